@@ -1,0 +1,15 @@
+// sRGB transfer functions (IEC 61966-2-1); lighting is done in linear space.
+vec3 srgb_to_linear(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+vec3 linear_to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+// Replace NaN/Inf by 0 and clamp to the half-float range: no pass ever writes a non-finite texel.
+vec3 finite3(vec3 c) {
+    bvec3 bad = bvec3(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z));
+    return clamp(mix(c, vec3(0.0), bvec3(bad)), vec3(-65000.0), vec3(65000.0));
+}
+float finite1(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -65000.0, 65000.0); }

@@ -1,0 +1,62 @@
+// Lights and shadow lookups shared by every technique (seed 000 §4.1.1-4.1.2).
+#define MAX_LIGHTS 4
+uniform int u_light_count;
+uniform int u_light_kind[MAX_LIGHTS];       // 0 directional, 1 point, 2 beam
+uniform vec3 u_light_radiance[MAX_LIGHTS];  // colour * intensity (Lc)
+uniform vec3 u_light_dir[MAX_LIGHTS];       // towards the light (normalised)
+uniform vec3 u_light_pos[MAX_LIGHTS];
+uniform float u_beam_radius[MAX_LIGHTS];
+uniform int u_light_shadowed[MAX_LIGHTS];
+uniform mat4 u_light_matrix[MAX_LIGHTS];    // eq. (6), GL clip space
+uniform sampler2D shadow_map0;
+uniform sampler2D shadow_map1;
+uniform sampler2D shadow_map2;
+uniform sampler2D shadow_map3;
+uniform float u_shadow_tol;                 // eq. (7)
+uniform int u_shadow_pcf;
+
+// Direction to the light L and incident radiance Lc at world point P (eq. 9).
+vec3 light_incident(int i, vec3 P, out vec3 L) {
+    vec3 Lc = u_light_radiance[i];
+    if (u_light_kind[i] == 1) {
+        vec3 d = u_light_pos[i] - P;
+        float len2 = max(dot(d, d), 1e-12);
+        L = d * inversesqrt(len2);
+        return Lc;  // no inverse-square falloff: artists set intensity at the subject
+    }
+    L = u_light_dir[i];
+    if (u_light_kind[i] == 2) {
+        // beam: collimated, radius u_beam_radius around the axis through u_light_pos
+        vec3 rel = P - u_light_pos[i];
+        vec3 perp = rel - dot(rel, L) * L;
+        return length(perp) <= u_beam_radius[i] ? Lc : vec3(0.0);
+    }
+    return Lc;
+}
+
+float shadow_compare(sampler2D sm, vec3 c) {
+    // eq. (7): shadowed if d(P) - ds > tol
+    if (u_shadow_pcf <= 0) return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+    vec2 texel = 1.0 / vec2(textureSize(sm, 0));
+    float lit = 0.0, n = 0.0;
+    for (int y = -3; y <= 3; ++y) for (int x = -3; x <= 3; ++x) {
+        if (abs(x) > u_shadow_pcf || abs(y) > u_shadow_pcf) continue;
+        float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
+        lit += (c.z - ds > u_shadow_tol) ? 0.0 : 1.0;
+        n += 1.0;
+    }
+    return lit / n;
+}
+
+// fac_shadow of eq. (10): 1 lit, 0 shadowed (fractional with PCF).
+float shadow_factor(int i, vec3 P) {
+    if (u_light_shadowed[i] == 0) return 1.0;
+    vec4 p = u_light_matrix[i] * vec4(P, 1.0);
+    if (p.w <= 0.0) return 1.0;
+    vec3 c = p.xyz / p.w * 0.5 + 0.5;  // z/w in [0,1] as stored (eq. 6)
+    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return 1.0;
+    if (i == 0) return shadow_compare(shadow_map0, c);
+    if (i == 1) return shadow_compare(shadow_map1, c);
+    if (i == 2) return shadow_compare(shadow_map2, c);
+    return shadow_compare(shadow_map3, c);
+}

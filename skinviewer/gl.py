@@ -1,0 +1,41 @@
+"""OpenGL contexts. The render core takes a moderngl context from its caller (the window's, or
+the headless one made here)."""
+from __future__ import annotations
+
+import moderngl
+
+MIN_GL = 330
+
+
+class GLUnavailableError(RuntimeError):
+    pass
+
+
+_HELP = (
+    "skinviewer needs OpenGL 3.3 or newer. Headless rendering uses EGL: on Debian/Ubuntu install "
+    "'libegl1 libgl1 libgl1-mesa-dri' (Mesa's llvmpipe renders on the CPU when there is no GPU); "
+    "in a window, a desktop with an OpenGL 3.3 driver (or 'xvfb-run' with Mesa)."
+)
+
+
+def headless_context(require: int = MIN_GL) -> moderngl.Context:
+    """A standalone context through EGL (no window, no X), falling back to the platform default."""
+    errors = []
+    for kwargs in ({"backend": "egl"}, {}):
+        try:
+            ctx = moderngl.create_standalone_context(require=require, **kwargs)
+        except Exception as exc:  # glcontext raises plain Exceptions
+            errors.append(f"{kwargs.get('backend', 'default')}: {exc}")
+            continue
+        if ctx.version_code < require:
+            errors.append(f"got OpenGL {ctx.version_code}, need {require}")
+            ctx.release()
+            continue
+        return ctx
+    raise GLUnavailableError(f"no OpenGL {require // 100}.{require % 100 // 10} context could be created "
+                             f"({'; '.join(errors)}). {_HELP}")
+
+
+def describe(ctx: moderngl.Context) -> str:
+    info = ctx.info
+    return f"{info.get('GL_RENDERER', '?')} / OpenGL {info.get('GL_VERSION', '?')}"

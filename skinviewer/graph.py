@@ -1,0 +1,507 @@
+"""The pass graph: passes declare what they read and write in ``reflect`` and do GL work in
+``execute`` (the Falcor model). The graph orders them, allocates and reuses textures, prunes passes
+nobody consumes, caches outputs whose inputs did not change, and times every pass.
+
+A pass re-runs only when one of these changed: a setting it declared, the version of an input
+texture, the source of a shader program it declared, the scene (mesh, maps, units) if it reads it,
+the camera if it is view-dependent, or the spec (size/format) of one of its outputs.
+"""
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable
+
+import moderngl
+import numpy as np
+
+from .settings import Settings, get_path, value_key
+from .shaders import ShaderLibrary
+
+_DTYPES = {"f1": 1, "f2": 2, "f4": 4}
+
+
+@dataclass(frozen=True)
+class TexSpec:
+    """An output texture: size (w, h), components 1-4, dtype f1 (8-bit unorm), f2 or f4 (float).
+    Anything lit is f2 or f4. ``depth`` adds a depth renderbuffer to the pass's framebuffer."""
+    size: tuple[int, int]
+    components: int = 4
+    dtype: str = "f2"
+    filter: str = "linear"
+    depth: bool = False
+
+    def __post_init__(self):
+        if self.dtype not in _DTYPES or not 1 <= self.components <= 4:
+            raise ValueError(f"bad texture spec {self}")
+        if self.size[0] < 1 or self.size[1] < 1:
+            raise ValueError(f"bad texture size {self.size}")
+
+    @property
+    def nbytes(self) -> int:
+        return self.size[0] * self.size[1] * self.components * _DTYPES[self.dtype]
+
+
+class GraphError(RuntimeError):
+    pass
+
+
+class Reflection:
+    """What a pass declares for this frame (``Pass.reflect`` fills it)."""
+
+    def __init__(self, settings: Settings):
+        self._settings = settings
+        self.settings: list[str] = []
+        self.inputs: list[str] = []
+        self.outputs: dict[str, TexSpec] = {}
+        self.programs: list[tuple[str, tuple]] = []
+
+    def setting(self, path: str) -> Any:
+        """Declare a setting (dotted path) and return its current value."""
+        if path not in self.settings:
+            self.settings.append(path)
+        return get_path(self._settings, path)
+
+    def input(self, resource: str) -> None:
+        if resource not in self.inputs:
+            self.inputs.append(resource)
+
+    def output(self, resource: str, spec: TexSpec) -> None:
+        self.outputs[resource] = spec
+
+    def program(self, name: str, **defines) -> None:
+        key = (name, tuple(sorted(defines.items())))
+        if key not in self.programs:
+            self.programs.append(key)
+
+
+class Pass:
+    """Base class of render passes. Subclasses set ``name`` (unique in a graph), override
+    ``reflect`` and ``execute``. ``view_dependent`` passes re-run when the camera moves;
+    ``uses_scene`` passes re-run when the mesh, its maps or its units change."""
+    name: str = "pass"
+    view_dependent: bool = False
+    uses_scene: bool = True
+
+    def reflect(self, r: Reflection) -> None:
+        raise NotImplementedError
+
+    def execute(self, ec: "ExecuteContext") -> None:
+        raise NotImplementedError
+
+    def release(self) -> None:
+        """Free GL objects the pass made itself (VAOs, LUT textures)."""
+
+
+class ExecuteContext:
+    def __init__(self, graph: "RenderGraph", p: Pass, refl: Reflection, frame: "FrameInputs"):
+        self.graph = graph
+        self.gl: moderngl.Context = graph.ctx
+        self.pass_ = p
+        self._refl = refl
+        self._frame = frame
+        self._scratch: list[moderngl.Texture] = []
+
+    @property
+    def scene(self):
+        if not self.pass_.uses_scene:
+            raise GraphError(f"pass {self.pass_.name} did not declare uses_scene")
+        return self._frame.scene
+
+    @property
+    def view(self):
+        if not self.pass_.view_dependent:
+            raise GraphError(f"pass {self.pass_.name} is view-independent: it may not read the camera")
+        return self._frame.view
+
+    def setting(self, path: str) -> Any:
+        if path not in self._refl.settings and not any(path.startswith(d + ".") for d in self._refl.settings):
+            raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")
+        return get_path(self._frame.settings, path)
+
+    def input(self, resource: str) -> moderngl.Texture:
+        if resource not in self._refl.inputs:
+            raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")
+        return self.graph._textures[resource]
+
+    def output(self, resource: str) -> moderngl.Texture:
+        return self.graph._textures[resource]
+
+    def framebuffer(self, *resources: str) -> moderngl.Framebuffer:
+        return self.graph._framebuffer(resources)
+
+    def program(self, name: str, **defines) -> moderngl.Program:
+        if (name, tuple(sorted(defines.items()))) not in self._refl.programs:
+            raise GraphError(f"pass {self.pass_.name} uses program '{name}' it did not declare")
+        return self.graph.shaders.get(name, defines or None)
+
+    def scratch(self, spec: TexSpec) -> moderngl.Texture:
+        """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
+        tex = self.graph._pool_take(spec)
+        self._scratch.append(tex)
+        return tex
+
+    def scratch_framebuffer(self, tex: moderngl.Texture) -> moderngl.Framebuffer:
+        return self.graph._framebuffer_for((tex,))
+
+    def _finish(self):
+        for t in self._scratch:
+            self.graph._pool_give(t)
+        self._scratch.clear()
+
+
+@dataclass
+class FrameInputs:
+    settings: Settings
+    scene: Any  # GpuScene
+    scene_version: int
+    view: Any  # View (camera) or None
+    view_key: str
+
+
+@dataclass
+class PassRecord:
+    name: str
+    status: str  # ran | cached | pruned
+    ms: float | None = None
+    reason: str = ""
+    inputs: list[str] = field(default_factory=list)
+    outputs: dict[str, dict] = field(default_factory=dict)
+
+
+@dataclass
+class FrameReport:
+    frame: int
+    timing_mode: str  # sync | gpu
+    passes: list[PassRecord]
+
+    def names(self, status: str) -> list[str]:
+        return [p.name for p in self.passes if p.status == status]
+
+    @property
+    def ran(self) -> list[str]:
+        return self.names("ran")
+
+    @property
+    def cached(self) -> list[str]:
+        return self.names("cached")
+
+    @property
+    def pruned(self) -> list[str]:
+        return self.names("pruned")
+
+    @property
+    def total_ms(self) -> float:
+        return float(sum(p.ms or 0.0 for p in self.passes if p.status == "ran"))
+
+    def to_json(self) -> dict:
+        return {
+            "frame": self.frame,
+            "timing_mode": self.timing_mode,
+            "timing_note": TIMING_NOTES[self.timing_mode],
+            "total_ms": round(self.total_ms, 4),
+            "passes": [
+                {"name": p.name, "status": p.status, "gpu_ms": None if p.ms is None else round(p.ms, 4),
+                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs}
+                for p in self.passes
+            ],
+        }
+
+    def table(self) -> str:
+        rows = [f"{'pass':<24} {'status':<7} {'ms':>9}  reason"]
+        for p in self.passes:
+            ms = "" if p.ms is None else f"{p.ms:9.3f}"
+            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}")
+        rows.append(f"{'total (' + self.timing_mode + ' timing)':<32} {self.total_ms:9.3f}")
+        return "\n".join(rows)
+
+
+TIMING_NOTES = {
+    "sync": "glFinish before and after each pass, wall clock: true cost on lazy rasterizers such as llvmpipe",
+    "gpu": "GL_TIME_ELAPSED timer queries: accurate on real GPUs, far too low on llvmpipe (lazy rasterization)",
+}
+
+
+class RenderGraph:
+    """Orders, prunes, caches and times passes. One graph per technique; textures come from a
+    shared pool so switching technique reuses allocations."""
+
+    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary, passes: Iterable[Pass],
+                 targets: Iterable[str], pool: "TexturePool | None" = None):
+        self.ctx = ctx
+        self.shaders = shaders
+        self.passes: list[Pass] = list(passes)
+        names = [p.name for p in self.passes]
+        if len(set(names)) != len(names):
+            raise GraphError(f"duplicate pass names in {names}")
+        self.targets = list(targets)
+        self.pool = pool or TexturePool(ctx)
+        self._textures: dict[str, moderngl.Texture] = {}
+        self._specs: dict[str, TexSpec] = {}
+        self._versions: dict[str, int] = {}
+        self._keys: dict[str, dict] = {}  # pass name -> last cache key parts
+        self._fbos: dict[tuple, moderngl.Framebuffer] = {}
+        self._depth: dict[tuple[int, int], moderngl.Renderbuffer] = {}
+        self.frame = 0
+        self.last_report: FrameReport | None = None
+        self.order: list[Pass] = []
+
+    # -- texture management ------------------------------------------------------------------
+    def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
+        return self.pool.take(spec)
+
+    def _pool_give(self, tex: moderngl.Texture) -> None:
+        self._drop_fbos(tex)
+        self.pool.give(tex)
+
+    def _drop_fbos(self, tex) -> None:
+        for key in [k for k in self._fbos if tex in k[0]]:
+            self._fbos.pop(key).release()
+
+    def _ensure(self, resource: str, spec: TexSpec) -> bool:
+        """Give ``resource`` a texture of ``spec``; True when it had to be (re)allocated."""
+        if self._specs.get(resource) == spec:
+            return False
+        self._free(resource)
+        self._textures[resource] = self.pool.take(spec)
+        self._specs[resource] = spec
+        self._versions[resource] = self._versions.get(resource, 0) + 1
+        return True
+
+    def _free(self, resource: str) -> None:
+        tex = self._textures.pop(resource, None)
+        if tex is not None:
+            self._pool_give(tex)
+        self._specs.pop(resource, None)
+
+    def _framebuffer(self, resources: tuple[str, ...]) -> moderngl.Framebuffer:
+        texs = tuple(self._textures[r] for r in resources)
+        depth = any(self._specs[r].depth for r in resources)
+        return self._framebuffer_for(texs, depth)
+
+    def _framebuffer_for(self, texs: tuple, depth: bool = False) -> moderngl.Framebuffer:
+        key = (texs, depth)
+        fbo = self._fbos.get(key)
+        if fbo is None:
+            size = texs[0].size
+            rb = None
+            if depth:
+                rb = self._depth.get(size)
+                if rb is None:
+                    rb = self._depth[size] = self.ctx.depth_renderbuffer(size)
+            fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=rb)
+        return fbo
+
+    def texture(self, resource: str) -> moderngl.Texture:
+        return self._textures[resource]
+
+    def resources(self) -> dict[str, TexSpec]:
+        return dict(self._specs)
+
+    def read(self, resource: str) -> np.ndarray:
+        """Read a texture back as float32 (H, W, C), row 0 at the bottom (GL order)."""
+        tex = self._textures[resource]
+        spec = self._specs[resource]
+        w, h = spec.size
+        if spec.dtype == "f1":
+            raw = np.frombuffer(tex.read(alignment=1), dtype=np.uint8).astype(np.float32) / 255.0
+        elif spec.dtype == "f2":
+            raw = np.frombuffer(tex.read(), dtype=np.float16).astype(np.float32)
+        else:
+            raw = np.frombuffer(tex.read(), dtype=np.float32).copy()
+        return raw.reshape(h, w, spec.components)
+
+    # -- the frame ---------------------------------------------------------------------------
+    def _reflect_all(self, settings: Settings) -> dict[str, Reflection]:
+        refl = {}
+        for p in self.passes:
+            r = Reflection(settings)
+            p.reflect(r)
+            refl[p.name] = r
+        return refl
+
+    def _order(self, refl: dict[str, Reflection], targets: list[str]) -> tuple[list[Pass], set[str]]:
+        producer: dict[str, Pass] = {}
+        for p in self.passes:
+            for out in refl[p.name].outputs:
+                if out in producer:
+                    raise GraphError(f"'{out}' is written by both {producer[out].name} and {p.name}")
+                producer[out] = p
+        live: set[str] = set()
+        order: list[Pass] = []
+        state: dict[str, int] = {}
+
+        def visit(p: Pass, chain: tuple[str, ...]):
+            s = state.get(p.name, 0)
+            if s == 2:
+                return
+            if s == 1:
+                raise GraphError(f"cycle in the pass graph: {' -> '.join(chain + (p.name,))}")
+            state[p.name] = 1
+            for res in refl[p.name].inputs:
+                if res not in producer:
+                    raise GraphError(f"pass {p.name} reads '{res}', which no pass writes")
+                visit(producer[res], chain + (p.name,))
+            state[p.name] = 2
+            live.add(p.name)
+            order.append(p)
+
+        for t in targets:
+            if t not in producer:
+                raise GraphError(f"target '{t}' is written by no pass (have: {sorted(producer)})")
+            visit(producer[t], ())
+        return order, live
+
+    def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict:
+        key = {
+            "settings": {path: value_key(frame.settings, path) for path in r.settings},
+            "inputs": {res: self._versions.get(res, 0) for res in r.inputs},
+            "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
+            "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
+        }
+        if p.uses_scene:
+            key["scene"] = frame.scene_version
+        if p.view_dependent:
+            key["camera"] = frame.view_key
+        return key
+
+    @staticmethod
+    def _why(old: dict | None, new: dict) -> str:
+        if old is None:
+            return "first run"
+        parts = []
+        for group in ("scene", "camera"):
+            if old.get(group) != new.get(group):
+                parts.append(group)
+        for group, label in (("settings", "setting"), ("inputs", "input"), ("programs", "shader"),
+                             ("outputs", "output")):
+            o, n = old.get(group, {}), new.get(group, {})
+            changed = [k for k in n if o.get(k) != n[k]] + [k for k in o if k not in n]
+            parts += [f"{label} {k}" for k in changed]
+        return ", ".join(parts)
+
+    def run(self, frame: FrameInputs, targets: list[str] | None = None, timing: str = "sync",
+            force: bool = False) -> FrameReport:
+        """Render one frame: everything needed for ``targets`` (default: the graph's targets)."""
+        if timing not in TIMING_NOTES:
+            raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
+        self.frame += 1
+        refl = self._reflect_all(frame.settings)
+        order, live = self._order(refl, list(targets or self.targets))
+        self.order = order
+        records: dict[str, PassRecord] = {}
+        for p in order:
+            r = refl[p.name]
+            realloc = False
+            for res, spec in r.outputs.items():
+                realloc |= self._ensure(res, spec)
+            key = self._key(p, r, frame)
+            old = self._keys.get(p.name)
+            rec = PassRecord(p.name, "cached", inputs=list(r.inputs),
+                             outputs={k: {"size": list(v.size), "components": v.components, "dtype": v.dtype}
+                                      for k, v in r.outputs.items()})
+            if force or realloc or old != key:
+                rec.status = "ran"
+                rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
+                rec.ms = self._execute(p, r, frame, timing)
+                for res in r.outputs:
+                    self._versions[res] = self._versions.get(res, 0) + 1
+                self._keys[p.name] = key
+            records[p.name] = rec
+        # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
+        for p in self.passes:
+            if p.name not in live:
+                records[p.name] = PassRecord(p.name, "pruned", reason="output not consumed",
+                                             inputs=list(refl[p.name].inputs))
+                for res in refl[p.name].outputs:
+                    if res in self._textures:
+                        self._free(res)
+                self._keys.pop(p.name, None)
+        report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
+                             [records[p.name] for p in self.passes if p.name not in live])
+        self.last_report = report
+        return report
+
+    def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str) -> float | None:
+        ec = ExecuteContext(self, p, r, frame)
+        try:
+            if timing == "sync":
+                self.ctx.finish()
+                t0 = time.perf_counter()
+                p.execute(ec)
+                self.ctx.finish()
+                return (time.perf_counter() - t0) * 1000.0
+            query = self.ctx.query(time=True)
+            with query:
+                p.execute(ec)
+            ns = query.elapsed
+            query.release() if hasattr(query, "release") else None
+            if ns is None or ns >= 0xFFFFFFFF or ns < 0:  # llvmpipe's first query answers 0xFFFFFFFF
+                return None
+            return ns / 1e6
+        finally:
+            ec._finish()
+
+    def invalidate(self, pass_name: str | None = None) -> None:
+        """Forget cache keys (all, or one pass) so they re-run next frame."""
+        if pass_name is None:
+            self._keys.clear()
+        else:
+            self._keys.pop(pass_name, None)
+
+    def release(self) -> None:
+        for p in self.passes:
+            p.release()
+        for res in list(self._textures):
+            self._free(res)
+        for fbo in self._fbos.values():
+            fbo.release()
+        self._fbos.clear()
+        for rb in self._depth.values():
+            rb.release()
+        self._depth.clear()
+
+    def describe(self) -> list[dict]:
+        """The passes in execution order with their declared inputs/outputs and last status."""
+        report = self.last_report
+        out = report.to_json()["passes"] if report else []
+        return out
+
+
+class TexturePool:
+    """Free textures by spec; a released texture is handed to the next request of the same spec."""
+
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        self._free: dict[tuple, list[moderngl.Texture]] = {}
+        self.allocated = 0
+        self.allocated_bytes = 0
+        self.reused = 0
+
+    @staticmethod
+    def _k(spec: TexSpec) -> tuple:
+        return (spec.size, spec.components, spec.dtype, spec.filter)
+
+    def take(self, spec: TexSpec) -> moderngl.Texture:
+        free = self._free.get(self._k(spec))
+        if free:
+            self.reused += 1
+            return free.pop()
+        tex = self.ctx.texture(spec.size, spec.components, dtype=spec.dtype)
+        f = moderngl.NEAREST if spec.filter == "nearest" else moderngl.LINEAR
+        tex.filter = (f, f)
+        tex.repeat_x = tex.repeat_y = False
+        tex.extra = spec
+        self.allocated += 1
+        self.allocated_bytes += spec.nbytes
+        return tex
+
+    def give(self, tex: moderngl.Texture) -> None:
+        self._free.setdefault(self._k(tex.extra), []).append(tex)
+
+    def release(self) -> None:
+        for lst in self._free.values():
+            for t in lst:
+                t.release()
+        self._free.clear()

@@ -1,0 +1,233 @@
+"""Mesh data and loading (glTF/GLB/OBJ/PLY through trimesh), tangents, texture maps, framing."""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+
+class MeshError(ValueError):
+    """A mesh that cannot be used, with a message saying why."""
+
+
+@dataclass
+class MeshData:
+    """Triangle mesh with one UV set, in its own units (``mm_per_unit`` converts to millimetres).
+
+    positions (N,3) f4, normals (N,3) f4 unit, uvs (N,2) f4 in [0,1], tangents (N,4) f4 (xyz, w =
+    bitangent sign), indices (M,3) u4. Optional maps are float32 arrays (H,W,C) in [0,1] with row 0
+    at v = 0 (OpenGL texture order): albedo sRGB-encoded RGB, normal tangent-space RGB encoded
+    n*0.5+0.5, specular (H,W,1) intensity scale, region (H,W) uint8 region IDs (settings.REGIONS).
+    """
+    positions: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray
+    indices: np.ndarray
+    tangents: np.ndarray | None = None
+    mm_per_unit: float = 1.0
+    albedo: np.ndarray | None = None
+    normal_map: np.ndarray | None = None
+    specular_map: np.ndarray | None = None
+    region_map: np.ndarray | None = None
+    name: str = "mesh"
+    notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.positions = np.ascontiguousarray(self.positions, dtype=np.float32)
+        self.normals = np.ascontiguousarray(self.normals, dtype=np.float32)
+        self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float32)
+        self.indices = np.ascontiguousarray(self.indices, dtype=np.uint32).reshape(-1, 3)
+        if self.tangents is None:
+            self.tangents = compute_tangents(self.positions, self.normals, self.uvs, self.indices)
+        self.tangents = np.ascontiguousarray(self.tangents, dtype=np.float32)
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.positions.min(axis=0), self.positions.max(axis=0)
+
+    @property
+    def center(self) -> np.ndarray:
+        lo, hi = self.bounds
+        return (lo + hi) * 0.5
+
+    @property
+    def radius(self) -> float:
+        return float(np.linalg.norm(self.positions - self.center, axis=1).max())
+
+    def replace(self, **kw) -> "MeshData":
+        return dataclasses.replace(self, **kw)
+
+    def interleaved(self) -> np.ndarray:
+        """(N, 12) float32: position, normal, uv, tangent — the vertex layout every pass uses."""
+        return np.hstack([self.positions, self.normals, self.uvs, self.tangents]).astype(np.float32)
+
+
+VERTEX_FORMAT = "3f 3f 2f 4f"
+VERTEX_ATTRS = ("in_position", "in_normal", "in_uv", "in_tangent")
+
+
+def vertex_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals; degenerate or isolated vertices get +Z (never NaN)."""
+    p = positions.astype(np.float64)
+    tri = p[indices]
+    fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n = np.zeros_like(p)
+    for k in range(3):
+        np.add.at(n, indices[:, k], fn)
+    return _normalize_or(n, np.array([0.0, 0.0, 1.0])).astype(np.float32)
+
+
+def _normalize_or(v: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    length = np.linalg.norm(v, axis=1, keepdims=True)
+    ok = length[:, 0] > 1e-20
+    out = np.empty_like(v)
+    out[ok] = v[ok] / length[ok]
+    out[~ok] = fallback
+    return out
+
+
+def compute_tangents(positions, normals, uvs, indices) -> np.ndarray:
+    """Per-vertex tangents from UV gradients (Lengyel's method), Gram-Schmidt against the normal.
+
+    Returns (N,4): xyz tangent, w = handedness. Degenerate UV triangles contribute nothing; a vertex
+    with no usable tangent gets an arbitrary one perpendicular to its normal.
+    """
+    p = positions.astype(np.float64)
+    t = uvs.astype(np.float64)
+    n = normals.astype(np.float64)
+    i0, i1, i2 = indices[:, 0], indices[:, 1], indices[:, 2]
+    e1, e2 = p[i1] - p[i0], p[i2] - p[i0]
+    d1, d2 = t[i1] - t[i0], t[i2] - t[i0]
+    det = d1[:, 0] * d2[:, 1] - d2[:, 0] * d1[:, 1]
+    good = np.abs(det) > 1e-14
+    r = np.zeros_like(det)
+    r[good] = 1.0 / det[good]
+    sdir = (e1 * d2[:, 1:2] - e2 * d1[:, 1:2]) * r[:, None]
+    tdir = (e2 * d1[:, 0:1] - e1 * d2[:, 0:1]) * r[:, None]
+    tan1 = np.zeros_like(p)
+    tan2 = np.zeros_like(p)
+    for idx in (i0, i1, i2):
+        np.add.at(tan1, idx, sdir)
+        np.add.at(tan2, idx, tdir)
+    tt = tan1 - n * np.sum(n * tan1, axis=1, keepdims=True)
+    # fallback: any vector perpendicular to n
+    helper = np.where(np.abs(n[:, 0:1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    fallback = np.cross(n, helper)
+    fallback = _normalize_or(fallback, np.array([1.0, 0.0, 0.0]))
+    length = np.linalg.norm(tt, axis=1, keepdims=True)
+    ok = length[:, 0] > 1e-12
+    tt[ok] /= length[ok]
+    tt[~ok] = fallback[~ok]
+    w = np.where(np.sum(np.cross(n, tt) * tan2, axis=1) < 0.0, -1.0, 1.0)
+    return np.hstack([tt, w[:, None]]).astype(np.float32)
+
+
+# ---------------------------------------------------------------------------------------------
+# loading
+
+def _read_image(path: str | Path, mode: str) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+    try:
+        img = Image.open(path)
+        img.load()
+    except (OSError, UnidentifiedImageError) as exc:
+        raise MeshError(f"cannot read image {path}: {exc}") from None
+    if mode == "L":
+        arr = np.asarray(img.convert("RGB"))[..., 0]
+        return np.ascontiguousarray(arr[::-1])  # row 0 at v = 0
+    arr = np.asarray(img.convert(mode), dtype=np.float32) / 255.0
+    return np.ascontiguousarray(arr[::-1])
+
+
+def load_texture_maps(mesh: MeshData, albedo=None, normal=None, specular=None, region=None) -> MeshData:
+    kw = {}
+    if albedo:
+        kw["albedo"] = _read_image(albedo, "RGB")
+    if normal:
+        kw["normal_map"] = _read_image(normal, "RGB")
+    if specular:
+        kw["specular_map"] = _read_image(specular, "L").astype(np.float32)[..., None] / 255.0
+    if region:
+        kw["region_map"] = _read_image(region, "L").astype(np.uint8)
+    return mesh.replace(**kw) if kw else mesh
+
+
+def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
+    """Load a glTF/GLB/OBJ/PLY file. A mesh without UVs gets an automatic xatlas atlas when
+    ``auto_uv`` (the default, and said in ``notes``); otherwise it is refused with MeshError."""
+    import trimesh
+
+    p = Path(path)
+    if not p.is_file():
+        raise MeshError(f"mesh file not found: {p}")
+    try:
+        loaded = trimesh.load(str(p), process=False)
+    except Exception as exc:  # trimesh raises many kinds
+        raise MeshError(f"cannot read mesh {p}: {exc}") from None
+    if isinstance(loaded, trimesh.Scene):
+        geoms = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)] if loaded.geometry else []
+        if not geoms:
+            raise MeshError(f"{p} contains no triangle mesh")
+        uv_ok = all(_uv_of(g) is not None for g in geoms)
+        tm = trimesh.util.concatenate(geoms) if len(geoms) > 1 else geoms[0]
+        uv = _uv_of(tm) if uv_ok else None
+    elif isinstance(loaded, trimesh.Trimesh):
+        tm = loaded
+        uv = _uv_of(tm)
+    else:
+        raise MeshError(f"{p} is not a triangle mesh (got {type(loaded).__name__})")
+    if len(tm.faces) == 0:
+        raise MeshError(f"{p} has no triangles")
+    positions = np.asarray(tm.vertices, dtype=np.float64)
+    indices = np.asarray(tm.faces, dtype=np.int64)
+    if not np.all(np.isfinite(positions)):
+        raise MeshError(f"{p} has non-finite vertex positions")
+    notes = []
+    if uv is None:
+        if not auto_uv:
+            raise MeshError(f"{p} has no texture coordinates (UVs); texture-space techniques need them. "
+                            "Add UVs in a modelling tool, or load with automatic UVs (xatlas).")
+        positions, indices, uv = _xatlas_uvs(positions, indices, p)
+        notes.append("no UVs in the file: generated a UV atlas with xatlas")
+        normals = vertex_normals(positions, indices)
+    else:
+        n = getattr(tm, "vertex_normals", None)
+        normals = np.asarray(n, dtype=np.float64) if n is not None and len(n) == len(positions) else None
+        if normals is None or not np.all(np.isfinite(normals)):
+            normals = vertex_normals(positions, indices)
+        else:
+            normals = _normalize_or(normals, np.array([0.0, 0.0, 1.0]))
+    uv = np.asarray(uv, dtype=np.float64)
+    bad = ~np.isfinite(uv)
+    if bad.any():
+        uv[bad] = 0.0
+        notes.append("non-finite UVs replaced by 0")
+    if uv.min() < -1e-3 or uv.max() > 1.001:
+        notes.append("UVs outside [0,1] wrap; texture-space passes use their fractional part")
+        uv = uv - np.floor(uv)
+    return MeshData(positions=positions, normals=normals, uvs=uv, indices=indices, name=p.stem, notes=notes)
+
+
+def _uv_of(tm) -> np.ndarray | None:
+    uv = getattr(getattr(tm, "visual", None), "uv", None)
+    if uv is None or len(uv) != len(tm.vertices):
+        return None
+    return np.asarray(uv)
+
+
+def _xatlas_uvs(positions, indices, p):
+    try:
+        import xatlas
+    except ImportError:
+        raise MeshError(f"{p} has no UVs and the xatlas package (automatic UVs) is not installed: "
+                        "pip install xatlas") from None
+    vmapping, new_idx, uvs = xatlas.parametrize(positions.astype(np.float32), indices.astype(np.uint32))
+    return positions[vmapping], new_idx.astype(np.int64), uvs
+
+
+def framing_distance(radius: float, fov_y_deg: float, margin: float = 1.15) -> float:
+    """Camera distance at which a sphere of ``radius`` fills the vertical field of view."""
+    half = np.radians(fov_y_deg) * 0.5
+    return float(radius * margin / max(np.sin(half), 1e-3))

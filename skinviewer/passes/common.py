@@ -1,0 +1,111 @@
+"""Helpers shared by passes: light uniforms, shadow-map inputs, drawing the mesh or a full-screen
+triangle, binding textures."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera import light_space
+from ..graph import Reflection
+
+MAX_LIGHTS = 4
+_KIND = {"directional": 0, "point": 1, "beam": 2}
+LIGHT_POSE_FIELDS = ("kind", "direction", "position", "beam_radius", "cast_shadow", "enabled")
+
+
+def shadow_resource(i: int) -> str:
+    return f"shadow_map_{i}"
+
+
+def active_lights(settings) -> list[tuple[int, object]]:
+    return [(i, l) for i, l in enumerate(settings.lights[:MAX_LIGHTS]) if l.enabled]
+
+
+def declare_lighting(r: Reflection) -> list[tuple[int, object]]:
+    """Declare what a lit pass reads: every light, the shadow test settings, and the shadow maps
+    of shadow-casting lights. Returns the enabled lights."""
+    lights = r.setting("lights")
+    r.setting("shadow.tol")
+    r.setting("shadow.pcf")
+    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
+    for i, l in active:
+        if l.cast_shadow:
+            r.input(shadow_resource(i))
+    return active
+
+
+def set_lighting(ec, prog, first_unit: int) -> int:
+    """Set the uniforms of shaders/lib/lights.glsl; returns the next free texture unit."""
+    scene = ec.scene
+    lights = ec.setting("lights")
+    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
+    n = len(active)
+    kinds, radiance, dirs, poss, radii, shadowed, mats = [], [], [], [], [], [], []
+    unit = first_unit
+    for slot, (i, l) in enumerate(active):
+        ls = light_space(l, scene.center, scene.radius)
+        d = np.asarray(l.direction, dtype=np.float64)
+        d = d / np.linalg.norm(d)
+        kinds.append(_KIND[l.kind])
+        radiance.extend(np.asarray(l.color) * l.intensity)
+        dirs.extend(d)
+        poss.extend(l.position)
+        radii.append(l.beam_radius)
+        shadowed.append(1 if l.cast_shadow else 0)
+        mats.append(ls.gl_matrix)
+        if l.cast_shadow:
+            ec.input(shadow_resource(i)).use(unit)
+            _set(prog, f"shadow_map{slot}", unit)
+            unit += 1
+    pad = MAX_LIGHTS - n
+    _set(prog, "u_light_count", n)
+    _set_array(prog, "u_light_kind", kinds + [0] * pad)
+    _set_array(prog, "u_light_radiance", list(radiance) + [0.0] * 3 * pad)
+    _set_array(prog, "u_light_dir", list(dirs) + [0.0, 0.0, 1.0] * pad)
+    _set_array(prog, "u_light_pos", list(poss) + [0.0] * 3 * pad)
+    _set_array(prog, "u_beam_radius", radii + [1.0] * pad)
+    _set_array(prog, "u_light_shadowed", shadowed + [0] * pad)
+    if "u_light_matrix" in prog:
+        m = np.zeros((MAX_LIGHTS, 4, 4), dtype=np.float32)
+        for k, mat in enumerate(mats):
+            m[k] = mat.T  # column-major
+        prog["u_light_matrix"].write(m.tobytes())
+    _set(prog, "u_shadow_tol", ec.setting("shadow.tol"))
+    _set(prog, "u_shadow_pcf", ec.setting("shadow.pcf"))
+    # unused shadow samplers must not alias a float texture of another kind: point them at a unit
+    # that holds no texture the shader reads as a shadow map
+    for slot in range(MAX_LIGHTS):
+        if slot >= n or not active[slot][1].cast_shadow:
+            _set(prog, f"shadow_map{slot}", unit)
+    return unit + 1
+
+
+def _set(prog, name, value):
+    if name in prog:
+        prog[name].value = value
+
+
+def _set_array(prog, name, values):
+    if name in prog:
+        u = prog[name]
+        fmt = "i" if u.fmt.endswith("i") else "f"
+        prog[name].write(np.asarray(values, dtype=np.int32 if fmt == "i" else np.float32).tobytes())
+
+
+def set_uniform(prog, name, value):
+    """Set a uniform if the compiled program still has it (the GLSL compiler drops unused ones)."""
+    _set(prog, name, value)
+
+
+def bind_surface(ec, prog, first_unit: int) -> int:
+    """Bind albedo and normal maps (shaders/lib/surface.glsl); returns the next free unit."""
+    scene = ec.scene
+    scene.albedo.use(first_unit)
+    _set(prog, "albedo_map", first_unit)
+    scene.normal_map.use(first_unit + 1)
+    _set(prog, "normal_map", first_unit + 1)
+    _set(prog, "u_has_normal_map", 1 if scene.has_normal_map else 0)
+    return first_unit + 2
+
+
+def draw_fullscreen(ec, prog) -> None:
+    ec.graph.fullscreen_vao(prog).render(vertices=3)

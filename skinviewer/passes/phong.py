@@ -1,0 +1,39 @@
+"""Phong/Lambert baseline (shadow map -> lit image), linear space."""
+from __future__ import annotations
+
+import moderngl
+
+from ..camera import gl_bytes
+from ..graph import Pass, Reflection, TexSpec
+from .common import bind_surface, declare_lighting, set_lighting, set_uniform
+
+
+class PhongPass(Pass):
+    name = "phong"
+    view_dependent = True
+
+    def reflect(self, r: Reflection) -> None:
+        declare_lighting(r)
+        r.setting("phong")
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.program("phong")
+        r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("phong")
+        view = ec.view
+        prog["u_view_proj"].write(gl_bytes(view.view_proj))
+        set_uniform(prog, "u_eye", tuple(view.eye))
+        ph = ec.setting("phong")
+        set_uniform(prog, "u_ambient", ph.ambient)
+        set_uniform(prog, "u_specular", ph.specular)
+        set_uniform(prog, "u_shininess", ph.shininess)
+        unit = bind_surface(ec, prog, 0)
+        set_lighting(ec, prog, unit)
+        fbo = ec.framebuffer("lit")
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        ec.gl.enable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        ec.scene.vao(prog).render()
+        ec.gl.disable(moderngl.DEPTH_TEST)

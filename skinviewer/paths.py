@@ -1,0 +1,36 @@
+"""Where the GLSL (`shaders/`) and presets (`presets/`) are: the source checkout first (so edits
+are live), else the copies installed inside the wheel as `skinviewer/shaders` and `skinviewer/presets`."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+_PKG = Path(__file__).resolve().parent
+_CHECKOUT = _PKG.parent
+
+
+def _find(name: str, env: str) -> Path:
+    override = os.environ.get(env)
+    if override:
+        return Path(override).resolve()
+    source = _CHECKOUT / name
+    if source.is_dir() and (_CHECKOUT / "pyproject.toml").is_file():
+        return source
+    installed = _PKG / name
+    if installed.is_dir():
+        return installed
+    raise FileNotFoundError(f"cannot find the {name}/ folder (looked in {source} and {installed}); set {env}")
+
+
+def shaders_dir() -> Path:
+    return _find("shaders", "SKINVIEWER_SHADERS")
+
+
+def presets_dir() -> Path:
+    return _find("presets", "SKINVIEWER_PRESETS")
+
+
+def cache_dir() -> Path:
+    d = Path(os.environ.get("SKINVIEWER_CACHE") or Path.home() / ".cache" / "skinviewer")
+    d.mkdir(parents=True, exist_ok=True)
+    return d

@@ -1,0 +1,216 @@
+"""The render core: a scene on the GPU and one pass graph per technique, driven by Settings.
+It takes a moderngl context from its caller (a window's, or ``gl.headless_context()``)."""
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+
+import moderngl
+import numpy as np
+
+from . import techniques
+from .camera import View, orbit_view
+from .graph import FrameInputs, FrameReport, RenderGraph, TexturePool
+from .mesh import VERTEX_ATTRS, VERTEX_FORMAT, MeshData, MeshError, load_mesh, load_texture_maps
+from .passes.output import srgb_to_linear
+from .scenes import build_scene
+from .settings import Settings
+from .shaders import ShaderLibrary
+
+# a mesh without an albedo map: a neutral skin tone (sRGB), so a bare scan reads as skin
+DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)
+
+
+class GpuScene:
+    """Mesh buffers and texture maps on the GPU. Immutable: a changed scene is a new GpuScene."""
+
+    def __init__(self, ctx: moderngl.Context, mesh: MeshData, mm_per_unit: float):
+        self.ctx = ctx
+        self.mesh = mesh
+        self.mm_per_unit = float(mm_per_unit)
+        self.center = mesh.center.astype(np.float64)
+        self.radius = mesh.radius
+        self.vbo = ctx.buffer(mesh.interleaved().tobytes())
+        self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
+        self._vaos: dict[int, moderngl.VertexArray] = {}
+        albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
+        self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
+        self.has_normal_map = mesh.normal_map is not None
+        nm = mesh.normal_map if mesh.normal_map is not None else np.array([[[0.5, 0.5, 1.0]]], np.float32)
+        self.normal_map = self._texture(_finite_map(nm), "f2")
+        sm = mesh.specular_map if mesh.specular_map is not None else np.ones((1, 1, 1), np.float32)
+        self.specular_map = self._texture(_finite_map(sm), "f2")
+        self.has_region_map = mesh.region_map is not None
+        rm = mesh.region_map if mesh.region_map is not None else np.zeros((1, 1), np.uint8)
+        self.region_map = ctx.texture((rm.shape[1], rm.shape[0]), 1, np.ascontiguousarray(rm).tobytes(),
+                                      dtype="f1", alignment=1)
+        self.region_map.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.region_ids = np.ascontiguousarray(rm)
+
+    def _texture(self, arr: np.ndarray, dtype: str) -> moderngl.Texture:
+        arr = np.ascontiguousarray(arr, dtype=np.float16 if dtype == "f2" else np.float32)
+        h, w = arr.shape[:2]
+        c = 1 if arr.ndim == 2 else arr.shape[2]
+        tex = self.ctx.texture((w, h), c, arr.tobytes(), dtype=dtype)
+        tex.build_mipmaps()
+        tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
+        return tex
+
+    def vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
+        vao = self._vaos.get(id(prog))
+        if vao is None or vao.program is not prog:
+            attrs = [a for a in VERTEX_ATTRS if a in prog]
+            fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
+            vao = self.ctx.vertex_array(prog, [(self.vbo, fmt, *attrs)], index_buffer=self.ibo, index_element_size=4)
+            self._vaos[id(prog)] = vao
+        return vao
+
+    def release(self) -> None:
+        for v in self._vaos.values():
+            v.release()
+        for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
+            obj.release()
+
+
+def _fmt(f: str, used: bool) -> str:
+    # "3f" -> "3f" when the attribute is used, "12x" (skip 12 bytes) when the compiler dropped it
+    return f if used else f"{int(f[:-1]) * 4}x"
+
+
+def _finite_map(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float32)
+    return np.nan_to_num(a, nan=0.0, posinf=1.0, neginf=0.0)
+
+
+@dataclass
+class LoadedScene:
+    key: str
+    gpu: GpuScene
+    description: str
+    notes: list[str]
+
+
+class Renderer:
+    """Renders Settings through the technique's graph. Scenes are loaded when their settings change;
+    each technique's graph persists (with its cache) while others run."""
+
+    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None):
+        self.ctx = ctx
+        self.shaders = shaders or ShaderLibrary(ctx)
+        self.pool = TexturePool(ctx)
+        self.graphs: dict[str, RenderGraph] = {}
+        self.scene: LoadedScene | None = None
+        self.scene_version = 0
+        self.last_view: View | None = None
+        self._fs_vaos: dict[int, moderngl.VertexArray] = {}
+
+    # -- scene -------------------------------------------------------------------------------
+    @staticmethod
+    def scene_key(s: Settings) -> str:
+        sc = s.scene
+        parts = [sc.mesh or f"builtin:{sc.name}", str(sc.mm_per_unit), sc.albedo_map, sc.normal_map,
+                 sc.specular_map, sc.region_map, str(sc.head_detail if not sc.mesh and sc.name == "head" else "")]
+        for p in (sc.mesh, sc.albedo_map, sc.normal_map, sc.specular_map, sc.region_map):
+            if p:
+                try:
+                    parts.append(str(Path(p).stat().st_mtime_ns))
+                except OSError:
+                    parts.append("missing")
+        return hashlib.sha1("|".join(map(str, parts)).encode()).hexdigest()
+
+    def ensure_scene(self, s: Settings) -> LoadedScene:
+        key = self.scene_key(s)
+        if self.scene is not None and self.scene.key == key:
+            return self.scene
+        sc = s.scene
+        notes: list[str] = []
+        if sc.mesh:
+            mesh = load_mesh(sc.mesh)
+            notes += mesh.notes
+            mm = sc.mm_per_unit
+            if mm is None:
+                mm = 1.0
+                notes.append("scene.mm_per_unit not set: assuming the mesh is in millimetres")
+            desc = f"{Path(sc.mesh).name}"
+        else:
+            sdef = build_scene(sc.name, sc.head_detail)
+            mesh = sdef.mesh
+            mm = sc.mm_per_unit if sc.mm_per_unit is not None else mesh.mm_per_unit
+            desc = sdef.description
+        mesh = load_texture_maps(mesh, sc.albedo_map, sc.normal_map, sc.specular_map, sc.region_map)
+        gpu = GpuScene(self.ctx, mesh, mm)
+        if self.scene is not None:
+            self.scene.gpu.release()
+        self.scene = LoadedScene(key, gpu, desc, notes)
+        self.scene_version += 1
+        return self.scene
+
+    # -- graphs ------------------------------------------------------------------------------
+    def graph(self, technique: str) -> RenderGraph:
+        g = self.graphs.get(technique)
+        if g is None:
+            passes, targets = techniques.build(technique)
+            g = RenderGraph(self.ctx, self.shaders, passes, targets, self.pool)
+            g.fullscreen_vao = self._fullscreen_vao
+            self.graphs[technique] = g
+        return g
+
+    def _fullscreen_vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
+        vao = self._fs_vaos.get(id(prog))
+        if vao is None or vao.program is not prog:
+            vao = self._fs_vaos[id(prog)] = self.ctx.vertex_array(prog, [])
+        return vao
+
+    def view(self, s: Settings) -> View:
+        gpu = self.ensure_scene(s).gpu
+        return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height))
+
+    def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
+               force: bool = False) -> FrameReport:
+        """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms)."""
+        scene = self.ensure_scene(s)
+        view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height))
+        self.last_view = view
+        g = self.graph(s.technique)
+        frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
+                            view_key=view.key())
+        report = g.run(frame, targets=targets, timing=timing or s.render.timing, force=force)
+        self.ctx.screen.use() if self.ctx.screen is not None else None
+        return report
+
+    def image(self, s: Settings) -> np.ndarray:
+        """The sRGB image of the last frame as uint8 (H, W, 3), top row first."""
+        g = self.graph(s.technique)
+        img = g.read("image")[..., :3]
+        return (np.clip(img, 0, 1) * 255.0 + 0.5).astype(np.uint8)[::-1]
+
+    def read(self, s: Settings, resource: str) -> np.ndarray:
+        return self.graph(s.technique).read(resource)
+
+    def release(self) -> None:
+        for g in self.graphs.values():
+            g.release()
+        self.graphs.clear()
+        self.pool.release()
+        if self.scene is not None:
+            self.scene.gpu.release()
+            self.scene = None
+
+
+def render_settings(s: Settings, ctx: moderngl.Context | None = None) -> tuple[np.ndarray, FrameReport]:
+    """Convenience: one headless frame of ``s`` (creates a context when none is given)."""
+    from .gl import headless_context
+    own = ctx is None
+    ctx = ctx or headless_context()
+    r = Renderer(ctx)
+    try:
+        report = r.render(s)
+        return r.image(s), report
+    finally:
+        r.release()
+        if own:
+            ctx.release()
+
+
+__all__ = ["Renderer", "GpuScene", "render_settings", "MeshError"]

@@ -1,0 +1,236 @@
+"""Shader library: compiles programs from ``shaders/`` with ``#include`` of shared snippets,
+remembers source files and modification times, and recompiles on demand. Compile errors come back
+as (file, line, message) records; the last good program keeps running."""
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import moderngl
+
+from . import paths
+
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
+# Mesa: "0:12(5): error: ..."; NVIDIA: "0(12) : error C0000: ..."; AMD/Intel: "ERROR: 0:12: ..."
+_ERR_PATTERNS = (
+    re.compile(r"^\s*(\d+):(\d+)\(\d+\):\s*(?:error|warning)?:?\s*(.*)$"),
+    re.compile(r"^\s*(\d+)\((\d+)\)\s*:\s*(?:error|warning)?\s*(.*)$"),
+    re.compile(r"^\s*(?:ERROR|WARNING):\s*(\d+):(\d+):\s*(.*)$"),
+)
+STAGES = {"vertex_shader": ".vert", "fragment_shader": ".frag", "geometry_shader": ".geom"}
+
+
+@dataclass(frozen=True)
+class ShaderError:
+    file: str
+    line: int
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}: {self.message}"
+
+
+class ShaderCompileError(RuntimeError):
+    def __init__(self, name: str, errors: list[ShaderError]):
+        self.name = name
+        self.errors = errors
+        super().__init__(f"shader program '{name}' does not compile:\n" + "\n".join(map(str, errors)))
+
+
+@dataclass
+class _Entry:
+    name: str
+    defines: tuple[tuple[str, str], ...]
+    program: moderngl.Program | None = None
+    mtimes: dict[Path, float] = field(default_factory=dict)
+    digest: str = ""
+    errors: list[ShaderError] = field(default_factory=list)
+    generation: int = 0  # bumps each time a new program replaces the old one
+
+
+class ShaderLibrary:
+    def __init__(self, ctx: moderngl.Context, root: Path | None = None):
+        self.ctx = ctx
+        self.root = Path(root) if root else paths.shaders_dir()
+        self._entries: dict[tuple, _Entry] = {}
+
+    # -- source assembly ---------------------------------------------------------------------
+    def _expand(self, path: Path, files: list[Path], stack: tuple[Path, ...] = ()) -> list[str]:
+        """Source lines with includes spliced in and #line directives so errors map to files."""
+        if path in stack:
+            raise _SourceError(ShaderError(self._rel(stack[-1]), 0, f"#include cycle through {self._rel(path)}"))
+        try:
+            text = path.read_text(encoding="utf-8")
+        except OSError as exc:
+            where = self._rel(stack[-1]) if stack else self._rel(path)
+            raise _SourceError(ShaderError(where, 0, f"cannot read {self._rel(path)}: {exc.strerror}")) from None
+        if path not in files:
+            files.append(path)
+        fid = files.index(path)
+        out: list[str] = []
+        for lineno, line in enumerate(text.splitlines(), start=1):
+            m = _INCLUDE.match(line)
+            if m:
+                inc = (path.parent / m.group(1)).resolve()
+                if not inc.is_file():
+                    inc = (self.root / m.group(1)).resolve()
+                if not inc.is_file():
+                    raise _SourceError(ShaderError(self._rel(path), lineno, f'#include "{m.group(1)}" not found'))
+                out.append(f"#line 1 {len(files) if inc not in files else files.index(inc)}")
+                out.extend(self._expand(inc, files, stack + (path,)))
+                out.append(f"#line {lineno + 1} {fid}")
+            else:
+                out.append(line)
+                if line.lstrip().startswith("#version") and not stack:
+                    out.append(f"#line {lineno + 1} {fid}")
+        return out
+
+    def _rel(self, p: Path) -> str:
+        try:
+            return str(p.relative_to(self.root))
+        except ValueError:
+            return str(p)
+
+    def _stage_files(self, name: str) -> dict[str, Path]:
+        found = {stage: self.root / f"{name}{ext}" for stage, ext in STAGES.items()}
+        found = {s: p for s, p in found.items() if p.is_file()}
+        return found
+
+    def _assemble(self, name: str, defines: tuple[tuple[str, str], ...]):
+        stage_files = self._stage_files(name)
+        if "vertex_shader" not in stage_files or "fragment_shader" not in stage_files:
+            raise _SourceError(ShaderError(f"{name}.vert/.frag", 0, "shader files not found in " + str(self.root)))
+        sources: dict[str, str] = {}
+        files_per_stage: dict[str, list[Path]] = {}
+        for stage, path in stage_files.items():
+            files: list[Path] = []
+            lines = self._expand(path.resolve(), files)
+            if defines:
+                at = next((i + 1 for i, ln in enumerate(lines) if ln.lstrip().startswith("#version")), 0)
+                lines[at:at] = [f"#define {k} {v}" for k, v in defines]  # the #line after #version follows
+            sources[stage] = "\n".join(lines) + "\n"
+            files_per_stage[stage] = files
+        return sources, files_per_stage
+
+    # -- compile -----------------------------------------------------------------------------
+    def _compile(self, entry: _Entry) -> bool:
+        try:
+            sources, files_per_stage = self._assemble(entry.name, entry.defines)
+        except _SourceError as exc:
+            entry.errors = [exc.error]
+            self._remember_files(entry, self._guess_files(entry.name))
+            return False
+        all_files = {p for fs in files_per_stage.values() for p in fs}
+        self._remember_files(entry, all_files)
+        digest = hashlib.sha1(repr(sorted(sources.items())).encode()).hexdigest()
+        if entry.program is not None and digest == entry.digest:
+            entry.errors = []
+            return True
+        try:
+            prog = self.ctx.program(**sources)
+        except Exception as exc:  # moderngl.Error
+            entry.errors = self._parse_errors(str(exc), files_per_stage)
+            return False
+        if entry.program is not None:
+            entry.program.release()
+        entry.program = prog
+        entry.digest = digest
+        entry.errors = []
+        entry.generation += 1
+        return True
+
+    def _guess_files(self, name: str) -> set[Path]:
+        return {p.resolve() for p in self._stage_files(name).values()}
+
+    def _remember_files(self, entry: _Entry, files) -> None:
+        entry.mtimes = {}
+        for p in files:
+            try:
+                entry.mtimes[p] = p.stat().st_mtime_ns
+            except OSError:
+                entry.mtimes[p] = -1
+
+    def _parse_errors(self, text: str, files_per_stage: dict[str, list[Path]]) -> list[ShaderError]:
+        stage = next((s for s in files_per_stage if s.split("_")[0] in text.lower().split("\n", 3)[0].lower()), None)
+        for s in files_per_stage:
+            if s in text or s.replace("_", " ") in text.lower():
+                stage = s
+        files = files_per_stage.get(stage) or next(iter(files_per_stage.values()))
+        out = []
+        for line in text.splitlines():
+            for pat in _ERR_PATTERNS:
+                m = pat.match(line)
+                if m:
+                    fid, ln, msg = int(m.group(1)), int(m.group(2)), m.group(3).strip()
+                    f = self._rel(files[fid]) if 0 <= fid < len(files) else f"<source {fid}>"
+                    out.append(ShaderError(f, ln, msg or line.strip()))
+                    break
+        if not out:
+            first = text.strip().splitlines()
+            out.append(ShaderError(self._rel(files[0]), 0, " ".join(first[:6]) if first else "compile failed"))
+        # keep errors, drop warnings-only noise when there are errors
+        errs = [e for e in out if "warning" not in e.message.lower()[:10]]
+        return errs or out
+
+    # -- public ------------------------------------------------------------------------------
+    def _entry(self, name: str, defines: dict | None) -> _Entry:
+        key_defs = tuple(sorted((str(k), str(v)) for k, v in (defines or {}).items()))
+        key = (name, key_defs)
+        entry = self._entries.get(key)
+        if entry is None:
+            entry = self._entries[key] = _Entry(name, key_defs)
+            self._compile(entry)
+        return entry
+
+    def get(self, name: str, defines: dict | None = None) -> moderngl.Program:
+        """The last good program; ShaderCompileError if it never compiled."""
+        entry = self._entry(name, defines)
+        if entry.program is None:
+            raise ShaderCompileError(name, entry.errors)
+        return entry.program
+
+    def version(self, name: str, defines: dict | None = None) -> str:
+        """Digest of the assembled source of the running program (part of pass cache keys)."""
+        entry = self._entry(name, defines)
+        return f"{entry.digest}:{entry.generation}"
+
+    def errors(self) -> dict[str, list[ShaderError]]:
+        return {e.name: list(e.errors) for e in self._entries.values() if e.errors}
+
+    def changed(self) -> list[_Entry]:
+        out = []
+        for entry in self._entries.values():
+            for p, t in entry.mtimes.items():
+                try:
+                    now = p.stat().st_mtime_ns
+                except OSError:
+                    now = -1
+                if now != t:
+                    out.append(entry)
+                    break
+        return out
+
+    def reload(self, force: bool = False) -> tuple[list[str], dict[str, list[ShaderError]]]:
+        """Recompile programs whose files changed (all when ``force``). Returns (names whose program
+        was replaced, current errors per program). Programs that fail keep their last good version."""
+        replaced = []
+        todo = list(self._entries.values()) if force else self.changed()
+        for entry in todo:
+            gen = entry.generation
+            self._compile(entry)
+            if entry.generation != gen:
+                replaced.append(entry.name)
+        return replaced, self.errors()
+
+    def release(self) -> None:
+        for e in self._entries.values():
+            if e.program is not None:
+                e.program.release()
+        self._entries.clear()
+
+
+class _SourceError(Exception):
+    def __init__(self, error: ShaderError):
+        self.error = error
