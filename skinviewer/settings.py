@@ -153,7 +153,6 @@ class GosselinSettings(_Model):
     scale_x: float = Field(4.0, ge=0.0, le=1000.0)
     scale_y: float = Field(0.0, ge=0.0, le=1000.0)
     regions: dict[str, RegionKernel] = Field(default_factory=_default_gosselin_regions)
-    dilate_gutters: int = Field(8, ge=0, le=64, description="texels of island-border dilation")
 
     @field_validator("regions")
     @classmethod
@@ -197,7 +196,6 @@ class DeonSettings(_Model):
     irradiance_size: int = Field(1024, ge=256, le=4096)
     reuse_irradiance_below: float = Field(
         0.01, ge=0.0, le=10.0, description="variance (mm^2) under which blur_1 reuses the irradiance itself")
-    dilate_gutters: int = Field(8, ge=0, le=64)
 
     @field_validator("gaussians")
     @classmethod

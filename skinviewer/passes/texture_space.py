@@ -1,0 +1,69 @@
+"""Texture-space helpers shared by the texture-space techniques: the gutter map of the UV atlas
+(nearest island texel for every texel outside the islands) and the dilation that uses it."""
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+from scipy import ndimage
+
+from ..graph import Pass, Reflection, TexSpec
+from .common import draw_fullscreen, set_uniform
+
+
+def gutter_resource(size: int) -> str:
+    return f"gutter_{size}"
+
+
+class GutterMapPass(Pass):
+    """Per texel: the integer texel coordinate of the nearest texel covered by a UV island (RG) and
+    coverage (B). Depends on the mesh and the texture size only, so it runs once per scene/size.
+    ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
+
+    def __init__(self, size_setting: str, name: str | None = None):
+        self.size_setting = size_setting
+        self.name = name or f"gutter_map[{size_setting}]"
+
+    def reflect(self, r: Reflection) -> None:
+        size = r.setting(self.size_setting)
+        r.program("uv_coverage")
+        r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        size = ec.setting(self.size_setting)
+        cover = ec.scratch(TexSpec((size, size), 1, "f1", filter="nearest"))
+        fbo = ec.scratch_framebuffer(cover)
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        ec.gl.disable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        prog = ec.program("uv_coverage")
+        ec.scene.vao(prog).render()
+        covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
+        ec.output(gutter_resource(size)).write(gutter_table(covered).tobytes())
+
+
+def gutter_table(covered: np.ndarray) -> np.ndarray:
+    """(H, W, 4) float32: RG = (x, y) of the nearest covered texel (itself when covered), B = covered."""
+    h, w = covered.shape
+    out = np.zeros((h, w, 4), np.float32)
+    if covered.any():
+        _, (iy, ix) = ndimage.distance_transform_edt(~covered, return_indices=True)
+    else:
+        iy, ix = np.mgrid[0:h, 0:w]
+    out[..., 0] = ix
+    out[..., 1] = iy
+    out[..., 2] = covered
+    return out
+
+
+def dilate(ec, source: moderngl.Texture, gutter: moderngl.Texture, target_fbo: moderngl.Framebuffer) -> None:
+    """Copy ``source`` into ``target_fbo`` with the gutters filled from the nearest island texel.
+    The calling pass must declare the program ``dilate``."""
+    prog = ec.program("dilate")
+    source.use(0)
+    gutter.use(1)
+    set_uniform(prog, "source", 0)
+    set_uniform(prog, "gutter", 1)
+    target_fbo.use()
+    ec.gl.disable(moderngl.DEPTH_TEST)
+    draw_fullscreen(ec, prog)

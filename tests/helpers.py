@@ -1,0 +1,36 @@
+"""Reusable test helpers: small settings for a scene, and the all-textures-finite check every
+technique's hard-case tests call."""
+from __future__ import annotations
+
+import numpy as np
+
+from skinviewer.scenes import scene_overrides
+from skinviewer.settings import Settings, with_values
+
+
+def small_settings(scene: str = "head", technique: str = "phong", size: int = 96, **assign) -> Settings:
+    """Settings for a quick render: a built-in scene with its own lights/camera, small maps."""
+    values = {"scene.name": scene, **scene_overrides(scene), "technique": technique,
+              "render.width": size, "render.height": size, "scene.head_detail": 0,
+              "shadow.map_size": 256, "gosselin.light_map_size": 256, "deon.irradiance_size": 256,
+              "deon.tsm_size": 256}
+    values.update(assign)
+    return with_values(Settings(), values)
+
+
+def assert_all_finite(renderer, settings: Settings, report=None) -> dict[str, np.ndarray]:
+    """Render (unless a report is given) and check every texture the graph holds is finite.
+    Returns the textures by name for further checks."""
+    if report is None:
+        report = renderer.render(settings)
+    g = renderer.graph(settings.technique)
+    out = {}
+    bad = []
+    for name in g.resources():
+        arr = g.read(name)
+        if not np.all(np.isfinite(arr)):
+            n = int((~np.isfinite(arr)).sum())
+            bad.append(f"{name}: {n} non-finite values")
+        out[name] = arr
+    assert not bad, "non-finite texels: " + "; ".join(bad)
+    return out
