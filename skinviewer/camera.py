@@ -6,7 +6,7 @@ import hashlib
 import math
 from dataclasses import dataclass
 
-import glm
+from pyglm import glm
 import numpy as np
 
 from .mesh import framing_distance

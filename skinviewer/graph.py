@@ -63,6 +63,11 @@ class Reflection:
             self.settings.append(path)
         return get_path(self._settings, path)
 
+    def peek(self, path: str) -> Any:
+        """Read a setting without declaring it: only for the graph's shape (e.g. whether light i
+        exists), never for a value the pass's output depends on."""
+        return get_path(self._settings, path)
+
     def input(self, resource: str) -> None:
         if resource not in self.inputs:
             self.inputs.append(resource)

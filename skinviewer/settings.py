@@ -153,6 +153,9 @@ class GosselinSettings(_Model):
     scale_x: float = Field(4.0, ge=0.0, le=1000.0)
     scale_y: float = Field(0.0, ge=0.0, le=1000.0)
     regions: dict[str, RegionKernel] = Field(default_factory=_default_gosselin_regions)
+    specular_shadow: Literal["visibility", "printed"] = Field(
+        "visibility", description="eq. (18) attenuation: visibility = LUM(blurred)/LUM(unshadowed irradiance) "
+        "in [0, 1] (default); printed = LUM(blurred) as printed (scales with Lc^2)")
 
     @field_validator("regions")
     @classmethod

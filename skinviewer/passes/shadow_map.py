@@ -19,7 +19,7 @@ class ShadowMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         i = self.light_index
-        if r.setting("lights.#") <= i:
+        if r.peek("lights.#") <= i or not r.peek(f"lights.{i}.enabled"):
             return
         for f in LIGHT_POSE_FIELDS:
             r.setting(f"lights.{i}.{f}")

@@ -1,0 +1,214 @@
+"""The pass graph: ordering, pruning, caching (settings, inputs, shaders, camera), timing, pooling."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from skinviewer.graph import FrameInputs, GraphError, Pass, Reflection, RenderGraph, TexSpec
+from skinviewer.settings import Settings, with_values
+from skinviewer.shaders import ShaderLibrary
+
+from helpers import small_settings
+
+FS_VERT = """#version 330 core
+out vec2 v_uv;
+void main() { vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2); v_uv = p; gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }
+"""
+
+
+@pytest.fixture
+def shader_dir(tmp_path):
+    (tmp_path / "fill.vert").write_text(FS_VERT)
+    (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\n"
+                                        "void main() { f = vec4(u_value); }\n")
+    (tmp_path / "add.vert").write_text(FS_VERT)
+    (tmp_path / "add.frag").write_text("#version 330 core\nin vec2 v_uv;\nuniform sampler2D a;\nuniform sampler2D b;\n"
+                                       "out vec4 f;\nvoid main() { f = texture(a, v_uv) + texture(b, v_uv); }\n")
+    return tmp_path
+
+
+class Fill(Pass):
+    uses_scene = False
+
+    def __init__(self, name, out, setting):
+        self.name, self.out, self.setting_path = name, out, setting
+
+    def reflect(self, r: Reflection):
+        r.setting(self.setting_path)
+        r.program("fill")
+        r.output(self.out, TexSpec((8, 8), 4, "f4"))
+
+    def execute(self, ec):
+        prog = ec.program("fill")
+        prog["u_value"].value = float(ec.setting(self.setting_path))
+        ec.framebuffer(self.out).use()
+        ec.graph.fullscreen_vao(prog).render(vertices=3)
+
+
+class Add(Pass):
+    uses_scene = False
+
+    def __init__(self, name, a, b, out, view_dependent=False):
+        self.name, self.a, self.b, self.out = name, a, b, out
+        self.view_dependent = view_dependent
+
+    def reflect(self, r):
+        r.input(self.a)
+        r.input(self.b)
+        r.program("add")
+        r.output(self.out, TexSpec((8, 8), 4, "f4"))
+
+    def execute(self, ec):
+        prog = ec.program("add")
+        ec.input(self.a).use(0)
+        ec.input(self.b).use(1)
+        for name, unit in (("a", 0), ("b", 1)):
+            if name in prog:  # the compiler drops unused samplers
+                prog[name].value = unit
+        ec.framebuffer(self.out).use()
+        ec.graph.fullscreen_vao(prog).render(vertices=3)
+
+
+def make_graph(gl_ctx, shader_dir, passes, targets):
+    lib = ShaderLibrary(gl_ctx, shader_dir)
+    g = RenderGraph(gl_ctx, lib, passes, targets)
+    vaos = {}
+    g.fullscreen_vao = lambda prog: vaos.setdefault(id(prog), gl_ctx.vertex_array(prog, []))
+    return g, lib
+
+
+def frame(s, view_key="cam0"):
+    return FrameInputs(settings=s, scene=None, scene_version=0, view=None, view_key=view_key)
+
+
+def test_orders_producers_first_and_computes(gl_ctx, shader_dir):
+    # listed consumer-first on purpose
+    passes = [Add("sum", "a", "b", "out"), Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient")]
+    g, _ = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    s = with_values(Settings(), {"render.exposure": 2.0, "phong.ambient": 0.25})
+    rep = g.run(frame(s))
+    assert [p.name for p in g.order] == ["fill_a", "fill_b", "sum"]
+    assert rep.ran == ["fill_a", "fill_b", "sum"]
+    assert np.allclose(g.read("out"), 2.25)
+
+
+def test_prunes_unconsumed_and_caches(gl_ctx, shader_dir):
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"),
+              Fill("unused", "c", "phong.specular"), Add("sum", "a", "b", "out")]
+    g, _ = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    s = Settings()
+    rep = g.run(frame(s))
+    assert rep.pruned == ["unused"]
+    rep = g.run(frame(s))
+    assert rep.ran == [] and set(rep.cached) == {"fill_a", "fill_b", "sum"}
+    # a setting re-runs exactly the pass that declared it and its consumers
+    rep = g.run(frame(with_values(s, {"phong.ambient": 0.5})))
+    assert rep.ran == ["fill_b", "sum"] and "fill_a" in rep.cached
+    assert "setting phong.ambient" in next(p.reason for p in rep.passes if p.name == "fill_b")
+    assert "input b" in next(p.reason for p in rep.passes if p.name == "sum")
+    # a setting nobody declared re-runs nothing
+    rep = g.run(frame(with_values(s, {"phong.ambient": 0.5, "gosselin.iterations": 7})))
+    assert rep.ran == []
+
+
+def test_camera_reruns_only_view_dependent(gl_ctx, shader_dir):
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"),
+              Add("final", "a", "b", "out", view_dependent=True)]
+    g, _ = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    s = Settings()
+    g.run(frame(s, "cam0"))
+    rep = g.run(frame(s, "cam1"))
+    assert rep.ran == ["final"]
+    assert next(p.reason for p in rep.passes if p.name == "final") == "camera"
+
+
+def test_shader_edit_reruns_users(gl_ctx, shader_dir):
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, lib = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    s = Settings()
+    g.run(frame(s))
+    time.sleep(0.01)
+    p = shader_dir / "add.frag"
+    p.write_text(p.read_text().replace("texture(a, v_uv) + texture(b, v_uv)", "texture(a, v_uv) * 3.0"))
+    replaced, errors = lib.reload()
+    assert replaced == ["add"] and not errors
+    rep = g.run(frame(s))
+    assert rep.ran == ["sum"]
+    assert np.allclose(g.read("out"), 3.0)
+
+
+def test_undeclared_setting_is_an_error(gl_ctx, shader_dir):
+    class Sneaky(Fill):
+        def execute(self, ec):
+            ec.setting("phong.shininess")
+
+    g, _ = make_graph(gl_ctx, shader_dir, [Sneaky("s", "a", "render.exposure")], ["a"])
+    with pytest.raises(GraphError, match="did not declare"):
+        g.run(frame(Settings()))
+
+
+def test_graph_errors(gl_ctx, shader_dir):
+    g, _ = make_graph(gl_ctx, shader_dir, [Add("x", "y_out", "b", "x_out"), Add("y", "x_out", "b", "y_out"),
+                                            Fill("fb", "b", "render.exposure")], ["x_out"])
+    with pytest.raises(GraphError, match="cycle"):
+        g.run(frame(Settings()))
+    g, _ = make_graph(gl_ctx, shader_dir, [Add("x", "nowhere", "b", "out"), Fill("fb", "b", "render.exposure")], ["out"])
+    with pytest.raises(GraphError, match="no pass writes"):
+        g.run(frame(Settings()))
+
+
+def test_timing_modes_are_reported(gl_ctx, shader_dir):
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, _ = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    rep = g.run(frame(Settings()), timing="sync")
+    assert rep.timing_mode == "sync" and all(p.ms is not None and p.ms >= 0 for p in rep.passes)
+    assert "glFinish" in rep.to_json()["timing_note"]
+    rep = g.run(frame(Settings()), timing="gpu", force=True)
+    assert rep.timing_mode == "gpu"
+    # timer queries may answer nothing useful on llvmpipe; never a bogus 0xFFFFFFFF figure
+    assert all(p.ms is None or 0 <= p.ms < 4000 for p in rep.passes)
+
+
+def test_pool_reuses_textures(gl_ctx, shader_dir):
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"),
+              Fill("fill_c", "c", "phong.specular"), Add("sum", "a", "b", "out")]
+    g, _ = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    g.run(frame(Settings()), targets=["out", "c"])
+    allocated = g.pool.allocated
+    g.run(frame(Settings()), targets=["out"])  # c pruned: its texture goes back to the pool
+    assert "c" not in g.resources()
+    g.run(frame(Settings()), targets=["out", "c"])  # ...and comes back from it
+    assert g.pool.allocated == allocated and g.pool.reused >= 1
+    rep = g.last_report
+    assert "fill_c" in rep.ran  # its old output was released, so it must run again
+
+
+# -- the real Phong graph ------------------------------------------------------------------------
+
+def test_phong_graph_caching_rules(renderer):
+    s = small_settings("shadow-edge", "phong")
+    rep = renderer.render(s)
+    assert set(rep.ran) == {"shadow_map_0", "phong", "output"}
+    assert set(rep.pruned) == {"shadow_map_1", "shadow_map_2", "shadow_map_3"}
+    rep = renderer.render(s)
+    assert rep.ran == []
+    rep = renderer.render(with_values(s, {"camera.yaw": 10.0}))
+    assert set(rep.ran) == {"phong", "output"}, rep.table()
+    s2 = with_values(s, {"camera.yaw": 10.0})
+    rep = renderer.render(with_values(s2, {"lights.0.color": [1.0, 0.5, 0.5]}))
+    assert set(rep.ran) == {"phong", "output"}  # colour is not part of the light's pose
+    rep = renderer.render(with_values(s2, {"lights.0.color": [1.0, 0.5, 0.5], "lights.0.direction": [0.1, 0.0, 1.0]}))
+    assert set(rep.ran) == {"shadow_map_0", "phong", "output"}
+    rep = renderer.render(with_values(s2, {"lights.0.color": [1.0, 0.5, 0.5], "lights.0.direction": [0.1, 0.0, 1.0],
+                                           "render.exposure": 2.0}))
+    assert rep.ran == ["output"]
+
+
+def test_second_light_adds_its_shadow_map(renderer):
+    s = small_settings("shadow-edge", "phong")
+    renderer.render(s)
+    lights = [l.model_dump() for l in s.lights] + [{"kind": "point", "position": [50.0, 50.0, 80.0]}]
+    rep = renderer.render(with_values(s, {"lights": lights}))
+    assert "shadow_map_1" in rep.ran and "shadow_map_0" in rep.cached

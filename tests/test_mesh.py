@@ -1,0 +1,94 @@
+"""Mesh loading (glTF/GLB/OBJ/PLY), UVs, normals, tangents, framing, and the shared head scan."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from skinviewer.mesh import MeshData, MeshError, compute_tangents, load_mesh, load_texture_maps, vertex_normals
+
+from conftest import LPS_GLB
+
+
+def _quad_with_uv(tmp_path, ext):
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    uv = v[:, :2].copy()
+    tm = trimesh.Trimesh(v, f, visual=trimesh.visual.TextureVisuals(uv=uv), process=False)
+    p = tmp_path / f"quad.{ext}"
+    tm.export(p)
+    return p
+
+
+@pytest.mark.parametrize("ext", ["obj", "glb", "ply"])
+def test_formats_with_uvs(tmp_path, ext):
+    p = _quad_with_uv(tmp_path, ext)
+    m = load_mesh(p)
+    assert m.indices.shape == (2, 3)
+    assert m.uvs.min() >= 0 and m.uvs.max() <= 1
+    assert np.allclose(np.abs(m.normals[:, 2]), 1, atol=1e-5)
+    assert np.all(np.isfinite(m.tangents))
+    # tangent follows +u: the quad's u runs along +x
+    assert np.allclose(np.abs(m.tangents[:, 0]), 1, atol=1e-4)
+
+
+def test_mesh_without_uvs_gets_an_atlas_or_is_refused(tmp_path):
+    tm = trimesh.creation.icosphere(subdivisions=2)
+    p = tmp_path / "ball.ply"
+    tm.export(p)
+    with pytest.raises(MeshError, match="no texture coordinates"):
+        load_mesh(p, auto_uv=False)
+    m = load_mesh(p)
+    assert any("xatlas" in n for n in m.notes)
+    assert m.uvs.shape[0] == m.positions.shape[0] and m.uvs.min() >= 0 and m.uvs.max() <= 1
+
+
+def test_unreadable_and_empty_files(tmp_path):
+    with pytest.raises(MeshError, match="not found"):
+        load_mesh(tmp_path / "missing.glb")
+    bad = tmp_path / "bad.glb"
+    bad.write_bytes(b"not a mesh at all")
+    with pytest.raises(MeshError):
+        load_mesh(bad)
+
+
+def test_degenerate_uvs_give_finite_tangents():
+    p = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], np.float32)
+    uv = np.zeros((4, 2), np.float32)  # every UV triangle has zero area
+    idx = np.array([[0, 1, 2], [1, 3, 2]])
+    n = vertex_normals(p, idx)
+    t = compute_tangents(p, n, uv, idx)
+    assert np.all(np.isfinite(t)) and np.allclose(np.linalg.norm(t[:, :3], axis=1), 1, atol=1e-5)
+    assert np.allclose(np.sum(t[:, :3] * n, axis=1), 0, atol=1e-5)
+
+
+def test_bad_texture_map_is_refused(tmp_path):
+    m = MeshData(np.zeros((3, 3)), np.tile([0, 0, 1.0], (3, 1)), np.zeros((3, 2)), np.array([[0, 1, 2]]))
+    bad = tmp_path / "albedo.png"
+    bad.write_bytes(b"garbage")
+    with pytest.raises(MeshError, match="cannot read image"):
+        load_texture_maps(m, albedo=bad)
+
+
+@pytest.mark.skipif(not LPS_GLB.is_file(), reason="shared Lee Perry-Smith scan not present")
+def test_lee_perry_smith_loads():
+    m = load_mesh(LPS_GLB)
+    assert m.positions.shape == (9279, 3) and m.indices.shape == (17684, 3)
+    assert 0 <= m.uvs.min() and m.uvs.max() <= 1
+    lo, hi = m.bounds
+    # Y up, facing +Z: the nose tip is the frontmost point and sits in the upper half
+    nose = m.positions[np.argmax(m.positions[:, 2])]
+    assert nose[1] > (lo[1] + hi[1]) / 2 - 0.5
+    assert np.all(np.isfinite(m.tangents)) and np.all(np.isfinite(m.normals))
+
+
+@pytest.mark.skipif(not LPS_GLB.is_file(), reason="shared Lee Perry-Smith scan not present")
+def test_lee_perry_smith_renders(renderer):
+    from skinviewer.settings import Settings, with_values
+    from helpers import assert_all_finite
+    s = with_values(Settings(), {"scene.mesh": str(LPS_GLB), "scene.mm_per_unit": 48.0, "technique": "phong",
+                                 "render.width": 96, "render.height": 96, "shadow.map_size": 256})
+    renderer.render(s)
+    img = renderer.image(s).astype(float)
+    assert img.std() > 10  # a lit head, not a blank frame
+    assert_all_finite(renderer, s)

@@ -1,0 +1,110 @@
+"""Rendering through the graph: every scene finite, the default head plausible, the CLI."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from skinviewer import techniques
+from skinviewer.cli import main
+from skinviewer.scenes import SCENES
+from skinviewer.settings import with_values
+
+from helpers import assert_all_finite, small_settings
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_every_scene_every_technique_is_finite(renderer, scene):
+    for tech in techniques.names():
+        s = small_settings(scene, tech, size=64)
+        renderer.render(s)
+        assert_all_finite(renderer, s)
+
+
+def test_head_renders_a_plausible_image(renderer):
+    s = small_settings("head", "phong", size=128)
+    renderer.render(s)
+    img = renderer.image(s).astype(np.float32)
+    bg = np.round(np.array([0.05, 0.05, 0.06]) ** (1 / 2.2) * 255)
+    subject = np.abs(img - img[0, 0]).sum(axis=2) > 12
+    assert 0.15 < subject.mean() < 0.9, "the head should fill a good part of the frame"
+    lit = img[subject]
+    # skin: red > green > blue on average, and real shading variation
+    assert lit[:, 0].mean() > lit[:, 1].mean() > lit[:, 2].mean()
+    assert lit.std() > 12
+
+
+def test_camera_orbit_changes_image_only_through_final(renderer):
+    s = small_settings("head", "phong", size=64)
+    renderer.render(s)
+    a = renderer.image(s)
+    s2 = with_values(s, {"camera.yaw": s.camera.yaw + 60})
+    rep = renderer.render(s2)
+    assert set(rep.ran) == {"phong", "output"}
+    assert np.abs(renderer.image(s2).astype(int) - a).mean() > 2
+
+
+def test_cli_render_dump_and_timings(tmp_path):
+    out, dump, tj = tmp_path / "x.png", tmp_path / "dump", tmp_path / "t.json"
+    rc = main(["render", "--scene", "shadow-edge", "--technique", "phong", "--size", "64x48", "--out", str(out),
+               "--dump-passes", str(dump), "--timings", str(tj), "--set", "shadow.map_size=256"])
+    assert rc == 0
+    from PIL import Image
+    assert Image.open(out).size == (64, 48)
+    graph = json.loads((dump / "graph.json").read_text())
+    assert graph["timing_mode"] == "sync" and graph["order"][-1] == "output"
+    statuses = {p["name"]: p["status"] for p in graph["passes"]}
+    assert statuses["shadow_map_0"] == "ran" and statuses["shadow_map_3"] == "pruned"
+    for name in ("shadow_map_0", "lit", "image"):
+        arr = np.load(dump / f"{name}.npy")
+        assert arr.dtype == np.float32 and np.all(np.isfinite(arr))
+        assert (dump / f"{name}.png").is_file()
+    t = json.loads(tj.read_text())
+    assert {"frame", "timing_mode", "passes", "total_ms"} <= set(t)
+
+
+@pytest.mark.parametrize("argv,msg", [
+    (["--scene", "nowhere"], "invalid choice"),
+    (["--set", "lights.0.intensity=-1"], "lights.0.intensity"),
+    (["--set", "no.such=1"], "no such setting"),
+    (["--mesh", "/nonexistent/head.glb"], "not found"),
+    (["--preset", "/nonexistent/p.json"], "cannot read"),
+    (["--technique", "raytracing"], "technique"),
+    (["--size", "big"], "WxH"),
+])
+def test_cli_errors_are_one_clear_line(tmp_path, argv, msg):
+    p = subprocess.run([sys.executable, "-m", "skinviewer.cli", "render", "--out", str(tmp_path / "o.png"), *argv],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2
+    assert msg in p.stderr
+    assert "Traceback" not in p.stderr
+    assert not (tmp_path / "o.png").exists()
+
+
+def test_headless_context_failure_says_what_to_install(monkeypatch):
+    import moderngl
+    from skinviewer import gl
+
+    def refuse(*a, **k):
+        raise Exception("eglInitialize failed")
+
+    monkeypatch.setattr(moderngl, "create_standalone_context", refuse)
+    with pytest.raises(gl.GLUnavailableError, match="libegl1"):
+        gl.headless_context()
+
+
+def test_package_data_globs_cover_shaders_and_presets():
+    """The wheel ships shaders/ and presets/ (pyproject package-data): every file must match a glob."""
+    import fnmatch
+    import tomllib
+    from skinviewer import paths
+    cfg = tomllib.loads((paths.shaders_dir().parent / "pyproject.toml").read_text())["tool"]["setuptools"]
+    for pkg, folder in (("skinviewer.shaders", paths.shaders_dir()), ("skinviewer.presets", paths.presets_dir())):
+        globs = cfg["package-data"][pkg]
+        for f in folder.rglob("*"):
+            if f.is_file() and "__pycache__" not in f.parts:
+                rel = f.relative_to(folder).as_posix()
+                assert any(fnmatch.fnmatch(rel, g) for g in globs), f"{rel} would be missing from the wheel"
