@@ -1,0 +1,656 @@
+"""The project's own default head: a procedural adult head and neck with a UV atlas and skin maps.
+
+Geometry, in millimetres, Y up, facing +Z, origin near the middle of the head:
+
+* skull, face and neck are one implicit surface (smooth union / subtraction of ellipsoids and
+  capsules), star-shaped about a point inside the head. Each vertex is found by casting a ray from
+  that point along the spherical direction (θ from +Y, φ from +Z towards +X), so the surface is a
+  radial function r(θ, φ) — no folds, and every texel maps straight back to a 3D point;
+* the ears are separate closed thin shells (3 mm thick, rounded rim) pushed into the side of the
+  head, so a back light passes through a real flap of tissue.
+
+UV atlas: the head band (everything below the crown cap, cut at the back of the head) is one island
+with u ∝ arc length around and v ∝ mean arc length down; the crown is an azimuthal-equidistant disk;
+each ear side is a planar island. Islands share one texel density and are separated by gutters that
+the maps fill by dilation (nearest island texel) so bilinear filtering never reads outside skin.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import Delaunay
+
+from .mesh import MeshData, vertex_normals
+from .settings import REGIONS
+
+GENERATOR_VERSION = 1
+
+# detail level -> (target edge length in mm, texture size)
+_LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}
+
+_RAY_ORIGIN = np.array([0.0, -5.0, -12.0])   # inside the skull; the neck axis runs under it
+_THETA_CAP = np.radians(38.0)                 # crown cap / head band boundary
+_NECK_BOTTOM_Y = -215.0                       # open neck cut, ~100 mm below the chin
+_NECK_RADIUS = 61.0                            # at the cut; narrower under the jaw
+_EAR_THICKNESS = 3.0                          # mm, between the two sheets of each ear
+_UV_MARGIN = 0.012                            # island distance from the atlas border
+_UV_GUTTER = 0.02                             # between islands (20 texels at 1024²)
+_REGION = {name: i for i, name in enumerate(REGIONS)}
+
+
+# ---------------------------------------------------------------------------------------------
+# public API
+
+def default_head(detail: int = 1, seed: int = 7, cache_dir: str | Path | None = None) -> MeshData:
+    """The built-in head (mm, Y up, facing +Z), generated once per (detail, seed) and cached.
+
+    detail 0: ~8k triangles and 512² maps (tests); 1: ~51k triangles and 1024² maps;
+    2: ~200k triangles and 2048² maps.
+    The seed only changes the skin's noise (albedo mottling, pores), never the shape.
+    """
+    if detail not in _LEVELS:
+        raise ValueError(f"head detail must be one of {sorted(_LEVELS)}, got {detail}")
+    path = _cache_path(detail, seed, cache_dir)
+    arrays = _load_cache(path)
+    if arrays is None:
+        arrays = _generate(detail, seed)
+        _save_cache(path, arrays)
+    return MeshData(
+        positions=arrays["positions"], normals=arrays["normals"], uvs=arrays["uvs"],
+        indices=arrays["indices"], mm_per_unit=1.0,
+        albedo=arrays["albedo"].astype(np.float32),
+        normal_map=arrays["normal_map"].astype(np.float32),
+        specular_map=arrays["specular_map"].astype(np.float32),
+        region_map=arrays["region_map"], name=f"default-head-d{detail}")
+
+
+# ---------------------------------------------------------------------------------------------
+# cache
+
+_ARRAY_KEYS = ("positions", "normals", "uvs", "indices", "albedo", "normal_map", "specular_map", "region_map")
+
+
+def _cache_path(detail: int, seed: int, cache_dir: str | Path | None) -> Path:
+    root = cache_dir or os.environ.get("SKINVIEWER_CACHE") or Path.home() / ".cache" / "skinviewer"
+    return Path(root) / f"head-v{GENERATOR_VERSION}-d{detail}-s{seed}.npz"
+
+
+def _load_cache(path: Path) -> dict[str, np.ndarray] | None:
+    """The cached arrays, or None when missing, unreadable or inconsistent (then regenerate)."""
+    if not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in _ARRAY_KEYS}
+    except Exception:  # truncated zip, bad header, missing key...: all mean "regenerate"
+        return None
+    n = len(arrays["positions"])
+    res = arrays["region_map"].shape
+    ok = (arrays["positions"].shape == (n, 3) and arrays["normals"].shape == (n, 3)
+          and arrays["uvs"].shape == (n, 2) and arrays["indices"].ndim == 2
+          and arrays["indices"].shape[1] == 3 and int(arrays["indices"].max(initial=0)) < n
+          and len(res) == 2 and arrays["albedo"].shape == (*res, 3)
+          and arrays["normal_map"].shape == (*res, 3) and arrays["specular_map"].shape == (*res, 1)
+          and all(np.all(np.isfinite(arrays[k])) for k in ("positions", "normals", "uvs")))
+    return arrays if ok else None
+
+
+def _save_cache(path: Path, arrays: dict[str, np.ndarray]) -> None:
+    """Atomic write (temp file + os.replace); an unwritable cache only costs regeneration."""
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=path.stem, suffix=".tmp", dir=path.parent)
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays)
+        os.replace(tmp, path)
+    except OSError:
+        if tmp is not None and os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+# ---------------------------------------------------------------------------------------------
+# implicit head: smooth CSG of ellipsoids and capsules (negative inside)
+
+def _smin(a, b, k):
+    """Polynomial smooth minimum (smooth union) with blend width k mm."""
+    h = np.maximum(k - np.abs(a - b), 0.0) / k
+    return np.minimum(a, b) - h * h * k * 0.25
+
+
+def _smax(a, b, k):
+    return -_smin(-a, -b, k)
+
+
+def _ellipsoid(x, y, z, c, r):
+    """Approximate signed distance to an ellipsoid (exact on the axes, good near the surface)."""
+    qx, qy, qz = (x - c[0]) / r[0], (y - c[1]) / r[1], (z - c[2]) / r[2]
+    k0 = np.sqrt(qx * qx + qy * qy + qz * qz)
+    k1 = np.sqrt((qx / r[0]) ** 2 + (qy / r[1]) ** 2 + (qz / r[2]) ** 2)
+    return k0 * (k0 - 1.0) / np.maximum(k1, 1e-9)
+
+
+def _capsule(x, y, z, a, b, ra, rb):
+    """Distance to a segment a-b with radius tapering from ra to rb."""
+    ab = np.subtract(b, a, dtype=float)
+    px, py, pz = x - a[0], y - a[1], z - a[2]
+    t = np.clip((px * ab[0] + py * ab[1] + pz * ab[2]) / ab.dot(ab), 0.0, 1.0)
+    dx, dy, dz = px - t * ab[0], py - t * ab[1], pz - t * ab[2]
+    return np.sqrt(dx * dx + dy * dy + dz * dz) - (ra + (rb - ra) * t)
+
+
+def _bilateral(f, x, y, z, c, *args):
+    """A paired feature (left and right), mirrored in x."""
+    return np.minimum(f(x, y, z, (c[0], c[1], c[2]), *args), f(x, y, z, (-c[0], c[1], c[2]), *args))
+
+
+def _head_sdf(x, y, z):
+    e, cap = _ellipsoid, _capsule
+    # neurocranium: braincase plus the flatter, more upright frontal bone
+    d = e(x, y, z, (0, 22, -10), (75, 93, 97))
+    d = _smin(d, e(x, y, z, (0, 40, 8), (66, 64, 85)), 20)
+    # temples are flatter than the parietal bossing
+    d = _smax(d, -_bilateral(e, x, y, z, (92, 18, 40), (30, 40, 42)), 25)
+    # midface (maxilla) and zygomatic bones (cheekbones)
+    d = _smin(d, e(x, y, z, (0, -22, 24), (54, 56, 68)), 18)
+    d = _smin(d, _bilateral(e, x, y, z, (44, -2, 58), (16, 11, 18)), 14)
+    # dental arch under the lips, and a mandible narrowing towards the chin (x shrinks with z)
+    d = _smin(d, e(x, y, z, (0, -68, 45), (38, 42, 48)), 14)
+    taper = 1.0 - 0.35 * _smoothstep(-5.0, 90.0, z)
+    d = _smin(d, e(x / taper, y, z, (0, -80, 18), (52, 34, 66)), 14)
+    d = _smin(d, e(x, y, z, (0, -100, 78), (17, 13, 12)), 10)
+    # brow ridges (supraorbital), orbits, closed eyelids over the eyeballs
+    d = _smin(d, _bilateral(e, x, y, z, (23, 30, 84), (22, 9, 10)), 10)
+    d = _smax(d, -_bilateral(e, x, y, z, (32, 14, 94), (19, 14, 17)), 7)
+    d = _smin(d, _bilateral(e, x, y, z, (32, 13, 71), (13, 12, 12)), 3)
+    d = _smax(d, -_bilateral(e, x, y, z, (32, 10.5, 84), (11, 0.7, 4)), 1.2)
+    # nose: bridge from the nasion, tip (pronasale), alae (nostril wings), nostrils
+    d = _smin(d, cap(x, y, z, (0, 16, 87), (0, -22, 109), 6.5, 9.0), 10)
+    d = _smin(d, e(x, y, z, (0, -28, 109), (9, 8.5, 9)), 5)
+    d = _smin(d, _bilateral(e, x, y, z, (11, -34, 97), (7, 6.5, 8)), 9)
+    d = _smax(d, -_bilateral(e, x, y, z, (6.5, -41.5, 101), (2.8, 1.6, 4.5)), 2)
+    # lips, the mouth line between them, and the philtrum groove
+    d = _smin(d, e(x, y, z, (0, -57, 88), (23, 7, 10)), 6)
+    d = _smin(d, e(x, y, z, (0, -71, 87), (20, 7, 10)), 6)
+    d = _smax(d, -e(x, y, z, (0, -64, 101), (24, 0.8, 12)), 1.5)
+    d = _smax(d, -e(x, y, z, (0, -48, 100), (3, 6, 3)), 2)
+    # neck and the nape muscles into the occiput
+    d = _smin(d, e(x, y, z, (0, -55, -44), (54, 45, 55)), 20)
+    d = _smin(d, cap(x, y, z, (0, _NECK_BOTTOM_Y, _RAY_ORIGIN[2]), (0, -70, _RAY_ORIGIN[2]),
+                     _NECK_RADIUS, 54.0), 14)
+    d = _smin(d, cap(x, y, z, (0, -400, _RAY_ORIGIN[2]), (0, _NECK_BOTTOM_Y, _RAY_ORIGIN[2]),
+                     _NECK_RADIUS, _NECK_RADIUS), 1)
+    return d
+
+
+def _direction(theta, phi):
+    st = np.sin(theta)
+    return np.stack([st * np.sin(phi), np.cos(theta), st * np.cos(phi)], axis=-1)
+
+
+def _cast(theta, phi):
+    """Radius of the head surface along each ray from the origin (outermost sign change)."""
+    d = _direction(np.ravel(theta), np.ravel(phi))
+    o = _RAY_ORIGIN
+
+    def f(r):
+        p = o + d * r[:, None]
+        return _head_sdf(p[:, 0], p[:, 1], p[:, 2])
+
+    radii = np.linspace(10.0, 250.0, 25)  # the farthest skin (neck cut) is ~220 mm out
+    inside = np.stack([f(np.full(len(d), r)) < 0 for r in radii])
+    last = len(radii) - 1 - np.argmax(inside[::-1], axis=0)  # outermost inside sample
+    lo, hi = radii[last], radii[np.minimum(last + 1, len(radii) - 1)]
+    for _ in range(15):
+        mid = 0.5 * (lo + hi)
+        neg = f(mid) < 0
+        lo, hi = np.where(neg, mid, lo), np.where(neg, hi, mid)
+    return (0.5 * (lo + hi)).reshape(np.shape(theta))
+
+
+def _theta_max():
+    """Polar angle of the neck cut (the neck is a vertical cylinder about the ray origin)."""
+    return np.pi - np.arctan2(_NECK_RADIUS, _RAY_ORIGIN[1] - _NECK_BOTTOM_Y)
+
+
+# ---------------------------------------------------------------------------------------------
+# ears: thin closed shells over a planar outline
+
+class _Ear:
+    """One ear. The outline is a unit disk (x, y) mapped to ear-plane mm (a back, b up):
+    b = 31 y, a = A_C + W(y) x, wider at the helix than at the lobe. The mid-surface is displaced
+    along the ear plane's normal (helix rim, scapha, antihelix, concha bowl); the two sheets sit
+    ±T/2 along the mid-surface normal, closing with a rounded rim."""
+
+    HEIGHT, A_C = 31.0, 9.0
+    RIM = 0.09  # fraction of the unit disk over which the rim rounds off
+
+    def __init__(self, side: float):
+        self.side = side
+        tilt, flare = np.radians(16.0), np.radians(30.0)
+        up = np.array([0.0, np.cos(tilt), -np.sin(tilt)])
+        back = np.array([side * np.sin(flare), 0.0, -np.cos(flare)])
+        back -= up * back.dot(up)
+        self.back = back / np.linalg.norm(back)
+        self.up = up
+        n = np.cross(self.up, self.back)
+        self.normal = n * np.sign(n[0] * side)
+        # attach the outline's front edge to the skin just in front of the tragus
+        th, ph = np.radians(92.0), side * np.radians(88.0)
+        r = float(_cast(np.array([th]), np.array([ph]))[0])
+        self.origin = _RAY_ORIGIN + _direction(th, ph) * r
+
+    @staticmethod
+    def half_width(y):
+        return 15.5 + 3.0 * y
+
+    def plane(self, x, y):
+        return self.A_C + self.half_width(y) * x, self.HEIGHT * y
+
+    def from_plane(self, a, b):
+        y = b / self.HEIGHT
+        return (a - self.A_C) / self.half_width(y), y
+
+    def depth(self, x, y):
+        """Mid-surface offset along the ear normal (mm; + outwards)."""
+        a, b = self.plane(x, y)
+        rho = np.sqrt(x * x + y * y)
+        lobe = 1.0 - _smoothstep(-0.45, -0.75, y)
+        helix = 2.6 * _smoothstep(0.70, 0.96, rho) * _smoothstep(-0.9, -0.2, x) * lobe
+        scapha = -1.4 * np.exp(-((rho - 0.78) / 0.07) ** 2) * lobe
+        antihelix = 1.8 * np.exp(-((rho - 0.58) / 0.1) ** 2) * _smoothstep(-0.5, 0.2, x + 0.3 * y) * lobe
+        concha = -7.5 * np.exp(-((a - 5.0) ** 2 + (b + 4.0) ** 2) / (2 * 8.0 ** 2))
+        return 3.0 * rho * rho + helix + scapha + antihelix + concha
+
+    def half_thickness(self, x, y):
+        rho = np.sqrt(x * x + y * y)
+        t = np.clip((rho - (1.0 - self.RIM)) / self.RIM, 0.0, 1.0)
+        return 0.5 * _EAR_THICKNESS * np.sqrt(np.maximum(1.0 - t * t, 0.0))
+
+    def mid(self, x, y):
+        a, b = self.plane(x, y)
+        d = self.depth(x, y)
+        return (self.origin + a[..., None] * self.back + b[..., None] * self.up
+                + d[..., None] * self.normal)
+
+    def sheet(self, x, y, front: bool):
+        """Points of the front (outer) or back sheet and the mid-surface normal."""
+        eps = 1e-3
+        m = self.mid(x, y)
+        mx = (self.mid(x + eps, y) - self.mid(x - eps, y))
+        my = (self.mid(x, y + eps) - self.mid(x, y - eps))
+        n = np.cross(mx, my)
+        n *= np.sign(np.sum(n * self.normal, axis=-1, keepdims=True))
+        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+        h = self.half_thickness(x, y)[..., None]
+        return m + (h if front else -h) * n
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers
+
+def _smoothstep(e0, e1, x):
+    t = np.clip((x - e0) / (e1 - e0), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _warp(lo, hi, n, density):
+    """n samples in [lo, hi] spaced inversely to density(x) (finer where density is high)."""
+    xs = np.linspace(lo, hi, 4097)
+    g = density(xs)
+    c = np.concatenate([[0.0], np.cumsum(0.5 * (g[1:] + g[:-1]) * np.diff(xs))])
+    return np.interp(np.linspace(0.0, c[-1], n), c, xs)
+
+
+def _warp_count(lo, hi, density, spacing_mm, mm_per_unit):
+    xs = np.linspace(lo, hi, 1025)
+    g = density(xs)
+    integral = float(np.sum(0.5 * (g[1:] + g[:-1]) * np.diff(xs)))
+    return int(np.ceil(integral * mm_per_unit / spacing_mm)) + 1
+
+
+def _disk_points(radius, spacing, with_rim=True):
+    """Concentric rings of roughly `spacing` filling a disk of `radius` (centre included); the
+    outermost ring is omitted when the caller supplies its own boundary."""
+    pts = [np.zeros((1, 2))]
+    rings = max(int(round(radius / spacing)), 1)
+    for j in range(1, rings + with_rim):
+        r = radius * j / rings
+        n = max(int(round(2 * np.pi * r / spacing)), 6)
+        a = (np.arange(n) + 0.5 * (j % 2)) * 2 * np.pi / n
+        pts.append(np.stack([r * np.cos(a), r * np.sin(a)], axis=1))
+    return np.concatenate(pts)
+
+
+def _orient(tris, positions, outward):
+    """Flip triangles whose geometric normal disagrees with the outward reference vectors."""
+    p = positions[tris]
+    n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    flip = np.sum(n * outward, axis=1) < 0
+    tris = tris.copy()
+    tris[flip] = tris[flip][:, ::-1]
+    return tris
+
+
+# ---------------------------------------------------------------------------------------------
+# generation
+
+def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
+    spacing, res = _LEVELS[detail]
+    th_max = _theta_max()
+
+    # mean meridian arc length S(θ) and mean circumference C(θ) from a coarse pass
+    th_c = np.linspace(0.0, th_max, 181)
+    ph_c = np.linspace(-np.pi, np.pi, 73)
+    tt, pp = np.meshgrid(th_c, ph_c, indexing="ij")
+    pc = _RAY_ORIGIN + _direction(tt, pp) * _cast(tt, pp)[..., None]
+    seg = np.linalg.norm(np.diff(pc, axis=0), axis=2).mean(axis=1)
+    s_of_theta = np.concatenate([[0.0], np.cumsum(seg)])
+    circumference = np.linalg.norm(np.diff(pc, axis=1), axis=2).sum(axis=1)
+
+    # atlas scale (uv per mm): band across the bottom, crown cap and four ear islands on top
+    s_cap = np.interp(_THETA_CAP, th_c, s_of_theta)
+    band_height = s_of_theta[-1] - s_cap
+    ears = [_Ear(+1.0), _Ear(-1.0)]
+    ear_w = 2 * (_Ear.half_width(1.0) + 0.5)  # bounding width of an ear island (mm)
+    ear_h = 2 * _Ear.HEIGHT
+    band_width = circumference[th_c >= _THETA_CAP].max()
+    top_row = max(2 * s_cap, ear_h)
+    k = min((1 - 2 * _UV_MARGIN) / band_width,
+            (1 - 2 * _UV_MARGIN - _UV_GUTTER) / (band_height + top_row),
+            (1 - 2 * _UV_MARGIN - 4 * _UV_GUTTER) / (2 * s_cap + 4 * ear_w))
+    v_band_top = _UV_MARGIN + k * band_height
+    v_row = v_band_top + _UV_GUTTER                        # bottom of the top row
+    cap_centre = np.array([_UV_MARGIN + k * s_cap, v_row + k * s_cap])
+
+    def band_uv(theta, phi):
+        c = np.interp(theta, th_c, circumference)
+        u = 0.5 + k * c * phi / (2 * np.pi)
+        v = _UV_MARGIN + k * (s_of_theta[-1] - np.interp(theta, th_c, s_of_theta))
+        return np.stack([u, v], axis=-1)
+
+    def cap_uv(theta, phi):
+        rho = k * np.interp(theta, th_c, s_of_theta)
+        return cap_centre + rho[..., None] * np.stack([np.sin(phi), -np.cos(phi)], axis=-1)
+
+    ear_origins = []  # (uv origin of the island, mirror sign) per (ear, sheet)
+    u0 = cap_centre[0] + k * s_cap + _UV_GUTTER
+    for ear in ears:
+        for front in (True, False):
+            mirror = ear.side if front else -ear.side
+            centre_u = u0 + 0.5 * k * ear_w
+            ear_origins.append((ear, front, np.array([centre_u - mirror * k * _Ear.A_C,
+                                                      v_row + 0.5 * k * ear_h]), mirror))
+            u0 += k * ear_w + _UV_GUTTER
+
+    def ear_uv(ear_origin, x, y):
+        ear, _, o, mirror = ear_origin
+        a, b = ear.plane(x, y)
+        return o + k * np.stack([mirror * a, b], axis=-1)
+
+    # --- head mesh: band grid, finer over the face; cap from Delaunay rings -------------------
+    face_rows = lambda th: 1.0 + 0.7 * _smoothstep(1.0, 1.25, th) * (1 - _smoothstep(2.45, 2.65, th))
+    face_cols = lambda ph: 1.0 + 0.8 * np.exp(-(ph / 0.85) ** 2)
+    mm_per_rad_row = band_height / (th_max - _THETA_CAP)
+    n_th = _warp_count(_THETA_CAP, th_max, face_rows, spacing, mm_per_rad_row)
+    n_ph = _warp_count(-np.pi, np.pi, face_cols, spacing, band_width / (2 * np.pi))
+    # rows uniform in arc length (then warped towards the face), so neck rows are not stretched
+    s_rows = _warp(s_cap, s_of_theta[-1], n_th,
+                   lambda s: face_rows(np.interp(s, s_of_theta, th_c)))
+    theta_b = np.interp(s_rows, s_of_theta, th_c)
+    phi_b = _warp(-np.pi, np.pi, n_ph, face_cols)
+    # the cap rows of the radius table (for texel lookups) are cast with the band
+    theta_top = np.linspace(0.0, _THETA_CAP, max(int(np.ceil(s_cap / spacing)), 4) + 1)[:-1]
+    theta_t = np.concatenate([theta_top, theta_b])
+    tt, pp = np.meshgrid(theta_t, phi_b, indexing="ij")
+    radius_table = _cast(tt, pp)
+    n_top = len(theta_top)
+    band_p = _RAY_ORIGIN + _direction(tt[n_top:], pp[n_top:]) * radius_table[n_top:, :, None]
+    band_uvs = band_uv(tt[n_top:], pp[n_top:])
+    ii = np.arange(n_th * n_ph).reshape(n_th, n_ph)
+    q0, q1, q2, q3 = ii[:-1, :-1], ii[:-1, 1:], ii[1:, 1:], ii[1:, :-1]
+    band_tris = np.concatenate([np.stack([q0, q1, q2], -1).reshape(-1, 3),
+                                np.stack([q0, q2, q3], -1).reshape(-1, 3)])
+    positions = [band_p.reshape(-1, 3)]
+    uvs = [band_uvs.reshape(-1, 2)]
+    tris = [band_tris]
+    base = n_th * n_ph
+
+    # cap: top band row as its boundary (same 3D points), rings inside, pole in the middle
+    ring_phi = phi_b[:-1]
+    inner = _disk_points(s_cap, spacing, with_rim=False)
+    in_s = np.linalg.norm(inner, axis=1)
+    in_phi = np.arctan2(inner[:, 0], -inner[:, 1])
+    in_theta = np.interp(in_s, s_of_theta, th_c)
+    in_p = _RAY_ORIGIN + _direction(in_theta, in_phi) * _cast(in_theta, in_phi)[:, None]
+    cap_p = np.concatenate([band_p[0, :-1], in_p])
+    cap_uvs = np.concatenate([cap_uv(np.full(len(ring_phi), _THETA_CAP), ring_phi),
+                              cap_uv(in_theta, in_phi)])
+    cap_tris = Delaunay(cap_uvs).simplices + base
+    positions.append(cap_p)
+    uvs.append(cap_uvs)
+    tris.append(cap_tris)
+    base += len(cap_p)
+    head_tris = _orient(np.concatenate(tris), np.concatenate(positions),
+                        np.concatenate(positions)[np.concatenate(tris)].mean(axis=1) - _RAY_ORIGIN)
+    tris = [head_tris]
+
+    # ears: unit-disk rings (dense towards the rim so it rounds), two sheets sharing the rim
+    ear_spacing = spacing * 0.45 / _Ear.HEIGHT  # ears are small and curled: finer
+    disk = _disk_points(1.0 - _Ear.RIM, ear_spacing)
+    n_rim = max(int(round(2 * np.pi / ear_spacing)), 24)
+    for f in (0.45, 0.8, 0.95, 1.0):
+        a = (np.arange(n_rim) + 0.5 * (f < 1)) * 2 * np.pi / n_rim
+        rr = 1.0 - _Ear.RIM * (1 - f)
+        disk = np.concatenate([disk, np.stack([rr * np.cos(a), rr * np.sin(a)], axis=1)])
+    disk_tris = Delaunay(disk).simplices
+    for ear_origin in ear_origins:
+        ear, front = ear_origin[0], ear_origin[1]
+        p = ear.sheet(disk[:, 0], disk[:, 1], front)
+        ref = ear.normal if front else -ear.normal
+        t = _orient(disk_tris + base, np.concatenate(positions + [p]), np.broadcast_to(ref, (len(disk_tris), 3)))
+        positions.append(p)
+        uvs.append(ear_uv(ear_origin, disk[:, 0], disk[:, 1]))
+        tris.append(t)
+        base += len(p)
+
+    positions = np.concatenate(positions)
+    uvs = np.concatenate(uvs)
+    indices = np.concatenate(tris)
+    normals = _welded_normals(positions, indices)
+
+    maps = _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius_table,
+                  cap_centre, ear_origins, v_band_top)
+    return {"positions": positions.astype(np.float32), "normals": normals,
+            "uvs": uvs.astype(np.float32), "indices": indices.astype(np.uint32), **maps}
+
+
+def _welded_normals(positions, indices):
+    """Smooth normals across UV seams and the ear rims: coincident vertices share one normal."""
+    _, canon = np.unique(positions, axis=0, return_inverse=True)
+    canon = canon.ravel()
+    first = np.zeros(canon.max() + 1, dtype=np.int64)
+    first[canon[::-1]] = np.arange(len(canon))[::-1]
+    welded = first[canon]
+    return vertex_normals(positions, welded[indices])[welded]
+
+
+# ---------------------------------------------------------------------------------------------
+# texture maps
+
+def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius_table,
+           cap_centre, ear_origins, v_band_top):
+    rng = np.random.default_rng(seed)
+    uv = (np.stack(np.meshgrid(np.arange(res), np.arange(res), indexing="xy"), axis=-1) + 0.5) / res
+    u, v = uv[..., 0], uv[..., 1]
+    point = np.zeros((res, res, 3))
+    island = np.zeros((res, res), dtype=np.int8)  # 0 gutter, 1 band, 2 cap, 3 ear
+
+    # texel -> (θ, φ) -> radius table -> 3D, inverting the band and cap maps analytically
+    def head_point(theta, phi):
+        ti = np.interp(theta, theta_t, np.arange(len(theta_t)))
+        pj = np.interp(phi, phi_b, np.arange(len(phi_b)))
+        r = ndimage.map_coordinates(radius_table, [ti, pj], order=1, mode="nearest")
+        return _RAY_ORIGIN + _direction(theta, phi) * r[:, None]
+
+    band = v <= v_band_top
+    s = s_of_theta[-1] - (v[band] - _UV_MARGIN) / k
+    theta = np.interp(s, s_of_theta, th_c)
+    phi = (u[band] - 0.5) * 2 * np.pi / (k * np.interp(theta, th_c, circumference))
+    ok = (np.abs(phi) <= np.pi) & (theta >= _THETA_CAP)
+    idx = np.flatnonzero(band)[ok]
+    point.reshape(-1, 3)[idx] = head_point(theta[ok], phi[ok])
+    island.reshape(-1)[idx] = 1
+
+    d = uv - cap_centre
+    rho = np.linalg.norm(d, axis=-1) / k
+    cap = rho <= np.interp(_THETA_CAP, th_c, s_of_theta)
+    theta = np.interp(rho[cap], s_of_theta, th_c)
+    phi = np.arctan2(d[cap][:, 0], -d[cap][:, 1])
+    point[cap] = head_point(theta, phi)
+    island[cap] = 2
+
+    for ear, front, o, mirror in ear_origins:
+        a = (u - o[0]) / (k * mirror)
+        b = (v - o[1]) / k
+        x, y = ear.from_plane(a, b)
+        inside = (x * x + y * y <= 1.0) & (np.abs(y) <= 1.0)
+        point[inside] = ear.sheet(x[inside], y[inside], front)
+        island[inside] = 3
+
+    skin = island > 0
+    p = point[skin]
+    region = _regions(p, island[skin])
+    albedo, spec, pore_gain = _skin_colour(p, region, rng)
+
+    # tangent-space normal map from a pore height field, in mm per texel of the local surface
+    gain = np.zeros((res, res))
+    gain[skin] = pore_gain
+    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
+    mm_u = np.linalg.norm(np.gradient(point, axis=1), axis=-1)  # mm per texel along +u
+    mm_v = np.linalg.norm(np.gradient(point, axis=0), axis=-1)  # along +v (rows)
+    scale = 1.0 / (k * res)
+    mm_u = np.where(skin & (mm_u > 0.1 * scale) & (mm_u < 4 * scale), mm_u, scale)
+    mm_v = np.where(skin & (mm_v > 0.1 * scale) & (mm_v < 4 * scale), mm_v, scale)
+    dh_du = np.gradient(height, axis=1) / mm_u
+    dh_dv = np.gradient(height, axis=0) / mm_v
+    n = np.stack([-dh_du, -dh_dv, np.ones_like(height)], axis=-1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+
+    full_albedo = np.zeros((res, res, 3))
+    full_albedo[skin] = albedo
+    full_spec = np.zeros((res, res, 1))
+    full_spec[skin, 0] = spec
+    full_region = np.zeros((res, res), dtype=np.uint8)
+    full_region[skin] = region
+
+    # fill the gutters from the nearest island texel
+    _, (ri, ci) = ndimage.distance_transform_edt(~skin, return_indices=True)
+    out = {
+        "albedo": full_albedo[ri, ci],
+        "normal_map": (n * 0.5 + 0.5)[ri, ci],
+        "specular_map": full_spec[ri, ci],
+    }
+    # the maps are stored as float16 (cache size); round here so fresh and cached heads agree
+    out = {key: np.clip(val, 0.0, 1.0).astype(np.float16) for key, val in out.items()}
+    out["region_map"] = full_region[ri, ci]
+    return out
+
+
+def _hair(p):
+    """Cropped-hair coverage in [0, 1]: above a hairline that recedes at the temples, drops to
+    sideburns in front of the ears, passes over them and ends at the nape."""
+    az = np.abs(np.arctan2(p[:, 0], p[:, 2] - _RAY_ORIGIN[2]))
+    knots = ([0.0, 0.55, 0.9, 1.12, 1.28, 1.42, 1.75, 2.1, np.pi],
+             [82.0, 78.0, 58.0, 34.0, 8.0, 30.0, 26.0, -30.0, -62.0])
+    line = np.interp(az, *knots)
+    return _smoothstep(line - 3.0, line + 6.0, p[:, 1])
+
+
+def _regions(p, island):
+    """Region ID per skin point from anatomical landmarks (mm)."""
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    ax = np.abs(x)
+    r = np.full(len(p), _REGION["other"], dtype=np.uint8)
+    front = z > 35.0
+    r[front & (y > -75.0) & (y < 6.0) & (ax > 12.0) & (ax < 64.0)] = _REGION["cheeks"]
+    r[front & (y >= 26.0) & (ax <= 54.0)] = _REGION["forehead"]
+    r[(y > -120.0) & (y <= -78.0) & (ax < 32.0) & (z > 45.0)] = _REGION["chin"]
+    lips = (ax / 25.0) ** 2 + ((y + 64.0) / np.where(y > -64.0, 10.5, 12.0)) ** 2 < 1.0
+    r[lips & (z > 80.0)] = _REGION["lips"]
+    nose = (y < 22.0) & (y > -49.0) & (ax < 11.0 + 11.0 * _smoothstep(5.0, -40.0, y)) & (z > 83.0)
+    r[nose] = _REGION["nose"]
+    # below the jaw line (chin to the angle of the mandible, then the nape)
+    jaw = np.interp(z, [-120.0, -40.0, 0.0, 60.0, 90.0], [-70.0, -70.0, -95.0, -112.0, -117.0])
+    r[(y < jaw) & (r != _REGION["chin"])] = _REGION["neck"]
+    r[(y < -118.0)] = _REGION["neck"]
+    r[(_hair(p) > 0.5) | (island == 2)] = _REGION["scalp"]
+    r[island == 3] = _REGION["ears"]
+    return r
+
+
+def _fbm(p, rng, base_mm, octaves):
+    """Fractal value noise at 3D points (seamless across UV seams), roughly in [-1, 1]."""
+    total = np.zeros(len(p))
+    amp, freq, norm = 1.0, 1.0 / base_mm, 0.0
+    for _ in range(octaves):
+        lattice = rng.standard_normal((32, 32, 32))
+        coords = (p * freq + rng.uniform(0, 32, 3)).T
+        total += amp * ndimage.map_coordinates(lattice, coords, order=3, mode="grid-wrap", prefilter=False)
+        norm += amp
+        amp, freq = amp * 0.5, freq * 2.0
+    return total / (0.4 * norm)
+
+
+def _skin_colour(p, region, rng):
+    """sRGB albedo, specular scale and pore depth per skin point."""
+    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    ax = np.abs(x)
+    g = lambda cx, cy, cz, sx, sy, sz: np.exp(-0.5 * (((ax - cx) / sx) ** 2 + ((y - cy) / sy) ** 2
+                                                      + ((z - cz) / sz) ** 2))
+    # linear-light reflectances of light skin
+    base = np.array([0.62, 0.40, 0.31])
+    red = np.array([0.60, 0.27, 0.22])
+    col = np.tile(base, (len(p), 1))
+    is_ = lambda name: (region == _REGION[name]).astype(float)
+    blush = 0.55 * g(40, -30, 70, 17, 18, 30) + 0.35 * g(0, -30, 112, 8, 8, 10) + 0.6 * is_("ears")
+    col = col + (red - col) * np.clip(blush, 0, 1)[:, None] * 0.6
+    lips = (ax / 24.0) ** 2 + ((y + 64.0) / np.where(y > -64.0, 9.0, 10.5)) ** 2
+    lip_w = _smoothstep(1.0, 0.75, lips) * _smoothstep(78.0, 86.0, z)
+    col = col + (np.array([0.50, 0.17, 0.15]) - col) * lip_w[:, None] * 0.85
+    # eyebrows, lash line and nostrils darken; scalp shows cropped hair
+    brow_y = 31.0 + 6.0 * np.exp(-((ax - 30.0) / 16.0) ** 2) - 0.004 * (ax - 30.0) ** 2
+    brow = 0.7 * _smoothstep(5.0, 1.0, np.abs(y - brow_y)) * _smoothstep(52.0, 46.0, ax) * _smoothstep(9.0, 14.0, ax)
+    brow *= (z > 60.0)
+    lash = 0.6 * _smoothstep(1.4, 0.2, np.abs(y - 10.7 + 0.004 * (ax - 32.0) ** 2)) * (np.abs(ax - 32.0) < 11.0) * (z > 78)
+    nostril = g(7.5, -44.5, 100.0, 3.0, 1.8, 4.0)
+    scalp = _hair(p) * (region != _REGION["ears"])
+    hair = np.array([0.10, 0.07, 0.05])
+    col = col + (hair - col) * np.clip(0.75 * brow + 0.7 * lash, 0, 1)[:, None]
+    col = col * (1.0 - 0.75 * np.clip(nostril, 0, 1))[:, None]
+    col = col + (np.array([0.30, 0.21, 0.17]) - col) * (0.55 * scalp)[:, None]
+    col = col * np.array([1.0, 1.02, 1.03]) ** is_("neck")[:, None]
+    # low-frequency mottling (fBm) in brightness and redness
+    mottle = _fbm(p, rng, 40.0, 4)
+    redness = _fbm(p, rng, 15.0, 2)
+    col = col * (1.0 + 0.07 * mottle)[:, None]
+    col = col + np.array([0.03, -0.012, -0.012]) * redness[:, None]
+    albedo = np.where(col <= 0.0031308, 12.92 * col, 1.055 * np.clip(col, 0, None) ** (1 / 2.4) - 0.055)
+
+    spec_by_region = np.array([0.5, 0.8, 0.85, 0.45, 0.65, 0.7, 0.4, 0.4, 0.3])
+    spec = spec_by_region[region] * (1.0 + 0.1 * redness) * (1.0 - 0.5 * brow)
+    pore_by_region = np.array([0.6, 0.8, 1.2, 1.0, 0.2, 0.8, 0.4, 0.5, 0.5])  # mm of pore depth ×10
+    return albedo, spec, pore_by_region[region] * 0.1
+
+
+def _pores(res, rng):
+    """Unit-depth pore field in texel space: sparse pits over fine bumpy noise (zero mean)."""
+    pits = (rng.random((res, res)) < 0.08).astype(float)
+    pits = ndimage.gaussian_filter(pits, 0.7, mode="wrap")
+    bumps = ndimage.gaussian_filter(rng.standard_normal((res, res)), 1.2, mode="wrap")
+    h = -pits / max(pits.max(), 1e-9) + 0.6 * bumps / max(np.abs(bumps).max(), 1e-9)
+    return h - h.mean()

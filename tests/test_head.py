@@ -1,0 +1,231 @@
+"""The procedural default head: determinism, cache, atlas, ears, regions (detail 0 unless noted)."""
+import numpy as np
+import pytest
+from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from skinviewer import head as head_mod
+from skinviewer.head import GENERATOR_VERSION, default_head
+from skinviewer.settings import REGIONS
+
+ARRAYS = ("positions", "normals", "uvs", "indices", "albedo", "normal_map", "specular_map", "region_map")
+
+
+@pytest.fixture(scope="module")
+def head(tmp_path_factory):
+    return default_head(detail=0, seed=7, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def _equal(a, b):
+    return all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ARRAYS)
+
+
+def _islands(mesh):
+    """Connected components in UV (vertices shared by index): label per triangle."""
+    f = mesh.indices.astype(np.int64)
+    n = len(mesh.positions)
+    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n, n))
+    count, labels = connected_components(graph, directed=False)
+    return count, labels[f[:, 0]], labels
+
+
+def _rasterize(uvs, tris, res, inset):
+    """Per-texel count of UV triangles covering the texel centre; inset > 0 keeps only interior
+    hits (barycentrics > inset), inset < 0 dilates a little (conservative coverage)."""
+    cover = np.zeros((res, res), dtype=np.int32)
+    t = uvs[tris].astype(np.float64) * res
+    lo = np.floor(t.min(axis=1) - 1).astype(int).clip(0, res - 1)
+    hi = np.ceil(t.max(axis=1) + 1).astype(int).clip(0, res - 1)
+    for (a, b, c), (x0, y0), (x1, y1) in zip(t, lo, hi):
+        gx, gy = np.meshgrid(np.arange(x0, x1 + 1) + 0.5, np.arange(y0, y1 + 1) + 0.5)
+        det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+        if abs(det) < 1e-12:
+            continue
+        w1 = ((gx - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (gy - a[1])) / det
+        w2 = ((b[0] - a[0]) * (gy - a[1]) - (gx - a[0]) * (b[1] - a[1])) / det
+        w0 = 1.0 - w1 - w2
+        inside = (w0 > inset) & (w1 > inset) & (w2 > inset)
+        cover[y0:y1 + 1, x0:x1 + 1] += inside
+    return cover
+
+
+def test_deterministic_and_seeded():
+    a = head_mod._generate(0, 7)
+    b = head_mod._generate(0, 7)
+    for k in ARRAYS:
+        assert a[k].dtype == b[k].dtype and np.array_equal(a[k], b[k]), k
+    c = head_mod._generate(0, 8)
+    assert np.array_equal(a["positions"], c["positions"])  # the seed is skin noise only
+    assert not np.array_equal(a["albedo"], c["albedo"])
+    assert not np.array_equal(a["normal_map"], c["normal_map"])
+
+
+def test_cache_reused_and_corrupt_cache_regenerated(tmp_path, monkeypatch):
+    first = default_head(detail=0, seed=3, cache_dir=tmp_path)
+    files = list(tmp_path.glob("*.npz"))
+    assert len(files) == 1 and f"v{GENERATOR_VERSION}" in files[0].name
+    assert not list(tmp_path.glob("*.tmp"))
+
+    real = head_mod._generate
+    calls = []
+
+    def counting(detail, seed):
+        calls.append((detail, seed))
+        return real(detail, seed)
+
+    monkeypatch.setattr(head_mod, "_generate", counting)
+    again = default_head(detail=0, seed=3, cache_dir=tmp_path)
+    assert calls == [] and _equal(first, again)
+
+    files[0].write_bytes(b"PK\x03\x04 not really a zip")
+    healed = default_head(detail=0, seed=3, cache_dir=tmp_path)
+    assert calls == [(0, 3)] and _equal(first, healed)
+    default_head(detail=0, seed=3, cache_dir=tmp_path)
+    assert len(calls) == 1  # the regenerated file was written back
+
+
+def test_cache_dir_from_environment(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))
+    path = head_mod._cache_path(0, 1, None)
+    assert path.parent == tmp_path
+    path.write_bytes(b"")  # an empty (interrupted) cache file is regenerated, not a crash
+    default_head(detail=0, seed=1)
+    assert path.stat().st_size > 0
+
+
+def test_triangle_counts(tmp_path):
+    coarse = default_head(detail=0, cache_dir=tmp_path)
+    assert 4_000 <= len(coarse.indices) <= 12_000
+    assert coarse.albedo.shape == (512, 512, 3)
+    normal = default_head(detail=1, cache_dir=tmp_path)
+    assert 20_000 <= len(normal.indices) <= 60_000
+    assert normal.albedo.shape == (1024, 1024, 3) and normal.region_map.shape == (1024, 1024)
+
+
+def test_finite_unit_normals_uvs_in_range(head):
+    assert head.mm_per_unit == 1.0
+    for k in ("positions", "normals", "uvs", "tangents"):
+        assert np.all(np.isfinite(getattr(head, k))), k
+    np.testing.assert_allclose(np.linalg.norm(head.normals, axis=1), 1.0, atol=1e-4)
+    assert head.uvs.min() >= 0.0 and head.uvs.max() <= 1.0
+    for k in ("albedo", "normal_map", "specular_map"):
+        m = getattr(head, k)
+        assert m.dtype == np.float32 and np.all(np.isfinite(m)) and m.min() >= 0 and m.max() <= 1, k
+    assert head.specular_map.shape[-1] == 1 and head.region_map.dtype == np.uint8
+    assert head.region_map.max() < len(REGIONS)
+    # tangent-space normals point out of the surface
+    assert (head.normal_map[..., 2] * 2 - 1).min() > 0.5
+
+
+def test_adult_proportions(head):
+    lo, hi = head.bounds
+    count, _, vlabel = _islands(head)
+    main = np.bincount(vlabel).argmax()
+    skull = head.positions[vlabel == main]
+    chin = skull[(np.abs(skull[:, 0]) < 10) & (skull[:, 2] > 65)][:, 1].min()
+    assert 215 <= hi[1] - chin <= 245          # crown to chin
+    assert 140 <= 2 * np.abs(skull[skull[:, 1] > 0][:, 0]).max() <= 165   # head width
+    assert hi[1] - 100 > 0 > lo[1] + 100 and chin - lo[1] >= 90            # origin in the head, neck below
+    assert head.positions[:, 2].argmax() in np.flatnonzero(vlabel == main)  # faces +Z (nose tip)
+
+
+def test_uv_atlas_has_no_overlaps(head):
+    cover = _rasterize(head.uvs, head.indices, 512, inset=1e-3)
+    assert cover.max() == 1
+    assert cover.sum() > 0.25 * 512 * 512  # the atlas is reasonably used
+
+
+def test_uv_islands_are_separated_by_gutters(head):
+    count, tri_label, _ = _islands(head)
+    assert count == 6  # head band, crown cap, two sides of two ears
+    res = 1024
+    masks = [_rasterize(head.uvs, head.indices[tri_label == i], res, inset=-0.02) > 0 for i in range(count)]
+    for i, m in enumerate(masks):
+        dist = ndimage.distance_transform_edt(~m)
+        for j in range(i + 1, count):
+            assert dist[masks[j]].min() >= 8.0, (i, j)
+    uv = head.uvs
+    assert uv.min() >= 0.005 and uv.max() <= 0.995
+
+
+def test_no_degenerate_uv_triangles(head):
+    t = head.uvs[head.indices].astype(np.float64)
+    e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    assert area.min() > 0.0
+
+
+def _ray_hits(origins, dirs, tri):
+    """Nearest positive hit distance of each ray against triangles (Möller–Trumbore), inf if none."""
+    v0, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    out = np.full(len(origins), np.inf)
+    for i, (o, d) in enumerate(zip(origins, dirs)):
+        p = np.cross(d, e2)
+        det = np.sum(e1 * p, axis=1)
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        s = o - v0
+        u = np.sum(s * p, axis=1) * inv
+        q = np.cross(s, e1)
+        v = (q @ d) * inv
+        t = np.sum(e2 * q, axis=1) * inv
+        hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
+        if hit.any():
+            out[i] = t[hit].min()
+    return out
+
+
+def test_ears_are_thin_closed_flaps(head):
+    count, tri_label, vlabel = _islands(head)
+    pos = head.positions.astype(np.float64)
+    ears = [i for i in range(count) if np.abs(pos[vlabel == i, 0]).mean() > 60]
+    assert len(ears) == 4
+    region_at = head.region_map[(head.uvs[:, 1] * 512).astype(int).clip(0, 511),
+                                (head.uvs[:, 0] * 512).astype(int).clip(0, 511)]
+    for side in (+1, -1):
+        front, back = sorted((i for i in ears if np.sign(pos[vlabel == i, 0].mean()) == side),
+                             key=lambda i: -side * head.normals[vlabel == i, 0].mean())
+        assert np.all(region_at[vlabel == front] == REGIONS.index("ears"))
+        # both sheets are sampled at the same ear-plane points: the rim points coincide (closed shell)
+        fv, bv = pos[vlabel == front], pos[vlabel == back]
+        assert len(fv) == len(bv)
+        gap = np.linalg.norm(fv - bv, axis=1)
+        assert np.sum(gap < 1e-4) >= 24
+        # thickness: rays from the front sheet across the flap to the first back-sheet triangle
+        sel = np.flatnonzero(gap > 2.9)[::5]
+        across = (bv[sel] - fv[sel]) / gap[sel, None]
+        thickness = _ray_hits(fv[sel], across, pos[head.indices[tri_label == back]])
+        hit = np.isfinite(thickness)
+        assert hit.mean() > 0.85  # a few rays leave the coarse (detail 0) sheet at its border
+        assert 2.5 <= np.median(thickness[hit]) <= 3.5
+        assert np.mean((thickness[hit] >= 2.0) & (thickness[hit] <= 4.0)) > 0.95
+
+
+def test_regions_present_and_anatomical(head):
+    ids = set(np.unique(head.region_map).tolist())
+    for name in ("forehead", "nose", "cheeks", "lips", "chin", "ears", "neck", "scalp"):
+        assert REGIONS.index(name) in ids, name
+    res = head.region_map.shape[0]
+    at = head.region_map[(head.uvs[:, 1] * res).astype(int).clip(0, res - 1),
+                         (head.uvs[:, 0] * res).astype(int).clip(0, res - 1)]
+    p = head.positions
+    z_of = lambda name: p[at == REGIONS.index(name), 2]
+    y_of = lambda name: p[at == REGIONS.index(name), 1]
+    assert z_of("nose").max() == pytest.approx(p[:, 2].max(), abs=1.0)  # the nose tip leads
+    assert z_of("nose").mean() > z_of("cheeks").mean()
+    assert y_of("forehead").mean() > y_of("nose").mean() > y_of("lips").mean() > y_of("chin").mean()
+    assert y_of("neck").mean() < y_of("chin").mean()
+    assert y_of("scalp").max() == pytest.approx(p[:, 1].max(), abs=1.0)
+
+
+def test_maps_fill_gutters_and_redden_lips(head):
+    count, tri_label, _ = _islands(head)
+    # gutter texels were filled from islands: no black/unset albedo anywhere
+    assert head.albedo.min() > 0.02
+    lips = head.region_map == REGIONS.index("lips")
+    cheeks = head.region_map == REGIONS.index("cheeks")
+    redness = lambda m: (head.albedo[m, 0] - head.albedo[m, 1]).mean()
+    assert redness(lips) > redness(cheeks)
