@@ -1,0 +1,70 @@
+#version 330 core
+// Gosselin final combination (seed 000 eq. 17-19):
+//   diffuse  = C * blurred                                                          (17)
+//   specular = sum_i KS_i * Lc_i * att                                              (18)
+//   colour   = specular + diffuse                                                   (19)
+// KS_i is listing 14-3 (includes N.L_i). att, the shadow attenuation of eq. (18), comes from the
+// blurred light map. u_spec_shadow == 0 ("visibility", default):
+//   att = clamp(LUM.blurred / LUM.E0, 0, 1),  E0 = sum_i Lc_i max(N.L_i, 0) (unshadowed irradiance)
+// a soft, dimensionless visibility in [0, 1] (specular never exceeds the unshadowed KS).
+// u_spec_shadow == 1 ("printed"): eq. (18) as printed, BRDF (KS / N.L) * Lc * (LUM.blurred), where
+// LUM.blurred stands for N.L * shadow; it scales with Lc^2 (dimensionally an irradiance too many).
+#include "lib/color.glsl"
+#include "lib/lights.glsl"
+#include "lib/surface.glsl"
+#include "lib/kelemen.glsl"
+#define N_REGIONS 9
+in vec3 v_position;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec4 v_tangent;
+uniform vec3 u_eye;
+uniform sampler2D blurred;        // f4 RGBA, blurred light map
+uniform sampler2D region_map;     // R8, nearest, id = index in settings.REGIONS
+uniform sampler2D specular_map;   // intensity scale of rho_s
+uniform sampler2D beckmann_tex;   // listing 14-2 LUT (mode beckmann_lut)
+uniform int u_use_lut;
+uniform int u_spec_shadow;
+uniform float u_f0;
+uniform float u_m[N_REGIONS];
+uniform float u_rho_s[N_REGIONS];
+out vec4 f_color;
+
+const vec3 LUM = vec3(0.2125, 0.7154, 0.0721);
+
+void main() {
+    vec3 N = surface_normal(v_normal, v_tangent, v_uv);
+    vec3 V = ks_safe_normalize(u_eye - v_position);
+    vec3 C = max(finite3(texture(albedo_map, v_uv).rgb), vec3(0.0));
+    vec3 E = max(finite3(texture(blurred, v_uv).rgb), vec3(0.0));
+    vec3 color = C * E;                                                 // (17)
+
+    int id = int(texture(region_map, v_uv).r * 255.0 + 0.5);
+    if (id < 0 || id >= N_REGIONS) id = 0;
+    float m = u_m[id];
+    float rho_s = u_rho_s[id] * clamp(finite1(texture(specular_map, v_uv).r), 0.0, 10.0);
+
+    float lumE = dot(LUM, E);
+    vec3 E0 = vec3(0.0);
+    vec3 spec = vec3(0.0);
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 L;
+        vec3 Lc = light_incident(i, v_position, L);
+        float ndl = dot(N, L);
+        if (!(ndl > 0.0)) continue;
+        E0 += Lc * min(ndl, 1.0);
+        float ks = (u_use_lut == 1) ? ks_specular_lut(N, L, V, m, rho_s, u_f0, beckmann_tex)
+                                    : ks_specular(N, L, V, m, rho_s, u_f0);
+        if (u_spec_shadow == 1) ks /= max(ndl, 1e-6);  // the bare BRDF of eq. (16)
+        spec += ks * Lc;
+    }
+    float att;
+    if (u_spec_shadow == 1) {
+        att = lumE;
+    } else {
+        float lumE0 = dot(LUM, E0);
+        att = lumE0 > 1e-20 ? clamp(lumE / lumE0, 0.0, 1.0) : 0.0;
+    }
+    color += finite3(spec) * att;                                       // (18), (19)
+    f_color = vec4(finite3(color), 1.0);
+}

@@ -1,0 +1,274 @@
+"""Gosselin et al. 2004 texture-space skin (seed 000 §4.1, eq. 1-19).
+
+    shadow_map_i --> gosselin_light_map --> gosselin_blur --> gosselin_final --> output
+    gutter_map  -/        gosselin_radius -/   beckmann_lut -/ (mode beckmann_lut only)
+
+* ``gosselin_light_map`` (eq. 8-10): the mesh unwrapped into texture space, sum of
+  fac_shadow * Lc * max(N.L, 0) over the lights (mesh normal map applied), f4 RGBA (a 1e5 light does
+  not overflow), alpha 1 on the islands, gutters filled with the nearest island texel (dilate).
+  View-independent.
+* ``gosselin_radius`` (eq. 12 per texel): R = kernel_size_r * scale_x_r * gosselin.scale_x +
+  scale_y_r * gosselin.scale_y for the region r of the texel (region map; a mesh without one is all
+  "other"), in texels **at the 1024 reference size**, times light_map_size / 1024. So eq. 12 holds
+  exactly at 1024 (size = 1/1024) and changing light_map_size keeps the blur the same width on the
+  surface (in mm) instead of changing the look. R is clamped to [0, light_map_size]. To avoid seams
+  where regions meet, gutters first take the radius of their nearest island texel, then the map is
+  smoothed with a Gaussian of sigma = clamp(0.5 * R_max, 1, 24) texels (R_max: the largest region
+  radius in the map), so R varies continuously over about one blur footprint across a border.
+* ``gosselin_blur`` (eq. 11-13): ``iterations`` 13-tap Poisson blurs (POISSON_12), ping-pong in
+  scratch textures, each iteration reading the previous one, gutters re-dilated after every
+  iteration so islands never bleed into each other. 0 iterations (or R = 0) = the light map itself.
+  A gather with a translation-invariant kernel keeps the total exactly (sum(f * k) = sum f * sum k)
+  wherever the taps stay inside the island; measured in tests/test_gosselin.py.
+* ``gosselin_final`` (eq. 17-19), the only view-dependent pass: C * blurred + specular. The
+  specular is Kelemen/Szirmay-Kalos (listing 14-3, includes N.L) per light times Lc, attenuated by
+  the blurred light map (eq. 18) -- see shaders/gosselin_final.frag and ``gosselin.specular_shadow``:
+  by default a visibility LUM(blurred) / LUM(unshadowed irradiance) clamped to [0, 1], because
+  eq. 18 as printed multiplies Lc by an irradiance that already contains Lc (and N.L).
+"""
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+from scipy import ndimage
+
+from .. import techniques
+from ..camera import gl_bytes
+from ..graph import Pass, Reflection, TexSpec
+from ..poisson import POISSON_12
+from ..settings import REGIONS, RegionKernel
+from .common import bind_surface, declare_lighting, draw_fullscreen, set_lighting, set_uniform
+from .luts import BECKMANN_LUT, BeckmannLutPass
+from .output import OutputPass
+from .texture_space import GutterMapPass, dilate, gutter_resource
+
+LIGHT_MAP = "gosselin_light_map"
+RADIUS_MAP = "gosselin_radius"
+BLURRED = "gosselin_blurred"
+SIZE = "gosselin.light_map_size"
+REFERENCE_SIZE = 1024  # eq. 12's size = 1/1024: radii are "texels at 1024"
+MAX_SMOOTH_SIGMA = 24.0
+
+
+def _map_spec(size: int) -> TexSpec:
+    return TexSpec((size, size), 4, "f4")
+
+
+class GosselinLightMapPass(Pass):
+    """Eq. 8-10 into an f4 texture of light_map_size; gutters dilated."""
+    name = "gosselin_light_map"
+
+    def reflect(self, r: Reflection) -> None:
+        declare_lighting(r)
+        size = r.setting(SIZE)
+        r.input(gutter_resource(size))
+        r.program("light_map")
+        r.program("dilate")
+        r.output(LIGHT_MAP, _map_spec(size))
+
+    def execute(self, ec) -> None:
+        size = ec.setting(SIZE)
+        raw = ec.scratch(_map_spec(size))
+        fbo = ec.scratch_framebuffer(raw)
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        ec.gl.disable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        prog = ec.program("light_map")
+        unit = bind_surface(ec, prog, 0)
+        set_lighting(ec, prog, unit)
+        ec.scene.vao(prog).render()
+        dilate(ec, raw, ec.input(gutter_resource(size)), ec.framebuffer(LIGHT_MAP))
+
+
+def region_radii(g, size: int) -> np.ndarray:
+    """Eq. 12's R (texels at ``size``) per region ID, float64 (len(REGIONS),). A region missing from
+    ``gosselin.regions`` uses "other" (or the RegionKernel defaults)."""
+    fallback = g.regions.get("other", RegionKernel())
+    out = np.zeros(len(REGIONS))
+    for k, name in enumerate(REGIONS):
+        rk = g.regions.get(name, fallback)
+        out[k] = rk.kernel_size * rk.scale_x * g.scale_x + rk.scale_y * g.scale_y
+    out *= size / REFERENCE_SIZE
+    return np.clip(np.nan_to_num(out, nan=0.0, posinf=size, neginf=0.0), 0.0, float(size))
+
+
+def radius_map(region_ids: np.ndarray, radii: np.ndarray, size: int,
+               gutter: np.ndarray | None = None) -> np.ndarray:
+    """(size, size) float32 per-texel radius in texels: region map resampled (nearest) to ``size``,
+    unknown IDs -> "other", gutters take their nearest island texel's radius (``gutter``: the
+    gutter table, RG = source texel), then a Gaussian of sigma = clamp(0.5 R_max, 1, 24)."""
+    ids = np.asarray(region_ids)
+    if ids.ndim == 3:
+        ids = ids[..., 0]
+    h, w = ids.shape
+    rows = np.minimum(((np.arange(size) + 0.5) * h / size).astype(np.int64), h - 1)
+    cols = np.minimum(((np.arange(size) + 0.5) * w / size).astype(np.int64), w - 1)
+    rid = ids[rows][:, cols].astype(np.int64)
+    rid = np.where((rid >= 0) & (rid < len(radii)), rid, 0)
+    rad = radii[rid]
+    if gutter is not None:
+        ix = np.clip(gutter[..., 0].astype(np.int64), 0, size - 1)
+        iy = np.clip(gutter[..., 1].astype(np.int64), 0, size - 1)
+        rad = rad[iy, ix]
+        present = np.unique(rid[iy, ix])
+    else:
+        present = np.unique(rid)
+    r_max = float(radii[present].max()) if present.size else 0.0
+    if r_max > 0.0 and float(radii[present].min()) != r_max:
+        sigma = min(max(0.5 * r_max, 1.0), MAX_SMOOTH_SIGMA)
+        rad = ndimage.gaussian_filter(rad, sigma, mode="nearest")
+    return np.clip(rad, 0.0, float(size)).astype(np.float32)
+
+
+class GosselinRadiusMapPass(Pass):
+    """Per-texel eq. 12 radius (texels) from the region map and the kernel settings, smoothed so the
+    blur has no seam at region borders. Re-runs on the region map (scene), kernel settings, size."""
+    name = "gosselin_radius"
+
+    def reflect(self, r: Reflection) -> None:
+        size = r.setting(SIZE)
+        r.setting("gosselin.regions")
+        r.setting("gosselin.scale_x")
+        r.setting("gosselin.scale_y")
+        r.input(gutter_resource(size))
+        r.output(RADIUS_MAP, TexSpec((size, size), 1, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        size = ec.setting(SIZE)
+        radii = region_radii(_GView(ec), size)
+        gtex = ec.input(gutter_resource(size))
+        gutter = np.frombuffer(gtex.read(), dtype=np.float32).reshape(size, size, 4)
+        rad = radius_map(ec.scene.region_ids, radii, size, gutter)
+        ec.output(RADIUS_MAP).write(np.ascontiguousarray(rad).tobytes())
+
+
+class _GView:
+    """The declared Gosselin kernel settings read through ``ec.setting`` (declared paths only)."""
+
+    def __init__(self, ec):
+        self.regions = ec.setting("gosselin.regions")
+        self.scale_x = ec.setting("gosselin.scale_x")
+        self.scale_y = ec.setting("gosselin.scale_y")
+
+
+class PoissonBlurPass(Pass):
+    """``gosselin.iterations`` Poisson blurs of the light map (eq. 11-13), ping-pong, gutters
+    re-dilated after each iteration."""
+    name = "gosselin_blur"
+
+    def reflect(self, r: Reflection) -> None:
+        size = r.setting(SIZE)
+        r.setting("gosselin.iterations")
+        r.input(LIGHT_MAP)
+        r.input(RADIUS_MAP)
+        r.input(gutter_resource(size))
+        r.program("poisson_blur")
+        r.program("dilate")
+        r.output(BLURRED, _map_spec(size))
+
+    def execute(self, ec) -> None:
+        size = ec.setting(SIZE)
+        n = ec.setting("gosselin.iterations")
+        src = ec.input(LIGHT_MAP)
+        gutter = ec.input(gutter_resource(size))
+        out_fbo = ec.framebuffer(BLURRED)
+        ec.gl.disable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        if n <= 0:
+            dilate(ec, src, gutter, out_fbo)  # a copy: the light map is already dilated
+            return
+        prog = ec.program("poisson_blur")
+        prog["u_poisson"].write(np.asarray(POISSON_12, dtype=np.float32).tobytes())
+        ec.input(RADIUS_MAP).use(1)
+        set_uniform(prog, "source", 0)
+        set_uniform(prog, "radius_map", 1)
+        tmp = ec.scratch(_map_spec(size))
+        tmp_fbo = ec.scratch_framebuffer(tmp)
+        ping = ec.scratch(_map_spec(size)) if n > 1 else None
+        ping_fbo = ec.scratch_framebuffer(ping) if ping is not None else None
+        cur = src
+        for k in range(n):
+            cur.use(0)
+            ec.input(RADIUS_MAP).use(1)
+            tmp_fbo.use()
+            draw_fullscreen(ec, prog)
+            last = k == n - 1
+            dilate(ec, tmp, gutter, out_fbo if last else ping_fbo)
+            cur = ping
+
+
+class GosselinFinalPass(Pass):
+    """Eq. 17-19 on the mesh from the camera; writes ``lit`` (RGBA f2, alpha 1 on the mesh)."""
+    name = "gosselin_final"
+    view_dependent = True
+
+    def reflect(self, r: Reflection) -> None:
+        declare_lighting(r)
+        r.setting("specular")
+        r.setting("gosselin.specular_shadow")
+        r.input(BLURRED)
+        if r.setting("specular.mode") == "beckmann_lut":
+            r.input(BECKMANN_LUT)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.program("gosselin_final")
+        r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("gosselin_final")
+        view = ec.view
+        sp = ec.setting("specular")
+        prog["u_view_proj"].write(gl_bytes(view.view_proj))
+        set_uniform(prog, "u_eye", tuple(float(x) for x in view.eye))
+        set_uniform(prog, "u_f0", float(sp.f0))
+        m, rho = per_region_specular(sp)
+        if "u_m" in prog:
+            prog["u_m"].write(m.tobytes())
+        if "u_rho_s" in prog:
+            prog["u_rho_s"].write(rho.tobytes())
+        lut = sp.mode == "beckmann_lut"
+        set_uniform(prog, "u_use_lut", 1 if lut else 0)
+        set_uniform(prog, "u_spec_shadow", 1 if ec.setting("gosselin.specular_shadow") == "printed" else 0)
+        unit = bind_surface(ec, prog, 0)
+        scene = ec.scene
+        ec.input(BLURRED).use(unit)
+        set_uniform(prog, "blurred", unit)
+        scene.region_map.use(unit + 1)
+        set_uniform(prog, "region_map", unit + 1)
+        scene.specular_map.use(unit + 2)
+        set_uniform(prog, "specular_map", unit + 2)
+        # the LUT sampler always points at a float texture; in direct mode the blurred map stands in
+        (ec.input(BECKMANN_LUT) if lut else ec.input(BLURRED)).use(unit + 3)
+        set_uniform(prog, "beckmann_tex", unit + 3)
+        set_lighting(ec, prog, unit + 4)
+        fbo = ec.framebuffer("lit")
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        ec.gl.enable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        scene.vao(prog).render()
+        ec.gl.disable(moderngl.DEPTH_TEST)
+
+
+def per_region_specular(sp) -> tuple[np.ndarray, np.ndarray]:
+    """(m, rho_s) float32 arrays indexed by region ID: ``specular.per_region`` overrides (None
+    fields keep the global value)."""
+    m = np.full(len(REGIONS), sp.m, np.float32)
+    rho = np.full(len(REGIONS), sp.rho_s, np.float32)
+    for name, rs in sp.per_region.items():
+        k = REGIONS.index(name)
+        if rs.m is not None:
+            m[k] = rs.m
+        if rs.rho_s is not None:
+            rho[k] = rs.rho_s
+    return m, rho
+
+
+def gosselin() -> list[Pass]:
+    return techniques.shadow_passes() + [
+        GutterMapPass(SIZE), GosselinLightMapPass(), GosselinRadiusMapPass(), PoissonBlurPass(),
+        BeckmannLutPass(), GosselinFinalPass(), OutputPass("lit"),
+    ]
+
+
+techniques.register("gosselin", gosselin)
