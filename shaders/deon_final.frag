@@ -1,0 +1,112 @@
+#version 330 core
+// Final pass of d'Eon & Luebke 2007 (seed 000 eq. 34-35), view-dependent:
+//   diffuse  = C^(1-mix) rho_dt(x, V) (sum_i w_i blur_i(uv) + transmitted)
+//   transmitted = sum_(i>=2) w_i exp(-d_(i-1)^2 / 2 v_i) blend_i blur_i(uv_A)   (eq. 33, "exact")
+//   specular = sum_lights KS(N, L, V) Lc fac_shadow   (ks_* already carries N.L, eq. 35)
+#include "lib/color.glsl"
+#include "lib/lights.glsl"
+#include "lib/surface.glsl"
+#include "lib/kelemen.glsl"
+#include "lib/deon.glsl"
+#define MAX_G 8
+in vec3 v_position;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec4 v_tangent;
+uniform vec3 u_eye;
+uniform float u_mix;
+uniform int u_energy;
+uniform sampler2D rho_dt_tex;
+uniform int u_count;
+uniform vec3 u_w[MAX_G];
+uniform float u_var[MAX_G];      // variance (mm^2) of each blurred texture
+uniform int u_used[MAX_G];
+uniform sampler2D blur0;
+uniform sampler2D blur1;
+uniform sampler2D blur2;
+uniform sampler2D blur3;
+uniform sampler2D blur4;
+uniform sampler2D blur5;
+uniform sampler2D blur6;
+uniform sampler2D blur7;
+uniform int u_tsm;
+uniform int u_tsm_printed;       // 1: exp(-d^2/v) as printed in seed 000 eq. (33)
+uniform sampler2D tsm_map;
+uniform mat4 u_tsm_matrix;
+uniform float u_tsm_gate_mm;     // own thickness under which a point counts as directly lit
+uniform sampler2D stretch_map;
+uniform vec2 u_uniform_stretch;
+uniform int u_use_stretch;
+uniform float u_spec_m;
+uniform float u_rho_s;
+uniform float u_f0;
+uniform int u_spec_lut;
+uniform sampler2D beckmann_tex;
+out vec4 f_color;
+
+vec4 blur(int i, vec2 uv) {
+    if (i == 0) return texture(blur0, uv);
+    if (i == 1) return texture(blur1, uv);
+    if (i == 2) return texture(blur2, uv);
+    if (i == 3) return texture(blur3, uv);
+    if (i == 4) return texture(blur4, uv);
+    if (i == 5) return texture(blur5, uv);
+    if (i == 6) return texture(blur6, uv);
+    return texture(blur7, uv);
+}
+
+vec2 uv_per_mm(vec2 uv) {
+    vec2 s = (u_use_stretch != 0) ? texture(stretch_map, uv).rg : u_uniform_stretch;
+    return max(s, vec2(1e-7));
+}
+
+void main() {
+    vec3 N = surface_normal(v_normal, v_tangent, v_uv);
+    vec3 V = normalize(u_eye - v_position);
+    if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
+    vec3 diffuse = vec3(0.0);
+    for (int i = 0; i < MAX_G; ++i) {
+        if (i >= u_count) break;
+        if (u_used[i] != 0) diffuse += u_w[i] * blur(i, v_uv).rgb;
+    }
+    if (u_tsm != 0) {
+        vec4 p = u_tsm_matrix * vec4(v_position, 1.0);
+        vec2 c = p.xy / max(p.w, 1e-30) * 0.5 + 0.5;
+        if (p.w > 0.0 && all(greaterThanEqual(c, vec2(0.0))) && all(lessThanEqual(c, vec2(1.0)))) {
+            vec4 t = texture(tsm_map, c);
+            // a directly lit point is its own A: transmission only where the light crossed tissue
+            float own = (t.a >= 0.0) ? (tsm_distance_mm(v_position) - t.r) * t.a : 0.0;
+            float gate = smoothstep(u_tsm_gate_mm, 2.0 * u_tsm_gate_mm, deon_finite(own));
+            if (t.a >= 0.0 && gate > 0.0) {
+                vec2 uvA = t.gb;
+                // texture-space distance C..A in mm: when A lies inside Gaussian i's own footprint
+                // the texture-space blur already carries that light (blend -> 0, no double count)
+                vec2 s = 0.5 * (uv_per_mm(v_uv) + uv_per_mm(uvA));
+                float r_mm = length((v_uv - uvA) / s);
+                for (int i = 1; i < MAX_G; ++i) {
+                    if (i >= u_count) break;
+                    if (u_used[i] == 0) continue;
+                    float v = u_var[i];
+                    if (!(v > 0.0)) continue;
+                    float d = max(deon_finite(blur(i - 1, v_uv).a), 0.0);
+                    float fade = exp(-d * d / ((u_tsm_printed != 0 ? 1.0 : 2.0) * v));
+                    float blend = clamp(r_mm / (3.0 * sqrt(v)), 0.0, 1.0);
+                    diffuse += u_w[i] * (fade * blend * gate) * blur(i, uvA).rgb;
+                }
+            }
+        }
+    }
+    vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
+    float rho_v = (u_energy != 0) ? rho_dt_lookup(rho_dt_tex, dot(N, V), u_spec_m) : 1.0;
+    diffuse *= deon_safe_pow(C, 1.0 - u_mix) * rho_v;
+    vec3 spec = vec3(0.0);
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 L;
+        vec3 Lc = light_incident(i, v_position, L);
+        if (!(dot(N, L) > 0.0)) continue;
+        float ks = (u_spec_lut != 0) ? ks_specular_lut(N, L, V, u_spec_m, u_rho_s, u_f0, beckmann_tex)
+                                     : ks_specular(N, L, V, u_spec_m, u_rho_s, u_f0);
+        spec += Lc * (ks * shadow_factor(i, v_position, normalize(v_normal)));
+    }
+    f_color = vec4(finite3(diffuse + spec), 1.0);
+}

@@ -1,0 +1,52 @@
+#version 330 core
+// Irradiance in texture space (seed 000 eq. 28, 32): sum over lights of
+//   Lc (N.L) fac_shadow rho_dt(x, L) C^mix
+// and, in alpha, the thickness d = (d(C) - d(A)) cos(theta) in mm read from the modified TSM
+// (§4.2.7), so the blur chain blurs it with the irradiance. float32 target: lights beyond the
+// half-float range stay finite and exact.
+#include "lib/color.glsl"
+#include "lib/lights.glsl"
+#include "lib/surface.glsl"
+#include "lib/kelemen.glsl"
+#include "lib/deon.glsl"
+in vec3 v_position;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec4 v_tangent;
+uniform float u_mix;
+uniform int u_energy;            // eq. (32) on/off
+uniform sampler2D rho_dt_tex;
+uniform float u_spec_m;
+uniform int u_tsm;
+uniform sampler2D tsm_map;
+uniform mat4 u_tsm_matrix;
+uniform float u_max_thickness;   // mm
+out vec4 f_irradiance;
+void main() {
+    vec3 N = surface_normal(v_normal, v_tangent, v_uv);
+    vec3 C = deon_safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
+    vec3 E = vec3(0.0);
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 L;
+        vec3 Lc = light_incident(i, v_position, L);
+        float ndl = dot(N, L);
+        if (!(ndl > 0.0)) continue;
+        float s = shadow_factor(i, v_position, normalize(v_normal));
+        float rho = (u_energy != 0) ? rho_dt_lookup(rho_dt_tex, ndl, u_spec_m) : 1.0;
+        E += Lc * (ndl * s * rho);
+    }
+    E *= C;
+    float d = 0.0;
+    if (u_tsm != 0) {
+        vec4 p = u_tsm_matrix * vec4(v_position, 1.0);
+        if (p.w > 0.0) {
+            vec2 c = p.xy / p.w * 0.5 + 0.5;
+            if (all(greaterThanEqual(c, vec2(0.0))) && all(lessThanEqual(c, vec2(1.0)))) {
+                vec4 t = texture(tsm_map, c);
+                if (t.a >= 0.0) d = (tsm_distance_mm(v_position) - t.r) * t.a;
+            }
+        }
+    }
+    d = clamp(deon_finite(d), 0.0, u_max_thickness);
+    f_irradiance = deon_finite4(vec4(E, d));
+}

@@ -1,0 +1,195 @@
+"""Reference maths of the d'Eon & Luebke 2007 technique (seed 000 §4.2 eq. 20-35, seed 002 §14.4),
+in numpy: the Gaussian of eq. (20), the sum-of-Gaussians profile (21), the 7-tap separable kernel
+used by every blur (eq. 25-26), the hierarchical blur plan (eq. 24) and the TSM separability
+identity behind eq. (33).
+
+Units: variances in mm^2, distances in mm.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+# -- eq. (20), (21) ----------------------------------------------------------------------------
+
+
+def gaussian(v, r):
+    """eq. (20): G(v, r) = exp(-r^2 / 2v) / (2 pi v), a 2D radial Gaussian of unit integral.
+    v = 0 is a delta (returns 0 for r > 0; never NaN)."""
+    v = np.asarray(v, dtype=np.float64)
+    r = np.asarray(r, dtype=np.float64)
+    vv = np.maximum(v, 1e-300)
+    with np.errstate(under="ignore", over="ignore"):
+        g = np.exp(-(r * r) / (2.0 * vv)) / (2.0 * np.pi * vv)
+    return np.where(v > 0, g, 0.0)
+
+
+def profile(r, gaussians) -> np.ndarray:
+    """eq. (21): R(r) = sum_i w_i G(v_i, r), per channel: returns (..., 3)."""
+    r = np.asarray(r, dtype=np.float64)
+    out = np.zeros(r.shape + (3,))
+    for g in gaussians:
+        v, w = _vw(g)
+        out += gaussian(v, r)[..., None] * np.asarray(w, dtype=np.float64)
+    return out
+
+
+def _vw(g):
+    if hasattr(g, "variance"):
+        return float(g.variance), tuple(g.weights)
+    return float(g[0]), tuple(g[1])
+
+
+# -- the TSM identity behind eq. (33) ----------------------------------------------------------
+
+
+def tsm_factor(d, v, form: str = "exact"):
+    """Attenuation of Gaussian v for a thickness d (mm): exact separability
+    G(v, sqrt(r^2 + d^2)) = G(v, r) exp(-d^2 / 2v) gives exp(-d^2/(2v)) ("exact"); seed 000 prints
+    exp(-d^2/v) ("printed"). v = 0: 1 at d = 0, else 0. Never NaN for finite input."""
+    d = np.asarray(d, dtype=np.float64)
+    v = np.asarray(v, dtype=np.float64)
+    denom = (2.0 if form == "exact" else 1.0) * np.maximum(v, 1e-300)
+    with np.errstate(under="ignore", over="ignore"):
+        f = np.exp(-(d * d) / denom)
+    return np.where(v > 0, f, (d == 0).astype(np.float64))
+
+
+# -- the 7-tap kernel (eq. 25-26) --------------------------------------------------------------
+# Offsets are -3..3 tap spacings, the spacing being the increment's standard deviation sigma
+# (eq. 25: radius = texel size * stretch * sigma). Weights: the unit Gaussian sampled at the
+# integers, exp(-k^2 / 2s^2), with s solved so that the discrete kernel's variance is exactly 1
+# (in tap units): the blur adds exactly v_i - v_(i-1) of variance, so the hierarchical chain's
+# variances add up as eq. (24) says. s = 1.0008; weights 0.0044, 0.0540, 0.2420, 0.3991, ...
+# GPU Gems 3 listing 14-5 prints {0.006, 0.061, 0.242, 0.382, ...}: its variance is 1.08 (8 % too
+# wide per blur, compounding down the chain), so it is not used.
+TAP_OFFSETS = np.arange(-3, 4, dtype=np.float64)
+
+
+def _kernel(s: float) -> np.ndarray:
+    w = np.exp(-TAP_OFFSETS ** 2 / (2.0 * s * s))
+    return w / w.sum()
+
+
+def _solve_kernel() -> np.ndarray:
+    lo, hi = 0.5, 2.0
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        var = float(np.sum(_kernel(mid) * TAP_OFFSETS ** 2))
+        lo, hi = (mid, hi) if var < 1.0 else (lo, mid)
+    return _kernel(0.5 * (lo + hi))
+
+
+KERNEL7 = _solve_kernel()
+
+# Narrow inputs. Seven taps one sigma apart reproduce a Gaussian only when the texture being
+# blurred is already smooth at that spacing: copies of a Gaussian of std s spaced h apart ripple by
+# ~2 exp(-2 pi^2 s^2 / h^2) (10 % at s/h = 0.39: blur 2 of the skin profile). Denser taps
+# (t = sigma/h > 1, weights exp(-k^2/2t^2), h rescaled so the added variance stays exact) were
+# tried: on the laser test (1024^2, 24 mm slab) truncating at +-3 taps = +-1.9 sigma (t = 1.6)
+# cut the blue tail at r = 0.4 mm by 56 % and doubled the r-weighted error (B 4.4 % -> 9.5 %),
+# so T_MAX = 1: eq. (25)'s spacing of one sigma, always.
+SMOOTH_RATIO = 0.6
+T_MAX = 1.0
+
+
+def kernel7(t: float = 1.0) -> tuple[np.ndarray, float]:
+    """(weights (7,), h/sigma): taps at k * h, k = -3..3, for a blur of standard deviation sigma,
+    t = sigma/h nominal taps per sigma (1 = eq. 25 exactly)."""
+    t = float(np.clip(t, 1.0, T_MAX))
+    w = KERNEL7.copy() if t == 1.0 else _kernel(t)
+    var = float(np.sum(w * TAP_OFFSETS ** 2))
+    return w, 1.0 / np.sqrt(var)
+
+
+def taps_per_sigma(sigma_in: float, sigma_inc: float, texel_mm: float = 0.0) -> float:
+    """t for blurring a texture already blurred by sigma_in (mm) with an increment sigma_inc."""
+    s_in = max(float(sigma_in), 0.5 * float(texel_mm))
+    if sigma_inc <= 0.0:
+        return 1.0
+    if s_in <= 0.0:
+        return T_MAX
+    return float(np.clip(SMOOTH_RATIO * sigma_inc / s_in, 1.0, T_MAX))
+GPU_GEMS_KERNEL7 = np.array([0.006, 0.061, 0.242, 0.382, 0.242, 0.061, 0.006])
+
+
+# -- the hierarchical blur plan (eq. 24) -------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BlurStep:
+    index: int  # Gaussian i (0-based)
+    source: str  # resource blurred: "deon_irradiance" or "blur_{i-1}"
+    increment: float  # variance (mm^2) added by this blur, >= 0
+    variance: float  # variance the result actually has (mm^2)
+    reused: bool  # blur_i *is* the irradiance (no pass)
+
+
+IRRADIANCE = "deon_irradiance"
+
+
+def blur_resource(i: int) -> str:
+    return f"blur_{i}"
+
+
+def blur_plan(variances, reuse_below: float) -> list[BlurStep]:
+    """One step per Gaussian. blur_i = blur_(i-1) (x) G(v_i - var(blur_(i-1))) with the increment
+    clamped to >= 0 (non-ascending variances: blur_i = blur_(i-1)); the first Gaussian reuses the
+    irradiance itself (variance 0) when v_1 < reuse_below. The increment is measured from the
+    variance the previous texture really has, so a reused or clamped step does not lose width."""
+    steps: list[BlurStep] = []
+    have = 0.0
+    src = IRRADIANCE
+    for i, v in enumerate(variances):
+        v = max(float(v), 0.0)
+        if i == 0 and v < reuse_below:
+            steps.append(BlurStep(0, IRRADIANCE, 0.0, 0.0, True))
+            continue
+        inc = max(v - have, 0.0)
+        steps.append(BlurStep(i, src, inc, have + inc, False))
+        have += inc
+        src = blur_resource(i)
+    return steps
+
+
+def texture_of(step: BlurStep) -> str:
+    """The resource holding Gaussian ``step.index``'s blurred irradiance."""
+    return IRRADIANCE if step.reused else blur_resource(step.index)
+
+
+def uniform_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
+    """The stretch used when stretch correction is off: one isotropic scale, sqrt(UV area / world
+    area in mm^2) over the whole mesh (so mm scaling stays right on average, distortion is not
+    corrected)."""
+    p = np.asarray(positions, dtype=np.float64)[indices]
+    t = np.asarray(uvs, dtype=np.float64)[indices]
+    a_w = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+    e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    a_t = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
+    a_w *= float(mm_per_unit) ** 2
+    if not (a_w > 0 and a_t > 0 and np.isfinite(a_w) and np.isfinite(a_t)):
+        return 1.0
+    return float(np.sqrt(a_t / a_w))
+
+
+def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int = 8) -> list[float]:
+    """Split one blur increment (variance, mm^2) into 7-tap sub-blurs (standard deviations, mm)
+    whose tap spacing never exceeds the smoothness of what they blur: sigma_k <= s_k / SMOOTH_RATIO
+    with s_k^2 = max(sigma_in, texel/2)^2 + sum of earlier sigma^2. Variances add up to the
+    increment exactly (eq. 24). Needed when a texel is much smaller than the first Gaussian (the
+    raw irradiance is smooth only at the texel scale: one 7-tap blur leaves 7 spikes)."""
+    rest = max(float(increment), 0.0)
+    if rest <= 0.0:
+        return [0.0]
+    s2 = max(float(sigma_in), 0.5 * max(float(texel_mm), 0.0)) ** 2
+    out: list[float] = []
+    while rest > 0.0 and len(out) < max_steps - 1:
+        cap = s2 / SMOOTH_RATIO ** 2 if s2 > 0 else rest
+        if cap >= rest:
+            break
+        out.append(float(np.sqrt(cap)))
+        rest -= cap
+        s2 += cap
+    out.append(float(np.sqrt(rest)))
+    return out

@@ -1,0 +1,409 @@
+"""d'Eon & Luebke 2007 (seed 000 §4.2 eq. 20-35; seed 002 §14.4): texture-space diffusion with a
+sum-of-Gaussians profile, blurred separably and hierarchically, stretch-corrected, with energy
+conservation (rho_dt) and the modified translucent shadow map.
+
+Graph (resources in quotes):
+    shadow_map_i        (shared)           per light pose
+    deon_gutter         "gutter_N"         mesh, irradiance size
+    deon_stretch        "deon_stretch"     mesh, mm_per_unit, size           (eq. 27)
+    rho_dt_lut          "rho_dt_lut"       specular.f0, specular.rho_s        (eq. 30-31)
+    deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
+    deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
+    deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26)
+    deon_final          "lit"              weights, camera, ...               (eq. 34-35)
+    output              "image"
+
+The key light of the TSM is the first enabled shadow-casting light (one TSM; other lights get no
+transmitted term). Units: the stretch map holds UV per millimetre, so tap spacing in UV =
+stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.mm_per_unit).
+"""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import moderngl
+import numpy as np
+
+from .. import techniques
+from ..camera import gl_bytes, light_space
+from ..diffusion import (IRRADIANCE, blur_plan, blur_resource, KERNEL7, sub_steps, texture_of,
+                         uniform_uv_per_mm)
+from ..graph import Pass, Reflection, TexSpec
+from .common import (LIGHT_POSE_FIELDS, bind_surface, declare_lighting, draw_fullscreen, set_lighting,
+                     set_uniform)
+from .output import OutputPass
+from .rho_dt import RHO_DT_RESOURCE, RhoDtLutPass
+from .texture_space import GutterMapPass, dilate, gutter_resource
+
+STRETCH = "deon_stretch"
+TSM = "deon_tsm"
+MAX_GAUSSIANS = 8
+MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
+SIZE = "deon.irradiance_size"
+
+
+def _size(r) -> int:
+    return r.setting(SIZE)
+
+
+def _set_array(prog, name, values, dtype=np.float32):
+    if name in prog:
+        prog[name].write(np.asarray(values, dtype=dtype).tobytes())
+
+
+# -- which light casts the TSM --------------------------------------------------------------------
+
+def tsm_light_index(r: Reflection) -> int | None:
+    """Declare (and return) the TSM's key light: the first enabled shadow-casting light, or None
+    when deon.tsm is off or no light casts shadows."""
+    if not r.setting("deon.tsm"):
+        return None
+    n = min(r.setting("lights.#"), 4)
+    for j in range(n):
+        if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow"):
+            return j
+    return None
+
+
+def _tsm_pose(ec, j: int):
+    return SimpleNamespace(**{f: ec.setting(f"lights.{j}.{f}") for f in LIGHT_POSE_FIELDS})
+
+
+def set_tsm_uniforms(ec, prog, j: int) -> None:
+    scene = ec.scene
+    pose = _tsm_pose(ec, j)
+    ls = light_space(pose, scene.center, scene.radius)
+    if "u_tsm_matrix" in prog:
+        prog["u_tsm_matrix"].write(gl_bytes(ls.gl_matrix))
+    d = np.asarray(pose.direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    set_uniform(prog, "u_tsm_kind", 1 if pose.kind == "point" else 0)
+    set_uniform(prog, "u_tsm_dir", tuple(float(x) for x in d))
+    set_uniform(prog, "u_tsm_pos", tuple(float(x) for x in ls.position))
+    set_uniform(prog, "u_mm_per_unit", float(scene.mm_per_unit))
+    if TSM in ec._refl.inputs:
+        # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
+        texel_mm = ls.texel_world(ec.input(TSM).size[0]) * scene.mm_per_unit
+        set_uniform(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
+    return ls
+
+
+def _key_light(ec) -> int:
+    return next(k for k in range(4) if ec.setting(f"lights.{k}.enabled") and ec.setting(f"lights.{k}.cast_shadow"))
+
+
+# -- passes --------------------------------------------------------------------------------------
+
+class StretchPass(Pass):
+    """eq. (27): UV per mm along u and v (RG), from derivatives while rasterising in texture space;
+    gutters dilated. Depends on the mesh, mm_per_unit (scene) and the size only."""
+    name = "deon_stretch"
+
+    def reflect(self, r: Reflection) -> None:
+        n = _size(r)
+        r.input(gutter_resource(n))
+        r.program("deon_stretch")
+        r.program("dilate")
+        r.output(STRETCH, TexSpec((n, n), 4, "f4"))
+
+    def execute(self, ec) -> None:
+        n = ec.setting(SIZE)
+        tmp = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
+        fbo = ec.scratch_framebuffer(tmp)
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        ec.gl.disable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        prog = ec.program("deon_stretch")
+        set_uniform(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
+        ec.scene.vao(prog).render()
+        dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(STRETCH))
+
+
+class TsmPass(Pass):
+    """Modified TSM (§4.2.7) from the key light: R distance (mm), GB uv of the lit point, A cos."""
+    name = "deon_tsm"
+
+    def reflect(self, r: Reflection) -> None:
+        j = tsm_light_index(r)
+        if j is None:
+            return
+        for f in LIGHT_POSE_FIELDS:
+            r.setting(f"lights.{j}.{f}")
+        n = r.setting("deon.tsm_size")
+        r.program("deon_tsm")
+        r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("deon_tsm")
+        ls = set_tsm_uniforms(ec, prog, _key_light(ec))
+        prog["u_light_matrix"].write(gl_bytes(ls.gl_matrix))
+        fbo = ec.framebuffer(TSM)
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, -1.0, depth=1.0)  # A < 0: no surface
+        ec.gl.enable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        ec.scene.vao(prog).render()
+        ec.gl.disable(moderngl.DEPTH_TEST)
+
+
+class IrradiancePass(Pass):
+    """eq. (28)/(32) in texture space, thickness in alpha; float32; gutters dilated."""
+    name = "deon_irradiance"
+
+    def reflect(self, r: Reflection) -> None:
+        n = _size(r)
+        declare_lighting(r)
+        r.setting("deon.mix")
+        if r.setting("deon.energy_conservation"):
+            r.setting("specular.m")
+            r.input(RHO_DT_RESOURCE)
+        if tsm_light_index(r) is not None:
+            r.input(TSM)
+        r.input(gutter_resource(n))
+        r.program("deon_irradiance")
+        r.program("dilate")
+        r.output(IRRADIANCE, TexSpec((n, n), 4, "f4"))
+
+    def execute(self, ec) -> None:
+        n = ec.setting(SIZE)
+        prog = ec.program("deon_irradiance")
+        unit = bind_surface(ec, prog, 0)
+        unit = set_lighting(ec, prog, unit)
+        energy = bool(ec.setting("deon.energy_conservation"))
+        set_uniform(prog, "u_energy", 1 if energy else 0)
+        set_uniform(prog, "u_mix", float(ec.setting("deon.mix")))
+        if energy:
+            ec.input(RHO_DT_RESOURCE).use(unit)
+            set_uniform(prog, "rho_dt_tex", unit)
+            set_uniform(prog, "u_spec_m", float(ec.setting("specular.m")))
+        unit += 1
+        use_tsm = TSM in ec._refl.inputs
+        set_uniform(prog, "u_tsm", 1 if use_tsm else 0)
+        set_uniform(prog, "u_max_thickness", MAX_THICKNESS_MM)
+        if use_tsm:
+            ec.input(TSM).use(unit)
+            set_uniform(prog, "tsm_map", unit)
+            set_tsm_uniforms(ec, prog, _key_light(ec))
+        else:
+            set_uniform(prog, "tsm_map", unit)
+        tmp = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
+        fbo = ec.scratch_framebuffer(tmp)
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0)
+        ec.gl.disable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        ec.scene.vao(prog).render()
+        dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(IRRADIANCE))
+
+
+def _plan(r):
+    gs = r.setting("deon.gaussians")
+    return blur_plan([g.variance for g in gs], r.setting("deon.reuse_irradiance_below"))
+
+
+class _MeshStretch:
+    """Uniform UV-per-mm of the mesh (stretch correction off), cached per GpuScene."""
+    _cache: dict[int, float] = {}
+
+    @classmethod
+    def get(cls, scene) -> float:
+        k = id(scene)
+        if k not in cls._cache:
+            m = scene.mesh
+            cls._cache = {k: uniform_uv_per_mm(m.positions, m.uvs, m.indices, scene.mm_per_unit)}
+        return cls._cache[k]
+
+
+class GaussianBlurPass(Pass):
+    """blur_i = blur_(i-1) (x) G(v_i - v_(i-1)) (eq. 24), H then V (7 taps, eq. 25-26). Declares the
+    variances up to v_i (not the weights), the stretch toggle, its input and the stretch map."""
+
+    def __init__(self, i: int):
+        self.i = i
+        self.name = f"deon_blur_{i}"
+
+    def reflect(self, r: Reflection) -> None:
+        if r.peek("deon.gaussians.#") <= self.i:
+            return
+        step = self._step(r)
+        if step.reused:
+            return  # blur_1 is the irradiance itself: the final pass reads it, this pass is pruned
+        n = _size(r)
+        r.input(step.source)
+        r.input(gutter_resource(n))
+        if r.setting("deon.stretch"):
+            r.input(STRETCH)
+        r.program("deon_blur")
+        r.output(blur_resource(self.i), TexSpec((n, n), 4, "f4"))
+
+    def _step(self, r):
+        vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
+        return blur_plan(vs, r.setting("deon.reuse_irradiance_below"))[self.i]
+
+    def execute(self, ec) -> None:
+        n = ec.setting(SIZE)
+        step = self._step(ec)
+        prog = ec.program("deon_blur")
+        use_stretch = bool(ec.setting("deon.stretch"))
+        set_uniform(prog, "u_use_stretch", 1 if use_stretch else 0)
+        s = 1.0 if use_stretch else _MeshStretch.get(ec.scene)
+        set_uniform(prog, "u_uniform_stretch", (s, s))
+        texel_mm = 1.0 / (n * _MeshStretch.get(ec.scene))
+        sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
+        _set_array(prog, "u_weights", KERNEL7)
+        gutter = ec.input(gutter_resource(n))
+        gutter.use(1)
+        set_uniform(prog, "gutter", 1)
+        if use_stretch:
+            ec.input(STRETCH).use(2)
+        else:
+            gutter.use(2)
+        set_uniform(prog, "stretch_map", 2)
+        set_uniform(prog, "source", 0)
+        ec.gl.disable(moderngl.DEPTH_TEST)
+        spec = TexSpec((n, n), 4, "f4")
+        tmp = ec.scratch(spec)
+        tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
+        src = ec.input(step.source)
+        for k, sigma in enumerate(sigmas):
+            set_uniform(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
+            src.use(0)  # horizontal: src -> tmp
+            set_uniform(prog, "u_dir", (1.0, 0.0))
+            ec.scratch_framebuffer(tmp).use()
+            draw_fullscreen(ec, prog)
+            tmp.use(0)  # vertical: tmp -> tmp2, or blur_i on the last sub-step
+            set_uniform(prog, "u_dir", (0.0, 1.0))
+            last = k == len(sigmas) - 1
+            (ec.framebuffer(blur_resource(self.i)) if last else ec.scratch_framebuffer(tmp2)).use()
+            draw_fullscreen(ec, prog)
+            src = tmp2
+
+
+class DeonFinalPass(Pass):
+    """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output)."""
+    name = "deon_final"
+    view_dependent = True
+
+    def reflect(self, r: Reflection) -> None:
+        declare_lighting(r)
+        gs = r.setting("deon.gaussians")
+        plan = _plan(r)
+        r.setting("deon.mix")
+        r.setting("specular.m")
+        r.setting("specular.rho_s")
+        r.setting("specular.f0")
+        mode = r.setting("specular.mode")
+        if mode == "beckmann_lut":
+            from .luts import BECKMANN_LUT
+            r.input(BECKMANN_LUT)
+        if r.setting("deon.energy_conservation"):
+            r.input(RHO_DT_RESOURCE)
+        tsm = tsm_light_index(r) is not None
+        if tsm:
+            r.setting("deon.tsm_form")
+            r.input(TSM)
+        for i, (g, step) in enumerate(zip(gs, plan)):
+            if any(w > 0 for w in g.weights):
+                r.input(texture_of(step))
+                if tsm and i >= 1:
+                    r.input(texture_of(plan[i - 1]))  # its blurred thickness
+        if tsm and r.setting("deon.stretch"):
+            r.input(STRETCH)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.program("deon_final")
+        r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("deon_final")
+        view = ec.view
+        prog["u_view_proj"].write(gl_bytes(view.view_proj))
+        set_uniform(prog, "u_eye", tuple(float(x) for x in view.eye))
+        unit = bind_surface(ec, prog, 0)
+        unit = set_lighting(ec, prog, unit)
+        inputs = ec._refl.inputs
+        gs = ec.setting("deon.gaussians")
+        plan = blur_plan([g.variance for g in gs], ec.setting("deon.reuse_irradiance_below"))
+        ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+        var = np.zeros(MAX_GAUSSIANS, np.float32)
+        used = np.zeros(MAX_GAUSSIANS, np.int32)
+        spare = unit  # a unit for samplers the shader does not read (an unused blur slot)
+        unit += 1
+        for i, (g, step) in enumerate(zip(gs, plan)):
+            res = texture_of(step)
+            var[i] = step.variance
+            if res in inputs:
+                ws[i] = g.weights
+                used[i] = 1 if any(w > 0 for w in g.weights) else 0
+                ec.input(res).use(unit)
+                set_uniform(prog, f"blur{i}", unit)
+                unit += 1
+            else:
+                set_uniform(prog, f"blur{i}", spare)
+        for i in range(len(gs), MAX_GAUSSIANS):
+            set_uniform(prog, f"blur{i}", spare)
+        set_uniform(prog, "u_count", len(gs))
+        _set_array(prog, "u_w", ws)
+        _set_array(prog, "u_var", var)
+        _set_array(prog, "u_used", used, np.int32)
+        set_uniform(prog, "u_mix", float(ec.setting("deon.mix")))
+        energy = RHO_DT_RESOURCE in inputs
+        set_uniform(prog, "u_energy", 1 if energy else 0)
+        if energy:
+            ec.input(RHO_DT_RESOURCE).use(unit)
+            set_uniform(prog, "rho_dt_tex", unit)
+            unit += 1
+        else:
+            set_uniform(prog, "rho_dt_tex", spare)
+        set_uniform(prog, "u_spec_m", float(ec.setting("specular.m")))
+        set_uniform(prog, "u_rho_s", float(ec.setting("specular.rho_s")))
+        set_uniform(prog, "u_f0", float(ec.setting("specular.f0")))
+        lut = ec.setting("specular.mode") == "beckmann_lut"
+        set_uniform(prog, "u_spec_lut", 1 if lut else 0)
+        if lut:
+            from .luts import BECKMANN_LUT
+            ec.input(BECKMANN_LUT).use(unit)
+            set_uniform(prog, "beckmann_tex", unit)
+            unit += 1
+        else:
+            set_uniform(prog, "beckmann_tex", spare)
+        tsm = TSM in inputs
+        set_uniform(prog, "u_tsm", 1 if tsm else 0)
+        if tsm:
+            ec.input(TSM).use(unit)
+            set_uniform(prog, "tsm_map", unit)
+            unit += 1
+            set_tsm_uniforms(ec, prog, _key_light(ec))
+            set_uniform(prog, "u_tsm_printed", 1 if ec.setting("deon.tsm_form") == "printed" else 0)
+            use_stretch = STRETCH in inputs
+            set_uniform(prog, "u_use_stretch", 1 if use_stretch else 0)
+            if use_stretch:
+                ec.input(STRETCH).use(unit)
+                set_uniform(prog, "stretch_map", unit)
+                unit += 1
+            else:
+                set_uniform(prog, "stretch_map", spare)
+                s = _MeshStretch.get(ec.scene)
+                set_uniform(prog, "u_uniform_stretch", (s, s))
+        else:
+            set_uniform(prog, "tsm_map", spare)
+            set_uniform(prog, "stretch_map", spare)
+        fbo = ec.framebuffer("lit")
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+        ec.gl.enable(moderngl.DEPTH_TEST)
+        ec.gl.disable(moderngl.CULL_FACE)
+        ec.scene.vao(prog).render()
+        ec.gl.disable(moderngl.DEPTH_TEST)
+
+
+def deon() -> list[Pass]:
+    from .luts import BeckmannLutPass
+    return (techniques.shadow_passes()
+            + [GutterMapPass(SIZE, name="deon_gutter"), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
+               TsmPass(), IrradiancePass()]
+            + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
+            + [DeonFinalPass(), OutputPass("lit")])
+
+
+techniques.register("deon", deon)
