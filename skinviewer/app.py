@@ -1,0 +1,535 @@
+"""The interactive viewer: a moderngl-window WindowConfig rendering through ``Renderer`` with the
+window's GL context, plus the imgui-bundle UI (``skinviewer/ui``). Entry point: ``run_viewer(args)``.
+
+Tests (and scripts) build it in-process with ``create_app(settings, size=(320, 240))`` and drive it
+with ``app.step()``, the ``on_mouse_*`` / ``on_key_event`` handlers, and ``app.apply({...})``."""
+from __future__ import annotations
+
+import sys
+import time
+import traceback
+from collections import deque
+from pathlib import Path
+from typing import Any
+
+import moderngl_window as mglw
+from moderngl_window.timers.clock import Timer
+
+from . import techniques
+from .renderer import Renderer
+from .scenes import scene_overrides
+from .settings import Settings, SettingsError, with_values
+from .shaders import ShaderLibrary
+from .ui.camera_control import OrbitController
+from .ui.compare import CompareState
+from .ui.display import Display
+from .ui.hot_reload import ShaderWatcher
+from .ui.presets import PresetState
+from .ui.screenshot import ScreenshotOptions, read_screen, save_npy, save_png, timestamped_path
+
+PREFERRED_TECHNIQUES = ("deon", "gosselin", "phong")
+DEFAULT_WINDOW = (1280, 800)
+FALLBACK_SCENE = "backlit-ear"
+
+
+def best_technique(preferred: str | None = None) -> str:
+    have = techniques.names()
+    if preferred and preferred in have:
+        return preferred
+    return next((t for t in PREFERRED_TECHNIQUES if t in have), have[0])
+
+
+class ViewerApp(mglw.WindowConfig):
+    title = "skinviewer"
+    gl_version = (3, 3)
+    aspect_ratio = None
+    resizable = True
+    clear_color = None
+    vsync = True
+
+    def __init__(self, settings: Settings | None = None, preset_path: str | None = None,
+                 shaders_root: str | Path | None = None, notices: list[str] | None = None, **kwargs):
+        super().__init__(**kwargs)
+        from imgui_bundle import imgui, implot
+        from .ui.imgui_backend import ImguiRenderer
+        self.imgui_ctx = imgui.create_context()
+        imgui.set_current_context(self.imgui_ctx)
+        self.implot_ctx = implot.create_context()
+        implot.set_current_context(self.implot_ctx)
+        io = imgui.get_io()
+        io.set_ini_filename("")
+        _style()
+        self.imgui = ImguiRenderer(self.wnd)
+
+        self.shaders = ShaderLibrary(self.ctx, root=Path(shaders_root) if shaders_root else None)
+        self.renderer = Renderer(self.ctx, self.shaders)
+        self.display = Display(self.ctx)
+        self.orbit = OrbitController()
+        self.watcher = ShaderWatcher(self.shaders)
+        self.compare = CompareState()
+        self.shot_options = ScreenshotOptions()
+        self.notices: list[str] = list(notices or [])
+        self.errors: list[tuple[str, str]] = []  # last refused edit
+        self.error_title = ""
+        self.render_error = ""
+        self.report = None
+        self.inspect: str | None = None  # resource shown full-window
+        self.inspect_channel = "RGB"
+        self.inspect_exposure = 1.0
+        self.frame_ms: deque[float] = deque(maxlen=240)
+        self.render_ms: deque[float] = deque(maxlen=240)
+        self.show_ui = True
+        self.vsync_on = bool(getattr(self.wnd, "vsync", True))
+        self.frames = 0
+        self.screenshots_written: list[Path] = []
+        self._pending_shots: list[tuple[Path | None, bool]] = []
+        self._buttons: set[int] = set()
+        self._drag_owner: str | None = None
+        self._shift = False
+        self._last_frame_t: float | None = None
+        self.ui_rects: list[tuple[float, float, float, float]] = []
+        self.last_ms: dict[str, float] = {}  # pass -> ms of its last run (cached passes show it dimmed)
+        self._title = ""
+
+        s = settings or Settings()
+        if s.technique not in techniques.names():
+            s = with_values(s, {"technique": best_technique(s.technique)})
+        fw, fh = self.wnd.buffer_size
+        s = with_values(s, {"render.width": max(16, fw), "render.height": max(16, fh)})
+        s = self._load_initial_scene(s)
+        self.settings = s
+        self.home_camera = s.camera.model_dump(mode="json")
+        self.presets = PresetState(s, preset_path)
+
+        from .ui.panel import Panel
+        from .ui.passes_window import PassesWindow
+        self.panel = Panel(self)
+        self.passes_window = PassesWindow(self)
+
+    # -- settings ----------------------------------------------------------------------------
+    def _load_initial_scene(self, s: Settings) -> Settings:
+        try:
+            scene = self.renderer.ensure_scene(s)
+        except Exception as exc:
+            if s.scene.mesh or s.scene.name == FALLBACK_SCENE:
+                raise
+            self.notices.append(f"scene '{s.scene.name}' is not available ({type(exc).__name__}: {exc}); "
+                                f"showing '{FALLBACK_SCENE}' instead")
+            s = with_values(s, {"scene.name": FALLBACK_SCENE, **scene_overrides(FALLBACK_SCENE)})
+            scene = self.renderer.ensure_scene(s)
+        self.notices += scene.notes
+        self.orbit.set_scene_bounds(scene.gpu.center, scene.gpu.radius)
+        return s
+
+    def apply(self, assignments: dict[str, Any], source: str = "") -> bool:
+        """Validate and apply dotted-path assignments. Refused edits leave the state untouched and
+        put their (path, message) list in ``self.errors``."""
+        if not assignments:
+            return True
+        try:
+            new = with_values(self.settings, assignments)
+        except SettingsError as exc:
+            self._refuse(exc.errors, source or "invalid setting")
+            return False
+        return self.set_settings(new, source)
+
+    def set_settings(self, new: Settings, source: str = "") -> bool:
+        if new.technique not in techniques.names():
+            self._refuse([("technique", f"'{new.technique}' is not available (have: {', '.join(techniques.names())})")],
+                         source or "technique")
+            return False
+        if Renderer.scene_key(new) != Renderer.scene_key(self.settings) or self.renderer.scene is None:
+            try:
+                scene = self.renderer.ensure_scene(new)
+            except Exception as exc:
+                self._refuse([("scene", f"{type(exc).__name__}: {exc}")], source or "scene")
+                return False
+            self.orbit.set_scene_bounds(scene.gpu.center, scene.gpu.radius)
+            self.notices = list(scene.notes)
+        self.settings = new
+        self.errors = []
+        self.error_title = ""
+        return True
+
+    def _refuse(self, errors: list[tuple[str, str]], title: str) -> None:
+        self.errors = list(errors)
+        self.error_title = title
+
+    def select_scene(self, name: str) -> bool:
+        ok = self.apply({"scene.name": name, "scene.mesh": None, **scene_overrides(name)}, f"scene {name}")
+        if ok:
+            self.home_camera = self.settings.camera.model_dump(mode="json")
+        return ok
+
+    def load_mesh(self, path: str) -> bool:
+        ok = self.apply({"scene.mesh": path or None}, f"mesh {path}")
+        if ok:
+            self.home_camera = self.settings.camera.model_dump(mode="json")
+        return ok
+
+    def set_technique(self, name: str) -> bool:
+        if self.inspect is not None:
+            self.inspect = None
+        return self.apply({"technique": name}, "technique")
+
+    def reset_camera(self) -> None:
+        self.apply({"camera": dict(self.home_camera)}, "camera reset")
+
+    def load_preset(self, path: str) -> bool:
+        s = self.presets.load(path, self.settings)
+        if s is None:
+            return False
+        if not self.set_settings(s, f"preset {path}"):
+            self.presets.errors, self.presets.error_source = list(self.errors), path
+            return False
+        self.home_camera = self.settings.camera.model_dump(mode="json")
+        return True
+
+    def set_vsync(self, on: bool) -> None:
+        self.vsync_on = bool(on)
+        try:
+            self.wnd._set_vsync(self.vsync_on)
+        except Exception:
+            pass
+
+    # -- frame -------------------------------------------------------------------------------
+    def step(self, n: int = 1) -> None:
+        """Render ``n`` complete frames (render, UI, swap): for tests and --frames."""
+        for _ in range(n):
+            self.wnd.use()
+            self.on_render(time.perf_counter(), 1 / 60)
+            self.wnd.swap_buffers()
+
+    def _sync_size(self) -> None:
+        fw, fh = self.wnd.buffer_size
+        fw, fh = max(16, int(fw)), max(16, int(fh))
+        if (fw, fh) != (self.settings.render.width, self.settings.render.height):
+            try:
+                self.settings = with_values(self.settings, {"render.width": fw, "render.height": fh})
+            except SettingsError:
+                pass
+
+    def on_render(self, t: float, frametime: float) -> None:
+        now = time.perf_counter()
+        if self._last_frame_t is not None:
+            self.frame_ms.append((now - self._last_frame_t) * 1000.0)
+        self._last_frame_t = now
+        self.frames += 1
+        self.watcher.poll()
+        self._sync_size()
+        fw, fh = self.settings.render.width, self.settings.render.height
+        viewport = (0, 0, fw, fh)
+
+        t0 = time.perf_counter()
+        self.report = self._render_main()
+        self._draw_view(viewport)
+        self.render_ms.append((time.perf_counter() - t0) * 1000.0)
+        self.watcher.refresh_errors()
+
+        self._take_shots(include_ui=False)
+        if self.show_ui:
+            self._draw_ui(frametime)
+        self._take_shots(include_ui=True)
+        self._update_title()
+
+    def _update_title(self) -> None:
+        name = Path(self.presets.path).name if self.presets.path else "untitled"
+        title = f"skinviewer - {name}{' *' if self.presets.dirty(self.settings) else ''} - {self.settings.technique}"
+        if title != self._title:
+            self._title = title
+            try:
+                self.wnd.title = title
+            except Exception:
+                pass
+
+    def _render_main(self):
+        try:
+            report = self.renderer.render(self.settings)
+            self.render_error = ""
+            for p in report.passes:
+                if p.status == "ran" and p.ms is not None:
+                    self.last_ms[p.name] = p.ms
+            return report
+        except Exception as exc:
+            self.render_error = f"{type(exc).__name__}: {exc}"
+            if "--debug" in sys.argv:
+                traceback.print_exc()
+            return None
+
+    def _render_slot(self, slot):
+        if slot.renderer is None:
+            slot.renderer = Renderer(self.ctx, self.shaders)
+        try:
+            s = self.compare.frame_settings(slot, self.settings)
+            slot.renderer.render(s)
+            slot.error = ""
+            return slot.renderer.graph(s.technique).texture("image")
+        except Exception as exc:
+            slot.error = f"{type(exc).__name__}: {exc}"
+            return None
+
+    def _draw_view(self, viewport) -> None:
+        ctx = self.ctx
+        ctx.screen.use()
+        ctx.viewport = viewport
+        bg = self.settings.render.background
+        ctx.clear(*bg, 1.0)
+        cmp = self.compare
+        if cmp.mode != "off" and cmp.ready():
+            if cmp.mode == "toggle":
+                tex = self._render_slot(cmp.b if cmp.show_b else cmp.a)
+                if tex is not None:
+                    self.display.show(tex, viewport)
+                return
+            ta, tb = self._render_slot(cmp.a), self._render_slot(cmp.b)
+            if ta is not None and tb is not None:
+                if cmp.mode == "split":
+                    self.display.split(ta, tb, viewport, cmp.divider)
+                else:
+                    self.display.difference(ta, tb, viewport, cmp.diff_gain)
+            return
+        g = self.renderer.graph(self.settings.technique) if self.settings.technique in techniques.names() else None
+        if g is None:
+            return
+        if self.inspect is not None:
+            spec = g.resources().get(self.inspect)
+            if spec is not None:
+                self.display.inspect(g.texture(self.inspect), viewport, self.inspect_channel,
+                                     self.inspect_exposure, spec.components)
+                return
+        if "image" in g.resources():
+            self.display.show(g.texture("image"), viewport)
+
+    def _draw_ui(self, frametime: float) -> None:
+        from imgui_bundle import imgui
+        imgui.set_current_context(self.imgui_ctx)
+        io = imgui.get_io()
+        io.delta_time = max(float(frametime), 1e-4)
+        io.display_size = self.wnd.size
+        imgui.new_frame()
+        self.ui_rects = []
+        state = imgui.internal.ErrorRecoveryState()
+        imgui.internal.error_recovery_store_state(state)
+        try:
+            self.panel.draw()
+            self.passes_window.draw()
+        except Exception as exc:  # a UI bug must not take the session down
+            self.render_error = f"UI: {type(exc).__name__}: {exc}"
+            traceback.print_exc()
+            imgui.internal.error_recovery_try_to_recover_state(state)
+        imgui.render()
+        self.ctx.screen.use()
+        self.imgui.render(imgui.get_draw_data())
+
+    # -- screenshots -------------------------------------------------------------------------
+    def request_screenshot(self, path: str | Path | None = None, include_ui: bool | None = None) -> Path:
+        """Queue a screenshot of the next frame; returns its path (timestamped when not given)."""
+        p = Path(path) if path else timestamped_path(self.shot_options.folder)
+        inc = self.shot_options.include_ui if include_ui is None else include_ui
+        self._pending_shots.append((p, bool(inc and self.show_ui)))
+        return p
+
+    def _take_shots(self, include_ui: bool) -> None:
+        todo = [x for x in self._pending_shots if x[1] == include_ui]
+        if not todo:
+            return
+        self._pending_shots = [x for x in self._pending_shots if x[1] != include_ui]
+        img = read_screen(self.ctx, (self.settings.render.width, self.settings.render.height))
+        for path, _ in todo:
+            try:
+                save_png(path, img)
+                self.screenshots_written.append(path)
+                self.notices = [n for n in self.notices if not n.startswith("screenshot")]
+                self.notices.append(f"screenshot: {path}")
+                if self.shot_options.save_linear_npy:
+                    g = self.renderer.graph(self.settings.technique)
+                    res = "lit" if "lit" in g.resources() else "image"
+                    save_npy(path.with_suffix(".npy"), g.read(res)[::-1])
+            except Exception as exc:
+                self._refuse([("screenshot", f"{type(exc).__name__}: {exc}")], f"screenshot {path}")
+
+    # -- input -------------------------------------------------------------------------------
+    def _over_ui(self, x: float, y: float) -> bool:
+        if not self.show_ui:
+            return False
+        for (rx, ry, rw, rh) in self.ui_rects:
+            if rx <= x <= rx + rw and ry <= y <= ry + rh:
+                return True
+        try:
+            from imgui_bundle import imgui
+            return bool(imgui.get_io().want_capture_mouse) and self._drag_owner == "ui"
+        except Exception:
+            return False
+
+    def _near_divider(self, x: float) -> bool:
+        cmp = self.compare
+        return cmp.mode == "split" and cmp.ready() and abs(x - cmp.divider * self.wnd.size[0]) < 8
+
+    def on_mouse_position_event(self, x, y, dx, dy):
+        self.imgui.mouse_position_event(x, y, dx, dy)
+
+    def on_mouse_press_event(self, x, y, button):
+        self.imgui.mouse_press_event(x, y, button)
+        self._buttons.add(button)
+        if self._drag_owner is None:
+            if self._over_ui(x, y):
+                self._drag_owner = "ui"
+            elif button == self.wnd.mouse.left and self._near_divider(x):
+                self._drag_owner = "divider"
+            else:
+                self._drag_owner = "view"
+
+    def on_mouse_release_event(self, x, y, button):
+        self.imgui.mouse_release_event(x, y, button)
+        self._buttons.discard(button)
+        if not self._buttons:
+            self._drag_owner = None
+
+    def on_mouse_drag_event(self, x, y, dx, dy):
+        self.imgui.mouse_drag_event(x, y, dx, dy)
+        if self._drag_owner == "divider":
+            self.compare.divider = float(min(1.0, max(0.0, x / max(self.wnd.size[0], 1))))
+            return
+        if self._drag_owner != "view":
+            return
+        m = self.wnd.mouse
+        shift = self._shift or bool(getattr(self.wnd.modifiers, "shift", False))
+        s = self.settings
+        if m.middle in self._buttons or (m.left in self._buttons and shift):
+            self.apply(self.orbit.pan(s, dx, dy, self.wnd.size[1]), "pan")
+        elif m.left in self._buttons:
+            self.apply(self.orbit.orbit(s, dx, dy), "orbit")
+        elif m.right in self._buttons:
+            self.apply(self.orbit.move_light(s, 0, dx, dy), "key light")
+
+    def on_mouse_scroll_event(self, x_offset, y_offset):
+        self.imgui.mouse_scroll_event(x_offset, y_offset)
+        from imgui_bundle import imgui
+        if self.show_ui and imgui.get_io().want_capture_mouse:
+            return
+        self.apply(self.orbit.zoom(self.settings, y_offset), "zoom")
+
+    def on_key_event(self, key, action, modifiers):
+        self.imgui.key_event(key, action, modifiers)
+        self._shift = bool(getattr(modifiers, "shift", False))
+        keys = self.wnd.keys
+        if action != keys.ACTION_PRESS:
+            return
+        if key == keys.F12:
+            self.request_screenshot()
+            return
+        from imgui_bundle import imgui
+        if self.show_ui and imgui.get_io().want_capture_keyboard:
+            return
+        if key == keys.R:
+            self.reset_camera()
+        elif key == keys.F1:
+            self.show_ui = not self.show_ui
+        elif key == keys.ESCAPE and self.inspect is not None:
+            self.inspect = None
+
+    def on_unicode_char_entered(self, char):
+        self.imgui.unicode_char_entered(char)
+
+    def on_resize(self, width, height):
+        self.imgui.resize(width, height)
+
+    # -- teardown ----------------------------------------------------------------------------
+    def close(self) -> None:
+        from imgui_bundle import imgui, implot
+        self.compare.release()
+        self.renderer.release()
+        self.shaders.release()
+        self.display.release()
+        try:
+            self.imgui.shutdown()
+        except Exception:
+            pass
+        implot.destroy_context(self.implot_ctx)
+        imgui.destroy_context(self.imgui_ctx)
+
+
+def _style() -> None:
+    from imgui_bundle import imgui
+    imgui.style_colors_dark()
+    st = imgui.get_style()
+    st.window_rounding = 4.0
+    st.frame_rounding = 3.0
+    st.grab_rounding = 3.0
+    st.item_spacing = imgui.ImVec2(6, 4)
+    st.set_color_(imgui.Col_.window_bg.value, imgui.ImVec4(0.08, 0.08, 0.09, 0.92))
+
+
+def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, vsync: bool = True,
+                  backend: str = "glfw"):
+    """A moderngl-window window (glfw by default; pyglet as a fallback) with a GL 3.3 core context."""
+    errors = []
+    for name in ([backend] + [b for b in ("glfw", "pyglet") if b != backend]):
+        try:
+            cls = mglw.get_local_window_cls(name)
+            wnd = cls(title="skinviewer", size=tuple(size), resizable=True, visible=visible, gl_version=(3, 3),
+                      aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
+            mglw.activate_context(window=wnd)
+            return wnd
+        except Exception as exc:
+            errors.append(f"{name}: {exc}")
+    raise RuntimeError("cannot open a window (" + "; ".join(errors) + "). Is there a display? "
+                       "Headless: xvfb-run -a -s '-screen 0 1280x800x24' skinviewer ...")
+
+
+def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True,
+               vsync: bool = True, preset_path: str | None = None, shaders_root=None,
+               notices: list[str] | None = None) -> ViewerApp:
+    wnd = create_window(size, visible=visible, vsync=vsync)
+    app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
+                    ctx=wnd.ctx, wnd=wnd, timer=Timer())
+    wnd.swap_buffers()
+    wnd.set_default_viewport()
+    return app
+
+
+def destroy_app(app: ViewerApp) -> None:
+    wnd = app.wnd
+    app.close()
+    try:
+        wnd.destroy()
+    except Exception:
+        pass
+
+
+def run_viewer(args) -> int:
+    """``skinviewer [view]``: open the window; with --frames N render N frames and exit
+    (writing --screenshot FILE after the last one)."""
+    from .cli import CliError, settings_from_args
+    s = settings_from_args(args)
+    if getattr(args, "technique", None) and args.technique not in techniques.names():
+        raise CliError(f"technique '{args.technique}' is not available (have: {', '.join(techniques.names())})")
+    if not getattr(args, "technique", None):
+        preset_tech = s.technique
+        s = with_values(s, {"technique": best_technique(preset_tech)})
+    if args.screenshot and not args.frames:
+        args.frames = 1
+    size = tuple(args.size) if args.size else DEFAULT_WINDOW
+    app = create_app(s, size=size, preset_path=args.preset)
+    for n in app.notices:
+        print(f"note: {n}", file=sys.stderr)
+    wnd = app.wnd
+    try:
+        app.timer.start()
+        while not wnd.is_closing:
+            if args.frames and args.screenshot and app.frames == args.frames - 1:
+                app.request_screenshot(args.screenshot, include_ui=False)
+            app.step()
+            if args.frames and app.frames >= args.frames:
+                break
+        if args.screenshot:
+            if not app.screenshots_written:
+                print(f"skinviewer: no screenshot written ({app.render_error or 'no frame'})", file=sys.stderr)
+                return 2
+            print(f"wrote {args.screenshot}")
+        if app.render_error and args.frames:
+            print(f"skinviewer: {app.render_error}", file=sys.stderr)
+            return 2
+        return 0
+    finally:
+        destroy_app(app)

@@ -1,0 +1,34 @@
+"""Shader hot reload: poll the library about twice a second; a changed GLSL file recompiles the
+programs that include it (the graph's cache keys hold shader versions, so their passes re-run).
+A failing compile keeps the last good program running; its errors stay listed until fixed."""
+from __future__ import annotations
+
+import time
+
+from ..shaders import ShaderError, ShaderLibrary
+
+
+class ShaderWatcher:
+    def __init__(self, shaders: ShaderLibrary, interval: float = 0.5):
+        self.shaders = shaders
+        self.interval = interval
+        self._next = 0.0
+        self.errors: dict[str, list[ShaderError]] = {}
+        self.last_reloaded: list[str] = []
+        self.last_reload_time: float | None = None
+
+    def poll(self, now: float | None = None, force: bool = False) -> list[str]:
+        """Recompile changed programs when due; returns the names replaced this call."""
+        now = time.monotonic() if now is None else now
+        if not force and now < self._next:
+            return []
+        self._next = now + self.interval
+        replaced, errors = self.shaders.reload(force=force)
+        self.errors = errors
+        if replaced:
+            self.last_reloaded = replaced
+            self.last_reload_time = time.time()
+        return replaced
+
+    def refresh_errors(self) -> None:
+        self.errors = self.shaders.errors()

@@ -1,0 +1,117 @@
+"""The passes window: every pass of the current technique this frame (ran / cached / pruned,
+reason, time and the timing mode), frame time / FPS with a history graph, and the output texture
+inspector (click a pass: its output full-window; channel, exposure)."""
+from __future__ import annotations
+
+import numpy as np
+from imgui_bundle import imgui
+
+from ..graph import TIMING_NOTES
+from .display import CHANNELS
+
+COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
+          "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0)}
+WIDTH = 400.0
+
+
+class PassesWindow:
+    def __init__(self, app):
+        self.app = app
+        self.open = True
+
+    def draw(self) -> None:
+        app = self.app
+        io = imgui.get_io()
+        w = io.display_size.x
+        imgui.set_next_window_pos(imgui.ImVec2(max(0.0, w - WIDTH), 0), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(WIDTH, 0), imgui.Cond_.first_use_ever.value)
+        if w < 900:  # small windows: start collapsed so the view stays usable
+            imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
+        expanded = imgui.begin("Passes###passes")[0]
+        if expanded:
+            self._timing()
+            self._inspector()
+            self._table()
+        pos, size = imgui.get_window_pos(), imgui.get_window_size()
+        app.ui_rects.append((pos.x, pos.y, size.x, size.y))
+        imgui.end()
+
+    def _timing(self) -> None:
+        app = self.app
+        ft = np.array(app.frame_ms, dtype=np.float32)
+        if len(ft):
+            avg = float(ft[-30:].mean())
+            imgui.text(f"frame {avg:6.1f} ms   {1000.0 / max(avg, 1e-3):5.1f} FPS")
+            imgui.plot_lines("##ft", ft, 0, None, 0.0, float(max(ft.max(), 1.0) * 1.1), imgui.ImVec2(-1, 40))
+        else:
+            imgui.text("frame -")
+
+    def _table(self) -> None:
+        app = self.app
+        rep = app.report
+        if rep is None:
+            imgui.text_disabled("no frame report")
+            return
+        imgui.text(f"{app.settings.technique}: {len(rep.ran)} ran, {len(rep.cached)} cached, {len(rep.pruned)} pruned")
+        imgui.text_disabled(f"{rep.total_ms:.2f} ms ({rep.timing_mode} timing)")
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip(TIMING_NOTES[rep.timing_mode])
+        flags = imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
+        if imgui.begin_table("passes", 4, flags):
+            imgui.table_setup_column("pass")
+            imgui.table_setup_column("status")
+            imgui.table_setup_column("ms")
+            imgui.table_setup_column("reason", imgui.TableColumnFlags_.width_stretch.value)
+            imgui.table_headers_row()
+            for p in rep.passes:
+                imgui.table_next_row()
+                imgui.table_next_column()
+                outs = list(p.outputs)
+                selected = app.inspect is not None and app.inspect in outs
+                if imgui.selectable(p.name, selected, imgui.SelectableFlags_.span_all_columns.value)[0]:
+                    if selected:
+                        app.inspect = None
+                    elif outs:
+                        app.inspect = outs[0]
+                imgui.table_next_column()
+                imgui.text_colored(COLORS.get(p.status, COLORS["pruned"]), p.status)
+                imgui.table_next_column()
+                if p.ms is not None:
+                    imgui.text(f"{p.ms:.2f}")
+                elif p.name in app.last_ms:
+                    imgui.text_disabled(f"({app.last_ms[p.name]:.2f})")
+                    if imgui.is_item_hovered():
+                        imgui.set_item_tooltip("cost when it last ran")
+                imgui.table_next_column()
+                imgui.text_disabled(p.reason[:60])
+                if p.reason and imgui.is_item_hovered():
+                    imgui.set_item_tooltip(p.reason)
+            imgui.end_table()
+
+    def _inspector(self) -> None:
+        app = self.app
+        if app.inspect is None:
+            imgui.text_disabled("click a pass to view its output full-window")
+            return
+        g = app.renderer.graph(app.settings.technique)
+        res = g.resources()
+        imgui.separator_text("output inspector")
+        names = sorted(res)
+        if app.inspect not in res:
+            imgui.text_colored(imgui.ImVec4(1, 0.5, 0.4, 1), f"'{app.inspect}' is not allocated this frame")
+        cur = names.index(app.inspect) if app.inspect in names else 0
+        if names:
+            ch, i = imgui.combo("texture", cur, names)
+            if ch:
+                app.inspect = names[i]
+        spec = res.get(app.inspect)
+        if spec is not None:
+            imgui.text_disabled(f"{spec.size[0]}x{spec.size[1]}  {spec.components}ch  {spec.dtype}")
+        ch, i = imgui.combo("channel", CHANNELS.index(app.inspect_channel), list(CHANNELS))
+        if ch:
+            app.inspect_channel = CHANNELS[i]
+        _, app.inspect_exposure = imgui.slider_float("exposure", app.inspect_exposure, 1e-3, 1e3, "%.3g",
+                                                     imgui.SliderFlags_.logarithmic.value)
+        if imgui.button("back to the image (Esc)"):
+            app.inspect = None
+        imgui.separator()

@@ -1,0 +1,189 @@
+"""Profile lab panel: pick a diffusion model (dipole / multipole / Burley) from a measured material
+or parameters, see r R(r), fit K Gaussians (``skinviewer.fitting``, in a background thread) and
+apply them to the current settings' ``deon.gaussians``."""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+from imgui_bundle import imgui, implot
+
+MODELS = ("dipole", "multipole", "burley")
+R_MAX = 8.0
+
+
+def available() -> bool:
+    try:
+        import skinviewer.fitting  # noqa: F401
+        import skinviewer.profiles  # noqa: F401
+        return True
+    except Exception:
+        return False
+
+
+class ProfileLab:
+    def __init__(self, app):
+        from .. import profiles as P
+        self.app = app
+        self.P = P
+        self.model = "dipole"
+        self.materials = list(P.MATERIALS)
+        self.material = self.materials.index("Skin1") if "Skin1" in P.MATERIALS else 0
+        self.use_material = True
+        m = P.MATERIALS[self.materials[self.material]]
+        self.ssp = list(m.sigma_s_prime)
+        self.sa = list(m.sigma_a)
+        self.eta = 1.3
+        self.thickness = 2.0
+        self.three_layer = False
+        self.albedo = [0.8, 0.6, 0.5]
+        self.mfp = [1.0, 0.5, 0.25]
+        self.k = 4
+        self.shared = True
+        self.normalize = True
+        self.fit = None
+        self.fit_error = ""
+        self.model_error = ""
+        self._busy = False
+        self._cache_key = None
+        self._curve = None  # (r, r*R)
+
+    # -- model -------------------------------------------------------------------------------
+    def _key(self):
+        return (self.model, self.use_material, self.material, tuple(self.ssp), tuple(self.sa), self.eta,
+                self.thickness, self.three_layer, tuple(self.albedo), tuple(self.mfp))
+
+    def build_model(self):
+        P = self.P
+        if self.use_material:
+            m = P.MATERIALS[self.materials[self.material]]
+            ssp, sa, eta = m.sigma_s_prime, m.sigma_a, m.eta
+        else:
+            ssp, sa, eta = tuple(self.ssp), tuple(self.sa), self.eta
+        if self.model == "dipole":
+            return P.Dipole(ssp, sa, eta)
+        if self.model == "multipole":
+            if self.three_layer:
+                return P.three_layer_skin()
+            return P.Multipole(ssp, sa, self.thickness, eta)
+        if self.use_material:
+            if min(sa) <= 0:
+                raise ValueError("Burley from a material needs sigma_a > 0 in every channel")
+            A = P.Dipole(ssp, sa, eta).total_reflectance()
+            return P.Burley(A, P.diffuse_mean_free_path(ssp, sa), "searchlight-dmfp")
+        return P.Burley(tuple(self.albedo), tuple(self.mfp), "searchlight-dmfp")
+
+    def curve(self):
+        key = self._key()
+        if key != self._cache_key:
+            self._cache_key = key
+            self.fit = None
+            try:
+                r = np.linspace(0.01, R_MAX, 160)
+                R = np.asarray(self.build_model()(r), dtype=np.float64)
+                self._curve = (r, r[:, None] * R)
+                self.model_error = ""
+            except Exception as exc:
+                self._curve = None
+                self.model_error = f"{type(exc).__name__}: {exc}"
+        return self._curve
+
+    # -- fitting -----------------------------------------------------------------------------
+    def start_fit(self, wait: bool = False) -> None:
+        if self._busy:
+            return
+        from ..fitting import fit_gaussians
+        try:
+            model = self.build_model()
+        except Exception as exc:
+            self.fit_error = f"{type(exc).__name__}: {exc}"
+            return
+        self._busy = True
+        self.fit_error = ""
+        k, shared = self.k, self.shared
+
+        def work():
+            try:
+                self.fit = fit_gaussians(model, k, shared=shared)
+            except Exception as exc:
+                self.fit_error = f"{type(exc).__name__}: {exc}"
+            finally:
+                self._busy = False
+
+        t = threading.Thread(target=work, daemon=True)
+        t.start()
+        if wait:
+            t.join()
+
+    def rows(self):
+        if self.fit is None:
+            return []
+        return self.fit.table(normalize=self.normalize)
+
+    def apply(self) -> bool:
+        rows = self.rows()
+        if not rows:
+            return False
+        if len(rows) > 8:
+            self.fit_error = f"the d'Eon table holds at most 8 Gaussians (this fit has {len(rows)})"
+            return False
+        return self.app.apply({"deon.gaussians": [{"variance": v, "weights": list(w)} for v, w in rows]},
+                              "profile lab")
+
+    # -- UI ----------------------------------------------------------------------------------
+    def draw(self) -> None:
+        from .panel import _header
+        if not _header("Profile lab"):
+            return
+        ch, i = imgui.combo("model", MODELS.index(self.model), list(MODELS))
+        if ch:
+            self.model = MODELS[i]
+        if self.model == "multipole":
+            _, self.three_layer = imgui.checkbox("three-layer skin example", self.three_layer)
+        if not (self.model == "multipole" and self.three_layer):
+            _, self.use_material = imgui.checkbox("measured material (Jensen 2001)", self.use_material)
+            if self.use_material:
+                _, self.material = imgui.combo("material", self.material, self.materials)
+            elif self.model == "burley":
+                _, self.albedo = imgui.drag_float3("albedo A", self.albedo, 0.005, 0.0, 1.0)
+                _, self.mfp = imgui.drag_float3("mfp d (mm)", self.mfp, 0.01, 0.001, 100.0)
+            else:
+                _, self.ssp = imgui.drag_float3("sigma_s' (1/mm)", self.ssp, 0.01, 0.0, 1000.0)
+                _, self.sa = imgui.drag_float3("sigma_a (1/mm)", self.sa, 0.001, 0.0, 1000.0)
+                _, self.eta = imgui.slider_float("eta", self.eta, 1.0, 2.0)
+            if self.model == "multipole":
+                _, self.thickness = imgui.drag_float("thickness (mm)", self.thickness, 0.01, 0.01, 100.0)
+        _, self.k = imgui.slider_int("K Gaussians", self.k, 1, 8)
+        _, self.shared = imgui.checkbox("shared variances", self.shared)
+        imgui.same_line()
+        _, self.normalize = imgui.checkbox("normalise", self.normalize)
+        cur = self.curve()
+        if self.model_error:
+            imgui.push_text_wrap_pos(0)
+            imgui.text_colored(imgui.ImVec4(1, 0.45, 0.4, 1), self.model_error)
+            imgui.pop_text_wrap_pos()
+        if imgui.button("fitting..." if self._busy else "fit"):
+            self.start_fit()
+        imgui.same_line()
+        imgui.begin_disabled(self.fit is None)
+        if imgui.button("apply to d'Eon gaussians"):
+            self.apply()
+        imgui.end_disabled()
+        if self.fit_error:
+            imgui.text_colored(imgui.ImVec4(1, 0.45, 0.4, 1), self.fit_error)
+        if self.fit is not None:
+            e = self.fit.errors
+            imgui.text_disabled(f"error R {e[0]:.3f}  G {e[1]:.3f}  B {e[2]:.3f}  ({self.fit.seconds:.2f} s)")
+        if cur is not None and implot.begin_plot("r R(r): model (thin) and fit", imgui.ImVec2(-1, 190)):
+            implot.setup_axes("r (mm)", "r R(r)")
+            r, rR = cur
+            cols = ((1.0, 0.35, 0.3), (0.35, 0.9, 0.4), (0.4, 0.6, 1.0))
+            for c, name in enumerate("RGB"):
+                implot.set_next_line_style(imgui.ImVec4(*cols[c], 0.6), 1.0)
+                implot.plot_line(f"model {name}", r, np.ascontiguousarray(rR[:, c]))
+            if self.fit is not None:
+                F = np.asarray(self.fit(r), dtype=np.float64)
+                for c, name in enumerate("RGB"):
+                    implot.set_next_line_style(imgui.ImVec4(*cols[c], 1.0), 2.5)
+                    implot.plot_line(f"fit {name}", r, np.ascontiguousarray(r * F[:, c]))
+            implot.end_plot()

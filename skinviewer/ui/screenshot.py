@@ -1,0 +1,48 @@
+"""Screenshots: PNG of the 3D view (optionally with the UI), timestamped name in a folder,
+optionally the linear image as float32 .npy. Written atomically."""
+from __future__ import annotations
+
+import datetime as _dt
+import io
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class ScreenshotOptions:
+    folder: str = "screenshots"
+    include_ui: bool = False
+    save_linear_npy: bool = False
+
+
+def timestamped_path(folder: str | os.PathLike, prefix: str = "skinviewer", ext: str = ".png") -> Path:
+    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]
+    return Path(folder) / f"{prefix}-{stamp}{ext}"
+
+
+def read_screen(ctx, size: tuple[int, int]) -> np.ndarray:
+    """The default framebuffer (back buffer) as uint8 (H, W, 3), top row first."""
+    w, h = size
+    raw = ctx.screen.read(viewport=(0, 0, w, h), components=3, alignment=1)
+    return np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
+
+
+def save_png(path: str | os.PathLike, img: np.ndarray) -> Path:
+    from ..cli import _save_png
+    p = Path(path)
+    _save_png(p, np.ascontiguousarray(img))
+    return p
+
+
+def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    buf = io.BytesIO()
+    np.save(buf, np.ascontiguousarray(arr, dtype=np.float32))
+    tmp = p.with_name(f".{p.name}.tmp")
+    tmp.write_bytes(buf.getvalue())
+    os.replace(tmp, p)
+    return p

@@ -1,0 +1,193 @@
+"""Generic settings widgets: walk a pydantic model's fields and draw the matching imgui widget
+(bool -> checkbox, Literal -> combo, bounded float -> slider/drag with those bounds, int -> input,
+RGB tuple -> colour edit, 3-vector -> drag3, optional -> "auto" checkbox + value, str -> text).
+Lists and dicts (tables) are hand-built by the panel. Edits are collected as dotted-path
+assignments; the app validates them through ``with_values``; invalid input shows a message."""
+from __future__ import annotations
+
+import math
+import types
+import typing
+from typing import Any, Literal
+
+from imgui_bundle import imgui
+from pydantic import BaseModel
+
+_ENTER = imgui.InputTextFlags_.enter_returns_true.value
+
+
+_PENDING: dict[str, int] = {}
+
+
+class Edits:
+    """Assignments collected while drawing a frame; applied (validated) by the app afterwards."""
+
+    def __init__(self):
+        self.values: dict[str, Any] = {}
+
+    def set(self, path: str, value: Any) -> None:
+        self.values[path] = value
+
+    def __bool__(self):
+        return bool(self.values)
+
+
+def _unwrap_optional(ann) -> tuple[Any, bool]:
+    origin = typing.get_origin(ann)
+    if origin in (typing.Union, types.UnionType):
+        args = [a for a in typing.get_args(ann) if a is not type(None)]
+        if len(args) == 1:
+            return args[0], True
+    return ann, False
+
+
+def bounds(field) -> tuple[float | None, float | None, bool, bool]:
+    """(lo, hi, lo_exclusive, hi_exclusive) from a pydantic FieldInfo's annotated-types metadata."""
+    lo = hi = None
+    lo_x = hi_x = False
+    for m in field.metadata:
+        for attr, is_lo, excl in (("ge", True, False), ("gt", True, True), ("le", False, False), ("lt", False, True)):
+            v = getattr(m, attr, None)
+            if v is not None:
+                if is_lo:
+                    lo, lo_x = float(v), excl
+                else:
+                    hi, hi_x = float(v), excl
+    return lo, hi, lo_x, hi_x
+
+
+def classify(field) -> tuple[str, Any, bool]:
+    """(kind, detail, optional): kind in bool, literal, int, float, vec3, color, str, model, other."""
+    ann, optional = _unwrap_optional(field.annotation)
+    origin = typing.get_origin(ann)
+    if ann is bool:
+        return "bool", None, optional
+    if origin is Literal:
+        return "literal", list(typing.get_args(ann)), optional
+    if ann is int:
+        return "int", None, optional
+    if ann is float:
+        return "float", None, optional
+    if ann is str:
+        return "str", None, optional
+    if origin is tuple and typing.get_args(ann) == (float, float, float):
+        return "vec3", None, optional
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return "model", ann, optional
+    return "other", None, optional
+
+
+def _label(name: str) -> str:
+    return name.replace("_", " ")
+
+
+def _tooltip(field) -> None:
+    if field.description and imgui.is_item_hovered():
+        imgui.set_item_tooltip(field.description)
+
+
+def edit_field(name: str, field, value: Any, path: str, edits: Edits) -> None:
+    kind, detail, optional = classify(field)
+    label = _label(name)
+    imgui.push_id(path)
+    try:
+        if optional and kind in ("float", "vec3"):
+            auto = value is None
+            ch, auto_new = imgui.checkbox("auto##auto", auto)
+            _tooltip(field)
+            if ch:
+                if auto_new:
+                    edits.set(path, None)
+                else:
+                    edits.set(path, _default_for(kind, field))
+            imgui.same_line()
+            if value is None:
+                imgui.text_disabled(f"{label}: auto")
+                return
+        if kind == "bool":
+            ch, v = imgui.checkbox(label, bool(value))
+            if ch:
+                edits.set(path, v)
+        elif kind == "literal":
+            opts = [str(o) for o in detail]
+            cur = opts.index(str(value)) if str(value) in opts else 0
+            ch, i = imgui.combo(label, cur, opts)
+            if ch:
+                edits.set(path, detail[i])
+        elif kind == "int":
+            lo, hi, _, _ = bounds(field)
+            if lo is not None and hi is not None and hi - lo <= 64:
+                ch, v = imgui.slider_int(label, int(value), int(lo), int(hi))
+            else:
+                # typed values apply when the field is left (no half-typed map sizes); +/- apply at once
+                ch, v = imgui.input_int(label, int(_PENDING.get(path, value)), 1, 64)
+                if ch:
+                    _PENDING[path] = int(v)
+                if imgui.is_item_deactivated_after_edit() or (ch and not imgui.is_item_active()):
+                    v = _PENDING.pop(path, v)
+                    ch = True
+                else:
+                    ch = False
+            if ch:
+                edits.set(path, int(v))
+        elif kind == "float":
+            _edit_float(label, field, float(value), path, edits)
+        elif kind == "vec3":
+            v = [float(x) for x in value]
+            if "color" in name or "colour" in name:
+                ch, nv = imgui.color_edit3(label, v, imgui.ColorEditFlags_.float.value | imgui.ColorEditFlags_.hdr.value)
+            else:
+                ch, nv = imgui.drag_float3(label, v, 0.01 * max(1.0, max(abs(x) for x in v) * 0.1))
+            if ch:
+                edits.set(path, [float(x) for x in nv])
+        elif kind == "str":
+            ch, text = imgui.input_text(label, value or "", _ENTER)
+            if ch:
+                edits.set(path, text.strip() or (None if optional else ""))
+        elif kind == "model":
+            if imgui.tree_node(label):
+                edit_model(value, path, edits)
+                imgui.tree_pop()
+        else:
+            imgui.text_disabled(f"{label}: {value!r}")
+        _tooltip(field)
+    finally:
+        imgui.pop_id()
+
+
+def _default_for(kind: str, field):
+    lo, hi, lo_x, _ = bounds(field)
+    if kind == "vec3":
+        return [0.0, 0.0, 0.0]
+    if lo is not None:
+        return max(1.0, lo + (1e-3 if lo_x else 0.0))
+    return 1.0
+
+
+def _edit_float(label: str, field, value: float, path: str, edits: Edits) -> None:
+    lo, hi, lo_x, hi_x = bounds(field)
+    fmt = "%.4g"
+    if lo is not None and hi is not None and hi - lo <= 100.0:
+        vmin = lo + (1e-4 if lo_x else 0.0)
+        vmax = hi - (1e-4 if hi_x else 0.0)
+        ch, v = imgui.slider_float(label, value, vmin, vmax, fmt)
+    else:
+        speed = max(abs(value) * 0.01, 1e-3)
+        vmin = -3.4e38 if lo is None else lo + (1e-6 if lo_x else 0.0)
+        vmax = 3.4e38 if hi is None else hi
+        ch, v = imgui.drag_float(label, value, speed, vmin, vmax, fmt)
+    if ch and math.isfinite(v) and v != value:
+        edits.set(path, float(v))
+
+
+def edit_model(obj: BaseModel, prefix: str, edits: Edits, skip: tuple[str, ...] = (),
+               only: tuple[str, ...] | None = None) -> None:
+    """Widgets for every scalar/vector field of ``obj`` (skipping lists and dicts: tables)."""
+    for name, field in type(obj).model_fields.items():
+        if name in skip or (only is not None and name not in only):
+            continue
+        kind, _, _ = classify(field)
+        if kind == "other":
+            continue
+        path = f"{prefix}.{name}" if prefix else name
+        edit_field(name, field, getattr(obj, name), path, edits)
