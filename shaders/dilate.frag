@@ -5,9 +5,9 @@
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D gutter;  // RG: texel coordinate (integer) to copy from; B: 1 inside an island
+uniform float u_limit;     // largest finite value of the target format (half: 65000, float: 1e30)
 out vec4 f_color;
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
-    vec4 c = texelFetch(source, src, 0);
-    f_color = vec4(finite3(c.rgb), finite1(c.a));
+    f_color = finite4(texelFetch(source, src, 0), u_limit);
 }

@@ -22,7 +22,7 @@ void main() {
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = max(dot(N, L), 0.0);
         if (ndl <= 0.0) continue;
-        float s = shadow_factor(i, v_position);
+        float s = shadow_factor(i, v_position, normalize(v_normal));
         vec3 H = normalize(L + V);
         float spec = u_specular * pow(max(dot(N, H), 0.0), u_shininess);
         color += Lc * s * (C * ndl + spec * ndl);

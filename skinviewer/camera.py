@@ -113,6 +113,10 @@ class LightSpace:
     view_proj_rowvec: np.ndarray  # eq. (6): p' = p * (View * P)
     position: np.ndarray  # light position (point) or a far virtual position (directional)
     directional: bool
+    extent: float = 1.0  # world width the map covers at the subject's centre
+
+    def texel_world(self, map_size: int) -> float:
+        return self.extent / max(int(map_size), 1)
 
     @property
     def gl_matrix(self) -> np.ndarray:
@@ -139,9 +143,9 @@ def light_space(light, center: np.ndarray, radius: float) -> LightSpace:
         fov = 2.0 * math.asin(min(radius / dist, 0.999))
         near, far = max(dist - radius, dist * 1e-3), dist + radius
         vp = light_view_rowvec(pos, center) @ light_projection_rowvec(fov, 1.0, 1.0, near, far)
-        return LightSpace(vp, pos, False)
+        return LightSpace(vp, pos, False, 2.0 * dist * math.tan(fov / 2.0))
     d = np.asarray(light.direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
     pos = center + d * radius * 2.0
     vp = light_view_rowvec(pos, center) @ ortho_projection_rowvec(radius * 1.02, radius * 0.98, radius * 3.02)
-    return LightSpace(vp, pos, True)
+    return LightSpace(vp, pos, True, 2.0 * radius * 1.02)

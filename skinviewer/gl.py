@@ -2,6 +2,8 @@
 the headless one made here)."""
 from __future__ import annotations
 
+import os
+
 import moderngl
 
 MIN_GL = 330
@@ -18,10 +20,14 @@ _HELP = (
 )
 
 
-def headless_context(require: int = MIN_GL) -> moderngl.Context:
-    """A standalone context through EGL (no window, no X), falling back to the platform default."""
+def headless_context(require: int = MIN_GL, backend: str | None = None) -> moderngl.Context:
+    """A standalone context: through EGL (no window, no X) unless ``backend`` or the environment
+    variable SKINVIEWER_GL_BACKEND names another glcontext backend ("x11" for GLX); falls back to
+    the platform default. A process that also opens a GLX window should use "x11" here: Mesa
+    refuses to make a GLX context current on a thread that had an EGL one."""
     errors = []
-    for kwargs in ({"backend": "egl"}, {}):
+    backend = backend or os.environ.get("SKINVIEWER_GL_BACKEND") or "egl"
+    for kwargs in ({"backend": backend}, {}):
         try:
             ctx = moderngl.create_standalone_context(require=require, **kwargs)
         except Exception as exc:  # glcontext raises plain Exceptions

@@ -2,12 +2,58 @@
 from __future__ import annotations
 
 import os
+import shutil
+import subprocess
+import time
 from pathlib import Path
 
 import pytest
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
 LPS_GLB = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
+
+
+_XVFB = None
+
+
+def _start_xvfb() -> str | None:
+    """Start a private Xvfb (when installed) and return its display name."""
+    global _XVFB
+    exe = shutil.which("Xvfb")
+    if exe is None:
+        return None
+    r, w = os.pipe()
+    proc = subprocess.Popen([exe, "-displayfd", str(w), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
+                            pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(w)
+    num = b""
+    deadline = time.time() + 10
+    with os.fdopen(r, "rb") as f:
+        while time.time() < deadline:
+            ch = f.read(1)
+            if not ch or ch == b"\n":
+                break
+            num += ch
+    if not num:
+        proc.kill()
+        return None
+    _XVFB = proc
+    return f":{num.decode().strip()}"
+
+
+def pytest_configure(config):
+    # One GL platform per test process: with a display (xvfb-run, or a private Xvfb started here)
+    # the in-process headless context is GLX, so the viewer tests' GLX window can coexist with it.
+    if not os.environ.get("DISPLAY"):
+        disp = _start_xvfb()
+        if disp:
+            os.environ["DISPLAY"] = disp
+
+
+def pytest_unconfigure(config):
+    if _XVFB is not None:
+        _XVFB.terminate()
+        _XVFB.wait(5)
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -21,7 +67,7 @@ def _cache_dir(tmp_path_factory):
 def gl_ctx():
     from skinviewer.gl import GLUnavailableError, headless_context
     try:
-        ctx = headless_context()
+        ctx = headless_context(backend="x11" if os.environ.get("DISPLAY") else None)
     except GLUnavailableError as exc:
         pytest.skip(str(exc))
     yield ctx

@@ -13,3 +13,9 @@ vec3 finite3(vec3 c) {
     return clamp(mix(c, vec3(0.0), bvec3(bad)), vec3(-65000.0), vec3(65000.0));
 }
 float finite1(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -65000.0, 65000.0); }
+// NaN/Inf -> 0 and clamp to +-limit (the largest value the target texture format can hold).
+vec4 finite4(vec4 c, float limit) {
+    bvec4 bad = bvec4(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z),
+                      isnan(c.w) || isinf(c.w));
+    return clamp(mix(c, vec4(0.0), bad), vec4(-limit), vec4(limit));
+}

@@ -13,6 +13,7 @@ uniform sampler2D shadow_map1;
 uniform sampler2D shadow_map2;
 uniform sampler2D shadow_map3;
 uniform float u_shadow_tol;                 // eq. (7)
+uniform float u_shadow_texel[MAX_LIGHTS];   // world size of one shadow-map texel at the subject
 uniform int u_shadow_pcf;
 
 // Direction to the light L and incident radiance Lc at world point P (eq. 9).
@@ -48,9 +49,16 @@ float shadow_compare(sampler2D sm, vec3 c) {
     return lit / n;
 }
 
-// fac_shadow of eq. (10): 1 lit, 0 shadowed (fractional with PCF).
-float shadow_factor(int i, vec3 P) {
+// fac_shadow of eq. (10): 1 lit, 0 shadowed (fractional with PCF). Ng is the geometric normal:
+// the lookup point moves off the surface by about a shadow texel, more at grazing light (normal
+// offset, a slope-scaled complement of eq. 7's constant tol that removes self-shadowing acne).
+float shadow_factor(int i, vec3 P, vec3 Ng) {
     if (u_light_shadowed[i] == 0) return 1.0;
+    vec3 L = (u_light_kind[i] == 1) ? normalize(u_light_pos[i] - P) : u_light_dir[i];
+    float nl = dot(Ng, L);
+    vec3 n = nl >= 0.0 ? Ng : -Ng;
+    float sin_l = sqrt(clamp(1.0 - nl * nl, 0.0, 1.0));
+    P += n * u_shadow_texel[i] * (0.5 + 1.5 * sin_l);
     vec4 p = u_light_matrix[i] * vec4(P, 1.0);
     if (p.w <= 0.0) return 1.0;
     vec3 c = p.xyz / p.w * 0.5 + 0.5;  // z/w in [0,1] as stored (eq. 6)

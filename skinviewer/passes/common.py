@@ -26,6 +26,7 @@ def declare_lighting(r: Reflection) -> list[tuple[int, object]]:
     lights = r.setting("lights")
     r.setting("shadow.tol")
     r.setting("shadow.pcf")
+    r.setting("shadow.map_size")
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
     for i, l in active:
         if l.cast_shadow:
@@ -39,7 +40,8 @@ def set_lighting(ec, prog, first_unit: int) -> int:
     lights = ec.setting("lights")
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
     n = len(active)
-    kinds, radiance, dirs, poss, radii, shadowed, mats = [], [], [], [], [], [], []
+    kinds, radiance, dirs, poss, radii, shadowed, mats, texels = [], [], [], [], [], [], [], []
+    map_size = ec.setting("shadow.map_size")
     unit = first_unit
     for slot, (i, l) in enumerate(active):
         ls = light_space(l, scene.center, scene.radius)
@@ -52,6 +54,7 @@ def set_lighting(ec, prog, first_unit: int) -> int:
         radii.append(l.beam_radius)
         shadowed.append(1 if l.cast_shadow else 0)
         mats.append(ls.gl_matrix)
+        texels.append(ls.texel_world(map_size))
         if l.cast_shadow:
             ec.input(shadow_resource(i)).use(unit)
             _set(prog, f"shadow_map{slot}", unit)
@@ -64,6 +67,7 @@ def set_lighting(ec, prog, first_unit: int) -> int:
     _set_array(prog, "u_light_pos", list(poss) + [0.0] * 3 * pad)
     _set_array(prog, "u_beam_radius", radii + [1.0] * pad)
     _set_array(prog, "u_light_shadowed", shadowed + [0] * pad)
+    _set_array(prog, "u_shadow_texel", texels + [0.0] * pad)
     if "u_light_matrix" in prog:
         m = np.zeros((MAX_LIGHTS, 4, 4), dtype=np.float32)
         for k, mat in enumerate(mats):

@@ -64,6 +64,8 @@ def dilate(ec, source: moderngl.Texture, gutter: moderngl.Texture, target_fbo: m
     gutter.use(1)
     set_uniform(prog, "source", 0)
     set_uniform(prog, "gutter", 1)
+    half = target_fbo.color_attachments[0].dtype == "f2"
+    set_uniform(prog, "u_limit", 65000.0 if half else 1e30)
     target_fbo.use()
     ec.gl.disable(moderngl.DEPTH_TEST)
     draw_fullscreen(ec, prog)
