@@ -6,7 +6,7 @@
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
-#include "lib/kelemen.glsl"
+#include "lib/specular_params.glsl"
 #include "lib/deon.glsl"
 #define MAX_G 8
 in vec3 v_position;
@@ -37,11 +37,6 @@ uniform float u_tsm_gate_mm;     // own thickness under which a point counts as 
 uniform sampler2D stretch_map;
 uniform vec2 u_uniform_stretch;
 uniform int u_use_stretch;
-uniform float u_spec_m;
-uniform float u_rho_s;
-uniform float u_f0;
-uniform int u_spec_lut;
-uniform sampler2D beckmann_tex;
 out vec4 f_color;
 
 vec4 blur(int i, vec2 uv) {
@@ -97,15 +92,15 @@ void main() {
         }
     }
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
-    float rho_v = (u_energy != 0) ? rho_dt_lookup(rho_dt_tex, dot(N, V), u_spec_m) : 1.0;
+    SpecParams sp = specular_params(v_uv);
+    float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
     diffuse *= deon_safe_pow(C, 1.0 - u_mix) * rho_v;
     vec3 spec = vec3(0.0);
     for (int i = 0; i < u_light_count; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         if (!(dot(N, L) > 0.0)) continue;
-        float ks = (u_spec_lut != 0) ? ks_specular_lut(N, L, V, u_spec_m, u_rho_s, u_f0, beckmann_tex)
-                                     : ks_specular(N, L, V, u_spec_m, u_rho_s, u_f0);
+        float ks = surface_ks(N, L, V, sp);
         spec += Lc * (ks * shadow_factor(i, v_position, normalize(v_normal)));
     }
     f_color = vec4(finite3(diffuse + spec), 1.0);

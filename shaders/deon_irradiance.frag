@@ -7,7 +7,7 @@
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
-#include "lib/kelemen.glsl"
+#include "lib/specular_params.glsl"
 #include "lib/deon.glsl"
 in vec3 v_position;
 in vec3 v_normal;
@@ -16,7 +16,6 @@ in vec4 v_tangent;
 uniform float u_mix;
 uniform int u_energy;            // eq. (32) on/off
 uniform sampler2D rho_dt_tex;
-uniform float u_spec_m;
 uniform int u_tsm;
 uniform sampler2D tsm_map;
 uniform mat4 u_tsm_matrix;
@@ -26,13 +25,14 @@ void main() {
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 C = deon_safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);
+    SpecParams sp = specular_params(v_uv);
     for (int i = 0; i < u_light_count; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);
         if (!(ndl > 0.0)) continue;
         float s = shadow_factor(i, v_position, normalize(v_normal));
-        float rho = (u_energy != 0) ? rho_dt_lookup(rho_dt_tex, ndl, u_spec_m) : 1.0;
+        float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
         E += Lc * (ndl * s * rho);
     }
     E *= C;

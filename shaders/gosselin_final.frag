@@ -12,22 +12,14 @@
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
-#include "lib/kelemen.glsl"
-#define N_REGIONS 9
+#include "lib/specular_params.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
 uniform vec3 u_eye;
 uniform sampler2D blurred;        // f4 RGBA, blurred light map
-uniform sampler2D region_map;     // R8, nearest, id = index in settings.REGIONS
-uniform sampler2D specular_map;   // intensity scale of rho_s
-uniform sampler2D beckmann_tex;   // listing 14-2 LUT (mode beckmann_lut)
-uniform int u_use_lut;
 uniform int u_spec_shadow;
-uniform float u_f0;
-uniform float u_m[N_REGIONS];
-uniform float u_rho_s[N_REGIONS];
 out vec4 f_color;
 
 const vec3 LUM = vec3(0.2125, 0.7154, 0.0721);
@@ -39,10 +31,7 @@ void main() {
     vec3 E = max(finite3(texture(blurred, v_uv).rgb), vec3(0.0));
     vec3 color = C * E;                                                 // (17)
 
-    int id = int(texture(region_map, v_uv).r * 255.0 + 0.5);
-    if (id < 0 || id >= N_REGIONS) id = 0;
-    float m = u_m[id];
-    float rho_s = u_rho_s[id] * clamp(finite1(texture(specular_map, v_uv).r), 0.0, 10.0);
+    SpecParams sp = specular_params(v_uv);
 
     float lumE = dot(LUM, E);
     vec3 E0 = vec3(0.0);
@@ -53,8 +42,7 @@ void main() {
         float ndl = dot(N, L);
         if (!(ndl > 0.0)) continue;
         E0 += Lc * min(ndl, 1.0);
-        float ks = (u_use_lut == 1) ? ks_specular_lut(N, L, V, m, rho_s, u_f0, beckmann_tex)
-                                    : ks_specular(N, L, V, m, rho_s, u_f0);
+        float ks = surface_ks(N, L, V, sp);
         if (u_spec_shadow == 1) ks /= max(ndl, 1e-6);  // the bare BRDF of eq. (16)
         spec += ks * Lc;
     }

@@ -133,6 +133,11 @@ def blur_resource(i: int) -> str:
     return f"blur_{i}"
 
 
+def stretch_blur_resource(i: int) -> str:
+    """The stretch map convolved like blur_i (seed 000 end of §4.2.4)."""
+    return f"stretch_blur_{i}"
+
+
 def blur_plan(variances, reuse_below: float) -> list[BlurStep]:
     """One step per Gaussian. blur_i = blur_(i-1) (x) G(v_i - var(blur_(i-1))) with the increment
     clamped to >= 0 (non-ascending variances: blur_i = blur_(i-1)); the first Gaussian reuses the

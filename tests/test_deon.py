@@ -169,6 +169,32 @@ def test_stretch_plane_matches_laser(renderer):
     assert vy_o / vx_o > 4.0 and max(err_off) > max(0.15, 4 * max(err_on)), (vx_o, vy_o, err_off, err_on)
 
 
+def test_stretch_per_gaussian(renderer):
+    """Seed 000 end of §4.2.4: the stretch map blurred along the chain. On a uniformly stretched
+    plane the blurred stretch equals the raw one, so the profile is unchanged; on the head, where
+    stretch varies, the wide Gaussians change; toggling it re-runs the blurs, not the irradiance."""
+    prof = [{"variance": 0.05, "weights": [0.5, 0.5, 0.5]}, {"variance": 0.3, "weights": [0.5, 0.5, 0.5]}]
+    common = {"deon.irradiance_size": 512, "deon.reuse_irradiance_below": 0.0, "deon.gaussians": prof,
+              "lights.0.beam_radius": 0.06}
+    D0, _, dx, dy, _ = _diffuse_and_reference(renderer, _deon("stretch-plane", **common))
+    s = _deon("stretch-plane", **common, **{"deon.stretch_per_gaussian": True})
+    D1, _, _, _, _ = _diffuse_and_reference(renderer, s)
+    rep = renderer.graph("deon").last_report
+    assert "deon_stretch_blur_0" in rep.ran and "deon_stretch_blur_1" in rep.pruned  # nobody after blur_1
+    assert "deon_irradiance" in rep.cached and "deon_stretch" in rep.cached
+    assert set(rep.ran) >= {"deon_blur_1", "deon_final"}
+    v0, v1 = _second_moments(D0, dx, dy, 2.8), _second_moments(D1, dx, dy, 2.8)
+    assert np.allclose(v0, v1, rtol=0.02), (v0, v1)
+
+    head = _deon("head", **{"deon.irradiance_size": 256})
+    renderer.render(head)
+    a = renderer.read(head, "blur_5")
+    head2 = with_values(head, {"deon.stretch_per_gaussian": True})
+    renderer.render(head2)
+    b = renderer.read(head2, "blur_5")
+    assert np.all(np.isfinite(b)) and np.abs(a - b).max() > 1e-4 * np.abs(a).max()
+
+
 # ---------------------------------------------------------------------------------------------
 # TSM
 

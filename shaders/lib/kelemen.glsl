@@ -50,40 +50,46 @@ float ks_decode_beckmann(float t) {
     return x4 * x4 * x2;
 }
 
-// listing 14-3 with direct PH (eq. 16): N.L * rho_s * max(PH F / dot(h, h), 0), h = L + V unnormalised.
-// The BRDF f_r is rho_s PH F / dot(h, h) (reciprocal); N.L is the light's cosine.
-float ks_specular(vec3 N, vec3 L, vec3 V, float m, float rho_s, float f0) {
+// listing 14-3 (eq. 16): N.L * rho_s * max(PH F / dot(h, h), 0), h = L + V unnormalised. The BRDF
+// f_r is rho_s PH F / dot(h, h) (reciprocal); N.L is the light's cosine.
+// ks_frame: the guards shared by both modes; false when the specular is 0.
+bool ks_frame(inout vec3 N, vec3 L, inout vec3 V, out vec3 H, out float hh, out float ndotl) {
     N = ks_safe_normalize(N);
     L = ks_safe_normalize(L);
     V = ks_safe_normalize(V);
-    float ndotl = dot(N, L);
-    if (!(ndotl > 0.0) || dot(V, V) < 0.5) return 0.0;  // N.L <= 0, or V was a zero vector
+    ndotl = dot(N, L);
+    H = vec3(0.0);
+    hh = 0.0;
+    if (!(ndotl > 0.0) || dot(V, V) < 0.5) return false;  // N.L <= 0, or V was a zero vector
     vec3 h = L + V;
-    float hh = dot(h, h);
-    if (!(hh >= KS_HH_EPS)) return 0.0;
-    vec3 H = h * inversesqrt(hh);
-    vec3 x = cross(N, H);
-    float PH = ks_beckmann_sc(dot(N, H), dot(x, x), m);
-    float F = fresnel_schlick(dot(H, V), f0);
-    return ndotl * max(rho_s, 0.0) * max(PH * F / hh, 0.0);
+    hh = dot(h, h);
+    if (!(hh >= KS_HH_EPS)) return false;
+    H = h * inversesqrt(hh);
+    return true;
 }
 
-// listing 14-3: PH from the Beckmann texture (x = N.H, y = m), same guards as ks_specular
+float ks_combine(float PH, vec3 H, vec3 V, float hh, float ndotl, float rho_s, float f0) {
+    return ndotl * max(rho_s, 0.0) * max(PH * fresnel_schlick(dot(H, V), f0) / hh, 0.0);
+}
+
+// direct: PH from eq. (15)
+float ks_specular(vec3 N, vec3 L, vec3 V, float m, float rho_s, float f0) {
+    vec3 H;
+    float hh, ndotl;
+    if (!ks_frame(N, L, V, H, hh, ndotl)) return 0.0;
+    vec3 x = cross(N, H);
+    return ks_combine(ks_beckmann_sc(dot(N, H), dot(x, x), m), H, V, hh, ndotl, rho_s, f0);
+}
+
+// listing 14-3: PH from the Beckmann texture of listing 14-2 (x = N.H, y = m)
 float ks_specular_lut(vec3 N, vec3 L, vec3 V, float m, float rho_s, float f0, sampler2D beckmann_tex) {
-    N = ks_safe_normalize(N);
-    L = ks_safe_normalize(L);
-    V = ks_safe_normalize(V);
-    float ndotl = dot(N, L);
-    if (!(ndotl > 0.0) || dot(V, V) < 0.5) return 0.0;  // N.L <= 0, or V was a zero vector
-    vec3 h = L + V;
-    float hh = dot(h, h);
-    if (!(hh >= KS_HH_EPS)) return 0.0;
-    vec3 H = h * inversesqrt(hh);
+    vec3 H;
+    float hh, ndotl;
+    if (!ks_frame(N, L, V, H, hh, ndotl)) return 0.0;
     float ndoth = dot(N, H);
     if (!(ndoth > 0.0)) return 0.0;
     float PH = ks_decode_beckmann(texture(beckmann_tex, vec2(min(ndoth, 1.0), max(m, KS_M_MIN))).r);
-    float F = fresnel_schlick(dot(H, V), f0);
-    return ndotl * max(rho_s, 0.0) * max(PH * F / hh, 0.0);
+    return ks_combine(PH, H, V, hh, ndotl, rho_s, f0);
 }
 
 // eq. 30-31 table lookup (specular.rho_dt_table): x = cos(theta), y = m; result in [0, 1]

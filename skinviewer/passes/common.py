@@ -2,10 +2,15 @@
 triangle, binding textures."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import moderngl
 import numpy as np
 
 from ..camera import light_space
 from ..graph import Reflection
+from ..settings import REGIONS
+from .luts import BECKMANN_LUT
 
 MAX_LIGHTS = 4
 _KIND = {"directional": 0, "point": 1, "beam": 2}
@@ -113,3 +118,64 @@ def bind_surface(ec, prog, first_unit: int) -> int:
 
 def draw_fullscreen(ec, prog) -> None:
     ec.graph.fullscreen_vao(prog).render(vertices=3)
+
+
+def draw_mesh(ec, prog, resource: str, clear=(0.0, 0.0, 0.0, 0.0)) -> None:
+    """Rasterise the mesh into ``resource`` (with its depth buffer), both faces, after a clear."""
+    fbo = ec.framebuffer(resource)
+    fbo.use()
+    fbo.clear(*clear, depth=1.0)
+    ec.gl.enable(moderngl.DEPTH_TEST)
+    ec.gl.disable(moderngl.CULL_FACE)
+    ec.scene.vao(prog).render()
+    ec.gl.disable(moderngl.DEPTH_TEST)
+
+
+def per_region_specular(sp) -> tuple[np.ndarray, np.ndarray]:
+    """(m, rho_s) float32 arrays indexed by region ID: ``specular.per_region`` overrides (None
+    fields keep the global value)."""
+    m = np.full(len(REGIONS), sp.m, np.float32)
+    rho = np.full(len(REGIONS), sp.rho_s, np.float32)
+    for name, rs in sp.per_region.items():
+        k = REGIONS.index(name)
+        if rs.m is not None:
+            m[k] = rs.m
+        if rs.rho_s is not None:
+            rho[k] = rs.rho_s
+    return m, rho
+
+
+SPECULAR_FIELDS = ("m", "rho_s", "f0", "per_region")
+
+
+def declare_specular(r: Reflection, lut: bool = True) -> None:
+    """Declare what shaders/lib/specular_params.glsl reads; the Beckmann LUT only in its mode."""
+    for f in SPECULAR_FIELDS:
+        r.setting(f"specular.{f}")
+    if lut and r.setting("specular.mode") == "beckmann_lut":
+        r.input(BECKMANN_LUT)
+
+
+def bind_specular(ec, prog, unit: int, spare_unit: int) -> int:
+    """Set the uniforms of shaders/lib/specular_params.glsl; returns the next free unit.
+    ``spare_unit`` backs samplers the current mode does not read."""
+    scene = ec.scene
+    m, rho = per_region_specular(SimpleNamespace(**{f: ec.setting(f"specular.{f}") for f in SPECULAR_FIELDS}))
+    _set_array(prog, "u_spec_m", m)
+    _set_array(prog, "u_spec_rho_s", rho)
+    _set(prog, "u_spec_rho_s_table", float(ec.setting("specular.rho_s")))
+    _set(prog, "u_f0", float(ec.setting("specular.f0")))
+    scene.region_map.use(unit)
+    _set(prog, "region_map", unit)
+    scene.specular_map.use(unit + 1)
+    _set(prog, "specular_map", unit + 1)
+    unit += 2
+    lut = BECKMANN_LUT in ec._refl.inputs
+    _set(prog, "u_spec_lut", 1 if lut else 0)
+    if lut:
+        ec.input(BECKMANN_LUT).use(unit)
+        _set(prog, "beckmann_tex", unit)
+        unit += 1
+    else:
+        _set(prog, "beckmann_tex", spare_unit)
+    return unit

@@ -26,14 +26,14 @@ import numpy as np
 
 from .. import techniques
 from ..camera import gl_bytes, light_space
-from ..diffusion import (IRRADIANCE, blur_plan, blur_resource, KERNEL7, sub_steps, texture_of,
+from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan, blur_resource, stretch_blur_resource, sub_steps, texture_of,
                          uniform_uv_per_mm)
 from ..graph import Pass, Reflection, TexSpec
-from .common import (LIGHT_POSE_FIELDS, bind_surface, declare_lighting, draw_fullscreen, set_lighting,
-                     set_uniform)
+from .common import (LIGHT_POSE_FIELDS, bind_specular, bind_surface, declare_lighting, declare_specular,
+                     draw_fullscreen, draw_mesh, set_lighting, set_uniform)
 from .output import OutputPass
 from .rho_dt import RHO_DT_RESOURCE, RhoDtLutPass
-from .texture_space import GutterMapPass, dilate, gutter_resource
+from .texture_space import GutterMapPass, dilate, gutter_resource, rasterize_unwrapped
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
@@ -108,15 +108,9 @@ class StretchPass(Pass):
 
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
-        tmp = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
-        fbo = ec.scratch_framebuffer(tmp)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ec.gl.disable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
         prog = ec.program("deon_stretch")
         set_uniform(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        ec.scene.vao(prog).render()
+        tmp = rasterize_unwrapped(ec, prog, n)
         dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(STRETCH))
 
 
@@ -156,7 +150,7 @@ class IrradiancePass(Pass):
         declare_lighting(r)
         r.setting("deon.mix")
         if r.setting("deon.energy_conservation"):
-            r.setting("specular.m")
+            declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
         if tsm_light_index(r) is not None:
             r.input(TSM)
@@ -176,8 +170,9 @@ class IrradiancePass(Pass):
         if energy:
             ec.input(RHO_DT_RESOURCE).use(unit)
             set_uniform(prog, "rho_dt_tex", unit)
-            set_uniform(prog, "u_spec_m", float(ec.setting("specular.m")))
-        unit += 1
+            unit = bind_specular(ec, prog, unit + 1, spare_unit=unit)
+        else:
+            unit += 1
         use_tsm = TSM in ec._refl.inputs
         set_uniform(prog, "u_tsm", 1 if use_tsm else 0)
         set_uniform(prog, "u_max_thickness", MAX_THICKNESS_MM)
@@ -187,13 +182,7 @@ class IrradiancePass(Pass):
             set_tsm_uniforms(ec, prog, _key_light(ec))
         else:
             set_uniform(prog, "tsm_map", unit)
-        tmp = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
-        fbo = ec.scratch_framebuffer(tmp)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ec.gl.disable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        ec.scene.vao(prog).render()
+        tmp = rasterize_unwrapped(ec, prog, n)
         dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(IRRADIANCE))
 
 
@@ -215,27 +204,49 @@ class _MeshStretch:
         return cls._cache[k]
 
 
+def stretch_of(source: str) -> str:
+    """The stretch map that goes with a blur input: the raw one for the irradiance, else the stretch
+    convolved like that input (deon.stretch_per_gaussian)."""
+    return STRETCH if source == IRRADIANCE else stretch_blur_resource(int(source.rsplit("_", 1)[1]))
+
+
 class GaussianBlurPass(Pass):
     """blur_i = blur_(i-1) (x) G(v_i - v_(i-1)) (eq. 24), H then V (7 taps, eq. 25-26). Declares the
-    variances up to v_i (not the weights), the stretch toggle, its input and the stretch map."""
+    variances up to v_i (not the weights), the stretch toggles, its input and the stretch map.
 
-    def __init__(self, i: int):
+    ``chain="stretch"`` runs the same convolution on the stretch map instead (seed 000 end of
+    §4.2.4, deon.stretch_per_gaussian): stretch_blur_i, which blur_(i+1) then uses for its taps, so
+    a wide Gaussian sees the average distortion of its footprint rather than the centre texel's."""
+
+    def __init__(self, i: int, chain: str = "irradiance"):
         self.i = i
-        self.name = f"deon_blur_{i}"
+        self.chain = chain
+        self.name = f"deon_blur_{i}" if chain == "irradiance" else f"deon_stretch_blur_{i}"
+
+    def _output(self) -> str:
+        return blur_resource(self.i) if self.chain == "irradiance" else stretch_blur_resource(self.i)
+
+    def _stretch_input(self, r, step) -> str | None:
+        if not r.setting("deon.stretch"):
+            return None
+        return stretch_of(step.source) if r.setting("deon.stretch_per_gaussian") else STRETCH
 
     def reflect(self, r: Reflection) -> None:
         if r.peek("deon.gaussians.#") <= self.i:
+            return
+        if self.chain == "stretch" and not (r.peek("deon.stretch") and r.peek("deon.stretch_per_gaussian")):
             return
         step = self._step(r)
         if step.reused:
             return  # blur_1 is the irradiance itself: the final pass reads it, this pass is pruned
         n = _size(r)
-        r.input(step.source)
+        stretch = self._stretch_input(r, step)
+        r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
-        if r.setting("deon.stretch"):
-            r.input(STRETCH)
+        if stretch:
+            r.input(stretch)
         r.program("deon_blur")
-        r.output(blur_resource(self.i), TexSpec((n, n), 4, "f4"))
+        r.output(self._output(), TexSpec((n, n), 4, "f4"))
 
     def _step(self, r):
         vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
@@ -245,9 +256,9 @@ class GaussianBlurPass(Pass):
         n = ec.setting(SIZE)
         step = self._step(ec)
         prog = ec.program("deon_blur")
-        use_stretch = bool(ec.setting("deon.stretch"))
-        set_uniform(prog, "u_use_stretch", 1 if use_stretch else 0)
-        s = 1.0 if use_stretch else _MeshStretch.get(ec.scene)
+        stretch = self._stretch_input(ec, step)
+        set_uniform(prog, "u_use_stretch", 1 if stretch else 0)
+        s = 1.0 if stretch else _MeshStretch.get(ec.scene)
         set_uniform(prog, "u_uniform_stretch", (s, s))
         texel_mm = 1.0 / (n * _MeshStretch.get(ec.scene))
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
@@ -255,27 +266,24 @@ class GaussianBlurPass(Pass):
         gutter = ec.input(gutter_resource(n))
         gutter.use(1)
         set_uniform(prog, "gutter", 1)
-        if use_stretch:
-            ec.input(STRETCH).use(2)
-        else:
-            gutter.use(2)
+        (ec.input(stretch) if stretch else gutter).use(2)
         set_uniform(prog, "stretch_map", 2)
         set_uniform(prog, "source", 0)
         ec.gl.disable(moderngl.DEPTH_TEST)
         spec = TexSpec((n, n), 4, "f4")
         tmp = ec.scratch(spec)
         tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
-        src = ec.input(step.source)
+        src = ec.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         for k, sigma in enumerate(sigmas):
             set_uniform(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
             src.use(0)  # horizontal: src -> tmp
             set_uniform(prog, "u_dir", (1.0, 0.0))
             ec.scratch_framebuffer(tmp).use()
             draw_fullscreen(ec, prog)
-            tmp.use(0)  # vertical: tmp -> tmp2, or blur_i on the last sub-step
+            tmp.use(0)  # vertical: tmp -> tmp2, or the output on the last sub-step
             set_uniform(prog, "u_dir", (0.0, 1.0))
             last = k == len(sigmas) - 1
-            (ec.framebuffer(blur_resource(self.i)) if last else ec.scratch_framebuffer(tmp2)).use()
+            (ec.framebuffer(self._output()) if last else ec.scratch_framebuffer(tmp2)).use()
             draw_fullscreen(ec, prog)
             src = tmp2
 
@@ -290,13 +298,7 @@ class DeonFinalPass(Pass):
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
         r.setting("deon.mix")
-        r.setting("specular.m")
-        r.setting("specular.rho_s")
-        r.setting("specular.f0")
-        mode = r.setting("specular.mode")
-        if mode == "beckmann_lut":
-            from .luts import BECKMANN_LUT
-            r.input(BECKMANN_LUT)
+        declare_specular(r)
         if r.setting("deon.energy_conservation"):
             r.input(RHO_DT_RESOURCE)
         tsm = tsm_light_index(r) is not None
@@ -355,18 +357,7 @@ class DeonFinalPass(Pass):
             unit += 1
         else:
             set_uniform(prog, "rho_dt_tex", spare)
-        set_uniform(prog, "u_spec_m", float(ec.setting("specular.m")))
-        set_uniform(prog, "u_rho_s", float(ec.setting("specular.rho_s")))
-        set_uniform(prog, "u_f0", float(ec.setting("specular.f0")))
-        lut = ec.setting("specular.mode") == "beckmann_lut"
-        set_uniform(prog, "u_spec_lut", 1 if lut else 0)
-        if lut:
-            from .luts import BECKMANN_LUT
-            ec.input(BECKMANN_LUT).use(unit)
-            set_uniform(prog, "beckmann_tex", unit)
-            unit += 1
-        else:
-            set_uniform(prog, "beckmann_tex", spare)
+        unit = bind_specular(ec, prog, unit, spare)
         tsm = TSM in inputs
         set_uniform(prog, "u_tsm", 1 if tsm else 0)
         if tsm:
@@ -388,13 +379,7 @@ class DeonFinalPass(Pass):
         else:
             set_uniform(prog, "tsm_map", spare)
             set_uniform(prog, "stretch_map", spare)
-        fbo = ec.framebuffer("lit")
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        ec.gl.enable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        ec.scene.vao(prog).render()
-        ec.gl.disable(moderngl.DEPTH_TEST)
+        draw_mesh(ec, prog, "lit")
 
 
 def deon() -> list[Pass]:
@@ -403,6 +388,7 @@ def deon() -> list[Pass]:
             + [GutterMapPass(SIZE, name="deon_gutter"), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
+            + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
             + [DeonFinalPass(), OutputPass("lit")])
 
 

@@ -37,10 +37,11 @@ from ..camera import gl_bytes
 from ..graph import Pass, Reflection, TexSpec
 from ..poisson import POISSON_12
 from ..settings import REGIONS, RegionKernel
-from .common import bind_surface, declare_lighting, draw_fullscreen, set_lighting, set_uniform
-from .luts import BECKMANN_LUT, BeckmannLutPass
+from .common import (bind_specular, bind_surface, declare_lighting, declare_specular, draw_fullscreen,
+                     draw_mesh, set_lighting, set_uniform)
+from .luts import BeckmannLutPass
 from .output import OutputPass
-from .texture_space import GutterMapPass, dilate, gutter_resource
+from .texture_space import GutterMapPass, dilate, gutter_resource, rasterize_unwrapped
 
 LIGHT_MAP = "gosselin_light_map"
 RADIUS_MAP = "gosselin_radius"
@@ -68,16 +69,10 @@ class GosselinLightMapPass(Pass):
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
-        raw = ec.scratch(_map_spec(size))
-        fbo = ec.scratch_framebuffer(raw)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ec.gl.disable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
         prog = ec.program("light_map")
         unit = bind_surface(ec, prog, 0)
         set_lighting(ec, prog, unit)
-        ec.scene.vao(prog).render()
+        raw = rasterize_unwrapped(ec, prog, size)
         dilate(ec, raw, ec.input(gutter_resource(size)), ec.framebuffer(LIGHT_MAP))
 
 
@@ -205,11 +200,9 @@ class GosselinFinalPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         declare_lighting(r)
-        r.setting("specular")
+        declare_specular(r)
         r.setting("gosselin.specular_shadow")
         r.input(BLURRED)
-        if r.setting("specular.mode") == "beckmann_lut":
-            r.input(BECKMANN_LUT)
         w, h = r.setting("render.width"), r.setting("render.height")
         r.program("gosselin_final")
         r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
@@ -217,51 +210,15 @@ class GosselinFinalPass(Pass):
     def execute(self, ec) -> None:
         prog = ec.program("gosselin_final")
         view = ec.view
-        sp = ec.setting("specular")
         prog["u_view_proj"].write(gl_bytes(view.view_proj))
         set_uniform(prog, "u_eye", tuple(float(x) for x in view.eye))
-        set_uniform(prog, "u_f0", float(sp.f0))
-        m, rho = per_region_specular(sp)
-        if "u_m" in prog:
-            prog["u_m"].write(m.tobytes())
-        if "u_rho_s" in prog:
-            prog["u_rho_s"].write(rho.tobytes())
-        lut = sp.mode == "beckmann_lut"
-        set_uniform(prog, "u_use_lut", 1 if lut else 0)
         set_uniform(prog, "u_spec_shadow", 1 if ec.setting("gosselin.specular_shadow") == "printed" else 0)
         unit = bind_surface(ec, prog, 0)
-        scene = ec.scene
         ec.input(BLURRED).use(unit)
         set_uniform(prog, "blurred", unit)
-        scene.region_map.use(unit + 1)
-        set_uniform(prog, "region_map", unit + 1)
-        scene.specular_map.use(unit + 2)
-        set_uniform(prog, "specular_map", unit + 2)
-        # the LUT sampler always points at a float texture; in direct mode the blurred map stands in
-        (ec.input(BECKMANN_LUT) if lut else ec.input(BLURRED)).use(unit + 3)
-        set_uniform(prog, "beckmann_tex", unit + 3)
-        set_lighting(ec, prog, unit + 4)
-        fbo = ec.framebuffer("lit")
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        ec.gl.enable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        scene.vao(prog).render()
-        ec.gl.disable(moderngl.DEPTH_TEST)
-
-
-def per_region_specular(sp) -> tuple[np.ndarray, np.ndarray]:
-    """(m, rho_s) float32 arrays indexed by region ID: ``specular.per_region`` overrides (None
-    fields keep the global value)."""
-    m = np.full(len(REGIONS), sp.m, np.float32)
-    rho = np.full(len(REGIONS), sp.rho_s, np.float32)
-    for name, rs in sp.per_region.items():
-        k = REGIONS.index(name)
-        if rs.m is not None:
-            m[k] = rs.m
-        if rs.rho_s is not None:
-            rho[k] = rs.rho_s
-    return m, rho
+        unit = bind_specular(ec, prog, unit + 1, spare_unit=unit)  # the blurred map backs unused samplers
+        set_lighting(ec, prog, unit)
+        draw_mesh(ec, prog, "lit")
 
 
 def gosselin() -> list[Pass]:

@@ -1,11 +1,9 @@
 """Phong/Lambert baseline (shadow map -> lit image), linear space."""
 from __future__ import annotations
 
-import moderngl
-
 from ..camera import gl_bytes
 from ..graph import Pass, Reflection, TexSpec
-from .common import bind_surface, declare_lighting, set_lighting, set_uniform
+from .common import bind_surface, declare_lighting, draw_mesh, set_lighting, set_uniform
 
 
 class PhongPass(Pass):
@@ -30,10 +28,4 @@ class PhongPass(Pass):
         set_uniform(prog, "u_shininess", ph.shininess)
         unit = bind_surface(ec, prog, 0)
         set_lighting(ec, prog, unit)
-        fbo = ec.framebuffer("lit")
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        ec.gl.enable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        ec.scene.vao(prog).render()
-        ec.gl.disable(moderngl.DEPTH_TEST)
+        draw_mesh(ec, prog, "lit")

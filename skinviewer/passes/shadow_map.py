@@ -3,11 +3,9 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-import moderngl
-
 from ..camera import gl_bytes, light_space
 from ..graph import Pass, Reflection, TexSpec
-from .common import LIGHT_POSE_FIELDS, shadow_resource
+from .common import LIGHT_POSE_FIELDS, draw_mesh, shadow_resource
 
 
 class ShadowMapPass(Pass):
@@ -34,10 +32,4 @@ class ShadowMapPass(Pass):
         ls = light_space(pose, scene.center, scene.radius)
         prog = ec.program("shadow_map")
         prog["u_light_matrix"].write(gl_bytes(ls.gl_matrix))
-        fbo = ec.framebuffer(shadow_resource(i))
-        fbo.use()
-        fbo.clear(1.0, 1.0, 1.0, 1.0, depth=1.0)
-        ec.gl.enable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        scene.vao(prog).render()
-        ec.gl.disable(moderngl.DEPTH_TEST)
+        draw_mesh(ec, prog, shadow_resource(i), clear=(1.0, 1.0, 1.0, 1.0))

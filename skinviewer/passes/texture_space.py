@@ -30,16 +30,22 @@ class GutterMapPass(Pass):
 
     def execute(self, ec) -> None:
         size = ec.setting(self.size_setting)
-        cover = ec.scratch(TexSpec((size, size), 1, "f1", filter="nearest"))
-        fbo = ec.scratch_framebuffer(cover)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0)
-        ec.gl.disable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        prog = ec.program("uv_coverage")
-        ec.scene.vao(prog).render()
+        cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
         ec.output(gutter_resource(size)).write(gutter_table(covered).tobytes())
+
+
+def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
+    """Draw the mesh with an unwrap program (shaders/lib/unwrap_vs.glsl, seed 000 eq. 8) into a
+    cleared scratch texture of size x size (nearest filtering; gutters still empty)."""
+    tex = ec.scratch(TexSpec((size, size), components, dtype, filter="nearest"))
+    fbo = ec.scratch_framebuffer(tex)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0)
+    ec.gl.disable(moderngl.DEPTH_TEST)
+    ec.gl.disable(moderngl.CULL_FACE)
+    ec.scene.vao(prog).render()
+    return tex
 
 
 def gutter_table(covered: np.ndarray) -> np.ndarray:

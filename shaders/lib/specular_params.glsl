@@ -1,0 +1,40 @@
+// Per-texel Kelemen/Szirmay-Kalos parameters shared by every technique: m and rho_s per facial
+// region (specular.per_region, region-ID map), rho_s scaled by the mesh's specular map, and the
+// evaluation mode (direct eq. 15, or the Beckmann texture of seed 002 listing 14-2).
+#ifndef SKINVIEWER_SPECULAR_PARAMS_GLSL
+#define SKINVIEWER_SPECULAR_PARAMS_GLSL
+#include "kelemen.glsl"
+#define N_REGIONS 9
+uniform sampler2D region_map;      // R8, nearest: id = index in settings.REGIONS
+uniform sampler2D specular_map;    // rho_s scale
+uniform float u_spec_m[N_REGIONS];
+uniform float u_spec_rho_s[N_REGIONS];
+uniform float u_spec_rho_s_table;  // the rho_s the rho_dt table was computed for
+uniform float u_f0;
+uniform int u_spec_lut;
+uniform sampler2D beckmann_tex;
+
+struct SpecParams { float m; float rho_s; };
+
+SpecParams specular_params(vec2 uv) {
+    int id = int(texture(region_map, uv).r * 255.0 + 0.5);
+    if (id < 0 || id >= N_REGIONS) id = 0;
+    float scale = texture(specular_map, uv).r;
+    scale = (isnan(scale) || isinf(scale)) ? 1.0 : clamp(scale, 0.0, 10.0);
+    return SpecParams(u_spec_m[id], u_spec_rho_s[id] * scale);
+}
+
+// KS value for one light (includes N.L, listing 14-3)
+float surface_ks(vec3 N, vec3 L, vec3 V, SpecParams sp) {
+    return (u_spec_lut != 0) ? ks_specular_lut(N, L, V, sp.m, sp.rho_s, u_f0, beckmann_tex)
+                             : ks_specular(N, L, V, sp.m, sp.rho_s, u_f0);
+}
+
+// rho_dt (eq. 30) at this texel: the table is linear in rho_s, 1 - rho_s I(cos, m), so another
+// rho_s rescales its complement exactly.
+float surface_rho_dt(sampler2D rho_dt_tex, float cos_theta, SpecParams sp) {
+    float t = rho_dt_lookup(rho_dt_tex, cos_theta, sp.m);
+    if (!(u_spec_rho_s_table > 0.0)) return 1.0;
+    return clamp(1.0 - (1.0 - t) * sp.rho_s / u_spec_rho_s_table, 0.0, 1.0);
+}
+#endif
