@@ -125,6 +125,10 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")
         return get_path(self._frame.settings, path)
 
+    def has_input(self, resource: str) -> bool:
+        """Whether this frame's reflect() declared ``resource`` (optional inputs)."""
+        return resource in self._refl.inputs
+
     def input(self, resource: str) -> moderngl.Texture:
         if resource not in self._refl.inputs:
             raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")

@@ -170,7 +170,7 @@ def bind_specular(ec, prog, unit: int, spare_unit: int) -> int:
     scene.specular_map.use(unit + 1)
     _set(prog, "specular_map", unit + 1)
     unit += 2
-    lut = BECKMANN_LUT in ec._refl.inputs
+    lut = ec.has_input(BECKMANN_LUT)
     _set(prog, "u_spec_lut", 1 if lut else 0)
     if lut:
         ec.input(BECKMANN_LUT).use(unit)

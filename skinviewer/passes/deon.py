@@ -81,7 +81,7 @@ def set_tsm_uniforms(ec, prog, j: int) -> None:
     set_uniform(prog, "u_tsm_dir", tuple(float(x) for x in d))
     set_uniform(prog, "u_tsm_pos", tuple(float(x) for x in ls.position))
     set_uniform(prog, "u_mm_per_unit", float(scene.mm_per_unit))
-    if TSM in ec._refl.inputs:
+    if ec.has_input(TSM):
         # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
         texel_mm = ls.texel_world(ec.input(TSM).size[0]) * scene.mm_per_unit
         set_uniform(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
@@ -173,7 +173,7 @@ class IrradiancePass(Pass):
             unit = bind_specular(ec, prog, unit + 1, spare_unit=unit)
         else:
             unit += 1
-        use_tsm = TSM in ec._refl.inputs
+        use_tsm = ec.has_input(TSM)
         set_uniform(prog, "u_tsm", 1 if use_tsm else 0)
         set_uniform(prog, "u_max_thickness", MAX_THICKNESS_MM)
         if use_tsm:
@@ -323,7 +323,7 @@ class DeonFinalPass(Pass):
         set_uniform(prog, "u_eye", tuple(float(x) for x in view.eye))
         unit = bind_surface(ec, prog, 0)
         unit = set_lighting(ec, prog, unit)
-        inputs = ec._refl.inputs
+        has = ec.has_input
         gs = ec.setting("deon.gaussians")
         plan = blur_plan([g.variance for g in gs], ec.setting("deon.reuse_irradiance_below"))
         ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
@@ -334,7 +334,7 @@ class DeonFinalPass(Pass):
         for i, (g, step) in enumerate(zip(gs, plan)):
             res = texture_of(step)
             var[i] = step.variance
-            if res in inputs:
+            if has(res):
                 ws[i] = g.weights
                 used[i] = 1 if any(w > 0 for w in g.weights) else 0
                 ec.input(res).use(unit)
@@ -349,7 +349,7 @@ class DeonFinalPass(Pass):
         _set_array(prog, "u_var", var)
         _set_array(prog, "u_used", used, np.int32)
         set_uniform(prog, "u_mix", float(ec.setting("deon.mix")))
-        energy = RHO_DT_RESOURCE in inputs
+        energy = has(RHO_DT_RESOURCE)
         set_uniform(prog, "u_energy", 1 if energy else 0)
         if energy:
             ec.input(RHO_DT_RESOURCE).use(unit)
@@ -358,7 +358,7 @@ class DeonFinalPass(Pass):
         else:
             set_uniform(prog, "rho_dt_tex", spare)
         unit = bind_specular(ec, prog, unit, spare)
-        tsm = TSM in inputs
+        tsm = has(TSM)
         set_uniform(prog, "u_tsm", 1 if tsm else 0)
         if tsm:
             ec.input(TSM).use(unit)
@@ -366,7 +366,7 @@ class DeonFinalPass(Pass):
             unit += 1
             set_tsm_uniforms(ec, prog, _key_light(ec))
             set_uniform(prog, "u_tsm_printed", 1 if ec.setting("deon.tsm_form") == "printed" else 0)
-            use_stretch = STRETCH in inputs
+            use_stretch = has(STRETCH)
             set_uniform(prog, "u_use_stretch", 1 if use_stretch else 0)
             if use_stretch:
                 ec.input(STRETCH).use(unit)
