@@ -25,11 +25,14 @@ from .ui.compare import CompareState
 from .ui.display import Display
 from .ui.hot_reload import ShaderWatcher
 from .ui.presets import PresetState
+from .ui.layout import PANEL_DEFAULT_W, Layout, compute_layout
+from .ui.scheduler import ChangeCost, RenderScheduler
 from .ui.screenshot import ScreenshotOptions, read_screen, save_npy, save_png, timestamped_path
 
 PREFERRED_TECHNIQUES = ("deon", "gosselin", "phong")
 DEFAULT_WINDOW = (1280, 800)
 FALLBACK_SCENE = "backlit-ear"
+TECHNIQUE_KEYS = ("phong", "gosselin", "deon")  # keys 1 / 2 / 3
 
 
 def best_technique(preferred: str | None = None) -> str:
@@ -90,12 +93,24 @@ class ViewerApp(mglw.WindowConfig):
         self.ui_rects: list[tuple[float, float, float, float]] = []
         self.last_ms: dict[str, float] = {}  # pass -> ms of its last run (cached passes show it dimmed)
         self._title = ""
+        # layout: docked settings column + status bar; the 3D view gets the rest (ui/layout.py)
+        self.panel_width = PANEL_DEFAULT_W
+        self.panel_side = "left"
+        self.layout: Layout = self._compute_layout()
+        # render scheduling and cost accounting (ui/scheduler.py)
+        self.scheduler = RenderScheduler()
+        self.last_change: ChangeCost | None = None
+        self._shown: Settings | None = None  # the settings of the image on screen
+        self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
+        self._ui_active = False  # an imgui widget is held this frame (slider drag, text edit)
+        self._mouse = (0.0, 0.0)
+        self.message = ("", False)  # status bar: (text, is_error)
 
         s = settings or Settings()
         if s.technique not in techniques.names():
             s = with_values(s, {"technique": best_technique(s.technique)})
-        fw, fh = self.wnd.buffer_size
-        s = with_values(s, {"render.width": max(16, fw), "render.height": max(16, fh)})
+        vw, vh = self.layout.view_fb[2:]
+        s = with_values(s, {"render.width": vw, "render.height": vh})
         s = self._load_initial_scene(s)
         self.settings = s
         self.home_camera = s.camera.model_dump(mode="json")
@@ -103,8 +118,10 @@ class ViewerApp(mglw.WindowConfig):
 
         from .ui.panel import Panel
         from .ui.passes_window import PassesWindow
+        from .ui.status_bar import StatusBar
         self.panel = Panel(self)
         self.passes_window = PassesWindow(self)
+        self.status_bar = StatusBar(self)
 
     # -- settings ----------------------------------------------------------------------------
     def _load_initial_scene(self, s: Settings) -> Settings:
@@ -131,7 +148,7 @@ class ViewerApp(mglw.WindowConfig):
         except SettingsError as exc:
             self._refuse(exc.errors, source or "invalid setting")
             return False
-        return self.set_settings(new, source)
+        return self.set_settings(new, source or ", ".join(assignments))
 
     def set_settings(self, new: Settings, source: str = "") -> bool:
         if new.technique not in techniques.names():
@@ -146,6 +163,9 @@ class ViewerApp(mglw.WindowConfig):
                 return False
             self.orbit.set_scene_bounds(scene.gpu.center, scene.gpu.radius)
             self.notices = list(scene.notes)
+        if new != self.settings:
+            self._change_source = source or "settings"
+            self.scheduler.note_change()
         self.settings = new
         self.errors = []
         self.error_title = ""
@@ -154,6 +174,13 @@ class ViewerApp(mglw.WindowConfig):
     def _refuse(self, errors: list[tuple[str, str]], title: str) -> None:
         self.errors = list(errors)
         self.error_title = title
+        if errors:
+            path, msg = errors[0]
+            self.say(f"refused {title}: {path}: {msg}", error=True)
+
+    def say(self, text: str, error: bool = False) -> None:
+        """The status bar's message (errors in red)."""
+        self.message = (text, bool(error))
 
     def select_scene(self, name: str) -> bool:
         ok = self.apply({"scene.name": name, "scene.mesh": None, **scene_overrides(name)}, f"scene {name}")
@@ -170,7 +197,24 @@ class ViewerApp(mglw.WindowConfig):
     def set_technique(self, name: str) -> bool:
         if self.inspect is not None:
             self.inspect = None
-        return self.apply({"technique": name}, "technique")
+        ok = self.apply({"technique": name}, "technique")
+        if ok:
+            self.say(f"technique: {name}")
+        return ok
+
+    def save_preset(self, path: str | None = None) -> bool:
+        """Save to ``path`` (or the current preset file; none yet: a new timestamped file in presets/)."""
+        p = self.presets
+        target = path or p.path
+        if not target:
+            from . import paths
+            try:
+                target = str(timestamped_path(paths.presets_dir(), prefix="preset", ext=".json"))
+            except FileNotFoundError:
+                target = str(timestamped_path("presets", prefix="preset", ext=".json"))
+        ok = p.save(self.settings, target)
+        self.say(p.message, error=not ok)
+        return ok
 
     def reset_camera(self) -> None:
         self.apply({"camera": dict(self.home_camera)}, "camera reset")
@@ -178,11 +222,14 @@ class ViewerApp(mglw.WindowConfig):
     def load_preset(self, path: str) -> bool:
         s = self.presets.load(path, self.settings)
         if s is None:
+            errs = self.presets.errors
+            self.say(f"refused preset {path}" + (f": {errs[0][0]}: {errs[0][1]}" if errs else ""), error=True)
             return False
         if not self.set_settings(s, f"preset {path}"):
             self.presets.errors, self.presets.error_source = list(self.errors), path
             return False
         self.home_camera = self.settings.camera.model_dump(mode="json")
+        self.say(f"loaded preset {path}")
         return True
 
     def set_vsync(self, on: bool) -> None:
@@ -200,12 +247,18 @@ class ViewerApp(mglw.WindowConfig):
             self.on_render(time.perf_counter(), 1 / 60)
             self.wnd.swap_buffers()
 
+    def _compute_layout(self) -> Layout:
+        return compute_layout(self.wnd.size, self.wnd.buffer_size, self.show_ui, self.panel_width, self.panel_side)
+
     def _sync_size(self) -> None:
-        fw, fh = self.wnd.buffer_size
-        fw, fh = max(16, int(fw)), max(16, int(fh))
-        if (fw, fh) != (self.settings.render.width, self.settings.render.height):
+        """The render size follows the 3D view region (framebuffer pixels), not the whole window."""
+        self.layout = self._compute_layout()
+        vw, vh = self.layout.view_fb[2:]
+        if (vw, vh) != (self.settings.render.width, self.settings.render.height):
             try:
-                self.settings = with_values(self.settings, {"render.width": fw, "render.height": fh})
+                self.settings = with_values(self.settings, {"render.width": vw, "render.height": vh})
+                if not self._change_source:
+                    self._change_source = "render size"
             except SettingsError:
                 pass
 
@@ -216,19 +269,22 @@ class ViewerApp(mglw.WindowConfig):
         self._last_frame_t = now
         self.frames += 1
         self.watcher.poll()
+        # the UI is built first: this frame's edits (and panel resizes) are rendered this frame;
+        # the panel shows the previous frame's report (identical on idle frames)
+        ui_built = False
+        if self.show_ui:
+            ui_built = self._build_ui(frametime)
         self._sync_size()
-        fw, fh = self.settings.render.width, self.settings.render.height
-        viewport = (0, 0, fw, fh)
 
         t0 = time.perf_counter()
         self.report = self._render_main()
-        self._draw_view(viewport)
+        self._draw_view(self.layout.view_fb)
         self.render_ms.append((time.perf_counter() - t0) * 1000.0)
         self.watcher.refresh_errors()
 
         self._take_shots(include_ui=False)
-        if self.show_ui:
-            self._draw_ui(frametime)
+        if ui_built:
+            self._present_ui()
         self._take_shots(include_ui=True)
         self._update_title()
 
@@ -242,19 +298,58 @@ class ViewerApp(mglw.WindowConfig):
             except Exception:
                 pass
 
+    @property
+    def render_deferred(self) -> bool:
+        """The image on screen is older than the settings (an expensive slider drag is in progress)."""
+        return self.scheduler.deferred
+
     def _render_main(self):
+        pending = self._shown is None or (self._shown is not self.settings and self._shown != self.settings)
+        last_cost = self.last_change.total_ms if self.last_change else None
+        defer = self._shown is not None and self.scheduler.should_defer(pending, self._ui_active, last_cost)
+        self.scheduler.deferred = defer
+        target = self._shown if defer else self.settings
         try:
-            report = self.renderer.render(self.settings)
+            report = self.renderer.render(target)
             self.render_error = ""
-            for p in report.passes:
-                if p.status == "ran" and p.ms is not None:
-                    self.last_ms[p.name] = p.ms
-            return report
         except Exception as exc:
             self.render_error = f"{type(exc).__name__}: {exc}"
+            self.say(f"render: {self.render_error.splitlines()[0]}", error=True)
             if "--debug" in sys.argv:
                 traceback.print_exc()
+            self._shown = self.settings  # do not retry a failing state every frame while deferring
             return None
+        if defer:
+            self.scheduler.deferred_frames += 1
+            return report
+        for p in report.passes:
+            if p.status == "ran" and p.ms is not None:
+                self.last_ms[p.name] = p.ms
+        if report.ran:
+            self._record_change(report)
+        self._shown = self.settings
+        self._change_source = ""
+        return report
+
+    def view_passes(self, technique: str | None = None) -> set[str]:
+        """Names of the view-dependent passes of a technique and everything downstream of them."""
+        from .ui.scheduler import view_side
+        tech = technique or self.settings.technique
+        g = self.renderer.graph(tech)
+        vd = {p.name for p in g.passes if p.view_dependent}
+        rep = self.report
+        if rep is None:
+            return vd
+        return view_side(rep, vd)
+
+    def _record_change(self, report) -> None:
+        from .ui.scheduler import split_ms, view_side
+        g = self.renderer.graph(self.settings.technique)
+        vset = view_side(report, {p.name for p in g.passes if p.view_dependent})
+        tex, view = split_ms(report, vset, lambda p: p.ms if p.status == "ran" else None)
+        ran = sorted(((p.name, p.ms or 0.0) for p in report.passes if p.status == "ran"), key=lambda x: -x[1])
+        self.last_change = ChangeCost(self._change_source or "frame", report.total_ms, tex, view, ran,
+                                      report.timing_mode, time.time())
 
     def _render_slot(self, slot):
         if slot.renderer is None:
@@ -271,9 +366,10 @@ class ViewerApp(mglw.WindowConfig):
     def _draw_view(self, viewport) -> None:
         ctx = self.ctx
         ctx.screen.use()
-        ctx.viewport = viewport
+        ctx.viewport = (0, 0, *self.layout.framebuffer)
         bg = self.settings.render.background
         ctx.clear(*bg, 1.0)
+        ctx.viewport = viewport
         cmp = self.compare
         if cmp.mode != "off" and cmp.ready():
             if cmp.mode == "toggle":
@@ -300,24 +396,37 @@ class ViewerApp(mglw.WindowConfig):
         if "image" in g.resources():
             self.display.show(g.texture("image"), viewport)
 
-    def _draw_ui(self, frametime: float) -> None:
+    def _build_ui(self, frametime: float) -> bool:
+        """Run the imgui frame (widgets apply their edits to the settings); drawn by _present_ui."""
         from imgui_bundle import imgui
         imgui.set_current_context(self.imgui_ctx)
         io = imgui.get_io()
         io.delta_time = max(float(frametime), 1e-4)
-        io.display_size = self.wnd.size
+        ww, wh = self.wnd.size
+        fw, fh = self.wnd.buffer_size
+        io.display_size = imgui.ImVec2(float(ww), float(wh))
+        io.display_framebuffer_scale = imgui.ImVec2(fw / max(ww, 1), fh / max(wh, 1))
+        self.layout = self._compute_layout()
         imgui.new_frame()
         self.ui_rects = []
         state = imgui.internal.ErrorRecoveryState()
         imgui.internal.error_recovery_store_state(state)
         try:
             self.panel.draw()
+            self.status_bar.draw()
             self.passes_window.draw()
         except Exception as exc:  # a UI bug must not take the session down
             self.render_error = f"UI: {type(exc).__name__}: {exc}"
+            self.say(self.render_error, error=True)
             traceback.print_exc()
             imgui.internal.error_recovery_try_to_recover_state(state)
+        self._ui_active = bool(imgui.is_any_item_active())
         imgui.render()
+        return True
+
+    def _present_ui(self) -> None:
+        from imgui_bundle import imgui
+        imgui.set_current_context(self.imgui_ctx)
         self.ctx.screen.use()
         self.imgui.render(imgui.get_draw_data())
 
@@ -334,13 +443,16 @@ class ViewerApp(mglw.WindowConfig):
         if not todo:
             return
         self._pending_shots = [x for x in self._pending_shots if x[1] != include_ui]
-        img = read_screen(self.ctx, (self.settings.render.width, self.settings.render.height))
+        # without UI: the 3D view region only; with UI: the whole framebuffer
+        if include_ui:
+            img = read_screen(self.ctx, self.layout.framebuffer)
+        else:
+            img = read_screen(self.ctx, self.layout.view_fb[2:], origin=self.layout.view_fb[:2])
         for path, _ in todo:
             try:
                 save_png(path, img)
                 self.screenshots_written.append(path)
-                self.notices = [n for n in self.notices if not n.startswith("screenshot")]
-                self.notices.append(f"screenshot: {path}")
+                self.say(f"screenshot: {path} ({img.shape[1]}x{img.shape[0]}{', with UI' if include_ui else ''})")
                 if self.shot_options.save_linear_npy:
                     g = self.renderer.graph(self.settings.technique)
                     res = "lit" if "lit" in g.resources() else "image"
@@ -350,8 +462,11 @@ class ViewerApp(mglw.WindowConfig):
 
     # -- input -------------------------------------------------------------------------------
     def _over_ui(self, x: float, y: float) -> bool:
+        """True over the docked panel / status bar (outside the 3D view) or a floating UI window."""
         if not self.show_ui:
             return False
+        if not self.layout.in_view(x, y):
+            return True
         for (rx, ry, rw, rh) in self.ui_rects:
             if rx <= x <= rx + rw and ry <= y <= ry + rh:
                 return True
@@ -361,14 +476,21 @@ class ViewerApp(mglw.WindowConfig):
         except Exception:
             return False
 
+    def _view_fraction(self, x: float) -> float:
+        vx, _, vw, _ = self.layout.view
+        return float(min(1.0, max(0.0, (x - vx) / max(vw, 1.0))))
+
     def _near_divider(self, x: float) -> bool:
         cmp = self.compare
-        return cmp.mode == "split" and cmp.ready() and abs(x - cmp.divider * self.wnd.size[0]) < 8
+        vx, _, vw, _ = self.layout.view
+        return cmp.mode == "split" and cmp.ready() and abs(x - (vx + cmp.divider * vw)) < 8
 
     def on_mouse_position_event(self, x, y, dx, dy):
+        self._mouse = (float(x), float(y))
         self.imgui.mouse_position_event(x, y, dx, dy)
 
     def on_mouse_press_event(self, x, y, button):
+        self._mouse = (float(x), float(y))
         self.imgui.mouse_press_event(x, y, button)
         self._buttons.add(button)
         if self._drag_owner is None:
@@ -386,9 +508,10 @@ class ViewerApp(mglw.WindowConfig):
             self._drag_owner = None
 
     def on_mouse_drag_event(self, x, y, dx, dy):
+        self._mouse = (float(x), float(y))
         self.imgui.mouse_drag_event(x, y, dx, dy)
         if self._drag_owner == "divider":
-            self.compare.divider = float(min(1.0, max(0.0, x / max(self.wnd.size[0], 1))))
+            self.compare.divider = self._view_fraction(x)
             return
         if self._drag_owner != "view":
             return
@@ -396,18 +519,20 @@ class ViewerApp(mglw.WindowConfig):
         shift = self._shift or bool(getattr(self.wnd.modifiers, "shift", False))
         s = self.settings
         if m.middle in self._buttons or (m.left in self._buttons and shift):
-            self.apply(self.orbit.pan(s, dx, dy, self.wnd.size[1]), "pan")
+            self.apply(self.orbit.pan(s, dx, dy, self.layout.view[3]), "camera (pan)")
         elif m.left in self._buttons:
-            self.apply(self.orbit.orbit(s, dx, dy), "orbit")
+            self.apply(self.orbit.orbit(s, dx, dy), "camera (orbit)")
         elif m.right in self._buttons:
-            self.apply(self.orbit.move_light(s, 0, dx, dy), "key light")
+            self.apply(self.orbit.move_light(s, 0, dx, dy), "lights.0 (key light drag)")
 
     def on_mouse_scroll_event(self, x_offset, y_offset):
         self.imgui.mouse_scroll_event(x_offset, y_offset)
+        if self._over_ui(*self._mouse):
+            return
         from imgui_bundle import imgui
         if self.show_ui and imgui.get_io().want_capture_mouse:
             return
-        self.apply(self.orbit.zoom(self.settings, y_offset), "zoom")
+        self.apply(self.orbit.zoom(self.settings, y_offset), "camera (zoom)")
 
     def on_key_event(self, key, action, modifiers):
         self.imgui.key_event(key, action, modifiers)
@@ -415,16 +540,33 @@ class ViewerApp(mglw.WindowConfig):
         keys = self.wnd.keys
         if action != keys.ACTION_PRESS:
             return
+        ctrl = bool(getattr(modifiers, "ctrl", False))
+        # function keys and Ctrl+S work even while a text field has the keyboard
         if key == keys.F12:
             self.request_screenshot()
+            return
+        if key == keys.F1:
+            self.show_ui = not self.show_ui
+            return
+        if ctrl and key == keys.S:
+            self.save_preset()
             return
         from imgui_bundle import imgui
         if self.show_ui and imgui.get_io().want_capture_keyboard:
             return
+        tech_keys = {keys.NUMBER_1: 0, keys.NUMBER_2: 1, keys.NUMBER_3: 2,
+                     getattr(keys, "NUMPAD_1", -1): 0, getattr(keys, "NUMPAD_2", -1): 1, getattr(keys, "NUMPAD_3", -1): 2}
         if key == keys.R:
             self.reset_camera()
-        elif key == keys.F1:
-            self.show_ui = not self.show_ui
+            self.say("camera reset (R)")
+        elif key in tech_keys and not ctrl:
+            self.set_technique(TECHNIQUE_KEYS[tech_keys[key]])
+        elif key == keys.SPACE and self.compare.mode != "off":
+            if self.compare.mode != "toggle":
+                self.compare.mode = "toggle"
+            else:
+                self.compare.show_b = not self.compare.show_b
+            self.say(f"A/B: showing {'B' if self.compare.show_b else 'A'}")
         elif key == keys.ESCAPE and self.inspect is not None:
             self.inspect = None
 
@@ -511,6 +653,8 @@ def run_viewer(args) -> int:
         args.frames = 1
     size = tuple(args.size) if args.size else DEFAULT_WINDOW
     app = create_app(s, size=size, preset_path=args.preset)
+    if args.frames and args.screenshot:
+        app.show_ui = False  # batch screenshot: the 3D view fills the whole --size window
     for n in app.notices:
         print(f"note: {n}", file=sys.stderr)
     wnd = app.wnd

@@ -14,7 +14,7 @@ import pytest
 
 pytestmark = pytest.mark.viewer
 
-W, H = 320, 240
+W, H = 560, 360
 SCENE = "shadow-edge"
 
 
@@ -68,6 +68,24 @@ def _view_image(app) -> np.ndarray:
     return app.renderer.image(app.settings).astype(np.float32)
 
 
+def _view_hw(app) -> tuple[int, int]:
+    """(height, width) of the 3D view region in framebuffer pixels."""
+    return app.layout.view_fb[3], app.layout.view_fb[2]
+
+
+def _key(app, key, ctrl=False):
+    from moderngl_window.context.base.keys import KeyModifiers
+    mods = KeyModifiers()
+    mods.ctrl = ctrl
+    app.on_key_event(key, app.wnd.keys.ACTION_PRESS, mods)
+    app.on_key_event(key, app.wnd.keys.ACTION_RELEASE, mods)
+
+
+def _in_view(app) -> tuple[float, float]:
+    vx, vy, vw, vh = app.layout.view
+    return vx + vw * 0.7, vy + vh * 0.6
+
+
 def _drag(app, x0, y0, dx, dy, button):
     app.on_mouse_position_event(x0, y0, 0, 0)
     app.on_mouse_press_event(x0, y0, button)
@@ -96,7 +114,7 @@ def test_window_renders_subject_and_ui(app):
     from skinviewer.ui import panel
     assert app.report is not None and not app.render_error
     img = _view_image(app)
-    assert img.shape == (H, W, 3) and img.std() > 10
+    assert img.shape == (*_view_hw(app), 3) and img.std() > 10
     panel.EXPAND_ALL["on"] = True  # draw every section and widget once: no imgui misuse anywhere
     try:
         app.step(2)
@@ -229,9 +247,9 @@ def test_screenshots_written_where_asked(app, tmp_path):
     app.step(1)
     assert p.exists() and p.parent == tmp_path / "shots"
     img = np.asarray(Image.open(p))
-    assert img.shape == (H, W, 3) and img.std() > 10
+    assert img.shape == (*_view_hw(app), 3) and img.std() > 10  # the 3D view region, no panel
     lin = np.load(p.with_suffix(".npy"))
-    assert lin.dtype == np.float32 and lin.shape[:2] == (H, W)
+    assert lin.dtype == np.float32 and lin.shape[:2] == _view_hw(app)
     app.shot_options.save_linear_npy = False
     n = len(list((tmp_path / "shots").glob("*.png")))
     app.on_key_event(app.wnd.keys.F12, app.wnd.keys.ACTION_PRESS, app.wnd.modifiers)
@@ -239,7 +257,8 @@ def test_screenshots_written_where_asked(app, tmp_path):
     assert len(list((tmp_path / "shots").glob("*.png"))) == n + 1
     q = app.request_screenshot(tmp_path / "with_ui.png", include_ui=True)
     app.step(1)
-    assert q.exists()
+    fw, fh = app.wnd.buffer_size
+    assert np.asarray(Image.open(q)).shape == (fh, fw, 3)  # with UI: the whole window
 
 
 def test_ab_compare_split_and_pass_inspector(app):
@@ -291,8 +310,10 @@ def test_resize_follows_framebuffer(app):
     try:
         if (fw, fh) == (w0, h0):
             pytest.skip("the X server did not resize the window")
-        assert (app.settings.render.width, app.settings.render.height) == (fw, fh)
-        assert _view_image(app).shape == (fh, fw, 3)
+        vx, vy, vw, vh = app.layout.view_fb
+        assert (app.settings.render.width, app.settings.render.height) == (vw, vh)
+        assert vw == fw - round(app.layout.panel[2] * fw / app.wnd.size[0])
+        assert _view_image(app).shape == (vh, vw, 3)
         assert not app.render_error
     finally:
         app.wnd.size = (W, H)
@@ -319,3 +340,176 @@ def test_profile_lab_fit_applies_to_deon_gaussians(app):
         assert not app.render_error
     finally:
         app.apply({"deon.gaussians": [g.model_dump(mode="json") for g in old]})
+
+
+# -- layout, input regions, shortcuts, scheduling ---------------------------------------------------
+
+def test_layout_pure_hidpi_and_sides():
+    from skinviewer.ui.layout import compute_layout
+    lo = compute_layout((1000, 700), (2000, 1400), True, 300.0, "left", status_h=20.0)
+    assert lo.panel == (0.0, 0.0, 300.0, 680.0) and lo.view == (300.0, 0.0, 700.0, 680.0)
+    assert lo.view_fb == (600, 40, 1400, 1360)  # framebuffer pixels, bottom-left origin (HiDPI x2)
+    assert lo.in_view(500, 100) and not lo.in_view(100, 100) and not lo.in_view(500, 690)
+    r = compute_layout((1000, 700), (1000, 700), True, 300.0, "right", status_h=20.0)
+    assert r.panel[0] == 700.0 and r.view_fb == (0, 20, 700, 680)
+    assert compute_layout((1000, 700), (1000, 700), True, 5000.0).panel[2] == 500.0  # at most half
+    hidden = compute_layout((1000, 700), (2000, 1400), False, 300.0)
+    assert hidden.view_fb == (0, 0, 2000, 1400) and hidden.panel is None
+
+
+def test_view_region_excludes_panel(app):
+    app.step(1)
+    lo = app.layout
+    fw, fh = app.wnd.buffer_size
+    sx, sy = lo.scale
+    panel_fb, status_fb = round(lo.panel[2] * sx), round(lo.status[3] * sy)
+    assert panel_fb > 0 and status_fb > 0
+    assert _view_image(app).shape == (fh - status_fb, fw - panel_fb, 3)
+    assert (app.settings.render.width, app.settings.render.height) == (fw - panel_fb, fh - status_fb)
+    # the user widens the panel by dragging its edge: the view (and the render size) shrink
+    app.panel_width = W * 0.45  # the narrowest this window allows
+    app.step(1)
+    pw0 = app.layout.panel[2]
+    x0 = pw0 - 1
+    w0 = app.settings.render.width
+    app.on_mouse_position_event(x0, 150, 0, 0)
+    app.step(1)
+    app.on_mouse_press_event(x0, 150, app.wnd.mouse.left)
+    app.step(1)
+    for k in range(1, 5):
+        app.on_mouse_drag_event(x0 + 5 * k, 150, 5, 0)
+        app.step(1)
+    app.on_mouse_release_event(x0 + 20, 150, app.wnd.mouse.left)
+    app.step(1)
+    try:
+        assert app.panel_width > pw0 + 10, "dragging the panel edge did not resize it"
+        assert app.settings.render.width < w0 and _view_image(app).shape[1] == app.settings.render.width
+    finally:
+        app.panel_width = lo.panel[2]
+        app.step(1)
+    # F1 hides the UI: the view fills the window
+    _key(app, app.wnd.keys.F1)
+    app.step(1)
+    try:
+        assert not app.show_ui and _view_image(app).shape == (fh, fw, 3)
+    finally:
+        _key(app, app.wnd.keys.F1)
+        app.step(1)
+    assert app.show_ui
+
+
+def test_orbit_and_zoom_only_in_view_region(app):
+    app.step(1)
+    cam0 = app.settings.camera.model_dump(mode="json")
+    sx, sy, sw, sh = app.layout.status
+    _drag(app, sx + sw - 30, sy + sh / 2, 40, -5, app.wnd.mouse.left)  # on the status bar, under the view
+    px, py, pw, ph = app.layout.panel
+    _drag(app, px + pw - 12, py + ph - 30, -30, 0, app.wnd.mouse.left)  # on the panel
+    app.on_mouse_position_event(px + 20, py + 40, 0, 0)
+    app.on_mouse_scroll_event(0, 2)  # wheel over the panel: scrolls the panel, no zoom
+    assert app.settings.camera.model_dump(mode="json") == cam0
+    x, y = _in_view(app)
+    _drag(app, x, y, 30, 0, app.wnd.mouse.left)
+    assert app.settings.camera.yaw != cam0["yaw"]
+    app.on_mouse_position_event(x, y, 0, 0)
+    app.on_mouse_scroll_event(0, 1)
+    assert app.settings.camera.distance is not None
+    app.step(1)
+    assert app.last_change.section() == "camera"
+    assert app.last_change.texture_ms == 0.0 and app.last_change.view_ms > 0  # orbit: view-dependent only
+    app.reset_camera()
+    app.step(1)
+
+
+def test_shortcuts_switch_technique_and_save(app, tmp_path):
+    from skinviewer import techniques
+    keys = app.wnd.keys
+    start = app.settings.technique
+    try:
+        _key(app, keys.NUMBER_1)
+        assert app.settings.technique == "phong"
+        if "deon" in techniques.names():
+            _key(app, keys.NUMBER_3)
+            assert app.settings.technique == "deon"
+        if "gosselin" in techniques.names():
+            _key(app, keys.NUMBER_2)
+            assert app.settings.technique == "gosselin"
+        app.step(1)
+        # Ctrl+S saves the preset (to the current preset file)
+        target = tmp_path / "ctrl_s.json"
+        app.presets.path = str(target)
+        assert app.apply({"render.exposure": 1.3}) and app.presets.dirty(app.settings)
+        _key(app, keys.S, ctrl=True)
+        assert target.exists() and not app.presets.dirty(app.settings)
+        assert "saved" in app.message[0] and not app.message[1]
+        # Space flips A/B while comparing
+        cmp = app.compare
+        cmp.a.settings, cmp.b.settings = app.settings, app.settings
+        cmp.mode, cmp.show_b = "toggle", False
+        _key(app, keys.SPACE)
+        assert cmp.show_b
+        _key(app, keys.SPACE)
+        assert not cmp.show_b
+    finally:
+        app.compare.mode = "off"
+        app.presets.path = None
+        app.apply({"render.exposure": 1.0})
+        app.set_technique(start)
+        app.step(1)
+
+
+def test_idle_frames_run_no_passes(app):
+    from skinviewer.ui import panel
+    app.step(2)
+    assert app.report.ran == [], app.report.table()
+    panel.EXPAND_ALL["on"] = True  # every widget drawn: none of them may edit the settings by itself
+    try:
+        s0 = app.settings
+        app.step(2)
+        assert app.report.ran == [], app.report.table()
+        assert app.settings == s0
+    finally:
+        panel.EXPAND_ALL["on"] = False
+    # the status bar names scene, triangles, technique, render size and timing mode
+    text = " | ".join(t for t, _ in app.status_bar.fields())
+    for part in (SCENE, "tris", app.settings.technique, f"{app.settings.render.width}x{app.settings.render.height}",
+                 "timing"):
+        assert part in text, text
+
+
+def test_expensive_change_waits_for_release(app):
+    from skinviewer.ui.scheduler import RenderScheduler
+    sch = RenderScheduler(budget_ms=100.0, rest_s=0.3)
+    sch.note_change(now=10.0)
+    assert sch.should_defer(True, True, 500.0, now=10.1)  # dragging, expensive: wait
+    assert not sch.should_defer(True, True, 50.0, now=10.1)  # cheap (real GPU): live
+    assert not sch.should_defer(True, False, 500.0, now=10.1)  # released: render
+    assert not sch.should_defer(True, True, 500.0, now=10.5)  # held still: render
+    # in the app: a texture-space edit while a widget is held (simulated) keeps the last image
+    app.show_ui = False  # the UI is not built: _ui_active stays as set here
+    app.scheduler.mode = "on release"
+    from skinviewer import techniques
+    old = app.settings.model_dump(mode="json")
+    tech = next((t for t in ("deon", "gosselin") if t in techniques.names()), None)
+    if tech is None:
+        pytest.skip("no texture-space technique available")
+    path = {"deon": "deon.mix", "gosselin": "gosselin.scale_x"}[tech]
+    try:
+        assert app.set_technique(tech)
+        app.step(1)
+        app._ui_active = True
+        assert app.apply({path: 0.2 if tech == "deon" else 3.0})
+        app.step(1)
+        assert app.render_deferred and app.report.ran == []
+        app._ui_active = False  # released
+        app.step(1)
+        assert not app.render_deferred and app.report.ran
+        ch = app.last_change
+        assert ch.source == path and ch.section() == tech and ch.texture_ms > 0 and ch.passes
+    finally:
+        app._ui_active = False
+        app.scheduler.mode = "adaptive"
+        app.show_ui = True
+        from skinviewer.settings import validate
+        app.set_settings(validate(old))
+        app.step(1)

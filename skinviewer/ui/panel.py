@@ -1,5 +1,9 @@
-"""The main settings panel (left side): collapsing sections built mostly from the settings model
-(``widgets.edit_model``); the Gaussian, per-region and light tables are hand-built."""
+"""The main settings panel: a column docked to the left (or right) edge of the window, resizable by
+dragging its inner edge; the 3D view takes the rest (``ui/layout.py``). Collapsing sections built
+mostly from the settings model (``widgets.edit_model``, units and tooltips from ``fielddocs``); the
+Gaussian, per-region and light tables are hand-built. Each section shows what the last change made
+in it cost (which passes re-ran, in ms), and the Technique section splits the frame cost into
+texture-space and view-dependent work."""
 from __future__ import annotations
 
 import math
@@ -12,6 +16,9 @@ from .. import techniques
 from ..scenes import SCENES
 from ..settings import REGIONS, profile_warnings
 from .camera_control import angles_to_direction, direction_to_angles
+from .fielddocs import doc
+from .scheduler import MODES as RENDER_MODES
+from .scheduler import split_ms
 from .widgets import Edits, edit_model
 
 ERR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
@@ -19,7 +26,14 @@ WARN = imgui.ImVec4(1.0, 0.8, 0.35, 1.0)
 OK = imgui.ImVec4(0.55, 0.9, 0.55, 1.0)
 DIM = imgui.ImVec4(0.65, 0.65, 0.7, 1.0)
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
-PANEL_W = 380.0
+TEX_COL = imgui.ImVec4(0.35, 0.6, 1.0, 1.0)  # texture-space cost
+VIEW_COL = imgui.ImVec4(1.0, 0.62, 0.3, 1.0)  # view-dependent cost
+SHORTCUTS = (
+    ("LMB drag (view)", "orbit"), ("MMB / Shift+LMB drag", "pan"), ("wheel", "zoom"),
+    ("RMB drag (view)", "move the key light"), ("R", "reset view"), ("1 / 2 / 3", "phong / gosselin / d'Eon"),
+    ("F1", "hide / show the UI"), ("F12", "screenshot"), ("Ctrl+S", "save preset (new file if none)"),
+    ("Space", "A/B: toggle A and B (compare on)"), ("Esc", "leave the pass inspector"),
+)
 
 
 def gaussian_profile(gaussians, r: np.ndarray) -> np.ndarray:
@@ -29,6 +43,16 @@ def gaussian_profile(gaussians, r: np.ndarray) -> np.ndarray:
         v = max(g.variance, 1e-6)
         out += np.outer(np.exp(-r * r / (2.0 * v)) / (2.0 * math.pi * v), g.weights)
     return out
+
+
+def _wrapped(text: str) -> None:
+    imgui.push_text_wrap_pos(0)
+    imgui.text_disabled(text)
+    imgui.pop_text_wrap_pos()
+
+
+def _short(source: str, n: int = 38) -> str:
+    return source if len(source) <= n else source[: n - 3] + "..."
 
 
 EXPAND_ALL = {"on": False}  # tests: open every section so every widget is drawn
@@ -57,14 +81,24 @@ class Panel:
     # ------------------------------------------------------------------------------------------
     def draw(self) -> None:
         app = self.app
-        io = imgui.get_io()
-        w, h = io.display_size.x, io.display_size.y
-        pw = min(PANEL_W, max(200.0, w * 0.45))
-        imgui.set_next_window_pos(imgui.ImVec2(0, 0), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(pw, h), imgui.Cond_.first_use_ever.value)
-        dirty = app.presets.dirty(app.settings)
-        title = f"skinviewer{'  *' if dirty else ''}###panel"
-        if imgui.begin(title)[0]:
+        rect = app.layout.panel
+        if rect is None:
+            return
+        x, y, pw, ph = rect
+        imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.always.value)
+        imgui.set_next_window_size(imgui.ImVec2(pw, ph), imgui.Cond_.always.value)
+        flags = (imgui.WindowFlags_.no_title_bar | imgui.WindowFlags_.no_move | imgui.WindowFlags_.no_collapse
+                 | imgui.WindowFlags_.no_bring_to_front_on_focus | imgui.WindowFlags_.no_saved_settings)
+        imgui.push_style_var(imgui.StyleVar_.window_rounding.value, 0.0)
+        imgui.push_style_color(imgui.Col_.window_bg.value, imgui.ImVec4(0.09, 0.09, 0.1, 1.0))
+        opened = imgui.begin("skinviewer###panel", None, flags)[0]
+        imgui.pop_style_color()
+        imgui.pop_style_var()
+        size = imgui.get_window_size()
+        if abs(size.x - pw) > 0.5:  # the user dragged the inner edge: remember the width
+            app.panel_width = float(size.x)
+        if opened:
+            imgui.push_item_width(-min(165.0, pw * 0.42))  # room for labels with units
             edits = Edits()
             self._status()
             self._technique(edits)
@@ -79,10 +113,11 @@ class Panel:
             self._shaders()
             if self.lab is not None:
                 self.lab.draw()
+            self._help()
+            imgui.pop_item_width()
             if edits:
                 app.apply(edits.values)
-        pos, size = imgui.get_window_pos(), imgui.get_window_size()
-        app.ui_rects.append((pos.x, pos.y, size.x, size.y))
+        app.ui_rects.append((x, y, pw, ph))
         imgui.end()
 
     # ------------------------------------------------------------------------------------------
@@ -91,11 +126,14 @@ class Panel:
         s = app.settings
         scene = app.renderer.scene
         imgui.push_text_wrap_pos(0)
-        imgui.text_colored(DIM, f"{s.technique}  |  {scene.description if scene else '-'}")
+        imgui.text_colored(DIM, scene.description if scene else "-")
         imgui.pop_text_wrap_pos()
         p = app.presets
-        marker = " (unsaved changes)" if p.dirty(s) else ""
-        imgui.text_colored(WARN if marker else DIM, f"preset: {p.path or '(none)'}{marker}")
+        marker = " (unsaved changes, Ctrl+S)" if p.dirty(s) else ""
+        imgui.text_colored(WARN if marker else DIM, f"preset: {Path(p.path).name if p.path else '(none)'}{marker}")
+        if p.path and imgui.is_item_hovered():
+            imgui.set_item_tooltip(p.path)
+        self._change_line(None)
         if app.errors:
             imgui.text_colored(ERR, f"refused: {app.error_title}")
             for path, msg in app.errors[:8]:
@@ -131,17 +169,107 @@ class Panel:
                 imgui.pop_text_wrap_pos()
                 k += 1
 
+    # -- cost accounting ----------------------------------------------------------------------
+    def _change_line(self, sections: tuple[str, ...] | None) -> None:
+        """'last change: N ms (passes ...)' -- everywhere (None) or when the change came from ``sections``."""
+        app = self.app
+        ch = app.last_change
+        if app.render_deferred:
+            imgui.text_colored(WARN, "preview paused: release (or hold still) to render")
+            if imgui.is_item_hovered():
+                imgui.set_item_tooltip(f"the last change cost {ch.total_ms:.0f} ms > the "
+                                       f"{app.scheduler.budget_ms:.0f} ms budget (Technique > scheduling)"
+                                       if ch else "render scheduling: on release")
+        if ch is None or (sections is not None and ch.section() not in sections):
+            return
+        if sections is not None and ch.source in ("render size",):
+            return
+        imgui.push_text_wrap_pos(0)
+        imgui.text_colored(DIM, f"last change ({_short(ch.source)}): ")
+        imgui.same_line(0, 0)
+        col = ERR if ch.total_ms > 1000 else (WARN if ch.total_ms > 100 else OK)
+        imgui.text_colored(col, f"{ch.total_ms:.0f} ms")
+        imgui.same_line()
+        imgui.text_colored(DIM, f"= texture {ch.texture_ms:.0f} + view {ch.view_ms:.0f}")
+        imgui.pop_text_wrap_pos()
+        if imgui.is_item_hovered():
+            rows = "\n".join(f"  {n:<22} {ms:8.1f} ms" for n, ms in ch.passes)
+            imgui.set_item_tooltip(f"caused by: {ch.source}\npasses re-run ({ch.timing_mode} timing):\n{rows}")
+        imgui.push_text_wrap_pos(0)
+        imgui.text_disabled("  passes: " + ", ".join(f"{n} {ms:.0f}" for n, ms in ch.passes[:4])
+                            + (f", +{len(ch.passes) - 4} more" if len(ch.passes) > 4 else ""))
+        imgui.pop_text_wrap_pos()
+
+    def _cost_split(self) -> None:
+        """The technique's frame cost: this frame, and a full frame at the passes' last-run costs,
+        split into texture-space (cached while orbiting) and view-dependent work."""
+        app = self.app
+        rep = app.report
+        if rep is None:
+            imgui.text_disabled("no frame yet")
+            return
+        vset = app.view_passes()
+        live = [p for p in rep.passes if p.status != "pruned"]
+        now_tex, now_view = split_ms(rep, vset, lambda p: p.ms if p.status == "ran" else None)
+        full_tex, full_view = split_ms(rep, vset, lambda p: app.last_ms.get(p.name) if p.status != "pruned" else None)
+        imgui.text(f"this frame: {now_tex + now_view:.1f} ms")
+        imgui.same_line()
+        imgui.text_disabled(f"({len(rep.ran)} of {len(live)} passes ran, {rep.timing_mode} timing)")
+        if imgui.is_item_hovered():
+            from ..graph import TIMING_NOTES
+            imgui.set_item_tooltip(TIMING_NOTES.get(rep.timing_mode, ""))
+        total = full_tex + full_view
+        imgui.text("full frame:")
+        imgui.same_line()
+        imgui.text_colored(TEX_COL, f"texture-space {full_tex:.0f} ms")
+        imgui.same_line()
+        imgui.text("+")
+        imgui.same_line()
+        imgui.text_colored(VIEW_COL, f"view {full_view:.0f} ms")
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("at each live pass's last measured cost.\n"
+                                   "texture-space: re-run only when their settings / lights / mesh change;\n"
+                                   "view-dependent: re-run on every camera move (orbit cost).")
+        # a two-colour bar: the share of each
+        w = imgui.get_content_region_avail().x
+        p0 = imgui.get_cursor_screen_pos()
+        hbar = 6.0
+        dl = imgui.get_window_draw_list()
+        dl.add_rect_filled(p0, imgui.ImVec2(p0.x + w, p0.y + hbar), imgui.get_color_u32(imgui.ImVec4(0.2, 0.2, 0.24, 1)))
+        if total > 0:
+            xt = p0.x + w * full_tex / total
+            dl.add_rect_filled(p0, imgui.ImVec2(xt, p0.y + hbar), imgui.get_color_u32(TEX_COL))
+            dl.add_rect_filled(imgui.ImVec2(xt, p0.y), imgui.ImVec2(p0.x + w, p0.y + hbar), imgui.get_color_u32(VIEW_COL))
+        imgui.dummy(imgui.ImVec2(w, hbar + 2))
+
     def _technique(self, edits: Edits) -> None:
         app = self.app
+        if not _header("Technique & cost", True):
+            return
         names = techniques.names()
         cur = names.index(app.settings.technique) if app.settings.technique in names else 0
-        ch, i = imgui.combo("technique", cur, names)
+        imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
+        ch, i = imgui.combo("technique (1/2/3)", cur, names)
         if ch:
             app.set_technique(names[i])
-        imgui.same_line()
-        imgui.text_disabled("(?)")
         if imgui.is_item_hovered():
-            imgui.set_item_tooltip("each technique keeps its own cached graph: switching back is instant")
+            imgui.set_item_tooltip("keys 1 / 2 / 3: phong / gosselin / deon. Each technique keeps its own cached "
+                                   "graph: switching back is instant")
+        self._cost_split()
+        sch = app.scheduler
+        imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
+        ch, i = imgui.combo("while dragging", RENDER_MODES.index(sch.mode), list(RENDER_MODES))
+        if ch:
+            sch.mode = RENDER_MODES[i]
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("adaptive: render every frame while a slider is dragged unless the last change "
+                                   "cost more than the budget; then render when it is released or held still.\n"
+                                   "live: always render (the UI may freeze on slow GL).\n"
+                                   "on release: render only on release / when held still.")
+        if sch.mode == "adaptive":
+            imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
+            _, sch.budget_ms = imgui.slider_float("budget (ms)", sch.budget_ms, 10.0, 2000.0, "%.0f ms",
+                                                  imgui.SliderFlags_.logarithmic.value)
 
     def _scene(self, edits: Edits) -> None:
         app = self.app
@@ -163,15 +291,17 @@ class Panel:
             self.mesh_path = ""
             app.apply({"scene.mesh": None}, "scene")
         edit_model(sc, "scene", edits, skip=("name", "mesh"))
+        self._change_line(("scene",))
 
     def _camera(self, edits: Edits) -> None:
         app = self.app
         if not _header("Camera"):
             return
-        imgui.text_disabled("LMB orbit, MMB / shift+LMB pan, wheel zoom, R reset, RMB key light")
+        _wrapped("in the view: LMB orbit, MMB / shift+LMB pan, wheel zoom, RMB key light")
         edit_model(app.settings.camera, "camera", edits)
-        if imgui.button("reset (R)"):
+        if imgui.button("reset view (R)"):
             app.reset_camera()
+        self._change_line(("camera",))
 
     def _lights(self, edits: Edits) -> None:
         app = self.app
@@ -205,6 +335,7 @@ class Panel:
         if imgui.tree_node("shadows"):
             edit_model(app.settings.shadow, "shadow", edits)
             imgui.tree_pop()
+        self._change_line(("lights", "shadow"))
 
     def _direction_pad(self, i: int, az: float, el: float, edits: Edits) -> None:
         """A little disc: drag the dot to aim the light (azimuth around, elevation from the centre)."""
@@ -235,29 +366,42 @@ class Panel:
     # ------------------------------------------------------------------------------------------
     def _technique_sections(self, edits: Edits) -> None:
         s = self.app.settings
-        if _header("Phong"):
+        tag = {True: "  (active)", False: ""}
+        if _header(f"Phong{tag[s.technique == 'phong']}###Phong"):
             edit_model(s.phong, "phong", edits)
-        if _header("Gosselin"):
+            self._change_line(("phong",))
+        if _header(f"Gosselin 2004{tag[s.technique == 'gosselin']}###Gosselin", s.technique == "gosselin"):
+            _wrapped("seed 000 §4.1, eq. 8-19: texture-space light map + Poisson blurs")
             edit_model(s.gosselin, "gosselin", edits, skip=("regions",))
             self._region_kernels(edits)
-        if _header("d'Eon", s.technique == "deon"):
+            self._change_line(("gosselin",))
+        if _header(f"d'Eon 2007{tag[s.technique == 'deon']}###deon", s.technique == "deon"):
+            _wrapped("seed 000 §4.2, eq. 20-35: sum-of-Gaussians diffusion in texture space")
             self._gaussians(edits)
             edit_model(s.deon, "deon", edits)
             for w in profile_warnings(s.deon):
                 imgui.push_text_wrap_pos(0)
                 imgui.text_colored(WARN, "! " + w)
                 imgui.pop_text_wrap_pos()
+            self._change_line(("deon",))
             self._profile_plot()
-        if _header("Specular"):
+        if _header("Specular (Kelemen / Szirmay-Kalos)###Specular"):
+            _wrapped("seed 000 eq. 14-16 (gosselin, deon)")
             edit_model(s.specular, "specular", edits, skip=("per_region",))
             self._region_specular(edits)
+            self._change_line(("specular",))
 
     def _region_kernels(self, edits: Edits) -> None:
         regions = self.app.settings.gosselin.regions
         imgui.text("per-region kernels")
+        imgui.same_line()
+        imgui.text_disabled("(eq. 12)")
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("radius = size * (kernel_size * scale_x + scale_y), per region of the region map;\n"
+                                   "size = 1/1024: radii are texels at a 1024 light map (rescaled to light_map_size)")
         flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_stretch_same.value
         if imgui.begin_table("kernels", 4, flags):
-            for col in ("region", "kernel size", "scale x", "scale y"):
+            for col in ("region", "kernel size", "scale x", "scale y (texels)"):
                 imgui.table_setup_column(col)
             imgui.table_headers_row()
             for reg in REGIONS:
@@ -270,6 +414,8 @@ class Panel:
                     imgui.table_next_column()
                     imgui.set_next_item_width(-1)
                     ch, nv = imgui.drag_float(f"##{reg}{fname}", float(v), 0.01, 0.0, 1000.0, "%.3g")
+                    if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+                        imgui.set_tooltip(f"{reg}: " + doc(f"gosselin.regions.{reg}.{fname}")[1])
                     if ch:
                         row = rk.model_dump() if rk else {"kernel_size": 1.0, "scale_x": 1.0, "scale_y": 0.0}
                         row[fname] = float(nv)
@@ -281,7 +427,7 @@ class Panel:
         imgui.text("per-region overrides (unchecked: global value)")
         flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
         if imgui.begin_table("specreg", 3, flags):
-            for col in ("region", "m", "rho_s"):
+            for col in ("region", "roughness m", "rho_s"):
                 imgui.table_setup_column(col)
             imgui.table_headers_row()
             for reg in REGIONS:
@@ -311,13 +457,18 @@ class Panel:
     def _gaussians(self, edits: Edits) -> None:
         d = self.app.settings.deon
         gs = d.gaussians
-        imgui.text("Gaussian sum: variance (mm^2) and RGB weights")
+        imgui.text("R(r) = sum_i w_i G(v_i, r)")
+        imgui.same_line()
+        imgui.text_disabled("(eq. 20-21)")
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("diffusion profile as a sum of Gaussians, seed 000 eq. 20-21;\n"
+                                   "G(v, r) = exp(-r²/2v) / (2 pi v), v in mm², r in mm")
         flags = imgui.TableFlags_.borders.value | imgui.TableFlags_.row_bg.value
         remove = None
         if imgui.begin_table("gauss", 4, flags):
             imgui.table_setup_column("#", imgui.TableColumnFlags_.width_fixed.value, 18)
-            imgui.table_setup_column("variance")
-            imgui.table_setup_column("weights R G B")
+            imgui.table_setup_column("variance v_i (mm²)")
+            imgui.table_setup_column("weights w_i  R G B")
             imgui.table_setup_column("", imgui.TableColumnFlags_.width_fixed.value, 22)
             imgui.table_headers_row()
             for i, g in enumerate(gs):
@@ -330,11 +481,16 @@ class Panel:
                 ch, v = imgui.drag_float("##var", float(g.variance), max(g.variance * 0.01, 1e-4), 0.0, 1e4, "%.4g")
                 if ch:
                     edits.set(f"deon.gaussians.{i}.variance", float(v))
+                if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+                    imgui.set_tooltip(f"{doc('deon.gaussians.*.variance')[1]}\n"
+                                      f"sigma = {math.sqrt(max(g.variance, 0.0)):.3f} mm")
                 imgui.table_next_column()
                 imgui.set_next_item_width(-1)
                 ch, w = imgui.drag_float3("##w", [float(x) for x in g.weights], 0.002, 0.0, 10.0, "%.3f")
                 if ch:
                     edits.set(f"deon.gaussians.{i}.weights", [float(x) for x in w])
+                if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+                    imgui.set_tooltip(doc("deon.gaussians.*.weights")[1])
                 imgui.table_next_column()
                 if len(gs) > 1 and imgui.small_button("x"):
                     remove = i
@@ -377,13 +533,22 @@ class Panel:
             return
         edit_model(app.settings.render, "render", edits, skip=("width", "height"))
         s = app.settings.render
-        imgui.text_disabled(f"render size {s.width} x {s.height} (window framebuffer)")
+        sx, sy = app.layout.scale
+        imgui.text_disabled(f"render size {s.width} x {s.height} px (3D view region"
+                            f"{f', framebuffer scale {sx:g}' if abs(sx - 1) > 1e-3 else ''})")
         ch, v = imgui.checkbox("vsync", app.vsync_on)
         if ch:
             app.set_vsync(v)
         ch, v = imgui.checkbox("show UI (F1)", app.show_ui)
         if ch:
             app.show_ui = v
+        sides = ("left", "right")
+        imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.4)
+        ch, i = imgui.combo("panel side", sides.index(app.panel_side), list(sides))
+        if ch:
+            app.panel_side = sides[i]
+        imgui.text_disabled(f"panel {app.layout.panel[2] if app.layout.panel else 0:.0f} px wide: drag its edge")
+        self._change_line(("render",))
 
     def _presets(self) -> None:
         app = self.app
@@ -394,12 +559,12 @@ class Panel:
         if imgui.button("load"):
             app.load_preset(p.edit_path.strip())
         imgui.same_line()
-        if imgui.button("save"):
-            p.save(app.settings)
+        if imgui.button("save (Ctrl+S)"):
+            app.save_preset()
         imgui.same_line()
         if imgui.button("save as"):
             if p.edit_path.strip():
-                p.save(app.settings, p.edit_path.strip())
+                app.save_preset(p.edit_path.strip())
         files = p.listing()
         if files:
             imgui.text_disabled("presets/:")
@@ -474,6 +639,23 @@ class Panel:
             _, cmp.diff_gain = imgui.slider_float("gain", cmp.diff_gain, 1.0, 100.0, "%.1f", imgui.SliderFlags_.logarithmic.value)
         _, cmp.follow_camera = imgui.checkbox("both use the live camera", cmp.follow_camera)
         imgui.text_disabled("each slot has its own renderer & caches (~2x frame cost)")
+
+    def _help(self) -> None:
+        if not _header("Help: shortcuts"):
+            return
+        flags = imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
+        if imgui.begin_table("keys", 2, flags):
+            for k, what in SHORTCUTS:
+                imgui.table_next_row()
+                imgui.table_next_column()
+                imgui.text_colored(WARN, k)
+                imgui.table_next_column()
+                imgui.text(what)
+            imgui.end_table()
+        imgui.push_text_wrap_pos(0)
+        imgui.text_disabled("Keys other than F1 / F12 / Ctrl+S are ignored while a text field has the keyboard. "
+                            "Hover a setting for its meaning, unit, range and seed equation.")
+        imgui.pop_text_wrap_pos()
 
     def _shaders(self) -> None:
         app = self.app

@@ -1,4 +1,4 @@
-"""The passes window: every pass of the current technique this frame (ran / cached / pruned,
+"""The passes window (floating over the 3D view: movable, collapsible): every pass of the current technique this frame (ran / cached / pruned,
 reason, time and the timing mode), frame time / FPS with a history graph, and the output texture
 inspector (click a pass: its output full-window; channel, exposure)."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ from .display import CHANNELS
 
 COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
           "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0)}
-WIDTH = 400.0
+WIDTH = 380.0
 
 
 class PassesWindow:
@@ -21,11 +21,11 @@ class PassesWindow:
 
     def draw(self) -> None:
         app = self.app
-        io = imgui.get_io()
-        w = io.display_size.x
-        imgui.set_next_window_pos(imgui.ImVec2(max(0.0, w - WIDTH), 0), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(WIDTH, 0), imgui.Cond_.first_use_ever.value)
-        if w < 900:  # small windows: start collapsed so the view stays usable
+        vx, vy, vw, vh = app.layout.view
+        # first shown at the top-right corner of the 3D view; then wherever the user moves it
+        imgui.set_next_window_pos(imgui.ImVec2(max(vx, vx + vw - WIDTH - 8), vy + 8), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(WIDTH, min(520.0, vh - 16)), imgui.Cond_.first_use_ever.value)
+        if vw < 900:  # small views: start collapsed so the image stays visible
             imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
         expanded = imgui.begin("Passes###passes")[0]
         if expanded:

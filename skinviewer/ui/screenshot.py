@@ -23,10 +23,11 @@ def timestamped_path(folder: str | os.PathLike, prefix: str = "skinviewer", ext:
     return Path(folder) / f"{prefix}-{stamp}{ext}"
 
 
-def read_screen(ctx, size: tuple[int, int]) -> np.ndarray:
-    """The default framebuffer (back buffer) as uint8 (H, W, 3), top row first."""
+def read_screen(ctx, size: tuple[int, int], origin: tuple[int, int] = (0, 0)) -> np.ndarray:
+    """A region of the default framebuffer (back buffer) as uint8 (H, W, 3), top row first.
+    ``origin``: the region's bottom-left corner in framebuffer pixels (GL convention)."""
     w, h = size
-    raw = ctx.screen.read(viewport=(0, 0, w, h), components=3, alignment=1)
+    raw = ctx.screen.read(viewport=(int(origin[0]), int(origin[1]), w, h), components=3, alignment=1)
     return np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
 
 

@@ -13,6 +13,8 @@ from typing import Any, Literal
 from imgui_bundle import imgui
 from pydantic import BaseModel
 
+from .fielddocs import doc, label_with_unit
+
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
 
 
@@ -81,20 +83,33 @@ def _label(name: str) -> str:
     return name.replace("_", " ")
 
 
-def _tooltip(field) -> None:
-    if field.description and imgui.is_item_hovered():
-        imgui.set_item_tooltip(field.description)
+def tooltip_text(field, path: str) -> str:
+    """The field's tooltip: physical meaning (fielddocs), the model's description, range, path."""
+    unit, text = doc(path)
+    parts = [t for t in (text, field.description if field.description and field.description not in text else "")
+             if t]
+    lo, hi, lo_x, hi_x = bounds(field)
+    if lo is not None or hi is not None:
+        rng = f"{'(' if lo_x else '['}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{')' if hi_x else ']'}"
+        parts.append(f"range {rng}{' ' + unit if unit else ''}")
+    parts.append(f"setting: {path}")
+    return "\n".join(parts)
+
+
+def _tooltip(field, path: str = "") -> None:
+    if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+        imgui.set_tooltip(tooltip_text(field, path))
 
 
 def edit_field(name: str, field, value: Any, path: str, edits: Edits) -> None:
     kind, detail, optional = classify(field)
-    label = _label(name)
+    label = label_with_unit(_label(name), path)
     imgui.push_id(path)
     try:
         if optional and kind in ("float", "vec3"):
             auto = value is None
             ch, auto_new = imgui.checkbox("auto##auto", auto)
-            _tooltip(field)
+            _tooltip(field, path)
             if ch:
                 if auto_new:
                     edits.set(path, None)
@@ -150,7 +165,7 @@ def edit_field(name: str, field, value: Any, path: str, edits: Edits) -> None:
                 imgui.tree_pop()
         else:
             imgui.text_disabled(f"{label}: {value!r}")
-        _tooltip(field)
+        _tooltip(field, path)
     finally:
         imgui.pop_id()
 

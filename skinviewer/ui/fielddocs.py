@@ -1,0 +1,98 @@
+"""Units and tooltips of the physically meaningful settings, keyed by dotted path (list indices as
+``*``). Equation numbers refer to seed 000 (the survey text the techniques follow) unless another
+seed is named. The panel shows the unit in the label and the text as the field's tooltip."""
+from __future__ import annotations
+
+import re
+
+# path -> (unit shown in the label, tooltip)
+FIELD_DOCS: dict[str, tuple[str, str]] = {
+    # scene
+    "scene.mm_per_unit": ("mm", "millimetres per mesh unit: every physical length (Gaussian variances, TSM "
+                          "thickness, stretch, eq. 27) is converted with it. Auto: the scene's own (built-ins are in mm)."),
+    "scene.head_detail": ("", "resolution of the generated head: 0 small, 1 normal, 2 fine"),
+    # camera
+    "camera.yaw": ("deg", "orbit angle about +Y (LMB drag in the view)"),
+    "camera.pitch": ("deg", "orbit elevation (LMB drag in the view)"),
+    "camera.distance": ("mesh units", "eye-to-target distance (mouse wheel). Auto: frame the mesh's bounding sphere"),
+    "camera.target": ("mesh units", "look-at point (MMB / shift+LMB pan). Auto: the mesh's bounds centre"),
+    "camera.fov_y": ("deg", "vertical field of view"),
+    # lights
+    "lights.*.intensity": ("", "radiance scale of the light (linear); with colour it is Lc of eq. 8-10 / 28"),
+    "lights.*.color": ("linear RGB", "light colour (linear, may exceed 1)"),
+    "lights.*.direction": ("", "directional: the direction towards the light (normalised internally); "
+                           "beam: the beam's axis"),
+    "lights.*.position": ("mesh units", "point / beam light position"),
+    "lights.*.beam_radius": ("mesh units", "radius of the collimated beam (the laser of seed 002 §14.4.1)"),
+    "lights.*.cast_shadow": ("", "render a shadow map for this light (eq. 1-7)"),
+    "lights.*.kind": ("", "directional, point, or a collimated beam (laser)"),
+    # shadows
+    "shadow.map_size": ("texels", "shadow-map resolution per light (eq. 1-6). Texture-space cost: re-runs every pass"),
+    "shadow.tol": ("light-space depth", "depth tolerance of the shadow test, eq. 7: shadowed if d(P) - d_s > tol "
+                   "(normalised light-space depth)"),
+    "shadow.pcf": ("texels", "percentage-closer filter radius (0 = the hard test of eq. 7)"),
+    # render
+    "render.exposure": ("x", "linear exposure multiplier before the sRGB encode"),
+    "render.background": ("linear RGB", "clear colour of the 3D view"),
+    "render.timing": ("", "sync: glFinish + wall clock per pass (true cost on llvmpipe); "
+                      "gpu: GL_TIME_ELAPSED queries (accurate on real GPUs, far too low on llvmpipe)"),
+    # phong
+    "phong.ambient": ("", "ambient term (fraction of albedo)"),
+    "phong.specular": ("", "Blinn-Phong specular intensity"),
+    "phong.shininess": ("exponent", "Blinn-Phong exponent (higher = tighter highlight)"),
+    # specular (Kelemen / Szirmay-Kalos)
+    "specular.m": ("", "Beckmann roughness m of the Kelemen/Szirmay-Kalos BRDF, eq. 14-16 (seed 002 §14.3)"),
+    "specular.f0": ("", "Fresnel reflectance at normal incidence (Schlick), eq. 14; skin ~0.028"),
+    "specular.rho_s": ("", "specular intensity rho_s, eq. 16; also scales the rho_dt energy table (eq. 30-31)"),
+    "specular.mode": ("", "direct: evaluate P_H analytically; beckmann_lut: listing 14-2's lookup texture"),
+    "specular.lut_size": ("texels", "Beckmann lookup texture size (beckmann_lut mode)"),
+    # gosselin
+    "gosselin.light_map_size": ("texels", "texture-space light map resolution, eq. 8-10. Texture-space cost ~ size^2"),
+    "gosselin.iterations": ("", "number of 13-tap Poisson blurs, eq. 11-13 (each adds to the blur radius)"),
+    "gosselin.scale_x": ("", "global scale_x of eq. 12: radius = size * (kernel_size * scale_x + scale_y), "
+                         "multiplies the per-region scale_x"),
+    "gosselin.scale_y": ("texels @1024", "global scale_y (offset) of eq. 12, added to the per-region one"),
+    "gosselin.specular_shadow": ("", "eq. 18 shadow attenuation of the specular: visibility (default) or as printed"),
+    "gosselin.regions.*.kernel_size": ("", "per-region kernel size of eq. 12 (ears and nose scatter more)"),
+    "gosselin.regions.*.scale_x": ("", "per-region scale_x of eq. 12"),
+    "gosselin.regions.*.scale_y": ("texels @1024", "per-region scale_y of eq. 12"),
+    # d'Eon
+    "deon.gaussians.*.variance": ("mm²", "variance v_i of Gaussian i (mm²), seed 000 eq. 20: "
+                                  "G(v, r) = exp(-r²/2v) / (2 pi v). Blurs are incremental: v_i - v_(i-1), eq. 24"),
+    "deon.gaussians.*.weights": ("RGB", "weights w_i of R(r) = sum_i w_i G(v_i, r), seed 000 eq. 21; "
+                                 "each channel's weights should sum to 1 (energy)"),
+    "deon.mix": ("", "pre/post-scatter texturing: albedo^mix before the blur, albedo^(1-mix) after, eq. 28 and 34"),
+    "deon.stretch": ("", "stretch-corrected blur radii from the UV stretch map (eq. 27, used in eq. 25)"),
+    "deon.stretch_per_gaussian": ("", "a stretch map per Gaussian width instead of one (eq. 25-27)"),
+    "deon.tsm": ("", "translucent shadow map: light through thin parts (ears), eq. 32-33"),
+    "deon.tsm_size": ("texels", "TSM resolution (eq. 32). Texture-space cost"),
+    "deon.tsm_form": ("", "exact: exp(-d²/(2 v_i)); printed: exp(-d²/v_i) as in seed 000 eq. 33"),
+    "deon.energy_conservation": ("", "scale diffuse by 1 - rho_dt (eq. 30-31) at the light and the eye (eq. 28, 34)"),
+    "deon.irradiance_size": ("texels", "texture-space irradiance / blur resolution (eq. 28). "
+                             "Texture-space cost ~ size² per blur pass"),
+    "deon.reuse_irradiance_below": ("mm²", "variance under which blur 1 reuses the irradiance itself (eq. 24: "
+                                    "a Gaussian narrower than a texel is a no-op)"),
+}
+
+_INDEX = re.compile(r"\.\d+(?=\.|$)")
+
+
+def generic(path: str) -> str:
+    """``lights.0.intensity`` -> ``lights.*.intensity``; ``gosselin.regions.ears.scale_x`` ->
+    ``gosselin.regions.*.scale_x``."""
+    p = _INDEX.sub(".*", path)
+    if p.startswith("gosselin.regions.") or p.startswith("specular.per_region."):
+        parts = p.split(".")
+        if len(parts) >= 4:
+            parts[2] = "*"
+            p = ".".join(parts)
+    return p
+
+
+def doc(path: str) -> tuple[str, str]:
+    return FIELD_DOCS.get(generic(path), ("", ""))
+
+
+def label_with_unit(label: str, path: str) -> str:
+    unit = doc(path)[0]
+    return f"{label} ({unit})" if unit else label

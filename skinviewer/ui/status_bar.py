@@ -1,0 +1,82 @@
+"""The status bar along the bottom of the window: scene, triangle count, technique, render size,
+timing mode, frame time, unsaved-changes marker and the last message (errors in red)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from imgui_bundle import imgui
+
+ERR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
+WARN = imgui.ImVec4(1.0, 0.8, 0.35, 1.0)
+DIM = imgui.ImVec4(0.62, 0.62, 0.68, 1.0)
+TEXT = imgui.ImVec4(0.88, 0.88, 0.9, 1.0)
+
+_FLAGS = (imgui.WindowFlags_.no_title_bar | imgui.WindowFlags_.no_resize | imgui.WindowFlags_.no_move
+          | imgui.WindowFlags_.no_scrollbar | imgui.WindowFlags_.no_scroll_with_mouse
+          | imgui.WindowFlags_.no_collapse | imgui.WindowFlags_.no_saved_settings
+          | imgui.WindowFlags_.no_bring_to_front_on_focus | imgui.WindowFlags_.no_focus_on_appearing
+          | imgui.WindowFlags_.no_nav)
+
+
+def triangle_count(app) -> int | None:
+    scene = app.renderer.scene
+    if scene is None:
+        return None
+    return int(np.asarray(scene.gpu.mesh.indices).size // 3)
+
+
+class StatusBar:
+    def __init__(self, app):
+        self.app = app
+
+    def fields(self) -> list[tuple[str, imgui.ImVec4]]:
+        """(text, colour) items left to right (also used by tests)."""
+        app = self.app
+        s = app.settings
+        out: list[tuple[str, imgui.ImVec4]] = []
+        name = Path(s.scene.mesh).name if s.scene.mesh else s.scene.name
+        tris = triangle_count(app)
+        out.append((f"{name}" + (f"  {tris:,} tris" if tris is not None else ""), TEXT))
+        out.append((s.technique, TEXT))
+        out.append((f"{s.render.width}x{s.render.height} px", DIM))
+        mode = app.report.timing_mode if app.report is not None else s.render.timing
+        out.append((f"{mode} timing", DIM))
+        ft = list(app.frame_ms)[-20:]
+        out.append((f"frame {np.mean(ft):.1f} ms" if ft else "frame -", TEXT))
+        if app.render_deferred:
+            out.append(("preview paused while dragging", WARN))
+        if app.presets.dirty(s):
+            out.append(("* unsaved", WARN))
+        text, is_err = app.message
+        if app.render_error and not is_err:
+            text, is_err = f"render: {app.render_error.splitlines()[0]}", True
+        if text:
+            out.append((text, ERR if is_err else DIM))
+        return out
+
+    def draw(self) -> None:
+        app = self.app
+        r = app.layout.status
+        if r is None:
+            return
+        x, y, w, h = r
+        imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.always.value)
+        imgui.set_next_window_size(imgui.ImVec2(w, h), imgui.Cond_.always.value)
+        imgui.push_style_var(imgui.StyleVar_.window_padding.value, imgui.ImVec2(8, 3))
+        imgui.push_style_var(imgui.StyleVar_.window_rounding.value, 0.0)
+        imgui.push_style_color(imgui.Col_.window_bg.value, imgui.ImVec4(0.13, 0.13, 0.15, 1.0))
+        imgui.begin("##statusbar", None, _FLAGS)
+        for i, (text, col) in enumerate(self.fields()):
+            if i:
+                imgui.same_line()
+                imgui.text_colored(DIM, "|")
+                imgui.same_line()
+            imgui.text_colored(col, text)
+            if i == 0 and imgui.is_item_hovered():
+                sc = app.renderer.scene
+                imgui.set_item_tooltip(sc.description if sc else "no scene")
+        imgui.end()
+        imgui.pop_style_color()
+        imgui.pop_style_var(2)
+        app.ui_rects.append(r)
