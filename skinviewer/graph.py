@@ -255,6 +255,8 @@ class RenderGraph:
         self.frame = 0
         self.last_report: FrameReport | None = None
         self.order: list[Pass] = []
+        self._last_refl: dict[str, Reflection] = {}
+        self._last_ms: dict[str, float] = {}  # last time each pass actually ran
 
     # -- texture management ------------------------------------------------------------------
     def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
@@ -399,6 +401,7 @@ class RenderGraph:
         refl = self._reflect_all(frame.settings)
         order, live = self._order(refl, list(targets or self.targets))
         self.order = order
+        self._last_refl = refl
         records: dict[str, PassRecord] = {}
         for p in order:
             r = refl[p.name]
@@ -414,6 +417,8 @@ class RenderGraph:
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
                 rec.ms = self._execute(p, r, frame, timing)
+                if rec.ms is not None:
+                    self._last_ms[p.name] = rec.ms
                 for res in r.outputs:
                     self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
@@ -451,6 +456,34 @@ class RenderGraph:
             return ns / 1e6
         finally:
             ec._finish()
+
+    def affected(self, paths: Iterable[str], camera: bool = False) -> list[str]:
+        """Passes (execution order of the last frame) that a change of these settings would re-run:
+        those that declared a path equal to, inside or around one of ``paths``, those that are
+        view-dependent when ``camera``, and everything downstream of them. Based on the last
+        frame's reflection; a change that alters the graph's shape may re-run more."""
+        refl = self._last_refl
+        paths = list(paths)
+
+        def touches(declared: str) -> bool:
+            return any(d == p or d.startswith(p + ".") or p.startswith(d + ".")
+                       for p in paths for d in (declared.replace(".#", ""),))
+
+        dirty: set[str] = set()
+        for p in self.order:
+            r = refl.get(p.name)
+            if r is None:
+                continue
+            if (camera and p.view_dependent) or any(touches(d) for d in r.settings) \
+                    or any(res in dirty for res in r.inputs):
+                dirty.update(r.outputs)
+                dirty.add("pass:" + p.name)
+        return [p.name for p in self.order if "pass:" + p.name in dirty]
+
+    def predicted_ms(self, passes: Iterable[str]) -> float:
+        """The last measured cost of re-running these passes (0 for those never timed)."""
+        last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
+        return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
 
     def invalidate(self, pass_name: str | None = None) -> None:
         """Forget cache keys (all, or one pass) so they re-run next frame."""

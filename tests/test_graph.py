@@ -212,3 +212,23 @@ def test_second_light_adds_its_shadow_map(renderer):
     lights = [l.model_dump() for l in s.lights] + [{"kind": "point", "position": [50.0, 50.0, 80.0]}]
     rep = renderer.render(with_values(s, {"lights": lights}))
     assert "shadow_map_1" in rep.ran and "shadow_map_0" in rep.cached
+
+
+def test_affected_predicts_what_a_change_reruns(renderer):
+    """The graph can say, before an edit, which passes it would re-run (and their last cost)."""
+    s = small_settings("shadow-edge", "phong")
+    renderer.render(s)
+    g = renderer.graph("phong")
+    assert g.affected(["camera.yaw"]) == []  # the camera is not a declared setting...
+    assert g.affected([], camera=True) == ["phong", "output"]  # ...it reaches view-dependent passes
+    assert g.affected(["render.exposure"]) == ["output"]
+    assert g.affected(["lights.0.direction"]) == ["shadow_map_0", "phong", "output"]
+    assert g.affected(["lights"]) == ["shadow_map_0", "phong", "output"]  # a parent path
+    assert g.predicted_ms(["phong", "output"]) > 0
+    # the prediction matches what really re-runs
+    for change in ({"lights.0.color": [1.0, 0.2, 0.2]}, {"shadow.map_size": 512}, {"phong.shininess": 8.0}):
+        path = next(iter(change))
+        predicted = g.affected([path])
+        rep = renderer.render(with_values(s, change))
+        assert rep.ran == predicted, (change, rep.ran, predicted)
+        renderer.render(s)
