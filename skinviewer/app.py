@@ -20,6 +20,7 @@ from .renderer import Renderer
 from .scenes import scene_overrides
 from .settings import Settings, SettingsError, with_values
 from .shaders import ShaderLibrary
+from .ui import widgets
 from .ui.camera_control import OrbitController
 from .ui.compare import CompareState
 from .ui.display import Display
@@ -396,6 +397,17 @@ class ViewerApp(mglw.WindowConfig):
         if "image" in g.resources():
             self.display.show(g.texture("image"), viewport)
 
+    def _cost_hint(self, path: str) -> str:
+        """What editing ``path`` re-runs in the current technique and what that cost last time."""
+        g = self.renderer.graphs.get(self.settings.technique)
+        if g is None or g.last_report is None:
+            return ""
+        passes = g.affected([path])
+        if not passes:
+            return "editing it re-runs no pass of this technique"
+        return (f"editing it re-runs {len(passes)} pass(es), ~{g.predicted_ms(passes):.0f} ms last measured "
+                f"({g.last_report.timing_mode} timing): {', '.join(passes)}")
+
     def _build_ui(self, frametime: float) -> bool:
         """Run the imgui frame (widgets apply their edits to the settings); drawn by _present_ui."""
         from imgui_bundle import imgui
@@ -411,6 +423,7 @@ class ViewerApp(mglw.WindowConfig):
         self.ui_rects = []
         state = imgui.internal.ErrorRecoveryState()
         imgui.internal.error_recovery_store_state(state)
+        widgets.cost_hint = self._cost_hint
         try:
             self.panel.draw()
             self.status_bar.draw()

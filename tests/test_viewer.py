@@ -513,3 +513,13 @@ def test_expensive_change_waits_for_release(app):
         from skinviewer.settings import validate
         app.set_settings(validate(old))
         app.step(1)
+
+
+def test_tooltips_say_what_an_edit_costs(app):
+    """Hovering a control tells which passes editing it would re-run, from the live graph."""
+    from skinviewer.ui import widgets
+    app.step(1)
+    hint = widgets.cost_hint("render.exposure")
+    assert "output" in hint and "ms" in hint
+    tech_passes = widgets.cost_hint("shadow.map_size")
+    assert "shadow_map_0" in tech_passes

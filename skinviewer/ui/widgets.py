@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import types
 import typing
-from typing import Any, Literal
+from typing import Any, Callable, Literal
 
 from imgui_bundle import imgui
 from pydantic import BaseModel
@@ -83,8 +83,14 @@ def _label(name: str) -> str:
     return name.replace("_", " ")
 
 
+# Set by the app each frame: setting path -> "re-runs: ... (~N ms)" from the current technique's
+# graph (RenderGraph.affected / predicted_ms), so a control tells what editing it costs.
+cost_hint: Callable[[str], str] | None = None
+
+
 def tooltip_text(field, path: str) -> str:
-    """The field's tooltip: physical meaning (fielddocs), the model's description, range, path."""
+    """The field's tooltip: physical meaning (fielddocs), the model's description, range, path,
+    and what editing it would re-run."""
     unit, text = doc(path)
     parts = [t for t in (text, field.description if field.description and field.description not in text else "")
              if t]
@@ -93,6 +99,10 @@ def tooltip_text(field, path: str) -> str:
         rng = f"{'(' if lo_x else '['}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{')' if hi_x else ']'}"
         parts.append(f"range {rng}{' ' + unit if unit else ''}")
     parts.append(f"setting: {path}")
+    if cost_hint is not None:
+        hint = cost_hint(path)
+        if hint:
+            parts.append(hint)
     return "\n".join(parts)
 
 
