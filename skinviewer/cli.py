@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .settings import Settings, SettingsError, atomic_write_text, load_preset, parse_assignments, with_values
+from .files import atomic_write_text, save_npy, save_png
+from .settings import Settings, SettingsError, load_preset, parse_assignments, with_values
 
 
 class CliError(Exception):
@@ -69,23 +70,6 @@ def settings_from_args(args) -> Settings:
     return with_values(s, direct) if direct else s
 
 
-def _save_png(path: Path, img: np.ndarray) -> None:
-    """PNG written atomically (temporary file, then rename)."""
-    import os
-    import tempfile
-
-    from PIL import Image
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=str(path.parent))
-    os.close(fd)
-    try:
-        Image.fromarray(img).save(tmp, format="PNG")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def _preview(arr: np.ndarray) -> np.ndarray:
     """A PNG preview of a float texture: RGB (or gray), scaled to its 99.5th percentile."""
     a = np.nan_to_num(arr.astype(np.float32), nan=0.0, posinf=0.0, neginf=0.0)
@@ -109,7 +93,7 @@ def cmd_render(args) -> int:
             print(f"note: {note}", file=sys.stderr)
         report = r.render(s)
         out = Path(args.out)
-        _save_png(out, r.image(s))
+        save_png(out, r.image(s))
         print(f"wrote {out} ({s.render.width}x{s.render.height}, {s.technique}, "
               f"{report.total_ms:.1f} ms {report.timing_mode})")
         if args.timings:
@@ -127,18 +111,11 @@ def cmd_render(args) -> int:
 
 def dump_passes(r, s: Settings, report, folder: Path) -> None:
     """Every intermediate texture as float32 .npy + PNG preview, and graph.json."""
-    import io
-    import os
-    folder.mkdir(parents=True, exist_ok=True)
     g = r.graph(s.technique)
-    for res, spec in g.resources().items():
+    for res in g.resources():
         arr = g.read(res)
-        buf = io.BytesIO()
-        np.save(buf, arr.astype(np.float32))
-        tmp = folder / f".{res}.npy.tmp"
-        tmp.write_bytes(buf.getvalue())
-        os.replace(tmp, folder / f"{res}.npy")
-        _save_png(folder / f"{res}.png", _preview(arr))
+        save_npy(folder / f"{res}.npy", arr)
+        save_png(folder / f"{res}.png", _preview(arr))
     data = report.to_json()
     data["technique"] = s.technique
     data["order"] = [p.name for p in g.order]

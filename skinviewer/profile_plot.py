@@ -4,12 +4,12 @@ ImGui/implot panel; ``save_plot`` writes a PNG headlessly (matplotlib Agg), atom
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from .files import atomic_path
 from .fitting import FitResult
 
 CHANNELS = (("red", "#d62728"), ("green", "#2ca02c"), ("blue", "#1f77b4"))
@@ -63,18 +63,7 @@ def save_plot(path: str | os.PathLike, profile: Callable[[np.ndarray], np.ndarra
         if title:
             ax.set_title(title)
         fig.tight_layout()
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".png", dir=str(p.parent))
-        os.close(fd)
-        try:
+        with atomic_path(path, suffix=".png") as tmp:
             fig.savefig(tmp, format="png")
-            os.replace(tmp, p)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
     finally:
         plt.close(fig)

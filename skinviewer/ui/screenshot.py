@@ -3,12 +3,13 @@ optionally the linear image as float32 .npy. Written atomically."""
 from __future__ import annotations
 
 import datetime as _dt
-import io
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from ..files import save_npy, save_png  # noqa: F401  (the viewer's writers)
 
 
 @dataclass
@@ -29,21 +30,3 @@ def read_screen(ctx, size: tuple[int, int], origin: tuple[int, int] = (0, 0)) ->
     w, h = size
     raw = ctx.screen.read(viewport=(int(origin[0]), int(origin[1]), w, h), components=3, alignment=1)
     return np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)[::-1].copy()
-
-
-def save_png(path: str | os.PathLike, img: np.ndarray) -> Path:
-    from ..cli import _save_png
-    p = Path(path)
-    _save_png(p, np.ascontiguousarray(img))
-    return p
-
-
-def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    buf = io.BytesIO()
-    np.save(buf, np.ascontiguousarray(arr, dtype=np.float32))
-    tmp = p.with_name(f".{p.name}.tmp")
-    tmp.write_bytes(buf.getvalue())
-    os.replace(tmp, p)
-    return p
