@@ -96,6 +96,10 @@ class ViewerApp(mglw.WindowConfig):
         self._title = ""
         # layout: docked settings column + status bar; the 3D view gets the rest (ui/layout.py)
         self.panel_width = PANEL_DEFAULT_W
+        # while the camera is dragged, render the view-dependent passes at a lower resolution when a
+        # full-size frame would stutter ("auto"), or at a fixed scale; full size again on release
+        self.drag_resolution: str = "auto"
+        self.drag_budget_ms = 60.0
         self.panel_side = "left"
         self.layout: Layout = self._compute_layout()
         # render scheduling and cost accounting (ui/scheduler.py)
@@ -255,6 +259,9 @@ class ViewerApp(mglw.WindowConfig):
         """The render size follows the 3D view region (framebuffer pixels), not the whole window."""
         self.layout = self._compute_layout()
         vw, vh = self.layout.view_fb[2:]
+        scale = self.drag_scale()
+        if scale < 1.0:
+            vw, vh = max(16, int(vw * scale)), max(16, int(vh * scale))
         if (vw, vh) != (self.settings.render.width, self.settings.render.height):
             try:
                 self.settings = with_values(self.settings, {"render.width": vw, "render.height": vh})
@@ -262,6 +269,23 @@ class ViewerApp(mglw.WindowConfig):
                     self._change_source = "render size"
             except SettingsError:
                 pass
+
+    def drag_scale(self) -> float:
+        """Resolution scale of the view while the camera is dragged (1 when not dragging)."""
+        if self._drag_owner != "view" or not self._buttons or self.drag_resolution == "full":
+            return 1.0
+        if self.drag_resolution != "auto":
+            return float(self.drag_resolution)
+        g = self.renderer.graphs.get(self.settings.technique)
+        if g is None or g.last_report is None:
+            return 1.0
+        full = self.layout.view_fb[2] * self.layout.view_fb[3]
+        now = max(self.settings.render.width * self.settings.render.height, 1)
+        # the view-dependent cost at full size, scaled from the size it was last measured at
+        ms = g.predicted_ms(g.affected([], camera=True)) * full / now
+        if ms <= self.drag_budget_ms:
+            return 1.0
+        return max(0.25, min(1.0, (self.drag_budget_ms / ms) ** 0.5))  # cost ~ pixels
 
     def on_render(self, t: float, frametime: float) -> None:
         now = time.perf_counter()

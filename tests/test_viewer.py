@@ -523,3 +523,23 @@ def test_tooltips_say_what_an_edit_costs(app):
     assert "output" in hint and "ms" in hint
     tech_passes = widgets.cost_hint("shadow.map_size")
     assert "shadow_map_0" in tech_passes
+
+
+def test_orbit_renders_smaller_while_dragging_when_slow(app):
+    """On slow GL the view is rendered at a lower resolution during a camera drag (texture-space
+    passes stay cached), and at full size again on release."""
+    full = (app.settings.render.width, app.settings.render.height)
+    app.drag_budget_ms = 1e-3  # any measured cost is over budget
+    x0, y0 = app.layout.view[0] + app.layout.view[2] * 0.5, app.layout.view[1] + app.layout.view[3] * 0.5
+    button = app.wnd.mouse.left
+    app.on_mouse_position_event(x0, y0, 0, 0)
+    app.on_mouse_press_event(x0, y0, button)
+    app.on_mouse_drag_event(x0 + 20, y0, 20, 0)
+    app.step(1)
+    small = (app.settings.render.width, app.settings.render.height)
+    assert small[0] < full[0] and small[1] < full[1]
+    assert all(p not in app.report.ran for p in ("shadow_map_0",))
+    app.on_mouse_release_event(x0 + 20, y0, button)
+    app.step(1)
+    assert (app.settings.render.width, app.settings.render.height) == full
+    app.drag_budget_ms = 60.0

@@ -65,6 +65,9 @@ def _header(label: str, open_default: bool = False) -> bool:
     return imgui.collapsing_header(label, flags)
 
 
+DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
+
+
 class Panel:
     def __init__(self, app):
         self.app = app
@@ -270,6 +273,15 @@ class Panel:
             imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
             _, sch.budget_ms = imgui.slider_float("budget (ms)", sch.budget_ms, 10.0, 2000.0, "%.0f ms",
                                                   imgui.SliderFlags_.logarithmic.value)
+        modes = list(DRAG_RESOLUTIONS)
+        imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
+        ch, i = imgui.combo("orbit resolution", modes.index(app.drag_resolution), modes)
+        if ch:
+            app.drag_resolution = modes[i]
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("resolution of the view while the camera is dragged; full size again on release.\n"
+                                   "auto: lower it just enough that the view-dependent passes fit "
+                                   f"{app.drag_budget_ms:.0f} ms (texture-space passes stay cached either way)")
 
     def _scene(self, edits: Edits) -> None:
         app = self.app
