@@ -27,15 +27,15 @@ from scipy.spatial import Delaunay
 from .mesh import MeshData, vertex_normals
 from .settings import REGIONS
 
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 
 # detail level -> (target edge length in mm, texture size)
 _LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}
 
 _RAY_ORIGIN = np.array([0.0, -5.0, -12.0])   # inside the skull; the neck axis runs under it
 _THETA_CAP = np.radians(38.0)                 # crown cap / head band boundary
-_NECK_BOTTOM_Y = -215.0                       # open neck cut, ~100 mm below the chin
-_NECK_RADIUS = 61.0                            # at the cut; narrower under the jaw
+_CUT_Y, _CUT_SLOPE = -180.0, 0.17           # collar cut plane: y at z = 40 mm, rise per mm forward
+_HOLE_RADIUS = 5.0                            # the band stops this far from the cut face's centre
 _EAR_THICKNESS = 3.0                          # mm, between the two sheets of each ear
 _UV_MARGIN = 0.012                            # island distance from the atlas border
 _UV_GUTTER = 0.02                             # between islands (20 texels at 1024²)
@@ -150,41 +150,67 @@ def _bilateral(f, x, y, z, c, *args):
 
 def _head_sdf(x, y, z):
     e, cap = _ellipsoid, _capsule
-    # neurocranium: braincase plus the flatter, more upright frontal bone
+    ax = np.abs(x)
+    # neurocranium: braincase, the flatter more upright frontal bone, the occipital bulge behind
     d = e(x, y, z, (0, 22, -10), (75, 93, 97))
     d = _smin(d, e(x, y, z, (0, 40, 8), (66, 64, 85)), 20)
+    d = _smin(d, e(x, y, z, (0, 2, -70), (50, 46, 40)), 22)
     # temples are flatter than the parietal bossing
-    d = _smax(d, -_bilateral(e, x, y, z, (92, 18, 40), (30, 40, 42)), 25)
-    # midface (maxilla) and zygomatic bones (cheekbones)
+    d = _smax(d, -e(ax, y, z, (92, 18, 40), (30, 40, 42)), 25)
+    # midface (maxilla), zygomatic bones (cheekbones) and the arches running back to the ears
     d = _smin(d, e(x, y, z, (0, -22, 24), (54, 56, 68)), 18)
-    d = _smin(d, _bilateral(e, x, y, z, (44, -2, 58), (16, 11, 18)), 14)
+    d = _smin(d, e(ax, y, z, (46, -3, 56), (17, 10, 18)), 12)
+    d = _smin(d, cap(ax, y, z, (52, -8, 40), (64, -12, 8), 4.0, 3.0), 12)
+    # cheek fat above the nasolabial fold
+    d = _smin(d, e(ax, y, z, (28, -42, 74), (13, 14, 11)), 14)
     # dental arch under the lips, and a mandible narrowing towards the chin (x shrinks with z)
-    d = _smin(d, e(x, y, z, (0, -68, 45), (38, 42, 48)), 14)
+    d = _smin(d, e(x, y, z, (0, -66, 46), (37, 40, 47)), 14)
     taper = 1.0 - 0.35 * _smoothstep(-5.0, 90.0, z)
-    d = _smin(d, e(x / taper, y, z, (0, -80, 18), (52, 34, 66)), 14)
-    d = _smin(d, e(x, y, z, (0, -100, 78), (17, 13, 12)), 10)
-    # brow ridges (supraorbital), orbits, closed eyelids over the eyeballs
-    d = _smin(d, _bilateral(e, x, y, z, (23, 30, 84), (22, 9, 10)), 10)
-    d = _smax(d, -_bilateral(e, x, y, z, (32, 14, 94), (19, 14, 17)), 7)
-    d = _smin(d, _bilateral(e, x, y, z, (32, 13, 71), (13, 12, 12)), 3)
-    d = _smax(d, -_bilateral(e, x, y, z, (32, 10.5, 84), (11, 0.7, 4)), 1.2)
-    # nose: bridge from the nasion, tip (pronasale), alae (nostril wings), nostrils
-    d = _smin(d, cap(x, y, z, (0, 16, 87), (0, -22, 109), 6.5, 9.0), 10)
-    d = _smin(d, e(x, y, z, (0, -28, 109), (9, 8.5, 9)), 5)
-    d = _smin(d, _bilateral(e, x, y, z, (11, -34, 97), (7, 6.5, 8)), 9)
-    d = _smax(d, -_bilateral(e, x, y, z, (6.5, -41.5, 101), (2.8, 1.6, 4.5)), 2)
-    # lips, the mouth line between them, and the philtrum groove
-    d = _smin(d, e(x, y, z, (0, -57, 88), (23, 7, 10)), 6)
-    d = _smin(d, e(x, y, z, (0, -71, 87), (20, 7, 10)), 6)
-    d = _smax(d, -e(x, y, z, (0, -64, 101), (24, 0.8, 12)), 1.5)
-    d = _smax(d, -e(x, y, z, (0, -48, 100), (3, 6, 3)), 2)
-    # neck and the nape muscles into the occiput
-    d = _smin(d, e(x, y, z, (0, -55, -44), (54, 45, 55)), 20)
-    d = _smin(d, cap(x, y, z, (0, _NECK_BOTTOM_Y, _RAY_ORIGIN[2]), (0, -70, _RAY_ORIGIN[2]),
-                     _NECK_RADIUS, 54.0), 14)
-    d = _smin(d, cap(x, y, z, (0, -400, _RAY_ORIGIN[2]), (0, _NECK_BOTTOM_Y, _RAY_ORIGIN[2]),
-                     _NECK_RADIUS, _NECK_RADIUS), 1)
-    return d
+    d = _smin(d, e(x / taper, y, z, (0, -78, 16), (50, 32, 64)), 14)
+    # mandible: ramus up to the ear, the angle, the body along the jawline, the chin
+    d = _smin(d, e(x, y, z, (0, -101, 78), (17, 13, 12)), 10)
+    d = _smin(d, e(x, y, z, (0, -100, 84), (12, 9, 6)), 8)
+    d = _smax(d, -e(x, y, z, (0, -84, 97), (15, 3.0, 6)), 6)          # mentolabial sulcus
+    # brow ridges (supraorbital), deep orbits, closed eyelids over the eyeballs
+    d = _smin(d, e(ax, y, z, (24, 30, 84), (23, 8, 11)), 10)
+    d = _smin(d, e(x, y, z, (0, 27, 90), (12, 7, 6)), 8)                # glabella
+    d = _smax(d, -e(ax, y, z, (32, 15, 95), (20, 15, 19)), 7)
+    d = _smin(d, e(ax, y, z, (32, 13, 70), (13, 12, 12)), 3)        # eyeball under the lids
+    d = _smin(d, e(ax, y, z, (32, 7.5, 80.5), (10, 3.2, 3.2)), 3)  # lower lid
+    d = _smax(d, -e(ax, y, z, (32, 10.5, 83), (11, 0.7, 4)), 1.2)   # lid line
+    d = _smax(d, -e(ax, y, z, (31, 21.5, 80), (12, 0.9, 3)), 2.0)   # upper-lid crease
+    # nose: slim bridge from the nasion to a rounded tip, alae (nostril wings), columella,
+    # nostril openings under the tip
+    d = _smin(d, cap(x * 1.15, y, z, (0, 17, 87), (0, -20, 106), 5.0, 7.5), 8)
+    d = _smin(d, e(x, y, z, (0, -27, 107), (8.5, 8.0, 9.0)), 5)
+    d = _smin(d, e(ax, y, z, (11.5, -33, 96), (6.5, 6.0, 7.5)), 4)
+    d = _smin(d, e(x, y, z, (0, -37, 101), (3.2, 4.5, 9)), 3)          # columella
+    d = _smax(d, -e(ax, y, z, (6.8, -38.5, 100), (3.0, 3.2, 5.0)), 1.5)
+    d = _smax(d, -e(ax, y, z, (19.5, -33, 95), (2.0, 8, 4)), 3)     # alar crease
+    # lips: upper lip with the cupid's bow, tubercle and philtrum; lower lip; mouth line; corners
+    d = _smin(d, e(x, y, z, (0, -56.5, 88), (23, 7, 10)), 6)
+    d = _smin(d, e(ax, y, z, (6, -57, 95), (6, 4, 3.5)), 3)
+    d = _smin(d, e(x, y, z, (0, -61, 96.5), (4.5, 3, 3)), 2)
+    d = _smin(d, e(x, y, z, (0, -70.5, 88), (20, 6.5, 10)), 6)
+    d = _smax(d, -e(x, y, z, (0, -63.5 + 0.006 * x * x, 101), (25, 0.8, 13)), 1.5)
+    d = _smax(d, -e(x, y, z, (0, -49, 99.5), (2.6, 6, 3)), 2)           # philtrum groove
+    d = _smax(d, -e(ax, y, z, (25, -64, 82), (2.5, 2.5, 4)), 3)     # mouth corners
+    d = _smax(d, -cap(ax, y, z, (20, -37, 93), (30, -63, 85), 0.6, 1.0), 3)  # nasolabial folds
+    # neck: slightly forward-tilted, tapering up into the head; sternocleidomastoids from behind
+    # the ears to the sternal notch, the larynx, and the trapezius slopes at the base
+    d = _smin(d, e(x, y, z, (0, -55, -44), (52, 45, 52)), 20)
+    k_neck = 8.0 + 16.0 * _smoothstep(10.0, -50.0, z)   # crisp under the jaw, soft at the nape
+    d = _smin(d, cap(x * 1.04, y, z, (0, -240, -22), (0, -100, -16), 60.0, 52.0), k_neck)
+    d = _smin(d, cap(ax, y, z, (44, -78, -30), (13, -190, 36), 9.0, 8.0), 12)
+    d = _smin(d, e(x, y, z, (0, -132, 36), (7.5, 10, 8)), 8)
+    d = _smax(d, -e(x, y, z, (0, -188, 48), (10, 9, 9)), 6)            # sternal notch
+    d = _smin(d, cap(ax, y, z, (26, -120, -50), (50, -230, -38), 12.0, 14.0), 25)
+    # clean collar cut, lower at the back than in front
+    return _smax(d, _cut_y(z) - y, 3)
+
+
+def _cut_y(z):
+    return _CUT_Y + _CUT_SLOPE * (z - 40.0)
 
 
 def _direction(theta, phi):
@@ -213,8 +239,8 @@ def _cast(theta, phi):
 
 
 def _theta_max():
-    """Polar angle of the neck cut (the neck is a vertical cylinder about the ray origin)."""
-    return np.pi - np.arctan2(_NECK_RADIUS, _RAY_ORIGIN[1] - _NECK_BOTTOM_Y)
+    """Polar angle where the band stops: a small hole in the middle of the flat collar cut."""
+    return np.pi - np.arctan2(_HOLE_RADIUS, _RAY_ORIGIN[1] - _cut_y(_RAY_ORIGIN[2]))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -246,7 +272,8 @@ class _Ear:
 
     @staticmethod
     def half_width(y):
-        return 15.5 + 3.0 * y
+        """Half the outline's width (mm): broad at the helix, narrowing to a rounded lobe."""
+        return 15.0 + 3.5 * y - 2.0 * y * y
 
     def plane(self, x, y):
         return self.A_C + self.half_width(y) * x, self.HEIGHT * y
@@ -255,16 +282,31 @@ class _Ear:
         y = b / self.HEIGHT
         return (a - self.A_C) / self.half_width(y), y
 
+    @staticmethod
+    def _ridge(x, y, p0, p1, width):
+        """Unit-height ridge along the segment p0-p1 of the unit disk (Gaussian cross-section)."""
+        ab = np.subtract(p1, p0)
+        t = np.clip(((x - p0[0]) * ab[0] + (y - p0[1]) * ab[1]) / ab.dot(ab), 0.0, 1.0)
+        d2 = (x - p0[0] - t * ab[0]) ** 2 + (y - p0[1] - t * ab[1]) ** 2
+        return np.exp(-d2 / width ** 2)
+
     def depth(self, x, y):
-        """Mid-surface offset along the ear normal (mm; + outwards)."""
+        """Mid-surface offset along the ear normal (mm; + outwards): the helix rolled over the rim,
+        the scapha groove inside it, the Y-shaped antihelix, the concha bowl with the tragus and
+        antitragus at its mouth, the helix crus running into the bowl, and a flat lobe."""
         a, b = self.plane(x, y)
         rho = np.sqrt(x * x + y * y)
         lobe = 1.0 - _smoothstep(-0.45, -0.75, y)
-        helix = 2.6 * _smoothstep(0.70, 0.96, rho) * _smoothstep(-0.9, -0.2, x) * lobe
-        scapha = -1.4 * np.exp(-((rho - 0.78) / 0.07) ** 2) * lobe
-        antihelix = 1.8 * np.exp(-((rho - 0.58) / 0.1) ** 2) * _smoothstep(-0.5, 0.2, x + 0.3 * y) * lobe
-        concha = -7.5 * np.exp(-((a - 5.0) ** 2 + (b + 4.0) ** 2) / (2 * 8.0 ** 2))
-        return 3.0 * rho * rho + helix + scapha + antihelix + concha
+        helix = 2.8 * _smoothstep(0.72, 0.97, rho) * _smoothstep(-0.95, -0.35, x + 0.4 * y) * lobe
+        scapha = -1.6 * np.exp(-((rho - 0.8) / 0.07) ** 2) * lobe
+        antihelix = 2.0 * np.exp(-((rho - 0.58) / 0.1) ** 2) * _smoothstep(-0.5, 0.2, x + 0.3 * y) * lobe
+        antihelix += 1.4 * self._ridge(x, y, (0.1, 0.35), (-0.4, 0.72), 0.09)   # superior crus
+        concha = -8.5 * np.exp(-((a - 5.0) ** 2 + (b + 3.0) ** 2) / (2 * 7.5 ** 2))
+        crus = 1.8 * self._ridge(x, y, (-0.8, 0.55), (-0.25, 0.12), 0.08)
+        tragus = 3.2 * np.exp(-((x + 0.86) ** 2 + (y + 0.22) ** 2) / 0.12 ** 2)
+        antitragus = 2.2 * np.exp(-((x + 0.15) ** 2 + (y + 0.5) ** 2) / 0.11 ** 2)
+        lobule = 1.2 * _smoothstep(-0.55, -0.95, y)
+        return 3.0 * rho * rho + helix + scapha + antihelix + concha + crus + tragus + antitragus + lobule
 
     def half_thickness(self, x, y):
         rho = np.sqrt(x * x + y * y)
@@ -348,7 +390,8 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     ph_c = np.linspace(-np.pi, np.pi, 73)
     tt, pp = np.meshgrid(th_c, ph_c, indexing="ij")
     pc = _RAY_ORIGIN + _direction(tt, pp) * _cast(tt, pp)[..., None]
-    seg = np.linalg.norm(np.diff(pc, axis=0), axis=2).mean(axis=1)
+    # root-mean-square over the columns, so grazing columns (neck sides, nose) get more rows
+    seg = np.sqrt(np.mean(np.linalg.norm(np.diff(pc, axis=0), axis=2) ** 2, axis=1))
     s_of_theta = np.concatenate([[0.0], np.cumsum(seg)])
     circumference = np.linalg.norm(np.diff(pc, axis=1), axis=2).sum(axis=1)
 
@@ -356,7 +399,7 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     s_cap = np.interp(_THETA_CAP, th_c, s_of_theta)
     band_height = s_of_theta[-1] - s_cap
     ears = [_Ear(+1.0), _Ear(-1.0)]
-    ear_w = 2 * (_Ear.half_width(1.0) + 0.5)  # bounding width of an ear island (mm)
+    ear_w = 2 * (_Ear.half_width(np.linspace(-1, 1, 201)).max() + 0.5)  # bounding width of an ear island (mm)
     ear_h = 2 * _Ear.HEIGHT
     band_width = circumference[th_c >= _THETA_CAP].max()
     top_row = max(2 * s_cap, ear_h)
@@ -571,23 +614,33 @@ def _hair(p):
     return _smoothstep(line - 3.0, line + 6.0, p[:, 1])
 
 
+def _brow_y(ax):
+    """Height of the eyebrow's centre line (mm) at a distance ax from the midline."""
+    return 30.5 + 5.5 * np.exp(-((ax - 31.0) / 15.0) ** 2) - 0.004 * (ax - 30.0) ** 2
+
+
+def _jaw_y(z):
+    """Height of the jaw line / under-jaw crease (neck below it) at depth z."""
+    return np.interp(z, [-120.0, -40.0, 0.0, 40.0, 70.0, 90.0], [-72.0, -72.0, -96.0, -110.0, -116.0, -118.0])
+
+
 def _regions(p, island):
-    """Region ID per skin point from anatomical landmarks (mm)."""
+    """Region ID per skin point from smooth anatomical landmark shapes (mm)."""
     x, y, z = p[:, 0], p[:, 1], p[:, 2]
     ax = np.abs(x)
+    ell = lambda cx, cy, sx, sy: ((ax - cx) / sx) ** 2 + ((y - cy) / sy) ** 2
     r = np.full(len(p), _REGION["other"], dtype=np.uint8)
-    front = z > 35.0
-    r[front & (y > -75.0) & (y < 6.0) & (ax > 12.0) & (ax < 64.0)] = _REGION["cheeks"]
-    r[front & (y >= 26.0) & (ax <= 54.0)] = _REGION["forehead"]
-    r[(y > -120.0) & (y <= -78.0) & (ax < 32.0) & (z > 45.0)] = _REGION["chin"]
-    lips = (ax / 25.0) ** 2 + ((y + 64.0) / np.where(y > -64.0, 10.5, 12.0)) ** 2 < 1.0
-    r[lips & (z > 80.0)] = _REGION["lips"]
-    nose = (y < 22.0) & (y > -49.0) & (ax < 11.0 + 11.0 * _smoothstep(5.0, -40.0, y)) & (z > 83.0)
+    front = z > 30.0
+    r[front & (ell(36.0, -28.0, 30.0, 40.0) < 1.0)] = _REGION["cheeks"]
+    r[front & (y >= _brow_y(ax) - 1.0) & (ell(0.0, 30.0, 58.0, 200.0) < 1.0)] = _REGION["forehead"]
+    r[(z > 45.0) & (ell(0.0, -104.0, 30.0, 24.0) < 1.0)] = _REGION["chin"]
+    lips = (ax / 25.0) ** 2 + ((y + 63.5) / np.where(y > -63.5, 10.0, 11.5)) ** 2 < 1.0
+    r[lips & (z > 78.0)] = _REGION["lips"]
+    nose_w = 7.5 + 14.0 * _smoothstep(8.0, -36.0, y)
+    nose = (y < 22.0) & (y > -46.0 + 0.08 * ax * ax / 4) & (ax < nose_w) & (z > 82.0)
     r[nose] = _REGION["nose"]
-    # below the jaw line (chin to the angle of the mandible, then the nape)
-    jaw = np.interp(z, [-120.0, -40.0, 0.0, 60.0, 90.0], [-70.0, -70.0, -95.0, -112.0, -117.0])
-    r[(y < jaw) & (r != _REGION["chin"])] = _REGION["neck"]
-    r[(y < -118.0)] = _REGION["neck"]
+    r[(y < _jaw_y(z)) & (r != _REGION["chin"])] = _REGION["neck"]
+    r[(y < -122.0)] = _REGION["neck"]
     r[(_hair(p) > 0.5) | (island == 2)] = _REGION["scalp"]
     r[island == 3] = _REGION["ears"]
     return r
@@ -606,6 +659,19 @@ def _fbm(p, rng, base_mm, octaves):
     return total / (0.4 * norm)
 
 
+def _brow_strokes(ax, y, rng):
+    """Eyebrow hair strokes in [0, 1]: noise stretched along the hair direction (up at the inner
+    end, sweeping outwards and slightly down along the arch)."""
+    lattice = rng.standard_normal((96, 512))
+    ang = np.radians(75.0) - np.radians(70.0) * _smoothstep(12.0, 26.0, ax)   # hair direction
+    s = y - _brow_y(ax)
+    along = ax * np.cos(ang) + s * np.sin(ang)
+    across = -ax * np.sin(ang) + s * np.cos(ang)
+    n = ndimage.map_coordinates(lattice, [along / 3.5 + 40.0, across / 0.45 + 200.0], order=1,
+                                mode="grid-wrap")
+    return _smoothstep(-0.2, 0.9, n)
+
+
 def _skin_colour(p, region, rng):
     """sRGB albedo, specular scale and pore depth per skin point."""
     x, y, z = p[:, 0], p[:, 1], p[:, 2]
@@ -617,22 +683,34 @@ def _skin_colour(p, region, rng):
     red = np.array([0.60, 0.27, 0.22])
     col = np.tile(base, (len(p), 1))
     is_ = lambda name: (region == _REGION[name]).astype(float)
-    blush = 0.55 * g(40, -30, 70, 17, 18, 30) + 0.35 * g(0, -30, 112, 8, 8, 10) + 0.6 * is_("ears")
+    # flushed cheeks, nose tip and alae, ears; a little on the chin and forehead centre
+    blush = (0.6 * g(38, -24, 70, 16, 16, 30) + 0.55 * g(0, -28, 110, 10, 9, 10)
+             + 0.45 * g(11, -33, 97, 6, 6, 6) + 0.65 * is_("ears") + 0.2 * g(0, -100, 85, 14, 10, 15)
+             + 0.12 * g(0, 45, 90, 25, 20, 20))
     col = col + (red - col) * np.clip(blush, 0, 1)[:, None] * 0.6
-    lips = (ax / 24.0) ** 2 + ((y + 64.0) / np.where(y > -64.0, 9.0, 10.5)) ** 2
-    lip_w = _smoothstep(1.0, 0.75, lips) * _smoothstep(78.0, 86.0, z)
-    col = col + (np.array([0.50, 0.17, 0.15]) - col) * lip_w[:, None] * 0.85
-    # eyebrows, lash line and nostrils darken; scalp shows cropped hair
-    brow_y = 31.0 + 6.0 * np.exp(-((ax - 30.0) / 16.0) ** 2) - 0.004 * (ax - 30.0) ** 2
-    brow = 0.7 * _smoothstep(5.0, 1.0, np.abs(y - brow_y)) * _smoothstep(52.0, 46.0, ax) * _smoothstep(9.0, 14.0, ax)
-    brow *= (z > 60.0)
-    lash = 0.6 * _smoothstep(1.4, 0.2, np.abs(y - 10.7 + 0.004 * (ax - 32.0) ** 2)) * (np.abs(ax - 32.0) < 11.0) * (z > 78)
-    nostril = g(7.5, -44.5, 100.0, 3.0, 1.8, 4.0)
+    # beard shadow: stubble under the skin over the upper lip, chin, jaw and lower cheeks
+    beard = (_smoothstep(-38.0, -52.0, y + 0.15 * ax) * _smoothstep(-128.0, -112.0, y)
+             * _smoothstep(-20.0, 15.0, z) * (1 - _smoothstep(55.0, 70.0, ax)))
+    beard = np.maximum(beard, _smoothstep(-42.0, -50.0, y) * _smoothstep(-75.0, -70.0, y)
+                       * (1 - _smoothstep(20.0, 30.0, ax)) * _smoothstep(80.0, 92.0, z))
+    lips = (ax / 24.0) ** 2 + ((y + 63.5) / np.where(y > -63.5, 9.0, 10.5)) ** 2
+    lip_w = _smoothstep(1.0, 0.7, lips) * _smoothstep(78.0, 86.0, z)
+    beard *= 1 - _smoothstep(1.6, 1.1, lips)
+    col = col * (1.0 - beard[:, None] * np.array([0.16, 0.12, 0.05]))
+    col = col + (np.array([0.52, 0.18, 0.16]) - col) * lip_w[:, None] * 0.8
+    # eyebrows (hair strokes), lash line and upper-lid crease, nostrils; scalp shows cropped hair
+    by = _brow_y(ax)
+    brow_mask = (_smoothstep(6.0, 2.0, np.abs(y - by + 0.02 * (ax - 30.0)))
+                 * _smoothstep(54.0, 46.0, ax) * _smoothstep(8.0, 14.0, ax) * (z > 60.0))
+    brow = brow_mask * (0.35 + 0.6 * _brow_strokes(ax, y, rng))
+    lash = 0.65 * _smoothstep(1.3, 0.2, np.abs(y - 10.7 + 0.004 * (ax - 32.0) ** 2)) * (np.abs(ax - 32.0) < 11.0) * (z > 78)
+    crease = 0.25 * _smoothstep(1.6, 0.3, np.abs(y - 21.0 + 0.006 * (ax - 31.0) ** 2)) * (np.abs(ax - 31.0) < 12.0) * (z > 74)
+    nostril = g(6.8, -39.5, 100.0, 2.6, 2.2, 4.0)
     scalp = _hair(p) * (region != _REGION["ears"])
-    hair = np.array([0.10, 0.07, 0.05])
-    col = col + (hair - col) * np.clip(0.75 * brow + 0.7 * lash, 0, 1)[:, None]
-    col = col * (1.0 - 0.75 * np.clip(nostril, 0, 1))[:, None]
-    col = col + (np.array([0.30, 0.21, 0.17]) - col) * (0.55 * scalp)[:, None]
+    hair = np.array([0.07, 0.05, 0.035])
+    col = col + (hair - col) * np.clip(0.85 * brow + 0.7 * lash, 0, 1)[:, None]
+    col = col * (1.0 - crease - 0.85 * np.clip(nostril, 0, 1))[:, None]
+    col = col + (np.array([0.28, 0.20, 0.16]) - col) * (0.55 * scalp)[:, None]
     col = col * np.array([1.0, 1.02, 1.03]) ** is_("neck")[:, None]
     # low-frequency mottling (fBm) in brightness and redness
     mottle = _fbm(p, rng, 40.0, 4)

@@ -128,7 +128,12 @@ def test_adult_proportions(head):
     chin = skull[(np.abs(skull[:, 0]) < 10) & (skull[:, 2] > 65)][:, 1].min()
     assert 215 <= hi[1] - chin <= 245          # crown to chin
     assert 140 <= 2 * np.abs(skull[skull[:, 1] > 0][:, 0]).max() <= 165   # head width
-    assert hi[1] - 100 > 0 > lo[1] + 100 and chin - lo[1] >= 90            # origin in the head, neck below
+    assert hi[1] - 100 > 0 > lo[1] + 100 and 70 <= chin - lo[1] <= 110     # origin in the head, short neck
+    # the collar cut is closed (no open tube): the band ends in a small hole under the neck
+    bottom = head.positions[head.positions[:, 1] < lo[1] + 25]
+    assert np.ptp(bottom[:, 0]) > 90                                         # the cut spans the neck
+    throat = skull[(np.abs(skull[:, 0]) < 8) & (skull[:, 2] > 20)][:, 1].min()
+    assert 50 <= chin - throat <= 90                                         # chin to sternal notch
     assert head.positions[:, 2].argmax() in np.flatnonzero(vlabel == main)  # faces +Z (nose tip)
 
 
