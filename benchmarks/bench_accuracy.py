@@ -40,7 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from skinviewer import accuracy as A  # noqa: E402
-from skinviewer.diffusion import IRRADIANCE, blur_plan, texture_of, uniform_uv_per_mm  # noqa: E402
+from skinviewer.diffusion import IRRADIANCE, blur_plan_texels, texture_of, uniform_uv_per_mm  # noqa: E402
 from skinviewer.fitting import fit_gaussians  # noqa: E402
 from skinviewer.gl import describe, headless_context  # noqa: E402
 from skinviewer.graph import TIMING_NOTES  # noqa: E402
@@ -166,16 +166,17 @@ def deon_case(b: Bench, scene: str, n: int, gaussians=None, reuse=None, stretch=
     vals = {"deon.irradiance_size": n, "lights.0.beam_radius": b.beam(scene, n), "deon.stretch": stretch,
             "deon.gaussians": [{"variance": float(v), "weights": [float(x) for x in w]} for v, w in gs]}
     if reuse is not None:
-        vals["deon.reuse_irradiance_below"] = reuse
+        vals["deon.reuse_irradiance_below_texels"] = reuse
     s = b.settings(scene, "deon", vals)
     h = b.run(s, single_blur_per_gaussian if single else contextlib.nullcontext)
-    plan = blur_plan([v for v, _ in gs], s.deon.reuse_irradiance_below)
+    plan = blur_plan_texels([v for v, _ in gs], s.deon.reuse_irradiance_below_texels, b.uniform_texel(scene, n))
     E = b.read(s, IRRADIANCE)[..., :3]
     D = sum(np.asarray(w, np.float64) * b.read(s, texture_of(p))[..., :3].astype(np.float64)
             for (_, w), p in zip(gs, plan))
     X, Y, area = b.coords(scene, n)
     h.update(A.laser_errors(D, E, X, Y, area, DEF_V, DEF_W, rmax=rmax))
-    blurs = A.deon_blur_passes([v for v, _ in gs], s.deon.reuse_irradiance_below, b.uniform_texel(scene, n))
+    texel = b.uniform_texel(scene, n)
+    blurs = A.deon_blur_passes([v for v, _ in gs], (s.deon.reuse_irradiance_below_texels * texel) ** 2, texel)
     h.update(blurs=sum(min(k, 1) for k in blurs) if single else sum(blurs), texel=max(b.texel(scene, n)), n=n,
              beam=b.beam(scene, n))
     return h
@@ -201,12 +202,12 @@ def part1(b: Bench, sizes, main: int, fits_k) -> dict:
     print("## 1. d'Eon on the laser: error against the default six-Gaussian profile")
     print("texel: mm; 7tap: separable 7-tap H+V blurs the chain runs (sub-steps included); relight = "
           "irradiance + blurs (what a light change re-runs)")
-    print("\n### 1a. irradiance size; first Gaussian (v = 0.0064) reused as the irradiance (shipped default, "
-          "reuse_irradiance_below = 0.01) or blurred (0)")
+    print("\n### 1a. irradiance size; first Gaussian (v = 0.0064, sigma 0.08 mm): shipped rule (reused as the "
+          "irradiance only when sigma < 0.5 texel), always blurred (0), or forced reuse (8 texels)")
     rows: list = [DEON_HDR]
     out = {}
     for n in sizes:
-        for reuse in (0.01, 0.0):
+        for reuse in (0.5, 0.0, 8.0):
             try:
                 c = deon_case(b, "laser", n, reuse=reuse)
             except Exception as exc:  # e.g. a GL allocation failure at 2048 on a small machine
@@ -214,10 +215,11 @@ def part1(b: Bench, sizes, main: int, fits_k) -> dict:
                 continue
             out[(n, reuse)] = c
             beam = "" if c["beam"] <= 0.02 else f" beam {c['beam']:.3f}"
-            rows.append((f"{n}^2 {'reuse' if reuse else 'blur v1'}{beam}", c))
+            label = {0.5: "shipped", 0.0: "blur v1", 8.0: "forced reuse"}[reuse]
+            rows.append((f"{n}^2 {label}{beam}", c))
     if _deon_pass_module() is not None:
-        for reuse in (0.01, 0.0):
-            rows.append((f"{main}^2 {'reuse' if reuse else 'blur v1'} 1 blur/G*",
+        for reuse in (8.0, 0.0):
+            rows.append((f"{main}^2 {'forced reuse' if reuse else 'blur v1'} 1 blur/G*",
                          deon_case(b, "laser", main, reuse=reuse, single=True)))
         rows.append("* patched in this process: one 7-tap blur per Gaussian (no sub-steps) -- what the sub-steps buy")
     _print_rows(b, rows)
@@ -384,8 +386,7 @@ def part3(b: Bench, n: int) -> None:
         rows.append((f"gosselin var = d'Eon {name} (sc {sc:.1f})", f"{gsig(sc):.3f}",
                      gosselin_case(b, n, sc, gs.iterations)))
     sig = "/".join(f"{math.sqrt(v):.2f}" for v in target)
-    rows.append(("deon default (6 G, reuse 0.01)", sig, deon_case(b, "laser", n)))
-    rows.append(("deon default, v1 blurred (reuse 0)", sig, deon_case(b, "laser", n, reuse=0.0)))
+    rows.append(("deon default (6 G)", sig, deon_case(b, "laser", n)))
     b.flush()
     print(hdr)
     for label, sg, c in rows:

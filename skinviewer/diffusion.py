@@ -158,6 +158,13 @@ def blur_plan(variances, reuse_below: float) -> list[BlurStep]:
     return steps
 
 
+def blur_plan_texels(variances, reuse_below_texels: float, texel_mm: float) -> list[BlurStep]:
+    """blur_plan with the reuse threshold relative to the texel: blur_1 is the irradiance itself
+    when sigma_1 < reuse_below_texels * texel_mm (a sub-texel blur would change nothing; a fixed
+    variance threshold instead skips a blur the laser needs at fine texel sizes)."""
+    return blur_plan(variances, (max(reuse_below_texels, 0.0) * texel_mm) ** 2)
+
+
 def texture_of(step: BlurStep) -> str:
     """The resource holding Gaussian ``step.index``'s blurred irradiance."""
     return IRRADIANCE if step.reused else blur_resource(step.index)

@@ -50,8 +50,9 @@ class GraphError(RuntimeError):
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
-    def __init__(self, settings: Settings):
+    def __init__(self, settings: Settings, scene: Any = None):
         self._settings = settings
+        self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self.settings: list[str] = []
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
@@ -324,10 +325,10 @@ class RenderGraph:
         return raw.reshape(h, w, spec.components)
 
     # -- the frame ---------------------------------------------------------------------------
-    def _reflect_all(self, settings: Settings) -> dict[str, Reflection]:
+    def _reflect_all(self, settings: Settings, scene: Any = None) -> dict[str, Reflection]:
         refl = {}
         for p in self.passes:
-            r = Reflection(settings)
+            r = Reflection(settings, scene if p.uses_scene else None)
             p.reflect(r)
             refl[p.name] = r
         return refl
@@ -398,7 +399,7 @@ class RenderGraph:
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
-        refl = self._reflect_all(frame.settings)
+        refl = self._reflect_all(frame.settings, frame.scene)
         order, live = self._order(refl, list(targets or self.targets))
         self.order = order
         self._last_refl = refl

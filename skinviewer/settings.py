@@ -200,8 +200,10 @@ class DeonSettings(_Model):
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True
     irradiance_size: int = Field(1024, ge=256, le=4096)
-    reuse_irradiance_below: float = Field(
-        0.01, ge=0.0, le=10.0, description="variance (mm^2) under which blur_1 reuses the irradiance itself")
+    reuse_irradiance_below_texels: float = Field(
+        0.5, ge=0.0, le=8.0,
+        description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "
+                    "a sub-texel 7-tap blur changes nothing")
 
     @field_validator("gaussians")
     @classmethod

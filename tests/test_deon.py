@@ -7,7 +7,8 @@ import pytest
 
 from helpers import assert_all_finite, small_settings
 from skinviewer import diffusion
-from skinviewer.diffusion import KERNEL7, blur_plan, gaussian, texture_of, tsm_factor
+from skinviewer.diffusion import KERNEL7, blur_plan, blur_plan_texels, gaussian, texture_of, tsm_factor
+from skinviewer.passes.deon import mean_texel_mm
 from skinviewer.settings import DeonSettings, Gaussian, profile_warnings, with_values
 
 # ---------------------------------------------------------------------------------------------
@@ -79,7 +80,8 @@ def _diffuse_and_reference(renderer, s):
     g = renderer.graph("deon")
     n = s.deon.irradiance_size
     E = g.read("deon_irradiance")[..., :3].astype(np.float64)
-    plan = blur_plan([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below)
+    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
+                            mean_texel_mm(renderer.scene.gpu, n))
     D = sum(np.asarray(x.weights) * g.read(texture_of(p))[..., :3] for x, p in zip(s.deon.gaussians, plan))
     X, Y, area = _plane_coords(renderer, n)
     lit = E[..., 0] > 0
@@ -116,7 +118,7 @@ def _radial_error(D, ref, R, rmax=10.0, bins=200):
 
 def test_laser_profile_matches_sum_of_gaussians(renderer):
     # 1024^2 on the 24 mm slab: 0.023 mm texels, the smallest Gaussian (sigma 0.08 mm) is 3.4 texels
-    s = _deon("laser", **{"deon.irradiance_size": 1024, "deon.reuse_irradiance_below": 0.0})
+    s = _deon("laser", **{"deon.irradiance_size": 1024})  # shipped settings: every Gaussian is resolved
     D, ref, dx, dy, area = _diffuse_and_reference(renderer, s)
     errs = _radial_error(D, ref, np.hypot(dx, dy))
     # measured: R 0.0064, G 0.0109, B 0.0151 (single 7-tap blurs without sub-steps: 0.018/0.033/0.044)
@@ -124,6 +126,15 @@ def test_laser_profile_matches_sum_of_gaussians(renderer):
     # the blurs conserve the beam's power (weights sum to ~1 per channel in the default profile)
     wsum = np.sum([x.weights for x in s.deon.gaussians], axis=0)
     assert np.allclose(D.sum((0, 1)) * area, wsum, rtol=0.01)
+
+
+def test_reuse_of_the_irradiance_follows_the_texel_size(renderer):
+    """blur_1 reuses the irradiance only where its sigma (0.08 mm) is under half a texel: on the
+    laser's fine texels it must be blurred, on the head's 1 mm texels the blur would be a no-op."""
+    rep = renderer.render(_deon("laser", **{"deon.irradiance_size": 512}))
+    assert "deon_blur_0" in rep.ran
+    rep = renderer.render(_deon("head", **{"deon.irradiance_size": 256}))
+    assert "deon_blur_0" in rep.pruned and "deon_blur_1" in rep.ran
 
 
 def test_laser_scales_with_mm_per_unit(renderer):
@@ -153,7 +164,7 @@ def _second_moments(D, dx, dy, rmax):
 def test_stretch_plane_matches_laser(renderer):
     prof = [{"variance": 0.05, "weights": [0.5, 0.5, 0.5]}, {"variance": 0.3, "weights": [0.5, 0.5, 0.5]}]
     expect = 0.5 * 0.05 + 0.5 * 0.3
-    common = {"deon.irradiance_size": 512, "deon.reuse_irradiance_below": 0.0, "deon.gaussians": prof,
+    common = {"deon.irradiance_size": 512, "deon.reuse_irradiance_below_texels": 0.0, "deon.gaussians": prof,
               "lights.0.beam_radius": 0.06}
     D, _, dx, dy, _ = _diffuse_and_reference(renderer, _deon("laser", **common))
     vx_l, vy_l = _second_moments(D, dx, dy, 2.8)
@@ -174,7 +185,7 @@ def test_stretch_per_gaussian(renderer):
     plane the blurred stretch equals the raw one, so the profile is unchanged; on the head, where
     stretch varies, the wide Gaussians change; toggling it re-runs the blurs, not the irradiance."""
     prof = [{"variance": 0.05, "weights": [0.5, 0.5, 0.5]}, {"variance": 0.3, "weights": [0.5, 0.5, 0.5]}]
-    common = {"deon.irradiance_size": 512, "deon.reuse_irradiance_below": 0.0, "deon.gaussians": prof,
+    common = {"deon.irradiance_size": 512, "deon.reuse_irradiance_below_texels": 0.0, "deon.gaussians": prof,
               "lights.0.beam_radius": 0.06}
     D0, _, dx, dy, _ = _diffuse_and_reference(renderer, _deon("stretch-plane", **common))
     s = _deon("stretch-plane", **common, **{"deon.stretch_per_gaussian": True})

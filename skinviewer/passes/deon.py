@@ -26,7 +26,8 @@ import numpy as np
 
 from .. import techniques
 from ..camera import gl_bytes, light_space
-from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan, blur_resource, stretch_blur_resource, sub_steps, texture_of,
+from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan_texels, blur_resource, stretch_blur_resource, sub_steps,
+                         texture_of,
                          uniform_uv_per_mm)
 from ..graph import Pass, Reflection, TexSpec
 from .common import (LIGHT_POSE_FIELDS, bind_specular, bind_surface, declare_lighting, declare_specular,
@@ -186,9 +187,19 @@ class IrradiancePass(Pass):
         dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(IRRADIANCE))
 
 
+def mean_texel_mm(scene, n: int) -> float:
+    """The atlas's mean texel size in mm at an n x n map (from UV area / surface area)."""
+    return 1.0 / (n * _MeshStretch.get(scene))
+
+
+def plan_of(variances, r) -> list:
+    """The blur chain for these variances (r: a Reflection or ExecuteContext of a scene pass)."""
+    return blur_plan_texels(variances, r.setting("deon.reuse_irradiance_below_texels"),
+                            mean_texel_mm(r.scene, r.setting(SIZE)))
+
+
 def _plan(r):
-    gs = r.setting("deon.gaussians")
-    return blur_plan([g.variance for g in gs], r.setting("deon.reuse_irradiance_below"))
+    return plan_of([g.variance for g in r.setting("deon.gaussians")], r)
 
 
 class _MeshStretch:
@@ -250,7 +261,7 @@ class GaussianBlurPass(Pass):
 
     def _step(self, r):
         vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
-        return blur_plan(vs, r.setting("deon.reuse_irradiance_below"))[self.i]
+        return plan_of(vs, r)[self.i]
 
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
@@ -260,7 +271,7 @@ class GaussianBlurPass(Pass):
         set_uniform(prog, "u_use_stretch", 1 if stretch else 0)
         s = 1.0 if stretch else _MeshStretch.get(ec.scene)
         set_uniform(prog, "u_uniform_stretch", (s, s))
-        texel_mm = 1.0 / (n * _MeshStretch.get(ec.scene))
+        texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
         _set_array(prog, "u_weights", KERNEL7)
         gutter = ec.input(gutter_resource(n))
@@ -325,7 +336,7 @@ class DeonFinalPass(Pass):
         unit = set_lighting(ec, prog, unit)
         has = ec.has_input
         gs = ec.setting("deon.gaussians")
-        plan = blur_plan([g.variance for g in gs], ec.setting("deon.reuse_irradiance_below"))
+        plan = _plan(ec)
         ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         var = np.zeros(MAX_GAUSSIANS, np.float32)
         used = np.zeros(MAX_GAUSSIANS, np.int32)

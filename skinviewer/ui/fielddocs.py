@@ -70,8 +70,8 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "deon.energy_conservation": ("", "scale diffuse by 1 - rho_dt (eq. 30-31) at the light and the eye (eq. 28, 34)"),
     "deon.irradiance_size": ("texels", "texture-space irradiance / blur resolution (eq. 28). "
                              "Texture-space cost ~ size² per blur pass"),
-    "deon.reuse_irradiance_below": ("mm²", "variance under which blur 1 reuses the irradiance itself (eq. 24: "
-                                    "a Gaussian narrower than a texel is a no-op)"),
+    "deon.reuse_irradiance_below_texels": ("texels", "blur 1 reuses the irradiance itself when its sigma is under "
+                                             "this many mean texels (a sub-texel 7-tap blur changes nothing)"),
 }
 
 _INDEX = re.compile(r"\.\d+(?=\.|$)")
