@@ -39,16 +39,12 @@ uniform vec2 u_uniform_stretch;
 uniform int u_use_stretch;
 out vec4 f_color;
 
-vec4 blur(int i, vec2 uv) {
-    if (i == 0) return texture(blur0, uv);
-    if (i == 1) return texture(blur1, uv);
-    if (i == 2) return texture(blur2, uv);
-    if (i == 3) return texture(blur3, uv);
-    if (i == 4) return texture(blur4, uv);
-    if (i == 5) return texture(blur5, uv);
-    if (i == 6) return texture(blur6, uv);
-    return texture(blur7, uv);
-}
+// every blurred texture sampled once per point, by name: an index into a chain of samplers would
+// make many compilers fetch all eight on each call
+#define FETCH_BLURS(out_, uv)                                                                    \
+    out_[0] = texture(blur0, uv); out_[1] = texture(blur1, uv); out_[2] = texture(blur2, uv);    \
+    out_[3] = texture(blur3, uv); out_[4] = texture(blur4, uv); out_[5] = texture(blur5, uv);    \
+    out_[6] = texture(blur6, uv); out_[7] = texture(blur7, uv);
 
 vec2 uv_per_mm(vec2 uv) {
     vec2 s = (u_use_stretch != 0) ? texture(stretch_map, uv).rg : u_uniform_stretch;
@@ -59,10 +55,12 @@ void main() {
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
+    vec4 here[MAX_G];
+    FETCH_BLURS(here, v_uv)
     vec3 diffuse = vec3(0.0);
     for (int i = 0; i < MAX_G; ++i) {
         if (i >= u_count) break;
-        if (u_used[i] != 0) diffuse += u_w[i] * blur(i, v_uv).rgb;
+        if (u_used[i] != 0) diffuse += u_w[i] * here[i].rgb;  // eq. (34), sum_i w_i blur_i
     }
     if (u_tsm != 0) {
         vec4 p = u_tsm_matrix * vec4(v_position, 1.0);
@@ -78,15 +76,17 @@ void main() {
                 // the texture-space blur already carries that light (blend -> 0, no double count)
                 vec2 s = 0.5 * (uv_per_mm(v_uv) + uv_per_mm(uvA));
                 float r_mm = length((v_uv - uvA) / s);
+                vec4 there[MAX_G];
+                FETCH_BLURS(there, uvA)
                 for (int i = 1; i < MAX_G; ++i) {
                     if (i >= u_count) break;
                     if (u_used[i] == 0) continue;
                     float v = u_var[i];
                     if (!(v > 0.0)) continue;
-                    float d = max(deon_finite(blur(i - 1, v_uv).a), 0.0);
+                    float d = max(deon_finite(here[i - 1].a), 0.0);  // blurred thickness of blur_(i-1)
                     float fade = exp(-d * d / ((u_tsm_printed != 0 ? 1.0 : 2.0) * v));
                     float blend = clamp(r_mm / (3.0 * sqrt(v)), 0.0, 1.0);
-                    diffuse += u_w[i] * (fade * blend * gate) * blur(i, uvA).rgb;
+                    diffuse += u_w[i] * (fade * blend * gate) * there[i].rgb;
                 }
             }
         }
