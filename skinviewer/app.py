@@ -5,6 +5,7 @@ Tests (and scripts) build it in-process with ``create_app(settings, size=(320, 2
 with ``app.step()``, the ``on_mouse_*`` / ``on_key_event`` handlers, and ``app.apply({...})``."""
 from __future__ import annotations
 
+import os
 import sys
 import time
 import traceback
@@ -639,21 +640,32 @@ def _style() -> None:
     st.set_color_(imgui.Col_.window_bg.value, imgui.ImVec4(0.08, 0.08, 0.09, 0.92))
 
 
+class WindowUnavailableError(RuntimeError):
+    """No window could be opened (no display, no OpenGL 3.3 driver)."""
+
+
 def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, vsync: bool = True,
                   backend: str = "glfw"):
     """A moderngl-window window (glfw by default; pyglet as a fallback) with a GL 3.3 core context."""
+    import warnings
     errors = []
-    for name in ([backend] + [b for b in ("glfw", "pyglet") if b != backend]):
-        try:
-            cls = mglw.get_local_window_cls(name)
-            wnd = cls(title="skinviewer", size=tuple(size), resizable=True, visible=visible, gl_version=(3, 3),
-                      aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
-            mglw.activate_context(window=wnd)
-            return wnd
-        except Exception as exc:
-            errors.append(f"{name}: {exc}")
-    raise RuntimeError("cannot open a window (" + "; ".join(errors) + "). Is there a display? "
-                       "Headless: xvfb-run -a -s '-screen 0 1280x800x24' skinviewer ...")
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) and sys.platform.startswith("linux"):
+        errors.append("no DISPLAY or WAYLAND_DISPLAY")
+    else:
+        for name in ([backend] + [b for b in ("glfw", "pyglet") if b != backend]):
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")  # glfw reports its init failure as a warning too
+                    cls = mglw.get_local_window_cls(name)
+                    wnd = cls(title="skinviewer", size=tuple(size), resizable=True, visible=visible,
+                              gl_version=(3, 3), aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
+                mglw.activate_context(window=wnd)
+                return wnd
+            except Exception as exc:
+                errors.append(f"{name}: {exc}")
+    raise WindowUnavailableError(
+        "cannot open a window (" + "; ".join(errors) + "). Without a display run it under Xvfb: "
+        "xvfb-run -a -s '-screen 0 1280x800x24' skinviewer ...; headless renders: skinviewer render --out FILE.png")
 
 
 def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True,

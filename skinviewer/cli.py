@@ -154,10 +154,13 @@ def _add_view_args(p: argparse.ArgumentParser) -> None:
 
 def cmd_view(args) -> int:
     try:
-        from .app import run_viewer
+        from .app import WindowUnavailableError, run_viewer
     except ImportError as exc:
         raise CliError(f"the viewer is not available: {exc}") from None
-    return run_viewer(args)
+    try:
+        return run_viewer(args)
+    except WindowUnavailableError as exc:
+        raise CliError(str(exc)) from None
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -108,3 +109,11 @@ def test_package_data_globs_cover_shaders_and_presets():
             if f.is_file() and "__pycache__" not in f.parts:
                 rel = f.relative_to(folder).as_posix()
                 assert any(fnmatch.fnmatch(rel, g) for g in globs), f"{rel} would be missing from the wheel"
+
+
+def test_viewer_without_a_display_says_how_to_run_it(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    p = subprocess.run([sys.executable, "-m", "skinviewer.cli", "--frames", "1", "--screenshot", str(tmp_path / "s.png")],
+                       capture_output=True, text=True, timeout=120, env=env)
+    assert p.returncode == 2
+    assert "xvfb-run" in p.stderr and "Traceback" not in p.stderr
