@@ -16,12 +16,29 @@ uniform sampler2D beckmann_tex;
 
 struct SpecParams { float m; float rho_s; };
 
+int region_at(ivec2 texel) {
+    int id = int(texelFetch(region_map, texel, 0).r * 255.0 + 0.5);
+    return (id < 0 || id >= N_REGIONS) ? 0 : id;
+}
+
+// The region parameters of the four nearest region-map texels, blended bilinearly: no hard line
+// where two regions with different m or rho_s meet.
 SpecParams specular_params(vec2 uv) {
-    int id = int(texture(region_map, uv).r * 255.0 + 0.5);
-    if (id < 0 || id >= N_REGIONS) id = 0;
+    ivec2 size = textureSize(region_map, 0);
+    vec2 st = uv * vec2(size) - 0.5;
+    ivec2 i0 = ivec2(floor(st));
+    vec2 f = clamp(st - vec2(i0), 0.0, 1.0);
+    float m = 0.0, rho = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        int id = region_at(clamp(i0 + o, ivec2(0), size - 1));
+        float w = (o.x == 1 ? f.x : 1.0 - f.x) * (o.y == 1 ? f.y : 1.0 - f.y);
+        m += w * u_spec_m[id];
+        rho += w * u_spec_rho_s[id];
+    }
     float scale = texture(specular_map, uv).r;
     scale = (isnan(scale) || isinf(scale)) ? 1.0 : clamp(scale, 0.0, 10.0);
-    return SpecParams(u_spec_m[id], u_spec_rho_s[id] * scale);
+    return SpecParams(m, rho * scale);
 }
 
 // KS value for one light (includes N.L, listing 14-3)
