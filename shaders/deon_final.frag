@@ -51,6 +51,19 @@ vec2 uv_per_mm(vec2 uv) {
     return max(s, vec2(1e-7));
 }
 
+// How much of the point lies behind tissue from the TSM light (0: it is directly lit, its own A),
+// percentage-closer filtered over 3x3 TSM texels so the transmission does not step with them.
+float tsm_gate(vec2 c, vec3 P) {
+    vec2 texel = 1.0 / vec2(textureSize(tsm_map, 0));
+    float d = tsm_distance_mm(P), g = 0.0;
+    for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
+        vec4 t = texture(tsm_map, c + vec2(x, y) * texel);
+        float own = (t.a >= 0.0) ? (d - t.r) * t.a : 0.0;
+        g += smoothstep(u_tsm_gate_mm, 2.0 * u_tsm_gate_mm, deon_finite(own));
+    }
+    return g / 9.0;
+}
+
 void main() {
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
@@ -68,8 +81,7 @@ void main() {
         if (p.w > 0.0 && all(greaterThanEqual(c, vec2(0.0))) && all(lessThanEqual(c, vec2(1.0)))) {
             vec4 t = texture(tsm_map, c);
             // a directly lit point is its own A: transmission only where the light crossed tissue
-            float own = (t.a >= 0.0) ? (tsm_distance_mm(v_position) - t.r) * t.a : 0.0;
-            float gate = smoothstep(u_tsm_gate_mm, 2.0 * u_tsm_gate_mm, deon_finite(own));
+            float gate = tsm_gate(c, v_position);
             if (t.a >= 0.0 && gate > 0.0) {
                 vec2 uvA = t.gb;
                 // texture-space distance C..A in mm: when A lies inside Gaussian i's own footprint

@@ -163,8 +163,23 @@ def cmd_view(args) -> int:
         raise CliError(str(exc)) from None
 
 
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """``--camera -75,5`` would read as an unknown option to argparse: bind such values to their flag."""
+    out: list[str] = []
+    it = iter(range(len(argv)))
+    for i in it:
+        a = argv[i]
+        if a in ("--camera", "--size") and i + 1 < len(argv) and argv[i + 1][:1] == "-" \
+                and argv[i + 1][1:2].isdigit():
+            out.append(f"{a}={argv[i + 1]}")
+            next(it, None)
+        else:
+            out.append(a)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
+    argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
     commands = {"render", "profile", "view", "-h", "--help"}
     if not argv or argv[0] not in commands:

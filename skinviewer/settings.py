@@ -196,6 +196,8 @@ class DeonSettings(_Model):
     stretch_per_gaussian: bool = False
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
+    tsm_light: int | None = Field(
+        None, ge=0, le=3, description="light the TSM is rendered from (None: the first shadow-casting light)")
     tsm_form: Literal["exact", "printed"] = Field(
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True

@@ -378,3 +378,20 @@ def test_hard_mesh_black_albedo(renderer, tmp_path):
         st = tex["deon_stretch"][..., :2]
         assert np.all(st > 0) and np.all(st <= 10.0)
         assert tex["lit"][..., 3].max() == 1.0
+
+
+def test_tsm_light_is_selectable(renderer):
+    """deon.tsm_light picks the light the TSM is rendered from; moving another light leaves it."""
+    lights = [{"kind": "directional", "direction": [0.0, 0.15, 1.0], "intensity": 1.0},
+              {"kind": "directional", "direction": [0.0, 0.15, -1.0], "intensity": 3.0}]
+    s = _deon("backlit-ear", **{"lights": lights, "deon.tsm_light": 1})
+    renderer.render(s)
+    rep = renderer.render(with_values(s, {"lights.0.direction": [0.2, 0.15, 1.0]}))
+    assert "deon_tsm" in rep.cached  # rendered from light 1
+    rep = renderer.render(with_values(s, {"lights.0.direction": [0.2, 0.15, 1.0], "lights.1.direction": [0.1, 0.15, -1.0]}))
+    assert "deon_tsm" in rep.ran
+    # a light that casts no shadow cannot carry the TSM: the first shadow-casting one does
+    s2 = with_values(s, {"lights.1.cast_shadow": False})
+    renderer.render(s2)
+    rep = renderer.render(with_values(s2, {"lights.0.direction": [0.3, 0.15, 1.0]}))
+    assert "deon_tsm" in rep.ran

@@ -117,3 +117,10 @@ def test_viewer_without_a_display_says_how_to_run_it(tmp_path):
                        capture_output=True, text=True, timeout=120, env=env)
     assert p.returncode == 2
     assert "xvfb-run" in p.stderr and "Traceback" not in p.stderr
+
+
+def test_negative_camera_yaw_on_the_command_line(tmp_path):
+    from skinviewer.cli import _join_negative_values, build_parser
+    argv = _join_negative_values(["render", "--camera", "-75,5", "--out", "x.png"])
+    args = build_parser().parse_args(argv)
+    assert args.camera == [-75.0, 5.0]

@@ -54,16 +54,18 @@ def _set_array(prog, name, values, dtype=np.float32):
 
 # -- which light casts the TSM --------------------------------------------------------------------
 
-def tsm_light_index(r: Reflection) -> int | None:
-    """Declare (and return) the TSM's key light: the first enabled shadow-casting light, or None
-    when deon.tsm is off or no light casts shadows."""
+def tsm_light_index(r) -> int | None:
+    """Declare (and return) the light the TSM is rendered from: deon.tsm_light when it names an
+    enabled shadow-casting light, else the first such light; None when deon.tsm is off or no light
+    casts shadows."""
     if not r.setting("deon.tsm"):
         return None
     n = min(r.setting("lights.#"), 4)
-    for j in range(n):
-        if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow"):
-            return j
-    return None
+    usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")]
+    want = r.setting("deon.tsm_light")
+    if want is not None and want in usable:
+        return want
+    return usable[0] if usable else None
 
 
 def _tsm_pose(ec, j: int):
@@ -87,10 +89,6 @@ def set_tsm_uniforms(ec, prog, j: int) -> None:
         texel_mm = ls.texel_world(ec.input(TSM).size[0]) * scene.mm_per_unit
         set_uniform(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
     return ls
-
-
-def _key_light(ec) -> int:
-    return next(k for k in range(4) if ec.setting(f"lights.{k}.enabled") and ec.setting(f"lights.{k}.cast_shadow"))
 
 
 # -- passes --------------------------------------------------------------------------------------
@@ -131,7 +129,7 @@ class TsmPass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_tsm")
-        ls = set_tsm_uniforms(ec, prog, _key_light(ec))
+        ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
         prog["u_light_matrix"].write(gl_bytes(ls.gl_matrix))
         fbo = ec.framebuffer(TSM)
         fbo.use()
@@ -180,7 +178,7 @@ class IrradiancePass(Pass):
         if use_tsm:
             ec.input(TSM).use(unit)
             set_uniform(prog, "tsm_map", unit)
-            set_tsm_uniforms(ec, prog, _key_light(ec))
+            set_tsm_uniforms(ec, prog, tsm_light_index(ec))
         else:
             set_uniform(prog, "tsm_map", unit)
         tmp = rasterize_unwrapped(ec, prog, n)
@@ -375,7 +373,7 @@ class DeonFinalPass(Pass):
             ec.input(TSM).use(unit)
             set_uniform(prog, "tsm_map", unit)
             unit += 1
-            set_tsm_uniforms(ec, prog, _key_light(ec))
+            set_tsm_uniforms(ec, prog, tsm_light_index(ec))
             set_uniform(prog, "u_tsm_printed", 1 if ec.setting("deon.tsm_form") == "printed" else 0)
             use_stretch = has(STRETCH)
             set_uniform(prog, "u_use_stretch", 1 if use_stretch else 0)
