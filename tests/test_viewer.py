@@ -543,3 +543,17 @@ def test_orbit_renders_smaller_while_dragging_when_slow(app):
     app.step(1)
     assert (app.settings.render.width, app.settings.render.height) == full
     app.drag_budget_ms = 60.0
+
+
+def test_every_settings_field_has_a_widget(app):
+    """The generic panel draws every field of the model, optional ones included (auto / value)."""
+    from imgui_bundle import imgui
+    from skinviewer.ui import widgets
+    for section in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
+        model = getattr(app.settings, section)
+        edits = widgets.Edits()
+        imgui.new_frame()
+        try:
+            widgets.edit_model(model, section, edits)
+        finally:
+            imgui.end_frame()

@@ -116,7 +116,7 @@ def edit_field(name: str, field, value: Any, path: str, edits: Edits) -> None:
     label = label_with_unit(_label(name), path)
     imgui.push_id(path)
     try:
-        if optional and kind in ("float", "vec3"):
+        if optional and kind in ("float", "vec3", "int"):
             auto = value is None
             ch, auto_new = imgui.checkbox("auto##auto", auto)
             _tooltip(field, path)
@@ -184,6 +184,8 @@ def _default_for(kind: str, field):
     lo, hi, lo_x, _ = bounds(field)
     if kind == "vec3":
         return [0.0, 0.0, 0.0]
+    if kind == "int":
+        return int(lo) if lo is not None else 0
     if lo is not None:
         return max(1.0, lo + (1e-3 if lo_x else 0.0))
     return 1.0
