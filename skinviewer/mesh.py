@@ -134,6 +134,11 @@ def _read_image(path: str | Path, mode: str) -> np.ndarray:
         img.load()
     except (OSError, UnidentifiedImageError) as exc:
         raise MeshError(f"cannot read image {path}: {exc}") from None
+    return _image_array(img, mode)
+
+
+def _image_array(img, mode: str) -> np.ndarray:
+    """A PIL image as a map array, row 0 at v = 0 (images store their top row first)."""
     if mode == "L":
         arr = np.asarray(img.convert("RGB"))[..., 0]
         return np.ascontiguousarray(arr[::-1])  # row 0 at v = 0
@@ -199,6 +204,7 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
             normals = vertex_normals(positions, indices)
         else:
             normals = _normalize_or(normals, np.array([0.0, 0.0, 1.0]))
+    albedo, normal_map = _embedded_textures(tm if uv is not None else None, notes)
     uv = np.asarray(uv, dtype=np.float64)
     bad = ~np.isfinite(uv)
     if bad.any():
@@ -207,7 +213,23 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
     if uv.min() < -1e-3 or uv.max() > 1.001:
         notes.append("UVs outside [0,1] wrap; texture-space passes use their fractional part")
         uv = uv - np.floor(uv)
-    return MeshData(positions=positions, normals=normals, uvs=uv, indices=indices, name=p.stem, notes=notes)
+    return MeshData(positions=positions, normals=normals, uvs=uv, indices=indices, name=p.stem, notes=notes,
+                    albedo=albedo, normal_map=normal_map)
+
+
+def _embedded_textures(tm, notes: list[str]):
+    """Base-colour and normal textures the file itself carries (glTF PBR material, OBJ map_Kd)."""
+    material = getattr(getattr(tm, "visual", None), "material", None)
+    if material is None:
+        return None, None
+    base = getattr(material, "baseColorTexture", None) or getattr(material, "image", None)
+    normal = getattr(material, "normalTexture", None)
+    albedo = _image_array(base, "RGB") if base is not None else None
+    nmap = _image_array(normal, "RGB") if normal is not None else None
+    for what, arr in (("base colour", albedo), ("normal", nmap)):
+        if arr is not None:
+            notes.append(f"using the file's {what} texture ({arr.shape[1]}x{arr.shape[0]})")
+    return albedo, nmap
 
 
 def _uv_of(tm) -> np.ndarray | None:

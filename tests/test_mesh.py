@@ -92,3 +92,23 @@ def test_lee_perry_smith_renders(renderer):
     img = renderer.image(s).astype(float)
     assert img.std() > 10  # a lit head, not a blank frame
     assert_all_finite(renderer, s)
+
+
+def test_embedded_textures_are_used(tmp_path):
+    from PIL import Image
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    img = np.zeros((8, 8, 3), np.uint8)
+    img[0] = (255, 0, 0)  # the image's top row: v = 1 in glTF's flipped convention
+    mat = trimesh.visual.material.PBRMaterial(baseColorTexture=Image.fromarray(img),
+                                              normalTexture=Image.fromarray(np.full((8, 8, 3), [128, 128, 255], np.uint8)))
+    tm = trimesh.Trimesh(v, f, visual=trimesh.visual.TextureVisuals(uv=v[:, :2], material=mat), process=False)
+    p = tmp_path / "textured.glb"
+    tm.export(p)
+    m = load_mesh(p)
+    assert m.albedo is not None and m.albedo.shape == (8, 8, 3) and m.normal_map is not None
+    assert m.albedo[-1, 0, 0] == 1.0 and m.albedo[0, 0, 0] == 0.0  # row 0 at v = 0
+    assert any("base colour texture" in n for n in m.notes)
+    # the red texel row maps to the vertices with v = 1 (the top edge of the quad)
+    top = m.uvs[:, 1].max()
+    assert np.isclose(top, 1.0)
