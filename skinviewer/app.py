@@ -100,6 +100,10 @@ class ViewerApp(mglw.WindowConfig):
         # while the camera is dragged, render the view-dependent passes at a lower resolution when a
         # full-size frame would stutter ("auto"), or at a fixed scale; full size again on release
         self.drag_resolution: str = "auto"
+        # a frame whose passes take longer than this is spread over several displayed frames (the UI
+        # stays responsive; the image on screen changes once, complete); None: one frame, however long
+        self.frame_budget_ms: float | None = 100.0
+        self._partial_ran: list = []  # passes that ran in the frames of an unfinished spread frame
         self.drag_budget_ms = 60.0
         self.panel_side = "left"
         self.layout: Layout = self._compute_layout()
@@ -332,11 +336,13 @@ class ViewerApp(mglw.WindowConfig):
     def _render_main(self):
         pending = self._shown is None or (self._shown is not self.settings and self._shown != self.settings)
         last_cost = self.last_change.total_ms if self.last_change else None
-        defer = self._shown is not None and self.scheduler.should_defer(pending, self._ui_active, last_cost)
+        # a spread frame in progress is finished first, whatever the scheduler says
+        defer = not self._partial_ran and self._shown is not None \
+            and self.scheduler.should_defer(pending, self._ui_active, last_cost)
         self.scheduler.deferred = defer
         target = self._shown if defer else self.settings
         try:
-            report = self.renderer.render(target)
+            report = self.renderer.render(target, budget_ms=self.frame_budget_ms)
             self.render_error = ""
         except Exception as exc:
             self.render_error = f"{type(exc).__name__}: {exc}"
@@ -348,6 +354,11 @@ class ViewerApp(mglw.WindowConfig):
         if defer:
             self.scheduler.deferred_frames += 1
             return report
+        if not report.complete:
+            self._partial_ran += [p for p in report.passes if p.status == "ran"]
+            return report
+        if self._partial_ran:
+            report = self._merge_partial(report)
         for p in report.passes:
             if p.status == "ran" and p.ms is not None:
                 self.last_ms[p.name] = p.ms
@@ -356,6 +367,14 @@ class ViewerApp(mglw.WindowConfig):
         self._shown = self.settings
         self._change_source = ""
         return report
+
+    def _merge_partial(self, report):
+        """One report for a frame spread over several: the passes that ran in any of them."""
+        from .graph import FrameReport
+        ran = {p.name: p for p in self._partial_ran}
+        self._partial_ran = []
+        passes = [p if p.status == "ran" else ran.get(p.name, p) for p in report.passes]
+        return FrameReport(report.frame, report.timing_mode, passes)
 
     def view_passes(self, technique: str | None = None) -> set[str]:
         """Names of the view-dependent passes of a technique and everything downstream of them."""

@@ -173,7 +173,7 @@ class FrameInputs:
 @dataclass
 class PassRecord:
     name: str
-    status: str  # ran | cached | pruned
+    status: str  # ran | cached | pruned | deferred (the frame's time budget ran out first)
     ms: float | None = None
     reason: str = ""
     inputs: list[str] = field(default_factory=list)
@@ -200,6 +200,15 @@ class FrameReport:
     @property
     def pruned(self) -> list[str]:
         return self.names("pruned")
+
+    @property
+    def deferred(self) -> list[str]:
+        return self.names("deferred")
+
+    @property
+    def complete(self) -> bool:
+        """False when the time budget deferred passes to the next frame (outputs not yet updated)."""
+        return not self.deferred
 
     @property
     def total_ms(self) -> float:
@@ -394,8 +403,15 @@ class RenderGraph:
         return ", ".join(parts)
 
     def run(self, frame: FrameInputs, targets: list[str] | None = None, timing: str = "sync",
-            force: bool = False) -> FrameReport:
-        """Render one frame: everything needed for ``targets`` (default: the graph's targets)."""
+            force: bool = False, budget_ms: float | None = None) -> FrameReport:
+        """Render one frame: everything needed for ``targets`` (default: the graph's targets).
+
+        ``budget_ms``: once at least one pass ran and this much wall time has passed, the passes
+        still to run are deferred (status "deferred", cache keys untouched); the next frame resumes
+        where this one stopped, since the passes that did run are then cached. Targets are written
+        last, so a deferred frame leaves the previous image intact."""
+        t_start = time.perf_counter()
+        any_ran = False
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
@@ -415,6 +431,14 @@ class RenderGraph:
                              outputs={k: {"size": list(v.size), "components": v.components, "dtype": v.dtype}
                                       for k, v in r.outputs.items()})
             if force or realloc or old != key:
+                # a freshly (re)allocated output holds garbage: that pass always runs
+                if budget_ms is not None and any_ran and not realloc \
+                        and (time.perf_counter() - t_start) * 1000.0 > budget_ms:
+                    rec.status = "deferred"
+                    rec.reason = "frame time budget spent"
+                    records[p.name] = rec
+                    continue
+                any_ran = True
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
                 rec.ms = self._execute(p, r, frame, timing)

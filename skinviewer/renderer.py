@@ -167,15 +167,16 @@ class Renderer:
         return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height))
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
-               force: bool = False) -> FrameReport:
-        """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms)."""
+               force: bool = False, budget_ms: float | None = None) -> FrameReport:
+        """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
+        ``budget_ms`` spreads a long frame over several calls (RenderGraph.run)."""
         scene = self.ensure_scene(s)
         view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height))
         self.last_view = view
         g = self.graph(s.technique)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
                             view_key=view.key())
-        report = g.run(frame, targets=targets, timing=timing or s.render.timing, force=force)
+        report = g.run(frame, targets=targets, timing=timing or s.render.timing, force=force, budget_ms=budget_ms)
         self.ctx.screen.use() if self.ctx.screen is not None else None
         return report
 

@@ -232,3 +232,24 @@ def test_affected_predicts_what_a_change_reruns(renderer):
         rep = renderer.render(with_values(s, change))
         assert rep.ran == predicted, (change, rep.ran, predicted)
         renderer.render(s)
+
+
+def test_time_budget_spreads_a_frame_over_several(renderer):
+    """With a tiny budget each call runs one pass; the frame completes after as many calls as it has
+    passes to run, and the image is only written by the last of them."""
+    s = small_settings("shadow-edge", "gosselin")
+    full = renderer.render(s, force=True)
+    expected = full.ran
+    s2 = with_values(s, {"lights.0.direction": [0.1, 0.0, 1.0]})
+    image_before = renderer.read(s, "image").copy()
+    done: list[str] = []
+    for _ in range(len(expected) + 1):
+        rep = renderer.render(s2, budget_ms=1e-6)
+        done += rep.ran
+        if rep.complete:
+            break
+        assert len(rep.ran) == 1 and rep.deferred
+        assert np.array_equal(renderer.read(s, "image"), image_before)  # no half-updated image
+    assert rep.complete
+    assert set(done) == set(renderer.graph("gosselin").affected(["lights.0.direction"]))
+    assert renderer.render(s2).ran == []  # all cached now

@@ -51,6 +51,7 @@ def app(display, shader_dir):
                                  "gosselin.light_map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
     try:
         a = create_app(s, size=(W, H), vsync=False)
+        a.frame_budget_ms = None  # one complete frame per step (spreading is tested on its own)
     except RuntimeError as exc:
         pytest.skip(f"cannot open a window: {exc}")
     assert str(a.shaders.root) == str(shader_dir)
@@ -557,3 +558,28 @@ def test_every_settings_field_has_a_widget(app):
             widgets.edit_model(model, section, edits)
         finally:
             imgui.end_frame()
+
+
+def test_long_frames_are_spread_and_shown_once_complete(app):
+    """With a frame budget, a change whose passes take longer is spread over several frames: the
+    UI keeps drawing, the image on screen changes once, complete, and the change's cost adds up."""
+    app.set_technique("gosselin")
+    app.step(1)
+    before = _view_image(app)
+    app.frame_budget_ms = 1e-6  # one pass per frame
+    try:
+        app.apply({"lights.0.direction": [0.6, 0.3, 0.7]}, "test light move")
+        frames = 0
+        while True:
+            app.step(1)
+            frames += 1
+            if app.report is not None and app.report.complete:
+                break
+            assert np.array_equal(_view_image(app), before)  # the old image until it is complete
+            assert frames < 20
+        assert frames > 1
+        assert np.abs(_view_image(app) - before).mean() > 0.5
+        ran = {name for name, _ in app.last_change.passes}
+        assert {"gosselin_light_map", "gosselin_blur", "gosselin_final", "output"} <= ran
+    finally:
+        app.frame_budget_ms = None

@@ -273,6 +273,18 @@ class Panel:
             imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
             _, sch.budget_ms = imgui.slider_float("budget (ms)", sch.budget_ms, 10.0, 2000.0, "%.0f ms",
                                                   imgui.SliderFlags_.logarithmic.value)
+        spread = app.frame_budget_ms is not None
+        ch, spread = imgui.checkbox("spread long frames", spread)
+        if ch:
+            app.frame_budget_ms = 100.0 if spread else None
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("a change whose passes take longer than the budget is rendered over several "
+                                   "frames: the UI stays responsive and the image changes once, complete")
+        if app.frame_budget_ms is not None:
+            imgui.same_line()
+            imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
+            _, app.frame_budget_ms = imgui.slider_float("frame budget", app.frame_budget_ms, 16.0, 1000.0, "%.0f ms",
+                                                        imgui.SliderFlags_.logarithmic.value)
         modes = list(DRAG_RESOLUTIONS)
         imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
         ch, i = imgui.combo("orbit resolution", modes.index(app.drag_resolution), modes)

@@ -10,7 +10,7 @@ from ..graph import TIMING_NOTES
 from .display import CHANNELS
 
 COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
-          "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0)}
+          "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0), "deferred": imgui.ImVec4(0.5, 0.7, 1.0, 1.0)}
 WIDTH = 380.0
 
 
@@ -52,7 +52,8 @@ class PassesWindow:
         if rep is None:
             imgui.text_disabled("no frame report")
             return
-        imgui.text(f"{app.settings.technique}: {len(rep.ran)} ran, {len(rep.cached)} cached, {len(rep.pruned)} pruned")
+        imgui.text(f"{app.settings.technique}: {len(rep.ran)} ran, {len(rep.cached)} cached, {len(rep.pruned)} pruned"
+                   + (f", {len(rep.deferred)} deferred to the next frame" if rep.deferred else ""))
         imgui.text_disabled(f"{rep.total_ms:.2f} ms ({rep.timing_mode} timing)")
         if imgui.is_item_hovered():
             imgui.set_item_tooltip(TIMING_NOTES[rep.timing_mode])

@@ -46,6 +46,8 @@ class StatusBar:
         out.append((f"frame {np.mean(ft):.1f} ms" if ft else "frame -", TEXT))
         if app.render_deferred:
             out.append(("preview paused while dragging", WARN))
+        if app.report is not None and not app.report.complete:
+            out.append((f"rendering: {len(app.report.deferred)} passes to go", WARN))
         if app.presets.dirty(s):
             out.append(("* unsaved", WARN))
         text, is_err = app.message
