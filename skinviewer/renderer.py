@@ -2,6 +2,7 @@
 It takes a moderngl context from its caller (a window's, or ``gl.headless_context()``)."""
 from __future__ import annotations
 
+import functools
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,6 +12,7 @@ import numpy as np
 
 from . import techniques
 from .camera import View, orbit_view
+from .diffusion import uniform_uv_per_mm
 from .graph import FrameInputs, FrameReport, RenderGraph, TexturePool
 from .mesh import VERTEX_ATTRS, VERTEX_FORMAT, MeshData, MeshError, load_mesh, load_texture_maps
 from .passes.output import srgb_to_linear
@@ -56,6 +58,13 @@ class GpuScene:
         tex.build_mipmaps()
         tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         return tex
+
+    @functools.cached_property
+    def mean_uv_per_mm(self) -> float:
+        """The atlas's mean UV per millimetre (sqrt of UV area / surface area): the isotropic
+        stretch used when stretch correction is off, and the mean texel size in mm at n x n (1/(n*x))."""
+        m = self.mesh
+        return uniform_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
 
     def vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
         vao = self._vaos.get(id(prog))

@@ -27,8 +27,7 @@ import numpy as np
 from .. import techniques
 from ..camera import gl_bytes, light_space
 from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan_texels, blur_resource, stretch_blur_resource, sub_steps,
-                         texture_of,
-                         uniform_uv_per_mm)
+                         texture_of)
 from ..graph import Pass, Reflection, TexSpec
 from .common import (LIGHT_POSE_FIELDS, bind_specular, bind_surface, declare_lighting, declare_specular,
                      draw_fullscreen, draw_mesh, set_lighting, set_uniform)
@@ -187,7 +186,7 @@ class IrradiancePass(Pass):
 
 def mean_texel_mm(scene, n: int) -> float:
     """The atlas's mean texel size in mm at an n x n map (from UV area / surface area)."""
-    return 1.0 / (n * _MeshStretch.get(scene))
+    return 1.0 / (n * scene.mean_uv_per_mm)
 
 
 def plan_of(variances, r) -> list:
@@ -200,17 +199,6 @@ def _plan(r):
     return plan_of([g.variance for g in r.setting("deon.gaussians")], r)
 
 
-class _MeshStretch:
-    """Uniform UV-per-mm of the mesh (stretch correction off), cached per GpuScene."""
-    _cache: dict[int, float] = {}
-
-    @classmethod
-    def get(cls, scene) -> float:
-        k = id(scene)
-        if k not in cls._cache:
-            m = scene.mesh
-            cls._cache = {k: uniform_uv_per_mm(m.positions, m.uvs, m.indices, scene.mm_per_unit)}
-        return cls._cache[k]
 
 
 def stretch_of(source: str) -> str:
@@ -267,7 +255,7 @@ class GaussianBlurPass(Pass):
         prog = ec.program("deon_blur")
         stretch = self._stretch_input(ec, step)
         set_uniform(prog, "u_use_stretch", 1 if stretch else 0)
-        s = 1.0 if stretch else _MeshStretch.get(ec.scene)
+        s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         set_uniform(prog, "u_uniform_stretch", (s, s))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
@@ -383,7 +371,7 @@ class DeonFinalPass(Pass):
                 unit += 1
             else:
                 set_uniform(prog, "stretch_map", spare)
-                s = _MeshStretch.get(ec.scene)
+                s = ec.scene.mean_uv_per_mm
                 set_uniform(prog, "u_uniform_stretch", (s, s))
         else:
             set_uniform(prog, "tsm_map", spare)
