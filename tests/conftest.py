@@ -27,9 +27,9 @@ def _start_xvfb() -> str | None:
                             pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     os.close(w)
     num = b""
-    deadline = time.time() + 10
+    deadline = time.monotonic() + 10
     with os.fdopen(r, "rb") as f:
-        while time.time() < deadline:
+        while time.monotonic() < deadline:
             ch = f.read(1)
             if not ch or ch == b"\n":
                 break

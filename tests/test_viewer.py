@@ -214,8 +214,8 @@ def test_shader_error_keeps_rendering_and_recovers(app, shader_dir):
     app.step(1)
     try:
         frag.write_text(good.replace("void main", "this is not glsl;\nvoid main", 1))
-        deadline = time.time() + 5
-        while not app.watcher.errors and time.time() < deadline:
+        deadline = time.monotonic() + 5
+        while not app.watcher.errors and time.monotonic() < deadline:
             time.sleep(0.2)
             app.step(1)
         errs = [e for es in app.watcher.errors.values() for e in es]
@@ -228,9 +228,9 @@ def test_shader_error_keeps_rendering_and_recovers(app, shader_dir):
         frag.write_text(good + "\n// fixed\n")
         st = frag.stat()
         os.utime(frag, ns=(st.st_atime_ns, st.st_mtime_ns + 2_000_000_000))
-    deadline = time.time() + 5
+    deadline = time.monotonic() + 5
     ran_output = False
-    while time.time() < deadline:
+    while time.monotonic() < deadline:
         time.sleep(0.2)
         app.step(1)
         ran_output |= "output" in app.report.ran
@@ -302,8 +302,8 @@ def test_resize_follows_framebuffer(app):
     import glfw
     w0, h0 = app.wnd.buffer_size
     app.wnd.size = (W + 64, H + 32)
-    deadline = time.time() + 5
-    while tuple(app.wnd.buffer_size) == (w0, h0) and time.time() < deadline:
+    deadline = time.monotonic() + 5
+    while tuple(app.wnd.buffer_size) == (w0, h0) and time.monotonic() < deadline:
         glfw.poll_events()
         time.sleep(0.05)
     app.step(1)
@@ -318,8 +318,8 @@ def test_resize_follows_framebuffer(app):
         assert not app.render_error
     finally:
         app.wnd.size = (W, H)
-        deadline = time.time() + 5
-        while tuple(app.wnd.buffer_size) != (w0, h0) and time.time() < deadline:
+        deadline = time.monotonic() + 5
+        while tuple(app.wnd.buffer_size) != (w0, h0) and time.monotonic() < deadline:
             glfw.poll_events()
             time.sleep(0.05)
         app.step(1)
