@@ -172,8 +172,7 @@ def deon_blur_passes(variances, reuse_below: float, texel: float) -> list[int]:
 
 
 def width_10_90(profile) -> float:
-    """10-90 % width (samples) of a rising edge, linear interpolation between samples (as
-    tests/test_gosselin.py)."""
+    """10-90 % width (samples) of a monotone-ish rising edge, linear interpolation between samples."""
     p = np.asarray(profile, np.float64)
     lo, hi = p.min(), p.max()
     t = (p - lo) / max(hi - lo, 1e-12)

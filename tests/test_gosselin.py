@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from skinviewer import scenes
+from skinviewer.accuracy import width_10_90
 from skinviewer.mesh import MeshData
 from skinviewer.passes import gosselin as G
 from skinviewer.settings import REGIONS, GosselinSettings, with_values
@@ -19,22 +20,6 @@ LM = G.LIGHT_MAP
 def _settings(scene="shadow-edge", **kw):
     # pcf 0: the eq. (7) hard shadow test, so the light map edge is a step
     return small_settings(scene, "gosselin", **{"shadow.pcf": 0, **kw})
-
-
-def width_10_90(profile: np.ndarray) -> float:
-    """10-90 % width (texels) of a monotone-ish rising edge, linear interpolation between texels."""
-    p = np.asarray(profile, np.float64)
-    lo, hi = p.min(), p.max()
-    t = (p - lo) / max(hi - lo, 1e-12)
-
-    def cross(level):
-        k = int(np.argmax(t >= level))
-        if k == 0:
-            return 0.0
-        a, b = t[k - 1], t[k]
-        return k - 1 + (level - a) / max(b - a, 1e-12)
-
-    return cross(0.9) - cross(0.1)
 
 
 def _edge_row(renderer, s, res=BLUR):
