@@ -33,7 +33,7 @@ from .common import (LIGHT_POSE_FIELDS, bind_specular, bind_surface, declare_lig
                      draw_fullscreen, draw_mesh, set_lighting, set_uniform)
 from .output import OutputPass
 from .rho_dt import RHO_DT_RESOURCE, RhoDtLutPass
-from .texture_space import GutterMapPass, dilate, gutter_resource, rasterize_unwrapped
+from .texture_space import GutterMapPass, declare_unwrapped, gutter_resource, unwrap_dilated
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
@@ -99,17 +99,13 @@ class StretchPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = _size(r)
-        r.input(gutter_resource(n))
-        r.program("deon_stretch")
-        r.program("dilate")
-        r.output(STRETCH, TexSpec((n, n), 4, "f4"))
+        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 4, "f4"))
 
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
         prog = ec.program("deon_stretch")
         set_uniform(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        tmp = rasterize_unwrapped(ec, prog, n)
-        dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(STRETCH))
+        unwrap_dilated(ec, prog, n, STRETCH)
 
 
 class TsmPass(Pass):
@@ -152,10 +148,7 @@ class IrradiancePass(Pass):
             r.input(RHO_DT_RESOURCE)
         if tsm_light_index(r) is not None:
             r.input(TSM)
-        r.input(gutter_resource(n))
-        r.program("deon_irradiance")
-        r.program("dilate")
-        r.output(IRRADIANCE, TexSpec((n, n), 4, "f4"))
+        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"))
 
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
@@ -180,8 +173,7 @@ class IrradiancePass(Pass):
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
         else:
             set_uniform(prog, "tsm_map", unit)
-        tmp = rasterize_unwrapped(ec, prog, n)
-        dilate(ec, tmp, ec.input(gutter_resource(n)), ec.framebuffer(IRRADIANCE))
+        unwrap_dilated(ec, prog, n, IRRADIANCE)
 
 
 def mean_texel_mm(scene, n: int) -> float:

@@ -41,7 +41,7 @@ from .common import (bind_specular, bind_surface, declare_lighting, declare_spec
                      draw_mesh, set_lighting, set_uniform)
 from .luts import BeckmannLutPass
 from .output import OutputPass
-from .texture_space import GutterMapPass, dilate, gutter_resource, rasterize_unwrapped
+from .texture_space import GutterMapPass, declare_unwrapped, dilate, gutter_resource, unwrap_dilated
 
 LIGHT_MAP = "gosselin_light_map"
 RADIUS_MAP = "gosselin_radius"
@@ -62,18 +62,14 @@ class GosselinLightMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         declare_lighting(r)
         size = r.setting(SIZE)
-        r.input(gutter_resource(size))
-        r.program("light_map")
-        r.program("dilate")
-        r.output(LIGHT_MAP, _map_spec(size))
+        declare_unwrapped(r, "light_map", size, LIGHT_MAP, _map_spec(size))
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
         prog = ec.program("light_map")
         unit = bind_surface(ec, prog, 0)
         set_lighting(ec, prog, unit)
-        raw = rasterize_unwrapped(ec, prog, size)
-        dilate(ec, raw, ec.input(gutter_resource(size)), ec.framebuffer(LIGHT_MAP))
+        unwrap_dilated(ec, prog, size, LIGHT_MAP)
 
 
 def region_radii(g, size: int) -> np.ndarray:

@@ -48,6 +48,21 @@ def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "
     return tex
 
 
+def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec) -> None:
+    """Declare a pass that rasterises ``program`` in texture space and writes ``resource`` with its
+    gutters filled (see unwrap_dilated)."""
+    r.input(gutter_resource(size))
+    r.program(program)
+    r.program("dilate")
+    r.output(resource, spec)
+
+
+def unwrap_dilated(ec, prog, size: int, resource: str) -> None:
+    """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled."""
+    raw = rasterize_unwrapped(ec, prog, size)
+    dilate(ec, raw, ec.input(gutter_resource(size)), ec.framebuffer(resource))
+
+
 def gutter_table(covered: np.ndarray) -> np.ndarray:
     """(H, W, 4) float32: RG = (x, y) of the nearest covered texel (itself when covered), B = covered."""
     h, w = covered.shape
