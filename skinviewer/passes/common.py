@@ -170,12 +170,16 @@ def bind_specular(ec, prog, unit: int, spare_unit: int) -> int:
     scene.specular_map.use(unit + 1)
     _set(prog, "specular_map", unit + 1)
     unit += 2
-    lut = ec.has_input(BECKMANN_LUT)
-    _set(prog, "u_spec_lut", 1 if lut else 0)
-    if lut:
-        ec.input(BECKMANN_LUT).use(unit)
-        _set(prog, "beckmann_tex", unit)
-        unit += 1
-    else:
-        _set(prog, "beckmann_tex", spare_unit)
+    _set(prog, "u_spec_lut", 1 if ec.has_input(BECKMANN_LUT) else 0)
+    return bind_optional(ec, prog, BECKMANN_LUT, "beckmann_tex", unit, spare_unit)
+
+
+def bind_optional(ec, prog, resource: str, sampler: str, unit: int, spare_unit: int) -> int:
+    """Bind ``resource`` to ``sampler`` when this frame declared it, else point the sampler at a
+    spare unit (it is not read); returns the next free unit."""
+    if ec.has_input(resource):
+        ec.input(resource).use(unit)
+        _set(prog, sampler, unit)
+        return unit + 1
+    _set(prog, sampler, spare_unit)
     return unit

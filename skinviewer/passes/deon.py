@@ -29,8 +29,8 @@ from ..camera import gl_bytes, light_space
 from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan_texels, blur_resource, stretch_blur_resource, sub_steps,
                          texture_of)
 from ..graph import Pass, Reflection, TexSpec
-from .common import (LIGHT_POSE_FIELDS, bind_specular, bind_surface, declare_lighting, declare_specular,
-                     draw_fullscreen, draw_mesh, set_lighting, set_uniform)
+from .common import (LIGHT_POSE_FIELDS, bind_optional, bind_specular, bind_surface, declare_lighting,
+                     declare_specular, draw_fullscreen, draw_mesh, set_lighting, set_uniform)
 from .output import OutputPass
 from .rho_dt import RHO_DT_RESOURCE, RhoDtLutPass
 from .texture_space import GutterMapPass, declare_unwrapped, gutter_resource, unwrap_dilated
@@ -338,36 +338,18 @@ class DeonFinalPass(Pass):
         _set_array(prog, "u_var", var)
         _set_array(prog, "u_used", used, np.int32)
         set_uniform(prog, "u_mix", float(ec.setting("deon.mix")))
-        energy = has(RHO_DT_RESOURCE)
-        set_uniform(prog, "u_energy", 1 if energy else 0)
-        if energy:
-            ec.input(RHO_DT_RESOURCE).use(unit)
-            set_uniform(prog, "rho_dt_tex", unit)
-            unit += 1
-        else:
-            set_uniform(prog, "rho_dt_tex", spare)
+        set_uniform(prog, "u_energy", 1 if has(RHO_DT_RESOURCE) else 0)
+        unit = bind_optional(ec, prog, RHO_DT_RESOURCE, "rho_dt_tex", unit, spare)
         unit = bind_specular(ec, prog, unit, spare)
-        tsm = has(TSM)
-        set_uniform(prog, "u_tsm", 1 if tsm else 0)
-        if tsm:
-            ec.input(TSM).use(unit)
-            set_uniform(prog, "tsm_map", unit)
-            unit += 1
+        set_uniform(prog, "u_tsm", 1 if has(TSM) else 0)
+        unit = bind_optional(ec, prog, TSM, "tsm_map", unit, spare)
+        unit = bind_optional(ec, prog, STRETCH, "stretch_map", unit, spare)  # read with the TSM only
+        if has(TSM):
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
             set_uniform(prog, "u_tsm_printed", 1 if ec.setting("deon.tsm_form") == "printed" else 0)
-            use_stretch = has(STRETCH)
-            set_uniform(prog, "u_use_stretch", 1 if use_stretch else 0)
-            if use_stretch:
-                ec.input(STRETCH).use(unit)
-                set_uniform(prog, "stretch_map", unit)
-                unit += 1
-            else:
-                set_uniform(prog, "stretch_map", spare)
-                s = ec.scene.mean_uv_per_mm
-                set_uniform(prog, "u_uniform_stretch", (s, s))
-        else:
-            set_uniform(prog, "tsm_map", spare)
-            set_uniform(prog, "stretch_map", spare)
+            set_uniform(prog, "u_use_stretch", 1 if has(STRETCH) else 0)
+            s = ec.scene.mean_uv_per_mm
+            set_uniform(prog, "u_uniform_stretch", (s, s))
         draw_mesh(ec, prog, "lit")
 
 
