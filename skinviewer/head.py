@@ -11,8 +11,10 @@ Geometry, in millimetres, Y up, facing +Z, origin near the middle of the head:
 
 UV atlas: the head band (everything below the crown cap, cut at the back of the head) is one island
 with u ∝ arc length around and v ∝ mean arc length down; the crown is an azimuthal-equidistant disk;
-each ear side is a planar island. Islands share one texel density and are separated by gutters that
-the maps fill by dilation (nearest island texel) so bilinear filtering never reads outside skin.
+each ear side is a planar island. The band runs down to the south pole at the centre of the flat
+collar cut, so the mesh is closed there (its last row collapses onto one point). Islands share one
+texel density and are separated by gutters that the maps fill by dilation (nearest island texel) so
+bilinear filtering never reads outside skin.
 """
 from __future__ import annotations
 
@@ -27,7 +29,7 @@ from scipy.spatial import Delaunay
 from .mesh import MeshData, vertex_normals
 from .settings import REGIONS
 
-GENERATOR_VERSION = 2
+GENERATOR_VERSION = 3
 
 # detail level -> (target edge length in mm, texture size)
 _LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}
@@ -35,7 +37,7 @@ _LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}
 _RAY_ORIGIN = np.array([0.0, -5.0, -12.0])   # inside the skull; the neck axis runs under it
 _THETA_CAP = np.radians(38.0)                 # crown cap / head band boundary
 _CUT_Y, _CUT_SLOPE = -180.0, 0.17           # collar cut plane: y at z = 40 mm, rise per mm forward
-_HOLE_RADIUS = 5.0                            # the band stops this far from the cut face's centre
+_POLE_CIRC = 40.0                             # mm: floor of the band's UV width towards the cut's centre
 _EAR_THICKNESS = 3.0                          # mm, between the two sheets of each ear
 _UV_MARGIN = 0.012                            # island distance from the atlas border
 _UV_GUTTER = 0.02                             # between islands (20 texels at 1024²)
@@ -156,20 +158,24 @@ def _head_sdf(x, y, z):
     d = _smin(d, e(x, y, z, (0, 40, 8), (66, 64, 85)), 20)
     d = _smin(d, e(x, y, z, (0, 2, -70), (50, 46, 40)), 22)
     # temples are flatter than the parietal bossing
-    d = _smax(d, -e(ax, y, z, (92, 18, 40), (30, 40, 42)), 25)
+    d = _smax(d, -e(ax, y, z, (97, 18, 38), (30, 40, 42)), 25)
     # midface (maxilla), zygomatic bones (cheekbones) and the arches running back to the ears
     d = _smin(d, e(x, y, z, (0, -22, 24), (54, 56, 68)), 18)
-    d = _smin(d, e(ax, y, z, (46, -3, 56), (17, 10, 18)), 12)
-    d = _smin(d, cap(ax, y, z, (52, -8, 40), (64, -12, 8), 4.0, 3.0), 12)
+    d = _smin(d, e(ax, y, z, (42, -4, 52), (19, 16, 20)), 22)
+    d = _smin(d, cap(ax, y, z, (52, -8, 36), (63, -10, 8), 1.5, 1.5), 20)
     # cheek fat above the nasolabial fold
     d = _smin(d, e(ax, y, z, (28, -42, 74), (13, 14, 11)), 14)
     # dental arch under the lips, and a mandible narrowing towards the chin (x shrinks with z)
     d = _smin(d, e(x, y, z, (0, -66, 46), (37, 40, 47)), 14)
-    taper = 1.0 - 0.35 * _smoothstep(-5.0, 90.0, z)
-    d = _smin(d, e(x / taper, y, z, (0, -78, 16), (50, 32, 64)), 14)
-    # mandible: ramus up to the ear, the angle, the body along the jawline, the chin
-    d = _smin(d, e(x, y, z, (0, -101, 78), (17, 13, 12)), 10)
-    d = _smin(d, e(x, y, z, (0, -100, 84), (12, 9, 6)), 8)
+    taper = 1.0 - 0.3 * _smoothstep(-5.0, 90.0, z)
+    d = _smin(d, e(x / taper, y, z, (0, -70, 20), (45, 24, 60)), 14)
+    # mandible: ramus up towards the ear, the angle, the body along the jawline to the chin
+    # (thin capsules with a tight blend, so the jawline stays a firm edge over the neck)
+    gonion, mental = (42.0, -80.0, 0.0), (14.0, -106.0, 72.0)
+    d = _smin(d, cap(ax, y, z, gonion, mental, 7.0, 8.0), 12)
+    d = _smin(d, cap(ax, y, z, (45.0, -30.0, -4.0), gonion, 6.5, 7.0), 14)
+    # chin: a soft mental protuberance (wider than deep, flat in front), not a ball
+    d = _smin(d, e(x, y, z, (0, -105, 80), (16, 11, 9)), 10)
     d = _smax(d, -e(x, y, z, (0, -84, 97), (15, 3.0, 6)), 6)          # mentolabial sulcus
     # brow ridges (supraorbital), deep orbits, closed eyelids over the eyeballs
     d = _smin(d, e(ax, y, z, (24, 30, 84), (23, 8, 11)), 10)
@@ -201,8 +207,8 @@ def _head_sdf(x, y, z):
     d = _smin(d, e(x, y, z, (0, -55, -44), (52, 45, 52)), 20)
     k_neck = 8.0 + 16.0 * _smoothstep(10.0, -50.0, z)   # crisp under the jaw, soft at the nape
     d = _smin(d, cap(x * 1.04, y, z, (0, -240, -22), (0, -100, -16), 60.0, 52.0), k_neck)
-    d = _smin(d, cap(ax, y, z, (44, -78, -30), (13, -190, 36), 9.0, 8.0), 12)
-    d = _smin(d, e(x, y, z, (0, -132, 36), (7.5, 10, 8)), 8)
+    d = _smin(d, cap(ax, y, z, (44, -78, -30), (19, -194, 30), 9.0, 6.5), 16)
+    d = _smin(d, e(x, y, z, (0, -135, 30.5), (9, 17, 8.5)), 14)          # thyroid cartilage
     d = _smax(d, -e(x, y, z, (0, -188, 48), (10, 9, 9)), 6)            # sternal notch
     d = _smin(d, cap(ax, y, z, (26, -120, -50), (50, -230, -38), 12.0, 14.0), 25)
     # clean collar cut, lower at the back than in front
@@ -239,8 +245,9 @@ def _cast(theta, phi):
 
 
 def _theta_max():
-    """Polar angle where the band stops: a small hole in the middle of the flat collar cut."""
-    return np.pi - np.arctan2(_HOLE_RADIUS, _RAY_ORIGIN[1] - _cut_y(_RAY_ORIGIN[2]))
+    """Polar angle where the band stops: the south pole, so the band closes over the flat collar
+    cut (its last row collapses onto the cut's centre point)."""
+    return np.pi
 
 
 # ---------------------------------------------------------------------------------------------
@@ -252,12 +259,12 @@ class _Ear:
     along the ear plane's normal (helix rim, scapha, antihelix, concha bowl); the two sheets sit
     ±T/2 along the mid-surface normal, closing with a rounded rim."""
 
-    HEIGHT, A_C = 31.0, 9.0
+    HEIGHT, A_C = 32.0, 9.0
     RIM = 0.09  # fraction of the unit disk over which the rim rounds off
 
     def __init__(self, side: float):
         self.side = side
-        tilt, flare = np.radians(16.0), np.radians(30.0)
+        tilt, flare = np.radians(15.0), np.radians(30.0)
         up = np.array([0.0, np.cos(tilt), -np.sin(tilt)])
         back = np.array([side * np.sin(flare), 0.0, -np.cos(flare)])
         back -= up * back.dot(up)
@@ -266,7 +273,7 @@ class _Ear:
         n = np.cross(self.up, self.back)
         self.normal = n * np.sign(n[0] * side)
         # attach the outline's front edge to the skin just in front of the tragus
-        th, ph = np.radians(92.0), side * np.radians(88.0)
+        th, ph = np.radians(85.0), side * np.radians(88.0)
         r = float(_cast(np.array([th]), np.array([ph]))[0])
         self.origin = _RAY_ORIGIN + _direction(th, ph) * r
 
@@ -394,6 +401,9 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     seg = np.sqrt(np.mean(np.linalg.norm(np.diff(pc, axis=0), axis=2) ** 2, axis=1))
     s_of_theta = np.concatenate([[0.0], np.cumsum(seg)])
     circumference = np.linalg.norm(np.diff(pc, axis=1), axis=2).sum(axis=1)
+    # the band's UV width follows the circumference but never shrinks to nothing at the pole
+    # (the underside of the collar cut gets a little stretched texture instead of a UV point)
+    circ_uv = np.maximum(circumference, _POLE_CIRC)
 
     # atlas scale (uv per mm): band across the bottom, crown cap and four ear islands on top
     s_cap = np.interp(_THETA_CAP, th_c, s_of_theta)
@@ -411,7 +421,7 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     cap_centre = np.array([_UV_MARGIN + k * s_cap, v_row + k * s_cap])
 
     def band_uv(theta, phi):
-        c = np.interp(theta, th_c, circumference)
+        c = np.interp(theta, th_c, circ_uv)
         u = 0.5 + k * c * phi / (2 * np.pi)
         v = _UV_MARGIN + k * (s_of_theta[-1] - np.interp(theta, th_c, s_of_theta))
         return np.stack([u, v], axis=-1)
@@ -453,11 +463,13 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     radius_table = _cast(tt, pp)
     n_top = len(theta_top)
     band_p = _RAY_ORIGIN + _direction(tt[n_top:], pp[n_top:]) * radius_table[n_top:, :, None]
+    band_p[-1] = band_p[-1, 0]  # the pole row: one 3D point (exactly, so normals weld there)
     band_uvs = band_uv(tt[n_top:], pp[n_top:])
     ii = np.arange(n_th * n_ph).reshape(n_th, n_ph)
     q0, q1, q2, q3 = ii[:-1, :-1], ii[:-1, 1:], ii[1:, 1:], ii[1:, :-1]
+    # the last row's (q0, q2, q3) triangles would have two corners on the pole: zero area, dropped
     band_tris = np.concatenate([np.stack([q0, q1, q2], -1).reshape(-1, 3),
-                                np.stack([q0, q2, q3], -1).reshape(-1, 3)])
+                                np.stack([q0, q2, q3], -1)[:-1].reshape(-1, 3)])
     positions = [band_p.reshape(-1, 3)]
     uvs = [band_uvs.reshape(-1, 2)]
     tris = [band_tris]
@@ -504,9 +516,14 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     positions = np.concatenate(positions)
     uvs = np.concatenate(uvs)
     indices = np.concatenate(tris)
+    # drop vertices no triangle uses (one pole-row vertex of the band)
+    used = np.zeros(len(positions), dtype=bool)
+    used[indices.ravel()] = True
+    remap = np.cumsum(used) - 1
+    positions, uvs, indices = positions[used], uvs[used], remap[indices]
     normals = _welded_normals(positions, indices)
 
-    maps = _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius_table,
+    maps = _paint(res, seed, k, th_c, s_of_theta, circ_uv, theta_t, phi_b, radius_table,
                   cap_centre, ear_origins, v_band_top)
     return {"positions": positions.astype(np.float32), "normals": normals,
             "uvs": uvs.astype(np.float32), "indices": indices.astype(np.uint32), **maps}
@@ -547,6 +564,21 @@ def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius
     ok = (np.abs(phi) <= np.pi) & (theta >= _THETA_CAP)
     idx = np.flatnonzero(band)[ok]
     point.reshape(-1, 3)[idx] = head_point(theta[ok], phi[ok])
+    # fine eyelid detail the mesh is too coarse to carry (lid line, lower lid, upper-lid fold):
+    # the exact surface is cast again at each eyelid texel and the radial offset from the mesh's
+    # interpolated surface goes into the normal map's height field (mm)
+    detail = np.zeros((res, res))
+    fp = point.reshape(-1, 3)[idx]
+    lid = ((np.abs(fp[:, 0]) - 32.0) / 15.0) ** 2 + ((fp[:, 1] - 14.0) / 11.0) ** 2
+    feather = _smoothstep(1.0, 0.6, lid) * _smoothstep(60.0, 72.0, fp[:, 2])
+    sel = feather > 0
+    th_f, ph_f = theta[ok][sel], phi[ok][sel]
+    ti = np.interp(th_f, theta_t, np.arange(len(theta_t)))
+    pj = np.interp(ph_f, phi_b, np.arange(len(phi_b)))
+    coarse = ndimage.map_coordinates(radius_table, [ti, pj], order=1, mode="nearest")
+    offset = _cast(th_f, ph_f) - coarse
+    offset *= _smoothstep(2.0, 1.0, np.abs(offset))  # grazing misses are not detail
+    detail.reshape(-1)[idx[sel]] = offset * feather[sel]
     island.reshape(-1)[idx] = 1
 
     d = uv - cap_centre
@@ -573,7 +605,7 @@ def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius
     # tangent-space normal map from a pore height field, in mm per texel of the local surface
     gain = np.zeros((res, res))
     gain[skin] = pore_gain
-    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
+    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0) + ndimage.gaussian_filter(detail, 0.7)
     mm_u = np.linalg.norm(np.gradient(point, axis=1), axis=-1)  # mm per texel along +u
     mm_v = np.linalg.norm(np.gradient(point, axis=0), axis=-1)  # along +v (rows)
     scale = 1.0 / (k * res)
@@ -581,7 +613,9 @@ def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius
     mm_v = np.where(skin & (mm_v > 0.1 * scale) & (mm_v < 4 * scale), mm_v, scale)
     dh_du = np.gradient(height, axis=1) / mm_u
     dh_dv = np.gradient(height, axis=0) / mm_v
-    n = np.stack([-dh_du, -dh_dv, np.ones_like(height)], axis=-1)
+    slope = np.hypot(dh_du, dh_dv)
+    limit = np.minimum(1.0, 1.2 / np.maximum(slope, 1e-9))  # keep normals within ~50° of the mesh's
+    n = np.stack([-dh_du * limit, -dh_dv * limit, np.ones_like(height)], axis=-1)
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
 
     full_albedo = np.zeros((res, res, 3))

@@ -129,7 +129,7 @@ def test_adult_proportions(head):
     assert 215 <= hi[1] - chin <= 245          # crown to chin
     assert 140 <= 2 * np.abs(skull[skull[:, 1] > 0][:, 0]).max() <= 165   # head width
     assert hi[1] - 100 > 0 > lo[1] + 100 and 70 <= chin - lo[1] <= 110     # origin in the head, short neck
-    # the collar cut is closed (no open tube): the band ends in a small hole under the neck
+    # the collar cut is closed (no open tube, no hole): the band runs to a pole under the neck
     bottom = head.positions[head.positions[:, 1] < lo[1] + 25]
     assert np.ptp(bottom[:, 0]) > 90                                         # the cut spans the neck
     throat = skull[(np.abs(skull[:, 0]) < 8) & (skull[:, 2] > 20)][:, 1].min()
