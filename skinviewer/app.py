@@ -593,8 +593,12 @@ class ViewerApp(mglw.WindowConfig):
 
     def on_key_event(self, key, action, modifiers):
         self.imgui.key_event(key, action, modifiers)
-        self._shift = bool(getattr(modifiers, "shift", False))
         keys = self.wnd.keys
+        self._shift = bool(getattr(modifiers, "shift", False))
+        if key in _shift_keys(keys) and action in (keys.ACTION_PRESS, keys.ACTION_RELEASE):
+            # X11 reports the modifiers from before the event: a Shift release still says "shift",
+            # which left shift+left-drag panning stuck on after Shift was let go
+            self._shift = action == keys.ACTION_PRESS
         if action != keys.ACTION_PRESS:
             return
         ctrl = bool(getattr(modifiers, "ctrl", False))
@@ -648,6 +652,18 @@ class ViewerApp(mglw.WindowConfig):
         imgui.destroy_context(self.imgui_ctx)
 
 
+def _shift_keys(keys) -> set:
+    codes = {getattr(keys, n, None) for n in ("LEFT_SHIFT", "RIGHT_SHIFT")}
+    try:
+        import glfw
+        if keys.__module__.startswith("moderngl_window.context.glfw"):
+            codes |= {glfw.KEY_LEFT_SHIFT, glfw.KEY_RIGHT_SHIFT}
+    except Exception:
+        pass
+    codes.discard(None)
+    return codes
+
+
 def _style() -> None:
     from imgui_bundle import imgui
     imgui.style_colors_dark()
@@ -679,6 +695,9 @@ def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, 
                     wnd = cls(title="skinviewer", size=tuple(size), resizable=True, visible=visible,
                               gl_version=(3, 3), aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
                 mglw.activate_context(window=wnd)
+                # moderngl-window closes the window on Escape by default: that quit the session (unsaved
+                # edits and all) when Escape was meant for a text field or for leaving the pass inspector
+                wnd.exit_key = None
                 return wnd
             except Exception as exc:
                 errors.append(f"{name}: {exc}")

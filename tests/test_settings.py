@@ -105,3 +105,15 @@ def test_shipped_presets_are_valid():
     for f in files:
         s = load_preset(f)
         assert validate(to_dict(s)) == s
+
+
+def test_saved_files_get_ordinary_permissions(tmp_path):
+    """Atomic writes go through a private temporary file; the result is readable like a plain write."""
+    p = tmp_path / "perm.json"
+    save_preset(Settings(), p)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert p.stat().st_mode & 0o777 == 0o666 & ~umask
+    p.chmod(0o640)
+    save_preset(Settings(), p)  # replacing keeps the file's own mode
+    assert p.stat().st_mode & 0o777 == 0o640

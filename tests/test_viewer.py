@@ -82,6 +82,16 @@ def _key(app, key, ctrl=False):
     app.on_key_event(key, app.wnd.keys.ACTION_RELEASE, mods)
 
 
+def _settle(app, max_frames: int = 30) -> None:
+    """Step until imgui has consumed the queued input: its event queue spreads a drag's press, moves
+    and release over several frames, and until then the widget it hit holds the keyboard."""
+    from imgui_bundle import imgui
+    for _ in range(max_frames):
+        app.step(1)
+        if not imgui.get_io().want_capture_keyboard and not imgui.internal.get_active_id():
+            return
+
+
 def _in_view(app) -> tuple[float, float]:
     vx, vy, vw, vh = app.layout.view
     return vx + vw * 0.7, vy + vh * 0.6
@@ -419,7 +429,7 @@ def test_orbit_and_zoom_only_in_view_region(app):
     assert app.last_change.section() == "camera"
     assert app.last_change.texture_ms == 0.0 and app.last_change.view_ms > 0  # orbit: view-dependent only
     app.reset_camera()
-    app.step(1)
+    _settle(app)
 
 
 def test_shortcuts_switch_technique_and_save(app, tmp_path):

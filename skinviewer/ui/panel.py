@@ -58,6 +58,13 @@ def _short(source: str, n: int = 38) -> str:
 EXPAND_ALL = {"on": False}  # tests: open every section so every widget is drawn
 
 
+def _same_line_if_fits(text: str, spacing: float = -1.0) -> None:
+    """Continue the current line with ``text`` if it fits there, else start a new line."""
+    imgui.same_line(0, spacing)
+    if imgui.calc_text_size(text).x > imgui.get_content_region_avail().x:
+        imgui.new_line()
+
+
 def _header(label: str, open_default: bool = False) -> bool:
     flags = imgui.TreeNodeFlags_.default_open.value if open_default else 0
     if EXPAND_ALL["on"]:
@@ -189,11 +196,14 @@ class Panel:
             return
         imgui.push_text_wrap_pos(0)
         imgui.text_colored(DIM, f"last change ({_short(ch.source)}): ")
-        imgui.same_line(0, 0)
         col = ERR if ch.total_ms > 1000 else (WARN if ch.total_ms > 100 else OK)
+        # a part that does not fit after a long source goes on the next line (wrapped into the
+        # few pixels left, it came out one or two letters per line)
+        _same_line_if_fits(f"{ch.total_ms:.0f} ms", 0.0)
         imgui.text_colored(col, f"{ch.total_ms:.0f} ms")
-        imgui.same_line()
-        imgui.text_colored(DIM, f"= texture {ch.texture_ms:.0f} + view {ch.view_ms:.0f}")
+        tail = f"= texture {ch.texture_ms:.0f} + view {ch.view_ms:.0f}"
+        _same_line_if_fits(tail)
+        imgui.text_colored(DIM, tail)
         imgui.pop_text_wrap_pos()
         if imgui.is_item_hovered():
             rows = "\n".join(f"  {n:<22} {ms:8.1f} ms" for n, ms in ch.passes)
@@ -307,8 +317,9 @@ class Panel:
             app.select_scene(SCENES[i])
         if self.mesh_path is None or (not self.mesh_path and sc.mesh and not imgui.is_any_item_active()):
             self.mesh_path = sc.mesh or ""
-        ch, self.mesh_path = imgui.input_text("mesh path", self.mesh_path)
-        if imgui.button("load mesh"):
+        entered, self.mesh_path = imgui.input_text("mesh path", self.mesh_path,
+                                                   imgui.InputTextFlags_.enter_returns_true.value)
+        if imgui.button("load mesh") or (entered and self.mesh_path.strip()):
             app.load_mesh(self.mesh_path.strip())
         imgui.same_line()
         if imgui.button("use built-in"):
@@ -579,8 +590,11 @@ class Panel:
         p = app.presets
         if not _header("Presets"):
             return
-        ch, p.edit_path = imgui.input_text("path", p.edit_path)
-        if imgui.button("load"):
+        # Enter in the path field loads it (same as the button below)
+        entered, p.edit_path = imgui.input_text("path", p.edit_path, imgui.InputTextFlags_.enter_returns_true.value)
+        if imgui.is_item_hovered():
+            imgui.set_item_tooltip("a preset .json; Enter or 'load' loads it, 'save as' writes the current state there")
+        if (imgui.button("load") or entered) and p.edit_path.strip():
             app.load_preset(p.edit_path.strip())
         imgui.same_line()
         if imgui.button("save (Ctrl+S)"):

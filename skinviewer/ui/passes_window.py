@@ -18,6 +18,7 @@ class PassesWindow:
     def __init__(self, app):
         self.app = app
         self.open = True
+        self._rect: tuple[float, float, float, float] | None = None  # last frame's (x, y, w, h)
 
     def draw(self) -> None:
         app = self.app
@@ -27,13 +28,21 @@ class PassesWindow:
         imgui.set_next_window_size(imgui.ImVec2(WIDTH, min(520.0, vh - 16)), imgui.Cond_.first_use_ever.value)
         if vw < 900:  # small views: start collapsed so the image stays visible
             imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
+        if self._rect is not None:
+            # the window shrank (or the panel moved): keep the passes window on screen
+            x, y, w, h = self._rect
+            ww, wh = app.layout.window
+            nx, ny = max(0.0, min(x, ww - w)), max(0.0, min(y, wh - h))
+            if (nx, ny) != (x, y):
+                imgui.set_next_window_pos(imgui.ImVec2(nx, ny), imgui.Cond_.always.value)
         expanded = imgui.begin("Passes###passes")[0]
         if expanded:
             self._timing()
             self._inspector()
             self._table()
         pos, size = imgui.get_window_pos(), imgui.get_window_size()
-        app.ui_rects.append((pos.x, pos.y, size.x, size.y))
+        self._rect = (pos.x, pos.y, size.x, size.y)
+        app.ui_rects.append(self._rect)
         imgui.end()
 
     def _timing(self) -> None:
