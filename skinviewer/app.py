@@ -103,6 +103,7 @@ class ViewerApp(mglw.WindowConfig):
         # a frame whose passes take longer than this is spread over several displayed frames (the UI
         # stays responsive; the image on screen changes once, complete); None: one frame, however long
         self.frame_budget_ms: float | None = 100.0
+        self._drag_scaled = False  # the last frame was rendered at the reduced orbit resolution
         self._partial_ran: list = []  # passes that ran in the frames of an unfinished spread frame
         self.drag_budget_ms = 60.0
         self.panel_side = "left"
@@ -271,9 +272,12 @@ class ViewerApp(mglw.WindowConfig):
             try:
                 self.settings = with_values(self.settings, {"render.width": vw, "render.height": vh})
                 if not self._change_source:
-                    self._change_source = "render size"
+                    self._change_source = ("camera (orbit at reduced resolution)" if scale < 1.0 else
+                                           "camera (orbit done: full resolution)" if self._drag_scaled else
+                                           "render size")
             except SettingsError:
                 pass
+        self._drag_scaled = scale < 1.0
 
     def drag_scale(self) -> float:
         """Resolution scale of the view while the camera is dragged (1 when not dragging)."""

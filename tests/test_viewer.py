@@ -553,6 +553,7 @@ def test_orbit_renders_smaller_while_dragging_when_slow(app):
     app.on_mouse_release_event(x0 + 20, y0, button)
     app.step(1)
     assert (app.settings.render.width, app.settings.render.height) == full
+    assert "orbit" in app.last_change.source  # the cost line names the orbit, not a resize
     app.drag_budget_ms = 60.0
 
 
