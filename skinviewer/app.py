@@ -366,7 +366,7 @@ class ViewerApp(mglw.WindowConfig):
         for p in report.passes:
             if p.status == "ran" and p.ms is not None:
                 self.last_ms[p.name] = p.ms
-        if report.ran:
+        if report.ran or self._change_source == "technique":  # a cached technique switch costs 0 ms: say so
             self._record_change(report)
         self._shown = self.settings
         self._change_source = ""

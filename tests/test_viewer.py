@@ -594,3 +594,14 @@ def test_long_frames_are_spread_and_shown_once_complete(app):
         assert {"gosselin_light_map", "gosselin_blur", "gosselin_final", "output"} <= ran
     finally:
         app.frame_budget_ms = None
+
+
+def test_switching_back_to_a_cached_technique_reports_zero_cost(app):
+    app.set_technique("phong")
+    app.step(1)
+    app.set_technique("gosselin")
+    app.step(1)
+    app.set_technique("phong")  # all of phong's passes are still cached
+    app.step(1)
+    assert app.report.ran == [] and app.last_change.source == "technique"
+    assert app.last_change.total_ms == 0.0
