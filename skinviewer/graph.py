@@ -135,11 +135,16 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")
         return self.graph._textures[resource]
 
+    def _own(self, resource: str) -> str:
+        if resource not in self._refl.outputs:
+            raise GraphError(f"pass {self.pass_.name} writes '{resource}' it did not declare as an output")
+        return resource
+
     def output(self, resource: str) -> moderngl.Texture:
-        return self.graph._textures[resource]
+        return self.graph._textures[self._own(resource)]
 
     def framebuffer(self, *resources: str) -> moderngl.Framebuffer:
-        return self.graph._framebuffer(resources)
+        return self.graph._framebuffer(tuple(self._own(r) for r in resources))
 
     def program(self, name: str, **defines) -> moderngl.Program:
         if (name, tuple(sorted(defines.items()))) not in self._refl.programs:

@@ -149,6 +149,17 @@ def test_undeclared_setting_is_an_error(gl_ctx, shader_dir):
         g.run(frame(Settings()))
 
 
+def test_writing_an_undeclared_output_is_an_error(gl_ctx, shader_dir):
+    class Trespasser(Fill):
+        def execute(self, ec):
+            ec.framebuffer("a")  # written by another pass
+
+    g, _ = make_graph(gl_ctx, shader_dir, [Fill("fill_a", "a", "render.exposure"), Trespasser("t", "b", "phong.ambient")],
+                      ["a", "b"])
+    with pytest.raises(GraphError, match="did not declare as an output"):
+        g.run(frame(Settings()))
+
+
 def test_graph_errors(gl_ctx, shader_dir):
     g, _ = make_graph(gl_ctx, shader_dir, [Add("x", "y_out", "b", "x_out"), Add("y", "x_out", "b", "y_out"),
                                             Fill("fb", "b", "render.exposure")], ["x_out"])
