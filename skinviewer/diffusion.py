@@ -86,31 +86,12 @@ KERNEL7 = _solve_kernel()
 # Narrow inputs. Seven taps one sigma apart reproduce a Gaussian only when the texture being
 # blurred is already smooth at that spacing: copies of a Gaussian of std s spaced h apart ripple by
 # ~2 exp(-2 pi^2 s^2 / h^2) (10 % at s/h = 0.39: blur 2 of the skin profile). Denser taps
-# (t = sigma/h > 1, weights exp(-k^2/2t^2), h rescaled so the added variance stays exact) were
-# tried: on the laser test (1024^2, 24 mm slab) truncating at +-3 taps = +-1.9 sigma (t = 1.6)
-# cut the blue tail at r = 0.4 mm by 56 % and doubled the r-weighted error (B 4.4 % -> 9.5 %),
-# so T_MAX = 1: eq. (25)'s spacing of one sigma, always.
+# (t = sigma/h > 1) were tried: on the laser test (1024^2, 24 mm slab) truncating at +-3 taps =
+# +-1.9 sigma (t = 1.6) cut the blue tail at r = 0.4 mm by 56 % and doubled the r-weighted error
+# (B 4.4 % -> 9.5 %), so every blur keeps eq. (25)'s spacing of one sigma, and a too-narrow input
+# is handled by splitting the increment instead (``sub_steps``, SMOOTH_RATIO).
 SMOOTH_RATIO = 0.6
-T_MAX = 1.0
 
-
-def kernel7(t: float = 1.0) -> tuple[np.ndarray, float]:
-    """(weights (7,), h/sigma): taps at k * h, k = -3..3, for a blur of standard deviation sigma,
-    t = sigma/h nominal taps per sigma (1 = eq. 25 exactly)."""
-    t = float(np.clip(t, 1.0, T_MAX))
-    w = KERNEL7.copy() if t == 1.0 else _kernel(t)
-    var = float(np.sum(w * TAP_OFFSETS ** 2))
-    return w, 1.0 / np.sqrt(var)
-
-
-def taps_per_sigma(sigma_in: float, sigma_inc: float, texel_mm: float = 0.0) -> float:
-    """t for blurring a texture already blurred by sigma_in (mm) with an increment sigma_inc."""
-    s_in = max(float(sigma_in), 0.5 * float(texel_mm))
-    if sigma_inc <= 0.0:
-        return 1.0
-    if s_in <= 0.0:
-        return T_MAX
-    return float(np.clip(SMOOTH_RATIO * sigma_inc / s_in, 1.0, T_MAX))
 GPU_GEMS_KERNEL7 = np.array([0.006, 0.061, 0.242, 0.382, 0.242, 0.061, 0.006])
 
 

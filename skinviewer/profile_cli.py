@@ -35,6 +35,15 @@ def _triple(text: str, name: str) -> tuple[float, float, float]:
     return (vals[0], vals[1], vals[2])
 
 
+def _warn_thin(thickness: float, ssp, sa, what: str) -> None:
+    """The multipole assumes a slab thicker than one transport mean free path 1/sigma_t' (seed 001
+    §2.3.4); thinner, its transmittance can even turn negative. Say so, once, on stderr."""
+    mfp = max(1.0 / max(s + a, 1e-12) for s, a in zip(ssp, sa))
+    if math.isfinite(thickness) and thickness < mfp:
+        print(f"skinviewer profile: note: {what} is {thickness:g} mm thick, under one mean free path "
+              f"({mfp:.3g} mm): the multipole is unreliable there", file=sys.stderr)
+
+
 def _layer(text: str) -> P.Layer:
     # THICKNESS:SSP_R,SSP_G,SSP_B:SA_R,SA_G,SA_B[:ETA]
     parts = text.split(":")
@@ -131,11 +140,15 @@ def _build_model(a):
             raise _Bad("give either a material/coefficients (one slab) or --layer/--skin-example")
         if not (a.thickness > 0):
             raise _Bad("--thickness must be > 0 mm")
+        _warn_thin(a.thickness, ssp, sa, "the slab")
         return P.Multipole(ssp, sa, a.thickness, eta), f"multipole: {name}, slab {a.thickness:g} mm"
     if a.layer:
         if a.skin_example:
             raise _Bad("give either --layer options or --skin-example")
-        return P.LayeredMultipole([_layer(t) for t in a.layer]), f"multipole: {len(a.layer)} layers"
+        layers = [_layer(t) for t in a.layer]
+        for i, lay in enumerate(layers):
+            _warn_thin(lay.thickness, lay.sigma_s_prime, lay.sigma_a, f"layer {i + 1}")
+        return P.LayeredMultipole(layers), f"multipole: {len(a.layer)} layers"
     return P.three_layer_skin(), "multipole: three-layer skin example"
 
 

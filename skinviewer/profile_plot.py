@@ -33,7 +33,10 @@ def plot_arrays(profile: Callable[[np.ndarray], np.ndarray], fit: FitResult | No
     """{"r": (n,) mm, "rR": (n, 3) r*R(r), "rG": (n, 3) r*G_sum(r) or absent}, r from 0 to r_max."""
     r_max = plot_range(profile) if r_max is None else float(r_max)
     r = np.linspace(0.0, r_max, n)
-    out = {"r": r, "rR": r[:, None] * np.nan_to_num(np.asarray(profile(r), dtype=float), posinf=0.0)}
+    # r R(r) is continuous at 0 but R may be singular there (Burley ~ 1/r): evaluate the first sample
+    # at a radius far below the plot's resolution instead of 0 * inf
+    re = np.maximum(r, 1e-9 * r_max)
+    out = {"r": r, "rR": re[:, None] * np.nan_to_num(np.asarray(profile(re), dtype=float), posinf=0.0)}
     if fit is not None:
         out["rG"] = r[:, None] * fit(r)
     return out

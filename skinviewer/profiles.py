@@ -32,6 +32,8 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.special import j0
 
+from .diffusion import gaussian as _diffusion_gaussian
+
 FOUR_PI = 4.0 * math.pi
 
 ArrayLike = float | Sequence[float] | np.ndarray
@@ -186,6 +188,39 @@ def dipole(r: ArrayLike, sigma_s_prime: ArrayLike, sigma_a: ArrayLike, eta: floa
 # ---------------------------------------------------------------------------------------------
 # Donner & Jensen 2005 multipole (one slab)
 
+def _cosh_sinh_over_sinh(q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """cosh(q a) sinh(q b) / sinh(q c) for q >= 0, 0 <= a, 0 <= b, a + b <= c, c > 0: finite for any q
+    (exponential form, no overflow), b/c at q = 0 (the limit)."""
+    x = q * c
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+        e = lambda t: np.exp(np.minimum(t, 0.0))  # arguments are <= 0 up to rounding
+        big = 0.5 * (e(q * (a + b - c)) + e(q * (b - a - c)) - e(q * (a - b - c)) - e(-q * (a + b + c)))
+        big = big / -np.expm1(-2.0 * x)
+        small = np.cosh(q * a) * np.sinh(q * b) / np.sinh(x)
+    return np.where(x < 1e-6, b / c, np.where(x < 1.0, small, big))
+
+
+def _slab_hat_closed(c: _Coefficients, d: float, A_top: float, A_bot: float, q: np.ndarray,
+                     transmit: bool) -> np.ndarray:
+    """The image series of eq. (2.65)/(2.67) transformed and summed over all i in closed form.
+    sum_i over the images is the 1-D Green's function of g'' - q^2 g = -delta(z - l) with g = 0 at the
+    extrapolated boundaries -2 A_top D and d + 2 A_bot D (distance P apart); the sums are its derivatives
+    at z = 0 and z = d:  R^(k) = alpha' cosh(q z_b0) sinh(q (d + z_bd - l)) / sinh(q P),
+    T^(k) = alpha' cosh(q z_bd) sinh(q (l + z_b0)) / sinh(q P)  (l < d; for l > d the flux at z = d points
+    up: T^ = -alpha' cosh(q (d + z_b0)) sinh(q (d + z_bd - l)) / sinh(q P)). Needs l < d + z_bd.
+    Used where the series converges too slowly (q P -> 0: sigma_a -> 0 at k = 0)."""
+    D = c.D
+    l = 1.0 / c.sigma_t_prime
+    zb0, zbd = 2.0 * A_top * D, 2.0 * A_bot * D
+    P = d + zb0 + zbd
+    up = d + zbd - l  # source to the lower extrapolated boundary (> 0)
+    if not transmit:
+        return c.alpha_prime * _cosh_sinh_over_sinh(q, zb0, up, P)
+    below = c.alpha_prime * _cosh_sinh_over_sinh(q, zbd, l + zb0, P)
+    above = -c.alpha_prime * _cosh_sinh_over_sinh(q, d + zb0, up, P)
+    return np.where(l <= d, below, above)
+
+
 def _slab_sources(c: _Coefficients, d: float, A_top: float, A_bot: float, n: int):
     """Source heights below the top surface (z down into the slab), seed 001 eq. (2.60)-(2.63):
     z_r,i = 2 i P + l, z_v,i = 2 i P - l - 4 A_top D, P = d + 2 A_top D + 2 A_bot D, i = -n..n."""
@@ -336,7 +371,13 @@ class Multipole:
             qq = q[sel]
             for j in ({n + i, n - i} if i else {n}):
                 acc[sel] += _dipole_term_hat(qq, z_r[j]) - _dipole_term_hat(qq, z_v[j])
-        return (c.alpha_prime / FOUR_PI * acc).reshape(shape)
+        out = c.alpha_prime / FOUR_PI * acc
+        # n images are not enough where q P is small (weak absorption near k = 0: the pairs decay only
+        # like q e^(-2 i P q)); unless n was chosen explicitly, those rows take the series' exact sum
+        slow = need > n
+        if self.n_dipoles is None and np.any(slow) and np.all(1.0 / c.sigma_t_prime < d + 2.0 * self.A_bot * c.D):
+            out[slow] = _slab_hat_closed(c, d, self.A_top, self.A_bot, q[slow], transmit)
+        return out.reshape(shape)
 
     def hankel(self, k: ArrayLike) -> np.ndarray:
         if self.semi_infinite:
@@ -527,16 +568,21 @@ def burley_scale(albedo: ArrayLike, config: str = "searchlight-dmfp") -> np.ndar
     raise ValueError(f"unknown Burley configuration {config!r}; known: {', '.join(BURLEY_CONFIGS)}")
 
 
+R_FLOOR = 1e-12  # Burley's r floor, in units of d
+
+
 def burley_normalized(r: ArrayLike, d: ArrayLike) -> np.ndarray:
     """Eq. (2.83): R(r) = (e^(-r/d) + e^(-r/(3d))) / (8 pi d r); 2 pi int r R dr = 1.
-    ``d`` broadcasts against r (e.g. shape (3,) for RGB with r[..., None]). At r = 0 the 1/r
-    singularity is integrable; the returned value there is +inf."""
-    r = np.abs(np.asarray(r, dtype=float))
+    ``d`` broadcasts against r (e.g. shape (3,) for RGB with r[..., None]). The 1/r singularity at
+    r = 0 is integrable but infinite: r is floored at R_FLOOR * d (1e-12 d: nothing a plot or a fit
+    resolves), so the value stays finite."""
     d = np.asarray(d, dtype=float)
+    r = np.maximum(np.abs(np.asarray(r, dtype=float)), R_FLOOR * np.where(np.isfinite(d), d, 0.0))
     with np.errstate(divide="ignore", under="ignore", invalid="ignore"):
         num = np.exp(-r / d) + np.exp(-r / (3.0 * d))
         out = num / (8.0 * math.pi * d * r)
-    return np.where(d > 0, out, 0.0)
+    out = np.nan_to_num(out, nan=0.0, posinf=np.finfo(float).max)  # d below ~1e-140 mm would overflow
+    return np.where((d > 0) & np.isfinite(d), out, 0.0)  # d = inf (no absorption): spread to nothing
 
 
 def diffuse_mean_free_path(sigma_s_prime: ArrayLike, sigma_a: ArrayLike) -> np.ndarray:
@@ -676,15 +722,13 @@ DEON_SKIN_GAUSSIANS: tuple[tuple[float, tuple[float, float, float]], ...] = (
 
 
 def gaussian(v: ArrayLike, r: ArrayLike) -> np.ndarray:
-    """G(v, r) = exp(-r^2/(2v)) / (2 pi v), seed 000 eq. (21): unit integral over the plane."""
-    v = np.asarray(v, dtype=float)
-    r = np.asarray(r, dtype=float)
-    with np.errstate(under="ignore", divide="ignore", invalid="ignore"):
-        return np.where(v > 0, np.exp(-(r * r) / (2.0 * v)) / (2.0 * math.pi * v), 0.0)
+    """G(v, r) = exp(-r^2/(2v)) / (2 pi v), seed 000 eq. (20): unit integral over the plane.
+    The one implementation is :func:`skinviewer.diffusion.gaussian` (v <= 0 -> 0, never Inf)."""
+    return _diffusion_gaussian(v, r)
 
 
 def sum_of_gaussians(r: ArrayLike, variances: ArrayLike, weights: ArrayLike) -> np.ndarray:
-    """R(r) = sum_i w_i G(v_i, r), seed 000 eq. (20).
+    """R(r) = sum_i w_i G(v_i, r), seed 000 eq. (21).
 
     ``variances`` (k,) shared with ``weights`` (k, 3) -> shape np.shape(r) + (3,);
     ``weights`` (k,) -> np.shape(r); per-channel ``variances`` (3, k) with ``weights`` (3, k) -> (..., 3).

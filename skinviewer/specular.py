@@ -109,7 +109,7 @@ def _half_terms(n, l, v):
     n, l, v = safe_normalize(n), safe_normalize(l), safe_normalize(v)
     h = l + v
     hh = _dot(h, h)
-    ok = (hh >= HH_EPS) & (_dot(v, v) > 0.5)  # and V was not a zero vector
+    ok = (hh >= HH_EPS) & (_dot(v, v) > 0.5) & (_dot(l, l) > 0.5)  # and neither V nor L was zero
     hn = h / np.sqrt(np.where(ok, hh, 1.0))[..., None]
     hn = np.where(ok[..., None], hn, 0.0)
     x = np.cross(n, hn)

@@ -81,3 +81,23 @@ def test_bad_input_exits_2_with_one_line(argv, needle, capsys):
     code, out, err = run(argv, capsys)
     assert code == 2
     assert needle in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_plot_arrays_r_times_burley_is_finite_and_continuous_at_zero():
+    """r R(r) -> 2 A / (8 pi d) at r = 0 for Burley (R ~ 1/r): the first plotted point is that limit."""
+    import math
+
+    from skinviewer import profiles as P
+    from skinviewer.profile_plot import plot_arrays
+    b = P.Burley(0.6, 1.0)
+    data = plot_arrays(b, r_max=5.0, n=501)
+    lim = 2 * 0.6 / (8 * math.pi * b.d)
+    assert abs(data["rR"][0, 0] - lim[0]) < 1e-6 * lim[0]
+    assert abs(data["rR"][1, 0] - data["rR"][0, 0]) < 0.05 * lim[0]
+
+
+def test_thin_layer_is_flagged(capsys):
+    code, out, err = run(["--model", "multipole", "--layer", "0.3:2,3,4:0.01,0.02,0.03", "--layer",
+                          "inf:1,1,1:0.05,0.1,0.2", "--fit", "2", "--json"], capsys)
+    assert code == 0
+    assert "layer 1 is 0.3 mm thick, under one mean free path" in err

@@ -178,3 +178,85 @@ def test_materials_table():
     assert all(m.eta == 1.3 for m in P.MATERIALS.values())
     with pytest.raises(KeyError, match="known"):
         P.material("unobtainium")
+
+
+def _fresnel_dielectric(mu, n1, n2):
+    """Unpolarised Fresnel reflectance from medium n1 into n2 at incidence cosine mu (TIR -> 1)."""
+    s2 = (n1 / n2) ** 2 * (1 - mu * mu)
+    ct = np.sqrt(np.clip(1 - s2, 0, None))
+    rs = (n1 * mu - n2 * ct) / (n1 * mu + n2 * ct)
+    rp = (n1 * ct - n2 * mu) / (n1 * ct + n2 * mu)
+    return np.where(s2 >= 1, 1.0, 0.5 * (rs * rs + rp * rp))
+
+
+@pytest.mark.parametrize("eta", [0.7, 0.77, 0.9, 1.1, 1.3, 1.4, 1.6])
+def test_fresnel_diffuse_reflectance_is_eq_2_49(eta):
+    """The rational fits against eq. (2.49) integrated: F_dr = 2 int_0^1 F_r(mu) mu dmu, light inside
+    the medium of relative index eta (the fits are good to ~1e-3); A = (1 + F_dr)/(1 - F_dr)."""
+    mu = (np.arange(400000) + 0.5) / 400000
+    exact = 2 * np.mean(_fresnel_dielectric(mu, eta, 1.0) * mu)
+    f = P.fresnel_diffuse_reflectance(eta)
+    assert abs(f - exact) < 1.5e-3, (f, exact)
+    assert P.boundary_A(eta) == pytest.approx((1 + f) / (1 - f))
+
+
+def _slab_closed_form(m, k):
+    """Independent check of the image positions (eq. 2.60-2.63): the sum over all images is the 1-D
+    Dirichlet Green's function on [-z_b0, d + z_bd], z_b = 2 A D, source at l = 1/sigma_t'; R^ and T^
+    are its fluxes at z = 0 and z = d (l < d here)."""
+    c = m.c
+    q = np.sqrt(c.sigma_tr**2 + k * k)
+    l, zb0, zbd = 1 / c.sigma_t_prime, 2 * m.A_top * c.D, 2 * m.A_bot * c.D
+    Pw = m.thickness + zb0 + zbd
+    with np.errstate(divide="ignore", invalid="ignore"):
+        R = np.where(q > 0, np.cosh(q * zb0) * np.sinh(q * (m.thickness + zbd - l)) / np.sinh(q * Pw),
+                     (m.thickness + zbd - l) / Pw)
+        T = np.where(q > 0, np.cosh(q * zbd) * np.sinh(q * (l + zb0)) / np.sinh(q * Pw), (l + zb0) / Pw)
+    return c.alpha_prime * R, c.alpha_prime * T
+
+
+@pytest.mark.parametrize("ssp, sa, d, eta_below", [
+    ((10, 10, 10), (0.05, 0.1, 0.2), 1.0, 1.0),
+    ((5, 6, 7), (0.5, 0.1, 0.01), 0.5, 1.33),  # different A at the two faces
+    ((1, 1, 1), (1e-4, 1e-6, 1e-8), 2.0, 1.0),  # weak absorption: slowly converging image series
+    ((1, 1, 1), (0, 0, 0), 2.0, 1.0),  # no absorption: R + T = 1
+])
+def test_multipole_transforms_match_the_summed_image_series(ssp, sa, d, eta_below):
+    m = P.Multipole(ssp, sa, d, eta=1.4, eta_above=1.0, eta_below=eta_below)
+    for k in (0.0, 0.3, 2.0, 20.0):
+        R, T = _slab_closed_form(m, k)
+        np.testing.assert_allclose(m.hankel(k), R, rtol=1e-9, atol=1e-300)
+        np.testing.assert_allclose(m.hankel_transmittance(k), T, rtol=1e-9, atol=1e-300)
+    if max(sa) == 0:
+        np.testing.assert_allclose(m.total_reflectance() + m.total_transmittance(), 1.0, rtol=1e-12)
+    assert np.all(np.isfinite(m.hankel(np.array([0.0, 1e-12, 1e-3, 1e3, 1e9]))))
+
+
+def test_burley_scale_fits_away_from_their_zeros():
+    # A = 0.2 exercises the |A - 0.8|^3, (A - 0.33)^4 and (A - 0.8)^2 terms of eq. 2.86, 2.88, 2.89
+    np.testing.assert_allclose(P.burley_scale(0.2, "searchlight-mfp"), 1.85 - 0.2 + 7 * 0.6**3)
+    np.testing.assert_allclose(P.burley_scale(0.2, "searchlight-dmfp"), 3.5 + 100 * 0.13**4)
+    np.testing.assert_allclose(P.burley_scale(0.2, "diffuse-transmission"), 1.9 - 0.2 + 3.5 * 0.6**2)
+    np.testing.assert_allclose(P.burley_scale(1.0, "searchlight-mfp"), 0.85 + 7 * 0.2**3)
+
+
+def test_diffuse_mean_free_path_eq_2_87():
+    ssp, sa = np.array([1.0, 2.0, 4.0]), np.array([0.1, 0.2, 0.0])
+    st = ssp + sa
+    D = (st + sa) / (3 * st**2)
+    with np.errstate(divide="ignore"):
+        np.testing.assert_allclose(P.diffuse_mean_free_path(ssp, sa), 1 / np.sqrt(sa / D))
+    assert np.isinf(P.diffuse_mean_free_path(ssp, sa)[2])
+
+
+def test_gaussian_never_inf():
+    assert np.isfinite(P.gaussian(1e-310, 0.0)) and P.gaussian(1e-310, 1.0) == 0.0
+    assert P.gaussian(-1.0, 0.0) == 0.0
+
+
+def test_burley_is_finite_at_r_zero():
+    """The product promise: no Inf, even at the integrable 1/r singularity of eq. 2.83."""
+    import numpy as np
+    from skinviewer import profiles as P
+    v = P.burley_normalized(np.array([0.0, 1e-300, 1e-9]), np.array([[0.5], [1.0], [2.0]]))
+    assert np.all(np.isfinite(v)) and np.all(v > 0)
