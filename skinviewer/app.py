@@ -82,7 +82,6 @@ class ViewerApp(mglw.WindowConfig):
         self.inspect_channel = "RGB"
         self.inspect_exposure = 1.0
         self.frame_ms: deque[float] = deque(maxlen=240)
-        self.render_ms: deque[float] = deque(maxlen=240)
         self.show_ui = True
         self.vsync_on = bool(getattr(self.wnd, "vsync", True))
         self.frames = 0
@@ -90,6 +89,7 @@ class ViewerApp(mglw.WindowConfig):
         self._pending_shots: list[tuple[Path | None, bool]] = []
         self._buttons: set[int] = set()
         self._drag_owner: str | None = None
+        self._drag_moved = False  # the current view drag has moved the camera / light (not a mere click)
         self._shift = False
         self._last_frame_t: float | None = None
         self.ui_rects: list[tuple[float, float, float, float]] = []
@@ -105,6 +105,8 @@ class ViewerApp(mglw.WindowConfig):
         self.frame_budget_ms: float | None = 100.0
         self._drag_scaled = False  # the last frame was rendered at the reduced orbit resolution
         self._partial_ran: list = []  # passes that ran in the frames of an unfinished spread frame
+        self._rendered: tuple[str, int, int] | None = None  # technique and size of the last main render
+        self._pools_trimmed_for: tuple[str, int, int] | None = None
         self.drag_budget_ms = 60.0
         self.panel_side = "left"
         self.layout: Layout = self._compute_layout()
@@ -206,8 +208,7 @@ class ViewerApp(mglw.WindowConfig):
         return ok
 
     def set_technique(self, name: str) -> bool:
-        if self.inspect is not None:
-            self.inspect = None
+        self.inspect = None
         ok = self.apply({"technique": name}, "technique")
         if ok:
             self.say(f"technique: {name}")
@@ -237,8 +238,11 @@ class ViewerApp(mglw.WindowConfig):
             self.say(f"refused preset {path}" + (f": {errs[0][0]}: {errs[0][1]}" if errs else ""), error=True)
             return False
         if not self.set_settings(s, f"preset {path}"):
-            self.presets.errors, self.presets.error_source = list(self.errors), path
+            # refused after loading: the current preset file and its saved baseline stay (Ctrl+S
+            # must not write this state over the file that was refused)
+            self.presets.refused(path, self.errors)
             return False
+        self.presets.accepted(self.settings, path)
         self.home_camera = self.settings.camera.model_dump(mode="json")
         self.say(f"loaded preset {path}")
         return True
@@ -281,7 +285,7 @@ class ViewerApp(mglw.WindowConfig):
 
     def drag_scale(self) -> float:
         """Resolution scale of the view while the camera is dragged (1 when not dragging)."""
-        if self._drag_owner != "view" or not self._buttons or self.drag_resolution == "full":
+        if self._drag_owner != "view" or not self._drag_moved or not self._buttons or self.drag_resolution == "full":
             return 1.0
         if self.drag_resolution != "auto":
             return float(self.drag_resolution)
@@ -310,11 +314,10 @@ class ViewerApp(mglw.WindowConfig):
             ui_built = self._build_ui(frametime)
         self._sync_size()
 
-        t0 = time.perf_counter()
         self.report = self._render_main()
         self._draw_view(self.layout.view_fb)
-        self.render_ms.append((time.perf_counter() - t0) * 1000.0)
         self.watcher.refresh_errors()
+        self._trim_texture_pools()
 
         self._take_shots(include_ui=False)
         if ui_built:
@@ -342,21 +345,23 @@ class ViewerApp(mglw.WindowConfig):
         last_cost = self.last_change.total_ms if self.last_change else None
         # a spread frame in progress is finished first, whatever the scheduler says
         defer = not self._partial_ran and self._shown is not None \
-            and self.scheduler.should_defer(pending, self._ui_active, last_cost)
+            and self.scheduler.should_defer(pending, self._ui_active, last_cost) \
+            and not self._scene_changed(self._shown)
         self.scheduler.deferred = defer
         target = self._shown if defer else self.settings
         try:
             report = self.renderer.render(target, budget_ms=self.frame_budget_ms)
             self.render_error = ""
+            self._rendered = (target.technique, target.render.width, target.render.height)
         except Exception as exc:
             self.render_error = f"{type(exc).__name__}: {exc}"
             self.say(f"render: {self.render_error.splitlines()[0]}", error=True)
             if "--debug" in sys.argv:
                 traceback.print_exc()
             self._shown = self.settings  # do not retry a failing state every frame while deferring
+            self._partial_ran = []  # a spread frame that failed is not resumed (nor merged into the next)
             return None
         if defer:
-            self.scheduler.deferred_frames += 1
             return report
         if not report.complete:
             self._partial_ran += [p for p in report.passes if p.status == "ran"]
@@ -371,6 +376,25 @@ class ViewerApp(mglw.WindowConfig):
         self._shown = self.settings
         self._change_source = ""
         return report
+
+    def _scene_changed(self, s: Settings) -> bool:
+        """The loaded scene is not the one of ``s``: set_settings has already loaded the new one, and
+        rendering ``s`` (the image on screen, while a deferred edit waits) would load it back."""
+        scene = self.renderer.scene
+        return scene is None or scene.key != Renderer.scene_key(s)
+
+    def _trim_texture_pools(self) -> None:
+        """Give the free textures of the render pools back to GL when the render size (or the
+        technique) changed: a pool keeps every texture handed back to it, keyed by size, so each
+        window or panel resize and each orbit resolution used to leave a full set of view-sized
+        textures behind for the rest of the session. Textures in use (every graph's cache) stay."""
+        if self._rendered == self._pools_trimmed_for:
+            return
+        if self._pools_trimmed_for is not None:
+            for r in (self.renderer, self.compare.a.renderer, self.compare.b.renderer):
+                if r is not None:
+                    r.pool.release()
+        self._pools_trimmed_for = self._rendered
 
     def _merge_partial(self, report):
         """One report for a frame spread over several: the passes that ran in any of them."""
@@ -561,6 +585,7 @@ class ViewerApp(mglw.WindowConfig):
                 self._drag_owner = "divider"
             else:
                 self._drag_owner = "view"
+                self._drag_moved = False
 
     def on_mouse_release_event(self, x, y, button):
         self.imgui.mouse_release_event(x, y, button)
@@ -576,6 +601,7 @@ class ViewerApp(mglw.WindowConfig):
             return
         if self._drag_owner != "view":
             return
+        self._drag_moved = True
         m = self.wnd.mouse
         shift = self._shift or bool(getattr(self.wnd.modifiers, "shift", False))
         s = self.settings

@@ -605,3 +605,139 @@ def test_switching_back_to_a_cached_technique_reports_zero_cost(app):
     app.step(1)
     assert app.report.ran == [] and app.last_change.source == "technique"
     assert app.last_change.total_ms == 0.0
+
+
+def test_preset_refused_after_loading_keeps_the_current_preset(app, tmp_path):
+    """A preset that parses but cannot be shown (its mesh does not load) leaves the current preset
+    file, its saved baseline and the state alone: Ctrl+S must not write the current state over the
+    file that was refused."""
+    from skinviewer.settings import to_dict
+    current = tmp_path / "current.json"
+    assert app.presets.save(app.settings, str(current))
+    bad = tmp_path / "missing_mesh.json"
+    text = json.dumps({"schema_version": 1, "scene": {"mesh": str(tmp_path / "no-such-mesh.obj")}})
+    bad.write_text(text)
+    before = to_dict(app.settings)
+    try:
+        assert not app.load_preset(str(bad))
+        assert to_dict(app.settings) == before
+        assert app.presets.path == str(current) and not app.presets.dirty(app.settings)
+        assert app.presets.errors and app.presets.message.startswith("refused")
+        assert app.save_preset()  # Ctrl+S: the current file, not the refused one
+        assert bad.read_text() == text
+    finally:
+        app.presets.path = None
+        app.step(1)
+
+
+def test_resizes_do_not_pile_up_textures(app):
+    """The render pools keep every texture handed back to them; the viewer gives back to GL the ones
+    of sizes no longer rendered, so resizing the panel (or orbiting at a reduced resolution) does
+    not leave a full set of view-sized textures behind each time."""
+    pw0 = app.panel_width
+    pool = app.renderer.pool
+    try:
+        for w in range(int(W * 0.3), int(W * 0.45), 6):
+            app.panel_width = float(w)
+            app.step(1)
+        assert sum(len(v) for v in pool._free.values()) == 0
+    finally:
+        app.panel_width = pw0
+        app.step(1)
+
+
+def test_click_in_view_keeps_full_resolution(app):
+    """A click in the view (no drag) neither orbits nor drops to the orbit resolution."""
+    full = (app.settings.render.width, app.settings.render.height)
+    app.drag_budget_ms = 1e-3
+    try:
+        x, y = _in_view(app)
+        app.on_mouse_position_event(x, y, 0, 0)
+        app.on_mouse_press_event(x, y, app.wnd.mouse.left)
+        app.step(1)
+        assert (app.settings.render.width, app.settings.render.height) == full
+        app.on_mouse_release_event(x, y, app.wnd.mouse.left)
+        app.step(1)
+        assert app.report.ran == []
+    finally:
+        app.drag_budget_ms = 60.0
+
+
+def test_deferred_scene_edit_does_not_reload_the_old_scene(app):
+    """A scene edit while a widget is held (the render would otherwise wait for the release) is
+    rendered at once: the new scene is already loaded, and showing the old image meant loading the
+    old scene back, then the new one again."""
+    old = app.settings
+    app.show_ui = False
+    app.scheduler.mode = "on release"
+    try:
+        app.step(1)
+        v0 = app.renderer.scene_version
+        app._ui_active = True
+        mm = app.settings.scene.mm_per_unit
+        assert app.apply({"scene.mm_per_unit": (mm or 1.0) * 1.5})
+        app.step(2)
+        assert app.renderer.scene_version == v0 + 1
+        assert not app.render_deferred
+    finally:
+        app._ui_active = False
+        app.scheduler.mode = "adaptive"
+        app.show_ui = True
+        app.set_settings(old)
+        app.step(1)
+
+
+def test_profile_lab_discards_a_fit_of_an_edited_model(app, monkeypatch):
+    """The fit runs in a thread: if the model is edited meanwhile, its result is not shown (or
+    applied) as the fit of the new model."""
+    import threading
+    lab = app.panel.lab
+    if lab is None:
+        pytest.skip("skinviewer.profiles / skinviewer.fitting not available")
+    from skinviewer import fitting
+    release = threading.Event()
+    real = fitting.fit_gaussians
+
+    def slow_fit(*a, **k):
+        release.wait(10)
+        return real(*a, **k)
+
+    monkeypatch.setattr(fitting, "fit_gaussians", slow_fit)
+    model0 = lab.model
+    try:
+        lab.fit = None
+        lab.start_fit()
+        assert lab.busy
+        lab.model = "burley" if model0 != "burley" else "dipole"
+        release.set()
+        lab._thread.join(30)
+        lab._collect()
+        assert lab.fit is None and "changed" in lab.fit_error
+        assert lab.rows() == [] and not lab.apply()
+    finally:
+        release.set()
+        lab.model = model0
+        lab.fit_error = ""
+
+
+def test_shader_file_in_another_encoding_is_listed_not_fatal(app, shader_dir):
+    """Hot reload of a shader file that is not UTF-8 shows an error; the session goes on and the
+    error goes once the file is fixed."""
+    frag = shader_dir / "output.frag"
+    good = frag.read_bytes()
+    app.step(1)
+    try:
+        frag.write_bytes(good.replace(b"void main", "// caf\u00e9\nvoid main".encode("latin-1"), 1))
+        st = frag.stat()
+        os.utime(frag, ns=(st.st_atime_ns, st.st_mtime_ns + 2_000_000_000))
+        app.watcher.poll(force=True)
+        app.step(1)
+        assert any("Decode" in e.message for es in app.watcher.errors.values() for e in es), app.watcher.errors
+        assert app.report is not None and _view_image(app).std() > 10
+    finally:
+        frag.write_bytes(good)
+        st = frag.stat()
+        os.utime(frag, ns=(st.st_atime_ns, st.st_mtime_ns + 2_000_000_000))
+    app.watcher.poll(force=True)
+    app.step(1)
+    assert not app.watcher.errors

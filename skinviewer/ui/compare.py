@@ -20,6 +20,7 @@ class Slot:
         self.renderer = None  # Renderer, made on first use
         self.source = ""
         self.error = ""
+        self._framed: tuple[tuple, Settings] | None = None  # frame_settings' last (inputs, result)
 
 
 class CompareState:
@@ -40,12 +41,19 @@ class CompareState:
         return self.a.settings is not None and self.b.settings is not None
 
     def frame_settings(self, slot: Slot, live: Settings) -> Settings:
-        """The slot's settings at the live window size (and camera, when following)."""
+        """The slot's settings at the live window size (and camera, when following). Validated once
+        per change of those inputs, not every frame."""
         s = slot.settings
+        cam = live.camera if self.follow_camera else None
+        key = (live.render.width, live.render.height, cam)
+        if slot._framed is not None and slot._framed[0][0] is s and slot._framed[0][1:] == key:
+            return slot._framed[1]
         upd = {"render.width": live.render.width, "render.height": live.render.height}
-        if self.follow_camera:
-            upd["camera"] = live.camera.model_dump(mode="json")
-        return with_values(s, upd)
+        if cam is not None:
+            upd["camera"] = cam.model_dump(mode="json")
+        out = with_values(s, upd)
+        slot._framed = ((s, *key), out)
+        return out
 
     def release(self):
         for slot in self.slots:

@@ -15,7 +15,7 @@ class ShaderWatcher:
         self._next = 0.0
         self.errors: dict[str, list[ShaderError]] = {}
         self.last_reloaded: list[str] = []
-        self.last_reload_time: float | None = None
+        self._failure: dict[str, list[ShaderError]] = {}  # a reload that raised (listed until one succeeds)
 
     def poll(self, now: float | None = None, force: bool = False) -> list[str]:
         """Recompile changed programs when due; returns the names replaced this call."""
@@ -23,12 +23,16 @@ class ShaderWatcher:
         if not force and now < self._next:
             return []
         self._next = now + self.interval
-        replaced, errors = self.shaders.reload(force=force)
-        self.errors = errors
+        try:
+            replaced, _ = self.shaders.reload(force=force)
+            self._failure = {}
+        except Exception as exc:  # e.g. a file saved in another encoding: listed, the session goes on
+            replaced = []
+            self._failure = {"(reload)": [ShaderError(str(self.shaders.root), 0, f"{type(exc).__name__}: {exc}")]}
+        self.refresh_errors()
         if replaced:
             self.last_reloaded = replaced
-            self.last_reload_time = time.time()
         return replaced
 
     def refresh_errors(self) -> None:
-        self.errors = self.shaders.errors()
+        self.errors = {**self.shaders.errors(), **self._failure}

@@ -19,12 +19,8 @@ from .camera_control import angles_to_direction, direction_to_angles
 from .fielddocs import doc
 from .scheduler import MODES as RENDER_MODES
 from .scheduler import split_ms
-from .widgets import Edits, edit_model
+from .widgets import DIM, ERR, OK, WARN, Edits, begin_docked, edit_model, error_list, wrapped
 
-ERR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
-WARN = imgui.ImVec4(1.0, 0.8, 0.35, 1.0)
-OK = imgui.ImVec4(0.55, 0.9, 0.55, 1.0)
-DIM = imgui.ImVec4(0.65, 0.65, 0.7, 1.0)
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
 TEX_COL = imgui.ImVec4(0.35, 0.6, 1.0, 1.0)  # texture-space cost
 VIEW_COL = imgui.ImVec4(1.0, 0.62, 0.3, 1.0)  # view-dependent cost
@@ -43,12 +39,6 @@ def gaussian_profile(gaussians, r: np.ndarray) -> np.ndarray:
         v = max(g.variance, 1e-6)
         out += np.outer(np.exp(-r * r / (2.0 * v)) / (2.0 * math.pi * v), g.weights)
     return out
-
-
-def _wrapped(text: str) -> None:
-    imgui.push_text_wrap_pos(0)
-    imgui.text_disabled(text)
-    imgui.pop_text_wrap_pos()
 
 
 def _short(source: str, n: int = 38) -> str:
@@ -95,15 +85,9 @@ class Panel:
         if rect is None:
             return
         x, y, pw, ph = rect
-        imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.always.value)
-        imgui.set_next_window_size(imgui.ImVec2(pw, ph), imgui.Cond_.always.value)
         flags = (imgui.WindowFlags_.no_title_bar | imgui.WindowFlags_.no_move | imgui.WindowFlags_.no_collapse
                  | imgui.WindowFlags_.no_bring_to_front_on_focus | imgui.WindowFlags_.no_saved_settings)
-        imgui.push_style_var(imgui.StyleVar_.window_rounding.value, 0.0)
-        imgui.push_style_color(imgui.Col_.window_bg.value, imgui.ImVec4(0.09, 0.09, 0.1, 1.0))
-        opened = imgui.begin("skinviewer###panel", None, flags)[0]
-        imgui.pop_style_color()
-        imgui.pop_style_var()
+        opened = begin_docked("skinviewer###panel", rect, flags, imgui.ImVec4(0.09, 0.09, 0.1, 1.0))
         size = imgui.get_window_size()
         if abs(size.x - pw) > 0.5:  # the user dragged the inner edge: remember the width
             app.panel_width = float(size.x)
@@ -135,9 +119,7 @@ class Panel:
         app = self.app
         s = app.settings
         scene = app.renderer.scene
-        imgui.push_text_wrap_pos(0)
-        imgui.text_colored(DIM, scene.description if scene else "-")
-        imgui.pop_text_wrap_pos()
+        wrapped(scene.description if scene else "-", DIM)
         p = app.presets
         marker = " (unsaved changes, Ctrl+S)" if p.dirty(s) else ""
         imgui.text_colored(WARN if marker else DIM, f"preset: {Path(p.path).name if p.path else '(none)'}{marker}")
@@ -146,26 +128,18 @@ class Panel:
         self._change_line(None)
         if app.errors:
             imgui.text_colored(ERR, f"refused: {app.error_title}")
-            for path, msg in app.errors[:8]:
-                imgui.bullet()
-                imgui.push_text_wrap_pos(0)
-                imgui.text_colored(ERR, f"{path}: {msg}")
-                imgui.pop_text_wrap_pos()
+            error_list(app.errors, 8)
             if imgui.small_button("dismiss##err"):
                 app.errors = []
         if app.render_error:
-            imgui.push_text_wrap_pos(0)
-            imgui.text_colored(ERR, f"render: {app.render_error}")
-            imgui.pop_text_wrap_pos()
+            wrapped(f"render: {app.render_error}", ERR)
         errs = app.watcher.errors
         if errs:
             n = sum(len(v) for v in errs.values())
             imgui.text_colored(ERR, f"shader errors ({n}) - last good programs still running:")
             self._shader_errors(limit=4)
         for note in app.notices[-4:]:
-            imgui.push_text_wrap_pos(0)
-            imgui.text_colored(DIM, note)
-            imgui.pop_text_wrap_pos()
+            wrapped(note, DIM)
         imgui.separator()
 
     def _shader_errors(self, limit: int = 100) -> None:
@@ -174,9 +148,7 @@ class Panel:
             for e in errs:
                 if k >= limit:
                     return
-                imgui.push_text_wrap_pos(0)
-                imgui.text_colored(ERR, f"{e.file}:{e.line}: {e.message}  [{name}]")
-                imgui.pop_text_wrap_pos()
+                wrapped(f"{e.file}:{e.line}: {e.message}  [{name}]", ERR)
                 k += 1
 
     # -- cost accounting ----------------------------------------------------------------------
@@ -315,10 +287,9 @@ class Panel:
         ch, i = imgui.combo(label, cur, list(SCENES))
         if ch:
             app.select_scene(SCENES[i])
-        if self.mesh_path is None or (not self.mesh_path and sc.mesh and not imgui.is_any_item_active()):
-            self.mesh_path = sc.mesh or ""
-        entered, self.mesh_path = imgui.input_text("mesh path", self.mesh_path,
-                                                   imgui.InputTextFlags_.enter_returns_true.value)
+        if not self.mesh_path and sc.mesh and not imgui.is_any_item_active():
+            self.mesh_path = sc.mesh
+        entered, self.mesh_path = imgui.input_text("mesh path", self.mesh_path, _ENTER)
         if imgui.button("load mesh") or (entered and self.mesh_path.strip()):
             app.load_mesh(self.mesh_path.strip())
         imgui.same_line()
@@ -332,7 +303,7 @@ class Panel:
         app = self.app
         if not _header("Camera"):
             return
-        _wrapped("in the view: LMB orbit, MMB / shift+LMB pan, wheel zoom, RMB key light")
+        wrapped("in the view: LMB orbit, MMB / shift+LMB pan, wheel zoom, RMB key light")
         edit_model(app.settings.camera, "camera", edits)
         if imgui.button("reset view (R)"):
             app.reset_camera()
@@ -406,22 +377,20 @@ class Panel:
             edit_model(s.phong, "phong", edits)
             self._change_line(("phong",))
         if _header(f"Gosselin 2004{tag[s.technique == 'gosselin']}###Gosselin", s.technique == "gosselin"):
-            _wrapped("seed 000 §4.1, eq. 8-19: texture-space light map + Poisson blurs")
+            wrapped("seed 000 §4.1, eq. 8-19: texture-space light map + Poisson blurs")
             edit_model(s.gosselin, "gosselin", edits, skip=("regions",))
             self._region_kernels(edits)
             self._change_line(("gosselin",))
         if _header(f"d'Eon 2007{tag[s.technique == 'deon']}###deon", s.technique == "deon"):
-            _wrapped("seed 000 §4.2, eq. 20-35: sum-of-Gaussians diffusion in texture space")
+            wrapped("seed 000 §4.2, eq. 20-35: sum-of-Gaussians diffusion in texture space")
             self._gaussians(edits)
             edit_model(s.deon, "deon", edits)
             for w in profile_warnings(s.deon):
-                imgui.push_text_wrap_pos(0)
-                imgui.text_colored(WARN, "! " + w)
-                imgui.pop_text_wrap_pos()
+                wrapped("! " + w, WARN)
             self._change_line(("deon",))
             self._profile_plot()
         if _header("Specular (Kelemen / Szirmay-Kalos)###Specular"):
-            _wrapped("seed 000 eq. 14-16 (gosselin, deon)")
+            wrapped("seed 000 eq. 14-16 (gosselin, deon)")
             edit_model(s.specular, "specular", edits, skip=("per_region",))
             self._region_specular(edits)
             self._change_line(("specular",))
@@ -591,7 +560,7 @@ class Panel:
         if not _header("Presets"):
             return
         # Enter in the path field loads it (same as the button below)
-        entered, p.edit_path = imgui.input_text("path", p.edit_path, imgui.InputTextFlags_.enter_returns_true.value)
+        entered, p.edit_path = imgui.input_text("path", p.edit_path, _ENTER)
         if imgui.is_item_hovered():
             imgui.set_item_tooltip("a preset .json; Enter or 'load' loads it, 'save as' writes the current state there")
         if (imgui.button("load") or entered) and p.edit_path.strip():
@@ -616,11 +585,7 @@ class Panel:
             imgui.text_colored(ERR if p.errors else OK, p.message)
         if p.errors:
             imgui.text_colored(ERR, f"{p.error_source}: state kept")
-            for path, msg in p.errors[:12]:
-                imgui.bullet()
-                imgui.push_text_wrap_pos(0)
-                imgui.text_colored(ERR, f"{path}: {msg}")
-                imgui.pop_text_wrap_pos()
+            error_list(p.errors, 12)
 
     def _screenshot(self) -> None:
         app = self.app
@@ -659,9 +624,7 @@ class Panel:
             imgui.same_line()
             imgui.text_disabled(slot.source or "(empty)")
             if slot.error:
-                imgui.push_text_wrap_pos(0)
-                imgui.text_colored(ERR, slot.error)
-                imgui.pop_text_wrap_pos()
+                wrapped(slot.error, ERR)
             imgui.pop_id()
         from .compare import MODES
         ch, i = imgui.combo("view", MODES.index(cmp.mode), list(MODES))
@@ -690,10 +653,8 @@ class Panel:
                 imgui.table_next_column()
                 imgui.text(what)
             imgui.end_table()
-        imgui.push_text_wrap_pos(0)
-        imgui.text_disabled("Keys other than F1 / F12 / Ctrl+S are ignored while a text field has the keyboard. "
-                            "Hover a setting for its meaning, unit, range and seed equation.")
-        imgui.pop_text_wrap_pos()
+        wrapped("Keys other than F1 / F12 / Ctrl+S are ignored while a text field has the keyboard. "
+                "Hover a setting for its meaning, unit, range and seed equation.")
 
     def _shaders(self) -> None:
         app = self.app

@@ -8,6 +8,7 @@ from imgui_bundle import imgui
 
 from ..graph import TIMING_NOTES
 from .display import CHANNELS
+from .widgets import ERR
 
 COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
           "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0), "deferred": imgui.ImVec4(0.5, 0.7, 1.0, 1.0)}
@@ -108,7 +109,7 @@ class PassesWindow:
         imgui.separator_text("output inspector")
         names = sorted(res)
         if app.inspect not in res:
-            imgui.text_colored(imgui.ImVec4(1, 0.5, 0.4, 1), f"'{app.inspect}' is not allocated this frame")
+            imgui.text_colored(ERR, f"'{app.inspect}' is not allocated this frame")
         cur = names.index(app.inspect) if app.inspect in names else 0
         if names:
             ch, i = imgui.combo("texture", cur, names)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import paths
-from ..settings import Settings, SettingsError, load_preset, save_preset, to_dict
+from ..settings import Settings, SettingsError, load_preset, save_preset, to_dict, with_values
 
 # these follow the window, not the user's choices
 _VOLATILE = (("render", "width"), ("render", "height"))
@@ -23,15 +23,20 @@ class PresetState:
         self.path: str | None = path
         self.edit_path: str = path or ""
         self._baseline = _comparable(settings)
+        self._dirty_of: tuple[Settings, bool] | None = None  # (settings, dirty): asked several times a frame
         self.errors: list[tuple[str, str]] = []
         self.error_source: str = ""
         self.message: str = ""
 
     def dirty(self, s: Settings) -> bool:
-        return _comparable(s) != self._baseline
+        # Settings are replaced, never edited in place (with_values): the answer for the same object holds
+        if self._dirty_of is None or self._dirty_of[0] is not s:
+            self._dirty_of = (s, _comparable(s) != self._baseline)
+        return self._dirty_of[1]
 
     def mark_saved(self, s: Settings, path: str | None) -> None:
         self._baseline = _comparable(s)
+        self._dirty_of = None
         self.path = path
 
     @staticmethod
@@ -43,21 +48,28 @@ class PresetState:
         return sorted(d.glob("*.json"))
 
     def load(self, path: str, current: Settings) -> Settings | None:
-        """A validated Settings from ``path`` (window size kept), or None with ``errors`` set."""
+        """A validated Settings from ``path`` (window size kept), or None with ``errors`` set.
+        The state is not touched: the caller calls ``accepted`` once it has taken the settings (it
+        may still refuse them, e.g. an unavailable technique or an unloadable mesh)."""
         try:
             s = load_preset(path)
         except SettingsError as exc:
-            self.errors = list(exc.errors)
-            self.error_source = exc.source or path
-            self.message = f"refused {path}"
+            self.refused(path, exc.errors, exc.source or path)
             return None
-        from ..settings import with_values
-        s = with_values(s, {"render.width": current.render.width, "render.height": current.render.height})
+        return with_values(s, {"render.width": current.render.width, "render.height": current.render.height})
+
+    def accepted(self, s: Settings, path: str) -> None:
+        """``s`` (loaded from ``path``) is now the viewer's state: it becomes the saved baseline."""
         self.errors = []
         self.message = f"loaded {path}"
         self.mark_saved(s, path)
         self.edit_path = path
-        return s
+
+    def refused(self, path: str, errors: list[tuple[str, str]], source: str = "") -> None:
+        """A load of ``path`` was refused: the current file, baseline and state stay as they were."""
+        self.errors = list(errors)
+        self.error_source = source or path
+        self.message = f"refused {path}"
 
     def save(self, s: Settings, path: str | None = None) -> bool:
         target = path or self.path

@@ -8,6 +8,8 @@ import threading
 import numpy as np
 from imgui_bundle import imgui, implot
 
+from .widgets import ERR, wrapped
+
 MODELS = ("dipole", "multipole", "burley")
 R_MAX = 8.0
 
@@ -41,12 +43,19 @@ class ProfileLab:
         self.k = 4
         self.shared = True
         self.normalize = True
+        # fit / fit_error belong to the UI thread; the background fit only hands its outcome over
+        # through _result (one assignment), picked up by _collect() on the UI thread
         self.fit = None
         self.fit_error = ""
         self.model_error = ""
-        self._busy = False
+        self._thread: threading.Thread | None = None
+        self._result = None  # (model key, fit or None, error text) of the finished background fit
         self._cache_key = None
         self._curve = None  # (r, r*R)
+
+    @property
+    def busy(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
 
     # -- model -------------------------------------------------------------------------------
     def _key(self):
@@ -90,7 +99,7 @@ class ProfileLab:
 
     # -- fitting -----------------------------------------------------------------------------
     def start_fit(self, wait: bool = False) -> None:
-        if self._busy:
+        if self.busy:
             return
         from ..fitting import fit_gaussians
         try:
@@ -98,22 +107,33 @@ class ProfileLab:
         except Exception as exc:
             self.fit_error = f"{type(exc).__name__}: {exc}"
             return
-        self._busy = True
         self.fit_error = ""
-        k, shared = self.k, self.shared
+        self._result = None
+        key, k, shared = self._key(), self.k, self.shared
 
         def work():
             try:
-                self.fit = fit_gaussians(model, k, shared=shared)
+                self._result = (key, fit_gaussians(model, k, shared=shared), "")
             except Exception as exc:
-                self.fit_error = f"{type(exc).__name__}: {exc}"
-            finally:
-                self._busy = False
+                self._result = (key, None, f"{type(exc).__name__}: {exc}")
 
-        t = threading.Thread(target=work, daemon=True)
-        t.start()
+        self._thread = threading.Thread(target=work, daemon=True)
+        self._thread.start()
         if wait:
-            t.join()
+            self._thread.join()
+            self._collect()
+
+    def _collect(self) -> None:
+        """Take over the finished background fit, unless the model was edited while it ran (a fit
+        of the previous model must not be shown, or applied, as the fit of this one)."""
+        res, self._result = self._result, None
+        if res is None:
+            return
+        key, fit, error = res
+        if key != self._key():
+            self.fit_error = "the model changed while fitting: fit again"
+            return
+        self.fit, self.fit_error = fit, error
 
     def rows(self):
         if self.fit is None:
@@ -135,6 +155,7 @@ class ProfileLab:
         from .panel import _header
         if not _header("Profile lab"):
             return
+        self._collect()
         ch, i = imgui.combo("model", MODELS.index(self.model), list(MODELS))
         if ch:
             self.model = MODELS[i]
@@ -159,10 +180,8 @@ class ProfileLab:
         _, self.normalize = imgui.checkbox("normalise", self.normalize)
         cur = self.curve()
         if self.model_error:
-            imgui.push_text_wrap_pos(0)
-            imgui.text_colored(imgui.ImVec4(1, 0.45, 0.4, 1), self.model_error)
-            imgui.pop_text_wrap_pos()
-        if imgui.button("fitting..." if self._busy else "fit"):
+            wrapped(self.model_error, ERR)
+        if imgui.button("fitting..." if self.busy else "fit"):
             self.start_fit()
         imgui.same_line()
         imgui.begin_disabled(self.fit is None)
@@ -170,7 +189,7 @@ class ProfileLab:
             self.apply()
         imgui.end_disabled()
         if self.fit_error:
-            imgui.text_colored(imgui.ImVec4(1, 0.45, 0.4, 1), self.fit_error)
+            imgui.text_colored(ERR, self.fit_error)
         if self.fit is not None:
             e = self.fit.errors
             imgui.text_disabled(f"error R {e[0]:.3f}  G {e[1]:.3f}  B {e[2]:.3f}  ({self.fit.seconds:.2f} s)")

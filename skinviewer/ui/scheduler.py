@@ -31,11 +31,6 @@ class ChangeCost:
         m = re.match(r"[A-Za-z_]+", self.source or "")
         return m.group(0) if m else ""
 
-    def summary(self, n: int = 3) -> str:
-        top = ", ".join(f"{name} {ms:.0f}" for name, ms in self.passes[:n])
-        more = f", +{len(self.passes) - n}" if len(self.passes) > n else ""
-        return f"{self.total_ms:.0f} ms ({top}{more})"
-
 
 def view_side(report, view_dependent: set[str]) -> set[str]:
     """Passes of a frame report that are view-dependent or downstream of one (e.g. the output pass):
@@ -69,7 +64,6 @@ class RenderScheduler:
         self.rest_s = rest_s
         self.changed_at = 0.0  # when the settings last changed
         self.deferred = False  # this frame showed the previous image although settings changed
-        self.deferred_frames = 0
 
     def note_change(self, now: float | None = None) -> None:
         self.changed_at = time.perf_counter() if now is None else now

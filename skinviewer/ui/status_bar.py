@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 from imgui_bundle import imgui
 
-ERR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
-WARN = imgui.ImVec4(1.0, 0.8, 0.35, 1.0)
+from .widgets import ERR, WARN, begin_docked
+
 DIM = imgui.ImVec4(0.62, 0.62, 0.68, 1.0)
 TEXT = imgui.ImVec4(0.88, 0.88, 0.9, 1.0)
 
@@ -62,13 +62,7 @@ class StatusBar:
         r = app.layout.status
         if r is None:
             return
-        x, y, w, h = r
-        imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.always.value)
-        imgui.set_next_window_size(imgui.ImVec2(w, h), imgui.Cond_.always.value)
-        imgui.push_style_var(imgui.StyleVar_.window_padding.value, imgui.ImVec2(8, 3))
-        imgui.push_style_var(imgui.StyleVar_.window_rounding.value, 0.0)
-        imgui.push_style_color(imgui.Col_.window_bg.value, imgui.ImVec4(0.13, 0.13, 0.15, 1.0))
-        imgui.begin("##statusbar", None, _FLAGS)
+        begin_docked("##statusbar", r, _FLAGS, imgui.ImVec4(0.13, 0.13, 0.15, 1.0), padding=(8, 3))
         for i, (text, col) in enumerate(self.fields()):
             if i:
                 imgui.same_line()
@@ -79,6 +73,4 @@ class StatusBar:
                 sc = app.renderer.scene
                 imgui.set_item_tooltip(sc.description if sc else "no scene")
         imgui.end()
-        imgui.pop_style_color()
-        imgui.pop_style_var(2)
         app.ui_rects.append(r)

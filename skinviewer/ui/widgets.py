@@ -16,6 +16,44 @@ from pydantic import BaseModel
 from .fielddocs import doc, label_with_unit
 
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
+# colours shared by the panel, the passes window, the status bar and the profile lab
+ERR = imgui.ImVec4(1.0, 0.45, 0.4, 1.0)
+WARN = imgui.ImVec4(1.0, 0.8, 0.35, 1.0)
+OK = imgui.ImVec4(0.55, 0.9, 0.55, 1.0)
+DIM = imgui.ImVec4(0.65, 0.65, 0.7, 1.0)
+
+
+def wrapped(text: str, color: imgui.ImVec4 | None = None) -> None:
+    """Text wrapped at the window edge: dimmed, or in ``color``."""
+    imgui.push_text_wrap_pos(0)
+    if color is None:
+        imgui.text_disabled(text)
+    else:
+        imgui.text_colored(color, text)
+    imgui.pop_text_wrap_pos()
+
+
+def begin_docked(name: str, rect, flags: int, bg: imgui.ImVec4, padding: tuple[float, float] | None = None) -> bool:
+    """Begin a window pinned to ``rect`` (x, y, w, h) of the layout: square corners, its own
+    background. Returns whether it is open; the caller calls ``imgui.end()``."""
+    x, y, w, h = rect
+    imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.always.value)
+    imgui.set_next_window_size(imgui.ImVec2(w, h), imgui.Cond_.always.value)
+    imgui.push_style_var(imgui.StyleVar_.window_rounding.value, 0.0)
+    if padding is not None:
+        imgui.push_style_var(imgui.StyleVar_.window_padding.value, imgui.ImVec2(*padding))
+    imgui.push_style_color(imgui.Col_.window_bg.value, bg)
+    opened = imgui.begin(name, None, flags)[0]
+    imgui.pop_style_color()
+    imgui.pop_style_var(1 if padding is None else 2)
+    return opened
+
+
+def error_list(errors, limit: int) -> None:
+    """A bullet per (path, message), in red, at most ``limit``."""
+    for path, msg in list(errors)[:limit]:
+        imgui.bullet()
+        wrapped(f"{path}: {msg}", ERR)
 
 
 _PENDING: dict[str, int] = {}
