@@ -393,7 +393,7 @@ class ViewerApp(mglw.WindowConfig):
         if self._pools_trimmed_for is not None:
             for r in (self.renderer, self.compare.a.renderer, self.compare.b.renderer):
                 if r is not None:
-                    r.pool.release()
+                    r.trim()
         self._pools_trimmed_for = self._rendered
 
     def _merge_partial(self, report):

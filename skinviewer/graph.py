@@ -515,6 +515,12 @@ class RenderGraph:
         last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
         return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
 
+    def trim(self) -> None:
+        """Release depth buffers no cached framebuffer uses (one is made per render size)."""
+        used = {fbo.depth_attachment.glo for fbo in self._fbos.values() if fbo.depth_attachment is not None}
+        for size in [s for s, rb in self._depth.items() if rb.glo not in used]:
+            self._depth.pop(size).release()
+
     def invalidate(self, pass_name: str | None = None) -> None:
         """Forget cache keys (all, or one pass) so they re-run next frame."""
         if pass_name is None:

@@ -69,6 +69,8 @@ class GpuScene:
     def vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
         vao = self._vaos.get(id(prog))
         if vao is None or vao.program is not prog:
+            if vao is not None:
+                vao.release()  # its program was replaced (hot reload)
             attrs = [a for a in VERTEX_ATTRS if a in prog]
             fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
             vao = self.ctx.vertex_array(prog, [(self.vbo, fmt, *attrs)], index_buffer=self.ibo, index_element_size=4)
@@ -168,6 +170,8 @@ class Renderer:
     def _fullscreen_vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
         vao = self._fs_vaos.get(id(prog))
         if vao is None or vao.program is not prog:
+            if vao is not None:
+                vao.release()  # its program was replaced (hot reload)
             vao = self._fs_vaos[id(prog)] = self.ctx.vertex_array(prog, [])
         return vao
 
@@ -197,6 +201,13 @@ class Renderer:
 
     def read(self, s: Settings, resource: str) -> np.ndarray:
         return self.graph(s.technique).read(resource)
+
+    def trim(self) -> None:
+        """Give GL back what no graph uses now: free pooled textures (every size ever rendered at)
+        and depth buffers of sizes no longer drawn. Cached outputs stay."""
+        for g in self.graphs.values():
+            g.trim()
+        self.pool.release()
 
     def release(self) -> None:
         for g in self.graphs.values():

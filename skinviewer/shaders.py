@@ -66,6 +66,9 @@ class ShaderLibrary:
         except OSError as exc:
             where = self._rel(stack[-1]) if stack else self._rel(path)
             raise _SourceError(ShaderError(where, 0, f"cannot read {self._rel(path)}: {exc.strerror}")) from None
+        except UnicodeDecodeError as exc:
+            raise _SourceError(ShaderError(self._rel(path), text_line(path, exc.start), "not UTF-8 text: "
+                                           f"byte 0x{exc.object[exc.start]:02x} at offset {exc.start}")) from None
         if path not in files:
             files.append(path)
         fid = files.index(path)
@@ -229,6 +232,14 @@ class ShaderLibrary:
             if e.program is not None:
                 e.program.release()
         self._entries.clear()
+
+
+def text_line(path: Path, offset: int) -> int:
+    """1-based line of a byte offset in a file."""
+    try:
+        return path.read_bytes()[:offset].count(b"\n") + 1
+    except OSError:
+        return 0
 
 
 class _SourceError(Exception):

@@ -264,3 +264,14 @@ def test_time_budget_spreads_a_frame_over_several(renderer):
     assert rep.complete
     assert set(done) == set(renderer.graph("gosselin").affected(["lights.0.direction"]))
     assert renderer.render(s2).ran == []  # all cached now
+
+
+def test_trim_releases_depth_buffers_of_old_sizes(renderer):
+    s = small_settings("shadow-edge", "phong", size=64)
+    renderer.render(s)
+    renderer.render(with_values(s, {"render.width": 80}))
+    g = renderer.graph("phong")
+    assert len(g._depth) >= 2  # the 64x64 lit image's depth buffer is no longer used...
+    renderer.trim()
+    assert (64, 64) not in g._depth and (80, 64) in g._depth  # ...and goes; the one in use stays
+    assert renderer.render(with_values(s, {"render.width": 80})).ran == []  # nothing cached was lost

@@ -91,3 +91,13 @@ def test_project_shaders_all_compile(gl_ctx):
         except ShaderCompileError as exc:
             failures[n] = [str(e) for e in exc.errors]
     assert not failures, failures
+
+
+def test_file_in_another_encoding_is_a_shader_error(gl_ctx, lib_dir):
+    lib = ShaderLibrary(gl_ctx, lib_dir)
+    good = lib.get("prog")
+    _touch_later(lib_dir / "lib" / "common.glsl", "")
+    (lib_dir / "lib" / "common.glsl").write_bytes(b"// caf\xe9\nfloat twice(float x) { return 2.0 * x; }\n")
+    replaced, errors = lib.reload()
+    assert replaced == [] and lib.get("prog") is good
+    assert any(e.file == "lib/common.glsl" and e.line == 1 and "UTF-8" in e.message for e in errors["prog"])

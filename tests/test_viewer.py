@@ -732,7 +732,8 @@ def test_shader_file_in_another_encoding_is_listed_not_fatal(app, shader_dir):
         os.utime(frag, ns=(st.st_atime_ns, st.st_mtime_ns + 2_000_000_000))
         app.watcher.poll(force=True)
         app.step(1)
-        assert any("Decode" in e.message for es in app.watcher.errors.values() for e in es), app.watcher.errors
+        assert any(e.file == "output.frag" and "UTF-8" in e.message
+                   for es in app.watcher.errors.values() for e in es), app.watcher.errors
         assert app.report is not None and _view_image(app).std() > 10
     finally:
         frag.write_bytes(good)
