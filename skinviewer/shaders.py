@@ -55,6 +55,7 @@ class ShaderLibrary:
         self.ctx = ctx
         self.root = Path(root) if root else paths.shaders_dir()
         self._entries: dict[tuple, _Entry] = {}
+        self.revision = 0  # bumps whenever any program is replaced (a cheap "did any shader change?")
 
     # -- source assembly ---------------------------------------------------------------------
     def _expand(self, path: Path, files: list[Path], stack: tuple[Path, ...] = ()) -> list[str]:
@@ -142,6 +143,7 @@ class ShaderLibrary:
         entry.digest = digest
         entry.errors = []
         entry.generation += 1
+        self.revision += 1
         return True
 
     def _guess_files(self, name: str) -> set[Path]:

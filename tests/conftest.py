@@ -74,6 +74,15 @@ def gl_ctx():
     ctx.release()
 
 
+@pytest.fixture(autouse=True)
+def _current_gl(request):
+    """A test that uses the session context gets it made current again (a viewer test's window
+    context may be current on this thread)."""
+    if "gl_ctx" in request.fixturenames:
+        request.getfixturevalue("gl_ctx").__enter__()
+    yield
+
+
 @pytest.fixture
 def renderer(gl_ctx):
     from skinviewer.renderer import Renderer

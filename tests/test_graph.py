@@ -275,3 +275,20 @@ def test_trim_releases_depth_buffers_of_old_sizes(renderer):
     renderer.trim()
     assert (64, 64) not in g._depth and (80, 64) in g._depth  # ...and goes; the one in use stays
     assert renderer.render(with_values(s, {"render.width": 80})).ran == []  # nothing cached was lost
+
+
+def test_idle_frames_take_the_fast_path_and_stay_correct(renderer):
+    s = small_settings("shadow-edge", "gosselin")
+    renderer.render(s)
+    g = renderer.graph("gosselin")
+    calls = []
+    for p in g.passes:
+        p.reflect = (lambda f: (lambda r: (calls.append(1), f(r))[1]))(p.reflect)
+    rep = renderer.render(s)  # the same settings object: nothing is reflected
+    assert calls == [] and rep.ran == [] and set(rep.cached) == {p.name for p in g.order}
+    rep = renderer.render(with_values(s, {}))  # an equal but new object: the full check, still all cached
+    assert calls and rep.ran == []
+    g.shaders.revision += 1  # any shader replaced: the full check again
+    calls.clear()
+    renderer.render(s)
+    assert calls
