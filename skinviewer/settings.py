@@ -25,6 +25,13 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
+def _known_regions(v: dict) -> dict:
+    bad = [k for k in v if k not in REGIONS]
+    if bad:
+        raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
+    return v
+
+
 def _finite(v: float) -> float:
     if not math.isfinite(v):
         raise ValueError("must be a finite number")
@@ -124,13 +131,7 @@ class SpecularSettings(_Model):
     lut_size: int = Field(512, ge=16, le=4096)
     per_region: dict[str, RegionSpecular] = Field(default_factory=dict)
 
-    @field_validator("per_region")
-    @classmethod
-    def _regions(cls, v: dict[str, RegionSpecular]) -> dict[str, RegionSpecular]:
-        bad = [k for k in v if k not in REGIONS]
-        if bad:
-            raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
-        return v
+    _regions = field_validator("per_region")(_known_regions)
 
 
 class RegionKernel(_Model):
@@ -160,13 +161,7 @@ class GosselinSettings(_Model):
         "visibility", description="eq. (18) attenuation: visibility = LUM(blurred)/LUM(unshadowed irradiance) "
         "in [0, 1] (default); printed = LUM(blurred) as printed (scales with Lc^2)")
 
-    @field_validator("regions")
-    @classmethod
-    def _regions(cls, v: dict[str, RegionKernel]) -> dict[str, RegionKernel]:
-        bad = [k for k in v if k not in REGIONS]
-        if bad:
-            raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
-        return v
+    _regions = field_validator("regions")(_known_regions)
 
 
 class Gaussian(_Model):
@@ -207,12 +202,6 @@ class DeonSettings(_Model):
         description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "
                     "a sub-texel 7-tap blur changes nothing")
 
-    @field_validator("gaussians")
-    @classmethod
-    def _gauss(cls, v: list[Gaussian]) -> list[Gaussian]:
-        # Non-ascending variances are kept (the blur chain clamps negative increments to 0); warnings
-        # are reported by profile_warnings(), never an error.
-        return v
 
 
 class Settings(_Model):
