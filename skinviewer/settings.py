@@ -185,6 +185,8 @@ def _default_gaussians() -> list[Gaussian]:
 
 class DeonSettings(_Model):
     """d'Eon & Luebke 2007 (seed 000 §4.2, eq. 20-35; seed 002 §14.4)."""
+    # variances need not ascend (the blur chain clamps a negative increment to 0) and weights need not
+    # sum to 1: profile_warnings() says so, never an error
     gaussians: list[Gaussian] = Field(default_factory=_default_gaussians, min_length=1, max_length=8)
     mix: float = Field(0.5, ge=0.0, le=1.0, description="pre/post-scatter texturing, eq. (28), (34)")
     stretch: bool = True
