@@ -7,11 +7,15 @@ Geometry, in millimetres, Y up, facing +Z, origin near the middle of the head:
   that point along the spherical direction (θ from +Y, φ from +Z towards +X), so the surface is a
   radial function r(θ, φ) — no folds, and every texel maps straight back to a 3D point;
 * the ears are separate closed thin shells (3 mm thick, rounded rim) pushed into the side of the
-  head, so a back light passes through a real flap of tissue.
+  head, so a back light passes through a real flap of tissue;
+* the eyeballs are separate closed globes (24 mm, corneal bulge) in the orbits; the head surface's
+  eyelids open around them (an almond fissure cut from a lid shell over the globe, its margin on
+  the eyeball), and the band cells around each eye are re-triangulated finer along the lid margins.
 
 UV atlas: the head band (everything below the crown cap, cut at the back of the head) is one island
 with u ∝ arc length around and v ∝ mean arc length down; the crown is an azimuthal-equidistant disk;
-each ear side is a planar island. The band runs down to the south pole at the centre of the flat
+each ear side is a planar island; each eyeball is an azimuthal disk (cornea in the middle,
+the unseen back compressed towards the rim). The band runs down to the south pole at the centre of the flat
 collar cut, so the mesh is closed there (its last row collapses onto one point). Islands share one
 texel density and are separated by gutters that the maps fill by dilation (nearest island texel) so
 bilinear filtering never reads outside skin.
@@ -29,7 +33,7 @@ from scipy.spatial import Delaunay
 from .mesh import MeshData, vertex_normals
 from .settings import REGIONS
 
-GENERATOR_VERSION = 3
+GENERATOR_VERSION = 4
 
 # detail level -> (target edge length in mm, texture size)
 _LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}
@@ -50,7 +54,7 @@ _REGION = {name: i for i, name in enumerate(REGIONS)}
 def default_head(detail: int = 1, seed: int = 7, cache_dir: str | Path | None = None) -> MeshData:
     """The built-in head (mm, Y up, facing +Z), generated once per (detail, seed) and cached.
 
-    detail 0: ~8k triangles and 512² maps (tests); 1: ~51k triangles and 1024² maps;
+    detail 0: ~9.5k triangles and 512² maps (tests); 1: ~58k triangles and 1024² maps;
     2: ~200k triangles and 2048² maps.
     The seed only changes the skin's noise (albedo mottling, pores), never the shape.
     """
@@ -150,6 +154,92 @@ def _bilateral(f, x, y, z, c, *args):
     return np.minimum(f(x, y, z, (c[0], c[1], c[2]), *args), f(x, y, z, (-c[0], c[1], c[2]), *args))
 
 
+# ---------------------------------------------------------------------------------------------
+# eyes: separate closed eyeballs in the orbits, eyelids of the head surface open around them
+
+_EYE_C = np.array([32.0, 12.0, 70.0])   # right eyeball centre (mm); the left one mirrors x
+_EYE_R = 12.0                           # sclera radius (24 mm globe)
+_CORNEA_R, _CORNEA_H = 7.8, 1.5         # corneal curvature radius, protrusion beyond the sclera
+_LON_C = np.radians(75.0)               # lateral canthus: horizontal angle from the eye's axis
+_LON_M = np.radians(60.0)               # medial canthus (the nose side: kept shallow)
+_LID_GAP = 0.5                          # hidden skin behind the eyeball inside the fissure (mm)
+
+
+def _eye_radius(alpha):
+    """Eyeball surface distance from its centre at angle alpha from the visual axis (+Z): the
+    sclera sphere with the corneal cap (a smaller sphere) blended on."""
+    d = _EYE_R + _CORNEA_H - _CORNEA_R
+    sa = np.sin(alpha)
+    cornea = d * np.cos(alpha) + np.sqrt(np.maximum(_CORNEA_R ** 2 - (d * sa) ** 2, 0.0))
+    return _smax(np.full_like(cornea, _EYE_R), cornea, 0.6)
+
+
+def _fissure(lon):
+    """Upper and lower lid margins (latitude, rad) at horizontal angle lon about the eye centre
+    (+ lateral): an almond between the canthi, the lateral canthus ~2 mm above the medial one,
+    the upper lid over the top quarter of the iris, the lower lid at the iris's lower edge."""
+    t = np.clip(lon / np.where(lon < 0, _LON_M, _LON_C), -1.0, 1.0)
+    canth = np.radians(-2.3 + 4.7 * t)
+    w = 1.0 - t * t
+    up = canth + np.radians(13.5) * w ** 0.6 * (1.0 - 0.2 * t)
+    lo = canth - np.radians(25.5) * w ** 0.8 * (1.0 + 0.1 * t)
+    return up, lo
+
+
+def _eye_coords(ax, y, z):
+    """(rho, lon, lat, alpha) about the eye centre; ax = |x| so both eyes share it."""
+    qx, qy, qz = ax - _EYE_C[0], y - _EYE_C[1], z - _EYE_C[2]
+    rho = np.sqrt(qx * qx + qy * qy + qz * qz) + 1e-9
+    lon = np.arctan2(qx, qz)
+    lat = np.arcsin(np.clip(qy / rho, -1.0, 1.0))
+    alpha = np.arccos(np.clip(qz / rho, -1.0, 1.0))
+    return rho, lon, lat, alpha
+
+
+def _limbus_alpha():
+    """Angle from the visual axis where the cornea meets the sclera."""
+    al = np.linspace(0.0, 1.2, 2401)
+    d = _EYE_R + _CORNEA_H - _CORNEA_R
+    cornea = d * np.cos(al) + np.sqrt(np.maximum(_CORNEA_R ** 2 - (d * np.sin(al)) ** 2, 0.0))
+    return float(al[np.argmax(cornea < _EYE_R)])
+
+
+_EYE_UV_KNEE, _EYE_UV_BACK = 1.05, 0.15   # the front (α < knee) gets most of an eye's UV disk
+
+
+def _eye_uv_radius(alpha):
+    """UV disk radius (fraction of the island's) for angle alpha from the eye's axis."""
+    g = lambda a: np.minimum(a, _EYE_UV_KNEE) + _EYE_UV_BACK * np.maximum(a - _EYE_UV_KNEE, 0.0)
+    return g(alpha) / g(np.pi)
+
+
+def _eye_uv_alpha(frac):
+    """Inverse of _eye_uv_radius."""
+    g = frac * (_EYE_UV_KNEE + _EYE_UV_BACK * (np.pi - _EYE_UV_KNEE))
+    return np.where(g <= _EYE_UV_KNEE, g, _EYE_UV_KNEE + (g - _EYE_UV_KNEE) / _EYE_UV_BACK)
+
+
+def _aperture(rho, lon, lat):
+    """Signed distance-like (mm) to the palpebral fissure's cone: negative inside the opening."""
+    up, lo = _fissure(lon)
+    return rho * np.maximum(np.maximum(lat - up, lo - lat), np.maximum(lon - _LON_C, -lon - _LON_M))
+
+
+def _eyelids(d, ax, y, z):
+    """Open eyelids: the orbit inside the fissure is emptied down to just behind the eyeball, the
+    lids are a shell over the globe (following the corneal bulge) cut by the fissure with a
+    rounded margin, and a thin layer of hidden conjunctiva sits just behind the eyeball."""
+    rho, lon, lat, alpha = _eye_coords(ax, y, z)
+    surf = _eye_radius(alpha)
+    a = _aperture(rho, lon, lat)
+    carve = np.maximum(a, np.maximum(surf - _LID_GAP - rho, rho - surf - 6.0))
+    d = _smax(d, -carve, 0.5)
+    thick = 1.4 + 0.6 * _smoothstep(-0.35, 0.15, lat)          # upper lid thicker than the lower
+    lid = _smax(rho - surf - thick, -a, 1.2)
+    d = _smin(d, lid, 2.0)
+    return np.minimum(d, rho - surf + _LID_GAP)
+
+
 def _head_sdf(x, y, z):
     e, cap = _ellipsoid, _capsule
     ax = np.abs(x)
@@ -181,10 +271,7 @@ def _head_sdf(x, y, z):
     d = _smin(d, e(ax, y, z, (24, 30, 84), (23, 8, 11)), 10)
     d = _smin(d, e(x, y, z, (0, 27, 90), (12, 7, 6)), 8)                # glabella
     d = _smax(d, -e(ax, y, z, (32, 15, 95), (20, 15, 19)), 7)
-    d = _smin(d, e(ax, y, z, (32, 13, 70), (13, 12, 12)), 3)        # eyeball under the lids
-    d = _smin(d, e(ax, y, z, (32, 7.5, 80.5), (10, 3.2, 3.2)), 3)  # lower lid
-    d = _smax(d, -e(ax, y, z, (32, 10.5, 83), (11, 0.7, 4)), 1.2)   # lid line
-    d = _smax(d, -e(ax, y, z, (31, 21.5, 80), (12, 0.9, 3)), 2.0)   # upper-lid crease
+    d = _eyelids(d, ax, y, z)
     # nose: slim bridge from the nasion to a rounded tip, alae (nostril wings), columella,
     # nostril openings under the tip
     d = _smin(d, cap(x * 1.15, y, z, (0, 17, 87), (0, -20, 106), 5.0, 7.5), 8)
@@ -440,6 +527,11 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
                                                       v_row + 0.5 * k * ear_h]), mirror))
             u0 += k * ear_w + _UV_GUTTER
 
+    # the two eyeball disks to the right of the ears
+    eye_uv_r = min(0.095, (1 - _UV_MARGIN - u0 - _UV_GUTTER) / 4, (1 - _UV_MARGIN - v_row) / 2)
+    eye_layout = (eye_uv_r, [np.array([u0 + eye_uv_r, v_row + eye_uv_r]),
+                             np.array([u0 + 3 * eye_uv_r + _UV_GUTTER, v_row + eye_uv_r])])
+
     def ear_uv(ear_origin, x, y):
         ear, _, o, mirror = ear_origin
         a, b = ear.plane(x, y)
@@ -470,10 +562,53 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     # the last row's (q0, q2, q3) triangles would have two corners on the pole: zero area, dropped
     band_tris = np.concatenate([np.stack([q0, q1, q2], -1).reshape(-1, 3),
                                 np.stack([q0, q2, q3], -1)[:-1].reshape(-1, 3)])
-    positions = [band_p.reshape(-1, 3)]
-    uvs = [band_uvs.reshape(-1, 2)]
-    tris = [band_tris]
+    # eye windows: the band cells around each eye are re-triangulated (Delaunay in the band's
+    # (φ, s) parameters) over finer points, finest along the lid margins
+    eye_windows = []
+    positions, uvs, keep_tri = [band_p.reshape(-1, 3)], [band_uvs.reshape(-1, 2)], np.ones(len(band_tris), bool)
     base = n_th * n_ph
+    extra_tris = []
+    cell = 0.25 * (band_p[:-1, :-1] + band_p[:-1, 1:] + band_p[1:, :-1] + band_p[1:, 1:])
+    for side in (1.0, -1.0):
+        box = ((side * cell[..., 0] > 14.0) & (side * cell[..., 0] < 50.0) & (cell[..., 1] > -3.0)
+               & (cell[..., 1] < 27.0) & (cell[..., 2] > 50.0))
+        ci, cj = np.nonzero(box)
+        i0, i1, j0, j1 = ci.min(), ci.max() + 1, cj.min(), cj.max() + 1   # vertex index rectangle
+        eye_windows.append((theta_b[i0], theta_b[i1], phi_b[j0], phi_b[j1]))
+        quad_i = np.concatenate([np.repeat(np.arange(n_th - 1), n_ph - 1),
+                                 np.repeat(np.arange(n_th - 1), n_ph - 1)[:-(n_ph - 1)]])
+        quad_j = np.concatenate([np.tile(np.arange(n_ph - 1), n_th - 1),
+                                 np.tile(np.arange(n_ph - 1), n_th - 2)])
+        keep_tri &= ~((quad_i >= i0) & (quad_i < i1) & (quad_j >= j0) & (quad_j < j1))
+        # local metric: mm per radian of φ and per mm of s at the window
+        win = band_p[i0:i1 + 1, j0:j1 + 1]
+        sx = np.linalg.norm(np.diff(win, axis=1), axis=2).mean() / np.diff(phi_b[j0:j1 + 1]).mean()
+        sy = np.linalg.norm(np.diff(win, axis=0), axis=2).mean() / np.diff(s_rows[i0:i1 + 1]).mean()
+        bi, bj = np.meshgrid(np.arange(i0, i1 + 1), np.arange(j0, j1 + 1), indexing="ij")
+        rim = (bi == i0) | (bi == i1) | (bj == j0) | (bj == j1)
+        rim_xy = np.stack([phi_b[bj[rim]] * sx, s_rows[bi[rim]] * sy], axis=1)
+        h = spacing * 0.2
+        h_grid = min(np.diff(phi_b[j0:j1 + 1]).min() * sx, np.diff(s_rows[i0:i1 + 1]).min() * sy)
+        xs = np.arange(phi_b[j0] * sx + 0.6 * h_grid, phi_b[j1] * sx - 0.6 * h_grid, h)
+        ys = np.arange(s_rows[i0] * sy + 0.6 * h_grid, s_rows[i1] * sy - 0.6 * h_grid, h)
+        gx, gy = np.meshgrid(xs, ys, indexing="ij")
+        coarse = (np.arange(len(xs))[:, None] % 3 == 0) & (np.arange(len(ys))[None, :] % 3 == 0)
+        f_phi, f_s = gx.ravel() / sx, gy.ravel() / sy
+        f_th = np.interp(f_s, s_of_theta, th_c)
+        f_p = _RAY_ORIGIN + _direction(f_th, f_phi) * _cast(f_th, f_phi)[:, None]
+        rho, lon, lat, alpha = _eye_coords(np.abs(f_p[:, 0]), f_p[:, 1], f_p[:, 2])
+        near = (np.abs(_aperture(rho, lon, lat)) < 1.6) & (rho < _eye_radius(alpha) + 4.0)
+        sel = coarse.ravel() | near
+        pts = np.concatenate([rim_xy, np.stack([f_phi[sel] * sx, f_s[sel] * sy], axis=1)])
+        simp = Delaunay(pts).simplices
+        e1, e2 = pts[simp[:, 1]] - pts[simp[:, 0]], pts[simp[:, 2]] - pts[simp[:, 0]]
+        simp = simp[np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]) > 1e-6 * h * h]
+        local = np.concatenate([ii[bi[rim], bj[rim]], base + np.arange(sel.sum())])
+        extra_tris.append(local[simp])
+        positions.append(f_p[sel])
+        uvs.append(band_uv(f_th[sel], f_phi[sel]))
+        base += int(sel.sum())
+    tris = [band_tris[keep_tri]] + extra_tris
 
     # cap: top band row as its boundary (same 3D points), rings inside, pole in the middle
     ring_phi = phi_b[:-1]
@@ -495,7 +630,7 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     tris = [head_tris]
 
     # ears: unit-disk rings (dense towards the rim so it rounds), two sheets sharing the rim
-    ear_spacing = spacing * 0.45 / _Ear.HEIGHT  # ears are small and curled: finer
+    ear_spacing = spacing * 0.54 / _Ear.HEIGHT  # ears are small and curled: finer
     disk = _disk_points(1.0 - _Ear.RIM, ear_spacing)
     n_rim = max(int(round(2 * np.pi / ear_spacing)), 24)
     for f in (0.45, 0.8, 0.95, 1.0):
@@ -513,6 +648,42 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
         tris.append(t)
         base += len(p)
 
+    # eyeballs: closed globes with a corneal bulge; one azimuthal UV disk each (front pole in the
+    # middle, the back compressed towards the rim, the back pole's ring collapsed in 3D)
+    n_seg, n_ring = {0: (16, 10), 1: (28, 15), 2: (48, 24)}[detail]
+    alpha_l = _limbus_alpha()
+    rings = _warp(0.0, np.pi, n_ring + 1,
+                  lambda al: 1.0 + 2.0 * np.exp(-((al - alpha_l) / 0.15) ** 2) + 1.5 * (al < 1.4))
+    beta = np.arange(n_seg) * 2 * np.pi / n_seg
+    ring_a, ring_b = np.meshgrid(rings[1:], beta, indexing="ij")
+    eye_alpha = np.concatenate([[0.0], ring_a.ravel()])
+    eye_beta = np.concatenate([[0.0], ring_b.ravel()])
+    rr = _eye_radius(eye_alpha)
+    eye_dir = np.stack([np.sin(eye_alpha) * np.cos(eye_beta), np.sin(eye_alpha) * np.sin(eye_beta),
+                        np.cos(eye_alpha)], axis=1)
+    eye_dir[-n_seg:] = (0.0, 0.0, -1.0)  # the back pole: one 3D point
+    rj = np.arange(n_seg)
+    fan = np.stack([np.zeros(n_seg, int), 1 + rj, 1 + (rj + 1) % n_seg], axis=1)
+    quads = []
+    for r in range(n_ring - 1):
+        a0, a1 = 1 + r * n_seg, 1 + (r + 1) * n_seg
+        quads.append(np.stack([a0 + rj, a0 + (rj + 1) % n_seg, a1 + (rj + 1) % n_seg], axis=1))
+        if r < n_ring - 2:  # the last row's other half has two corners on the back pole
+            quads.append(np.stack([a0 + rj, a1 + (rj + 1) % n_seg, a1 + rj], axis=1))
+    eye_tris = np.concatenate([fan] + quads)
+    eye_uv_r, eye_centres = eye_layout
+    for side, cuv in zip((1.0, -1.0), eye_centres):
+        centre = _EYE_C * np.array([side, 1.0, 1.0])
+        p = centre + rr[:, None] * eye_dir * np.array([side, 1.0, 1.0])
+        p[-n_seg:] = centre + np.array([0.0, 0.0, -_EYE_R])
+        t = _orient(eye_tris + base, np.concatenate(positions + [p]),
+                    p[eye_tris].mean(axis=1) - centre)
+        positions.append(p)
+        uvs.append(cuv + _eye_uv_radius(eye_alpha)[:, None] * eye_uv_r
+                   * np.stack([np.cos(eye_beta), np.sin(eye_beta)], axis=1))
+        tris.append(t)
+        base += len(p)
+
     positions = np.concatenate(positions)
     uvs = np.concatenate(uvs)
     indices = np.concatenate(tris)
@@ -524,7 +695,7 @@ def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
     normals = _welded_normals(positions, indices)
 
     maps = _paint(res, seed, k, th_c, s_of_theta, circ_uv, theta_t, phi_b, radius_table,
-                  cap_centre, ear_origins, v_band_top)
+                  cap_centre, ear_origins, v_band_top, eye_windows, eye_layout)
     return {"positions": positions.astype(np.float32), "normals": normals,
             "uvs": uvs.astype(np.float32), "indices": indices.astype(np.uint32), **maps}
 
@@ -543,12 +714,12 @@ def _welded_normals(positions, indices):
 # texture maps
 
 def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius_table,
-           cap_centre, ear_origins, v_band_top):
+           cap_centre, ear_origins, v_band_top, eye_windows, eye_layout):
     rng = np.random.default_rng(seed)
     uv = (np.stack(np.meshgrid(np.arange(res), np.arange(res), indexing="xy"), axis=-1) + 0.5) / res
     u, v = uv[..., 0], uv[..., 1]
     point = np.zeros((res, res, 3))
-    island = np.zeros((res, res), dtype=np.int8)  # 0 gutter, 1 band, 2 cap, 3 ear
+    island = np.zeros((res, res), dtype=np.int8)  # 0 gutter, 1 band, 2 cap, 3 ear, 4 eyeball
 
     # texel -> (θ, φ) -> radius table -> 3D, inverting the band and cap maps analytically
     def head_point(theta, phi):
@@ -564,21 +735,12 @@ def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius
     ok = (np.abs(phi) <= np.pi) & (theta >= _THETA_CAP)
     idx = np.flatnonzero(band)[ok]
     point.reshape(-1, 3)[idx] = head_point(theta[ok], phi[ok])
-    # fine eyelid detail the mesh is too coarse to carry (lid line, lower lid, upper-lid fold):
-    # the exact surface is cast again at each eyelid texel and the radial offset from the mesh's
-    # interpolated surface goes into the normal map's height field (mm)
-    detail = np.zeros((res, res))
-    fp = point.reshape(-1, 3)[idx]
-    lid = ((np.abs(fp[:, 0]) - 32.0) / 15.0) ** 2 + ((fp[:, 1] - 14.0) / 11.0) ** 2
-    feather = _smoothstep(1.0, 0.6, lid) * _smoothstep(60.0, 72.0, fp[:, 2])
-    sel = feather > 0
-    th_f, ph_f = theta[ok][sel], phi[ok][sel]
-    ti = np.interp(th_f, theta_t, np.arange(len(theta_t)))
-    pj = np.interp(ph_f, phi_b, np.arange(len(phi_b)))
-    coarse = ndimage.map_coordinates(radius_table, [ti, pj], order=1, mode="nearest")
-    offset = _cast(th_f, ph_f) - coarse
-    offset *= _smoothstep(2.0, 1.0, np.abs(offset))  # grazing misses are not detail
-    detail.reshape(-1)[idx[sel]] = offset * feather[sel]
+    # the eye windows are meshed finer than the radius table: cast their texels exactly
+    th_ok, ph_ok = theta[ok], phi[ok]
+    for th0, th1, ph0, ph1 in eye_windows:
+        w = (th_ok >= th0) & (th_ok <= th1) & (ph_ok >= min(ph0, ph1)) & (ph_ok <= max(ph0, ph1))
+        point.reshape(-1, 3)[idx[w]] = (_RAY_ORIGIN + _direction(th_ok[w], ph_ok[w])
+                                        * _cast(th_ok[w], ph_ok[w])[:, None])
     island.reshape(-1)[idx] = 1
 
     d = uv - cap_centre
@@ -597,15 +759,30 @@ def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius
         point[inside] = ear.sheet(x[inside], y[inside], front)
         island[inside] = 3
 
-    skin = island > 0
+    eye_uv_r, eye_centres = eye_layout
+    eye_polar = np.zeros((res, res, 2))  # (alpha, beta) on the eyeball
+    for side, cuv in zip((1.0, -1.0), eye_centres):
+        du, dv = u - cuv[0], v - cuv[1]
+        frac = np.hypot(du, dv) / eye_uv_r
+        inside = frac <= 1.0
+        al = _eye_uv_alpha(frac[inside])
+        be = np.arctan2(dv[inside], du[inside])
+        eye_polar[inside] = np.stack([al, be], axis=1)
+        dirs = np.stack([side * np.sin(al) * np.cos(be), np.sin(al) * np.sin(be), np.cos(al)], axis=1)
+        point[inside] = _EYE_C * np.array([side, 1.0, 1.0]) + _eye_radius(al)[:, None] * dirs
+        island[inside] = 4
+
+    skin = (island > 0) & (island < 4)
+    eyes = island == 4
     p = point[skin]
     region = _regions(p, island[skin])
     albedo, spec, pore_gain = _skin_colour(p, region, rng)
+    eye_albedo = _eye_colour(eye_polar[eyes], np.random.default_rng(seed + 7919), res, eyes)
 
     # tangent-space normal map from a pore height field, in mm per texel of the local surface
     gain = np.zeros((res, res))
     gain[skin] = pore_gain
-    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0) + ndimage.gaussian_filter(detail, 0.7)
+    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
     mm_u = np.linalg.norm(np.gradient(point, axis=1), axis=-1)  # mm per texel along +u
     mm_v = np.linalg.norm(np.gradient(point, axis=0), axis=-1)  # along +v (rows)
     scale = 1.0 / (k * res)
@@ -620,13 +797,18 @@ def _paint(res, seed, k, th_c, s_of_theta, circumference, theta_t, phi_b, radius
 
     full_albedo = np.zeros((res, res, 3))
     full_albedo[skin] = albedo
+    full_albedo[eyes] = eye_albedo
     full_spec = np.zeros((res, res, 1))
     full_spec[skin, 0] = spec
+    full_spec[eyes, 0] = 0.9   # wet cornea and conjunctiva
     full_region = np.zeros((res, res), dtype=np.uint8)
     full_region[skin] = region
+    full_region[eyes] = _REGION["other"]
+    n[eyes] = (0.0, 0.0, 1.0)  # smooth: the cornea's bulge is in the mesh
 
     # fill the gutters from the nearest island texel
-    _, (ri, ci) = ndimage.distance_transform_edt(~skin, return_indices=True)
+    filled = island > 0
+    _, (ri, ci) = ndimage.distance_transform_edt(~filled, return_indices=True)
     out = {
         "albedo": full_albedo[ri, ci],
         "normal_map": (n * 0.5 + 0.5)[ri, ci],
@@ -737,8 +919,21 @@ def _skin_colour(p, region, rng):
     brow_mask = (_smoothstep(6.0, 2.0, np.abs(y - by + 0.02 * (ax - 30.0)))
                  * _smoothstep(54.0, 46.0, ax) * _smoothstep(8.0, 14.0, ax) * (z > 60.0))
     brow = brow_mask * (0.35 + 0.6 * _brow_strokes(ax, y, rng))
-    lash = 0.65 * _smoothstep(1.3, 0.2, np.abs(y - 10.7 + 0.004 * (ax - 32.0) ** 2)) * (np.abs(ax - 32.0) < 11.0) * (z > 78)
-    crease = 0.25 * _smoothstep(1.6, 0.3, np.abs(y - 21.0 + 0.006 * (ax - 31.0) ** 2)) * (np.abs(ax - 31.0) < 12.0) * (z > 74)
+    # lid margins: a lash line along the upper lid (heavier laterally), a fainter lower one, the
+    # upper-lid crease above it, pink conjunctiva inside the fissure (the caruncle at the corners)
+    rho, lon, lat, alpha = _eye_coords(ax, y, z)
+    up, lo = _fissure(lon)
+    surf = _eye_radius(alpha)
+    # the painted lines end inside the medial corner: where the margins converge they would
+    # otherwise run on towards the nose as thin strokes
+    in_lon = (_smoothstep(_LON_C - 0.05, _LON_C - 0.35, lon) * _smoothstep(-_LON_M + 0.25, -_LON_M + 0.55, lon)
+              * (rho < 26.0))
+    du, dl = rho * (lat - up), rho * (lo - lat)   # mm beyond the upper / lower margin
+    lash = in_lon * ((0.8 + 0.15 * _smoothstep(-0.5, 0.8, lon)) * _smoothstep(1.9, 0.5, du) * _smoothstep(-1.2, -0.2, du)
+                     + 0.45 * _smoothstep(1.0, 0.2, dl) * _smoothstep(-1.2, -0.2, dl))
+    crease = 0.22 * in_lon * np.exp(-((du - 7.0) / 1.2) ** 2)
+    conj = _smoothstep(surf + 0.6, surf - 0.2, rho) * (rho < 20.0)
+    col = col + (np.array([0.50, 0.20, 0.18]) - col) * (0.8 * conj)[:, None]
     nostril = g(6.8, -39.5, 100.0, 2.6, 2.2, 4.0)
     scalp = _hair(p) * (region != _REGION["ears"])
     hair = np.array([0.07, 0.05, 0.035])
@@ -757,6 +952,44 @@ def _skin_colour(p, region, rng):
     spec = spec_by_region[region] * (1.0 + 0.1 * redness) * (1.0 - 0.5 * brow)
     pore_by_region = np.array([0.6, 0.8, 1.2, 1.0, 0.2, 0.8, 0.4, 0.5, 0.5])  # mm of pore depth ×10
     return albedo, spec, pore_by_region[region] * 0.1
+
+
+def _eye_colour(polar, rng, res, eyes):
+    """sRGB albedo of eyeball texels from (alpha, beta) on the globe: a warm grey sclera reddening
+    towards the corners with a few thin veins, a dark limbal ring, a blue-grey iris with radial
+    fibres, a darker outer rim and a warmer collarette, and a near-black pupil."""
+    al, be = polar[:, 0], polar[:, 1]
+    r_perp = _eye_radius(al) * np.sin(al)        # mm from the visual axis
+    lateral = np.abs(np.sin(al) * np.cos(be))   # towards either canthus
+    wrap = lambda lattice, a, b: ndimage.map_coordinates(lattice, [a, b], order=1, mode="grid-wrap")
+    # sclera: warm grey, pinker and veined towards the canthi, darker behind the globe
+    col = np.tile(np.array([0.66, 0.60, 0.54]), (len(al), 1))
+    corner = _smoothstep(0.45, 0.95, lateral) * _smoothstep(0.6, 1.1, al)
+    veins_n = ndimage.gaussian_filter(rng.standard_normal((64, 96)), 1.5, mode="wrap")
+    veins_n /= np.abs(veins_n).max()
+    vein = _smoothstep(0.05, 0.0, np.abs(wrap(veins_n, al / np.pi * 64, (be / (2 * np.pi)) * 96)))
+    vein *= _smoothstep(0.65, 1.1, al) * (0.3 + 0.7 * corner)
+    red = np.clip(0.45 * corner + 0.6 * vein, 0.0, 1.0)
+    col = col + (np.array([0.55, 0.22, 0.19]) - col) * red[:, None]
+    col *= (1.0 - 0.5 * _smoothstep(1.4, 2.0, al))[:, None]
+    # iris: radial fibres (noise stretched along the radius), crypts, collarette, dark outer rim
+    r_pupil, r_iris = 1.9, 6.0
+    t = np.clip((r_perp - r_pupil) / (r_iris - r_pupil), 0.0, 1.0)
+    fib = rng.standard_normal((720, 12))
+    fibres = wrap(fib, (be / (2 * np.pi)) * 720, t * 8.0) / 2.0
+    crypt_n = ndimage.gaussian_filter(rng.standard_normal((90, 8)), 0.8, mode="wrap")
+    crypts = _smoothstep(0.25, 0.6, wrap(crypt_n / np.abs(crypt_n).max(), (be / (2 * np.pi)) * 90, t * 6.0))
+    iris = np.array([0.15, 0.23, 0.30]) + (np.array([0.26, 0.21, 0.12]) - np.array([0.15, 0.23, 0.30])) \
+        * (0.7 * _smoothstep(0.42, 0.22, t))[:, None]
+    iris = iris * np.clip(0.75 + 0.45 * fibres - 0.35 * crypts, 0.3, 1.6)[:, None]
+    iris *= (1.0 - 0.55 * _smoothstep(0.72, 1.0, t) - 0.15 * np.exp(-((t - 0.33) / 0.05) ** 2))[:, None]
+    w_iris = _smoothstep(r_iris + 0.35, r_iris - 0.05, r_perp) * (al < 1.0)
+    col = col + (iris - col) * w_iris[:, None]
+    limbal = np.exp(-((r_perp - (r_iris - 0.05)) / 0.35) ** 2) * (al < 1.0)
+    col = col + (np.array([0.05, 0.05, 0.06]) - col) * (0.85 * limbal)[:, None]
+    pupil = _smoothstep(r_pupil + 0.15, r_pupil - 0.1, r_perp)
+    col = col + (np.array([0.012, 0.012, 0.015]) - col) * pupil[:, None]
+    return np.where(col <= 0.0031308, 12.92 * col, 1.055 * np.clip(col, 0, None) ** (1 / 2.4) - 0.055)
 
 
 def _pores(res, rng):

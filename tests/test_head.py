@@ -145,7 +145,7 @@ def test_uv_atlas_has_no_overlaps(head):
 
 def test_uv_islands_are_separated_by_gutters(head):
     count, tri_label, _ = _islands(head)
-    assert count == 6  # head band, crown cap, two sides of two ears
+    assert count == 8  # head band, crown cap, two sides of two ears, two eyeballs
     res = 1024
     masks = [_rasterize(head.uvs, head.indices[tri_label == i], res, inset=-0.02) > 0 for i in range(count)]
     for i, m in enumerate(masks):
@@ -234,3 +234,41 @@ def test_maps_fill_gutters_and_redden_lips(head):
     cheeks = head.region_map == REGIONS.index("cheeks")
     redness = lambda m: (head.albedo[m, 0] - head.albedo[m, 1]).mean()
     assert redness(lips) > redness(cheeks)
+
+
+def test_eyeballs_sit_in_the_orbits_behind_open_lids(head):
+    count, tri_label, vlabel = _islands(head)
+    pos = head.positions.astype(np.float64)
+    res = head.region_map.shape[0]
+    eyes = [i for i in range(count)
+            if np.linalg.norm(pos[vlabel == i].mean(axis=0) - [np.sign(pos[vlabel == i, 0].mean()) * 32, 12, 70]) < 5]
+    assert len(eyes) == 2
+    assert sorted(np.sign(pos[vlabel == i, 0].mean()) for i in eyes) == [-1, 1]
+    for i in eyes:
+        p = pos[vlabel == i]
+        side = np.sign(p[:, 0].mean())
+        centre = head_mod._EYE_C * [side, 1, 1]
+        r = np.linalg.norm(p - centre, axis=1)
+        assert 11.5 <= r.min() and r.max() <= 14.0 and np.ptp(p[:, 1]) >= 23.0  # a ~24 mm globe
+        assert np.sum(tri_label == i) <= 1500                                   # cheap
+        at = head.region_map[(head.uvs[vlabel == i, 1] * res).astype(int).clip(0, res - 1),
+                             (head.uvs[vlabel == i, 0] * res).astype(int).clip(0, res - 1)]
+        assert np.all(at == REGIONS.index("other"))
+        # inside the orbit: behind the nose tip and brow, between the nose and the temple
+        assert p[:, 2].max() < pos[:, 2].max() - 15 and 14 < np.abs(p[:, 0]).min() < 32 < np.abs(p[:, 0]).max() < 48
+        # the lids are open around the cornea, cover the top of the globe, and the lid margin
+        # lies on the eyeball (skin just behind it inside the fissure, in front of it outside)
+        sdf = lambda q: head_mod._head_sdf(q[:, 0], q[:, 1], q[:, 2])
+        ahead = centre + np.array([[0, 0, 14.0], [0, -3.5, 13.5], [side * 6, 0, 13.0]])
+        assert np.all(sdf(ahead) > 0)                       # iris and pupil visible
+        top = centre + 12.5 * np.array([[0, np.sin(0.6), np.cos(0.6)], [0, -np.sin(0.75), np.cos(0.75)]])
+        assert np.all(sdf(top) < 0)                         # upper and lower lids over the globe
+    # the iris and pupil are painted: a dark centre and a bright sclera on the eyeball islands
+    albedo = head.albedo
+    for i in eyes:
+        uv = head.uvs[vlabel == i]
+        pole = uv[np.argmax(pos[vlabel == i, 2])]
+        c = albedo[int(pole[1] * res), int(pole[0] * res)]
+        assert c.max() < 0.15                               # pupil
+    sclera = head.region_map == REGIONS.index("other")
+    assert np.percentile(albedo[sclera].mean(axis=1), 90) > 0.7
