@@ -27,24 +27,20 @@ def register(name: str, builder: Callable[[], list[Pass]]) -> None:
     BUILDERS[name] = builder
 
 
-def _load_optional() -> None:
-    # techniques living in their own modules register themselves on import
-    import importlib
-    for mod in ("skinviewer.passes.gosselin", "skinviewer.passes.deon"):
-        try:
-            importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name != mod:
-                raise
+def _load_techniques() -> None:
+    # the skin techniques live in their own modules and register themselves on import (imported
+    # here, lazily, because they import this module to do so)
+    from .passes import gosselin  # noqa: F401  (registration order = the viewer's order)
+    from .passes import deon  # noqa: F401
 
 
 def names() -> list[str]:
-    _load_optional()
+    _load_techniques()
     return list(BUILDERS)
 
 
 def build(name: str) -> tuple[list[Pass], list[str]]:
-    _load_optional()
+    _load_techniques()
     if name not in BUILDERS:
         raise KeyError(f"technique '{name}' is not available (have: {', '.join(BUILDERS)})")
     return BUILDERS[name](), list(TARGETS)
