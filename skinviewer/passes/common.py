@@ -7,8 +7,8 @@ from types import SimpleNamespace
 import moderngl
 import numpy as np
 
-from ..camera import light_space
-from ..graph import Reflection
+from ..camera import gl_bytes, light_space
+from ..graph import Reflection, TexSpec
 from ..settings import REGIONS
 from .luts import BECKMANN_LUT
 
@@ -118,6 +118,23 @@ def bind_surface(ec, prog, first_unit: int) -> int:
 
 def draw_fullscreen(ec, prog) -> None:
     ec.graph.fullscreen_vao(prog).render(vertices=3)
+
+
+LIT = "lit"  # every technique's linear image, read by the output pass
+
+
+def declare_lit(r: Reflection, program: str) -> None:
+    """A view-dependent final pass: its program and the render-size linear image it writes."""
+    w, h = r.setting("render.width"), r.setting("render.height")
+    r.program(program)
+    r.output(LIT, TexSpec((w, h), 4, "f2", depth=True))
+
+
+def set_camera(ec, prog) -> None:
+    """The camera uniforms of a mesh pass drawn from the view (u_view_proj, u_eye)."""
+    view = ec.view
+    prog["u_view_proj"].write(gl_bytes(view.view_proj))
+    _set(prog, "u_eye", tuple(float(x) for x in view.eye))
 
 
 def draw_mesh(ec, prog, resource: str, clear=(0.0, 0.0, 0.0, 0.0)) -> None:

@@ -29,8 +29,8 @@ from ..camera import gl_bytes, light_space
 from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan_texels, blur_resource, stretch_blur_resource, sub_steps,
                          texture_of)
 from ..graph import Pass, Reflection, TexSpec
-from .common import (LIGHT_POSE_FIELDS, bind_optional, bind_specular, bind_surface, declare_lighting,
-                     declare_specular, draw_fullscreen, draw_mesh, set_lighting, set_uniform)
+from .common import (LIGHT_POSE_FIELDS, bind_optional, bind_specular, bind_surface, declare_lighting, declare_lit,
+                     declare_specular, draw_fullscreen, draw_mesh, set_camera, set_lighting, set_uniform)
 from .output import OutputPass
 from .rho_dt import RHO_DT_RESOURCE, RhoDtLutPass
 from .texture_space import GutterMapPass, declare_unwrapped, gutter_resource, unwrap_dilated
@@ -301,15 +301,11 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
         if tsm and r.setting("deon.stretch"):
             r.input(STRETCH)
-        w, h = r.setting("render.width"), r.setting("render.height")
-        r.program("deon_final")
-        r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
+        declare_lit(r, "deon_final")
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
-        view = ec.view
-        prog["u_view_proj"].write(gl_bytes(view.view_proj))
-        set_uniform(prog, "u_eye", tuple(float(x) for x in view.eye))
+        set_camera(ec, prog)
         unit = bind_surface(ec, prog, 0)
         unit = set_lighting(ec, prog, unit)
         has = ec.has_input

@@ -33,12 +33,11 @@ import numpy as np
 from scipy import ndimage
 
 from .. import techniques
-from ..camera import gl_bytes
 from ..graph import Pass, Reflection, TexSpec
 from ..poisson import POISSON_12
 from ..settings import REGIONS, RegionKernel
-from .common import (bind_specular, bind_surface, declare_lighting, declare_specular, draw_fullscreen,
-                     draw_mesh, set_lighting, set_uniform)
+from .common import (bind_specular, bind_surface, declare_lighting, declare_lit, declare_specular,
+                     draw_fullscreen, draw_mesh, set_camera, set_lighting, set_uniform)
 from .luts import BeckmannLutPass
 from .output import OutputPass
 from .texture_space import GutterMapPass, declare_unwrapped, dilate, gutter_resource, unwrap_dilated
@@ -199,15 +198,11 @@ class GosselinFinalPass(Pass):
         declare_specular(r)
         r.setting("gosselin.specular_shadow")
         r.input(BLURRED)
-        w, h = r.setting("render.width"), r.setting("render.height")
-        r.program("gosselin_final")
-        r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
+        declare_lit(r, "gosselin_final")
 
     def execute(self, ec) -> None:
         prog = ec.program("gosselin_final")
-        view = ec.view
-        prog["u_view_proj"].write(gl_bytes(view.view_proj))
-        set_uniform(prog, "u_eye", tuple(float(x) for x in view.eye))
+        set_camera(ec, prog)
         set_uniform(prog, "u_spec_shadow", 1 if ec.setting("gosselin.specular_shadow") == "printed" else 0)
         unit = bind_surface(ec, prog, 0)
         ec.input(BLURRED).use(unit)

@@ -1,9 +1,8 @@
 """Phong/Lambert baseline (shadow map -> lit image), linear space."""
 from __future__ import annotations
 
-from ..camera import gl_bytes
-from ..graph import Pass, Reflection, TexSpec
-from .common import bind_surface, declare_lighting, draw_mesh, set_lighting, set_uniform
+from ..graph import Pass, Reflection
+from .common import bind_surface, declare_lighting, declare_lit, draw_mesh, set_camera, set_lighting, set_uniform
 
 
 class PhongPass(Pass):
@@ -13,15 +12,11 @@ class PhongPass(Pass):
     def reflect(self, r: Reflection) -> None:
         declare_lighting(r)
         r.setting("phong")
-        w, h = r.setting("render.width"), r.setting("render.height")
-        r.program("phong")
-        r.output("lit", TexSpec((w, h), 4, "f2", depth=True))
+        declare_lit(r, "phong")
 
     def execute(self, ec) -> None:
         prog = ec.program("phong")
-        view = ec.view
-        prog["u_view_proj"].write(gl_bytes(view.view_proj))
-        set_uniform(prog, "u_eye", tuple(view.eye))
+        set_camera(ec, prog)
         ph = ec.setting("phong")
         set_uniform(prog, "u_ambient", ph.ambient)
         set_uniform(prog, "u_specular", ph.specular)
