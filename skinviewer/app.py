@@ -29,7 +29,8 @@ from .ui.hot_reload import ShaderWatcher
 from .ui.presets import PresetState
 from .ui.layout import PANEL_DEFAULT_W, Layout, compute_layout
 from .ui.scheduler import ChangeCost, RenderScheduler
-from .ui.screenshot import ScreenshotOptions, read_screen, save_npy, save_png, timestamped_path
+from .files import save_npy, save_png
+from .ui.screenshot import ScreenshotOptions, read_screen, timestamped_path
 
 PREFERRED_TECHNIQUES = ("deon", "gosselin", "phong")
 DEFAULT_WINDOW = (1280, 800)

@@ -8,10 +8,9 @@ the camera if it is view-dependent, or the spec (size/format) of one of its outp
 """
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable
+from typing import Any, Iterable
 
 import moderngl
 import numpy as np

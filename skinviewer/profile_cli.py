@@ -10,7 +10,6 @@ import json
 import math
 import sys
 
-import numpy as np
 
 from . import profiles as P
 from .fitting import FitResult, fit_gaussians

@@ -4,7 +4,6 @@ ImGui/implot panel; ``save_plot`` writes a PNG headlessly (matplotlib Agg), atom
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Callable
 
 import numpy as np

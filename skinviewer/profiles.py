@@ -26,7 +26,7 @@ form is kept where it can be selected (``printed=True`` / ``form="printed"``):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np

@@ -8,7 +8,7 @@ import pytest
 
 from skinviewer import techniques
 from skinviewer.scenes import SCENES
-from skinviewer.settings import REGIONS, SettingsError, with_values
+from skinviewer.settings import REGIONS, SettingsError
 
 from helpers import assert_all_finite, small_settings
 

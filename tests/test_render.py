@@ -29,7 +29,6 @@ def test_head_renders_a_plausible_image(renderer):
     s = small_settings("head", "phong", size=128)
     renderer.render(s)
     img = renderer.image(s).astype(np.float32)
-    bg = np.round(np.array([0.05, 0.05, 0.06]) ** (1 / 2.2) * 255)
     subject = np.abs(img - img[0, 0]).sum(axis=2) > 12
     assert 0.15 < subject.mean() < 0.9, "the head should fill a good part of the frame"
     lit = img[subject]

@@ -1,6 +1,5 @@
 """Kelemen/Szirmay-Kalos specular (seed 000 eq. 14-16, seed 002 listings 14-1..14-3), the Beckmann LUT,
 rho_dt (eq. 30-31), and the GLSL twin shaders/lib/kelemen.glsl against numpy."""
-import time
 from pathlib import Path
 
 import numpy as np

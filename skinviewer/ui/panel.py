@@ -17,6 +17,7 @@ from ..scenes import SCENES
 from ..settings import REGIONS, profile_warnings
 from .camera_control import angles_to_direction, direction_to_angles
 from .fielddocs import doc
+from .profile_lab import ProfileLab
 from .scheduler import MODES as RENDER_MODES
 from .scheduler import split_ms
 from .widgets import DIM, ERR, OK, WARN, Edits, begin_docked, edit_model, error_list, wrapped
@@ -70,13 +71,7 @@ class Panel:
         self.app = app
         self.mesh_path = ""
         self.save_as_path = ""
-        self.lab = None
-        try:
-            from .profile_lab import ProfileLab, available
-            if available():
-                self.lab = ProfileLab(app)
-        except Exception:
-            self.lab = None
+        self.lab = ProfileLab(app)
 
     # ------------------------------------------------------------------------------------------
     def draw(self) -> None:
@@ -105,8 +100,7 @@ class Panel:
             self._screenshot()
             self._compare()
             self._shaders()
-            if self.lab is not None:
-                self.lab.draw()
+            self.lab.draw()
             self._help()
             imgui.pop_item_width()
             if edits:

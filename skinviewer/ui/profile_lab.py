@@ -14,15 +14,6 @@ MODELS = ("dipole", "multipole", "burley")
 R_MAX = 8.0
 
 
-def available() -> bool:
-    try:
-        import skinviewer.fitting  # noqa: F401
-        import skinviewer.profiles  # noqa: F401
-        return True
-    except Exception:
-        return False
-
-
 class ProfileLab:
     def __init__(self, app):
         from .. import profiles as P

@@ -9,8 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..files import save_npy, save_png  # noqa: F401  (the viewer's writers)
-
 
 @dataclass
 class ScreenshotOptions:
