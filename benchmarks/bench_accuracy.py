@@ -39,15 +39,25 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from skinviewer import accuracy as A  # noqa: E402
-from skinviewer.diffusion import IRRADIANCE, blur_plan_texels, texture_of, uniform_uv_per_mm  # noqa: E402
-from skinviewer.fitting import fit_gaussians  # noqa: E402
-from skinviewer.gl import describe, headless_context  # noqa: E402
-from skinviewer.graph import TIMING_NOTES  # noqa: E402
-from skinviewer.profiles import deon_skin_profile  # noqa: E402
-from skinviewer.renderer import Renderer  # noqa: E402
-from skinviewer.scenes import build_scene, scene_overrides  # noqa: E402
-from skinviewer.settings import DeonSettings, GosselinSettings, Settings, with_values  # noqa: E402
+from skinviewer.core.gl import describe, headless_context  # noqa: E402
+from skinviewer.core.graph import TIMING_NOTES  # noqa: E402
+from skinviewer.core.renderer import Renderer  # noqa: E402
+from skinviewer.core.settings import (  # noqa: E402
+    DeonSettings,
+    GosselinSettings,
+    Settings,
+    with_values,
+)
+from skinviewer.physics import accuracy as A  # noqa: E402
+from skinviewer.physics.diffusion import (  # noqa: E402
+    IRRADIANCE,
+    blur_plan_texels,
+    texture_of,
+    uniform_uv_per_mm,
+)
+from skinviewer.physics.fitting import fit_gaussians  # noqa: E402
+from skinviewer.physics.profiles import deon_skin_profile  # noqa: E402
+from skinviewer.scene.scenes import build_scene, scene_overrides  # noqa: E402
 
 DEFAULT = DeonSettings().gaussians
 DEF_V = np.array([g.variance for g in DEFAULT])
@@ -325,7 +335,7 @@ def part2(b: Bench, size: int, scales, iters) -> None:
 
 def head_texel_mm_1024() -> float | None:
     try:
-        from skinviewer.head import default_head
+        from skinviewer.scene.head import default_head
         h = default_head(detail=1)
         return 1.0 / (1024 * uniform_uv_per_mm(h.positions, h.uvs, h.indices, h.mm_per_unit))
     except Exception:

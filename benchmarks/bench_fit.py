@@ -16,8 +16,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from skinviewer import profiles as P  # noqa: E402
-from skinviewer.fitting import fit_gaussians, make_grid  # noqa: E402
+from skinviewer.physics import profiles as P  # noqa: E402
+from skinviewer.physics.fitting import fit_gaussians, make_grid  # noqa: E402
 
 MATERIALS = ("Skin1", "Skin2", "Marble", "Ketchup", "Spectralon", "Wholemilk")
 

@@ -15,10 +15,10 @@ import statistics
 import time
 
 from skinviewer import techniques
-from skinviewer.gl import describe, headless_context
-from skinviewer.renderer import Renderer
-from skinviewer.scenes import scene_overrides
-from skinviewer.settings import Settings, with_values
+from skinviewer.core.gl import describe, headless_context
+from skinviewer.core.renderer import Renderer
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.scene.scenes import scene_overrides
 
 
 def settings_for(tech: str, scene: str, size: int, maps: int) -> Settings:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import statistics
 import time
 
-from skinviewer import specular as S
+from skinviewer.physics import specular as S
 
 
 def ms(fn, n=5):

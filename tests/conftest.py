@@ -65,7 +65,7 @@ def _cache_dir(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def gl_ctx():
-    from skinviewer.gl import GLUnavailableError, headless_context
+    from skinviewer.core.gl import GLUnavailableError, headless_context
     try:
         ctx = headless_context(backend="x11" if os.environ.get("DISPLAY") else None)
     except GLUnavailableError as exc:
@@ -85,7 +85,7 @@ def _current_gl(request):
 
 @pytest.fixture
 def renderer(gl_ctx):
-    from skinviewer.renderer import Renderer
+    from skinviewer.core.renderer import Renderer
     r = Renderer(gl_ctx)
     yield r
     r.release()

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.scenes import scene_overrides
-from skinviewer.settings import Settings, with_values
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.scene.scenes import scene_overrides
 
 
 def small_settings(scene: str = "head", technique: str = "phong", size: int = 96, **assign) -> Settings:

@@ -1,4 +1,4 @@
-"""skinviewer.accuracy (the measurements behind benchmarks/bench_accuracy.py) on synthetic data:
+"""skinviewer.physics.accuracy (the measurements behind benchmarks/bench_accuracy.py) on synthetic data:
 no GL, fast. The benchmark's timings are never asserted."""
 from __future__ import annotations
 
@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from skinviewer import accuracy as A
-from skinviewer.poisson import POISSON_12
-from skinviewer.profiles import sum_of_gaussians
-from skinviewer.scenes import laser_scene
-from skinviewer.settings import DeonSettings
+from skinviewer.core.settings import DeonSettings
+from skinviewer.physics import accuracy as A
+from skinviewer.physics.poisson import POISSON_12
+from skinviewer.physics.profiles import sum_of_gaussians
+from skinviewer.scene.scenes import laser_scene
 
 V = np.array([g.variance for g in DeonSettings().gaussians])
 W = np.array([g.weights for g in DeonSettings().gaussians])
@@ -78,8 +78,8 @@ def test_wrong_profiles_have_large_errors():
     delta = A.laser_errors(E, E, X, Y, area, V, W)
     assert np.all(delta["l1"] > 0.9) and np.all(delta["eq31"] > 1.0), delta
     # two Gaussians fitted to the profile: worse than the six, but far better than no scattering
-    from skinviewer.fitting import fit_gaussians
-    from skinviewer.profiles import deon_skin_profile
+    from skinviewer.physics.fitting import fit_gaussians
+    from skinviewer.physics.profiles import deon_skin_profile
     f = fit_gaussians(deon_skin_profile, 2, max_starts=2)
     two = A.laser_errors(_exact(E, X, Y, area, f.variances, f.weights), E, X, Y, area, V, W)
     assert np.all(two["l1"] > 0.01) and np.all(two["l1"] < delta["l1"]), two

@@ -6,8 +6,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from skinviewer.camera import light_basis, light_projection_rowvec, light_space, light_view_rowvec, orbit_view
-from skinviewer.settings import CameraSettings
+from skinviewer.core.settings import CameraSettings
+from skinviewer.scene.camera import (
+    light_basis,
+    light_projection_rowvec,
+    light_space,
+    light_view_rowvec,
+    orbit_view,
+)
 
 
 def test_light_basis_is_orthonormal_and_looks_at_target():

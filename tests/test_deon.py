@@ -4,12 +4,24 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from helpers import assert_all_finite, small_settings
-from skinviewer import diffusion
-from skinviewer.diffusion import KERNEL7, blur_plan, blur_plan_texels, gaussian, texture_of, tsm_factor
+
+from skinviewer.core.settings import (
+    DeonSettings,
+    Gaussian,
+    profile_warnings,
+    with_values,
+)
 from skinviewer.passes.deon import mean_texel_mm
-from skinviewer.settings import DeonSettings, Gaussian, profile_warnings, with_values
+from skinviewer.physics import diffusion
+from skinviewer.physics.diffusion import (
+    KERNEL7,
+    blur_plan,
+    blur_plan_texels,
+    gaussian,
+    texture_of,
+    tsm_factor,
+)
 
 # ---------------------------------------------------------------------------------------------
 # numpy maths
@@ -242,7 +254,8 @@ def test_backlit_ear_transmission_falls_off_with_thickness(renderer):
 
 
 def test_rho_dt_texture_on_gpu(renderer, gl_ctx):
-    from skinviewer import paths, specular
+    from skinviewer.core import paths
+    from skinviewer.physics import specular
     s = _deon("laser", **{"deon.irradiance_size": 256, "specular.f0": 0.05, "specular.rho_s": 0.4})
     renderer.render(s)
     tex = renderer.graph("deon").texture("rho_dt_lut")

@@ -4,8 +4,8 @@ numbers of seed 002 section 14.4.4-14.4.5."""
 import numpy as np
 import pytest
 
-from skinviewer import profiles as P
-from skinviewer.fitting import FitGrid, fit_error, fit_gaussians
+from skinviewer.physics import profiles as P
+from skinviewer.physics.fitting import FitGrid, fit_error, fit_gaussians
 
 # seed 002 14.4.4: green marble (Jensen 2001 parameters), four Gaussians
 SEED_MARBLE_V = np.array([0.036, 0.14, 0.91, 7.0])

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import assert_all_finite, small_settings
 
 from skinviewer import techniques
-from skinviewer.scenes import SCENES
-from skinviewer.settings import REGIONS, SettingsError
-
-from helpers import assert_all_finite, small_settings
+from skinviewer.core.settings import REGIONS, SettingsError
+from skinviewer.scene.scenes import SCENES
 
 CASES_PER_TECHNIQUE = 10
 

@@ -5,12 +5,18 @@ import time
 
 import numpy as np
 import pytest
-
-from skinviewer.graph import FrameInputs, GraphError, Pass, Reflection, RenderGraph, TexSpec
-from skinviewer.settings import Settings, with_values
-from skinviewer.shaders import ShaderLibrary
-
 from helpers import small_settings
+
+from skinviewer.core.graph import (
+    FrameInputs,
+    GraphError,
+    Pass,
+    Reflection,
+    RenderGraph,
+    TexSpec,
+)
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.core.shaders import ShaderLibrary
 
 FS_VERT = """#version 330 core
 out vec2 v_uv;

@@ -5,9 +5,9 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from skinviewer import head as head_mod
-from skinviewer.head import GENERATOR_VERSION, default_head
-from skinviewer.settings import REGIONS
+from skinviewer.core.settings import REGIONS
+from skinviewer.scene import head as head_mod
+from skinviewer.scene.head import GENERATOR_VERSION, default_head
 
 ARRAYS = ("positions", "normals", "uvs", "indices", "albedo", "normal_map", "specular_map", "region_map")
 

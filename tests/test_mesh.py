@@ -4,10 +4,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-
-from skinviewer.mesh import MeshData, MeshError, compute_tangents, load_mesh, load_texture_maps, vertex_normals
-
 from conftest import LPS_GLB
+
+from skinviewer.scene.mesh import (
+    MeshData,
+    MeshError,
+    compute_tangents,
+    load_mesh,
+    load_texture_maps,
+    vertex_normals,
+)
 
 
 def _quad_with_uv(tmp_path, ext):
@@ -84,8 +90,9 @@ def test_lee_perry_smith_loads():
 
 @pytest.mark.skipif(not LPS_GLB.is_file(), reason="shared Lee Perry-Smith scan not present")
 def test_lee_perry_smith_renders(renderer):
-    from skinviewer.settings import Settings, with_values
     from helpers import assert_all_finite
+
+    from skinviewer.core.settings import Settings, with_values
     s = with_values(Settings(), {"scene.mesh": str(LPS_GLB), "scene.mm_per_unit": 48.0, "technique": "phong",
                                  "render.width": 96, "render.height": 96, "shadow.map_size": 256})
     renderer.render(s)

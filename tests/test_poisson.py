@@ -1,7 +1,7 @@
 """The 12-tap Poisson disk of the Gosselin blur (seed 000 eq. 13)."""
 import numpy as np
 
-from skinviewer import poisson
+from skinviewer.physics import poisson
 
 
 def test_constant_is_the_generator_output():

@@ -1,11 +1,11 @@
-"""`skinviewer profile`: JSON structure, preset round trip through skinviewer.settings, errors."""
+"""`skinviewer profile`: JSON structure, preset round trip through skinviewer.core.settings, errors."""
 import argparse
 import json
 
 import pytest
 
-from skinviewer import profile_cli
-from skinviewer.settings import load_preset, profile_warnings
+from skinviewer.cli import profile as profile_cli
+from skinviewer.core.settings import load_preset, profile_warnings
 
 
 def run(argv, capsys):
@@ -87,8 +87,8 @@ def test_plot_arrays_r_times_burley_is_finite_and_continuous_at_zero():
     """r R(r) -> 2 A / (8 pi d) at r = 0 for Burley (R ~ 1/r): the first plotted point is that limit."""
     import math
 
-    from skinviewer import profiles as P
-    from skinviewer.profile_plot import plot_arrays
+    from skinviewer.cli.profile_plot import plot_arrays
+    from skinviewer.physics import profiles as P
     b = P.Burley(0.6, 1.0)
     data = plot_arrays(b, r_max=5.0, n=501)
     lim = 2 * 0.6 / (8 * math.pi * b.d)

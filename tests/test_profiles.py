@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from skinviewer import profiles as P
+from skinviewer.physics import profiles as P
 
 R_LOG = np.geomspace(1e-7, 1e5, 120001)
 
@@ -257,6 +257,7 @@ def test_gaussian_never_inf():
 def test_burley_is_finite_at_r_zero():
     """The product promise: no Inf, even at the integrable 1/r singularity of eq. 2.83."""
     import numpy as np
-    from skinviewer import profiles as P
+
+    from skinviewer.physics import profiles as P
     v = P.burley_normalized(np.array([0.0, 1e-300, 1e-9]), np.array([[0.5], [1.0], [2.0]]))
     assert np.all(np.isfinite(v)) and np.all(v > 0)

@@ -8,13 +8,12 @@ import sys
 
 import numpy as np
 import pytest
+from helpers import assert_all_finite, small_settings
 
 from skinviewer import techniques
 from skinviewer.cli import main
-from skinviewer.scenes import SCENES
-from skinviewer.settings import with_values
-
-from helpers import assert_all_finite, small_settings
+from skinviewer.core.settings import with_values
+from skinviewer.scene.scenes import SCENES
 
 
 @pytest.mark.parametrize("scene", SCENES)
@@ -86,7 +85,8 @@ def test_cli_errors_are_one_clear_line(tmp_path, argv, msg):
 
 def test_headless_context_failure_says_what_to_install(monkeypatch):
     import moderngl
-    from skinviewer import gl
+
+    from skinviewer.core import gl
 
     def refuse(*a, **k):
         raise Exception("eglInitialize failed")
@@ -99,8 +99,10 @@ def test_headless_context_failure_says_what_to_install(monkeypatch):
 def test_package_data_globs_cover_shaders_and_presets():
     """The wheel ships shaders/ and presets/ (pyproject package-data): every file must match a glob."""
     import fnmatch
+
     import tomllib
-    from skinviewer import paths
+
+    from skinviewer.core import paths
     cfg = tomllib.loads((paths.shaders_dir().parent / "pyproject.toml").read_text())["tool"]["setuptools"]
     for pkg, folder in (("skinviewer.shaders", paths.shaders_dir()), ("skinviewer.presets", paths.presets_dir())):
         globs = cfg["package-data"][pkg]

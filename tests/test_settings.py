@@ -6,9 +6,18 @@ import os
 
 import pytest
 
-from skinviewer import paths
-from skinviewer.settings import (Settings, SettingsError, load_preset, parse_assignments, profile_warnings,
-                                 save_preset, to_dict, validate, with_values)
+from skinviewer.core import paths
+from skinviewer.core.settings import (
+    Settings,
+    SettingsError,
+    load_preset,
+    parse_assignments,
+    profile_warnings,
+    save_preset,
+    to_dict,
+    validate,
+    with_values,
+)
 
 
 def test_round_trip(tmp_path):

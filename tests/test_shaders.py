@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-from skinviewer.shaders import ShaderCompileError, ShaderLibrary
+from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
 
 VERT = '#version 330 core\n#include "lib/common.glsl"\nin vec2 in_pos;\nvoid main() { gl_Position = vec4(in_pos, 0.0, 1.0); }\n'
 FRAG = '#version 330 core\n#include "lib/common.glsl"\nout vec4 f;\nvoid main() { f = vec4(twice(0.5)); }\n'
@@ -80,7 +80,7 @@ def test_defines_and_versions(gl_ctx, lib_dir):
 
 def test_project_shaders_all_compile(gl_ctx):
     """Every program in shaders/ compiles (catches a broken edit before the viewer does)."""
-    from skinviewer import paths
+    from skinviewer.core import paths
     lib = ShaderLibrary(gl_ctx)
     names = sorted({p.stem for p in paths.shaders_dir().glob("*.frag")})
     assert names

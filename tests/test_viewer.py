@@ -1,5 +1,5 @@
 """The interactive viewer, under a real (Xvfb) display. Most tests drive one in-process app
-(skinviewer.app.create_app) with a small window; one runs the CLI as a subprocess."""
+(skinviewer.ui.app.create_app) with a small window; one runs the CLI as a subprocess."""
 from __future__ import annotations
 
 import json
@@ -28,7 +28,7 @@ def display():
 
 @pytest.fixture(scope="module")
 def shader_dir(tmp_path_factory):
-    from skinviewer import paths
+    from skinviewer.core import paths
     src = paths.shaders_dir()
     dst = tmp_path_factory.mktemp("shaders") / "shaders"
     shutil.copytree(src, dst)
@@ -44,9 +44,9 @@ def shader_dir(tmp_path_factory):
 @pytest.fixture(scope="module")
 def app(display, shader_dir):
     pytest.importorskip("imgui_bundle")
-    from skinviewer.app import create_app, destroy_app
-    from skinviewer.scenes import scene_overrides
-    from skinviewer.settings import Settings, with_values
+    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui.app import create_app, destroy_app
     s = with_values(Settings(), {"scene.name": SCENE, **scene_overrides(SCENE), "shadow.map_size": 256,
                                  "gosselin.light_map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
     try:
@@ -193,7 +193,7 @@ def test_switch_technique_changes_image(app):
 
 
 def test_broken_preset_refused_state_kept(app, tmp_path):
-    from skinviewer.settings import to_dict
+    from skinviewer.core.settings import to_dict
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"schema_version": 1, "lights": [{"intensity": -3}], "render": {"exposure": 0},
                                "nonsense": 1}))
@@ -338,7 +338,7 @@ def test_resize_follows_framebuffer(app):
 def test_profile_lab_fit_applies_to_deon_gaussians(app):
     lab = app.panel.lab
     if lab is None:
-        pytest.skip("skinviewer.profiles / skinviewer.fitting not available")
+        pytest.skip("skinviewer.physics.profiles / skinviewer.physics.fitting not available")
     old = app.settings.deon.gaussians
     lab.k = 3
     lab.start_fit(wait=True)
@@ -521,7 +521,7 @@ def test_expensive_change_waits_for_release(app):
         app._ui_active = False
         app.scheduler.mode = "adaptive"
         app.show_ui = True
-        from skinviewer.settings import validate
+        from skinviewer.core.settings import validate
         app.set_settings(validate(old))
         app.step(1)
 
@@ -560,6 +560,7 @@ def test_orbit_renders_smaller_while_dragging_when_slow(app):
 def test_every_settings_field_has_a_widget(app):
     """The generic panel draws every field of the model, optional ones included (auto / value)."""
     from imgui_bundle import imgui
+
     from skinviewer.ui import widgets
     for section in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
         model = getattr(app.settings, section)
@@ -611,7 +612,7 @@ def test_preset_refused_after_loading_keeps_the_current_preset(app, tmp_path):
     """A preset that parses but cannot be shown (its mesh does not load) leaves the current preset
     file, its saved baseline and the state alone: Ctrl+S must not write the current state over the
     file that was refused."""
-    from skinviewer.settings import to_dict
+    from skinviewer.core.settings import to_dict
     current = tmp_path / "current.json"
     assert app.presets.save(app.settings, str(current))
     bad = tmp_path / "missing_mesh.json"
@@ -693,8 +694,8 @@ def test_profile_lab_discards_a_fit_of_an_edited_model(app, monkeypatch):
     import threading
     lab = app.panel.lab
     if lab is None:
-        pytest.skip("skinviewer.profiles / skinviewer.fitting not available")
-    from skinviewer import fitting
+        pytest.skip("skinviewer.physics.profiles / skinviewer.physics.fitting not available")
+    from skinviewer.physics import fitting
     release = threading.Event()
     real = fitting.fit_gaussians
 

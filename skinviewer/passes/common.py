@@ -7,10 +7,10 @@ from types import SimpleNamespace
 import moderngl
 import numpy as np
 
-from ..camera import gl_bytes, light_space
-from ..graph import Reflection, TexSpec
-from ..settings import REGIONS
-from .luts import BECKMANN_LUT
+from skinviewer.core.graph import Reflection, TexSpec
+from skinviewer.core.settings import REGIONS
+from skinviewer.passes.luts import BECKMANN_LUT
+from skinviewer.scene.camera import gl_bytes, light_space
 
 MAX_LIGHTS = 4
 _KIND = {"directional": 0, "point": 1, "beam": 2}

@@ -24,16 +24,37 @@ from types import SimpleNamespace
 import moderngl
 import numpy as np
 
-from .. import techniques
-from ..camera import gl_bytes, light_space
-from ..diffusion import (IRRADIANCE, KERNEL7, blur_plan_texels, blur_resource, stretch_blur_resource, sub_steps,
-                         texture_of)
-from ..graph import Pass, Reflection, TexSpec
-from .common import (LIGHT_POSE_FIELDS, bind_optional, bind_specular, bind_surface, declare_lighting, declare_lit,
-                     declare_specular, draw_fullscreen, draw_mesh, set_camera, set_lighting, set_uniform)
-from .output import OutputPass
-from .rho_dt import RHO_DT_RESOURCE, RhoDtLutPass
-from .texture_space import GutterMapPass, declare_unwrapped, gutter_resource, unwrap_dilated
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.common import (
+    LIGHT_POSE_FIELDS,
+    bind_optional,
+    bind_specular,
+    bind_surface,
+    declare_lighting,
+    declare_lit,
+    declare_specular,
+    draw_fullscreen,
+    draw_mesh,
+    set_camera,
+    set_lighting,
+    set_uniform,
+)
+from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
+from skinviewer.passes.texture_space import (
+    declare_unwrapped,
+    gutter_resource,
+    unwrap_dilated,
+)
+from skinviewer.physics.diffusion import (
+    IRRADIANCE,
+    KERNEL7,
+    blur_plan_texels,
+    blur_resource,
+    stretch_blur_resource,
+    sub_steps,
+    texture_of,
+)
+from skinviewer.scene.camera import gl_bytes, light_space
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
@@ -347,16 +368,3 @@ class DeonFinalPass(Pass):
             s = ec.scene.mean_uv_per_mm
             set_uniform(prog, "u_uniform_stretch", (s, s))
         draw_mesh(ec, prog, "lit")
-
-
-def deon() -> list[Pass]:
-    from .luts import BeckmannLutPass
-    return (techniques.shadow_passes()
-            + [GutterMapPass(SIZE, name="deon_gutter"), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
-               TsmPass(), IrradiancePass()]
-            + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
-            + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
-            + [DeonFinalPass(), OutputPass("lit")])
-
-
-techniques.register("deon", deon)

@@ -32,15 +32,27 @@ import moderngl
 import numpy as np
 from scipy import ndimage
 
-from .. import techniques
-from ..graph import Pass, Reflection, TexSpec
-from ..poisson import POISSON_12
-from ..settings import REGIONS, RegionKernel
-from .common import (bind_specular, bind_surface, declare_lighting, declare_lit, declare_specular,
-                     draw_fullscreen, draw_mesh, set_camera, set_lighting, set_uniform)
-from .luts import BeckmannLutPass
-from .output import OutputPass
-from .texture_space import GutterMapPass, declare_unwrapped, dilate, gutter_resource, unwrap_dilated
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.core.settings import REGIONS, RegionKernel
+from skinviewer.passes.common import (
+    bind_specular,
+    bind_surface,
+    declare_lighting,
+    declare_lit,
+    declare_specular,
+    draw_fullscreen,
+    draw_mesh,
+    set_camera,
+    set_lighting,
+    set_uniform,
+)
+from skinviewer.passes.texture_space import (
+    declare_unwrapped,
+    dilate,
+    gutter_resource,
+    unwrap_dilated,
+)
+from skinviewer.physics.poisson import POISSON_12
 
 LIGHT_MAP = "gosselin_light_map"
 RADIUS_MAP = "gosselin_radius"
@@ -210,13 +222,3 @@ class GosselinFinalPass(Pass):
         unit = bind_specular(ec, prog, unit + 1, spare_unit=unit)  # the blurred map backs unused samplers
         set_lighting(ec, prog, unit)
         draw_mesh(ec, prog, "lit")
-
-
-def gosselin() -> list[Pass]:
-    return techniques.shadow_passes() + [
-        GutterMapPass(SIZE), GosselinLightMapPass(), GosselinRadiusMapPass(), PoissonBlurPass(),
-        BeckmannLutPass(), GosselinFinalPass(), OutputPass("lit"),
-    ]
-
-
-techniques.register("gosselin", gosselin)

@@ -1,6 +1,6 @@
 """Lookup-texture passes shared by the texture-space techniques (Gosselin and d'Eon).
 
-Each LUT is computed in numpy (``skinviewer.specular``) and uploaded into the graph-owned output
+Each LUT is computed in numpy (``skinviewer.physics.specular``) and uploaded into the graph-owned output
 texture (f4, one channel, LINEAR, CLAMP_TO_EDGE: the sampling ``shaders/lib/kelemen.glsl`` assumes).
 A LUT pass reads no scene and no camera, so it runs once per change of its own settings; passes that
 sample it declare it as an input only in the mode that uses it, so otherwise it is pruned.
@@ -11,8 +11,8 @@ import functools
 
 import numpy as np
 
-from .. import specular
-from ..graph import Pass, Reflection, TexSpec
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.physics import specular
 
 BECKMANN_LUT = "beckmann_lut"
 

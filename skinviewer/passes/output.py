@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..graph import Pass, Reflection, TexSpec
-from .common import draw_fullscreen, set_uniform
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.common import draw_fullscreen, set_uniform
 
 
 def srgb_to_linear(c):

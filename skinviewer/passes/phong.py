@@ -1,8 +1,16 @@
 """Phong/Lambert baseline (shadow map -> lit image), linear space."""
 from __future__ import annotations
 
-from ..graph import Pass, Reflection
-from .common import bind_surface, declare_lighting, declare_lit, draw_mesh, set_camera, set_lighting, set_uniform
+from skinviewer.core.graph import Pass, Reflection
+from skinviewer.passes.common import (
+    bind_surface,
+    declare_lighting,
+    declare_lit,
+    draw_mesh,
+    set_camera,
+    set_lighting,
+    set_uniform,
+)
 
 
 class PhongPass(Pass):

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from ..camera import gl_bytes, light_space
-from ..graph import Pass, Reflection, TexSpec
-from .common import LIGHT_POSE_FIELDS, draw_mesh, shadow_resource
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.common import LIGHT_POSE_FIELDS, draw_mesh, shadow_resource
+from skinviewer.scene.camera import gl_bytes, light_space
 
 
 class ShadowMapPass(Pass):

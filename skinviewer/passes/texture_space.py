@@ -6,8 +6,8 @@ import moderngl
 import numpy as np
 from scipy import ndimage
 
-from ..graph import Pass, Reflection, TexSpec
-from .common import draw_fullscreen, set_uniform
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.common import draw_fullscreen, set_uniform
 
 
 def gutter_resource(size: int) -> str:

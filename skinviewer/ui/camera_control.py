@@ -7,9 +7,9 @@ import math
 
 import numpy as np
 
-from ..camera import orbit_eye
-from ..mesh import framing_distance
-from ..settings import Settings
+from skinviewer.core.settings import Settings
+from skinviewer.scene.camera import orbit_eye
+from skinviewer.scene.mesh import framing_distance
 
 ORBIT_DEG_PER_PX = 0.35
 LIGHT_DEG_PER_PX = 0.4

@@ -8,7 +8,7 @@ the single-view cost), and texture-space passes of both stay cached. Memory: a s
 technique's textures and a second copy of the mesh."""
 from __future__ import annotations
 
-from ..settings import Settings, with_values
+from skinviewer.core.settings import Settings, with_values
 
 MODES = ("off", "split", "toggle", "difference")
 

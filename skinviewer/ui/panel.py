@@ -12,15 +12,27 @@ from pathlib import Path
 import numpy as np
 from imgui_bundle import imgui, implot
 
-from .. import techniques
-from ..scenes import SCENES
-from ..settings import REGIONS, profile_warnings
-from .camera_control import angles_to_direction, direction_to_angles
-from .fielddocs import doc
-from .profile_lab import ProfileLab
-from .scheduler import MODES as RENDER_MODES
-from .scheduler import split_ms
-from .widgets import DIM, ERR, OK, WARN, Edits, begin_docked, edit_model, error_list, wrapped
+from skinviewer import techniques
+from skinviewer.core.settings import REGIONS, profile_warnings
+from skinviewer.scene.scenes import SCENES
+from skinviewer.ui.camera_control import angles_to_direction, direction_to_angles
+from skinviewer.ui.fielddocs import doc
+from skinviewer.ui.profile_lab import ProfileLab
+from skinviewer.ui.scheduler import MODES as RENDER_MODES
+from skinviewer.ui.scheduler import split_ms
+from skinviewer.ui.widgets import (  # noqa: F401  (tests open every section)
+    DIM,
+    ERR,
+    EXPAND_ALL,
+    OK,
+    WARN,
+    Edits,
+    begin_docked,
+    edit_model,
+    error_list,
+    wrapped,
+)
+from skinviewer.ui.widgets import header as _header
 
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
 TEX_COL = imgui.ImVec4(0.35, 0.6, 1.0, 1.0)  # texture-space cost
@@ -46,7 +58,6 @@ def _short(source: str, n: int = 38) -> str:
     return source if len(source) <= n else source[: n - 3] + "..."
 
 
-EXPAND_ALL = {"on": False}  # tests: open every section so every widget is drawn
 
 
 def _same_line_if_fits(text: str, spacing: float = -1.0) -> None:
@@ -56,11 +67,6 @@ def _same_line_if_fits(text: str, spacing: float = -1.0) -> None:
         imgui.new_line()
 
 
-def _header(label: str, open_default: bool = False) -> bool:
-    flags = imgui.TreeNodeFlags_.default_open.value if open_default else 0
-    if EXPAND_ALL["on"]:
-        imgui.set_next_item_open(True)
-    return imgui.collapsing_header(label, flags)
 
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
@@ -195,7 +201,7 @@ class Panel:
         imgui.same_line()
         imgui.text_disabled(f"({len(rep.ran)} of {len(live)} passes ran, {rep.timing_mode} timing)")
         if imgui.is_item_hovered():
-            from ..graph import TIMING_NOTES
+            from skinviewer.core.graph import TIMING_NOTES
             imgui.set_item_tooltip(TIMING_NOTES.get(rep.timing_mode, ""))
         total = full_tex + full_view
         imgui.text("full frame:")
@@ -608,7 +614,7 @@ class Panel:
             imgui.same_line()
             if imgui.button(f"preset -> {slot.label}"):
                 path = app.presets.edit_path.strip()
-                from ..settings import SettingsError, load_preset
+                from skinviewer.core.settings import SettingsError, load_preset
                 try:
                     slot.settings = load_preset(path)
                     slot.source = Path(path).name
@@ -620,7 +626,7 @@ class Panel:
             if slot.error:
                 wrapped(slot.error, ERR)
             imgui.pop_id()
-        from .compare import MODES
+        from skinviewer.ui.compare import MODES
         ch, i = imgui.combo("view", MODES.index(cmp.mode), list(MODES))
         if ch:
             cmp.mode = MODES[i]

@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 from imgui_bundle import imgui
 
-from ..graph import TIMING_NOTES
-from .display import CHANNELS
-from .widgets import ERR
+from skinviewer.core.graph import TIMING_NOTES
+from skinviewer.ui.display import CHANNELS
+from skinviewer.ui.widgets import ERR
 
 COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
           "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0), "deferred": imgui.ImVec4(0.5, 0.7, 1.0, 1.0)}

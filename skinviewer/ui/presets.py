@@ -4,8 +4,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .. import paths
-from ..settings import Settings, SettingsError, load_preset, save_preset, to_dict, with_values
+from skinviewer.core import paths
+from skinviewer.core.settings import (
+    Settings,
+    SettingsError,
+    load_preset,
+    save_preset,
+    to_dict,
+    with_values,
+)
 
 # these follow the window, not the user's choices
 _VOLATILE = (("render", "width"), ("render", "height"))

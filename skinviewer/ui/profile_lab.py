@@ -1,5 +1,5 @@
 """Profile lab panel: pick a diffusion model (dipole / multipole / Burley) from a measured material
-or parameters, see r R(r), fit K Gaussians (``skinviewer.fitting``, in a background thread) and
+or parameters, see r R(r), fit K Gaussians (``skinviewer.physics.fitting``, in a background thread) and
 apply them to the current settings' ``deon.gaussians``."""
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import threading
 import numpy as np
 from imgui_bundle import imgui, implot
 
-from .widgets import ERR, wrapped
+from skinviewer.ui.widgets import ERR, header, wrapped
 
 MODELS = ("dipole", "multipole", "burley")
 R_MAX = 8.0
@@ -16,7 +16,7 @@ R_MAX = 8.0
 
 class ProfileLab:
     def __init__(self, app):
-        from .. import profiles as P
+        from skinviewer.physics import profiles as P
         self.app = app
         self.P = P
         self.model = "dipole"
@@ -92,7 +92,7 @@ class ProfileLab:
     def start_fit(self, wait: bool = False) -> None:
         if self.busy:
             return
-        from ..fitting import fit_gaussians
+        from skinviewer.physics.fitting import fit_gaussians
         try:
             model = self.build_model()
         except Exception as exc:
@@ -143,8 +143,7 @@ class ProfileLab:
 
     # -- UI ----------------------------------------------------------------------------------
     def draw(self) -> None:
-        from .panel import _header
-        if not _header("Profile lab"):
+        if not header("Profile lab"):
             return
         self._collect()
         ch, i = imgui.combo("model", MODELS.index(self.model), list(MODELS))

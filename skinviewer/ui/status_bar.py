@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from imgui_bundle import imgui
 
-from .widgets import ERR, WARN, begin_docked
+from skinviewer.ui.widgets import ERR, WARN, begin_docked
 
 DIM = imgui.ImVec4(0.62, 0.62, 0.68, 1.0)
 TEXT = imgui.ImVec4(0.88, 0.88, 0.9, 1.0)

@@ -13,7 +13,7 @@ from typing import Any, Callable, Literal
 from imgui_bundle import imgui
 from pydantic import BaseModel
 
-from .fielddocs import doc, label_with_unit
+from skinviewer.ui.fielddocs import doc, label_with_unit
 
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
 # colours shared by the panel, the passes window, the status bar and the profile lab
@@ -256,3 +256,13 @@ def edit_model(obj: BaseModel, prefix: str, edits: Edits, skip: tuple[str, ...] 
             continue
         path = f"{prefix}.{name}" if prefix else name
         edit_field(name, field, getattr(obj, name), path, edits)
+
+
+EXPAND_ALL = {"on": False}  # tests: open every section so every widget is drawn
+
+
+def header(label: str, open_default: bool = False) -> bool:
+    flags = imgui.TreeNodeFlags_.default_open.value if open_default else 0
+    if EXPAND_ALL["on"]:
+        imgui.set_next_item_open(True)
+    return imgui.collapsing_header(label, flags)

@@ -32,7 +32,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.special import j0
 
-from .diffusion import gaussian as _diffusion_gaussian
+from skinviewer.physics.diffusion import gaussian as _diffusion_gaussian
 
 FOUR_PI = 4.0 * math.pi
 
@@ -723,7 +723,7 @@ DEON_SKIN_GAUSSIANS: tuple[tuple[float, tuple[float, float, float]], ...] = (
 
 def gaussian(v: ArrayLike, r: ArrayLike) -> np.ndarray:
     """G(v, r) = exp(-r^2/(2v)) / (2 pi v), seed 000 eq. (20): unit integral over the plane.
-    The one implementation is :func:`skinviewer.diffusion.gaussian` (v <= 0 -> 0, never Inf)."""
+    The one implementation is :func:`skinviewer.physics.diffusion.gaussian` (v <= 0 -> 0, never Inf)."""
     return _diffusion_gaussian(v, r)
 
 

@@ -29,8 +29,8 @@ from typing import Sequence
 import numpy as np
 from scipy.special import ndtr
 
-from .diffusion import blur_plan, gaussian, sub_steps
-from .poisson import POISSON_12
+from skinviewer.physics.diffusion import blur_plan, gaussian, sub_steps
+from skinviewer.physics.poisson import POISSON_12
 
 # ---------------------------------------------------------------------------------------------
 # planar scenes: texel centres in millimetres

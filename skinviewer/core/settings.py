@@ -9,9 +9,16 @@ import os
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
-from .files import atomic_write_text  # noqa: F401  (presets are saved through it)
+from skinviewer.core.files import atomic_write_text  # noqa: F401  (presets are saved through it)
 
 SCHEMA_VERSION = 1
 

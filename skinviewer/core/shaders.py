@@ -10,7 +10,7 @@ from pathlib import Path
 
 import moderngl
 
-from . import paths
+from skinviewer.core import paths
 
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 # Mesa: "0:12(5): error: ..."; NVIDIA: "0(12) : error C0000: ..."; AMD/Intel: "ERROR: 0:12: ..."

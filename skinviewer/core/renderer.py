@@ -10,15 +10,22 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from . import techniques
-from .camera import View, orbit_view
-from .diffusion import uniform_uv_per_mm
-from .graph import FrameInputs, FrameReport, RenderGraph, TexturePool
-from .mesh import VERTEX_ATTRS, VERTEX_FORMAT, MeshData, MeshError, load_mesh, load_texture_maps
-from .passes.output import srgb_to_linear
-from .scenes import build_scene
-from .settings import Settings
-from .shaders import ShaderLibrary
+from skinviewer import techniques
+from skinviewer.core.graph import FrameInputs, FrameReport, RenderGraph, TexturePool
+from skinviewer.core.settings import Settings
+from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.passes.output import srgb_to_linear
+from skinviewer.physics.diffusion import uniform_uv_per_mm
+from skinviewer.scene.camera import View, orbit_view
+from skinviewer.scene.mesh import (
+    VERTEX_ATTRS,
+    VERTEX_FORMAT,
+    MeshData,
+    MeshError,
+    load_mesh,
+    load_texture_maps,
+)
+from skinviewer.scene.scenes import build_scene
 
 # a mesh without an albedo map: a neutral skin tone (sRGB), so a bare scan reads as skin
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)
@@ -221,7 +228,7 @@ class Renderer:
 
 def render_settings(s: Settings, ctx: moderngl.Context | None = None) -> tuple[np.ndarray, FrameReport]:
     """Convenience: one headless frame of ``s`` (creates a context when none is given)."""
-    from .gl import headless_context
+    from skinviewer.core.gl import headless_context
     own = ctx is None
     ctx = ctx or headless_context()
     r = Renderer(ctx)

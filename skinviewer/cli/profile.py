@@ -10,9 +10,8 @@ import json
 import math
 import sys
 
-
-from . import profiles as P
-from .fitting import FitResult, fit_gaussians
+from skinviewer.physics import profiles as P
+from skinviewer.physics.fitting import FitResult, fit_gaussians
 
 MAX_PRESET_GAUSSIANS = 8
 
@@ -173,7 +172,13 @@ def _fit(a, model) -> FitResult:
 
 
 def _preset(a, fit: FitResult):
-    from .settings import Settings, SettingsError, load_preset, save_preset, with_values
+    from skinviewer.core.settings import (
+        Settings,
+        SettingsError,
+        load_preset,
+        save_preset,
+        with_values,
+    )
     rows = fit.table(normalize=not a.no_normalize)
     if len(rows) > MAX_PRESET_GAUSSIANS:
         raise _Bad(f"a preset holds at most {MAX_PRESET_GAUSSIANS} Gaussians, this fit has {len(rows)} "
@@ -207,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
         model, title = _build_model(args)
         fit = _fit(args, model)
         if args.plot:
-            from .profile_plot import save_plot
+            from skinviewer.cli.profile_plot import save_plot
             try:
                 save_plot(args.plot, model, fit, title=title)
             except OSError as exc:

@@ -6,10 +6,10 @@ import hashlib
 import math
 from dataclasses import dataclass
 
-from pyglm import glm
 import numpy as np
+from pyglm import glm
 
-from .mesh import framing_distance
+from skinviewer.scene.mesh import framing_distance
 
 
 @dataclass

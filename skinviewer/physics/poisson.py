@@ -10,7 +10,7 @@ tap i at coord + POISSON_12[i] * radius, eq. 12).
      and truncated to 6 decimals (towards 0, so it stays in the disk).
 Result: minimum pairwise distance 0.657310 (the best known packing of 12 points in the unit disk
 reaches ~0.6602), |centroid| = 1.9e-7 (truncation only: the blur does not shift the image), all taps
-within radius 1 (nine on the rim, three inside). ``python -m skinviewer.poisson`` prints the literal.
+within radius 1 (nine on the rim, three inside). ``python -m skinviewer.physics.poisson`` prints the literal.
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ import numpy as np
 SEED = 2004  # Gosselin et al. 2004
 MIN_DISTANCE = 0.657  # lower bound of POISSON_12's minimum pairwise distance (tested)
 
-# printed by `python -m skinviewer.poisson` (generate_poisson_disk(12, SEED)); tests check they agree
+# printed by `python -m skinviewer.physics.poisson` (generate_poisson_disk(12, SEED)); tests check they agree
 POISSON_12: tuple[tuple[float, float], ...] = (
     (-0.292011, 0.956414),
     (-0.04047, -0.99918),

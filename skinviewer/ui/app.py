@@ -16,21 +16,21 @@ from typing import Any
 import moderngl_window as mglw
 from moderngl_window.timers.clock import Timer
 
-from . import techniques
-from .renderer import Renderer
-from .scenes import scene_overrides
-from .settings import Settings, SettingsError, with_values
-from .shaders import ShaderLibrary
-from .ui import widgets
-from .ui.camera_control import OrbitController
-from .ui.compare import CompareState
-from .ui.display import Display
-from .ui.hot_reload import ShaderWatcher
-from .ui.presets import PresetState
-from .ui.layout import PANEL_DEFAULT_W, Layout, compute_layout
-from .ui.scheduler import ChangeCost, RenderScheduler
-from .files import save_npy, save_png
-from .ui.screenshot import ScreenshotOptions, read_screen, timestamped_path
+from skinviewer import techniques
+from skinviewer.core.files import save_npy, save_png
+from skinviewer.core.renderer import Renderer
+from skinviewer.core.settings import Settings, SettingsError, with_values
+from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.scene.scenes import scene_overrides
+from skinviewer.ui import widgets
+from skinviewer.ui.camera_control import OrbitController
+from skinviewer.ui.compare import CompareState
+from skinviewer.ui.display import Display
+from skinviewer.ui.hot_reload import ShaderWatcher
+from skinviewer.ui.layout import PANEL_DEFAULT_W, Layout, compute_layout
+from skinviewer.ui.presets import PresetState
+from skinviewer.ui.scheduler import ChangeCost, RenderScheduler
+from skinviewer.ui.screenshot import ScreenshotOptions, read_screen, timestamped_path
 
 PREFERRED_TECHNIQUES = ("deon", "gosselin", "phong")
 DEFAULT_WINDOW = (1280, 800)
@@ -57,7 +57,8 @@ class ViewerApp(mglw.WindowConfig):
                  shaders_root: str | Path | None = None, notices: list[str] | None = None, **kwargs):
         super().__init__(**kwargs)
         from imgui_bundle import imgui, implot
-        from .ui.imgui_backend import ImguiRenderer
+
+        from skinviewer.ui.imgui_backend import ImguiRenderer
         self.imgui_ctx = imgui.create_context()
         imgui.set_current_context(self.imgui_ctx)
         self.implot_ctx = implot.create_context()
@@ -130,9 +131,9 @@ class ViewerApp(mglw.WindowConfig):
         self.home_camera = s.camera.model_dump(mode="json")
         self.presets = PresetState(s, preset_path)
 
-        from .ui.panel import Panel
-        from .ui.passes_window import PassesWindow
-        from .ui.status_bar import StatusBar
+        from skinviewer.ui.panel import Panel
+        from skinviewer.ui.passes_window import PassesWindow
+        from skinviewer.ui.status_bar import StatusBar
         self.panel = Panel(self)
         self.passes_window = PassesWindow(self)
         self.status_bar = StatusBar(self)
@@ -220,7 +221,7 @@ class ViewerApp(mglw.WindowConfig):
         p = self.presets
         target = path or p.path
         if not target:
-            from . import paths
+            from skinviewer.core import paths
             try:
                 target = str(timestamped_path(paths.presets_dir(), prefix="preset", ext=".json"))
             except FileNotFoundError:
@@ -399,7 +400,7 @@ class ViewerApp(mglw.WindowConfig):
 
     def _merge_partial(self, report):
         """One report for a frame spread over several: the passes that ran in any of them."""
-        from .graph import FrameReport
+        from skinviewer.core.graph import FrameReport
         ran = {p.name: p for p in self._partial_ran}
         self._partial_ran = []
         passes = [p if p.status == "ran" else ran.get(p.name, p) for p in report.passes]
@@ -407,7 +408,7 @@ class ViewerApp(mglw.WindowConfig):
 
     def view_passes(self, technique: str | None = None) -> set[str]:
         """Names of the view-dependent passes of a technique and everything downstream of them."""
-        from .ui.scheduler import view_side
+        from skinviewer.ui.scheduler import view_side
         tech = technique or self.settings.technique
         g = self.renderer.graph(tech)
         vd = {p.name for p in g.passes if p.view_dependent}
@@ -417,7 +418,7 @@ class ViewerApp(mglw.WindowConfig):
         return view_side(rep, vd)
 
     def _record_change(self, report) -> None:
-        from .ui.scheduler import split_ms, view_side
+        from skinviewer.ui.scheduler import split_ms, view_side
         g = self.renderer.graph(self.settings.technique)
         vset = view_side(report, {p.name for p in g.passes if p.view_dependent})
         tex, view = split_ms(report, vset, lambda p: p.ms if p.status == "ran" else None)
@@ -760,7 +761,7 @@ def destroy_app(app: ViewerApp) -> None:
 def run_viewer(args) -> int:
     """``skinviewer [view]``: open the window; with --frames N render N frames and exit
     (writing --screenshot FILE after the last one)."""
-    from .cli import CliError, settings_from_args
+    from skinviewer.cli.args import CliError, settings_from_args
     s = settings_from_args(args)
     if getattr(args, "technique", None) and args.technique not in techniques.names():
         raise CliError(f"technique '{args.technique}' is not available (have: {', '.join(techniques.names())})")

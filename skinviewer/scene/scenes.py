@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .mesh import MeshData
+from skinviewer.scene.mesh import MeshData
 
 SCENES = ("head", "laser", "shadow-edge", "backlit-ear", "stretch-plane", "regions-plane")
 
@@ -118,7 +118,7 @@ def backlit_ear_scene() -> SceneDef:
     front[0][:, 2] = t_front
     back[0][:, 2] = -0.5 * _flap_thickness(back[0][:, 1])
     pos, nrm, uv, idx = _merge([front, back])
-    from .mesh import vertex_normals
+    from skinviewer.scene.mesh import vertex_normals
     nrm = vertex_normals(pos, idx)
     albedo = np.ones((4, 4, 3), np.float32) * np.array([0.85, 0.62, 0.55], np.float32)
     mesh = MeshData(pos, nrm, uv, idx, name="backlit-ear", albedo=albedo)
@@ -147,7 +147,7 @@ def stretch_plane_scene() -> SceneDef:
 def regions_plane_scene() -> SceneDef:
     """A plane split into two regions (left: cheeks, right: ears) with a shadow edge running
     across both, for per-region kernel sizes."""
-    from .settings import REGIONS
+    from skinviewer.core.settings import REGIONS
     plane = grid(64, 64, 60.0, 60.0, uv_rect=(0.02, 0.02, 0.78, 0.98))
     blade = _box((0.0, 17.5, 20.0), (80.0, 35.0, 2.0), uv_rect=(0.82, 0.02, 0.98, 0.40))
     pos, nrm, uv, idx = _merge([plane, blade])
@@ -164,7 +164,7 @@ def regions_plane_scene() -> SceneDef:
 
 
 def head_scene(detail: int = 1) -> SceneDef:
-    from .head import default_head
+    from skinviewer.scene.head import default_head
     mesh = default_head(detail=detail)
     return SceneDef("head", mesh, {}, "the project's generated head (millimetres)")
 

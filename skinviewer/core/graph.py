@@ -15,8 +15,8 @@ from typing import Any, Iterable
 import moderngl
 import numpy as np
 
-from .settings import Settings, get_path, value_key
-from .shaders import ShaderLibrary
+from skinviewer.core.settings import Settings, get_path, value_key
+from skinviewer.core.shaders import ShaderLibrary
 
 _DTYPES = {"f1": 1, "f2": 2, "f4": 4}
 

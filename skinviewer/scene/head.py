@@ -30,8 +30,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import Delaunay
 
-from .mesh import MeshData, vertex_normals
-from .settings import REGIONS
+from skinviewer.core.settings import REGIONS
+from skinviewer.scene.mesh import MeshData, vertex_normals
 
 GENERATOR_VERSION = 4
 

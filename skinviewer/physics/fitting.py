@@ -25,7 +25,7 @@ from typing import Callable, Sequence
 import numpy as np
 from scipy.optimize import minimize, nnls
 
-from .profiles import sum_of_gaussians
+from skinviewer.physics.profiles import sum_of_gaussians
 
 TWO_PI = 2.0 * math.pi
 
@@ -288,7 +288,7 @@ def fit_gaussians(profile: Callable[[np.ndarray], np.ndarray] | FitGrid, k: int 
                   fixed_variances: Sequence[float] | None = None, init: Sequence[float] | None = None,
                   grid_points: int = 200, max_starts: int = 6) -> FitResult:
     """Fit ``k`` Gaussians (weights >= 0, variances ascending) to ``profile`` (a callable r -> (..., 3),
-    e.g. a model from :mod:`skinviewer.profiles`, or a prepared :class:`FitGrid`).
+    e.g. a model from :mod:`skinviewer.physics.profiles`, or a prepared :class:`FitGrid`).
 
     ``fixed_variances``: only the weights are fitted (non-negative linear least squares).
     ``init``: warm-start variances (e.g. the previous fit while a slider moves); any length.

@@ -8,8 +8,8 @@ from typing import Callable
 
 import numpy as np
 
-from .files import atomic_path
-from .fitting import FitResult
+from skinviewer.core.files import atomic_path
+from skinviewer.physics.fitting import FitResult
 
 CHANNELS = (("red", "#d62728"), ("green", "#2ca02c"), ("blue", "#1f77b4"))
 

@@ -1,0 +1,6 @@
+"""``python -m skinviewer``: the same as the ``skinviewer`` command."""
+import sys
+
+from skinviewer.cli import main
+
+sys.exit(main())

@@ -1,0 +1,96 @@
+"""Command line: ``skinviewer`` (the viewer), ``skinviewer render`` (headless), ``skinviewer profile``."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from skinviewer.cli.args import CliError, add_scene_args
+from skinviewer.cli.render import cmd_render
+from skinviewer.core.settings import SettingsError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
+    sub = p.add_subparsers(dest="command")
+
+    pr = sub.add_parser("render", help="render one frame headless to a PNG")
+    add_scene_args(pr)
+    pr.add_argument("--out", required=True, help="output PNG")
+    pr.add_argument("--dump-passes", metavar="DIR", help="write every intermediate texture (.npy + .png) and graph.json")
+    pr.add_argument("--timings", metavar="FILE.json", help="write per-pass times of the frame")
+    pr.add_argument("-v", "--verbose", action="store_true", help="print the pass table")
+    pr.set_defaults(func=cmd_render)
+
+    try:
+        from skinviewer.cli import profile as profile_cli
+        profile_cli.add_parser(sub)
+    except ImportError:
+        pass
+
+    pv = sub.add_parser("view", help="open the viewer (the default command)")
+    _add_view_args(pv)
+    pv.set_defaults(func=cmd_view)
+    return p
+
+
+def _add_view_args(p: argparse.ArgumentParser) -> None:
+    add_scene_args(p)
+    p.add_argument("--frames", type=int, help="render N frames, then exit (with --screenshot: save it)")
+    p.add_argument("--screenshot", help="PNG to write after --frames")
+
+
+def cmd_view(args) -> int:
+    try:
+        from skinviewer.ui.app import WindowUnavailableError, run_viewer
+    except ImportError as exc:
+        raise CliError(f"the viewer is not available: {exc}") from None
+    try:
+        return run_viewer(args)
+    except WindowUnavailableError as exc:
+        raise CliError(str(exc)) from None
+
+
+def _join_negative_values(argv: list[str]) -> list[str]:
+    """``--camera -75,5`` would read as an unknown option to argparse: bind such values to their flag."""
+    out: list[str] = []
+    it = iter(range(len(argv)))
+    for i in it:
+        a = argv[i]
+        if a in ("--camera", "--size") and i + 1 < len(argv) and argv[i + 1][:1] == "-" \
+                and argv[i + 1][1:2].isdigit():
+            out.append(f"{a}={argv[i + 1]}")
+            next(it, None)
+        else:
+            out.append(a)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
+    parser = build_parser()
+    commands = {"render", "profile", "view", "-h", "--help"}
+    if not argv or argv[0] not in commands:
+        argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except SettingsError as exc:
+        where = f"{exc.source}: " if exc.source else ""
+        print(f"skinviewer: invalid settings: {where}" + "; ".join(f"{p}: {m}" for p, m in exc.errors), file=sys.stderr)
+    except CliError as exc:
+        print(f"skinviewer: {exc}", file=sys.stderr)
+    except KeyError as exc:
+        print(f"skinviewer: {exc.args[0] if exc.args else exc}", file=sys.stderr)
+    except Exception as exc:  # a clear line, not a traceback, for anything the user can cause
+        from skinviewer.core.gl import GLUnavailableError
+        from skinviewer.core.shaders import ShaderCompileError
+        from skinviewer.scene.mesh import MeshError
+        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError)):
+            print(f"skinviewer: {exc}", file=sys.stderr)
+        else:
+            raise
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,70 @@
+"""Arguments shared by the commands that take a scene and settings (render, the viewer, and more)."""
+from __future__ import annotations
+
+import argparse
+
+from skinviewer.core.settings import (
+    Settings,
+    load_preset,
+    parse_assignments,
+    with_values,
+)
+from skinviewer.scene.scenes import SCENES, scene_overrides
+
+
+class CliError(Exception):
+    """One clear line for the user; exit code 2."""
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--size expects WxH, e.g. 640x640 (got '{text}')") from None
+    return w, h
+
+
+def _camera(text: str) -> list[float]:
+    try:
+        vals = [float(x) for x in text.split(",")]
+    except ValueError:
+        vals = []
+    if len(vals) not in (2, 3):
+        raise argparse.ArgumentTypeError(f"--camera expects yaw,pitch[,distance] in degrees/mesh units (got '{text}')")
+    return vals
+
+
+def add_scene_args(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("scene and settings")
+    g.add_argument("--scene", choices=SCENES, help="built-in scene (brings its own lights and camera)")
+    g.add_argument("--mesh", help="glTF/GLB/OBJ/PLY mesh to render instead of a built-in scene")
+    g.add_argument("--technique", help="phong, gosselin or deon")
+    g.add_argument("--preset", help="preset JSON (a partial preset overrides the defaults)")
+    g.add_argument("--set", dest="assign", action="append", default=[], metavar="KEY=VALUE",
+                   help="set any setting by dotted path, e.g. --set lights.0.intensity=4 (repeatable)")
+    g.add_argument("--size", type=_size, help="image size WxH")
+    g.add_argument("--camera", type=_camera, help="yaw,pitch[,distance]")
+
+
+def settings_from_args(args) -> Settings:
+    """Defaults <- scene's own lights/camera <- preset <- --mesh/--technique/--size/--camera <- --set."""
+    s = Settings()
+    if args.preset:
+        s = load_preset(args.preset)
+    if args.scene:
+        s = with_values(s, {"scene.name": args.scene, "scene.mesh": None, **scene_overrides(args.scene)})
+    direct: dict = {}
+    if args.mesh:
+        direct["scene.mesh"] = args.mesh
+    if args.technique:
+        direct["technique"] = args.technique
+    if args.size:
+        direct["render.width"], direct["render.height"] = args.size
+    if args.camera:
+        direct["camera.yaw"], direct["camera.pitch"] = args.camera[:2]
+        if len(args.camera) == 3:
+            direct["camera.distance"] = args.camera[2]
+    direct.update(parse_assignments(args.assign))
+    return with_values(s, direct) if direct else s
+
+

@@ -1,0 +1,31 @@
+"""What a technique is: a graph description (passes + targets), not a fork of the renderer.
+
+Each technique module defines one ``Technique``: its name, what it is (with the seed equations it
+follows), how to build its passes, and the quality knobs ``skinviewer bench`` sweeps."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from skinviewer.core.graph import Pass
+from skinviewer.passes.common import MAX_LIGHTS
+from skinviewer.passes.shadow_map import ShadowMapPass
+
+TARGETS = ["image"]
+
+# A bench configuration: a short label and the settings it changes (dotted path -> value).
+Config = tuple[str, dict[str, Any]]
+
+
+@dataclass(frozen=True)
+class Technique:
+    name: str
+    title: str  # what it is, in the papers' terms, with the seeds it follows
+    build: Callable[[], list[Pass]]
+    # the configurations ``skinviewer bench`` sweeps (quick=True: a few for CI-sized runs)
+    sweep: Callable[[bool], list[Config]] = field(default=lambda quick: [("default", {})])
+    targets: tuple[str, ...] = tuple(TARGETS)
+
+
+def shadow_passes() -> list[Pass]:
+    return [ShadowMapPass(i) for i in range(MAX_LIGHTS)]

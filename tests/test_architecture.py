@@ -1,0 +1,80 @@
+"""The layout is the architecture: no import cycles between modules (not even through imports
+inside functions), and the layers only import downwards (core and physics never import the UI)."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PKG = Path(__file__).resolve().parents[1] / "skinviewer"
+
+# layer -> the layers it may import (besides itself)
+ALLOWED = {
+    "core": {"core", "physics", "scene", "techniques", "passes"},  # the renderer builds technique graphs
+    "physics": {"physics"},
+    "scene": {"scene", "core", "physics"},
+    "passes": {"passes", "core", "physics", "scene"},
+    "techniques": {"techniques", "passes", "core", "physics", "scene"},
+    "ui": {"ui", "core", "physics", "scene", "passes", "techniques", "cli"},
+    "cli": {"cli", "core", "physics", "scene", "passes", "techniques", "ui"},
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(PKG.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _imports() -> dict[str, set[str]]:
+    mods = {_module_name(p): p for p in PKG.rglob("*.py") if "__pycache__" not in p.parts}
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for mod, path in mods.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            targets = []
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                targets = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            for t in targets:
+                if t in mods and t != mod:
+                    graph[mod].add(t)
+    return graph
+
+
+def test_no_relative_imports():
+    for p in PKG.rglob("*.py"):
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            assert not (isinstance(node, ast.ImportFrom) and node.level), f"{p}: use absolute imports"
+
+
+def test_no_import_cycles():
+    graph = _imports()
+    # packages import their own submodules in __init__; a submodule importing its own package's
+    # __init__ is not a cycle of logic, so edges into a package from inside it are left out
+    def deps(m):
+        return {d for d in graph[m] if not m.startswith(d + ".")}
+    state: dict[str, int] = {}
+
+    def visit(m, chain):
+        if state.get(m) == 2:
+            return
+        assert state.get(m) != 1, "import cycle: " + " -> ".join(chain + [m])
+        state[m] = 1
+        for d in sorted(deps(m)):
+            visit(d, chain + [m])
+        state[m] = 2
+
+    for m in sorted(graph):
+        visit(m, [])
+
+
+def test_layers_import_downwards():
+    for mod, deps in _imports().items():
+        parts = mod.split(".")
+        if len(parts) < 2 or parts[1] not in ALLOWED:
+            continue
+        for d in deps:
+            dl = d.split(".")
+            if len(dl) >= 2 and dl[1] in ALLOWED:
+                assert dl[1] in ALLOWED[parts[1]], f"{mod} imports {d}: layer {parts[1]} may not import {dl[1]}"
