@@ -1,0 +1,114 @@
+"""Image error metrics, one copy for the bench, the viewer's Accuracy window and the tests.
+
+Every figure is of a linear-radiance image against a reference of the same shape, over a mask of
+pixels that count (skin pixels, or every covered pixel):
+
+- ``rel_rms``: relative RMS per channel, sqrt(sum (x - ref)^2 / sum ref^2) over the mask.
+- ``p99_rel``: the 99th percentile of the per-pixel relative error |x - ref| / max(ref, floor), per
+  channel, where floor = 1 % of the channel's mean reference (so black pixels do not explode it).
+- ``dssim``: DSSIM = (1 - SSIM) / 2 (seed 001 eq. 4.3), SSIM of Wang et al. 2004 as implemented by
+  scikit-image: Gaussian window sigma = 1.5 truncated at 3.5 sigma (11x11), population covariance,
+  C1 = (0.01 L)^2, C2 = (0.03 L)^2 with L = 1; computed on the display-encoded image (exposure, clamp
+  to [0, 1], sRGB encoding) channel by channel and averaged over the three channels; with a mask the SSIM
+  map is averaged over the mask only. These choices are reported with every number (``DSSIM_SETUP``),
+  since seed 001 does not fix them (spec §12.7, T7.2).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+DSSIM_SETUP = ("SSIM (Wang et al. 2004, scikit-image): Gaussian window sigma 1.5 (11x11), population covariance, "
+               "C1=(0.01L)^2, C2=(0.03L)^2, L=1, on sRGB-encoded [0,1] RGB per channel, mean over mask; "
+               "DSSIM=(1-SSIM)/2 (seed 001 eq. 4.3)")
+
+
+def _mask(x: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+    if mask is None:
+        return np.ones(x.shape[:2], bool)
+    m = np.asarray(mask).astype(bool)
+    if m.shape != x.shape[:2]:
+        raise ValueError(f"mask shape {m.shape} does not match the image {x.shape[:2]}")
+    return m
+
+
+def _check(x: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    x = np.asarray(x, np.float64)[..., :3]
+    ref = np.asarray(ref, np.float64)[..., :3]
+    if x.shape != ref.shape:
+        raise ValueError(f"image shape {x.shape} does not match the reference {ref.shape}")
+    if not (np.isfinite(x).all() and np.isfinite(ref).all()):
+        raise ValueError("images must be finite")
+    return x, ref
+
+
+def rel_rms(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Relative RMS error per channel over the mask (0 for a perfect image)."""
+    x, ref = _check(x, ref)
+    m = _mask(x, mask)
+    d = ((x - ref)[m] ** 2).sum(axis=0)
+    n = (ref[m] ** 2).sum(axis=0)
+    return np.sqrt(d / np.maximum(n, 1e-30))
+
+
+def rel_error_map(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """Per-pixel relative error |x - ref| / max(ref, 1 % of the channel mean), per channel; 0 outside the mask."""
+    x, ref = _check(x, ref)
+    m = _mask(x, mask)
+    mean = ref[m].mean(axis=0) if m.any() else np.ones(3)
+    floor = np.maximum(0.01 * mean, 1e-12)
+    e = np.abs(x - ref) / np.maximum(ref, floor)
+    e[~m] = 0.0
+    return e
+
+
+def p99_rel(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+    """The 99th percentile of the per-pixel relative error, per channel, over the mask."""
+    m = _mask(np.asarray(x), mask)
+    e = rel_error_map(x, ref, m)
+    return np.percentile(e[m], 99, axis=0) if m.any() else np.zeros(3)
+
+
+def display_encode(x: np.ndarray, exposure: float = 1.0) -> np.ndarray:
+    """Linear radiance -> the [0, 1] sRGB-encoded values a viewer sees (exposure, clamp, sRGB)."""
+    c = np.clip(np.asarray(x, np.float64)[..., :3] * exposure, 0.0, 1.0)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+def dssim(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> float:
+    """DSSIM = (1 - SSIM) / 2 (seed 001 eq. 4.3), with the setup in ``DSSIM_SETUP``."""
+    from skimage.metrics import structural_similarity
+
+    x, ref = _check(x, ref)
+    m = _mask(x, mask)
+    a, b = display_encode(x, exposure), display_encode(ref, exposure)
+    _, smap = structural_similarity(a, b, data_range=1.0, channel_axis=-1, gaussian_weights=True, sigma=1.5,
+                                    use_sample_covariance=False, full=True)
+    smap = smap.mean(axis=-1)
+    s = float(smap[m].mean()) if m.any() else 1.0
+    return float(np.clip((1.0 - s) / 2.0, 0.0, 1.0))
+
+
+@dataclass(frozen=True)
+class ImageError:
+    """The three figures reported everywhere: relative RMS and p99 per channel (R, G, B), and DSSIM."""
+    rms: tuple[float, float, float]
+    p99: tuple[float, float, float]
+    dssim: float
+
+    @property
+    def rms_mean(self) -> float:
+        return float(np.mean(self.rms))
+
+    def to_json(self) -> dict:
+        return {**asdict(self), "dssim_setup": DSSIM_SETUP}
+
+    def summary(self) -> str:
+        pct = lambda v: " / ".join(f"{100 * c:.2f}" for c in v)  # noqa: E731
+        return f"RMS {pct(self.rms)} %  p99 {pct(self.p99)} %  DSSIM {self.dssim:.4f}"
+
+
+def image_error(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> ImageError:
+    return ImageError(tuple(float(v) for v in rel_rms(x, ref, mask)), tuple(float(v) for v in p99_rel(x, ref, mask)),
+                      dssim(x, ref, mask, exposure))
