@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -42,7 +43,20 @@ def shader_dir(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def app(display, shader_dir):
+def user_presets(tmp_path_factory):
+    """Presets the viewer saves without a path go to a private user folder, never ~/.config."""
+    d = tmp_path_factory.mktemp("user_presets")
+    old = os.environ.get("SKINVIEWER_USER_PRESETS")
+    os.environ["SKINVIEWER_USER_PRESETS"] = str(d)
+    yield d
+    if old is None:
+        os.environ.pop("SKINVIEWER_USER_PRESETS", None)
+    else:
+        os.environ["SKINVIEWER_USER_PRESETS"] = old
+
+
+@pytest.fixture(scope="module")
+def app(display, shader_dir, user_presets):
     pytest.importorskip("imgui_bundle")
     from skinviewer.core.settings import Settings, with_values
     from skinviewer.scene.scenes import scene_overrides
@@ -697,6 +711,7 @@ def test_profile_lab_discards_a_fit_of_an_edited_model(app, monkeypatch):
     """The fit runs in a thread: if the model is edited meanwhile, its result is not shown (or
     applied) as the fit of the new model."""
     import threading
+
     from skinviewer.ui.panel import Panel
     lab = app.ui.window(Panel).lab
     if lab is None:
@@ -749,3 +764,189 @@ def test_shader_file_in_another_encoding_is_listed_not_fatal(app, shader_dir):
     app.frame.watcher.poll(force=True)
     app.step(1)
     assert not app.frame.watcher.errors
+
+
+# -- the split viewer: state, controllers, windows; panel; presets ------------------------------
+
+def test_a_registered_window_draws_and_owns_its_area(app):
+    """A window is one registration: it gets the state and the frame controller, draws itself with
+    the frame's UI context, and the area it claims is the UI's (a drag there does not orbit)."""
+    from imgui_bundle import imgui
+    seen = {}
+
+    class Probe:
+        def __init__(self, state, frame):
+            self.state, self.frame = state, frame
+
+        def draw(self, ui):
+            vx, vy, vw, vh = ui.layout.view
+            self.rect = (vx, vy, vw * 0.5, vh)  # the left half of the 3D view
+            imgui.set_next_window_pos(imgui.ImVec2(vx, vy))
+            imgui.set_next_window_size(imgui.ImVec2(vw * 0.5, vh))
+            imgui.begin("probe###probe")
+            imgui.text(self.state.settings.technique)
+            imgui.end()
+            ui.claim(self.rect)
+            seen["hint"] = ui.cost_hint("render.exposure")
+            seen["report"] = self.frame.report
+
+    probe = app.ui.add_window(Probe)
+    try:
+        app.step(2)
+        assert "output" in seen["hint"] and seen["report"] is not None
+        yaw0 = app.state.settings.camera.yaw
+        x, y, w, h = probe.rect
+        _drag(app, x + w * 0.5, y + h * 0.5, 30, 0, app.wnd.mouse.left)
+        assert app.state.settings.camera.yaw == yaw0
+        _drag(app, x + w * 1.5, y + h * 0.5, 30, 0, app.wnd.mouse.left)  # the free half still orbits
+        assert app.state.settings.camera.yaw != yaw0
+    finally:
+        app.ui.windows.remove(probe)
+        app.state.reset_camera()
+        _settle(app)
+
+
+def test_technique_keys_beyond_the_registry_do_nothing(app):
+    from skinviewer import techniques
+    n = len(techniques.names())
+    start = app.state.settings.technique
+    key = getattr(app.wnd.keys, f"NUMBER_{n + 1}", None)
+    if key is None:
+        pytest.skip("no key beyond the registry")
+    _key(app, key)
+    assert app.state.settings.technique == start and not app.state.errors
+    _key(app, app.wnd.keys.NUMBER_1)
+    assert app.state.settings.technique == techniques.names()[0]
+    app.state.set_technique(start)
+    app.step(1)
+
+
+def test_wheel_over_the_profile_plot_scrolls_the_panel(app):
+    """The r·R(r) plot takes no mouse input: the wheel over it scrolls the panel (it used to zoom
+    the plot and leave the panel where it was)."""
+    from skinviewer.ui.panel import Panel
+    panel = app.ui.window(Panel)
+    assert app.state.set_technique("deon")  # its section (with the plot) opens by default
+    try:
+        app.step(2)
+        top = app.frame.layout.panel[1]
+        panel.scroll_to(panel.scroll_y + panel.plot_rect[1] - top - 40)  # the plot near the top
+        app.step(2)
+        x, y, w, h = panel.plot_rect
+        assert top <= y and y + h <= app.frame.layout.panel[3], "the plot is not on screen"
+        scroll0 = panel.scroll_y
+        cx, cy = x + w * 0.5, y + h * 0.5
+        app.on_mouse_position_event(cx, cy, 0, 0)
+        app.step(2)
+        for _ in range(3):
+            app.on_mouse_scroll_event(0, -1)  # wheel down
+            app.step(1)
+        app.step(1)
+        assert panel.scroll_y > scroll0 + 10, (scroll0, panel.scroll_y)
+    finally:
+        panel.scroll_to(0)
+        app.on_mouse_position_event(*_in_view(app), 0, 0)
+        _settle(app)
+
+
+def test_every_label_fits_the_label_column(app):
+    """Labels (with units) of every settings field fit the panel's label column: none clipped."""
+    from imgui_bundle import imgui
+
+    from skinviewer.ui.fielddocs import LABEL_MAX_PX, label_with_unit
+    from skinviewer.ui.widgets import classify
+    imgui.set_current_context(app.ui.imgui_ctx)
+    app.step(1)
+    too_long = []
+    imgui.new_frame()
+    try:
+        def walk(model, prefix):
+            for name, f in type(model).model_fields.items():
+                kind, _, _ = classify(f)
+                if kind == "model":
+                    walk(getattr(model, name), f"{prefix}{name}.")
+                elif kind != "other":
+                    lab = label_with_unit(name, prefix + name)
+                    if imgui.calc_text_size(lab).x > LABEL_MAX_PX:
+                        too_long.append((prefix + name, lab, imgui.calc_text_size(lab).x))
+        s = app.state.settings
+        for sec in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
+            walk(getattr(s, sec), sec + ".")
+        walk(s.lights[0], "lights.0.")
+    finally:
+        imgui.end_frame()
+    assert not too_long, too_long
+
+
+def test_ctrl_s_on_a_shipped_preset_saves_a_copy(app, tmp_path, monkeypatch, user_presets):
+    """Ctrl+S used to overwrite the shipped presets/deon.json (with the window size and float noise):
+    shipped presets are read-only, Ctrl+S writes a copy into the user folder."""
+    from skinviewer.core import paths
+    shipped = tmp_path / "shipped"
+    shutil.copytree(paths.presets_dir(), shipped)
+    monkeypatch.setenv("SKINVIEWER_PRESETS", str(shipped))
+    deon = shipped / "deon.json"
+    before = deon.read_bytes()
+    old = app.state.settings
+    try:
+        assert app.state.load_preset(str(deon))
+        assert app.state.apply({"render.exposure": 0.1 + 0.2})
+        _key(app, app.wnd.keys.S, ctrl=True)
+        assert deon.read_bytes() == before
+        copy = Path(app.state.presets.path)
+        assert copy.parent == user_presets and copy.name.startswith("deon")
+        data = json.loads(copy.read_text())
+        assert data["render"]["exposure"] == 0.3 and "width" not in data["render"]
+        assert not app.state.presets.dirty(app.state.settings) and not app.state.message[1]
+        # "save as" onto a shipped file is refused with the reason
+        assert not app.state.save_preset(str(deon)) and app.state.message[1]
+        assert deon.read_bytes() == before
+        app.step(1)
+    finally:
+        app.state.presets.set_path(None)
+        app.state.set_settings(old)
+        app.step(1)
+
+
+def test_loading_over_unsaved_changes_asks_first(app, tmp_path):
+    """One click on a preset name used to load it and discard unsaved changes: it asks first."""
+    from imgui_bundle import imgui
+
+    from skinviewer.ui.panel import CONFIRM_POPUP
+    other = tmp_path / "other.json"
+    assert app.state.presets.save(with_exposure(app, 2.5), str(other))
+    current = tmp_path / "current.json"
+    assert app.state.save_preset(str(current))
+    old = app.state.settings
+    try:
+        assert app.state.apply({"render.exposure": 1.9})  # an unsaved change
+        edited = app.state.settings
+        assert not app.state.request_preset(str(other))
+        assert app.state.presets.pending_load == str(other) and app.state.settings is edited
+        app.step(2)  # the panel shows the question
+        assert imgui.is_popup_open(CONFIRM_POPUP, imgui.PopupFlags_.any_popup_id.value)
+        assert not app.state.answer_pending("cancel")
+        assert app.state.settings is edited and app.state.presets.pending_load is None
+        app.step(1)
+        assert not app.state.request_preset(str(other))
+        assert app.state.answer_pending("discard")
+        assert app.state.settings.render.exposure == 2.5 and app.state.presets.path == str(other)
+        # "save, then load": the edit is kept in its file first
+        assert app.state.apply({"render.exposure": 1.1})
+        assert not app.state.request_preset(str(current))
+        assert app.state.answer_pending("save")
+        assert json.loads(other.read_text())["render"]["exposure"] == 1.1
+        assert app.state.presets.path == str(current)
+        # without unsaved changes a click loads at once
+        assert app.state.request_preset(str(other)) and app.state.presets.pending_load is None
+        app.step(1)
+    finally:
+        app.state.presets.cancel_pending()
+        app.state.presets.set_path(None)
+        app.state.set_settings(old)
+        _settle(app)
+
+
+def with_exposure(app, v):
+    from skinviewer.core.settings import with_values
+    return with_values(app.state.settings, {"render.exposure": v})

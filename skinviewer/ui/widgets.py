@@ -10,7 +10,8 @@ from __future__ import annotations
 import math
 import types
 import typing
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field as dc_field
 from typing import Any, Callable, Literal
 
 from imgui_bundle import imgui
@@ -102,11 +103,11 @@ class UiContext:
     go, what editing a setting costs (the frame controller's ``cost_hint``), whether every section
     is forced open (tests), and the rectangles the UI covers (input hit-testing)."""
     layout: Any = None
-    edits: Edits = field(default_factory=Edits)
+    edits: Edits = dc_field(default_factory=Edits)
     cost_hint: Callable[[str], str] | None = None
     expand_all: bool = False
-    rects: list[tuple[float, float, float, float]] = field(default_factory=list)
-    pending: dict[str, Any] = field(default_factory=dict)  # typed, not yet applied values (kept across frames)
+    rects: list[tuple[float, float, float, float]] = dc_field(default_factory=list)
+    pending: dict[str, Any] = dc_field(default_factory=dict)  # typed, not yet applied values (kept across frames)
 
     def header(self, label: str, open_default: bool = False) -> bool:
         """A collapsing section header (forced open when ``expand_all``)."""

@@ -70,6 +70,13 @@ class UiHost:
         self.rects: list[tuple[float, float, float, float]] = []  # what the UI covered last frame
         self._pending: dict = {}  # typed, not yet applied widget values (kept across frames)
 
+    def add_window(self, factory: WindowFactory) -> Window:
+        """Register a window for this session (drawn after the others); ``WINDOWS`` is the place for
+        the viewer's own windows."""
+        w = factory(self.state, self.frame)
+        self.windows.append(w)
+        return w
+
     def window(self, cls):
         """The window of type ``cls`` (tests, scripts)."""
         return next(w for w in self.windows if isinstance(w, cls))
