@@ -825,14 +825,16 @@ def test_wheel_over_the_profile_plot_scrolls_the_panel(app):
     """The r·R(r) plot takes no mouse input: the wheel over it scrolls the panel (it used to zoom
     the plot and leave the panel where it was)."""
     from skinviewer.ui.panel import Panel
+    from skinviewer.ui.sections.shading import DeonSection
     panel = app.ui.window(Panel)
+    deon = panel.section(DeonSection)
     assert app.state.set_technique("deon")  # its section (with the plot) opens by default
     try:
         app.step(2)
         top = app.frame.layout.panel[1]
-        panel.scroll_to(panel.scroll_y + panel.plot_rect[1] - top - 40)  # the plot near the top
+        panel.scroll_to(panel.scroll_y + deon.plot_rect[1] - top - 40)  # the plot near the top
         app.step(2)
-        x, y, w, h = panel.plot_rect
+        x, y, w, h = deon.plot_rect
         assert top <= y and y + h <= app.frame.layout.panel[3], "the plot is not on screen"
         scroll0 = panel.scroll_y
         cx, cy = x + w * 0.5, y + h * 0.5
@@ -912,7 +914,7 @@ def test_loading_over_unsaved_changes_asks_first(app, tmp_path):
     """One click on a preset name used to load it and discard unsaved changes: it asks first."""
     from imgui_bundle import imgui
 
-    from skinviewer.ui.panel import CONFIRM_POPUP
+    from skinviewer.ui.sections.tools import CONFIRM_POPUP
     other = tmp_path / "other.json"
     assert app.state.presets.save(with_exposure(app, 2.5), str(other))
     current = tmp_path / "current.json"

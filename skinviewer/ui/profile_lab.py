@@ -16,7 +16,7 @@ R_MAX = 8.0
 
 
 class ProfileLab:
-    def __init__(self, state):
+    def __init__(self, state, frame=None):
         from skinviewer.physics import profiles as P
         self.state = state
         self.P = P
