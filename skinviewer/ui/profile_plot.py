@@ -64,12 +64,17 @@ def draw(title: str, series, log_r: bool, height: float = PLOT_H) -> tuple[float
     p = imgui.get_cursor_screen_pos()
     w = imgui.get_content_region_avail().x
     flags = implot.Flags_.no_inputs.value | implot.Flags_.no_menus.value
+    implot.push_style_var(implot.StyleVar_.fit_padding.value, imgui.ImVec2(0.0, 0.08))  # peaks not on the frame
     if implot.begin_plot(title, imgui.ImVec2(-1, height), flags):
         implot.setup_axes("r (mm)", y_label(log_r), implot.AxisFlags_.auto_fit.value, implot.AxisFlags_.auto_fit.value)
         if log_r:
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
+        # above the plot, in one row: it never hides the curves
+        implot.setup_legend(implot.Location_.north.value,
+                            implot.LegendFlags_.outside.value | implot.LegendFlags_.horizontal.value)
         for label, r, y, col, thick in series:
             implot.set_next_line_style(imgui.ImVec4(*col), thick)
             implot.plot_line(label, np.ascontiguousarray(r, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64))
         implot.end_plot()
+    implot.pop_style_var()
     return (p.x, p.y, w, height)

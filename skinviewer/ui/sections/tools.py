@@ -248,8 +248,10 @@ class HelpSection:
     def draw(self, ui: UiContext) -> None:
         if not ui.header("Help: shortcuts"):
             return
-        flags = imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
-        if imgui.begin_table("keys", 2, flags):
+        if imgui.begin_table("keys", 2, imgui.TableFlags_.row_bg.value):
+            imgui.table_setup_column("key", imgui.TableColumnFlags_.width_fixed.value,
+                                     imgui.calc_text_size("MMB / Shift+LMB drag").x)
+            imgui.table_setup_column("what", imgui.TableColumnFlags_.width_stretch.value)
             for k, what in shortcuts(self.state.technique_names()):
                 imgui.table_next_row()
                 imgui.table_next_column()
