@@ -46,7 +46,7 @@ def test_state_and_controllers_do_not_write_into_each_other():
     # the state, the controllers and the thin window talk through methods too (GL / imgui / window
     # library objects aside: a viewport, imgui's io and style, the window's title are set directly)
     library = ("ctx.", "io.", "st.", "self.ctx.", "self.wnd.", "wnd.")
-    writes = [w for name in ("state.py", "frame.py", "input.py", "app.py", "windows.py", "compare.py", "presets.py")
+    writes = [w for name in ("state.py", "frame.py", "input.py", "app.py", "windows.py", "compare.py", "presets.py", "view.py")
               for w in _attribute_writes(UI / name)
               if not w.split(": ", 1)[1].startswith(library)]
     assert writes == [], "\n".join(writes)

@@ -23,13 +23,13 @@ from skinviewer.core.graph import FrameReport
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings
 from skinviewer.core.shaders import ShaderLibrary
-from skinviewer.ui.display import Display
 from skinviewer.ui.hot_reload import ShaderWatcher
 from skinviewer.ui.layout import Layout, compute_layout
 from skinviewer.ui.scheduler import MODES as SCHEDULE_MODES
 from skinviewer.ui.scheduler import ChangeCost, RenderScheduler, split_ms, view_side
 from skinviewer.ui.screenshot import read_screen, timestamped_path
 from skinviewer.ui.state import ViewerState
+from skinviewer.ui.view import ViewPresenter
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
 
@@ -49,7 +49,7 @@ class FrameController:
         self.state = state
         self.renderer = renderer
         self.shaders = shaders
-        self.display = Display(ctx)
+        self.view = ViewPresenter(ctx, state, shaders)
         self.watcher = ShaderWatcher(shaders)
         self.scheduler = RenderScheduler()
         self.report: FrameReport | None = None
@@ -67,7 +67,6 @@ class FrameController:
         self.drag_resolution = "auto"
         self.drag_budget_ms = 60.0
         self._pending_shots: list[tuple[Path, bool]] = []
-        self._slot_renderers: dict[str, Renderer] = {}
         self._dragging = False  # the camera is being dragged in the view (input controller)
         self._drag_scaled = False  # the last frame was rendered at the reduced orbit resolution
         self._widget_active = False  # an imgui widget is held this frame (slider drag, text edit)
@@ -179,7 +178,7 @@ class FrameController:
             ui_built = ui.build(frametime, self.layout)
         self._sync_size()
         self.report = self._render_main()
-        self._draw_view(self.layout.view_fb)
+        self.view.draw(self.graph(), self.layout)
         self.watcher.refresh_errors()
         self._trim_texture_pools()
         self._take_shots(include_ui=False)
@@ -267,56 +266,9 @@ class FrameController:
         if self._rendered == self._pools_trimmed_for:
             return
         if self._pools_trimmed_for is not None:
-            for r in (self.renderer, *self._slot_renderers.values()):
+            for r in (self.renderer, *self.view.renderers()):
                 r.trim()
         self._pools_trimmed_for = self._rendered
-
-    # -- putting it on screen ----------------------------------------------------------------
-    def _render_slot(self, slot):
-        r = self._slot_renderers.get(slot.label)
-        if r is None:
-            r = self._slot_renderers[slot.label] = Renderer(self.ctx, self.shaders)
-        cmp = self.state.compare
-        try:
-            s = cmp.frame_settings(slot, self.state.settings)
-            r.render(s)
-            slot.set_error("")
-            return r.graph(s.technique).texture("image")
-        except Exception as exc:
-            slot.set_error(f"{type(exc).__name__}: {exc}")
-            return None
-
-    def _draw_view(self, viewport) -> None:
-        ctx = self.ctx
-        ctx.screen.use()
-        ctx.viewport = (0, 0, *self.layout.framebuffer)
-        ctx.clear(*self.state.settings.render.background, 1.0)
-        ctx.viewport = viewport
-        cmp = self.state.compare
-        if cmp.active:
-            if cmp.mode == "toggle":
-                tex = self._render_slot(cmp.b if cmp.show_b else cmp.a)
-                if tex is not None:
-                    self.display.show(tex, viewport)
-                return
-            ta, tb = self._render_slot(cmp.a), self._render_slot(cmp.b)
-            if ta is not None and tb is not None:
-                if cmp.mode == "split":
-                    self.display.split(ta, tb, viewport, cmp.divider)
-                else:
-                    self.display.difference(ta, tb, viewport, cmp.diff_gain)
-            return
-        g = self.graph()
-        if g is None:
-            return
-        ins = self.state.inspect
-        if ins.resource is not None:
-            spec = g.resources().get(ins.resource)
-            if spec is not None:
-                self.display.inspect(g.texture(ins.resource), viewport, ins.channel, ins.exposure, spec.components)
-                return
-        if "image" in g.resources():
-            self.display.show(g.texture("image"), viewport)
 
     # -- screenshots -------------------------------------------------------------------------
     def request_screenshot(self, path: str | Path | None = None, include_ui: bool | None = None) -> Path:
@@ -350,8 +302,5 @@ class FrameController:
                 self.state.refuse([("screenshot", f"{type(exc).__name__}: {exc}")], f"screenshot {path}")
 
     def release(self) -> None:
-        for r in self._slot_renderers.values():
-            r.release()
-        self._slot_renderers = {}
+        self.view.release()
         self.renderer.release()
-        self.display.release()

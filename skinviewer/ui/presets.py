@@ -168,7 +168,7 @@ class PresetState:
             return timestamped_path(user, prefix="preset", ext=".json"), ""
         if is_shipped(self.path):
             name = Path(self.path).name
-            return _free_name(user, name), f"{name} is a shipped preset (read-only): saved a copy"
+            return _free_name(user, name), f"{name} is a shipped preset (read-only): saved a copy as"
         return Path(self.path), ""
 
     def save(self, s: Settings, path: str | os.PathLike | None = None, note: str = "") -> bool:
@@ -193,7 +193,7 @@ class PresetState:
         self.errors = []
         self.mark_saved(s, target)
         self.edit_path = target
-        self.message = f"{note + ' ' if note else ''}saved {target}"
+        self.message = f"{note} {target}" if note else f"saved {target}"
         return True
 
     # -- "discard unsaved changes?" ------------------------------------------------------------

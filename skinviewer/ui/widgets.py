@@ -185,76 +185,115 @@ def tooltip_text(field, path: str, cost_hint: Callable[[str], str] | None = None
     return "\n".join(out)
 
 
+@dataclass
+class _Field:
+    """One settings field being drawn: what the per-kind widgets below need."""
+    name: str
+    info: Any  # pydantic FieldInfo
+    value: Any
+    path: str
+    label: str
+    detail: Any
+    optional: bool
+    ui: UiContext
+
+    def set(self, value: Any) -> None:
+        self.ui.edits.set(self.path, value)
+
+    def tooltip(self) -> None:
+        if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+            show_tooltip(tooltip_text(self.info, self.path, self.ui.cost_hint))
+
+
+def _w_bool(f: _Field) -> None:
+    ch, v = imgui.checkbox(f.label, bool(f.value))
+    if ch:
+        f.set(v)
+
+
+def _w_literal(f: _Field) -> None:
+    opts = [str(o) for o in f.detail]
+    cur = opts.index(str(f.value)) if str(f.value) in opts else 0
+    ch, i = imgui.combo(f.label, cur, opts)
+    if ch:
+        f.set(f.detail[i])
+
+
+def _w_int(f: _Field) -> None:
+    lo, hi, _, _ = bounds(f.info)
+    if lo is not None and hi is not None and hi - lo <= 64:
+        ch, v = imgui.slider_int(f.label, int(f.value), int(lo), int(hi))
+    else:
+        # typed values apply when the field is left (no half-typed map sizes); +/- apply at once
+        pending = f.ui.pending
+        ch, v = imgui.input_int(f.label, int(pending.get(f.path, f.value)), 1, 64)
+        if ch:
+            pending[f.path] = int(v)
+        if imgui.is_item_deactivated_after_edit() or (ch and not imgui.is_item_active()):
+            v = pending.pop(f.path, v)
+            ch = True
+        else:
+            ch = False
+    if ch:
+        f.set(int(v))
+
+
+def _w_float(f: _Field) -> None:
+    _edit_float(f.label, f.info, float(f.value), f.path, f.ui.edits)
+
+
+def _w_vec3(f: _Field) -> None:
+    v = [float(x) for x in f.value]
+    if "color" in f.name or "colour" in f.name:
+        ch, nv = imgui.color_edit3(f.label, v, imgui.ColorEditFlags_.float.value | imgui.ColorEditFlags_.hdr.value)
+    else:
+        ch, nv = imgui.drag_float3(f.label, v, 0.01 * max(1.0, max(abs(x) for x in v) * 0.1))
+    if ch:
+        f.set([float(x) for x in nv])
+
+
+def _w_str(f: _Field) -> None:
+    ch, text = imgui.input_text(f.label, f.value or "", _ENTER)
+    if ch:
+        f.set(text.strip() or (None if f.optional else ""))
+
+
+def _w_model(f: _Field) -> None:
+    if imgui.tree_node(f.label):
+        edit_model(f.value, f.path, f.ui)
+        imgui.tree_pop()
+
+
+def _w_other(f: _Field) -> None:
+    imgui.text_disabled(f"{f.label}: {f.value!r}")
+
+
+_WIDGETS = {"bool": _w_bool, "literal": _w_literal, "int": _w_int, "float": _w_float, "vec3": _w_vec3,
+            "str": _w_str, "model": _w_model}
+
+
+def _auto_toggle(f: _Field, kind: str) -> bool:
+    """An optional number: the "auto" checkbox; returns True when the value is auto (nothing more to draw)."""
+    ch, auto_new = imgui.checkbox("auto##auto", f.value is None)
+    f.tooltip()
+    if ch:
+        f.set(None if auto_new else _default_for(kind, f.info))
+    imgui.same_line()
+    if f.value is None:
+        imgui.text_disabled(f"{f.label}: auto")
+        return True
+    return False
+
+
 def edit_field(name: str, field, value: Any, path: str, ui: UiContext) -> None:
     kind, detail, optional = classify(field)
-    label = label_with_unit(name, path)
-    edits = ui.edits
-
-    def _tooltip(field, path):
-        if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
-            show_tooltip(tooltip_text(field, path, ui.cost_hint))
+    f = _Field(name, field, value, path, label_with_unit(name, path), detail, optional, ui)
     imgui.push_id(path)
     try:
-        if optional and kind in ("float", "vec3", "int"):
-            auto = value is None
-            ch, auto_new = imgui.checkbox("auto##auto", auto)
-            _tooltip(field, path)
-            if ch:
-                if auto_new:
-                    edits.set(path, None)
-                else:
-                    edits.set(path, _default_for(kind, field))
-            imgui.same_line()
-            if value is None:
-                imgui.text_disabled(f"{label}: auto")
-                return
-        if kind == "bool":
-            ch, v = imgui.checkbox(label, bool(value))
-            if ch:
-                edits.set(path, v)
-        elif kind == "literal":
-            opts = [str(o) for o in detail]
-            cur = opts.index(str(value)) if str(value) in opts else 0
-            ch, i = imgui.combo(label, cur, opts)
-            if ch:
-                edits.set(path, detail[i])
-        elif kind == "int":
-            lo, hi, _, _ = bounds(field)
-            if lo is not None and hi is not None and hi - lo <= 64:
-                ch, v = imgui.slider_int(label, int(value), int(lo), int(hi))
-            else:
-                # typed values apply when the field is left (no half-typed map sizes); +/- apply at once
-                ch, v = imgui.input_int(label, int(ui.pending.get(path, value)), 1, 64)
-                if ch:
-                    ui.pending[path] = int(v)
-                if imgui.is_item_deactivated_after_edit() or (ch and not imgui.is_item_active()):
-                    v = ui.pending.pop(path, v)
-                    ch = True
-                else:
-                    ch = False
-            if ch:
-                edits.set(path, int(v))
-        elif kind == "float":
-            _edit_float(label, field, float(value), path, edits)
-        elif kind == "vec3":
-            v = [float(x) for x in value]
-            if "color" in name or "colour" in name:
-                ch, nv = imgui.color_edit3(label, v, imgui.ColorEditFlags_.float.value | imgui.ColorEditFlags_.hdr.value)
-            else:
-                ch, nv = imgui.drag_float3(label, v, 0.01 * max(1.0, max(abs(x) for x in v) * 0.1))
-            if ch:
-                edits.set(path, [float(x) for x in nv])
-        elif kind == "str":
-            ch, text = imgui.input_text(label, value or "", _ENTER)
-            if ch:
-                edits.set(path, text.strip() or (None if optional else ""))
-        elif kind == "model":
-            if imgui.tree_node(label):
-                edit_model(value, path, ui)
-                imgui.tree_pop()
-        else:
-            imgui.text_disabled(f"{label}: {value!r}")
-        _tooltip(field, path)
+        if optional and kind in ("float", "vec3", "int") and _auto_toggle(f, kind):
+            return
+        _WIDGETS.get(kind, _w_other)(f)
+        f.tooltip()
     finally:
         imgui.pop_id()
 
