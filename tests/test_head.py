@@ -247,7 +247,7 @@ def test_eyeballs_sit_in_the_orbits_behind_open_lids(head):
     for i in eyes:
         p = pos[vlabel == i]
         side = np.sign(p[:, 0].mean())
-        centre = head_mod._EYE_C * [side, 1, 1]
+        centre = head_mod.EYE_C * [side, 1, 1]
         r = np.linalg.norm(p - centre, axis=1)
         assert 11.5 <= r.min() and r.max() <= 14.0 and np.ptp(p[:, 1]) >= 23.0  # a ~24 mm globe
         assert np.sum(tri_label == i) <= 1500                                   # cheap
@@ -258,7 +258,7 @@ def test_eyeballs_sit_in_the_orbits_behind_open_lids(head):
         assert p[:, 2].max() < pos[:, 2].max() - 15 and 14 < np.abs(p[:, 0]).min() < 32 < np.abs(p[:, 0]).max() < 48
         # the lids are open around the cornea, cover the top of the globe, and the lid margin
         # lies on the eyeball (skin just behind it inside the fissure, in front of it outside)
-        sdf = lambda q: head_mod._head_sdf(q[:, 0], q[:, 1], q[:, 2])
+        sdf = lambda q: head_mod.head_sdf(q[:, 0], q[:, 1], q[:, 2])
         ahead = centre + np.array([[0, 0, 14.0], [0, -3.5, 13.5], [side * 6, 0, 13.0]])
         assert np.all(sdf(ahead) > 0)                       # iris and pupil visible
         top = centre + 12.5 * np.array([[0, np.sin(0.6), np.cos(0.6)], [0, -np.sin(0.75), np.cos(0.75)]])
