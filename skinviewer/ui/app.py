@@ -150,7 +150,7 @@ class ViewerApp(mglw.WindowConfig):
             s = with_values(s, {"scene.name": FALLBACK_SCENE, **scene_overrides(FALLBACK_SCENE)})
             scene = self.renderer.ensure_scene(s)
         self.notices += scene.notes
-        self.orbit.set_scene_bounds(scene.gpu.center, scene.gpu.radius)
+        self.orbit.set_scene_bounds(*scene.gpu.frame)
         return s
 
     def apply(self, assignments: dict[str, Any], source: str = "") -> bool:
@@ -176,7 +176,7 @@ class ViewerApp(mglw.WindowConfig):
             except Exception as exc:
                 self._refuse([("scene", f"{type(exc).__name__}: {exc}")], source or "scene")
                 return False
-            self.orbit.set_scene_bounds(scene.gpu.center, scene.gpu.radius)
+            self.orbit.set_scene_bounds(*scene.gpu.frame)
             self.notices = list(scene.notes)
         if new != self.settings:
             self._change_source = source or "settings"
