@@ -174,10 +174,15 @@ def regions_plane_scene() -> SceneDef:
        "25 mm above it, lit from above the camera")
 
 
+# the head's eyeballs are the only texels of region "other" (non-skin): a glossy cornea gives
+# the eyes their catchlight (Beckmann m 0.08) while the skin keeps its own lobe
+HEAD_OVERRIDES = {"specular.per_region.other": {"m": 0.08, "rho_s": 0.6}}
+
+
 def head_scene(detail: int = 1) -> SceneDef:
     from skinviewer.scene.head import default_head
     mesh = default_head(detail=detail)
-    return SceneDef("head", mesh, {}, "the project's generated head (millimetres)")
+    return SceneDef("head", mesh, dict(HEAD_OVERRIDES), "the project's generated head (millimetres)")
 
 
 _BUILDERS = {
@@ -200,5 +205,5 @@ def build_scene(name: str, detail: int = 1) -> SceneDef:
 def scene_overrides(name: str) -> dict:
     """The settings a built-in scene brings (its lights and camera); cheap for analysis scenes."""
     if name == "head":
-        return {}
+        return dict(HEAD_OVERRIDES)
     return build_scene(name).overrides

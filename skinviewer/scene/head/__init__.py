@@ -14,15 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from skinviewer.scene.head.atlas import Atlas
-from skinviewer.scene.head.geometry import EYE_C, head_sdf
+from skinviewer.scene.head.geometry import EYE_C, EYE_R, head_sdf
 from skinviewer.scene.head.paint import paint
 from skinviewer.scene.head.tessellate import tessellate
 from skinviewer.scene.mesh import MeshData
 
-__all__ = ["GENERATOR_VERSION", "default_head", "EYE_C", "head_sdf"]
+__all__ = ["EYE_C", "EYE_R", "GENERATOR_VERSION", "default_head", "head_sdf"]
 
 # bump whenever the shape, the atlas or the maps change: old cache files are then not reused
-GENERATOR_VERSION = 4
+GENERATOR_VERSION = 5
 
 # detail level -> (target edge length in mm, texture size)
 LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}

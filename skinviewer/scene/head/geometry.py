@@ -13,7 +13,7 @@ from skinviewer.scene.head.landmarks import CUT, EAR, EYE, FEATURES, Feature
 from skinviewer.scene.head.shapes import capsule, ellipsoid, smax, smin, smoothstep
 
 RAY_ORIGIN = np.array([0.0, -5.0, -12.0])   # inside the skull; the neck axis runs under it
-CAST_RADII = (10.0, 250.0, 25)                # coarse ray samples (mm): the farthest skin is ~220 mm out
+CAST_RADII = (10.0, 260.0, 26)                # coarse ray samples (mm): the farthest skin is ~235 mm out
 
 EYE_C = np.array(EYE["centre"])
 EYE_R = EYE["radius"]
@@ -117,12 +117,12 @@ def head_sdf(x, y, z):
             extra, z0, z1 = f.blend_back
             k = k + extra * smoothstep(z0, z1, z)
         d = smin(d, fd, k) if f.op == "add" else smax(d, -fd, k)
-    return smax(d, cut_y(z) - y, CUT["blend"])
+    return smax(d, cut_y(x, z) - y, CUT["blend"])
 
 
-def cut_y(z):
-    """Height of the collar cut at depth z."""
-    return CUT["y"] + CUT["slope"] * (z - 40.0)
+def cut_y(x, z):
+    """Height of the collar cut at (x, z)."""
+    return CUT["y"] + CUT["slope"] * (z - 40.0) - CUT["drop"] * x * x
 
 
 def direction(theta, phi):
@@ -221,9 +221,15 @@ class Ear:
         return 3.0 * rho * rho + helix + scapha + antihelix + concha + crus + tragus + antitragus + lobule
 
     def half_thickness(self, x, y):
+        """Half the flap's thickness: thin (EAR thickness[0]) over the helix and scapha, thicker
+        towards the root behind the concha, rounding off to the rim."""
+        a, b = self.plane(x, y)
+        ca, cb, sa, sb = EAR["root"]
+        thin, thick = EAR["thickness"]
+        root = np.exp(-0.5 * (((a - ca) / sa) ** 2 + ((b - cb) / sb) ** 2))
         rho = np.sqrt(x * x + y * y)
         t = np.clip((rho - (1.0 - self.RIM)) / self.RIM, 0.0, 1.0)
-        return 0.5 * EAR["thickness"] * np.sqrt(np.maximum(1.0 - t * t, 0.0))
+        return 0.5 * (thin + (thick - thin) * root) * np.sqrt(np.maximum(1.0 - t * t, 0.0))
 
     def mid(self, x, y):
         a, b = self.plane(x, y)

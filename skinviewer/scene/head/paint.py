@@ -21,7 +21,7 @@ from skinviewer.scene.head.geometry import (
     eye_radius,
     fissure,
 )
-from skinviewer.scene.head.landmarks import BROW, EYE, HAIRLINE, JAW_LINE
+from skinviewer.scene.head.landmarks import BROW, EYE, HAIR, HAIRLINE, JAW_LINE
 from skinviewer.scene.head.shapes import smoothstep
 
 REGION = {name: i for i, name in enumerate(REGIONS)}
@@ -31,12 +31,16 @@ def _srgb(col):
     return np.where(col <= 0.0031308, 12.92 * col, 1.055 * np.clip(col, 0, None) ** (1 / 2.4) - 0.055)
 
 
-def hair(p):
+def hair(p, jitter=None):
     """Cropped-hair coverage in [0, 1]: above a hairline that recedes at the temples, drops to
-    sideburns in front of the ears, passes over them and ends at the nape."""
+    sideburns in front of the ears, passes over them and ends in a U at the nape. The edge is
+    soft (HAIR edge, mm) and, given ``jitter`` (noise in [-1, 1] per point), irregular."""
     az = np.abs(np.arctan2(p[:, 0], p[:, 2] - RAY_ORIGIN[2]))
     line = np.interp(az, *HAIRLINE)
-    return smoothstep(line - 3.0, line + 6.0, p[:, 1])
+    if jitter is not None:
+        line = line + HAIR["jitter"] * jitter
+    lo, hi = HAIR["edge"]
+    return smoothstep(line + lo, line + hi, p[:, 1])
 
 
 def brow_y(ax):
@@ -55,7 +59,8 @@ def regions(p, island):
     x, y, z = p[:, 0], p[:, 1], p[:, 2]
     ax = np.abs(x)
     ell = lambda cx, cy, sx, sy: ((ax - cx) / sx) ** 2 + ((y - cy) / sy) ** 2
-    r = np.full(len(p), REGION["other"], dtype=np.uint8)
+    # every skin point gets a named region ("other" is left to the eyeballs, i.e. non-skin)
+    r = np.where(y >= brow_y(ax) - 1.0, REGION["forehead"], REGION["cheeks"]).astype(np.uint8)
     front = z > 30.0
     r[front & (ell(36.0, -28.0, 30.0, 40.0) < 1.0)] = REGION["cheeks"]
     r[front & (y >= brow_y(ax) - 1.0) & (ell(0.0, 30.0, 58.0, 200.0) < 1.0)] = REGION["forehead"]
@@ -144,20 +149,24 @@ def skin_colour(p, region, rng):
     conj = smoothstep(surf + 0.6, surf - 0.2, rho) * (rho < 20.0)
     col = col + (np.array([0.50, 0.20, 0.18]) - col) * (0.8 * conj)[:, None]
     nostril = g(6.8, -39.5, 100.0, 2.6, 2.2, 4.0)
-    scalp = hair(p) * (region != REGION["ears"])
     hair_col = np.array([0.07, 0.05, 0.035])
     col = col + (hair_col - col) * np.clip(0.85 * brow + 0.7 * lash, 0, 1)[:, None]
     col = col * (1.0 - crease - 0.85 * np.clip(nostril, 0, 1))[:, None]
-    col = col + (np.array([0.28, 0.20, 0.16]) - col) * (0.55 * scalp)[:, None]
     col = col * np.array([1.0, 1.02, 1.03]) ** is_("neck")[:, None]
-    # low-frequency mottling (fBm) in brightness and redness
+    # low-frequency mottling (fBm) in brightness and redness, on skin, not under the hair
+    scalp = hair(p, _fbm(p, rng, 12.0, 2)) * (region != REGION["ears"])
     mottle = _fbm(p, rng, 40.0, 4)
     redness = _fbm(p, rng, 15.0, 2)
-    col = col * (1.0 + 0.07 * mottle)[:, None]
-    col = col + np.array([0.03, -0.012, -0.012]) * redness[:, None]
+    bare = 1.0 - scalp
+    col = col * (1.0 + 0.07 * mottle * bare)[:, None]
+    col = col + np.array([0.03, -0.012, -0.012]) * (redness * bare)[:, None]
+    # cropped hair: a smooth dark-brown cover with the scalp showing through, fine strands
+    strands = 1.0 + 0.12 * _fbm(p, rng, 1.5, 2)
+    col = col + (np.array(HAIR["colour"]) * strands[:, None] - col) * (HAIR["cover"] * scalp)[:, None]
 
-    spec_by_region = np.array([0.5, 0.8, 0.85, 0.45, 0.65, 0.7, 0.4, 0.4, 0.3])
+    spec_by_region = np.array([1.0, 0.8, 0.85, 0.45, 0.65, 0.7, 0.4, 0.4, 0.3])
     spec = spec_by_region[region] * (1.0 + 0.1 * redness) * (1.0 - 0.5 * brow)
+    spec = spec + (HAIR["specular"] - spec) * scalp   # smooth across the hairline
     pore_by_region = np.array([0.6, 0.8, 1.2, 1.0, 0.2, 0.8, 0.4, 0.5, 0.5])  # mm of pore depth ×10
     return _srgb(col), spec, pore_by_region[region] * 0.1
 
@@ -203,8 +212,8 @@ def eye_colour(polar, rng):
 def _pores(res, rng):
     """Unit-depth pore field in texel space: sparse pits over fine bumpy noise (zero mean)."""
     pits = (rng.random((res, res)) < 0.08).astype(float)
-    pits = ndimage.gaussian_filter(pits, 0.7, mode="wrap")
-    bumps = ndimage.gaussian_filter(rng.standard_normal((res, res)), 1.2, mode="wrap")
+    pits = ndimage.gaussian_filter(pits, 1.0, mode="wrap")   # >= 2 texels across: no blocky texels
+    bumps = ndimage.gaussian_filter(rng.standard_normal((res, res)), 1.6, mode="wrap")
     h = -pits / max(pits.max(), 1e-9) + 0.6 * bumps / max(np.abs(bumps).max(), 1e-9)
     return h - h.mean()
 
@@ -244,7 +253,7 @@ def paint(atlas: Atlas, table: RadiusTable, res: int, seed: int) -> dict[str, np
     full_albedo[eyes] = eye_albedo
     full_spec = np.zeros((res, res, 1))
     full_spec[skin, 0] = spec
-    full_spec[eyes, 0] = 0.9   # wet cornea and conjunctiva
+    full_spec[eyes, 0] = 1.0   # wet cornea and conjunctiva: the catchlight
     full_region = np.zeros((res, res), dtype=np.uint8)
     full_region[skin] = region
     full_region[eyes] = REGION["other"]
