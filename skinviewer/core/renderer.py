@@ -40,6 +40,7 @@ class GpuScene:
         self.mm_per_unit = float(mm_per_unit)
         self.center = mesh.center.astype(np.float64)
         self.radius = mesh.radius
+        self.frame = mesh.frame  # what the camera frames by default (the head of a bust)
         self.vbo = ctx.buffer(mesh.interleaved().tobytes())
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
@@ -166,14 +167,15 @@ class Renderer:
 
     def view(self, s: Settings) -> View:
         gpu = self.ensure_scene(s).gpu
-        return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height))
+        return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height), gpu.frame)
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
                force: bool = False, budget_ms: float | None = None) -> FrameReport:
         """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run)."""
         scene = self.ensure_scene(s)
-        view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height))
+        view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height),
+                           scene.gpu.frame)
         self.last_view = view
         g = self.graph(s.technique)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,

@@ -41,10 +41,14 @@ def orbit_eye(target, yaw_deg: float, pitch_deg: float, distance: float) -> np.n
     return np.asarray(target, dtype=np.float64) + distance * offset
 
 
-def orbit_view(cam, center: np.ndarray, radius: float, size: tuple[int, int]) -> View:
-    """A View from CameraSettings, framing a bounding sphere (center, radius) when distance is None."""
-    target = np.asarray(cam.target if cam.target is not None else center, dtype=np.float64)
-    distance = cam.distance if cam.distance is not None else framing_distance(radius, cam.fov_y)
+def orbit_view(cam, center: np.ndarray, radius: float, size: tuple[int, int],
+               frame: tuple[np.ndarray, float] | None = None) -> View:
+    """A View from CameraSettings. (center, radius) bound the whole scene (near/far); the camera
+    looks at and frames ``frame`` = (centre, radius), e.g. MeshData.frame (the head of a bust),
+    when target / distance are None; without ``frame`` it frames the bounding sphere."""
+    f_center, f_radius = frame if frame is not None else (center, radius)
+    target = np.asarray(cam.target if cam.target is not None else f_center, dtype=np.float64)
+    distance = cam.distance if cam.distance is not None else framing_distance(f_radius, cam.fov_y)
     eye = orbit_eye(target, cam.yaw, cam.pitch, distance)
     view = np.array(glm.lookAt(glm.vec3(*eye), glm.vec3(*target), glm.vec3(0, 1, 0)).to_list(), dtype=np.float64).T
     # near/far hug the scene's bounding sphere as seen from the eye (depth precision)

@@ -56,6 +56,14 @@ class MeshData:
     def radius(self) -> float:
         return float(np.linalg.norm(self.positions - self.center, axis=1).max())
 
+    @property
+    def frame(self) -> tuple[np.ndarray, float]:
+        """(centre, radius) the camera frames by default: the head when the mesh has a neck or
+        shoulders (``portrait_frame``), else the bounding sphere."""
+        if getattr(self, "_frame", None) is None:
+            self._frame = portrait_frame(self.positions)
+        return self._frame
+
     def replace(self, **kw) -> "MeshData":
         return dataclasses.replace(self, **kw)
 
@@ -253,3 +261,43 @@ def framing_distance(radius: float, fov_y_deg: float, margin: float = 1.15) -> f
     """Camera distance at which a sphere of ``radius`` fills the vertical field of view."""
     half = np.radians(fov_y_deg) * 0.5
     return float(radius * margin / max(np.sin(half), 1e-3))
+
+
+def portrait_frame(positions: np.ndarray, slices: int = 48) -> tuple[np.ndarray, float]:
+    """Centre and radius of the part of a Y-up mesh a portrait shows, without face detection.
+
+    A bust or a figure is wide at the head, narrow at the neck and wide again at the shoulders;
+    the horizontal (x) width of horizontal slices shows it. The neck is the narrowest slice below
+    the widest slice of the upper half; when it is clearly narrower than the head (< 0.8) and not
+    the bottom of the mesh, the frame is everything above it (head and a little neck). A mesh much
+    taller than wide without a neck is framed on its top (a square of its width). Otherwise the
+    bounding sphere (centre of the bounds, farthest vertex)."""
+    p = np.asarray(positions, dtype=np.float64)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    height = hi[1] - lo[1]
+    keep = p
+    if height > 0 and len(p) >= 8 * slices:
+        edges = np.linspace(lo[1], hi[1], slices + 1)
+        idx = np.clip(((p[:, 1] - lo[1]) / height * slices).astype(int), 0, slices - 1)
+        order = np.argsort(idx, kind="stable")
+        bounds = np.searchsorted(idx[order], np.arange(slices + 1))
+        width = np.zeros(slices)
+        for i in range(slices):
+            xs = p[order[bounds[i]:bounds[i + 1]], 0]
+            if len(xs) >= 4:  # robust extent: ignore a few stray vertices
+                width[i] = np.percentile(xs, 99) - np.percentile(xs, 1)
+        top = np.arange(slices // 2, slices)
+        i_head = top[np.argmax(width[top])]
+        below = np.arange(0, i_head)
+        below = below[width[below] > 0]
+        girth = max(np.ptp(p[:, 0]), np.ptp(p[:, 2]))
+        if len(below) and width[i_head] > 0:
+            i_neck = below[np.argmin(width[below])]
+            if width[i_neck] < 0.8 * width[i_head] and i_neck > slices // 20:
+                keep = p[p[:, 1] >= edges[i_neck]]
+            elif height > 1.6 * girth:
+                keep = p[p[:, 1] >= hi[1] - girth]
+        elif height > 1.6 * girth:
+            keep = p[p[:, 1] >= hi[1] - girth]
+    c = 0.5 * (keep.min(axis=0) + keep.max(axis=0))
+    return c, float(np.linalg.norm(keep - c, axis=1).max())

@@ -76,7 +76,7 @@ class InputController:
     def _apply(self, assignments: dict, source: str) -> None:
         scene = self.state.scene
         if scene is not None:
-            self.orbit.set_scene_bounds(scene.gpu.center, scene.gpu.radius)
+            self.orbit.set_scene_bounds(*scene.gpu.frame)
         self.state.apply(assignments, source)
 
     # -- mouse ---------------------------------------------------------------------------------
