@@ -88,9 +88,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"skinviewer: {exc.args[0] if exc.args else exc}", file=sys.stderr)
     except Exception as exc:  # a clear line, not a traceback, for anything the user can cause
         from skinviewer.core.gl import GLUnavailableError
+        from skinviewer.core.graph import ResourceLimitError
         from skinviewer.core.shaders import ShaderCompileError
         from skinviewer.scene.mesh import MeshError
-        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError)):
+        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError, ResourceLimitError)):
             print(f"skinviewer: {exc}", file=sys.stderr)
         else:
             raise
