@@ -16,6 +16,7 @@ from skinviewer.ui.sections.scene import CameraSection, LightsSection, SceneSect
 from skinviewer.ui.sections.shading import (
     DeonSection,
     GosselinSection,
+    OtherSettingsSection,
     PhongSection,
     SpecularSection,
 )
@@ -36,7 +37,7 @@ LABEL_COLUMN_PX = LABEL_MAX_PX + 8.0  # room for labels with units (fielddocs ke
 # the panel's sections, top to bottom: each made with (state, frame), drawn with draw(ui)
 SECTIONS = (
     StatusSection, TechniqueSection, SceneSection, CameraSection, LightsSection,
-    PhongSection, GosselinSection, DeonSection, SpecularSection,
+    PhongSection, GosselinSection, DeonSection, SpecularSection, OtherSettingsSection,
     RenderSection, PresetsSection, ScreenshotSection, CompareSection, ShadersSection,
     ProfileLab, HelpSection,
 )
