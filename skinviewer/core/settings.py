@@ -507,11 +507,13 @@ def _deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-def save_preset(s: Settings, path: str | os.PathLike) -> None:
-    """Write ``s`` atomically; scene paths are written relative to the preset's folder."""
-    data = to_dict(s)
+def save_preset(s: Settings, path: str | os.PathLike, data: dict | None = None) -> None:
+    """Write ``s`` (or ``data``, a dict of it such as the viewer's trimmed payload) atomically; scene
+    paths are written relative to the preset's folder."""
+    data = to_dict(s) if data is None else dict(data)
     folder = Path(path).parent
-    data["scene"] = {k: _relative_to(v, folder) if k in PATH_FIELDS else v for k, v in data["scene"].items()}
+    if "scene" in data:
+        data["scene"] = {k: _relative_to(v, folder) if k in PATH_FIELDS else v for k, v in data["scene"].items()}
     atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 
