@@ -56,7 +56,7 @@ FEATURES: tuple[Feature, ...] = (
     E("malar fat", "add", (28, -42, 74), (13, 14, 11), 14, True),
     # masseter and buccal fat fill the cheek between the cheekbone and the jaw angle
     E("masseter", "add", (44, -62, 24), (12, 24, 22), 26, True),
-    E("buccal fat", "add", (35, -52, 54), (16, 20, 18), 22, True),
+    E("buccal fat", "add", (34, -54, 56), (17, 21, 19), 24, True),
     # dental arch under the lips, and a mandible narrowing towards the chin
     E("dental arch", "add", (0, -66, 46), (37, 40, 47), 14),
     E("mandible mass", "add", (0, -70, 20), (45, 24, 60), 14, taper=(0.3, -5.0, 90.0)),
@@ -85,8 +85,8 @@ FEATURES: tuple[Feature, ...] = (
     E("lower lip", "add", (0, -70.5, 88), (20, 6.5, 10), 9),
     E("mouth line", "cut", (0, -63.5, 101), (25, 0.9, 13), 2.5, bend=0.006),
     E("philtrum", "cut", (0, -49, 99.5), (2.6, 6, 3), 2),
-    E("mouth corner", "cut", (25, -64, 82), (2.5, 2.5, 4), 3, True),
-    C("nasolabial fold", "cut", (20, -37, 93), (30, -63, 85), 0.5, 0.8, 5, True),
+    E("mouth corner", "cut", (25, -64, 82), (2.2, 2.2, 3.5), 4, True),
+    C("nasolabial fold", "cut", (20, -37, 93), (30, -63, 85), 0.3, 0.5, 6, True),
     # neck: slightly forward-tilted, tapering up into the head (crisp under the jaw, soft at the
     # nape); sternocleidomastoids from behind the ears to the sternal notch; larynx; trapezius
     E("neck root", "add", (0, -55, -44), (52, 45, 52), 20),
@@ -111,7 +111,7 @@ EYE = dict(
     lateral_canthus=75.0,        # deg, horizontal angle from the eye's axis
     medial_canthus=60.0,         # deg (the nose side: kept shallow)
     canthus_tilt=(-2.3, 4.7),    # deg: fissure centre line at the medial .. lift to the lateral canthus
-    upper_lid=13.5,              # deg above the centre line at the middle of the fissure
+    upper_lid=15.0,              # deg above the centre line at the middle of the fissure
     lower_lid=25.5,              # deg below it
     lid_gap=0.5,                 # hidden skin behind the eyeball inside the fissure
     lid_thickness=(1.4, 0.6),    # lower lid, extra for the upper lid

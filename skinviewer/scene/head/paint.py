@@ -220,12 +220,16 @@ def _pores(res, rng):
 
 def _normal_map(point, skin, pore_gain, res, k, rng):
     """Tangent-space normals from a pore height field, its slopes in mm of the local surface."""
-    gain = np.zeros((res, res))
-    gain[skin] = pore_gain
-    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
     mm_u = np.linalg.norm(np.gradient(point, axis=1), axis=-1)  # mm per texel along +u
     mm_v = np.linalg.norm(np.gradient(point, axis=0), axis=-1)  # along +v (rows)
     scale = 1.0 / (k * res)
+    # where the atlas stretches texels (grazing rays on the neck, the pole), pores would become
+    # streaks: fade them out beyond 1.5x the nominal texel size
+    stretch = np.where(skin, np.maximum(mm_u, mm_v) / scale, 1.0)
+    gain = np.zeros((res, res))
+    gain[skin] = pore_gain
+    gain /= np.maximum(1.0, stretch / 1.5) ** 2
+    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
     mm_u = np.where(skin & (mm_u > 0.1 * scale) & (mm_u < 4 * scale), mm_u, scale)
     mm_v = np.where(skin & (mm_v > 0.1 * scale) & (mm_v < 4 * scale), mm_v, scale)
     dh_du = np.gradient(height, axis=1) / mm_u
