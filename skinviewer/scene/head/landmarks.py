@@ -123,8 +123,8 @@ EAR = dict(
     height=32.0,                 # half height of the outline
     centre_back=9.0,             # outline centre behind the attachment point
     half_width=(15.0, 3.5, -2.0),  # half width = c0 + c1 y + c2 y² (y in [-1, 1] down..up)
-    thickness=(2.0, 4.6),        # between the two sheets: at the helix rim, at the root (concha)
-    root=(4.0, -4.0, 8.0, 12.0),  # the root's centre (a, b) and extent (sa, sb) in the ear plane
+    thickness=(2.0, 4.8),        # between the two sheets: at the helix rim, at the root (concha)
+    root=(5.0, -3.0, 6.0, 10.0),  # the root's centre (a, b) and extent (sa, sb) in the ear plane
     rim=0.09,                    # fraction of the unit disk over which the rim rounds off
     tilt=15.0, flare=24.0,       # deg: backwards lean, flare away from the head
     attach=(85.0, 88.0),         # deg (theta from +Y, phi from +Z) of the attachment ray

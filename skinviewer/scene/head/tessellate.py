@@ -279,7 +279,7 @@ def tessellate(atlas: Atlas, detail: int, spacing: float):
     normals = welded_normals(positions, indices)
     # the skin's normals from the implicit surface's gradient: exact where rays graze and the
     # mesh's triangles are long and thin (their averaged normals shade as streaks there)
-    skin = np.flatnonzero(used[:n_skin])
+    skin = np.arange(int(used[:n_skin].sum()))   # the skin's vertices come first (after the remap too)
     normals[skin] = _sdf_normals(positions[skin], normals[skin])
     return positions, normals, uvs, indices, table
 
