@@ -62,7 +62,7 @@ FEATURES: tuple[Feature, ...] = (
     E("mandible mass", "add", (0, -70, 20), (45, 24, 60), 14, taper=(0.3, -5.0, 90.0)),
     # mandible: body along the jawline (gonion -> mental tubercle), ramus up towards the ear
     C("mandible body", "add", (46, -82, -2), (14, -106, 72), 8.0, 8.0, 12, True),
-    C("ramus", "add", (47, -30, -6), (46, -82, -2), 6.5, 8.0, 14, True),
+    C("ramus", "add", (47, -34, -6), (46, -82, -2), 6.5, 8.0, 16, True),
     E("chin", "add", (0, -105, 80), (16, 11, 9), 10),
     E("mentolabial sulcus", "cut", (0, -84, 97), (15, 3.0, 6), 8),
     # brow ridges (supraorbital), glabella, orbits, open lids over the eyeballs
@@ -91,7 +91,7 @@ FEATURES: tuple[Feature, ...] = (
     # nape); sternocleidomastoids from behind the ears to the sternal notch; larynx; trapezius
     E("neck root", "add", (0, -55, -44), (52, 45, 52), 20),
     C("neck", "add", (0, -240, -22), (0, -100, -16), 60.0, 52.0, 8, x_scale=1.04, blend_back=(16.0, 10.0, -50.0)),
-    C("sternocleidomastoid", "add", (44, -78, -30), (19, -194, 30), 8.0, 6.5, 22, True),
+    C("sternocleidomastoid", "add", (40, -86, -34), (19, -194, 30), 7.0, 6.5, 26, True),
     E("thyroid cartilage", "add", (0, -135, 30.5), (9, 17, 8.5), 14),
     E("sternal notch", "cut", (0, -188, 48), (10, 9, 9), 6),
     C("trapezius", "add", (26, -120, -50), (50, -230, -38), 12.0, 14.0, 25, True),
