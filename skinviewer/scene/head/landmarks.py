@@ -141,3 +141,37 @@ BROW = dict(base=30.5, lift=5.5, peak_x=31.0, width=15.0, droop=0.004)
 
 # jaw line (under-jaw crease) height against depth z: neck below it
 JAW_LINE = ([-120.0, -40.0, 0.0, 40.0, 70.0, 90.0], [-72.0, -72.0, -96.0, -110.0, -116.0, -118.0])
+
+# ---------------------------------------------------------------------------------------------
+# paint: region shapes, flushes and colours (mm; |x|, y, z)
+
+# facial regions as ellipses in (|x|, y): centre, semi-axes, and the depth the region starts at
+REGION_SHAPES = dict(
+    cheeks=dict(centre=(36.0, -28.0), axes=(30.0, 40.0), z_min=30.0),
+    forehead=dict(centre=(0.0, 30.0), axes=(58.0, 200.0), z_min=30.0),
+    chin=dict(centre=(0.0, -104.0), axes=(30.0, 24.0), z_min=45.0),
+    lips=dict(centre=(0.0, -63.5), axes=(25.0, 10.0, 11.5), z_min=78.0),   # upper, lower half-height
+    nose=dict(top=22.0, bottom=-46.0, width=(7.5, 14.0), widen=(8.0, -36.0), z_min=82.0),
+    neck_below=-122.0,
+)
+
+# flushed spots (Gaussian: weight, centre, sigma) where the skin is redder
+BLUSH = (
+    (0.60, (38, -24, 70), (16, 16, 30)),    # cheeks
+    (0.55, (0, -28, 110), (10, 9, 10)),     # nose tip
+    (0.45, (11, -33, 97), (6, 6, 6)),       # alae
+    (0.20, (0, -100, 85), (14, 10, 15)),    # chin
+    (0.12, (0, 45, 90), (25, 20, 20)),      # forehead centre
+)
+BLUSH_EARS = 0.65
+NOSTRIL_SHADE = ((6.8, -39.5, 100.0), (2.6, 2.2, 4.0))
+
+# linear-light reflectances
+SKIN_COLOURS = dict(base=(0.62, 0.40, 0.31), flush=(0.60, 0.27, 0.22), lips=(0.52, 0.18, 0.16),
+                    conjunctiva=(0.50, 0.20, 0.18), brow=(0.07, 0.05, 0.035),
+                    beard=(0.16, 0.12, 0.05))   # beard: fractional darkening per channel
+
+# per region (order of settings.REGIONS: other, forehead, nose, cheeks, lips, chin, ears, neck,
+# scalp): specular scale and pore depth (x 0.1 mm)
+SPECULAR_BY_REGION = (1.0, 0.8, 0.85, 0.45, 0.65, 0.7, 0.4, 0.4, 0.3)
+PORES_BY_REGION = (0.6, 0.8, 1.2, 1.0, 0.2, 0.8, 0.4, 0.5, 0.5)
