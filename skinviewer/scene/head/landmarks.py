@@ -56,7 +56,7 @@ FEATURES: tuple[Feature, ...] = (
     E("malar fat", "add", (28, -42, 74), (13, 14, 11), 14, True),
     # masseter and buccal fat fill the cheek between the cheekbone and the jaw angle
     E("masseter", "add", (44, -62, 24), (12, 24, 22), 26, True),
-    E("buccal fat", "add", (34, -54, 56), (17, 21, 19), 24, True),
+    E("buccal fat", "add", (34, -50, 54), (15, 19, 17), 26, True),
     # dental arch under the lips, and a mandible narrowing towards the chin
     E("dental arch", "add", (0, -66, 46), (37, 40, 47), 14),
     E("mandible mass", "add", (0, -70, 20), (45, 24, 60), 14, taper=(0.3, -5.0, 90.0)),
