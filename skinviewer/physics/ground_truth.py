@@ -268,6 +268,8 @@ class Diffusion:
         self.s2max = float(el.s2.max()) if len(el.s2) else 0.0
         self._levels: dict[float, Clusters] = {}
         self._edges = None
+        self._tree: cKDTree | None = None
+        self._radius: np.ndarray | None = None
 
     def method(self, v: float):
         """('delta', None) | ('exact', None) | ('elements', None) | ('clusters', voxel)."""
@@ -312,7 +314,7 @@ class Diffusion:
         own = None
         if ea_here is not None and len(el.area):
             ea_here = np.asarray(ea_here, np.float64)
-            d, own = cKDTree(el.centroid).query(x, k=1)
+            d, own = self.tree().query(x, k=1)
             own = np.where(d <= el.radius * 1.01, own, -1)
         todo = [(v, w) for v, w in zip(self.v, self.w) if np.any(w > 0)]
         cost = {"delta": 0.02, "exact": 1.0, "elements": 0.5, "clusters": 0.5}
@@ -327,10 +329,10 @@ class Diffusion:
                 if ea_here is not None:
                     m += ea_here
                 elif len(el.area):
-                    m += el.ea[cKDTree(el.centroid).query(x, k=1)[1]]
+                    m += el.ea[self.tree().query(x, k=1)[1]]
             elif kind == "exact":
                 r = TRUNCATE * math.sqrt(v) + self._el_radius()
-                for i, j in neighbour_pairs(x, el.centroid, r):
+                for i, j in self._tree_pairs(x, r):
                     k = self._exact(x[i], j, v)
                     val = el.ea[j]
                     if own is not None:
@@ -362,10 +364,25 @@ class Diffusion:
                 progress(done / total)
         return out
 
+    def tree(self) -> cKDTree:
+        if self._tree is None:
+            self._tree = cKDTree(self.el.centroid)
+        return self._tree
+
+    def _tree_pairs(self, x: np.ndarray, radius: np.ndarray, chunk: int = 8192):
+        """(receiver, element) pairs closer than the element's ``radius`` (KD-trees: for small radii)."""
+        rmax = float(radius.max())
+        for s0 in range(0, len(x), chunk):
+            sm = cKDTree(x[s0:s0 + chunk]).sparse_distance_matrix(self.tree(), rmax, output_type="ndarray")
+            keep = sm["v"] < radius[sm["j"]]
+            yield sm["i"][keep].astype(np.int64) + s0, sm["j"][keep].astype(np.int64)
+
     def _el_radius(self) -> np.ndarray:
         """Per element: the largest corner distance from its centroid."""
-        d = self.el.corners - self.el.centroid[:, None]
-        return np.sqrt((d * d).sum(2).max(1))
+        if self._radius is None:
+            d = self.el.corners - self.el.centroid[:, None]
+            self._radius = np.sqrt((d * d).sum(2).max(1))
+        return self._radius
 
     def _edge_data(self):
         """Per element: 2D frame (e1, e2), corners in it (relative to corner 0), and per edge the
