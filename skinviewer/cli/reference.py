@@ -49,7 +49,11 @@ def _progress():
 
 
 def reference_with_progress(s: Settings, args):
-    from skinviewer.core.reference import DEFAULT_H_MM, ReferenceTooSlow, compute_reference
+    from skinviewer.core.reference import (
+        DEFAULT_H_MM,
+        ReferenceTooSlow,
+        compute_reference,
+    )
     h = args.h if args.h else DEFAULT_H_MM
     if not h > 0:
         raise CliError("--h must be a positive number of millimetres")
@@ -97,7 +101,12 @@ def cmd_reference(args) -> int:
 
 def cmd_bench(args) -> int:
     from skinviewer import techniques
-    from skinviewer.core.bench import best_within, config_settings, load_results, run_bench
+    from skinviewer.core.bench import (
+        best_within,
+        config_settings,
+        load_results,
+        run_bench,
+    )
 
     s = settings_from_args(args)
     if args.size is None:

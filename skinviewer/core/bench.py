@@ -8,9 +8,10 @@ from __future__ import annotations
 import json
 import statistics
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -20,6 +21,7 @@ from skinviewer.core.settings import Settings, with_values
 from skinviewer.physics.metrics import DSSIM_SETUP, image_error, rel_error_map
 
 RUNS = 3
+LAST_BENCH = "last_bench.txt"  # in cache_dir(): the results.json of the last bench (the viewer's chart)
 HEAT_MAX = 0.5  # heat maps: relative error 0 -> black, >= 50 % -> white (magma)
 
 
@@ -164,7 +166,21 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
     atomic_write_text(out / "results.json", json.dumps(data, indent=2) + "\n")
     atomic_write_text(out / "results.md", results_markdown(data))
     pareto_plot(results, out / "pareto.png", title=f"{data['scene']} {base.render.width}x{base.render.height}")
+    remember_bench(out / "results.json")
     return data
+
+
+def remember_bench(results_json: Path) -> None:
+    from skinviewer.core.paths import cache_dir
+    atomic_write_text(cache_dir() / LAST_BENCH, str(Path(results_json).resolve()) + "\n")
+
+
+def last_bench() -> str:
+    from skinviewer.core.paths import cache_dir
+    try:
+        return (cache_dir() / LAST_BENCH).read_text(encoding="utf-8").strip()
+    except OSError:
+        return ""
 
 
 def load_results(path: str | Path) -> tuple[dict, list[Result]]:

@@ -24,9 +24,9 @@ import io
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -36,7 +36,13 @@ from skinviewer.core.settings import REGIONS, Settings
 from skinviewer.passes.common import per_region_specular
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics import ground_truth as gt
-from skinviewer.physics.specular import beckmann_lut, ks_specular, ks_specular_lut, rho_dt_table, sample_bilinear
+from skinviewer.physics.specular import (
+    beckmann_lut,
+    ks_specular,
+    ks_specular_lut,
+    rho_dt_table,
+    sample_bilinear,
+)
 from skinviewer.scene.camera import orbit_view
 from skinviewer.scene.mesh import MeshData, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
@@ -192,7 +198,7 @@ class Surface:
         ng = a["Ng"] * np.where((a["Ng"] * L).sum(1) >= 0, 1.0, -1.0)[:, None]
         o = a["Ps"] + ng * self.eps
         if light.kind == "point":
-            idx_tri, idx_ray, loc = self.rays.intersects_id(o, L, multiple_hits=False, return_locations=True)
+            _, idx_ray, loc = self.rays.intersects_id(o, L, multiple_hits=False, return_locations=True)
             dl = np.linalg.norm(np.asarray(light.position) - o, axis=1)
             hit = np.zeros(len(L), bool)
             dh = np.linalg.norm(loc - o[idx_ray], axis=1)
@@ -235,7 +241,7 @@ class Surface:
             o = (np.asarray(light.position, np.float64)[None] + L[None] * far
                  + r * (rad * np.cos(ang))[:, None] * u + r * (rad * np.sin(ang))[:, None] * v)
             d = np.broadcast_to(-L, o.shape).copy()
-            tri, ray, loc = self.rays.intersects_id(o, d, multiple_hits=False, return_locations=True)
+            tri, _, loc = self.rays.intersects_id(o, d, multiple_hits=False, return_locations=True)
             if len(tri) == 0:
                 continue
             bary = _barycentric(self.P[self.F[tri]], loc)
@@ -466,7 +472,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
         imgs.append(img.reshape(H, W, 3))
     times["total"] = time.perf_counter() - t0
     meta = {"key": key, "version": VERSION, "h_mm": h_mm, "elements": n_el, "pixels": int(mask.sum()),
-            "beam_rays": int(len(points.position)), "seconds": times, "estimate_s": est,
+            "beam_rays": len(points.position), "seconds": times, "estimate_s": est,
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False}
     ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3])
     if use_cache:

@@ -28,8 +28,8 @@ Everything is float64 numpy + scipy (cKDTree for the neighbour pairs, owens_t); 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 from scipy.spatial import cKDTree

@@ -137,6 +137,8 @@ class ViewerApp(mglw.WindowConfig):
         self.panel = Panel(self)
         self.passes_window = PassesWindow(self)
         self.status_bar = StatusBar(self)
+        from skinviewer.ui.accuracy_window import AccuracyWindow
+        self.accuracy = AccuracyWindow(self)
 
     # -- settings ----------------------------------------------------------------------------
     def _load_initial_scene(self, s: Settings) -> Settings:
@@ -468,6 +470,8 @@ class ViewerApp(mglw.WindowConfig):
                 self.display.inspect(g.texture(self.inspect), viewport, self.inspect_channel,
                                      self.inspect_exposure, spec.components)
                 return
+        if self.accuracy.draw_view(viewport):
+            return
         if "image" in g.resources():
             self.display.show(g.texture("image"), viewport)
 
@@ -502,6 +506,7 @@ class ViewerApp(mglw.WindowConfig):
             self.panel.draw()
             self.status_bar.draw()
             self.passes_window.draw()
+            self.accuracy.draw()
         except Exception as exc:  # a UI bug must not take the session down
             self.render_error = f"UI: {type(exc).__name__}: {exc}"
             self.say(self.render_error, error=True)
@@ -672,6 +677,7 @@ class ViewerApp(mglw.WindowConfig):
     # -- teardown ----------------------------------------------------------------------------
     def close(self) -> None:
         from imgui_bundle import imgui, implot
+        self.accuracy.release()
         self.compare.release()
         self.renderer.release()
         self.shaders.release()
