@@ -447,6 +447,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     mask, tri, bary, eye = camera_hits(surf, s)
     a = surf.attributes(tri, bary)
     times["camera"] = time.perf_counter() - t0
+    report("scene", 1.0)
     x_mm = a["P"] * mm
     diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check)
     n_el = len(diff.el.area)
