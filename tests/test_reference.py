@@ -161,3 +161,21 @@ def test_cache_roundtrip(tmp_path, monkeypatch):
     c = compute_reference(with_values(s, {"lights.0.intensity": 100.0}))
     assert not c.meta["cached"]
     assert math.isclose(float(c.lit.sum()) / float(a.lit.sum()), 100.0 / 400.0, rel_tol=1e-4)
+
+
+def test_a_dipole_truth_follows_the_dipole():
+    """--profile dipole: the laser's exitance follows the normalised Jensen 2001 dipole R(r) / R_d
+    (32 fixed-variance Gaussians fitted to r R(r), each integrated exactly)."""
+    from skinviewer.core.reference import model_profile
+    from skinviewer.physics import profiles as P
+    v, w, err = model_profile("dipole", "Skin1")
+    assert err.max() < 1e-3
+    s = _settings("laser", 64, **{"deon.energy_conservation": False, "specular.rho_s": 0.0})
+    ref = compute_reference(s, use_cache=False, profile=(v, w))
+    p = ref.position[ref.mask]
+    r = np.hypot(p[:, 0], p[:, 1])
+    keep = (r > 0.3) & (r < 5.0)
+    m = P.material("Skin1")
+    dip = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta)
+    expect = 400.0 * np.pi * 0.02 ** 2 * dip(r[keep]) / dip.total_reflectance()[None]
+    assert rel_rms(ref.diffuse[ref.mask][keep], expect).max() < 0.01

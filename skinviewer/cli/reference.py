@@ -40,6 +40,11 @@ def _reference_args(p) -> None:
     g.add_argument("--max-seconds", type=float, default=600.0,
                    help="refuse a reference whose estimated time exceeds this (default 600)")
     g.add_argument("--no-cache", action="store_true", help="recompute even when a cached reference exists")
+    g.add_argument("--profile", default="gaussians", metavar="MODEL[:MATERIAL]",
+                   help="diffusion profile of the truth: gaussians (the settings' deon.gaussians, default), "
+                        "dipole[:Skin1], burley[:Skin1] (searchlight, diffuse mean free path) or "
+                        "multipole[:MATERIAL] (default: the three-layer skin example); models are integrated "
+                        "as 32 fixed-variance Gaussians fitted to r R(r) (fit error printed), weights normalised")
 
 
 def _progress():
@@ -65,11 +70,29 @@ def reference_with_progress(s: Settings, args):
                 tasks[stage] = prog.add_task(f"reference: {stage}", total=1.0)
             prog.update(tasks[stage], completed=f)
 
+        profile = _profile(args)
         try:
             return compute_reference(s, h_mm=h, use_cache=not args.no_cache, max_seconds=args.max_seconds,
-                                     progress=report)
+                                     progress=report, profile=profile)
         except ReferenceTooSlow as exc:
             raise CliError(f"{exc}; use a smaller --size, a larger --h or raise --max-seconds") from None
+
+
+def _profile(args):
+    from skinviewer.core.reference import PROFILE_MODELS, model_profile
+    spec = (args.profile or "gaussians").strip()
+    model, _, material = spec.partition(":")
+    if model not in PROFILE_MODELS:
+        raise CliError(f"--profile: unknown model {model!r} (have: {', '.join(PROFILE_MODELS)})")
+    if model == "gaussians":
+        return None
+    try:
+        v, w, err = model_profile(model, material or None)
+    except KeyError as exc:
+        raise CliError(f"--profile: {exc.args[0]}") from None
+    print(f"profile {spec}: {len(v)} Gaussians, fit error (eq. 3.1) R/G/B "
+          + " / ".join(f"{100 * e:.3f}" for e in err) + " %")
+    return v, w
 
 
 def display_png(s: Settings, lit: np.ndarray, mask: np.ndarray) -> np.ndarray:

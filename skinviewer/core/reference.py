@@ -332,6 +332,41 @@ def profile_of(s: Settings) -> tuple[np.ndarray, np.ndarray]:
     return np.array([x.variance for x in g], np.float64), np.array([x.weights for x in g], np.float64)
 
 
+PROFILE_MODELS = ("gaussians", "dipole", "multipole", "burley")
+
+
+def model_profile(model: str, material: str | None = None, normalize: bool = True, n: int = 32):
+    """A radial profile of the profile lab (skinviewer.physics.profiles) as (variances, weights (k, 3),
+    fit error per channel): non-negative weights on ``n`` fixed log-spaced variances (1e-6 .. 400 mm^2,
+    NNLS of physics.fitting on r R(r), eq. 3.1 error). The diffusion then integrates each Gaussian
+    exactly. ``normalize``: weights sum to 1 per channel (R_d lives in the albedo, as the profile
+    lab's presets)."""
+    from skinviewer.physics import profiles as P
+    from skinviewer.physics.fitting import fit_gaussians
+    if model == "dipole":
+        m = P.material(material or "Skin1")
+        prof = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta)
+    elif model == "burley":
+        m = P.material(material or "Skin1")
+        A = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta).total_reflectance()
+        prof = P.Burley(A, P.diffuse_mean_free_path(m.sigma_s_prime, m.sigma_a), "searchlight-dmfp")
+    elif model == "multipole":
+        if material:
+            m = P.material(material)
+            prof = P.Multipole(m.sigma_s_prime, m.sigma_a, 2.0, m.eta)  # a 2 mm slab
+        else:
+            prof = P.three_layer_skin()
+    else:
+        raise KeyError(f"unknown profile model {model!r} (have: {', '.join(PROFILE_MODELS)})")
+    fit = fit_gaussians(prof, shared=True, fixed_variances=np.geomspace(1e-6, 400.0, n))
+    v, w = np.asarray(fit.variances, np.float64), np.asarray(fit.weights, np.float64)
+    keep = w.sum(1) > 0
+    v, w = v[keep], w[keep]
+    if normalize:
+        w = w / np.maximum(w.sum(0, keepdims=True), 1e-300)
+    return v, w, np.asarray(fit.errors, np.float64)
+
+
 def cache_key(s: Settings, h_mm: float, profile=None) -> str:
     from skinviewer.core.renderer import Renderer
     d = s.model_dump(mode="json")

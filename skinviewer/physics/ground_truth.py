@@ -252,6 +252,7 @@ def _gauss(v, d2):
     return np.exp(-d2 / (2.0 * v)) / (2.0 * np.pi * v)
 
 
+DELTA_V = 1e-4  # mm^2: a Gaussian with sigma < 0.01 mm is E A at x (it only differs within 0.05 mm of a step)
 OWEN_RATIO = 8.0  # exact triangle integrals while v < 8 s^2 of the elements (moment-matching error > ~0.5 %)
 
 
@@ -273,7 +274,7 @@ class Diffusion:
 
     def method(self, v: float):
         """('delta', None) | ('exact', None) | ('elements', None) | ('clusters', voxel)."""
-        if v <= 0:
+        if v < DELTA_V:
             return "delta", None
         if v < OWEN_RATIO * self.s2max:
             return "exact", None
@@ -294,7 +295,7 @@ class Diffusion:
         for v in self.v:
             kind, voxel = self.method(v)
             if kind == "delta":
-                out.append(f"v={v:g}: delta (E A at x)")
+                out.append(f"v={v:g} mm^2: delta (E A at x)")
             elif kind == "exact":
                 out.append(f"v={v:g} mm^2: exact triangle integrals (Owen's T) over {len(self.el.area)} elements")
             elif kind == "elements":
