@@ -8,22 +8,22 @@ back surface reaches its front through its thickness), for a sum of 2D Gaussians
 exp(-r^2 / 2v) / (2 pi v) (eq. 20).
 
 Integrated, not point-sampled. The surface is cut into small flat source elements (sub-triangles
-of edge <= h) whose E A is the element mean (a 3-point rule). For each element and Gaussian:
+of edge <= h) whose E A is the mean of their corners. For each Gaussian of variance v:
 
-- near (sigma_i < NEAR_RATIO * h): the exact integral of the Gaussian over the flat triangle, by
-  Owen's T function, times exp(-z^2 / 2 v) for the distance z of x from the element's plane
-  (G(v, sqrt(r^2 + z^2)) = G(v, r) exp(-z^2 / 2v), the separability behind eq. 33). Every Gaussian
-  keeps its exact total weight however narrow it is (sigma = 0.08 mm on ~0.5 mm elements).
-- far (sigma_i >= NEAR_RATIO * h): elements are merged into clusters of size <= sigma_i / 1.25
-  (voxels, split by normal octant so the two sides of a thin flap never merge) and each cluster is
-  a moment-matched Gaussian: a G(v_i + s^2, |x - c|), s^2 the cluster's in-plane variance (exact
-  to second order in s / sigma).
-- the element under x takes the value E A(x) evaluated at x itself (the best estimate of the local
-  mean a narrow Gaussian averages), so sub-element detail of the irradiance (normal map, albedo)
-  is kept by the narrow Gaussians.
+- v < OWEN_RATIO s^2 (s^2: the elements' in-plane per-axis variance; on 0.5 mm elements the
+  0.0064 and 0.0484 mm^2 skin Gaussians): the exact integral of the Gaussian over each flat
+  triangle in closed form with Owen's T function, times exp(-z^2 / 2v) for the height z of x over
+  the element's plane (G(v, sqrt(r^2 + z^2)) = G(v, r) exp(-z^2 / 2v), the separability behind
+  eq. 33). Every Gaussian keeps its exact total weight however narrow it is.
+- wider: elements, or clusters of elements (voxels <= sigma / CLUSTER_RATIO, split by normal octant
+  so the two sides of a thin flap never merge), each a Gaussian moment-matched in its own plane,
+  a G(v + s^2, r_parallel) exp(-z^2 / 2v) (exact to second order in s / sigma; the height exact).
+- the element under x takes E A evaluated at x itself (the best estimate of the local mean a narrow
+  Gaussian averages), so sub-element irradiance detail (normal map, albedo) is kept; Gaussians with
+  v < DELTA_V are E A(x).
 - thin beams (the laser) are point sources: K rays of the beam, each carrying its power.
 
-Everything is float64 numpy + scipy (cKDTree for the neighbour pairs, owens_t); no GL.
+Everything is float64 numpy + scipy (KD-trees and cell blocks for the neighbours, owens_t); no GL.
 """
 from __future__ import annotations
 
@@ -35,7 +35,6 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.special import owens_t
 
-NEAR_RATIO = 1.5      # Gaussians narrower than 1.5 element sizes are integrated exactly per element
 CLUSTER_RATIO = 1.25  # a cluster level is used for a Gaussian when its voxel <= sigma / 1.25
 TRUNCATE = 4.5        # kernel support in standard deviations (weight beyond: exp(-10.1) = 4e-5)
 
