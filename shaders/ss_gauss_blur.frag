@@ -1,11 +1,12 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Jimenez et al. 2009 (seed 001 §3.2, eq. 3.2): one 1-D pass of the separable blur of one
 // (incremental) Gaussian of std u_sigma_mm, on SSS-masked pixels only. Tap spacing in pixels:
 //   x_k sigma s,  s = (alpha / 11) focal / (d + beta |grad_dir d|)   (eq. 3.2, calibrated: alpha = 11,
 //   beta = 0 is the true projection; d linear depth mm, grad mm per pixel from ss_depth)
 // Taps on background or non-skin pixels take the centre colour (no bleeding, energy kept).
 #include "lib/screen_space.glsl"
-#define MAX_TAPS 63
+// TAPS: the tap count, a compile-time define (constant loop bounds)
 uniform sampler2D source;      // rgb diffuse, a = SSS mask
 uniform sampler2D depth_tex;   // ss_depth
 uniform vec2 u_dir;            // (1, 0) horizontal, (0, 1) vertical
@@ -13,9 +14,8 @@ uniform float u_sigma_mm;
 uniform float u_alpha;
 uniform float u_beta;
 uniform float u_focal;         // H / (2 tan(fov_y / 2))
-uniform int u_taps;
-uniform float u_x[MAX_TAPS];   // tap offsets in sigmas
-uniform float u_w[MAX_TAPS];   // normalised weights
+uniform float u_x[TAPS];   // tap offsets in sigmas
+uniform float u_w[TAPS];   // normalised weights
 out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
@@ -28,8 +28,7 @@ void main() {
     vec2 texel = 1.0 / vec2(textureSize(source, 0));
     vec2 uv = (vec2(p) + 0.5) * texel;
     vec3 acc = vec3(0.0);
-    for (int k = 0; k < MAX_TAPS; ++k) {
-        if (k >= u_taps) break;
+    for (int k = 0; k < TAPS; ++k) {
         vec4 t = texture(source, uv + u_dir * (u_x[k] * step_px) * texel);
         acc += u_w[k] * (t.a < 0.999 ? c.rgb : t.rgb);
     }

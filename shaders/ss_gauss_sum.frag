@@ -1,8 +1,8 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Jimenez et al. 2009 (seed 001 §3.2 step 4, eq. 3.1 profile): sum_i w_i blur_i per channel on
 // skin; other pixels keep the unblurred diffuse.
 #include "lib/screen_space.glsl"
-#define MAX_G 8
 uniform sampler2D diffuse;   // ss_diffuse (mask in a)
 uniform sampler2D blur0;
 uniform sampler2D blur1;
@@ -13,7 +13,7 @@ uniform sampler2D blur5;
 uniform sampler2D blur6;
 uniform sampler2D blur7;
 uniform int u_count;
-uniform vec3 u_w[MAX_G];
+uniform vec3 u_w[MAX_GAUSSIANS];
 out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);

@@ -10,7 +10,6 @@
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
 #include "lib/screen_space.glsl"
-#define MAX_TG 8
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -27,8 +26,8 @@ uniform float u_tr_scale;            // profile distance per mm of thickness
 uniform float u_tr_div;              // 1: exp(-d^2/v) printed, 2: exact
 uniform float u_tr_wrap;
 uniform int u_tr_count;
-uniform vec3 u_tr_w[MAX_TG];
-uniform float u_tr_v[MAX_TG];
+uniform vec3 u_tr_w[MAX_GAUSSIANS];
+uniform float u_tr_v[MAX_GAUSSIANS];
 uniform mat4 u_light_matrix_inv[MAX_LIGHTS];
 layout(location = 0) out vec4 o_diffuse;
 layout(location = 1) out vec4 o_specular;
@@ -37,7 +36,7 @@ layout(location = 3) out vec4 o_albedo;
 
 vec3 transmittance_profile(float d) {  // T(d) = sum_i w_i exp(-d^2 / (div v_i)), T(0) = sum w_i
     vec3 t = vec3(0.0);
-    for (int i = 0; i < MAX_TG; ++i) {
+    for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_tr_count) break;
         float v = u_tr_v[i];
         t += u_tr_w[i] * (v > 0.0 ? exp(-d * d / (u_tr_div * v)) : (d > 0.0 ? 0.0 : 1.0));
@@ -76,7 +75,7 @@ void main() {
     vec3 A = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);
     vec3 E = vec3(0.0), spec = vec3(0.0), T = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);

@@ -1,19 +1,19 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Jimenez et al. 2015 separable SSS (seed 001 §3.3; spec §4.2 SSSSBlurPS), one 1-D pass:
 //   out = k_0 c_M + sum_(i>=1) k_i c(uv + x_i step dir),  step = (width / 3) focal / d_M pixels per
 //   profile mm (x mask strength), follow surface: c_i <- lerp(c_i, c_M, saturate(|d_M - d_i| / thr)).
 // Rotation (seed 001 §3.3.4): taps within u_rot_fraction of the kernel's extent turn by a
 // per-pixel random angle (same angle in both passes); outer taps stay on the axis.
 #include "lib/screen_space.glsl"
-#define MAX_TAPS 63
+// TAPS: the tap count, a compile-time define (constant loop bounds)
 uniform sampler2D source;      // rgb diffuse, a = SSS mask (strength)
 uniform sampler2D depth_tex;   // ss_depth
 uniform vec2 u_dir;
 uniform float u_width_mm;
 uniform float u_focal;
-uniform int u_taps;
-uniform vec3 u_k[MAX_TAPS];    // kernel weights, centre first
-uniform float u_x[MAX_TAPS];   // offsets, profile mm
+uniform vec3 u_k[TAPS];    // kernel weights, centre first
+uniform float u_x[TAPS];   // offsets, profile mm
 uniform int u_follow;
 uniform float u_follow_mm;
 uniform int u_rotate;
@@ -35,13 +35,12 @@ void main() {
     vec2 texel = 1.0 / vec2(textureSize(source, 0));
     vec2 uv = (vec2(p) + 0.5) * texel;
     float xmax = 0.0;
-    for (int i = 1; i < MAX_TAPS; ++i) { if (i >= u_taps) break; xmax = max(xmax, abs(u_x[i])); }
+    for (int i = 1; i < TAPS; ++i) { xmax = max(xmax, abs(u_x[i])); }
     float a = 6.28318530718 * ss_hash(p);
     mat2 R = mat2(cos(a), sin(a), -sin(a), cos(a));
     vec2 rdir = R * u_dir;
     vec3 acc = u_k[0] * c.rgb;
-    for (int i = 1; i < MAX_TAPS; ++i) {
-        if (i >= u_taps) break;
+    for (int i = 1; i < TAPS; ++i) {
         vec2 d = (u_rotate != 0 && abs(u_x[i]) <= u_rot_fraction * xmax + 1e-6) ? rdir : u_dir;
         vec2 off = d * (u_x[i] * step_px) * texel;
         vec4 t = texture(source, uv + off);

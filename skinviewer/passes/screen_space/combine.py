@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from skinviewer.core.graph import Pass, Reflection
-from skinviewer.passes.common import LIT, declare_lit, draw_fullscreen, set_uniform
+from skinviewer.passes.common import LIT, declare_lit
 from skinviewer.passes.screen_space.lighting import ALBEDO, DIFFUSE, SPECULAR
 
 
@@ -21,10 +21,5 @@ class CombinePass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("ss_combine")
-        for unit, (res, sampler) in enumerate(((self.source, "diffuse"), (SPECULAR, "specular"), (ALBEDO, "albedo"))):
-            ec.input(res).use(unit)
-            set_uniform(prog, sampler, unit)
-        fbo = ec.framebuffer(LIT)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        draw_fullscreen(ec, prog)
+        ec.textures(prog, diffuse=self.source, specular=SPECULAR, albedo=ALBEDO)
+        ec.draw_fullscreen(prog, LIT)

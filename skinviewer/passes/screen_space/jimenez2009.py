@@ -12,14 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from skinviewer.core.constants import MAX_GAUSSIANS
 from skinviewer.core.graph import Pass, Reflection
-from skinviewer.passes.common import draw_fullscreen, set_uniform
 from skinviewer.passes.screen_space.blur import SeparableScreenBlur, blur_spec
 from skinviewer.passes.screen_space.lighting import DIFFUSE, screen_size
 from skinviewer.physics.separable import focal_px, gaussian_taps, incremental_sigmas, limit_gaussians
 
-MAX_GAUSSIANS = 8
-MAX_TAPS = 63
 SUM = "ssss_diffuse"
 
 
@@ -31,14 +29,8 @@ def gaussian_count(r) -> int:
     return min(r.peek("deon.gaussians.#"), r.peek("ssss.gaussians"), MAX_GAUSSIANS)
 
 
-def _write(prog, name, arr, dtype=np.float32):
-    if name in prog:
-        prog[name].write(np.ascontiguousarray(arr, dtype=dtype).tobytes())
-
-
 class SsssBlurPass(SeparableScreenBlur):
     """blur_i: the increment sqrt(v_i - v_(i-1)), H then V, eq. 3.2 stretch."""
-    program_name = "ss_gauss_blur"
 
     def __init__(self, i: int):
         super().__init__(f"ssss_blur_{i}", DIFFUSE if i == 0 else blur_resource(i - 1), blur_resource(i))
@@ -47,32 +39,29 @@ class SsssBlurPass(SeparableScreenBlur):
     def declare(self, r: Reflection) -> bool:
         if gaussian_count(r) <= self.i:
             return False
+        r.setting("ssss.gaussians")
         for k in range(self.i + 1):
             r.setting(f"deon.gaussians.{k}.variance")
-        for f in ("alpha", "beta", "taps"):
-            r.setting(f"ssss.{f}")
+        r.section("ssss", ("alpha", "beta"))
         r.setting("camera.fov_y")
         screen_size(r)
+        r.program("ss_gauss_blur", TAPS=int(r.setting("ssss.taps")))
         return True
+
+    def program(self, ec):
+        return ec.program("ss_gauss_blur")
 
     def set_uniforms(self, ec, prog) -> None:
         vs = [ec.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
-        sigma = incremental_sigmas(vs)[self.i]
         x, w = gaussian_taps(int(ec.setting("ssss.taps")))
-        xs = np.zeros(MAX_TAPS, np.float32)
-        ws = np.zeros(MAX_TAPS, np.float32)
-        xs[:len(x)], ws[:len(w)] = x, w
-        _write(prog, "u_x", xs)
-        _write(prog, "u_w", ws)
-        set_uniform(prog, "u_taps", len(x))
-        set_uniform(prog, "u_sigma_mm", float(sigma))
-        set_uniform(prog, "u_alpha", float(ec.setting("ssss.alpha")))
-        set_uniform(prog, "u_beta", float(ec.setting("ssss.beta")))
-        set_uniform(prog, "u_focal", float(focal_px(ec.setting("camera.fov_y"), ec.setting("render.height"))))
+        p = ec.section("ssss", ("alpha", "beta"))
+        ec.uniforms(prog, u_x=x, u_w=w, u_sigma_mm=float(incremental_sigmas(vs)[self.i]),
+                    u_alpha=float(p.alpha), u_beta=float(p.beta),
+                    u_focal=float(focal_px(ec.setting("camera.fov_y"), ec.setting("render.height"))))
 
 
 class SsssSumPass(Pass):
-    """ssss_diffuse = sum_i w_i blur_i (weights of the Gaussians dropped by ssss.gaussians go to
+    """ssss_diffuse = sum_i w_i blur_i (the weights of Gaussians dropped by ssss.gaussians go to
     the widest kept one)."""
     name = "ssss_sum"
     uses_scene = False
@@ -94,15 +83,8 @@ class SsssSumPass(Pass):
         w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         for i, (_, wt) in enumerate(kept):
             w[i] = wt
-        _write(prog, "u_w", w)
-        set_uniform(prog, "u_count", len(kept))
-        ec.input(DIFFUSE).use(0)
-        set_uniform(prog, "diffuse", 0)
-        for i in range(MAX_GAUSSIANS):
-            if i < len(kept):
-                ec.input(blur_resource(i)).use(1 + i)
-                set_uniform(prog, f"blur{i}", 1 + i)
-            else:
-                set_uniform(prog, f"blur{i}", 0)
-        ec.framebuffer(SUM).use()
-        draw_fullscreen(ec, prog)
+        ec.uniforms(prog, u_w=w, u_count=len(kept))
+        ec.bind(prog, "diffuse", DIFFUSE)
+        for i in range(len(kept)):
+            ec.bind(prog, f"blur{i}", blur_resource(i))
+        ec.draw_fullscreen(prog, SUM)
