@@ -24,7 +24,19 @@ void main() {
     vec4 dz = texelFetch(depth_tex, p, 0);
     float grad = u_dir.x > 0.5 ? dz.g : dz.b;
     float s = (u_alpha / 11.0) * u_focal / max(dz.r + u_beta * grad, 1e-6);  // px per mm, eq. 3.2
-    float step_px = u_sigma_mm * s;
+    float target = u_sigma_mm * s;  // the increment's std on screen (px)
+    // Bilinear fetches at a fractional offset f add f (1 - f) px^2 of variance per tap: shrink the
+    // tap spacing so the discrete kernel's variance is exactly target^2 (2 fixed-point steps;
+    // skinviewer.physics.separable.bilinear_compensated_step)
+    float step_px = target;
+    for (int it = 0; it < 2; ++it) {
+        float vb = 0.0;
+        for (int k = 0; k < TAPS; ++k) {
+            float f = fract(abs(u_x[k] * step_px));
+            vb += u_w[k] * f * (1.0 - f);
+        }
+        step_px = sqrt(max(target * target - vb, 0.0));
+    }
     vec2 texel = 1.0 / vec2(textureSize(source, 0));
     vec2 uv = (vec2(p) + 0.5) * texel;
     vec3 acc = vec3(0.0);

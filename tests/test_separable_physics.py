@@ -80,6 +80,18 @@ def test_gaussian_taps_unit_variance_and_seven_taps_are_deons():
         gaussian_taps(8)
 
 
+def test_bilinear_compensation_gives_the_exact_variance():
+    from skinviewer.physics.separable import bilinear_compensated_step, bilinear_variance
+    for n in (7, 17, 25):
+        x, w = gaussian_taps(n)
+        for sigma in (1.3, 2.7, 6.1, 17.0):
+            step = bilinear_compensated_step(sigma, x, w)
+            total = step * step + bilinear_variance(step, x, w)
+            assert abs(total - sigma * sigma) < 0.02 * sigma * sigma, (n, sigma, total)
+            assert step <= sigma
+    assert bilinear_variance(2.0, [1.0, 2.0], [0.5, 0.5]) == 0.0  # integer offsets: no added variance
+
+
 def test_incremental_sigmas_add_up_and_gaussian_limit_keeps_energy():
     vs = [g[0] for g in DEON]
     sig = incremental_sigmas(vs)

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from helpers import assert_all_finite, small_settings
 from scipy.signal import fftconvolve
-from scipy.special import erf
 
 from skinviewer.core.settings import with_values
 from skinviewer.passes.screen_space import DEPTH, DIFFUSE
@@ -59,7 +58,7 @@ def test_t2_1_footprint_inverse_depth(renderer):
     vx1, vy1 = added_variance(renderer, laser("ssss", distance=20.0, **ONE_GAUSSIAN))
     vx2, vy2 = added_variance(renderer, laser("ssss", distance=40.0, **ONE_GAUSSIAN))
     k1 = focal_px(30.0, N) / 20.0
-    assert abs(math.sqrt(vx1) - k1) < 0.05 * k1 and abs(vx1 - vy1) < 1e-3 * vx1  # sigma = 1 mm on screen
+    assert abs(math.sqrt(vx1) - k1) < 0.01 * k1 and abs(vx1 - vy1) < 1e-3 * vx1  # sigma = 1 mm on screen
     assert abs(math.sqrt(vx1 / vx2) - 2.0) < 0.05  # doubling z halves the footprint
 
 
@@ -86,8 +85,9 @@ def test_t2_3_energy_on_constant_irradiance(renderer, technique):
 
 
 def _pixel_gaussian(sigma, half):
+    """G(sigma) sampled at the pixel centres, normalised (the spec's sum_i w_i G(v_i k^2, r))."""
     x = np.arange(-half, half + 1)
-    g = 0.5 * (erf((x + 0.5) / (math.sqrt(2) * sigma)) - erf((x - 0.5) / (math.sqrt(2) * sigma)))
+    g = np.exp(-0.5 * (x / max(sigma, 1e-6)) ** 2)
     return g / g.sum()
 
 
@@ -120,9 +120,10 @@ def impulse_error(renderer, s) -> np.ndarray:
     return np.sqrt((w * (po - pr) ** 2).sum(0) / (w * pr ** 2).sum(0))
 
 
-def test_t2_4_impulse_matches_the_sum_of_gaussians(renderer):
-    # 7 px/mm: the widest Gaussian's 3 sigma is 57 px
-    err = impulse_error(renderer, laser("ssss", distance=34.0, **{"ssss.beta": 0.0}))
+@pytest.mark.parametrize("taps", [7, 17])
+def test_t2_4_impulse_matches_the_sum_of_gaussians(renderer, taps):
+    # 7 px/mm: the widest Gaussian's 3 sigma is 57 px. Measured: 0.7-1.8 % (7 taps), 1.7-1.9 % (17)
+    err = impulse_error(renderer, laser("ssss", distance=34.0, **{"ssss.beta": 0.0, "ssss.taps": taps}))
     assert np.all(err <= 0.05), err
 
 

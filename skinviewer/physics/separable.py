@@ -56,6 +56,24 @@ def gaussian_taps(n: int, extent: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
     return x, kernel(0.5 * (lo + hi))
 
 
+def bilinear_variance(step_px: float, offsets, weights) -> float:
+    """Variance (px^2) that bilinear fetches add to a 1-D kernel with taps at offsets x step_px:
+    a fetch at fractional position f is a 2-tap kernel (1 - f, f) of variance f (1 - f)."""
+    f = np.mod(np.abs(np.asarray(offsets, np.float64) * step_px), 1.0)
+    return float(np.sum(np.asarray(weights, np.float64) * f * (1.0 - f)))
+
+
+def bilinear_compensated_step(sigma_px: float, offsets, weights, iterations: int = 2) -> float:
+    """The tap spacing (px per kernel unit) at which a unit-variance kernel sampled bilinearly has
+    variance sigma_px^2: step^2 + bilinear_variance(step) = sigma^2 (2 fixed-point steps, as the
+    GLSL of ss_gauss_blur). Without it every blur of the incremental chain is ~0.15 px^2 too wide
+    and denser taps get worse, not better (measured on the laser: 7 -> 25 taps, 2 % -> 7.5 %)."""
+    step = float(sigma_px)
+    for _ in range(iterations):
+        step = math.sqrt(max(sigma_px * sigma_px - bilinear_variance(step, offsets, weights), 0.0))
+    return step
+
+
 def incremental_sigmas(variances) -> list[float]:
     """Standard deviations of the incremental blurs: blur_i = blur_(i-1) x G(v_i - v_(i-1))
     (seed 000 eq. 24; spec §3.2). A non-ascending variance gives a zero increment."""
