@@ -29,6 +29,7 @@ uniform int u_tr_count;
 uniform vec3 u_tr_w[MAX_GAUSSIANS];
 uniform float u_tr_v[MAX_GAUSSIANS];
 uniform mat4 u_light_matrix_inv[MAX_LIGHTS];
+uniform int u_shadow_map_size;
 layout(location = 0) out vec4 o_diffuse;
 layout(location = 1) out vec4 o_specular;
 layout(location = 2) out vec4 o_depth;
@@ -51,19 +52,36 @@ float shadow_sample(int i, vec2 c) {
     return texture(shadow_map3, c).r;
 }
 
-// Thickness (mm) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
-// map's nearest surface A unprojected, distance to the shrunk point (spec §6.2 step 2-3).
-float thickness_mm(int i, vec3 P, vec3 Ng) {
+// T(thickness) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
+// map's nearest surface A unprojected, its distance (mm) to the point shrunk by a shadow texel along
+// the normal (spec §6.2 steps 2-4). T is averaged over 3x3 shadow texels: the thickness of nearly lit
+// points is a texel-quantised few tenths of a mm, which would print the shadow map's grid as moire.
+vec3 transmitted(int i, vec3 P, vec3 Ng) {
     vec3 Ps = P - Ng * u_shadow_texel[i];
     vec4 p = u_light_matrix[i] * vec4(Ps, 1.0);
-    if (!(p.w > 0.0)) return 1e4;
+    if (!(p.w > 0.0)) return vec3(0.0);
     vec3 c = p.xyz / p.w * 0.5 + 0.5;
-    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return 1e4;
-    float ds = shadow_sample(i, c.xy);
-    if (ds >= 1.0) return 1e4;
-    vec4 a = u_light_matrix_inv[i] * vec4(c.xy * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
-    if (!(abs(a.w) > 1e-30)) return 1e4;
-    return length(a.xyz / a.w - Ps) * u_mm_per_unit;
+    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return vec3(0.0);
+    vec2 texel = 1.0 / vec2(u_shadow_map_size);
+    vec3 Lv = (u_light_kind[i] == LIGHT_POINT) ? normalize(u_light_pos[i] - Ps) : u_light_dir[i];
+    // a lit point's own depth differs from the texel-centre depth by up to tan(N, L) / 2 texels:
+    // that much thickness is quantisation, not tissue (the slope-scaled tolerance of the shadow test)
+    float nl = abs(dot(Ng, Lv));
+    float tan_nl = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.25);
+    float tol_mm = u_shadow_texel[i] * (0.5 + 0.5 * tan_nl) * u_mm_per_unit;
+    vec3 t = vec3(0.0);
+    for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
+        vec2 cc = c.xy + vec2(x, y) * texel;
+        float ds = shadow_sample(i, cc);
+        if (ds >= 1.0) continue;  // no surface in front: nothing crossed
+        vec4 a = u_light_matrix_inv[i] * vec4(cc * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
+        if (!(abs(a.w) > 1e-30)) continue;
+        vec3 A = a.xyz / a.w;
+        // the distance along the light (not the lateral texel offset), less the quantisation
+        float d_mm = max(abs(dot(A - Ps, Lv)) * u_mm_per_unit - tol_mm, 0.0);
+        t += transmittance_profile(d_mm * u_tr_scale);
+    }
+    return t / 9.0;
 }
 
 void main() {
@@ -87,7 +105,7 @@ void main() {
         if (u_tr != 0 && u_light_shadowed[i] != 0) {
             // eq. 3.15 with [SEP]'s wrap: back-side irradiance through the inverted vertex normal
             float back = clamp(u_tr_wrap + dot(L, -Ng), 0.0, 1.0);
-            if (back > 0.0) T += Lc * back * transmittance_profile(thickness_mm(i, v_position, Ng) * u_tr_scale);
+            if (back > 0.0) T += Lc * back * transmitted(i, v_position, Ng);
         }
     }
     float mask = 1.0;

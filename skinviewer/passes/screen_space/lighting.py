@@ -97,4 +97,4 @@ class ScreenLightingPass(Pass):
         ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs),
                     u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM),
                     u_tr_div=1.0 if tr.form == "printed" else 2.0, u_tr_wrap=float(tr.wrap),
-                    u_light_matrix_inv=inv)
+                    u_light_matrix_inv=inv, u_shadow_map_size=int(ec.setting("shadow.map_size")))
