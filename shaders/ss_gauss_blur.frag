@@ -6,7 +6,10 @@
 //   beta = 0 is the true projection; d linear depth mm, grad mm per pixel from ss_depth)
 // Taps on background or non-skin pixels take the centre colour (no bleeding, energy kept).
 #include "lib/screen_space.glsl"
-// TAPS: the tap count, a compile-time define (constant loop bounds)
+// TAPS: the tap count, a compile-time define (constant loop bounds); the passes always set it
+#ifndef TAPS
+#define TAPS 7
+#endif
 uniform sampler2D source;      // rgb diffuse, a = SSS mask
 uniform sampler2D depth_tex;   // ss_depth
 uniform vec2 u_dir;            // (1, 0) horizontal, (0, 1) vertical

@@ -6,7 +6,10 @@
 // Rotation (seed 001 §3.3.4): taps within u_rot_fraction of the kernel's extent turn by a
 // per-pixel random angle (same angle in both passes); outer taps stay on the axis.
 #include "lib/screen_space.glsl"
-// TAPS: the tap count, a compile-time define (constant loop bounds)
+// TAPS: the tap count, a compile-time define (constant loop bounds); the passes always set it
+#ifndef TAPS
+#define TAPS 17
+#endif
 uniform sampler2D source;      // rgb diffuse, a = SSS mask (strength)
 uniform sampler2D depth_tex;   // ss_depth
 uniform vec2 u_dir;

@@ -9,7 +9,7 @@ float ss_finite(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -FLOAT
 vec4 ss_finite4(vec4 c) { return vec4(ss_finite(c.x), ss_finite(c.y), ss_finite(c.z), ss_finite(c.w)); }
 // albedo^e without pow(0, 0): e <= 0 -> 1, c <= 0 -> 0
 vec3 ss_safe_pow(vec3 c, float e) {
-    c = clamp(c, 0.0, 1e30);
+    c = clamp(c, 0.0, FLOAT_MAX);
     if (!(e > 0.0)) return vec3(1.0);
     return vec3(c.x > 0.0 ? pow(c.x, e) : 0.0, c.y > 0.0 ? pow(c.y, e) : 0.0, c.z > 0.0 ? pow(c.z, e) : 0.0);
 }
