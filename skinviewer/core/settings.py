@@ -19,7 +19,7 @@ from pydantic import (
 )
 
 from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF, REGIONS
-from skinviewer.core.files import atomic_write_text  # noqa: F401  (presets are saved through it)
+from skinviewer.core.files import FileReadError, atomic_write_text, read_regular_file
 
 SCHEMA_VERSION = 1
 
@@ -44,6 +44,32 @@ def _finite(v: float) -> float:
     return v
 
 
+def _finite_vec(v: Vec3 | None) -> Vec3 | None:
+    if v is not None and any(not math.isfinite(c) for c in v):
+        raise ValueError("components must be finite numbers")
+    return v
+
+
+def _file_path(v: str | None) -> str | None:
+    """A path the OS can open: no NUL byte, encodable (a lone surrogate from JSON is not)."""
+    if v is None:
+        return v
+    if "\x00" in v:
+        raise ValueError("path contains a NUL byte")
+    if not v.strip():
+        raise ValueError("path is empty")
+    try:
+        os.fsencode(v)
+        v.encode("utf-8", "surrogateescape")
+    except (UnicodeError, ValueError):
+        raise ValueError("path is not valid text for this file system (lone surrogate?)") from None
+    return v
+
+
+# a light farther than this (mesh units) is refused: shadow-map projections lose all precision
+MAX_POSITION = 1e9
+
+
 class SceneSettings(_Model):
     name: Literal["head", "laser", "shadow-edge", "backlit-ear", "stretch-plane", "regions-plane"] = "head"
     mesh: str | None = Field(None, description="path of a glTF/GLB/OBJ/PLY mesh; overrides `name`")
@@ -55,6 +81,8 @@ class SceneSettings(_Model):
     region_map: str | None = Field(None, description="region-ID PNG: red channel = index in REGIONS")
     head_detail: int = Field(1, ge=0, le=2, description="default head resolution level (0 small, 1 normal, 2 fine)")
 
+    _paths = field_validator("mesh", "albedo_map", "normal_map", "specular_map", "region_map")(_file_path)
+
 
 class CameraSettings(_Model):
     yaw: float = Field(25.0, ge=-3600, le=3600, description="degrees about +Y")
@@ -64,6 +92,7 @@ class CameraSettings(_Model):
     fov_y: float = Field(30.0, gt=1.0, lt=170.0, description="degrees")
 
     _f = field_validator("yaw", "pitch")(_finite)
+    _t = field_validator("target")(_finite_vec)
 
 
 class LightSettings(_Model):
@@ -98,6 +127,8 @@ class LightSettings(_Model):
     def _pos(cls, v: Vec3) -> Vec3:
         if any(not math.isfinite(c) for c in v):
             raise ValueError("position must be finite")
+        if max(abs(c) for c in v) > MAX_POSITION:
+            raise ValueError(f"position must be within +-{MAX_POSITION:g} mesh units")
         return v
 
 
@@ -113,8 +144,13 @@ class RenderSettings(_Model):
     height: int = Field(640, ge=16, le=8192)
     exposure: float = Field(1.0, gt=0.0, le=1e4)
     background: Vec3 = (0.05, 0.05, 0.06)
+    check_finite: bool = Field(
+        True, description="after a pass runs, check its outputs for NaN/Inf (a small GPU reduction); "
+        "the frame report names a pass whose output is not finite")
     timing: Literal["sync", "gpu"] = Field(
         "sync", description="sync: glFinish + wall clock per pass (right on llvmpipe); gpu: GL timer queries")
+
+    _bg = field_validator("background")(_finite_vec)
 
 
 class PhongSettings(_Model):
@@ -359,7 +395,7 @@ def get_path(obj: Any, path: str) -> Any:
         if part == "#":  # "lights.#": the length of a list
             cur = len(cur)
         elif isinstance(cur, (list, tuple)):
-            cur = cur[int(part)]
+            cur = cur[_index(part)]
         elif isinstance(cur, dict):
             cur = cur[part]
         else:
@@ -367,6 +403,13 @@ def get_path(obj: Any, path: str) -> Any:
                 raise KeyError(path)
             cur = getattr(cur, part)
     return cur
+
+
+def _index(part: str) -> int:
+    """A list index in a dotted path: plain decimal digits only (``lights.-1`` is not the last light)."""
+    if not (part.isascii() and part.isdigit()) or len(part) > 6:
+        raise IndexError(part)
+    return int(part)
 
 
 def _jsonable(v: Any) -> Any:
@@ -388,7 +431,9 @@ def parse_value(text: str) -> Any:
     """A ``--set`` value: JSON when it parses (numbers, true/false, null, lists), else the bare string."""
     try:
         return json.loads(text)
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError) as exc:
+        if not isinstance(exc, json.JSONDecodeError):  # 5,000-digit integers, 100,000 nested lists
+            raise SettingsError([("<value>", _json_problem(exc))]) from None
         lowered = text.strip().lower()
         if lowered in ("on", "yes"):
             return True
@@ -397,7 +442,7 @@ def parse_value(text: str) -> Any:
         if "," in text:  # 1,2,3 -> [1, 2, 3]
             try:
                 return [json.loads(p) for p in text.split(",")]
-            except json.JSONDecodeError:
+            except (ValueError, RecursionError):
                 pass
         return text
 
@@ -411,10 +456,10 @@ def with_values(s: Settings, assignments: dict[str, Any]) -> Settings:
         cur: Any = data
         try:
             for p in parts[:-1]:
-                cur = cur[int(p)] if isinstance(cur, list) else cur[p]
+                cur = cur[_index(p)] if isinstance(cur, list) else cur[p]
             last = parts[-1]
             if isinstance(cur, list):
-                idx = int(last)
+                idx = _index(last)
                 if idx == len(cur):
                     cur.append(value)
                 else:
@@ -445,29 +490,88 @@ def parse_assignments(items: list[str]) -> dict[str, Any]:
             errors.append((item, "expected key=value"))
             continue
         k, v = item.split("=", 1)
-        out[k.strip()] = parse_value(v.strip())
+        try:
+            out[k.strip()] = parse_value(v.strip())
+        except SettingsError as exc:
+            errors += [(k.strip(), m) for _, m in exc.errors]
     if errors:
         raise SettingsError(errors)
     return out
 
 
+# a preset is a small JSON file: anything larger is not one (and /dev/zero never ends)
+MAX_PRESET_BYTES = 4 * 1024 * 1024
+# scene fields holding file paths: relative ones in a preset are relative to the preset's folder
+PATH_FIELDS = ("mesh", "albedo_map", "normal_map", "specular_map", "region_map")
+
+
+def _json_problem(exc: BaseException) -> str:
+    if isinstance(exc, RecursionError):
+        return "nested too deeply"
+    if isinstance(exc, UnicodeDecodeError):
+        return f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})"
+    if isinstance(exc, json.JSONDecodeError):
+        return f"line {exc.lineno} column {exc.colno}: {exc.msg}"
+    return str(exc).split(";")[0]  # e.g. "Exceeds the limit (4300 digits) for integer string conversion"
+
+
 def load_preset(path: str | os.PathLike, base: Settings | None = None) -> Settings:
-    """Read a preset. A preset may be partial: its fields override ``base`` (default: defaults)."""
+    """Read a preset. A preset may be partial: its fields override ``base`` (default: defaults).
+    Relative scene paths in it are resolved against the preset's folder."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SettingsError([("<file>", f"cannot read: {exc.strerror or exc}")], str(p)) from None
+        raw = read_regular_file(p, MAX_PRESET_BYTES, what="preset")
+    except FileReadError as exc:
+        raise SettingsError([("<file>", str(exc))], _shown(p)) from None
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        raise SettingsError([("<file>", "UTF-16 text: save the preset as UTF-8")], _shown(p))
     try:
+        text = raw.decode("utf-8")
+        if text.startswith("\ufeff"):
+            text = text[1:]  # a UTF-8 byte-order mark
         data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise SettingsError([("<json>", f"line {exc.lineno} column {exc.colno}: {exc.msg}")], str(p)) from None
+    except (ValueError, RecursionError) as exc:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        where = "<json>" if isinstance(exc, json.JSONDecodeError) or not isinstance(exc, UnicodeDecodeError) \
+            else "<file>"
+        raise SettingsError([(where, _json_problem(exc))], _shown(p)) from None
     if not isinstance(data, dict):
-        raise SettingsError([("<root>", "a preset is a JSON object")], str(p))
+        raise SettingsError([("<root>", "a preset is a JSON object")], _shown(p))
     if "schema_version" not in data:
-        raise SettingsError([("schema_version", "missing")], str(p))
-    merged = _deep_merge(to_dict(base or Settings()), data)
-    return validate(merged, str(p))
+        raise SettingsError([("schema_version", "missing")], _shown(p))
+    scene = data.get("scene")
+    if isinstance(scene, dict):
+        data = dict(data, scene={k: _resolve_against(v, p.parent) if k in PATH_FIELDS else v
+                                 for k, v in scene.items()})
+    try:
+        merged = _deep_merge(to_dict(base or Settings()), data)
+        return validate(merged, _shown(p))
+    except RecursionError:
+        raise SettingsError([("<json>", "nested too deeply")], _shown(p)) from None
+
+
+def _shown(p: Path) -> str:
+    """A path as printable text (a lone surrogate in it must not break the error line)."""
+    return str(p).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _resolve_against(v: Any, folder: Path) -> Any:
+    if not isinstance(v, str) or not v or "\x00" in v:
+        return v  # validation says what is wrong with it
+    try:
+        if os.path.isabs(v):
+            return v
+        return os.path.normpath(os.path.join(os.path.abspath(folder), v))
+    except (ValueError, UnicodeError):
+        return v
+
+
+def _relative_to(v: str | None, folder: Path) -> str | None:
+    if not v:
+        return v
+    try:
+        return os.path.relpath(os.path.abspath(v), os.path.abspath(folder))
+    except ValueError:  # another drive (Windows)
+        return v
 
 
 def _deep_merge(base: dict, over: dict) -> dict:
@@ -481,7 +585,11 @@ def _deep_merge(base: dict, over: dict) -> dict:
 
 
 def save_preset(s: Settings, path: str | os.PathLike) -> None:
-    atomic_write_text(path, json.dumps(to_dict(s), indent=2) + "\n")
+    """Write ``s`` atomically; scene paths are written relative to the preset's folder."""
+    data = to_dict(s)
+    folder = Path(path).parent
+    data["scene"] = {k: _relative_to(v, folder) if k in PATH_FIELDS else v for k, v in data["scene"].items()}
+    atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 
 def profile_warnings(d: DeonSettings) -> list[str]:
