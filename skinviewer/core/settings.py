@@ -255,8 +255,10 @@ class ScreenSettings(_Model):
                                 "pre-post = x albedo^mix before the blur and x albedo^(1-mix) after")
     mix: float = Field(0.5, ge=0.0, le=1.0, description="pre-post texturing: the albedo exponent f applied before the blur")
     non_skin_regions: list[str] = Field(
-        default_factory=list, description="regions (names in REGIONS) the SSS mask excludes: no blur there and no "
-                                          "bleeding into them; a mesh without a region map is all skin")
+        default_factory=lambda: ["other"],
+        description="regions (names in REGIONS) the SSS mask excludes: no blur there and no bleeding into them "
+                    "(the default head paints its eyeballs 'other', every skin point a named region); a mesh "
+                    "without a region map is all skin")
 
     @field_validator("non_skin_regions")
     @classmethod
