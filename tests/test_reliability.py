@@ -371,7 +371,7 @@ def test_release_frees_the_full_screen_vaos(gl_ctx):
     r = Renderer(gl_ctx)
     s = small_settings("laser", "phong", size=16)
     r.render(s)
-    vaos = list(r._fs_vaos.values())
+    vaos = [v for g in r.graphs.values() for _, _, v in g.gpu._vaos.values()]  # the graphs' one VAO cache
     assert vaos
     r.release()
     assert all(type(v.mglo).__name__ == "InvalidObject" for v in vaos)

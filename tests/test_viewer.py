@@ -79,6 +79,13 @@ def _screen(app) -> np.ndarray:
     return read_screen(app.ctx, (app.state.settings.render.width, app.state.settings.render.height)).astype(np.float32)
 
 
+def _screen_view(app) -> np.ndarray:
+    """The 3D view region of the window's back buffer."""
+    from skinviewer.ui.screenshot import read_screen
+    fb = app.frame.layout.view_fb
+    return read_screen(app.ctx, fb[2:], origin=fb[:2]).astype(np.float32)
+
+
 def _view_image(app) -> np.ndarray:
     return app.renderer.image(app.state.settings).astype(np.float32)
 
@@ -790,10 +797,24 @@ def test_a_registered_window_draws_and_owns_its_area(app):
             seen["hint"] = ui.cost_hint("render.exposure")
             seen["report"] = self.frame.report
 
+        def draw_view(self, viewport):  # its own view mode: here, nothing but the background
+            seen["viewport"] = viewport
+            return seen.get("take_view", False)
+
     probe = app.ui.add_window(Probe)
     try:
         app.step(2)
         assert "output" in seen["hint"] and seen["report"] is not None
+        assert seen["viewport"] == app.frame.layout.view_fb
+        app.state.set_show_ui(False)  # the view alone on screen (its view mode works without the UI too)
+        app.step(1)
+        assert _screen_view(app).std() > 10
+        seen["take_view"] = True
+        app.step(1)
+        assert _screen_view(app).std() < 1.0  # the window drew the view (the plain background)
+        seen["take_view"] = False
+        app.state.set_show_ui(True)
+        app.step(1)
         yaw0 = app.state.settings.camera.yaw
         x, y, w, h = probe.rect
         _drag(app, x + w * 0.5, y + h * 0.5, 30, 0, app.wnd.mouse.left)
@@ -801,6 +822,7 @@ def test_a_registered_window_draws_and_owns_its_area(app):
         _drag(app, x + w * 1.5, y + h * 0.5, 30, 0, app.wnd.mouse.left)  # the free half still orbits
         assert app.state.settings.camera.yaw != yaw0
     finally:
+        app.state.set_show_ui(True)
         app.ui.windows.remove(probe)
         app.state.reset_camera()
         _settle(app)

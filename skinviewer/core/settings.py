@@ -142,7 +142,10 @@ class ShadowSettings(_Model):
 class RenderSettings(_Model):
     width: int = Field(640, ge=16, le=8192)
     height: int = Field(640, ge=16, le=8192)
-    exposure: float = Field(1.0, gt=0.0, le=1e4)
+    exposure: float = Field(0.9, gt=0.0, le=1e4)
+    tone_map: Literal["filmic", "linear"] = Field(
+        "filmic", description="display transform after exposure: filmic (ACES fit, soft highlight roll-off) or "
+        "linear (clamp; what measurements compare)")
     background: Vec3 = (0.05, 0.05, 0.06)
     check_finite: bool = Field(
         True, description="after a pass runs, check its outputs for NaN/Inf (a small GPU reduction); "
@@ -164,6 +167,14 @@ class RegionSpecular(_Model):
     rho_s: float | None = Field(None, ge=0.0, le=10.0)
 
 
+def _default_region_specular() -> dict[str, "RegionSpecular"]:
+    # seed 002 §14.3: Weyrich et al. 2006 measured m and rho_s per facial region; the pattern they found
+    # (nose and lips shinier, cheeks and chin rougher) with values inside their measured range
+    table = {"forehead": (0.32, 0.20), "nose": (0.28, 0.24), "lips": (0.30, 0.22), "cheeks": (0.38, 0.15),
+             "chin": (0.35, 0.17)}
+    return {k: RegionSpecular(m=m, rho_s=r) for k, (m, r) in table.items()}
+
+
 class SpecularSettings(_Model):
     """Kelemen/Szirmay-Kalos (seed 000 eq. 14-16, seed 002 §14.3)."""
     m: float = Field(0.3, ge=0.0, le=1.0, description="Beckmann roughness")
@@ -171,7 +182,7 @@ class SpecularSettings(_Model):
     rho_s: float = Field(0.18, ge=0.0, le=10.0, description="specular intensity")
     mode: Literal["direct", "beckmann_lut"] = "direct"
     lut_size: int = Field(512, ge=16, le=4096)
-    per_region: dict[str, RegionSpecular] = Field(default_factory=dict)
+    per_region: dict[str, RegionSpecular] = Field(default_factory=lambda: _default_region_specular())
 
     _regions = field_validator("per_region")(_known_regions)
 
@@ -236,7 +247,7 @@ class DeonSettings(_Model):
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
     tsm_light: int | None = Field(
-        None, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
+        1, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
     tsm_form: Literal["exact", "printed"] = Field(
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True
@@ -331,9 +342,11 @@ class Settings(_Model):
     render: RenderSettings = Field(default_factory=RenderSettings)
     lights: list[LightSettings] = Field(
         default_factory=lambda: [
-            # key light front-right, rim light behind-left (it makes the ears glow with TSM)
-            LightSettings(direction=(0.55, 0.35, 1.0), intensity=1.4, color=(1.0, 0.97, 0.92)),
-            LightSettings(direction=(-0.8, 0.4, -0.9), intensity=1.2, color=(0.85, 0.9, 1.0)),
+            # a portrait rig: a warm key high on the left of the face, a cool rim behind the right ear
+            # (deon.tsm_light = 1: it makes the ears glow), a soft unshadowed fill from the camera side
+            LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
+            LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
+            LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False),
         ],
         min_length=1, max_length=MAX_LIGHTS)
     shadow: ShadowSettings = Field(default_factory=ShadowSettings)
@@ -586,11 +599,13 @@ def _deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-def save_preset(s: Settings, path: str | os.PathLike) -> None:
-    """Write ``s`` atomically; scene paths are written relative to the preset's folder."""
-    data = to_dict(s)
+def save_preset(s: Settings, path: str | os.PathLike, data: dict | None = None) -> None:
+    """Write ``s`` (or ``data``, a dict of it such as the viewer's trimmed payload) atomically; scene
+    paths are written relative to the preset's folder."""
+    data = to_dict(s) if data is None else dict(data)
     folder = Path(path).parent
-    data["scene"] = {k: _relative_to(v, folder) if k in PATH_FIELDS else v for k, v in data["scene"].items()}
+    if "scene" in data:
+        data["scene"] = {k: _relative_to(v, folder) if k in PATH_FIELDS else v for k, v in data["scene"].items()}
     atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 

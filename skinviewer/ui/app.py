@@ -121,9 +121,9 @@ class ViewerApp(mglw.WindowConfig):
 
     # -- teardown ------------------------------------------------------------------------------
     def close(self) -> None:
+        self.ui.release()  # windows free their GL objects first
         self.frame.release()
         self.shaders.release()
-        self.ui.release()
 
 
 class WindowUnavailableError(RuntimeError):

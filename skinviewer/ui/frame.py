@@ -41,6 +41,8 @@ class UiLayer(Protocol):
 
     def present(self) -> None: ...
 
+    def view_hooks(self) -> list: ...
+
 
 class FrameController:
     def __init__(self, ctx, state: ViewerState, renderer: Renderer, shaders: ShaderLibrary,
@@ -178,7 +180,7 @@ class FrameController:
             ui_built = ui.build(frametime, self.layout)
         self._sync_size()
         self.report = self._render_main()
-        self.view.draw(self.graph(), self.layout)
+        self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
         self.watcher.refresh_errors()
         self._trim_texture_pools()
         self._take_shots(include_ui=False)

@@ -9,16 +9,15 @@ the render size (it follows the window), floats rounded to 6 significant digits 
 ``0.30000000000000004`` from a slider)."""
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
 from skinviewer.core import paths
-from skinviewer.core.files import atomic_write_text
 from skinviewer.core.settings import (
     Settings,
     SettingsError,
     load_preset,
+    save_preset,
     to_dict,
     with_values,
 )
@@ -184,7 +183,7 @@ class PresetState:
             return False
         try:
             Path(target).parent.mkdir(parents=True, exist_ok=True)
-            atomic_write_text(target, json.dumps(preset_payload(s), indent=2) + "\n")
+            save_preset(s, target, preset_payload(s))  # scene paths relative to the preset's folder
         except OSError as exc:
             self.errors = [("<file>", f"cannot write: {exc.strerror or exc}")]
             self.error_source = target

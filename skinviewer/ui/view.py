@@ -35,9 +35,10 @@ class ViewPresenter:
             slot.set_error(f"{type(exc).__name__}: {exc}")
             return None
 
-    def draw(self, graph, layout: Layout) -> None:
+    def draw(self, graph, layout: Layout, hooks=()) -> None:
         """Clear the window, then show in the view region: A/B when comparing, else the inspected
-        output of ``graph`` (the current technique's), else its image."""
+        output of ``graph`` (the current technique's), else the first of ``hooks`` (windows' own
+        view modes, ``draw_view(viewport) -> bool``) that draws it, else the image."""
         ctx, viewport = self.ctx, layout.view_fb
         ctx.screen.use()
         ctx.viewport = (0, 0, *layout.framebuffer)
@@ -64,6 +65,9 @@ class ViewPresenter:
             spec = graph.resources().get(ins.resource)
             if spec is not None:
                 self.display.inspect(graph.texture(ins.resource), viewport, ins.channel, ins.exposure, spec.components)
+                return
+        for hook in hooks:
+            if hook(viewport):
                 return
         if "image" in graph.resources():
             self.display.show(graph.texture("image"), viewport)

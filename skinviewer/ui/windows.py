@@ -10,7 +10,12 @@ value)`` (applied and validated once, after every window has drawn) or ``state.a
 
 **Adding a window is one line** in ``WINDOWS`` below (drawn in that order), e.g. for the
 accuracy window: ``from skinviewer.ui.accuracy_window import AccuracyWindow`` and ``AccuracyWindow,``
-in the tuple. A window that fails to draw is reported in the status bar; the session goes on."""
+in the tuple. A window that fails to draw is reported in the status bar; the session goes on.
+
+Optional: ``draw_view(viewport) -> bool`` -- the window's own view mode (e.g. an error heat map):
+called when the 3D view would show the image (not while comparing A/B or inspecting a pass); return
+True when it drew the view region (``viewport``: x, y, w, h in framebuffer pixels; draw with
+``frame.view.display``). ``release()`` -- free its GL objects at the end of the session."""
 from __future__ import annotations
 
 import traceback
@@ -27,6 +32,8 @@ from skinviewer.ui.widgets import UiContext
 
 class Window(Protocol):
     def draw(self, ui: UiContext) -> None: ...
+
+    # optional: def draw_view(self, viewport) -> bool; def release(self) -> None
 
 
 WindowFactory = Callable[[ViewerState, FrameController], Window]
@@ -115,6 +122,10 @@ class UiHost:
         self.frame.ctx.screen.use()
         self.renderer.render(imgui.get_draw_data())
 
+    def view_hooks(self) -> list:
+        """The windows' own view modes (``draw_view``), in drawing order."""
+        return [w.draw_view for w in self.windows if callable(getattr(w, "draw_view", None))]
+
     def covers(self, x: float, y: float) -> bool:
         """A UI window was drawn at (x, y) last frame."""
         return any(rx <= x <= rx + rw and ry <= y <= ry + rh for rx, ry, rw, rh in self.rects)
@@ -129,6 +140,9 @@ class UiHost:
 
     def release(self) -> None:
         from imgui_bundle import imgui, implot
+        for w in self.windows:
+            if callable(getattr(w, "release", None)):
+                w.release()
         try:
             self.renderer.shutdown()
         except Exception:

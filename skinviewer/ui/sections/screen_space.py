@@ -1,5 +1,6 @@
-"""The screen-space technique sections: Jimenez 2009 (ssss), Jimenez 2015 separable, and the shared
-screen-space settings (texturing mode, SSS mask regions, Jimenez 2010 transmittance)."""
+"""The shared screen-space settings: texturing mode, the regions the SSS mask leaves out (a check box
+each), the Jimenez 2010 transmittance. The ``ssss`` and ``separable`` groups are drawn from the model
+by the generic section (titled from the technique registry)."""
 from __future__ import annotations
 
 from imgui_bundle import imgui
@@ -11,43 +12,6 @@ from skinviewer.ui.state import ViewerState
 from skinviewer.ui.widgets import UiContext, edit_model, wrapped
 
 SCREEN_SPACE = ("ssss", "separable")
-
-
-def _active(state: ViewerState, name: str) -> str:
-    return "  (active)" if state.settings.technique == name else ""
-
-
-class SsssSection:
-    """Jimenez 2009: alpha, beta, taps, Gaussian count (the profile is deon.gaussians)."""
-
-    def __init__(self, state: ViewerState, frame: FrameController):
-        self.state = state
-        self.frame = frame
-
-    def draw(self, ui: UiContext) -> None:
-        s = self.state.settings
-        if ui.header(f"Jimenez 2009{_active(self.state, 'ssss')}###ssss", s.technique == "ssss"):
-            wrapped("seed 001 §3.2, eq. 3.2: one screen-space blur per Gaussian of the d'Eon profile "
-                    "(its table), width alpha / (depth + beta |depth gradient|)")
-            edit_model(s.ssss, "ssss", ui)
-            change_line(self.frame, ("ssss",))
-
-
-class SeparableSection:
-    """Jimenez 2015: taps, strength/falloff, width, follow surface, inner-tap rotation."""
-
-    def __init__(self, state: ViewerState, frame: FrameController):
-        self.state = state
-        self.frame = frame
-
-    def draw(self, ui: UiContext) -> None:
-        s = self.state.settings
-        if ui.header(f"Jimenez 2015 separable{_active(self.state, 'separable')}###separable",
-                     s.technique == "separable"):
-            wrapped("seed 001 §3.3: one pre-integrated separable kernel (strength / falloff), follow surface, "
-                    "inner taps rotated per pixel")
-            edit_model(s.separable, "separable", ui)
-            change_line(self.frame, ("separable",))
 
 
 class ScreenSpaceSection:

@@ -1,5 +1,6 @@
 """The technique sections: Phong, Gosselin 2004 (per-region kernels), d'Eon 2007 (the Gaussian table and
-the radial profile plot) and the Kelemen / Szirmay-Kalos specular (per-region overrides)."""
+the radial profile plot), the Kelemen / Szirmay-Kalos specular (per-region overrides), and a generic
+section for every other settings group (a new technique's settings show up with no UI code)."""
 from __future__ import annotations
 
 import math
@@ -7,7 +8,8 @@ import math
 import numpy as np
 from imgui_bundle import imgui
 
-from skinviewer.core.settings import REGIONS, profile_warnings
+from skinviewer import techniques
+from skinviewer.core.settings import REGIONS, Settings, profile_warnings
 from skinviewer.ui import profile_plot
 from skinviewer.ui.fielddocs import doc
 from skinviewer.ui.frame import FrameController
@@ -16,6 +18,7 @@ from skinviewer.ui.state import ViewerState
 from skinviewer.ui.widgets import (
     WARN,
     UiContext,
+    classify,
     edit_model,
     tooltip,
     wrapped,
@@ -221,3 +224,33 @@ class SpecularSection:
                             ui.edits.set(f"specular.per_region.{reg}", row)
                     imgui.pop_id()
             imgui.end_table()
+
+
+# settings groups with a section of their own (ui/sections/*.py); the rest get OtherSettingsSection
+HAND_BUILT = ("scene", "camera", "render", "lights", "shadow", "phong", "specular", "gosselin", "deon",
+              "screen", "transmittance")  # ui/sections/screen_space.py
+
+
+def generic_groups(settings_cls=Settings) -> list[str]:
+    """Settings groups (sub-models) no hand-built section draws, in model order."""
+    return [name for name, f in settings_cls.model_fields.items()
+            if name not in HAND_BUILT and classify(f)[0] == "model"]
+
+
+class OtherSettingsSection:
+    """Every other settings group, drawn from the model (labels, units and tooltips from fielddocs);
+    a technique's group is titled with the technique's title and opens when it is the active one."""
+
+    def __init__(self, state: ViewerState, frame: FrameController):
+        self.state = state
+        self.frame = frame
+        self.groups = generic_groups(type(state.settings))
+
+    def draw(self, ui: UiContext) -> None:
+        s = self.state.settings
+        for name in self.groups:
+            tech = techniques.REGISTRY.get(name)
+            title = tech.title.split(":")[0] if tech is not None else name.replace("_", " ").capitalize()
+            if ui.header(f"{title}{_active(self.state, name)}###{name}", s.technique == name):
+                edit_model(getattr(s, name), name, ui)
+                change_line(self.frame, (name,))
