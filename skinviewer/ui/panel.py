@@ -13,6 +13,7 @@ from skinviewer.ui.fielddocs import LABEL_MAX_PX
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.profile_lab import ProfileLab
 from skinviewer.ui.sections.scene import CameraSection, LightsSection, SceneSection
+from skinviewer.ui.sections.screen_space import ScreenSpaceSection
 from skinviewer.ui.sections.shading import (
     DeonSection,
     GosselinSection,
@@ -37,7 +38,7 @@ LABEL_COLUMN_PX = LABEL_MAX_PX + 8.0  # room for labels with units (fielddocs ke
 # the panel's sections, top to bottom: each made with (state, frame), drawn with draw(ui)
 SECTIONS = (
     StatusSection, TechniqueSection, SceneSection, CameraSection, LightsSection,
-    PhongSection, GosselinSection, DeonSection, SpecularSection, OtherSettingsSection,
+    PhongSection, GosselinSection, DeonSection, SpecularSection, OtherSettingsSection, ScreenSpaceSection,
     RenderSection, PresetsSection, ScreenshotSection, CompareSection, ShadersSection,
     ProfileLab, HelpSection,
 )

@@ -227,7 +227,8 @@ class SpecularSection:
 
 
 # settings groups with a section of their own (ui/sections/*.py); the rest get OtherSettingsSection
-HAND_BUILT = ("scene", "camera", "render", "lights", "shadow", "phong", "specular", "gosselin", "deon")
+HAND_BUILT = ("scene", "camera", "render", "lights", "shadow", "phong", "specular", "gosselin", "deon",
+              "screen", "transmittance")  # ui/sections/screen_space.py
 
 
 def generic_groups(settings_cls=Settings) -> list[str]:

@@ -1,0 +1,100 @@
+"""The screen-space lighting pass (see the package docstring for the contract)."""
+from __future__ import annotations
+
+import numpy as np
+
+from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.common import (
+    bind_specular,
+    bind_surface,
+    declare_lighting,
+    declare_specular,
+    set_camera,
+    set_lighting,
+)
+from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
+from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
+from skinviewer.scene.camera import gl_bytes, light_space
+
+DIFFUSE = "ss_diffuse"
+SPECULAR = "ss_specular"
+DEPTH = "ss_depth"
+ALBEDO = "ss_albedo"
+
+
+def screen_size(r) -> tuple[int, int]:
+    """The render size (declares render.width/height)."""
+    return int(r.setting("render.width")), int(r.setting("render.height"))
+
+
+def texturing_exponent(texturing: str, mix: float) -> float:
+    """f of seed 001 §3.6: albedo^f before the blur, albedo^(1-f) after."""
+    return {"post": 0.0, "pre": 1.0}.get(texturing, float(mix))
+
+
+class ScreenLightingPass(Pass):
+    """Diffuse (x albedo^f, + transmittance), specular, linear depth + gradient, SSS mask and
+    the post-scatter albedo, from the camera. ``transmittance_profile`` is the settings path of a
+    list of Gaussians (variance mm^2, RGB weights) whose T(d) the transmittance uses; a technique
+    with another profile overrides ``transmittance_gaussians``."""
+    name = "ss_lighting"
+    view_dependent = True
+
+    def __init__(self, transmittance_profile: str = "deon.gaussians"):
+        self.transmittance_profile = transmittance_profile
+
+    def reflect(self, r: Reflection) -> None:
+        defines = declare_lighting(r)
+        declare_specular(r)
+        r.section("screen", ("texturing", "mix", "non_skin_regions"))
+        if r.setting("transmittance.enabled"):
+            r.section("transmittance", ("translucency", "form", "wrap"))
+            r.setting(self.transmittance_profile)
+        size = screen_size(r)
+        r.program("ss_lighting", **defines)
+        r.output(DIFFUSE, TexSpec(size, 4, "f4", depth=True))
+        r.output(SPECULAR, TexSpec(size, 4, "f2"))
+        r.output(DEPTH, TexSpec(size, 4, "f4", filter="nearest"))
+        r.output(ALBEDO, TexSpec(size, 4, "f2"))
+
+    def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
+        return [(float(g.variance), tuple(g.weights)) for g in ec.setting(self.transmittance_profile)]
+
+    def execute(self, ec) -> None:
+        prog = ec.program("ss_lighting")
+        scene = ec.scene
+        set_camera(ec, prog)
+        bind_surface(ec, prog)
+        set_lighting(ec, prog)
+        bind_specular(ec, prog)
+        sc = ec.section("screen", ("texturing", "mix", "non_skin_regions"))
+        non_skin = set(sc.non_skin_regions)
+        sss = np.array([0.0 if name in non_skin else 1.0 for name in REGIONS], np.float32)
+        ec.uniforms(prog, u_view=gl_bytes(ec.view.view), u_mm_per_unit=float(scene.mm_per_unit),
+                    u_mix=float(texturing_exponent(sc.texturing, sc.mix)), u_region_sss=sss,
+                    u_has_regions=bool(scene.has_region_map and non_skin))
+        self._transmittance(ec, prog)
+        ec.draw_mesh(prog, DIFFUSE, SPECULAR, DEPTH, ALBEDO)
+
+    def _transmittance(self, ec, prog) -> None:
+        on = bool(ec.setting("transmittance.enabled"))
+        ec.set(prog, "u_tr", on)
+        if not on:
+            return
+        tr = ec.section("transmittance", ("translucency", "form", "wrap"))
+        gs = self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
+        w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+        v = np.zeros(MAX_GAUSSIANS, np.float32)
+        for i, (var, wt) in enumerate(gs):
+            w[i], v[i] = wt, var
+        scene = ec.scene
+        inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
+        active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if l.enabled]
+        for slot, l in enumerate(active):
+            inv[slot] = np.linalg.inv(light_space(l, scene.center, scene.radius).gl_matrix).T  # column-major
+        # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
+        ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs),
+                    u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM),
+                    u_tr_div=1.0 if tr.form == "printed" else 2.0, u_tr_wrap=float(tr.wrap),
+                    u_light_matrix_inv=inv, u_shadow_map_size=int(ec.setting("shadow.map_size")))
