@@ -150,6 +150,11 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name} uses program '{name}' it did not declare")
         return self.graph.shaders.get(name, defines or None)
 
+    def note(self, text: str, **figures) -> None:
+        """A figure this run measured (e.g. samples counted on the GPU): shown with the pass in the
+        frame report (``PassRecord.note`` / ``figures``), kept while the pass stays cached."""
+        self.graph._notes[self.pass_.name] = (text, dict(figures))
+
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
         """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
         tex = self.graph._pool_take(spec)
@@ -182,6 +187,8 @@ class PassRecord:
     reason: str = ""
     inputs: list[str] = field(default_factory=list)
     outputs: dict[str, dict] = field(default_factory=dict)
+    note: str = ""  # what the pass measured when it last ran (ExecuteContext.note)
+    figures: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -226,7 +233,8 @@ class FrameReport:
             "total_ms": round(self.total_ms, 4),
             "passes": [
                 {"name": p.name, "status": p.status, "gpu_ms": None if p.ms is None else round(p.ms, 4),
-                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs}
+                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs,
+                 **({"note": p.note, "figures": p.figures} if p.note else {})}
                 for p in self.passes
             ],
         }
@@ -235,7 +243,7 @@ class FrameReport:
         rows = [f"{'pass':<24} {'status':<7} {'ms':>9}  reason"]
         for p in self.passes:
             ms = "" if p.ms is None else f"{p.ms:9.3f}"
-            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}")
+            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}" + (f" [{p.note}]" if p.note else ""))
         rows.append(f"{'total (' + self.timing_mode + ' timing)':<32} {self.total_ms:9.3f}")
         return "\n".join(rows)
 
@@ -272,6 +280,7 @@ class RenderGraph:
         self._last_refl: dict[str, Reflection] = {}
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
+        self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
 
     # -- texture management ------------------------------------------------------------------
     def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
@@ -425,7 +434,8 @@ class RenderGraph:
             self.frame += 1
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
-                           "" if p.status == "ran" else p.reason, p.inputs, p.outputs) for p in last.passes])
+                           "" if p.status == "ran" else p.reason, p.inputs, p.outputs, p.note, p.figures)
+                for p in last.passes])
             return self.last_report
         t_start = time.perf_counter()
         any_ran = False
@@ -464,6 +474,8 @@ class RenderGraph:
                 for res in r.outputs:
                     self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
+            if p.name in self._notes:
+                rec.note, rec.figures = self._notes[p.name]
             records[p.name] = rec
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         for p in self.passes:

@@ -1,0 +1,264 @@
+"""Burley normalized-diffusion blur passes in screen space: Golubev 2018 (HDRP) and the thesis's
+contrast-driven two-level sampling (seed 001 §3.4, ch. 4; spec §5, §7). GLSL: shaders/burley_blur.frag
+with shaders/lib/burley.glsl; numpy twin: skinviewer/physics/burley.py.
+
+The blur reads the screen-space framework's diffuse irradiance, linear depth (mm) and SSS mask and
+writes the blurred diffuse (consumed by the framework's combine pass) and a per-pixel statistics
+texture: R samples taken, G extra levels taken, B 1 where the kernel was under the pixel cutoff,
+A the base contrast (max channel; -1 where none was computed). ``BurleyCountPass`` sums the statistics
+on the GPU (a two-stage reduction) and puts the frame's sample count in the pass report."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.common import draw_fullscreen, set_uniform
+from skinviewer.passes.output import OutputPass
+from skinviewer.physics import burley as B
+
+# the screen-space framework's resources (skinviewer/passes/screen_space)
+IRRADIANCE = "ss_diffuse"
+DEPTH = "ss_depth"
+MASK = "ss_mask"
+IRRADIANCE_DTYPE = "f4"  # the blurred output has the irradiance's format: skipped pixels copy it bit for bit
+
+BLURRED = "burley_diffuse"
+STATS = "burley_stats"
+COUNT = "burley_count"
+VIEW = "burley_view"
+
+PROFILE_FIELDS = ("albedo", "mfp", "fit", "scale")
+
+
+def profile_of(get) -> B.Profile:
+    """The Burley profile from the ``burley`` settings (``get(path)`` reads a declared setting)."""
+    return B.profile(get("burley.albedo"), get("burley.mfp"), get("burley.fit"), get("burley.scale"))
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The sample levels a blur pass takes, and how it decides (physics.burley.Sampling in GLSL terms)."""
+    levels: tuple[int, ...]
+    cutoffs: tuple[tuple[float, float, float], ...] = ()
+    split: str = "half-radius"
+    contrast: str = "rings"
+    always: bool = False
+
+    def sampling(self, budget: bool) -> B.Sampling:
+        cut = tuple(-1.0 if self.always else c for c in self.cutoffs)
+        return B.Sampling(self.levels, cut, self.split, self.contrast, budget)
+
+
+def _floats(v) -> str:
+    return ", ".join(repr(float(np.float32(x))) for x in v)
+
+
+def table_defines(plan: Plan, budget: bool) -> dict[str, str]:
+    """The sample tables and counts as #defines (the counts specialise the loops: llvmpipe is SIMD)."""
+    sets = plan.sampling(budget).sets()
+    defs = {"N_SET0": str(sets[0].n), "N_SET1": "0", "N_SET2": "0",
+            "N_INNER": str(int(np.count_nonzero(sets[0].inner))),
+            "CONTRAST_MINMAX": "1" if plan.contrast == "minmax" else "0",
+            "BURLEY_BUDGET": "1" if budget else "0", "BURLEY_ALWAYS": "1" if plan.always else "0"}
+    if not np.all(sets[0].inner[:np.count_nonzero(sets[0].inner)]):
+        raise ValueError("inner ring must be the first samples by radius")
+    for k, s in enumerate(sets):
+        defs[f"N_SET{k}"] = str(s.n)
+        defs[f"SET{k}_X_TABLE"] = f"float[{s.n}]({_floats(s.x)})"
+        defs[f"SET{k}_RCP_TABLE"] = f"float[{s.n}]({_floats(s.rcp_pdf)})"
+        cs = s.cos_sin
+        defs[f"SET{k}_CS_TABLE"] = f"vec2[{s.n}](" + ", ".join(
+            f"vec2({_floats(c)})" for c in cs) + ")"
+    return defs
+
+
+def golubev_plan(get) -> Plan:
+    return Plan((int(get("burley.samples")),))
+
+
+def two_level_plan(get) -> Plan:
+    """burley2 settings -> levels. ``thesis``: Algorithm 1 (base, extra, cutoff on the ring contrast);
+    ``three-level``: a third level and a second cutoff on top of it."""
+    mode = get("burley2.mode")
+    t = get("burley2.threshold")
+    c1 = tuple(float(t) * float(s) for s in get("burley2.channel_scale"))
+    levels = (int(get("burley2.base")), int(get("burley2.extra")))
+    cutoffs = (c1,)
+    if mode == "three-level" and int(get("burley2.third")) > 0:
+        t2 = float(get("burley2.threshold2"))
+        levels += (int(get("burley2.third")),)
+        cutoffs += (tuple(t2 * float(s) for s in get("burley2.channel_scale")),)
+    return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"))
+
+
+class BurleyBlurPass(Pass):
+    """One full-screen pass: Golubev's per-pixel Burley estimator (spec §5.3), optionally multi-level
+    (spec §7.5-7.6). ``variant``: "golubev" (``burley.samples``) or "two_level" (``burley2.*``);
+    ``plan`` fixes the levels instead (tests, the bench's pooled estimator)."""
+    view_dependent = True
+    uses_scene = False
+
+    def __init__(self, variant: str = "golubev", plan: Plan | None = None, name: str = "burley_blur"):
+        if variant not in ("golubev", "two_level"):
+            raise ValueError(f"unknown variant {variant!r}")
+        self.variant = variant
+        self.fixed_plan = plan
+        self.name = name
+
+    def _plan(self, get) -> Plan:
+        if self.fixed_plan is not None:
+            return self.fixed_plan
+        return golubev_plan(get) if self.variant == "golubev" else two_level_plan(get)
+
+    def reflect(self, r: Reflection) -> None:
+        for f in PROFILE_FIELDS:
+            r.setting(f"burley.{f}")
+        budget = bool(r.setting("burley.budget"))
+        if self.fixed_plan is None:
+            if self.variant == "golubev":
+                r.setting("burley.samples")
+            else:
+                r.setting("burley2")
+        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
+        r.program("burley_blur", **table_defines(plan, budget))
+        for res in (IRRADIANCE, DEPTH, MASK):
+            r.input(res)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
+        r.output(STATS, TexSpec((w, h), 4, "f2", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        budget = bool(ec.setting("burley.budget"))
+        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
+        prog = ec.program("burley_blur", **table_defines(plan, budget))
+        prof = profile_of(ec.setting)
+        view = ec.view
+        h = ec.setting("render.height")
+        set_uniform(prog, "u_proj_scale", float(view.proj[1, 1]) * h / 2.0)
+        set_uniform(prog, "u_filter_radius", prof.filter_radius)
+        set_uniform(prog, "u_S", tuple(float(v) for v in prof.S))
+        set_uniform(prog, "u_d", prof.d)
+        cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
+        set_uniform(prog, "u_cutoff1", tuple(float(c) for c in cut[0]))
+        set_uniform(prog, "u_cutoff2", tuple(float(c) for c in cut[1]))
+        for unit, (res, sampler) in enumerate(((IRRADIANCE, "irradiance"), (DEPTH, "lin_depth"),
+                                               (MASK, "sss_mask"))):
+            ec.input(res).use(unit)
+            set_uniform(prog, sampler, unit)
+        fbo = ec.framebuffer(BLURRED, STATS)
+        fbo.use()
+        draw_fullscreen(ec, prog)
+
+
+@dataclass(frozen=True)
+class SampleCount:
+    """The frame's figures, summed on the GPU from the statistics texture."""
+    samples: int  # samples taken (every SSS pixel above the cutoff)
+    pixels: int  # SSS pixels blurred
+    triggered: int  # pixels that took at least one extra level
+    skipped: int  # SSS pixels under the pixel cutoff (output = input)
+
+    @property
+    def per_pixel(self) -> float:
+        return self.samples / max(self.pixels, 1)
+
+    def summary(self) -> str:
+        trig = 100.0 * self.triggered / max(self.pixels, 1)
+        return (f"{self.samples:,} samples on the GPU ({self.per_pixel:.2f}/px over {self.pixels:,} px); "
+                f"extra: {trig:.1f} % px; skipped (kernel < 1 px): {self.skipped:,} px")
+
+
+def _split(hi: float, lo: float) -> int:
+    return int(round(hi)) * 4096 + int(round(lo))
+
+
+class BurleyCountPass(Pass):
+    """Sums the blur's statistics texture on the GPU: each row (stage 1, exact in float up to 2^24),
+    then the rows in uint (stage 2, written as 4096-based hi/lo pairs, exact up to 2^36); reads back
+    the two resulting texels and reports the figures (``last`` and the pass report's note)."""
+    name = "burley_count"
+    uses_scene = False
+
+    def __init__(self):
+        self.last: SampleCount | None = None
+
+    def reflect(self, r: Reflection) -> None:
+        r.input(STATS)
+        h = r.setting("render.height")
+        r.setting("render.width")
+        r.program("burley_count", STAGE="1")
+        r.program("burley_count", STAGE="2")
+        r.output(COUNT, TexSpec((2, 1), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        h = ec.setting("render.height")
+        rows = ec.scratch(TexSpec((1, h), 4, "f4", filter="nearest"))
+        p1 = ec.program("burley_count", STAGE="1")
+        ec.input(STATS).use(0)
+        set_uniform(p1, "stats", 0)
+        ec.scratch_framebuffer(rows).use()
+        draw_fullscreen(ec, p1)
+        p2 = ec.program("burley_count", STAGE="2")
+        rows.use(0)
+        set_uniform(p2, "rows", 0)
+        fbo = ec.framebuffer(COUNT)
+        fbo.use()
+        draw_fullscreen(ec, p2)
+        raw = np.frombuffer(ec.output(COUNT).read(), dtype=np.float32).reshape(2, 4)
+        self.last = SampleCount(samples=_split(raw[0, 0], raw[0, 1]), triggered=_split(raw[0, 2], raw[0, 3]),
+                                skipped=_split(raw[1, 0], raw[1, 1]), pixels=_split(raw[1, 2], raw[1, 3]))
+        note = getattr(ec, "note", None)
+        if note is not None:
+            note(self.last.summary(), samples=self.last.samples, pixels=self.last.pixels,
+                 triggered=self.last.triggered, skipped=self.last.skipped)
+
+
+VIEW_MODES = ("image", "extra", "samples")
+
+
+class BurleyViewPass(Pass):
+    """The view modes (``burley.view``): ``extra`` tints the pixels that took extra samples (magenta; a
+    second extra level orange) and those under the pixel cutoff (blue) over the lit image; ``samples``
+    shows samples per pixel as a heat map (black 0 ... white at the plan's maximum)."""
+    name = "burley_view"
+    uses_scene = False
+
+    def reflect(self, r: Reflection) -> None:
+        r.input("lit")
+        r.input(STATS)
+        r.setting("burley.view")
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.program("burley_view")
+        r.output(VIEW, TexSpec((w, h), 4, "f2"))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("burley_view")
+        ec.input("lit").use(0)
+        ec.input(STATS).use(1)
+        set_uniform(prog, "lit", 0)
+        set_uniform(prog, "stats", 1)
+        set_uniform(prog, "u_mode", VIEW_MODES.index(ec.setting("burley.view")))
+        set_uniform(prog, "u_max_samples", 32.0)
+        ec.framebuffer(VIEW).use()
+        draw_fullscreen(ec, prog)
+
+
+class BurleyOutputPass(OutputPass):
+    """The output pass, fed by the view pass when ``burley.view`` is not ``image``."""
+
+    def reflect(self, r: Reflection) -> None:
+        self.source = "lit" if r.setting("burley.view") == "image" else VIEW
+        super().reflect(r)
+
+
+def kernel_pixels(prof: B.Profile, z_mm: float, proj_scale: float) -> float:
+    """The filter radius in pixels at depth z (spec §5.3 step 2-3)."""
+    return prof.filter_radius * proj_scale / max(z_mm, 1e-6)
+
+
+def pixel_cutoff_radius() -> float:
+    """The kernel radius (px) under which a pixel is not blurred: pi r^2 / 4 < 1 -> r < 2/sqrt(pi)."""
+    return 2.0 / math.sqrt(math.pi)
