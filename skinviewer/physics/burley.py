@@ -353,8 +353,9 @@ def contrast_of(kind, in_sum, out_sum, n_in, n_out, lo, hi) -> np.ndarray:
         C = np.abs(L_in - L_out) / np.maximum(L_in + L_out, 1e-6)
         ok = ((n_in > 0) & (n_out > 0))[..., None]
     else:
-        C = (hi - lo) / np.maximum(hi + lo, 1e-6)
         ok = np.isfinite(lo) & np.isfinite(hi)
+        lo, hi = np.where(ok, lo, 0.0), np.where(ok, hi, 0.0)
+        C = (hi - lo) / np.maximum(hi + lo, 1e-6)
     return np.where(ok, np.nan_to_num(C), 0.0)
 
 
