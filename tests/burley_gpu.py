@@ -71,7 +71,6 @@ class Harness:
             self.upload = UploadPass(E, z, mask)
             self.graph = RenderGraph(self.ctx, self.shaders, [self.upload, self.blur, self.count],
                                      [PB.BLURRED, PB.STATS, PB.COUNT])
-            self.graph.fullscreen_vao = lambda prog: self.ctx.vertex_array(prog, [])
         else:
             self.upload.set(E, z, mask)
         v = view_for(w, h)

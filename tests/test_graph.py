@@ -48,9 +48,8 @@ class Fill(Pass):
 
     def execute(self, ec):
         prog = ec.program("fill")
-        prog["u_value"].value = float(ec.setting(self.setting_path))
-        ec.framebuffer(self.out).use()
-        ec.graph.fullscreen_vao(prog).render(vertices=3)
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        ec.draw_fullscreen(prog, self.out)
 
 
 class Add(Pass):
@@ -68,20 +67,13 @@ class Add(Pass):
 
     def execute(self, ec):
         prog = ec.program("add")
-        ec.input(self.a).use(0)
-        ec.input(self.b).use(1)
-        for name, unit in (("a", 0), ("b", 1)):
-            if name in prog:  # the compiler drops unused samplers
-                prog[name].value = unit
-        ec.framebuffer(self.out).use()
-        ec.graph.fullscreen_vao(prog).render(vertices=3)
+        ec.textures(prog, a=self.a, b=self.b)  # a sampler the compiler dropped is skipped
+        ec.draw_fullscreen(prog, self.out)
 
 
 def make_graph(gl_ctx, shader_dir, passes, targets):
     lib = ShaderLibrary(gl_ctx, shader_dir)
     g = RenderGraph(gl_ctx, lib, passes, targets)
-    vaos = {}
-    g.fullscreen_vao = lambda prog: vaos.setdefault(id(prog), gl_ctx.vertex_array(prog, []))
     return g, lib
 
 

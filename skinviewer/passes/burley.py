@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
-from skinviewer.passes.common import draw_fullscreen, set_uniform
 from skinviewer.passes.output import OutputPass
 from skinviewer.physics import burley as B
 
@@ -137,20 +136,14 @@ class BurleyBlurPass(Pass):
         prof = profile_of(ec.setting)
         view = ec.view
         h = ec.setting("render.height")
-        set_uniform(prog, "u_proj_scale", float(view.proj[1, 1]) * h / 2.0)
-        set_uniform(prog, "u_filter_radius", prof.filter_radius)
-        set_uniform(prog, "u_S", tuple(float(v) for v in prof.S))
-        set_uniform(prog, "u_d", prof.d)
         cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
-        set_uniform(prog, "u_cutoff1", tuple(float(c) for c in cut[0]))
-        set_uniform(prog, "u_cutoff2", tuple(float(c) for c in cut[1]))
-        for unit, (res, sampler) in enumerate(((IRRADIANCE, "irradiance"), (DEPTH, "lin_depth"),
-                                               (MASK, "sss_mask"))):
-            ec.input(res).use(unit)
-            set_uniform(prog, sampler, unit)
-        fbo = ec.framebuffer(BLURRED, STATS)
-        fbo.use()
-        draw_fullscreen(ec, prog)
+        ec.uniforms(prog, u_proj_scale=float(view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
+                    u_S=tuple(float(v) for v in prof.S), u_d=prof.d)
+        # the cutoffs are dropped by the compiler in Golubev's variant (no contrast test)
+        ec.set(prog, "u_cutoff1", tuple(float(c) for c in cut[0]), optional=True)
+        ec.set(prog, "u_cutoff2", tuple(float(c) for c in cut[1]), optional=True)
+        ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH, sss_mask=MASK)
+        ec.draw_fullscreen(prog, BLURRED, STATS)
 
 
 @dataclass(frozen=True)
@@ -197,23 +190,16 @@ class BurleyCountPass(Pass):
         h = ec.setting("render.height")
         rows = ec.scratch(TexSpec((1, h), 4, "f4", filter="nearest"))
         p1 = ec.program("burley_count", STAGE="1")
-        ec.input(STATS).use(0)
-        set_uniform(p1, "stats", 0)
-        ec.scratch_framebuffer(rows).use()
-        draw_fullscreen(ec, p1)
+        ec.bind(p1, "stats", STATS)
+        ec.draw_fullscreen(p1, rows)
         p2 = ec.program("burley_count", STAGE="2")
-        rows.use(0)
-        set_uniform(p2, "rows", 0)
-        fbo = ec.framebuffer(COUNT)
-        fbo.use()
-        draw_fullscreen(ec, p2)
+        ec.bind(p2, "rows", rows)
+        ec.draw_fullscreen(p2, COUNT)
         raw = np.frombuffer(ec.output(COUNT).read(), dtype=np.float32).reshape(2, 4)
         self.last = SampleCount(samples=_split(raw[0, 0], raw[0, 1]), triggered=_split(raw[0, 2], raw[0, 3]),
                                 skipped=_split(raw[1, 0], raw[1, 1]), pixels=_split(raw[1, 2], raw[1, 3]))
-        note = getattr(ec, "note", None)
-        if note is not None:
-            note(self.last.summary(), samples=self.last.samples, pixels=self.last.pixels,
-                 triggered=self.last.triggered, skipped=self.last.skipped)
+        ec.note(self.last.summary(), samples=self.last.samples, pixels=self.last.pixels,
+                triggered=self.last.triggered, skipped=self.last.skipped)
 
 
 VIEW_MODES = ("image", "extra", "samples")
@@ -236,14 +222,9 @@ class BurleyViewPass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("burley_view")
-        ec.input("lit").use(0)
-        ec.input(STATS).use(1)
-        set_uniform(prog, "lit", 0)
-        set_uniform(prog, "stats", 1)
-        set_uniform(prog, "u_mode", VIEW_MODES.index(ec.setting("burley.view")))
-        set_uniform(prog, "u_max_samples", 32.0)
-        ec.framebuffer(VIEW).use()
-        draw_fullscreen(ec, prog)
+        ec.textures(prog, lit="lit", stats=STATS)
+        ec.uniforms(prog, u_mode=VIEW_MODES.index(ec.setting("burley.view")), u_max_samples=32.0)
+        ec.draw_fullscreen(prog, VIEW)
 
 
 class BurleyOutputPass(OutputPass):
