@@ -11,6 +11,9 @@ uniform float u_proj_scale;     // pixels per mm at 1 mm depth: proj[1][1] * hei
 uniform float u_filter_radius;  // mm, P^-1(0.997) d
 layout(location = 0) out vec4 o_diffuse;
 layout(location = 1) out vec4 o_stats;  // samples, extra levels, skipped, base contrast
+#if BURLEY_REUSE
+layout(location = 2) out vec4 o_wsum;   // sum w per channel, a = 1 where blurred (for burley_reuse.frag)
+#endif
 
 bool burley_fetch(ivec2 q, out vec3 E, out float z) {
     E = vec3(0.0);
@@ -31,6 +34,9 @@ void main() {
     vec4 c = texelFetch(irradiance, p, 0);
     o_diffuse = c;
     o_stats = vec4(0.0, 0.0, 0.0, -1.0);
+#if BURLEY_REUSE
+    o_wsum = vec4(0.0);
+#endif
     if (texelFetch(sss_mask, p, 0).r <= 0.5)
         return;
     float zc = texelFetch(lin_depth, p, 0).r;
@@ -42,7 +48,11 @@ void main() {
         return;
     }
     float count, level, cmax;
-    vec3 e = burley_sss(p, zc, ppm, n_avail, count, level, cmax);
+    vec3 ws;
+    vec3 e = burley_sss(p, zc, ppm, n_avail, count, level, cmax, ws);
     o_diffuse = vec4(finite3(e), c.a);
+#if BURLEY_REUSE
+    o_wsum = vec4(finite3(ws), 1.0);
+#endif
     o_stats = vec4(count, level, 0.0, cmax);
 }

@@ -18,6 +18,7 @@ uniform vec3 u_S;         // S_c = 1/d_c per channel, 1/mm
 uniform float u_d;        // d = max_c d_c, mm (the channel that is importance-sampled)
 uniform vec3 u_cutoff1;   // trigger level 1 iff C_c > cutoff_c for any channel (thesis: 0.25)
 uniform vec3 u_cutoff2;   // the same for level 2
+uniform uint u_seed;      // added to the rotation hash (0; another value decorrelates a reference image)
 
 // PCG-RXS-M-XS (Jarzynski & Olano 2020): a stable per-pixel hash for the rotation phase
 uint burley_pcg(uint v) {
@@ -28,7 +29,7 @@ uint burley_pcg(uint v) {
 
 // psi = 2 pi hash(pixel, bits of the linear depth) / 2^32 (spec §5.3 step 4)
 float burley_phase(ivec2 p, float z) {
-    uint h = burley_pcg(uint(p.x) + burley_pcg(uint(p.y) + burley_pcg(floatBitsToUint(z))));
+    uint h = burley_pcg(uint(p.x) + burley_pcg(uint(p.y) + burley_pcg(floatBitsToUint(z) + u_seed)));
     return 6.2831855 * (float(h) * 2.3283064e-10);
 }
 
@@ -113,7 +114,8 @@ const vec2 SET2_CS[N_SET2] = SET2_CS_TABLE;
 
 // The whole per-pixel estimator: returns sum w E / sum w; count = samples taken, level = extra levels taken,
 // cmax = the largest channel of the base contrast (-1 when no contrast was computed).
-vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, out float level, out float cmax) {
+vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, out float level, out float cmax,
+                out vec3 wsum) {
     BurleyState st = burley_state();
     float psi = burley_phase(p, zc);
     vec2 rot = vec2(cos(psi), sin(psi));
@@ -133,6 +135,7 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
             burley_take(st, p, zc, ppm, rot, x, rcp, vec2(cos(phi), sin(phi)), 0);
         }
         count = st.count;
+        wsum = st.wsum;
         return st.acc / max(st.wsum, vec3(1.17549435e-38));
     }
 #endif
@@ -170,5 +173,6 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
     }
 #endif
     count = st.count;
+    wsum = st.wsum;
     return st.acc / max(st.wsum, vec3(1.17549435e-38));
 }

@@ -247,9 +247,10 @@ class BurleySettings(_Model):
 class Burley2Settings(_Model):
     """The thesis's contrast-driven two-level sampling, "Golubev Plus" (seed 001 ch. 4, Algorithm 1,
     eq. 4.1-4.2; spec §7). Profile and cutoff/budget from ``burley``."""
-    mode: Literal["thesis", "three-level"] = Field(
+    mode: Literal["thesis", "three-level", "nested"] = Field(
         "thesis", description="thesis: base + extra (Algorithm 1); three-level: a third set when the contrast "
-                              "exceeds threshold2 too")
+                              "exceeds threshold2 too; nested: the base set is a subset of one (base + extra)-sample "
+                              "Golubev set and the extra level completes it ((base+extra)/base odd)")
     base: int = Field(12, ge=1, le=64, description="base samples (thesis: 12)")
     extra: int = Field(10, ge=1, le=64, description="extra samples where the contrast triggers (thesis: 10)")
     third: int = Field(0, ge=0, le=64, description="three-level mode: samples of the third set")
@@ -263,6 +264,10 @@ class Burley2Settings(_Model):
                                    "or the nearer half of the samples")
     contrast: Literal["rings", "minmax"] = Field(
         "rings", description="rings: eq. 4.1 between ring means; minmax: (max-min)/(max+min) of the samples")
+    reuse: int = Field(0, ge=0, le=2, description="neighbourhood reuse radius, px (0 off): pool the weighted sums "
+                                                  "of the (2R+1)^2 pixels around (each rotated its disk differently)")
+    reuse_min_radius: float = Field(12.0, ge=0.0, le=1000.0,
+                                    description="reuse only where the kernel radius is at least this many px")
 
     @field_validator("channel_scale")
     @classmethod
@@ -270,6 +275,14 @@ class Burley2Settings(_Model):
         if any((not math.isfinite(c)) or c < 0 for c in v):
             raise ValueError("channel scales must be finite and >= 0")
         return v
+
+    @model_validator(mode="after")
+    def _nested(self) -> "Burley2Settings":
+        total = self.base + self.extra
+        if self.mode == "nested" and (total % self.base or (total // self.base) % 2 == 0):
+            raise ValueError(f"nested mode needs (base + extra) / base odd, e.g. 6 + 24 or 10 + 20 (got {self.base} + "
+                             f"{self.extra})")
+        return self
 
 
 class Settings(_Model):

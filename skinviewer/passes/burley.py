@@ -25,6 +25,8 @@ MASK = "ss_mask"
 IRRADIANCE_DTYPE = "f4"  # the blurred output has the irradiance's format: skipped pixels copy it bit for bit
 
 BLURRED = "burley_diffuse"
+PARTIAL = "burley_partial"  # the blur's own estimate when a reuse pass pools neighbours into BLURRED
+WSUM = "burley_wsum"
 STATS = "burley_stats"
 COUNT = "burley_count"
 VIEW = "burley_view"
@@ -45,10 +47,14 @@ class Plan:
     split: str = "half-radius"
     contrast: str = "rings"
     always: bool = False
+    nested: bool = False
+    seed: int = 0
+    reuse: int = 0  # neighbourhood reuse radius in px (0: off; BurleyReusePass)
+    reuse_min_radius: float = 12.0  # px: narrower kernels keep their own estimate
 
     def sampling(self, budget: bool) -> B.Sampling:
         cut = tuple(-1.0 if self.always else c for c in self.cutoffs)
-        return B.Sampling(self.levels, cut, self.split, self.contrast, budget)
+        return B.Sampling(self.levels, cut, self.split, self.contrast, budget, self.nested, self.seed)
 
 
 def _floats(v) -> str:
@@ -61,7 +67,8 @@ def table_defines(plan: Plan, budget: bool) -> dict[str, str]:
     defs = {"N_SET0": str(sets[0].n), "N_SET1": "0", "N_SET2": "0",
             "N_INNER": str(int(np.count_nonzero(sets[0].inner))),
             "CONTRAST_MINMAX": "1" if plan.contrast == "minmax" else "0",
-            "BURLEY_BUDGET": "1" if budget else "0", "BURLEY_ALWAYS": "1" if plan.always else "0"}
+            "BURLEY_BUDGET": "1" if budget else "0", "BURLEY_ALWAYS": "1" if plan.always else "0",
+            "BURLEY_REUSE": "1" if plan.reuse else "0"}
     if not np.all(sets[0].inner[:np.count_nonzero(sets[0].inner)]):
         raise ValueError("inner ring must be the first samples by radius")
     for k, s in enumerate(sets):
@@ -90,7 +97,8 @@ def two_level_plan(get) -> Plan:
         t2 = float(get("burley2.threshold2"))
         levels += (int(get("burley2.third")),)
         cutoffs += (tuple(t2 * float(s) for s in get("burley2.channel_scale")),)
-    return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"))
+    return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"), nested=mode == "nested",
+                reuse=int(get("burley2.reuse")), reuse_min_radius=float(get("burley2.reuse_min_radius")))
 
 
 class BurleyBlurPass(Pass):
@@ -126,8 +134,10 @@ class BurleyBlurPass(Pass):
         for res in (IRRADIANCE, DEPTH, MASK):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
-        r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
+        r.output(PARTIAL if plan.reuse else BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
         r.output(STATS, TexSpec((w, h), 4, "f2", filter="nearest"))
+        if plan.reuse:
+            r.output(WSUM, TexSpec((w, h), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         budget = bool(ec.setting("burley.budget"))
@@ -138,12 +148,50 @@ class BurleyBlurPass(Pass):
         h = ec.setting("render.height")
         cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
         ec.uniforms(prog, u_proj_scale=float(view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
-                    u_S=tuple(float(v) for v in prof.S), u_d=prof.d)
+                    u_S=tuple(float(v) for v in prof.S), u_d=prof.d, u_seed=int(plan.seed))
         # the cutoffs are dropped by the compiler in Golubev's variant (no contrast test)
         ec.set(prog, "u_cutoff1", tuple(float(c) for c in cut[0]), optional=True)
         ec.set(prog, "u_cutoff2", tuple(float(c) for c in cut[1]), optional=True)
         ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH, sss_mask=MASK)
-        ec.draw_fullscreen(prog, BLURRED, STATS)
+        ec.draw_fullscreen(prog, *((PARTIAL, STATS, WSUM) if plan.reuse else (BLURRED, STATS)))
+
+
+class BurleyReusePass(Pass):
+    """Neighbourhood reuse (shaders/burley_reuse.frag): pools the blur's per-pixel weighted sums over a
+    (2R+1)^2 tent where the kernel is wide; declares nothing (and is pruned) when the plan has no reuse."""
+    view_dependent = True
+    uses_scene = False
+    name = "burley_reuse"
+
+    def __init__(self, plan: Plan | None = None):
+        self.fixed_plan = plan
+
+    def _plan(self, get) -> Plan:
+        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(get)
+
+    def reflect(self, r: Reflection) -> None:
+        if self.fixed_plan is None:
+            if r.peek("burley2.reuse") == 0:
+                return
+            r.setting("burley2")
+        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
+        for f in PROFILE_FIELDS:
+            r.setting(f"burley.{f}")
+        r.program("burley_reuse", REUSE_R=str(plan.reuse))
+        for res in (PARTIAL, WSUM, DEPTH):
+            r.input(res)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
+
+    def execute(self, ec) -> None:
+        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
+        prog = ec.program("burley_reuse", REUSE_R=str(plan.reuse))
+        prof = profile_of(ec.setting)
+        h = ec.setting("render.height")
+        ec.uniforms(prog, u_proj_scale=float(ec.view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
+                    u_reuse_dz=0.05 * prof.filter_radius, u_min_radius=float(plan.reuse_min_radius))
+        ec.textures(prog, partial=PARTIAL, wsum=WSUM, lin_depth=DEPTH)
+        ec.draw_fullscreen(prog, BLURRED)
 
 
 @dataclass(frozen=True)

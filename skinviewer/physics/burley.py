@@ -93,6 +93,22 @@ def ring_flags(x: np.ndarray, split: str = "half-radius") -> np.ndarray:
     raise ValueError(f"unknown ring split {split!r}; known: {', '.join(SPLITS)}")
 
 
+def nested_sets(n_base: int, n_total: int, split: str = "half-radius") -> tuple[SampleSet, SampleSet]:
+    """A base set that is a subset of Golubev's n_total-sample set, and the rest of that set (a variant of
+    §7.6: the extra level *completes* one stratified set instead of pooling two unrelated ones). With
+    m = n_total / n_base odd, entries m k + (m - 1)/2 of the n_total set have u = (k + 0.5)/n_base: the
+    base set keeps Golubev's n_base radii (with the directions of the bigger set)."""
+    m, r = divmod(n_total, n_base)
+    if r or m % 2 == 0 or m < 3:
+        raise ValueError(f"a nested base needs n_total / n_base odd and >= 3 (got {n_total}/{n_base})")
+    full = sample_set(n_total)
+    pick = np.arange(n_base) * m + (m - 1) // 2
+    rest = np.setdiff1d(np.arange(n_total), pick)
+    base = SampleSet(n_base, full.x[pick], full.rcp_pdf[pick], full.phi[pick], ring_flags(full.x[pick], split))
+    extra = SampleSet(len(rest), full.x[rest], full.rcp_pdf[rest], full.phi[rest], np.zeros(len(rest), bool))
+    return base, extra
+
+
 def sample_set(n: int, phase: float = 0.0, split: str = "half-radius") -> SampleSet:
     """Golubev's table of n samples: u_i = (i + 0.5)/n, x_i = P^-1(u_i), phi_i = 2 pi frac(i/golden) + phase."""
     if not 1 <= n <= 1024:
@@ -180,12 +196,12 @@ def pcg_hash(v: np.ndarray) -> np.ndarray:
         return (word >> np.uint32(22)) ^ word
 
 
-def rotation_phase(px: np.ndarray, py: np.ndarray, z: np.ndarray) -> np.ndarray:
+def rotation_phase(px: np.ndarray, py: np.ndarray, z: np.ndarray, seed: int = 0) -> np.ndarray:
     """psi = 2 pi hash(x, y, bits of the linear depth) / 2^32, float32 like the GLSL (stable while the
     camera and scene are static, spec §5.3 step 4)."""
     zb = np.asarray(z, dtype=np.float32).view(np.uint32)
     with np.errstate(over="ignore"):
-        h = pcg_hash(np.asarray(px, np.uint32) + pcg_hash(np.asarray(py, np.uint32) + pcg_hash(zb)))
+        h = pcg_hash(np.asarray(px, np.uint32) + pcg_hash(np.asarray(py, np.uint32) + pcg_hash(zb + np.uint32(seed))))
     return np.float32(6.2831855) * (h.astype(np.float32) * np.float32(2.3283064e-10))
 
 
@@ -213,6 +229,8 @@ class Sampling:
     split: str = "half-radius"
     contrast: str = "rings"
     budget: bool = False
+    nested: bool = False  # two levels that complete one stratified set of levels[0] + levels[1] (nested_sets)
+    seed: int = 0  # added to the rotation hash (a decorrelated reference image)
 
     def __post_init__(self):
         if len(self.cutoffs) != len(self.levels) - 1:
@@ -222,6 +240,10 @@ class Sampling:
         ring_flags(np.ones(2), self.split)
 
     def sets(self) -> list[SampleSet]:
+        if self.nested:
+            if len(self.levels) != 2:
+                raise ValueError("nested sampling has exactly two levels")
+            return list(nested_sets(self.levels[0], sum(self.levels), self.split))
         return [sample_set(n, EXTRA_PHASE * k, self.split) for k, n in enumerate(self.levels)]
 
     @property
@@ -254,7 +276,7 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
     sss = np.asarray(mask) > 0.5
     z = np.asarray(z, dtype=np.float32)
     ys, xs = np.mgrid[0:H, 0:W]
-    psi = rotation_phase(xs, ys, z).astype(np.float64)
+    psi = rotation_phase(xs, ys, z, sampling.seed).astype(np.float64)
     cpsi, spsi = np.cos(psi), np.sin(psi)
     ppm = pixel_scale(z.astype(np.float64), proj_scale)
     d = prof.d
