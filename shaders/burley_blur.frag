@@ -4,9 +4,8 @@
 // buffers and applies the pixel cutoff: a kernel under floor(pi (radius px)^2 / 4) < 1 sample leaves the
 // irradiance as it is, bit for bit (spec §5.3 step 3, T4.5).
 #include "lib/color.glsl"
-uniform sampler2D irradiance;   // diffuse irradiance, linear (texturing mode already applied)
-uniform sampler2D lin_depth;    // linear view depth, mm
-uniform sampler2D sss_mask;     // > 0.5: an SSS pixel
+uniform sampler2D irradiance;   // ss_diffuse: rgb diffuse irradiance (texturing applied), a > 0.5: SSS pixel
+uniform sampler2D lin_depth;    // ss_depth: r = linear view depth, mm
 uniform float u_proj_scale;     // pixels per mm at 1 mm depth: proj[1][1] * height / 2
 uniform float u_filter_radius;  // mm, P^-1(0.997) d
 layout(location = 0) out vec4 o_diffuse;
@@ -20,9 +19,10 @@ bool burley_fetch(ivec2 q, out vec3 E, out float z) {
     z = 0.0;
     if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, textureSize(irradiance, 0))))
         return false;
-    if (texelFetch(sss_mask, q, 0).r <= 0.5)
+    vec4 e = texelFetch(irradiance, q, 0);
+    if (!(e.a > 0.5))
         return false;
-    E = texelFetch(irradiance, q, 0).rgb;
+    E = e.rgb;
     z = texelFetch(lin_depth, q, 0).r;
     return true;
 }
@@ -37,7 +37,7 @@ void main() {
 #if BURLEY_REUSE
     o_wsum = vec4(0.0);
 #endif
-    if (texelFetch(sss_mask, p, 0).r <= 0.5)
+    if (!(c.a > 0.5))
         return;
     float zc = texelFetch(lin_depth, p, 0).r;
     float ppm = u_proj_scale / max(zc, 1e-6);

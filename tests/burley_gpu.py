@@ -21,21 +21,19 @@ class UploadPass(Pass):
         self.set(E, z, mask)
 
     def set(self, E, z, mask):
-        self.E = np.ascontiguousarray(np.concatenate([E, np.ones(E.shape[:2] + (1,))], -1), np.float32)
-        self.z = np.ascontiguousarray(z, np.float32)
-        self.mask = np.ascontiguousarray(mask, np.float32)
+        self.E = np.ascontiguousarray(np.concatenate([E, np.asarray(mask)[..., None]], -1), np.float32)
+        z = np.asarray(z, np.float32)
+        self.z = np.ascontiguousarray(np.stack([z, 0 * z, 0 * z, np.ones_like(z)], -1), np.float32)
         self.version = getattr(self, "version", 0) + 1
 
     def reflect(self, r):
-        h, w = self.z.shape
+        h, w = self.z.shape[:2]
         r.output(PB.IRRADIANCE, TexSpec((w, h), 4, PB.IRRADIANCE_DTYPE, filter="nearest"))
-        r.output(PB.DEPTH, TexSpec((w, h), 1, "f4", filter="nearest"))
-        r.output(PB.MASK, TexSpec((w, h), 1, "f4", filter="nearest"))
+        r.output(PB.DEPTH, TexSpec((w, h), 4, "f4", filter="nearest"))
 
     def execute(self, ec):
         ec.output(PB.IRRADIANCE).write(self.E.tobytes())
         ec.output(PB.DEPTH).write(self.z.tobytes())
-        ec.output(PB.MASK).write(self.mask.tobytes())
 
 
 FOV = 30.0

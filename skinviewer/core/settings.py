@@ -285,9 +285,81 @@ class Burley2Settings(_Model):
         return self
 
 
+class ScreenSettings(_Model):
+    """The shared screen-space framework (seed 001 §3.1, §3.6; spec §2): what the lighting pass writes."""
+    texturing: Literal["post", "pre", "pre-post"] = Field(
+        "pre-post", description="seed 001 §3.6: post = blur E then x albedo; pre = blur E x albedo; "
+                                "pre-post = x albedo^mix before the blur and x albedo^(1-mix) after")
+    mix: float = Field(0.5, ge=0.0, le=1.0, description="pre-post texturing: the albedo exponent f applied before the blur")
+    non_skin_regions: list[str] = Field(
+        default_factory=list, description="regions (names in REGIONS) the SSS mask excludes: no blur there and no "
+                                          "bleeding into them; a mesh without a region map is all skin")
+
+    @field_validator("non_skin_regions")
+    @classmethod
+    def _regions(cls, v: list[str]) -> list[str]:
+        bad = [k for k in v if k not in REGIONS]
+        if bad:
+            raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
+        return v
+
+
+class TransmittanceSettings(_Model):
+    """Jimenez et al. 2010 translucency from shadow-map thickness (seed 001 §3.5, eq. 3.14-3.18; spec §6):
+    added to the diffuse irradiance of every screen-space technique before its blur."""
+    enabled: bool = True
+    translucency: float = Field(
+        0.83, ge=0.0, le=0.999, description="[SEP] translucency: profile distance = 2.75 (1 - t) x thickness (mm)")
+    form: Literal["printed", "exact"] = Field(
+        "printed", description="printed: exp(-d^2/v_i) (eq. 3.18, [SEP]); exact: exp(-d^2/(2 v_i))")
+    wrap: float = Field(0.3, ge=0.0, le=1.0, description="[SEP] wrap: T(d) x saturate(wrap + L.(-N)) (0: eq. 3.15)")
+
+
+def _odd(v: int) -> int:
+    if v % 2 == 0:
+        raise ValueError("must be odd (a centre tap)")
+    return v
+
+
+class SsssSettings(_Model):
+    """Jimenez et al. 2009 screen-space Gaussians (seed 001 §3.2, eq. 3.2; spec §3): one separable blur per
+    Gaussian of ``deon.gaussians``, incremental, width s = alpha / (d + beta |grad d|)."""
+    alpha: float = Field(11.0, gt=0.0, le=1000.0, description="global SSS level (eq. 3.2); 11 = the true projection")
+    beta: float = Field(800.0, ge=0.0, le=1e5, description="how strongly the depth gradient shrinks the kernel (eq. 3.2)")
+    taps: int = Field(7, ge=3, le=63, description="taps per 1-D pass over +-3 sigma (7: d'Eon's kernel)")
+    gaussians: int = Field(8, ge=1, le=8, description="blur at most this many Gaussians (the rest: a 1-Gaussian refit is "
+                                                       "not done; their weight goes to the widest one kept)")
+
+    _odd_taps = field_validator("taps")(_odd)
+
+
+class SeparableSettings(_Model):
+    """Jimenez et al. 2015 separable SSS (seed 001 §3.3; spec §4, [SEP] calculateKernel/SSSSBlurPS)."""
+    taps: int = Field(17, ge=3, le=63, description="kernel samples (presets 11/17/25)")
+    strength: Vec3 = Field((0.48, 0.41, 0.28), description="per-channel lerp identity -> blur ([SEP] demo)")
+    falloff: Vec3 = Field((1.0, 0.37, 0.30), description="per-channel profile width ([SEP] demo)")
+    width_mm: float = Field(3.0, gt=0.0, le=100.0, description="sssWidth in mm: the kernel's +-3 profile mm span this "
+                                                                "(3: the d'Eon profile at its true size)")
+    follow_surface: bool = True
+    follow_surface_mm: float = Field(
+        4.0, gt=0.0, le=1000.0, description="depth difference (mm) at which a tap is fully replaced by the centre colour")
+    rotation: bool = Field(True, description="per-pixel random rotation of the inner taps (seed 001 §3.3.4)")
+    rotation_fraction: float = Field(
+        0.1, ge=0.0, le=1.0, description="rotate taps within this fraction of the kernel width (0.1; 0.3 close-ups)")
+
+    _odd_taps = field_validator("taps")(_odd)
+
+    @field_validator("strength", "falloff")
+    @classmethod
+    def _unit(cls, v: Vec3) -> Vec3:
+        if any((not math.isfinite(c)) or c < 0 or c > 10 for c in v):
+            raise ValueError("components must be finite and in [0, 10]")
+        return v
+
+
 class Settings(_Model):
     schema_version: int = SCHEMA_VERSION
-    technique: Literal["phong", "gosselin", "deon", "burley", "burley2"] = "deon"
+    technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2"] = "deon"
     scene: SceneSettings = Field(default_factory=SceneSettings)
     camera: CameraSettings = Field(default_factory=CameraSettings)
     render: RenderSettings = Field(default_factory=RenderSettings)
@@ -303,6 +375,10 @@ class Settings(_Model):
     specular: SpecularSettings = Field(default_factory=SpecularSettings)
     gosselin: GosselinSettings = Field(default_factory=GosselinSettings)
     deon: DeonSettings = Field(default_factory=DeonSettings)
+    screen: ScreenSettings = Field(default_factory=ScreenSettings)
+    transmittance: TransmittanceSettings = Field(default_factory=TransmittanceSettings)
+    ssss: SsssSettings = Field(default_factory=SsssSettings)
+    separable: SeparableSettings = Field(default_factory=SeparableSettings)
     burley: BurleySettings = Field(default_factory=BurleySettings)
     burley2: Burley2Settings = Field(default_factory=Burley2Settings)
 

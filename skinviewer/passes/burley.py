@@ -16,12 +16,12 @@ import numpy as np
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.output import OutputPass
+from skinviewer.passes.screen_space import DEPTH, DIFFUSE
 from skinviewer.physics import burley as B
 
-# the screen-space framework's resources (skinviewer/passes/screen_space)
-IRRADIANCE = "ss_diffuse"
-DEPTH = "ss_depth"
-MASK = "ss_mask"
+# the screen-space framework's resources (skinviewer/passes/screen_space): ss_diffuse rgb irradiance,
+# a = SSS mask; ss_depth r = linear depth in mm
+IRRADIANCE = DIFFUSE
 IRRADIANCE_DTYPE = "f4"  # the blurred output has the irradiance's format: skipped pixels copy it bit for bit
 
 BLURRED = "burley_diffuse"
@@ -131,7 +131,7 @@ class BurleyBlurPass(Pass):
                 r.setting("burley2")
         plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
         r.program("burley_blur", **table_defines(plan, budget))
-        for res in (IRRADIANCE, DEPTH, MASK):
+        for res in (IRRADIANCE, DEPTH):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
         r.output(PARTIAL if plan.reuse else BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
@@ -152,7 +152,7 @@ class BurleyBlurPass(Pass):
         # the cutoffs are dropped by the compiler in Golubev's variant (no contrast test)
         ec.set(prog, "u_cutoff1", tuple(float(c) for c in cut[0]), optional=True)
         ec.set(prog, "u_cutoff2", tuple(float(c) for c in cut[1]), optional=True)
-        ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH, sss_mask=MASK)
+        ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH)
         ec.draw_fullscreen(prog, *((PARTIAL, STATS, WSUM) if plan.reuse else (BLURRED, STATS)))
 
 

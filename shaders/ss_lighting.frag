@@ -1,0 +1,103 @@
+#version 330 core
+// Screen-space lighting (seed 001 §3.1-3.2, §3.5-3.6; spec §2, §6), four targets:
+//   0 ss_diffuse  rgb = sum_lights Lc (N.L) fac_shadow x albedo^f (+ transmittance), a = SSS mask
+//   1 ss_specular rgb = sum_lights KS(N, L, V) Lc fac_shadow (seed 000 eq. 35), a = coverage 1
+//   2 ss_depth    r = linear view depth mm, gb = |ddx|, |ddy| of it, a = coverage 1
+//   3 ss_albedo   rgb = albedo^(1-f) (the combine pass's post-scatter factor), a = 1
+// f: 0 post-scatter, 1 pre-scatter, mix pre-and-post (seed 001 §3.6).
+#include "lib/color.glsl"
+#include "lib/lights.glsl"
+#include "lib/surface.glsl"
+#include "lib/specular_params.glsl"
+#include "lib/screen_space.glsl"
+#define MAX_TG 8
+in vec3 v_position;
+in vec3 v_normal;
+in vec2 v_uv;
+in vec4 v_tangent;
+in float v_depth_mm;
+uniform vec3 u_eye;
+uniform float u_mix;                  // f
+uniform float u_region_sss[N_REGIONS];  // 1 skin, 0 not
+uniform int u_has_regions;
+uniform float u_mm_per_unit;
+// Jimenez 2010 transmittance (seed 001 eq. 3.18, spec §6.2)
+uniform int u_tr;
+uniform float u_tr_scale;            // profile distance per mm of thickness
+uniform float u_tr_div;              // 1: exp(-d^2/v) printed, 2: exact
+uniform float u_tr_wrap;
+uniform int u_tr_count;
+uniform vec3 u_tr_w[MAX_TG];
+uniform float u_tr_v[MAX_TG];
+uniform mat4 u_light_matrix_inv[MAX_LIGHTS];
+layout(location = 0) out vec4 o_diffuse;
+layout(location = 1) out vec4 o_specular;
+layout(location = 2) out vec4 o_depth;
+layout(location = 3) out vec4 o_albedo;
+
+vec3 transmittance_profile(float d) {  // T(d) = sum_i w_i exp(-d^2 / (div v_i)), T(0) = sum w_i
+    vec3 t = vec3(0.0);
+    for (int i = 0; i < MAX_TG; ++i) {
+        if (i >= u_tr_count) break;
+        float v = u_tr_v[i];
+        t += u_tr_w[i] * (v > 0.0 ? exp(-d * d / (u_tr_div * v)) : (d > 0.0 ? 0.0 : 1.0));
+    }
+    return t;
+}
+
+float shadow_sample(int i, vec2 c) {
+    if (i == 0) return texture(shadow_map0, c).r;
+    if (i == 1) return texture(shadow_map1, c).r;
+    if (i == 2) return texture(shadow_map2, c).r;
+    return texture(shadow_map3, c).r;
+}
+
+// Thickness (mm) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
+// map's nearest surface A unprojected, distance to the shrunk point (spec §6.2 step 2-3).
+float thickness_mm(int i, vec3 P, vec3 Ng) {
+    vec3 Ps = P - Ng * u_shadow_texel[i];
+    vec4 p = u_light_matrix[i] * vec4(Ps, 1.0);
+    if (!(p.w > 0.0)) return 1e4;
+    vec3 c = p.xyz / p.w * 0.5 + 0.5;
+    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return 1e4;
+    float ds = shadow_sample(i, c.xy);
+    if (ds >= 1.0) return 1e4;
+    vec4 a = u_light_matrix_inv[i] * vec4(c.xy * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
+    if (!(abs(a.w) > 1e-30)) return 1e4;
+    return length(a.xyz / a.w - Ps) * u_mm_per_unit;
+}
+
+void main() {
+    vec3 Ng = normalize(v_normal);
+    vec3 N = surface_normal(v_normal, v_tangent, v_uv);
+    vec3 V = normalize(u_eye - v_position);
+    if (dot(N, V) < 0.0) N = -N;   // two-sided (open meshes)
+    if (dot(Ng, V) < 0.0) Ng = -Ng;
+    vec3 A = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
+    SpecParams sp = specular_params(v_uv);
+    vec3 E = vec3(0.0), spec = vec3(0.0), T = vec3(0.0);
+    for (int i = 0; i < u_light_count; ++i) {
+        vec3 L;
+        vec3 Lc = light_incident(i, v_position, L);
+        float ndl = dot(N, L);
+        if (ndl > 0.0) {
+            float s = shadow_factor(i, v_position, Ng);
+            E += Lc * (ndl * s);
+            spec += Lc * (surface_ks(N, L, V, sp) * s);
+        }
+        if (u_tr != 0 && u_light_shadowed[i] != 0) {
+            // eq. 3.15 with [SEP]'s wrap: back-side irradiance through the inverted vertex normal
+            float back = clamp(u_tr_wrap + dot(L, -Ng), 0.0, 1.0);
+            if (back > 0.0) T += Lc * back * transmittance_profile(thickness_mm(i, v_position, Ng) * u_tr_scale);
+        }
+    }
+    float mask = 1.0;
+    if (u_has_regions != 0) mask = u_region_sss[region_at(ivec2(v_uv * vec2(textureSize(region_map, 0))))];
+    // non-skin pixels scatter nothing: the transmittance belongs to skin
+    vec3 diffuse = (E + mask * T) * ss_safe_pow(A, u_mix);
+    o_diffuse = ss_finite4(vec4(diffuse, mask));
+    o_specular = ss_finite4(vec4(spec, 1.0));
+    float d = v_depth_mm;
+    o_depth = ss_finite4(vec4(d, abs(dFdx(d)), abs(dFdy(d)), 1.0));
+    o_albedo = ss_finite4(vec4(ss_safe_pow(A, 1.0 - u_mix), 1.0));
+}
