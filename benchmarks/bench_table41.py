@@ -65,11 +65,17 @@ METHODS: dict[str, Plan] = {
     "golubev-12": Plan((12,)),
 }
 VARIANTS: dict[str, Plan] = {
-    # neighbourhood reuse: each pixel pools the weighted sums of its 3x3 neighbours (differently rotated
-    # disks) where the kernel is >= 12 px wide; two levels 8 + 14 on the thesis's ring contrast
+    # spec §7.9 beyond the thesis. "r": neighbourhood reuse (shaders/burley_reuse.frag): each pixel pools the
+    # weighted sums of its 3x3 neighbours (whose disks are rotated differently) where the kernel is >= 12 px
+    # wide and the neighbour's depth is within 5 % of the filter radius
     "beyond-8+14r": Plan((8, 14), (c3(0.25),), reuse=1),
     "beyond-6+10r": Plan((6, 10), (c3(0.25),), reuse=1),
-    "beyond-8+14r4": Plan((8, 14), (c3(0.25),), reuse=1, reuse_min_radius=4.0),
+    "beyond-6+16r": Plan((6, 16), (c3(0.25),), reuse=1),
+    # equal-count ring split (6 inner / 6 outer: the outer mean no longer rests on 2 samples, spec §7.3)
+    "beyond-12+10eq": Plan((12, 10), (c3(0.25),), split="equal-count"),
+    # nested: the 6 base samples are a subset of the 30-sample set and the extra level completes it (then a
+    # triggered pixel IS the 30-sample estimate: its DSSIM/30 flatters it, DSSIM/ref does not)
+    "beyond-nested6+24mm": Plan((6, 24), (c3(0.3),), contrast="minmax", nested=True, reuse=1),
 }
 REFS: dict[str, Plan] = {REFERENCE: Plan((30,)), TRUTH: Plan((128,), seed=7)}
 
@@ -114,11 +120,15 @@ def main(argv=None) -> int:
     ap.add_argument("--size", default="640x360", help="render size WxH")
     ap.add_argument("--quick", action="store_true", help="one angle, 320x180, no 128-sample reference")
     ap.add_argument("--only", help="comma-separated method names (besides the baseline and references)")
+    ap.add_argument("--angles", help="comma-separated yaw angles (default -30,0,30)")
+    ap.add_argument("--no-truth", action="store_true", help="skip the 128-sample reference")
     args = ap.parse_args(argv)
     w, h = (int(v) for v in args.size.lower().split("x"))
     if args.quick:
         w, h = 320, 180
     angles = (0.0,) if args.quick else ANGLES
+    if args.angles:
+        angles = tuple(float(a) for a in args.angles.split(","))
     base = {"render.width": w, "render.height": h, "burley.budget": False, "scene.head_detail": 1,
             "shadow.map_size": 1024}
     if args.mesh:
@@ -131,7 +141,7 @@ def main(argv=None) -> int:
     if args.only:
         keep = set(args.only.split(","))
         methods = {k: v for k, v in methods.items() if k == BASELINE or k in keep}
-    refs = {REFERENCE: REFS[REFERENCE]} if args.quick else REFS
+    refs = {REFERENCE: REFS[REFERENCE]} if args.quick or args.no_truth else REFS
     graphs = {k: make_graph(r, p) for k, p in {**methods, **refs}.items()}
     scene = r.ensure_scene(s0)
     fd = framing_distance(scene.gpu.radius, s0.camera.fov_y)

@@ -19,6 +19,7 @@ void main() {
     f_color = own;
     if (ws.a < 0.5)
         return;
+
     float zc = texelFetch(lin_depth, p, 0).r;
     if (u_filter_radius * u_proj_scale / max(zc, 1e-6) < u_min_radius)
         return;

@@ -51,6 +51,7 @@ class Plan:
     seed: int = 0
     reuse: int = 0  # neighbourhood reuse radius in px (0: off; BurleyReusePass)
     reuse_min_radius: float = 12.0  # px: narrower kernels keep their own estimate
+    reuse_dz: float = 0.05  # neighbours further than this fraction of the filter radius in depth are not pooled
 
     def sampling(self, budget: bool) -> B.Sampling:
         cut = tuple(-1.0 if self.always else c for c in self.cutoffs)
@@ -169,6 +170,10 @@ class BurleyReusePass(Pass):
     def _plan(self, get) -> Plan:
         return self.fixed_plan if self.fixed_plan is not None else two_level_plan(get)
 
+    @staticmethod
+    def _defines(plan: Plan) -> dict[str, str]:
+        return {"REUSE_R": str(plan.reuse)}
+
     def reflect(self, r: Reflection) -> None:
         if self.fixed_plan is None:
             if r.peek("burley2.reuse") == 0:
@@ -177,7 +182,7 @@ class BurleyReusePass(Pass):
         plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
         for f in PROFILE_FIELDS:
             r.setting(f"burley.{f}")
-        r.program("burley_reuse", REUSE_R=str(plan.reuse))
+        r.program("burley_reuse", **self._defines(plan))
         for res in (PARTIAL, WSUM, DEPTH):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
@@ -185,11 +190,11 @@ class BurleyReusePass(Pass):
 
     def execute(self, ec) -> None:
         plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
-        prog = ec.program("burley_reuse", REUSE_R=str(plan.reuse))
+        prog = ec.program("burley_reuse", **self._defines(plan))
         prof = profile_of(ec.setting)
         h = ec.setting("render.height")
         ec.uniforms(prog, u_proj_scale=float(ec.view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
-                    u_reuse_dz=0.05 * prof.filter_radius, u_min_radius=float(plan.reuse_min_radius))
+                    u_reuse_dz=plan.reuse_dz * prof.filter_radius, u_min_radius=float(plan.reuse_min_radius))
         ec.textures(prog, partial=PARTIAL, wsum=WSUM, lin_depth=DEPTH)
         ec.draw_fullscreen(prog, BLURRED)
 
