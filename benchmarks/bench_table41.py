@@ -27,7 +27,7 @@ import argparse
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -36,6 +36,7 @@ from skinviewer.core.graph import FrameInputs, RenderGraph
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, parse_assignments, with_values
 from skinviewer.passes.burley import (
+    BEYOND_PLAN,
     BLURRED,
     COUNT,
     BurleyBlurPass,
@@ -65,17 +66,16 @@ METHODS: dict[str, Plan] = {
     "golubev-12": Plan((12,)),
 }
 VARIANTS: dict[str, Plan] = {
-    # spec §7.9 beyond the thesis. "r": neighbourhood reuse (shaders/burley_reuse.frag): each pixel pools the
-    # weighted sums of its 3x3 neighbours (whose disks are rotated differently) where the kernel is >= 12 px
-    # wide and the neighbour's depth is within 5 % of the filter radius
-    "beyond-8+14r": Plan((8, 14), (c3(0.25),), reuse=1),
-    "beyond-6+10r": Plan((6, 10), (c3(0.25),), reuse=1),
-    "beyond-6+16r": Plan((6, 16), (c3(0.25),), reuse=1),
-    # equal-count ring split (6 inner / 6 outer: the outer mean no longer rests on 2 samples, spec §7.3)
-    "beyond-12+10eq": Plan((12, 10), (c3(0.25),), split="equal-count"),
-    # nested: the 6 base samples are a subset of the 30-sample set and the extra level completes it (then a
-    # triggered pixel IS the 30-sample estimate: its DSSIM/30 flatters it, DSSIM/ref does not)
-    "beyond-nested6+24mm": Plan((6, 24), (c3(0.3),), contrast="minmax", nested=True, reuse=1),
+    # spec §7.9, beyond the thesis. The selectable mode (burley2.mode = "beyond", passes/burley.py):
+    "beyond": BEYOND_PLAN,
+    # ablations of it
+    "beyond w/o reuse": replace(BEYOND_PLAN, reuse=0),
+    "beyond w/o footprint LOD": replace(BEYOND_PLAN, wide_scale=1.0),
+    "beyond w/o equal-count": replace(BEYOND_PLAN, split="half-radius"),
+    # the ring split alone (6 inner / 6 outer instead of 10 / 2, spec §7.3)
+    "12+10 equal-count": Plan((12, 10), (c3(0.25),), split="equal-count"),
+    # more savings, less quality: 6 + 10 with reuse
+    "6+10 reuse": Plan((6, 10), (c3(0.25),), reuse=1, reuse_split=0.5),
 }
 REFS: dict[str, Plan] = {REFERENCE: Plan((30,)), TRUTH: Plan((128,), seed=7)}
 
@@ -121,6 +121,7 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="one angle, 320x180, no 128-sample reference")
     ap.add_argument("--only", help="comma-separated method names (besides the baseline and references)")
     ap.add_argument("--angles", help="comma-separated yaw angles (default -30,0,30)")
+    ap.add_argument("--framings", help="comma-separated framing indices 0,1,2 (default all)")
     ap.add_argument("--no-truth", action="store_true", help="skip the 128-sample reference")
     args = ap.parse_args(argv)
     w, h = (int(v) for v in args.size.lower().split("x"))
@@ -150,7 +151,8 @@ def main(argv=None) -> int:
           f"texturing {s0.screen.texturing}; DSSIM: {DSSIM_SETUP}")
     results: dict[str, dict[str, Row]] = {}
     t_start = time.perf_counter()
-    for fname, frac in FRAMINGS:
+    framings = FRAMINGS if not args.framings else tuple(FRAMINGS[int(i)] for i in args.framings.split(","))
+    for fname, frac in framings:
         rows = {k: Row([], [], [], [], [], []) for k in methods}
         for yaw in angles:
             s = with_values(s0, {"camera.distance": fd * frac, "camera.yaw": yaw})
@@ -174,18 +176,18 @@ def main(argv=None) -> int:
     print(f"# {time.perf_counter() - t_start:.0f} s; angles (yaw) {angles}; framing distance fractions "
           f"{[f for _, f in FRAMINGS]} of {fd:.0f} units\n")
     # the thesis's table
-    hdr = f"{'':26s}" + "".join(f"{f:>22s}" for f, _ in FRAMINGS)
+    hdr = f"{'':26s}" + "".join(f"{f:>22s}" for f, _ in framings)
     print("Samples per frame (mean over angles), and the thesis's Table 4.1 for comparison")
     print(hdr)
     for k in methods:
-        print(f"{k:26s}" + "".join(f"{np.mean(results[f][k].samples):>22,.0f}" for f, _ in FRAMINGS))
-    print(f"{'thesis: Golubev':26s}" + "".join(f"{THESIS[f][0]:>22,}" for f, _ in FRAMINGS))
-    print(f"{'thesis: Golubev Plus':26s}" + "".join(f"{THESIS[f][1]:>22,}" for f, _ in FRAMINGS))
+        print(f"{k:26s}" + "".join(f"{np.mean(results[f][k].samples):>22,.0f}" for f, _ in framings))
+    print(f"{'thesis: Golubev':26s}" + "".join(f"{THESIS[f][0]:>22,}" for f, _ in framings))
+    print(f"{'thesis: Golubev Plus':26s}" + "".join(f"{THESIS[f][1]:>22,}" for f, _ in framings))
     print()
     print(f"{'method':26s} {'framing':18s} {'spp':>6s} {'saved':>7s} {'trig':>6s} {'DSSIM/30':>9s} "
           f"{'DSSIM/ref':>9s} {'ms':>7s}")
     verdict = {}
-    for f, _ in FRAMINGS:
+    for f, _ in framings:
         g22 = results[f][BASELINE]
         for k in methods:
             row = results[f][k]
@@ -204,7 +206,7 @@ def main(argv=None) -> int:
         if k == BASELINE:
             continue
         ok = all(sv >= 0.55 and d for sv, d, _ in v)
-        okref = all(sv >= 0.55 and (dr is None or dr) for sv, _, dr in v)
+        okref = all(sv >= 0.55 and bool(dr) for sv, _, dr in v)
         print(f"  {k:24s} saved {' / '.join(f'{100 * sv:.1f}' for sv, _, _ in v)} %; DSSIM/30 <= golubev-22: "
               f"{' / '.join('yes' if d else 'no' for _, d, _ in v)}; DSSIM/ref <= golubev-22: "
               f"{' / '.join('-' if dr is None else ('yes' if dr else 'no') for _, _, dr in v)} -> "

@@ -11,7 +11,10 @@ uniform float u_filter_radius;  // mm, P^-1(0.997) d
 layout(location = 0) out vec4 o_diffuse;
 layout(location = 1) out vec4 o_stats;  // samples, extra levels, skipped, base contrast
 #if BURLEY_REUSE
-layout(location = 2) out vec4 o_wsum;   // sum w per channel, a = 1 where blurred (for burley_reuse.frag)
+// for burley_reuse.frag: the near samples' sums (kept) and the far samples' sums (pooled with the neighbours')
+layout(location = 2) out vec4 o_near_w;  // rgb sum w of the samples nearer than u_reuse_split px, a = 1: blurred
+layout(location = 3) out vec4 o_far;     // rgb sum w E of the far samples
+layout(location = 4) out vec4 o_far_w;   // rgb sum w of the far samples
 #endif
 
 bool burley_fetch(ivec2 q, out vec3 E, out float z) {
@@ -35,7 +38,9 @@ void main() {
     o_diffuse = c;
     o_stats = vec4(0.0, 0.0, 0.0, -1.0);
 #if BURLEY_REUSE
-    o_wsum = vec4(0.0);
+    o_near_w = vec4(0.0);
+    o_far = vec4(0.0);
+    o_far_w = vec4(0.0);
 #endif
     if (!(c.a > 0.5))
         return;
@@ -48,11 +53,15 @@ void main() {
         return;
     }
     float count, level, cmax;
-    vec3 ws;
-    vec3 e = burley_sss(p, zc, ppm, n_avail, count, level, cmax, ws);
-    o_diffuse = vec4(finite3(e), c.a);
+    BurleyState st;
+    vec3 e = burley_sss(p, zc, ppm, n_avail, count, level, cmax, st);
 #if BURLEY_REUSE
-    o_wsum = vec4(finite3(ws), 1.0);
+    o_diffuse = vec4(st.acc, c.a);  // sum w E of the near samples
+    o_near_w = vec4(st.wsum, 1.0);
+    o_far = vec4(st.acc_o, 0.0);
+    o_far_w = vec4(st.wsum_o, 0.0);
+#else
+    o_diffuse = vec4(finite3(e), c.a);
 #endif
     o_stats = vec4(count, level, 0.0, cmax);
 }

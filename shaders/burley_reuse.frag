@@ -1,43 +1,46 @@
 #version 330 core
-// Neighbourhood reuse of Burley samples (a variant beyond seed 001 ch. 4): every pixel rotated its disk by
-// its own hash, so the (2R+1)^2 pixels around p hold independent estimates of nearly the same kernel
-// (centres <= R px apart). Their weighted sums are pooled with a tent weight, only between SSS pixels of
-// similar depth (|dz| < u_reuse_dz mm), and only where the kernel is wide enough (>= u_min_radius px) that
-// the R-px shift is negligible; elsewhere the pixel keeps its own estimate.
-uniform sampler2D partial;    // rgb: own estimate sum wE / sum w; a: alpha of the irradiance
-uniform sampler2D wsum;       // rgb: own sum w; a: 1 where the pixel was blurred
-uniform sampler2D lin_depth;
-uniform float u_proj_scale;
-uniform float u_filter_radius;
+// Neighbourhood reuse of the far Burley samples (a variant beyond seed 001 ch. 4). Every pixel turned its
+// disk by its own hash, so the far samples (>= u_reuse_split px from the centre) of the (2R+1)^2 pixels
+// around p are independent estimates of nearly the same part of the kernel: a 1-px shift is small against
+// their radius. Their sums are averaged with a tent weight over SSS neighbours on the same surface (depth
+// step within what the local slope predicts plus u_reuse_dz mm); the near samples, where the peaked profile
+// would be blurred by the shift, stay the pixel's own. Result = (near + mean far) / (near w + mean far w).
+uniform sampler2D partial;    // rgb: sum w E of the near samples; a: alpha of the irradiance
+uniform sampler2D near_w;     // rgb: sum w of the near samples; a: 1 where the pixel was blurred
+uniform sampler2D far;        // rgb: sum w E of the far samples
+uniform sampler2D far_w;      // rgb: sum w of the far samples
+uniform sampler2D lin_depth;  // ss_depth: r depth (mm), g, b |dz/dx|, |dz/dy| (mm per px)
 uniform float u_reuse_dz;
-uniform float u_min_radius;
 out vec4 f_color;
+const float TINY = 1.17549435e-38;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 own = texelFetch(partial, p, 0);
-    vec4 ws = texelFetch(wsum, p, 0);
-    f_color = own;
-    if (ws.a < 0.5)
+    vec4 nw = texelFetch(near_w, p, 0);
+    if (nw.a < 0.5) {
+        f_color = own;  // not blurred: the irradiance as it was
         return;
-
-    float zc = texelFetch(lin_depth, p, 0).r;
-    if (u_filter_radius * u_proj_scale / max(zc, 1e-6) < u_min_radius)
-        return;
+    }
+    vec4 dc = texelFetch(lin_depth, p, 0);
     ivec2 size = textureSize(partial, 0);
     vec3 acc = vec3(0.0);
     vec3 wt = vec3(0.0);
+    float g_sum = 0.0;
     for (int dy = -REUSE_R; dy <= REUSE_R; ++dy) {
         for (int dx = -REUSE_R; dx <= REUSE_R; ++dx) {
             ivec2 q = p + ivec2(dx, dy);
             if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size)))
                 continue;
-            vec4 wq = texelFetch(wsum, q, 0);
-            if (wq.a < 0.5 || abs(texelFetch(lin_depth, q, 0).r - zc) > u_reuse_dz)
+            float tol = u_reuse_dz + 1.5 * dot(dc.gb, abs(vec2(dx, dy)));
+            if (texelFetch(near_w, q, 0).a < 0.5 || abs(texelFetch(lin_depth, q, 0).r - dc.r) > tol)
                 continue;
             float g = float((REUSE_R + 1 - abs(dx)) * (REUSE_R + 1 - abs(dy)));
-            acc += g * wq.rgb * texelFetch(partial, q, 0).rgb;
-            wt += g * wq.rgb;
+            acc += g * texelFetch(far, q, 0).rgb;
+            wt += g * texelFetch(far_w, q, 0).rgb;
+            g_sum += g;
         }
     }
-    f_color = vec4(acc / max(wt, vec3(1.17549435e-38)), own.a);
+    vec3 num = own.rgb + acc / g_sum;
+    vec3 den = nw.rgb + wt / g_sum;
+    f_color = vec4(num / max(den, vec3(TINY)), own.a);
 }

@@ -61,13 +61,14 @@ class Harness:
         self.count = PB.BurleyCountPass()
         self.upload = None
         self.graph = None
+        self.extra: list = []  # more passes (e.g. the reuse pass)
 
     def run(self, E, z, mask, settings: Settings | None = None, **assign):
         h, w = z.shape
         s = with_values(settings or Settings(), {"render.width": w, "render.height": h, **assign})
         if self.graph is None:
             self.upload = UploadPass(E, z, mask)
-            self.graph = RenderGraph(self.ctx, self.shaders, [self.upload, self.blur, self.count],
+            self.graph = RenderGraph(self.ctx, self.shaders, [self.upload, self.blur, self.count] + self.extra,
                                      [PB.BLURRED, PB.STATS, PB.COUNT])
         else:
             self.upload.set(E, z, mask)

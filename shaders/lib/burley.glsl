@@ -13,12 +13,18 @@
 
 const float BURLEY_PI = 3.14159265358979;
 const float BURLEY_GOLDEN_RATIO = 1.618033988749895;
+const float BURLEY_FILTER_RADIUS_UNIT = 16.564398753;  // P^-1(0.997): the filter radius in units of d
 
 uniform vec3 u_S;         // S_c = 1/d_c per channel, 1/mm
 uniform float u_d;        // d = max_c d_c, mm (the channel that is importance-sampled)
 uniform vec3 u_cutoff1;   // trigger level 1 iff C_c > cutoff_c for any channel (thesis: 0.25)
 uniform vec3 u_cutoff2;   // the same for level 2
+uniform float u_wide_px;     // kernels at least this wide (radius, px) use the cutoffs times u_wide_scale
+uniform float u_wide_scale;  // (1: the same cutoff at every footprint)
 uniform uint u_seed;      // added to the rotation hash (0; another value decorrelates a reference image)
+#if BURLEY_REUSE
+uniform float u_reuse_split;  // px: samples this far from the centre are pooled with the neighbours' (reuse)
+#endif
 
 // PCG-RXS-M-XS (Jarzynski & Olano 2020): a stable per-pixel hash for the rotation phase
 uint burley_pcg(uint v) {
@@ -50,10 +56,13 @@ struct BurleyState {
     vec3 lo;       // min / max of the valid samples (CONTRAST_MINMAX)
     vec3 hi;
     float count;   // samples taken (valid or not): what the frame pays
+    vec3 acc_o;    // BURLEY_REUSE: the samples at >= u_reuse_split px (pooled with the neighbours'), not in acc
+    vec3 wsum_o;
 };
 
 BurleyState burley_state() {
-    return BurleyState(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, vec3(1e30), vec3(-1e30), 0.0);
+    return BurleyState(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, vec3(1e30), vec3(-1e30), 0.0, vec3(0.0),
+                       vec3(0.0));
 }
 
 // One sample (spec §5.3 step 4): r = x d, direction rotated by psi, pixel offset rounded, bilateral
@@ -72,8 +81,18 @@ void burley_take(inout BurleyState st, ivec2 p, float zc, float ppm, vec2 rot, f
     float dz = z - zc;
     float rp = sqrt(r * r + dz * dz);
     vec3 w = u_S / (8.0 * BURLEY_PI) * (exp(-u_S * rp) + exp(-u_S * rp / 3.0)) * (rcp * u_d);
+#if BURLEY_REUSE
+    if (ppm * r >= u_reuse_split) {
+        st.acc_o += w * E;
+        st.wsum_o += w;
+    } else {
+        st.acc += w * E;
+        st.wsum += w;
+    }
+#else
     st.acc += w * E;
     st.wsum += w;
+#endif
 #if CONTRAST_MINMAX
     st.lo = min(st.lo, E);
     st.hi = max(st.hi, E);
@@ -115,7 +134,7 @@ const vec2 SET2_CS[N_SET2] = SET2_CS_TABLE;
 // The whole per-pixel estimator: returns sum w E / sum w; count = samples taken, level = extra levels taken,
 // cmax = the largest channel of the base contrast (-1 when no contrast was computed).
 vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, out float level, out float cmax,
-                out vec3 wsum) {
+                out BurleyState fin) {
     BurleyState st = burley_state();
     float psi = burley_phase(p, zc);
     vec2 rot = vec2(cos(psi), sin(psi));
@@ -135,8 +154,8 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
             burley_take(st, p, zc, ppm, rot, x, rcp, vec2(cos(phi), sin(phi)), 0);
         }
         count = st.count;
-        wsum = st.wsum;
-        return st.acc / max(st.wsum, vec3(1.17549435e-38));
+        fin = st;
+        return (st.acc + st.acc_o) / max(st.wsum + st.wsum_o, vec3(1.17549435e-38));
     }
 #endif
     for (int i = 0; i < N_SET0; ++i)
@@ -152,7 +171,8 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
 #if BURLEY_ALWAYS
     bool go = room;
 #else
-    bool go = room && any(greaterThan(C, u_cutoff1));
+    float cut_scale = ppm * u_d * BURLEY_FILTER_RADIUS_UNIT >= u_wide_px ? u_wide_scale : 1.0;
+    bool go = room && any(greaterThan(C, u_cutoff1 * cut_scale));
 #endif
     if (go) {
         level = 1.0;
@@ -162,7 +182,7 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
 #if BURLEY_ALWAYS
         bool go2 = true;
 #else
-        bool go2 = any(greaterThan(burley_contrast(st), u_cutoff2));
+        bool go2 = any(greaterThan(burley_contrast(st), u_cutoff2 * cut_scale));
 #endif
         if (go2) {
             level = 2.0;
@@ -173,6 +193,6 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
     }
 #endif
     count = st.count;
-    wsum = st.wsum;
-    return st.acc / max(st.wsum, vec3(1.17549435e-38));
+    fin = st;
+    return (st.acc + st.acc_o) / max(st.wsum + st.wsum_o, vec3(1.17549435e-38));
 }

@@ -247,10 +247,12 @@ class BurleySettings(_Model):
 class Burley2Settings(_Model):
     """The thesis's contrast-driven two-level sampling, "Golubev Plus" (seed 001 ch. 4, Algorithm 1,
     eq. 4.1-4.2; spec §7). Profile and cutoff/budget from ``burley``."""
-    mode: Literal["thesis", "three-level", "nested"] = Field(
+    mode: Literal["thesis", "three-level", "nested", "beyond"] = Field(
         "thesis", description="thesis: base + extra (Algorithm 1); three-level: a third set when the contrast "
                               "exceeds threshold2 too; nested: the base set is a subset of one (base + extra)-sample "
-                              "Golubev set and the extra level completes it ((base+extra)/base odd)")
+                              "Golubev set and the extra level completes it ((base+extra)/base odd); beyond: the "
+                              "fixed variant that beat Table 4.1's target (9 + 11, equal-count rings, reuse; "
+                              "the other fields are ignored)")
     base: int = Field(12, ge=1, le=64, description="base samples (thesis: 12)")
     extra: int = Field(10, ge=1, le=64, description="extra samples where the contrast triggers (thesis: 10)")
     third: int = Field(0, ge=0, le=64, description="three-level mode: samples of the third set")
@@ -264,10 +266,15 @@ class Burley2Settings(_Model):
                                    "or the nearer half of the samples")
     contrast: Literal["rings", "minmax"] = Field(
         "rings", description="rings: eq. 4.1 between ring means; minmax: (max-min)/(max+min) of the samples")
-    reuse: int = Field(0, ge=0, le=2, description="neighbourhood reuse radius, px (0 off): pool the weighted sums "
-                                                  "of the (2R+1)^2 pixels around (each rotated its disk differently)")
-    reuse_min_radius: float = Field(12.0, ge=0.0, le=1000.0,
-                                    description="reuse only where the kernel radius is at least this many px")
+    reuse: int = Field(0, ge=0, le=2, description="neighbourhood reuse radius, px (0 off): pool the far samples' "
+                                                  "sums of the (2R+1)^2 pixels around (each rotated its disk differently)")
+    reuse_split: float = Field(3.0, ge=0.0, le=1000.0,
+                               description="reuse: samples at least this many px from the centre are pooled; nearer "
+                                           "ones (where a 1-px shift would blur the peaked profile) stay the pixel's own")
+
+    wide_px: float = Field(1e6, gt=0.0, le=1e6, description="kernels at least this wide (filter radius, px) scale "
+                                                              "the contrast cutoffs by wide_scale (a footprint LOD)")
+    wide_scale: float = Field(1.0, ge=0.0, le=100.0, description="cutoff multiplier for wide kernels")
 
     @field_validator("channel_scale")
     @classmethod

@@ -25,8 +25,11 @@ IRRADIANCE = DIFFUSE
 IRRADIANCE_DTYPE = "f4"  # the blurred output has the irradiance's format: skipped pixels copy it bit for bit
 
 BLURRED = "burley_diffuse"
-PARTIAL = "burley_partial"  # the blur's own estimate when a reuse pass pools neighbours into BLURRED
-WSUM = "burley_wsum"
+# reuse: the blur writes its near / far sample sums, the reuse pass pools the far ones into BLURRED
+PARTIAL = "burley_partial"
+NEAR_W = "burley_near_w"
+FAR = "burley_far"
+FAR_W = "burley_far_w"
 STATS = "burley_stats"
 COUNT = "burley_count"
 VIEW = "burley_view"
@@ -50,12 +53,15 @@ class Plan:
     nested: bool = False
     seed: int = 0
     reuse: int = 0  # neighbourhood reuse radius in px (0: off; BurleyReusePass)
-    reuse_min_radius: float = 12.0  # px: narrower kernels keep their own estimate
-    reuse_dz: float = 0.05  # neighbours further than this fraction of the filter radius in depth are not pooled
+    reuse_split: float = 3.0  # px: samples at least this far from the centre are pooled with the neighbours'
+    reuse_dz: float = 0.05  # depth tolerance beyond the local slope, as a fraction of the filter radius
+    wide_px: float = 1e30  # kernels at least this wide (filter radius, px) multiply the cutoffs by wide_scale
+    wide_scale: float = 1.0
 
     def sampling(self, budget: bool) -> B.Sampling:
         cut = tuple(-1.0 if self.always else c for c in self.cutoffs)
-        return B.Sampling(self.levels, cut, self.split, self.contrast, budget, self.nested, self.seed)
+        return B.Sampling(self.levels, cut, self.split, self.contrast, budget, self.nested, self.seed, self.wide_px,
+                          self.wide_scale)
 
 
 def _floats(v) -> str:
@@ -82,6 +88,14 @@ def table_defines(plan: Plan, budget: bool) -> dict[str, str]:
     return defs
 
 
+# burley2.mode "beyond": the variant that beat the thesis's Table 4.1 target on the default head (benchmarks/
+# bench_table41.py; notes/ss2.md): 9 base samples with an equal-count ring split (the outer mean rests on 4-5
+# samples instead of 2, spec §7.3), 11 extra where C > 0.35 (x 2 where the kernel is >= 20 px wide, whose
+# far samples the reuse pools), and the far samples (>= 0.5 px) pooled over the 3x3 neighbourhood
+BEYOND_PLAN = Plan((9, 11), ((0.35, 0.35, 0.35),), split="equal-count", reuse=1, reuse_split=0.5, wide_px=20.0,
+                   wide_scale=2.0)
+
+
 def golubev_plan(get) -> Plan:
     return Plan((int(get("burley.samples")),))
 
@@ -90,6 +104,8 @@ def two_level_plan(get) -> Plan:
     """burley2 settings -> levels. ``thesis``: Algorithm 1 (base, extra, cutoff on the ring contrast);
     ``three-level``: a third level and a second cutoff on top of it."""
     mode = get("burley2.mode")
+    if mode == "beyond":
+        return BEYOND_PLAN
     t = get("burley2.threshold")
     c1 = tuple(float(t) * float(s) for s in get("burley2.channel_scale"))
     levels = (int(get("burley2.base")), int(get("burley2.extra")))
@@ -99,7 +115,8 @@ def two_level_plan(get) -> Plan:
         levels += (int(get("burley2.third")),)
         cutoffs += (tuple(t2 * float(s) for s in get("burley2.channel_scale")),)
     return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"), nested=mode == "nested",
-                reuse=int(get("burley2.reuse")), reuse_min_radius=float(get("burley2.reuse_min_radius")))
+                reuse=int(get("burley2.reuse")), reuse_split=float(get("burley2.reuse_split")),
+                wide_px=float(get("burley2.wide_px")), wide_scale=float(get("burley2.wide_scale")))
 
 
 class BurleyBlurPass(Pass):
@@ -138,7 +155,8 @@ class BurleyBlurPass(Pass):
         r.output(PARTIAL if plan.reuse else BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
         r.output(STATS, TexSpec((w, h), 4, "f2", filter="nearest"))
         if plan.reuse:
-            r.output(WSUM, TexSpec((w, h), 4, "f4", filter="nearest"))
+            for res in (NEAR_W, FAR, FAR_W):
+                r.output(res, TexSpec((w, h), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         budget = bool(ec.setting("burley.budget"))
@@ -153,13 +171,17 @@ class BurleyBlurPass(Pass):
         # the cutoffs are dropped by the compiler in Golubev's variant (no contrast test)
         ec.set(prog, "u_cutoff1", tuple(float(c) for c in cut[0]), optional=True)
         ec.set(prog, "u_cutoff2", tuple(float(c) for c in cut[1]), optional=True)
+        ec.set(prog, "u_wide_px", float(plan.wide_px), optional=True)
+        ec.set(prog, "u_wide_scale", float(plan.wide_scale), optional=True)
         ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH)
-        ec.draw_fullscreen(prog, *((PARTIAL, STATS, WSUM) if plan.reuse else (BLURRED, STATS)))
+        if plan.reuse:
+            ec.set(prog, "u_reuse_split", float(plan.reuse_split))
+        ec.draw_fullscreen(prog, *((PARTIAL, STATS, NEAR_W, FAR, FAR_W) if plan.reuse else (BLURRED, STATS)))
 
 
 class BurleyReusePass(Pass):
-    """Neighbourhood reuse (shaders/burley_reuse.frag): pools the blur's per-pixel weighted sums over a
-    (2R+1)^2 tent where the kernel is wide; declares nothing (and is pruned) when the plan has no reuse."""
+    """Neighbourhood reuse (shaders/burley_reuse.frag): pools the far samples' weighted sums of the (2R+1)^2
+    pixels around each pixel (a tent, same surface only); declares nothing (and is pruned) without reuse."""
     view_dependent = True
     uses_scene = False
     name = "burley_reuse"
@@ -176,14 +198,14 @@ class BurleyReusePass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         if self.fixed_plan is None:
-            if r.peek("burley2.reuse") == 0:
+            if r.peek("burley2.reuse") == 0 and r.peek("burley2.mode") != "beyond":
                 return
             r.setting("burley2")
         plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
         for f in PROFILE_FIELDS:
             r.setting(f"burley.{f}")
         r.program("burley_reuse", **self._defines(plan))
-        for res in (PARTIAL, WSUM, DEPTH):
+        for res in (PARTIAL, NEAR_W, FAR, FAR_W, DEPTH):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
         r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
@@ -192,10 +214,8 @@ class BurleyReusePass(Pass):
         plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
         prog = ec.program("burley_reuse", **self._defines(plan))
         prof = profile_of(ec.setting)
-        h = ec.setting("render.height")
-        ec.uniforms(prog, u_proj_scale=float(ec.view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
-                    u_reuse_dz=plan.reuse_dz * prof.filter_radius, u_min_radius=float(plan.reuse_min_radius))
-        ec.textures(prog, partial=PARTIAL, wsum=WSUM, lin_depth=DEPTH)
+        ec.uniforms(prog, u_reuse_dz=plan.reuse_dz * prof.filter_radius)
+        ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W, lin_depth=DEPTH)
         ec.draw_fullscreen(prog, BLURRED)
 
 

@@ -231,6 +231,8 @@ class Sampling:
     budget: bool = False
     nested: bool = False  # two levels that complete one stratified set of levels[0] + levels[1] (nested_sets)
     seed: int = 0  # added to the rotation hash (a decorrelated reference image)
+    wide_px: float = 1e30  # kernels at least this wide (filter radius, px) scale the cutoffs by wide_scale
+    wide_scale: float = 1.0
 
     def __post_init__(self):
         if len(self.cutoffs) != len(self.levels) - 1:
@@ -341,7 +343,8 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
     if len(sets) > 1:
         C = contrast_of(sampling.contrast, in_sum, out_sum, n_in, n_out, lo, hi)
         contrast = np.where(multi[..., None], C, np.nan)
-        go = multi & np.any(C > np.asarray(sampling.cutoffs[0], dtype=float), axis=-1)
+        scale = np.where(prof.filter_radius * ppm >= sampling.wide_px, sampling.wide_scale, 1.0)[..., None]
+        go = multi & np.any(C > np.asarray(sampling.cutoffs[0], dtype=float) * scale, axis=-1)
         for k, s in enumerate(sets[1:], start=1):
             for j in range(s.n):
                 valid, Ei = take(go, s.x[j], s.rcp_pdf[j], s.cos_sin[j])
@@ -353,7 +356,7 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
             if k < len(sets) - 1:
                 # a further level is decided from the min/max of every sample so far (rings: base only)
                 C2 = contrast_of(sampling.contrast, in_sum, out_sum, n_in, n_out, lo, hi)
-                go = go & np.any(C2 > np.asarray(sampling.cutoffs[k], dtype=float), axis=-1)
+                go = go & np.any(C2 > np.asarray(sampling.cutoffs[k], dtype=float) * scale, axis=-1)
     # runtime sets (budget): n_avail samples evaluated per pixel
     if short.any():
         for n in np.unique(n_avail[short]).astype(int):
