@@ -59,6 +59,8 @@ D_RGB = (0.6, 0.35, 0.2)
     ("golubev", None, {"burley.samples": 22, "burley.budget": True}),
     ("two_level", None, {}),
     ("two_level", None, {"burley2.split": "equal-count", "burley2.threshold": 0.1}),
+    ("two_level", None, {"burley2.threshold": 0.1, "burley2.wide_px": 5.0, "burley2.wide_scale": 2.5}),
+    ("two_level", None, {"burley2.mode": "nested", "burley2.base": 6, "burley2.extra": 24, "burley2.contrast": "minmax"}),
     ("two_level", None, {"burley2.mode": "three-level", "burley2.base": 6, "burley2.extra": 8, "burley2.third": 16,
                          "burley2.contrast": "minmax", "burley2.threshold": 0.2, "burley2.threshold2": 0.3}),
 ])

@@ -16,6 +16,7 @@ from skinviewer.physics import burley as B
                                          ("burley2", {}), ("burley2", {"burley.budget": False}),
                                          ("burley2", {"burley2.reuse": 1, "burley2.base": 8,
                                                                        "burley2.extra": 14}),
+                                         ("burley2", {"burley2.mode": "beyond", "burley.budget": False}),
                                          ("burley2", {"burley2.mode": "nested", "burley2.base": 6, "burley2.extra": 24,
                                                       "burley2.contrast": "minmax"})])
 def test_techniques_render_finite_and_count_samples(renderer, tech, assign):
@@ -30,7 +31,8 @@ def test_techniques_render_finite_and_count_samples(renderer, tech, assign):
     lit, diffuse = tex["lit"], tex["ss_diffuse"]
     skin = diffuse[..., 3] > 0.5
     assert skin.any() and np.all(lit[skin][:, :3] >= 0)
-    assert ("burley_reuse" in report.ran) == (assign.get("burley2.reuse", 0) > 0)
+    assert ("burley_reuse" in report.ran) == (assign.get("burley2.reuse", 0) > 0
+                                              or assign.get("burley2.mode") == "beyond")
     if tech == "burley2" and assign == {"burley.budget": False}:
         # Algorithm 1's accounting on a real frame: 12 per blurred pixel plus 10 per triggered one
         assert rec.figures["samples"] == 12 * rec.figures["pixels"] + 10 * rec.figures["triggered"]
@@ -90,7 +92,7 @@ def test_nested_two_level_always_equals_the_full_set(gl_ctx):
 def test_reuse_keeps_energy_and_lowers_noise(gl_ctx):
     w, hgt = 96, 64
     a = {"burley.fit": "direct", "burley.budget": False, "burley.mfp": [1.0, 1.0, 1.0]}
-    plan = PB.Plan((8,), reuse=1)
+    plan = PB.Plan((8,), reuse=1, reuse_split=0.5)
 
     def run(E, z, mask, reuse):
         h = Harness(gl_ctx, PB.BurleyBlurPass("golubev", plan if reuse else PB.Plan((8,))))
