@@ -5,6 +5,7 @@
 // their radius. Their sums are averaged with a tent weight over SSS neighbours on the same surface (depth
 // step within what the local slope predicts plus u_reuse_dz mm); the near samples, where the peaked profile
 // would be blurred by the shift, stay the pixel's own. Result = (near + mean far) / (near w + mean far w).
+#include "lib/color.glsl"
 uniform sampler2D partial;    // rgb: sum w E of the near samples; a: alpha of the irradiance
 uniform sampler2D near_w;     // rgb: sum w of the near samples; a: 1 where the pixel was blurred
 uniform sampler2D far;        // rgb: sum w E of the far samples
@@ -18,7 +19,7 @@ void main() {
     vec4 own = texelFetch(partial, p, 0);
     vec4 nw = texelFetch(near_w, p, 0);
     if (nw.a < 0.5) {
-        f_color = own;  // not blurred: the irradiance as it was
+        f_color = own;  // not blurred: the irradiance as it was (bit for bit)
         return;
     }
     vec4 dc = texelFetch(lin_depth, p, 0);
@@ -42,5 +43,5 @@ void main() {
     }
     vec3 num = own.rgb + acc / g_sum;
     vec3 den = nw.rgb + wt / g_sum;
-    f_color = vec4(num / max(den, vec3(TINY)), own.a);
+    f_color = vec4(finite3(num / max(den, vec3(TINY))), own.a);
 }

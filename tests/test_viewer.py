@@ -743,3 +743,19 @@ def test_shader_file_in_another_encoding_is_listed_not_fatal(app, shader_dir):
     app.watcher.poll(force=True)
     app.step(1)
     assert not app.watcher.errors
+
+
+def test_burley2_in_the_viewer_shows_extra_samples_and_the_gpu_count(app):
+    """burley2 live: its panel sections draw, the passes window shows the GPU sample count, and the
+    'extra' view mode changes the image."""
+    assert app.set_technique("burley2")
+    app.step(1)
+    plain = _view_image(app)
+    rec = next(p for p in app.report.passes if p.name == "burley_count")
+    assert rec.figures["samples"] > 0 and "samples on the GPU" in rec.note
+    assert app.apply({"burley.view": "extra"}, "burley.view")
+    app.step(1)
+    assert np.abs(_view_image(app) - plain).mean() > 0.5
+    assert app.apply({"burley.view": "image"}, "burley.view")
+    assert app.set_technique("phong")
+    app.step(1)

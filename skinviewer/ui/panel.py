@@ -389,11 +389,30 @@ class Panel:
                 wrapped("! " + w, WARN)
             self._change_line(("deon",))
             self._profile_plot()
+        if _header(f"Burley / Golubev 2018{tag[s.technique == 'burley']}###burley", s.technique in ("burley", "burley2")):
+            wrapped("seed 001 §3.4, eq. 2.83-2.89, 3.9-3.13: Burley normalized diffusion sampled on a disk in screen "
+                    "space (HDRP); its profile is also burley2's")
+            edit_model(s.burley, "burley", edits)
+            self._burley_count()
+            self._change_line(("burley",))
+        if _header(f"Two-level sampling (thesis ch. 4){tag[s.technique == 'burley2']}###burley2",
+                   s.technique == "burley2"):
+            wrapped("seed 001 ch. 4, Algorithm 1, eq. 4.1-4.2: extra samples where the ring contrast exceeds the "
+                    "threshold; burley.view = extra shows where")
+            edit_model(s.burley2, "burley2", edits)
+            self._change_line(("burley2",))
         if _header("Specular (Kelemen / Szirmay-Kalos)###Specular"):
             wrapped("seed 000 eq. 14-16 (gosselin, deon)")
             edit_model(s.specular, "specular", edits, skip=("per_region",))
             self._region_specular(edits)
             self._change_line(("specular",))
+
+    def _burley_count(self) -> None:
+        """The samples this frame took, counted on the GPU (the burley_count pass's report)."""
+        rep = self.app.report
+        rec = next((p for p in rep.passes if p.name == "burley_count"), None) if rep is not None else None
+        if rec is not None and rec.note:
+            wrapped(rec.note)
 
     def _region_kernels(self, edits: Edits) -> None:
         regions = self.app.settings.gosselin.regions
