@@ -61,7 +61,7 @@ void main() {
     o_far = vec4(st.acc_o, 0.0);
     o_far_w = vec4(st.wsum_o, 0.0);
 #else
-    o_diffuse = vec4(finite3(e), c.a);
+    o_diffuse = vec4(finite4(vec4(e, 0.0), FLOAT_MAX).rgb, c.a);  // f4 target: float range
 #endif
     o_stats = vec4(count, level, 0.0, cmax);
 }

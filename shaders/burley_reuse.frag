@@ -43,5 +43,5 @@ void main() {
     }
     vec3 num = own.rgb + acc / g_sum;
     vec3 den = nw.rgb + wt / g_sum;
-    f_color = vec4(finite3(num / max(den, vec3(TINY))), own.a);
+    f_color = vec4(finite4(vec4(num / max(den, vec3(TINY)), 0.0), FLOAT_MAX).rgb, own.a);
 }
