@@ -27,6 +27,7 @@ class GpuServices:
         self._samplers: dict[int, tuple[moderngl.Program, dict[str, int]]] = {}
         self._dummies: dict[int, tuple[moderngl.Texture, int]] = {}
         self.max_units = int(ctx.info.get("GL_MAX_TEXTURE_IMAGE_UNITS", 16))
+        self.binding_units = self.max_units - len(_SAMPLER_KINDS)  # the top units hold the dummies
 
     # -- vertex arrays -------------------------------------------------------------------------
     def _vao(self, prog, owner, make) -> moderngl.VertexArray:
@@ -86,10 +87,6 @@ class GpuServices:
         tex, unit = hit
         tex.use(unit)
         return unit
-
-    @property
-    def first_dummy_unit(self) -> int:
-        return self.max_units - len(_SAMPLER_KINDS)
 
     def release(self) -> None:
         for _, _, vao in self._vaos.values():

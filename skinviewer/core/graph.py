@@ -251,7 +251,7 @@ class ExecuteContext:
             return
         bound = self._bound.setdefault(id(prog), {})
         unit = bound[sampler][0] if sampler in bound else len(bound)
-        if unit >= self.graph.gpu.max_units - 4:
+        if unit >= self.graph.gpu.binding_units:
             raise GraphError(f"pass {self.pass_.name}: too many textures for one program")
         bound[sampler] = (unit, tex)
 
@@ -320,9 +320,6 @@ class ExecuteContext:
         tex = self.graph._pool_take(spec)
         self._scratch.append(tex)
         return tex
-
-    def scratch_framebuffer(self, tex: moderngl.Texture) -> moderngl.Framebuffer:
-        return self.graph._framebuffer_for((tex,))
 
     def _finish(self):
         for t in self._scratch:

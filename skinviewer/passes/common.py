@@ -17,18 +17,21 @@ def shadow_resource(i: int) -> str:
     return f"shadow_map_{i}"
 
 
-def declare_lighting(r: Reflection) -> list[tuple[int, object]]:
+def declare_lighting(r: Reflection) -> dict[str, int]:
     """Declare what a lit pass reads: every light, the shadow test settings, and the shadow maps
-    of shadow-casting lights. Returns the enabled lights."""
+    of shadow-casting lights. Returns the defines that specialise shaders/lib/lights.glsl to this
+    frame's lights (declare the lit program with them: ``r.program(name, **defines)``)."""
     lights = r.setting("lights")
     r.setting("shadow.tol")
-    r.setting("shadow.pcf")
+    pcf = r.setting("shadow.pcf")
     r.setting("shadow.map_size")
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
-    for i, l in active:
+    mask = 0
+    for slot, (i, l) in enumerate(active):
         if l.cast_shadow:
             r.input(shadow_resource(i))
-    return active
+            mask |= 1 << slot
+    return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_MASK": mask}
 
 
 def set_lighting(ec, prog) -> None:
@@ -74,10 +77,11 @@ def bind_surface(ec, prog) -> None:
 LIT = "lit"  # every technique's linear image, read by the output pass
 
 
-def declare_lit(r: Reflection, program: str) -> None:
-    """A view-dependent final pass: its program and the render-size linear image it writes."""
+def declare_lit(r: Reflection, program: str, **defines) -> None:
+    """A view-dependent final pass: its program (with ``defines``) and the render-size linear image
+    it writes."""
     w, h = r.setting("render.width"), r.setting("render.height")
-    r.program(program)
+    r.program(program, **defines)
     r.output(LIT, TexSpec((w, h), 4, "f2", depth=True))
 
 

@@ -134,14 +134,14 @@ class IrradiancePass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = _size(r)
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         r.setting("deon.mix")
         if r.setting("deon.energy_conservation"):
             declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
         if tsm_light_index(r) is not None:
             r.input(TSM)
-        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"))
+        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting)
 
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
@@ -261,7 +261,7 @@ class DeonFinalPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
         r.setting("deon.mix")
@@ -279,7 +279,7 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
         if tsm and r.setting("deon.stretch"):
             r.input(STRETCH)
-        declare_lit(r, "deon_final")
+        declare_lit(r, "deon_final", **lighting)
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")

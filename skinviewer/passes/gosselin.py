@@ -69,9 +69,9 @@ class GosselinLightMapPass(Pass):
     name = "gosselin_light_map"
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         size = r.setting(SIZE)
-        declare_unwrapped(r, "light_map", size, LIGHT_MAP, _map_spec(size))
+        declare_unwrapped(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
@@ -183,11 +183,11 @@ class GosselinFinalPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         declare_specular(r)
         r.setting("gosselin.specular_shadow")
         r.input(BLURRED)
-        declare_lit(r, "gosselin_final")
+        declare_lit(r, "gosselin_final", **lighting)
 
     def execute(self, ec) -> None:
         prog = ec.program("gosselin_final")

@@ -2,7 +2,14 @@
 from __future__ import annotations
 
 from skinviewer.core.graph import Pass, Reflection
-from skinviewer.passes.common import LIT, bind_surface, declare_lighting, declare_lit, set_camera, set_lighting
+from skinviewer.passes.common import (
+    LIT,
+    bind_surface,
+    declare_lighting,
+    declare_lit,
+    set_camera,
+    set_lighting,
+)
 
 
 class PhongPass(Pass):
@@ -10,9 +17,9 @@ class PhongPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         r.section("phong", ("ambient", "specular", "shininess"))
-        declare_lit(r, "phong")
+        declare_lit(r, "phong", **lighting)
 
     def execute(self, ec) -> None:
         prog = ec.program("phong")

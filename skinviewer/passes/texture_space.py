@@ -36,18 +36,18 @@ class GutterMapPass(Pass):
 
 
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
-    """Draw the mesh with an unwrap program (shaders/lib/unwrap_vs.glsl, seed 000 eq. 8) into a
+    """Draw the mesh with an unwrap program (shaders/vs/unwrap.vert, seed 000 eq. 8) into a
     cleared scratch texture of size x size (nearest filtering; gutters still empty)."""
     tex = ec.scratch(TexSpec((size, size), components, dtype, filter="nearest"))
     ec.draw_mesh(prog, tex, depth_test=False)
     return tex
 
 
-def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec) -> None:
-    """Declare a pass that rasterises ``program`` in texture space and writes ``resource`` with its
-    gutters filled (see unwrap_dilated)."""
+def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec, **defines) -> None:
+    """Declare a pass that rasterises ``program`` (with ``defines``) in texture space and writes
+    ``resource`` with its gutters filled (see unwrap_dilated)."""
     r.input(gutter_resource(size))
-    r.program(program)
+    r.program(program, **defines)
     r.program("dilate")
     r.output(resource, spec)
 
