@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Burley normalized-diffusion blur in screen space (Golubev 2018 / HDRP, spec §5.3; two-level sampling,
 // seed 001 Algorithm 1, spec §7.6). The estimator is in lib/burley.glsl; this file reads the framework's
 // buffers and applies the pixel cutoff: a kernel under floor(pi (radius px)^2 / 4) < 1 sample leaves the

@@ -1,8 +1,12 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // GPU reduction of the Burley statistics texture (samples, extra levels, skipped):
 // STAGE 1 sums each row into a 1 x H texture (exact in float below 2^24 per row);
 // STAGE 2 sums the rows in uint and writes 4096-based (hi, lo) pairs into a 2 x 1 texture:
 // texel 0 = (samples hi, lo, triggered hi, lo), texel 1 = (skipped hi, lo, blurred pixels hi, lo).
+#ifndef STAGE
+#define STAGE 1
+#endif
 #if STAGE == 1
 uniform sampler2D stats;
 out vec4 f_out;

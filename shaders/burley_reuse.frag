@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Neighbourhood reuse of the far Burley samples (a variant beyond seed 001 ch. 4). Every pixel turned its
 // disk by its own hash, so the far samples (>= u_reuse_split px from the centre) of the (2R+1)^2 pixels
 // around p are independent estimates of nearly the same part of the kernel: a 1-px shift is small against
@@ -14,6 +15,9 @@ uniform sampler2D lin_depth;  // ss_depth: r depth (mm), g, b |dz/dx|, |dz/dy| (
 uniform float u_reuse_dz;
 out vec4 f_color;
 const float TINY = 1.17549435e-38;
+#ifndef REUSE_R
+#define REUSE_R 1
+#endif
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 own = texelFetch(partial, p, 0);

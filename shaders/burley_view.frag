@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Burley view modes: 1 = where extra samples were taken (magenta: one extra level, orange: two;
 // blue: SSS pixels under the pixel cutoff) over the lit image; 2 = samples per pixel as a heat map.
 #include "lib/color.glsl"

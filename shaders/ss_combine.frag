@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Screen-space combine (seed 001 §3.1, §3.6): lit = blurred diffuse x albedo^(1-f) + specular;
 // alpha = coverage (the output pass composites the background where it is 0).
 #include "lib/color.glsl"

@@ -10,7 +10,6 @@
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
 #include "lib/screen_space.glsl"
-#define MAX_TG 8
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -27,9 +26,10 @@ uniform float u_tr_scale;            // profile distance per mm of thickness
 uniform float u_tr_div;              // 1: exp(-d^2/v) printed, 2: exact
 uniform float u_tr_wrap;
 uniform int u_tr_count;
-uniform vec3 u_tr_w[MAX_TG];
-uniform float u_tr_v[MAX_TG];
+uniform vec3 u_tr_w[MAX_GAUSSIANS];
+uniform float u_tr_v[MAX_GAUSSIANS];
 uniform mat4 u_light_matrix_inv[MAX_LIGHTS];
+uniform int u_shadow_map_size;
 layout(location = 0) out vec4 o_diffuse;
 layout(location = 1) out vec4 o_specular;
 layout(location = 2) out vec4 o_depth;
@@ -37,7 +37,7 @@ layout(location = 3) out vec4 o_albedo;
 
 vec3 transmittance_profile(float d) {  // T(d) = sum_i w_i exp(-d^2 / (div v_i)), T(0) = sum w_i
     vec3 t = vec3(0.0);
-    for (int i = 0; i < MAX_TG; ++i) {
+    for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_tr_count) break;
         float v = u_tr_v[i];
         t += u_tr_w[i] * (v > 0.0 ? exp(-d * d / (u_tr_div * v)) : (d > 0.0 ? 0.0 : 1.0));
@@ -52,19 +52,36 @@ float shadow_sample(int i, vec2 c) {
     return texture(shadow_map3, c).r;
 }
 
-// Thickness (mm) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
-// map's nearest surface A unprojected, distance to the shrunk point (spec §6.2 step 2-3).
-float thickness_mm(int i, vec3 P, vec3 Ng) {
+// T(thickness) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
+// map's nearest surface A unprojected, its distance (mm) to the point shrunk by a shadow texel along
+// the normal (spec §6.2 steps 2-4). T is averaged over 3x3 shadow texels: the thickness of nearly lit
+// points is a texel-quantised few tenths of a mm, which would print the shadow map's grid as moire.
+vec3 transmitted(int i, vec3 P, vec3 Ng) {
     vec3 Ps = P - Ng * u_shadow_texel[i];
     vec4 p = u_light_matrix[i] * vec4(Ps, 1.0);
-    if (!(p.w > 0.0)) return 1e4;
+    if (!(p.w > 0.0)) return vec3(0.0);
     vec3 c = p.xyz / p.w * 0.5 + 0.5;
-    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return 1e4;
-    float ds = shadow_sample(i, c.xy);
-    if (ds >= 1.0) return 1e4;
-    vec4 a = u_light_matrix_inv[i] * vec4(c.xy * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
-    if (!(abs(a.w) > 1e-30)) return 1e4;
-    return length(a.xyz / a.w - Ps) * u_mm_per_unit;
+    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return vec3(0.0);
+    vec2 texel = 1.0 / vec2(u_shadow_map_size);
+    vec3 Lv = (u_light_kind[i] == LIGHT_POINT) ? normalize(u_light_pos[i] - Ps) : u_light_dir[i];
+    // a lit point's own depth differs from the texel-centre depth by up to tan(N, L) / 2 texels:
+    // that much thickness is quantisation, not tissue (the slope-scaled tolerance of the shadow test)
+    float nl = abs(dot(Ng, Lv));
+    float tan_nl = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.25);
+    float tol_mm = u_shadow_texel[i] * (0.5 + 0.5 * tan_nl) * u_mm_per_unit;
+    vec3 t = vec3(0.0);
+    for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
+        vec2 cc = c.xy + vec2(x, y) * texel;
+        float ds = shadow_sample(i, cc);
+        if (ds >= 1.0) continue;  // no surface in front: nothing crossed
+        vec4 a = u_light_matrix_inv[i] * vec4(cc * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
+        if (!(abs(a.w) > 1e-30)) continue;
+        vec3 A = a.xyz / a.w;
+        // the distance along the light (not the lateral texel offset), less the quantisation
+        float d_mm = max(abs(dot(A - Ps, Lv)) * u_mm_per_unit - tol_mm, 0.0);
+        t += transmittance_profile(d_mm * u_tr_scale);
+    }
+    return t / 9.0;
 }
 
 void main() {
@@ -76,7 +93,7 @@ void main() {
     vec3 A = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);
     vec3 E = vec3(0.0), spec = vec3(0.0), T = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);
@@ -88,7 +105,7 @@ void main() {
         if (u_tr != 0 && u_light_shadowed[i] != 0) {
             // eq. 3.15 with [SEP]'s wrap: back-side irradiance through the inverted vertex normal
             float back = clamp(u_tr_wrap + dot(L, -Ng), 0.0, 1.0);
-            if (back > 0.0) T += Lc * back * transmittance_profile(thickness_mm(i, v_position, Ng) * u_tr_scale);
+            if (back > 0.0) T += Lc * back * transmitted(i, v_position, Ng);
         }
     }
     float mask = 1.0;

@@ -10,10 +10,40 @@
 //   BURLEY_BUDGET 1: HDRP's adaptive count n <= floor(area / 4 px) (runtime tables below the base count);
 //   BURLEY_ALWAYS 1: take every level without a contrast test (the pooled Golubev estimator).
 // The includer defines  bool burley_fetch(ivec2 q, out vec3 E, out float z)  (false: not an SSS sample).
+// Without the pass's defines (a plain compile check) it builds a one-sample Golubev set.
+#ifndef SKINVIEWER_BURLEY_GLSL
+#define SKINVIEWER_BURLEY_GLSL
+#ifndef N_SET0
+#define N_SET0 1
+#define SET0_X_TABLE float[1](1.552183)
+#define SET0_RCP_TABLE float[1](31.11039)
+#define SET0_CS_TABLE vec2[1](vec2(1.0, 0.0))
+#define N_INNER 1
+#endif
+#ifndef N_SET1
+#define N_SET1 0
+#endif
+#ifndef N_SET2
+#define N_SET2 0
+#endif
+#ifndef CONTRAST_MINMAX
+#define CONTRAST_MINMAX 0
+#endif
+#ifndef BURLEY_BUDGET
+#define BURLEY_BUDGET 0
+#endif
+#ifndef BURLEY_ALWAYS
+#define BURLEY_ALWAYS 0
+#endif
+#ifndef BURLEY_REUSE
+#define BURLEY_REUSE 0
+#endif
+#ifndef BURLEY_FILTER_RADIUS_UNIT
+#define BURLEY_FILTER_RADIUS_UNIT 16.564399  // P^-1(0.997): the filter radius in units of d (physics/burley.py)
+#endif
 
 const float BURLEY_PI = 3.14159265358979;
 const float BURLEY_GOLDEN_RATIO = 1.618033988749895;
-const float BURLEY_FILTER_RADIUS_UNIT = 16.564398753;  // P^-1(0.997): the filter radius in units of d
 
 uniform vec3 u_S;         // S_c = 1/d_c per channel, 1/mm
 uniform float u_d;        // d = max_c d_c, mm (the channel that is importance-sampled)
@@ -61,7 +91,7 @@ struct BurleyState {
 };
 
 BurleyState burley_state() {
-    return BurleyState(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, vec3(1e30), vec3(-1e30), 0.0, vec3(0.0),
+    return BurleyState(vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, vec3(FLOAT_MAX), vec3(-FLOAT_MAX), 0.0, vec3(0.0),
                        vec3(0.0));
 }
 
@@ -196,3 +226,4 @@ vec3 burley_sss(ivec2 p, float zc, float ppm, float n_avail, out float count, ou
     fin = st;
     return (st.acc + st.acc_o) / max(st.wsum + st.wsum_o, vec3(1.17549435e-38));
 }
+#endif

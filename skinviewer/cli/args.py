@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import get_args
 
 from skinviewer.core.settings import (
     Settings,
@@ -38,7 +39,7 @@ def add_scene_args(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("scene and settings")
     g.add_argument("--scene", choices=SCENES, help="built-in scene (brings its own lights and camera)")
     g.add_argument("--mesh", help="glTF/GLB/OBJ/PLY mesh to render instead of a built-in scene")
-    g.add_argument("--technique", help="phong, gosselin or deon")
+    g.add_argument("--technique", help=", ".join(get_args(Settings.model_fields["technique"].annotation)))
     g.add_argument("--preset", help="preset JSON (a partial preset overrides the defaults)")
     g.add_argument("--set", dest="assign", action="append", default=[], metavar="KEY=VALUE",
                    help="set any setting by dotted path, e.g. --set lights.0.intensity=4 (repeatable)")

@@ -318,7 +318,8 @@ class TransmittanceSettings(_Model):
         0.83, ge=0.0, le=0.999, description="[SEP] translucency: profile distance = 2.75 (1 - t) x thickness (mm)")
     form: Literal["printed", "exact"] = Field(
         "printed", description="printed: exp(-d^2/v_i) (eq. 3.18, [SEP]); exact: exp(-d^2/(2 v_i))")
-    wrap: float = Field(0.3, ge=0.0, le=1.0, description="[SEP] wrap: T(d) x saturate(wrap + L.(-N)) (0: eq. 3.15)")
+    wrap: float = Field(0.0, ge=0.0, le=1.0, description="T(d) x saturate(wrap + L.(-N)): 0 = eq. 3.15; [SEP] uses 0.3 "
+                        "(a wrap-lighting glow along the terminator)")
 
 
 def _odd(v: int) -> int:

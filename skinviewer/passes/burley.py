@@ -75,7 +75,7 @@ def table_defines(plan: Plan, budget: bool) -> dict[str, str]:
             "N_INNER": str(int(np.count_nonzero(sets[0].inner))),
             "CONTRAST_MINMAX": "1" if plan.contrast == "minmax" else "0",
             "BURLEY_BUDGET": "1" if budget else "0", "BURLEY_ALWAYS": "1" if plan.always else "0",
-            "BURLEY_REUSE": "1" if plan.reuse else "0"}
+            "BURLEY_REUSE": "1" if plan.reuse else "0", "BURLEY_FILTER_RADIUS_UNIT": repr(B.FILTER_RADIUS_UNIT)}
     if not np.all(sets[0].inner[:np.count_nonzero(sets[0].inner)]):
         raise ValueError("inner ring must be the first samples by radius")
     for k, s in enumerate(sets):

@@ -35,7 +35,7 @@ from skinviewer.ui.screenshot import ScreenshotOptions, read_screen, timestamped
 PREFERRED_TECHNIQUES = ("deon", "gosselin", "phong")
 DEFAULT_WINDOW = (1280, 800)
 FALLBACK_SCENE = "backlit-ear"
-TECHNIQUE_KEYS = ("phong", "gosselin", "deon")  # keys 1 / 2 / 3
+TECHNIQUE_KEYS = tuple(techniques.names())[:9]  # keys 1..9 in registry order
 
 
 def best_technique(preferred: str | None = None) -> str:
@@ -647,8 +647,10 @@ class ViewerApp(mglw.WindowConfig):
         from imgui_bundle import imgui
         if self.show_ui and imgui.get_io().want_capture_keyboard:
             return
-        tech_keys = {keys.NUMBER_1: 0, keys.NUMBER_2: 1, keys.NUMBER_3: 2,
-                     getattr(keys, "NUMPAD_1", -1): 0, getattr(keys, "NUMPAD_2", -1): 1, getattr(keys, "NUMPAD_3", -1): 2}
+        tech_keys = {}
+        for k in range(len(TECHNIQUE_KEYS)):
+            tech_keys[getattr(keys, f"NUMBER_{k + 1}", -1)] = k
+            tech_keys[getattr(keys, f"NUMPAD_{k + 1}", -2)] = k
         if key == keys.R:
             self.reset_camera()
             self.say("camera reset (R)")

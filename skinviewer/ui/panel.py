@@ -39,7 +39,7 @@ TEX_COL = imgui.ImVec4(0.35, 0.6, 1.0, 1.0)  # texture-space cost
 VIEW_COL = imgui.ImVec4(1.0, 0.62, 0.3, 1.0)  # view-dependent cost
 SHORTCUTS = (
     ("LMB drag (view)", "orbit"), ("MMB / Shift+LMB drag", "pan"), ("wheel", "zoom"),
-    ("RMB drag (view)", "move the key light"), ("R", "reset view"), ("1 / 2 / 3", "phong / gosselin / d'Eon"),
+    ("RMB drag (view)", "move the key light"), ("R", "reset view"), ("1 / 2 / 3 / ...", " / ".join(techniques.names())),
     ("F1", "hide / show the UI"), ("F12", "screenshot"), ("Ctrl+S", "save preset (new file if none)"),
     ("Space", "A/B: toggle A and B (compare on)"), ("Esc", "leave the pass inspector"),
 )
@@ -234,7 +234,7 @@ class Panel:
         names = techniques.names()
         cur = names.index(app.settings.technique) if app.settings.technique in names else 0
         imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
-        ch, i = imgui.combo("technique (1/2/3)", cur, names)
+        ch, i = imgui.combo("technique (1/2/3/...)", cur, names)
         if ch:
             app.set_technique(names[i])
         if imgui.is_item_hovered():
@@ -389,6 +389,18 @@ class Panel:
                 wrapped("! " + w, WARN)
             self._change_line(("deon",))
             self._profile_plot()
+        screen = s.technique in ("ssss", "separable", "burley", "burley2")
+        if _header(f"Jimenez 2009{tag[s.technique == 'ssss']}###ssss", s.technique == "ssss"):
+            wrapped("seed 001 §3.2, eq. 3.2: one screen-space blur per Gaussian of the d'Eon profile, "
+                    "width alpha / (depth + beta |depth gradient|)")
+            edit_model(s.ssss, "ssss", edits)
+            self._change_line(("ssss",))
+        if _header(f"Jimenez 2015 separable{tag[s.technique == 'separable']}###separable",
+                   s.technique == "separable"):
+            wrapped("seed 001 §3.3: one pre-integrated separable kernel (strength / falloff), follow surface, "
+                    "inner taps rotated per pixel")
+            edit_model(s.separable, "separable", edits)
+            self._change_line(("separable",))
         if _header(f"Burley / Golubev 2018{tag[s.technique == 'burley']}###burley", s.technique in ("burley", "burley2")):
             wrapped("seed 001 §3.4, eq. 2.83-2.89, 3.9-3.13: Burley normalized diffusion sampled on a disk in screen "
                     "space (HDRP); its profile is also burley2's")
@@ -401,6 +413,19 @@ class Panel:
                     "threshold; burley.view = extra shows where")
             edit_model(s.burley2, "burley2", edits)
             self._change_line(("burley2",))
+        if _header("Screen space: texturing, mask, transmittance###screen", screen):
+            wrapped("seed 001 §3.5-3.6: texturing mode, non-skin regions, Jimenez 2010 transmittance")
+            edit_model(s.screen, "screen", edits)
+            imgui.text("not skin (no blur, nothing bleeds in):")
+            for k, reg in enumerate(REGIONS):
+                if k % 3:
+                    imgui.same_line()
+                ch, on = imgui.checkbox(f"{reg}##nonskin", reg in s.screen.non_skin_regions)
+                if ch:
+                    edits.set("screen.non_skin_regions",
+                              [r for r in REGIONS if (r == reg and on) or (r != reg and r in s.screen.non_skin_regions)])
+            edit_model(s.transmittance, "transmittance", edits)
+            self._change_line(("screen", "transmittance"))
         if _header("Specular (Kelemen / Szirmay-Kalos)###Specular"):
             wrapped("seed 000 eq. 14-16 (gosselin, deon)")
             edit_model(s.specular, "specular", edits, skip=("per_region",))

@@ -22,7 +22,4 @@ class CombinePass(Pass):
     def execute(self, ec) -> None:
         prog = ec.program("ss_combine")
         ec.textures(prog, diffuse=self.source, specular=SPECULAR, albedo=ALBEDO)
-        fbo = ec.framebuffer(LIT)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
         ec.draw_fullscreen(prog, LIT)

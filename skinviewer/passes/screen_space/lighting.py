@@ -1,14 +1,11 @@
 """The screen-space lighting pass (see the package docstring for the contract)."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
 from skinviewer.core.graph import Pass, Reflection, TexSpec
-from skinviewer.core.settings import REGIONS
 from skinviewer.passes.common import (
-    MAX_LIGHTS,
     bind_specular,
     bind_surface,
     declare_lighting,
@@ -16,25 +13,19 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
+from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
+from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
 from skinviewer.scene.camera import gl_bytes, light_space
 
 DIFFUSE = "ss_diffuse"
 SPECULAR = "ss_specular"
 DEPTH = "ss_depth"
 ALBEDO = "ss_albedo"
-MAX_TR_GAUSSIANS = 8
-# [SEP] SSSSTransmittance: scale = 8.25 (1 - translucency) / sssWidth, sssWidth <-> 3 mm of profile
-TR_SCALE = 8.25 / 3.0
 
 
 def screen_size(r) -> tuple[int, int]:
     """The render size (declares render.width/height)."""
     return int(r.setting("render.width")), int(r.setting("render.height"))
-
-
-def focal_px(fov_y_deg: float, height: int) -> float:
-    """Pixels per unit length at unit depth: H / (2 tan(fov_y / 2))."""
-    return height / (2.0 * math.tan(math.radians(fov_y_deg) / 2.0))
 
 
 def texturing_exponent(texturing: str, mix: float) -> float:
@@ -45,7 +36,8 @@ def texturing_exponent(texturing: str, mix: float) -> float:
 class ScreenLightingPass(Pass):
     """Diffuse (x albedo^f, + transmittance), specular, linear depth + gradient, SSS mask and
     the post-scatter albedo, from the camera. ``transmittance_profile`` is the settings path of a
-    list of Gaussians (variance mm^2, RGB weights) whose T(d) the transmittance uses."""
+    list of Gaussians (variance mm^2, RGB weights) whose T(d) the transmittance uses; a technique
+    with another profile overrides ``transmittance_gaussians``."""
     name = "ss_lighting"
     view_dependent = True
 
@@ -53,16 +45,14 @@ class ScreenLightingPass(Pass):
         self.transmittance_profile = transmittance_profile
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        defines = declare_lighting(r)
         declare_specular(r)
-        r.setting("screen.texturing")
-        r.setting("screen.mix")
-        r.setting("screen.non_skin_regions")
+        r.section("screen", ("texturing", "mix", "non_skin_regions"))
         if r.setting("transmittance.enabled"):
-            r.setting("transmittance")
+            r.section("transmittance", ("translucency", "form", "wrap"))
             r.setting(self.transmittance_profile)
         size = screen_size(r)
-        r.program("ss_lighting")
+        r.program("ss_lighting", **defines)
         r.output(DIFFUSE, TexSpec(size, 4, "f4", depth=True))
         r.output(SPECULAR, TexSpec(size, 4, "f2"))
         r.output(DEPTH, TexSpec(size, 4, "f4", filter="nearest"))
@@ -75,40 +65,36 @@ class ScreenLightingPass(Pass):
         prog = ec.program("ss_lighting")
         scene = ec.scene
         set_camera(ec, prog)
-        ec.set(prog, "u_view", gl_bytes(ec.view.view))
-        ec.set(prog, "u_mm_per_unit", float(scene.mm_per_unit), optional=True)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         bind_specular(ec, prog)
-        f = texturing_exponent(ec.setting("screen.texturing"), ec.setting("screen.mix"))
-        ec.set(prog, "u_mix", float(f), optional=True)
-        non_skin = set(ec.setting("screen.non_skin_regions"))
+        sc = ec.section("screen", ("texturing", "mix", "non_skin_regions"))
+        non_skin = set(sc.non_skin_regions)
         sss = np.array([0.0 if name in non_skin else 1.0 for name in REGIONS], np.float32)
-        ec.set(prog, "u_region_sss", sss, optional=True)
-        ec.set(prog, "u_has_regions", 1 if scene.has_region_map and non_skin else 0, optional=True)
+        ec.uniforms(prog, u_view=gl_bytes(ec.view.view), u_mm_per_unit=float(scene.mm_per_unit),
+                    u_mix=float(texturing_exponent(sc.texturing, sc.mix)), u_region_sss=sss,
+                    u_has_regions=bool(scene.has_region_map and non_skin))
         self._transmittance(ec, prog)
         ec.draw_mesh(prog, DIFFUSE, SPECULAR, DEPTH, ALBEDO)
 
     def _transmittance(self, ec, prog) -> None:
         on = bool(ec.setting("transmittance.enabled"))
-        ec.set(prog, "u_tr", 1 if on else 0, optional=True)
+        ec.set(prog, "u_tr", on)
         if not on:
             return
-        tr = ec.setting("transmittance")
-        gs = self.transmittance_gaussians(ec)[:MAX_TR_GAUSSIANS]
-        w = np.zeros((MAX_TR_GAUSSIANS, 3), np.float32)
-        v = np.zeros(MAX_TR_GAUSSIANS, np.float32)
+        tr = ec.section("transmittance", ("translucency", "form", "wrap"))
+        gs = self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
+        w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+        v = np.zeros(MAX_GAUSSIANS, np.float32)
         for i, (var, wt) in enumerate(gs):
             w[i], v[i] = wt, var
-        ec.set(prog, "u_tr_w", w, optional=True)
-        ec.set(prog, "u_tr_v", v, optional=True)
-        ec.set(prog, "u_tr_count", len(gs), optional=True)
-        ec.set(prog, "u_tr_scale", float(TR_SCALE * (1.0 - tr.translucency)), optional=True)
-        ec.set(prog, "u_tr_div", 1.0 if tr.form == "printed" else 2.0, optional=True)
-        ec.set(prog, "u_tr_wrap", float(tr.wrap), optional=True)
         scene = ec.scene
-        inv = np.tile(np.eye(4, dtype=np.float32), (4, 1, 1))
+        inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
         active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if l.enabled]
         for slot, l in enumerate(active):
-            inv[slot] = np.linalg.inv(light_space(l, scene.center, scene.radius).gl_matrix).T
-        ec.set(prog, "u_light_matrix_inv", np.ascontiguousarray(inv, np.float32).tobytes(), optional=True)
+            inv[slot] = np.linalg.inv(light_space(l, scene.center, scene.radius).gl_matrix).T  # column-major
+        # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
+        ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs),
+                    u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM),
+                    u_tr_div=1.0 if tr.form == "printed" else 2.0, u_tr_wrap=float(tr.wrap),
+                    u_light_matrix_inv=inv, u_shadow_map_size=int(ec.setting("shadow.map_size")))

@@ -1,0 +1,50 @@
+"""A separable screen-space blur: a horizontal pass into a scratch texture, a vertical pass into
+the output (spec §4.2 "run twice"). Subclasses declare their settings and program (``declare``)
+and set their uniforms (``set_uniforms``); the program reads ``source``, ``depth_tex`` and
+``u_dir``."""
+from __future__ import annotations
+
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.screen_space.lighting import DEPTH, screen_size
+
+
+def blur_spec(r) -> TexSpec:
+    return TexSpec(screen_size(r), 4, "f4")
+
+
+class SeparableScreenBlur(Pass):
+    """``source`` -> ``output``: rgb blurred, alpha (the SSS mask) kept. Reads ss_depth too."""
+    uses_scene = False
+
+    def __init__(self, name: str, source: str, output: str):
+        self.name = name
+        self.source = source
+        self.output = output
+
+    def declare(self, r: Reflection) -> bool:
+        """Declare the pass's settings and its program; False: not part of this frame's graph."""
+        raise NotImplementedError
+
+    def program(self, ec):
+        raise NotImplementedError
+
+    def set_uniforms(self, ec, prog) -> None:
+        raise NotImplementedError
+
+    def reflect(self, r: Reflection) -> None:
+        if not self.declare(r):
+            return
+        r.input(self.source)
+        r.input(DEPTH)
+        r.output(self.output, blur_spec(r))
+
+    def execute(self, ec) -> None:
+        prog = self.program(ec)
+        self.set_uniforms(ec, prog)
+        tmp = ec.scratch(blur_spec(ec))
+        ec.textures(prog, source=self.source, depth_tex=DEPTH)
+        ec.set(prog, "u_dir", (1.0, 0.0))
+        ec.draw_fullscreen(prog, tmp)
+        ec.bind(prog, "source", tmp)
+        ec.set(prog, "u_dir", (0.0, 1.0))
+        ec.draw_fullscreen(prog, self.output)
