@@ -200,7 +200,7 @@ def main(argv=None) -> int:
             verdict.setdefault(k, []).append((np.mean(saved), d30 <= float(np.mean(g22.d30)) + 1e-12,
                                               dref <= float(np.mean(g22.dref)) + 1e-12 if not math.isnan(dref) else None))
         print()
-    print(f"thesis: 40 / 42 / 44 % saved (exact 39.3 / 41.6 / 43.1 %), ceiling 1 - 12/22 = 45.45 %")
+    print("thesis: 40 / 42 / 44 % saved (exact 39.3 / 41.6 / 43.1 %), ceiling 1 - 12/22 = 45.45 %")
     print("Target: >= 55 % fewer samples than golubev-22 at equal-or-better DSSIM to the 30-sample image, all framings")
     for k, v in verdict.items():
         if k == BASELINE:

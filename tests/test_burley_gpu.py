@@ -2,12 +2,13 @@
 spec §12.4 (T4.1-T4.7) and §12.6 (T6.1-T6.4), and agreement with the numpy reference."""
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 import pytest
-
 from burley_gpu import Harness, plane, proj_scale
+
 from skinviewer.passes import burley as PB
 from skinviewer.physics import burley as B
 
@@ -71,7 +72,7 @@ def test_glsl_matches_the_numpy_reference(harness, variant, plan, assign):
     out, stats, cnt = h.run(E, z, mask, **a)
     from skinviewer.core.settings import Settings, get_path, with_values
     s = with_values(Settings(), a)
-    get = lambda p: get_path(s, p)  # noqa: E731
+    get = lambda p: get_path(s, p)
     pl = PB.golubev_plan(get) if variant == "golubev" else PB.two_level_plan(get)
     ref = B.blur(E, z, mask, _profile(D_RGB), proj_scale(z.shape[0]), pl.sampling(s.burley.budget))
     agree = np.all(np.abs(out - ref.out) <= 2e-4 * np.maximum(1.0, np.abs(ref.out)), axis=-1)
@@ -98,7 +99,7 @@ def _edge_run(h, n, rows=4096, w=136, x0=68, dpx=2.5):
     d = dpx * z / proj_scale(rows)
     E = np.zeros((rows, w, 3))
     E[:, x0:] = 1.0
-    out, stats, _ = h.run(E, np.full((rows, w), z), np.ones((rows, w)),
+    out, _, _ = h.run(E, np.full((rows, w), z), np.ones((rows, w)),
                           **DIRECT, **_mfp(d), **{"burley.samples": n})
     t = (np.arange(w) + 0.5 - x0) / dpx
     return t, out[..., 0]
@@ -234,7 +235,7 @@ def test_contrast_sanity_t62_monotonicity_t63_accounting_t64(harness):
         saved = B.samples_saved(c.samples, 22 * c.pixels)
         assert -1e-12 <= saved <= 1 - 12 / 22 + 1e-12
     assert fr[0] == 1.0 and fr[-1] == 0.0
-    assert all(x >= y for x, y in zip(fr, fr[1:]))  # fewer triggers as the cutoff rises
+    assert all(x >= y for x, y in itertools.pairwise(fr))  # fewer triggers as the cutoff rises
 
 
 def test_sample_count_reaches_the_pass_report(harness):

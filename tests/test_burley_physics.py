@@ -2,6 +2,7 @@
 numpy reference. The GLSL is checked against this reference in test_burley_gpu.py."""
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -161,7 +162,7 @@ def test_contrast_sanity_per_channel_t62():
 def test_threshold_monotonicity_t63():
     E, z, m = _edge()
     fr = [(B.blur(E, z, m, PROF, PS, B.Sampling((12, 10), (t,))).level > 0).mean() for t in (0.0, 0.1, 0.25, 0.5, 0.9)]
-    assert all(a >= b for a, b in zip(fr, fr[1:])) and fr[0] > fr[-1]
+    assert all(a >= b for a, b in itertools.pairwise(fr)) and fr[0] > fr[-1]
 
 
 def test_pixel_cutoff_and_budget_follow_the_kernel_area():

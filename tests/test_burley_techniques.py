@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from burley_gpu import Harness, plane
 from helpers import assert_all_finite, small_settings
+
 from skinviewer.core.settings import SettingsError, with_values
 from skinviewer.passes import burley as PB
 from skinviewer.physics import burley as B

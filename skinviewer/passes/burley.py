@@ -9,7 +9,6 @@ A the base contrast (max channel; -1 where none was computed). ``BurleyCountPass
 on the GPU (a two-stage reduction) and puts the frame's sample count in the pass report."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -238,7 +237,7 @@ class SampleCount:
 
 
 def _split(hi: float, lo: float) -> int:
-    return int(round(hi)) * 4096 + int(round(lo))
+    return round(float(hi)) * 4096 + round(float(lo))
 
 
 class BurleyCountPass(Pass):
@@ -253,7 +252,7 @@ class BurleyCountPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         r.input(STATS)
-        h = r.setting("render.height")
+        r.setting("render.height")
         r.setting("render.width")
         r.program("burley_count", STAGE="1")
         r.program("burley_count", STAGE="2")
@@ -307,12 +306,3 @@ class BurleyOutputPass(OutputPass):
         self.source = "lit" if r.setting("burley.view") == "image" else VIEW
         super().reflect(r)
 
-
-def kernel_pixels(prof: B.Profile, z_mm: float, proj_scale: float) -> float:
-    """The filter radius in pixels at depth z (spec §5.3 step 2-3)."""
-    return prof.filter_radius * proj_scale / max(z_mm, 1e-6)
-
-
-def pixel_cutoff_radius() -> float:
-    """The kernel radius (px) under which a pixel is not blurred: pi r^2 / 4 < 1 -> r < 2/sqrt(pi)."""
-    return 2.0 / math.sqrt(math.pi)

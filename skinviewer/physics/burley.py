@@ -22,7 +22,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from skinviewer.physics.profiles import burley_cdf, burley_inverse_cdf, burley_normalized, burley_scale
+from skinviewer.physics.profiles import (
+    burley_cdf,
+    burley_inverse_cdf,
+    burley_normalized,
+    burley_scale,
+)
 
 GOLDEN_RATIO = 1.618033988749895
 GOLDEN_ANGLE = 2.0 * math.pi * (2.0 - GOLDEN_RATIO)  # 2.399963229728653 rad
@@ -180,7 +185,7 @@ def transmittance_numeric(t: float, S: float, A: float = 1.0) -> float:
     """The defining integral, by quadrature (for tests)."""
     from scipy.integrate import quad
     d = 1.0 / S
-    f = lambda r: 2.0 * math.pi * r * A * float(burley_normalized(math.hypot(r, t), d))  # noqa: E731
+    f = lambda r: 2.0 * math.pi * r * A * float(burley_normalized(math.hypot(r, t), d))
     return quad(f, 0.0, np.inf, limit=400, epsabs=1e-12)[0]
 
 
