@@ -9,8 +9,12 @@ from pathlib import Path
 
 import pytest
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
+# CI clones the project with shared/ beside the checkout: ../shared from the project root
+SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")
 LPS_GLB = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
+NEEDS_SCAN = pytest.mark.skipif(
+    not LPS_GLB.is_file(),
+    reason=f"needs the shared Lee Perry-Smith scan at {LPS_GLB} (../shared beside the checkout, or SKINVIEWER_SHARED)")
 
 
 _XVFB = None

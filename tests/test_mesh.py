@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from conftest import LPS_GLB
+from conftest import LPS_GLB, NEEDS_SCAN
 
 from skinviewer.scene.mesh import (
     MeshData,
@@ -76,7 +76,7 @@ def test_bad_texture_map_is_refused(tmp_path):
         load_texture_maps(m, albedo=bad)
 
 
-@pytest.mark.skipif(not LPS_GLB.is_file(), reason="shared Lee Perry-Smith scan not present")
+@NEEDS_SCAN
 def test_lee_perry_smith_loads():
     m = load_mesh(LPS_GLB)
     assert m.positions.shape == (9279, 3) and m.indices.shape == (17684, 3)
@@ -88,7 +88,7 @@ def test_lee_perry_smith_loads():
     assert np.all(np.isfinite(m.tangents)) and np.all(np.isfinite(m.normals))
 
 
-@pytest.mark.skipif(not LPS_GLB.is_file(), reason="shared Lee Perry-Smith scan not present")
+@NEEDS_SCAN
 def test_lee_perry_smith_renders(renderer):
     from helpers import assert_all_finite
 

@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -42,7 +43,20 @@ def shader_dir(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def app(display, shader_dir):
+def user_presets(tmp_path_factory):
+    """Presets the viewer saves without a path go to a private user folder, never ~/.config."""
+    d = tmp_path_factory.mktemp("user_presets")
+    old = os.environ.get("SKINVIEWER_USER_PRESETS")
+    os.environ["SKINVIEWER_USER_PRESETS"] = str(d)
+    yield d
+    if old is None:
+        os.environ.pop("SKINVIEWER_USER_PRESETS", None)
+    else:
+        os.environ["SKINVIEWER_USER_PRESETS"] = old
+
+
+@pytest.fixture(scope="module")
+def app(display, shader_dir, user_presets):
     pytest.importorskip("imgui_bundle")
     from skinviewer.core.settings import Settings, with_values
     from skinviewer.scene.scenes import scene_overrides
@@ -51,7 +65,7 @@ def app(display, shader_dir):
                                  "gosselin.light_map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
     try:
         a = create_app(s, size=(W, H), vsync=False)
-        a.frame_budget_ms = None  # one complete frame per step (spreading is tested on its own)
+        a.frame.set_frame_budget(None)  # one complete frame per step (spreading is tested on its own)
     except RuntimeError as exc:
         pytest.skip(f"cannot open a window: {exc}")
     assert str(a.shaders.root) == str(shader_dir)
@@ -62,16 +76,23 @@ def app(display, shader_dir):
 
 def _screen(app) -> np.ndarray:
     from skinviewer.ui.screenshot import read_screen
-    return read_screen(app.ctx, (app.settings.render.width, app.settings.render.height)).astype(np.float32)
+    return read_screen(app.ctx, (app.state.settings.render.width, app.state.settings.render.height)).astype(np.float32)
+
+
+def _screen_view(app) -> np.ndarray:
+    """The 3D view region of the window's back buffer."""
+    from skinviewer.ui.screenshot import read_screen
+    fb = app.frame.layout.view_fb
+    return read_screen(app.ctx, fb[2:], origin=fb[:2]).astype(np.float32)
 
 
 def _view_image(app) -> np.ndarray:
-    return app.renderer.image(app.settings).astype(np.float32)
+    return app.renderer.image(app.state.settings).astype(np.float32)
 
 
 def _view_hw(app) -> tuple[int, int]:
     """(height, width) of the 3D view region in framebuffer pixels."""
-    return app.layout.view_fb[3], app.layout.view_fb[2]
+    return app.frame.layout.view_fb[3], app.frame.layout.view_fb[2]
 
 
 def _key(app, key, ctrl=False):
@@ -93,7 +114,7 @@ def _settle(app, max_frames: int = 30) -> None:
 
 
 def _in_view(app) -> tuple[float, float]:
-    vx, vy, vw, vh = app.layout.view
+    vx, vy, vw, vh = app.frame.layout.view
     return vx + vw * 0.7, vy + vh * 0.6
 
 
@@ -122,27 +143,26 @@ def test_cli_frames_screenshot_exits_with_image(display, tmp_path):
 
 
 def test_window_renders_subject_and_ui(app):
-    from skinviewer.ui import panel
-    assert app.report is not None and not app.render_error
+    assert app.frame.report is not None and not app.frame.render_error
     img = _view_image(app)
     assert img.shape == (*_view_hw(app), 3) and img.std() > 10
-    panel.EXPAND_ALL["on"] = True  # draw every section and widget once: no imgui misuse anywhere
+    app.state.set_expand_all(True)  # draw every section and widget once: no imgui misuse anywhere
     try:
         app.step(2)
     finally:
-        panel.EXPAND_ALL["on"] = False
-    assert "UI:" not in app.render_error
+        app.state.set_expand_all(False)
+    assert "UI:" not in app.frame.render_error
 
 
 def test_orbit_changes_image_texture_space_cached(app):
-    g = app.renderer.graph(app.settings.technique)
+    g = app.renderer.graph(app.state.settings.technique)
     app.step(1)
     before = _view_image(app)
-    yaw0 = app.settings.camera.yaw
+    yaw0 = app.state.settings.camera.yaw
     _drag(app, W - 40, H - 40, 30, 10, app.wnd.mouse.left)
-    assert app.settings.camera.yaw != yaw0
+    assert app.state.settings.camera.yaw != yaw0
     app.step(1)
-    rep = app.report
+    rep = app.frame.report
     after = _view_image(app)
     assert np.abs(after - before).mean() > 0.5
     view_dep = {p.name for p in g.passes if p.view_dependent}
@@ -152,25 +172,25 @@ def test_orbit_changes_image_texture_space_cached(app):
     assert all(rep.passes[[q.name for q in rep.passes].index(n)].status in ("cached", "pruned")
                for n in texture_space), rep.table()
     # wheel zoom, middle-drag pan, right-drag key light, R reset
-    d0 = app.settings.camera.distance
+    d0 = app.state.settings.camera.distance
     app.on_mouse_position_event(W - 40, H - 40, 0, 0)
     app.on_mouse_scroll_event(0, 1)
-    assert app.settings.camera.distance != d0
+    assert app.state.settings.camera.distance != d0
     _drag(app, W - 40, H - 40, 10, 5, app.wnd.mouse.middle)
-    assert app.settings.camera.target is not None
-    dir0 = app.settings.lights[0].direction
+    assert app.state.settings.camera.target is not None
+    dir0 = app.state.settings.lights[0].direction
     _drag(app, W - 40, H - 40, 25, 0, app.wnd.mouse.right)
-    assert app.settings.lights[0].direction != dir0
+    assert app.state.settings.lights[0].direction != dir0
     app.on_key_event(app.wnd.keys.R, app.wnd.keys.ACTION_PRESS, app.wnd.modifiers)
-    assert app.settings.camera.model_dump(mode="json") == app.home_camera
+    assert app.state.settings.camera.model_dump(mode="json") == app.state.home_camera
     app.step(1)
 
 
 def test_drag_over_panel_does_not_orbit(app):
     app.step(1)
-    yaw0 = app.settings.camera.yaw
+    yaw0 = app.state.settings.camera.yaw
     _drag(app, 20, 120, 40, 0, app.wnd.mouse.left)  # on the settings panel
-    assert app.settings.camera.yaw == yaw0
+    assert app.state.settings.camera.yaw == yaw0
 
 
 def test_switch_technique_changes_image(app):
@@ -179,17 +199,17 @@ def test_switch_technique_changes_image(app):
     other = next(t for t in names if t != "phong") if len(names) > 1 else None
     if other is None:
         pytest.skip("only one technique available")
-    assert app.set_technique("phong")
+    assert app.state.set_technique("phong")
     app.step(1)
     phong = _view_image(app)
-    assert app.set_technique(other)
+    assert app.state.set_technique(other)
     app.step(1)
     img = _view_image(app)
     assert np.abs(img - phong).mean() > 0.5
-    assert app.set_technique("phong")
+    assert app.state.set_technique("phong")
     app.step(1)
-    assert app.report.ran == [], "switching back should find the phong graph cached"
-    assert not app.set_technique("nonexistent-technique") and app.errors
+    assert app.frame.report.ran == [], "switching back should find the phong graph cached"
+    assert not app.state.set_technique("nonexistent-technique") and app.state.errors
 
 
 def test_broken_preset_refused_state_kept(app, tmp_path):
@@ -197,24 +217,24 @@ def test_broken_preset_refused_state_kept(app, tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"schema_version": 1, "lights": [{"intensity": -3}], "render": {"exposure": 0},
                                "nonsense": 1}))
-    before = to_dict(app.settings)
-    assert not app.load_preset(str(bad))
-    assert app.presets.errors and any("intensity" in p for p, _ in app.presets.errors)
-    assert to_dict(app.settings) == before
+    before = to_dict(app.state.settings)
+    assert not app.state.load_preset(str(bad))
+    assert app.state.presets.errors and any("intensity" in p for p, _ in app.state.presets.errors)
+    assert to_dict(app.state.settings) == before
     broken = tmp_path / "broken.json"
     broken.write_text("{ not json")
-    assert not app.load_preset(str(broken)) and app.presets.errors[0][0] == "<json>"
-    assert to_dict(app.settings) == before
+    assert not app.state.load_preset(str(broken)) and app.state.presets.errors[0][0] == "<json>"
+    assert to_dict(app.state.settings) == before
     app.step(1)  # the panel draws the errors without crashing
     # a good preset round-trips; the unsaved marker follows edits
     good = tmp_path / "good.json"
-    assert app.presets.save(app.settings, str(good))
-    assert not app.presets.dirty(app.settings)
-    assert app.apply({"render.exposure": 1.7})
-    assert app.presets.dirty(app.settings)
-    assert app.load_preset(str(good)) and not app.presets.dirty(app.settings)
+    assert app.state.presets.save(app.state.settings, str(good))
+    assert not app.state.presets.dirty(app.state.settings)
+    assert app.state.apply({"render.exposure": 1.7})
+    assert app.state.presets.dirty(app.state.settings)
+    assert app.state.load_preset(str(good)) and not app.state.presets.dirty(app.state.settings)
     # an invalid edit shows a message and keeps the state
-    assert not app.apply({"shadow.pcf": 99}) and app.errors[0][0].startswith("shadow.pcf")
+    assert not app.state.apply({"shadow.pcf": 99}) and app.state.errors[0][0].startswith("shadow.pcf")
     app.step(1)
 
 
@@ -225,13 +245,13 @@ def test_shader_error_keeps_rendering_and_recovers(app, shader_dir):
     try:
         frag.write_text(good.replace("void main", "this is not glsl;\nvoid main", 1))
         deadline = time.monotonic() + 5
-        while not app.watcher.errors and time.monotonic() < deadline:
+        while not app.frame.watcher.errors and time.monotonic() < deadline:
             time.sleep(0.2)
             app.step(1)
-        errs = [e for es in app.watcher.errors.values() for e in es]
+        errs = [e for es in app.frame.watcher.errors.values() for e in es]
         assert errs, "the broken shader was not reported"
         assert any(e.file.endswith("output.frag") and e.line > 0 for e in errs), errs
-        assert app.report is not None and not app.render_error
+        assert app.frame.report is not None and not app.frame.render_error
         assert _view_image(app).std() > 10  # last good program still renders
     finally:
         # fixed, and different from the running program (identical source would need no re-run)
@@ -243,69 +263,69 @@ def test_shader_error_keeps_rendering_and_recovers(app, shader_dir):
     while time.monotonic() < deadline:
         time.sleep(0.2)
         app.step(1)
-        ran_output |= "output" in app.report.ran
-        if not app.watcher.errors and ran_output:
+        ran_output |= "output" in app.frame.report.ran
+        if not app.frame.watcher.errors and ran_output:
             break
-    assert not app.watcher.errors
+    assert not app.frame.watcher.errors
     assert ran_output, "the fixed program did not re-run its pass"
 
 
 def test_screenshots_written_where_asked(app, tmp_path):
     from PIL import Image
-    app.shot_options.folder = str(tmp_path / "shots")
-    app.shot_options.save_linear_npy = True
-    p = app.request_screenshot()
+    app.state.set_screenshot_options(folder=str(tmp_path / "shots"))
+    app.state.set_screenshot_options(save_linear_npy=True)
+    p = app.frame.request_screenshot()
     app.step(1)
     assert p.exists() and p.parent == tmp_path / "shots"
     img = np.asarray(Image.open(p))
     assert img.shape == (*_view_hw(app), 3) and img.std() > 10  # the 3D view region, no panel
     lin = np.load(p.with_suffix(".npy"))
     assert lin.dtype == np.float32 and lin.shape[:2] == _view_hw(app)
-    app.shot_options.save_linear_npy = False
+    app.state.set_screenshot_options(save_linear_npy=False)
     n = len(list((tmp_path / "shots").glob("*.png")))
     app.on_key_event(app.wnd.keys.F12, app.wnd.keys.ACTION_PRESS, app.wnd.modifiers)
     app.step(1)
     assert len(list((tmp_path / "shots").glob("*.png"))) == n + 1
-    q = app.request_screenshot(tmp_path / "with_ui.png", include_ui=True)
+    q = app.frame.request_screenshot(tmp_path / "with_ui.png", include_ui=True)
     app.step(1)
     fw, fh = app.wnd.buffer_size
     assert np.asarray(Image.open(q)).shape == (fh, fw, 3)  # with UI: the whole window
 
 
 def test_ab_compare_split_and_pass_inspector(app):
-    cmp = app.compare
-    cmp.a.settings = app.settings
-    assert app.apply({"render.exposure": 4.0})
-    cmp.b.settings = app.settings
-    cmp.mode = "split"
-    cmp.divider = 0.5
-    app.show_ui = False
+    cmp = app.state.compare
+    app.state.capture_slot("A")
+    assert app.state.apply({"render.exposure": 4.0})
+    app.state.capture_slot("B")
+    cmp.set_mode("split")
+    cmp.set_divider(0.5)
+    app.state.set_show_ui(False)
     try:
         app.step(1)
         scr = _screen(app)
         assert not cmp.a.error and not cmp.b.error
         left, right = scr[:, : W // 2 - 2], scr[:, W // 2 + 2:]
         # B (brighter exposure) on the right: the right half is brighter than a plain A frame's right half
-        cmp.mode = "off"
-        assert app.apply({"render.exposure": 1.0})  # back to A's state
+        cmp.set_mode("off")
+        assert app.state.apply({"render.exposure": 1.0})  # back to A's state
         app.step(1)
         plain = _screen(app)[:, W // 2 + 2:]
         assert right.mean() > plain.mean() + 1.0
         assert np.abs(left - _screen(app)[:, : W // 2 - 2]).mean() < 1.0  # A on the left
-        cmp.mode = "difference"
+        cmp.set_mode("difference")
         app.step(1)
         assert _screen(app).std() > 1.0
         # inspector: a pass output full-window
-        cmp.mode = "off"
-        app.inspect = "shadow_map_0" if "shadow_map_0" in app.renderer.graph(app.settings.technique).resources() else "image"
-        app.inspect_channel = "R"
+        cmp.set_mode("off")
+        app.state.set_inspect("shadow_map_0" if "shadow_map_0" in app.renderer.graph(app.state.settings.technique).resources() else "image")
+        app.state.set_inspect_channel("R")
         app.step(1)
-        assert not app.render_error
+        assert not app.frame.render_error
     finally:
-        app.inspect = None
-        cmp.mode = "off"
-        app.show_ui = True
-        app.apply({"render.exposure": 1.0})
+        app.state.set_inspect(None)
+        cmp.set_mode("off")
+        app.state.set_show_ui(True)
+        app.state.apply({"render.exposure": 1.0})
 
 
 def test_resize_follows_framebuffer(app):
@@ -321,11 +341,11 @@ def test_resize_follows_framebuffer(app):
     try:
         if (fw, fh) == (w0, h0):
             pytest.skip("the X server did not resize the window")
-        vx, vy, vw, vh = app.layout.view_fb
-        assert (app.settings.render.width, app.settings.render.height) == (vw, vh)
-        assert vw == fw - round(app.layout.panel[2] * fw / app.wnd.size[0])
+        vx, vy, vw, vh = app.frame.layout.view_fb
+        assert (app.state.settings.render.width, app.state.settings.render.height) == (vw, vh)
+        assert vw == fw - round(app.frame.layout.panel[2] * fw / app.wnd.size[0])
         assert _view_image(app).shape == (vh, vw, 3)
-        assert not app.render_error
+        assert not app.frame.render_error
     finally:
         app.wnd.size = (W, H)
         deadline = time.monotonic() + 5
@@ -336,21 +356,22 @@ def test_resize_follows_framebuffer(app):
 
 
 def test_profile_lab_fit_applies_to_deon_gaussians(app):
-    lab = app.panel.lab
+    from skinviewer.ui.panel import Panel
+    lab = app.ui.window(Panel).lab
     if lab is None:
         pytest.skip("skinviewer.physics.profiles / skinviewer.physics.fitting not available")
-    old = app.settings.deon.gaussians
+    old = app.state.settings.deon.gaussians
     lab.k = 3
     lab.start_fit(wait=True)
     assert not lab.fit_error and lab.fit is not None
     try:
         assert lab.apply()
-        gs = app.settings.deon.gaussians
+        gs = app.state.settings.deon.gaussians
         assert len(gs) == 3 and all(g.variance > 0 for g in gs)
         app.step(1)
-        assert not app.render_error
+        assert not app.frame.render_error
     finally:
-        app.apply({"deon.gaussians": [g.model_dump(mode="json") for g in old]})
+        app.state.apply({"deon.gaussians": [g.model_dump(mode="json") for g in old]})
 
 
 # -- layout, input regions, shortcuts, scheduling ---------------------------------------------------
@@ -370,19 +391,19 @@ def test_layout_pure_hidpi_and_sides():
 
 def test_view_region_excludes_panel(app):
     app.step(1)
-    lo = app.layout
+    lo = app.frame.layout
     fw, fh = app.wnd.buffer_size
     sx, sy = lo.scale
     panel_fb, status_fb = round(lo.panel[2] * sx), round(lo.status[3] * sy)
     assert panel_fb > 0 and status_fb > 0
     assert _view_image(app).shape == (fh - status_fb, fw - panel_fb, 3)
-    assert (app.settings.render.width, app.settings.render.height) == (fw - panel_fb, fh - status_fb)
+    assert (app.state.settings.render.width, app.state.settings.render.height) == (fw - panel_fb, fh - status_fb)
     # the user widens the panel by dragging its edge: the view (and the render size) shrink
-    app.panel_width = W * 0.45  # the narrowest this window allows
+    app.state.set_panel_width(W * 0.45)  # the narrowest this window allows
     app.step(1)
-    pw0 = app.layout.panel[2]
+    pw0 = app.frame.layout.panel[2]
     x0 = pw0 - 1
-    w0 = app.settings.render.width
+    w0 = app.state.settings.render.width
     app.on_mouse_position_event(x0, 150, 0, 0)
     app.step(1)
     app.on_mouse_press_event(x0, 150, app.wnd.mouse.left)
@@ -393,97 +414,99 @@ def test_view_region_excludes_panel(app):
     app.on_mouse_release_event(x0 + 20, 150, app.wnd.mouse.left)
     app.step(1)
     try:
-        assert app.panel_width > pw0 + 10, "dragging the panel edge did not resize it"
-        assert app.settings.render.width < w0 and _view_image(app).shape[1] == app.settings.render.width
+        assert app.state.view.panel_width > pw0 + 10, "dragging the panel edge did not resize it"
+        assert app.state.settings.render.width < w0 and _view_image(app).shape[1] == app.state.settings.render.width
     finally:
-        app.panel_width = lo.panel[2]
+        app.state.set_panel_width(lo.panel[2])
         app.step(1)
     # F1 hides the UI: the view fills the window
     _key(app, app.wnd.keys.F1)
     app.step(1)
     try:
-        assert not app.show_ui and _view_image(app).shape == (fh, fw, 3)
+        assert not app.state.view.show_ui and _view_image(app).shape == (fh, fw, 3)
     finally:
         _key(app, app.wnd.keys.F1)
         app.step(1)
-    assert app.show_ui
+    assert app.state.view.show_ui
 
 
 def test_orbit_and_zoom_only_in_view_region(app):
     app.step(1)
-    cam0 = app.settings.camera.model_dump(mode="json")
-    sx, sy, sw, sh = app.layout.status
+    cam0 = app.state.settings.camera.model_dump(mode="json")
+    sx, sy, sw, sh = app.frame.layout.status
     _drag(app, sx + sw - 30, sy + sh / 2, 40, -5, app.wnd.mouse.left)  # on the status bar, under the view
-    px, py, pw, ph = app.layout.panel
+    px, py, pw, ph = app.frame.layout.panel
     _drag(app, px + pw - 12, py + ph - 30, -30, 0, app.wnd.mouse.left)  # on the panel
     app.on_mouse_position_event(px + 20, py + 40, 0, 0)
     app.on_mouse_scroll_event(0, 2)  # wheel over the panel: scrolls the panel, no zoom
-    assert app.settings.camera.model_dump(mode="json") == cam0
+    assert app.state.settings.camera.model_dump(mode="json") == cam0
     x, y = _in_view(app)
     _drag(app, x, y, 30, 0, app.wnd.mouse.left)
-    assert app.settings.camera.yaw != cam0["yaw"]
+    assert app.state.settings.camera.yaw != cam0["yaw"]
     app.on_mouse_position_event(x, y, 0, 0)
     app.on_mouse_scroll_event(0, 1)
-    assert app.settings.camera.distance is not None
+    assert app.state.settings.camera.distance is not None
     app.step(1)
-    assert app.last_change.section() == "camera"
-    assert app.last_change.texture_ms == 0.0 and app.last_change.view_ms > 0  # orbit: view-dependent only
-    app.reset_camera()
+    assert app.frame.last_change.section() == "camera"
+    assert app.frame.last_change.texture_ms == 0.0 and app.frame.last_change.view_ms > 0  # orbit: view-dependent only
+    app.state.reset_camera()
     _settle(app)
 
 
 def test_shortcuts_switch_technique_and_save(app, tmp_path):
     from skinviewer import techniques
     keys = app.wnd.keys
-    start = app.settings.technique
+    start = app.state.settings.technique
     try:
         _key(app, keys.NUMBER_1)
-        assert app.settings.technique == "phong"
+        assert app.state.settings.technique == "phong"
         if "deon" in techniques.names():
             _key(app, keys.NUMBER_3)
-            assert app.settings.technique == "deon"
+            assert app.state.settings.technique == "deon"
         if "gosselin" in techniques.names():
             _key(app, keys.NUMBER_2)
-            assert app.settings.technique == "gosselin"
+            assert app.state.settings.technique == "gosselin"
         app.step(1)
         # Ctrl+S saves the preset (to the current preset file)
         target = tmp_path / "ctrl_s.json"
-        app.presets.path = str(target)
-        assert app.apply({"render.exposure": 1.3}) and app.presets.dirty(app.settings)
+        app.state.presets.set_path(str(target))
+        assert app.state.apply({"render.exposure": 1.3}) and app.state.presets.dirty(app.state.settings)
         _key(app, keys.S, ctrl=True)
-        assert target.exists() and not app.presets.dirty(app.settings)
-        assert "saved" in app.message[0] and not app.message[1]
+        assert target.exists() and not app.state.presets.dirty(app.state.settings)
+        assert "saved" in app.state.message[0] and not app.state.message[1]
         # Space flips A/B while comparing
-        cmp = app.compare
-        cmp.a.settings, cmp.b.settings = app.settings, app.settings
-        cmp.mode, cmp.show_b = "toggle", False
+        cmp = app.state.compare
+        app.state.capture_slot("A")
+        app.state.capture_slot("B")
+        cmp.set_mode("toggle")
+        cmp.set_show_b(False)
         _key(app, keys.SPACE)
         assert cmp.show_b
         _key(app, keys.SPACE)
         assert not cmp.show_b
     finally:
-        app.compare.mode = "off"
-        app.presets.path = None
-        app.apply({"render.exposure": 1.0})
-        app.set_technique(start)
+        app.state.compare.mode = "off"
+        app.state.presets.set_path(None)
+        app.state.apply({"render.exposure": 1.0})
+        app.state.set_technique(start)
         app.step(1)
 
 
 def test_idle_frames_run_no_passes(app):
-    from skinviewer.ui import panel
+    from skinviewer.ui.status_bar import StatusBar
     app.step(2)
-    assert app.report.ran == [], app.report.table()
-    panel.EXPAND_ALL["on"] = True  # every widget drawn: none of them may edit the settings by itself
+    assert app.frame.report.ran == [], app.frame.report.table()
+    app.state.set_expand_all(True)  # every widget drawn: none of them may edit the settings by itself
     try:
-        s0 = app.settings
+        s0 = app.state.settings
         app.step(2)
-        assert app.report.ran == [], app.report.table()
-        assert app.settings == s0
+        assert app.frame.report.ran == [], app.frame.report.table()
+        assert app.state.settings == s0
     finally:
-        panel.EXPAND_ALL["on"] = False
+        app.state.set_expand_all(False)
     # the status bar names scene, triangles, technique, render size and timing mode
-    text = " | ".join(t for t, _ in app.status_bar.fields())
-    for part in (SCENE, "tris", app.settings.technique, f"{app.settings.render.width}x{app.settings.render.height}",
+    text = " | ".join(t for t, _ in app.ui.window(StatusBar).fields())
+    for part in (SCENE, "tris", app.state.settings.technique, f"{app.state.settings.render.width}x{app.state.settings.render.height}",
                  "timing"):
         assert part in text, text
 
@@ -497,32 +520,32 @@ def test_expensive_change_waits_for_release(app):
     assert not sch.should_defer(True, False, 500.0, now=10.1)  # released: render
     assert not sch.should_defer(True, True, 500.0, now=10.5)  # held still: render
     # in the app: a texture-space edit while a widget is held (simulated) keeps the last image
-    app.show_ui = False  # the UI is not built: _ui_active stays as set here
-    app.scheduler.mode = "on release"
+    app.state.set_show_ui(False)  # the UI is not built: _ui_active stays as set here
+    app.frame.set_schedule(mode="on release")
     from skinviewer import techniques
-    old = app.settings.model_dump(mode="json")
+    old = app.state.settings.model_dump(mode="json")
     tech = next((t for t in ("deon", "gosselin") if t in techniques.names()), None)
     if tech is None:
         pytest.skip("no texture-space technique available")
     path = {"deon": "deon.mix", "gosselin": "gosselin.scale_x"}[tech]
     try:
-        assert app.set_technique(tech)
+        assert app.state.set_technique(tech)
         app.step(1)
-        app._ui_active = True
-        assert app.apply({path: 0.2 if tech == "deon" else 3.0})
+        app.frame.set_widget_active(True)
+        assert app.state.apply({path: 0.2 if tech == "deon" else 3.0})
         app.step(1)
-        assert app.render_deferred and app.report.ran == []
-        app._ui_active = False  # released
+        assert app.frame.render_deferred and app.frame.report.ran == []
+        app.frame.set_widget_active(False)  # released
         app.step(1)
-        assert not app.render_deferred and app.report.ran
-        ch = app.last_change
+        assert not app.frame.render_deferred and app.frame.report.ran
+        ch = app.frame.last_change
         assert ch.source == path and ch.section() == tech and ch.texture_ms > 0 and ch.passes
     finally:
-        app._ui_active = False
-        app.scheduler.mode = "adaptive"
-        app.show_ui = True
+        app.frame.set_widget_active(False)
+        app.frame.set_schedule(mode="adaptive")
+        app.state.set_show_ui(True)
         from skinviewer.core.settings import validate
-        app.set_settings(validate(old))
+        app.state.set_settings(validate(old))
         app.step(1)
 
 
@@ -530,31 +553,34 @@ def test_tooltips_say_what_an_edit_costs(app):
     """Hovering a control tells which passes editing it would re-run, from the live graph."""
     from skinviewer.ui import widgets
     app.step(1)
-    hint = widgets.cost_hint("render.exposure")
+    hint = app.frame.cost_hint("render.exposure")
     assert "output" in hint and "ms" in hint
-    tech_passes = widgets.cost_hint("shadow.map_size")
+    tech_passes = app.frame.cost_hint("shadow.map_size")
     assert "shadow_map_0" in tech_passes
+    # the tooltip of a control carries it (through the frame's UI context, not a module global)
+    field = type(app.state.settings.render).model_fields["exposure"]
+    assert hint in widgets.tooltip_text(field, "render.exposure", app.frame.cost_hint)
 
 
 def test_orbit_renders_smaller_while_dragging_when_slow(app):
     """On slow GL the view is rendered at a lower resolution during a camera drag (texture-space
     passes stay cached), and at full size again on release."""
-    full = (app.settings.render.width, app.settings.render.height)
-    app.drag_budget_ms = 1e-3  # any measured cost is over budget
-    x0, y0 = app.layout.view[0] + app.layout.view[2] * 0.5, app.layout.view[1] + app.layout.view[3] * 0.5
+    full = (app.state.settings.render.width, app.state.settings.render.height)
+    app.frame.set_drag_budget(1e-3)  # any measured cost is over budget
+    x0, y0 = app.frame.layout.view[0] + app.frame.layout.view[2] * 0.5, app.frame.layout.view[1] + app.frame.layout.view[3] * 0.5
     button = app.wnd.mouse.left
     app.on_mouse_position_event(x0, y0, 0, 0)
     app.on_mouse_press_event(x0, y0, button)
     app.on_mouse_drag_event(x0 + 20, y0, 20, 0)
     app.step(1)
-    small = (app.settings.render.width, app.settings.render.height)
+    small = (app.state.settings.render.width, app.state.settings.render.height)
     assert small[0] < full[0] and small[1] < full[1]
-    assert all(p not in app.report.ran for p in ("shadow_map_0",))
+    assert all(p not in app.frame.report.ran for p in ("shadow_map_0",))
     app.on_mouse_release_event(x0 + 20, y0, button)
     app.step(1)
-    assert (app.settings.render.width, app.settings.render.height) == full
-    assert "orbit" in app.last_change.source  # the cost line names the orbit, not a resize
-    app.drag_budget_ms = 60.0
+    assert (app.state.settings.render.width, app.state.settings.render.height) == full
+    assert "orbit" in app.frame.last_change.source  # the cost line names the orbit, not a resize
+    app.frame.set_drag_budget(60.0)
 
 
 def test_every_settings_field_has_a_widget(app):
@@ -563,11 +589,11 @@ def test_every_settings_field_has_a_widget(app):
 
     from skinviewer.ui import widgets
     for section in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
-        model = getattr(app.settings, section)
-        edits = widgets.Edits()
+        model = getattr(app.state.settings, section)
+        ui = widgets.UiContext(layout=app.frame.layout)
         imgui.new_frame()
         try:
-            widgets.edit_model(model, section, edits)
+            widgets.edit_model(model, section, ui)
         finally:
             imgui.end_frame()
 
@@ -575,37 +601,37 @@ def test_every_settings_field_has_a_widget(app):
 def test_long_frames_are_spread_and_shown_once_complete(app):
     """With a frame budget, a change whose passes take longer is spread over several frames: the
     UI keeps drawing, the image on screen changes once, complete, and the change's cost adds up."""
-    app.set_technique("gosselin")
+    app.state.set_technique("gosselin")
     app.step(1)
     before = _view_image(app)
-    app.frame_budget_ms = 1e-6  # one pass per frame
+    app.frame.set_frame_budget(1e-6)  # one pass per frame
     try:
-        app.apply({"lights.0.direction": [0.6, 0.3, 0.7]}, "test light move")
+        app.state.apply({"lights.0.direction": [0.6, 0.3, 0.7]}, "test light move")
         frames = 0
         while True:
             app.step(1)
             frames += 1
-            if app.report is not None and app.report.complete:
+            if app.frame.report is not None and app.frame.report.complete:
                 break
             assert np.array_equal(_view_image(app), before)  # the old image until it is complete
             assert frames < 20
         assert frames > 1
         assert np.abs(_view_image(app) - before).mean() > 0.5
-        ran = {name for name, _ in app.last_change.passes}
+        ran = {name for name, _ in app.frame.last_change.passes}
         assert {"gosselin_light_map", "gosselin_blur", "gosselin_final", "output"} <= ran
     finally:
-        app.frame_budget_ms = None
+        app.frame.set_frame_budget(None)
 
 
 def test_switching_back_to_a_cached_technique_reports_zero_cost(app):
-    app.set_technique("phong")
+    app.state.set_technique("phong")
     app.step(1)
-    app.set_technique("gosselin")
+    app.state.set_technique("gosselin")
     app.step(1)
-    app.set_technique("phong")  # all of phong's passes are still cached
+    app.state.set_technique("phong")  # all of phong's passes are still cached
     app.step(1)
-    assert app.report.ran == [] and app.last_change.source == "technique"
-    assert app.last_change.total_ms == 0.0
+    assert app.frame.report.ran == [] and app.frame.last_change.source == "technique"
+    assert app.frame.last_change.total_ms == 0.0
 
 
 def test_preset_refused_after_loading_keeps_the_current_preset(app, tmp_path):
@@ -614,20 +640,20 @@ def test_preset_refused_after_loading_keeps_the_current_preset(app, tmp_path):
     file that was refused."""
     from skinviewer.core.settings import to_dict
     current = tmp_path / "current.json"
-    assert app.presets.save(app.settings, str(current))
+    assert app.state.presets.save(app.state.settings, str(current))
     bad = tmp_path / "missing_mesh.json"
     text = json.dumps({"schema_version": 1, "scene": {"mesh": str(tmp_path / "no-such-mesh.obj")}})
     bad.write_text(text)
-    before = to_dict(app.settings)
+    before = to_dict(app.state.settings)
     try:
-        assert not app.load_preset(str(bad))
-        assert to_dict(app.settings) == before
-        assert app.presets.path == str(current) and not app.presets.dirty(app.settings)
-        assert app.presets.errors and app.presets.message.startswith("refused")
-        assert app.save_preset()  # Ctrl+S: the current file, not the refused one
+        assert not app.state.load_preset(str(bad))
+        assert to_dict(app.state.settings) == before
+        assert app.state.presets.path == str(current) and not app.state.presets.dirty(app.state.settings)
+        assert app.state.presets.errors and app.state.presets.message.startswith("refused")
+        assert app.state.save_preset()  # Ctrl+S: the current file, not the refused one
         assert bad.read_text() == text
     finally:
-        app.presets.path = None
+        app.state.presets.set_path(None)
         app.step(1)
 
 
@@ -635,56 +661,56 @@ def test_resizes_do_not_pile_up_textures(app):
     """The render pools keep every texture handed back to them; the viewer gives back to GL the ones
     of sizes no longer rendered, so resizing the panel (or orbiting at a reduced resolution) does
     not leave a full set of view-sized textures behind each time."""
-    pw0 = app.panel_width
+    pw0 = app.state.view.panel_width
     pool = app.renderer.pool
     try:
         for w in range(int(W * 0.3), int(W * 0.45), 6):
-            app.panel_width = float(w)
+            app.state.set_panel_width(float(w))
             app.step(1)
         assert sum(len(v) for v in pool._free.values()) == 0
     finally:
-        app.panel_width = pw0
+        app.state.set_panel_width(pw0)
         app.step(1)
 
 
 def test_click_in_view_keeps_full_resolution(app):
     """A click in the view (no drag) neither orbits nor drops to the orbit resolution."""
-    full = (app.settings.render.width, app.settings.render.height)
-    app.drag_budget_ms = 1e-3
+    full = (app.state.settings.render.width, app.state.settings.render.height)
+    app.frame.set_drag_budget(1e-3)
     try:
         x, y = _in_view(app)
         app.on_mouse_position_event(x, y, 0, 0)
         app.on_mouse_press_event(x, y, app.wnd.mouse.left)
         app.step(1)
-        assert (app.settings.render.width, app.settings.render.height) == full
+        assert (app.state.settings.render.width, app.state.settings.render.height) == full
         app.on_mouse_release_event(x, y, app.wnd.mouse.left)
         app.step(1)
-        assert app.report.ran == []
+        assert app.frame.report.ran == []
     finally:
-        app.drag_budget_ms = 60.0
+        app.frame.set_drag_budget(60.0)
 
 
 def test_deferred_scene_edit_does_not_reload_the_old_scene(app):
     """A scene edit while a widget is held (the render would otherwise wait for the release) is
     rendered at once: the new scene is already loaded, and showing the old image meant loading the
     old scene back, then the new one again."""
-    old = app.settings
-    app.show_ui = False
-    app.scheduler.mode = "on release"
+    old = app.state.settings
+    app.state.set_show_ui(False)
+    app.frame.set_schedule(mode="on release")
     try:
         app.step(1)
         v0 = app.renderer.scene_version
-        app._ui_active = True
-        mm = app.settings.scene.mm_per_unit
-        assert app.apply({"scene.mm_per_unit": (mm or 1.0) * 1.5})
+        app.frame.set_widget_active(True)
+        mm = app.state.settings.scene.mm_per_unit
+        assert app.state.apply({"scene.mm_per_unit": (mm or 1.0) * 1.5})
         app.step(2)
         assert app.renderer.scene_version == v0 + 1
-        assert not app.render_deferred
+        assert not app.frame.render_deferred
     finally:
-        app._ui_active = False
-        app.scheduler.mode = "adaptive"
-        app.show_ui = True
-        app.set_settings(old)
+        app.frame.set_widget_active(False)
+        app.frame.set_schedule(mode="adaptive")
+        app.state.set_show_ui(True)
+        app.state.set_settings(old)
         app.step(1)
 
 
@@ -692,7 +718,9 @@ def test_profile_lab_discards_a_fit_of_an_edited_model(app, monkeypatch):
     """The fit runs in a thread: if the model is edited meanwhile, its result is not shown (or
     applied) as the fit of the new model."""
     import threading
-    lab = app.panel.lab
+
+    from skinviewer.ui.panel import Panel
+    lab = app.ui.window(Panel).lab
     if lab is None:
         pytest.skip("skinviewer.physics.profiles / skinviewer.physics.fitting not available")
     from skinviewer.physics import fitting
@@ -731,31 +759,234 @@ def test_shader_file_in_another_encoding_is_listed_not_fatal(app, shader_dir):
         frag.write_bytes(good.replace(b"void main", "// caf\u00e9\nvoid main".encode("latin-1"), 1))
         st = frag.stat()
         os.utime(frag, ns=(st.st_atime_ns, st.st_mtime_ns + 2_000_000_000))
-        app.watcher.poll(force=True)
+        app.frame.watcher.poll(force=True)
         app.step(1)
         assert any(e.file == "output.frag" and "UTF-8" in e.message
-                   for es in app.watcher.errors.values() for e in es), app.watcher.errors
-        assert app.report is not None and _view_image(app).std() > 10
+                   for es in app.frame.watcher.errors.values() for e in es), app.frame.watcher.errors
+        assert app.frame.report is not None and _view_image(app).std() > 10
     finally:
         frag.write_bytes(good)
         st = frag.stat()
         os.utime(frag, ns=(st.st_atime_ns, st.st_mtime_ns + 2_000_000_000))
-    app.watcher.poll(force=True)
+    app.frame.watcher.poll(force=True)
     app.step(1)
-    assert not app.watcher.errors
+    assert not app.frame.watcher.errors
+
+
+# -- the split viewer: state, controllers, windows; panel; presets ------------------------------
+
+def test_a_registered_window_draws_and_owns_its_area(app):
+    """A window is one registration: it gets the state and the frame controller, draws itself with
+    the frame's UI context, and the area it claims is the UI's (a drag there does not orbit)."""
+    from imgui_bundle import imgui
+    seen = {}
+
+    class Probe:
+        def __init__(self, state, frame):
+            self.state, self.frame = state, frame
+
+        def draw(self, ui):
+            vx, vy, vw, vh = ui.layout.view
+            self.rect = (vx, vy, vw * 0.5, vh)  # the left half of the 3D view
+            imgui.set_next_window_pos(imgui.ImVec2(vx, vy))
+            imgui.set_next_window_size(imgui.ImVec2(vw * 0.5, vh))
+            imgui.begin("probe###probe")
+            imgui.text(self.state.settings.technique)
+            imgui.end()
+            ui.claim(self.rect)
+            seen["hint"] = ui.cost_hint("render.exposure")
+            seen["report"] = self.frame.report
+
+        def draw_view(self, viewport):  # its own view mode: here, nothing but the background
+            seen["viewport"] = viewport
+            return seen.get("take_view", False)
+
+    probe = app.ui.add_window(Probe)
+    try:
+        app.step(2)
+        assert "output" in seen["hint"] and seen["report"] is not None
+        assert seen["viewport"] == app.frame.layout.view_fb
+        app.state.set_show_ui(False)  # the view alone on screen (its view mode works without the UI too)
+        app.step(1)
+        assert _screen_view(app).std() > 10
+        seen["take_view"] = True
+        app.step(1)
+        assert _screen_view(app).std() < 1.0  # the window drew the view (the plain background)
+        seen["take_view"] = False
+        app.state.set_show_ui(True)
+        app.step(1)
+        yaw0 = app.state.settings.camera.yaw
+        x, y, w, h = probe.rect
+        _drag(app, x + w * 0.5, y + h * 0.5, 30, 0, app.wnd.mouse.left)
+        assert app.state.settings.camera.yaw == yaw0
+        _drag(app, x + w * 1.5, y + h * 0.5, 30, 0, app.wnd.mouse.left)  # the free half still orbits
+        assert app.state.settings.camera.yaw != yaw0
+    finally:
+        app.state.set_show_ui(True)
+        app.ui.windows.remove(probe)
+        app.state.reset_camera()
+        _settle(app)
+
+
+def test_technique_keys_beyond_the_registry_do_nothing(app):
+    from skinviewer import techniques
+    n = len(techniques.names())
+    start = app.state.settings.technique
+    key = getattr(app.wnd.keys, f"NUMBER_{n + 1}", None)
+    if key is None:
+        pytest.skip("no key beyond the registry")
+    _key(app, key)
+    assert app.state.settings.technique == start and not app.state.errors
+    _key(app, app.wnd.keys.NUMBER_1)
+    assert app.state.settings.technique == techniques.names()[0]
+    app.state.set_technique(start)
+    app.step(1)
+
+
+def test_wheel_over_the_profile_plot_scrolls_the_panel(app):
+    """The r·R(r) plot takes no mouse input: the wheel over it scrolls the panel (it used to zoom
+    the plot and leave the panel where it was)."""
+    from skinviewer.ui.panel import Panel
+    from skinviewer.ui.sections.shading import DeonSection
+    panel = app.ui.window(Panel)
+    deon = panel.section(DeonSection)
+    assert app.state.set_technique("deon")  # its section (with the plot) opens by default
+    try:
+        app.step(2)
+        top = app.frame.layout.panel[1]
+        panel.scroll_to(panel.scroll_y + deon.plot_rect[1] - top - 40)  # the plot near the top
+        app.step(2)
+        x, y, w, h = deon.plot_rect
+        assert top <= y and y + h <= app.frame.layout.panel[3], "the plot is not on screen"
+        scroll0 = panel.scroll_y
+        cx, cy = x + w * 0.5, y + h * 0.5
+        app.on_mouse_position_event(cx, cy, 0, 0)
+        app.step(2)
+        for _ in range(3):
+            app.on_mouse_scroll_event(0, -1)  # wheel down
+            app.step(1)
+        app.step(1)
+        assert panel.scroll_y > scroll0 + 10, (scroll0, panel.scroll_y)
+    finally:
+        panel.scroll_to(0)
+        app.on_mouse_position_event(*_in_view(app), 0, 0)
+        _settle(app)
+
+
+def test_every_label_fits_the_label_column(app):
+    """Labels (with units) of every settings field fit the panel's label column: none clipped."""
+    from imgui_bundle import imgui
+
+    from skinviewer.ui.fielddocs import LABEL_MAX_PX, label_with_unit
+    from skinviewer.ui.widgets import classify
+    imgui.set_current_context(app.ui.imgui_ctx)
+    app.step(1)
+    too_long = []
+    imgui.new_frame()
+    try:
+        def walk(model, prefix):
+            for name, f in type(model).model_fields.items():
+                kind, _, _ = classify(f)
+                if kind == "model":
+                    walk(getattr(model, name), f"{prefix}{name}.")
+                elif kind != "other":
+                    lab = label_with_unit(name, prefix + name)
+                    if imgui.calc_text_size(lab).x > LABEL_MAX_PX:
+                        too_long.append((prefix + name, lab, imgui.calc_text_size(lab).x))
+        s = app.state.settings
+        for sec in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
+            walk(getattr(s, sec), sec + ".")
+        walk(s.lights[0], "lights.0.")
+    finally:
+        imgui.end_frame()
+    assert not too_long, too_long
+
+
+def test_ctrl_s_on_a_shipped_preset_saves_a_copy(app, tmp_path, monkeypatch, user_presets):
+    """Ctrl+S used to overwrite the shipped presets/deon.json (with the window size and float noise):
+    shipped presets are read-only, Ctrl+S writes a copy into the user folder."""
+    from skinviewer.core import paths
+    shipped = tmp_path / "shipped"
+    shutil.copytree(paths.presets_dir(), shipped)
+    monkeypatch.setenv("SKINVIEWER_PRESETS", str(shipped))
+    deon = shipped / "deon.json"
+    before = deon.read_bytes()
+    old = app.state.settings
+    try:
+        assert app.state.load_preset(str(deon))
+        assert app.state.apply({"render.exposure": 0.1 + 0.2})
+        _key(app, app.wnd.keys.S, ctrl=True)
+        assert deon.read_bytes() == before
+        copy = Path(app.state.presets.path)
+        assert copy.parent == user_presets and copy.name.startswith("deon")
+        data = json.loads(copy.read_text())
+        assert data["render"]["exposure"] == 0.3 and "width" not in data["render"]
+        assert not app.state.presets.dirty(app.state.settings) and not app.state.message[1]
+        # "save as" onto a shipped file is refused with the reason
+        assert not app.state.save_preset(str(deon)) and app.state.message[1]
+        assert deon.read_bytes() == before
+        app.step(1)
+    finally:
+        app.state.presets.set_path(None)
+        app.state.set_settings(old)
+        app.step(1)
+
+
+def test_loading_over_unsaved_changes_asks_first(app, tmp_path):
+    """One click on a preset name used to load it and discard unsaved changes: it asks first."""
+    from imgui_bundle import imgui
+
+    from skinviewer.ui.sections.tools import CONFIRM_POPUP
+    other = tmp_path / "other.json"
+    assert app.state.presets.save(with_exposure(app, 2.5), str(other))
+    current = tmp_path / "current.json"
+    assert app.state.save_preset(str(current))
+    old = app.state.settings
+    try:
+        assert app.state.apply({"render.exposure": 1.9})  # an unsaved change
+        edited = app.state.settings
+        assert not app.state.request_preset(str(other))
+        assert app.state.presets.pending_load == str(other) and app.state.settings is edited
+        app.step(2)  # the panel shows the question
+        assert imgui.is_popup_open(CONFIRM_POPUP, imgui.PopupFlags_.any_popup_id.value)
+        assert not app.state.answer_pending("cancel")
+        assert app.state.settings is edited and app.state.presets.pending_load is None
+        app.step(1)
+        assert not app.state.request_preset(str(other))
+        assert app.state.answer_pending("discard")
+        assert app.state.settings.render.exposure == 2.5 and app.state.presets.path == str(other)
+        # "save, then load": the edit is kept in its file first
+        assert app.state.apply({"render.exposure": 1.1})
+        assert not app.state.request_preset(str(current))
+        assert app.state.answer_pending("save")
+        assert json.loads(other.read_text())["render"]["exposure"] == 1.1
+        assert app.state.presets.path == str(current)
+        # without unsaved changes a click loads at once
+        assert app.state.request_preset(str(other)) and app.state.presets.pending_load is None
+        app.step(1)
+    finally:
+        app.state.presets.cancel_pending()
+        app.state.presets.set_path(None)
+        app.state.set_settings(old)
+        _settle(app)
+
+
+def with_exposure(app, v):
+    from skinviewer.core.settings import with_values
+    return with_values(app.state.settings, {"render.exposure": v})
 
 
 def test_burley2_in_the_viewer_shows_extra_samples_and_the_gpu_count(app):
-    """burley2 live: its panel sections draw, the passes window shows the GPU sample count, and the
-    'extra' view mode changes the image."""
-    assert app.set_technique("burley2")
+    """burley2 live: the passes window's report carries the GPU sample count, and the 'extra' view mode
+    changes the image."""
+    assert app.state.set_technique("burley2")
     app.step(1)
     plain = _view_image(app)
-    rec = next(p for p in app.report.passes if p.name == "burley_count")
+    rec = next(p for p in app.frame.report.passes if p.name == "burley_count")
     assert rec.figures["samples"] > 0 and "samples on the GPU" in rec.note
-    assert app.apply({"burley.view": "extra"}, "burley.view")
+    assert app.state.apply({"burley.view": "extra"}, "burley.view")
     app.step(1)
     assert np.abs(_view_image(app) - plain).mean() > 0.5
-    assert app.apply({"burley.view": "image"}, "burley.view")
-    assert app.set_technique("phong")
+    assert app.state.apply({"burley.view": "image"}, "burley.view")
+    assert app.state.set_technique("phong")
     app.step(1)

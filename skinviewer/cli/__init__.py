@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from skinviewer.cli import settings_list
 from skinviewer.cli.args import CliError, add_scene_args
 from skinviewer.cli.render import cmd_render
 from skinviewer.core.settings import SettingsError
@@ -26,6 +27,8 @@ def build_parser() -> argparse.ArgumentParser:
         profile_cli.add_parser(sub)
     except ImportError:
         pass
+
+    settings_list.add_parser(sub)
 
     pv = sub.add_parser("view", help="open the viewer (the default command)")
     _add_view_args(pv)
@@ -68,7 +71,7 @@ def _join_negative_values(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
-    commands = {"render", "profile", "view", "-h", "--help"}
+    commands = {"render", "profile", "view", "settings", "-h", "--help"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     args = parser.parse_args(argv)
@@ -77,15 +80,18 @@ def main(argv: list[str] | None = None) -> int:
     except SettingsError as exc:
         where = f"{exc.source}: " if exc.source else ""
         print(f"skinviewer: invalid settings: {where}" + "; ".join(f"{p}: {m}" for p, m in exc.errors), file=sys.stderr)
+    except BrokenPipeError:  # `skinviewer settings --list | head`
+        return 0
     except CliError as exc:
         print(f"skinviewer: {exc}", file=sys.stderr)
     except KeyError as exc:
         print(f"skinviewer: {exc.args[0] if exc.args else exc}", file=sys.stderr)
     except Exception as exc:  # a clear line, not a traceback, for anything the user can cause
         from skinviewer.core.gl import GLUnavailableError
+        from skinviewer.core.graph import ResourceLimitError
         from skinviewer.core.shaders import ShaderCompileError
         from skinviewer.scene.mesh import MeshError
-        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError)):
+        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError, ResourceLimitError)):
             print(f"skinviewer: {exc}", file=sys.stderr)
         else:
             raise

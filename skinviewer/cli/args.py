@@ -2,8 +2,8 @@
 from __future__ import annotations
 
 import argparse
-from typing import get_args
 
+from skinviewer import techniques
 from skinviewer.core.settings import (
     Settings,
     load_preset,
@@ -36,15 +36,16 @@ def _camera(text: str) -> list[float]:
 
 
 def add_scene_args(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("scene and settings")
-    g.add_argument("--scene", choices=SCENES, help="built-in scene (brings its own lights and camera)")
+    d = Settings()
+    g = p.add_argument_group("scene and settings (defaults come from the settings model: `skinviewer settings --list`)")
+    g.add_argument("--scene", choices=SCENES, help=f"built-in scene (brings its own lights and camera); default: {d.scene.name}")
     g.add_argument("--mesh", help="glTF/GLB/OBJ/PLY mesh to render instead of a built-in scene")
-    g.add_argument("--technique", help=", ".join(get_args(Settings.model_fields["technique"].annotation)))
+    g.add_argument("--technique", help=f"one of {', '.join(techniques.names())}; default: {d.technique}")
     g.add_argument("--preset", help="preset JSON (a partial preset overrides the defaults)")
     g.add_argument("--set", dest="assign", action="append", default=[], metavar="KEY=VALUE",
                    help="set any setting by dotted path, e.g. --set lights.0.intensity=4 (repeatable)")
-    g.add_argument("--size", type=_size, help="image size WxH")
-    g.add_argument("--camera", type=_camera, help="yaw,pitch[,distance]")
+    g.add_argument("--size", type=_size, help=f"image size WxH; default: {d.render.width}x{d.render.height}")
+    g.add_argument("--camera", type=_camera, help=f"yaw,pitch[,distance] in degrees and mesh units; default: {d.camera.yaw:g},{d.camera.pitch:g} at a distance that frames the mesh")
 
 
 def settings_from_args(args) -> Settings:

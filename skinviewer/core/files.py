@@ -2,9 +2,13 @@
 is renamed over the target only when complete."""
 from __future__ import annotations
 
+import errno
 import io
 import os
+import re
+import stat
 import tempfile
+import time
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
@@ -21,12 +25,125 @@ def _read_umask() -> int:
 _UMASK = _read_umask()
 
 
+class FileReadError(OSError):
+    """A file that is not read: missing, not a regular file (FIFO, device, folder), or too large."""
+
+
+def read_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes. FIFOs, devices (/dev/zero) and folders
+    are refused before any read (opened non-blocking, so a FIFO never hangs), and at most
+    ``limit`` + 1 bytes are ever read (a file growing meanwhile is refused too)."""
+    p = os.fspath(path)
+    try:
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the path
+        raise FileReadError(f"cannot read {what}: {getattr(exc, 'strerror', None) or exc}") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            kind = ("a folder" if stat.S_ISDIR(st.st_mode) else "a FIFO" if stat.S_ISFIFO(st.st_mode)
+                    else "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else "a socket")
+            raise FileReadError(f"cannot read {what}: it is {kind}, not a regular file")
+        if st.st_size > limit:
+            raise FileReadError(f"cannot read {what}: {st.st_size / 2**20:.1f} MiB is over the "
+                                f"{limit / 2**20:.0f} MiB limit")
+        chunks, total = [], 0
+        while True:
+            chunk = os.read(fd, min(1 << 20, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+            if total > limit:
+                raise FileReadError(f"cannot read {what}: larger than the {limit / 2**20:.0f} MiB limit")
+        return b"".join(chunks)
+    except FileReadError:
+        raise
+    except OSError as exc:
+        raise FileReadError(f"cannot read {what}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+
+
+def check_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -> int:
+    """Size of ``path`` if it is a regular file within ``limit`` (for readers that take a path)."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError) as exc:
+        raise FileReadError(f"cannot read {what}: {getattr(exc, 'strerror', None) or exc}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise FileReadError(f"cannot read {what}: not a regular file")
+    if st.st_size > limit:
+        raise FileReadError(f"cannot read {what}: {st.st_size / 2**20:.1f} MiB is over the "
+                            f"{limit / 2**20:.0f} MiB limit")
+    return st.st_size
+
+
+# our temporaries: ".<target name>.<pid>-<random>.tmp" (older builds: ".<target name>.<random>.tmp")
+_TMP = re.compile(r"^\.(?P<target>.+)\.(?:(?P<pid>\d+)-)?[A-Za-z0-9_]{6,12}\.tmp$")
+STALE_TMP_SECONDS = 600  # a temporary without a pid is stale after this long
+
+
+def is_temporary(path: str | os.PathLike) -> bool:
+    """True for the temporaries atomic writes make (never a preset, never an image)."""
+    return _TMP.match(Path(path).name) is not None
+
+
+def list_files(folder: str | os.PathLike, pattern: str = "*.json") -> list[Path]:
+    """Regular files of ``folder`` matching ``pattern``, without hidden files and our temporaries."""
+    return sorted(p for p in Path(folder).glob(pattern)
+                  if not p.name.startswith(".") and not is_temporary(p) and p.is_file())
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    except OSError as exc:
+        return exc.errno != errno.ESRCH
+    return True
+
+
+def clean_stale_temporaries(target: str | os.PathLike) -> int:
+    """Remove temporaries of ``target`` left by a killed save: those whose writer process is gone
+    (or, without a pid in the name, older than STALE_TMP_SECONDS). Returns how many went."""
+    p = Path(target)
+    removed = 0
+    try:
+        entries = list(os.scandir(p.parent))
+    except OSError:
+        return 0
+    now = time.time()
+    for e in entries:
+        m = _TMP.match(e.name)
+        if m is None or m.group("target") != p.name:
+            continue
+        try:
+            if not e.is_file(follow_symlinks=False):
+                continue
+            pid = m.group("pid")
+            stale = (not _pid_alive(int(pid))) if pid else now - e.stat(follow_symlinks=False).st_mtime > STALE_TMP_SECONDS
+            if stale:
+                os.unlink(e.path)
+                removed += 1
+        except OSError:
+            continue
+    return removed
+
+
 @contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
-    """Yields a temporary path beside ``path``; on success it replaces ``path``, on error it goes."""
+    """Yields a temporary path beside ``path``; on success it replaces ``path``, on error it goes.
+    Temporaries of ``path`` left behind by a killed earlier save are removed first."""
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=suffix, dir=str(p.parent))
+    clean_stale_temporaries(p)
+    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.{os.getpid()}-", suffix=suffix, dir=str(p.parent))
     os.close(fd)
     try:
         yield Path(tmp)

@@ -23,7 +23,8 @@ import numpy as np
 
 from skinviewer.core.gpu import GpuServices, write_uniform
 from skinviewer.core.settings import Settings, get_path, value_key
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.core.paths import shaders_dir
+from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
 
 _DTYPES = {"f1": 1, "f2": 2, "f4": 4}
 
@@ -51,6 +52,21 @@ class TexSpec:
 
 class GraphError(RuntimeError):
     pass
+
+
+class ResourceLimitError(GraphError):
+    """A configuration whose textures would not fit in the memory available: refused before any
+    allocation, with the figure (``needed``, ``available`` in bytes)."""
+
+    def __init__(self, needed: int, available: int, biggest: list[tuple[str, int]]):
+        self.needed, self.available = needed, available
+        top = ", ".join(f"{name} {_gb(b)}" for name, b in biggest[:3])
+        super().__init__(f"this configuration needs {_gb(needed)} of texture memory but only {_gb(available)} "
+                         f"is available (largest: {top}); lower render/map sizes")
+
+
+def _gb(n: int) -> str:
+    return f"{n / 1e9:.2f} GB" if n >= 1e8 else f"{n / 1e6:.1f} MB"
 
 
 class Reflection:
@@ -346,6 +362,7 @@ class PassRecord:
     outputs: dict[str, dict] = field(default_factory=dict)
     note: str = ""  # what the pass measured when it last ran (ExecuteContext.note)
     figures: dict = field(default_factory=dict)
+    nonfinite: list[str] = field(default_factory=list)  # outputs holding NaN/Inf (render.check_finite)
 
 
 @dataclass
@@ -379,6 +396,11 @@ class FrameReport:
         return not self.deferred
 
     @property
+    def nonfinite(self) -> dict[str, list[str]]:
+        """Passes whose outputs hold NaN or Inf (when render.check_finite): pass -> outputs."""
+        return {p.name: list(p.nonfinite) for p in self.passes if p.nonfinite}
+
+    @property
     def total_ms(self) -> float:
         return float(sum(p.ms or 0.0 for p in self.passes if p.status == "ran"))
 
@@ -390,17 +412,19 @@ class FrameReport:
             "total_ms": round(self.total_ms, 4),
             "passes": [
                 {"name": p.name, "status": p.status, "gpu_ms": None if p.ms is None else round(p.ms, 4),
-                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs,
+                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs, "nonfinite": p.nonfinite,
                  **({"note": p.note, "figures": p.figures} if p.note else {})}
                 for p in self.passes
             ],
+            "nonfinite": self.nonfinite,
         }
 
     def table(self) -> str:
         rows = [f"{'pass':<24} {'status':<7} {'ms':>9}  reason"]
         for p in self.passes:
             ms = "" if p.ms is None else f"{p.ms:9.3f}"
-            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}" + (f" [{p.note}]" if p.note else ""))
+            bad = f"  NON-FINITE: {', '.join(p.nonfinite)}" if p.nonfinite else ""
+            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}{bad}" + (f" [{p.note}]" if p.note else ""))
         rows.append(f"{'total (' + self.timing_mode + ' timing)':<32} {self.total_ms:9.3f}")
         return "\n".join(rows)
 
@@ -440,6 +464,11 @@ class RenderGraph:
         self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
+        self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
+        # bytes of memory textures may take (None: no check); the Renderer sets it
+        self.memory_available: Any = None
+        self._checked_plan: tuple | None = None
+        self._check_lib: ShaderLibrary | None = None
 
     # -- texture management ------------------------------------------------------------------
     def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
@@ -593,7 +622,8 @@ class RenderGraph:
             self.frame += 1
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
-                           "" if p.status == "ran" else p.reason, p.inputs, p.outputs, p.note, p.figures)
+                           "" if p.status == "ran" else p.reason, p.inputs, p.outputs,
+                           note=p.note, figures=p.figures, nonfinite=p.nonfinite)
                 for p in last.passes])
             return self.last_report
         t_start = time.perf_counter()
@@ -604,8 +634,10 @@ class RenderGraph:
         self.gpu.keep_scene(frame.scene)
         refl = self._reflect_all(frame.settings, frame.scene)
         order, live = self._order(refl, list(targets or self.targets))
+        self._check_memory(refl, order)
         self.order = order
         self._last_refl = refl
+        check_finite = bool(getattr(frame.settings.render, "check_finite", False))
         records: dict[str, PassRecord] = {}
         for p in order:
             r = refl[p.name]
@@ -623,6 +655,7 @@ class RenderGraph:
                         and (time.perf_counter() - t_start) * 1000.0 > budget_ms:
                     rec.status = "deferred"
                     rec.reason = "frame time budget spent"
+                    rec.nonfinite = list(self._nonfinite.get(p.name, []))
                     records[p.name] = rec
                     continue
                 any_ran = True
@@ -634,6 +667,8 @@ class RenderGraph:
                 for res in r.outputs:
                     self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
+                self._nonfinite[p.name] = self._find_nonfinite(r.outputs) if check_finite else []
+            rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
             if p.name in self._notes:
                 rec.note, rec.figures = self._notes[p.name]
             records[p.name] = rec
@@ -646,6 +681,7 @@ class RenderGraph:
                     if res in self._textures:
                         self._free(res)
                 self._keys.pop(p.name, None)
+                self._nonfinite.pop(p.name, None)
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
@@ -672,6 +708,80 @@ class RenderGraph:
             return ns / 1e6
         finally:
             ec._finish()
+
+    # -- reliability: memory needed before allocating, non-finite outputs after running ----------
+    def plan_bytes(self, refl: dict[str, Reflection], order: list[Pass]) -> tuple[int, list[tuple[str, int]]]:
+        """Memory the frame's textures take: every live output, a depth buffer per size that needs
+        one, and ping-pong scratch (up to two copies of the largest pass's outputs)."""
+        per_res: list[tuple[str, int]] = []
+        depth_sizes: set[tuple[int, int]] = set()
+        biggest_pass = 0
+        for p in order:
+            outs = refl[p.name].outputs
+            biggest_pass = max(biggest_pass, sum(spec.nbytes for spec in outs.values()))
+            for res, spec in outs.items():
+                per_res.append((res, spec.nbytes))
+                if spec.depth:
+                    depth_sizes.add(spec.size)
+        total = sum(b for _, b in per_res) + sum(w * h * 4 for w, h in depth_sizes) + 2 * biggest_pass
+        return total, sorted(per_res, key=lambda x: -x[1])
+
+    def _check_memory(self, refl: dict[str, Reflection], order: list[Pass]) -> None:
+        """Refuse (ResourceLimitError) a frame whose textures will not fit, before allocating any."""
+        budget = self.memory_available
+        if budget is None:
+            return
+        plan = tuple((res, spec) for p in order for res, spec in refl[p.name].outputs.items())
+        if plan == self._checked_plan or all(self._specs.get(res) == spec for res, spec in plan):
+            return  # nothing new to allocate
+        needed, per_res = self.plan_bytes(refl, order)
+        held = sum(self._specs[r].nbytes for r in self._textures if r in self._specs)
+        available = int(budget() if callable(budget) else budget) + held
+        if needed > available:
+            raise ResourceLimitError(needed, available, per_res)
+        self._checked_plan = plan
+
+    def _find_nonfinite(self, outputs: dict[str, TexSpec]) -> list[str]:
+        """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back
+        (<= 4 KB per output). 8-bit outputs cannot hold one and are skipped."""
+        vao_of = self.gpu.fullscreen_vao
+        bad = []
+        for res, spec in outputs.items():
+            if spec.dtype == "f1" or res not in self._textures:
+                continue
+            w, h = spec.size
+            gw, gh = min(w, 64), min(h, 64)
+            tile = (-(-w // gw), -(-h // gh))
+            prog = self._check_program()
+            if prog is None:
+                return bad
+            flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
+            try:
+                fbo = self._framebuffer_for((flags,))
+                fbo.use()
+                self._textures[res].use(0)
+                prog["src"].value = 0
+                prog["u_tile"].value = tile
+                prog["u_size"].value = (w, h)
+                vao_of(prog).render(vertices=3)
+                if np.frombuffer(flags.read(alignment=1), dtype=np.uint8).any():
+                    bad.append(res)
+            finally:
+                self._pool_give(flags)
+        return bad
+
+    def _check_program(self) -> moderngl.Program | None:
+        """shaders/finite_check.*, from the graph's library, or the project's when the graph was
+        given another shader folder (tests); None if it does not compile (no check then)."""
+        lib = self.shaders
+        if not (lib.root / "finite_check.frag").is_file():
+            if self._check_lib is None:
+                self._check_lib = ShaderLibrary(self.ctx, shaders_dir())
+            lib = self._check_lib
+        try:
+            return lib.get("finite_check")
+        except ShaderCompileError:
+            return None
 
     def affected(self, paths: Iterable[str], camera: bool = False) -> list[str]:
         """Passes (execution order of the last frame) that a change of these settings would re-run:
@@ -727,6 +837,9 @@ class RenderGraph:
         self._depth.clear()
         self.gpu.release()
         self.shaders.remove_hook(self.gpu.forget_program)
+        if self._check_lib is not None:
+            self._check_lib.release()
+            self._check_lib = None
 
     def describe(self) -> list[dict]:
         """The passes in execution order with their declared inputs/outputs and last status."""

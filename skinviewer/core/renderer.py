@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,6 +41,7 @@ class GpuScene:
         self.mm_per_unit = float(mm_per_unit)
         self.center = mesh.center.astype(np.float64)
         self.radius = mesh.radius
+        self.frame = mesh.frame  # what the camera frames by default (the head of a bust)
         self.vbo = ctx.buffer(mesh.interleaved().tobytes())
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
@@ -113,6 +115,8 @@ class Renderer:
         self.scene: LoadedScene | None = None
         self.scene_version = 0
         self.last_view: View | None = None
+        # bytes textures may use (None: what the system has, see available_memory); tests set it
+        self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")
 
     # -- scene -------------------------------------------------------------------------------
     @staticmethod
@@ -126,7 +130,8 @@ class Renderer:
                     parts.append(str(Path(p).stat().st_mtime_ns))
                 except OSError:
                     parts.append("missing")
-        return hashlib.sha1("|".join(map(str, parts)).encode()).hexdigest()
+        # surrogateescape: a path from a non-UTF-8 file name (validation refuses unencodable ones)
+        return hashlib.sha1("|".join(map(str, parts)).encode("utf-8", "surrogateescape")).hexdigest()
 
     def ensure_scene(self, s: Settings) -> LoadedScene:
         key = self.scene_key(s)
@@ -147,6 +152,7 @@ class Renderer:
             mesh = sdef.mesh
             mm = sc.mm_per_unit if sc.mm_per_unit is not None else mesh.mm_per_unit
             desc = sdef.description
+        mesh.check_renderable()
         mesh = load_texture_maps(mesh, sc.albedo_map, sc.normal_map, sc.specular_map, sc.region_map)
         gpu = GpuScene(self.ctx, mesh, mm)
         if self.scene is not None:
@@ -161,19 +167,35 @@ class Renderer:
         if g is None:
             passes, targets = techniques.build(technique)
             g = RenderGraph(self.ctx, self.shaders, passes, targets, self.pool)
+            g.memory_available = self.available_memory
             self.graphs[technique] = g
         return g
 
+    def available_memory(self) -> int:
+        """Bytes a frame's new textures may take: ``memory_limit`` less what our textures already
+        hold, else 90 % of the host's available memory (llvmpipe keeps textures in host memory; a
+        discrete GPU reports no figure through GL 3.3, so this is the host bound there too)."""
+        if self.memory_limit is not None:
+            return max(int(self.memory_limit) - self.held_bytes(), 0)
+        return int(_host_available() * 0.9)
+
+    def held_bytes(self) -> int:
+        """Bytes of textures held now: every graph's live textures, the pool's free ones, the scene's."""
+        n = sum(spec.nbytes for g in self.graphs.values() for spec in g.resources().values())
+        n += sum(t.extra.nbytes for lst in self.pool._free.values() for t in lst)
+        return n
+
     def view(self, s: Settings) -> View:
         gpu = self.ensure_scene(s).gpu
-        return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height))
+        return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height), gpu.frame)
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
                force: bool = False, budget_ms: float | None = None) -> FrameReport:
         """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run)."""
         scene = self.ensure_scene(s)
-        view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height))
+        view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height),
+                           scene.gpu.frame)
         self.last_view = view
         g = self.graph(s.technique)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
@@ -206,6 +228,33 @@ class Renderer:
         if self.scene is not None:
             self.scene.gpu.release()
             self.scene = None
+
+
+def _env_bytes(name: str) -> int | None:
+    """An environment size such as 2G, 512M or 1000000 (bytes); None when unset or unreadable."""
+    text = os.environ.get(name, "").strip().upper()
+    if not text:
+        return None
+    mult = {"K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}.get(text[-1:], 1)
+    try:
+        return int(float(text.rstrip("KMGTB") or "x") * mult)
+    except ValueError:
+        return None
+
+
+def _host_available() -> int:
+    """MemAvailable of /proc/meminfo (Linux), else physical memory from sysconf, else 8 GB."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return 8 * 10**9
 
 
 def render_settings(s: Settings, ctx: moderngl.Context | None = None) -> tuple[np.ndarray, FrameReport]:

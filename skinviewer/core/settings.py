@@ -19,7 +19,7 @@ from pydantic import (
 )
 
 from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF, REGIONS
-from skinviewer.core.files import atomic_write_text  # noqa: F401  (presets are saved through it)
+from skinviewer.core.files import FileReadError, atomic_write_text, read_regular_file
 
 SCHEMA_VERSION = 1
 
@@ -44,6 +44,32 @@ def _finite(v: float) -> float:
     return v
 
 
+def _finite_vec(v: Vec3 | None) -> Vec3 | None:
+    if v is not None and any(not math.isfinite(c) for c in v):
+        raise ValueError("components must be finite numbers")
+    return v
+
+
+def _file_path(v: str | None) -> str | None:
+    """A path the OS can open: no NUL byte, encodable (a lone surrogate from JSON is not)."""
+    if v is None:
+        return v
+    if "\x00" in v:
+        raise ValueError("path contains a NUL byte")
+    if not v.strip():
+        raise ValueError("path is empty")
+    try:
+        os.fsencode(v)
+        v.encode("utf-8", "surrogateescape")
+    except (UnicodeError, ValueError):
+        raise ValueError("path is not valid text for this file system (lone surrogate?)") from None
+    return v
+
+
+# a light farther than this (mesh units) is refused: shadow-map projections lose all precision
+MAX_POSITION = 1e9
+
+
 class SceneSettings(_Model):
     name: Literal["head", "laser", "shadow-edge", "backlit-ear", "stretch-plane", "regions-plane"] = "head"
     mesh: str | None = Field(None, description="path of a glTF/GLB/OBJ/PLY mesh; overrides `name`")
@@ -55,6 +81,8 @@ class SceneSettings(_Model):
     region_map: str | None = Field(None, description="region-ID PNG: red channel = index in REGIONS")
     head_detail: int = Field(1, ge=0, le=2, description="default head resolution level (0 small, 1 normal, 2 fine)")
 
+    _paths = field_validator("mesh", "albedo_map", "normal_map", "specular_map", "region_map")(_file_path)
+
 
 class CameraSettings(_Model):
     yaw: float = Field(25.0, ge=-3600, le=3600, description="degrees about +Y")
@@ -64,6 +92,7 @@ class CameraSettings(_Model):
     fov_y: float = Field(30.0, gt=1.0, lt=170.0, description="degrees")
 
     _f = field_validator("yaw", "pitch")(_finite)
+    _t = field_validator("target")(_finite_vec)
 
 
 class LightSettings(_Model):
@@ -98,6 +127,8 @@ class LightSettings(_Model):
     def _pos(cls, v: Vec3) -> Vec3:
         if any(not math.isfinite(c) for c in v):
             raise ValueError("position must be finite")
+        if max(abs(c) for c in v) > MAX_POSITION:
+            raise ValueError(f"position must be within +-{MAX_POSITION:g} mesh units")
         return v
 
 
@@ -111,10 +142,18 @@ class ShadowSettings(_Model):
 class RenderSettings(_Model):
     width: int = Field(640, ge=16, le=8192)
     height: int = Field(640, ge=16, le=8192)
-    exposure: float = Field(1.0, gt=0.0, le=1e4)
+    exposure: float = Field(0.9, gt=0.0, le=1e4)
+    tone_map: Literal["filmic", "linear"] = Field(
+        "filmic", description="display transform after exposure: filmic (ACES fit, soft highlight roll-off) or "
+        "linear (clamp; what measurements compare)")
     background: Vec3 = (0.05, 0.05, 0.06)
+    check_finite: bool = Field(
+        True, description="after a pass runs, check its outputs for NaN/Inf (a small GPU reduction); "
+        "the frame report names a pass whose output is not finite")
     timing: Literal["sync", "gpu"] = Field(
         "sync", description="sync: glFinish + wall clock per pass (right on llvmpipe); gpu: GL timer queries")
+
+    _bg = field_validator("background")(_finite_vec)
 
 
 class PhongSettings(_Model):
@@ -128,6 +167,14 @@ class RegionSpecular(_Model):
     rho_s: float | None = Field(None, ge=0.0, le=10.0)
 
 
+def _default_region_specular() -> dict[str, "RegionSpecular"]:
+    # seed 002 §14.3: Weyrich et al. 2006 measured m and rho_s per facial region; the pattern they found
+    # (nose and lips shinier, cheeks and chin rougher) with values inside their measured range
+    table = {"forehead": (0.32, 0.20), "nose": (0.28, 0.24), "lips": (0.30, 0.22), "cheeks": (0.38, 0.15),
+             "chin": (0.35, 0.17)}
+    return {k: RegionSpecular(m=m, rho_s=r) for k, (m, r) in table.items()}
+
+
 class SpecularSettings(_Model):
     """Kelemen/Szirmay-Kalos (seed 000 eq. 14-16, seed 002 §14.3)."""
     m: float = Field(0.3, ge=0.0, le=1.0, description="Beckmann roughness")
@@ -135,7 +182,7 @@ class SpecularSettings(_Model):
     rho_s: float = Field(0.18, ge=0.0, le=10.0, description="specular intensity")
     mode: Literal["direct", "beckmann_lut"] = "direct"
     lut_size: int = Field(512, ge=16, le=4096)
-    per_region: dict[str, RegionSpecular] = Field(default_factory=dict)
+    per_region: dict[str, RegionSpecular] = Field(default_factory=lambda: _default_region_specular())
 
     _regions = field_validator("per_region")(_known_regions)
 
@@ -200,7 +247,7 @@ class DeonSettings(_Model):
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
     tsm_light: int | None = Field(
-        None, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
+        1, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
     tsm_form: Literal["exact", "printed"] = Field(
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True
@@ -298,8 +345,10 @@ class ScreenSettings(_Model):
                                 "pre-post = x albedo^mix before the blur and x albedo^(1-mix) after")
     mix: float = Field(0.5, ge=0.0, le=1.0, description="pre-post texturing: the albedo exponent f applied before the blur")
     non_skin_regions: list[str] = Field(
-        default_factory=list, description="regions (names in REGIONS) the SSS mask excludes: no blur there and no "
-                                          "bleeding into them; a mesh without a region map is all skin")
+        default_factory=lambda: ["other"],
+        description="regions (names in REGIONS) the SSS mask excludes: no blur there and no bleeding into them "
+                    "(the default head paints its eyeballs 'other', every skin point a named region); a mesh "
+                    "without a region map is all skin")
 
     @field_validator("non_skin_regions")
     @classmethod
@@ -372,9 +421,11 @@ class Settings(_Model):
     render: RenderSettings = Field(default_factory=RenderSettings)
     lights: list[LightSettings] = Field(
         default_factory=lambda: [
-            # key light front-right, rim light behind-left (it makes the ears glow with TSM)
-            LightSettings(direction=(0.55, 0.35, 1.0), intensity=1.4, color=(1.0, 0.97, 0.92)),
-            LightSettings(direction=(-0.8, 0.4, -0.9), intensity=1.2, color=(0.85, 0.9, 1.0)),
+            # a portrait rig: a warm key high on the left of the face, a cool rim behind the right ear
+            # (deon.tsm_light = 1: it makes the ears glow), a soft unshadowed fill from the camera side
+            LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
+            LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
+            LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False),
         ],
         min_length=1, max_length=MAX_LIGHTS)
     shadow: ShadowSettings = Field(default_factory=ShadowSettings)
@@ -440,7 +491,7 @@ def get_path(obj: Any, path: str) -> Any:
         if part == "#":  # "lights.#": the length of a list
             cur = len(cur)
         elif isinstance(cur, (list, tuple)):
-            cur = cur[int(part)]
+            cur = cur[_index(part)]
         elif isinstance(cur, dict):
             cur = cur[part]
         else:
@@ -448,6 +499,13 @@ def get_path(obj: Any, path: str) -> Any:
                 raise KeyError(path)
             cur = getattr(cur, part)
     return cur
+
+
+def _index(part: str) -> int:
+    """A list index in a dotted path: plain decimal digits only (``lights.-1`` is not the last light)."""
+    if not (part.isascii() and part.isdigit()) or len(part) > 6:
+        raise IndexError(part)
+    return int(part)
 
 
 def _jsonable(v: Any) -> Any:
@@ -469,7 +527,9 @@ def parse_value(text: str) -> Any:
     """A ``--set`` value: JSON when it parses (numbers, true/false, null, lists), else the bare string."""
     try:
         return json.loads(text)
-    except json.JSONDecodeError:
+    except (ValueError, RecursionError) as exc:
+        if not isinstance(exc, json.JSONDecodeError):  # 5,000-digit integers, 100,000 nested lists
+            raise SettingsError([("<value>", _json_problem(exc))]) from None
         lowered = text.strip().lower()
         if lowered in ("on", "yes"):
             return True
@@ -478,7 +538,7 @@ def parse_value(text: str) -> Any:
         if "," in text:  # 1,2,3 -> [1, 2, 3]
             try:
                 return [json.loads(p) for p in text.split(",")]
-            except json.JSONDecodeError:
+            except (ValueError, RecursionError):
                 pass
         return text
 
@@ -492,10 +552,10 @@ def with_values(s: Settings, assignments: dict[str, Any]) -> Settings:
         cur: Any = data
         try:
             for p in parts[:-1]:
-                cur = cur[int(p)] if isinstance(cur, list) else cur[p]
+                cur = cur[_index(p)] if isinstance(cur, list) else cur[p]
             last = parts[-1]
             if isinstance(cur, list):
-                idx = int(last)
+                idx = _index(last)
                 if idx == len(cur):
                     cur.append(value)
                 else:
@@ -526,29 +586,88 @@ def parse_assignments(items: list[str]) -> dict[str, Any]:
             errors.append((item, "expected key=value"))
             continue
         k, v = item.split("=", 1)
-        out[k.strip()] = parse_value(v.strip())
+        try:
+            out[k.strip()] = parse_value(v.strip())
+        except SettingsError as exc:
+            errors += [(k.strip(), m) for _, m in exc.errors]
     if errors:
         raise SettingsError(errors)
     return out
 
 
+# a preset is a small JSON file: anything larger is not one (and /dev/zero never ends)
+MAX_PRESET_BYTES = 4 * 1024 * 1024
+# scene fields holding file paths: relative ones in a preset are relative to the preset's folder
+PATH_FIELDS = ("mesh", "albedo_map", "normal_map", "specular_map", "region_map")
+
+
+def _json_problem(exc: BaseException) -> str:
+    if isinstance(exc, RecursionError):
+        return "nested too deeply"
+    if isinstance(exc, UnicodeDecodeError):
+        return f"not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset {exc.start})"
+    if isinstance(exc, json.JSONDecodeError):
+        return f"line {exc.lineno} column {exc.colno}: {exc.msg}"
+    return str(exc).split(";")[0]  # e.g. "Exceeds the limit (4300 digits) for integer string conversion"
+
+
 def load_preset(path: str | os.PathLike, base: Settings | None = None) -> Settings:
-    """Read a preset. A preset may be partial: its fields override ``base`` (default: defaults)."""
+    """Read a preset. A preset may be partial: its fields override ``base`` (default: defaults).
+    Relative scene paths in it are resolved against the preset's folder."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SettingsError([("<file>", f"cannot read: {exc.strerror or exc}")], str(p)) from None
+        raw = read_regular_file(p, MAX_PRESET_BYTES, what="preset")
+    except FileReadError as exc:
+        raise SettingsError([("<file>", str(exc))], _shown(p)) from None
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        raise SettingsError([("<file>", "UTF-16 text: save the preset as UTF-8")], _shown(p))
     try:
+        text = raw.decode("utf-8")
+        if text.startswith("\ufeff"):
+            text = text[1:]  # a UTF-8 byte-order mark
         data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise SettingsError([("<json>", f"line {exc.lineno} column {exc.colno}: {exc.msg}")], str(p)) from None
+    except (ValueError, RecursionError) as exc:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        where = "<json>" if isinstance(exc, json.JSONDecodeError) or not isinstance(exc, UnicodeDecodeError) \
+            else "<file>"
+        raise SettingsError([(where, _json_problem(exc))], _shown(p)) from None
     if not isinstance(data, dict):
-        raise SettingsError([("<root>", "a preset is a JSON object")], str(p))
+        raise SettingsError([("<root>", "a preset is a JSON object")], _shown(p))
     if "schema_version" not in data:
-        raise SettingsError([("schema_version", "missing")], str(p))
-    merged = _deep_merge(to_dict(base or Settings()), data)
-    return validate(merged, str(p))
+        raise SettingsError([("schema_version", "missing")], _shown(p))
+    scene = data.get("scene")
+    if isinstance(scene, dict):
+        data = dict(data, scene={k: _resolve_against(v, p.parent) if k in PATH_FIELDS else v
+                                 for k, v in scene.items()})
+    try:
+        merged = _deep_merge(to_dict(base or Settings()), data)
+        return validate(merged, _shown(p))
+    except RecursionError:
+        raise SettingsError([("<json>", "nested too deeply")], _shown(p)) from None
+
+
+def _shown(p: Path) -> str:
+    """A path as printable text (a lone surrogate in it must not break the error line)."""
+    return str(p).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _resolve_against(v: Any, folder: Path) -> Any:
+    if not isinstance(v, str) or not v or "\x00" in v:
+        return v  # validation says what is wrong with it
+    try:
+        if os.path.isabs(v):
+            return v
+        return os.path.normpath(os.path.join(os.path.abspath(folder), v))
+    except (ValueError, UnicodeError):
+        return v
+
+
+def _relative_to(v: str | None, folder: Path) -> str | None:
+    if not v:
+        return v
+    try:
+        return os.path.relpath(os.path.abspath(v), os.path.abspath(folder))
+    except ValueError:  # another drive (Windows)
+        return v
 
 
 def _deep_merge(base: dict, over: dict) -> dict:
@@ -561,8 +680,14 @@ def _deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-def save_preset(s: Settings, path: str | os.PathLike) -> None:
-    atomic_write_text(path, json.dumps(to_dict(s), indent=2) + "\n")
+def save_preset(s: Settings, path: str | os.PathLike, data: dict | None = None) -> None:
+    """Write ``s`` (or ``data``, a dict of it such as the viewer's trimmed payload) atomically; scene
+    paths are written relative to the preset's folder."""
+    data = to_dict(s) if data is None else dict(data)
+    folder = Path(path).parent
+    if "scene" in data:
+        data["scene"] = {k: _relative_to(v, folder) if k in PATH_FIELDS else v for k, v in data["scene"].items()}
+    atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 
 def profile_warnings(d: DeonSettings) -> list[str]:

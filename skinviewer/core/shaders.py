@@ -88,8 +88,13 @@ class ShaderLibrary:
         self.revision = 0  # bumps whenever any program is replaced (a cheap "did any shader change?")
 
     # -- source assembly ---------------------------------------------------------------------
-    def _expand(self, path: Path, files: list[Path], stack: tuple[Path, ...] = ()) -> list[str]:
-        """Source lines with includes spliced in and #line directives so errors map to files."""
+    def _expand(self, path: Path, files: list[Path], stack: tuple[Path, ...] = (),
+                watch: set[Path] | None = None) -> list[str]:
+        """Source lines with includes spliced in and #line directives so errors map to files.
+        ``watch`` collects every file the result depends on, including ones that are missing or
+        fail, so that a hot reload notices when they are restored or fixed."""
+        if watch is not None:
+            watch.add(path)
         if path in stack:
             raise _SourceError(ShaderError(self._rel(stack[-1]), 0, f"#include cycle through {self._rel(path)}"))
         try:
@@ -109,13 +114,14 @@ class ShaderLibrary:
             if _VERTEX_STAGE.match(line):
                 out.append("// " + line.strip())  # read by _stage_files; keeps line numbers
             elif m:
-                inc = (path.parent / m.group(1)).resolve()
-                if not inc.is_file():
-                    inc = (self.root / m.group(1)).resolve()
-                if not inc.is_file():
+                candidates = [(path.parent / m.group(1)).resolve(), (self.root / m.group(1)).resolve()]
+                inc = next((c for c in candidates if c.is_file()), None)
+                if inc is None:
+                    if watch is not None:
+                        watch.update(candidates)  # either appearing fixes it
                     raise _SourceError(ShaderError(self._rel(path), lineno, f'#include "{m.group(1)}" not found'))
                 out.append(f"#line 1 {len(files) if inc not in files else files.index(inc)}")
-                out.extend(self._expand(inc, files, stack + (path,)))
+                out.extend(self._expand(inc, files, stack + (path,), watch))
                 out.append(f"#line {lineno + 1} {fid}")
             else:
                 out.append(line)
@@ -142,7 +148,9 @@ class ShaderLibrary:
                 found["vertex_shader"] = self.root / m.group(1)
         return found
 
-    def _assemble(self, name: str, defines: tuple[tuple[str, str], ...]):
+    def _assemble(self, name: str, defines: tuple[tuple[str, str], ...], watch: set[Path] | None = None):
+        if watch is not None:  # every stage file, present or not: a deleted one may come back
+            watch.update((self.root / f"{name}{ext}").resolve() for ext in STAGES.values())
         stage_files = self._stage_files(name)
         if "fragment_shader" in stage_files and "vertex_shader" not in stage_files:
             self._expand(stage_files["fragment_shader"].resolve(), [])  # its own error (encoding) first
@@ -156,7 +164,7 @@ class ShaderLibrary:
         files_per_stage: dict[str, list[Path]] = {}
         for stage, path in stage_files.items():
             files: list[Path] = []
-            lines = self._expand(path.resolve(), files)
+            lines = self._expand(path.resolve(), files, watch=watch)
             if defines:
                 at = next((i + 1 for i, ln in enumerate(lines) if ln.lstrip().startswith("#version")), 0)
                 lines[at:at] = [f"#define {k} {v}" for k, v in defines]  # the #line after #version follows
@@ -166,14 +174,15 @@ class ShaderLibrary:
 
     # -- compile -----------------------------------------------------------------------------
     def _compile(self, entry: _Entry) -> bool:
+        watch: set[Path] = set()
         try:
-            sources, files_per_stage = self._assemble(entry.name, entry.defines)
+            sources, files_per_stage = self._assemble(entry.name, entry.defines, watch)
         except _SourceError as exc:
             entry.errors = [exc.error]
-            self._remember_files(entry, self._guess_files(entry.name))
+            self._remember_files(entry, watch)
             return False
         all_files = {p for fs in files_per_stage.values() for p in fs}
-        self._remember_files(entry, all_files)
+        self._remember_files(entry, all_files | watch)
         digest = hashlib.sha1(repr(sorted(sources.items())).encode()).hexdigest()
         if entry.program is not None and digest == entry.digest:
             entry.errors = []

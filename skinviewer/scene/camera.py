@@ -41,16 +41,22 @@ def orbit_eye(target, yaw_deg: float, pitch_deg: float, distance: float) -> np.n
     return np.asarray(target, dtype=np.float64) + distance * offset
 
 
-def orbit_view(cam, center: np.ndarray, radius: float, size: tuple[int, int]) -> View:
-    """A View from CameraSettings, framing a bounding sphere (center, radius) when distance is None."""
-    target = np.asarray(cam.target if cam.target is not None else center, dtype=np.float64)
-    distance = cam.distance if cam.distance is not None else framing_distance(radius, cam.fov_y)
+def orbit_view(cam, center: np.ndarray, radius: float, size: tuple[int, int],
+               frame: tuple[np.ndarray, float] | None = None) -> View:
+    """A View from CameraSettings. (center, radius) bound the whole scene (near/far); the camera
+    looks at and frames ``frame`` = (centre, radius), e.g. MeshData.frame (the head of a bust),
+    when target / distance are None; without ``frame`` it frames the bounding sphere."""
+    f_center, f_radius = frame if frame is not None else (center, radius)
+    target = np.asarray(cam.target if cam.target is not None else f_center, dtype=np.float64)
+    distance = cam.distance if cam.distance is not None else framing_distance(f_radius, cam.fov_y)
     eye = orbit_eye(target, cam.yaw, cam.pitch, distance)
     view = np.array(glm.lookAt(glm.vec3(*eye), glm.vec3(*target), glm.vec3(0, 1, 0)).to_list(), dtype=np.float64).T
     # near/far hug the scene's bounding sphere as seen from the eye (depth precision)
     d_center = float(np.linalg.norm(eye - center))
-    near = max(d_center - radius * 1.5, distance * 1e-3, 1e-4)
-    far = d_center + radius * 1.5
+    # no absolute floor: a mesh 1e-6 units across is framed like one 1e3 across (the near plane
+    # scales with the distance, which scales with the mesh)
+    near = max(d_center - radius * 1.5, distance * 1e-3)
+    far = max(d_center + radius * 1.5, near * (1.0 + 1e-6))
     aspect = size[0] / max(size[1], 1)
     proj = np.array(glm.perspective(math.radians(cam.fov_y), aspect, near, far).to_list(), dtype=np.float64).T
     return View(view=view, proj=proj, eye=eye, size=size)
@@ -137,9 +143,12 @@ def light_space(light, center: np.ndarray, radius: float) -> LightSpace:
         pos = np.asarray(light.position, dtype=np.float64)
         dist = float(np.linalg.norm(pos - center))
         if dist <= radius * 1.05:  # light inside the bounds: back it off along its direction so eq. (5) fits
-            d = (pos - center) / max(dist, 1e-9) if dist > 1e-9 else np.array([0.0, 0.0, 1.0])
+            d = (pos - center) / dist if dist > radius * 1e-9 else np.array([0.0, 0.0, 1.0])
             pos = center + d * radius * 1.05
             dist = radius * 1.05
+        elif dist > radius * 1e4:  # so far that its rays are parallel: bring it in, or near == far (eq. 5 / 0)
+            pos = center + (pos - center) / dist * radius * 1e4
+            dist = radius * 1e4
         fov = 2.0 * math.asin(min(radius / dist, 0.999))
         near, far = max(dist - radius, dist * 1e-3), dist + radius
         vp = light_view_rowvec(pos, center) @ light_projection_rowvec(fov, 1.0, 1.0, near, far)

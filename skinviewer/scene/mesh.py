@@ -35,7 +35,14 @@ class MeshData:
     notes: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.positions = np.ascontiguousarray(self.positions, dtype=np.float32)
+        p64 = np.asarray(self.positions, dtype=np.float64)
+        if not np.all(np.isfinite(p64)):
+            raise MeshError(f"{self.name}: non-finite vertex positions")
+        with np.errstate(over="ignore"):
+            self.positions = np.ascontiguousarray(p64, dtype=np.float32)
+        if not np.all(np.isfinite(self.positions)):
+            raise MeshError(f"{self.name}: vertex positions up to {np.abs(p64).max():.3g} exceed the float32 "
+                            "range the GPU uses (3.4e38); rescale the mesh and set scene.mm_per_unit")
         self.normals = np.ascontiguousarray(self.normals, dtype=np.float32)
         self.uvs = np.ascontiguousarray(self.uvs, dtype=np.float32)
         self.indices = np.ascontiguousarray(self.indices, dtype=np.uint32).reshape(-1, 3)
@@ -56,6 +63,33 @@ class MeshData:
     def radius(self) -> float:
         return float(np.linalg.norm(self.positions - self.center, axis=1).max())
 
+    @property
+    def frame(self) -> tuple[np.ndarray, float]:
+        """(centre, radius) the camera frames by default: the head when the mesh has a neck or
+        shoulders (``portrait_frame``), else the bounding sphere."""
+        if getattr(self, "_frame", None) is None:
+            self._frame = portrait_frame(self.positions)
+        return self._frame
+    def check_renderable(self) -> None:
+        """MeshError saying why a mesh cannot be framed and shaded in float32: zero size, coordinates
+        so large that squared lengths overflow in the shaders, or so small / so far from the origin
+        that float32 cannot tell its vertices apart."""
+        lo, hi = self.bounds
+        extent = float(np.max(hi - lo))
+        reach = float(np.abs(self.positions).max())
+        if not extent > 0.0:
+            raise MeshError(f"{self.name}: all vertices coincide (zero size): nothing to frame")
+        if reach > MAX_COORDINATE:
+            raise MeshError(f"{self.name}: coordinates reach {reach:.3g} mesh units; shading squares lengths in "
+                            f"float32, so coordinates must stay within {MAX_COORDINATE:g}: rescale the mesh "
+                            "and set scene.mm_per_unit")
+        if extent < MIN_EXTENT:
+            raise MeshError(f"{self.name}: the mesh is {extent:.3g} mesh units across; below {MIN_EXTENT:g} float32 "
+                            "shading underflows: rescale the mesh and set scene.mm_per_unit")
+        if extent < reach * 1e-5:
+            raise MeshError(f"{self.name}: the mesh is {extent:.3g} units across but {reach:.3g} from the origin: "
+                            "float32 cannot resolve it there; centre it near the origin")
+
     def replace(self, **kw) -> "MeshData":
         return dataclasses.replace(self, **kw)
 
@@ -63,6 +97,15 @@ class MeshData:
         """(N, 12) float32: position, normal, uv, tangent — the vertex layout every pass uses."""
         return np.hstack([self.positions, self.normals, self.uvs, self.tangents]).astype(np.float32)
 
+
+# float32 shading limits (see MeshData.check_renderable): squared lengths must neither overflow
+# (3.4e38) nor sink into denormals (1.2e-38), with room for products of a few such terms
+MAX_COORDINATE = 1e15
+MIN_EXTENT = 1e-12
+# files read as meshes / images: regular files only, at most this large
+MAX_MESH_BYTES = 2 * 1024**3
+MAX_IMAGE_BYTES = 1024**3
+MAX_IMAGE_PIXELS = 8192 * 8192  # a map larger than the largest texture-space map helps nothing
 
 VERTEX_FORMAT = "3f 3f 2f 4f"
 VERTEX_ATTRS = ("in_position", "in_normal", "in_uv", "in_tangent")
@@ -128,22 +171,71 @@ def compute_tangents(positions, normals, uvs, indices) -> np.ndarray:
 # loading
 
 def _read_image(path: str | Path, mode: str) -> np.ndarray:
+    """A map from an image file: regular files only, size-limited, any bit depth (see _image_array)."""
+    import io
+
     from PIL import Image, UnidentifiedImageError
+
+    from skinviewer.core.files import FileReadError, read_regular_file
     try:
-        img = Image.open(path)
+        data = read_regular_file(path, MAX_IMAGE_BYTES, what=f"image {path}")
+    except FileReadError as exc:
+        raise MeshError(str(exc)) from None
+    try:
+        img = Image.open(io.BytesIO(data))
+        w, h = img.size
+        if w * h > MAX_IMAGE_PIXELS:
+            raise MeshError(f"image {path} is {w}x{h} ({w * h / 1e6:.0f} megapixels); the limit is "
+                            f"{MAX_IMAGE_PIXELS / 1e6:.0f} megapixels (8192x8192)")
         img.load()
-    except (OSError, UnidentifiedImageError) as exc:
+    except Image.DecompressionBombError as exc:
+        raise MeshError(f"image {path} is too large to decode safely ({exc})") from None
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as exc:
         raise MeshError(f"cannot read image {path}: {exc}") from None
     return _image_array(img, mode)
 
 
 def _image_array(img, mode: str) -> np.ndarray:
-    """A PIL image as a map array, row 0 at v = 0 (images store their top row first)."""
+    """A PIL image as a map array, row 0 at v = 0 (images store their top row first).
+    ``mode`` "L": uint8 (H, W) (region IDs; 16-bit images are rounded to 8 bits, not clipped);
+    "RGB"/"RGBA": float32 in [0, 1] of the image's own bit depth (16-bit PNGs stay 16-bit)."""
+    arr = _unit_float(img)  # (H, W, C) float32 in [0, 1]
     if mode == "L":
-        arr = np.asarray(img.convert("RGB"))[..., 0]
-        return np.ascontiguousarray(arr[::-1])  # row 0 at v = 0
-    arr = np.asarray(img.convert(mode), dtype=np.float32) / 255.0
-    return np.ascontiguousarray(arr[::-1])
+        arr8 = np.rint(arr[..., 0] * 255.0).astype(np.uint8)
+        return np.ascontiguousarray(arr8[::-1])  # row 0 at v = 0
+    want = len(mode)
+    c = arr.shape[2]
+    if c in (1, 2):  # grey (+ alpha)
+        grey = arr[..., :1]
+        arr = np.concatenate([grey, grey, grey] + ([arr[..., 1:2]] if c == 2 else []), axis=2)
+        c = arr.shape[2]
+    if want == 3:
+        arr = arr[..., :3]
+    elif want == 4 and c == 3:
+        arr = np.concatenate([arr, np.ones_like(arr[..., :1])], axis=2)
+    return np.ascontiguousarray(arr[::-1], dtype=np.float32)
+
+
+def _unit_float(img) -> np.ndarray:
+    """Pixels as float32 (H, W, C) in [0, 1], dividing by the maximum of the image's bit depth:
+    8-bit modes by 255, 16-bit ("I;16*", and "I" as Pillow opens 16-bit greyscale PNGs) by 65535,
+    32-bit float ("F") clipped to [0, 1]; palette and other modes through RGB(A)."""
+    m = img.mode
+    if m.startswith("I;16"):
+        a = np.asarray(img).astype(np.float32) / 65535.0
+    elif m == "I":
+        a = np.asarray(img).astype(np.float64)
+        top = 65535.0 if a.max(initial=0) <= 65535 else float(2**31 - 1)
+        a = (a / top).astype(np.float32)
+    elif m == "F":
+        a = np.nan_to_num(np.asarray(img, dtype=np.float32), nan=0.0, posinf=1.0, neginf=0.0)
+    elif m in ("L", "LA", "RGB", "RGBA"):
+        a = np.asarray(img).astype(np.float32) / 255.0
+    else:
+        conv = img.convert("RGBA" if ("A" in m or "transparency" in img.info) else "RGB")
+        a = np.asarray(conv).astype(np.float32) / 255.0
+    a = np.clip(a, 0.0, 1.0)
+    return a[..., None] if a.ndim == 2 else a
 
 
 def load_texture_maps(mesh: MeshData, albedo=None, normal=None, specular=None, region=None) -> MeshData:
@@ -164,9 +256,12 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
     ``auto_uv`` (the default, and said in ``notes``); otherwise it is refused with MeshError."""
     import trimesh
 
+    from skinviewer.core.files import FileReadError, check_regular_file
     p = Path(path)
-    if not p.is_file():
-        raise MeshError(f"mesh file not found: {p}")
+    try:
+        check_regular_file(p, MAX_MESH_BYTES, what=f"mesh {p}")
+    except FileReadError as exc:
+        raise MeshError(str(exc) if p.exists() else f"mesh file not found: {p}") from None
     try:
         loaded = trimesh.load(str(p), process=False)
     except Exception as exc:  # trimesh raises many kinds
@@ -224,12 +319,27 @@ def _embedded_textures(tm, notes: list[str]):
         return None, None
     base = getattr(material, "baseColorTexture", None) or getattr(material, "image", None)
     normal = getattr(material, "normalTexture", None)
+    if base is not None and _is_placeholder(base):
+        # trimesh gives an OBJ without a material (or with a missing .mtl) a 2x2 grey image: not a texture
+        base = None
+        notes.append("the file has no material texture: the default skin tone is used as albedo")
     albedo = _image_array(base, "RGB") if base is not None else None
     nmap = _image_array(normal, "RGB") if normal is not None else None
     for what, arr in (("base colour", albedo), ("normal", nmap)):
         if arr is not None:
             notes.append(f"using the file's {what} texture ({arr.shape[1]}x{arr.shape[0]})")
     return albedo, nmap
+
+
+def _is_placeholder(img) -> bool:
+    """trimesh's stand-in material image (trimesh.visual.material.empty_material): tiny, uniform grey 100."""
+    try:
+        if img.size[0] > 2 or img.size[1] > 2:
+            return False
+        a = np.asarray(img.convert("RGB"))
+    except Exception:
+        return False
+    return bool(np.all(a == 100))
 
 
 def _uv_of(tm) -> np.ndarray | None:
@@ -253,3 +363,43 @@ def framing_distance(radius: float, fov_y_deg: float, margin: float = 1.15) -> f
     """Camera distance at which a sphere of ``radius`` fills the vertical field of view."""
     half = np.radians(fov_y_deg) * 0.5
     return float(radius * margin / max(np.sin(half), 1e-3))
+
+
+def portrait_frame(positions: np.ndarray, slices: int = 48) -> tuple[np.ndarray, float]:
+    """Centre and radius of the part of a Y-up mesh a portrait shows, without face detection.
+
+    A bust or a figure is wide at the head, narrow at the neck and wide again at the shoulders;
+    the horizontal (x) width of horizontal slices shows it. The neck is the narrowest slice below
+    the widest slice of the upper half; when it is clearly narrower than the head (< 0.8) and not
+    the bottom of the mesh, the frame is everything above it (head and a little neck). A mesh much
+    taller than wide without a neck is framed on its top (a square of its width). Otherwise the
+    bounding sphere (centre of the bounds, farthest vertex)."""
+    p = np.asarray(positions, dtype=np.float64)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    height = hi[1] - lo[1]
+    keep = p
+    if height > 0 and len(p) >= 8 * slices:
+        edges = np.linspace(lo[1], hi[1], slices + 1)
+        idx = np.clip(((p[:, 1] - lo[1]) / height * slices).astype(int), 0, slices - 1)
+        order = np.argsort(idx, kind="stable")
+        bounds = np.searchsorted(idx[order], np.arange(slices + 1))
+        width = np.zeros(slices)
+        for i in range(slices):
+            xs = p[order[bounds[i]:bounds[i + 1]], 0]
+            if len(xs) >= 4:  # robust extent: ignore a few stray vertices
+                width[i] = np.percentile(xs, 99) - np.percentile(xs, 1)
+        top = np.arange(slices // 2, slices)
+        i_head = top[np.argmax(width[top])]
+        below = np.arange(0, i_head)
+        below = below[width[below] > 0]
+        girth = max(np.ptp(p[:, 0]), np.ptp(p[:, 2]))
+        if len(below) and width[i_head] > 0:
+            i_neck = below[np.argmin(width[below])]
+            if width[i_neck] < 0.8 * width[i_head] and i_neck > slices // 20:
+                keep = p[p[:, 1] >= edges[i_neck]]
+            elif height > 1.6 * girth:
+                keep = p[p[:, 1] >= hi[1] - girth]
+        elif height > 1.6 * girth:
+            keep = p[p[:, 1] >= hi[1] - girth]
+    c = 0.5 * (keep.min(axis=0) + keep.max(axis=0))
+    return c, float(np.linalg.norm(keep - c, axis=1).max())

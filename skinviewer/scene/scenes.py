@@ -146,27 +146,43 @@ def stretch_plane_scene() -> SceneDef:
 
 def regions_plane_scene() -> SceneDef:
     """A plane split into two regions (left: cheeks, right: ears) with a shadow edge running
-    across both, for per-region kernel sizes."""
+    across both along y = 0, for per-region kernel widths.
+
+    The key light comes from above the camera (direction (0, 0.45, 1)), so the blade that casts
+    the edge hangs higher than the edge (its lower edge at y = 11.25 mm, 25 mm above the plane);
+    the camera looks up at the plane from below, under the blade, so the edge is in plain view;
+    the lit side (intensity 0.8 at 24° incidence) stays below white."""
     from skinviewer.core.settings import REGIONS
+    light = np.array([0.0, 0.45, 1.0])
+    height = 25.0
+    y_edge = height * light[1] / light[2]     # blade edge that casts the plane's edge at y = 0
     plane = grid(64, 64, 60.0, 60.0, uv_rect=(0.02, 0.02, 0.78, 0.98))
-    blade = _box((0.0, 17.5, 20.0), (80.0, 35.0, 2.0), uv_rect=(0.82, 0.02, 0.98, 0.40))
+    blade = _box((0.0, y_edge + 20.0, height), (80.0, 40.0, 2.0), uv_rect=(0.82, 0.02, 0.98, 0.40))
     pos, nrm, uv, idx = _merge([plane, blade])
     region = np.zeros((256, 256), np.uint8)
     region[:, :] = REGIONS.index("cheeks")
     region[:, 103:] = REGIONS.index("ears")  # u >= 0.40 (x >= 0 on the plane)
-    mesh = MeshData(pos, nrm, uv, idx, name="regions-plane", albedo=np.ones((4, 4, 3), np.float32),
-                    region_map=region)
+    albedo = np.empty((64, 64, 3), np.float32)
+    albedo[:] = 1.0                           # white plane (like the other analysis scenes)
+    albedo[:, 51:] = (0.25, 0.25, 0.27)       # the blade's island (u >= 0.80): dark grey
+    mesh = MeshData(pos, nrm, uv, idx, name="regions-plane", albedo=albedo, region_map=region)
     return SceneDef("regions-plane", mesh, {
-        "lights": [{"kind": "directional", "direction": [0.0, 0.0, 1.0], "intensity": 1.0,
+        "lights": [{"kind": "directional", "direction": light.tolist(), "intensity": 0.8,
                     "color": [1.0, 1.0, 1.0], "cast_shadow": True}],
-        "camera": {"yaw": 0.0, "pitch": 0.0, "distance": 140.0, "target": [0.0, 0.0, 0.0], "fov_y": 30.0},
-    }, "60 mm plane, left half region 'cheeks', right half 'ears', shadow edge along y = 0")
+        "camera": {"yaw": 0.0, "pitch": -30.0, "distance": 85.0, "target": [0.0, 2.0, 0.0], "fov_y": 30.0},
+    }, "60 mm plane, left half region 'cheeks', right half 'ears', shadow edge along y = 0 from a blade "
+       "25 mm above it, lit from above the camera")
+
+
+# the head's eyeballs are the only texels of region "other" (non-skin): a glossy cornea gives
+# the eyes their catchlight (Beckmann m 0.08) while the skin keeps its own lobe
+HEAD_OVERRIDES = {"specular.per_region.other": {"m": 0.08, "rho_s": 0.6}}
 
 
 def head_scene(detail: int = 1) -> SceneDef:
     from skinviewer.scene.head import default_head
     mesh = default_head(detail=detail)
-    return SceneDef("head", mesh, {}, "the project's generated head (millimetres)")
+    return SceneDef("head", mesh, dict(HEAD_OVERRIDES), "the project's generated head (millimetres)")
 
 
 _BUILDERS = {
@@ -189,5 +205,5 @@ def build_scene(name: str, detail: int = 1) -> SceneDef:
 def scene_overrides(name: str) -> dict:
     """The settings a built-in scene brings (its lights and camera); cheap for analysis scenes."""
     if name == "head":
-        return {}
+        return dict(HEAD_OVERRIDES)
     return build_scene(name).overrides

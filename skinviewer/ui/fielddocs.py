@@ -1,6 +1,8 @@
-"""Units and tooltips of the physically meaningful settings, keyed by dotted path (list indices as
-``*``). Equation numbers refer to seed 000 (the survey text the techniques follow) unless another
-seed is named. The panel shows the unit in the label and the text as the field's tooltip."""
+"""Labels, units and tooltips of the settings, keyed by dotted path (list indices as ``*``).
+Equation numbers refer to seed 000 (the survey text the techniques follow) unless another seed is
+named. The panel shows the label (words an artist uses; the paper's term is in the tooltip) with
+the unit, and the text as the field's tooltip. A label with its unit must fit the panel's label
+column (``LABEL_MAX_PX`` at the default font; a test checks every field)."""
 from __future__ import annotations
 
 import re
@@ -14,21 +16,21 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     # camera
     "camera.yaw": ("deg", "orbit angle about +Y (LMB drag in the view)"),
     "camera.pitch": ("deg", "orbit elevation (LMB drag in the view)"),
-    "camera.distance": ("mesh units", "eye-to-target distance (mouse wheel). Auto: frame the mesh's bounding sphere"),
-    "camera.target": ("mesh units", "look-at point (MMB / shift+LMB pan). Auto: the mesh's bounds centre"),
+    "camera.distance": ("units", "eye-to-target distance (mouse wheel). Auto: frame the mesh's bounding sphere"),
+    "camera.target": ("units", "look-at point (MMB / shift+LMB pan). Auto: the mesh's bounds centre"),
     "camera.fov_y": ("deg", "vertical field of view"),
     # lights
     "lights.*.intensity": ("", "radiance scale of the light (linear); with colour it is Lc of eq. 8-10 / 28"),
     "lights.*.color": ("linear RGB", "light colour (linear, may exceed 1)"),
     "lights.*.direction": ("", "directional: the direction towards the light (normalised internally); "
                            "beam: the beam's axis"),
-    "lights.*.position": ("mesh units", "point / beam light position"),
-    "lights.*.beam_radius": ("mesh units", "radius of the collimated beam (the laser of seed 002 §14.4.1)"),
+    "lights.*.position": ("units", "point / beam light position"),
+    "lights.*.beam_radius": ("units", "radius of the collimated beam (the laser of seed 002 §14.4.1)"),
     "lights.*.cast_shadow": ("", "render a shadow map for this light (eq. 1-7)"),
     "lights.*.kind": ("", "directional, point, or a collimated beam (laser)"),
     # shadows
     "shadow.map_size": ("texels", "shadow-map resolution per light (eq. 1-6). Texture-space cost: re-runs every pass"),
-    "shadow.tol": ("light-space depth", "depth tolerance of the shadow test, eq. 7: shadowed if d(P) - d_s > tol "
+    "shadow.tol": ("", "depth tolerance of the shadow test, eq. 7: shadowed if d(P) - d_s > tol "
                    "(normalised light-space depth)"),
     "shadow.pcf": ("texels", "percentage-closer filter radius (0 = the hard test of eq. 7)"),
     # render
@@ -49,30 +51,79 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     # gosselin
     "gosselin.light_map_size": ("texels", "texture-space light map resolution, eq. 8-10. Texture-space cost ~ size^2"),
     "gosselin.iterations": ("", "number of 13-tap Poisson blurs, eq. 11-13 (each adds to the blur radius)"),
-    "gosselin.scale_x": ("", "global scale_x of eq. 12: radius = size * (kernel_size * scale_x + scale_y), "
-                         "multiplies the per-region scale_x"),
-    "gosselin.scale_y": ("texels @1024", "global scale_y (offset) of eq. 12, added to the per-region one"),
+    "gosselin.scale_x": ("", "blur radius scale (scale_x of eq. 12: radius = size * (kernel_size * scale_x + "
+                         "scale_y)); multiplies the per-region scale"),
+    "gosselin.scale_y": ("texels", "extra blur radius in light-map texels at a 1024² map (rescaled to the map "
+                         "size): scale_y of eq. 12, added to the per-region one"),
     "gosselin.specular_shadow": ("", "eq. 18 shadow attenuation of the specular: visibility (default) or as printed"),
     "gosselin.regions.*.kernel_size": ("", "per-region kernel size of eq. 12 (ears and nose scatter more)"),
-    "gosselin.regions.*.scale_x": ("", "per-region scale_x of eq. 12"),
-    "gosselin.regions.*.scale_y": ("texels @1024", "per-region scale_y of eq. 12"),
+    "gosselin.regions.*.scale_x": ("", "per-region blur radius scale (scale_x of eq. 12)"),
+    "gosselin.regions.*.scale_y": ("texels", "per-region extra blur radius (scale_y of eq. 12), in light-map "
+                                   "texels at a 1024² map"),
     # d'Eon
     "deon.gaussians.*.variance": ("mm²", "variance v_i of Gaussian i (mm²), seed 000 eq. 20: "
                                   "G(v, r) = exp(-r²/2v) / (2 pi v). Blurs are incremental: v_i - v_(i-1), eq. 24"),
     "deon.gaussians.*.weights": ("RGB", "weights w_i of R(r) = sum_i w_i G(v_i, r), seed 000 eq. 21; "
                                  "each channel's weights should sum to 1 (energy)"),
-    "deon.mix": ("", "pre/post-scatter texturing: albedo^mix before the blur, albedo^(1-mix) after, eq. 28 and 34"),
+    "deon.mix": ("", "how much of the skin colour is applied before the blur (pre-scatter texturing): "
+                 "albedo^mix before, albedo^(1-mix) after, eq. 28 and 34. 0: sharp colour detail, 1: blurred"),
     "deon.stretch": ("", "stretch-corrected blur radii from the UV stretch map (eq. 27, used in eq. 25)"),
     "deon.stretch_per_gaussian": ("", "a stretch map per Gaussian width instead of one (eq. 25-27)"),
     "deon.tsm": ("", "translucent shadow map: light through thin parts (ears), eq. 32-33"),
-    "deon.tsm_size": ("texels", "TSM resolution (eq. 32). Texture-space cost"),
-    "deon.tsm_form": ("", "exact: exp(-d²/(2 v_i)); printed: exp(-d²/v_i) as in seed 000 eq. 33"),
+    "deon.tsm_size": ("texels", "translucent shadow map (TSM) resolution, eq. 32. Texture-space cost"),
+    "deon.tsm_form": ("", "how light through thin parts fades with thickness d (translucent shadow map, eq. 33). "
+                      "exact: exp(-d²/(2 v_i)); printed: exp(-d²/v_i) as printed in seed 000"),
     "deon.energy_conservation": ("", "scale diffuse by 1 - rho_dt (eq. 30-31) at the light and the eye (eq. 28, 34)"),
-    "deon.irradiance_size": ("texels", "texture-space irradiance / blur resolution (eq. 28). "
+    "deon.irradiance_size": ("texels", "resolution of the texture-space irradiance the blurs run on (eq. 28). "
                              "Texture-space cost ~ size² per blur pass"),
-    "deon.reuse_irradiance_below_texels": ("texels", "blur 1 reuses the irradiance itself when its sigma is under "
-                                             "this many mean texels (a sub-texel 7-tap blur changes nothing)"),
+    "deon.reuse_irradiance_below_texels": ("texels", "skip the finest blur when its width is under this many "
+                                             "texels (a blur narrower than a texel changes nothing): blur 1 "
+                                             "reuses the irradiance itself"),
 }
+
+# path -> label (default: the field name with spaces). Short: the panel's label column is narrow.
+LABELS: dict[str, str] = {
+    "scene.mm_per_unit": "size of 1 unit",
+    "scene.head_detail": "head detail",
+    "scene.albedo_map": "colour map",
+    "scene.specular_map": "specular map",
+    "scene.region_map": "region map",
+    "camera.fov_y": "field of view",
+    "camera.target": "look at",
+    "render.background": "background",
+    "render.timing": "timing method",
+    "shadow.map_size": "shadow map size",
+    "shadow.tol": "shadow bias",
+    "shadow.pcf": "shadow softness",
+    "phong.shininess": "shininess",
+    "specular.m": "roughness",
+    "specular.f0": "reflectance F0",
+    "specular.rho_s": "intensity",
+    "specular.mode": "evaluation",
+    "specular.lut_size": "lookup size",
+    "gosselin.light_map_size": "light map size",
+    "gosselin.iterations": "blur passes",
+    "gosselin.scale_x": "blur scale",
+    "gosselin.scale_y": "blur offset",
+    "gosselin.specular_shadow": "specular shadow",
+    "gosselin.regions.*.kernel_size": "kernel size",
+    "gosselin.regions.*.scale_x": "blur scale",
+    "gosselin.regions.*.scale_y": "blur offset",
+    "deon.mix": "colour before blur",
+    "deon.stretch": "stretch correction",
+    "deon.stretch_per_gaussian": "stretch per Gaussian",
+    "deon.tsm": "translucency (TSM)",
+    "deon.tsm_size": "translucency map",
+    "deon.tsm_light": "translucency light",
+    "deon.tsm_form": "translucency falloff",
+    "deon.energy_conservation": "energy conservation",
+    "deon.irradiance_size": "blur map size",
+    "deon.reuse_irradiance_below_texels": "skip finest blur",
+    "lights.*.intensity": "intensity",
+    "lights.*.beam_radius": "beam radius",
+    "lights.*.cast_shadow": "casts shadow",
+}
+LABEL_MAX_PX = 160.0  # the panel's label column at its default width (panel.LABEL_COLUMN_PX)
 
 _INDEX = re.compile(r"\.\d+(?=\.|$)")
 
@@ -93,6 +144,11 @@ def doc(path: str) -> tuple[str, str]:
     return FIELD_DOCS.get(generic(path), ("", ""))
 
 
-def label_with_unit(label: str, path: str) -> str:
-    unit = doc(path)[0]
-    return f"{label} ({unit})" if unit else label
+def label(path: str, name: str | None = None) -> str:
+    """The label of the setting at ``path`` (its field name with spaces when it has none)."""
+    return LABELS.get(generic(path), (name or path.rsplit(".", 1)[-1]).replace("_", " "))
+
+
+def label_with_unit(name: str, path: str) -> str:
+    text, unit = label(path, name), doc(path)[0]
+    return f"{text} ({unit})" if unit else text

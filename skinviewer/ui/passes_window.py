@@ -8,7 +8,7 @@ from imgui_bundle import imgui
 
 from skinviewer.core.graph import TIMING_NOTES
 from skinviewer.ui.display import CHANNELS
-from skinviewer.ui.widgets import ERR
+from skinviewer.ui.widgets import ERR, UiContext, tooltip
 
 COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
           "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0), "deferred": imgui.ImVec4(0.5, 0.7, 1.0, 1.0)}
@@ -16,14 +16,14 @@ WIDTH = 380.0
 
 
 class PassesWindow:
-    def __init__(self, app):
-        self.app = app
+    def __init__(self, state, frame):
+        self.state = state
+        self.frame = frame
         self.open = True
         self._rect: tuple[float, float, float, float] | None = None  # last frame's (x, y, w, h)
 
-    def draw(self) -> None:
-        app = self.app
-        vx, vy, vw, vh = app.layout.view
+    def draw(self, ui: UiContext) -> None:
+        vx, vy, vw, vh = ui.layout.view
         # first shown at the top-right corner of the 3D view; then wherever the user moves it
         imgui.set_next_window_pos(imgui.ImVec2(max(vx, vx + vw - WIDTH - 8), vy + 8), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size(imgui.ImVec2(WIDTH, min(520.0, vh - 16)), imgui.Cond_.first_use_ever.value)
@@ -32,7 +32,7 @@ class PassesWindow:
         if self._rect is not None:
             # the window shrank (or the panel moved): keep the passes window on screen
             x, y, w, h = self._rect
-            ww, wh = app.layout.window
+            ww, wh = ui.layout.window
             nx, ny = max(0.0, min(x, ww - w)), max(0.0, min(y, wh - h))
             if (nx, ny) != (x, y):
                 imgui.set_next_window_pos(imgui.ImVec2(nx, ny), imgui.Cond_.always.value)
@@ -43,12 +43,11 @@ class PassesWindow:
             self._table()
         pos, size = imgui.get_window_pos(), imgui.get_window_size()
         self._rect = (pos.x, pos.y, size.x, size.y)
-        app.ui_rects.append(self._rect)
+        ui.claim(self._rect)
         imgui.end()
 
     def _timing(self) -> None:
-        app = self.app
-        ft = np.array(app.frame_ms, dtype=np.float32)
+        ft = np.array(self.frame.frame_ms, dtype=np.float32)
         if len(ft):
             avg = float(ft[-30:].mean())
             imgui.text(f"frame {avg:6.1f} ms   {1000.0 / max(avg, 1e-3):5.1f} FPS")
@@ -57,16 +56,15 @@ class PassesWindow:
             imgui.text("frame -")
 
     def _table(self) -> None:
-        app = self.app
-        rep = app.report
+        fr, st = self.frame, self.state
+        rep = fr.report
         if rep is None:
             imgui.text_disabled("no frame report")
             return
-        imgui.text(f"{app.settings.technique}: {len(rep.ran)} ran, {len(rep.cached)} cached, {len(rep.pruned)} pruned"
+        imgui.text(f"{st.settings.technique}: {len(rep.ran)} ran, {len(rep.cached)} cached, {len(rep.pruned)} pruned"
                    + (f", {len(rep.deferred)} deferred to the next frame" if rep.deferred else ""))
         imgui.text_disabled(f"{rep.total_ms:.2f} ms ({rep.timing_mode} timing)")
-        if imgui.is_item_hovered():
-            imgui.set_item_tooltip(TIMING_NOTES[rep.timing_mode])
+        tooltip(TIMING_NOTES[rep.timing_mode])
         flags = imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
         if imgui.begin_table("passes", 4, flags):
             imgui.table_setup_column("pass")
@@ -78,53 +76,54 @@ class PassesWindow:
                 imgui.table_next_row()
                 imgui.table_next_column()
                 outs = list(p.outputs)
-                selected = app.inspect is not None and app.inspect in outs
+                selected = st.inspect.resource is not None and st.inspect.resource in outs
                 if imgui.selectable(p.name, selected, imgui.SelectableFlags_.span_all_columns.value)[0]:
                     if selected:
-                        app.inspect = None
+                        st.set_inspect(None)
                     elif outs:
-                        app.inspect = outs[0]
+                        st.set_inspect(outs[0])
                 imgui.table_next_column()
                 imgui.text_colored(COLORS.get(p.status, COLORS["pruned"]), p.status)
                 imgui.table_next_column()
                 if p.ms is not None:
                     imgui.text(f"{p.ms:.2f}")
-                elif p.name in app.last_ms:
-                    imgui.text_disabled(f"({app.last_ms[p.name]:.2f})")
-                    if imgui.is_item_hovered():
-                        imgui.set_item_tooltip("cost when it last ran")
+                elif p.name in fr.last_ms:
+                    imgui.text_disabled(f"({fr.last_ms[p.name]:.2f})")
+                    tooltip("cost when it last ran")
                 imgui.table_next_column()
                 imgui.text_disabled(p.reason[:60])
-                if p.reason and imgui.is_item_hovered():
-                    imgui.set_item_tooltip(p.reason)
+                if p.reason:
+                    tooltip(p.reason)
                 if p.note:  # a figure the pass measured (e.g. the GPU sample count)
                     imgui.text(p.note)
             imgui.end_table()
 
     def _inspector(self) -> None:
-        app = self.app
-        if app.inspect is None:
+        st = self.state
+        ins = st.inspect
+        if ins.resource is None:
             imgui.text_disabled("click a pass to view its output full-window")
             return
-        g = app.renderer.graph(app.settings.technique)
+        g = self.frame.renderer.graph(st.settings.technique)
         res = g.resources()
         imgui.separator_text("output inspector")
         names = sorted(res)
-        if app.inspect not in res:
-            imgui.text_colored(ERR, f"'{app.inspect}' is not allocated this frame")
-        cur = names.index(app.inspect) if app.inspect in names else 0
+        if ins.resource not in res:
+            imgui.text_colored(ERR, f"'{ins.resource}' is not allocated this frame")
+        cur = names.index(ins.resource) if ins.resource in names else 0
         if names:
             ch, i = imgui.combo("texture", cur, names)
             if ch:
-                app.inspect = names[i]
-        spec = res.get(app.inspect)
+                st.set_inspect(names[i])
+        spec = res.get(ins.resource)
         if spec is not None:
             imgui.text_disabled(f"{spec.size[0]}x{spec.size[1]}  {spec.components}ch  {spec.dtype}")
-        ch, i = imgui.combo("channel", CHANNELS.index(app.inspect_channel), list(CHANNELS))
+        ch, i = imgui.combo("channel", CHANNELS.index(ins.channel), list(CHANNELS))
         if ch:
-            app.inspect_channel = CHANNELS[i]
-        _, app.inspect_exposure = imgui.slider_float("exposure", app.inspect_exposure, 1e-3, 1e3, "%.3g",
-                                                     imgui.SliderFlags_.logarithmic.value)
+            st.set_inspect_channel(CHANNELS[i])
+        ch, v = imgui.slider_float("exposure", ins.exposure, 1e-3, 1e3, "%.3g", imgui.SliderFlags_.logarithmic.value)
+        if ch:
+            st.set_inspect_exposure(v)
         if imgui.button("back to the image (Esc)"):
-            app.inspect = None
+            st.set_inspect(None)
         imgui.separator()

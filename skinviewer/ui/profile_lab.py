@@ -6,18 +6,19 @@ from __future__ import annotations
 import threading
 
 import numpy as np
-from imgui_bundle import imgui, implot
+from imgui_bundle import imgui
 
-from skinviewer.ui.widgets import ERR, header, wrapped
+from skinviewer.ui import profile_plot
+from skinviewer.ui.widgets import ERR, UiContext, tooltip, wrapped
 
 MODELS = ("dipole", "multipole", "burley")
 R_MAX = 8.0
 
 
 class ProfileLab:
-    def __init__(self, app):
+    def __init__(self, state, frame=None):
         from skinviewer.physics import profiles as P
-        self.app = app
+        self.state = state
         self.P = P
         self.model = "dipole"
         self.materials = list(P.MATERIALS)
@@ -34,6 +35,7 @@ class ProfileLab:
         self.k = 4
         self.shared = True
         self.normalize = True
+        self.log_r = True  # the plot's radius axis (ui/profile_plot.py)
         # fit / fit_error belong to the UI thread; the background fit only hands its outcome over
         # through _result (one assignment), picked up by _collect() on the UI thread
         self.fit = None
@@ -74,14 +76,17 @@ class ProfileLab:
         return P.Burley(tuple(self.albedo), tuple(self.mfp), "searchlight-dmfp")
 
     def curve(self):
-        key = self._key()
+        """(r, R(r)) of the model on the plot's radii (cached per model and axis)."""
+        key = (self._key(), self.log_r)
         if key != self._cache_key:
+            if self._cache_key is None or key[0] != self._cache_key[0]:
+                self.fit = None
             self._cache_key = key
-            self.fit = None
             try:
-                r = np.linspace(0.01, R_MAX, 160)
+                r = profile_plot.radii(0.01, R_MAX, self.log_r, 240)
+                r = r[r > 0]
                 R = np.asarray(self.build_model()(r), dtype=np.float64)
-                self._curve = (r, r[:, None] * R)
+                self._curve = (r, R)
                 self.model_error = ""
             except Exception as exc:
                 self._curve = None
@@ -138,12 +143,12 @@ class ProfileLab:
         if len(rows) > 8:
             self.fit_error = f"the d'Eon table holds at most 8 Gaussians (this fit has {len(rows)})"
             return False
-        return self.app.apply({"deon.gaussians": [{"variance": v, "weights": list(w)} for v, w in rows]},
+        return self.state.apply({"deon.gaussians": [{"variance": v, "weights": list(w)} for v, w in rows]},
                               "profile lab")
 
     # -- UI ----------------------------------------------------------------------------------
-    def draw(self) -> None:
-        if not header("Profile lab"):
+    def draw(self, ui: UiContext) -> None:
+        if not ui.header("Profile lab"):
             return
         self._collect()
         ch, i = imgui.combo("model", MODELS.index(self.model), list(MODELS))
@@ -183,16 +188,15 @@ class ProfileLab:
         if self.fit is not None:
             e = self.fit.errors
             imgui.text_disabled(f"error R {e[0]:.3f}  G {e[1]:.3f}  B {e[2]:.3f}  ({self.fit.seconds:.2f} s)")
-        if cur is not None and implot.begin_plot("r R(r): model (thin) and fit", imgui.ImVec2(-1, 190)):
-            implot.setup_axes("r (mm)", "r R(r)")
-            r, rR = cur
-            cols = ((1.0, 0.35, 0.3), (0.35, 0.9, 0.4), (0.4, 0.6, 1.0))
-            for c, name in enumerate("RGB"):
-                implot.set_next_line_style(imgui.ImVec4(*cols[c], 0.6), 1.0)
-                implot.plot_line(f"model {name}", r, np.ascontiguousarray(rR[:, c]))
+        _, self.log_r = imgui.checkbox("log radius axis##lab", self.log_r)
+        tooltip("linear: r·R(r) against r (GPU Gems 3 §14.4.6); log: r²·R(r) against log r (the same area rule)")
+        if cur is not None:
+            r, R = cur
+            series = []
+            for c, (name, col) in enumerate(profile_plot.CHANNELS):
+                series.append((f"model {name}", r, profile_plot.weighted(r, R, self.log_r)[:, c], (*col, 0.6), 1.0))
             if self.fit is not None:
-                F = np.asarray(self.fit(r), dtype=np.float64)
-                for c, name in enumerate("RGB"):
-                    implot.set_next_line_style(imgui.ImVec4(*cols[c], 1.0), 2.5)
-                    implot.plot_line(f"fit {name}", r, np.ascontiguousarray(r * F[:, c]))
-            implot.end_plot()
+                F = profile_plot.weighted(r, np.asarray(self.fit(r), dtype=np.float64), self.log_r)
+                for c, (name, col) in enumerate(profile_plot.CHANNELS):
+                    series.append((f"fit {name}", r, F[:, c], (*col, 1.0), 2.5))
+            profile_plot.draw("model (thin) and fit##lab", series, self.log_r)

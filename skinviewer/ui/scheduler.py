@@ -65,6 +65,17 @@ class RenderScheduler:
         self.changed_at = 0.0  # when the settings last changed
         self.deferred = False  # this frame showed the previous image although settings changed
 
+    def configure(self, mode: str | None = None, budget_ms: float | None = None) -> None:
+        if mode is not None:
+            if mode not in MODES:
+                raise ValueError(f"render scheduling '{mode}' (have: {', '.join(MODES)})")
+            self.mode = mode
+        if budget_ms is not None:
+            self.budget_ms = float(budget_ms)
+
+    def set_deferred(self, on: bool) -> None:
+        self.deferred = bool(on)
+
     def note_change(self, now: float | None = None) -> None:
         self.changed_at = time.perf_counter() if now is None else now
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from imgui_bundle import imgui
 
-from skinviewer.ui.widgets import ERR, WARN, begin_docked
+from skinviewer.ui.widgets import ERR, WARN, UiContext, begin_docked, tooltip
 
 DIM = imgui.ImVec4(0.62, 0.62, 0.68, 1.0)
 TEXT = imgui.ImVec4(0.88, 0.88, 0.9, 1.0)
@@ -19,47 +19,46 @@ _FLAGS = (imgui.WindowFlags_.no_title_bar | imgui.WindowFlags_.no_resize | imgui
           | imgui.WindowFlags_.no_nav)
 
 
-def triangle_count(app) -> int | None:
-    scene = app.renderer.scene
+def triangle_count(scene) -> int | None:
     if scene is None:
         return None
     return int(np.asarray(scene.gpu.mesh.indices).size // 3)
 
 
 class StatusBar:
-    def __init__(self, app):
-        self.app = app
+    def __init__(self, state, frame):
+        self.state = state
+        self.frame = frame
 
     def fields(self) -> list[tuple[str, imgui.ImVec4]]:
         """(text, colour) items left to right (also used by tests)."""
-        app = self.app
-        s = app.settings
+        st, fr = self.state, self.frame
+        s = st.settings
         out: list[tuple[str, imgui.ImVec4]] = []
         name = Path(s.scene.mesh).name if s.scene.mesh else s.scene.name
-        tris = triangle_count(app)
+        tris = triangle_count(st.scene)
         out.append((f"{name}" + (f"  {tris:,} tris" if tris is not None else ""), TEXT))
         out.append((s.technique, TEXT))
         out.append((f"{s.render.width}x{s.render.height} px", DIM))
-        mode = app.report.timing_mode if app.report is not None else s.render.timing
+        mode = fr.report.timing_mode if fr.report is not None else s.render.timing
         out.append((f"{mode} timing", DIM))
-        ft = list(app.frame_ms)[-20:]
+        ft = list(fr.frame_ms)[-20:]
         out.append((f"frame {np.mean(ft):.1f} ms" if ft else "frame -", TEXT))
-        if app.render_deferred:
+        if fr.render_deferred:
             out.append(("preview paused while dragging", WARN))
-        if app.report is not None and not app.report.complete:
-            out.append((f"rendering: {len(app.report.deferred)} passes to go", WARN))
-        if app.presets.dirty(s):
+        if fr.report is not None and not fr.report.complete:
+            out.append((f"rendering: {len(fr.report.deferred)} passes to go", WARN))
+        if st.presets.dirty(s):
             out.append(("* unsaved", WARN))
-        text, is_err = app.message
-        if app.render_error and not is_err:
-            text, is_err = f"render: {app.render_error.splitlines()[0]}", True
+        text, is_err = st.message
+        if fr.render_error and not is_err:
+            text, is_err = f"render: {fr.render_error.splitlines()[0]}", True
         if text:
             out.append((text, ERR if is_err else DIM))
         return out
 
-    def draw(self) -> None:
-        app = self.app
-        r = app.layout.status
+    def draw(self, ui: UiContext) -> None:
+        r = ui.layout.status
         if r is None:
             return
         begin_docked("##statusbar", r, _FLAGS, imgui.ImVec4(0.13, 0.13, 0.15, 1.0), padding=(8, 3))
@@ -69,8 +68,10 @@ class StatusBar:
                 imgui.text_colored(DIM, "|")
                 imgui.same_line()
             imgui.text_colored(col, text)
-            if i == 0 and imgui.is_item_hovered():
-                sc = app.renderer.scene
-                imgui.set_item_tooltip(sc.description if sc else "no scene")
+            if i == 0:
+                sc = self.state.scene
+                tooltip(sc.description if sc else "no scene")
+            elif text == self.state.message[0] and len(text) > 40:
+                tooltip(text)  # a long message is cut at the window edge: in full here
         imgui.end()
-        app.ui_rects.append(r)
+        ui.claim(r)

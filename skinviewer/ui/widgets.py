@@ -2,12 +2,16 @@
 (bool -> checkbox, Literal -> combo, bounded float -> slider/drag with those bounds, int -> input,
 RGB tuple -> colour edit, 3-vector -> drag3, optional -> "auto" checkbox + value, str -> text).
 Lists and dicts (tables) are hand-built by the panel. Edits are collected as dotted-path
-assignments; the app validates them through ``with_values``; invalid input shows a message."""
+assignments in the frame's ``UiContext``; the state validates them through ``with_values``;
+invalid input shows a message. Nothing here is module-global: what a widget needs besides imgui
+(where edits go, what an edit costs, whether every section is forced open) is in the context."""
 from __future__ import annotations
 
 import math
 import types
 import typing
+from dataclasses import dataclass
+from dataclasses import field as dc_field
 from typing import Any, Callable, Literal
 
 from imgui_bundle import imgui
@@ -49,6 +53,29 @@ def begin_docked(name: str, rect, flags: int, bg: imgui.ImVec4, padding: tuple[f
     return opened
 
 
+TOOLTIP_EM = 32.0  # tooltips wrap at this many font heights (never wider than the window)
+
+
+def tooltip(text: str) -> None:
+    """A tooltip for the last item when it is hovered: wrapped, so a long line never runs off the window."""
+    if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+        show_tooltip(text)
+
+
+def show_tooltip(text: str) -> None:
+    """A wrapped tooltip now (the caller decided it is hovered)."""
+    if not text:
+        return
+    wrap = imgui.get_font_size() * TOOLTIP_EM
+    io = imgui.get_io()
+    wrap = max(120.0, min(wrap, io.display_size.x * 0.6))
+    if imgui.begin_tooltip():
+        imgui.push_text_wrap_pos(wrap)
+        imgui.text_unformatted(text)
+        imgui.pop_text_wrap_pos()
+        imgui.end_tooltip()
+
+
 def error_list(errors, limit: int) -> None:
     """A bullet per (path, message), in red, at most ``limit``."""
     for path, msg in list(errors)[:limit]:
@@ -56,11 +83,9 @@ def error_list(errors, limit: int) -> None:
         wrapped(f"{path}: {msg}", ERR)
 
 
-_PENDING: dict[str, int] = {}
-
 
 class Edits:
-    """Assignments collected while drawing a frame; applied (validated) by the app afterwards."""
+    """Assignments collected while drawing a frame; applied (validated) by the state afterwards."""
 
     def __init__(self):
         self.values: dict[str, Any] = {}
@@ -70,6 +95,30 @@ class Edits:
 
     def __bool__(self):
         return bool(self.values)
+
+
+@dataclass
+class UiContext:
+    """What the windows and widgets of one imgui frame get besides imgui: the layout, where edits
+    go, what editing a setting costs (the frame controller's ``cost_hint``), whether every section
+    is forced open (tests), and the rectangles the UI covers (input hit-testing)."""
+    layout: Any = None
+    edits: Edits = dc_field(default_factory=Edits)
+    cost_hint: Callable[[str], str] | None = None
+    expand_all: bool = False
+    rects: list[tuple[float, float, float, float]] = dc_field(default_factory=list)
+    pending: dict[str, Any] = dc_field(default_factory=dict)  # typed, not yet applied values (kept across frames)
+
+    def header(self, label: str, open_default: bool = False) -> bool:
+        """A collapsing section header (forced open when ``expand_all``)."""
+        flags = imgui.TreeNodeFlags_.default_open.value if open_default else 0
+        if self.expand_all:
+            imgui.set_next_item_open(True)
+        return imgui.collapsing_header(label, flags)
+
+    def claim(self, rect: tuple[float, float, float, float]) -> None:
+        """This window covers ``rect`` (x, y, w, h): the mouse there belongs to the UI, not the view."""
+        self.rects.append(tuple(rect))
 
 
 def _unwrap_optional(ann) -> tuple[Any, bool]:
@@ -117,103 +166,134 @@ def classify(field) -> tuple[str, Any, bool]:
     return "other", None, optional
 
 
-def _label(name: str) -> str:
-    return name.replace("_", " ")
-
-
-# Set by the app each frame: setting path -> "re-runs: ... (~N ms)" from the current technique's
-# graph (RenderGraph.affected / predicted_ms), so a control tells what editing it costs.
-cost_hint: Callable[[str], str] | None = None
-
-
-def tooltip_text(field, path: str) -> str:
-    """The field's tooltip: physical meaning (fielddocs), the model's description, range, path,
-    and what editing it would re-run."""
+def tooltip_text(field, path: str, cost_hint: Callable[[str], str] | None = None) -> str:
+    """The field's tooltip, each line once: its meaning (fielddocs, else the model's description --
+    both say the same thing in other words), range, setting path, and what editing it re-runs."""
     unit, text = doc(path)
-    parts = [t for t in (text, field.description if field.description and field.description not in text else "")
-             if t]
+    parts = [text or (field.description or "")]
     lo, hi, lo_x, hi_x = bounds(field)
     if lo is not None or hi is not None:
         rng = f"{'(' if lo_x else '['}{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}{')' if hi_x else ']'}"
         parts.append(f"range {rng}{' ' + unit if unit else ''}")
     parts.append(f"setting: {path}")
     if cost_hint is not None:
-        hint = cost_hint(path)
-        if hint:
-            parts.append(hint)
-    return "\n".join(parts)
+        parts.append(cost_hint(path))
+    out: list[str] = []
+    for p in parts:
+        if p and p not in out:
+            out.append(p)
+    return "\n".join(out)
 
 
-def _tooltip(field, path: str = "") -> None:
-    if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
-        imgui.set_tooltip(tooltip_text(field, path))
+@dataclass
+class _Field:
+    """One settings field being drawn: what the per-kind widgets below need."""
+    name: str
+    info: Any  # pydantic FieldInfo
+    value: Any
+    path: str
+    label: str
+    detail: Any
+    optional: bool
+    ui: UiContext
+
+    def set(self, value: Any) -> None:
+        self.ui.edits.set(self.path, value)
+
+    def tooltip(self) -> None:
+        if imgui.is_item_hovered(imgui.HoveredFlags_.for_tooltip.value):
+            show_tooltip(tooltip_text(self.info, self.path, self.ui.cost_hint))
 
 
-def edit_field(name: str, field, value: Any, path: str, edits: Edits) -> None:
+def _w_bool(f: _Field) -> None:
+    ch, v = imgui.checkbox(f.label, bool(f.value))
+    if ch:
+        f.set(v)
+
+
+def _w_literal(f: _Field) -> None:
+    opts = [str(o) for o in f.detail]
+    cur = opts.index(str(f.value)) if str(f.value) in opts else 0
+    ch, i = imgui.combo(f.label, cur, opts)
+    if ch:
+        f.set(f.detail[i])
+
+
+def _w_int(f: _Field) -> None:
+    lo, hi, _, _ = bounds(f.info)
+    if lo is not None and hi is not None and hi - lo <= 64:
+        ch, v = imgui.slider_int(f.label, int(f.value), int(lo), int(hi))
+    else:
+        # typed values apply when the field is left (no half-typed map sizes); +/- apply at once
+        pending = f.ui.pending
+        ch, v = imgui.input_int(f.label, int(pending.get(f.path, f.value)), 1, 64)
+        if ch:
+            pending[f.path] = int(v)
+        if imgui.is_item_deactivated_after_edit() or (ch and not imgui.is_item_active()):
+            v = pending.pop(f.path, v)
+            ch = True
+        else:
+            ch = False
+    if ch:
+        f.set(int(v))
+
+
+def _w_float(f: _Field) -> None:
+    _edit_float(f.label, f.info, float(f.value), f.path, f.ui.edits)
+
+
+def _w_vec3(f: _Field) -> None:
+    v = [float(x) for x in f.value]
+    if "color" in f.name or "colour" in f.name:
+        ch, nv = imgui.color_edit3(f.label, v, imgui.ColorEditFlags_.float.value | imgui.ColorEditFlags_.hdr.value)
+    else:
+        ch, nv = imgui.drag_float3(f.label, v, 0.01 * max(1.0, max(abs(x) for x in v) * 0.1))
+    if ch:
+        f.set([float(x) for x in nv])
+
+
+def _w_str(f: _Field) -> None:
+    ch, text = imgui.input_text(f.label, f.value or "", _ENTER)
+    if ch:
+        f.set(text.strip() or (None if f.optional else ""))
+
+
+def _w_model(f: _Field) -> None:
+    if imgui.tree_node(f.label):
+        edit_model(f.value, f.path, f.ui)
+        imgui.tree_pop()
+
+
+def _w_other(f: _Field) -> None:
+    imgui.text_disabled(f"{f.label}: {f.value!r}")
+
+
+_WIDGETS = {"bool": _w_bool, "literal": _w_literal, "int": _w_int, "float": _w_float, "vec3": _w_vec3,
+            "str": _w_str, "model": _w_model}
+
+
+def _auto_toggle(f: _Field, kind: str) -> bool:
+    """An optional number: the "auto" checkbox; returns True when the value is auto (nothing more to draw)."""
+    ch, auto_new = imgui.checkbox("auto##auto", f.value is None)
+    f.tooltip()
+    if ch:
+        f.set(None if auto_new else _default_for(kind, f.info))
+    imgui.same_line()
+    if f.value is None:
+        imgui.text_disabled(f"{f.label}: auto")
+        return True
+    return False
+
+
+def edit_field(name: str, field, value: Any, path: str, ui: UiContext) -> None:
     kind, detail, optional = classify(field)
-    label = label_with_unit(_label(name), path)
+    f = _Field(name, field, value, path, label_with_unit(name, path), detail, optional, ui)
     imgui.push_id(path)
     try:
-        if optional and kind in ("float", "vec3", "int"):
-            auto = value is None
-            ch, auto_new = imgui.checkbox("auto##auto", auto)
-            _tooltip(field, path)
-            if ch:
-                if auto_new:
-                    edits.set(path, None)
-                else:
-                    edits.set(path, _default_for(kind, field))
-            imgui.same_line()
-            if value is None:
-                imgui.text_disabled(f"{label}: auto")
-                return
-        if kind == "bool":
-            ch, v = imgui.checkbox(label, bool(value))
-            if ch:
-                edits.set(path, v)
-        elif kind == "literal":
-            opts = [str(o) for o in detail]
-            cur = opts.index(str(value)) if str(value) in opts else 0
-            ch, i = imgui.combo(label, cur, opts)
-            if ch:
-                edits.set(path, detail[i])
-        elif kind == "int":
-            lo, hi, _, _ = bounds(field)
-            if lo is not None and hi is not None and hi - lo <= 64:
-                ch, v = imgui.slider_int(label, int(value), int(lo), int(hi))
-            else:
-                # typed values apply when the field is left (no half-typed map sizes); +/- apply at once
-                ch, v = imgui.input_int(label, int(_PENDING.get(path, value)), 1, 64)
-                if ch:
-                    _PENDING[path] = int(v)
-                if imgui.is_item_deactivated_after_edit() or (ch and not imgui.is_item_active()):
-                    v = _PENDING.pop(path, v)
-                    ch = True
-                else:
-                    ch = False
-            if ch:
-                edits.set(path, int(v))
-        elif kind == "float":
-            _edit_float(label, field, float(value), path, edits)
-        elif kind == "vec3":
-            v = [float(x) for x in value]
-            if "color" in name or "colour" in name:
-                ch, nv = imgui.color_edit3(label, v, imgui.ColorEditFlags_.float.value | imgui.ColorEditFlags_.hdr.value)
-            else:
-                ch, nv = imgui.drag_float3(label, v, 0.01 * max(1.0, max(abs(x) for x in v) * 0.1))
-            if ch:
-                edits.set(path, [float(x) for x in nv])
-        elif kind == "str":
-            ch, text = imgui.input_text(label, value or "", _ENTER)
-            if ch:
-                edits.set(path, text.strip() or (None if optional else ""))
-        elif kind == "model":
-            if imgui.tree_node(label):
-                edit_model(value, path, edits)
-                imgui.tree_pop()
-        else:
-            imgui.text_disabled(f"{label}: {value!r}")
-        _tooltip(field, path)
+        if optional and kind in ("float", "vec3", "int") and _auto_toggle(f, kind):
+            return
+        _WIDGETS.get(kind, _w_other)(f)
+        f.tooltip()
     finally:
         imgui.pop_id()
 
@@ -245,7 +325,7 @@ def _edit_float(label: str, field, value: float, path: str, edits: Edits) -> Non
         edits.set(path, float(v))
 
 
-def edit_model(obj: BaseModel, prefix: str, edits: Edits, skip: tuple[str, ...] = (),
+def edit_model(obj: BaseModel, prefix: str, ui: UiContext, skip: tuple[str, ...] = (),
                only: tuple[str, ...] | None = None) -> None:
     """Widgets for every scalar/vector field of ``obj`` (skipping lists and dicts: tables)."""
     for name, field in type(obj).model_fields.items():
@@ -255,14 +335,4 @@ def edit_model(obj: BaseModel, prefix: str, edits: Edits, skip: tuple[str, ...] 
         if kind == "other":
             continue
         path = f"{prefix}.{name}" if prefix else name
-        edit_field(name, field, getattr(obj, name), path, edits)
-
-
-EXPAND_ALL = {"on": False}  # tests: open every section so every widget is drawn
-
-
-def header(label: str, open_default: bool = False) -> bool:
-    flags = imgui.TreeNodeFlags_.default_open.value if open_default else 0
-    if EXPAND_ALL["on"]:
-        imgui.set_next_item_open(True)
-    return imgui.collapsing_header(label, flags)
+        edit_field(name, field, getattr(obj, name), path, ui)

@@ -1,0 +1,308 @@
+"""The frame controller: what to render this frame and how it gets on screen.
+
+Each frame (``run``): poll shader hot reload, build the UI (the windows' edits reach the state
+this frame), make the render size follow the 3D view (lower while the camera is dragged on slow
+GL), render the state's settings through the pass graph — unless the scheduler defers an expensive
+edit while a widget is held, or a frame longer than the time budget is spread over several
+displayed frames — then put the image (or the inspected pass output, or the A/B compare) in the
+view, give unused pool textures back, take queued screenshots and draw the UI on top.
+
+It owns the renderer's frame products (report, per-pass costs, the last change's cost) and the
+time-budget options; the state owns what the user chose."""
+from __future__ import annotations
+
+import time
+import traceback
+from collections import deque
+from pathlib import Path
+from typing import Protocol
+
+from skinviewer import techniques
+from skinviewer.core.files import save_npy, save_png
+from skinviewer.core.graph import FrameReport
+from skinviewer.core.renderer import Renderer
+from skinviewer.core.settings import Settings
+from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.ui.hot_reload import ShaderWatcher
+from skinviewer.ui.layout import Layout, compute_layout
+from skinviewer.ui.scheduler import MODES as SCHEDULE_MODES
+from skinviewer.ui.scheduler import ChangeCost, RenderScheduler, split_ms, view_side
+from skinviewer.ui.screenshot import read_screen, timestamped_path
+from skinviewer.ui.state import ViewerState
+from skinviewer.ui.view import ViewPresenter
+
+DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
+
+
+class UiLayer(Protocol):
+    """What the frame needs of the UI (``ui.windows.UiHost``)."""
+
+    def build(self, frametime: float, layout: Layout) -> bool: ...
+
+    def present(self) -> None: ...
+
+    def view_hooks(self) -> list: ...
+
+
+class FrameController:
+    def __init__(self, ctx, state: ViewerState, renderer: Renderer, shaders: ShaderLibrary,
+                 window_size: tuple[int, int], buffer_size: tuple[int, int]):
+        self.ctx = ctx
+        self.state = state
+        self.renderer = renderer
+        self.shaders = shaders
+        self.view = ViewPresenter(ctx, state, shaders)
+        self.watcher = ShaderWatcher(shaders)
+        self.scheduler = RenderScheduler()
+        self.report: FrameReport | None = None
+        self.last_change: ChangeCost | None = None
+        self.last_ms: dict[str, float] = {}  # pass -> ms of its last run (cached passes show it dimmed)
+        self.frame_ms: deque[float] = deque(maxlen=240)
+        self.frames = 0
+        self.render_error = ""
+        self.screenshots_written: list[Path] = []
+        # a frame whose passes take longer than this is spread over several displayed frames (the UI
+        # stays responsive; the image on screen changes once, complete); None: one frame, however long
+        self.frame_budget_ms: float | None = 100.0
+        # while the camera is dragged, render the view-dependent passes at a lower resolution when a
+        # full-size frame would stutter ("auto"), or at a fixed scale; full size again on release
+        self.drag_resolution = "auto"
+        self.drag_budget_ms = 60.0
+        self._pending_shots: list[tuple[Path, bool]] = []
+        self._dragging = False  # the camera is being dragged in the view (input controller)
+        self._drag_scaled = False  # the last frame was rendered at the reduced orbit resolution
+        self._widget_active = False  # an imgui widget is held this frame (slider drag, text edit)
+        self._partial_ran: list = []  # passes that ran in the frames of an unfinished spread frame
+        self._rendered: tuple[str, int, int] | None = None  # technique and size of the last main render
+        self._pools_trimmed_for: tuple[str, int, int] | None = None
+        self._shown: Settings | None = None  # the settings of the image on screen
+        self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
+        self._last_frame_t: float | None = None
+        self._window = (tuple(window_size), tuple(buffer_size))
+        self.layout: Layout = self._compute_layout()
+        state.set_render_size(*self.layout.view_fb[2:])
+        state.subscribe(self._on_change)
+
+    # -- options (the panel edits them through these) ---------------------------------------
+    def set_frame_budget(self, ms: float | None) -> None:
+        self.frame_budget_ms = None if ms is None else max(float(ms), 1e-6)
+
+    def set_drag_resolution(self, mode: str) -> None:
+        if mode in DRAG_RESOLUTIONS:
+            self.drag_resolution = mode
+
+    def set_drag_budget(self, ms: float) -> None:
+        self.drag_budget_ms = float(ms)
+
+    def set_schedule(self, mode: str | None = None, budget_ms: float | None = None) -> None:
+        self.scheduler.configure(mode if mode in SCHEDULE_MODES else None, budget_ms)
+
+    def set_dragging(self, on: bool) -> None:
+        """The input controller: the camera is being dragged in the view (a move, not a mere click)."""
+        self._dragging = bool(on)
+
+    def set_widget_active(self, on: bool) -> None:
+        """The UI: a widget is held this frame (an expensive edit may wait for its release)."""
+        self._widget_active = bool(on)
+
+    def ui_failed(self, text: str) -> None:
+        self.render_error = text
+        self.state.say(text, error=True)
+
+    def _on_change(self, source: str) -> None:
+        self._change_source = source
+        self.scheduler.note_change()
+
+    # -- reading -----------------------------------------------------------------------------
+    @property
+    def render_deferred(self) -> bool:
+        """The image on screen is older than the settings (an expensive slider drag is in progress)."""
+        return self.scheduler.deferred
+
+    def graph(self):
+        """The current technique's graph (None when the technique is not available)."""
+        t = self.state.settings.technique
+        return self.renderer.graph(t) if t in techniques.names() else None
+
+    def cost_hint(self, path: str) -> str:
+        """What editing ``path`` re-runs in the current technique and what that cost last time."""
+        g = self.renderer.graphs.get(self.state.settings.technique)
+        if g is None or g.last_report is None:
+            return ""
+        passes = g.affected([path])
+        if not passes:
+            return "editing it re-runs no pass of this technique"
+        return (f"editing it re-runs {len(passes)} pass(es), ~{g.predicted_ms(passes):.0f} ms last measured "
+                f"({g.last_report.timing_mode} timing): {', '.join(passes)}")
+
+    def view_passes(self, technique: str | None = None) -> set[str]:
+        """Names of the view-dependent passes of a technique and everything downstream of them."""
+        g = self.renderer.graph(technique or self.state.settings.technique)
+        vd = {p.name for p in g.passes if p.view_dependent}
+        return vd if self.report is None else view_side(self.report, vd)
+
+    def drag_scale(self) -> float:
+        """Resolution scale of the view while the camera is dragged (1 when not dragging)."""
+        if not self._dragging or self.drag_resolution == "full":
+            return 1.0
+        if self.drag_resolution != "auto":
+            return float(self.drag_resolution)
+        s = self.state.settings
+        g = self.renderer.graphs.get(s.technique)
+        if g is None or g.last_report is None:
+            return 1.0
+        full = self.layout.view_fb[2] * self.layout.view_fb[3]
+        now = max(s.render.width * s.render.height, 1)
+        # the view-dependent cost at full size, scaled from the size it was last measured at
+        ms = g.predicted_ms(g.affected([], camera=True)) * full / now
+        if ms <= self.drag_budget_ms:
+            return 1.0
+        return max(0.25, min(1.0, (self.drag_budget_ms / ms) ** 0.5))  # cost ~ pixels
+
+    # -- the frame ---------------------------------------------------------------------------
+    def _compute_layout(self) -> Layout:
+        v = self.state.view
+        return compute_layout(self._window[0], self._window[1], v.show_ui, v.panel_width, v.panel_side)
+
+    def run(self, frametime: float, window_size, buffer_size, ui: UiLayer | None = None) -> None:
+        now = time.perf_counter()
+        if self._last_frame_t is not None:
+            self.frame_ms.append((now - self._last_frame_t) * 1000.0)
+        self._last_frame_t = now
+        self.frames += 1
+        self._window = (tuple(window_size), tuple(buffer_size))
+        self.watcher.poll()
+        # the UI is built first: this frame's edits (and panel resizes) are rendered this frame;
+        # the panel shows the previous frame's report (identical on idle frames)
+        ui_built = False
+        if ui is not None and self.state.view.show_ui:
+            self.layout = self._compute_layout()
+            ui_built = ui.build(frametime, self.layout)
+        self._sync_size()
+        self.report = self._render_main()
+        self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
+        self.watcher.refresh_errors()
+        self._trim_texture_pools()
+        self._take_shots(include_ui=False)
+        if ui_built:
+            ui.present()
+        self._take_shots(include_ui=True)
+
+    def _sync_size(self) -> None:
+        """The render size follows the 3D view region (framebuffer pixels), not the whole window."""
+        self.layout = self._compute_layout()
+        vw, vh = self.layout.view_fb[2:]
+        scale = self.drag_scale()
+        if scale < 1.0:
+            vw, vh = max(16, int(vw * scale)), max(16, int(vh * scale))
+        if self.state.set_render_size(vw, vh) and not self._change_source:
+            self._change_source = ("camera (orbit at reduced resolution)" if scale < 1.0 else
+                                   "camera (orbit done: full resolution)" if self._drag_scaled else
+                                   "render size")
+        self._drag_scaled = scale < 1.0
+
+    def _render_main(self) -> FrameReport | None:
+        live = self.state.settings
+        pending = self._shown is None or (self._shown is not live and self._shown != live)
+        last_cost = self.last_change.total_ms if self.last_change else None
+        # a spread frame in progress is finished first, whatever the scheduler says
+        defer = not self._partial_ran and self._shown is not None \
+            and self.scheduler.should_defer(pending, self._widget_active, last_cost) \
+            and not self._scene_changed(self._shown)
+        self.scheduler.set_deferred(defer)
+        target = self._shown if defer else live
+        try:
+            report = self.renderer.render(target, budget_ms=self.frame_budget_ms)
+            self.render_error = ""
+            self._rendered = (target.technique, target.render.width, target.render.height)
+        except Exception as exc:
+            self.render_error = f"{type(exc).__name__}: {exc}"
+            self.state.say(f"render: {self.render_error.splitlines()[0]}", error=True)
+            if self.state.options.debug:
+                traceback.print_exc()
+            self._shown = live  # do not retry a failing state every frame while deferring
+            self._partial_ran = []  # a spread frame that failed is not resumed (nor merged into the next)
+            return None
+        if defer:
+            return report
+        if not report.complete:
+            self._partial_ran += [p for p in report.passes if p.status == "ran"]
+            return report
+        if self._partial_ran:
+            report = self._merge_partial(report)
+        for p in report.passes:
+            if p.status == "ran" and p.ms is not None:
+                self.last_ms[p.name] = p.ms
+        if report.ran or self._change_source == "technique":  # a cached technique switch costs 0 ms: say so
+            self._record_change(report, live.technique)
+        self._shown = live
+        self._change_source = ""
+        return report
+
+    def _scene_changed(self, s: Settings) -> bool:
+        """The loaded scene is not the one of ``s``: the state has already loaded the new one, and
+        rendering ``s`` (the image on screen, while a deferred edit waits) would load it back."""
+        scene = self.renderer.scene
+        return scene is None or scene.key != Renderer.scene_key(s)
+
+    def _merge_partial(self, report: FrameReport) -> FrameReport:
+        """One report for a frame spread over several: the passes that ran in any of them."""
+        ran = {p.name: p for p in self._partial_ran}
+        self._partial_ran = []
+        passes = [p if p.status == "ran" else ran.get(p.name, p) for p in report.passes]
+        return FrameReport(report.frame, report.timing_mode, passes)
+
+    def _record_change(self, report: FrameReport, technique: str) -> None:
+        g = self.renderer.graph(technique)
+        vset = view_side(report, {p.name for p in g.passes if p.view_dependent})
+        tex, view = split_ms(report, vset, lambda p: p.ms if p.status == "ran" else None)
+        ran = sorted(((p.name, p.ms or 0.0) for p in report.passes if p.status == "ran"), key=lambda x: -x[1])
+        self.last_change = ChangeCost(self._change_source or "frame", report.total_ms, tex, view, ran,
+                                      report.timing_mode, time.time())
+
+    def _trim_texture_pools(self) -> None:
+        """Give the free textures of the render pools back to GL when the render size (or the
+        technique) changed: a pool keeps every texture handed back to it, keyed by size, so each
+        window or panel resize and each orbit resolution used to leave a full set of view-sized
+        textures behind for the rest of the session. Textures in use (every graph's cache) stay."""
+        if self._rendered == self._pools_trimmed_for:
+            return
+        if self._pools_trimmed_for is not None:
+            for r in (self.renderer, *self.view.renderers()):
+                r.trim()
+        self._pools_trimmed_for = self._rendered
+
+    # -- screenshots -------------------------------------------------------------------------
+    def request_screenshot(self, path: str | Path | None = None, include_ui: bool | None = None) -> Path:
+        """Queue a screenshot of the next frame; returns its path (timestamped when not given)."""
+        o = self.state.shots
+        p = Path(path) if path else timestamped_path(o.folder)
+        inc = o.include_ui if include_ui is None else include_ui
+        self._pending_shots.append((p, bool(inc and self.state.view.show_ui)))
+        return p
+
+    def _take_shots(self, include_ui: bool) -> None:
+        todo = [x for x in self._pending_shots if x[1] == include_ui]
+        if not todo:
+            return
+        self._pending_shots = [x for x in self._pending_shots if x[1] != include_ui]
+        # without UI: the 3D view region only; with UI: the whole framebuffer
+        if include_ui:
+            img = read_screen(self.ctx, self.layout.framebuffer)
+        else:
+            img = read_screen(self.ctx, self.layout.view_fb[2:], origin=self.layout.view_fb[:2])
+        for path, _ in todo:
+            try:
+                save_png(path, img)
+                self.screenshots_written.append(path)
+                self.state.say(f"screenshot: {path} ({img.shape[1]}x{img.shape[0]}{', with UI' if include_ui else ''})")
+                if self.state.shots.save_linear_npy:
+                    g = self.renderer.graph(self.state.settings.technique)
+                    res = "lit" if "lit" in g.resources() else "image"
+                    save_npy(path.with_suffix(".npy"), g.read(res)[::-1])
+            except Exception as exc:
+                self.state.refuse([("screenshot", f"{type(exc).__name__}: {exc}")], f"screenshot {path}")
+
+    def release(self) -> None:
+        self.view.release()
+        self.renderer.release()

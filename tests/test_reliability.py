@@ -1,0 +1,510 @@
+"""Issue 13: every bad input gets one clear line, resources are bounded, hot reload recovers,
+nothing is left behind. One test per fix; each failed before the fix."""
+from __future__ import annotations
+
+import json
+import os
+import struct
+import subprocess
+import sys
+import threading
+import time
+import zlib
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from helpers import small_settings
+
+from skinviewer.cli import main as cli_main
+from skinviewer.core import files
+from skinviewer.core.graph import FrameInputs, Pass, Reflection, RenderGraph, ResourceLimitError, TexSpec
+from skinviewer.core.settings import (
+    Settings,
+    SettingsError,
+    get_path,
+    load_preset,
+    parse_assignments,
+    save_preset,
+    to_dict,
+    validate,
+    with_values,
+)
+from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.scene.camera import light_space, orbit_view
+from skinviewer.scene.mesh import MeshData, MeshError, load_mesh, load_texture_maps
+from skinviewer.scene.scenes import grid
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _preset(tmp_path, raw: bytes, name="p.json") -> Path:
+    p = tmp_path / name
+    p.write_bytes(raw)
+    return p
+
+
+def _errors(exc) -> str:
+    return "; ".join(f"{p}: {m}" for p, m in exc.value.errors)
+
+
+# -- presets: every bad file is one SettingsError --------------------------------------------------
+
+@pytest.mark.parametrize("raw,expect", [
+    (b'{"schema_version":1,"technique":"\xff"}', "not UTF-8"),
+    ('{"schema_version":1}'.encode("utf-16"), "UTF-16"),
+    (b'{"schema_version":1,"render":{"width":' + b"1" * 5000 + b"}}", "digits"),
+    (b'{"schema_version":1,"x":' + b"[" * 100000 + b"]" * 100000 + b"}", "nested too deeply"),
+])
+def test_undecodable_presets_are_settings_errors(tmp_path, raw, expect):
+    with pytest.raises(SettingsError) as exc:
+        load_preset(_preset(tmp_path, raw))
+    assert expect in _errors(exc)
+
+
+def test_preset_from_a_device_fifo_or_folder_is_refused_without_reading(tmp_path):
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    targets = [fifo, tmp_path] + ([Path("/dev/zero")] if Path("/dev/zero").exists() else [])
+    for target in targets:
+        result = {}
+        t = threading.Thread(target=lambda: result.setdefault("exc", _catch(load_preset, target)), daemon=True)
+        t.start()
+        t.join(10)
+        assert not t.is_alive(), f"reading {target} hangs"
+        assert isinstance(result["exc"], SettingsError), result
+        assert "not a regular file" in str(result["exc"])
+
+
+def _catch(fn, *a):
+    try:
+        fn(*a)
+    except Exception as exc:  # noqa: BLE001 - the test inspects it
+        return exc
+    return None
+
+
+def test_oversized_preset_is_refused(tmp_path):
+    p = _preset(tmp_path, b'{"schema_version":1, "pad": "' + b"x" * (5 * 2**20) + b'"}')
+    with pytest.raises(SettingsError, match="limit"):
+        load_preset(p)
+
+
+def test_read_regular_file_never_reads_past_the_limit(tmp_path):
+    p = tmp_path / "f"
+    p.write_bytes(b"a" * 100)
+    assert files.read_regular_file(p, 100) == b"a" * 100
+    with pytest.raises(files.FileReadError):
+        files.read_regular_file(p, 99)
+
+
+# -- validation ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("path,value", [
+    ("camera.target", [float("nan"), 0, 0]), ("camera.target", [0, float("inf"), 0]),
+    ("render.background", [0, float("inf"), 0]), ("render.background", [float("nan")] * 3),
+    ("scene.mesh", "a\x00b"), ("scene.albedo_map", "a\ud800b"), ("scene.mesh", ""),
+    ("lights.0.position", [1e20, 0, 0]),
+])
+def test_bad_values_are_refused_at_validation(path, value):
+    with pytest.raises(SettingsError) as exc:
+        with_values(Settings(), {path: value})
+    assert exc.value.errors[0][0] == path
+
+
+def test_negative_list_indices_are_refused():
+    s = Settings()
+    with pytest.raises(SettingsError, match="no such setting"):
+        with_values(s, {"lights.-1.intensity": 2.0})
+    with pytest.raises(SettingsError):
+        with_values(s, {"deon.gaussians.-2.variance": 1.0})
+    with pytest.raises((IndexError, KeyError)):
+        get_path(s, "lights.-1")
+    assert with_values(s, {"lights.1.intensity": 2.0}).lights[1].intensity == 2.0
+
+
+def test_set_values_that_json_cannot_hold_are_settings_errors():
+    with pytest.raises(SettingsError) as exc:
+        parse_assignments(["lights.0.intensity=" + "1" * 5000])
+    assert exc.value.errors[0][0] == "lights.0.intensity"
+    with pytest.raises(SettingsError, match="nested too deeply"):
+        parse_assignments(["lights.0.color=" + "[" * 100000])
+
+
+def test_surrogate_path_from_a_non_utf8_file_name_is_accepted():
+    # argv decodes the byte 0xff of a real file name to U+DCFF (surrogateescape): a usable path
+    s = with_values(Settings(), {"scene.mesh": os.fsdecode(b"/tmp/\xffhead.glb")})
+    from skinviewer.core.renderer import Renderer
+    assert Renderer.scene_key(s)
+
+
+# -- far point lights, near plane -----------------------------------------------------------------
+
+def test_light_space_of_a_very_far_point_light_is_finite():
+    light = SimpleNamespace(kind="point", position=(1e20, 0.0, 0.0), direction=(0, 0, 1))
+    ls = light_space(light, np.zeros(3), 100.0)  # ZeroDivisionError before: near == far in float64
+    assert np.all(np.isfinite(ls.view_proj_rowvec))
+    d = ls.depth(np.array([[100.0, 0, 0], [-100.0, 0, 0]]))
+    assert np.all(np.isfinite(d)) and d[0] < d[1]
+
+
+@pytest.mark.parametrize("radius", [1e-6, 1e-9, 1.0, 1e6])
+def test_near_plane_scales_with_the_mesh(radius):
+    cam = Settings().camera
+    v = orbit_view(cam, np.zeros(3), radius, (64, 64))
+    # the mesh's nearest point (distance - radius along the view axis) must lie beyond near
+    near = v.proj[2, 3] / (v.proj[2, 2] - 1.0)
+    dist = float(np.linalg.norm(v.eye))
+    assert near < dist - radius, (near, dist, radius)
+
+
+# -- relative paths in presets --------------------------------------------------------------------
+
+def test_relative_mesh_path_resolves_against_the_preset_folder_and_is_saved_relative(tmp_path, monkeypatch):
+    folder = tmp_path / "presets"
+    (folder / "meshes").mkdir(parents=True)
+    p = _preset(folder, json.dumps({"schema_version": 1, "scene": {"mesh": "meshes/head.obj",
+                                                                   "albedo_map": "../tex/a.png"}}).encode())
+    monkeypatch.chdir(tmp_path)
+    s = load_preset(p)
+    assert Path(s.scene.mesh) == folder / "meshes" / "head.obj"
+    assert Path(s.scene.albedo_map) == tmp_path / "tex" / "a.png"
+    out = tmp_path / "elsewhere" / "q.json"
+    save_preset(s, out)
+    data = json.loads(out.read_text())
+    assert data["scene"]["mesh"] == os.path.join("..", "presets", "meshes", "head.obj")
+    assert load_preset(out) == s  # round trip from another folder
+
+
+# -- stale temporaries ----------------------------------------------------------------------------
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+def test_stale_temporaries_of_killed_saves_are_cleaned_and_never_listed(tmp_path):
+    target = tmp_path / "deon.json"
+    dead = tmp_path / f".deon.json.{_dead_pid()}-abc12345.tmp"
+    live = tmp_path / f".deon.json.{os.getppid()}-def67890.tmp"  # a save in progress elsewhere
+    old = tmp_path / ".deon.json.k3j4h5g6.tmp"  # an older build's name, an hour old
+    other = tmp_path / ".gosselin.json.q1w2e3r4.tmp"
+    for f in (dead, live, old, other):
+        f.write_text("{")
+    t = time.time() - 3600
+    os.utime(old, (t, t))
+    assert all(files.is_temporary(f) for f in (dead, live, old, other))
+    assert files.list_files(tmp_path) == []
+    save_preset(Settings(), target)
+    assert not dead.exists() and not old.exists()
+    assert live.exists() and other.exists()  # not stale / not this target's
+    assert files.list_files(tmp_path) == [target]
+
+
+def test_killed_saves_leave_nothing_after_the_next_save(tmp_path):
+    target = tmp_path / "p.json"
+    code = ("import os,sys\nfrom skinviewer.core import files\n"
+            "with files.atomic_path(sys.argv[1]) as t:\n    open(t,'w').write('x')\n    os._exit(9)\n")
+    for _ in range(3):  # killed mid-save: its temporary stays behind until the next save
+        subprocess.run([sys.executable, "-c", code, str(target)], cwd=ROOT, check=False)
+    assert len(list(tmp_path.glob(".p.json.*.tmp"))) == 1  # each save cleaned the one before
+    save_preset(Settings(), target)
+    assert list(tmp_path.iterdir()) == [target]
+
+
+# -- meshes and images ----------------------------------------------------------------------------
+
+def _plane(scale=1.0, offset=0.0, name="plane") -> MeshData:
+    pos, nrm, uv, idx = grid(4, 4, 2.0, 2.0)
+    return MeshData(positions=pos * scale + offset, normals=nrm, uvs=uv, indices=idx, name=name)
+
+
+def test_vertices_beyond_float32_are_refused():
+    with pytest.raises(MeshError, match="float32"):
+        _plane(1e39)
+
+
+@pytest.mark.parametrize("scale,offset,why", [(1e30, 0.0, "rescale"), (1e-20, 0.0, "across"),
+                                              (1.0, 1e7, "origin"), (0.0, 0.0, "zero size")])
+def test_unrenderable_scales_are_refused_with_the_reason(scale, offset, why):
+    with pytest.raises(MeshError, match=why):
+        _plane(scale, offset).check_renderable()
+
+
+def _obj(path: Path, scale: float, mtl: bool = False) -> Path:
+    pos, _, uv, idx = grid(6, 6, 2.0, 2.0)
+    lines = [f"v {float(x) * scale!r} {float(y) * scale!r} {float(z) * scale!r}" for x, y, z in pos]
+    lines += [f"vt {u} {v}" for u, v in uv]
+    lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in idx]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e12])
+def test_tiny_and_huge_meshes_are_framed(renderer, tmp_path, scale):
+    mesh = _obj(tmp_path / "m.obj", scale)
+    s = small_settings("head", "phong", size=32, **{"scene.mesh": str(mesh), "scene.mm_per_unit": 1.0,
+                                                     "camera.yaw": 0.0, "camera.pitch": 0.0,
+                                                     "lights": [{"direction": [0, 0, 1]}]})
+    renderer.render(s)
+    img = renderer.image(s).astype(float)
+    bg = renderer.image(s)[0, 0].astype(float)
+    centre = img[12:20, 12:20]
+    assert np.abs(centre - bg).max() > 20, "the plane is not in the image (clipped or blank)"
+
+
+def test_obj_without_material_gets_the_skin_tone_and_says_so(tmp_path):
+    m = load_mesh(_obj(tmp_path / "plain.obj", 1.0))
+    assert m.albedo is None  # not trimesh's 2x2 grey placeholder
+    assert any("no material texture" in n for n in m.notes), m.notes
+    assert not any("base colour texture" in n for n in m.notes)
+
+
+def test_sixteen_bit_textures_keep_their_values(tmp_path):
+    from PIL import Image
+    ramp = (np.linspace(0, 65535, 64 * 64).reshape(64, 64)).astype(np.uint16)
+    p = tmp_path / "ramp16.png"
+    Image.fromarray(ramp).save(p)
+    m = load_texture_maps(_plane(), albedo=p, specular=p)
+    got = m.albedo[::-1][..., 0]  # back to image row order
+    assert np.abs(got - ramp / 65535.0).max() < 1e-4
+    assert (got > 0.999).mean() < 0.01  # saturated almost everywhere before
+    spec = m.specular_map[::-1][..., 0]
+    assert np.abs(spec - np.rint(ramp / 257.0) / 255.0).max() < 1e-6
+
+
+def _png_header(w: int, h: int) -> bytes:
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    ihdr = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"\0" * 16)) + chunk(b"IEND", b"")
+
+
+@pytest.mark.parametrize("side", [16384, 9000])
+def test_huge_images_are_one_clear_error(tmp_path, side):
+    p = tmp_path / "huge.png"
+    p.write_bytes(_png_header(side, side))
+    with pytest.raises(MeshError, match="too large|megapixels"):
+        load_texture_maps(_plane(), albedo=p)
+
+
+def test_fifo_as_a_texture_or_mesh_does_not_hang(tmp_path):
+    fifo = tmp_path / "albedo.png"
+    os.mkfifo(fifo)
+    for fn in (lambda: load_texture_maps(_plane(), albedo=fifo), lambda: load_mesh(fifo)):
+        result = {}
+        t = threading.Thread(target=lambda: result.setdefault("exc", _catch(fn)), daemon=True)
+        t.start()
+        t.join(10)
+        assert not t.is_alive()
+        assert isinstance(result["exc"], MeshError) and "regular file" in str(result["exc"])
+
+
+# -- hot reload recovers ----------------------------------------------------------------------------
+
+VERT = '#version 330 core\n#include "lib/a.glsl"\nvoid main() { gl_Position = vec4(f(0.5)); }\n'
+FRAG = '#version 330 core\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n'
+LIB_A = "float f(float x) { return x; }\n"
+
+
+@pytest.fixture
+def shader_root(tmp_path):
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "lib" / "a.glsl").write_text(LIB_A)
+    (tmp_path / "p.vert").write_text(VERT)
+    (tmp_path / "p.frag").write_text(FRAG)
+    return tmp_path
+
+
+def _later(path: Path, text: str | None):
+    time.sleep(0.01)
+    if text is None:
+        path.unlink()
+    else:
+        path.write_text(text)
+
+
+def test_reload_recovers_after_a_deleted_include_is_restored(gl_ctx, shader_root):
+    lib = ShaderLibrary(gl_ctx, shader_root)
+    lib.get("p")
+    _later(shader_root / "lib" / "a.glsl", None)
+    _, errors = lib.reload()
+    assert "not found" in str(errors["p"])
+    _later(shader_root / "lib" / "a.glsl", LIB_A.replace("x;", "x * 2.0;"))
+    replaced, errors = lib.reload()  # stuck with the error before: the include was not watched
+    assert replaced == ["p"] and errors == {}
+
+
+def test_reload_recovers_after_an_include_cycle_is_broken(gl_ctx, shader_root):
+    lib = ShaderLibrary(gl_ctx, shader_root)
+    lib.get("p")
+    (shader_root / "lib" / "b.glsl").write_text('#include "a.glsl"\n')
+    _later(shader_root / "lib" / "a.glsl", '#include "b.glsl"\n' + LIB_A)
+    _, errors = lib.reload()
+    assert "cycle" in str(errors["p"])
+    _later(shader_root / "lib" / "b.glsl", "// no include\n")  # only b changes
+    replaced, errors = lib.reload()
+    assert replaced == ["p"] and errors == {}
+
+
+def test_reload_recovers_after_a_deleted_stage_file_is_restored(gl_ctx, shader_root):
+    lib = ShaderLibrary(gl_ctx, shader_root)
+    lib.get("p")
+    _later(shader_root / "p.frag", None)
+    lib.reload()
+    # a fresh program that never compiled must recover as well
+    lib2 = ShaderLibrary(gl_ctx, shader_root)
+    with pytest.raises(Exception):
+        lib2.get("p")
+    _later(shader_root / "p.frag", FRAG.replace("1.0", "0.5"))
+    for lb in (lib, lib2):
+        replaced, errors = lb.reload()
+        assert replaced == ["p"] and errors == {}
+
+
+# -- renderer: release, memory ------------------------------------------------------------------------
+
+def test_release_frees_the_full_screen_vaos(gl_ctx):
+    from skinviewer.core.renderer import Renderer
+    r = Renderer(gl_ctx)
+    s = small_settings("laser", "phong", size=16)
+    r.render(s)
+    vaos = [v for g in r.graphs.values() for _, _, v in g.gpu._vaos.values()]  # the graphs' one VAO cache
+    assert vaos
+    r.release()
+    assert all(type(v.mglo).__name__ == "InvalidObject" for v in vaos)
+
+
+LARGEST = {"render.width": 8192, "render.height": 8192, "shadow.map_size": 8192, "deon.tsm_size": 8192,
+           "deon.irradiance_size": 4096, "gosselin.light_map_size": 4096, "specular.lut_size": 4096}
+
+
+def test_configuration_that_does_not_fit_is_refused_before_allocating(gl_ctx):
+    from skinviewer.core.renderer import Renderer
+    r = Renderer(gl_ctx)
+    r.memory_limit = 2 * 10**9
+    try:
+        s = small_settings("laser", "deon", size=16, **LARGEST)
+        with pytest.raises(ResourceLimitError) as exc:
+            r.render(s)
+        assert exc.value.needed > 4e9 and "GB" in str(exc.value)
+        assert r.pool.allocated == 0  # refused before any texture was made
+        small = small_settings("laser", "deon", size=16)
+        r.render(small)  # a configuration that fits still renders
+        assert r.pool.allocated > 0
+    finally:
+        r.release()
+
+
+# -- non-finite pass outputs are named in the frame report ------------------------------------------
+
+FS_VERT = ("#version 330 core\nvoid main() { vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2); "
+           "gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }\n")
+
+
+class Poison(Pass):
+    """Writes u_value everywhere, or NaN/Inf into one texel: a user's broken shader edit."""
+    uses_scene = False
+    name = "poison"
+
+    def __init__(self, value: float, dtype="f2"):
+        self.value, self.dtype = value, dtype
+
+    def reflect(self, r: Reflection):
+        r.setting("render.exposure")
+        r.program("fill")
+        r.output("lit", TexSpec((200, 70), 4, self.dtype))
+
+    def execute(self, ec):
+        prog = ec.program("fill")
+        prog["u_value"].value = self.value
+        ec.framebuffer("lit").use()
+        ec.graph.fullscreen_vao(prog).render(vertices=3)
+
+
+def _poison_graph(gl_ctx, tmp_path, value, dtype="f2"):
+    (tmp_path / "fill.vert").write_text(FS_VERT)
+    (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\nvoid main() {"
+                                        " f = (ivec2(gl_FragCoord.xy) == ivec2(137, 41)) ? vec4(u_value) : vec4(0.5); }\n")
+    g = RenderGraph(gl_ctx, ShaderLibrary(gl_ctx, tmp_path), [Poison(value, dtype)], ["lit"])
+    vaos = {}
+    g.fullscreen_vao = lambda prog: vaos.setdefault(id(prog), gl_ctx.vertex_array(prog, []))
+    return g
+
+
+@pytest.mark.parametrize("value,dtype", [(float("nan"), "f2"), (float("inf"), "f2"), (float("-inf"), "f4"),
+                                         (float("nan"), "f4")])
+def test_a_pass_writing_nan_or_inf_is_named(gl_ctx, tmp_path, value, dtype):
+    g = _poison_graph(gl_ctx, tmp_path, value, dtype)
+    s = Settings()
+    rep = g.run(FrameInputs(s, None, 0, None, "c"))
+    assert rep.nonfinite == {"poison": ["lit"]}
+    assert "NON-FINITE: lit" in rep.table() and rep.to_json()["nonfinite"] == {"poison": ["lit"]}
+    rep = g.run(FrameInputs(with_values(s, {"phong.ambient": 0.5}), None, 0, None, "c"))
+    assert rep.cached == ["poison"] and rep.nonfinite == {"poison": ["lit"]}  # the cached output keeps its flag
+    g.release()
+
+
+def test_finite_outputs_and_the_off_switch_flag_nothing(gl_ctx, tmp_path):
+    g = _poison_graph(gl_ctx, tmp_path, 1e4)
+    assert g.run(FrameInputs(Settings(), None, 0, None, "c")).nonfinite == {}
+    g.release()
+    g = _poison_graph(gl_ctx, tmp_path, float("nan"))
+    off = with_values(Settings(), {"render.check_finite": False})
+    assert g.run(FrameInputs(off, None, 0, None, "c")).nonfinite == {}
+    g.release()
+
+
+def test_output_pass_keeps_the_screen_finite_over_a_poisoned_lit(renderer):
+    s = small_settings("laser", "phong", size=16)
+    renderer.render(s)
+    g = renderer.graph("phong")
+    lit = g.texture("lit")
+    bad = np.full((16, 16, 4), np.nan, np.float16)
+    bad[:8] = np.inf
+    lit.write(bad.tobytes())
+    g.invalidate("output")
+    s = with_values(s, {})  # not the idle frame's object: the graph looks at its cache keys
+    assert renderer.render(s).ran == ["output"]
+    img = renderer.image(s)
+    bg = img[-1, 0].astype(int)  # a corner: background (the laser slab does not reach it)
+    flat = img.reshape(-1, 3).astype(int)
+    assert np.all(np.abs(flat - bg) <= 1), np.unique(flat, axis=0)  # background, not garbage
+
+
+# -- the command line: one line, exit 2 -------------------------------------------------------------
+
+@pytest.mark.parametrize("argv_tail", [
+    ["--preset", "{b}"], ["--preset", "{huge}"], ["--preset", "{deep}"], ["--preset", "/dev/zero"],
+    ["--set", 'scene.mesh="a\\u0000b"'], ["--set", 'scene.mesh="a\\ud800b"'],
+    ["--set", "lights.0.kind=point", "--set", "lights.0.position=1e20,0,0"],
+    ["--set", "camera.target=[NaN,0,0]"], ["--set", "render.background=0,Infinity,0"],
+    ["--set", "lights.-1.intensity=2"], ["--set", "lights.0.intensity=" + "9" * 5000],
+])
+def test_cli_errors_are_one_line_and_exit_2(tmp_path, capsys, argv_tail):
+    b = _preset(tmp_path, b'{"schema_version":1,"technique":"\xff"}', "b.json")
+    huge = _preset(tmp_path, b'{"schema_version":1,"render":{"width":' + b"1" * 5000 + b"}}", "huge.json")
+    deep = _preset(tmp_path, b'{"schema_version":1,"x":' + b"[" * 100000 + b"}", "deep.json")
+    argv = ["render", "--out", str(tmp_path / "x.png")] + [a.format(b=b, huge=huge, deep=deep) for a in argv_tail]
+    assert cli_main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("skinviewer:") and "\n" not in err and "Traceback" not in err, err
+
+
+def test_cli_refuses_a_configuration_that_does_not_fit(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("SKINVIEWER_MEMORY_LIMIT", "1G")
+    argv = ["render", "--scene", "laser", "--technique", "deon", "--out", str(tmp_path / "x.png"), "--size", "8192x8192"]
+    for k, v in LARGEST.items():
+        if not k.startswith("render."):
+            argv += ["--set", f"{k}={v}"]
+    assert cli_main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert "GB of texture memory" in err and "\n" not in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_settings_roundtrip_unchanged_by_validators():
+    s = Settings()
+    assert validate(to_dict(s)) == s
