@@ -975,3 +975,19 @@ def test_loading_over_unsaved_changes_asks_first(app, tmp_path):
 def with_exposure(app, v):
     from skinviewer.core.settings import with_values
     return with_values(app.state.settings, {"render.exposure": v})
+
+
+def test_burley2_in_the_viewer_shows_extra_samples_and_the_gpu_count(app):
+    """burley2 live: the passes window's report carries the GPU sample count, and the 'extra' view mode
+    changes the image."""
+    assert app.state.set_technique("burley2")
+    app.step(1)
+    plain = _view_image(app)
+    rec = next(p for p in app.frame.report.passes if p.name == "burley_count")
+    assert rec.figures["samples"] > 0 and "samples on the GPU" in rec.note
+    assert app.state.apply({"burley.view": "extra"}, "burley.view")
+    app.step(1)
+    assert np.abs(_view_image(app) - plain).mean() > 0.5
+    assert app.state.apply({"burley.view": "image"}, "burley.view")
+    assert app.state.set_technique("phong")
+    app.step(1)

@@ -326,6 +326,11 @@ class ExecuteContext:
         self._apply(prog)
         self.graph.gpu.fullscreen_vao(prog).render(vertices=3)
 
+    def note(self, text: str, **figures) -> None:
+        """A figure this run measured (e.g. samples counted on the GPU): shown with the pass in the
+        frame report (``PassRecord.note`` / ``figures``), kept while the pass stays cached."""
+        self.graph._notes[self.pass_.name] = (text, dict(figures))
+
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
         """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
         tex = self.graph._pool_take(spec)
@@ -355,6 +360,8 @@ class PassRecord:
     reason: str = ""
     inputs: list[str] = field(default_factory=list)
     outputs: dict[str, dict] = field(default_factory=dict)
+    note: str = ""  # what the pass measured when it last ran (ExecuteContext.note)
+    figures: dict = field(default_factory=dict)
     nonfinite: list[str] = field(default_factory=list)  # outputs holding NaN/Inf (render.check_finite)
 
 
@@ -405,7 +412,8 @@ class FrameReport:
             "total_ms": round(self.total_ms, 4),
             "passes": [
                 {"name": p.name, "status": p.status, "gpu_ms": None if p.ms is None else round(p.ms, 4),
-                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs, "nonfinite": p.nonfinite}
+                 "reason": p.reason, "inputs": p.inputs, "outputs": p.outputs, "nonfinite": p.nonfinite,
+                 **({"note": p.note, "figures": p.figures} if p.note else {})}
                 for p in self.passes
             ],
             "nonfinite": self.nonfinite,
@@ -416,7 +424,7 @@ class FrameReport:
         for p in self.passes:
             ms = "" if p.ms is None else f"{p.ms:9.3f}"
             bad = f"  NON-FINITE: {', '.join(p.nonfinite)}" if p.nonfinite else ""
-            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}{bad}")
+            rows.append(f"{p.name:<24} {p.status:<7} {ms:>9}  {p.reason}{bad}" + (f" [{p.note}]" if p.note else ""))
         rows.append(f"{'total (' + self.timing_mode + ' timing)':<32} {self.total_ms:9.3f}")
         return "\n".join(rows)
 
@@ -453,6 +461,7 @@ class RenderGraph:
         self._last_refl: dict[str, Reflection] = {}
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
+        self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
@@ -613,7 +622,8 @@ class RenderGraph:
             self.frame += 1
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
-                           "" if p.status == "ran" else p.reason, p.inputs, p.outputs, p.nonfinite)
+                           "" if p.status == "ran" else p.reason, p.inputs, p.outputs,
+                           note=p.note, figures=p.figures, nonfinite=p.nonfinite)
                 for p in last.passes])
             return self.last_report
         t_start = time.perf_counter()
@@ -659,6 +669,8 @@ class RenderGraph:
                 self._keys[p.name] = key
                 self._nonfinite[p.name] = self._find_nonfinite(r.outputs) if check_finite else []
             rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
+            if p.name in self._notes:
+                rec.note, rec.figures = self._notes[p.name]
             records[p.name] = rec
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         for p in self.passes:

@@ -258,6 +258,85 @@ class DeonSettings(_Model):
                     "a sub-texel 7-tap blur changes nothing")
 
 
+class BurleySettings(_Model):
+    """Burley normalized diffusion in screen space, Golubev 2018 / Unity HDRP (seed 001 §3.4, eq. 2.83-2.89,
+    3.9-3.13; spec §5). Profile per channel: d = mfp / s(A) (Christensen's fits), S = 1/d."""
+    # Jensen et al. 2001 Skin1 (sigma_s' = 0.74/0.88/1.01, sigma_a = 0.032/0.17/0.48 per mm): dipole total
+    # reflectance and diffuse mean free path (eq. 2.87); with eq. 2.88: d = 1.07 / 0.42 / 0.21 mm
+    albedo: Vec3 = Field((0.436, 0.227, 0.131), description="surface albedo A per channel (picks s(A), eq. 2.86-2.89)")
+    mfp: Vec3 = Field((3.749, 1.473, 0.785), description="mean free path per channel, mm (diffuse mfp for the dmfp fit)")
+    fit: Literal["searchlight-dmfp", "searchlight-mfp", "diffuse-transmission", "direct"] = Field(
+        "searchlight-dmfp", description="s(A): eq. 2.88 (dmfp), 2.86 (mfp), 2.89 (DST); direct: d = mfp (HDRP-new)")
+    scale: float = Field(1.0, gt=0.0, le=100.0, description="multiplies d (HDRP's distance multiplier)")
+    samples: int = Field(22, ge=1, le=64, description="Golubev's samples per pixel (thesis: 22; spec §5.2)")
+    budget: bool = Field(
+        True, description="HDRP adaptive count: n <= floor(kernel area / 4 px) (spec §5.3 step 3); the pixel "
+                          "cutoff (kernel under ~1 px: no blur) applies either way")
+    view: Literal["image", "extra", "samples"] = Field(
+        "image", description="extra: tint pixels that took extra samples (and skipped ones blue); samples: heat map")
+
+    @field_validator("albedo")
+    @classmethod
+    def _albedo(cls, v: Vec3) -> Vec3:
+        if any((not math.isfinite(c)) or c < 0 or c > 1 for c in v):
+            raise ValueError("albedo components must be in [0, 1]")
+        return v
+
+    @field_validator("mfp")
+    @classmethod
+    def _mfp(cls, v: Vec3) -> Vec3:
+        if any((not math.isfinite(c)) or c <= 0 or c > 1000 for c in v):
+            raise ValueError("mean free path components must be in (0, 1000] mm")
+        return v
+
+
+class Burley2Settings(_Model):
+    """The thesis's contrast-driven two-level sampling, "Golubev Plus" (seed 001 ch. 4, Algorithm 1,
+    eq. 4.1-4.2; spec §7). Profile and cutoff/budget from ``burley``."""
+    mode: Literal["thesis", "three-level", "nested", "beyond"] = Field(
+        "thesis", description="thesis: base + extra (Algorithm 1); three-level: a third set when the contrast "
+                              "exceeds threshold2 too; nested: the base set is a subset of one (base + extra)-sample "
+                              "Golubev set and the extra level completes it ((base+extra)/base odd); beyond: the "
+                              "fixed variant that beat Table 4.1's target (9 + 11, equal-count rings, reuse; "
+                              "the other fields are ignored)")
+    base: int = Field(12, ge=1, le=64, description="base samples (thesis: 12)")
+    extra: int = Field(10, ge=1, le=64, description="extra samples where the contrast triggers (thesis: 10)")
+    third: int = Field(0, ge=0, le=64, description="three-level mode: samples of the third set")
+    threshold: float = Field(
+        0.25, ge=-1.0, le=1.0, description="contrast cutoff: extra samples iff C > threshold in any channel "
+        "(eq. 4.2; the thesis's 0.25 under either reading, spec §7.4); 1: never, < 0: always")
+    threshold2: float = Field(0.5, ge=-1.0, le=1.0, description="three-level mode: cutoff of the third set")
+    channel_scale: Vec3 = Field((1.0, 1.0, 1.0), description="per-channel multiplier of the cutoffs")
+    split: Literal["half-radius", "area-third", "equal-count"] = Field(
+        "half-radius", description="inner/outer ring of the base samples: r <= R/2 (thesis), r <= R/sqrt(3), "
+                                   "or the nearer half of the samples")
+    contrast: Literal["rings", "minmax"] = Field(
+        "rings", description="rings: eq. 4.1 between ring means; minmax: (max-min)/(max+min) of the samples")
+    reuse: int = Field(0, ge=0, le=2, description="neighbourhood reuse radius, px (0 off): pool the far samples' "
+                                                  "sums of the (2R+1)^2 pixels around (each rotated its disk differently)")
+    reuse_split: float = Field(3.0, ge=0.0, le=1000.0,
+                               description="reuse: samples at least this many px from the centre are pooled; nearer "
+                                           "ones (where a 1-px shift would blur the peaked profile) stay the pixel's own")
+
+    wide_px: float = Field(1e6, gt=0.0, le=1e6, description="kernels at least this wide (filter radius, px) scale "
+                                                              "the contrast cutoffs by wide_scale (a footprint LOD)")
+    wide_scale: float = Field(1.0, ge=0.0, le=100.0, description="cutoff multiplier for wide kernels")
+
+    @field_validator("channel_scale")
+    @classmethod
+    def _scale(cls, v: Vec3) -> Vec3:
+        if any((not math.isfinite(c)) or c < 0 for c in v):
+            raise ValueError("channel scales must be finite and >= 0")
+        return v
+
+    @model_validator(mode="after")
+    def _nested(self) -> "Burley2Settings":
+        total = self.base + self.extra
+        if self.mode == "nested" and (total % self.base or (total // self.base) % 2 == 0):
+            raise ValueError(f"nested mode needs (base + extra) / base odd, e.g. 6 + 24 or 10 + 20 (got {self.base} + "
+                             f"{self.extra})")
+        return self
+
 
 class ScreenSettings(_Model):
     """The shared screen-space framework (seed 001 §3.1, §3.6; spec §2): what the lighting pass writes."""
@@ -336,7 +415,7 @@ class SeparableSettings(_Model):
 
 class Settings(_Model):
     schema_version: int = SCHEMA_VERSION
-    technique: Literal["phong", "gosselin", "deon", "ssss", "separable"] = "deon"
+    technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2"] = "deon"
     scene: SceneSettings = Field(default_factory=SceneSettings)
     camera: CameraSettings = Field(default_factory=CameraSettings)
     render: RenderSettings = Field(default_factory=RenderSettings)
@@ -358,6 +437,8 @@ class Settings(_Model):
     transmittance: TransmittanceSettings = Field(default_factory=TransmittanceSettings)
     ssss: SsssSettings = Field(default_factory=SsssSettings)
     separable: SeparableSettings = Field(default_factory=SeparableSettings)
+    burley: BurleySettings = Field(default_factory=BurleySettings)
+    burley2: Burley2Settings = Field(default_factory=Burley2Settings)
 
     @model_validator(mode="after")
     def _version(self) -> "Settings":

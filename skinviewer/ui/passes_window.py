@@ -94,6 +94,8 @@ class PassesWindow:
                 imgui.text_disabled(p.reason[:60])
                 if p.reason:
                     tooltip(p.reason)
+                if p.note:  # a figure the pass measured (e.g. the GPU sample count)
+                    imgui.text(p.note)
             imgui.end_table()
 
     def _inspector(self) -> None:

@@ -1,0 +1,308 @@
+"""Burley normalized-diffusion blur passes in screen space: Golubev 2018 (HDRP) and the thesis's
+contrast-driven two-level sampling (seed 001 §3.4, ch. 4; spec §5, §7). GLSL: shaders/burley_blur.frag
+with shaders/lib/burley.glsl; numpy twin: skinviewer/physics/burley.py.
+
+The blur reads the screen-space framework's diffuse irradiance, linear depth (mm) and SSS mask and
+writes the blurred diffuse (consumed by the framework's combine pass) and a per-pixel statistics
+texture: R samples taken, G extra levels taken, B 1 where the kernel was under the pixel cutoff,
+A the base contrast (max channel; -1 where none was computed). ``BurleyCountPass`` sums the statistics
+on the GPU (a two-stage reduction) and puts the frame's sample count in the pass report."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.output import OutputPass
+from skinviewer.passes.screen_space import DEPTH, DIFFUSE
+from skinviewer.physics import burley as B
+
+# the screen-space framework's resources (skinviewer/passes/screen_space): ss_diffuse rgb irradiance,
+# a = SSS mask; ss_depth r = linear depth in mm
+IRRADIANCE = DIFFUSE
+IRRADIANCE_DTYPE = "f4"  # the blurred output has the irradiance's format: skipped pixels copy it bit for bit
+
+BLURRED = "burley_diffuse"
+# reuse: the blur writes its near / far sample sums, the reuse pass pools the far ones into BLURRED
+PARTIAL = "burley_partial"
+NEAR_W = "burley_near_w"
+FAR = "burley_far"
+FAR_W = "burley_far_w"
+STATS = "burley_stats"
+COUNT = "burley_count"
+VIEW = "burley_view"
+
+PROFILE_FIELDS = ("albedo", "mfp", "fit", "scale")
+
+
+def profile_of(get) -> B.Profile:
+    """The Burley profile from the ``burley`` settings (``get(path)`` reads a declared setting)."""
+    return B.profile(get("burley.albedo"), get("burley.mfp"), get("burley.fit"), get("burley.scale"))
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The sample levels a blur pass takes, and how it decides (physics.burley.Sampling in GLSL terms)."""
+    levels: tuple[int, ...]
+    cutoffs: tuple[tuple[float, float, float], ...] = ()
+    split: str = "half-radius"
+    contrast: str = "rings"
+    always: bool = False
+    nested: bool = False
+    seed: int = 0
+    reuse: int = 0  # neighbourhood reuse radius in px (0: off; BurleyReusePass)
+    reuse_split: float = 3.0  # px: samples at least this far from the centre are pooled with the neighbours'
+    reuse_dz: float = 0.05  # depth tolerance beyond the local slope, as a fraction of the filter radius
+    wide_px: float = 1e30  # kernels at least this wide (filter radius, px) multiply the cutoffs by wide_scale
+    wide_scale: float = 1.0
+
+    def sampling(self, budget: bool) -> B.Sampling:
+        cut = tuple(-1.0 if self.always else c for c in self.cutoffs)
+        return B.Sampling(self.levels, cut, self.split, self.contrast, budget, self.nested, self.seed, self.wide_px,
+                          self.wide_scale)
+
+
+def _floats(v) -> str:
+    return ", ".join(repr(float(np.float32(x))) for x in v)
+
+
+def table_defines(plan: Plan, budget: bool) -> dict[str, str]:
+    """The sample tables and counts as #defines (the counts specialise the loops: llvmpipe is SIMD)."""
+    sets = plan.sampling(budget).sets()
+    defs = {"N_SET0": str(sets[0].n), "N_SET1": "0", "N_SET2": "0",
+            "N_INNER": str(int(np.count_nonzero(sets[0].inner))),
+            "CONTRAST_MINMAX": "1" if plan.contrast == "minmax" else "0",
+            "BURLEY_BUDGET": "1" if budget else "0", "BURLEY_ALWAYS": "1" if plan.always else "0",
+            "BURLEY_REUSE": "1" if plan.reuse else "0", "BURLEY_FILTER_RADIUS_UNIT": repr(B.FILTER_RADIUS_UNIT)}
+    if not np.all(sets[0].inner[:np.count_nonzero(sets[0].inner)]):
+        raise ValueError("inner ring must be the first samples by radius")
+    for k, s in enumerate(sets):
+        defs[f"N_SET{k}"] = str(s.n)
+        defs[f"SET{k}_X_TABLE"] = f"float[{s.n}]({_floats(s.x)})"
+        defs[f"SET{k}_RCP_TABLE"] = f"float[{s.n}]({_floats(s.rcp_pdf)})"
+        cs = s.cos_sin
+        defs[f"SET{k}_CS_TABLE"] = f"vec2[{s.n}](" + ", ".join(
+            f"vec2({_floats(c)})" for c in cs) + ")"
+    return defs
+
+
+# burley2.mode "beyond": the variant that beat the thesis's Table 4.1 target on the default head (benchmarks/
+# bench_table41.py; notes/ss2.md): 9 base samples with an equal-count ring split (the outer mean rests on 4-5
+# samples instead of 2, spec §7.3), 11 extra where C > 0.35 (x 2 where the kernel is >= 20 px wide, whose
+# far samples the reuse pools), and the far samples (>= 0.5 px) pooled over the 3x3 neighbourhood
+BEYOND_PLAN = Plan((9, 11), ((0.35, 0.35, 0.35),), split="equal-count", reuse=1, reuse_split=0.5, wide_px=20.0,
+                   wide_scale=2.0)
+
+
+def golubev_plan(get) -> Plan:
+    return Plan((int(get("burley.samples")),))
+
+
+def two_level_plan(get) -> Plan:
+    """burley2 settings -> levels. ``thesis``: Algorithm 1 (base, extra, cutoff on the ring contrast);
+    ``three-level``: a third level and a second cutoff on top of it."""
+    mode = get("burley2.mode")
+    if mode == "beyond":
+        return BEYOND_PLAN
+    t = get("burley2.threshold")
+    c1 = tuple(float(t) * float(s) for s in get("burley2.channel_scale"))
+    levels = (int(get("burley2.base")), int(get("burley2.extra")))
+    cutoffs = (c1,)
+    if mode == "three-level" and int(get("burley2.third")) > 0:
+        t2 = float(get("burley2.threshold2"))
+        levels += (int(get("burley2.third")),)
+        cutoffs += (tuple(t2 * float(s) for s in get("burley2.channel_scale")),)
+    return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"), nested=mode == "nested",
+                reuse=int(get("burley2.reuse")), reuse_split=float(get("burley2.reuse_split")),
+                wide_px=float(get("burley2.wide_px")), wide_scale=float(get("burley2.wide_scale")))
+
+
+class BurleyBlurPass(Pass):
+    """One full-screen pass: Golubev's per-pixel Burley estimator (spec §5.3), optionally multi-level
+    (spec §7.5-7.6). ``variant``: "golubev" (``burley.samples``) or "two_level" (``burley2.*``);
+    ``plan`` fixes the levels instead (tests, the bench's pooled estimator)."""
+    view_dependent = True
+    uses_scene = False
+
+    def __init__(self, variant: str = "golubev", plan: Plan | None = None, name: str = "burley_blur"):
+        if variant not in ("golubev", "two_level"):
+            raise ValueError(f"unknown variant {variant!r}")
+        self.variant = variant
+        self.fixed_plan = plan
+        self.name = name
+
+    def _plan(self, get) -> Plan:
+        if self.fixed_plan is not None:
+            return self.fixed_plan
+        return golubev_plan(get) if self.variant == "golubev" else two_level_plan(get)
+
+    def reflect(self, r: Reflection) -> None:
+        for f in PROFILE_FIELDS:
+            r.setting(f"burley.{f}")
+        budget = bool(r.setting("burley.budget"))
+        if self.fixed_plan is None:
+            if self.variant == "golubev":
+                r.setting("burley.samples")
+            else:
+                r.setting("burley2")
+        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
+        r.program("burley_blur", **table_defines(plan, budget))
+        for res in (IRRADIANCE, DEPTH):
+            r.input(res)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.output(PARTIAL if plan.reuse else BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
+        r.output(STATS, TexSpec((w, h), 4, "f2", filter="nearest"))
+        if plan.reuse:
+            for res in (NEAR_W, FAR, FAR_W):
+                r.output(res, TexSpec((w, h), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        budget = bool(ec.setting("burley.budget"))
+        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
+        prog = ec.program("burley_blur", **table_defines(plan, budget))
+        prof = profile_of(ec.setting)
+        view = ec.view
+        h = ec.setting("render.height")
+        cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
+        ec.uniforms(prog, u_proj_scale=float(view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
+                    u_S=tuple(float(v) for v in prof.S), u_d=prof.d, u_seed=int(plan.seed))
+        # the cutoffs are dropped by the compiler in Golubev's variant (no contrast test)
+        ec.set(prog, "u_cutoff1", tuple(float(c) for c in cut[0]), optional=True)
+        ec.set(prog, "u_cutoff2", tuple(float(c) for c in cut[1]), optional=True)
+        ec.set(prog, "u_wide_px", float(plan.wide_px), optional=True)
+        ec.set(prog, "u_wide_scale", float(plan.wide_scale), optional=True)
+        ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH)
+        if plan.reuse:
+            ec.set(prog, "u_reuse_split", float(plan.reuse_split))
+        ec.draw_fullscreen(prog, *((PARTIAL, STATS, NEAR_W, FAR, FAR_W) if plan.reuse else (BLURRED, STATS)))
+
+
+class BurleyReusePass(Pass):
+    """Neighbourhood reuse (shaders/burley_reuse.frag): pools the far samples' weighted sums of the (2R+1)^2
+    pixels around each pixel (a tent, same surface only); declares nothing (and is pruned) without reuse."""
+    view_dependent = True
+    uses_scene = False
+    name = "burley_reuse"
+
+    def __init__(self, plan: Plan | None = None):
+        self.fixed_plan = plan
+
+    def _plan(self, get) -> Plan:
+        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(get)
+
+    @staticmethod
+    def _defines(plan: Plan) -> dict[str, str]:
+        return {"REUSE_R": str(plan.reuse)}
+
+    def reflect(self, r: Reflection) -> None:
+        if self.fixed_plan is None:
+            if r.peek("burley2.reuse") == 0 and r.peek("burley2.mode") != "beyond":
+                return
+            r.setting("burley2")
+        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
+        for f in PROFILE_FIELDS:
+            r.setting(f"burley.{f}")
+        r.program("burley_reuse", **self._defines(plan))
+        for res in (PARTIAL, NEAR_W, FAR, FAR_W, DEPTH):
+            r.input(res)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
+
+    def execute(self, ec) -> None:
+        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
+        prog = ec.program("burley_reuse", **self._defines(plan))
+        prof = profile_of(ec.setting)
+        ec.uniforms(prog, u_reuse_dz=plan.reuse_dz * prof.filter_radius)
+        ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W, lin_depth=DEPTH)
+        ec.draw_fullscreen(prog, BLURRED)
+
+
+@dataclass(frozen=True)
+class SampleCount:
+    """The frame's figures, summed on the GPU from the statistics texture."""
+    samples: int  # samples taken (every SSS pixel above the cutoff)
+    pixels: int  # SSS pixels blurred
+    triggered: int  # pixels that took at least one extra level
+    skipped: int  # SSS pixels under the pixel cutoff (output = input)
+
+    @property
+    def per_pixel(self) -> float:
+        return self.samples / max(self.pixels, 1)
+
+    def summary(self) -> str:
+        trig = 100.0 * self.triggered / max(self.pixels, 1)
+        return (f"{self.samples:,} samples on the GPU ({self.per_pixel:.2f}/px over {self.pixels:,} px); "
+                f"extra: {trig:.1f} % px; skipped (kernel < 1 px): {self.skipped:,} px")
+
+
+def _split(hi: float, lo: float) -> int:
+    return round(float(hi)) * 4096 + round(float(lo))
+
+
+class BurleyCountPass(Pass):
+    """Sums the blur's statistics texture on the GPU: each row (stage 1, exact in float up to 2^24),
+    then the rows in uint (stage 2, written as 4096-based hi/lo pairs, exact up to 2^36); reads back
+    the two resulting texels and reports the figures (``last`` and the pass report's note)."""
+    name = "burley_count"
+    uses_scene = False
+
+    def __init__(self):
+        self.last: SampleCount | None = None
+
+    def reflect(self, r: Reflection) -> None:
+        r.input(STATS)
+        r.setting("render.height")
+        r.setting("render.width")
+        r.program("burley_count", STAGE="1")
+        r.program("burley_count", STAGE="2")
+        r.output(COUNT, TexSpec((2, 1), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        h = ec.setting("render.height")
+        rows = ec.scratch(TexSpec((1, h), 4, "f4", filter="nearest"))
+        p1 = ec.program("burley_count", STAGE="1")
+        ec.bind(p1, "stats", STATS)
+        ec.draw_fullscreen(p1, rows)
+        p2 = ec.program("burley_count", STAGE="2")
+        ec.bind(p2, "rows", rows)
+        ec.draw_fullscreen(p2, COUNT)
+        raw = np.frombuffer(ec.output(COUNT).read(), dtype=np.float32).reshape(2, 4)
+        self.last = SampleCount(samples=_split(raw[0, 0], raw[0, 1]), triggered=_split(raw[0, 2], raw[0, 3]),
+                                skipped=_split(raw[1, 0], raw[1, 1]), pixels=_split(raw[1, 2], raw[1, 3]))
+        ec.note(self.last.summary(), samples=self.last.samples, pixels=self.last.pixels,
+                triggered=self.last.triggered, skipped=self.last.skipped)
+
+
+VIEW_MODES = ("image", "extra", "samples")
+
+
+class BurleyViewPass(Pass):
+    """The view modes (``burley.view``): ``extra`` tints the pixels that took extra samples (magenta; a
+    second extra level orange) and those under the pixel cutoff (blue) over the lit image; ``samples``
+    shows samples per pixel as a heat map (black 0 ... white at the plan's maximum)."""
+    name = "burley_view"
+    uses_scene = False
+
+    def reflect(self, r: Reflection) -> None:
+        r.input("lit")
+        r.input(STATS)
+        r.setting("burley.view")
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.program("burley_view")
+        r.output(VIEW, TexSpec((w, h), 4, "f2"))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("burley_view")
+        ec.textures(prog, lit="lit", stats=STATS)
+        ec.uniforms(prog, u_mode=VIEW_MODES.index(ec.setting("burley.view")), u_max_samples=32.0)
+        ec.draw_fullscreen(prog, VIEW)
+
+
+class BurleyOutputPass(OutputPass):
+    """The output pass, fed by the view pass when ``burley.view`` is not ``image``."""
+
+    def reflect(self, r: Reflection) -> None:
+        self.source = "lit" if r.setting("burley.view") == "image" else VIEW
+        super().reflect(r)
+

@@ -1,0 +1,188 @@
+"""Burley sampling math (skinviewer/physics/burley.py): spec §12.1 T1.1-T1.2, §12.4, §12.6 and §13 on the
+numpy reference. The GLSL is checked against this reference in test_burley_gpu.py."""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from skinviewer.physics import burley as B
+
+
+def test_cdf_values_t11():
+    np.testing.assert_allclose(B.cdf([0.5, 1.0, 3.0, 10.0]), [0.213506, 0.370632, 0.711644, 0.973233], atol=1e-6)
+
+
+def test_inverse_cdf_values_and_round_trip_in_float32_t12():
+    np.testing.assert_allclose(B.inverse_cdf([0.1, 0.5, 0.9, 0.997]), [0.214462, 1.552183, 6.062229, 16.564399],
+                               atol=1e-6)
+    assert B.FILTER_RADIUS_UNIT == pytest.approx(16.564399, abs=1e-6)
+    p = np.linspace(0.001, 0.999, 4001).astype(np.float32)
+    # the GLSL formula evaluated in float32 (shaders/lib/burley.glsl burley_x_of_u)
+    u = (np.float32(1) - p).astype(np.float32)
+    G = np.float32(1) + np.float32(4) * u * (np.float32(2) * u + np.sqrt(np.float32(1) + np.float32(4) * u * u))
+    g = np.power(G, np.float32(1.0 / 3.0))
+    x = np.float32(3) * np.log((np.float32(1) + np.float32(1) / g + g) / (np.float32(4) * u))
+    assert x.dtype == np.float32
+    assert np.max(np.abs(B.cdf(x.astype(np.float64)) - p)) < 1e-5
+
+
+def test_printed_inverse_eq_3_12_is_not_an_inverse():
+    # seed 001 prints G^(-1/3) twice in eq. 3.12 (spec E7): at p = 0.5 it returns 0.1625 d, P of that is 0.077
+    printed = B.inverse_cdf(0.5, printed=True)
+    assert printed == pytest.approx(0.1625, abs=1e-4)
+    assert abs(B.cdf(printed) - 0.5) > 0.4
+    correct = B.inverse_cdf(0.5)
+    assert abs(B.cdf(correct) - 0.5) < 1e-9
+
+
+def test_stratified_radii_match_spec_13():
+    np.testing.assert_allclose(B.sample_set(12).x, [0.0857, 0.2731, 0.4858, 0.7305, 1.0162, 1.3561, 1.7700, 2.2893,
+                                                    2.9685, 3.9154, 5.4024, 8.6742], atol=1e-4)
+    np.testing.assert_allclose(B.sample_set(10).x, [0.1035, 0.3340, 0.6037, 0.9255, 1.3192, 1.8165, 2.4728,
+                                                    3.3979, 4.8670, 8.1286], atol=1e-4)
+    np.testing.assert_allclose(B.sample_set(22).x[-2:], [7.2019, 10.4904], atol=1e-4)
+    assert B.sample_set(21).x[-1] == pytest.approx(10.351, abs=1e-3)
+    assert B.sample_set(55).x[-1] == pytest.approx(13.2385, abs=1e-4)
+
+
+def test_golden_angle_directions_and_rcp_pdf():
+    s = B.sample_set(22)
+    assert B.GOLDEN_ANGLE == pytest.approx(2.399963229728653, abs=1e-12)
+    steps = np.mod(np.diff(s.phi), 2 * math.pi)
+    np.testing.assert_allclose(np.minimum(steps, 2 * math.pi - steps), B.GOLDEN_ANGLE, atol=1e-12)
+    # rcpPdf = 1/p(r, phi) with p the polar pdf: p integrates to 1 over r/d in [0, inf) and phi in [0, 2 pi)
+    x = np.linspace(0, 200, 400001)
+    assert 2 * math.pi * np.trapezoid(B.polar_pdf_unit(x), x) == pytest.approx(1.0, abs=1e-6)
+    np.testing.assert_allclose(s.rcp_pdf * B.polar_pdf_unit(s.x), 1.0)
+
+
+def test_ring_split_t67():
+    for n, inner in ((12, 10), (10, 8), (22, 19), (30, 27)):
+        f = B.sample_set(n).inner
+        assert f.sum() == inner and np.all(f[:inner])  # the first samples by radius
+    assert B.ring_flags(B.sample_set(22).x, "area-third").sum() == 20  # the other reading of 1:3
+    assert B.ring_flags(B.sample_set(12).x, "equal-count").sum() == 6
+    with pytest.raises(ValueError):
+        B.ring_flags(np.ones(3), "nope")
+
+
+def test_transmission_t48():
+    np.testing.assert_allclose(B.transmittance([0.5, 1, 2, 4], 1.0), [0.786494, 0.629368, 0.418897, 0.202277],
+                               atol=1e-6)
+    for t in (0.5, 1.0, 2.0, 4.0):
+        assert B.transmittance(t, 1.0) == pytest.approx(B.transmittance_numeric(t, 1.0), abs=1e-5)
+    assert B.transmittance(0.0, [1.0, 2.0, 3.0], 0.7) == pytest.approx(0.7)
+    # thick mode: attenuated by e^(-S dt / 3) beyond the baked thickness, never amplified
+    S = np.array([0.5, 1.0, 2.0])
+    np.testing.assert_allclose(B.transmittance_thick(1.0, 3.0, S), B.transmittance(1.0, S) * np.exp(-S * 2 / 3))
+    np.testing.assert_allclose(B.transmittance_thick(1.0, 0.5, S), B.transmittance(1.0, S))
+
+
+def test_shape_from_albedo_and_mfp():
+    d = B.shape_distance([0.1, 0.5, 0.9], 1.0, "diffuse-transmission")  # eq. 2.89 test vectors, spec §1.4
+    np.testing.assert_allclose(1 / d, [3.515, 1.715, 1.035], atol=1e-3)
+    np.testing.assert_allclose(B.shape_distance([0.3, 0.3, 0.3], [1, 2, 3], "direct"), [1, 2, 3])
+    p = B.profile([0.5, 0.5, 0.5], [1.0, 2.0, 4.0], "direct")
+    assert p.d == 4.0 and p.filter_radius == pytest.approx(4 * 16.5644, abs=1e-3)
+    with pytest.raises(ValueError):
+        B.shape_distance(0.5, 0.0)
+
+
+def test_rotation_hash_is_stable_and_uniform():
+    ys, xs = np.mgrid[0:128, 0:128]
+    a = B.rotation_phase(xs, ys, np.full(xs.shape, 100.0))
+    np.testing.assert_array_equal(a, B.rotation_phase(xs, ys, np.full(xs.shape, 100.0)))
+    assert a.min() >= 0 and a.max() < 2 * math.pi + 1e-6
+    hist, _ = np.histogram(a, bins=16, range=(0, 2 * math.pi))
+    assert hist.min() > 0.8 * a.size / 16
+    assert not np.array_equal(a, B.rotation_phase(xs, ys, np.full(xs.shape, 101.0)))  # depth bits reseed
+
+
+# ---------------------------------------------------------------------------------------------
+# the reference algorithm on small images
+
+PS = 300.0  # pixels per mm at 1 mm depth
+
+
+def _edge(w=48, h=40, z=40.0, red_only=False):
+    E = np.ones((h, w, 3))
+    if red_only:
+        E[:, w // 2:, 0] = 0.1
+    else:
+        E[:, w // 2:] = 0.1
+    return E, np.full((h, w), z), np.ones((h, w))
+
+
+PROF = B.profile([0.5] * 3, [0.2, 0.1, 0.05], "direct")
+
+
+def test_weights_are_one_for_the_widest_channel_t41():
+    s = B.sample_set(22)
+    S = 1.0 / PROF.d
+    w = S / (8 * math.pi) * (np.exp(-S * s.x * PROF.d) + np.exp(-S * s.x * PROF.d / 3)) * s.rcp_pdf * PROF.d
+    np.testing.assert_allclose(w, 1.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("levels,cutoffs", [((12,), ()), ((22,), ()), ((12, 10), (0.25,)), ((6, 8, 16), (0.1, 0.2))])
+def test_constant_irradiance_is_preserved_t42(levels, cutoffs):
+    E, z, m = _edge()
+    E[:] = (0.3, 0.6, 0.9)
+    r = B.blur(E, z, m, PROF, PS, B.Sampling(levels, cutoffs))
+    np.testing.assert_allclose(r.out, E, rtol=1e-12)
+    assert np.all(r.level == 0)  # C = 0: nothing triggers (T6.2)
+
+
+def test_degenerate_thresholds_t61_and_accounting_t64():
+    E, z, m = _edge()
+    g12 = B.blur(E, z, m, PROF, PS, B.Sampling((12,)))
+    never = B.blur(E, z, m, PROF, PS, B.Sampling((12, 10), (1.0,)))
+    always = B.blur(E, z, m, PROF, PS, B.Sampling((12, 10), (-1.0,)))
+    np.testing.assert_array_equal(never.out, g12.out)
+    n = int(m.sum())
+    assert never.count.sum() == 12 * n and always.count.sum() == 22 * n
+    mid = B.blur(E, z, m, PROF, PS, B.Sampling((12, 10), (0.25,)))
+    trig = int((mid.level > 0).sum())
+    assert 0 < trig < n
+    assert mid.count.sum() == 12 * n + 10 * trig
+    saved = B.samples_saved(mid.count.sum(), 22 * n)
+    assert 0 <= saved <= 1 - 12 / 22
+
+
+def test_contrast_sanity_per_channel_t62():
+    E, z, m = _edge(red_only=True)
+    r = B.blur(E, z, m, PROF, PS, B.Sampling((12, 10), (0.25,)))
+    assert (r.level > 0).any()  # a red-only edge triggers through R alone (any())
+    trig = r.level > 0
+    assert np.all(r.contrast[trig][:, 1:] == 0) and np.all(r.contrast[trig][:, 0] > 0.25)
+
+
+def test_threshold_monotonicity_t63():
+    E, z, m = _edge()
+    fr = [(B.blur(E, z, m, PROF, PS, B.Sampling((12, 10), (t,))).level > 0).mean() for t in (0.0, 0.1, 0.25, 0.5, 0.9)]
+    assert all(a >= b for a, b in itertools.pairwise(fr)) and fr[0] > fr[-1]
+
+
+def test_pixel_cutoff_and_budget_follow_the_kernel_area():
+    E, z, m = _edge()
+    # kernel radius in px = 16.56 d * PS / z
+    for zz, expect_skip in ((40.0, False), (PROF.filter_radius * PS / 1.0, True)):
+        r = B.blur(E, np.full(z.shape, zz), m, PROF, PS, B.Sampling((22,), (), budget=True))
+        rad = PROF.filter_radius * PS / zz
+        n_avail = math.floor(math.pi * rad * rad / 4)
+        assert r.skipped.all() == expect_skip
+        if expect_skip:
+            np.testing.assert_array_equal(r.out, E) and (r.count == 0).all()
+        else:
+            assert (r.count == min(22, n_avail)).all()
+    zz = PROF.filter_radius * PS / 4.0  # radius 4 px: floor(4 pi) = 12 samples
+    r = B.blur(E, np.full(z.shape, zz), m, PROF, PS, B.Sampling((22,), (), budget=True))
+    assert (r.count == 12).all()
+
+
+def test_edge_response_reference_values_t43():
+    np.testing.assert_allclose(B.edge_response([0.1, 0.5, 1, 2, 5, 10]), [0.5632, 0.6898, 0.7770, 0.8706, 0.9653,
+                                                                           0.9949], atol=1e-4)
+    np.testing.assert_allclose(B.edge_response(-0.5), 1 - 0.6898, atol=1e-4)

@@ -1,0 +1,115 @@
+"""The burley and burley2 techniques end to end on the default head (small sizes): finite everywhere, the
+view modes, the GPU sample count in the frame report, caching, the reuse variant; nested sample sets."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from burley_gpu import Harness, plane
+from helpers import assert_all_finite, small_settings
+
+from skinviewer.core.settings import SettingsError, with_values
+from skinviewer.passes import burley as PB
+from skinviewer.physics import burley as B
+
+
+@pytest.mark.parametrize("tech,assign", [("burley", {}), ("burley", {"burley.budget": False, "burley.samples": 8}),
+                                         ("burley2", {}), ("burley2", {"burley.budget": False}),
+                                         ("burley2", {"burley2.reuse": 1, "burley2.base": 8,
+                                                                       "burley2.extra": 14}),
+                                         ("burley2", {"burley2.mode": "beyond", "burley.budget": False}),
+                                         ("burley2", {"burley2.mode": "nested", "burley2.base": 6, "burley2.extra": 24,
+                                                      "burley2.contrast": "minmax"})])
+def test_techniques_render_finite_and_count_samples(renderer, tech, assign):
+    s = small_settings(technique=tech, size=80, **assign)
+    report = renderer.render(s)
+    tex = assert_all_finite(renderer, s, report)
+    rec = next(p for p in report.passes if p.name == "burley_count")
+    assert rec.status == "ran" and rec.figures["samples"] > 0 and "samples on the GPU" in rec.note
+    stats = tex[PB.STATS]
+    assert rec.figures["samples"] == int(stats[..., 0].sum())
+    assert rec.figures["triggered"] == int((stats[..., 1] > 0.5).sum())
+    lit, diffuse = tex["lit"], tex["ss_diffuse"]
+    skin = diffuse[..., 3] > 0.5
+    assert skin.any() and np.all(lit[skin][:, :3] >= 0)
+    assert ("burley_reuse" in report.ran) == (assign.get("burley2.reuse", 0) > 0
+                                              or assign.get("burley2.mode") == "beyond")
+    if tech == "burley2" and assign == {"burley.budget": False}:
+        # Algorithm 1's accounting on a real frame: 12 per blurred pixel plus 10 per triggered one
+        assert rec.figures["samples"] == 12 * rec.figures["pixels"] + 10 * rec.figures["triggered"]
+
+
+def test_view_modes_show_the_extra_samples_and_recompute_little(renderer):
+    s = small_settings(technique="burley2", size=96, **{"burley.budget": False})
+    renderer.render(s)
+    img = renderer.image(s).astype(int)
+    s2 = with_values(s, {"burley.view": "extra"})
+    rep = renderer.render(s2)
+    assert set(rep.ran) == {"burley_view", "output"}  # the blur and the count stay cached
+    over = renderer.image(s2).astype(int)
+    stats = renderer.read(s2, PB.STATS)[::-1]
+    trig = stats[..., 1] > 0.5
+    assert trig.any()
+    # magenta where extra samples were taken: red and blue above green
+    px = over[trig]
+    assert np.mean((px[:, 0] > px[:, 1]) & (px[:, 2] > px[:, 1])) > 0.9
+    assert np.abs(over - img).sum() > 0
+    s3 = with_values(s, {"burley.view": "samples"})
+    renderer.render(s3)
+    heat = renderer.image(s3).astype(int)
+    assert not np.array_equal(heat, over)
+    rec = next(p for p in renderer.graph("burley2").last_report.passes if p.name == "burley_count")
+    assert rec.status == "cached" and rec.note  # the figure stays shown while cached
+
+
+def test_nested_sets_complete_one_golubev_set():
+    base, extra = B.nested_sets(6, 30)
+    full = B.sample_set(30)
+    np.testing.assert_allclose(base.x, B.sample_set(6).x, atol=1e-12)  # Golubev's 6 radii
+    np.testing.assert_allclose(np.sort(np.concatenate([base.x, extra.x])), full.x)
+    with pytest.raises(ValueError):
+        B.nested_sets(6, 24)  # 24 / 6 = 4 is even: no centred subset
+    with pytest.raises(SettingsError):
+        with_values(small_settings(), {"burley2.mode": "nested", "burley2.base": 6, "burley2.extra": 18})
+
+
+def test_nested_two_level_always_equals_the_full_set(gl_ctx):
+    """A triggered pixel of the nested mode is Golubev's (base+extra)-sample estimate."""
+    rng = np.random.default_rng(2)
+    E, z, mask = plane(48, 40, 150.0, E=0.2 + rng.random((40, 48, 3)))
+    a = {"burley.fit": "direct", "burley.budget": False, "burley.mfp": [0.5, 0.3, 0.2]}
+    hs = [Harness(gl_ctx, PB.BurleyBlurPass("golubev", PB.Plan((6, 24), ((-1.0,) * 3,), nested=True))),
+          Harness(gl_ctx, PB.BurleyBlurPass("golubev", PB.Plan((30,))))]
+    try:
+        nested, _, cn = hs[0].run(E, z, mask, **a)
+        full, _, cf = hs[1].run(E, z, mask, **a)
+        np.testing.assert_allclose(nested, full, rtol=1e-5)  # same samples, another summation order
+        assert cn.samples == cf.samples == 30 * cf.pixels
+    finally:
+        for h in hs:
+            h.release()
+
+
+def test_reuse_keeps_energy_and_lowers_noise(gl_ctx):
+    w, hgt = 96, 64
+    a = {"burley.fit": "direct", "burley.budget": False, "burley.mfp": [1.0, 1.0, 1.0]}
+    plan = PB.Plan((8,), reuse=1, reuse_split=0.5)
+
+    def run(E, z, mask, reuse):
+        h = Harness(gl_ctx, PB.BurleyBlurPass("golubev", plan if reuse else PB.Plan((8,))))
+        if reuse:
+            h.extra = [PB.BurleyReusePass(plan)]
+        try:
+            return h.run(E, z, mask, **a)[0]
+        finally:
+            h.release()
+
+    E, z, mask = plane(w, hgt, 60.0)
+    const = E * (0.2, 0.4, 0.8)
+    np.testing.assert_allclose(run(const, z, mask, True), const, rtol=1e-5)  # constant stays constant
+    edge = np.ones((hgt, w, 3))
+    edge[:, w // 2:] = 0.0
+    own, pooled = run(edge, z, mask, False), run(edge, z, mask, True)
+    col = slice(w // 2 - 4, w // 2 + 4)
+    # the same mean response along the edge, with less pixel-to-pixel noise
+    assert abs(own[8:-8, col, 0].mean() - pooled[8:-8, col, 0].mean()) < 0.01
+    assert pooled[8:-8, col, 0].std(axis=0).mean() < 0.6 * own[8:-8, col, 0].std(axis=0).mean()
