@@ -4,6 +4,7 @@ their consistency)."""
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -39,7 +40,7 @@ def test_pareto_and_budget():
     assert best_within(rs, 5) is None
 
 
-def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch):
+def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch, gl_ctx):
     bad = Technique("broken", "a configuration that cannot be built", techniques.REGISTRY["phong"].build,
                     lambda quick: [("ok", {}), ("invalid", {"shadow.map_size": 3})])
     monkeypatch.setitem(techniques.REGISTRY, "broken", bad)
@@ -47,7 +48,7 @@ def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch):
     ref = compute_reference(s)
     out = tmp_path / "bench"
     # the fake technique is not a valid `technique` value: both of its configurations fail, and say why
-    data = run_bench(s, out, quick=True, names=["phong", "broken"], reference=ref)
+    data = run_bench(s, out, quick=True, names=["phong", "broken"], reference=ref, ctx=gl_ctx)
     res = {(r["technique"], r["label"]): r for r in data["results"]}
     assert res[("broken", "invalid")]["error"] and res[("broken", "ok")]["error"]
     good = [r for r in data["results"] if r["error"] is None]
@@ -65,8 +66,10 @@ def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch):
     assert meta["reference"]["elements"] > 0 and len(rs) == len(data["results"])
 
 
-def test_bench_cli_budget_preset(tmp_path, capsys):
+def test_bench_cli_budget_preset(tmp_path, capsys, monkeypatch, gl_ctx):
     from skinviewer.cli import main
+    if os.environ.get("DISPLAY"):  # one GL platform per process (see conftest): GLX beside the window tests
+        monkeypatch.setenv("SKINVIEWER_GL_BACKEND", "x11")
     out = tmp_path / "b"
     preset = tmp_path / "best.json"
     code = main(["bench", "--scene", "laser", "--size", "32x32", "--quick", "--techniques", "phong", "--out", str(out),
@@ -80,31 +83,23 @@ def test_bench_cli_budget_preset(tmp_path, capsys):
     assert data["results"][0]["error"] is None
 
 
-def test_deon_on_a_lit_plane_is_close_to_the_truth():
+def test_deon_on_a_lit_plane_is_close_to_the_truth(renderer):
     """The same equations on both sides: d'Eon's texture-space diffusion on a uniformly lit plane
     (exact away from the rim) agrees with the truth; Phong (no diffusion, its own lighting model)
     does not. Compared by the bench's own code."""
     from skinviewer.core.bench import compare_mask, linear_image
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
     from skinviewer.physics.metrics import rel_rms
     s = with_values(_plane(48), {"deon.irradiance_size": 512})
     ref = compute_reference(s)
-    ctx = headless_context()
-    r = Renderer(ctx)
-    try:
-        errs = {}
-        for t in ("deon", "phong"):
-            st = with_values(s, {"technique": t})
-            r.render(st)
-            img, cov = linear_image(r, st)
-            m = compare_mask(ref.mask, cov)
-            inner = m & (np.abs(ref.position[..., :2]) < 6.0).all(-1)  # 6 mm inside the slab's rim
-            errs[t] = rel_rms(img, ref.lit, m)
-            errs[t + " inside"] = rel_rms(img, ref.lit, inner)
-    finally:
-        r.release()
-        ctx.release()
+    errs = {}
+    for t in ("deon", "phong"):
+        st = with_values(s, {"technique": t})
+        renderer.render(st)
+        img, cov = linear_image(renderer, st)
+        m = compare_mask(ref.mask, cov)
+        inner = m & (np.abs(ref.position[..., :2]) < 6.0).all(-1)  # 6 mm inside the slab's rim
+        errs[t] = rel_rms(img, ref.lit, m)
+        errs[t + " inside"] = rel_rms(img, ref.lit, inner)
     # away from the open rim (where the truth loses the light that leaves the slab and the
     # texture-space blur does not) d'Eon agrees within 1 %: irradiance, mix, rho_dt, specular
     assert errs["deon inside"].max() < 0.01, errs

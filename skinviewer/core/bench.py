@@ -110,8 +110,9 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
 
 def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] | None = None,
               reference=None, runs: int = RUNS,
-              progress: Callable[[str, int, int], None] | None = None) -> dict:
-    """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/."""
+              progress: Callable[[str, int, int], None] | None = None, ctx=None) -> dict:
+    """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/.
+    ``ctx``: a moderngl context to render with (default: a new headless one, released after)."""
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
 
@@ -121,7 +122,8 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
                for label, ch in t.sweep(quick)]
     ref = reference
     results: list[Result] = []
-    ctx = headless_context()
+    own_ctx = ctx is None
+    ctx = ctx or headless_context()
     r = Renderer(ctx)
     try:
         for n, (tech, label, changes) in enumerate(configs):
@@ -149,7 +151,8 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
             r.trim()
     finally:
         r.release()
-        ctx.release()
+        if own_ctx:
+            ctx.release()
     pareto_front(results)
     data = {
         "scene": base.scene.mesh or base.scene.name,
