@@ -111,8 +111,8 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
 def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] | None = None,
               reference=None, runs: int = RUNS,
               progress: Callable[[str, int, int], None] | None = None, ctx=None) -> dict:
-    """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/. ``ctx``: a
-    GL context to render with (default: a headless one made and released here)."""
+    """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/.
+    ``ctx``: a moderngl context to render with (default: a new headless one, released after)."""
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
 
@@ -122,7 +122,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
                for label, ch in t.sweep(quick)]
     ref = reference
     results: list[Result] = []
-    own = ctx is None
+    own_ctx = ctx is None
     ctx = ctx or headless_context()
     r = Renderer(ctx)
     try:
@@ -151,7 +151,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
             r.trim()
     finally:
         r.release()
-        if own:
+        if own_ctx:
             ctx.release()
     pareto_front(results)
     data = {

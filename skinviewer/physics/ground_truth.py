@@ -429,16 +429,20 @@ def _accumulate(i: np.ndarray, vals: np.ndarray, n: int) -> np.ndarray:
     return np.stack([np.bincount(i, vals[:, c], n) for c in range(vals.shape[1])], 1)
 
 
-def gaussian_disc_convolution(r: np.ndarray, v: float, radius: float, n: int = 400) -> np.ndarray:
+def gaussian_disc_convolution(r: np.ndarray, v: float, radius: float, n: int = 48) -> np.ndarray:
     """(G(v) * disc)(r): the integral of G(v, |p - (r, 0)|) over the disc of ``radius`` at the
-    origin (polar Gauss-Legendre rule); the analytic reference of a laser beam."""
+    origin (n x n polar Gauss-Legendre rule); the analytic reference of a laser beam."""
     t, wt = np.polynomial.legendre.leggauss(n)
     rho = 0.5 * radius * (t + 1.0)
-    wr = 0.5 * radius * wt
     phi = np.pi * (t + 1.0)
-    wp = np.pi * wt
     R, P = np.meshgrid(rho, phi, indexing="ij")
-    W = (wr[:, None] * wp[None, :]) * R
+    W = ((0.5 * radius * wt)[:, None] * (np.pi * wt)[None, :]) * R
+    px, py = (R * np.cos(P)).ravel(), (R * np.sin(P)).ravel()
     r = np.asarray(r, np.float64)
-    d2 = (r[..., None, None] - R * np.cos(P)) ** 2 + (R * np.sin(P)) ** 2
-    return (np.exp(-d2 / (2 * v)) / (2 * np.pi * v) * W).sum(axis=(-2, -1))
+    flat = r.ravel()
+    out = np.empty(flat.shape)
+    for s0 in range(0, len(flat), 2048):
+        rr = flat[s0:s0 + 2048, None]
+        d2 = (rr - px[None]) ** 2 + py[None] ** 2
+        out[s0:s0 + 2048] = (np.exp(-d2 / (2 * v)) / (2 * np.pi * v)) @ W.ravel()
+    return out.reshape(r.shape)
