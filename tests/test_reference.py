@@ -178,3 +178,18 @@ def test_a_dipole_truth_follows_the_dipole():
     dip = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta)
     expect = 400.0 * np.pi * 0.02 ** 2 * dip(r[keep]) / dip.total_reflectance()[None]
     assert rel_rms(ref.diffuse[ref.mask][keep], expect).max() < 0.01
+
+
+def test_truth_sees_the_view_the_renderer_draws(renderer):
+    """The truth's camera is the renderer's (same framing of a bust on its head): its pixel mask
+    matches the technique's coverage on the default head."""
+    from skinviewer.core.bench import linear_image
+    from skinviewer.core.reference import Surface, camera_hits, load_scene
+    s = with_values(Settings(), {"technique": "phong", "render.width": 64, "render.height": 64,
+                                 "shadow.map_size": 256})
+    mesh, mm = load_scene(s)
+    mask = camera_hits(Surface(mesh, mm, s), s)[0]
+    renderer.render(s)
+    _, cov = linear_image(renderer, s)
+    iou = (mask & cov).sum() / max((mask | cov).sum(), 1)
+    assert iou > 0.95, iou

@@ -7,7 +7,6 @@ import os
 import struct
 import subprocess
 import sys
-import threading
 import time
 import zlib
 from pathlib import Path
@@ -63,18 +62,29 @@ def test_undecodable_presets_are_settings_errors(tmp_path, raw, expect):
     assert expect in _errors(exc)
 
 
+def _in_child(code: str, *args: str) -> subprocess.CompletedProcess:
+    """Run ``code`` in a child with a 20 s timeout and a 2 GB address-space limit: a regression
+    (reading /dev/zero forever, blocking on a FIFO) fails the test instead of taking the machine."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (2 * 2**30, 2 * 2**30))
+    try:
+        return subprocess.run([sys.executable, "-c", code, *args], cwd=ROOT, capture_output=True, text=True,
+                              timeout=20, preexec_fn=limit)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"hangs: {args}")
+
+
 def test_preset_from_a_device_fifo_or_folder_is_refused_without_reading(tmp_path):
     fifo = tmp_path / "fifo.json"
     os.mkfifo(fifo)
     targets = [fifo, tmp_path] + ([Path("/dev/zero")] if Path("/dev/zero").exists() else [])
+    code = ("import sys\nfrom skinviewer.core.settings import load_preset, SettingsError\n"
+            "try:\n    load_preset(sys.argv[1])\nexcept SettingsError as e:\n    print(e)\n")
     for target in targets:
-        result = {}
-        t = threading.Thread(target=lambda: result.setdefault("exc", _catch(load_preset, target)), daemon=True)
-        t.start()
-        t.join(10)
-        assert not t.is_alive(), f"reading {target} hangs"
-        assert isinstance(result["exc"], SettingsError), result
-        assert "not a regular file" in str(result["exc"])
+        r = _in_child(code, str(target))
+        assert r.returncode == 0 and "not a regular file" in r.stdout, (target, r.stdout, r.stderr[-500:])
 
 
 def _catch(fn, *a):
@@ -293,13 +303,13 @@ def test_huge_images_are_one_clear_error(tmp_path, side):
 def test_fifo_as_a_texture_or_mesh_does_not_hang(tmp_path):
     fifo = tmp_path / "albedo.png"
     os.mkfifo(fifo)
-    for fn in (lambda: load_texture_maps(_plane(), albedo=fifo), lambda: load_mesh(fifo)):
-        result = {}
-        t = threading.Thread(target=lambda: result.setdefault("exc", _catch(fn)), daemon=True)
-        t.start()
-        t.join(10)
-        assert not t.is_alive()
-        assert isinstance(result["exc"], MeshError) and "regular file" in str(result["exc"])
+    code = ("import sys\nsys.path.insert(0, 'tests')\nfrom skinviewer.scene.mesh import MeshError, load_mesh, "
+            "load_texture_maps, MeshData\nfrom skinviewer.scene.scenes import grid\n"
+            "p, n, uv, i = grid(2, 2, 1.0, 1.0)\nm = MeshData(positions=p, normals=n, uvs=uv, indices=i)\n"
+            "for fn in (lambda: load_texture_maps(m, albedo=sys.argv[1]), lambda: load_mesh(sys.argv[1])):\n"
+            "    try:\n        fn()\n    except MeshError as e:\n        print(e)\n")
+    r = _in_child(code, str(fifo))
+    assert r.returncode == 0 and r.stdout.count("regular file") == 2, (r.stdout, r.stderr[-500:])
 
 
 # -- hot reload recovers ----------------------------------------------------------------------------
@@ -372,9 +382,11 @@ def test_release_frees_the_full_screen_vaos(gl_ctx):
     s = small_settings("laser", "phong", size=16)
     r.render(s)
     vaos = [v for g in r.graphs.values() for _, _, v in g.gpu._vaos.values()]  # the graphs' one VAO cache
-    assert vaos
+    progs = [e.program for e in r.shaders._entries.values()]
+    assert vaos and progs
     r.release()
     assert all(type(v.mglo).__name__ == "InvalidObject" for v in vaos)
+    assert all(type(p.mglo).__name__ == "InvalidObject" for p in progs)  # its own shader library too
 
 
 LARGEST = {"render.width": 8192, "render.height": 8192, "shadow.map_size": 8192, "deon.tsm_size": 8192,
@@ -419,19 +431,15 @@ class Poison(Pass):
 
     def execute(self, ec):
         prog = ec.program("fill")
-        prog["u_value"].value = self.value
-        ec.framebuffer("lit").use()
-        ec.graph.fullscreen_vao(prog).render(vertices=3)
+        ec.set(prog, "u_value", self.value)
+        ec.draw_fullscreen(prog, "lit")
 
 
 def _poison_graph(gl_ctx, tmp_path, value, dtype="f2"):
     (tmp_path / "fill.vert").write_text(FS_VERT)
     (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\nvoid main() {"
                                         " f = (ivec2(gl_FragCoord.xy) == ivec2(137, 41)) ? vec4(u_value) : vec4(0.5); }\n")
-    g = RenderGraph(gl_ctx, ShaderLibrary(gl_ctx, tmp_path), [Poison(value, dtype)], ["lit"])
-    vaos = {}
-    g.fullscreen_vao = lambda prog: vaos.setdefault(id(prog), gl_ctx.vertex_array(prog, []))
-    return g
+    return RenderGraph(gl_ctx, ShaderLibrary(gl_ctx, tmp_path), [Poison(value, dtype)], ["lit"])
 
 
 @pytest.mark.parametrize("value,dtype", [(float("nan"), "f2"), (float("inf"), "f2"), (float("-inf"), "f4"),

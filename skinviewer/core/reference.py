@@ -47,7 +47,7 @@ from skinviewer.scene.camera import orbit_view
 from skinviewer.scene.mesh import MeshData, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 1                 # bump when the reference's maths change (invalidates the cache)
+VERSION = 2                 # bump when the reference's maths change (invalidates the cache)
 DEFAULT_H_MM = 0.5          # source element edge
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
@@ -109,6 +109,7 @@ class Surface:
         self.Ng = fn / np.maximum(np.linalg.norm(fn, axis=1), 1e-300)[:, None]
         self.radius = float(mesh.radius)
         self.center = mesh.center.astype(np.float64)
+        self.frame = mesh.frame  # what the camera frames (the head of a bust), as the renderer does
         self.eps = 1e-5 * self.radius + 1e-6
         self.rays = RayMeshIntersector(trimesh.Trimesh(self.P, self.F, process=False))
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3)) * np.asarray(DEFAULT_SKIN_SRGB)
@@ -307,7 +308,7 @@ def camera_hits(surf: Surface, s: Settings, grid: tuple[int, int] | None = None)
     """Ray through every pixel centre: (mask (H, W), triangle ids, barycentrics, eye) top row first.
     ``grid``: cast a coarser (W, H) grid over the same view instead (coverage estimates)."""
     W, H = s.render.width, s.render.height
-    view = orbit_view(s.camera, surf.center, surf.radius, (W, H))
+    view = orbit_view(s.camera, surf.center, surf.radius, (W, H), surf.frame)
     if grid is not None:
         W, H = grid
     inv = np.linalg.inv(view.view_proj)

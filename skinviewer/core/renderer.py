@@ -109,6 +109,7 @@ class Renderer:
 
     def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None):
         self.ctx = ctx
+        self._own_shaders = shaders is None  # a library we made is ours to release
         self.shaders = shaders or ShaderLibrary(ctx)
         self.pool = TexturePool(ctx)
         self.graphs: dict[str, RenderGraph] = {}
@@ -228,6 +229,8 @@ class Renderer:
         if self.scene is not None:
             self.scene.gpu.release()
             self.scene = None
+        if self._own_shaders:
+            self.shaders.release()
 
 
 def _env_bytes(name: str) -> int | None:

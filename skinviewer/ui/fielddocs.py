@@ -38,6 +38,8 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "render.background": ("linear RGB", "clear colour of the 3D view"),
     "render.timing": ("", "sync: glFinish + wall clock per pass (true cost on llvmpipe); "
                       "gpu: GL_TIME_ELAPSED queries (accurate on real GPUs, far too low on llvmpipe)"),
+    "render.check_finite": ("", "after a pass runs, scan its outputs for NaN/Inf on the GPU; the passes window "
+                            "names a pass whose output is not finite (the screen shows the background there)"),
     # phong
     "phong.ambient": ("", "ambient term (fraction of albedo)"),
     "phong.specular": ("", "Blinn-Phong specular intensity"),

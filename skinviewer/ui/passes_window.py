@@ -65,6 +65,9 @@ class PassesWindow:
                    + (f", {len(rep.deferred)} deferred to the next frame" if rep.deferred else ""))
         imgui.text_disabled(f"{rep.total_ms:.2f} ms ({rep.timing_mode} timing)")
         tooltip(TIMING_NOTES[rep.timing_mode])
+        bad = getattr(rep, "nonfinite", {})
+        if bad:  # render.check_finite: a pass wrote NaN/Inf (e.g. a shader edit); the screen stays finite
+            imgui.text_colored(ERR, "NaN/Inf in " + ", ".join(f"{n} ({', '.join(o)})" for n, o in bad.items()))
         flags = imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
         if imgui.begin_table("passes", 4, flags):
             imgui.table_setup_column("pass")
@@ -91,6 +94,9 @@ class PassesWindow:
                     imgui.text_disabled(f"({fr.last_ms[p.name]:.2f})")
                     tooltip("cost when it last ran")
                 imgui.table_next_column()
+                if getattr(p, "nonfinite", None):
+                    imgui.text_colored(ERR, "NaN/Inf")
+                    imgui.same_line()
                 imgui.text_disabled(p.reason[:60])
                 if p.reason:
                     tooltip(p.reason)

@@ -1,0 +1,104 @@
+"""Soak: render N frames as the viewer would (the camera orbits every frame, a setting changes
+every few frames, the technique switches now and then, the pool is trimmed like on a resize) and
+report the process's RSS and the live GL objects over time. A healthy run is flat after warm-up.
+
+    python benchmarks/soak.py --frames 3000 --size 96 --maps 256
+
+Live GL objects: moderngl objects reachable from Python that were not released, by type. (GL
+object names are no leak measure on Mesa: it hands out ever-increasing names even when objects
+are freed.) RSS covers everything else, including GL objects lost without a release."""
+from __future__ import annotations
+
+import argparse
+import gc
+import os
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import moderngl  # noqa: E402
+
+from skinviewer import techniques  # noqa: E402
+from skinviewer.core.gl import headless_context  # noqa: E402
+from skinviewer.core.renderer import Renderer  # noqa: E402
+from skinviewer.core.settings import Settings, with_values  # noqa: E402
+
+_GL_TYPES = (moderngl.Texture, moderngl.Framebuffer, moderngl.Buffer, moderngl.VertexArray, moderngl.Program,
+             moderngl.Renderbuffer, moderngl.Query)
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        pages = int(f.read().split()[1])
+    return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def live_gl() -> Counter:
+    gc.collect()
+    out = Counter()
+    for o in gc.get_objects():
+        if isinstance(o, _GL_TYPES) and type(getattr(o, "mglo", None)).__name__ != "InvalidObject":
+            out[type(o).__name__] += 1
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--frames", type=int, default=3000)
+    ap.add_argument("--size", type=int, default=96, help="image size (square)")
+    ap.add_argument("--maps", type=int, default=256, help="texture-space map size")
+    ap.add_argument("--every", type=int, default=250, help="report every N frames")
+    args = ap.parse_args()
+    ctx = headless_context()
+    r = Renderer(ctx)
+    base = with_values(Settings(), {
+        "render.width": args.size, "render.height": args.size, "scene.head_detail": 0,
+        "shadow.map_size": args.maps, "gosselin.light_map_size": max(args.maps, 256),
+        "deon.irradiance_size": max(args.maps, 256), "deon.tsm_size": args.maps})
+    names = techniques.names()
+    rows = []
+    t0 = time.perf_counter()
+    warm = None
+    for i in range(args.frames + 1):
+        s = base
+        tech = names[(i // 500) % len(names)]  # switch technique every 500 frames
+        edits = {"technique": tech, "camera.yaw": 25.0 + (i % 360)}
+        if i % 7 == 0:  # a slider drag: a setting every 7th frame
+            edits["lights.0.intensity"] = 1.0 + (i % 13) * 0.1
+            edits["deon.mix"] = (i % 11) / 10.0
+        if i % 97 == 0:  # a resize now and then
+            edits["render.width"] = args.size + (i // 97) % 3 * 8
+        s = with_values(s, edits)
+        r.render(s)
+        if i % 97 == 0:
+            r.trim()
+        if i % args.every == 0:
+            ctx.finish()
+            gl = live_gl()
+            row = (i, rss_mb(), sum(gl.values()), dict(gl), time.perf_counter() - t0)
+            rows.append(row)
+            if warm is None and i >= min(500 * len(names), args.frames):  # every technique ran once
+                warm = row
+            print(f"frame {i:6d}  RSS {row[1]:8.1f} MB  live GL objects {row[2]:4d}  {row[4]:7.1f} s  {tech}",
+                  flush=True)
+    r.release()
+    gl_after = live_gl()
+    first = warm or rows[0]
+    last = rows[-1]
+    print()
+    print("| | frame | RSS MB | live GL objects |")
+    print("| --- | --- | --- | --- |")
+    for label, row in (("after warm-up", first), ("end", last)):
+        print(f"| {label} | {row[0]} | {row[1]:.1f} | {row[2]} |")
+    print(f"\nRSS drift after warm-up: {last[1] - first[1]:+.1f} MB over {last[0] - first[0]} frames; "
+          f"live GL objects {first[2]} -> {last[2]}; after Renderer.release(): {sum(gl_after.values())} "
+          f"{dict(gl_after)}")
+    print(f"live objects by type at the end: {last[3]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
