@@ -54,7 +54,7 @@ float shadow_sample(int i, vec2 c) {
 
 // T(thickness) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
 // map's nearest surface A unprojected, its distance (mm) to the point shrunk by a shadow texel along
-// the normal (spec §6.2 steps 2-4). T is averaged over 3x3 shadow texels: the thickness of nearly lit
+// the normal (spec §6.2 steps 2-4). The thickness is averaged over 3x3 shadow texels: the thickness of nearly lit
 // points is a texel-quantised few tenths of a mm, which would print the shadow map's grid as moire.
 vec3 transmitted(int i, vec3 P, vec3 Ng) {
     vec3 Ps = P - Ng * u_shadow_texel[i];
@@ -69,19 +69,20 @@ vec3 transmitted(int i, vec3 P, vec3 Ng) {
     float nl = abs(dot(Ng, Lv));
     float tan_nl = sqrt(max(1.0 - nl * nl, 0.0)) / max(nl, 0.25);
     float tol_mm = u_shadow_texel[i] * (0.5 + 0.5 * tan_nl) * u_mm_per_unit;
-    vec3 t = vec3(0.0);
+    // the thickness (not T) is averaged: one profile evaluation per light
+    float d_sum = 0.0, n = 0.0;
     for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
         vec2 cc = c.xy + vec2(x, y) * texel;
         float ds = shadow_sample(i, cc);
         if (ds >= 1.0) continue;  // no surface in front: nothing crossed
         vec4 a = u_light_matrix_inv[i] * vec4(cc * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
         if (!(abs(a.w) > 1e-30)) continue;
-        vec3 A = a.xyz / a.w;
         // the distance along the light (not the lateral texel offset), less the quantisation
-        float d_mm = max(abs(dot(A - Ps, Lv)) * u_mm_per_unit - tol_mm, 0.0);
-        t += transmittance_profile(d_mm * u_tr_scale);
+        d_sum += max(abs(dot(a.xyz / a.w - Ps, Lv)) * u_mm_per_unit - tol_mm, 0.0);
+        n += 1.0;
     }
-    return t / 9.0;
+    if (n < 0.5) return vec3(0.0);
+    return (n / 9.0) * transmittance_profile(d_sum / n * u_tr_scale);
 }
 
 void main() {
@@ -113,8 +114,8 @@ void main() {
     // non-skin pixels scatter nothing: the transmittance belongs to skin
     vec3 diffuse = (E + mask * T) * ss_safe_pow(A, u_mix);
     o_diffuse = ss_finite4(vec4(diffuse, mask));
-    o_specular = ss_finite4(vec4(spec, 1.0));
+    o_specular = finite4(vec4(spec, 1.0), HALF_MAX);  // a half-float target
     float d = v_depth_mm;
     o_depth = ss_finite4(vec4(d, abs(dFdx(d)), abs(dFdy(d)), 1.0));
-    o_albedo = ss_finite4(vec4(ss_safe_pow(A, 1.0 - u_mix), 1.0));
+    o_albedo = finite4(vec4(ss_safe_pow(A, 1.0 - u_mix), 1.0), HALF_MAX);
 }

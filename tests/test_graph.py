@@ -125,7 +125,7 @@ def test_camera_reruns_only_view_dependent(gl_ctx, shader_dir):
 def test_shader_edit_reruns_users(gl_ctx, shader_dir):
     passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
     g, lib = make_graph(gl_ctx, shader_dir, passes, ["out"])
-    s = Settings()
+    s = with_values(Settings(), {"render.exposure": 1.0})  # a = 1
     g.run(frame(s))
     time.sleep(0.01)
     p = shader_dir / "add.frag"

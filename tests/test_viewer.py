@@ -294,6 +294,7 @@ def test_screenshots_written_where_asked(app, tmp_path):
 
 def test_ab_compare_split_and_pass_inspector(app):
     cmp = app.state.compare
+    exposure_a = app.state.settings.render.exposure
     app.state.capture_slot("A")
     assert app.state.apply({"render.exposure": 4.0})
     app.state.capture_slot("B")
@@ -307,7 +308,7 @@ def test_ab_compare_split_and_pass_inspector(app):
         left, right = scr[:, : W // 2 - 2], scr[:, W // 2 + 2:]
         # B (brighter exposure) on the right: the right half is brighter than a plain A frame's right half
         cmp.set_mode("off")
-        assert app.state.apply({"render.exposure": 1.0})  # back to A's state
+        assert app.state.apply({"render.exposure": exposure_a})  # back to A's state
         app.step(1)
         plain = _screen(app)[:, W // 2 + 2:]
         assert right.mean() > plain.mean() + 1.0

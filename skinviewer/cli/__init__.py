@@ -1,4 +1,5 @@
-"""Command line: ``skinviewer`` (the viewer), ``skinviewer render`` (headless), ``skinviewer profile``."""
+"""Command line: ``skinviewer`` (the viewer), ``skinviewer render`` (headless), ``skinviewer profile``,
+``skinviewer reference`` (the ground truth) and ``skinviewer bench`` (accuracy vs time)."""
 from __future__ import annotations
 
 import argparse
@@ -21,6 +22,9 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--timings", metavar="FILE.json", help="write per-pass times of the frame")
     pr.add_argument("-v", "--verbose", action="store_true", help="print the pass table")
     pr.set_defaults(func=cmd_render)
+
+    from skinviewer.cli import reference as reference_cli
+    reference_cli.add_parsers(sub)
 
     try:
         from skinviewer.cli import profile as profile_cli
@@ -71,7 +75,7 @@ def _join_negative_values(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
-    commands = {"render", "profile", "view", "settings", "-h", "--help"}
+    commands = {"render", "profile", "view", "settings", "reference", "bench", "-h", "--help"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     args = parser.parse_args(argv)

@@ -186,3 +186,35 @@ def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
     np.save(buf, np.ascontiguousarray(arr, dtype=np.float32))
     atomic_write_bytes(path, buf.getvalue())
     return Path(path)
+
+
+def save_exr(path: str | os.PathLike, img: np.ndarray) -> Path:
+    """Linear float image (H, W), (H, W, 1|3|4) as OpenEXR (float32, ZIP), top row first: what
+    compositing and VFX tools read. Written to a temporary file and renamed like every writer."""
+    import OpenEXR
+
+    a = np.ascontiguousarray(np.nan_to_num(np.asarray(img, np.float32), nan=0.0, posinf=3e38, neginf=-3e38))
+    if a.ndim == 3 and a.shape[2] == 1:
+        a = a[..., 0]
+    if a.ndim == 2:
+        channels = {"Y": a}
+    elif a.shape[2] in (3, 4):
+        channels = {"RGBA"[:a.shape[2]]: a}
+    else:
+        raise ValueError(f"save_exr: expected 1, 3 or 4 channels, got shape {a.shape}")
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with atomic_path(path, suffix=".exr") as tmp:
+        with OpenEXR.File(header, channels) as f:
+            f.write(str(tmp))
+    return Path(path)
+
+
+def load_exr(path: str | os.PathLike) -> np.ndarray:
+    """The pixels of an EXR written by ``save_exr`` (float32, top row first)."""
+    import OpenEXR
+
+    with OpenEXR.File(str(path)) as f:
+        ch = f.channels()
+        key = next(k for k in ("RGBA", "RGB", "Y") if k in ch) if any(k in ch for k in ("RGBA", "RGB", "Y")) \
+            else next(iter(ch))
+        return np.array(ch[key].pixels, dtype=np.float32)

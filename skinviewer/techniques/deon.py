@@ -27,5 +27,31 @@ def build():
             + [DeonFinalPass(), OutputPass("lit")])
 
 
+def fewer_gaussians(k: int) -> list[dict]:
+    """The default six-Gaussian skin profile refitted with k Gaussians (seed 000 eq. 21; the
+    sweep's Gaussian-count knob): what dropping blurs costs against the six-Gaussian truth."""
+    from skinviewer.core.settings import Settings
+    from skinviewer.physics.diffusion import profile
+    from skinviewer.physics.fitting import fit_gaussians
+    g = Settings().deon.gaussians
+    fit = fit_gaussians(lambda r: profile(r, g), k=k)
+    return [{"variance": v, "weights": list(w)} for v, w in fit.table()]
+
+
+def sweep(quick: bool):
+    """Irradiance/blur texture size (the blurs' taps are tied to its texels: eq. 25 sub-steps),
+    stretch correction, the TSM, and the number of Gaussians (eq. 21)."""
+    if quick:
+        return ([(f"irr{n}", {"deon.irradiance_size": n}) for n in (256, 512, 1024)]
+                + [("irr512 4G", {"deon.irradiance_size": 512, "deon.gaussians": fewer_gaussians(4)})])
+    out = [(f"irr{n}", {"deon.irradiance_size": n}) for n in (256, 512, 1024, 2048)]
+    out += [("irr1024 no-stretch", {"deon.irradiance_size": 1024, "deon.stretch": False}),
+            ("irr1024 no-tsm", {"deon.irradiance_size": 1024, "deon.tsm": False}),
+            ("irr1024 tsm512", {"deon.irradiance_size": 1024, "deon.tsm_size": 512}),
+            ("irr1024 reuse2", {"deon.irradiance_size": 1024, "deon.reuse_irradiance_below_texels": 2.0})]
+    out += [(f"irr1024 {k}G", {"deon.irradiance_size": 1024, "deon.gaussians": fewer_gaussians(k)}) for k in (2, 3, 4)]
+    return out
+
+
 TECHNIQUE = Technique("deon", "d'Eon & Luebke 2007: texture-space sum-of-Gaussians diffusion (seed 000 eq. 20-35)",
-                      build)
+                      build, sweep)

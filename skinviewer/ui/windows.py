@@ -21,6 +21,7 @@ from __future__ import annotations
 import traceback
 from typing import Callable, Protocol
 
+from skinviewer.ui.accuracy_window import AccuracyWindow
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.layout import Layout
 from skinviewer.ui.panel import Panel
@@ -43,6 +44,7 @@ WINDOWS: tuple[WindowFactory, ...] = (
     Panel,
     StatusBar,
     PassesWindow,
+    AccuracyWindow,
 )
 
 

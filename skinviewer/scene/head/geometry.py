@@ -215,8 +215,8 @@ class Ear:
         antihelix += 1.4 * self._ridge(x, y, (0.1, 0.35), (-0.4, 0.72), 0.09)   # superior crus
         concha = -8.5 * np.exp(-((a - 5.0) ** 2 + (b + 3.0) ** 2) / (2 * 7.5 ** 2))
         crus = 1.8 * self._ridge(x, y, (-0.8, 0.55), (-0.25, 0.12), 0.08)
-        tragus = 3.2 * np.exp(-((x + 0.86) ** 2 + (y + 0.22) ** 2) / 0.12 ** 2)
-        antitragus = 2.2 * np.exp(-((x + 0.15) ** 2 + (y + 0.5) ** 2) / 0.11 ** 2)
+        tragus = 3.0 * np.exp(-((x + 0.84) ** 2 + (y + 0.22) ** 2) / 0.2 ** 2)
+        antitragus = 2.0 * np.exp(-((x + 0.15) ** 2 + (y + 0.5) ** 2) / 0.17 ** 2)
         lobule = 1.2 * smoothstep(-0.55, -0.95, y)
         return 3.0 * rho * rho + helix + scapha + antihelix + concha + crus + tragus + antitragus + lobule
 
@@ -238,13 +238,8 @@ class Ear:
                 + d[..., None] * self.normal)
 
     def sheet(self, x, y, front: bool):
-        """Points of the front (outer) or back sheet, offset along the mid-surface normal."""
-        eps = 1e-3
-        m = self.mid(x, y)
-        mx = (self.mid(x + eps, y) - self.mid(x - eps, y))
-        my = (self.mid(x, y + eps) - self.mid(x, y - eps))
-        n = np.cross(mx, my)
-        n *= np.sign(np.sum(n * self.normal, axis=-1, keepdims=True))
-        n /= np.linalg.norm(n, axis=-1, keepdims=True)
+        """Points of the front (outer) or back sheet: the mid-surface is a height field over the
+        ear plane, and so are both sheets, offset ±h along the plane's normal (an offset along
+        the mid-surface normal folds where the helix and tragus curve tighter than h)."""
         h = self.half_thickness(x, y)[..., None]
-        return m + (h if front else -h) * n
+        return self.mid(x, y) + (h if front else -h) * self.normal

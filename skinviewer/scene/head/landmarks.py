@@ -56,13 +56,13 @@ FEATURES: tuple[Feature, ...] = (
     E("malar fat", "add", (28, -42, 74), (13, 14, 11), 14, True),
     # masseter and buccal fat fill the cheek between the cheekbone and the jaw angle
     E("masseter", "add", (44, -62, 24), (12, 24, 22), 26, True),
-    E("buccal fat", "add", (35, -52, 54), (16, 20, 18), 22, True),
+    E("buccal fat", "add", (34, -50, 54), (15, 19, 17), 26, True),
     # dental arch under the lips, and a mandible narrowing towards the chin
     E("dental arch", "add", (0, -66, 46), (37, 40, 47), 14),
     E("mandible mass", "add", (0, -70, 20), (45, 24, 60), 14, taper=(0.3, -5.0, 90.0)),
     # mandible: body along the jawline (gonion -> mental tubercle), ramus up towards the ear
     C("mandible body", "add", (46, -82, -2), (14, -106, 72), 8.0, 8.0, 12, True),
-    C("ramus", "add", (47, -30, -6), (46, -82, -2), 6.5, 8.0, 14, True),
+    C("ramus", "add", (47, -34, -6), (46, -82, -2), 6.5, 8.0, 16, True),
     E("chin", "add", (0, -105, 80), (16, 11, 9), 10),
     E("mentolabial sulcus", "cut", (0, -84, 97), (15, 3.0, 6), 8),
     # brow ridges (supraorbital), glabella, orbits, open lids over the eyeballs
@@ -85,13 +85,13 @@ FEATURES: tuple[Feature, ...] = (
     E("lower lip", "add", (0, -70.5, 88), (20, 6.5, 10), 9),
     E("mouth line", "cut", (0, -63.5, 101), (25, 0.9, 13), 2.5, bend=0.006),
     E("philtrum", "cut", (0, -49, 99.5), (2.6, 6, 3), 2),
-    E("mouth corner", "cut", (25, -64, 82), (2.5, 2.5, 4), 3, True),
-    C("nasolabial fold", "cut", (20, -37, 93), (30, -63, 85), 0.5, 0.8, 5, True),
+    E("mouth corner", "cut", (25, -64, 82), (2.2, 2.2, 3.5), 4, True),
+    C("nasolabial fold", "cut", (20, -37, 93), (30, -63, 85), 0.3, 0.5, 6, True),
     # neck: slightly forward-tilted, tapering up into the head (crisp under the jaw, soft at the
     # nape); sternocleidomastoids from behind the ears to the sternal notch; larynx; trapezius
     E("neck root", "add", (0, -55, -44), (52, 45, 52), 20),
     C("neck", "add", (0, -240, -22), (0, -100, -16), 60.0, 52.0, 8, x_scale=1.04, blend_back=(16.0, 10.0, -50.0)),
-    C("sternocleidomastoid", "add", (44, -78, -30), (19, -194, 30), 8.0, 6.5, 22, True),
+    C("sternocleidomastoid", "add", (40, -86, -34), (19, -194, 30), 7.0, 6.5, 26, True),
     E("thyroid cartilage", "add", (0, -135, 30.5), (9, 17, 8.5), 14),
     E("sternal notch", "cut", (0, -188, 48), (10, 9, 9), 6),
     C("trapezius", "add", (26, -120, -50), (50, -230, -38), 12.0, 14.0, 25, True),
@@ -111,7 +111,7 @@ EYE = dict(
     lateral_canthus=75.0,        # deg, horizontal angle from the eye's axis
     medial_canthus=60.0,         # deg (the nose side: kept shallow)
     canthus_tilt=(-2.3, 4.7),    # deg: fissure centre line at the medial .. lift to the lateral canthus
-    upper_lid=13.5,              # deg above the centre line at the middle of the fissure
+    upper_lid=15.0,              # deg above the centre line at the middle of the fissure
     lower_lid=25.5,              # deg below it
     lid_gap=0.5,                 # hidden skin behind the eyeball inside the fissure
     lid_thickness=(1.4, 0.6),    # lower lid, extra for the upper lid
@@ -123,8 +123,8 @@ EAR = dict(
     height=32.0,                 # half height of the outline
     centre_back=9.0,             # outline centre behind the attachment point
     half_width=(15.0, 3.5, -2.0),  # half width = c0 + c1 y + c2 y² (y in [-1, 1] down..up)
-    thickness=(2.0, 4.6),        # between the two sheets: at the helix rim, at the root (concha)
-    root=(4.0, -4.0, 8.0, 12.0),  # the root's centre (a, b) and extent (sa, sb) in the ear plane
+    thickness=(2.0, 4.8),        # between the two sheets: at the helix rim, at the root (concha)
+    root=(5.0, -3.0, 6.0, 10.0),  # the root's centre (a, b) and extent (sa, sb) in the ear plane
     rim=0.09,                    # fraction of the unit disk over which the rim rounds off
     tilt=15.0, flare=24.0,       # deg: backwards lean, flare away from the head
     attach=(85.0, 88.0),         # deg (theta from +Y, phi from +Z) of the attachment ray
@@ -141,3 +141,37 @@ BROW = dict(base=30.5, lift=5.5, peak_x=31.0, width=15.0, droop=0.004)
 
 # jaw line (under-jaw crease) height against depth z: neck below it
 JAW_LINE = ([-120.0, -40.0, 0.0, 40.0, 70.0, 90.0], [-72.0, -72.0, -96.0, -110.0, -116.0, -118.0])
+
+# ---------------------------------------------------------------------------------------------
+# paint: region shapes, flushes and colours (mm; |x|, y, z)
+
+# facial regions as ellipses in (|x|, y): centre, semi-axes, and the depth the region starts at
+REGION_SHAPES = dict(
+    cheeks=dict(centre=(36.0, -28.0), axes=(30.0, 40.0), z_min=30.0),
+    forehead=dict(centre=(0.0, 30.0), axes=(58.0, 200.0), z_min=30.0),
+    chin=dict(centre=(0.0, -104.0), axes=(30.0, 24.0), z_min=45.0),
+    lips=dict(centre=(0.0, -63.5), axes=(25.0, 10.0, 11.5), z_min=78.0),   # upper, lower half-height
+    nose=dict(top=22.0, bottom=-46.0, width=(7.5, 14.0), widen=(8.0, -36.0), z_min=82.0),
+    neck_below=-122.0,
+)
+
+# flushed spots (Gaussian: weight, centre, sigma) where the skin is redder
+BLUSH = (
+    (0.60, (38, -24, 70), (16, 16, 30)),    # cheeks
+    (0.55, (0, -28, 110), (10, 9, 10)),     # nose tip
+    (0.45, (11, -33, 97), (6, 6, 6)),       # alae
+    (0.20, (0, -100, 85), (14, 10, 15)),    # chin
+    (0.12, (0, 45, 90), (25, 20, 20)),      # forehead centre
+)
+BLUSH_EARS = 0.65
+NOSTRIL_SHADE = ((6.8, -39.5, 100.0), (2.6, 2.2, 4.0))
+
+# linear-light reflectances
+SKIN_COLOURS = dict(base=(0.62, 0.40, 0.31), flush=(0.60, 0.27, 0.22), lips=(0.52, 0.18, 0.16),
+                    conjunctiva=(0.50, 0.20, 0.18), brow=(0.07, 0.05, 0.035),
+                    beard=(0.16, 0.12, 0.05))   # beard: fractional darkening per channel
+
+# per region (order of settings.REGIONS: other, forehead, nose, cheeks, lips, chin, ears, neck,
+# scalp): specular scale and pore depth (x 0.1 mm)
+SPECULAR_BY_REGION = (1.0, 0.8, 0.85, 0.45, 0.65, 0.7, 0.4, 0.4, 0.3)
+PORES_BY_REGION = (0.6, 0.8, 1.2, 1.0, 0.2, 0.8, 0.4, 0.5, 0.5)

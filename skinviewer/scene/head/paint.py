@@ -21,7 +21,20 @@ from skinviewer.scene.head.geometry import (
     eye_radius,
     fissure,
 )
-from skinviewer.scene.head.landmarks import BROW, EYE, HAIR, HAIRLINE, JAW_LINE
+from skinviewer.scene.head.landmarks import (
+    BLUSH,
+    BLUSH_EARS,
+    BROW,
+    EYE,
+    HAIR,
+    HAIRLINE,
+    JAW_LINE,
+    NOSTRIL_SHADE,
+    PORES_BY_REGION,
+    REGION_SHAPES,
+    SKIN_COLOURS,
+    SPECULAR_BY_REGION,
+)
 from skinviewer.scene.head.shapes import smoothstep
 
 REGION = {name: i for i, name in enumerate(REGIONS)}
@@ -58,20 +71,28 @@ def regions(p, island):
     """Region ID per skin point from smooth anatomical landmark shapes (mm)."""
     x, y, z = p[:, 0], p[:, 1], p[:, 2]
     ax = np.abs(x)
-    ell = lambda cx, cy, sx, sy: ((ax - cx) / sx) ** 2 + ((y - cy) / sy) ** 2
+    sh = REGION_SHAPES
+
+    def ell(name):
+        (cx, cy), (sx, sy) = sh[name]["centre"], sh[name]["axes"]
+        return (((ax - cx) / sx) ** 2 + ((y - cy) / sy) ** 2 < 1.0) & (z > sh[name]["z_min"])
+
     # every skin point gets a named region ("other" is left to the eyeballs, i.e. non-skin)
-    r = np.where(y >= brow_y(ax) - 1.0, REGION["forehead"], REGION["cheeks"]).astype(np.uint8)
-    front = z > 30.0
-    r[front & (ell(36.0, -28.0, 30.0, 40.0) < 1.0)] = REGION["cheeks"]
-    r[front & (y >= brow_y(ax) - 1.0) & (ell(0.0, 30.0, 58.0, 200.0) < 1.0)] = REGION["forehead"]
-    r[(z > 45.0) & (ell(0.0, -104.0, 30.0, 24.0) < 1.0)] = REGION["chin"]
-    lips = (ax / 25.0) ** 2 + ((y + 63.5) / np.where(y > -63.5, 10.0, 11.5)) ** 2 < 1.0
-    r[lips & (z > 78.0)] = REGION["lips"]
-    nose_w = 7.5 + 14.0 * smoothstep(8.0, -36.0, y)
-    nose = (y < 22.0) & (y > -46.0 + 0.08 * ax * ax / 4) & (ax < nose_w) & (z > 82.0)
+    above_brow = y >= brow_y(ax) - 1.0
+    r = np.where(above_brow, REGION["forehead"], REGION["cheeks"]).astype(np.uint8)
+    r[ell("cheeks")] = REGION["cheeks"]
+    r[above_brow & ell("forehead")] = REGION["forehead"]
+    r[ell("chin")] = REGION["chin"]
+    lp = sh["lips"]
+    half_h = np.where(y > lp["centre"][1], lp["axes"][1], lp["axes"][2])
+    lips = (ax / lp["axes"][0]) ** 2 + ((y - lp["centre"][1]) / half_h) ** 2 < 1.0
+    r[lips & (z > lp["z_min"])] = REGION["lips"]
+    ns = sh["nose"]
+    nose_w = ns["width"][0] + ns["width"][1] * smoothstep(*ns["widen"], y)
+    nose = (y < ns["top"]) & (y > ns["bottom"] + 0.02 * ax * ax) & (ax < nose_w) & (z > ns["z_min"])
     r[nose] = REGION["nose"]
     r[(y < jaw_y(z)) & (r != REGION["chin"])] = REGION["neck"]
-    r[(y < -122.0)] = REGION["neck"]
+    r[(y < sh["neck_below"])] = REGION["neck"]
     r[(hair(p) > 0.5) | (island == ISLAND_CAP)] = REGION["scalp"]
     r[island == ISLAND_EAR] = REGION["ears"]
     return r
@@ -109,14 +130,12 @@ def skin_colour(p, region, rng):
     g = lambda cx, cy, cz, sx, sy, sz: np.exp(-0.5 * (((ax - cx) / sx) ** 2 + ((y - cy) / sy) ** 2
                                                       + ((z - cz) / sz) ** 2))
     # linear-light reflectances of light skin
-    base = np.array([0.62, 0.40, 0.31])
-    red = np.array([0.60, 0.27, 0.22])
-    col = np.tile(base, (len(p), 1))
+    c = {k: np.array(v) for k, v in SKIN_COLOURS.items()}
+    red = c["flush"]
+    col = np.tile(c["base"], (len(p), 1))
     is_ = lambda name: (region == REGION[name]).astype(float)
     # flushed cheeks, nose tip and alae, ears; a little on the chin and forehead centre
-    blush = (0.6 * g(38, -24, 70, 16, 16, 30) + 0.55 * g(0, -28, 110, 10, 9, 10)
-             + 0.45 * g(11, -33, 97, 6, 6, 6) + 0.65 * is_("ears") + 0.2 * g(0, -100, 85, 14, 10, 15)
-             + 0.12 * g(0, 45, 90, 25, 20, 20))
+    blush = BLUSH_EARS * is_("ears") + sum(w * g(*centre, *sigma) for w, centre, sigma in BLUSH)
     col = col + (red - col) * np.clip(blush, 0, 1)[:, None] * 0.6
     # beard shadow: stubble under the skin over the upper lip, chin, jaw and lower cheeks
     beard = (smoothstep(-38.0, -52.0, y + 0.15 * ax) * smoothstep(-128.0, -112.0, y)
@@ -126,8 +145,8 @@ def skin_colour(p, region, rng):
     lips = (ax / 24.0) ** 2 + ((y + 63.5) / np.where(y > -63.5, 9.0, 10.5)) ** 2
     lip_w = smoothstep(1.0, 0.7, lips) * smoothstep(78.0, 86.0, z)
     beard *= 1 - smoothstep(1.6, 1.1, lips)
-    col = col * (1.0 - beard[:, None] * np.array([0.16, 0.12, 0.05]))
-    col = col + (np.array([0.52, 0.18, 0.16]) - col) * lip_w[:, None] * 0.8
+    col = col * (1.0 - beard[:, None] * c["beard"])
+    col = col + (c["lips"] - col) * lip_w[:, None] * 0.8
     # eyebrows (hair strokes), lash line and upper-lid crease, nostrils; scalp shows cropped hair
     by = brow_y(ax)
     brow_mask = (smoothstep(6.0, 2.0, np.abs(y - by + 0.02 * (ax - 30.0)))
@@ -147,10 +166,9 @@ def skin_colour(p, region, rng):
                      + 0.45 * smoothstep(1.0, 0.2, dl) * smoothstep(-1.2, -0.2, dl))
     crease = 0.22 * in_lon * np.exp(-((du - 7.0) / 1.2) ** 2)
     conj = smoothstep(surf + 0.6, surf - 0.2, rho) * (rho < 20.0)
-    col = col + (np.array([0.50, 0.20, 0.18]) - col) * (0.8 * conj)[:, None]
-    nostril = g(6.8, -39.5, 100.0, 2.6, 2.2, 4.0)
-    hair_col = np.array([0.07, 0.05, 0.035])
-    col = col + (hair_col - col) * np.clip(0.85 * brow + 0.7 * lash, 0, 1)[:, None]
+    col = col + (c["conjunctiva"] - col) * (0.8 * conj)[:, None]
+    nostril = g(*NOSTRIL_SHADE[0], *NOSTRIL_SHADE[1])
+    col = col + (c["brow"] - col) * np.clip(0.85 * brow + 0.7 * lash, 0, 1)[:, None]
     col = col * (1.0 - crease - 0.85 * np.clip(nostril, 0, 1))[:, None]
     col = col * np.array([1.0, 1.02, 1.03]) ** is_("neck")[:, None]
     # low-frequency mottling (fBm) in brightness and redness, on skin, not under the hair
@@ -164,11 +182,9 @@ def skin_colour(p, region, rng):
     strands = 1.0 + 0.12 * _fbm(p, rng, 1.5, 2)
     col = col + (np.array(HAIR["colour"]) * strands[:, None] - col) * (HAIR["cover"] * scalp)[:, None]
 
-    spec_by_region = np.array([1.0, 0.8, 0.85, 0.45, 0.65, 0.7, 0.4, 0.4, 0.3])
-    spec = spec_by_region[region] * (1.0 + 0.1 * redness) * (1.0 - 0.5 * brow)
+    spec = np.array(SPECULAR_BY_REGION)[region] * (1.0 + 0.1 * redness) * (1.0 - 0.5 * brow)
     spec = spec + (HAIR["specular"] - spec) * scalp   # smooth across the hairline
-    pore_by_region = np.array([0.6, 0.8, 1.2, 1.0, 0.2, 0.8, 0.4, 0.5, 0.5])  # mm of pore depth ×10
-    return _srgb(col), spec, pore_by_region[region] * 0.1
+    return _srgb(col), spec, np.array(PORES_BY_REGION)[region] * 0.1
 
 
 def eye_colour(polar, rng):
@@ -220,12 +236,16 @@ def _pores(res, rng):
 
 def _normal_map(point, skin, pore_gain, res, k, rng):
     """Tangent-space normals from a pore height field, its slopes in mm of the local surface."""
-    gain = np.zeros((res, res))
-    gain[skin] = pore_gain
-    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
     mm_u = np.linalg.norm(np.gradient(point, axis=1), axis=-1)  # mm per texel along +u
     mm_v = np.linalg.norm(np.gradient(point, axis=0), axis=-1)  # along +v (rows)
     scale = 1.0 / (k * res)
+    # where the atlas stretches texels (grazing rays on the neck, the pole), pores would become
+    # streaks: fade them out beyond 1.5x the nominal texel size
+    stretch = np.where(skin, np.maximum(mm_u, mm_v) / scale, 1.0)
+    gain = np.zeros((res, res))
+    gain[skin] = pore_gain
+    gain /= np.maximum(1.0, stretch / 1.5) ** 2
+    height = _pores(res, rng) * ndimage.gaussian_filter(gain, 2.0)
     mm_u = np.where(skin & (mm_u > 0.1 * scale) & (mm_u < 4 * scale), mm_u, scale)
     mm_v = np.where(skin & (mm_v > 0.1 * scale) & (mm_v < 4 * scale), mm_v, scale)
     dh_du = np.gradient(height, axis=1) / mm_u

@@ -16,6 +16,7 @@ from skinviewer.scene.head.geometry import (
     direction,
     eye_coords,
     eye_radius,
+    head_sdf,
     limbus_alpha,
     surface_point,
 )
@@ -149,9 +150,15 @@ def _head_skin(atlas: Atlas, spacing: float, parts: _Parts) -> RadiusTable:
     n_th, n_ph = band_p.shape[:2]
     ii = np.arange(n_th * n_ph).reshape(n_th, n_ph)
     q0, q1, q2, q3 = ii[:-1, :-1], ii[:-1, 1:], ii[1:, 1:], ii[1:, :-1]
-    # the last row's (q0, q2, q3) triangles would have two corners on the pole: zero area, dropped
-    band_tris = np.concatenate([np.stack([q0, q1, q2], -1).reshape(-1, 3),
-                                np.stack([q0, q2, q3], -1)[:-1].reshape(-1, 3)])
+    # each quad is split along its shorter 3D diagonal (long thin quads where rays graze would
+    # otherwise shade as a sawtooth); the last row always along q0-q2: its (q0, q2, q3) triangles
+    # have two corners on the pole (zero area) and are dropped
+    flat = band_p.reshape(-1, 3)
+    alt = (np.linalg.norm(flat[q1] - flat[q3], axis=-1) < np.linalg.norm(flat[q0] - flat[q2], axis=-1))
+    alt[-1] = False
+    a_tri = np.where(alt[..., None], np.stack([q0, q1, q3], -1), np.stack([q0, q1, q2], -1))
+    b_tri = np.where(alt[..., None], np.stack([q1, q2, q3], -1), np.stack([q0, q2, q3], -1))
+    band_tris = np.concatenate([a_tri.reshape(-1, 3), b_tri[:-1].reshape(-1, 3)])
     quad_i = np.concatenate([np.repeat(np.arange(n_th - 1), n_ph - 1),
                              np.repeat(np.arange(n_th - 1), n_ph - 1)[:-(n_ph - 1)]])
     quad_j = np.concatenate([np.tile(np.arange(n_ph - 1), n_th - 1), np.tile(np.arange(n_ph - 1), n_th - 2)])
@@ -200,7 +207,10 @@ def _ears(atlas: Atlas, spacing: float, parts: _Parts) -> None:
         a = (np.arange(n_rim) + 0.5 * (f < 1)) * 2 * np.pi / n_rim
         rr = 1.0 - Ear.RIM * (1 - f)
         disk = np.concatenate([disk, np.stack([rr * np.cos(a), rr * np.sin(a)], axis=1)])
-    disk_tris = Delaunay(disk).simplices
+    # triangulated in the ear plane (the UV layout up to scale), not in the unit disk: the
+    # disk -> plane map is not affine, and disk-Delaunay slivers at the rim could flip in UV
+    a, b = Ear.plane(atlas.ears[0], disk[:, 0], disk[:, 1])
+    disk_tris = Delaunay(np.stack([a, b], axis=1)).simplices
     for isl in atlas.ear_islands:
         p = isl.ear.sheet(disk[:, 0], disk[:, 1], isl.front)
         ref = isl.ear.normal if isl.front else -isl.ear.normal
@@ -255,6 +265,7 @@ def tessellate(atlas: Atlas, detail: int, spacing: float):
     """(positions, normals, uvs, indices) of the whole head and the radius table for painting."""
     parts = _Parts()
     table = _head_skin(atlas, spacing, parts)
+    n_skin = parts.base
     _ears(atlas, spacing, parts)
     _eyeballs(atlas, detail, parts)
     positions = np.concatenate(parts.positions)
@@ -265,4 +276,17 @@ def tessellate(atlas: Atlas, detail: int, spacing: float):
     used[indices.ravel()] = True
     remap = np.cumsum(used) - 1
     positions, uvs, indices = positions[used], uvs[used], remap[indices]
-    return positions, welded_normals(positions, indices), uvs, indices, table
+    normals = welded_normals(positions, indices)
+    # the skin's normals from the implicit surface's gradient: exact where rays graze and the
+    # mesh's triangles are long and thin (their averaged normals shade as streaks there)
+    skin = np.arange(int(used[:n_skin].sum()))   # the skin's vertices come first (after the remap too)
+    normals[skin] = _sdf_normals(positions[skin], normals[skin])
+    return positions, normals, uvs, indices, table
+
+
+def _sdf_normals(p, fallback, eps=0.05):
+    """Normalised central-difference gradient of head_sdf at points p (fallback where degenerate)."""
+    g = np.stack([head_sdf(*(p + eps * axis).T) - head_sdf(*(p - eps * axis).T) for axis in np.eye(3)], axis=-1)
+    norm = np.linalg.norm(g, axis=-1, keepdims=True)
+    ok = (norm[:, 0] > 1e-6) & (np.sum(g * fallback, axis=-1) > 0)
+    return np.where(ok[:, None], g / np.maximum(norm, 1e-12), fallback)

@@ -1,0 +1,531 @@
+"""The ground-truth image of a Settings: the same lights, albedo, normal map, specular (Kelemen /
+Szirmay-Kalos, seed 000 eq. 14-16), energy conservation (rho_dt, eq. 30-32), pre/post-scatter mix
+(eq. 28, 34) and diffusion profile (deon.gaussians, eq. 21) as the techniques, with the diffusion
+computed by brute force over the 3D surface (skinviewer.physics.ground_truth) and every visibility
+test done by ray casting on Embree (trimesh + embreex): no shadow map, no texture space, no UVs
+except to look up the surface's own maps.
+
+- Visible surface: one camera ray through each pixel centre (the rasteriser's sample point).
+- Irradiance E(y) A(y) = sum_lights Lc (N.L) vis rho_dt(N.L) C^mix (eq. 28, 32) at 3 points of each
+  source element (sub-triangles of edge <= h mm), with its own shadow ray per light; the ray starts
+  on the smooth (Phong-interpolated) surface (Hanika 2021's terminator fix) so faceting does not
+  shadow the terminator. Beams (the laser) are K rays, each a point source of its power.
+- Exitant diffuse M(x) of physics.ground_truth; thin parts: a lit back surface reaches x through
+  the 3D distance (G(v, sqrt(r^2 + d^2)) for a flap of thickness d), which is the light the
+  techniques' translucent shadow maps approximate (eq. 33).
+- Pixel = C^(1-mix) rho_dt(N.V) M(x) + sum_lights Lc KS(N, L, V) vis  (eq. 34, 35).
+
+Results are cached on disk (``cache_dir()/reference``) by a hash of everything they depend on.
+"""
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from skinviewer.core.files import atomic_write_bytes
+from skinviewer.core.paths import cache_dir
+from skinviewer.core.settings import REGIONS, Settings
+from skinviewer.passes.common import per_region_specular
+from skinviewer.passes.output import srgb_to_linear
+from skinviewer.physics import ground_truth as gt
+from skinviewer.physics.specular import (
+    beckmann_lut,
+    ks_specular,
+    ks_specular_lut,
+    rho_dt_table,
+    sample_bilinear,
+)
+from skinviewer.scene.camera import orbit_view
+from skinviewer.scene.mesh import MeshData, load_mesh, load_texture_maps
+from skinviewer.scene.scenes import build_scene
+
+VERSION = 1                 # bump when the reference's maths change (invalidates the cache)
+DEFAULT_H_MM = 0.5          # source element edge
+BEAM_RAYS = 64
+DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
+RHO_DT_SIZE = (32, 32)      # the table the techniques sample (passes/rho_dt.py)
+
+
+class ReferenceTooSlow(RuntimeError):
+    """The estimated time exceeds the limit the caller set."""
+
+
+@dataclass
+class Reference:
+    """Linear images (H, W, 3), top row first, and the mask of pixels that hit the mesh."""
+    lit: np.ndarray
+    diffuse: np.ndarray
+    specular: np.ndarray
+    mask: np.ndarray
+    meta: dict = field(default_factory=dict)
+    position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
+
+
+# -- scene -------------------------------------------------------------------------------------
+
+def load_scene(s: Settings) -> tuple[MeshData, float]:
+    """The mesh and its mm per unit, as Renderer.ensure_scene loads them (without GL)."""
+    sc = s.scene
+    if sc.mesh:
+        mesh = load_mesh(sc.mesh)
+        mm = sc.mm_per_unit if sc.mm_per_unit is not None else 1.0
+    else:
+        mesh = build_scene(sc.name, sc.head_detail).mesh
+        mm = sc.mm_per_unit if sc.mm_per_unit is not None else mesh.mm_per_unit
+    return load_texture_maps(mesh, sc.albedo_map, sc.normal_map, sc.specular_map, sc.region_map), float(mm)
+
+
+def _tex(img: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Bilinear, clamp-to-edge lookup of an (H, W, C) map (row 0 at v = 0) at uv (N, 2) -> (N, C)."""
+    img = np.asarray(img, np.float64)
+    if img.ndim == 2:
+        img = img[..., None]
+    return np.stack([sample_bilinear(img[..., c], uv[:, 0], uv[:, 1]) for c in range(img.shape[2])], 1)
+
+
+class Surface:
+    """The mesh with its maps, for shading arbitrary points (triangle id, barycentrics)."""
+
+    def __init__(self, mesh: MeshData, mm: float, s: Settings):
+        import trimesh
+        from trimesh.ray.ray_pyembree import RayMeshIntersector
+
+        self.mesh, self.mm, self.s = mesh, mm, s
+        self.P = mesh.positions.astype(np.float64)
+        self.F = mesh.indices.astype(np.int64)
+        self.Nv = mesh.normals.astype(np.float64)
+        self.UV = mesh.uvs.astype(np.float64)
+        self.T = mesh.tangents.astype(np.float64)
+        tri = self.P[self.F]
+        fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        self.Ng = fn / np.maximum(np.linalg.norm(fn, axis=1), 1e-300)[:, None]
+        self.radius = float(mesh.radius)
+        self.center = mesh.center.astype(np.float64)
+        self.eps = 1e-5 * self.radius + 1e-6
+        self.rays = RayMeshIntersector(trimesh.Trimesh(self.P, self.F, process=False))
+        albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3)) * np.asarray(DEFAULT_SKIN_SRGB)
+        self.albedo = srgb_to_linear(np.nan_to_num(np.asarray(albedo, np.float64), nan=0.0))
+        self.normal_map = mesh.normal_map
+        self.spec_map = mesh.specular_map if mesh.specular_map is not None else np.ones((1, 1, 1))
+        self.region = mesh.region_map if mesh.region_map is not None else np.zeros((1, 1), np.uint8)
+        self.m_reg, self.rho_reg = per_region_specular(s.specular)
+        sp = s.specular
+        self.rho_table = np.nan_to_num(np.clip(rho_dt_table(sp.f0, sp.rho_s, *RHO_DT_SIZE), 0, 1), nan=1.0)
+        self.beckmann = beckmann_lut(sp.lut_size) if sp.mode == "beckmann_lut" else None
+        self.lights = [l for l in s.lights[:4] if l.enabled]
+
+    # per-point attributes
+    def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict:
+        f = self.F[tri]
+        P = np.einsum("nk,nkd->nd", bary, self.P[f])
+        nv = np.einsum("nk,nkd->nd", bary, self.Nv[f])
+        nv /= np.maximum(np.linalg.norm(nv, axis=1), 1e-300)[:, None]
+        uv = np.einsum("nk,nkd->nd", bary, self.UV[f])
+        t = np.einsum("nk,nkd->nd", bary, self.T[f])
+        N = self._shading_normal(nv, t, uv)
+        C = np.maximum(_tex(self.albedo, uv), 0.0)
+        m, rho = self._spec_params(uv)
+        # Hanika 2021: lift P onto the tangent planes of the corners (outwards only)
+        lift = np.zeros_like(P)
+        for k in range(3):
+            pk, nk = self.P[f[:, k]], self.Nv[f[:, k]]
+            d = np.minimum(((P - pk) * nk).sum(1), 0.0)
+            lift += bary[:, k:k + 1] * (-d[:, None] * nk)
+        return {"P": P, "Ps": P + lift, "Ng": self.Ng[tri], "Nv": nv, "N": N, "uv": uv, "C": C, "m": m, "rho": rho}
+
+    def _shading_normal(self, n, t, uv):
+        """shaders/lib/surface.glsl surface_normal."""
+        if self.normal_map is None:
+            return n
+        T = t[:, :3] - n * (n * t[:, :3]).sum(1, keepdims=True)
+        tl = np.linalg.norm(T, axis=1)
+        ok = tl >= 1e-6
+        T = T / np.where(ok, tl, 1.0)[:, None]
+        B = np.cross(n, T) * np.where(t[:, 3] < 0, -1.0, 1.0)[:, None]
+        mm = _tex(self.normal_map, uv) * 2.0 - 1.0
+        P = T * mm[:, :1] + B * mm[:, 1:2] + n * mm[:, 2:3]
+        pl = np.linalg.norm(P, axis=1)
+        good = ok & (pl > 1e-6)
+        return np.where(good[:, None], P / np.where(good, pl, 1.0)[:, None], n)
+
+    def _spec_params(self, uv):
+        """shaders/lib/specular_params.glsl: region parameters blended over 4 texels, rho_s x map."""
+        h, w = self.region.shape[:2]
+        st = uv * np.array([w, h]) - 0.5
+        i0 = np.floor(st).astype(np.int64)
+        f = np.clip(st - i0, 0.0, 1.0)
+        m = np.zeros(len(uv))
+        rho = np.zeros(len(uv))
+        for ox, oy in ((0, 0), (1, 0), (0, 1), (1, 1)):
+            ix = np.clip(i0[:, 0] + ox, 0, w - 1)
+            iy = np.clip(i0[:, 1] + oy, 0, h - 1)
+            rid = self.region[iy, ix].astype(np.int64)
+            rid = np.where((rid < 0) | (rid >= len(REGIONS)), 0, rid)
+            wt = (f[:, 0] if ox else 1 - f[:, 0]) * (f[:, 1] if oy else 1 - f[:, 1])
+            m += wt * self.m_reg[rid]
+            rho += wt * self.rho_reg[rid]
+        scale = _tex(self.spec_map, uv)[:, 0]
+        scale = np.where(np.isfinite(scale), np.clip(scale, 0, 10), 1.0)
+        return m, rho * scale
+
+    def rho_dt(self, cos_theta, m, rho_s):
+        """surface_rho_dt: the table for specular.rho_s rescaled to the point's rho_s."""
+        t = np.clip(sample_bilinear(self.rho_table, np.clip(cos_theta, 0, 1), np.clip(m, 0, 1)), 0, 1)
+        r0 = self.s.specular.rho_s
+        if not r0 > 0:
+            return np.ones_like(t)
+        return np.clip(1.0 - (1.0 - t) * rho_s / r0, 0.0, 1.0)
+
+    def light_dir(self, light, P):
+        if light.kind == "point":
+            d = np.asarray(light.position, np.float64) - P
+            return d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+        d = np.asarray(light.direction, np.float64)
+        return np.broadcast_to(d / np.linalg.norm(d), P.shape)
+
+    def visible(self, light, a: dict, L: np.ndarray) -> np.ndarray:
+        """Shadow ray from the lifted point towards the light (hard, exact)."""
+        if not light.cast_shadow or len(L) == 0:
+            return np.ones(len(L), bool)
+        ng = a["Ng"] * np.where((a["Ng"] * L).sum(1) >= 0, 1.0, -1.0)[:, None]
+        o = a["Ps"] + ng * self.eps
+        if light.kind == "point":
+            _, idx_ray, loc = self.rays.intersects_id(o, L, multiple_hits=False, return_locations=True)
+            dl = np.linalg.norm(np.asarray(light.position) - o, axis=1)
+            hit = np.zeros(len(L), bool)
+            dh = np.linalg.norm(loc - o[idx_ray], axis=1)
+            hit[idx_ray[dh < dl[idx_ray]]] = True
+            return ~hit
+        return ~self.rays.intersects_any(o, np.ascontiguousarray(L))
+
+    def irradiance(self, a: dict, mix: float, energy: bool) -> np.ndarray:
+        """E A (eq. 28, 32) from the directional and point lights (beams are point sources)."""
+        E = np.zeros((len(a["P"]), 3))
+        for light in self.lights:
+            if light.kind == "beam":
+                continue
+            L = self.light_dir(light, a["P"])
+            ndl = (a["N"] * L).sum(1)
+            lit = ndl > 0
+            if not lit.any():
+                continue
+            sub = {k: v[lit] for k, v in a.items()}
+            vis = self.visible(light, sub, np.ascontiguousarray(L[lit]))
+            rho = self.rho_dt(ndl[lit], sub["m"], sub["rho"]) if energy else 1.0
+            Lc = np.asarray(light.color, np.float64) * light.intensity
+            E[lit] += Lc[None] * (ndl[lit] * vis * rho)[:, None]
+        return E * _safe_pow(a["C"], mix)
+
+    def beam_sources(self, mix: float, energy: bool) -> gt.PointSources:
+        pos, power = [], []
+        k = np.arange(BEAM_RAYS) + 0.5
+        rad, ang = np.sqrt(k / BEAM_RAYS), k * math.pi * (3.0 - math.sqrt(5.0))  # sunflower: equal areas
+        for light in self.lights:
+            if light.kind != "beam":
+                continue
+            L = np.asarray(light.direction, np.float64)
+            L /= np.linalg.norm(L)
+            u = np.cross(L, [1.0, 0, 0] if abs(L[0]) < 0.9 else [0, 1.0, 0])
+            u /= np.linalg.norm(u)
+            v = np.cross(L, u)
+            r = light.beam_radius
+            far = np.linalg.norm(np.asarray(light.position) - self.center) + 3 * self.radius
+            o = (np.asarray(light.position, np.float64)[None] + L[None] * far
+                 + r * (rad * np.cos(ang))[:, None] * u + r * (rad * np.sin(ang))[:, None] * v)
+            d = np.broadcast_to(-L, o.shape).copy()
+            tri, _, loc = self.rays.intersects_id(o, d, multiple_hits=False, return_locations=True)
+            if len(tri) == 0:
+                continue
+            bary = _barycentric(self.P[self.F[tri]], loc)
+            a = self.attributes(tri, bary)
+            ndl = np.maximum((a["N"] * L).sum(1), 0.0)
+            ngl = np.maximum(np.abs((a["Ng"] * L).sum(1)), 1e-3)
+            rho = self.rho_dt(ndl, a["m"], a["rho"]) if energy else 1.0
+            Lc = np.asarray(light.color, np.float64) * light.intensity
+            area = math.pi * (r * self.mm) ** 2 / BEAM_RAYS  # each ray's share of the beam, mm^2
+            power.append(Lc[None] * (area * ndl / ngl * rho)[:, None] * _safe_pow(a["C"], mix))
+            pos.append(a["P"] * self.mm)
+        if not pos:
+            return gt.PointSources(np.zeros((0, 3)), np.zeros((0, 3)))
+        return gt.PointSources(np.concatenate(pos), np.concatenate(power))
+
+    def specular(self, a: dict, V: np.ndarray) -> np.ndarray:
+        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35)."""
+        out = np.zeros((len(V), 3))
+        sp = self.s.specular
+        for light in self.lights:
+            L = np.ascontiguousarray(self.light_dir(light, a["P"]))
+            Lc = np.asarray(light.color, np.float64) * light.intensity
+            if light.kind == "beam":
+                rel = a["P"] - np.asarray(light.position)
+                perp = rel - (rel * L).sum(1, keepdims=True) * L
+                inside = np.linalg.norm(perp, axis=1) <= light.beam_radius
+            else:
+                inside = np.ones(len(V), bool)
+            ks = (ks_specular_lut(a["N"], L, V, a["m"], a["rho"], sp.f0, self.beckmann) if self.beckmann is not None
+                  else ks_specular(a["N"], L, V, a["m"], a["rho"], sp.f0))
+            on = inside & (ks > 0)
+            if not on.any():
+                continue
+            sub = {k: v[on] for k, v in a.items()}
+            vis = self.visible(light, sub, L[on])
+            out[on] += Lc[None] * (ks[on] * vis)[:, None]
+        return out
+
+
+def _safe_pow(c: np.ndarray, e: float) -> np.ndarray:
+    """deon_safe_pow: C^e with e <= 0 -> 1 and C <= 0 -> 0."""
+    if not e > 0:
+        return np.ones_like(c)
+    c = np.clip(c, 0.0, 1e30)
+    return np.where(c > 0, np.power(np.maximum(c, 1e-300), e), 0.0)
+
+
+def _barycentric(tri: np.ndarray, p: np.ndarray) -> np.ndarray:
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    v0, v1, v2 = b - a, c - a, p - a
+    d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
+    d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
+    den = np.maximum(d00 * d11 - d01 * d01, 1e-300)
+    v = (d11 * d20 - d01 * d21) / den
+    w = (d00 * d21 - d01 * d20) / den
+    bary = np.stack([1 - v - w, v, w], 1)
+    return np.clip(bary, 0, 1) / np.maximum(np.clip(bary, 0, 1).sum(1, keepdims=True), 1e-300)
+
+
+# -- the camera ------------------------------------------------------------------------------------
+
+def camera_hits(surf: Surface, s: Settings, grid: tuple[int, int] | None = None):
+    """Ray through every pixel centre: (mask (H, W), triangle ids, barycentrics, eye) top row first.
+    ``grid``: cast a coarser (W, H) grid over the same view instead (coverage estimates)."""
+    W, H = s.render.width, s.render.height
+    view = orbit_view(s.camera, surf.center, surf.radius, (W, H))
+    if grid is not None:
+        W, H = grid
+    inv = np.linalg.inv(view.view_proj)
+    i, j = np.meshgrid(np.arange(W), np.arange(H))
+    x = (i.ravel() + 0.5) / W * 2 - 1
+    y = 1 - (j.ravel() + 0.5) / H * 2
+    pts = []
+    for z in (-1.0, 1.0):
+        p = np.stack([x, y, np.full_like(x, z), np.ones_like(x)], 1) @ inv.T
+        pts.append(p[:, :3] / p[:, 3:4])
+    d = pts[1] - pts[0]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    o = np.broadcast_to(view.eye, d.shape).copy()
+    tri, ray, loc = surf.rays.intersects_id(o, d, multiple_hits=False, return_locations=True)
+    mask = np.zeros(W * H, bool)
+    mask[ray] = True
+    order = np.argsort(ray)
+    return mask.reshape(H, W), tri[order], _barycentric(surf.P[surf.F[tri[order]]], loc[order]), view.eye
+
+
+# -- what the reference depends on -----------------------------------------------------------------
+
+def profile_of(s: Settings) -> tuple[np.ndarray, np.ndarray]:
+    g = s.deon.gaussians
+    return np.array([x.variance for x in g], np.float64), np.array([x.weights for x in g], np.float64)
+
+
+PROFILE_MODELS = ("gaussians", "dipole", "multipole", "burley")
+
+
+def model_profile(model: str, material: str | None = None, normalize: bool = True, n: int = 32):
+    """A radial profile of the profile lab (skinviewer.physics.profiles) as (variances, weights (k, 3),
+    fit error per channel): non-negative weights on ``n`` fixed log-spaced variances (1e-6 .. 400 mm^2,
+    NNLS of physics.fitting on r R(r), eq. 3.1 error). The diffusion then integrates each Gaussian
+    exactly. ``normalize``: weights sum to 1 per channel (R_d lives in the albedo, as the profile
+    lab's presets)."""
+    from skinviewer.physics import profiles as P
+    from skinviewer.physics.fitting import fit_gaussians
+    if model == "dipole":
+        m = P.material(material or "Skin1")
+        prof = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta)
+    elif model == "burley":
+        m = P.material(material or "Skin1")
+        A = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta).total_reflectance()
+        prof = P.Burley(A, P.diffuse_mean_free_path(m.sigma_s_prime, m.sigma_a), "searchlight-dmfp")
+    elif model == "multipole":
+        if material:
+            m = P.material(material)
+            prof = P.Multipole(m.sigma_s_prime, m.sigma_a, 2.0, m.eta)  # a 2 mm slab
+        else:
+            prof = P.three_layer_skin()
+    else:
+        raise KeyError(f"unknown profile model {model!r} (have: {', '.join(PROFILE_MODELS)})")
+    fit = fit_gaussians(prof, shared=True, fixed_variances=np.geomspace(1e-6, 400.0, n))
+    v, w = np.asarray(fit.variances, np.float64), np.asarray(fit.weights, np.float64)
+    keep = w.sum(1) > 0
+    v, w = v[keep], w[keep]
+    if normalize:
+        w = w / np.maximum(w.sum(0, keepdims=True), 1e-300)
+    return v, w, np.asarray(fit.errors, np.float64)
+
+
+def cache_key(s: Settings, h_mm: float, profile=None) -> str:
+    from skinviewer.core.renderer import Renderer
+    d = s.model_dump(mode="json")
+    parts = {"v": VERSION, "scene": Renderer.scene_key(s), "camera": d["camera"],
+             "size": [s.render.width, s.render.height], "lights": d["lights"], "specular": d["specular"],
+             "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
+             "profile": [np.asarray(p).tolist() for p in (profile or profile_of(s))]}
+    return hashlib.sha1(json.dumps(parts, sort_keys=True).encode()).hexdigest()
+
+
+def _cache_path(key: str) -> Path:
+    return cache_dir() / "reference" / f"{key}.npz"
+
+
+def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None) -> Reference | None:
+    p = _cache_path(cache_key(s, h_mm, profile))
+    if not p.is_file():
+        return None
+    try:
+        z = np.load(p, allow_pickle=False)
+        meta = json.loads(str(z["meta"]))
+        meta["cached"] = True
+        return Reference(z["lit"], z["diffuse"], z["specular"], z["mask"], meta, z["position"])
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _store(key: str, ref: Reference) -> None:
+    buf = io.BytesIO()
+    np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
+                        specular=ref.specular.astype(np.float32), mask=ref.mask,
+                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta))
+    atomic_write_bytes(_cache_path(key), buf.getvalue())
+
+
+# -- the reference -----------------------------------------------------------------------------------
+
+# CPU seconds per receiver pixel and per source element, measured on this 2-core machine (default head
+# at 512^2: 38.8 s CPU for 60 833 pixels and 2.15 M elements)
+_SEC_PER_PIXEL = 2.5e-4
+_SEC_PER_ELEMENT = 1.2e-5
+
+
+def estimate_seconds(n_pixels: int, n_elements: int) -> float:
+    return _SEC_PER_PIXEL * n_pixels + _SEC_PER_ELEMENT * n_elements
+
+
+def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances, weights, mix: float,
+                    energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
+                    report=None, check=None) -> gt.Diffusion:
+    """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
+    the beams' point sources, and the Diffusion sum over them."""
+    report = report or (lambda stage, f: None)
+    check = check or (lambda: False)
+    mm = surf.mm
+    sig_max = math.sqrt(max(float(np.max(variances)), 0.0))
+    reach = gt.TRUNCATE * sig_max + 3 * h_mm
+    tri_mm = surf.P[surf.F] * mm
+    tc = tri_mm.mean(1)
+    tr = np.linalg.norm(tri_mm - tc[:, None], axis=2).max(1)
+    keep = np.zeros(len(tc), bool)
+    if len(receivers_mm):
+        from scipy.spatial import cKDTree
+        d, _ = cKDTree(receivers_mm).query(tc, distance_upper_bound=reach + tr.max())
+        keep = d <= reach + tr
+    vpar, vbary, elem = gt.subdivide(tri_mm, h_mm, keep)
+    n_el, n_v = len(elem), len(vpar)
+    n_px = len(receivers_mm) if n_pixels is None else n_pixels
+    est = estimate_seconds(n_px, n_el)
+    if max_seconds is not None and est > max_seconds:
+        raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU ({n_px} pixels, "
+                               f"{n_el} source elements of {h_mm:g} mm), over the {max_seconds:.0f} s limit")
+    report("irradiance", 0.0)
+    # E A at the element corners (shared inside each parent triangle); an element's value is the
+    # mean of its corners (exact for linear variation)
+    ea_v = np.zeros((n_v, 3))
+    step = 200_000
+    for s0 in range(0, n_v, step):
+        if check():
+            raise InterruptedError("cancelled")
+        sl = slice(s0, min(n_v, s0 + step))
+        ea_v[sl] = surf.irradiance(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
+        report("irradiance", sl.stop / max(n_v, 1))
+    vpos = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])
+    el = gt.Elements(vpos[elem], ea_v[elem].mean(1))
+    return gt.Diffusion(el, variances, weights, h_mm, surf.beam_sources(mix, energy))
+
+
+def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use_cache: bool = True,
+                      max_seconds: float | None = None, scene: tuple[MeshData, float] | None = None,
+                      progress: Callable[[str, float], None] | None = None,
+                      cancelled: Callable[[], bool] | None = None) -> Reference:
+    """The ground truth of ``s`` (see the module doc). ``profile``: (variances, weights (k, 3)) to
+    use instead of ``s.deon.gaussians``. ``max_seconds``: raise ReferenceTooSlow (before the
+    expensive part) when the estimate exceeds it. ``progress(stage, fraction)``; ``cancelled()``
+    -> True stops with InterruptedError. ``scene``: (mesh, mm per unit) instead of s.scene (not
+    cached)."""
+    key = cache_key(s, h_mm, profile)
+    if scene is not None:
+        use_cache = False
+    if use_cache:
+        hit = load_cached(s, h_mm, profile)
+        if hit is not None:
+            return hit
+    report = progress or (lambda stage, f: None)
+    check = cancelled or (lambda: False)
+    t0 = time.perf_counter()
+    times: dict[str, float] = {}
+    variances, weights = profile if profile is not None else profile_of(s)
+    mix, energy = s.deon.mix, s.deon.energy_conservation
+    report("scene", 0.0)
+    mesh, mm = scene if scene is not None else load_scene(s)
+    surf = Surface(mesh, mm, s)
+    if max_seconds is not None:  # before any per-pixel work: coverage from a 64 x 64 ray grid
+        cover = camera_hits(surf, s, grid=(64, 64))[0].mean()
+        tri_mm = surf.P[surf.F] * mm
+        area = 0.5 * np.linalg.norm(np.cross(tri_mm[:, 1] - tri_mm[:, 0], tri_mm[:, 2] - tri_mm[:, 0]), axis=1).sum()
+        n_px = int(cover * s.render.width * s.render.height)
+        n_el = int(0.5 * area / (0.17 * h_mm * h_mm))  # about half the surface can reach a visible point
+        est = estimate_seconds(n_px, n_el)
+        if est > max_seconds:
+            raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU (~{n_px} pixels, "
+                                   f"~{n_el} source elements of {h_mm:g} mm), over the {max_seconds:.0f} s limit")
+    mask, tri, bary, eye = camera_hits(surf, s)
+    a = surf.attributes(tri, bary)
+    times["camera"] = time.perf_counter() - t0
+    report("scene", 1.0)
+    x_mm = a["P"] * mm
+    diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check)
+    n_el = len(diff.el.area)
+    est = estimate_seconds(len(x_mm), n_el)
+    points = diff.points
+    ea_here = surf.irradiance(a, mix, energy)
+    times["irradiance"] = time.perf_counter() - t0 - times["camera"]
+    M = diff.exitance(x_mm, ea_here, progress=lambda f: report("diffusion", f), cancelled=check)
+    times["diffusion"] = time.perf_counter() - t0 - times["camera"] - times["irradiance"]
+    # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
+    V = eye[None] - a["P"]
+    V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
+    N = a["N"] * np.where((a["N"] * V).sum(1) < 0, -1.0, 1.0)[:, None]  # two-sided, as deon_final
+    a = {**a, "N": N}
+    rho_v = surf.rho_dt((N * V).sum(1), a["m"], a["rho"]) if energy else np.ones(len(V))
+    diffuse = M * _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
+    spec = surf.specular(a, V)
+    H, W = mask.shape
+    imgs = []
+    for arr in (diffuse + spec, diffuse, spec, a["P"]):
+        img = np.zeros((H * W, 3))
+        img[mask.ravel()] = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
+        imgs.append(img.reshape(H, W, 3))
+    times["total"] = time.perf_counter() - t0
+    meta = {"key": key, "version": VERSION, "h_mm": h_mm, "elements": n_el, "pixels": int(mask.sum()),
+            "beam_rays": len(points.position), "seconds": times, "estimate_s": est,
+            "plan": diff.plan(), "mm_per_unit": mm, "cached": False}
+    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3])
+    if use_cache:
+        _store(key, ref)
+    report("done", 1.0)
+    return ref

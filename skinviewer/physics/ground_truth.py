@@ -1,0 +1,444 @@
+"""Brute-force subsurface diffusion over a triangle mesh: the ground truth every technique is
+measured against (Jensen et al. 2001; seed 002 §14.4.2; seed 000 eq. 21):
+
+    M(x) = sum_i w_i  integral_S  G(v_i, |x - y|) E(y) A(y) dA(y)
+
+with 3D distances |x - y| over the whole surface S (so seams do not exist, and a thin flap's lit
+back surface reaches its front through its thickness), for a sum of 2D Gaussians G(v, r) =
+exp(-r^2 / 2v) / (2 pi v) (eq. 20).
+
+Integrated, not point-sampled. The surface is cut into small flat source elements (sub-triangles
+of edge <= h) whose E A is the mean of their corners. For each Gaussian of variance v:
+
+- v < OWEN_RATIO s^2 (s^2: the elements' in-plane per-axis variance; on 0.5 mm elements the
+  0.0064 and 0.0484 mm^2 skin Gaussians): the exact integral of the Gaussian over each flat
+  triangle in closed form with Owen's T function, times exp(-z^2 / 2v) for the height z of x over
+  the element's plane (G(v, sqrt(r^2 + z^2)) = G(v, r) exp(-z^2 / 2v), the separability behind
+  eq. 33). Every Gaussian keeps its exact total weight however narrow it is.
+- wider: elements, or clusters of elements (voxels <= sigma / CLUSTER_RATIO, split by normal octant
+  so the two sides of a thin flap never merge), each a Gaussian moment-matched in its own plane,
+  a G(v + s^2, r_parallel) exp(-z^2 / 2v) (exact to second order in s / sigma; the height exact).
+- the element under x takes E A evaluated at x itself (the best estimate of the local mean a narrow
+  Gaussian averages), so sub-element irradiance detail (normal map, albedo) is kept; Gaussians with
+  v < DELTA_V are E A(x).
+- thin beams (the laser) are point sources: K rays of the beam, each carrying its power.
+
+Everything is float64 numpy + scipy (KD-trees and cell blocks for the neighbours, owens_t); no GL.
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+from scipy.special import owens_t
+
+CLUSTER_RATIO = 1.25  # a cluster level is used for a Gaussian when its voxel <= sigma / 1.25
+TRUNCATE = 4.5        # kernel support in standard deviations (weight beyond: exp(-10.1) = 4e-5)
+
+
+# -- the exact Gaussian integral over a triangle ----------------------------------------------
+
+def _wedge(h: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Standard 2D normal mass of the right triangle (0, (h, 0), (h, t)), h > 0, signed by t:
+    atan(t/h) / 2pi - T(h, t/h) (Owen's T: T(h, a) = P(X > h, 0 < Y < aX))."""
+    a = t / h
+    return np.arctan(a) / (2.0 * np.pi) - owens_t(h, a)
+
+
+def gaussian_triangle_mass(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Mass of the standard 2D normal (sigma = 1, centred at the origin) inside triangles (q0, q1,
+    q2) given as (..., 2) arrays in units of sigma; any orientation (the result is >= 0)."""
+    q = [np.asarray(x, np.float64) for x in (q0, q1, q2)]
+    cross = (q[1][..., 0] - q[0][..., 0]) * (q[2][..., 1] - q[0][..., 1]) \
+        - (q[1][..., 1] - q[0][..., 1]) * (q[2][..., 0] - q[0][..., 0])
+    orient = np.where(cross >= 0, 1.0, -1.0)
+    total = np.zeros(q[0].shape[:-1])
+    for k in range(3):
+        A, B = q[k], q[(k + 1) % 3]
+        d = B - A
+        ln = np.hypot(d[..., 0], d[..., 1])
+        ok = ln > 1e-300
+        ux = np.where(ok, d[..., 0] / np.where(ok, ln, 1.0), 1.0)
+        uy = np.where(ok, d[..., 1] / np.where(ok, ln, 1.0), 0.0)
+        # right-hand normal (uy, -ux): the origin lies on its negative side for a CCW edge around it
+        hs = A[..., 0] * uy - A[..., 1] * ux
+        h = np.abs(hs)
+        good = ok & (h > 1e-12)
+        hh = np.where(good, h, 1.0)
+        tA = A[..., 0] * ux + A[..., 1] * uy
+        tB = B[..., 0] * ux + B[..., 1] * uy
+        part = _wedge(hh, tB) - _wedge(hh, tA)
+        total += np.where(good, np.sign(hs) * part, 0.0)
+    return np.maximum(orient * total, 0.0)
+
+
+# -- source elements -----------------------------------------------------------------------------
+
+def subdivision_pattern(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The n x n regular subdivision of a triangle: barycentric grid vertices ((n+1)(n+2)/2, 3)
+    and sub-triangles as vertex indices (n*n, 3), wound like the parent."""
+    ij = [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
+    index = {v: k for k, v in enumerate(ij)}
+    tris = []
+    for i in range(n):
+        for j in range(n - i):
+            tris.append([index[(i, j)], index[(i + 1, j)], index[(i, j + 1)]])
+            if i + j < n - 1:
+                tris.append([index[(i + 1, j)], index[(i + 1, j + 1)], index[(i, j + 1)]])
+    g = np.asarray(ij, np.float64) / n
+    bary = np.stack([1.0 - g[:, 0] - g[:, 1], g[:, 0], g[:, 1]], 1)
+    return bary, np.asarray(tris, np.int64)
+
+
+def subdivide(tri_mm: np.ndarray, h: float, keep: np.ndarray | None = None):
+    """Cut triangles (T, 3, 3) (mm) into sub-triangles of edge <= h. Returns (vertex parent (V,),
+    vertex barycentrics in the parent (V, 3), element corners as vertex indices (E, 3))."""
+    edges = np.linalg.norm(tri_mm[:, [1, 2, 0]] - tri_mm, axis=2).max(axis=1)
+    n = np.maximum(np.ceil(edges / max(h, 1e-9)), 1).astype(np.int64)
+    if keep is not None:
+        n = np.where(keep, n, 0)
+    vpar, vbary, elems, offset = [], [], [], 0
+    for k in np.unique(n[n > 0]):
+        idx = np.nonzero(n == k)[0]
+        b, t = subdivision_pattern(int(k))
+        vpar.append(np.repeat(idx, len(b)))
+        vbary.append(np.broadcast_to(b, (len(idx),) + b.shape).reshape(-1, 3))
+        base = offset + np.arange(len(idx)) * len(b)
+        elems.append((base[:, None, None] + t[None]).reshape(-1, 3))
+        offset += len(idx) * len(b)
+    if not vpar:
+        return np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    return np.concatenate(vpar), np.concatenate(vbary), np.concatenate(elems)
+
+
+@dataclass
+class Elements:
+    """Flat source elements in mm: corners (E, 3, 3), ea (E, 3) = E A (mean over the element), and
+    per element centroid, unit normal, area, s2 (in-plane per-axis variance of the uniform
+    triangle: trace(cov) / 2 = sum |p_k - g|^2 / 24)."""
+    corners: np.ndarray
+    ea: np.ndarray
+    centroid: np.ndarray = field(init=False)
+    normal: np.ndarray = field(init=False)
+    area: np.ndarray = field(init=False)
+    s2: np.ndarray = field(init=False)
+    radius: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        c = np.asarray(self.corners, np.float64)
+        self.corners = c
+        self.ea = np.asarray(self.ea, np.float64).reshape(len(c), 3)
+        self.centroid = c.mean(axis=1)
+        n = np.cross(c[:, 1] - c[:, 0], c[:, 2] - c[:, 0])
+        ln = np.linalg.norm(n, axis=1)
+        self.area = 0.5 * ln
+        self.normal = n / np.maximum(ln, 1e-300)[:, None]
+        d = c - self.centroid[:, None, :]
+        self.s2 = (d * d).sum(axis=(1, 2)) / 24.0
+        self.radius = float(np.linalg.norm(d, axis=2).max()) if len(c) else 0.0
+
+
+@dataclass
+class Clusters:
+    centroid: np.ndarray
+    area: np.ndarray
+    ea: np.ndarray      # area-weighted mean E A
+    s2: np.ndarray      # per-axis in-plane variance
+    size: float
+    normal: np.ndarray  # area-weighted mean unit normal
+
+
+def cluster(el: Elements, voxel: float) -> Clusters:
+    """Merge elements by voxel and normal octant (the two faces of a thin flap stay apart)."""
+    v = np.floor(el.centroid / voxel).astype(np.int64)
+    v -= v.min(axis=0)
+    octant = (el.normal > 0).astype(np.int64) @ np.array([1, 2, 4])
+    dims = v.max(axis=0) + 1
+    key = ((v[:, 0] * dims[1] + v[:, 1]) * dims[2] + v[:, 2]) * 8 + octant
+    _, inv = np.unique(key, return_inverse=True)
+    n = int(inv.max()) + 1 if len(inv) else 0
+    a = np.bincount(inv, el.area, n)
+    sa = np.maximum(a, 1e-300)
+    c = np.stack([np.bincount(inv, el.area * el.centroid[:, k], n) for k in range(3)], 1) / sa[:, None]
+    ea = np.stack([np.bincount(inv, el.area * el.ea[:, k], n) for k in range(3)], 1) / sa[:, None]
+    m2 = np.bincount(inv, el.area * ((el.centroid ** 2).sum(1) + 2.0 * el.s2), n) / sa
+    s2 = np.maximum(m2 - (c ** 2).sum(1), 0.0) / 2.0
+    nrm = np.stack([np.bincount(inv, el.area * el.normal[:, k], n) for k in range(3)], 1)
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
+    return Clusters(c, a, ea, s2, voxel, nrm)
+
+
+@dataclass
+class PointSources:
+    """Infinitesimal sources (beam rays): positions (K, 3) mm and power (K, 3)."""
+    position: np.ndarray
+    power: np.ndarray
+
+
+MIN_CELL = 2.0     # mm: cell of the receiver/source grid (at least the search radius)
+BATCH = 1_500_000  # pairs evaluated at once
+
+
+def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None):
+    """Receivers and sources binned in cells of max(radius, MIN_CELL): yields, per occupied
+    receiver cell, (receiver indices, source indices of the 27 cells around it, dense |x - s|^2)
+    and, given source ``normals``, the dense heights (x - s).n over the sources' planes."""
+    if len(x) == 0 or len(src) == 0:
+        return
+    cell = max(radius, MIN_CELL)
+    lo = np.minimum(x.min(0), src.min(0)) - cell
+    kx = np.floor((x - lo) / cell).astype(np.int64)
+    ks = np.floor((src - lo) / cell).astype(np.int64)
+    dims = np.maximum(kx.max(0), ks.max(0)) + 2
+
+    def key(k):
+        return (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
+
+    skey = key(ks)
+    sorder = np.argsort(skey, kind="stable")
+    ssorted = skey[sorder]
+    rkey = key(kx)
+    rorder = np.argsort(rkey, kind="stable")
+    cells, rstart = np.unique(rkey[rorder], return_index=True)
+    rend = np.append(rstart[1:], len(rorder))
+    offs = np.array([(dx * dims[1] + dy) * dims[2] + dz for dx in (-1, 0, 1) for dy in (-1, 0, 1)
+                     for dz in (-1, 0, 1)], np.int64)
+    nb = cells[:, None] + offs[None]
+    st = np.searchsorted(ssorted, nb, "left")
+    en = np.searchsorted(ssorted, nb, "right")
+    for c in range(len(cells)):
+        keep = en[c] > st[c]
+        if not keep.any():
+            continue
+        ri = rorder[rstart[c]:rend[c]]
+        sj = sorder[np.concatenate([np.arange(a, b) for a, b in zip(st[c][keep], en[c][keep])])]
+        centre = x[ri[0]]
+        xr = x[ri] - centre
+        sr = src[sj] - centre
+        d2 = np.maximum((xr * xr).sum(1)[:, None] + (sr * sr).sum(1)[None] - 2.0 * (xr @ sr.T), 0.0)
+        if normals is None:
+            yield ri, sj, d2
+        else:
+            ns = normals[sj]
+            yield ri, sj, d2, xr @ ns.T - (sr * ns).sum(1)[None]
+
+
+def neighbour_pairs(x: np.ndarray, src: np.ndarray, radius):
+    """All (receiver i, source j) with |x_i - src_j| < radius (a scalar, or one per source), in
+    batches of about BATCH pairs."""
+    per_source = np.ndim(radius) > 0
+    rmax = float(np.max(radius)) if per_source else float(radius)
+    bi, bj, count = [], [], 0
+    for ri, sj, d2 in blocks(x, src, rmax):
+        lim = (np.asarray(radius)[sj] ** 2)[None] if per_source else rmax * rmax
+        ii, jj = np.nonzero(d2 < lim)
+        if len(ii) == 0:
+            continue
+        bi.append(ri[ii])
+        bj.append(sj[jj])
+        count += len(ii)
+        if count >= BATCH:
+            yield np.concatenate(bi), np.concatenate(bj)
+            bi, bj, count = [], [], 0
+    if count:
+        yield np.concatenate(bi), np.concatenate(bj)
+
+
+def _gauss(v, d2):
+    return np.exp(-d2 / (2.0 * v)) / (2.0 * np.pi * v)
+
+
+DELTA_V = 1e-4  # mm^2: a Gaussian with sigma < 0.01 mm is E A at x (it only differs within 0.05 mm of a step)
+OWEN_RATIO = 8.0  # exact triangle integrals while v < 8 s^2 of the elements (moment-matching error > ~0.5 %)
+
+
+class Diffusion:
+    """M(x) for source elements and a sum-of-Gaussians profile (variances mm^2, weights (k, 3));
+    ``h`` the element edge (mm). Receivers are surface points in mm."""
+
+    def __init__(self, el: Elements, variances, weights, h: float, points: PointSources | None = None):
+        self.el = el
+        self.h = float(h)
+        self.v = np.asarray(variances, np.float64).ravel()
+        self.w = np.asarray(weights, np.float64).reshape(len(self.v), 3)
+        self.points = points
+        self.s2max = float(el.s2.max()) if len(el.s2) else 0.0
+        self._levels: dict[float, Clusters] = {}
+        self._edges = None
+        self._tree: cKDTree | None = None
+        self._radius: np.ndarray | None = None
+
+    def method(self, v: float):
+        """('delta', None) | ('exact', None) | ('elements', None) | ('clusters', voxel)."""
+        if v < DELTA_V:
+            return "delta", None
+        if v < OWEN_RATIO * self.s2max:
+            return "exact", None
+        voxel = self.h
+        while voxel * 2 <= math.sqrt(v) / CLUSTER_RATIO:
+            voxel *= 2
+        if voxel > math.sqrt(v) / CLUSTER_RATIO:
+            return "elements", None
+        return "clusters", voxel
+
+    def level(self, voxel: float) -> Clusters:
+        if voxel not in self._levels:
+            self._levels[voxel] = cluster(self.el, voxel)
+        return self._levels[voxel]
+
+    def plan(self) -> list[str]:
+        out = []
+        for v in self.v:
+            kind, voxel = self.method(v)
+            if kind == "delta":
+                out.append(f"v={v:g} mm^2: delta (E A at x)")
+            elif kind == "exact":
+                out.append(f"v={v:g} mm^2: exact triangle integrals (Owen's T) over {len(self.el.area)} elements")
+            elif kind == "elements":
+                out.append(f"v={v:g} mm^2: moment-matched elements ({len(self.el.area)})")
+            else:
+                out.append(f"v={v:g} mm^2: moment-matched clusters of {voxel:g} mm ({len(self.level(voxel).area)})")
+        return out
+
+    def exitance(self, x: np.ndarray, ea_here: np.ndarray | None = None,
+                 progress: Callable[[float], None] | None = None,
+                 cancelled: Callable[[], bool] | None = None) -> np.ndarray:
+        """M(x) (N, 3) at receivers x (N, 3) mm. ``ea_here`` (N, 3): E A at x itself, used for the
+        element under x (the nearest element centroid within an element radius)."""
+        x = np.asarray(x, np.float64)
+        out = np.zeros((len(x), 3))
+        el = self.el
+        own = None
+        if ea_here is not None and len(el.area):
+            ea_here = np.asarray(ea_here, np.float64)
+            d, own = self.tree().query(x, k=1)
+            own = np.where(d <= el.radius * 1.01, own, -1)
+        todo = [(v, w) for v, w in zip(self.v, self.w) if np.any(w > 0)]
+        cost = {"delta": 0.02, "exact": 1.0, "elements": 0.5, "clusters": 0.5}
+        total = sum(cost[self.method(v)[0]] for v, _ in todo) or 1.0
+        done = 0.0
+        for v, w in todo:
+            if cancelled is not None and cancelled():
+                raise InterruptedError("cancelled")
+            kind, voxel = self.method(v)
+            m = np.zeros((len(x), 3))
+            if kind == "delta":
+                if ea_here is not None:
+                    m += ea_here
+                elif len(el.area):
+                    m += el.ea[self.tree().query(x, k=1)[1]]
+            elif kind == "exact":
+                r = TRUNCATE * math.sqrt(v) + self._el_radius()
+                for i, j in self._tree_pairs(x, r):
+                    k = self._exact(x[i], j, v)
+                    val = el.ea[j]
+                    if own is not None:
+                        val = np.where((own[i] == j)[:, None], ea_here[i], val)
+                    m += _accumulate(i, k[:, None] * val, len(x))
+                    if cancelled is not None and cancelled():
+                        raise InterruptedError("cancelled")
+            else:
+                src = el if kind == "elements" else self.level(voxel)
+                r = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
+                for ri, sj, d2, z in blocks(x, src.centroid, r, src.normal):
+                    # moment matching in the source's plane only; the height z over it enters
+                    # exactly, exp(-z^2 / 2v) (eq. 20 is separable): a flap's far side stays right
+                    ve = v + src.s2[sj]
+                    z2 = z * z
+                    k = np.exp(-np.maximum(d2 - z2, 0.0) / (2.0 * ve) - z2 / (2.0 * v)) \
+                        * (src.area[sj] / (2.0 * np.pi * ve))
+                    m[ri] += k @ src.ea[sj]
+                    if cancelled is not None and cancelled():
+                        raise InterruptedError("cancelled")
+            if self.points is not None and len(self.points.position):
+                for s0 in range(0, len(x), 4096):
+                    xs = x[s0:s0 + 4096]
+                    d2 = ((xs[:, None, :] - self.points.position[None]) ** 2).sum(-1)
+                    m[s0:s0 + 4096] += _gauss(v, d2) @ self.points.power
+            out += m * w
+            done += cost[kind]
+            if progress is not None:
+                progress(done / total)
+        return out
+
+    def tree(self) -> cKDTree:
+        if self._tree is None:
+            self._tree = cKDTree(self.el.centroid)
+        return self._tree
+
+    def _tree_pairs(self, x: np.ndarray, radius: np.ndarray, chunk: int = 8192):
+        """(receiver, element) pairs closer than the element's ``radius`` (KD-trees: for small radii)."""
+        rmax = float(radius.max())
+        for s0 in range(0, len(x), chunk):
+            sm = cKDTree(x[s0:s0 + chunk]).sparse_distance_matrix(self.tree(), rmax, output_type="ndarray")
+            keep = sm["v"] < radius[sm["j"]]
+            yield sm["i"][keep].astype(np.int64) + s0, sm["j"][keep].astype(np.int64)
+
+    def _el_radius(self) -> np.ndarray:
+        """Per element: the largest corner distance from its centroid."""
+        if self._radius is None:
+            d = self.el.corners - self.el.centroid[:, None]
+            self._radius = np.sqrt((d * d).sum(2).max(1))
+        return self._radius
+
+    def _edge_data(self):
+        """Per element: 2D frame (e1, e2), corners in it (relative to corner 0), and per edge the
+        unit direction u and right-hand normal (u_y, -u_x)."""
+        if self._edges is None:
+            c = self.el.corners
+            e1 = c[:, 1] - c[:, 0]
+            e1 /= np.maximum(np.linalg.norm(e1, axis=1), 1e-300)[:, None]
+            e2 = np.cross(self.el.normal, e1)
+            rel = c - c[:, :1]
+            q = np.stack([(rel * e1[:, None]).sum(2), (rel * e2[:, None]).sum(2)], 2)  # (E, 3, 2)
+            d = q[:, [1, 2, 0]] - q
+            ln = np.maximum(np.linalg.norm(d, axis=2), 1e-300)
+            u = d / ln[..., None]
+            self._edges = (e1, e2, q, u)
+        return self._edges
+
+    def _exact(self, x: np.ndarray, j: np.ndarray, v: float) -> np.ndarray:
+        """integral over element j of G(v, |x - y|) dA(y), exactly: Owen's T over the flat triangle
+        times exp(-z^2 / 2v) for x's height z over its plane (eq. 20 is separable)."""
+        e1, e2, q, u = self._edge_data()
+        s = math.sqrt(v)
+        d = x - self.el.corners[j, 0]
+        z = (d * self.el.normal[j]).sum(1)
+        p = np.stack([(d * e1[j]).sum(1), (d * e2[j]).sum(1)], 1)
+        qj = q[j]
+        uj = u[j]
+        total = np.zeros(len(j))
+        for k in range(3):
+            A = (qj[:, k] - p) / s
+            B = (qj[:, (k + 1) % 3] - p) / s
+            ux, uy = uj[:, k, 0], uj[:, k, 1]
+            hs = A[:, 0] * uy - A[:, 1] * ux
+            h = np.abs(hs)
+            good = h > 1e-12
+            hh = np.where(good, h, 1.0)
+            part = _wedge(hh, B[:, 0] * ux + B[:, 1] * uy) - _wedge(hh, A[:, 0] * ux + A[:, 1] * uy)
+            total += np.where(good, np.sign(hs) * part, 0.0)
+        # corners are wound counter-clockwise in (e1, e2) (e2 = n x e1), so the sum is >= 0
+        return np.maximum(total, 0.0) * np.exp(-z * z / (2.0 * v))
+
+
+def _accumulate(i: np.ndarray, vals: np.ndarray, n: int) -> np.ndarray:
+    return np.stack([np.bincount(i, vals[:, c], n) for c in range(vals.shape[1])], 1)
+
+
+def gaussian_disc_convolution(r: np.ndarray, v: float, radius: float, n: int = 400) -> np.ndarray:
+    """(G(v) * disc)(r): the integral of G(v, |p - (r, 0)|) over the disc of ``radius`` at the
+    origin (polar Gauss-Legendre rule); the analytic reference of a laser beam."""
+    t, wt = np.polynomial.legendre.leggauss(n)
+    rho = 0.5 * radius * (t + 1.0)
+    wr = 0.5 * radius * wt
+    phi = np.pi * (t + 1.0)
+    wp = np.pi * wt
+    R, P = np.meshgrid(rho, phi, indexing="ij")
+    W = (wr[:, None] * wp[None, :]) * R
+    r = np.asarray(r, np.float64)
+    d2 = (r[..., None, None] - R * np.cos(P)) ** 2 + (R * np.sin(P)) ** 2
+    return (np.exp(-d2 / (2 * v)) / (2 * np.pi * v) * W).sum(axis=(-2, -1))

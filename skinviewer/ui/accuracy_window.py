@@ -1,0 +1,288 @@
+"""The Accuracy window: the ground truth of the current view (core.reference) computed in a worker
+thread with a progress bar (cancellable; a view that would take too long says so first), the
+current image's error against it (physics.metrics: relative RMS, p99, DSSIM — the bench's code),
+an error heat-map view mode (full view, or split image | heat map), and the Pareto chart of a bench
+``results.json`` (implot) with the current configuration marked; clicking a point applies it.
+
+A window of ui/windows.py: made as ``AccuracyWindow(state, frame)``, drawn with ``draw(ui)``, and
+``draw_view(viewport)`` before showing its image (True: the window drew the view)."""
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+
+from skinviewer.core.bench import (
+    compare_mask,
+    heat_rgb,
+    last_bench,
+    load_results,
+    pareto_front,
+)
+from skinviewer.core.settings import Settings, value_key, with_values
+from skinviewer.physics.metrics import image_error, rel_error_map
+from skinviewer.ui.widgets import show_tooltip
+
+VIEW_MODES = ("image", "heat map", "split image | heat map")
+def reference_key(s: Settings) -> str:
+    """What a reference depends on, to tell whether the one on hand is for this view."""
+    return "|".join(value_key(s, k) for k in ("scene", "camera", "render.width", "render.height", "lights",
+                                              "specular", "deon.gaussians", "deon.mix", "deon.energy_conservation"))
+
+
+class _Job:
+    def __init__(self, s: Settings, max_seconds: float):
+        self.settings = s
+        self.key = reference_key(s)
+        self.stage = "starting"
+        self.fraction = 0.0
+        self.result = None
+        self.error = ""
+        self.cancel = threading.Event()
+        self.thread = threading.Thread(target=self._run, args=(max_seconds,), daemon=True)
+        self.thread.start()
+
+    def _run(self, max_seconds: float) -> None:
+        from skinviewer.core.reference import ReferenceTooSlow, compute_reference
+        try:
+            self.result = compute_reference(self.settings, max_seconds=max_seconds, progress=self._progress,
+                                            cancelled=self.cancel.is_set)
+        except ReferenceTooSlow as exc:
+            self.error = str(exc)
+        except InterruptedError:
+            self.error = "cancelled"
+        except Exception as exc:  # shown in the window, the viewer goes on
+            self.error = f"{type(exc).__name__}: {exc}"
+
+    def _progress(self, stage: str, f: float) -> None:
+        self.stage, self.fraction = stage, float(f)
+
+    @property
+    def done(self) -> bool:
+        return not self.thread.is_alive()
+
+
+class AccuracyWindow:
+    def __init__(self, state, frame):
+        self.state, self.frame = state, frame  # ui.state.ViewerState, ui.frame.FrameController
+        self.open = True
+        self.job: _Job | None = None
+        self.reference = None
+        self.ref_key = ""
+        self.max_seconds = 180.0
+        self.view_mode = 0
+        self.error = None        # ImageError of the image on screen
+        self.error_for = None    # (settings object, report id) the figures are for
+        self.status = ""
+        self.heat_tex = None
+        self.results_path = last_bench()
+        self.results = []        # bench Result list
+        self.results_meta: dict = {}
+        self.results_msg = ""
+        if self.results_path:
+            self.load_results(self.results_path, quiet=True)
+
+    # -- ground truth ---------------------------------------------------------------------------
+    def start(self) -> None:
+        if self.job is not None and not self.job.done:
+            return
+        self.job = _Job(self.state.settings, self.max_seconds)
+        self.status = ""
+
+    def cancel(self) -> None:
+        if self.job is not None:
+            self.job.cancel.set()
+
+    def _poll(self) -> None:
+        job = self.job
+        if job is None or not job.done:
+            return
+        if job.result is not None:
+            self.reference, self.ref_key = job.result, job.key
+            t = job.result.meta.get("seconds", {}).get("total", 0.0)
+            self.status = "ground truth ready" + (" (cached)" if job.result.meta.get("cached") else f" ({t:.1f} s)")
+            self.error_for = None
+        else:
+            self.status = job.error
+        self.job = None
+
+    @property
+    def current(self) -> bool:
+        return self.reference is not None and self.ref_key == reference_key(self.state.settings)
+
+    def _update_error(self) -> None:
+        """Figures of the image on screen against the reference (recomputed when the frame changes)."""
+        st, fr = self.state, self.frame
+        if not self.current or fr.report is None:
+            return
+        tag = (id(st.settings), id(fr.report))
+        if self.error_for == tag:
+            return
+        self.error_for = tag
+        try:
+            lit = fr.renderer.read(st.settings, "lit")[::-1]
+        except Exception as exc:
+            self.status = f"no image to compare: {exc}"
+            return
+        img = np.asarray(lit[..., :3], np.float64)
+        if img.shape != self.reference.lit.shape:
+            return
+        m = compare_mask(self.reference.mask, lit[..., 3] > 0.5)
+        self.error = image_error(img, self.reference.lit, m, exposure=st.settings.render.exposure)
+        self._upload_heat(rel_error_map(img, self.reference.lit, m))
+
+    def _upload_heat(self, emap: np.ndarray) -> None:
+        rgb = np.ascontiguousarray(heat_rgb(emap)[::-1])  # GL rows bottom-up
+        h, w = rgb.shape[:2]
+        ctx = self.frame.ctx
+        if self.heat_tex is None or self.heat_tex.size != (w, h):
+            if self.heat_tex is not None:
+                self.heat_tex.release()
+            self.heat_tex = ctx.texture((w, h), 3, rgb.tobytes(), alignment=1)
+        else:
+            self.heat_tex.write(rgb.tobytes(), alignment=1)
+
+    def draw_view(self, viewport) -> bool:
+        """Heat-map view modes; False leaves the view to the app."""
+        if self.view_mode == 0 or self.heat_tex is None or not self.current:
+            return False
+        display = self.frame.view.display
+        if self.view_mode == 1:
+            display.show(self.heat_tex, viewport)
+        else:
+            g = self.frame.renderer.graph(self.state.settings.technique)
+            if "image" not in g.resources():
+                return False
+            display.split(g.texture("image"), self.heat_tex, viewport, self.state.compare.divider)
+        return True
+
+    # -- bench results --------------------------------------------------------------------------
+    def load_results(self, path: str, quiet: bool = False) -> bool:
+        try:
+            self.results_meta, self.results = load_results(path)
+            pareto_front(self.results)
+            self.results_path = path
+            self.results_msg = f"{len(self.results)} configurations ({self.results_meta.get('scene')})"
+            return True
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            if not quiet:
+                self.results_msg = f"cannot read {path}: {exc}"
+            return False
+
+    def matches(self, r) -> bool:
+        """Is bench configuration ``r`` the current settings?"""
+        s = self.state.settings
+        if r.technique != s.technique:
+            return False
+        try:
+            probe = with_values(s, r.changes)
+        except Exception:
+            return False
+        return all(value_key(probe, k) == value_key(s, k) for k in r.changes)
+
+    def apply(self, r) -> None:
+        self.state.apply({"technique": r.technique, **r.changes}, source=f"Pareto: {r.name}")
+
+    # -- UI ---------------------------------------------------------------------------------------
+    def draw(self, ui) -> None:
+        from imgui_bundle import imgui
+        self._poll()
+        self._update_error()
+        vx, vy, vw, vh = ui.layout.view
+        imgui.set_next_window_pos(imgui.ImVec2(vx + 8, vy + vh - 330), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(420, 320), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
+        expanded = imgui.begin("Accuracy###accuracy")[0]
+        if expanded:
+            self._truth_ui(imgui)
+            imgui.separator()
+            self._chart_ui(imgui)
+        pos, size = imgui.get_window_pos(), imgui.get_window_size()
+        ui.claim((pos.x, pos.y, size.x, size.y))
+        imgui.end()
+
+    def _truth_ui(self, imgui) -> None:
+        job = self.job
+        if job is not None:
+            imgui.progress_bar(job.fraction, imgui.ImVec2(-90, 0), f"{job.stage} {100 * job.fraction:.0f}%")
+            imgui.same_line()
+            if imgui.button("Cancel"):
+                self.cancel()
+        else:
+            if imgui.button("Ground truth for this view"):
+                self.start()
+            imgui.same_line()
+            imgui.set_next_item_width(110)
+            _, self.max_seconds = imgui.slider_float("limit s", self.max_seconds, 10.0, 1800.0, "%.0f")
+        if self.status:
+            imgui.text_wrapped(self.status)
+        if self.reference is not None and not self.current:
+            imgui.text_disabled("the view or lighting changed: the ground truth is for another view")
+        if self.current and self.error is not None:
+            e = self.error
+            imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
+            imgui.text(f"p99  {' / '.join(f'{100 * c:.1f}' for c in e.p99)} %")
+            imgui.text(f"DSSIM {e.dssim:.4f}")
+            imgui.set_next_item_width(200)
+            _, self.view_mode = imgui.combo("view", self.view_mode, list(VIEW_MODES))
+            if self.view_mode:
+                imgui.text_disabled("heat map: relative error 0 (black) .. 50 % (white)")
+
+    def _chart_ui(self, imgui) -> None:
+        from imgui_bundle import implot
+        imgui.set_next_item_width(-60)
+        _, self.results_path = imgui.input_text("##results", self.results_path)
+        imgui.same_line()
+        if imgui.button("Load"):
+            self.load_results(self.results_path)
+        if self.results_msg:
+            imgui.text_disabled(self.results_msg)
+        ok = [r for r in self.results if r.error is None and r.full_ms and r.rms]
+        if not ok:
+            return
+        if implot.begin_plot("##pareto", imgui.ImVec2(-1, 200)):
+            implot.setup_axes("full frame ms", "RMS %")
+            implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
+            for tech in dict.fromkeys(r.technique for r in ok):
+                pts = [r for r in ok if r.technique == tech]
+                implot.plot_scatter(tech, np.array([r.full_ms for r in pts], np.float64),
+                                    np.array([100 * r.rms_mean for r in pts], np.float64))
+            front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)
+            if len(front) > 1:
+                implot.plot_line("Pareto front", np.array([r.full_ms for r in front], np.float64),
+                                 np.array([100 * r.rms_mean for r in front], np.float64))
+            cur = [r for r in ok if self.matches(r)]
+            if cur:
+                implot.plot_scatter("current", np.array([cur[0].full_ms], np.float64),
+                                    np.array([100 * cur[0].rms_mean], np.float64))
+            hovered = self._nearest(implot, ok)
+            if hovered is not None:
+                show_tooltip(f"{hovered.name}\n{hovered.full_ms:.0f} ms, RMS {100 * hovered.rms_mean:.2f} %, "
+                             f"DSSIM {hovered.dssim:.4f}\nclick: apply")
+                if imgui.is_mouse_clicked(0):
+                    self.apply(hovered)
+            implot.end_plot()
+
+    @staticmethod
+    def _nearest(implot, pts, radius_px: float = 10.0):
+        if not implot.is_plot_hovered():
+            return None
+        from imgui_bundle import imgui
+        mouse = imgui.get_mouse_pos()
+        best, bd = None, radius_px
+        for r in pts:
+            p = implot.plot_to_pixels(r.full_ms, 100 * r.rms_mean)
+            d = math.hypot(p.x - mouse.x, p.y - mouse.y)
+            if d < bd:
+                best, bd = r, d
+        return best
+
+    def release(self) -> None:
+        self.cancel()
+        if self.heat_tex is not None:
+            self.heat_tex.release()
+            self.heat_tex = None
+
+
+__all__ = ["AccuracyWindow", "reference_key"]

@@ -1,0 +1,116 @@
+"""The viewer's Accuracy window: ground truth in a worker (the UI keeps stepping), the image's error
+figures, the heat-map view modes, cancelling, and the Pareto chart's configurations applied."""
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.viewer
+
+
+@pytest.fixture(scope="module")
+def app(tmp_path_factory):
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY and no Xvfb")
+    pytest.importorskip("imgui_bundle")
+    old = os.environ.get("SKINVIEWER_CACHE")
+    os.environ["SKINVIEWER_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui.app import create_app, destroy_app
+    s = with_values(Settings(), {"scene.name": "laser", **scene_overrides("laser"), "technique": "deon",
+                                 "shadow.map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
+    try:
+        a = create_app(s, size=(300, 200), vsync=False)
+        a.frame.set_frame_budget(None)
+    except RuntimeError as exc:
+        pytest.skip(f"cannot open a window: {exc}")
+    a.step(2)
+    yield a
+    destroy_app(a)
+    if old is None:
+        os.environ.pop("SKINVIEWER_CACHE", None)
+    else:
+        os.environ["SKINVIEWER_CACHE"] = old
+
+
+def _acc(app):
+    from skinviewer.ui.accuracy_window import AccuracyWindow
+    return next(w for w in app.ui.windows if isinstance(w, AccuracyWindow))  # a registered window
+
+
+def _wait(app, timeout=120.0):
+    t0 = time.monotonic()
+    frames = 0
+    while _acc(app).job is not None and time.monotonic() - t0 < timeout:
+        app.step()
+        frames += 1
+    assert _acc(app).job is None, "the ground truth did not finish"
+    return frames
+
+
+def test_ground_truth_in_a_worker_then_error_figures_and_heat_map(app):
+    acc = _acc(app)
+    acc.start()
+    assert acc.job is not None
+    frames = _wait(app)
+    assert frames >= 1  # the UI kept stepping while the worker ran
+    assert acc.current, acc.status
+    app.step()
+    e = acc.error
+    assert e is not None and all(np.isfinite(e.rms)) and 0.0 <= e.dssim <= 1.0
+    acc.view_mode = 1
+    app.step()
+    assert acc.heat_tex is not None and acc.heat_tex.size == (app.state.settings.render.width, app.state.settings.render.height)
+    acc.view_mode = 2
+    app.step()
+    acc.view_mode = 0
+    # a new view makes the truth stale
+    app.state.apply({"camera.yaw": 10.0})
+    app.step()
+    assert not acc.current
+
+
+def test_cancel(app):
+    acc = _acc(app)
+    app.state.apply({"camera.yaw": 20.0})
+    acc.start()
+    acc.cancel()
+    _wait(app)
+    assert acc.status in ("cancelled",) or acc.current
+
+
+def test_too_slow_says_so(app):
+    acc = _acc(app)
+    acc.max_seconds = 1e-6
+    app.state.apply({"camera.yaw": 30.0})
+    acc.start()
+    _wait(app)
+    acc.max_seconds = 180.0
+    assert "would take about" in acc.status
+
+
+def test_pareto_point_applies_its_configuration(app, tmp_path):
+    from skinviewer.core.bench import Result
+    rows = [Result("deon", "irr512", {"deon.irradiance_size": 512}, full_ms=50.0, rms=[0.02] * 3, p99=[0.1] * 3,
+                   dssim=0.01).to_json(),
+            Result("gosselin", "map512 it2", {"gosselin.light_map_size": 512, "gosselin.iterations": 2},
+                   full_ms=30.0, rms=[0.05] * 3, p99=[0.2] * 3, dssim=0.02).to_json()]
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps({"scene": "laser", "results": rows}))
+    acc = _acc(app)
+    assert acc.load_results(str(path))
+    assert sum(r.pareto for r in acc.results) == 2
+    deon, gos = acc.results
+    app.state.apply({"technique": "deon", "deon.irradiance_size": 512})
+    assert acc.matches(deon) and not acc.matches(gos)
+    acc.apply(gos)
+    assert app.state.settings.technique == "gosselin" and app.state.settings.gosselin.iterations == 2
+    assert acc.matches(gos)
+    app.step()
+    assert not acc.load_results(str(tmp_path / "missing.json"))
+    assert "cannot read" in acc.results_msg
