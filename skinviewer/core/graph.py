@@ -56,13 +56,33 @@ class GraphError(RuntimeError):
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
-    def __init__(self, settings: Settings, scene: Any = None):
+    def __init__(self, settings: Settings, scene: Any = None, state: dict | None = None):
         self._settings = settings
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self.settings: list[str] = []
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
         self.programs: list[tuple[str, tuple]] = []
+        # scene-driven rules (core/rules.py): why this pass is skipped, why a consumer no longer
+        # reads a resource (its producer is pruned with that reason), notes for the frame report
+        self.skip_reason: str | None = None
+        self.dropped: dict[str, str] = {}
+        self.notes: list[str] = []
+        self.state = state if state is not None else {}  # the graph's memory for shape decisions
+
+    def skip(self, reason: str) -> None:
+        """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
+        self.skip_reason = reason
+
+    def drop(self, resource: str, reason: str) -> None:
+        """This pass does not read ``resource`` this frame because of ``reason``: when nothing else
+        reads it its producer is reported "pruned: reason"."""
+        self.dropped.setdefault(resource, reason)
+
+    def note(self, text: str) -> None:
+        """A scene-driven choice shown with the pass in the frame report (e.g. a map size)."""
+        if text not in self.notes:
+            self.notes.append(text)
 
     def setting(self, path: str) -> Any:
         """Declare a setting (dotted path) and return its current value."""
@@ -179,6 +199,15 @@ class ExecuteContext:
         if path not in self._refl.settings and not any(path.startswith(d + ".") for d in self._refl.settings):
             raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")
         return get_path(self._frame.settings, path)
+
+    def peek(self, path: str) -> Any:
+        """A setting read for the graph's shape only (as Reflection.peek), not declared."""
+        return get_path(self._frame.settings, path)
+
+    @property
+    def state(self) -> dict:
+        """The graph's memory for shape decisions (Reflection.state)."""
+        return self.graph.shape_state
 
     def has_input(self, resource: str) -> bool:
         """Whether this frame's reflect() declared ``resource`` (optional inputs)."""
@@ -429,6 +458,8 @@ class RenderGraph:
         self._last_refl: dict[str, Reflection] = {}
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
+        self._produced: dict[str, set[str]] = {}  # pass -> outputs it last declared (freed when pruned)
+        self.shape_state: dict = {}  # memory of scene-driven rules (e.g. map-size hysteresis)
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
 
@@ -501,8 +532,14 @@ class RenderGraph:
     def _reflect_all(self, settings: Settings, scene: Any = None) -> dict[str, Reflection]:
         refl = {}
         for p in self.passes:
-            r = Reflection(settings, scene if p.uses_scene else None)
+            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state)
             p.reflect(r)
+            if r.skip_reason is not None:  # a skipped pass declares nothing
+                r.inputs, r.outputs, r.programs = [], {}, []
+            elif r.outputs:
+                for res in self._produced.get(p.name, set()) - set(r.outputs):
+                    self._free(res)  # e.g. a gutter map of a map size no longer used
+                self._produced[p.name] = set(r.outputs)
             refl[p.name] = r
         return refl
 
@@ -619,18 +656,22 @@ class RenderGraph:
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
                 rec.ms = self._execute(p, r, frame, timing)
+                if r.notes:
+                    rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
                     self._last_ms[p.name] = rec.ms
                 for res in r.outputs:
                     self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
+            if rec.status == "cached" and r.notes:
+                rec.reason = "; ".join(r.notes)
             records[p.name] = rec
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         for p in self.passes:
             if p.name not in live:
-                records[p.name] = PassRecord(p.name, "pruned", reason="output not consumed",
+                records[p.name] = PassRecord(p.name, "pruned", reason=_prune_reason(p.name, refl, live),
                                              inputs=list(refl[p.name].inputs))
-                for res in refl[p.name].outputs:
+                for res in set(refl[p.name].outputs) | self._produced.pop(p.name, set()):
                     if res in self._textures:
                         self._free(res)
                 self._keys.pop(p.name, None)
@@ -721,6 +762,25 @@ class RenderGraph:
         report = self.last_report
         out = report.to_json()["passes"] if report else []
         return out
+
+
+def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth: int = 0) -> str:
+    """Why a pass is pruned: its own skip reason, a consumer's reason for dropping its output, or
+    the reason its only consumers are pruned."""
+    r = refl[name]
+    if r.skip_reason is not None:
+        return "pruned: " + r.skip_reason
+    outs = set(r.outputs)
+    for other in refl.values():
+        for res in outs & set(other.dropped):
+            return "pruned: " + other.dropped[res]
+    if depth < 8:
+        for n, other in refl.items():
+            if n not in live and n != name and outs & set(other.inputs):
+                why = _prune_reason(n, refl, live, depth + 1)
+                if why.startswith("pruned: "):
+                    return why + f" (via {n})"
+    return "output not consumed"
 
 
 class TexturePool:

@@ -205,6 +205,11 @@ class DeonSettings(_Model):
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True
     irradiance_size: int = Field(1024, ge=256, le=4096)
+    irradiance_size_mode: Literal["fixed", "auto"] = Field(
+        "fixed", description="auto: the irradiance map (and its blurs) sized from the head's screen coverage, "
+                             "irradiance_size at most, with hysteresis (issue 14)")
+    tsm_auto: bool = Field(
+        True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
     reuse_irradiance_below_texels: float = Field(
         0.5, ge=0.0, le=8.0,
         description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "

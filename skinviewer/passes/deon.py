@@ -35,6 +35,7 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
+from skinviewer.passes.rules import coverage_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
@@ -57,8 +58,9 @@ MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 
 
-def _size(r) -> int:
-    return r.setting(SIZE)
+def map_size(r) -> int:
+    """The irradiance-map size: deon.irradiance_size, or from the screen coverage (rules.py)."""
+    return coverage_size(r, SIZE, "deon.irradiance_size_mode")
 
 
 # -- which light casts the TSM --------------------------------------------------------------------
@@ -70,11 +72,19 @@ def tsm_light_index(r) -> int | None:
     if not r.setting("deon.tsm"):
         return None
     n = min(r.setting("lights.#"), MAX_LIGHTS)
-    usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")]
+    usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")
+              and light_on(r.peek(f"lights.{j}"))]
     want = r.setting("deon.tsm_light")
-    if want is not None and want in usable:
-        return want
-    return usable[0] if usable else None
+    j = want if want is not None and want in usable else (usable[0] if usable else None)
+    if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
+        # issue 14: only when the light is behind a thin part in view (peeked: shape only)
+        s = r._settings if hasattr(r, "_settings") else r._frame.settings
+        need, why = tsm_needed(s, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
+        if not need:
+            if hasattr(r, "drop"):
+                r.drop(TSM, why)
+            return None
+    return j
 
 
 def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
@@ -99,11 +109,11 @@ class StretchPass(Pass):
     name = "deon_stretch"
 
     def reflect(self, r: Reflection) -> None:
-        n = _size(r)
+        n = map_size(r)
         declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 4, "f4"))
 
     def execute(self, ec) -> None:
-        n = ec.setting(SIZE)
+        n = map_size(ec)
         prog = ec.program("deon_stretch")
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
         unwrap_dilated(ec, prog, n, STRETCH)
@@ -133,7 +143,7 @@ class IrradiancePass(Pass):
     name = "deon_irradiance"
 
     def reflect(self, r: Reflection) -> None:
-        n = _size(r)
+        n = map_size(r)
         lighting = declare_lighting(r)
         r.setting("deon.mix")
         if r.setting("deon.energy_conservation"):
@@ -144,7 +154,7 @@ class IrradiancePass(Pass):
         declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting)
 
     def execute(self, ec) -> None:
-        n = ec.setting(SIZE)
+        n = map_size(ec)
         prog = ec.program("deon_irradiance")
         bind_surface(ec, prog)
         set_lighting(ec, prog)
@@ -169,7 +179,7 @@ def mean_texel_mm(scene, n: int) -> float:
 def plan_of(variances, r) -> list:
     """The blur chain for these variances (r: a Reflection or ExecuteContext of a scene pass)."""
     return blur_plan_texels(variances, r.setting("deon.reuse_irradiance_below_texels"),
-                            mean_texel_mm(r.scene, r.setting(SIZE)))
+                            mean_texel_mm(r.scene, map_size(r)))
 
 
 def _plan(r):
@@ -213,7 +223,7 @@ class GaussianBlurPass(Pass):
         step = self._step(r)
         if step.reused:
             return  # blur_1 is the irradiance itself: the final pass reads it, this pass is pruned
-        n = _size(r)
+        n = map_size(r)
         stretch = self._stretch_input(r, step)
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
@@ -227,7 +237,7 @@ class GaussianBlurPass(Pass):
         return plan_of(vs, r)[self.i]
 
     def execute(self, ec) -> None:
-        n = ec.setting(SIZE)
+        n = map_size(ec)
         step = self._step(ec)
         prog = ec.program("deon_blur")
         stretch = self._stretch_input(ec, step)
@@ -255,6 +265,22 @@ class GaussianBlurPass(Pass):
             src = tmp2
 
 
+def final_defines(mask: int, tsm: bool) -> dict[str, int]:
+    """deon_final.frag's specialisation: GAUSSIAN_MASK (bit i: Gaussian i has weight), DEON_TSM."""
+    return {"GAUSSIAN_MASK": int(mask), "DEON_TSM": int(bool(tsm))}
+
+
+def likely_final_variants(defines: dict) -> list[dict]:
+    """The deon_final variants one toggle away from ``defines`` (a weight to/from zero, the TSM
+    on/off): what the viewer compiles while idle so a toggle does not stall."""
+    out = []
+    mask, n = defines.get("GAUSSIAN_MASK", 0), MAX_GAUSSIANS
+    for i in range(n):
+        out.append({**defines, "GAUSSIAN_MASK": mask ^ (1 << i)})
+    out.append({**defines, "DEON_TSM": 1 - defines.get("DEON_TSM", 0)})
+    return out
+
+
 class DeonFinalPass(Pass):
     """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output)."""
     name = "deon_final"
@@ -264,6 +290,11 @@ class DeonFinalPass(Pass):
         lighting = declare_lighting(r)
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
+        if lighting["LIGHT_COUNT"] == 0:  # every light off: black (no irradiance, no specular)
+            for step in plan:
+                r.drop(texture_of(step), "every light is off or at zero intensity")
+            declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
+            return
         r.setting("deon.mix")
         declare_specular(r)
         if r.setting("deon.energy_conservation"):
@@ -272,18 +303,29 @@ class DeonFinalPass(Pass):
         if tsm:
             r.setting("deon.tsm_form")
             r.input(TSM)
+        mask = 0
         for i, (g, step) in enumerate(zip(gs, plan)):
             if any(w > 0 for w in g.weights):
+                mask |= 1 << i
                 r.input(texture_of(step))
                 if tsm and i >= 1:
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
+            else:
+                r.drop(texture_of(step), f"Gaussian {i} has zero weight")
         if tsm and r.setting("deon.stretch"):
             r.input(STRETCH)
-        declare_lit(r, "deon_final", **lighting)
+        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm))
+
+    @staticmethod
+    def dark(ec) -> bool:
+        return not any(light_on(l) for l in ec.setting("lights")[:MAX_LIGHTS])
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
         set_camera(ec, prog)
+        if self.dark(ec):
+            ec.draw_mesh(prog, LIT)
+            return
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         has = ec.has_input

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import moderngl
 import numpy as np
-from scipy import ndimage
 
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
@@ -19,17 +18,21 @@ class GutterMapPass(Pass):
     coverage (B). Depends on the mesh and the texture size only, so it runs once per scene/size.
     ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
 
-    def __init__(self, size_setting: str, name: str | None = None):
+    def __init__(self, size_setting: str, name: str | None = None, size_of=None):
         self.size_setting = size_setting
         self.name = name or f"gutter_map[{size_setting}]"
+        self.size_of = size_of  # optional: size from a rule (e.g. screen coverage), given r
+
+    def _n(self, r) -> int:
+        return self.size_of(r) if self.size_of is not None else r.setting(self.size_setting)
 
     def reflect(self, r: Reflection) -> None:
-        size = r.setting(self.size_setting)
+        size = self._n(r)
         r.program("uv_coverage")
         r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        size = ec.setting(self.size_setting)
+        size = self._n(ec)
         cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
         ec.output(gutter_resource(size)).write(gutter_table(covered).tobytes())
@@ -63,6 +66,7 @@ def gutter_table(covered: np.ndarray) -> np.ndarray:
     h, w = covered.shape
     out = np.zeros((h, w, 4), np.float32)
     if covered.any():
+        from scipy import ndimage  # here, not at import: scipy costs start-up (issue 14 item 7)
         _, (iy, ix) = ndimage.distance_transform_edt(~covered, return_indices=True)
     else:
         iy, ix = np.mgrid[0:h, 0:w]
