@@ -126,6 +126,8 @@ class TsmPass(Pass):
     def reflect(self, r: Reflection) -> None:
         j = tsm_light_index(r)
         if j is None:
+            if TSM in r.dropped:  # the rule's reason (rules.tsm_needed)
+                r.skip(r.dropped[TSM])
             return
         r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
         n = r.setting("deon.tsm_size")

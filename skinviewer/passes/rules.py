@@ -15,7 +15,7 @@ import numpy as np
 
 from skinviewer.scene.camera import orbit_view
 
-TSM_EPS = 2e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
+TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
 MAX_RAYS = 4096     # rays cast per light pose for the TSM rule (Embree via trimesh)
 MIN_AUTO_SIZE = 64  # smallest irradiance map "auto" chooses
 HYSTERESIS = 1.25   # "auto" changes size only when the wanted size leaves [c / 2 / H, c * H]
