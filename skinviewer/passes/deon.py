@@ -110,7 +110,7 @@ class StretchPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
-        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 4, "f4"))
+        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 2, "f4"))  # RG only
 
     def execute(self, ec) -> None:
         n = map_size(ec)
@@ -232,7 +232,10 @@ class GaussianBlurPass(Pass):
         if stretch:
             r.input(stretch)
         r.program("deon_blur")
-        r.output(self._output(), TexSpec((n, n), 4, "f4"))
+        r.output(self._output(), self._spec(n))
+
+    def _spec(self, n: int) -> TexSpec:
+        return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
 
     def _step(self, r):
         vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
@@ -251,7 +254,7 @@ class GaussianBlurPass(Pass):
         ec.bind(prog, "gutter", gutter_resource(n))
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
-        spec = TexSpec((n, n), 4, "f4")
+        spec = self._spec(n)
         tmp = ec.scratch(spec)
         tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)

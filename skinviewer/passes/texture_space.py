@@ -29,13 +29,28 @@ class GutterMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         size = self._n(r)
         r.program("uv_coverage")
-        r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
+        r.output(gutter_resource(size), gutter_spec(size))
 
     def execute(self, ec) -> None:
         size = self._n(ec)
         cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
-        ec.output(gutter_resource(size)).write(gutter_table(covered).tobytes())
+        spec = gutter_spec(size)
+        table = gutter_table(covered)[..., :spec.components]
+        ec.output(gutter_resource(size)).write(table.astype(np.float16 if spec.dtype == "f2" else np.float32).tobytes())
+
+
+def gutter_spec(size: int) -> TexSpec:
+    """RG integer texel coordinates: half floats hold every integer up to 2048 exactly (issue 14:
+    exact formats; the coverage flag B of gutter_table is not read by any shader)."""
+    return TexSpec((size, size), 2, "f2" if size <= 2048 else "f4", filter="nearest")
+
+
+def read_gutter(tex: moderngl.Texture) -> np.ndarray:
+    """The gutter map back on the CPU: (H, W, 2) float32, RG = source texel."""
+    w, h = tex.size
+    dt = np.float16 if tex.dtype == "f2" else np.float32
+    return np.frombuffer(tex.read(), dtype=dt).reshape(h, w, tex.components).astype(np.float32)
 
 
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:

@@ -27,11 +27,26 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from scipy import ndimage
-from scipy.spatial import Delaunay
 
 from skinviewer.core.settings import REGIONS
 from skinviewer.scene.mesh import MeshData, vertex_normals
+
+
+class _LazyScipy:
+    """scipy.ndimage / Delaunay on first use: only generating a head needs them, not loading it from
+    the cache (issue 14: scipy was 0.27 s of a 0.42 s start-up)."""
+
+    def __getattr__(self, name):
+        from scipy import ndimage
+        return getattr(ndimage, name)
+
+
+ndimage = _LazyScipy()
+
+
+def Delaunay(points):  # noqa: N802 (scipy's name)
+    from scipy.spatial import Delaunay as _Delaunay
+    return _Delaunay(points)
 
 GENERATOR_VERSION = 4
 
