@@ -133,3 +133,23 @@ def test_auto_map_size_follows_coverage_with_hysteresis(renderer):
     key = next(iter(state))
     state[key] = n0 * 2 if n0 * 2 <= 512 else n0  # as if it was larger: stays inside the band
     assert rules.coverage_size(r, "deon.irradiance_size", "deon.irradiance_size_mode") == state[key]
+
+
+def test_warm_compiles_the_likely_final_variants(gl_ctx):
+    r = Renderer(gl_ctx, ShaderLibrary(gl_ctx))
+    try:
+        s = small_settings("head", "deon", 32)
+        r.render(s)
+        likely = r.graph("deon").likely_programs()
+        assert ("deon_final", {**dict([d for n, d in r.graph("deon")._last_refl["deon_final"].programs][0]),
+                               "DEON_TSM": 0}) in likely or any(d.get("DEON_TSM") == 0 for _, d in likely)
+        left = r.warm("deon", budget_ms=None)
+        assert left == 0
+        before = r.shaders.revision
+        # a weight to zero now finds its variant compiled: no new compile in this frame
+        s2 = with_values(s, {"deon.gaussians.5.weights": (0.0, 0.0, 0.0)})
+        r.render(s2)
+        assert r.shaders.revision == before
+    finally:
+        r.release()
+        r.shaders.release()

@@ -730,6 +730,16 @@ class RenderGraph:
         last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
         return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
 
+    def likely_programs(self) -> list[tuple[str, dict]]:
+        """Program variants one toggle away from the last frame's (passes that define
+        ``likely_programs(reflection)``): what ShaderLibrary.warm compiles while the viewer idles."""
+        out = []
+        for p in self.order:
+            fn = getattr(p, "likely_programs", None)
+            if fn is not None and p.name in self._last_refl:
+                out += fn(self._last_refl[p.name])
+        return out
+
     def trim(self) -> None:
         """Release depth buffers no cached framebuffer uses (one is made per render size)."""
         used = {fbo.depth_attachment.glo for fbo in self._fbos.values() if fbo.depth_attachment is not None}

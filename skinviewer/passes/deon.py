@@ -321,6 +321,11 @@ class DeonFinalPass(Pass):
             r.input(STRETCH)
         declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm))
 
+    def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
+        """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
+        return [("deon_final", v) for n, d in r.programs if n == "deon_final"
+                for v in likely_final_variants(dict(d))]
+
     @staticmethod
     def dark(ec) -> bool:
         return not any(light_on(l) for l in ec.setting("lights")[:MAX_LIGHTS])

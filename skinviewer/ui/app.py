@@ -317,6 +317,8 @@ class ViewerApp(mglw.WindowConfig):
         self._sync_size()
 
         self.report = self._render_main()
+        if self.report is not None and self.report.complete and not self.report.ran:
+            self.renderer.warm(self.settings.technique, budget_ms=30.0)  # idle: likely shader variants
         self._draw_view(self.layout.view_fb)
         self.watcher.refresh_errors()
         self._trim_texture_pools()
