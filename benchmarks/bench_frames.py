@@ -108,7 +108,7 @@ def main() -> None:
     ran_cam: dict[str, list[str]] = {}
     mem: dict[str, float] = {}
     # the extra frames (d'Eon): every light at zero; head under 1 % of the screen vs close-up
-    auto = {"deon.irradiance_size_mode": "auto"}
+    auto = {"deon.irradiance_size_mode": "auto", "shadow.map_size_mode": "auto"}
     dark = settings_for("deon", args.scene, args.size, args.maps,
                         **{f"lights.{i}.intensity": 0.0 for i in range(len(base["deon"].lights))})
     close = settings_for("deon", args.scene, args.size, args.maps, **auto)

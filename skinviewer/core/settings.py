@@ -103,6 +103,8 @@ class LightSettings(_Model):
 
 class ShadowSettings(_Model):
     map_size: int = Field(1024, ge=64, le=8192)
+    map_size_mode: Literal["fixed", "auto"] = Field(
+        "fixed", description="auto: shadow maps sized from the scene's screen coverage, map_size at most (issue 14)")
     # seed 000 eq. (7): shadowed if d(P) - ds > tol; tol in normalised light-space depth
     tol: float = Field(0.002, ge=0.0, le=0.5)
     pcf: int = Field(1, ge=0, le=MAX_PCF, description="percentage-closer filter radius in texels (0 = eq. 7 hard test)")

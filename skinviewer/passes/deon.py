@@ -35,7 +35,7 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
-from skinviewer.passes.rules import coverage_size, light_on, tsm_needed
+from skinviewer.passes.rules import coverage_size, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
@@ -130,7 +130,7 @@ class TsmPass(Pass):
                 r.skip(r.dropped[TSM])
             return
         r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
-        n = r.setting("deon.tsm_size")
+        n = light_map_size(r, "deon.tsm_size", "deon.irradiance_size_mode")
         r.program("deon_tsm")
         r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
 

@@ -53,7 +53,7 @@ def wanted_map_size(settings, scene) -> float:
     return px_per_mm / max(scene.mean_uv_per_mm, 1e-12)
 
 
-def coverage_size(r, path: str, mode_path: str) -> int:
+def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
     """The map size for setting ``path`` (the user's size, the maximum): the setting itself in
     "fixed" mode; in "auto" the power of two from the screen coverage, changed only when the wanted
     size leaves the hysteresis band. ``r``: a Reflection or ExecuteContext of a scene pass."""
@@ -62,7 +62,7 @@ def coverage_size(r, path: str, mode_path: str) -> int:
         return user
     s = r._settings if hasattr(r, "_settings") else r._frame.settings
     scene = r.scene
-    wanted = wanted_map_size(s, scene)
+    wanted = (wanted_fn or wanted_map_size)(s, scene)
     key = (path, id(scene))
     cur = min(r.state.get(key, user), user)
     if not (cur / 2.0 / HYSTERESIS <= wanted <= cur * HYSTERESIS):
@@ -72,6 +72,16 @@ def coverage_size(r, path: str, mode_path: str) -> int:
     if hasattr(r, "note") and cur != user:
         r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
     return cur
+
+
+def light_map_size(r, path: str, mode_path: str) -> int:
+    """A map seen from a light that frames the bounding sphere (shadow maps, the TSM): about one
+    texel per pixel of the scene's screen diameter."""
+    return coverage_size(r, path, mode_path, screen_diameter_px)
+
+
+def shadow_map_size(r) -> int:
+    return light_map_size(r, "shadow.map_size", "shadow.map_size_mode")
 
 
 # -- translucent shadow map ----------------------------------------------------------------------

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.common import LIGHT_POSE_FIELDS, shadow_resource
-from skinviewer.passes.rules import light_off_reason, light_on
+from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
 from skinviewer.scene.camera import gl_bytes, light_space
 
 
@@ -22,7 +22,7 @@ class ShadowMapPass(Pass):
             r.skip(light_off_reason(i, r.peek(f"lights.{i}")))
             return
         r.section(f"lights.{i}", LIGHT_POSE_FIELDS)
-        size = r.setting("shadow.map_size")
+        size = shadow_map_size(r)
         r.program("shadow_map")
         r.output(shadow_resource(i), TexSpec((size, size), 1, "f4", filter="nearest", depth=True))
 
