@@ -153,3 +153,24 @@ def test_warm_compiles_the_likely_final_variants(gl_ctx):
     finally:
         r.release()
         r.shaders.release()
+
+
+def test_gutter_mask_keeps_images_bit_identical(renderer):
+    from skinviewer.passes.texture_space import read_gutter
+    from skinviewer.physics.diffusion import blur_resource
+    s = small_settings("head", "deon", 64)
+    renderer.render(s, force=True)
+    g = renderer.graph("deon")
+    masks = [k for k in g.shape_state.get("gl_objects", {}) if k[0] == "work_mask"]
+    assert masks, "the blurs drew through a work mask"
+    ring = masks[-1][3]
+    a = {k: renderer.read(s, k) for k in ("lit", "image", blur_resource(3))}
+    gt = read_gutter(g.texture("gutter_256"))
+    off = with_values(s, {"deon.skip_gutters": False})
+    renderer.render(off, force=True)
+    b = {k: renderer.read(off, k) for k in ("lit", "image", blur_resource(3))}
+    assert np.array_equal(a["lit"], b["lit"]) and np.array_equal(a["image"], b["image"])
+    y, x = np.mgrid[0:256, 0:256]
+    near = np.hypot(gt[..., 0] - x, gt[..., 1] - y) <= ring
+    assert 0.3 < near.mean() < 0.95
+    assert np.array_equal(a[blur_resource(3)][near], b[blur_resource(3)][near])  # every texel a reader can reach

@@ -213,6 +213,11 @@ class ExecuteContext:
         """Whether this frame's reflect() declared ``resource`` (optional inputs)."""
         return resource in self._refl.inputs
 
+    def input_version(self, resource: str) -> int:
+        """The version of a declared input (bumps whenever its producer re-ran)."""
+        self.input(resource)
+        return self.graph._versions.get(resource, 0)
+
     def input(self, resource: str) -> moderngl.Texture:
         if resource not in self._refl.inputs:
             raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")
@@ -330,14 +335,29 @@ class ExecuteContext:
         self.graph.gpu.mesh_vao(prog, scene).render()
         self.gl.disable(moderngl.DEPTH_TEST)
 
-    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture") -> None:
+    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
+                        mask: "moderngl.Texture | None" = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
-        ``targets`` (declared outputs or scratch textures), no depth test, no clear."""
-        fbo = self._target(targets)
+        ``targets`` (declared outputs or scratch textures), no depth test, no clear.
+
+        ``mask``: a depth texture of the targets' size, 1 where texels are wanted and 0 elsewhere
+        (texture_space.work_mask): the early depth test drops the others before shading (issue 14:
+        no work on gutter texels no blur can read); those texels keep their previous contents."""
+        if mask is None:
+            fbo = self._target(targets)
+        else:
+            self._target(targets)  # validates them
+            fbo = self.graph._framebuffer_masked(tuple(self.output(t) if isinstance(t, str) else t
+                                                       for t in targets), mask)
         fbo.use()
-        self.gl.disable(moderngl.DEPTH_TEST)
+        if mask is None:
+            self.gl.disable(moderngl.DEPTH_TEST)
+        else:
+            self.gl.enable(moderngl.DEPTH_TEST)
+            self.gl.depth_func = "<"  # the triangle's depth 0.5 passes only over a mask of 1
         self._apply(prog)
         self.graph.gpu.fullscreen_vao(prog).render(vertices=3)
+        self.gl.disable(moderngl.DEPTH_TEST)
 
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
         """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
@@ -507,6 +527,15 @@ class RenderGraph:
                 if rb is None:
                     rb = self._depth[size] = self.ctx.depth_renderbuffer(size)
             fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=rb)
+        return fbo
+
+    def _framebuffer_masked(self, texs: tuple, mask: moderngl.Texture) -> moderngl.Framebuffer:
+        """Colour ``texs`` with the depth texture ``mask`` (read-only: depth writes off)."""
+        key = (texs, ("mask", mask.glo))
+        fbo = self._fbos.get(key)
+        if fbo is None:
+            fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=mask)
+            fbo.depth_mask = False
         return fbo
 
     def texture(self, resource: str) -> moderngl.Texture:
@@ -764,6 +793,8 @@ class RenderGraph:
         for rb in self._depth.values():
             rb.release()
         self._depth.clear()
+        for obj in self.shape_state.pop("gl_objects", {}).values():
+            obj.release()  # work masks (texture_space.work_mask)
         self.gpu.release()
         self.shaders.remove_hook(self.gpu.forget_program)
 

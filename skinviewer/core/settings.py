@@ -210,6 +210,9 @@ class DeonSettings(_Model):
     irradiance_size_mode: Literal["fixed", "auto"] = Field(
         "fixed", description="auto: the irradiance map (and its blurs) sized from the head's screen coverage, "
                              "irradiance_size at most, with hysteresis (issue 14)")
+    skip_gutters: bool = Field(
+        True, description="blurs shade only island texels and the ring of gutter texels a blur can read "
+                          "(early depth test on a mask); images are identical")
     tsm_auto: bool = Field(
         True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
     reuse_irradiance_below_texels: float = Field(
