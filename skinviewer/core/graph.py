@@ -794,7 +794,8 @@ class RenderGraph:
             rb.release()
         self._depth.clear()
         for obj in self.shape_state.pop("gl_objects", {}).values():
-            obj.release()  # work masks (texture_space.work_mask)
+            if obj is not None:
+                obj.release()  # work masks (texture_space.work_mask)
         self.gpu.release()
         self.shaders.remove_hook(self.gpu.forget_program)
 

@@ -210,6 +210,10 @@ class DeonSettings(_Model):
     irradiance_size_mode: Literal["fixed", "auto"] = Field(
         "fixed", description="auto: the irradiance map (and its blurs) sized from the head's screen coverage, "
                              "irradiance_size at most, with hysteresis (issue 14)")
+    fold_below_texels: float = Field(
+        0.0, ge=0.0, le=8.0,
+        description="a later blur whose sigma increment is under this many (mean) texels is folded: blur_i = "
+                    "blur_(i-1), the next blur adds its variance exactly (0: off; 0.5 saves blurs 1-2 at 512^2)")
     skip_gutters: bool = Field(
         True, description="blurs shade only island texels and the ring of gutter texels a blur can read "
                           "(early depth test on a mask); images are identical")

@@ -182,7 +182,7 @@ def mean_texel_mm(scene, n: int) -> float:
 def plan_of(variances, r) -> list:
     """The blur chain for these variances (r: a Reflection or ExecuteContext of a scene pass)."""
     return blur_plan_texels(variances, r.setting("deon.reuse_irradiance_below_texels"),
-                            mean_texel_mm(r.scene, map_size(r)))
+                            mean_texel_mm(r.scene, map_size(r)), r.setting("deon.fold_below_texels"))
 
 
 def _plan(r):
@@ -224,8 +224,10 @@ class GaussianBlurPass(Pass):
         if self.chain == "stretch" and not (r.peek("deon.stretch") and r.peek("deon.stretch_per_gaussian")):
             return
         step = self._step(r)
-        if step.reused:
-            return  # blur_1 is the irradiance itself: the final pass reads it, this pass is pruned
+        if step.reused:  # blur_i is its source: the final pass reads that, this pass is pruned
+            r.skip(f"kernel under {r.setting('deon.fold_below_texels' if self.i else 'deon.reuse_irradiance_below_texels')}"
+                   f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
+            return
         n = map_size(r)
         stretch = self._stretch_input(r, step)
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))

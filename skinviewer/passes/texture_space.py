@@ -63,7 +63,9 @@ def work_mask(ec, size: int, ring: int) -> moderngl.Texture | None:
     if key in objs:
         return objs[key]
     for k in [k for k in objs if k[0] == "work_mask" and k[1] != id(ec.scene)]:
-        objs.pop(k).release()  # masks of a previous scene
+        old = objs.pop(k)  # masks of a previous scene
+        if old is not None:
+            old.release()
     g = read_gutter(ec.input(gutter_resource(size)))
     y, x = np.mgrid[0:size, 0:size]
     near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
