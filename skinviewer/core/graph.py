@@ -181,6 +181,7 @@ class ExecuteContext:
         self._refl = refl
         self._frame = frame
         self._scratch: list[moderngl.Texture] = []
+        self.draws = 0
         self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
 
     @property
@@ -333,6 +334,7 @@ class ExecuteContext:
         self.gl.disable(moderngl.CULL_FACE)
         self._apply(prog)
         self.graph.gpu.mesh_vao(prog, scene).render()
+        self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
     def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
@@ -357,6 +359,7 @@ class ExecuteContext:
             self.gl.depth_func = "<"  # the triangle's depth 0.5 passes only over a mask of 1
         self._apply(prog)
         self.graph.gpu.fullscreen_vao(prog).render(vertices=3)
+        self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
@@ -388,6 +391,7 @@ class PassRecord:
     reason: str = ""
     inputs: list[str] = field(default_factory=list)
     outputs: dict[str, dict] = field(default_factory=dict)
+    draws: int = 0  # draw calls the pass made when it ran
 
 
 @dataclass
@@ -479,7 +483,8 @@ class RenderGraph:
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._produced: dict[str, set[str]] = {}  # pass -> outputs it last declared (freed when pruned)
-        self.shape_state: dict = {}  # memory of scene-driven rules (e.g. map-size hysteresis)
+        self.shape_state: dict = {}
+        self._last_draws = 0  # memory of scene-driven rules (e.g. map-size hysteresis)
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
 
@@ -685,6 +690,7 @@ class RenderGraph:
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
                 rec.ms = self._execute(p, r, frame, timing)
+                rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
@@ -730,6 +736,7 @@ class RenderGraph:
             return ns / 1e6
         finally:
             ec._finish()
+            self._last_draws = ec.draws
 
     def affected(self, paths: Iterable[str], camera: bool = False) -> list[str]:
         """Passes (execution order of the last frame) that a change of these settings would re-run:
