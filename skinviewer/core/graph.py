@@ -338,13 +338,15 @@ class ExecuteContext:
         self.gl.disable(moderngl.DEPTH_TEST)
 
     def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
-                        mask: "moderngl.Texture | None" = None) -> None:
+                        mask: "moderngl.Texture | None" = None, tiles: tuple | None = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
         ``targets`` (declared outputs or scratch textures), no depth test, no clear.
 
         ``mask``: a depth texture of the targets' size, 1 where texels are wanted and 0 elsewhere
         (texture_space.work_mask): the early depth test drops the others before shading (issue 14:
-        no work on gutter texels no blur can read); those texels keep their previous contents."""
+        no work on gutter texels no blur can read); those texels keep their previous contents.
+        ``tiles``: (texture, count, edge) from texture_space.work_tiles, for a program compiled with
+        ``TILED=1``: only those tiles are rasterised (the same texels come out bit-identical)."""
         if mask is None:
             fbo = self._target(targets)
         else:
@@ -357,8 +359,13 @@ class ExecuteContext:
         else:
             self.gl.enable(moderngl.DEPTH_TEST)
             self.gl.depth_func = "<"  # the triangle's depth 0.5 passes only over a mask of 1
+        if tiles is not None:
+            tex, count, edge = tiles
+            self.bind(prog, "u_tiles", tex)
+            w, h = fbo.size
+            self.uniforms(prog, u_tile=float(edge), u_target_size=(float(w), float(h)))
         self._apply(prog)
-        self.graph.gpu.fullscreen_vao(prog).render(vertices=3)
+        self.graph.gpu.fullscreen_vao(prog).render(vertices=3 if tiles is None else 6 * tiles[1])
         self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
@@ -802,7 +809,7 @@ class RenderGraph:
         self._depth.clear()
         for obj in self.shape_state.pop("gl_objects", {}).values():
             if obj is not None:
-                obj.release()  # work masks (texture_space.work_mask)
+                (obj[0] if isinstance(obj, tuple) else obj).release()  # texture_space work masks / tiles
         self.gpu.release()
         self.shaders.remove_hook(self.gpu.forget_program)
 

@@ -215,8 +215,8 @@ class DeonSettings(_Model):
         description="a later blur whose sigma increment is under this many (mean) texels is folded: blur_i = "
                     "blur_(i-1), the next blur adds its variance exactly (0: off; 0.5 saves blurs 1-2 at 512^2)")
     skip_gutters: bool = Field(
-        True, description="blurs shade only island texels and the ring of gutter texels a blur can read "
-                          "(early depth test on a mask); images are identical")
+        False, description="blurs shade only island texels and the ring of gutter texels a blur can read "
+                           "(early depth test on a mask; images identical): for GPUs with early-Z, no gain on llvmpipe")
     tsm_auto: bool = Field(
         True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
     reuse_irradiance_below_texels: float = Field(

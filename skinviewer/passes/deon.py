@@ -40,7 +40,7 @@ from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
     unwrap_dilated,
-    work_mask,
+    work_tiles,
 )
 from skinviewer.physics.diffusion import (
     IRRADIANCE,
@@ -234,8 +234,7 @@ class GaussianBlurPass(Pass):
         r.input(gutter_resource(n))
         if stretch:
             r.input(stretch)
-        r.program("deon_blur")
-        r.setting("deon.skip_gutters")
+        r.program("deon_blur", **({"TILED": 1} if r.setting("deon.skip_gutters") else {}))
         r.output(self._output(), self._spec(n))
 
     def _spec(self, n: int) -> TexSpec:
@@ -262,16 +261,16 @@ class GaussianBlurPass(Pass):
         tmp = ec.scratch(spec)
         tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
-        mask = work_mask(ec, n, blur_ring(ec, n, stretch)) if ec.setting("deon.skip_gutters") else None
+        tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
         for k, sigma in enumerate(sigmas):
             ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
             ec.bind(prog, "source", src)  # horizontal: src -> tmp
             ec.set(prog, "u_dir", (1.0, 0.0))
-            ec.draw_fullscreen(prog, tmp, mask=mask)
+            ec.draw_fullscreen(prog, tmp, tiles=tiles)
             ec.bind(prog, "source", tmp)  # vertical: tmp -> tmp2, or the output on the last sub-step
             ec.set(prog, "u_dir", (0.0, 1.0))
             last = k == len(sigmas) - 1
-            ec.draw_fullscreen(prog, self._output() if last else tmp2, mask=mask)
+            ec.draw_fullscreen(prog, self._output() if last else tmp2, tiles=tiles)
             src = tmp2
 
 
@@ -291,10 +290,11 @@ def likely_final_variants(defines: dict) -> list[dict]:
     return out
 
 
-def blur_ring(ec, n: int, stretch: str | None) -> int:
-    """Texels beyond the islands any blur of the chain can read (seed 000 eq. 25: taps at k * s *
-    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * the largest sub-step sigma * n, plus one for
-    bilinear taps and one for the final pass's bilinear lookups at island edges."""
+def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
+    """Texels beyond the islands that readers of blur_i can reach (seed 000 eq. 25: taps at k * s *
+    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n for this blur's own V taps on its
+    H output and the next blur's taps on its output (sigma <= sqrt(increment); i None: the whole
+    chain), plus one for bilinear taps and one for the final pass's bilinear lookups."""
     if stretch:
         key = ("max_stretch", stretch, ec.input_version(stretch), id(ec.scene))
         s_max = ec.state.get(key)
@@ -306,7 +306,8 @@ def blur_ring(ec, n: int, stretch: str | None) -> int:
     else:
         s_max = ec.scene.mean_uv_per_mm
     plan = plan_of([g.variance for g in ec.peek("deon.gaussians")], ec)  # the whole chain's widest step
-    sigma = max((np.sqrt(step.increment) for step in plan if not step.reused), default=0.0)
+    near = plan if i is None else plan[i:i + 2]
+    sigma = max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0)
     return int(np.ceil(3.0 * s_max * sigma * n)) + 2
 
 

@@ -77,6 +77,40 @@ def work_mask(ec, size: int, ring: int) -> moderngl.Texture | None:
     return tex
 
 
+TILE = 16  # texels per tile edge of work_tiles
+
+
+def work_tiles(ec, size: int, ring: int) -> tuple | None:
+    """The tiles (TILE x TILE texels) holding a texel covered by a UV island or within ``ring``
+    texels of one: (RG32F 1-row texture of tile origins, count, TILE) for ``ec.draw_fullscreen(...,
+    tiles=)`` with a program compiled with TILED=1. Once per mesh, size and ring; one tile of the
+    whole target when they are (nearly) every tile."""
+    objs = ec.state.setdefault("gl_objects", {})
+    key = ("work_tiles", id(ec.scene), size, int(ring))
+    if key in objs:
+        return objs[key]
+    for k in [k for k in objs if k[0] == "work_tiles" and k[1] != id(ec.scene)]:
+        old = objs.pop(k)
+        if old is not None:
+            old[0].release()
+    g = read_gutter(ec.input(gutter_resource(size)))
+    y, x = np.mgrid[0:size, 0:size]
+    near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
+    nt = -(-size // TILE)
+    pad = np.zeros((nt * TILE, nt * TILE), bool)
+    pad[:size, :size] = near
+    any_t = pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))
+    ty, tx = np.nonzero(any_t)
+    edge = TILE
+    if len(tx) == 0 or len(tx) > 0.9 * nt * nt or len(tx) > 16384:
+        tx, ty, edge = np.zeros(1, int), np.zeros(1, int), size  # one tile: the whole target
+    origins = np.stack([tx * TILE, ty * TILE], axis=1).astype(np.float32)
+    tex = ec.gl.texture((len(tx), 1), 2, origins.tobytes(), dtype="f4")
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    objs[key] = (tex, len(tx), edge)
+    return objs[key]
+
+
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
     """Draw the mesh with an unwrap program (shaders/vs/unwrap.vert, seed 000 eq. 8) into a
     cleared scratch texture of size x size (nearest filtering; gutters still empty)."""
