@@ -1,12 +1,20 @@
 """Frame time of each technique relative to Phong, full frame vs camera-only frame, measured side by
-side in one run (synchronous per-pass timing: glFinish + wall clock, right on llvmpipe).
+side in one run (synchronous per-pass timing: glFinish + wall clock, right on llvmpipe), and the
+ratios of issue 14.
 
     python benchmarks/bench_frames.py [--scene head] [--size 256] [--maps 512] [--repeats 5]
 
 A "full frame" re-runs every pass (forced); a "camera-only frame" changes the yaw, so the graph
-re-runs only view-dependent passes. Figures are medians over --repeats, interleaved across
-techniques so machine noise hits all of them alike. Also printed: GPU texture memory each technique
-holds (from its graph's texture specs).
+re-runs only view-dependent passes. Figures are medians over --repeats.
+
+Two states, both printed and named:
+* "sequence": one Renderer runs every technique in turn, interleaved (machine noise hits all
+  alike; techniques share the texture pool and the shader library, as in the viewer);
+* "fresh": each technique in its own new Renderer and ShaderLibrary, nothing else run before it.
+
+Memory ("tex MiB", fresh state) is everything a renderer holds after that technique's frames alone
+(core/memory.py: graph outputs, free pooled scratch, depth buffers, scene maps with mips, mesh
+buffers), not only declared outputs; the sequence renderer's total is printed below the ratios.
 """
 from __future__ import annotations
 
@@ -14,24 +22,73 @@ import argparse
 import statistics
 import time
 
+import moderngl
+
 from skinviewer import techniques
 from skinviewer.core.gl import describe, headless_context
+from skinviewer.core.memory import renderer_memory
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.scene.scenes import scene_overrides
 
 
-def settings_for(tech: str, scene: str, size: int, maps: int) -> Settings:
+def settings_for(tech: str, scene: str, size: int, maps: int, **extra) -> Settings:
     return with_values(Settings(), {"scene.name": scene, **scene_overrides(scene), "technique": tech,
                                     "render.width": size, "render.height": size, "render.timing": "sync",
                                     "shadow.map_size": maps, "gosselin.light_map_size": maps,
-                                    "deon.irradiance_size": maps, "deon.tsm_size": maps})
+                                    "deon.irradiance_size": maps, "deon.tsm_size": maps, **extra})
 
 
 def wall_ms(fn) -> float:
     t0 = time.perf_counter()
     fn()
     return (time.perf_counter() - t0) * 1000.0
+
+
+def full_ms(r: Renderer, s: Settings) -> float:
+    return wall_ms(lambda: (r.render(s, force=True), r.ctx.finish()))
+
+
+def cam_ms(r: Renderer, s: Settings, k: int) -> tuple[float, list[str]]:
+    s2 = with_values(s, {"camera.yaw": s.camera.yaw + 5.0 * (k + 1)})
+    out = {}
+
+    def frame():
+        out["rep"] = r.render(s2)
+        r.ctx.finish()
+    ms = wall_ms(frame)
+    r.render(s)  # back to the base view (not timed)
+    return ms, out["rep"].ran
+
+
+def copy_draw_ms(r: Renderer, size: int, repeats: int) -> float:
+    """One plain full-screen copy (shaders/copy.frag) into an RGBA32F size x size target."""
+    ctx = r.ctx
+    prog = r.shaders.get("copy")
+    src = ctx.texture((size, size), 4, dtype="f4")
+    dst = ctx.texture((size, size), 4, dtype="f4")
+    fbo = ctx.framebuffer([dst])
+    vao = ctx.vertex_array(prog, [])
+    src.use(0)
+    prog["source"].value = 0
+    fbo.use()
+    ctx.disable(moderngl.DEPTH_TEST)
+    times = []
+    for _ in range(repeats + 1):
+        ctx.finish()
+        t0 = time.perf_counter()
+        vao.render(vertices=3)
+        ctx.finish()
+        times.append((time.perf_counter() - t0) * 1000.0)
+    for o in (vao, fbo, src, dst):
+        o.release()
+    return statistics.median(times[1:])
+
+
+def blur_draw_ms(report, name: str) -> tuple[float | None, int]:
+    """A blur pass's time per draw (its H and V draws, times its sub-steps)."""
+    rec = {p.name: p for p in report.passes}.get(name)
+    return (None, 0) if rec is None or rec.ms is None or not rec.draws else (rec.ms / rec.draws, rec.draws)
 
 
 def main() -> None:
@@ -43,48 +100,107 @@ def main() -> None:
     args = ap.parse_args()
 
     ctx = headless_context()
-    r = Renderer(ctx)
     names = techniques.names()
     base = {t: settings_for(t, args.scene, args.size, args.maps) for t in names}
+
+    # -- sequence: one renderer, techniques interleaved ------------------------------------------
+    r = Renderer(ctx)
     full: dict[str, list[float]] = {t: [] for t in names}
     cam: dict[str, list[float]] = {t: [] for t in names}
-    passes_full: dict[str, float] = {}
     ran_cam: dict[str, list[str]] = {}
+    mem: dict[str, float] = {}
+    # the issue's extra frames (d'Eon): every light at zero; head under 1 % of the screen vs close-up
+    auto = {"deon.irradiance_size_mode": "auto", "shadow.map_size_mode": "auto"}
+    dark = settings_for("deon", args.scene, args.size, args.maps,
+                        **{f"lights.{i}.intensity": 0.0 for i in range(len(base["deon"].lights))})
+    close = settings_for("deon", args.scene, args.size, args.maps, **auto)
+    far = with_values(close, {"camera.distance": close_distance(r, close) * 12.0})
+    extra = {"dark": dark, "close": close, "far": far}
+    extra_ms: dict[str, list[float]] = {k: [] for k in extra}
     for t in names:  # warm-up: compile shaders, build scene, first allocation
         r.render(base[t], force=True)
+    for s in extra.values():
+        r.render(s, force=True)
     for k in range(args.repeats):
         for t in names:
-            s = base[t]
-            full[t].append(wall_ms(lambda: (r.render(s, force=True), ctx.finish())))
-            passes_full[t] = r.graph(t).last_report.total_ms
-            s2 = with_values(s, {"camera.yaw": s.camera.yaw + 5.0 * (k + 1)})
-            rep = None
+            full[t].append(full_ms(r, base[t]))
+            ms, ran = cam_ms(r, base[t], k)
+            cam[t].append(ms)
+            ran_cam[t] = ran
+        for key, s in extra.items():
+            extra_ms[key].append(full_ms(r, s))
+    # one d'Eon blur draw (pass time / its H+V draws) vs a plain copy of the same size and format
+    rep = r.render(base["deon"], force=True)
+    blur, draws = blur_draw_ms(rep, "deon_blur_3")
+    copy = copy_draw_ms(r, args.maps, args.repeats)
+    far_rep = r.render(far, force=True)
+    coverage = {p.name: p.reason for p in far_rep.passes}.get("deon_irradiance", "")
 
-            def cam_frame():
-                nonlocal rep
-                rep = r.render(s2)
-                ctx.finish()
-            cam[t].append(wall_ms(cam_frame))
-            ran_cam[t] = rep.ran
-            r.render(s)  # back to the base view (not timed)
+    # -- fresh: each technique alone in a new renderer -------------------------------------------
+    fresh_full: dict[str, float] = {}
+    fresh_cam: dict[str, float] = {}
+    for t in names:
+        rf = Renderer(ctx)
+        rf.render(base[t], force=True)
+        fresh_full[t] = statistics.median(full_ms(rf, base[t]) for _ in range(args.repeats))
+        fresh_cam[t] = statistics.median(cam_ms(rf, base[t], k)[0] for k in range(args.repeats))
+        mem[t] = sum(renderer_memory(rf).values()) / 2**20  # this technique alone
+        rf.release()
+        rf.shaders.release()
 
     print(f"# skinviewer frame times — {describe(ctx)}")
     print(f"# scene={args.scene} image={args.size}x{args.size} maps={args.maps}^2 repeats={args.repeats}; "
-          f"timing mode: sync (glFinish + wall clock)")
-    ref = statistics.median(full["phong"])
-    hdr = f"{'technique':<10} {'full ms':>9} {'x phong':>8} {'camera-only ms':>15} {'x phong':>8} {'cam/full':>9} {'tex MiB':>8}  camera-only re-ran"
+          f"timing mode: sync (glFinish + wall clock); medians; one run, side by side (shared, loaded machine)")
+    print("# sequence = one renderer, techniques interleaved; fresh = each technique alone in a new renderer")
+    ref, fref = statistics.median(full["phong"]), fresh_full["phong"]
+    cref = statistics.median(cam["phong"])
+    hdr = (f"{'technique':<10} {'seq full ms':>12} {'x phong':>8} {'seq cam ms':>11} {'x phong':>8} "
+           f"{'fresh full':>11} {'x phong':>8} {'fresh cam':>10} {'tex MiB':>8}  camera-only re-ran")
     print(hdr)
     print("-" * len(hdr))
     for t in names:
         f, c = statistics.median(full[t]), statistics.median(cam[t])
-        mib = sum(spec.nbytes for spec in r.graph(t).resources().values()) / 2**20
-        print(f"{t:<10} {f:9.1f} {f / ref:8.2f} {c:15.1f} {c / ref:8.2f} {c / f:9.2f} {mib:8.1f}  {', '.join(ran_cam[t])}")
+        print(f"{t:<10} {f:12.1f} {f / ref:8.2f} {c:11.1f} {c / cref:8.2f} {fresh_full[t]:11.1f} "
+              f"{fresh_full[t] / fref:8.2f} {fresh_cam[t]:10.1f} {mem[t]:8.1f}  {', '.join(ran_cam[t])}")
+    print()
+    m = {k: statistics.median(v) for k, v in extra_ms.items()}
+    lit = statistics.median(full["deon"])
+    print("## issue 14 ratios (sequence state unless said)")
+    print(f"{'figure':<58} {'ratio':>7}  {'goal':>6}  detail")
+    rows = [
+        ("d'Eon full frame / Phong full frame", lit / ref, "<= 3.0", f"{lit:.1f} / {ref:.1f} ms"),
+        ("d'Eon full frame / Phong full frame (fresh)", fresh_full["deon"] / fref, "<= 3.0",
+         f"{fresh_full['deon']:.1f} / {fref:.1f} ms"),
+        ("d'Eon camera-only / Phong camera-only", statistics.median(cam["deon"]) / cref, "<= 1.2",
+         f"{statistics.median(cam['deon']):.1f} / {cref:.1f} ms"),
+        ("head under 1 % of the screen / close-up (d'Eon, auto)", m["far"] / m["close"], "<= 0.1",
+         f"{m['far']:.1f} / {m['close']:.1f} ms; {coverage}"),
+        ("every light at zero / lit frame (d'Eon)", m["dark"] / lit, "<= 0.05", f"{m['dark']:.1f} / {lit:.1f} ms"),
+        ("one d'Eon blur draw / plain full-screen copy", (blur or 0.0) / copy, "<= 2.0",
+         f"{blur or 0:.2f} / {copy:.2f} ms ({args.maps}^2 RGBA32F; deon_blur_3 / its {draws} draws)"),
+    ]
+    for name, ratio, goal, detail in rows:
+        print(f"{name:<58} {ratio:7.3f}  {goal:>6}  {detail}")
+    print()
+    print("## memory held by the sequence renderer (every technique's graph), MiB")
+    r.render(base["deon"])
+    for k, v in renderer_memory(r).items():
+        print(f"  {k:<24} {v / 2**20:8.2f}")
     print()
     for t in names:
-        print(f"## {t}: last full frame, per pass")
+        print(f"## {t}: last full frame, per pass (sequence)")
         print(r.render(base[t], force=True).table())
+    for key in ("dark", "far"):
+        print(f"## d'Eon {key} frame, per pass")
+        print(r.render(extra[key], force=True).table())
     r.release()
     ctx.release()
+
+
+def close_distance(r: Renderer, s: Settings) -> float:
+    """The default framing distance (camera.distance None frames the mesh)."""
+    v = r.view(s)
+    return float(((v.eye - r.scene.gpu.center) ** 2).sum() ** 0.5)
 
 
 if __name__ == "__main__":

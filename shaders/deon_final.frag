@@ -39,12 +39,26 @@ uniform vec2 u_uniform_stretch;
 uniform int u_use_stretch;
 out vec4 f_color;
 
+// Specialised (issue 14) by GAUSSIAN_MASK (bit i: Gaussian i has weight and its blur is bound)
+// and DEON_TSM (0: no transmission code); GENERIC_SHADERS or no mask: every slot, uniform-driven.
+#if defined(GAUSSIAN_MASK) && !defined(GENERIC_SHADERS)
+#define G_MASK GAUSSIAN_MASK
+#define G_TSM DEON_TSM
+#else
+#define G_MASK 255
+#define G_TSM 1
+#endif
+// blur_i read here: used ones, and blur_(i-1) of a used i >= 1 for its thickness with the TSM
+#define HERE_MASK (G_MASK | ((G_TSM != 0) ? (G_MASK >> 1) : 0))
+#define THERE_MASK (G_MASK & 254)
+
 // every blurred texture sampled once per point, by name: an index into a chain of samplers would
-// make many compilers fetch all eight on each call
-#define FETCH_BLURS(out_, uv)                                                                    \
-    out_[0] = texture(blur0, uv); out_[1] = texture(blur1, uv); out_[2] = texture(blur2, uv);    \
-    out_[3] = texture(blur3, uv); out_[4] = texture(blur4, uv); out_[5] = texture(blur5, uv);    \
-    out_[6] = texture(blur6, uv); out_[7] = texture(blur7, uv);
+// make many compilers fetch all eight on each call; slots outside `mask` are not sampled at all
+#define FETCH_ONE(out_, k, s, uv, mask) out_[k] = (((mask) >> k) & 1) != 0 ? texture(s, uv) : vec4(0.0);
+#define FETCH_BLURS(out_, uv, mask)                                                                    \
+    FETCH_ONE(out_, 0, blur0, uv, mask) FETCH_ONE(out_, 1, blur1, uv, mask) FETCH_ONE(out_, 2, blur2, uv, mask) \
+    FETCH_ONE(out_, 3, blur3, uv, mask) FETCH_ONE(out_, 4, blur4, uv, mask) FETCH_ONE(out_, 5, blur5, uv, mask) \
+    FETCH_ONE(out_, 6, blur6, uv, mask) FETCH_ONE(out_, 7, blur7, uv, mask)
 
 vec2 uv_per_mm(vec2 uv) {
     vec2 s = (u_use_stretch != 0) ? texture(stretch_map, uv).rg : u_uniform_stretch;
@@ -65,16 +79,23 @@ float tsm_gate(vec2 c, vec3 P) {
 }
 
 void main() {
+#if G_MASK == 0 && G_TSM == 0 && defined(LIGHT_COUNT) && !defined(GENERIC_SHADERS)
+#if LIGHT_COUNT == 0
+    f_color = vec4(0.0, 0.0, 0.0, 1.0);  // every light off: black, as the full sum would give
+    return;
+#endif
+#endif
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
     vec4 here[MAX_GAUSSIANS];
-    FETCH_BLURS(here, v_uv)
+    FETCH_BLURS(here, v_uv, HERE_MASK)
     vec3 diffuse = vec3(0.0);
     for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_count) break;
-        if (u_used[i] != 0) diffuse += u_w[i] * here[i].rgb;  // eq. (34), sum_i w_i blur_i
+        if (((G_MASK >> i) & 1) != 0 && u_used[i] != 0) diffuse += u_w[i] * here[i].rgb;  // eq. (34), sum_i w_i blur_i
     }
+#if G_TSM != 0
     if (u_tsm != 0) {
         vec4 p = u_tsm_matrix * vec4(v_position, 1.0);
         vec2 c = p.xy / max(p.w, 1e-30) * 0.5 + 0.5;
@@ -89,10 +110,10 @@ void main() {
                 vec2 s = 0.5 * (uv_per_mm(v_uv) + uv_per_mm(uvA));
                 float r_mm = length((v_uv - uvA) / s);
                 vec4 there[MAX_GAUSSIANS];
-                FETCH_BLURS(there, uvA)
+                FETCH_BLURS(there, uvA, THERE_MASK)
                 for (int i = 1; i < MAX_GAUSSIANS; ++i) {
                     if (i >= u_count) break;
-                    if (u_used[i] == 0) continue;
+                    if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0) continue;
                     float v = u_var[i];
                     if (!(v > 0.0)) continue;
                     float d = max(deon_finite(here[i - 1].a), 0.0);  // blurred thickness of blur_(i-1)
@@ -103,6 +124,7 @@ void main() {
             }
         }
     }
+#endif
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)

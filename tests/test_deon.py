@@ -392,7 +392,7 @@ def test_tsm_light_is_selectable(renderer):
     """deon.tsm_light picks the light the TSM is rendered from; moving another light leaves it."""
     lights = [{"kind": "directional", "direction": [0.0, 0.15, 1.0], "intensity": 1.0},
               {"kind": "directional", "direction": [0.0, 0.15, -1.0], "intensity": 3.0}]
-    s = _deon("backlit-ear", **{"lights": lights, "deon.tsm_light": 1})
+    s = _deon("backlit-ear", **{"lights": lights, "deon.tsm_light": 1, "deon.tsm_auto": False})  # selection, not the rule
     renderer.render(s)
     rep = renderer.render(with_values(s, {"lights.0.direction": [0.2, 0.15, 1.0]}))
     assert "deon_tsm" in rep.cached  # rendered from light 1

@@ -72,13 +72,33 @@ def _gb(n: int) -> str:
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
-    def __init__(self, settings: Settings, scene: Any = None):
+    def __init__(self, settings: Settings, scene: Any = None, state: dict | None = None):
         self._settings = settings
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self.settings: list[str] = []
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
         self.programs: list[tuple[str, tuple]] = []
+        # scene-driven rules (core/rules.py): why this pass is skipped, why a consumer no longer
+        # reads a resource (its producer is pruned with that reason), notes for the frame report
+        self.skip_reason: str | None = None
+        self.dropped: dict[str, str] = {}
+        self.notes: list[str] = []
+        self.state = state if state is not None else {}  # the graph's memory for shape decisions
+
+    def skip(self, reason: str) -> None:
+        """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
+        self.skip_reason = reason
+
+    def drop(self, resource: str, reason: str) -> None:
+        """This pass does not read ``resource`` this frame because of ``reason``: when nothing else
+        reads it its producer is reported "pruned: reason"."""
+        self.dropped.setdefault(resource, reason)
+
+    def note(self, text: str) -> None:
+        """A scene-driven choice shown with the pass in the frame report (e.g. a map size)."""
+        if text not in self.notes:
+            self.notes.append(text)
 
     def setting(self, path: str) -> Any:
         """Declare a setting (dotted path) and return its current value."""
@@ -177,6 +197,7 @@ class ExecuteContext:
         self._refl = refl
         self._frame = frame
         self._scratch: list[moderngl.Texture] = []
+        self.draws = 0
         self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
 
     @property
@@ -196,9 +217,23 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")
         return get_path(self._frame.settings, path)
 
+    def peek(self, path: str) -> Any:
+        """A setting read for the graph's shape only (as Reflection.peek), not declared."""
+        return get_path(self._frame.settings, path)
+
+    @property
+    def state(self) -> dict:
+        """The graph's memory for shape decisions (Reflection.state)."""
+        return self.graph.shape_state
+
     def has_input(self, resource: str) -> bool:
         """Whether this frame's reflect() declared ``resource`` (optional inputs)."""
         return resource in self._refl.inputs
+
+    def input_version(self, resource: str) -> int:
+        """The version of a declared input (bumps whenever its producer re-ran)."""
+        self.input(resource)
+        return self.graph._versions.get(resource, 0)
 
     def input(self, resource: str) -> moderngl.Texture:
         if resource not in self._refl.inputs:
@@ -315,16 +350,40 @@ class ExecuteContext:
         self.gl.disable(moderngl.CULL_FACE)
         self._apply(prog)
         self.graph.gpu.mesh_vao(prog, scene).render()
+        self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
-    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture") -> None:
+    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
+                        mask: "moderngl.Texture | None" = None, tiles: tuple | None = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
-        ``targets`` (declared outputs or scratch textures), no depth test, no clear."""
-        fbo = self._target(targets)
+        ``targets`` (declared outputs or scratch textures), no depth test, no clear.
+
+        ``mask``: a depth texture of the targets' size, 1 where texels are wanted and 0 elsewhere
+        (texture_space.work_mask): the early depth test drops the others before shading (issue 14:
+        no work on gutter texels no blur can read); those texels keep their previous contents.
+        ``tiles``: (texture, count, edge) from texture_space.work_tiles, for a program compiled with
+        ``TILED=1``: only those tiles are rasterised (the same texels come out bit-identical)."""
+        if mask is None:
+            fbo = self._target(targets)
+        else:
+            self._target(targets)  # validates them
+            fbo = self.graph._framebuffer_masked(tuple(self.output(t) if isinstance(t, str) else t
+                                                       for t in targets), mask)
         fbo.use()
-        self.gl.disable(moderngl.DEPTH_TEST)
+        if mask is None:
+            self.gl.disable(moderngl.DEPTH_TEST)
+        else:
+            self.gl.enable(moderngl.DEPTH_TEST)
+            self.gl.depth_func = "<"  # the triangle's depth 0.5 passes only over a mask of 1
+        if tiles is not None:
+            tex, count, edge = tiles
+            self.bind(prog, "u_tiles", tex)
+            w, h = fbo.size
+            self.uniforms(prog, u_tile=float(edge), u_target_size=(float(w), float(h)))
         self._apply(prog)
-        self.graph.gpu.fullscreen_vao(prog).render(vertices=3)
+        self.graph.gpu.fullscreen_vao(prog).render(vertices=3 if tiles is None else 6 * tiles[1])
+        self.draws += 1
+        self.gl.disable(moderngl.DEPTH_TEST)
 
     def note(self, text: str, **figures) -> None:
         """A figure this run measured (e.g. samples counted on the GPU): shown with the pass in the
@@ -363,6 +422,7 @@ class PassRecord:
     note: str = ""  # what the pass measured when it last ran (ExecuteContext.note)
     figures: dict = field(default_factory=dict)
     nonfinite: list[str] = field(default_factory=list)  # outputs holding NaN/Inf (render.check_finite)
+    draws: int = 0  # draw calls the pass made when it ran
 
 
 @dataclass
@@ -462,6 +522,9 @@ class RenderGraph:
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
+        self._produced: dict[str, set[str]] = {}  # pass -> outputs it last declared (freed when pruned)
+        self.shape_state: dict = {}
+        self._last_draws = 0  # memory of scene-driven rules (e.g. map-size hysteresis)
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
@@ -516,6 +579,15 @@ class RenderGraph:
             fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=rb)
         return fbo
 
+    def _framebuffer_masked(self, texs: tuple, mask: moderngl.Texture) -> moderngl.Framebuffer:
+        """Colour ``texs`` with the depth texture ``mask`` (read-only: depth writes off)."""
+        key = (texs, ("mask", mask.glo))
+        fbo = self._fbos.get(key)
+        if fbo is None:
+            fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=mask)
+            fbo.depth_mask = False
+        return fbo
+
     def texture(self, resource: str) -> moderngl.Texture:
         return self._textures[resource]
 
@@ -539,8 +611,14 @@ class RenderGraph:
     def _reflect_all(self, settings: Settings, scene: Any = None) -> dict[str, Reflection]:
         refl = {}
         for p in self.passes:
-            r = Reflection(settings, scene if p.uses_scene else None)
+            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state)
             p.reflect(r)
+            if r.skip_reason is not None:  # a skipped pass declares nothing
+                r.inputs, r.outputs, r.programs = [], {}, []
+            elif r.outputs:
+                for res in self._produced.get(p.name, set()) - set(r.outputs):
+                    self._free(res)  # e.g. a gutter map of a map size no longer used
+                self._produced[p.name] = set(r.outputs)
             refl[p.name] = r
         return refl
 
@@ -662,6 +740,9 @@ class RenderGraph:
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
                 rec.ms = self._execute(p, r, frame, timing)
+                rec.draws = self._last_draws
+                if r.notes:
+                    rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
                     self._last_ms[p.name] = rec.ms
                 for res in r.outputs:
@@ -671,13 +752,15 @@ class RenderGraph:
             rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
             if p.name in self._notes:
                 rec.note, rec.figures = self._notes[p.name]
+            if rec.status == "cached" and r.notes:
+                rec.reason = "; ".join(r.notes)
             records[p.name] = rec
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         for p in self.passes:
             if p.name not in live:
-                records[p.name] = PassRecord(p.name, "pruned", reason="output not consumed",
+                records[p.name] = PassRecord(p.name, "pruned", reason=_prune_reason(p.name, refl, live),
                                              inputs=list(refl[p.name].inputs))
-                for res in refl[p.name].outputs:
+                for res in set(refl[p.name].outputs) | self._produced.pop(p.name, set()):
                     if res in self._textures:
                         self._free(res)
                 self._keys.pop(p.name, None)
@@ -708,6 +791,7 @@ class RenderGraph:
             return ns / 1e6
         finally:
             ec._finish()
+            self._last_draws = ec.draws
 
     # -- reliability: memory needed before allocating, non-finite outputs after running ----------
     def plan_bytes(self, refl: dict[str, Reflection], order: list[Pass]) -> tuple[int, list[tuple[str, int]]]:
@@ -811,6 +895,16 @@ class RenderGraph:
         last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
         return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
 
+    def likely_programs(self) -> list[tuple[str, dict]]:
+        """Program variants one toggle away from the last frame's (passes that define
+        ``likely_programs(reflection)``): what ShaderLibrary.warm compiles while the viewer idles."""
+        out = []
+        for p in self.order:
+            fn = getattr(p, "likely_programs", None)
+            if fn is not None and p.name in self._last_refl:
+                out += fn(self._last_refl[p.name])
+        return out
+
     def trim(self) -> None:
         """Release depth buffers no cached framebuffer uses (one is made per render size)."""
         used = {fbo.depth_attachment.glo for fbo in self._fbos.values() if fbo.depth_attachment is not None}
@@ -835,6 +929,9 @@ class RenderGraph:
         for rb in self._depth.values():
             rb.release()
         self._depth.clear()
+        for obj in self.shape_state.pop("gl_objects", {}).values():
+            if obj is not None:
+                (obj[0] if isinstance(obj, tuple) else obj).release()  # texture_space work masks / tiles
         self.gpu.release()
         self.shaders.remove_hook(self.gpu.forget_program)
         if self._check_lib is not None:
@@ -846,6 +943,25 @@ class RenderGraph:
         report = self.last_report
         out = report.to_json()["passes"] if report else []
         return out
+
+
+def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth: int = 0) -> str:
+    """Why a pass is pruned: its own skip reason, a consumer's reason for dropping its output, or
+    the reason its only consumers are pruned."""
+    r = refl[name]
+    if r.skip_reason is not None:
+        return "pruned: " + r.skip_reason
+    outs = set(r.outputs)
+    for other in refl.values():
+        for res in outs & set(other.dropped):
+            return "pruned: " + other.dropped[res]
+    if depth < 8:
+        for n, other in refl.items():
+            if n not in live and n != name and outs & set(other.inputs):
+                why = _prune_reason(n, refl, live, depth + 1)
+                if why.startswith("pruned: "):
+                    return why + f" (via {n})"
+    return "output not consumed"
 
 
 class TexturePool:

@@ -214,6 +214,12 @@ class Renderer:
     def read(self, s: Settings, resource: str) -> np.ndarray:
         return self.graph(s.technique).read(resource)
 
+    def warm(self, technique: str, budget_ms: float | None = 50.0) -> int:
+        """Compile the likely next shader variants of ``technique`` (idle time); returns how many
+        are left."""
+        g = self.graphs.get(technique)
+        return 0 if g is None else self.shaders.warm(g.likely_programs(), budget_ms)
+
     def trim(self) -> None:
         """Give GL back what no graph uses now: free pooled textures (every size ever rendered at)
         and depth buffers of sizes no longer drawn. Cached outputs stay."""

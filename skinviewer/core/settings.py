@@ -134,6 +134,8 @@ class LightSettings(_Model):
 
 class ShadowSettings(_Model):
     map_size: int = Field(1024, ge=64, le=8192)
+    map_size_mode: Literal["fixed", "auto"] = Field(
+        "fixed", description="auto: shadow maps sized from the scene's screen coverage, map_size at most (issue 14)")
     # seed 000 eq. (7): shadowed if d(P) - ds > tol; tol in normalised light-space depth
     tol: float = Field(0.002, ge=0.0, le=0.5)
     pcf: int = Field(1, ge=0, le=MAX_PCF, description="percentage-closer filter radius in texels (0 = eq. 7 hard test)")
@@ -252,6 +254,18 @@ class DeonSettings(_Model):
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True
     irradiance_size: int = Field(1024, ge=256, le=4096)
+    irradiance_size_mode: Literal["fixed", "auto"] = Field(
+        "fixed", description="auto: the irradiance map (and its blurs) sized from the head's screen coverage, "
+                             "irradiance_size at most, with hysteresis (issue 14)")
+    fold_below_texels: float = Field(
+        0.0, ge=0.0, le=8.0,
+        description="a later blur whose sigma increment is under this many (mean) texels is folded: blur_i = "
+                    "blur_(i-1), the next blur adds its variance exactly (0: off; 0.5 saves blurs 1-2 at 512^2)")
+    skip_gutters: bool = Field(
+        False, description="blurs shade only island texels and the ring of gutter texels a blur can read "
+                           "(early depth test on a mask; images identical): for GPUs with early-Z, no gain on llvmpipe")
+    tsm_auto: bool = Field(
+        True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
     reuse_irradiance_below_texels: float = Field(
         0.5, ge=0.0, le=8.0,
         description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -255,6 +256,22 @@ class ShaderLibrary:
         if entry.program is None:
             raise ShaderCompileError(name, entry.errors)
         return entry.program
+
+    def warm(self, items, budget_ms: float | None = None) -> int:
+        """Compile the variants ``items`` ((name, defines) pairs) not compiled yet, until
+        ``budget_ms`` of wall time is spent (viewer idle frames, issue 14: a toggle then does not
+        stall on a compile). Returns how many are still to compile. A driver that JIT-compiles at
+        the first draw (llvmpipe) still pays that part then."""
+        t0 = time.perf_counter()
+        todo = [(n, d) for n, d in items
+                if (n, tuple(sorted((str(k), str(v)) for k, v in (d or {}).items()))) not in self._entries]
+        done = 0
+        for name, defines in todo:
+            if budget_ms is not None and done and (time.perf_counter() - t0) * 1000.0 > budget_ms:
+                break
+            self._entry(name, defines)
+            done += 1
+        return len(todo) - done
 
     def version(self, name: str, defines: dict | None = None) -> str:
         """Digest of the assembled source of the running program (part of pass cache keys)."""

@@ -8,6 +8,7 @@ import numpy as np
 from skinviewer.core.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
 from skinviewer.core.graph import Reflection, TexSpec
 from skinviewer.passes.luts import BECKMANN_LUT
+from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
 from skinviewer.scene.camera import gl_bytes, light_space
 
 LIGHT_POSE_FIELDS = ("kind", "direction", "position", "beam_radius", "cast_shadow", "enabled")
@@ -24,8 +25,11 @@ def declare_lighting(r: Reflection) -> dict[str, int]:
     lights = r.setting("lights")
     r.setting("shadow.tol")
     pcf = r.setting("shadow.pcf")
-    r.setting("shadow.map_size")
-    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
+    shadow_map_size(r)
+    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if light_on(l)]
+    for i, l in enumerate(lights[:MAX_LIGHTS]):
+        if not light_on(l) and l.cast_shadow:
+            r.drop(shadow_resource(i), light_off_reason(i, l))
     mask = 0
     for slot, (i, l) in enumerate(active):
         if l.cast_shadow:
@@ -38,8 +42,8 @@ def set_lighting(ec, prog) -> None:
     """Set the uniforms and shadow maps of shaders/lib/lights.glsl (slot k = k-th enabled light)."""
     scene = ec.scene
     lights = ec.setting("lights")
-    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if l.enabled]
-    map_size = ec.setting("shadow.map_size")
+    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if light_on(l)]
+    map_size = shadow_map_size(ec)
     kind = np.zeros(MAX_LIGHTS, np.int32)
     radiance = np.zeros((MAX_LIGHTS, 3), np.float32)
     dirs = np.tile(np.float32([0.0, 0.0, 1.0]), (MAX_LIGHTS, 1))

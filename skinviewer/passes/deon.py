@@ -35,10 +35,12 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
+from skinviewer.passes.rules import coverage_size, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
     unwrap_dilated,
+    work_tiles,
 )
 from skinviewer.physics.diffusion import (
     IRRADIANCE,
@@ -57,8 +59,9 @@ MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 
 
-def _size(r) -> int:
-    return r.setting(SIZE)
+def map_size(r) -> int:
+    """The irradiance-map size: deon.irradiance_size, or from the screen coverage (rules.py)."""
+    return coverage_size(r, SIZE, "deon.irradiance_size_mode")
 
 
 # -- which light casts the TSM --------------------------------------------------------------------
@@ -70,11 +73,19 @@ def tsm_light_index(r) -> int | None:
     if not r.setting("deon.tsm"):
         return None
     n = min(r.setting("lights.#"), MAX_LIGHTS)
-    usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")]
+    usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")
+              and light_on(r.peek(f"lights.{j}"))]
     want = r.setting("deon.tsm_light")
-    if want is not None and want in usable:
-        return want
-    return usable[0] if usable else None
+    j = want if want is not None and want in usable else (usable[0] if usable else None)
+    if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
+        # issue 14: only when the light is behind a thin part in view (peeked: shape only)
+        s = r._settings if hasattr(r, "_settings") else r._frame.settings
+        need, why = tsm_needed(s, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
+        if not need:
+            if hasattr(r, "drop"):
+                r.drop(TSM, why)
+            return None
+    return j
 
 
 def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
@@ -99,11 +110,11 @@ class StretchPass(Pass):
     name = "deon_stretch"
 
     def reflect(self, r: Reflection) -> None:
-        n = _size(r)
-        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 4, "f4"))
+        n = map_size(r)
+        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 2, "f4"))  # RG only
 
     def execute(self, ec) -> None:
-        n = ec.setting(SIZE)
+        n = map_size(ec)
         prog = ec.program("deon_stretch")
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
         unwrap_dilated(ec, prog, n, STRETCH)
@@ -116,9 +127,11 @@ class TsmPass(Pass):
     def reflect(self, r: Reflection) -> None:
         j = tsm_light_index(r)
         if j is None:
+            if TSM in r.dropped:  # the rule's reason (rules.tsm_needed)
+                r.skip(r.dropped[TSM])
             return
         r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
-        n = r.setting("deon.tsm_size")
+        n = light_map_size(r, "deon.tsm_size", "deon.irradiance_size_mode")
         r.program("deon_tsm")
         r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
 
@@ -133,7 +146,7 @@ class IrradiancePass(Pass):
     name = "deon_irradiance"
 
     def reflect(self, r: Reflection) -> None:
-        n = _size(r)
+        n = map_size(r)
         lighting = declare_lighting(r)
         r.setting("deon.mix")
         if r.setting("deon.energy_conservation"):
@@ -144,7 +157,7 @@ class IrradiancePass(Pass):
         declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting)
 
     def execute(self, ec) -> None:
-        n = ec.setting(SIZE)
+        n = map_size(ec)
         prog = ec.program("deon_irradiance")
         bind_surface(ec, prog)
         set_lighting(ec, prog)
@@ -169,7 +182,7 @@ def mean_texel_mm(scene, n: int) -> float:
 def plan_of(variances, r) -> list:
     """The blur chain for these variances (r: a Reflection or ExecuteContext of a scene pass)."""
     return blur_plan_texels(variances, r.setting("deon.reuse_irradiance_below_texels"),
-                            mean_texel_mm(r.scene, r.setting(SIZE)))
+                            mean_texel_mm(r.scene, map_size(r)), r.setting("deon.fold_below_texels"))
 
 
 def _plan(r):
@@ -211,23 +224,28 @@ class GaussianBlurPass(Pass):
         if self.chain == "stretch" and not (r.peek("deon.stretch") and r.peek("deon.stretch_per_gaussian")):
             return
         step = self._step(r)
-        if step.reused:
-            return  # blur_1 is the irradiance itself: the final pass reads it, this pass is pruned
-        n = _size(r)
+        if step.reused:  # blur_i is its source: the final pass reads that, this pass is pruned
+            r.skip(f"kernel under {r.setting('deon.fold_below_texels' if self.i else 'deon.reuse_irradiance_below_texels')}"
+                   f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
+            return
+        n = map_size(r)
         stretch = self._stretch_input(r, step)
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
         if stretch:
             r.input(stretch)
-        r.program("deon_blur")
-        r.output(self._output(), TexSpec((n, n), 4, "f4"))
+        r.program("deon_blur", **({"TILED": 1} if r.setting("deon.skip_gutters") else {}))
+        r.output(self._output(), self._spec(n))
+
+    def _spec(self, n: int) -> TexSpec:
+        return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
 
     def _step(self, r):
         vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
         return plan_of(vs, r)[self.i]
 
     def execute(self, ec) -> None:
-        n = ec.setting(SIZE)
+        n = map_size(ec)
         step = self._step(ec)
         prog = ec.program("deon_blur")
         stretch = self._stretch_input(ec, step)
@@ -239,20 +257,58 @@ class GaussianBlurPass(Pass):
         ec.bind(prog, "gutter", gutter_resource(n))
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
-        spec = TexSpec((n, n), 4, "f4")
+        spec = self._spec(n)
         tmp = ec.scratch(spec)
         tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
+        tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
         for k, sigma in enumerate(sigmas):
             ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
             ec.bind(prog, "source", src)  # horizontal: src -> tmp
             ec.set(prog, "u_dir", (1.0, 0.0))
-            ec.draw_fullscreen(prog, tmp)
+            ec.draw_fullscreen(prog, tmp, tiles=tiles)
             ec.bind(prog, "source", tmp)  # vertical: tmp -> tmp2, or the output on the last sub-step
             ec.set(prog, "u_dir", (0.0, 1.0))
             last = k == len(sigmas) - 1
-            ec.draw_fullscreen(prog, self._output() if last else tmp2)
+            ec.draw_fullscreen(prog, self._output() if last else tmp2, tiles=tiles)
             src = tmp2
+
+
+def final_defines(mask: int, tsm: bool) -> dict[str, int]:
+    """deon_final.frag's specialisation: GAUSSIAN_MASK (bit i: Gaussian i has weight), DEON_TSM."""
+    return {"GAUSSIAN_MASK": int(mask), "DEON_TSM": int(bool(tsm))}
+
+
+def likely_final_variants(defines: dict) -> list[dict]:
+    """The deon_final variants one toggle away from ``defines`` (a weight to/from zero, the TSM
+    on/off): what the viewer compiles while idle so a toggle does not stall."""
+    out = []
+    mask, n = defines.get("GAUSSIAN_MASK", 0), MAX_GAUSSIANS
+    for i in range(n):
+        out.append({**defines, "GAUSSIAN_MASK": mask ^ (1 << i)})
+    out.append({**defines, "DEON_TSM": 1 - defines.get("DEON_TSM", 0)})
+    return out
+
+
+def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
+    """Texels beyond the islands that readers of blur_i can reach (seed 000 eq. 25: taps at k * s *
+    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n for this blur's own V taps on its
+    H output and the next blur's taps on its output (sigma <= sqrt(increment); i None: the whole
+    chain), plus one for bilinear taps and one for the final pass's bilinear lookups."""
+    if stretch:
+        key = ("max_stretch", stretch, ec.input_version(stretch), id(ec.scene))
+        s_max = ec.state.get(key)
+        if s_max is None:
+            tex = ec.input(stretch)
+            a = np.frombuffer(tex.read(), np.float32)
+            a = a[np.isfinite(a)]
+            s_max = ec.state[key] = float(a.max()) if a.size else 0.0
+    else:
+        s_max = ec.scene.mean_uv_per_mm
+    plan = plan_of([g.variance for g in ec.peek("deon.gaussians")], ec)  # the whole chain's widest step
+    near = plan if i is None else plan[i:i + 2]
+    sigma = max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0)
+    return int(np.ceil(3.0 * s_max * sigma * n)) + 2
 
 
 class DeonFinalPass(Pass):
@@ -264,6 +320,11 @@ class DeonFinalPass(Pass):
         lighting = declare_lighting(r)
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
+        if lighting["LIGHT_COUNT"] == 0:  # every light off: black (no irradiance, no specular)
+            for step in plan:
+                r.drop(texture_of(step), "every light is off or at zero intensity")
+            declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
+            return
         r.setting("deon.mix")
         declare_specular(r)
         if r.setting("deon.energy_conservation"):
@@ -272,18 +333,34 @@ class DeonFinalPass(Pass):
         if tsm:
             r.setting("deon.tsm_form")
             r.input(TSM)
+        mask = 0
         for i, (g, step) in enumerate(zip(gs, plan)):
             if any(w > 0 for w in g.weights):
+                mask |= 1 << i
                 r.input(texture_of(step))
                 if tsm and i >= 1:
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
+            else:
+                r.drop(texture_of(step), f"Gaussian {i} has zero weight")
         if tsm and r.setting("deon.stretch"):
             r.input(STRETCH)
-        declare_lit(r, "deon_final", **lighting)
+        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm))
+
+    def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
+        """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
+        return [("deon_final", v) for n, d in r.programs if n == "deon_final"
+                for v in likely_final_variants(dict(d))]
+
+    @staticmethod
+    def dark(ec) -> bool:
+        return not any(light_on(l) for l in ec.setting("lights")[:MAX_LIGHTS])
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
         set_camera(ec, prog)
+        if self.dark(ec):
+            ec.draw_mesh(prog, LIT)
+            return
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         has = ec.has_input

@@ -29,7 +29,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.core.settings import REGIONS, RegionKernel
@@ -47,6 +46,7 @@ from skinviewer.passes.texture_space import (
     declare_unwrapped,
     dilate,
     gutter_resource,
+    read_gutter,
     unwrap_dilated,
 )
 from skinviewer.physics.poisson import POISSON_12
@@ -117,6 +117,7 @@ def radius_map(region_ids: np.ndarray, radii: np.ndarray, size: int,
     r_max = float(radii[present].max()) if present.size else 0.0
     if r_max > 0.0 and float(radii[present].min()) != r_max:
         sigma = min(max(0.5 * r_max, 1.0), MAX_SMOOTH_SIGMA)
+        from scipy import ndimage  # here, not at import: scipy costs start-up (issue 14)
         rad = ndimage.gaussian_filter(rad, sigma, mode="nearest")
     return np.clip(rad, 0.0, float(size)).astype(np.float32)
 
@@ -136,7 +137,7 @@ class GosselinRadiusMapPass(Pass):
         size = ec.setting(SIZE)
         radii = region_radii(ec.section("gosselin", KERNEL_FIELDS), size)
         gtex = ec.input(gutter_resource(size))
-        gutter = np.frombuffer(gtex.read(), dtype=np.float32).reshape(size, size, 4)
+        gutter = read_gutter(gtex)
         rad = radius_map(ec.scene.region_ids, radii, size, gutter)
         ec.output(RADIUS_MAP).write(np.ascontiguousarray(rad).tobytes())
 

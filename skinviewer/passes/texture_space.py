@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import moderngl
 import numpy as np
-from scipy import ndimage
 
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
@@ -19,20 +18,97 @@ class GutterMapPass(Pass):
     coverage (B). Depends on the mesh and the texture size only, so it runs once per scene/size.
     ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
 
-    def __init__(self, size_setting: str, name: str | None = None):
+    def __init__(self, size_setting: str, name: str | None = None, size_of=None):
         self.size_setting = size_setting
         self.name = name or f"gutter_map[{size_setting}]"
+        self.size_of = size_of  # optional: size from a rule (e.g. screen coverage), given r
+
+    def _n(self, r) -> int:
+        return self.size_of(r) if self.size_of is not None else r.setting(self.size_setting)
 
     def reflect(self, r: Reflection) -> None:
-        size = r.setting(self.size_setting)
+        size = self._n(r)
         r.program("uv_coverage")
-        r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
+        r.output(gutter_resource(size), gutter_spec(size))
 
     def execute(self, ec) -> None:
-        size = ec.setting(self.size_setting)
+        size = self._n(ec)
         cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
-        ec.output(gutter_resource(size)).write(gutter_table(covered).tobytes())
+        spec = gutter_spec(size)
+        table = gutter_table(covered)[..., :spec.components]
+        ec.output(gutter_resource(size)).write(table.astype(np.float16 if spec.dtype == "f2" else np.float32).tobytes())
+
+
+def gutter_spec(size: int) -> TexSpec:
+    """RG integer texel coordinates: half floats hold every integer up to 2048 exactly (issue 14:
+    exact formats; the coverage flag B of gutter_table is not read by any shader)."""
+    return TexSpec((size, size), 2, "f2" if size <= 2048 else "f4", filter="nearest")
+
+
+def read_gutter(tex: moderngl.Texture) -> np.ndarray:
+    """The gutter map back on the CPU: (H, W, 2) float32, RG = source texel."""
+    w, h = tex.size
+    dt = np.float16 if tex.dtype == "f2" else np.float32
+    return np.frombuffer(tex.read(), dtype=dt).reshape(h, w, tex.components).astype(np.float32)
+
+
+def work_mask(ec, size: int, ring: int) -> moderngl.Texture | None:
+    """A depth texture (size x size) for ``ec.draw_fullscreen(..., mask=)``: 1 on texels covered by
+    a UV island or within ``ring`` texels of one (what a blur can read), 0 on the rest of the
+    gutters. Built on the CPU from the gutter map once per mesh, size and ring (the graph keeps
+    it). None when the ring reaches (nearly) everything: a plain draw is then cheaper."""
+    objs = ec.state.setdefault("gl_objects", {})
+    key = ("work_mask", id(ec.scene), size, int(ring))
+    if key in objs:
+        return objs[key]
+    for k in [k for k in objs if k[0] == "work_mask" and k[1] != id(ec.scene)]:
+        old = objs.pop(k)  # masks of a previous scene
+        if old is not None:
+            old.release()
+    g = read_gutter(ec.input(gutter_resource(size)))
+    y, x = np.mgrid[0:size, 0:size]
+    near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
+    if near.mean() > 0.9:
+        objs[key] = None
+        return None
+    tex = ec.gl.depth_texture((size, size), near.astype(np.float32).tobytes())
+    objs[key] = tex
+    return tex
+
+
+TILE = 16  # texels per tile edge of work_tiles
+
+
+def work_tiles(ec, size: int, ring: int) -> tuple | None:
+    """The tiles (TILE x TILE texels) holding a texel covered by a UV island or within ``ring``
+    texels of one: (RG32F 1-row texture of tile origins, count, TILE) for ``ec.draw_fullscreen(...,
+    tiles=)`` with a program compiled with TILED=1. Once per mesh, size and ring; one tile of the
+    whole target when they are (nearly) every tile."""
+    objs = ec.state.setdefault("gl_objects", {})
+    key = ("work_tiles", id(ec.scene), size, int(ring))
+    if key in objs:
+        return objs[key]
+    for k in [k for k in objs if k[0] == "work_tiles" and k[1] != id(ec.scene)]:
+        old = objs.pop(k)
+        if old is not None:
+            old[0].release()
+    g = read_gutter(ec.input(gutter_resource(size)))
+    y, x = np.mgrid[0:size, 0:size]
+    near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
+    nt = -(-size // TILE)
+    pad = np.zeros((nt * TILE, nt * TILE), bool)
+    pad[:size, :size] = near
+    any_t = pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))
+    ty, tx = np.nonzero(any_t)
+    edge = TILE
+    if len(tx) == 0 or len(tx) > 0.9 * nt * nt or len(tx) > 16384:
+        tx, ty, edge = np.zeros(1, int), np.zeros(1, int), size  # one tile: the whole target
+    origins = np.stack([tx * TILE, ty * TILE], axis=1).astype(np.float32)
+    tex = ec.gl.texture((len(tx), 1), 2, origins.tobytes(), dtype="f4")
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    objs[key] = (tex, len(tx), edge)
+    return objs[key]
 
 
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
@@ -63,6 +139,7 @@ def gutter_table(covered: np.ndarray) -> np.ndarray:
     h, w = covered.shape
     out = np.zeros((h, w, 4), np.float32)
     if covered.any():
+        from scipy import ndimage  # here, not at import: scipy costs start-up (issue 14 item 7)
         _, (iy, ix) = ndimage.distance_transform_edt(~covered, return_indices=True)
     else:
         iy, ix = np.mgrid[0:h, 0:w]

@@ -104,7 +104,7 @@ class BlurStep:
     source: str  # resource blurred: "deon_irradiance" or "blur_{i-1}"
     increment: float  # variance (mm^2) added by this blur, >= 0
     variance: float  # variance the result actually has (mm^2)
-    reused: bool  # blur_i *is* the irradiance (no pass)
+    reused: bool  # blur_i *is* its source (the irradiance, or a folded sub-texel step): no pass
 
 
 IRRADIANCE = "deon_irradiance"
@@ -119,11 +119,13 @@ def stretch_blur_resource(i: int) -> str:
     return f"stretch_blur_{i}"
 
 
-def blur_plan(variances, reuse_below: float) -> list[BlurStep]:
+def blur_plan(variances, reuse_below: float, fold_below: float = 0.0) -> list[BlurStep]:
     """One step per Gaussian. blur_i = blur_(i-1) (x) G(v_i - var(blur_(i-1))) with the increment
     clamped to >= 0 (non-ascending variances: blur_i = blur_(i-1)); the first Gaussian reuses the
     irradiance itself (variance 0) when v_1 < reuse_below. The increment is measured from the
-    variance the previous texture really has, so a reused or clamped step does not lose width."""
+    variance the previous texture really has, so a reused or clamped step does not lose width.
+    ``fold_below`` (variance, mm^2): a later step whose increment is under it is folded too, blur_i
+    = its source; the next real step then adds the folded variance exactly (issue 14)."""
     steps: list[BlurStep] = []
     have = 0.0
     src = IRRADIANCE
@@ -133,22 +135,27 @@ def blur_plan(variances, reuse_below: float) -> list[BlurStep]:
             steps.append(BlurStep(0, IRRADIANCE, 0.0, 0.0, True))
             continue
         inc = max(v - have, 0.0)
+        if i > 0 and inc < fold_below:
+            steps.append(BlurStep(i, src, 0.0, have, True))
+            continue
         steps.append(BlurStep(i, src, inc, have + inc, False))
         have += inc
         src = blur_resource(i)
     return steps
 
 
-def blur_plan_texels(variances, reuse_below_texels: float, texel_mm: float) -> list[BlurStep]:
+def blur_plan_texels(variances, reuse_below_texels: float, texel_mm: float,
+                     fold_below_texels: float = 0.0) -> list[BlurStep]:
     """blur_plan with the reuse threshold relative to the texel: blur_1 is the irradiance itself
     when sigma_1 < reuse_below_texels * texel_mm (a sub-texel blur would change nothing; a fixed
     variance threshold instead skips a blur the laser needs at fine texel sizes)."""
-    return blur_plan(variances, (max(reuse_below_texels, 0.0) * texel_mm) ** 2)
+    return blur_plan(variances, (max(reuse_below_texels, 0.0) * texel_mm) ** 2,
+                     (max(fold_below_texels, 0.0) * texel_mm) ** 2)
 
 
 def texture_of(step: BlurStep) -> str:
     """The resource holding Gaussian ``step.index``'s blurred irradiance."""
-    return IRRADIANCE if step.reused else blur_resource(step.index)
+    return step.source if step.reused else blur_resource(step.index)
 
 
 def uniform_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:

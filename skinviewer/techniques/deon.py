@@ -10,6 +10,7 @@ from skinviewer.passes.deon import (
     IrradiancePass,
     StretchPass,
     TsmPass,
+    map_size,
 )
 from skinviewer.passes.luts import BeckmannLutPass
 from skinviewer.passes.output import OutputPass
@@ -20,7 +21,7 @@ from skinviewer.techniques.base import Technique, shadow_passes
 
 def build():
     return (shadow_passes()
-            + [GutterMapPass(SIZE, name="deon_gutter"), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
+            + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]

@@ -180,6 +180,8 @@ class FrameController:
             ui_built = ui.build(frametime, self.layout)
         self._sync_size()
         self.report = self._render_main()
+        if self.report is not None and self.report.complete and not self.report.ran:
+            self.renderer.warm(self.state.settings.technique, budget_ms=30.0)  # idle: likely shader variants
         self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
         self.watcher.refresh_errors()
         self._trim_texture_pools()

@@ -13,10 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skinviewer.scene.head.atlas import Atlas
 from skinviewer.scene.head.geometry import EYE_C, EYE_R, head_sdf
-from skinviewer.scene.head.paint import paint
-from skinviewer.scene.head.tessellate import tessellate
 from skinviewer.scene.mesh import MeshData
 
 __all__ = ["EYE_C", "EYE_R", "GENERATOR_VERSION", "default_head", "head_sdf"]
@@ -54,6 +51,10 @@ def default_head(detail: int = 1, seed: int = 7, cache_dir: str | Path | None = 
 
 
 def _generate(detail: int, seed: int) -> dict[str, np.ndarray]:
+    # generation only (scipy and the painting code): a cached head loads without them (issue 14 start-up)
+    from skinviewer.scene.head.atlas import Atlas
+    from skinviewer.scene.head.paint import paint
+    from skinviewer.scene.head.tessellate import tessellate
     spacing, res = LEVELS[detail]
     atlas = Atlas()
     positions, normals, uvs, indices, table = tessellate(atlas, detail, spacing)

@@ -1,0 +1,171 @@
+"""Scene-driven rules (issue 14): simulate only what the scene calls for. Each rule decides the
+graph's shape from the scene and the settings, and says why in the frame report
+(``Reflection.skip`` / ``drop`` / ``note``):
+
+* a light of zero intensity (or black colour) is no light: no shadow map, no lighting;
+* the TSM runs only when a light is behind a part thin enough to transmit and that part is in view;
+* the irradiance-map size follows the head's screen coverage (deon.irradiance_size_mode = "auto"),
+  with hysteresis so an orbit does not thrash the cache.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skinviewer.scene.camera import orbit_view
+
+TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
+MAX_RAYS = 4096     # rays cast per light pose for the TSM rule (Embree via trimesh)
+MIN_AUTO_SIZE = 64  # smallest irradiance map "auto" chooses
+HYSTERESIS = 1.25   # "auto" changes size only when the wanted size leaves [c / 2 / H, c * H]
+
+
+def light_on(light) -> bool:
+    """A light that adds radiance: enabled, intensity > 0 and a colour that is not black."""
+    return bool(light.enabled) and light.intensity > 0.0 and max(light.color) > 0.0
+
+
+def light_off_reason(i: int, light) -> str:
+    return f"light {i} is disabled" if not light.enabled else f"light {i} has zero intensity"
+
+
+# -- screen coverage -------------------------------------------------------------------------------
+
+def screen_diameter_px(settings, scene) -> float:
+    """The projected diameter (pixels, along the image height) of the scene's bounding sphere."""
+    w, h = settings.render.width, settings.render.height
+    view = orbit_view(settings.camera, scene.center, scene.radius, (w, h))
+    d = float(np.linalg.norm(np.asarray(view.eye, np.float64) - scene.center))
+    if d <= scene.radius:
+        return float("inf")
+    half = math.asin(min(scene.radius / d, 1.0))
+    return h * math.tan(half) / math.tan(math.radians(settings.camera.fov_y) / 2.0)
+
+
+def wanted_map_size(settings, scene) -> float:
+    """Map size (texels) at which the atlas has one texel per pixel of the head on screen, on
+    average: pixels per mm at the head = D_px / (2 r mm); texels per mm = n * mean UV per mm."""
+    d_px = screen_diameter_px(settings, scene)
+    if not math.isfinite(d_px):
+        return float("inf")
+    px_per_mm = d_px / (2.0 * scene.radius * scene.mm_per_unit)
+    return px_per_mm / max(scene.mean_uv_per_mm, 1e-12)
+
+
+def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
+    """The map size for setting ``path`` (the user's size, the maximum): the setting itself in
+    "fixed" mode; in "auto" the power of two from the screen coverage, changed only when the wanted
+    size leaves the hysteresis band. ``r``: a Reflection or ExecuteContext of a scene pass."""
+    user = int(r.setting(path))
+    if r.setting(mode_path) != "auto":
+        return user
+    s = r._settings if hasattr(r, "_settings") else r._frame.settings
+    scene = r.scene
+    wanted = (wanted_fn or wanted_map_size)(s, scene)
+    key = (path, id(scene))
+    cur = min(r.state.get(key, user), user)
+    if not (cur / 2.0 / HYSTERESIS <= wanted <= cur * HYSTERESIS):
+        pow2 = 2 ** math.ceil(math.log2(min(max(wanted, MIN_AUTO_SIZE), 1 << 20)))
+        cur = int(min(pow2, user))
+    r.state[key] = cur
+    if hasattr(r, "note") and cur != user:
+        r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
+    return cur
+
+
+def light_map_size(r, path: str, mode_path: str) -> int:
+    """A map seen from a light that frames the bounding sphere (shadow maps, the TSM): about one
+    texel per pixel of the scene's screen diameter."""
+    return coverage_size(r, path, mode_path, screen_diameter_px)
+
+
+def shadow_map_size(r) -> int:
+    return light_map_size(r, "shadow.map_size", "shadow.map_size_mode")
+
+
+# -- translucent shadow map ----------------------------------------------------------------------
+
+def _mesh_rays(scene):
+    """Embree (embreex, 0.2 s to import; trimesh's wrapper costs 2-3 s of start-up) over the mesh,
+    with its face normals; cached on the scene."""
+    cache = scene.__dict__.setdefault("_rules_cache", {})
+    if "ray" not in cache:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+        m = scene.mesh
+        tris = m.positions.astype(np.float64)[m.indices.reshape(-1, 3)]
+        fn = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+        fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-30)
+        sc = rtcore_scene.EmbreeScene()
+        TriangleMesh(sc, tris.astype(np.float32))
+        cache["ray"] = (sc, fn)
+    return cache
+
+
+def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
+    """For each vertex whose normal faces away from the light (``pose``: LightSettings fields):
+    (vertex index, thickness in mm to the lit surface along the ray to the light, cos at that entry
+    point). Cached per scene and light pose."""
+    cache = _mesh_rays(scene)
+    key = ("thick", pose.kind, tuple(pose.direction), tuple(pose.position))
+    if key in cache:
+        return cache[key]
+    sc, face_normals = cache["ray"]
+    m = scene.mesh
+    p = m.positions.astype(np.float64)
+    n = m.normals.astype(np.float64)
+    if pose.kind == "point":
+        L = np.asarray(pose.position, np.float64) - p
+        L /= np.maximum(np.linalg.norm(L, axis=1, keepdims=True), 1e-12)
+    else:
+        d = np.asarray(pose.direction, np.float64)
+        L = np.broadcast_to(d / np.linalg.norm(d), p.shape)
+    back = np.nonzero(np.einsum("ij,ij->i", n, L) < -0.05)[0]
+    back = back[::max(1, len(back) // MAX_RAYS)]  # a sample: thin parts span many vertices
+    out = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
+    if len(back):
+        eps = 1e-4 * scene.radius
+        origins = p[back] + L[back] * eps
+        hit = sc.run(origins.astype(np.float32), np.ascontiguousarray(L[back], np.float32), output=1)
+        tri = np.asarray(hit["primID"])
+        ray_i = np.nonzero(tri >= 0)[0]
+        if len(ray_i):
+            t = (np.asarray(hit["tfar"], np.float64)[ray_i] + eps) * scene.mm_per_unit
+            cos_a = np.abs(np.einsum("ij,ij->i", face_normals[tri[ray_i]], L[back][ray_i]))
+            out = (back[ray_i], t, cos_a)
+    cache[key] = out
+    return out
+
+
+def tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
+    """Whether the TSM term can show: a vertex in view whose normal faces away from the light
+    while the light enters the mesh within a thickness that transmits, estimated as in
+    deon_final.frag: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS."""
+    try:
+        idx, t, cos_a = thickness_toward(scene, pose)
+    except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
+        return True, ""
+    if len(idx) == 0:
+        return False, "no light behind a thin part"
+    amp = np.zeros(len(idx))
+    for i, g in enumerate(gaussians):
+        if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
+            continue
+        sig = math.sqrt(g.variance)
+        amp = np.maximum(amp, max(g.weights) * np.exp(-t * t / (2.0 * g.variance)) * np.minimum(t / (3.0 * sig), 1.0))
+    amp *= cos_a
+    cand = idx[amp > TSM_EPS]
+    if len(cand) == 0:
+        return False, "no light behind a thin part"
+    w, h = settings.render.width, settings.render.height
+    view = orbit_view(settings.camera, scene.center, scene.radius, (w, h))
+    p = scene.mesh.positions[cand].astype(np.float64)
+    facing = np.einsum("ij,ij->i", scene.mesh.normals[cand].astype(np.float64), view.eye - p) > 0
+    ph = np.hstack([p, np.ones((len(p), 1))]) @ view.view_proj.T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ndc = ph[:, :3] / ph[:, 3:4]
+    inside = (ph[:, 3] > 0) & np.all(np.abs(ndc[:, :2]) <= 1.02, axis=1)
+    if not np.any(facing & inside):
+        return False, "the thin part the light is behind is out of view"
+    return True, ""
