@@ -1,0 +1,83 @@
+"""Texture-space fidelity figures of issue 10 (printed tables; never asserted):
+
+  laser   beam power carried by the irradiance map (sum E * texel area / (pi r^2 Lc)) and the laser
+          error (physics/accuracy.laser_errors) per irradiance size, d'Eon and Gosselin.
+
+Run: python3 benchmarks/bench_fidelity.py [--parts laser] [--sizes 256,512,1024,2048]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from skinviewer.core.gl import describe, headless_context  # noqa: E402
+from skinviewer.core.renderer import Renderer  # noqa: E402
+from skinviewer.core.settings import DeonSettings, Settings, with_values  # noqa: E402
+from skinviewer.physics import accuracy as A  # noqa: E402
+from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels, texture_of  # noqa: E402
+from skinviewer.scene.scenes import build_scene, scene_overrides  # noqa: E402
+
+DEFAULT = DeonSettings().gaussians
+DEF_V = np.array([g.variance for g in DEFAULT])
+DEF_W = np.array([g.weights for g in DEFAULT])
+
+
+def settings(scene: str, tech: str, values: dict) -> Settings:
+    base = {"scene.name": scene, **scene_overrides(scene), "technique": tech, "render.width": 64,
+            "render.height": 64, "shadow.map_size": 256, "deon.tsm_size": 256}
+    return with_values(Settings(), {**base, **values})
+
+
+def laser(r: Renderer, sizes, offsets=((0.0, 0.0), (0.013, -0.007))) -> None:
+    m = build_scene("laser").mesh
+    print("## laser: power carried by the irradiance map / (pi r^2 Lc), and the laser error (default 0.02 mm beam; rho_dt off so d'Eon's map carries it all)")
+    print(f"{'tech':<9}{'size':>6}{'beam at (mm)':>16}{'power':>9}  {'l1 %  R     G     B':>20}  {'eq3.1 %  R   G     B':>21}")
+    for tech, key in (("deon", "deon.irradiance_size"), ("gosselin", "gosselin.light_map_size")):
+        for n in sizes:
+            for off in offsets:
+                s = settings("laser", tech, {key: n, "deon.energy_conservation": False, "lights.0.position": [off[0], off[1], 0.0]})
+                r.render(s)
+                g = r.graph(tech)
+                E = g.read(IRRADIANCE if tech == "deon" else "gosselin_light_map")[..., :3].astype(np.float64)
+                X, Y, area = A.plane_coords(m.positions, m.uvs, m.mm_per_unit, n)
+                L = s.lights[0]
+                p_true = math.pi * L.beam_radius ** 2 * L.intensity
+                ratio = E[..., 0].sum() * area / p_true
+                err = "   (no lit texel: no error measurable)"
+                if tech == "deon" and ratio > 0:
+                    plan = blur_plan_texels(list(DEF_V), s.deon.reuse_irradiance_below_texels,
+                                            A.texel_mm(m.positions, m.uvs, m.mm_per_unit, n)[0])
+                    D = sum(np.asarray(gs.weights) * g.read(texture_of(p))[..., :3].astype(np.float64)
+                            for gs, p in zip(s.deon.gaussians, plan))
+                    e = A.laser_errors(D, E, X, Y, area, DEF_V, DEF_W)
+                    err = "  " + " ".join(f"{100 * x:5.1f}" for x in e["l1"]) + "  " + \
+                        " ".join(f"{100 * x:5.1f}" for x in e["eq31"])
+                elif tech != "deon":
+                    err = ""
+                print(f"{tech:<9}{n:>6}{str(off):>16}{ratio:9.3f}{err}")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--parts", default="laser")
+    ap.add_argument("--sizes", default="256,512,1024,2048")
+    a = ap.parse_args()
+    ctx = headless_context()
+    r = Renderer(ctx)
+    print(f"# {describe(ctx)}")
+    sizes = [int(x) for x in a.sizes.split(",")]
+    if "laser" in a.parts:
+        laser(r, sizes)
+    r.release()
+    ctx.release()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
