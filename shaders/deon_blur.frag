@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // One direction of a separable 7-tap Gaussian blur in texture space (seed 000 eq. 25-26):
 //   out(x) = sum_k w_k in(x + k * stretch(x) * sigma * dir),  k = -3..3
 // stretch in UV per mm (stretch texture, or one uniform scale when stretch correction is off),

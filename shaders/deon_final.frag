@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/camera.vert"
 // Final pass of d'Eon & Luebke 2007 (seed 000 eq. 34-35), view-dependent:
 //   diffuse  = C^(1-mix) rho_dt(x, V) (sum_i w_i blur_i(uv) + transmitted)
 //   transmitted = sum_(i>=2) w_i exp(-d_(i-1)^2 / 2 v_i) blend_i blur_i(uv_A)   (eq. 33, "exact")
@@ -8,7 +9,6 @@
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
 #include "lib/deon.glsl"
-#define MAX_G 8
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -18,9 +18,9 @@ uniform float u_mix;
 uniform int u_energy;
 uniform sampler2D rho_dt_tex;
 uniform int u_count;
-uniform vec3 u_w[MAX_G];
-uniform float u_var[MAX_G];      // variance (mm^2) of each blurred texture
-uniform int u_used[MAX_G];
+uniform vec3 u_w[MAX_GAUSSIANS];
+uniform float u_var[MAX_GAUSSIANS];      // variance (mm^2) of each blurred texture
+uniform int u_used[MAX_GAUSSIANS];
 uniform sampler2D blur0;
 uniform sampler2D blur1;
 uniform sampler2D blur2;
@@ -69,10 +69,10 @@ void main() {
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
-    vec4 here[MAX_G];
+    vec4 here[MAX_GAUSSIANS];
     FETCH_BLURS(here, v_uv)
     vec3 diffuse = vec3(0.0);
-    for (int i = 0; i < MAX_G; ++i) {
+    for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_count) break;
         if (u_used[i] != 0) diffuse += u_w[i] * here[i].rgb;  // eq. (34), sum_i w_i blur_i
     }
@@ -89,9 +89,9 @@ void main() {
                 // the texture-space blur already carries that light (blend -> 0, no double count)
                 vec2 s = 0.5 * (uv_per_mm(v_uv) + uv_per_mm(uvA));
                 float r_mm = length((v_uv - uvA) / s);
-                vec4 there[MAX_G];
+                vec4 there[MAX_GAUSSIANS];
                 FETCH_BLURS(there, uvA)
-                for (int i = 1; i < MAX_G; ++i) {
+                for (int i = 1; i < MAX_GAUSSIANS; ++i) {
                     if (i >= u_count) break;
                     if (u_used[i] == 0) continue;
                     float v = u_var[i];
@@ -109,7 +109,7 @@ void main() {
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
     diffuse *= deon_safe_pow(C, 1.0 - u_mix) * rho_v;
     vec3 spec = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         if (!(dot(N, L) > 0.0)) continue;

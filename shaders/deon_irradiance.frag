@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/unwrap.vert"
 // Irradiance in texture space (seed 000 eq. 28, 32): sum over lights of
 //   Lc (N.L) fac_shadow rho_dt(x, L) C^mix
 // and, in alpha, the thickness d = (d(C) - d(A)) cos(theta) in mm read from the modified TSM
@@ -27,7 +28,7 @@ void main() {
     vec3 C = deon_safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);

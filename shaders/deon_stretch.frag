@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/unwrap.vert"
 // Stretch texture (seed 000 eq. 27, seed 002 §14.5): texture-space units per millimetre along u
 // and v, so a blur tap spacing in UV = stretch * sigma_mm (eq. 25 with size * stretch in texels).
 // dP/du and dP/dv from the screen derivatives of the world position and of the UV (solving the

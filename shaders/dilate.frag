@@ -1,11 +1,12 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Gutter fill: each texel outside the UV islands copies the nearest island texel (gutter map RG),
 // so blurs and bilinear lookups never pull black in from empty texture space.
 #include "lib/color.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D gutter;  // RG: texel coordinate (integer) to copy from; B: 1 inside an island
-uniform float u_limit;     // largest finite value of the target format (half: 65000, float: 1e30)
+uniform float u_limit;     // largest finite value of the target format (HALF_MAX or FLOAT_MAX)
 out vec4 f_color;
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);

@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/camera.vert"
 // Gosselin final combination (seed 000 eq. 17-19):
 //   diffuse  = C * blurred                                                          (17)
 //   specular = sum_i KS_i * Lc_i * att                                              (18)
@@ -37,7 +38,7 @@ void main() {
     float lumE = dot(LUM, E);
     vec3 E0 = vec3(0.0);
     vec3 spec = vec3(0.0);
-    for (int i = 0; i < u_light_count; ++i) {
+    for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);

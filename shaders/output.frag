@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // Exposure, background composite and sRGB encoding of the linear lit image.
 #include "lib/color.glsl"
 in vec2 v_uv;

@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/camera.vert"
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
@@ -18,7 +19,7 @@ void main() {
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
     vec3 C = texture(albedo_map, v_uv).rgb;
     vec3 color = u_ambient * C;
-    for (int i = 0; i < u_light_count; ++i) {
+    for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = max(dot(N, L), 0.0);

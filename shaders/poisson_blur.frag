@@ -1,4 +1,5 @@
 #version 330 core
+#pragma vertex_stage "vs/fullscreen.vert"
 // One Gosselin Poisson blur iteration (seed 000 eq. 11-13):
 //   size = 1 / (width, height)                                   (11)
 //   radius = size * R, R from the radius map (texels, eq. 12)    (12)
@@ -13,7 +14,7 @@ out vec4 f_color;
 vec4 finite4(vec4 c) {
     bvec4 bad = bvec4(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y),
                       isnan(c.z) || isinf(c.z), isnan(c.w) || isinf(c.w));
-    return clamp(mix(c, vec4(0.0), bad), vec4(0.0), vec4(1e30));
+    return clamp(mix(c, vec4(0.0), bad), vec4(0.0), vec4(FLOAT_MAX));
 }
 
 void main() {

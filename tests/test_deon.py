@@ -14,6 +14,7 @@ from skinviewer.core.settings import (
 )
 from skinviewer.passes.deon import mean_texel_mm
 from skinviewer.physics import diffusion
+from skinviewer.physics.accuracy import plane_coords
 from skinviewer.physics.diffusion import (
     KERNEL7,
     blur_plan,
@@ -75,14 +76,8 @@ def _deon(scene, **kw):
 
 def _plane_coords(renderer, n):
     """Texel centres -> mesh millimetres for a planar built-in scene (linear UV map)."""
-    mesh = renderer.scene.gpu.mesh
-    mm = renderer.scene.gpu.mm_per_unit
-    P, UV = mesh.positions.astype(float), mesh.uvs.astype(float)
-    ax, ay = np.polyfit(UV[:, 0], P[:, 0], 1) * mm, np.polyfit(UV[:, 1], P[:, 1], 1) * mm
-    c = (np.arange(n) + 0.5) / n
-    X = np.broadcast_to(np.polyval(ax, c)[None, :], (n, n))
-    Y = np.broadcast_to(np.polyval(ay, c)[:, None], (n, n))
-    return X, Y, abs(ax[0] * ay[0]) / n ** 2
+    gpu = renderer.scene.gpu
+    return plane_coords(gpu.mesh.positions, gpu.mesh.uvs, gpu.mm_per_unit, n)
 
 
 def _diffuse_and_reference(renderer, s):

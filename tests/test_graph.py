@@ -48,9 +48,8 @@ class Fill(Pass):
 
     def execute(self, ec):
         prog = ec.program("fill")
-        prog["u_value"].value = float(ec.setting(self.setting_path))
-        ec.framebuffer(self.out).use()
-        ec.graph.fullscreen_vao(prog).render(vertices=3)
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        ec.draw_fullscreen(prog, self.out)
 
 
 class Add(Pass):
@@ -68,20 +67,13 @@ class Add(Pass):
 
     def execute(self, ec):
         prog = ec.program("add")
-        ec.input(self.a).use(0)
-        ec.input(self.b).use(1)
-        for name, unit in (("a", 0), ("b", 1)):
-            if name in prog:  # the compiler drops unused samplers
-                prog[name].value = unit
-        ec.framebuffer(self.out).use()
-        ec.graph.fullscreen_vao(prog).render(vertices=3)
+        ec.textures(prog, a=self.a, b=self.b)  # a sampler the compiler dropped is skipped
+        ec.draw_fullscreen(prog, self.out)
 
 
 def make_graph(gl_ctx, shader_dir, passes, targets):
     lib = ShaderLibrary(gl_ctx, shader_dir)
     g = RenderGraph(gl_ctx, lib, passes, targets)
-    vaos = {}
-    g.fullscreen_vao = lambda prog: vaos.setdefault(id(prog), gl_ctx.vertex_array(prog, []))
     return g, lib
 
 
@@ -298,3 +290,133 @@ def test_idle_frames_take_the_fast_path_and_stay_correct(renderer):
     calls.clear()
     renderer.render(s)
     assert calls
+
+
+# -- the ExecuteContext services ------------------------------------------------------------------
+
+class Custom(Pass):
+    """A pass whose execute is given as a function (service tests)."""
+    uses_scene = False
+
+    def __init__(self, name, program, out, body, inputs=()):
+        self.name, self.prog_name, self.out, self.body, self.inputs = name, program, out, body, inputs
+
+    def reflect(self, r):
+        for res in self.inputs:
+            r.input(res)
+        r.setting("render.exposure")
+        r.program(self.prog_name)
+        r.output(self.out, TexSpec((8, 8), 4, "f4"))
+
+    def execute(self, ec):
+        self.body(ec, ec.program(self.prog_name))
+
+
+def _run_one(gl_ctx, shader_dir, body, program="fill", inputs=(), extra=()):
+    g, lib = make_graph(gl_ctx, shader_dir, [*extra, Custom("custom", program, "out", body, inputs)], ["out"])
+    g.run(frame(Settings()))
+    return g, lib
+
+
+def test_misspelt_uniform_fails_loudly_naming_pass_program_and_uniform(gl_ctx, shader_dir):
+    def body(ec, prog):
+        ec.set(prog, "u_valeu", 1.0)
+        ec.draw_fullscreen(prog, "out")
+
+    with pytest.raises(GraphError, match=r"pass custom: program 'fill' declares no uniform 'u_valeu'"):
+        _run_one(gl_ctx, shader_dir, body)
+
+
+def test_declared_but_unused_uniform_and_optional_names_are_skipped(gl_ctx, shader_dir):
+    (shader_dir / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nuniform float u_unused;\n"
+                                          "out vec4 f;\nvoid main() { f = vec4(u_value); }\n")
+
+    def body(ec, prog):
+        assert "u_unused" not in prog  # the compiler dropped it; the source declares it
+        ec.uniforms(prog, u_value=0.5, u_unused=3.0)
+        ec.set(prog, "u_not_in_this_variant", 1.0, optional=True)
+        ec.draw_fullscreen(prog, "out")
+
+    g, _ = _run_one(gl_ctx, shader_dir, body)
+    assert np.allclose(g.read("out"), 0.5)
+
+
+def test_textures_by_name_units_allocated_and_unbound_samplers_read_a_dummy(gl_ctx, shader_dir):
+    stale = gl_ctx.texture((8, 8), 4, np.full((8, 8, 4), 7.0, np.float32).tobytes(), dtype="f4")
+
+    def body(ec, prog):
+        for unit in range(4):  # whatever an earlier pass left on the units...
+            stale.use(unit)
+        ec.bind(prog, "a", "a")  # ...b is not bound: it reads the 1x1 zero texture, not a stale unit
+        ec.draw_fullscreen(prog, "out")
+
+    g, _ = _run_one(gl_ctx, shader_dir, body, program="add", inputs=("a",),
+                    extra=[Fill("fill_a", "a", "phong.ambient")])
+    assert np.allclose(g.read("out"), Settings().phong.ambient)
+    stale.release()
+
+    def undeclared(ec, prog):
+        ec.bind(prog, "c", "a")
+
+    with pytest.raises(GraphError, match="declares no uniform 'c'"):
+        _run_one(gl_ctx, shader_dir, undeclared, program="add", inputs=("a",),
+                 extra=[Fill("fill_a", "a", "phong.ambient")])
+
+
+def test_scratch_targets_and_undeclared_targets(gl_ctx, shader_dir):
+    def body(ec, prog):
+        tmp = ec.scratch(TexSpec((8, 8), 4, "f4"))
+        ec.set(prog, "u_value", 0.25)
+        ec.draw_fullscreen(prog, tmp)
+        ec.set(prog, "u_value", 0.75)
+        ec.draw_fullscreen(prog, "out")
+        with pytest.raises(GraphError, match="did not declare as an output"):
+            ec.draw_fullscreen(prog, "elsewhere")
+        with pytest.raises(GraphError, match="scratch"):
+            ec.draw_fullscreen(prog, ec.graph.pool.take(TexSpec((8, 8), 4, "f4")))
+
+    g, _ = _run_one(gl_ctx, shader_dir, body)
+    assert np.allclose(g.read("out"), 0.75)
+
+
+def test_one_vao_cache_released_on_hot_reload_and_release(gl_ctx, shader_dir):
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, lib = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    g.run(frame(Settings()))
+    assert len(g.gpu._vaos) == 2  # fill and add, one each
+    old = lib.get("add")
+    time.sleep(0.01)
+    p = shader_dir / "add.frag"
+    p.write_text(p.read_text().replace("texture(a, v_uv) + texture(b, v_uv)", "texture(a, v_uv) * 2.0"))
+    lib.reload()
+    assert all(prog is not old for prog, _, _ in g.gpu._vaos.values())  # released with the program
+    g.run(frame(Settings()))
+    assert len(g.gpu._vaos) == 2
+    g.release()
+    assert g.gpu._vaos == {} and g.gpu.forget_program not in lib._release_hooks
+
+
+def test_settings_sections_are_read_only_and_declared(gl_ctx, shader_dir):
+    seen = {}
+
+    class Sectioned(Fill):
+        def reflect(self, r):
+            super().reflect(r)
+            r.section("phong", ("ambient", "shininess"))
+
+        def execute(self, ec):
+            ph = ec.section("phong", ("ambient", "shininess"))
+            seen["ambient"] = ph.ambient
+            with pytest.raises(AttributeError, match="read-only"):
+                ph.ambient = 2.0
+            with pytest.raises(AttributeError, match="no field 'specular'"):
+                ph.specular
+            with pytest.raises(GraphError, match="did not declare"):
+                ec.section("phong", ("specular",))
+            super().execute(ec)
+
+    g, _ = make_graph(gl_ctx, shader_dir, [Sectioned("s", "a", "render.exposure")], ["a"])
+    g.run(frame(with_values(Settings(), {"phong.ambient": 0.125})))
+    assert seen["ambient"] == 0.125
+    rep = g.run(frame(with_values(Settings(), {"phong.ambient": 0.25})))
+    assert rep.ran == ["s"]  # a section's fields are declared settings

@@ -79,18 +79,84 @@ def test_defines_and_versions(gl_ctx, lib_dir):
 
 
 def test_project_shaders_all_compile(gl_ctx):
-    """Every program in shaders/ compiles (catches a broken edit before the viewer does)."""
+    """Every program in shaders/ compiles, generic and specialised to several light setups
+    (catches a broken edit before the viewer does)."""
     from skinviewer.core import paths
     lib = ShaderLibrary(gl_ctx)
     names = sorted({p.stem for p in paths.shaders_dir().glob("*.frag")})
     assert names
     failures = {}
+    variants = [None, {"LIGHT_COUNT": 0, "SHADOW_PCF": 0, "SHADOW_MASK": 0},
+                {"LIGHT_COUNT": 4, "SHADOW_PCF": 3, "SHADOW_MASK": 0b1011}]
     for n in names:
-        try:
-            lib.get(n)
-        except ShaderCompileError as exc:
-            failures[n] = [str(e) for e in exc.errors]
+        lit = "lib/lights.glsl" in (paths.shaders_dir() / f"{n}.frag").read_text()
+        for defines in variants if lit else variants[:1]:
+            try:
+                lib.get(n, defines)
+            except ShaderCompileError as exc:
+                failures[f"{n}{defines or ''}"] = [str(e) for e in exc.errors]
+    lib.release()
     assert not failures, failures
+
+
+def test_shared_vertex_stage_named_by_pragma_and_hot_reloaded(gl_ctx, lib_dir):
+    (lib_dir / "vs").mkdir()
+    (lib_dir / "vs" / "shared.vert").write_text(VERT)
+    for name, value in (("one", "1.0"), ("two", "2.0")):
+        (lib_dir / f"{name}.frag").write_text(f'#version 330 core\n#pragma vertex_stage "vs/shared.vert"\n'
+                                              f'out vec4 f;\nvoid main() {{ f = vec4({value}); }}\n')
+    lib = ShaderLibrary(gl_ctx, lib_dir)
+    one, two = lib.get("one"), lib.get("two")
+    assert "in_pos" in one and "in_pos" in two
+    _touch_later(lib_dir / "vs" / "shared.vert", VERT.replace("in_pos, 0.0", "in_pos * 0.5, 0.0"))
+    replaced, errors = lib.reload()
+    assert sorted(replaced) == ["one", "two"] and errors == {}  # an edit reaches every user
+    (lib_dir / "three.frag").write_text('#version 330 core\n#pragma vertex_stage "vs/missing.vert"\n'
+                                        'out vec4 f;\nvoid main() { f = vec4(1.0); }\n')
+    with pytest.raises(ShaderCompileError, match="vs/missing.vert not found"):
+        lib.get("three")
+    (lib_dir / "bad.frag").write_text('#version 330 core\n#pragma vertex_stage "vs/shared.vert"\nout vec4 f;\n'
+                                      'void main() { f = vec4(nope); }\n')
+    with pytest.raises(ShaderCompileError) as exc:
+        lib.get("bad")
+    assert any(e.file == "bad.frag" and e.line == 4 for e in exc.value.errors), exc.value.errors
+
+
+def test_shared_constants_are_injected_and_declared_uniforms_known(gl_ctx, lib_dir):
+    from skinviewer.core.constants import MAX_GAUSSIANS
+    (lib_dir / "c.frag").write_text('#version 330 core\n#pragma vertex_stage "prog.vert"\n'
+                                    "uniform float u_w[MAX_GAUSSIANS];\nuniform int u_k, u_unused[MAX_LIGHTS];\n"
+                                    "out vec4 f;\nvoid main() { f = vec4(float(MAX_LIGHTS) + u_w[MAX_GAUSSIANS - 1]"
+                                    " + float(u_k) + HALF_MAX + float(LIGHT_POINT)); }\n")
+    lib = ShaderLibrary(gl_ctx, lib_dir)
+    prog = lib.get("c")
+    assert prog["u_w"].array_length == MAX_GAUSSIANS
+    name, declared = lib.describe(prog)
+    assert name == "c" and {"u_w", "u_k", "u_unused"} <= declared and "u_unused" not in prog
+
+
+def test_project_shaders_are_consolidated():
+    """Shared vertex stages (no two .vert files with one body), include guards in every lib
+    snippet, and no copy of a constant that skinviewer.core.constants injects."""
+    import re
+
+    from skinviewer.core import paths
+    from skinviewer.core.constants import GLSL_DEFINES
+    root = paths.shaders_dir()
+    bodies = {}
+    for v in root.rglob("*.vert"):
+        body = "\n".join(ln for ln in v.read_text().splitlines() if not ln.lstrip().startswith("//"))
+        assert body not in bodies, f"{v.name} repeats {bodies.get(body)}"
+        bodies[body] = v.name
+    for f in (root / "lib").glob("*.glsl"):
+        text = f.read_text()
+        m = re.search(r"^#ifndef (\w+)\s*\n#define (\w+)", text, re.M)
+        assert m and m.group(1) == m.group(2) and text.rstrip().endswith("#endif"), f"{f.name}: no include guard"
+    for f in list(root.rglob("*.glsl")) + list(root.rglob("*.frag")) + list(root.rglob("*.vert")):
+        text = f.read_text()
+        for name in GLSL_DEFINES:
+            assert not re.search(rf"#define\s+{name}\b", text), f"{f.name} redefines {name}"
+        assert not re.search(r"\b65000\.0|\b1e30\b", text), f"{f.name} writes a clamp constant by value"
 
 
 def test_file_in_another_encoding_is_a_shader_error(gl_ctx, lib_dir):

@@ -1,4 +1,6 @@
 // sRGB transfer functions (IEC 61966-2-1); lighting is done in linear space.
+#ifndef SKINVIEWER_COLOR_GLSL
+#define SKINVIEWER_COLOR_GLSL
 vec3 srgb_to_linear(vec3 c) {
     c = clamp(c, 0.0, 1.0);
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
@@ -10,12 +12,13 @@ vec3 linear_to_srgb(vec3 c) {
 // Replace NaN/Inf by 0 and clamp to the half-float range: no pass ever writes a non-finite texel.
 vec3 finite3(vec3 c) {
     bvec3 bad = bvec3(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z));
-    return clamp(mix(c, vec3(0.0), bvec3(bad)), vec3(-65000.0), vec3(65000.0));
+    return clamp(mix(c, vec3(0.0), bvec3(bad)), vec3(-HALF_MAX), vec3(HALF_MAX));
 }
-float finite1(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -65000.0, 65000.0); }
+float finite1(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -HALF_MAX, HALF_MAX); }
 // NaN/Inf -> 0 and clamp to +-limit (the largest value the target texture format can hold).
 vec4 finite4(vec4 c, float limit) {
     bvec4 bad = bvec4(isnan(c.x) || isinf(c.x), isnan(c.y) || isinf(c.y), isnan(c.z) || isinf(c.z),
                       isnan(c.w) || isinf(c.w));
     return clamp(mix(c, vec4(0.0), bad), vec4(-limit), vec4(limit));
 }
+#endif

@@ -1,8 +1,20 @@
 // Lights and shadow lookups shared by every technique (seed 000 §4.1.1-4.1.2).
-#define MAX_LIGHTS 4
+// Specialisation (skinviewer.passes.common.declare_lighting): a lit program is compiled with
+// LIGHT_COUNT, SHADOW_PCF and SHADOW_MASK (bit k: light slot k has a shadow map) for the frame's
+// lights, so its loops have constant bounds and absent shadow lookups vanish: a SIMD rasteriser
+// pays every tap of a loop that merely `continue`s. GENERIC_SHADERS (or no LIGHT_COUNT) compiles
+// the uniform-driven version; both give bit-identical images (tests/test_specialise.py).
+#ifndef SKINVIEWER_LIGHTS_GLSL
+#define SKINVIEWER_LIGHTS_GLSL
+#if defined(LIGHT_COUNT) && !defined(GENERIC_SHADERS)
+#define LIGHTS_SPECIALISED 1
+#define N_LIGHTS LIGHT_COUNT        // loop bound of the lit passes: for (i = 0; i < N_LIGHTS; ...)
+#else
+#define N_LIGHTS u_light_count
+#endif
 #include "lib/beam.glsl"
 uniform int u_light_count;
-uniform int u_light_kind[MAX_LIGHTS];       // 0 directional, 1 point, 2 beam
+uniform int u_light_kind[MAX_LIGHTS];       // LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_BEAM
 uniform vec3 u_light_radiance[MAX_LIGHTS];  // colour * intensity (Lc)
 uniform vec3 u_light_dir[MAX_LIGHTS];       // towards the light (normalised)
 uniform vec3 u_light_pos[MAX_LIGHTS];
@@ -20,14 +32,14 @@ uniform int u_shadow_pcf;
 // Direction to the light L and incident radiance Lc at world point P (eq. 9).
 vec3 light_incident(int i, vec3 P, out vec3 L) {
     vec3 Lc = u_light_radiance[i];
-    if (u_light_kind[i] == 1) {
+    if (u_light_kind[i] == LIGHT_POINT) {
         vec3 d = u_light_pos[i] - P;
         float len2 = max(dot(d, d), 1e-12);
         L = d * inversesqrt(len2);
         return Lc;  // no inverse-square falloff: artists set intensity at the subject
     }
     L = u_light_dir[i];
-    if (u_light_kind[i] == 2) {
+    if (u_light_kind[i] == LIGHT_BEAM) {
         // beam: collimated, radius u_beam_radius around the axis through u_light_pos
         // averaged over the texel/pixel footprint set by set_light_footprint (lib/beam.glsl)
         return Lc * beam_coverage(P, u_light_pos[i], L, u_beam_radius[i]);
@@ -36,25 +48,44 @@ vec3 light_incident(int i, vec3 P, out vec3 L) {
 }
 
 float shadow_compare(sampler2D sm, vec3 c) {
-    // eq. (7): shadowed if d(P) - ds > tol
+    // eq. (7): shadowed if d(P) - ds > tol; PCF averages the test over (2 pcf + 1)^2 texels
+#ifdef LIGHTS_SPECIALISED
+#if SHADOW_PCF <= 0
+    return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+#else
+    vec2 texel = 1.0 / vec2(textureSize(sm, 0));
+    float lit = 0.0, n = 0.0;
+    for (int y = -SHADOW_PCF; y <= SHADOW_PCF; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF; ++x) {
+        float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
+        lit += (c.z - ds > u_shadow_tol) ? 0.0 : 1.0;
+        n += 1.0;
+    }
+    return lit / n;
+#endif
+#else
     if (u_shadow_pcf <= 0) return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
     vec2 texel = 1.0 / vec2(textureSize(sm, 0));
     float lit = 0.0, n = 0.0;
-    for (int y = -3; y <= 3; ++y) for (int x = -3; x <= 3; ++x) {
+    for (int y = -MAX_PCF; y <= MAX_PCF; ++y) for (int x = -MAX_PCF; x <= MAX_PCF; ++x) {
         if (abs(x) > u_shadow_pcf || abs(y) > u_shadow_pcf) continue;
         float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
         lit += (c.z - ds > u_shadow_tol) ? 0.0 : 1.0;
         n += 1.0;
     }
     return lit / n;
+#endif
 }
 
 // fac_shadow of eq. (10): 1 lit, 0 shadowed (fractional with PCF). Ng is the geometric normal:
 // the lookup point moves off the surface by about a shadow texel, more at grazing light (normal
 // offset, a slope-scaled complement of eq. 7's constant tol that removes self-shadowing acne).
 float shadow_factor(int i, vec3 P, vec3 Ng) {
+#ifdef LIGHTS_SPECIALISED
+    if (((SHADOW_MASK >> i) & 1) == 0) return 1.0;
+#else
     if (u_light_shadowed[i] == 0) return 1.0;
-    vec3 L = (u_light_kind[i] == 1) ? normalize(u_light_pos[i] - P) : u_light_dir[i];
+#endif
+    vec3 L = (u_light_kind[i] == LIGHT_POINT) ? normalize(u_light_pos[i] - P) : u_light_dir[i];
     float nl = dot(Ng, L);
     vec3 n = nl >= 0.0 ? Ng : -Ng;
     float sin_l = sqrt(clamp(1.0 - nl * nl, 0.0, 1.0));
@@ -63,8 +94,25 @@ float shadow_factor(int i, vec3 P, vec3 Ng) {
     if (p.w <= 0.0) return 1.0;
     vec3 c = p.xyz / p.w * 0.5 + 0.5;  // z/w in [0,1] as stored (eq. 6)
     if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return 1.0;
+#ifdef LIGHTS_SPECIALISED
+#if (SHADOW_MASK & 1) != 0
+    if (i == 0) return shadow_compare(shadow_map0, c);
+#endif
+#if (SHADOW_MASK & 2) != 0
+    if (i == 1) return shadow_compare(shadow_map1, c);
+#endif
+#if (SHADOW_MASK & 4) != 0
+    if (i == 2) return shadow_compare(shadow_map2, c);
+#endif
+#if (SHADOW_MASK & 8) != 0
+    if (i == 3) return shadow_compare(shadow_map3, c);
+#endif
+    return 1.0;
+#else
     if (i == 0) return shadow_compare(shadow_map0, c);
     if (i == 1) return shadow_compare(shadow_map1, c);
     if (i == 2) return shadow_compare(shadow_map2, c);
     return shadow_compare(shadow_map3, c);
+#endif
 }
+#endif

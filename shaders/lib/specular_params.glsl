@@ -4,7 +4,6 @@
 #ifndef SKINVIEWER_SPECULAR_PARAMS_GLSL
 #define SKINVIEWER_SPECULAR_PARAMS_GLSL
 #include "kelemen.glsl"
-#define N_REGIONS 9
 uniform sampler2D region_map;      // R8, nearest: id = index in settings.REGIONS
 uniform sampler2D specular_map;    // rho_s scale
 uniform float u_spec_m[N_REGIONS];

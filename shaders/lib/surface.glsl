@@ -1,4 +1,6 @@
 // Surface inputs from the mesh's maps (albedo linear, tangent-space normal map).
+#ifndef SKINVIEWER_SURFACE_GLSL
+#define SKINVIEWER_SURFACE_GLSL
 uniform sampler2D albedo_map;   // linear RGB
 uniform sampler2D normal_map;   // tangent space, n * 0.5 + 0.5
 uniform int u_has_normal_map;
@@ -16,3 +18,4 @@ vec3 surface_normal(vec3 n, vec4 t, vec2 uv) {
     float pl = length(P);
     return pl > 1e-6 ? P / pl : N;
 }
+#endif

@@ -5,6 +5,12 @@ nobody consumes, caches outputs whose inputs did not change, and times every pas
 A pass re-runs only when one of these changed: a setting it declared, the version of an input
 texture, the source of a shader program it declared, the scene (mesh, maps, units) if it reads it,
 the camera if it is view-dependent, or the spec (size/format) of one of its outputs.
+
+Passes do no GL plumbing of their own: the ExecuteContext gives them draws (``draw_mesh``,
+``draw_fullscreen``), textures bound by sampler name with units allocated per execute
+(``bind``/``textures``; samplers left unbound read a 1x1 dummy), uniforms that fail loudly on a
+name the program's source does not declare (``set``/``uniforms``), and read-only views of the
+settings they declared (``section``). The graph owns the GL objects behind them (core/gpu.py).
 """
 from __future__ import annotations
 
@@ -15,6 +21,7 @@ from typing import Any, Iterable
 import moderngl
 import numpy as np
 
+from skinviewer.core.gpu import GpuServices, write_uniform
 from skinviewer.core.settings import Settings, get_path, value_key
 from skinviewer.core.shaders import ShaderLibrary
 
@@ -76,9 +83,37 @@ class Reflection:
         self.outputs[resource] = spec
 
     def program(self, name: str, **defines) -> None:
+        """Declare a program, compiled with these ``#define``s (a specialised variant; the defines
+        are part of the cache key). ``ec.program(name)`` then returns it."""
         key = (name, tuple(sorted(defines.items())))
         if key not in self.programs:
             self.programs.append(key)
+
+    def section(self, prefix: str, fields: Iterable[str]) -> "SettingsView":
+        """Declare the settings ``prefix.f`` for each field and return them as a read-only view."""
+        return SettingsView(prefix, {f: self.setting(f"{prefix}.{f}") for f in fields})
+
+
+class SettingsView:
+    """Read-only attribute view of some declared settings (``view.m``); only the declared fields."""
+    __slots__ = ("_prefix", "_values")
+
+    def __init__(self, prefix: str, values: dict[str, Any]):
+        object.__setattr__(self, "_prefix", prefix)
+        object.__setattr__(self, "_values", dict(values))
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(f"settings view '{self._prefix}' has no field '{name}' "
+                                 f"(declared: {sorted(self._values)})") from None
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"settings view '{self._prefix}' is read-only")
+
+    def __repr__(self) -> str:
+        return f"SettingsView({self._prefix!r}, {self._values!r})"
 
 
 class Pass:
@@ -100,6 +135,25 @@ class Pass:
 
 
 class ExecuteContext:
+    """What ``Pass.execute`` may use: its declared settings, inputs, outputs and programs, and the
+    graph's GL services.
+
+    Drawing::
+
+        prog = ec.program("phong")                    # the (only) declared variant of "phong"
+        ec.uniforms(prog, u_ambient=0.03, u_eye=(0.0, 0.0, 5.0))
+        ec.textures(prog, albedo_map=ec.scene.albedo, blurred="gosselin_blurred")
+        ec.draw_mesh(prog, "lit")                     # depth test, both faces, cleared first
+        ec.draw_fullscreen(prog, "image")             # or a scratch texture: ec.draw_fullscreen(p, tmp)
+
+    * Textures are bound by sampler name; units are allocated per program for this execute and
+      every binding is re-applied before each draw, so a pass never threads unit numbers. Samplers
+      of the program that nothing bound read a 1x1 zero texture of their kind (never a stale unit).
+    * ``set``/``uniforms``/``bind`` raise GraphError (pass, program, name) for a name the program's
+      GLSL source does not declare; a name declared but dropped by the compiler (unused in this
+      variant) is skipped silently; ``optional=True`` also skips a name the source lacks.
+    """
+
     def __init__(self, graph: "RenderGraph", p: Pass, refl: Reflection, frame: "FrameInputs"):
         self.graph = graph
         self.gl: moderngl.Context = graph.ctx
@@ -107,6 +161,7 @@ class ExecuteContext:
         self._refl = refl
         self._frame = frame
         self._scratch: list[moderngl.Texture] = []
+        self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
 
     @property
     def scene(self):
@@ -146,18 +201,120 @@ class ExecuteContext:
         return self.graph._framebuffer(tuple(self._own(r) for r in resources))
 
     def program(self, name: str, **defines) -> moderngl.Program:
-        if (name, tuple(sorted(defines.items()))) not in self._refl.programs:
-            raise GraphError(f"pass {self.pass_.name} uses program '{name}' it did not declare")
-        return self.graph.shaders.get(name, defines or None)
+        """A declared program. Without ``defines``: the one variant of ``name`` reflect() declared."""
+        declared = [d for n, d in self._refl.programs if n == name]
+        key = tuple(sorted(defines.items()))
+        if not defines and len(declared) == 1:
+            key = declared[0]
+        elif key not in declared:
+            raise GraphError(f"pass {self.pass_.name} uses program '{name}'{dict(key) or ''} it did not declare"
+                             + (f" (declared variants: {[dict(d) for d in declared]})" if declared else ""))
+        return self.graph.shaders.get(name, dict(key) or None)
+
+    def section(self, prefix: str, fields: Iterable[str]) -> SettingsView:
+        """The declared settings ``prefix.f`` (for f in ``fields``) as a read-only view."""
+        return SettingsView(prefix, {f: self.setting(f"{prefix}.{f}") for f in fields})
+
+    # -- uniforms and textures -------------------------------------------------------------------
+    def _check(self, prog: moderngl.Program, name: str, optional: bool) -> bool:
+        """Whether ``name`` is live in ``prog``; GraphError when its source does not declare it."""
+        if name in prog:
+            return True
+        try:
+            pname, declared = self.graph.shaders.describe(prog)
+        except KeyError:
+            raise GraphError(f"pass {self.pass_.name}: program not from the graph's shader library") from None
+        if name in declared or optional:
+            return False  # declared but dropped by the compiler (unused in this variant)
+        raise GraphError(f"pass {self.pass_.name}: program '{pname}' declares no uniform '{name}'")
+
+    def set(self, prog: moderngl.Program, name: str, value: Any, optional: bool = False) -> None:
+        """Set a uniform: numbers, bools, tuples (vectors), numpy arrays (uniform arrays, cut to what
+        the compiler kept) or bytes (e.g. a column-major matrix)."""
+        if self._check(prog, name, optional):
+            try:
+                write_uniform(prog[name], value)
+            except (ValueError, TypeError, moderngl.Error) as exc:
+                raise GraphError(f"pass {self.pass_.name}: uniform '{name}': {exc}") from None
+
+    def uniforms(self, prog: moderngl.Program, **values: Any) -> None:
+        """``set`` for each keyword (all required to be declared)."""
+        for name, value in values.items():
+            self.set(prog, name, value)
+
+    def bind(self, prog: moderngl.Program, sampler: str, texture: "moderngl.Texture | str",
+             optional: bool = False) -> None:
+        """Bind ``texture`` (a texture, or the name of a declared input) to ``sampler`` of ``prog``;
+        it stays bound for every draw of ``prog`` in this execute (rebinding replaces it)."""
+        tex = self.input(texture) if isinstance(texture, str) else texture
+        if not self._check(prog, sampler, optional):
+            return
+        bound = self._bound.setdefault(id(prog), {})
+        unit = bound[sampler][0] if sampler in bound else len(bound)
+        if unit >= self.graph.gpu.binding_units:
+            raise GraphError(f"pass {self.pass_.name}: too many textures for one program")
+        bound[sampler] = (unit, tex)
+
+    def textures(self, prog: moderngl.Program, **samplers: "moderngl.Texture | str") -> None:
+        """``bind`` for each keyword: ``ec.textures(prog, source=tex, gutter="gutter_512")``."""
+        for sampler, tex in samplers.items():
+            self.bind(prog, sampler, tex)
+
+    def _apply(self, prog: moderngl.Program) -> None:
+        """Before a draw: this program's textures on their units, the other samplers on dummies."""
+        bound = self._bound.get(id(prog), {})
+        gpu = self.graph.gpu
+        for name, gl_type in gpu.samplers(prog).items():
+            if name in bound:
+                unit, tex = bound[name]
+                tex.use(unit)
+            else:
+                unit = gpu.dummy(gl_type)
+            prog[name].value = unit
+
+    # -- draws ---------------------------------------------------------------------------------
+    def _target(self, targets) -> moderngl.Framebuffer:
+        if not targets:
+            raise GraphError(f"pass {self.pass_.name}: a draw needs a target")
+        if all(isinstance(t, str) for t in targets):
+            return self.framebuffer(*targets)
+        if any(isinstance(t, str) or t not in self._scratch for t in targets):
+            raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
+        return self.graph._framebuffer_for(tuple(targets))
+
+    def draw_mesh(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
+                  clear: tuple | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True) -> None:
+        """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
+        depth buffer, or scratch textures): both faces, depth-tested unless ``depth_test=False``
+        (texture-space unwraps), after clearing colour to ``clear`` and depth to 1 (None: no clear)."""
+        scene = self.scene
+        fbo = self._target(targets)
+        fbo.use()
+        if clear is not None:
+            fbo.clear(*clear, depth=1.0)
+        if depth_test:
+            self.gl.enable(moderngl.DEPTH_TEST)
+        else:
+            self.gl.disable(moderngl.DEPTH_TEST)
+        self.gl.disable(moderngl.CULL_FACE)
+        self._apply(prog)
+        self.graph.gpu.mesh_vao(prog, scene).render()
+        self.gl.disable(moderngl.DEPTH_TEST)
+
+    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture") -> None:
+        """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
+        ``targets`` (declared outputs or scratch textures), no depth test, no clear."""
+        fbo = self._target(targets)
+        fbo.use()
+        self.gl.disable(moderngl.DEPTH_TEST)
+        self._apply(prog)
+        self.graph.gpu.fullscreen_vao(prog).render(vertices=3)
 
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
         """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
         tex = self.graph._pool_take(spec)
         self._scratch.append(tex)
         return tex
-
-    def scratch_framebuffer(self, tex: moderngl.Texture) -> moderngl.Framebuffer:
-        return self.graph._framebuffer_for((tex,))
 
     def _finish(self):
         for t in self._scratch:
@@ -272,6 +429,8 @@ class RenderGraph:
         self._last_refl: dict[str, Reflection] = {}
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
+        self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
+        shaders.on_release(self.gpu.forget_program)
 
     # -- texture management ------------------------------------------------------------------
     def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
@@ -432,6 +591,7 @@ class RenderGraph:
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
+        self.gpu.keep_scene(frame.scene)
         refl = self._reflect_all(frame.settings, frame.scene)
         order, live = self._order(refl, list(targets or self.targets))
         self.order = order
@@ -553,6 +713,8 @@ class RenderGraph:
         for rb in self._depth.values():
             rb.release()
         self._depth.clear()
+        self.gpu.release()
+        self.shaders.remove_hook(self.gpu.forget_program)
 
     def describe(self) -> list[dict]:
         """The passes in execution order with their declared inputs/outputs and last status."""

@@ -42,7 +42,6 @@ class GpuScene:
         self.radius = mesh.radius
         self.vbo = ctx.buffer(mesh.interleaved().tobytes())
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
-        self._vaos: dict[int, moderngl.VertexArray] = {}
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
         self.has_normal_map = mesh.normal_map is not None
@@ -73,20 +72,13 @@ class GpuScene:
         m = self.mesh
         return uniform_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
 
-    def vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
-        vao = self._vaos.get(id(prog))
-        if vao is None or vao.program is not prog:
-            if vao is not None:
-                vao.release()  # its program was replaced (hot reload)
-            attrs = [a for a in VERTEX_ATTRS if a in prog]
-            fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
-            vao = self.ctx.vertex_array(prog, [(self.vbo, fmt, *attrs)], index_buffer=self.ibo, index_element_size=4)
-            self._vaos[id(prog)] = vao
-        return vao
+    def vertex_array(self, prog: moderngl.Program) -> moderngl.VertexArray:
+        """A new VAO of the mesh for ``prog`` (the graph's GpuServices caches it per program)."""
+        attrs = [a for a in VERTEX_ATTRS if a in prog]
+        fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
+        return self.ctx.vertex_array(prog, [(self.vbo, fmt, *attrs)], index_buffer=self.ibo, index_element_size=4)
 
     def release(self) -> None:
-        for v in self._vaos.values():
-            v.release()
         for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
             obj.release()
 
@@ -121,7 +113,6 @@ class Renderer:
         self.scene: LoadedScene | None = None
         self.scene_version = 0
         self.last_view: View | None = None
-        self._fs_vaos: dict[int, moderngl.VertexArray] = {}
 
     # -- scene -------------------------------------------------------------------------------
     @staticmethod
@@ -170,17 +161,8 @@ class Renderer:
         if g is None:
             passes, targets = techniques.build(technique)
             g = RenderGraph(self.ctx, self.shaders, passes, targets, self.pool)
-            g.fullscreen_vao = self._fullscreen_vao
             self.graphs[technique] = g
         return g
-
-    def _fullscreen_vao(self, prog: moderngl.Program) -> moderngl.VertexArray:
-        vao = self._fs_vaos.get(id(prog))
-        if vao is None or vao.program is not prog:
-            if vao is not None:
-                vao.release()  # its program was replaced (hot reload)
-            vao = self._fs_vaos[id(prog)] = self.ctx.vertex_array(prog, [])
-        return vao
 
     def view(self, s: Settings) -> View:
         gpu = self.ensure_scene(s).gpu

@@ -18,14 +18,13 @@ from pydantic import (
     model_validator,
 )
 
+from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF, REGIONS
 from skinviewer.core.files import atomic_write_text  # noqa: F401  (presets are saved through it)
 
 SCHEMA_VERSION = 1
 
 Vec3 = tuple[float, float, float]
 
-# Facial regions of the region-ID map; the ID stored in the map is the index in this list.
-REGIONS: tuple[str, ...] = ("other", "forehead", "nose", "cheeks", "lips", "chin", "ears", "neck", "scalp")
 
 
 class _Model(BaseModel):
@@ -106,7 +105,7 @@ class ShadowSettings(_Model):
     map_size: int = Field(1024, ge=64, le=8192)
     # seed 000 eq. (7): shadowed if d(P) - ds > tol; tol in normalised light-space depth
     tol: float = Field(0.002, ge=0.0, le=0.5)
-    pcf: int = Field(1, ge=0, le=3, description="percentage-closer filter radius in texels (0 = eq. 7 hard test)")
+    pcf: int = Field(1, ge=0, le=MAX_PCF, description="percentage-closer filter radius in texels (0 = eq. 7 hard test)")
 
 
 class RenderSettings(_Model):
@@ -194,14 +193,14 @@ class DeonSettings(_Model):
     """d'Eon & Luebke 2007 (seed 000 §4.2, eq. 20-35; seed 002 §14.4)."""
     # variances need not ascend (the blur chain clamps a negative increment to 0) and weights need not
     # sum to 1: profile_warnings() says so, never an error
-    gaussians: list[Gaussian] = Field(default_factory=_default_gaussians, min_length=1, max_length=8)
+    gaussians: list[Gaussian] = Field(default_factory=_default_gaussians, min_length=1, max_length=MAX_GAUSSIANS)
     mix: float = Field(0.5, ge=0.0, le=1.0, description="pre/post-scatter texturing, eq. (28), (34)")
     stretch: bool = True
     stretch_per_gaussian: bool = False
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
     tsm_light: int | None = Field(
-        None, ge=0, le=3, description="light the TSM is rendered from (None: the first shadow-casting light)")
+        None, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
     tsm_form: Literal["exact", "printed"] = Field(
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
     energy_conservation: bool = True
@@ -225,7 +224,7 @@ class Settings(_Model):
             LightSettings(direction=(0.55, 0.35, 1.0), intensity=1.4, color=(1.0, 0.97, 0.92)),
             LightSettings(direction=(-0.8, 0.4, -0.9), intensity=1.2, color=(0.85, 0.9, 1.0)),
         ],
-        min_length=1, max_length=4)
+        min_length=1, max_length=MAX_LIGHTS)
     shadow: ShadowSettings = Field(default_factory=ShadowSettings)
     phong: PhongSettings = Field(default_factory=PhongSettings)
     specular: SpecularSettings = Field(default_factory=SpecularSettings)

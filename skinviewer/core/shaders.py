@@ -1,6 +1,11 @@
 """Shader library: compiles programs from ``shaders/`` with ``#include`` of shared snippets,
 remembers source files and modification times, and recompiles on demand. Compile errors come back
-as (file, line, message) records; the last good program keeps running."""
+as (file, line, message) records; the last good program keeps running.
+
+A program ``name`` is ``name.frag`` plus a vertex stage: ``name.vert``, or the shared stage its
+fragment file names with ``#pragma vertex_stage "vs/fullscreen.vert"`` (paths relative to the root).
+Every program gets the shared constants (``skinviewer.core.constants.GLSL_DEFINES``), then the
+library's own defines, then the program's defines, as ``#define`` lines after ``#version``."""
 from __future__ import annotations
 
 import hashlib
@@ -11,8 +16,12 @@ from pathlib import Path
 import moderngl
 
 from skinviewer.core import paths
+from skinviewer.core.constants import GLSL_DEFINES
 
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
+_VERTEX_STAGE = re.compile(r'^\s*#pragma\s+vertex_stage\s+"([^"]+)"\s*$', re.M)
+# "uniform <type> a, b[4];" with optional layout(...) and precision qualifiers
+_UNIFORM = re.compile(r"^\s*(?:layout\s*\([^)]*\)\s*)?uniform\s+([^;{]+);", re.M)
 # Mesa: "0:12(5): error: ..."; NVIDIA: "0(12) : error C0000: ..."; AMD/Intel: "ERROR: 0:12: ..."
 _ERR_PATTERNS = (
     re.compile(r"^\s*(\d+):(\d+)\(\d+\):\s*(?:error|warning)?:?\s*(.*)$"),
@@ -48,13 +57,34 @@ class _Entry:
     digest: str = ""
     errors: list[ShaderError] = field(default_factory=list)
     generation: int = 0  # bumps each time a new program replaces the old one
+    declared: frozenset = frozenset()  # uniform names declared in the running program's source
+
+
+def declared_uniforms(source: str) -> set[str]:
+    """Names of the uniforms declared in preprocessed GLSL (compilers drop unused ones from the
+    program; this says which names the source has at all)."""
+    out = set()
+    for m in _UNIFORM.finditer(source):
+        decl = m.group(1).split()
+        rest = " ".join(decl[1:]) if decl[0] not in ("lowp", "mediump", "highp") else " ".join(decl[2:])
+        for part in rest.split(","):
+            name = part.split("[")[0].split("=")[0].strip()
+            if name.isidentifier():
+                out.add(name)
+    return out
 
 
 class ShaderLibrary:
-    def __init__(self, ctx: moderngl.Context, root: Path | None = None):
+    """Programs by (name, defines). ``defines``: library-wide extra defines (e.g. ``{"GENERIC_SHADERS":
+    1}`` compiles every program unspecialised, for tests and comparisons)."""
+
+    def __init__(self, ctx: moderngl.Context, root: Path | None = None, defines: dict | None = None):
         self.ctx = ctx
         self.root = Path(root) if root else paths.shaders_dir()
+        self.defines = {**GLSL_DEFINES, **{str(k): str(v) for k, v in (defines or {}).items()}}
         self._entries: dict[tuple, _Entry] = {}
+        self._by_program: dict[int, _Entry] = {}
+        self._release_hooks: list = []
         self.revision = 0  # bumps whenever any program is replaced (a cheap "did any shader change?")
 
     # -- source assembly ---------------------------------------------------------------------
@@ -76,7 +106,9 @@ class ShaderLibrary:
         out: list[str] = []
         for lineno, line in enumerate(text.splitlines(), start=1):
             m = _INCLUDE.match(line)
-            if m:
+            if _VERTEX_STAGE.match(line):
+                out.append("// " + line.strip())  # read by _stage_files; keeps line numbers
+            elif m:
                 inc = (path.parent / m.group(1)).resolve()
                 if not inc.is_file():
                     inc = (self.root / m.group(1)).resolve()
@@ -100,12 +132,24 @@ class ShaderLibrary:
     def _stage_files(self, name: str) -> dict[str, Path]:
         found = {stage: self.root / f"{name}{ext}" for stage, ext in STAGES.items()}
         found = {s: p for s, p in found.items() if p.is_file()}
+        frag = found.get("fragment_shader")
+        if frag is not None:
+            try:
+                m = _VERTEX_STAGE.search(frag.read_text(encoding="utf-8"))
+            except (OSError, UnicodeDecodeError):
+                m = None
+            if m:
+                found["vertex_shader"] = self.root / m.group(1)
         return found
 
     def _assemble(self, name: str, defines: tuple[tuple[str, str], ...]):
         stage_files = self._stage_files(name)
         if "vertex_shader" not in stage_files or "fragment_shader" not in stage_files:
             raise _SourceError(ShaderError(f"{name}.vert/.frag", 0, "shader files not found in " + str(self.root)))
+        if not stage_files["vertex_shader"].is_file():
+            raise _SourceError(ShaderError(f"{name}.frag", 0, "vertex stage "
+                                           f"{self._rel(stage_files['vertex_shader'])} not found"))
+        defines = tuple({**self.defines, **dict(defines)}.items())  # a program's own define wins
         sources: dict[str, str] = {}
         files_per_stage: dict[str, list[Path]] = {}
         for stage, path in stage_files.items():
@@ -138,8 +182,13 @@ class ShaderLibrary:
             entry.errors = self._parse_errors(str(exc), files_per_stage)
             return False
         if entry.program is not None:
+            self._by_program.pop(id(entry.program), None)
+            for hook in list(self._release_hooks):
+                hook(entry.program)
             entry.program.release()
         entry.program = prog
+        self._by_program[id(prog)] = entry
+        entry.declared = frozenset(n for src in sources.values() for n in declared_uniforms(src))
         entry.digest = digest
         entry.errors = []
         entry.generation += 1
@@ -201,6 +250,21 @@ class ShaderLibrary:
         entry = self._entry(name, defines)
         return f"{entry.digest}:{entry.generation}"
 
+    def describe(self, prog: moderngl.Program) -> tuple[str, frozenset]:
+        """(program name, uniform names declared in its GLSL source) of a program this library made."""
+        entry = self._by_program.get(id(prog))
+        if entry is None or entry.program is not prog:
+            raise KeyError("program not made by this shader library")
+        return entry.name, entry.declared
+
+    def on_release(self, hook) -> None:
+        """Call ``hook(program)`` just before a program is released (hot reload, release())."""
+        self._release_hooks.append(hook)
+
+    def remove_hook(self, hook) -> None:
+        if hook in self._release_hooks:
+            self._release_hooks.remove(hook)
+
     def errors(self) -> dict[str, list[ShaderError]]:
         return {e.name: list(e.errors) for e in self._entries.values() if e.errors}
 
@@ -232,8 +296,11 @@ class ShaderLibrary:
     def release(self) -> None:
         for e in self._entries.values():
             if e.program is not None:
+                for hook in list(self._release_hooks):
+                    hook(e.program)
                 e.program.release()
         self._entries.clear()
+        self._by_program.clear()
 
 
 def text_line(path: Path, offset: int) -> int:

@@ -19,25 +19,20 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 """
 from __future__ import annotations
 
-from types import SimpleNamespace
-
-import moderngl
 import numpy as np
 
+from skinviewer.core.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     LIGHT_POSE_FIELDS,
-    bind_optional,
+    LIT,
     bind_specular,
     bind_surface,
     declare_lighting,
     declare_lit,
     declare_specular,
-    draw_fullscreen,
-    draw_mesh,
     set_camera,
     set_lighting,
-    set_uniform,
 )
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.texture_space import (
@@ -58,18 +53,12 @@ from skinviewer.scene.camera import gl_bytes, light_space
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
-MAX_GAUSSIANS = 8
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 
 
 def _size(r) -> int:
     return r.setting(SIZE)
-
-
-def _set_array(prog, name, values, dtype=np.float32):
-    if name in prog:
-        prog[name].write(np.asarray(values, dtype=dtype).tobytes())
 
 
 # -- which light casts the TSM --------------------------------------------------------------------
@@ -80,7 +69,7 @@ def tsm_light_index(r) -> int | None:
     casts shadows."""
     if not r.setting("deon.tsm"):
         return None
-    n = min(r.setting("lights.#"), 4)
+    n = min(r.setting("lights.#"), MAX_LIGHTS)
     usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")]
     want = r.setting("deon.tsm_light")
     if want is not None and want in usable:
@@ -88,26 +77,17 @@ def tsm_light_index(r) -> int | None:
     return usable[0] if usable else None
 
 
-def _tsm_pose(ec, j: int):
-    return SimpleNamespace(**{f: ec.setting(f"lights.{j}.{f}") for f in LIGHT_POSE_FIELDS})
-
-
-def set_tsm_uniforms(ec, prog, j: int) -> None:
+def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
+    """The TSM light's uniforms (lib/deon.glsl; ``matrix``: the name of its light-space matrix in
+    ``prog``). Returns its LightSpace."""
     scene = ec.scene
-    pose = _tsm_pose(ec, j)
+    pose = ec.section(f"lights.{j}", LIGHT_POSE_FIELDS)
     ls = light_space(pose, scene.center, scene.radius)
-    if "u_tsm_matrix" in prog:
-        prog["u_tsm_matrix"].write(gl_bytes(ls.gl_matrix))
     d = np.asarray(pose.direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
-    set_uniform(prog, "u_tsm_kind", 1 if pose.kind == "point" else 0)
-    set_uniform(prog, "u_tsm_dir", tuple(float(x) for x in d))
-    set_uniform(prog, "u_tsm_pos", tuple(float(x) for x in ls.position))
-    set_uniform(prog, "u_mm_per_unit", float(scene.mm_per_unit))
-    if ec.has_input(TSM):
-        # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
-        texel_mm = ls.texel_world(ec.input(TSM).size[0]) * scene.mm_per_unit
-        set_uniform(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
+    ec.uniforms(prog, **{matrix: gl_bytes(ls.gl_matrix)}, u_tsm_kind=LIGHT_KINDS[pose.kind],
+                u_tsm_dir=tuple(float(x) for x in d), u_tsm_pos=tuple(float(x) for x in ls.position),
+                u_mm_per_unit=float(scene.mm_per_unit))
     return ls
 
 
@@ -125,7 +105,7 @@ class StretchPass(Pass):
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
         prog = ec.program("deon_stretch")
-        set_uniform(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
+        ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
         unwrap_dilated(ec, prog, n, STRETCH)
 
 
@@ -137,23 +117,15 @@ class TsmPass(Pass):
         j = tsm_light_index(r)
         if j is None:
             return
-        for f in LIGHT_POSE_FIELDS:
-            r.setting(f"lights.{j}.{f}")
+        r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
         n = r.setting("deon.tsm_size")
         r.program("deon_tsm")
         r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_tsm")
-        ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
-        prog["u_light_matrix"].write(gl_bytes(ls.gl_matrix))
-        fbo = ec.framebuffer(TSM)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, -1.0, depth=1.0)  # A < 0: no surface
-        ec.gl.enable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
-        ec.scene.vao(prog).render()
-        ec.gl.disable(moderngl.DEPTH_TEST)
+        set_tsm_uniforms(ec, prog, tsm_light_index(ec), matrix="u_light_matrix")
+        ec.draw_mesh(prog, TSM, clear=(0.0, 0.0, 0.0, -1.0))  # A < 0: no surface
 
 
 class IrradiancePass(Pass):
@@ -162,38 +134,30 @@ class IrradiancePass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = _size(r)
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         r.setting("deon.mix")
         if r.setting("deon.energy_conservation"):
             declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
         if tsm_light_index(r) is not None:
             r.input(TSM)
-        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"))
+        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting)
 
     def execute(self, ec) -> None:
         n = ec.setting(SIZE)
         prog = ec.program("deon_irradiance")
-        unit = bind_surface(ec, prog, 0)
-        unit = set_lighting(ec, prog, unit)
+        bind_surface(ec, prog)
+        set_lighting(ec, prog)
         energy = bool(ec.setting("deon.energy_conservation"))
-        set_uniform(prog, "u_energy", 1 if energy else 0)
-        set_uniform(prog, "u_mix", float(ec.setting("deon.mix")))
+        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.setting("deon.mix")))
         if energy:
-            ec.input(RHO_DT_RESOURCE).use(unit)
-            set_uniform(prog, "rho_dt_tex", unit)
-            unit = bind_specular(ec, prog, unit + 1, spare_unit=unit)
-        else:
-            unit += 1
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+            bind_specular(ec, prog)
         use_tsm = ec.has_input(TSM)
-        set_uniform(prog, "u_tsm", 1 if use_tsm else 0)
-        set_uniform(prog, "u_max_thickness", MAX_THICKNESS_MM)
+        ec.uniforms(prog, u_tsm=use_tsm, u_max_thickness=MAX_THICKNESS_MM)
         if use_tsm:
-            ec.input(TSM).use(unit)
-            set_uniform(prog, "tsm_map", unit)
+            ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
-        else:
-            set_uniform(prog, "tsm_map", unit)
         unwrap_dilated(ec, prog, n, IRRADIANCE)
 
 
@@ -267,34 +231,27 @@ class GaussianBlurPass(Pass):
         step = self._step(ec)
         prog = ec.program("deon_blur")
         stretch = self._stretch_input(ec, step)
-        set_uniform(prog, "u_use_stretch", 1 if stretch else 0)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
-        set_uniform(prog, "u_uniform_stretch", (s, s))
+        ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
+                    u_weights=np.asarray(KERNEL7, np.float32))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
-        _set_array(prog, "u_weights", KERNEL7)
-        gutter = ec.input(gutter_resource(n))
-        gutter.use(1)
-        set_uniform(prog, "gutter", 1)
-        (ec.input(stretch) if stretch else gutter).use(2)
-        set_uniform(prog, "stretch_map", 2)
-        set_uniform(prog, "source", 0)
-        ec.gl.disable(moderngl.DEPTH_TEST)
+        ec.bind(prog, "gutter", gutter_resource(n))
+        if stretch:
+            ec.bind(prog, "stretch_map", stretch)
         spec = TexSpec((n, n), 4, "f4")
         tmp = ec.scratch(spec)
         tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
-        src = ec.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
+        src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         for k, sigma in enumerate(sigmas):
-            set_uniform(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
-            src.use(0)  # horizontal: src -> tmp
-            set_uniform(prog, "u_dir", (1.0, 0.0))
-            ec.scratch_framebuffer(tmp).use()
-            draw_fullscreen(ec, prog)
-            tmp.use(0)  # vertical: tmp -> tmp2, or the output on the last sub-step
-            set_uniform(prog, "u_dir", (0.0, 1.0))
+            ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
+            ec.bind(prog, "source", src)  # horizontal: src -> tmp
+            ec.set(prog, "u_dir", (1.0, 0.0))
+            ec.draw_fullscreen(prog, tmp)
+            ec.bind(prog, "source", tmp)  # vertical: tmp -> tmp2, or the output on the last sub-step
+            ec.set(prog, "u_dir", (0.0, 1.0))
             last = k == len(sigmas) - 1
-            (ec.framebuffer(self._output()) if last else ec.scratch_framebuffer(tmp2)).use()
-            draw_fullscreen(ec, prog)
+            ec.draw_fullscreen(prog, self._output() if last else tmp2)
             src = tmp2
 
 
@@ -304,7 +261,7 @@ class DeonFinalPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
         r.setting("deon.mix")
@@ -322,49 +279,40 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
         if tsm and r.setting("deon.stretch"):
             r.input(STRETCH)
-        declare_lit(r, "deon_final")
+        declare_lit(r, "deon_final", **lighting)
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
         set_camera(ec, prog)
-        unit = bind_surface(ec, prog, 0)
-        unit = set_lighting(ec, prog, unit)
+        bind_surface(ec, prog)
+        set_lighting(ec, prog)
         has = ec.has_input
         gs = ec.setting("deon.gaussians")
         plan = _plan(ec)
         ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         var = np.zeros(MAX_GAUSSIANS, np.float32)
         used = np.zeros(MAX_GAUSSIANS, np.int32)
-        spare = unit  # a unit for samplers the shader does not read (an unused blur slot)
-        unit += 1
         for i, (g, step) in enumerate(zip(gs, plan)):
             res = texture_of(step)
             var[i] = step.variance
-            if has(res):
+            if has(res):  # unbound blur slots read the graph's dummy texture
                 ws[i] = g.weights
                 used[i] = 1 if any(w > 0 for w in g.weights) else 0
-                ec.input(res).use(unit)
-                set_uniform(prog, f"blur{i}", unit)
-                unit += 1
-            else:
-                set_uniform(prog, f"blur{i}", spare)
-        for i in range(len(gs), MAX_GAUSSIANS):
-            set_uniform(prog, f"blur{i}", spare)
-        set_uniform(prog, "u_count", len(gs))
-        _set_array(prog, "u_w", ws)
-        _set_array(prog, "u_var", var)
-        _set_array(prog, "u_used", used, np.int32)
-        set_uniform(prog, "u_mix", float(ec.setting("deon.mix")))
-        set_uniform(prog, "u_energy", 1 if has(RHO_DT_RESOURCE) else 0)
-        unit = bind_optional(ec, prog, RHO_DT_RESOURCE, "rho_dt_tex", unit, spare)
-        unit = bind_specular(ec, prog, unit, spare)
-        set_uniform(prog, "u_tsm", 1 if has(TSM) else 0)
-        unit = bind_optional(ec, prog, TSM, "tsm_map", unit, spare)
-        unit = bind_optional(ec, prog, STRETCH, "stretch_map", unit, spare)  # read with the TSM only
+                ec.bind(prog, f"blur{i}", res)
+        ec.uniforms(prog, u_count=len(gs), u_w=ws, u_var=var, u_used=used, u_mix=float(ec.setting("deon.mix")),
+                    u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM))
+        if has(RHO_DT_RESOURCE):
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        bind_specular(ec, prog)
         if has(TSM):
-            set_tsm_uniforms(ec, prog, tsm_light_index(ec))
-            set_uniform(prog, "u_tsm_printed", 1 if ec.setting("deon.tsm_form") == "printed" else 0)
-            set_uniform(prog, "u_use_stretch", 1 if has(STRETCH) else 0)
+            ec.bind(prog, "tsm_map", TSM)
+            if has(STRETCH):  # read with the TSM only
+                ec.bind(prog, "stretch_map", STRETCH)
+            ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
+            # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
+            texel_mm = ls.texel_world(ec.input(TSM).size[0]) * ec.scene.mm_per_unit
+            ec.set(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
             s = ec.scene.mean_uv_per_mm
-            set_uniform(prog, "u_uniform_stretch", (s, s))
-        draw_mesh(ec, prog, "lit")
+            ec.uniforms(prog, u_tsm_printed=ec.setting("deon.tsm_form") == "printed",
+                        u_use_stretch=has(STRETCH), u_uniform_stretch=(s, s))
+        ec.draw_mesh(prog, LIT)

@@ -28,23 +28,20 @@
 """
 from __future__ import annotations
 
-import moderngl
 import numpy as np
 from scipy import ndimage
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.core.settings import REGIONS, RegionKernel
 from skinviewer.passes.common import (
+    LIT,
     bind_specular,
     bind_surface,
     declare_lighting,
     declare_lit,
     declare_specular,
-    draw_fullscreen,
-    draw_mesh,
     set_camera,
     set_lighting,
-    set_uniform,
 )
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
@@ -60,6 +57,7 @@ BLURRED = "gosselin_blurred"
 SIZE = "gosselin.light_map_size"
 REFERENCE_SIZE = 1024  # eq. 12's size = 1/1024: radii are "texels at 1024"
 MAX_SMOOTH_SIGMA = 24.0
+KERNEL_FIELDS = ("regions", "scale_x", "scale_y")  # what region_radii reads
 
 
 def _map_spec(size: int) -> TexSpec:
@@ -71,15 +69,15 @@ class GosselinLightMapPass(Pass):
     name = "gosselin_light_map"
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         size = r.setting(SIZE)
-        declare_unwrapped(r, "light_map", size, LIGHT_MAP, _map_spec(size))
+        declare_unwrapped(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
         prog = ec.program("light_map")
-        unit = bind_surface(ec, prog, 0)
-        set_lighting(ec, prog, unit)
+        bind_surface(ec, prog)
+        set_lighting(ec, prog)
         unwrap_dilated(ec, prog, size, LIGHT_MAP)
 
 
@@ -130,28 +128,17 @@ class GosselinRadiusMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         size = r.setting(SIZE)
-        r.setting("gosselin.regions")
-        r.setting("gosselin.scale_x")
-        r.setting("gosselin.scale_y")
+        r.section("gosselin", KERNEL_FIELDS)
         r.input(gutter_resource(size))
         r.output(RADIUS_MAP, TexSpec((size, size), 1, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
-        radii = region_radii(_GView(ec), size)
+        radii = region_radii(ec.section("gosselin", KERNEL_FIELDS), size)
         gtex = ec.input(gutter_resource(size))
         gutter = np.frombuffer(gtex.read(), dtype=np.float32).reshape(size, size, 4)
         rad = radius_map(ec.scene.region_ids, radii, size, gutter)
         ec.output(RADIUS_MAP).write(np.ascontiguousarray(rad).tobytes())
-
-
-class _GView:
-    """The declared Gosselin kernel settings read through ``ec.setting`` (declared paths only)."""
-
-    def __init__(self, ec):
-        self.regions = ec.setting("gosselin.regions")
-        self.scale_x = ec.setting("gosselin.scale_x")
-        self.scale_y = ec.setting("gosselin.scale_y")
 
 
 class PoissonBlurPass(Pass):
@@ -172,31 +159,21 @@ class PoissonBlurPass(Pass):
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
         n = ec.setting("gosselin.iterations")
-        src = ec.input(LIGHT_MAP)
-        gutter = ec.input(gutter_resource(size))
-        out_fbo = ec.framebuffer(BLURRED)
-        ec.gl.disable(moderngl.DEPTH_TEST)
-        ec.gl.disable(moderngl.CULL_FACE)
+        gutter = gutter_resource(size)
         if n <= 0:
-            dilate(ec, src, gutter, out_fbo)  # a copy: the light map is already dilated
+            dilate(ec, LIGHT_MAP, gutter, BLURRED)  # a copy: the light map is already dilated
             return
         prog = ec.program("poisson_blur")
-        prog["u_poisson"].write(np.asarray(POISSON_12, dtype=np.float32).tobytes())
-        ec.input(RADIUS_MAP).use(1)
-        set_uniform(prog, "source", 0)
-        set_uniform(prog, "radius_map", 1)
+        ec.set(prog, "u_poisson", np.asarray(POISSON_12, dtype=np.float32))
+        ec.bind(prog, "radius_map", RADIUS_MAP)
         tmp = ec.scratch(_map_spec(size))
-        tmp_fbo = ec.scratch_framebuffer(tmp)
         ping = ec.scratch(_map_spec(size)) if n > 1 else None
-        ping_fbo = ec.scratch_framebuffer(ping) if ping is not None else None
-        cur = src
+        cur = LIGHT_MAP
         for k in range(n):
-            cur.use(0)
-            ec.input(RADIUS_MAP).use(1)
-            tmp_fbo.use()
-            draw_fullscreen(ec, prog)
+            ec.bind(prog, "source", cur)
+            ec.draw_fullscreen(prog, tmp)
             last = k == n - 1
-            dilate(ec, tmp, gutter, out_fbo if last else ping_fbo)
+            dilate(ec, tmp, gutter, BLURRED if last else ping)
             cur = ping
 
 
@@ -206,19 +183,18 @@ class GosselinFinalPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
+        lighting = declare_lighting(r)
         declare_specular(r)
         r.setting("gosselin.specular_shadow")
         r.input(BLURRED)
-        declare_lit(r, "gosselin_final")
+        declare_lit(r, "gosselin_final", **lighting)
 
     def execute(self, ec) -> None:
         prog = ec.program("gosselin_final")
         set_camera(ec, prog)
-        set_uniform(prog, "u_spec_shadow", 1 if ec.setting("gosselin.specular_shadow") == "printed" else 0)
-        unit = bind_surface(ec, prog, 0)
-        ec.input(BLURRED).use(unit)
-        set_uniform(prog, "blurred", unit)
-        unit = bind_specular(ec, prog, unit + 1, spare_unit=unit)  # the blurred map backs unused samplers
-        set_lighting(ec, prog, unit)
-        draw_mesh(ec, prog, "lit")
+        ec.set(prog, "u_spec_shadow", ec.setting("gosselin.specular_shadow") == "printed")
+        bind_surface(ec, prog)
+        ec.bind(prog, "blurred", BLURRED)
+        bind_specular(ec, prog)
+        set_lighting(ec, prog)
+        ec.draw_mesh(prog, LIT)

@@ -4,7 +4,6 @@ from __future__ import annotations
 import numpy as np
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
-from skinviewer.passes.common import draw_fullscreen, set_uniform
 
 
 def srgb_to_linear(c):
@@ -29,10 +28,7 @@ class OutputPass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("output")
-        ec.input(self.source).use(0)
-        set_uniform(prog, "lit", 0)
-        set_uniform(prog, "u_exposure", ec.setting("render.exposure"))
-        set_uniform(prog, "u_background", tuple(srgb_to_linear(ec.setting("render.background"))))
-        fbo = ec.framebuffer("image")
-        fbo.use()
-        draw_fullscreen(ec, prog)
+        ec.bind(prog, "lit", self.source)
+        ec.uniforms(prog, u_exposure=ec.setting("render.exposure"),
+                    u_background=tuple(srgb_to_linear(ec.setting("render.background"))))
+        ec.draw_fullscreen(prog, "image")

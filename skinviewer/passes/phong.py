@@ -3,13 +3,12 @@ from __future__ import annotations
 
 from skinviewer.core.graph import Pass, Reflection
 from skinviewer.passes.common import (
+    LIT,
     bind_surface,
     declare_lighting,
     declare_lit,
-    draw_mesh,
     set_camera,
     set_lighting,
-    set_uniform,
 )
 
 
@@ -18,17 +17,15 @@ class PhongPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        declare_lighting(r)
-        r.setting("phong")
-        declare_lit(r, "phong")
+        lighting = declare_lighting(r)
+        r.section("phong", ("ambient", "specular", "shininess"))
+        declare_lit(r, "phong", **lighting)
 
     def execute(self, ec) -> None:
         prog = ec.program("phong")
         set_camera(ec, prog)
-        ph = ec.setting("phong")
-        set_uniform(prog, "u_ambient", ph.ambient)
-        set_uniform(prog, "u_specular", ph.specular)
-        set_uniform(prog, "u_shininess", ph.shininess)
-        unit = bind_surface(ec, prog, 0)
-        set_lighting(ec, prog, unit)
-        draw_mesh(ec, prog, "lit")
+        ph = ec.section("phong", ("ambient", "specular", "shininess"))
+        ec.uniforms(prog, u_ambient=ph.ambient, u_specular=ph.specular, u_shininess=ph.shininess)
+        bind_surface(ec, prog)
+        set_lighting(ec, prog)
+        ec.draw_mesh(prog, LIT)

@@ -1,10 +1,8 @@
 """Shadow map per light (seed 000 §4.1.1, eq. 1-6): light-space z/w of the nearest surface."""
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 from skinviewer.core.graph import Pass, Reflection, TexSpec
-from skinviewer.passes.common import LIGHT_POSE_FIELDS, draw_mesh, shadow_resource
+from skinviewer.passes.common import LIGHT_POSE_FIELDS, shadow_resource
 from skinviewer.scene.camera import gl_bytes, light_space
 
 
@@ -19,8 +17,7 @@ class ShadowMapPass(Pass):
         i = self.light_index
         if r.peek("lights.#") <= i or not r.peek(f"lights.{i}.enabled"):
             return
-        for f in LIGHT_POSE_FIELDS:
-            r.setting(f"lights.{i}.{f}")
+        r.section(f"lights.{i}", LIGHT_POSE_FIELDS)
         size = r.setting("shadow.map_size")
         r.program("shadow_map")
         r.output(shadow_resource(i), TexSpec((size, size), 1, "f4", filter="nearest", depth=True))
@@ -28,8 +25,7 @@ class ShadowMapPass(Pass):
     def execute(self, ec) -> None:
         i = self.light_index
         scene = ec.scene
-        pose = SimpleNamespace(**{f: ec.setting(f"lights.{i}.{f}") for f in LIGHT_POSE_FIELDS})
-        ls = light_space(pose, scene.center, scene.radius)
+        ls = light_space(ec.section(f"lights.{i}", LIGHT_POSE_FIELDS), scene.center, scene.radius)
         prog = ec.program("shadow_map")
-        prog["u_light_matrix"].write(gl_bytes(ls.gl_matrix))
-        draw_mesh(ec, prog, shadow_resource(i), clear=(1.0, 1.0, 1.0, 1.0))
+        ec.set(prog, "u_light_matrix", gl_bytes(ls.gl_matrix))
+        ec.draw_mesh(prog, shadow_resource(i), clear=(1.0, 1.0, 1.0, 1.0))

@@ -6,8 +6,8 @@ import moderngl
 import numpy as np
 from scipy import ndimage
 
+from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
-from skinviewer.passes.common import draw_fullscreen, set_uniform
 
 
 def gutter_resource(size: int) -> str:
@@ -36,23 +36,18 @@ class GutterMapPass(Pass):
 
 
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
-    """Draw the mesh with an unwrap program (shaders/lib/unwrap_vs.glsl, seed 000 eq. 8) into a
+    """Draw the mesh with an unwrap program (shaders/vs/unwrap.vert, seed 000 eq. 8) into a
     cleared scratch texture of size x size (nearest filtering; gutters still empty)."""
     tex = ec.scratch(TexSpec((size, size), components, dtype, filter="nearest"))
-    fbo = ec.scratch_framebuffer(tex)
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 0.0)
-    ec.gl.disable(moderngl.DEPTH_TEST)
-    ec.gl.disable(moderngl.CULL_FACE)
-    ec.scene.vao(prog).render()
+    ec.draw_mesh(prog, tex, depth_test=False)
     return tex
 
 
-def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec) -> None:
-    """Declare a pass that rasterises ``program`` in texture space and writes ``resource`` with its
-    gutters filled (see unwrap_dilated)."""
+def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec, **defines) -> None:
+    """Declare a pass that rasterises ``program`` (with ``defines``) in texture space and writes
+    ``resource`` with its gutters filled (see unwrap_dilated)."""
     r.input(gutter_resource(size))
-    r.program(program)
+    r.program(program, **defines)
     r.program("dilate")
     r.output(resource, spec)
 
@@ -60,7 +55,7 @@ def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spe
 def unwrap_dilated(ec, prog, size: int, resource: str) -> None:
     """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled."""
     raw = rasterize_unwrapped(ec, prog, size)
-    dilate(ec, raw, ec.input(gutter_resource(size)), ec.framebuffer(resource))
+    dilate(ec, raw, gutter_resource(size), resource)
 
 
 def gutter_table(covered: np.ndarray) -> np.ndarray:
@@ -77,16 +72,11 @@ def gutter_table(covered: np.ndarray) -> np.ndarray:
     return out
 
 
-def dilate(ec, source: moderngl.Texture, gutter: moderngl.Texture, target_fbo: moderngl.Framebuffer) -> None:
-    """Copy ``source`` into ``target_fbo`` with the gutters filled from the nearest island texel.
-    The calling pass must declare the program ``dilate``."""
+def dilate(ec, source: moderngl.Texture | str, gutter: str, target: moderngl.Texture | str) -> None:
+    """Copy ``source`` into ``target`` (an output or scratch texture) with the gutters filled from
+    the nearest island texel. The calling pass must declare the program ``dilate``."""
     prog = ec.program("dilate")
-    source.use(0)
-    gutter.use(1)
-    set_uniform(prog, "source", 0)
-    set_uniform(prog, "gutter", 1)
-    half = target_fbo.color_attachments[0].dtype == "f2"
-    set_uniform(prog, "u_limit", 65000.0 if half else 1e30)
-    target_fbo.use()
-    ec.gl.disable(moderngl.DEPTH_TEST)
-    draw_fullscreen(ec, prog)
+    ec.textures(prog, source=source, gutter=gutter)
+    tex = ec.output(target) if isinstance(target, str) else target
+    ec.set(prog, "u_limit", HALF_MAX if tex.dtype == "f2" else FLOAT_MAX)
+    ec.draw_fullscreen(prog, target)

@@ -7,8 +7,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from skinviewer.core.constants import MAX_LIGHTS
 from skinviewer.core.graph import Pass
-from skinviewer.passes.common import MAX_LIGHTS
 from skinviewer.passes.shadow_map import ShadowMapPass
 
 TARGETS = ["image"]

@@ -2,8 +2,8 @@
 space, hierarchical separable blurs with stretch correction, rho_dt energy conservation, TSM."""
 from __future__ import annotations
 
+from skinviewer.core.constants import MAX_GAUSSIANS
 from skinviewer.passes.deon import (
-    MAX_GAUSSIANS,
     SIZE,
     DeonFinalPass,
     GaussianBlurPass,

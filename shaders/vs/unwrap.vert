@@ -1,5 +1,7 @@
-// Texture-space unwrap (seed 000 eq. 8): pos.xy = coord_tex * 2 - 1, independent of the camera.
-#include "mesh_vs.glsl"
+#version 330 core
+// Shared vertex stage: texture-space unwrap (seed 000 eq. 8), pos.xy = coord_tex * 2 - 1,
+// independent of the camera.
+#include "../lib/mesh_vs.glsl"
 out vec3 v_position;
 out vec3 v_normal;
 out vec2 v_uv;

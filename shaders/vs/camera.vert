@@ -1,6 +1,6 @@
 #version 330 core
-// Phong/Lambert baseline: the naive reference every skin technique is compared against.
-#include "lib/mesh_vs.glsl"
+// Shared vertex stage: the mesh seen by the camera (the view-dependent final passes).
+#include "../lib/mesh_vs.glsl"
 uniform mat4 u_view_proj;
 out vec3 v_position;
 out vec3 v_normal;

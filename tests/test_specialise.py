@@ -1,0 +1,67 @@
+"""Specialised lit shaders (LIGHT_COUNT, SHADOW_PCF, SHADOW_MASK defines; shaders/lib/lights.glsl)
+give bit-identical images to the generic, uniform-driven version (GENERIC_SHADERS)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import small_settings
+
+from skinviewer.core.renderer import Renderer
+from skinviewer.core.shaders import ShaderLibrary
+
+# default lights (two, both shadowed, PCF 1); then three lights of every kind with an unshadowed
+# one in the middle slot, a disabled one before it, and a wider PCF
+CASES = {
+    "default": {},
+    "mixed": {"shadow.pcf": 2,
+              "lights": [{"kind": "directional", "direction": (0.5, 0.3, 1.0), "intensity": 1.5},
+                         {"kind": "point", "position": (0.0, 0.0, 400.0), "enabled": False},
+                         {"kind": "point", "position": (-150.0, 80.0, 250.0), "intensity": 0.8,
+                          "cast_shadow": False},
+                         {"kind": "directional", "direction": (-0.7, 0.2, -0.9), "intensity": 1.1}]},
+    "hard": {"shadow.pcf": 0},
+}
+
+
+@pytest.fixture(scope="module")
+def generic(gl_ctx):
+    r = Renderer(gl_ctx, ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}))
+    yield r
+    r.release()
+    r.shaders.release()
+
+
+@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.parametrize("technique", ["phong", "gosselin", "deon"])
+def test_specialised_equals_generic(renderer, generic, technique, case):
+    s = small_settings("head", technique, 64, **CASES[case])
+    renderer.render(s)
+    generic.render(s)
+    prog = [d for n, d in renderer.graph(technique)._last_refl[_lit_pass(technique)].programs
+            if n != "dilate"][0]
+    defines = dict(prog)
+    assert defines["LIGHT_COUNT"] == sum(1 for l in s.lights if l.enabled)
+    assert defines["SHADOW_PCF"] == s.shadow.pcf
+    want_mask = sum(1 << k for k, l in enumerate([l for l in s.lights if l.enabled]) if l.cast_shadow)
+    assert defines["SHADOW_MASK"] == want_mask
+    for res in ("lit", "image") + (("deon_irradiance",) if technique == "deon" else ()) \
+            + (("gosselin_light_map",) if technique == "gosselin" else ()):
+        a, b = renderer.read(s, res), generic.read(s, res)
+        assert np.array_equal(a, b), f"{technique}/{case}: {res} differs by up to {np.abs(a - b).max()}"
+    assert renderer.image(s).max() > 0  # something was lit
+
+
+def _lit_pass(technique):
+    return {"phong": "phong", "gosselin": "gosselin_final", "deon": "deon_final"}[technique]
+
+
+def test_generic_define_reaches_the_source(gl_ctx):
+    lib, lib_spec = ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}), ShaderLibrary(gl_ctx)
+    try:
+        defines = {"LIGHT_COUNT": 1, "SHADOW_PCF": 1, "SHADOW_MASK": 1}
+        assert "u_light_count" in lib.get("phong", defines)  # the uniform-driven loop
+        spec = lib_spec.get("phong", defines)
+        assert "u_light_count" not in spec and "u_shadow_pcf" not in spec and "shadow_map1" not in spec
+    finally:
+        lib.release()
+        lib_spec.release()
