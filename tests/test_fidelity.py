@@ -42,3 +42,113 @@ def test_beam_power_on_stretched_texels_and_wide_beams(renderer):
     # 4:1 texel footprints (stretch-plane), and a beam wider than many texels
     assert np.allclose(_beam_power_ratio(renderer, "stretch-plane", "deon", 256, (0.011, 0.03)), 1.0, atol=0.01)
     assert np.allclose(_beam_power_ratio(renderer, "laser", "deon", 256, (0.3, -0.2), radius=1.3), 1.0, atol=0.01)
+
+
+# ---------------------------------------------------------------------------------------------
+# items 3-4: transmission (translucent shadow map) without terminator lines, thin parts glow
+
+
+def _uv_sphere_obj(path, radius=40.0, nlon=128, nlat=64):
+    """A lat-long sphere (seam at -x, the side away from a light at +x) written as OBJ."""
+    import trimesh
+    lon = np.pi + np.linspace(0.0, 2.0 * np.pi, nlon + 1)
+    lat = np.linspace(-np.pi / 2, np.pi / 2, nlat + 1)
+    LO, LA = np.meshgrid(lon, lat)
+    P = np.stack([np.cos(LA) * np.cos(LO), np.sin(LA), np.cos(LA) * np.sin(LO)], -1).reshape(-1, 3) * radius
+    UV = np.stack([0.02 + 0.96 * (LO - np.pi) / (2 * np.pi), 0.02 + 0.96 * (LA + np.pi / 2) / np.pi], -1).reshape(-1, 2)
+    idx = []
+    for j in range(nlat):
+        for i in range(nlon):
+            a = j * (nlon + 1) + i
+            idx += [(a, a + nlon + 1, a + nlon + 2), (a, a + nlon + 2, a + 1)]
+    trimesh.Trimesh(P, np.array(idx), process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    return str(path)
+
+
+def test_no_red_line_along_the_terminator(renderer, tmp_path):
+    """A 40 mm sphere lit from +x, seen from +z: the image's middle row runs along the equator (a
+    great circle) across the terminator at its centre. The red channel must fall monotonically from
+    the lit side into the shadow: the TSM term used the depth below the lit point (-> 0 at grazing
+    light) and put a red line just past the terminator."""
+    mesh = _uv_sphere_obj(tmp_path / "sphere.obj")
+    s = small_settings("head", "deon", 192, **{
+        "scene.mesh": mesh, "scene.mm_per_unit": 1.0, "camera.yaw": 0.0, "camera.pitch": 0.0,
+        "camera.distance": 200.0, "camera.target": [0.0, 0.0, 0.0], "deon.irradiance_size": 512,
+        "deon.tsm_size": 512, "specular.rho_s": 0.0,
+        "lights": [{"kind": "directional", "direction": [1.0, 0.0, 0.0], "intensity": 2.0, "cast_shadow": True}]})
+    renderer.render(s)
+    lit = renderer.read(s, "lit")[..., :3].astype(np.float64)
+    row = lit[lit.shape[0] // 2, :, 0]
+    n = row.size
+    # the sphere spans about the middle 60 % of the row; from its lit limb (right) to its dark limb
+    inside = np.nonzero(lit[lit.shape[0] // 2, :, :].sum(-1) > 0)[0]
+    seg = row[n // 2 - int(0.25 * n): n // 2 + int(0.25 * n)][::-1]  # lit -> dark
+    assert seg[0] > 0.05, (seg[0], inside)
+    rises = np.diff(seg)
+    assert np.all(rises <= 1e-4 * seg[0]), np.round(seg * 1000).astype(int)
+
+
+def _project(view, p, n):
+    c = view.view_proj @ np.append(p, 1.0)
+    ndc = c[:3] / c[3]
+    return int((ndc[1] + 1) / 2 * n), int((ndc[0] + 1) / 2 * n)  # (row, col), row 0 at the bottom
+
+
+def test_backlit_ear_transmits_the_thin_slab_profile(renderer):
+    """backlit-ear (a flap 1.5 mm thick at the top, 6 mm at the bottom) lit from behind: at the
+    front points 2, 3 and 4 mm thick the final image is C^(1-mix) sum_i w_i exp(-m^2/2v_i) blur_i(uv_A),
+    m the path through the flap along the light, A where that ray enters the back (seed 000 eq. 33)."""
+    from skinviewer.passes.deon import mean_texel_mm
+    from skinviewer.physics.diffusion import blur_plan_texels, texture_of
+    from skinviewer.scene.camera import orbit_view
+    from skinviewer.scene.scenes import _flap_thickness
+    n = 160
+    s = small_settings("backlit-ear", "deon", n, **{"deon.irradiance_size": 512, "deon.tsm_size": 512,
+                                                   "deon.energy_conservation": False})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    lit = renderer.read(s, "lit")[..., :3].astype(np.float64)
+    scene = renderer.scene.gpu
+    view = orbit_view(s.camera, scene.center, scene.radius, (n, n))
+    L = np.array(s.lights[0].direction, np.float64)
+    L /= np.linalg.norm(L)
+    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
+                            mean_texel_mm(scene, 512))
+    blurs = [g.read(texture_of(p))[..., :3].astype(np.float64) for p in plan]
+    from skinviewer.passes.output import srgb_to_linear
+    albedo = srgb_to_linear(np.array([0.85, 0.62, 0.55]))  # the scene's sRGB albedo, linear in the shaders
+    for d in (2.0, 3.0, 4.0):
+        y = 20.0 - (d - 1.5) * 40.0 / 4.5
+        C = np.array([0.0, y, 0.5 * _flap_thickness(np.array(y))])
+        # walk towards the light to the back surface z = -t(y)/2
+        ts = np.linspace(0.0, 3 * d, 30001)
+        P = C[None, :] + ts[:, None] * L[None, :]
+        k = int(np.argmax(P[:, 2] <= -0.5 * _flap_thickness(P[:, 1])))
+        A, m = P[k], ts[k]
+        s_a, t_a = (A[0] + 15.0) / 30.0, (A[1] + 20.0) / 40.0
+        uvA = np.array([0.52 + 0.46 * (1.0 - s_a), 0.02 + 0.96 * t_a])
+        ij = (uvA[::-1] * 512).astype(int)
+        expect = sum(np.asarray(x.weights) * np.exp(-m * m / (2 * x.variance)) * b[ij[0], ij[1]]
+                     for x, b in zip(s.deon.gaussians, blurs)) * albedo ** (1 - s.deon.mix)
+        row, col = _project(view, C, n)
+        got = lit[row, col]
+        assert abs(got[0] / expect[0] - 1) < 0.10, (d, m, got, expect)
+
+
+def test_no_transmission_through_the_head(renderer):
+    """Light from behind the default head, seen from the front: the face (~150 mm of head behind
+    it) gets no transmitted light; the thin ears do. Before: red contours along every terminator."""
+    from skinviewer.core.settings import with_values
+    n = 160
+    s = small_settings("head", "deon", n, **{"camera.yaw": 0.0, "camera.pitch": 5.0, "deon.irradiance_size": 512,
+                                             "deon.tsm_size": 512, "shadow.map_size": 1024,
+                                             "lights": [{"kind": "directional", "direction": [0.0, 0.15, -1.0],
+                                                         "intensity": 3.0, "cast_shadow": True}]})
+    renderer.render(s)
+    on = renderer.read(s, "lit")[..., 0].astype(np.float64).copy()
+    renderer.render(with_values(s, {"deon.tsm": False}))
+    off = renderer.read(s, "lit")[..., 0].astype(np.float64)
+    t = on - off
+    face = t[int(0.3 * n):int(0.8 * n), int(0.38 * n):int(0.62 * n)]  # between the ears
+    assert face.max() < 1e-3, (face.max(), np.argwhere(face >= 1e-3)[:10])
+    assert t.max() > 0.05  # the ears glow
