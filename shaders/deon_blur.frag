@@ -17,8 +17,9 @@ uniform vec2 u_uniform_stretch;   // UV per mm
 uniform float u_weights[7];
 out vec4 f_color;
 void main() {
-    ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
-    vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
+    vec2 at = texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg;  // fractional across a UV seam
+    ivec2 src = ivec2(at + 0.5);
+    vec2 uv = (at + 0.5) / vec2(textureSize(source, 0));
     vec2 s = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0).rg : u_uniform_stretch;
     float step_uv = deon_finite(dot(s, u_dir) * u_sigma_mm);
     vec4 acc = vec4(0.0);

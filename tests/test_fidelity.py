@@ -152,3 +152,73 @@ def test_no_transmission_through_the_head(renderer):
     face = t[int(0.3 * n):int(0.8 * n), int(0.38 * n):int(0.62 * n)]  # between the ears
     assert face.max() < 1e-3, (face.max(), np.argwhere(face >= 1e-3)[:10])
     assert t.max() > 0.05  # the ears glow
+
+
+# ---------------------------------------------------------------------------------------------
+# item 1: seam-aware blurs
+
+
+def _plane_obj(path, cut: bool, size=80.0, uv_per_mm=0.0093):
+    """An 80 mm plane (normal +z), uncut (one UV island) or cut along x = 0 into two islands 0.22
+    apart in u (the same texel density either way)."""
+    import trimesh
+
+    from skinviewer.scene.scenes import _merge, grid
+    w = size * uv_per_mm
+    if cut:
+        parts = []
+        for x0, u0 in ((-size / 4, 0.02), (size / 4, 0.98 - w / 2)):
+            p, nrm, uv, idx = grid(20, 40, size / 2, size, uv_rect=(u0, 0.5 - w / 2, u0 + w / 2, 0.5 + w / 2))
+            p[:, 0] += x0
+            parts.append((p, nrm, uv, idx))
+        P, _, UV, F = _merge(parts)
+    else:
+        P, _, UV, F = grid(40, 40, size, size, uv_rect=(0.5 - w / 2, 0.5 - w / 2, 0.5 + w / 2, 0.5 + w / 2))
+    trimesh.Trimesh(P, F, process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    return str(path), UV, P
+
+
+def _diffused(renderer, mesh, seam_aware=True, n=256):
+    from skinviewer.passes.deon import mean_texel_mm
+    from skinviewer.physics.diffusion import blur_plan_texels, texture_of
+    prof = [{"variance": 0.5, "weights": [0.4, 0.6, 0.8]}, {"variance": 3.0, "weights": [0.6, 0.4, 0.2]}]
+    s = small_settings("laser", "deon", 32, **{
+        "scene.mesh": mesh, "scene.mm_per_unit": 1.0, "scene.seam_aware": seam_aware, "deon.irradiance_size": n,
+        "deon.tsm": False, "deon.energy_conservation": False, "deon.gaussians": prof,
+        "deon.reuse_irradiance_below_texels": 0.0, "camera.target": None, "camera.distance": None,
+        "lights": [{"kind": "beam", "direction": [0.0, 0.0, 1.0], "position": [2.5, 0.0, 0.0], "beam_radius": 2.0,
+                    "intensity": 1.0, "cast_shadow": False}]})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    plan = blur_plan_texels([x["variance"] for x in prof], 0.0, mean_texel_mm(renderer.scene.gpu, n))
+    return sum(np.asarray(x["weights"]) * g.read(texture_of(p))[..., :3].astype(np.float64) for x, p in zip(prof, plan))
+
+
+def test_diffusion_across_a_uv_cut_equals_the_uncut_plane(renderer, tmp_path):
+    """A beam beside the cut (2.5 mm right of it, 2 mm radius): the blurred irradiance on both islands equals the uncut plane's at
+    the same surface points (within 2 % of the peak); with gutters that repeat the island's edge
+    texel (scene.seam_aware off) it does not."""
+    from scipy.ndimage import map_coordinates
+    n, upm = 256, 0.0093
+    cut, _, _ = _plane_obj(tmp_path / "cut.obj", True, uv_per_mm=upm)
+    whole, _, _ = _plane_obj(tmp_path / "whole.obj", False, uv_per_mm=upm)
+    ref = _diffused(renderer, whole, n=n)
+    w = 80.0 * upm
+
+    def compare(D):
+        errs = []
+        for u0, x0 in ((0.02, -40.0), (0.98 - w / 2, 0.0)):
+            i0, i1 = int(np.ceil(u0 * n)), int((u0 + w / 2) * n) - 1
+            j0, j1 = int(np.ceil((0.5 - w / 2) * n)), int((0.5 + w / 2) * n) - 1
+            jj, ii = np.mgrid[j0:j1 + 1, i0:i1 + 1]
+            x = x0 + ((ii + 0.5) / n - u0) / upm           # mm on the plane
+            ui = ((0.5 - w / 2) + (x + 40.0) * upm) * n - 0.5  # the uncut map's texel coordinate there
+            for c in range(3):
+                r = map_coordinates(ref[..., c], [jj.astype(float), ui], order=1)
+                errs.append(np.abs(D[j0:j1 + 1, i0:i1 + 1, c] - r).max() / ref[..., c].max())
+        return max(errs)
+
+    err_on = compare(_diffused(renderer, cut, True, n))
+    err_off = compare(_diffused(renderer, cut, False, n))
+    print("uv cut: max error seam-aware %.4f, edge-texel gutters %.4f" % (err_on, err_off))
+    assert err_on < 0.02 and err_off > 0.05, (err_on, err_off)

@@ -54,6 +54,8 @@ class SceneSettings(_Model):
     specular_map: str | None = None
     region_map: str | None = Field(None, description="region-ID PNG: red channel = index in REGIONS")
     head_detail: int = Field(1, ge=0, le=2, description="default head resolution level (0 small, 1 normal, 2 fine)")
+    seam_aware: bool = Field(True, description="texture-space gutters near UV seams continue on the island across "
+                             "the seam (3D adjacency), so blurs do not read invented values there (issue 10)")
 
 
 class CameraSettings(_Model):

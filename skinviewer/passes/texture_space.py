@@ -8,6 +8,7 @@ from scipy import ndimage
 
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.scene.texels import seam_indirection
 
 
 def gutter_resource(size: int) -> str:
@@ -15,8 +16,9 @@ def gutter_resource(size: int) -> str:
 
 
 class GutterMapPass(Pass):
-    """Per texel: the integer texel coordinate of the nearest texel covered by a UV island (RG) and
-    coverage (B). Depends on the mesh and the texture size only, so it runs once per scene/size.
+    """Per texel: the texel coordinate of the nearest texel covered by a UV island (RG) and coverage
+    (B); with scene.seam_aware, gutter texels near a UV seam hold instead the (fractional) texel
+    coordinate of the surface point across the seam (seam_gutter_table). Depends on the mesh and the texture size only, so it runs once per scene/size.
     ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
 
     def __init__(self, size_setting: str, name: str | None = None):
@@ -26,13 +28,20 @@ class GutterMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         size = r.setting(self.size_setting)
         r.program("uv_coverage")
+        if r.setting("scene.seam_aware"):
+            r.program("uv_position")
         r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         size = ec.setting(self.size_setting)
         cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
-        ec.output(gutter_resource(size)).write(gutter_table(covered).tobytes())
+        table = gutter_table(covered)
+        if ec.setting("scene.seam_aware"):
+            pos = rasterize_unwrapped(ec, ec.program("uv_position"), size)
+            pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
+            table = seam_gutter_table(table, ec.scene, pos)
+        ec.output(gutter_resource(size)).write(table.tobytes())
 
 
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
@@ -56,6 +65,25 @@ def unwrap_dilated(ec, prog, size: int, resource: str) -> None:
     """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled."""
     raw = rasterize_unwrapped(ec, prog, size)
     dilate(ec, raw, gutter_resource(size), resource)
+
+
+SEAM_REACH_TEXELS = 24.0  # gutter texels this close to a seam continue across it (blur taps reach ~3 sigma)
+
+
+def seam_gutter_table(table: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
+    """The gutter table with its texels near UV seams pointing across the seam (RG: float texel
+    coordinate of the surface point they stand for on the adjacent island; issue 10 item 1), so
+    dilation and blur taps that leave an island continue on the surface instead of repeating the
+    island's edge texel."""
+    size = table.shape[0]
+    mm = float(scene.mm_per_unit)
+    texel_mm = 1.0 / (size * max(scene.mean_uv_per_mm, 1e-12))
+    mapped, coords = seam_indirection(scene.mesh.positions, scene.mesh.uvs, scene.mesh.indices, table[..., 2] > 0,
+                                      SEAM_REACH_TEXELS, mm, texel_pos.astype(np.float64) * mm, texel_mm)
+    out = table.copy()
+    out[mapped, 0] = coords[mapped, 0]
+    out[mapped, 1] = coords[mapped, 1]
+    return out
 
 
 def gutter_table(covered: np.ndarray) -> np.ndarray:
