@@ -123,6 +123,8 @@ def main() -> int:
         print("## seams: the scan at 512^2, d'Eon diffused map vs the 3D-distance reference over lit texels")
         print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}))
         print_seams("seam-aware gutters on", seams(r))
+        print_seams("  + stretch_shear", seams(r, extra={"deon.stretch_shear": True}))
+        print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_shear": True, "deon.stretch_per_gaussian": True}))
     if "laser" in a.parts:
         laser(r, sizes)
     r.release()

@@ -199,6 +199,9 @@ class DeonSettings(_Model):
     mix: float = Field(0.5, ge=0.0, le=1.0, description="pre/post-scatter texturing, eq. (28), (34)")
     stretch: bool = True
     stretch_per_gaussian: bool = False
+    stretch_shear: bool = Field(False, description="blur along the full UV->surface Jacobian (the second pass follows "
+                                "the texels' shear) instead of eq. 27's per-axis lengths; exact on sheared planes, "
+                                "not yet better on the scan (issue 10 item 2, notes/fidelity.md)")
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
     tsm_light: int | None = Field(

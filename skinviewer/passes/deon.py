@@ -215,6 +215,8 @@ class GaussianBlurPass(Pass):
             return  # blur_1 is the irradiance itself: the final pass reads it, this pass is pruned
         n = _size(r)
         stretch = self._stretch_input(r, step)
+        if stretch:
+            r.setting("deon.stretch_shear")
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
         if stretch:
@@ -233,7 +235,8 @@ class GaussianBlurPass(Pass):
         stretch = self._stretch_input(ec, step)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
-                    u_weights=np.asarray(KERNEL7, np.float32))
+                    u_weights=np.asarray(KERNEL7, np.float32),
+                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
         ec.bind(prog, "gutter", gutter_resource(n))
