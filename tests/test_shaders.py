@@ -120,6 +120,9 @@ def test_shared_vertex_stage_named_by_pragma_and_hot_reloaded(gl_ctx, lib_dir):
     with pytest.raises(ShaderCompileError) as exc:
         lib.get("bad")
     assert any(e.file == "bad.frag" and e.line == 4 for e in exc.value.errors), exc.value.errors
+    (lib_dir / "enc.frag").write_bytes(b'#version 330 core\n#pragma vertex_stage "vs/shared.vert"\n// caf\xe9\n')
+    with pytest.raises(ShaderCompileError, match="UTF-8"):  # not "vertex stage not found"
+        lib.get("enc")
 
 
 def test_shared_constants_are_injected_and_declared_uniforms_known(gl_ctx, lib_dir):

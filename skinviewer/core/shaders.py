@@ -144,6 +144,8 @@ class ShaderLibrary:
 
     def _assemble(self, name: str, defines: tuple[tuple[str, str], ...]):
         stage_files = self._stage_files(name)
+        if "fragment_shader" in stage_files and "vertex_shader" not in stage_files:
+            self._expand(stage_files["fragment_shader"].resolve(), [])  # its own error (encoding) first
         if "vertex_shader" not in stage_files or "fragment_shader" not in stage_files:
             raise _SourceError(ShaderError(f"{name}.vert/.frag", 0, "shader files not found in " + str(self.root)))
         if not stage_files["vertex_shader"].is_file():
