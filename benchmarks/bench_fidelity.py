@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -66,7 +67,9 @@ def laser(r: Renderer, sizes, offsets=((0.0, 0.0), (0.013, -0.007))) -> None:
                 print(f"{tech:<9}{n:>6}{str(off):>16}{ratio:9.3f}{err}")
 
 
-SCAN = Path(__file__).resolve().parents[2] / "shared" / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
+# ../shared beside the checkout, or SKINVIEWER_SHARED (as tests/conftest.py)
+SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")
+SCAN = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
 
 
 def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = None, dump: str | None = None) -> dict:

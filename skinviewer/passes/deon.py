@@ -38,6 +38,7 @@ from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
+    seam_resource,
     unwrap_dilated,
 )
 from skinviewer.physics.diffusion import (
@@ -217,6 +218,8 @@ class GaussianBlurPass(Pass):
         stretch = self._stretch_input(r, step)
         if stretch:
             r.setting("deon.stretch_shear")
+        if r.setting("scene.seam_aware"):
+            r.input(seam_resource(n))
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
         if stretch:
@@ -236,7 +239,10 @@ class GaussianBlurPass(Pass):
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
-                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")))
+                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")),
+                    u_seam=ec.has_input(seam_resource(n)))
+        if ec.has_input(seam_resource(n)):
+            ec.bind(prog, "seam_map", seam_resource(n))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
         ec.bind(prog, "gutter", gutter_resource(n))

@@ -16,9 +16,10 @@ def gutter_resource(size: int) -> str:
 
 
 class GutterMapPass(Pass):
-    """Per texel: the texel coordinate of the nearest texel covered by a UV island (RG) and coverage
-    (B); with scene.seam_aware, gutter texels near a UV seam hold instead the (fractional) texel
-    coordinate of the surface point across the seam (seam_gutter_table). Depends on the mesh and the texture size only, so it runs once per scene/size.
+    """Per texel: the integer texel coordinate of the nearest texel covered by a UV island (RG) and
+    coverage (B); with scene.seam_aware also the seam map (seam_resource: RG the fractional texel
+    coordinate of the surface point across the UV seam, B 1 where there is one; seam_map). Depends
+    on the mesh and the texture size only, so it runs once per scene/size.
     ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
 
     def __init__(self, size_setting: str, name: str | None = None):
@@ -28,20 +29,21 @@ class GutterMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         size = r.setting(self.size_setting)
         r.program("uv_coverage")
+        r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
         if r.setting("scene.seam_aware"):
             r.program("uv_position")
-        r.output(gutter_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
+            r.output(seam_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         size = ec.setting(self.size_setting)
         cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
         table = gutter_table(covered)
+        ec.output(gutter_resource(size)).write(table.tobytes())
         if ec.setting("scene.seam_aware"):
             pos = rasterize_unwrapped(ec, ec.program("uv_position"), size)
             pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
-            table = seam_gutter_table(table, ec.scene, pos)
-        ec.output(gutter_resource(size)).write(table.tobytes())
+            ec.output(seam_resource(size)).write(seam_map(covered, ec.scene, pos).tobytes())
 
 
 def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "f4") -> moderngl.Texture:
@@ -70,19 +72,23 @@ def unwrap_dilated(ec, prog, size: int, resource: str) -> None:
 SEAM_REACH_TEXELS = 24.0  # gutter texels this close to a seam continue across it (blur taps reach ~3 sigma)
 
 
-def seam_gutter_table(table: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
-    """The gutter table with its texels near UV seams pointing across the seam (RG: float texel
-    coordinate of the surface point they stand for on the adjacent island; issue 10 item 1), so
-    dilation and blur taps that leave an island continue on the surface instead of repeating the
-    island's edge texel."""
-    size = table.shape[0]
+def seam_resource(size: int) -> str:
+    return f"seam_{size}"
+
+
+def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
+    """(H, W, 4) float32 for gutter texels near a UV seam (issue 10 item 1): RG the fractional
+    texel coordinate of the surface point the texel stands for on the adjacent island, B = 1 there
+    (0 elsewhere). Blur taps that leave their island read the source there, so they continue on
+    the surface instead of repeating the island's edge texel (scene/texels.seam_indirection)."""
+    size = covered.shape[0]
     mm = float(scene.mm_per_unit)
     texel_mm = 1.0 / (size * max(scene.mean_uv_per_mm, 1e-12))
-    mapped, coords = seam_indirection(scene.mesh.positions, scene.mesh.uvs, scene.mesh.indices, table[..., 2] > 0,
+    mapped, coords = seam_indirection(scene.mesh.positions, scene.mesh.uvs, scene.mesh.indices, covered,
                                       SEAM_REACH_TEXELS, mm, texel_pos.astype(np.float64) * mm, texel_mm)
-    out = table.copy()
-    out[mapped, 0] = coords[mapped, 0]
-    out[mapped, 1] = coords[mapped, 1]
+    out = np.zeros((size, size, 4), np.float32)
+    out[mapped, :2] = coords[mapped]
+    out[mapped, 2] = 1.0
     return out
 
 
