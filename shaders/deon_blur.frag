@@ -6,6 +6,7 @@
 // sigma = sqrt(v_i - v_(i-1)) in mm. Each texel is computed at the island texel the gutter map
 // names, so the output's gutters come out dilated. RGB irradiance and A thickness are blurred alike.
 #include "lib/deon.glsl"
+#include "lib/seam_tap.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D stretch_map;
@@ -16,8 +17,6 @@ uniform int u_use_stretch;
 uniform vec2 u_uniform_stretch;   // UV per mm
 uniform float u_weights[7];
 uniform int u_shear;              // deon.stretch_shear: the second pass follows the shear
-uniform sampler2D seam_map;       // RG: texel coordinate across the UV seam, B: 1 where there is one
-uniform int u_seam;               // scene.seam_aware
 out vec4 f_color;
 
 // Tap spacing (UV) per mm of sigma, shear included (issue 10 item 2). The blur must have the UV
@@ -31,28 +30,6 @@ vec2 shear_step(vec2 s, float c, vec2 dir) {
     return vec2(-c * s.x, s.y) * inversesqrt(1.0 - c * c);
 }
 
-// A tap that leaves its island continues on the island adjacent across the UV seam (issue 10
-// item 1): the seam map names, for gutter texels near a seam, the surface point they stand for.
-vec4 tap(vec2 uv) {
-    if (u_seam == 0) return texture(source, uv);
-    ivec2 size = textureSize(source, 0);
-    vec2 t = uv * vec2(size) - 0.5;
-    ivec2 i0 = ivec2(floor(t));
-    vec2 f = t - vec2(i0);
-    vec4 s00 = texelFetch(seam_map, clamp(i0, ivec2(0), size - 1), 0);
-    vec4 s10 = texelFetch(seam_map, clamp(i0 + ivec2(1, 0), ivec2(0), size - 1), 0);
-    vec4 s01 = texelFetch(seam_map, clamp(i0 + ivec2(0, 1), ivec2(0), size - 1), 0);
-    vec4 s11 = texelFetch(seam_map, clamp(i0 + ivec2(1, 1), ivec2(0), size - 1), 0);
-    if (s00.b + s10.b + s01.b + s11.b < 0.5) return texture(source, uv);
-    // bilinear by hand, each of the four texels read where the surface continues
-    vec2 inv = 1.0 / vec2(size);
-    vec4 c00 = s00.b > 0.5 ? texture(source, (s00.rg + 0.5) * inv) : texelFetch(source, clamp(i0, ivec2(0), size - 1), 0);
-    vec4 c10 = s10.b > 0.5 ? texture(source, (s10.rg + 0.5) * inv) : texelFetch(source, clamp(i0 + ivec2(1, 0), ivec2(0), size - 1), 0);
-    vec4 c01 = s01.b > 0.5 ? texture(source, (s01.rg + 0.5) * inv) : texelFetch(source, clamp(i0 + ivec2(0, 1), ivec2(0), size - 1), 0);
-    vec4 c11 = s11.b > 0.5 ? texture(source, (s11.rg + 0.5) * inv) : texelFetch(source, clamp(i0 + ivec2(1, 1), ivec2(0), size - 1), 0);
-    return mix(mix(c00, c10, f.x), mix(c01, c11, f.x), f.y);
-}
-
 void main() {
     vec2 at = texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg;  // fractional across a UV seam
     ivec2 src = ivec2(at + 0.5);
@@ -62,6 +39,6 @@ void main() {
     step_uv = vec2(deon_finite(step_uv.x), deon_finite(step_uv.y));
     vec4 acc = vec4(0.0);
     for (int k = 0; k < 7; ++k)
-        acc += u_weights[k] * tap(uv + step_uv * float(k - 3));
+        acc += u_weights[k] * seam_tap(source, uv + step_uv * float(k - 3));
     f_color = deon_finite4(acc);
 }
