@@ -31,9 +31,8 @@ vec2 shear_step(vec2 s, float c, vec2 dir) {
 }
 
 void main() {
-    vec2 at = texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg;  // fractional across a UV seam
-    ivec2 src = ivec2(at + 0.5);
-    vec2 uv = (at + 0.5) / vec2(textureSize(source, 0));
+    ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
+    vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
     vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0) : vec4(u_uniform_stretch, 0.0, 1.0);
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
     step_uv = vec2(deon_finite(step_uv.x), deon_finite(step_uv.y));

@@ -220,7 +220,7 @@ def test_diffusion_across_a_uv_cut_equals_the_uncut_plane(renderer, tmp_path):
 
     err_on = compare(_diffused(renderer, cut, True, n))
     err_off = compare(_diffused(renderer, cut, False, n))
-    print("uv cut: max error seam-aware %.4f, edge-texel gutters %.4f" % (err_on, err_off))
+    print(f"uv cut: max error seam-aware {err_on:.4f}, edge-texel gutters {err_off:.4f}")
     assert err_on < 0.02 and err_off > 0.05, (err_on, err_off)
 
 
@@ -264,5 +264,5 @@ def test_sheared_uvs_diffuse_like_unsheared(renderer, tmp_path):
     for c in range(3):
         r = map_coordinates(ref[..., c], [(0.5 + upm * y) * n - 0.5, (0.5 + upm * x) * n - 0.5], order=1)
         err0 = max(err0, np.abs(D0[..., c] - r)[keep].max() / ref[..., c].max())
-    print("sheared plane: max error %.4f of the peak (per-axis stretch: %.4f)" % (err, err0))
+    print(f"sheared plane: max error {err:.4f} of the peak (per-axis stretch: {err0:.4f})")
     assert err < 0.02 and err0 > 0.05, (err, err0)

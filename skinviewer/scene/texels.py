@@ -101,7 +101,6 @@ def seam_edges(positions, uvs, indices):
     scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
     pid = _weld(P, 1e-6 * scale)
     uid = _weld(np.hstack([P / scale, np.asarray(uvs, np.float64)]), 1e-6)
-    T = len(F)
     a = F[:, [0, 1, 2]].ravel()
     b = F[:, [1, 2, 0]].ravel()
     pa, pb = pid[a], pid[b]
@@ -156,7 +155,6 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
     wc = Pc - Pa - np.einsum("ij,ij->i", Pc - Pa, e)[:, None] * e
     wl = np.linalg.norm(wc, axis=1)
     ok &= wl > 1e-12
-    d = -wc / np.maximum(wl, 1e-300)[:, None]
     # T's chart: 3D (in T's plane, coordinates along e and d) -> texel coordinates, affine
     ua, ub, uc = UV[ia], UV[ib], UV[ic]
     # local 2D coordinates of T's vertices: a = (0, 0), b = (el, 0), c = (ce, -wl)
