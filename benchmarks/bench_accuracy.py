@@ -140,8 +140,9 @@ class Bench:
         return A.texel_mm(m.positions, m.uvs, m.mm_per_unit, n, mask)
 
     def beam(self, scene: str, n: int) -> float:
-        """0.02 mm, widened to 0.75 texel when a texel is larger (else no texel centre is lit)."""
-        return max(0.02, 0.75 * max(self.texel(scene, n)))
+        """The laser's 0.02 mm at every map size: the beam is integrated over each texel's footprint
+        (shaders/lib/beam.glsl), so a beam narrower than a texel keeps its power."""
+        return 0.02
 
     def uniform_texel(self, scene: str, n: int) -> float:
         m = self.mesh(scene)

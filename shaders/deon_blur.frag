@@ -1,11 +1,12 @@
 #version 330 core
 #pragma vertex_stage "vs/fullscreen.vert"
 // One direction of a separable 7-tap Gaussian blur in texture space (seed 000 eq. 25-26):
-//   out(x) = sum_k w_k in(x + k * stretch(x) * sigma * dir),  k = -3..3
+//   out(x) = sum_k w_k in(x + k * step(x) * sigma),  k = -3..3, step = shear_step (u, then skewed v)
 // stretch in UV per mm (stretch texture, or one uniform scale when stretch correction is off),
 // sigma = sqrt(v_i - v_(i-1)) in mm. Each texel is computed at the island texel the gutter map
 // names, so the output's gutters come out dilated. RGB irradiance and A thickness are blurred alike.
 #include "lib/deon.glsl"
+#include "lib/seam_tap.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D stretch_map;
@@ -15,14 +16,28 @@ uniform float u_sigma_mm;
 uniform int u_use_stretch;
 uniform vec2 u_uniform_stretch;   // UV per mm
 uniform float u_weights[7];
+uniform int u_shear;              // deon.stretch_shear: the second pass follows the shear
 out vec4 f_color;
+
+// Tap spacing (UV) per mm of sigma, shear included (issue 10 item 2). The blur must have the UV
+// covariance S = sigma^2 G^-1, G = J^T J the metric of the UV -> surface Jacobian J = [dP/du dP/dv]
+// (per-axis stretch s = 1 / |dP/du|, 1 / |dP/dv|, shear c = cos of their angle). Two passes give
+// it exactly, S = a a^T + b b^T: the first along u with a = (s_u, 0) (the per-axis pass of eq. 25),
+// the second along b = (-c s_u, s_v) / sqrt(1 - c^2), which is v's axis when there is no shear.
+vec2 shear_step(vec2 s, float c, vec2 dir) {
+    if (dir.x > 0.5) return vec2(s.x, 0.0);
+    c = clamp(deon_finite(c), -0.95, 0.95);
+    return vec2(-c * s.x, s.y) * inversesqrt(1.0 - c * c);
+}
+
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
     vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
-    vec2 s = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0).rg : u_uniform_stretch;
-    float step_uv = deon_finite(dot(s, u_dir) * u_sigma_mm);
+    vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0) : vec4(u_uniform_stretch, 0.0, 1.0);
+    vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
+    step_uv = vec2(deon_finite(step_uv.x), deon_finite(step_uv.y));
     vec4 acc = vec4(0.0);
     for (int k = 0; k < 7; ++k)
-        acc += u_weights[k] * texture(source, uv + u_dir * (step_uv * float(k - 3)));
+        acc += u_weights[k] * seam_tap(source, uv + step_uv * float(k - 3));
     f_color = deon_finite4(acc);
 }

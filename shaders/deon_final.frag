@@ -2,7 +2,8 @@
 #pragma vertex_stage "vs/camera.vert"
 // Final pass of d'Eon & Luebke 2007 (seed 000 eq. 34-35), view-dependent:
 //   diffuse  = C^(1-mix) rho_dt(x, V) (sum_i w_i blur_i(uv) + transmitted)
-//   transmitted = sum_(i>=2) w_i exp(-d_(i-1)^2 / 2 v_i) blend_i blur_i(uv_A)   (eq. 33, "exact")
+//   transmitted = sum_i w_i (exp(-m^2 / 2 v_i) - exp(-r^2 / 2 v_i)) blur_i(uv_A)   (eq. 33 at the
+//   true distance m, less what the surface blur carries: lib/tsm_transmit.glsl)
 //   specular = sum_lights KS(N, L, V) Lc fac_shadow   (ks_* already carries N.L, eq. 35)
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
@@ -50,7 +51,7 @@ out vec4 f_color;
 #endif
 // blur_i read here: used ones, and blur_(i-1) of a used i >= 1 for its thickness with the TSM
 #define HERE_MASK (G_MASK | ((G_TSM != 0) ? (G_MASK >> 1) : 0))
-#define THERE_MASK (G_MASK & 254)
+#define THERE_MASK G_MASK  // the lit points A of the TSM: every used blur (lib/tsm_transmit.glsl)
 
 // every blurred texture sampled once per point, by name: an index into a chain of samplers would
 // make many compilers fetch all eight on each call; slots outside `mask` are not sampled at all
@@ -65,18 +66,7 @@ vec2 uv_per_mm(vec2 uv) {
     return max(s, vec2(1e-7));
 }
 
-// How much of the point lies behind tissue from the TSM light (0: it is directly lit, its own A),
-// percentage-closer filtered over 3x3 TSM texels so the transmission does not step with them.
-float tsm_gate(vec2 c, vec3 P) {
-    vec2 texel = 1.0 / vec2(textureSize(tsm_map, 0));
-    float d = tsm_distance_mm(P), g = 0.0;
-    for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
-        vec4 t = texture(tsm_map, c + vec2(x, y) * texel);
-        float own = (t.a >= 0.0) ? (d - t.r) * t.a : 0.0;
-        g += smoothstep(u_tsm_gate_mm, 2.0 * u_tsm_gate_mm, deon_finite(own));
-    }
-    return g / 9.0;
-}
+#include "lib/tsm_transmit.glsl"
 
 void main() {
 #if G_MASK == 0 && G_TSM == 0 && defined(LIGHT_COUNT) && !defined(GENERIC_SHADERS)
@@ -85,6 +75,7 @@ void main() {
     return;
 #endif
 #endif
+    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
@@ -96,34 +87,7 @@ void main() {
         if (((G_MASK >> i) & 1) != 0 && u_used[i] != 0) diffuse += u_w[i] * here[i].rgb;  // eq. (34), sum_i w_i blur_i
     }
 #if G_TSM != 0
-    if (u_tsm != 0) {
-        vec4 p = u_tsm_matrix * vec4(v_position, 1.0);
-        vec2 c = p.xy / max(p.w, 1e-30) * 0.5 + 0.5;
-        if (p.w > 0.0 && all(greaterThanEqual(c, vec2(0.0))) && all(lessThanEqual(c, vec2(1.0)))) {
-            vec4 t = texture(tsm_map, c);
-            // a directly lit point is its own A: transmission only where the light crossed tissue
-            float gate = tsm_gate(c, v_position);
-            if (t.a >= 0.0 && gate > 0.0) {
-                vec2 uvA = t.gb;
-                // texture-space distance C..A in mm: when A lies inside Gaussian i's own footprint
-                // the texture-space blur already carries that light (blend -> 0, no double count)
-                vec2 s = 0.5 * (uv_per_mm(v_uv) + uv_per_mm(uvA));
-                float r_mm = length((v_uv - uvA) / s);
-                vec4 there[MAX_GAUSSIANS];
-                FETCH_BLURS(there, uvA, THERE_MASK)
-                for (int i = 1; i < MAX_GAUSSIANS; ++i) {
-                    if (i >= u_count) break;
-                    if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0) continue;
-                    float v = u_var[i];
-                    if (!(v > 0.0)) continue;
-                    float d = max(deon_finite(here[i - 1].a), 0.0);  // blurred thickness of blur_(i-1)
-                    float fade = exp(-d * d / ((u_tsm_printed != 0 ? 1.0 : 2.0) * v));
-                    float blend = clamp(r_mm / (3.0 * sqrt(v)), 0.0, 1.0);
-                    diffuse += u_w[i] * (fade * blend * gate) * there[i].rgb;
-                }
-            }
-        }
-    }
+    if (u_tsm != 0) diffuse += tsm_transmitted(v_position, v_uv);  // eq. 33 (lib/tsm_transmit.glsl)
 #endif
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);

@@ -23,6 +23,7 @@ uniform mat4 u_tsm_matrix;
 uniform float u_max_thickness;   // mm
 out vec4 f_irradiance;
 void main() {
+    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 C = deon_safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);

@@ -26,6 +26,7 @@ out vec4 f_color;
 const vec3 LUM = vec3(0.2125, 0.7154, 0.0721);
 
 void main() {
+    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = ks_safe_normalize(u_eye - v_position);
     vec3 C = max(finite3(texture(albedo_map, v_uv).rgb), vec3(0.0));

@@ -18,6 +18,7 @@ vec3 finite_f32(vec3 c) {
 }
 
 void main() {
+    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 E = vec3(0.0);
     for (int i = 0; i < N_LIGHTS; ++i) {

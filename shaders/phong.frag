@@ -13,6 +13,7 @@ uniform float u_specular;
 uniform float u_shininess;
 out vec4 f_color;
 void main() {
+    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)

@@ -4,7 +4,9 @@
 //   size = 1 / (width, height)                                   (11)
 //   radius = size * R, R from the radius map (texels, eq. 12)    (12)
 //   pixel = (centre + sum_i source(coord + poisson(i) * radius)) / 13   (13)
-// Taps are bilinear on a gutter-dilated source, CLAMP_TO_EDGE.
+// Taps are bilinear on a gutter-dilated source, CLAMP_TO_EDGE; taps that leave their island
+// continue across UV seams (lib/seam_tap.glsl, scene.seam_aware).
+#include "lib/seam_tap.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D radius_map;  // R32F, per texel radius in texels (eq. 12 without size)
@@ -26,6 +28,6 @@ void main() {
     vec2 radius = size * R;                                     // (12)
     vec4 sum = finite4(texelFetch(source, p, 0));
     for (int i = 0; i < 12; ++i)
-        sum += finite4(texture(source, uv + u_poisson[i] * radius));
+        sum += finite4(seam_tap(source, uv + u_poisson[i] * radius));
     f_color = finite4(sum * (1.0 / 13.0));                      // (13)
 }

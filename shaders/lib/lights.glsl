@@ -12,6 +12,7 @@
 #else
 #define N_LIGHTS u_light_count
 #endif
+#include "lib/beam.glsl"
 uniform int u_light_count;
 uniform int u_light_kind[MAX_LIGHTS];       // LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_BEAM
 uniform vec3 u_light_radiance[MAX_LIGHTS];  // colour * intensity (Lc)
@@ -40,9 +41,8 @@ vec3 light_incident(int i, vec3 P, out vec3 L) {
     L = u_light_dir[i];
     if (u_light_kind[i] == LIGHT_BEAM) {
         // beam: collimated, radius u_beam_radius around the axis through u_light_pos
-        vec3 rel = P - u_light_pos[i];
-        vec3 perp = rel - dot(rel, L) * L;
-        return length(perp) <= u_beam_radius[i] ? Lc : vec3(0.0);
+        // averaged over the texel/pixel footprint set by set_light_footprint (lib/beam.glsl)
+        return Lc * beam_coverage(P, u_light_pos[i], L, u_beam_radius[i]);
     }
     return Lc;
 }

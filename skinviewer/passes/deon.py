@@ -39,6 +39,7 @@ from skinviewer.passes.rules import coverage_size, light_map_size, light_on, tsm
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
+    seam_resource,
     unwrap_dilated,
     work_tiles,
 )
@@ -105,13 +106,14 @@ def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
 # -- passes --------------------------------------------------------------------------------------
 
 class StretchPass(Pass):
-    """eq. (27): UV per mm along u and v (RG), from derivatives while rasterising in texture space;
+    """eq. (27): UV per mm along u and v (RG) and the shear of the UV axes on the surface (B, the
+    cosine between them: deon.stretch_shear), from derivatives while rasterising in texture space;
     gutters dilated. Depends on the mesh, mm_per_unit (scene) and the size only."""
     name = "deon_stretch"
 
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
-        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 2, "f4"))  # RG only
+        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
 
     def execute(self, ec) -> None:
         n = map_size(ec)
@@ -230,6 +232,10 @@ class GaussianBlurPass(Pass):
             return
         n = map_size(r)
         stretch = self._stretch_input(r, step)
+        if stretch:
+            r.setting("deon.stretch_shear")
+        if r.setting("scene.seam_aware"):
+            r.input(seam_resource(n))
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
         if stretch:
@@ -251,7 +257,11 @@ class GaussianBlurPass(Pass):
         stretch = self._stretch_input(ec, step)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
-                    u_weights=np.asarray(KERNEL7, np.float32))
+                    u_weights=np.asarray(KERNEL7, np.float32),
+                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")),
+                    u_seam=ec.has_input(seam_resource(n)))
+        if ec.has_input(seam_resource(n)):
+            ec.bind(prog, "seam_map", seam_resource(n))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
         ec.bind(prog, "gutter", gutter_resource(n))

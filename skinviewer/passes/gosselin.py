@@ -47,6 +47,7 @@ from skinviewer.passes.texture_space import (
     dilate,
     gutter_resource,
     read_gutter,
+    seam_resource,
     unwrap_dilated,
 )
 from skinviewer.physics.poisson import POISSON_12
@@ -153,6 +154,8 @@ class PoissonBlurPass(Pass):
         r.input(LIGHT_MAP)
         r.input(RADIUS_MAP)
         r.input(gutter_resource(size))
+        if r.setting("scene.seam_aware"):
+            r.input(seam_resource(size))
         r.program("poisson_blur")
         r.program("dilate")
         r.output(BLURRED, _map_spec(size))
@@ -166,6 +169,9 @@ class PoissonBlurPass(Pass):
             return
         prog = ec.program("poisson_blur")
         ec.set(prog, "u_poisson", np.asarray(POISSON_12, dtype=np.float32))
+        ec.set(prog, "u_seam", ec.has_input(seam_resource(size)))
+        if ec.has_input(seam_resource(size)):
+            ec.bind(prog, "seam_map", seam_resource(size))
         ec.bind(prog, "radius_map", RADIUS_MAP)
         tmp = ec.scratch(_map_spec(size))
         ping = ec.scratch(_map_spec(size)) if n > 1 else None

@@ -7,6 +7,7 @@ import numpy as np
 
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.scene.texels import seam_indirection
 
 
 def gutter_resource(size: int) -> str:
@@ -15,7 +16,9 @@ def gutter_resource(size: int) -> str:
 
 class GutterMapPass(Pass):
     """Per texel: the integer texel coordinate of the nearest texel covered by a UV island (RG) and
-    coverage (B). Depends on the mesh and the texture size only, so it runs once per scene/size.
+    coverage (B); with scene.seam_aware also the seam map (seam_resource: RG the fractional texel
+    coordinate of the surface point across the UV seam, B 1 where there is one; seam_map). Depends
+    on the mesh and the texture size only, so it runs once per scene/size.
     ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
 
     def __init__(self, size_setting: str, name: str | None = None, size_of=None):
@@ -30,6 +33,9 @@ class GutterMapPass(Pass):
         size = self._n(r)
         r.program("uv_coverage")
         r.output(gutter_resource(size), gutter_spec(size))
+        if r.setting("scene.seam_aware"):
+            r.program("uv_position")
+            r.output(seam_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         size = self._n(ec)
@@ -38,6 +44,11 @@ class GutterMapPass(Pass):
         spec = gutter_spec(size)
         table = gutter_table(covered)[..., :spec.components]
         ec.output(gutter_resource(size)).write(table.astype(np.float16 if spec.dtype == "f2" else np.float32).tobytes())
+
+        if ec.setting("scene.seam_aware"):
+            pos = rasterize_unwrapped(ec, ec.program("uv_position"), size)
+            pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
+            ec.output(seam_resource(size)).write(seam_map(covered, ec.scene, pos).tobytes())
 
 
 def gutter_spec(size: int) -> TexSpec:
@@ -132,6 +143,29 @@ def unwrap_dilated(ec, prog, size: int, resource: str) -> None:
     """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled."""
     raw = rasterize_unwrapped(ec, prog, size)
     dilate(ec, raw, gutter_resource(size), resource)
+
+
+SEAM_REACH_TEXELS = 24.0  # gutter texels this close to a seam continue across it (blur taps reach ~3 sigma)
+
+
+def seam_resource(size: int) -> str:
+    return f"seam_{size}"
+
+
+def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
+    """(H, W, 4) float32 for gutter texels near a UV seam (issue 10 item 1): RG the fractional
+    texel coordinate of the surface point the texel stands for on the adjacent island, B = 1 there
+    (0 elsewhere). Blur taps that leave their island read the source there, so they continue on
+    the surface instead of repeating the island's edge texel (scene/texels.seam_indirection)."""
+    size = covered.shape[0]
+    mm = float(scene.mm_per_unit)
+    texel_mm = 1.0 / (size * max(scene.mean_uv_per_mm, 1e-12))
+    mapped, coords = seam_indirection(scene.mesh.positions, scene.mesh.uvs, scene.mesh.indices, covered,
+                                      SEAM_REACH_TEXELS, mm, texel_pos.astype(np.float64) * mm, texel_mm)
+    out = np.zeros((size, size, 4), np.float32)
+    out[mapped, :2] = coords[mapped]
+    out[mapped, 2] = 1.0
+    return out
 
 
 def gutter_table(covered: np.ndarray) -> np.ndarray:

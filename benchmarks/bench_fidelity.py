@@ -1,0 +1,139 @@
+"""Texture-space fidelity figures of issue 10 (printed tables; never asserted):
+
+  seams   the scan at 512^2 (one shadowed directional light, TSM off): d'Eon's diffused map sum_i w_i blur_i
+          against the brute-force 3D-distance reference (scene/texels.surface_diffusion_reference):
+          relative RMS and p99 texel error per channel over lit texels, and where the worst 1 % lie.
+  laser   beam power carried by the irradiance map (sum E * texel area / (pi r^2 Lc)) and the laser
+          error (physics/accuracy.laser_errors) per irradiance size, d'Eon and Gosselin.
+
+Run: python3 benchmarks/bench_fidelity.py [--parts laser] [--sizes 256,512,1024,2048]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from skinviewer.core.gl import describe, headless_context  # noqa: E402
+from skinviewer.core.renderer import Renderer  # noqa: E402
+from skinviewer.core.settings import DeonSettings, Settings, with_values  # noqa: E402
+from skinviewer.physics import accuracy as A  # noqa: E402
+from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels, texture_of  # noqa: E402
+from skinviewer.scene.scenes import build_scene, scene_overrides  # noqa: E402
+
+DEFAULT = DeonSettings().gaussians
+DEF_V = np.array([g.variance for g in DEFAULT])
+DEF_W = np.array([g.weights for g in DEFAULT])
+
+
+def settings(scene: str, tech: str, values: dict) -> Settings:
+    base = {"scene.name": scene, **scene_overrides(scene), "technique": tech, "render.width": 64,
+            "render.height": 64, "shadow.map_size": 256, "deon.tsm_size": 256}
+    return with_values(Settings(), {**base, **values})
+
+
+def laser(r: Renderer, sizes, offsets=((0.0, 0.0), (0.013, -0.007))) -> None:
+    m = build_scene("laser").mesh
+    print("## laser: power carried by the irradiance map / (pi r^2 Lc), and the laser error (default 0.02 mm beam; rho_dt off so d'Eon's map carries it all)")
+    print(f"{'tech':<9}{'size':>6}{'beam at (mm)':>16}{'power':>9}  {'l1 %  R     G     B':>20}  {'eq3.1 %  R   G     B':>21}")
+    for tech, key in (("deon", "deon.irradiance_size"), ("gosselin", "gosselin.light_map_size")):
+        for n in sizes:
+            for off in offsets:
+                s = settings("laser", tech, {key: n, "deon.energy_conservation": False, "lights.0.position": [off[0], off[1], 0.0]})
+                r.render(s)
+                g = r.graph(tech)
+                E = g.read(IRRADIANCE if tech == "deon" else "gosselin_light_map")[..., :3].astype(np.float64)
+                X, Y, area = A.plane_coords(m.positions, m.uvs, m.mm_per_unit, n)
+                L = s.lights[0]
+                p_true = math.pi * L.beam_radius ** 2 * L.intensity
+                ratio = E[..., 0].sum() * area / p_true
+                err = "   (no lit texel: no error measurable)"
+                if tech == "deon" and ratio > 0:
+                    plan = blur_plan_texels(list(DEF_V), s.deon.reuse_irradiance_below_texels,
+                                            A.texel_mm(m.positions, m.uvs, m.mm_per_unit, n)[0])
+                    D = sum(np.asarray(gs.weights) * g.read(texture_of(p))[..., :3].astype(np.float64)
+                            for gs, p in zip(s.deon.gaussians, plan))
+                    e = A.laser_errors(D, E, X, Y, area, DEF_V, DEF_W)
+                    err = "  " + " ".join(f"{100 * x:5.1f}" for x in e["l1"]) + "  " + \
+                        " ".join(f"{100 * x:5.1f}" for x in e["eq31"])
+                elif tech != "deon":
+                    err = ""
+                print(f"{tech:<9}{n:>6}{str(off):>16}{ratio:9.3f}{err}")
+
+
+# ../shared beside the checkout, or SKINVIEWER_SHARED (as tests/conftest.py)
+SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")
+SCAN = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
+
+
+def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = None, dump: str | None = None) -> dict:
+    from scipy import ndimage
+
+    from skinviewer.physics import metrics
+    from skinviewer.scene.texels import surface_diffusion_reference, texel_surface
+    vals = {"scene.mesh": str(scan), "scene.mm_per_unit": 48.0, "deon.irradiance_size": n, "deon.tsm": False,
+            "shadow.map_size": 2048,
+            "lights": [{"kind": "directional", "direction": [0.55, 0.35, 1.0], "intensity": 1.4, "cast_shadow": True}]}
+    vals.update(extra or {})
+    s = settings("head", "deon", vals)
+    r.render(s)
+    g = r.graph("deon")
+    m = r.scene.gpu.mesh
+    E = g.read(IRRADIANCE)[..., :3].astype(np.float64)
+    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
+                            1.0 / (n * r.scene.gpu.mean_uv_per_mm))
+    D = sum(np.asarray(x.weights) * g.read(texture_of(p))[..., :3].astype(np.float64)
+            for x, p in zip(s.deon.gaussians, plan))
+    tri, pos, area = texel_surface(m.positions, m.uvs, m.indices, n, r.scene.gpu.mm_per_unit)
+    cov = tri >= 0
+    ref = surface_diffusion_reference(E, pos, area, cov, [x.variance for x in s.deon.gaussians],
+                                      [x.weights for x in s.deon.gaussians])
+    lit = cov & (E.max(-1) > 0)
+    rms = metrics.rel_rms(D, ref, lit)
+    p99 = metrics.p99_rel(D, ref, lit)
+    err = metrics.rel_error_map(D, ref, lit)
+    edge = ndimage.distance_transform_edt(cov) <= 2.5
+    worst = err[..., 0] >= np.percentile(err[..., 0][lit], 99)
+    out = {"rms": rms, "p99": p99, "worst_near_edge": float((worst & lit & edge).sum() / max((worst & lit).sum(), 1)),
+           "lit_near_edge": float((lit & edge).sum() / lit.sum()), "err": err, "lit": lit, "D": D, "ref": ref}
+    if dump:
+        np.savez_compressed(dump, D=D, ref=ref, E=E, lit=lit, err=err)
+    return out
+
+
+def print_seams(tag: str, e: dict) -> None:
+    print(f"{tag:<28} RMS % R G B {' '.join(f'{100 * x:5.2f}' for x in e['rms'])}   p99 % "
+          f"{' '.join(f'{100 * x:5.1f}' for x in e['p99'])}   worst 1 % (red) within 2.5 texels of an island edge: "
+          f"{100 * e['worst_near_edge']:.0f} % (lit texels there: {100 * e['lit_near_edge']:.0f} %)")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--parts", default="laser")
+    ap.add_argument("--sizes", default="256,512,1024,2048")
+    a = ap.parse_args()
+    ctx = headless_context()
+    r = Renderer(ctx)
+    print(f"# {describe(ctx)}")
+    sizes = [int(x) for x in a.sizes.split(",")]
+    if "seams" in a.parts:
+        print("## seams: the scan at 512^2, d'Eon diffused map vs the 3D-distance reference over lit texels")
+        print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}))
+        print_seams("seam-aware gutters on", seams(r))
+        print_seams("  + stretch_shear", seams(r, extra={"deon.stretch_shear": True}))
+        print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_shear": True, "deon.stretch_per_gaussian": True}))
+    if "laser" in a.parts:
+        laser(r, sizes)
+    r.release()
+    ctx.release()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

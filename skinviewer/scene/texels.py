@@ -1,0 +1,230 @@
+"""Texels as surface samples (issue 10, seam-aware diffusion), plain numpy:
+
+* :func:`texel_surface` rasterises a mesh in texture space at texel centres (the unwrap of seed 000
+  eq. 8): per texel the triangle, the 3D position and the surface area (mm^2) the texel stands for.
+* :func:`seam_indirection` — for each gutter texel near a UV seam, the UV of the surface point it
+  stands for on the island adjacent across the seam (3D adjacency: triangles sharing a 3D edge but
+  not a UV edge), so blur taps that leave an island continue on the surface.
+* :func:`surface_diffusion_reference` — the brute-force 3D-distance reference of a texture-space
+  diffusion: D(x) = sum_y E(y) A(y) R(|x - y|) over covered texels (R a sum of Gaussians, mm).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+from scipy.spatial import cKDTree
+
+
+def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
+    """Rasterise at texel centres (GL convention: texel (i, j) at uv = ((i + .5)/n, (j + .5)/n), row
+    j = v). Returns (tri (n, n) int, -1 outside), pos (n, n, 3) in mm, area (n, n) mm^2 per texel."""
+    P = np.asarray(positions, np.float64) * mm_per_unit
+    UV = np.asarray(uvs, np.float64) * n - 0.5
+    F = np.asarray(indices, np.int64)
+    tri = np.full((n, n), -1, np.int64)
+    pos = np.zeros((n, n, 3))
+    area = np.zeros((n, n))
+    for t, (a, b, c) in enumerate(F):
+        ua, ub, uc = UV[a], UV[b], UV[c]
+        lo = np.floor(np.minimum(np.minimum(ua, ub), uc)).astype(int)
+        hi = np.ceil(np.maximum(np.maximum(ua, ub), uc)).astype(int)
+        lo = np.maximum(lo, 0)
+        hi = np.minimum(hi, n - 1)
+        if np.any(hi < lo):
+            continue
+        e1, e2 = ub - ua, uc - ua
+        det = e1[0] * e2[1] - e1[1] * e2[0]
+        if abs(det) < 1e-14:
+            continue
+        xs, ys = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1))
+        dx, dy = xs - ua[0], ys - ua[1]
+        l1 = (dx * e2[1] - dy * e2[0]) / det
+        l2 = (e1[0] * dy - e1[1] * dx) / det
+        l0 = 1.0 - l1 - l2
+        inside = (l0 >= -1e-9) & (l1 >= -1e-9) & (l2 >= -1e-9)
+        if not inside.any():
+            continue
+        X, Y = xs[inside], ys[inside]
+        tri[Y, X] = t
+        pos[Y, X] = l0[inside, None] * P[a] + l1[inside, None] * P[b] + l2[inside, None] * P[c]
+        # mm^2 per texel: 3D triangle area / its texel-space area
+        a3 = 0.5 * np.linalg.norm(np.cross(P[b] - P[a], P[c] - P[a]))
+        area[Y, X] = a3 / (0.5 * abs(det))
+    return tri, pos, area
+
+
+def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutoff_sigmas: float = 3.5,
+                                block: int = 8192) -> np.ndarray:
+    """D(x) = sum_i w_i [sum_y E(y) A(y) G(v_i, |x - y|)] / [sum_y A(y) G(v_i, |x - y|)] over covered
+    texels x, y (3D distance in mm). The normalisation makes each Gaussian a weighted mean of E, so a
+    Gaussian narrower than a texel (skin's first, sigma 0.08 mm) is the identity instead of a
+    point-sampled spike, and equals the plain sum on flat, closed, well-sampled surfaces. E (n, n, 3);
+    returns (n, n, 3), 0 outside ``covered``."""
+    v = np.asarray(variances, np.float64)
+    w = np.asarray(weights, np.float64).reshape(len(v), 3)
+    idx = np.flatnonzero(covered.ravel())
+    X = pos.reshape(-1, 3)[idx]
+    a = area.ravel()[idx]
+    src = np.asarray(E, np.float64).reshape(-1, 3)[idx] * a[:, None]
+    tree = cKDTree(X)
+    out = np.zeros((len(idx), 3))
+    for vi, wi in zip(v, w):
+        if not (vi > 0) or not np.any(wi != 0):
+            continue
+        rmax = cutoff_sigmas * float(np.sqrt(vi))
+        for s in range(0, len(idx), block):
+            m = min(block, len(idx) - s)
+            pairs = cKDTree(X[s:s + m]).sparse_distance_matrix(tree, rmax, output_type="ndarray")
+            i, j, r = pairs["i"], pairs["j"], pairs["v"]  # self pairs (r = 0) included
+            k = np.exp(-r * r / (2 * vi))
+            den = np.bincount(i, k * a[j], minlength=m)
+            for c in range(3):
+                if wi[c] != 0:
+                    out[s:s + m, c] += wi[c] * np.bincount(i, k * src[j, c], minlength=m) / np.maximum(den, 1e-300)
+    D = np.zeros(E.shape[:2] + (3,))
+    D.reshape(-1, 3)[idx] = out
+    return D
+
+
+def _weld(keys: np.ndarray, tol: float) -> np.ndarray:
+    """Integer id per row of ``keys``, equal for rows within ``tol`` (quantised)."""
+    q = np.round(np.asarray(keys, np.float64) / tol).astype(np.int64)
+    _, ids = np.unique(q, axis=0, return_inverse=True)
+    return ids.ravel()
+
+
+def seam_edges(positions, uvs, indices):
+    """Half-edges on UV seams: triangle edges whose 3D edge is shared by exactly two triangles that
+    do not share it in UV. Returns (tri, corner k: the edge is (k, k+1), twin tri, twin corner) arrays."""
+    P = np.asarray(positions, np.float64)
+    F = np.asarray(indices, np.int64)
+    scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
+    pid = _weld(P, 1e-6 * scale)
+    uid = _weld(np.hstack([P / scale, np.asarray(uvs, np.float64)]), 1e-6)
+    a = F[:, [0, 1, 2]].ravel()
+    b = F[:, [1, 2, 0]].ravel()
+    pa, pb = pid[a], pid[b]
+    key3 = np.stack([np.minimum(pa, pb), np.maximum(pa, pb)], 1)
+    ua, ub = uid[a], uid[b]
+    keyuv = np.stack([np.minimum(ua, ub), np.maximum(ua, ub)], 1)
+    _, inv3, cnt3 = np.unique(key3, axis=0, return_inverse=True, return_counts=True)
+    inv3 = inv3.ravel()
+    he = np.flatnonzero(cnt3[inv3] == 2)
+    order = he[np.argsort(inv3[he], kind="stable")]
+    h0, h1 = order[0::2], order[1::2]
+    seam = np.any(keyuv[h0] != keyuv[h1], axis=1)
+    h0, h1 = h0[seam], h1[seam]
+    hs = np.concatenate([h0, h1])
+    tw = np.concatenate([h1, h0])
+    return hs // 3, hs % 3, tw // 3, tw % 3, pid
+
+
+def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float, mm_per_unit: float = 1.0,
+                     texel_pos: np.ndarray | None = None, texel_mm: float = 1.0):
+    """For every texel outside the islands within ``reach`` texels of a UV seam edge: the texel
+    coordinate (x, y, float, texel centres at integers) of the surface point it stands for across
+    the seam. The triangle T on this side is unfolded with its twin T' (sharing the 3D edge) into
+    T's UV chart; the gutter texel's barycentrics in the unfolded T' give its UV in T''s island.
+    ``texel_pos`` (texel_surface's positions, mm) enables a check that the point found lies where
+    the unfolded surface says (within 1.5 texels + 25 % of the distance from the edge): the 8
+    nearest seam edges are tried in turn. Returns (mapped (n, n) bool, coords (n, n, 2)); unmapped
+    texels keep their nearest island texel (gutter_table)."""
+    n = covered.shape[0]
+    P = np.asarray(positions, np.float64) * mm_per_unit
+    UV = np.asarray(uvs, np.float64) * n - 0.5  # texel coordinates
+    F = np.asarray(indices, np.int64)
+    mapped = np.zeros((n, n), bool)
+    coords = np.zeros((n, n, 2))
+    t, k, t2, k2, pid = seam_edges(positions, uvs, indices)
+    if len(t) == 0:
+        return mapped, coords
+    ia, ib, ic = F[t, k], F[t, (k + 1) % 3], F[t, (k + 2) % 3]
+    # twin corners: the twin's vertices at the same 3D points as ia, ib, and its third vertex
+    ja, jb = F[t2, k2], F[t2, (k2 + 1) % 3]
+    swap = pid[ja] != pid[ia]
+    ja, jb = np.where(swap, jb, ja), np.where(swap, ja, jb)
+    jc = F[t2, (k2 + 2) % 3]
+    Pa, Pb, Pc, Pc2 = P[ia], P[ib], P[ic], P[jc]
+    e = Pb - Pa
+    el = np.linalg.norm(e, axis=1)
+    ok = el > 1e-12
+    e = e / np.maximum(el, 1e-300)[:, None]
+    # unfold c' into T's plane, on the far side of the edge from c
+    along = np.einsum("ij,ij->i", Pc2 - Pa, e)
+    perp = np.linalg.norm(Pc2 - Pa - along[:, None] * e, axis=1)
+    wc = Pc - Pa - np.einsum("ij,ij->i", Pc - Pa, e)[:, None] * e
+    wl = np.linalg.norm(wc, axis=1)
+    ok &= wl > 1e-12
+    # T's chart: 3D (in T's plane, coordinates along e and d) -> texel coordinates, affine
+    ua, ub, uc = UV[ia], UV[ib], UV[ic]
+    # local 2D coordinates of T's vertices: a = (0, 0), b = (el, 0), c = (ce, -wl)
+    ce = np.einsum("ij,ij->i", Pc - Pa, e)
+    L = np.stack([np.stack([el, np.zeros_like(el)], 1), np.stack([ce, -wl], 1)], 2)  # columns b-a, c-a
+    U = np.stack([ub - ua, uc - ua], 2)
+    det = L[:, 0, 0] * L[:, 1, 1] - L[:, 0, 1] * L[:, 1, 0]
+    ok &= np.abs(det) > 1e-20
+    Linv = np.stack([np.stack([L[:, 1, 1], -L[:, 0, 1]], 1), np.stack([-L[:, 1, 0], L[:, 0, 0]], 1)], 1) / \
+        np.where(ok, det, 1.0)[:, None, None]
+    M = np.einsum("nij,njk->nik", U, Linv)  # texel = ua + M @ local
+    uc2 = ua + np.einsum("nij,nj->ni", M, np.stack([along, perp], 1))  # unfolded c' in T's chart
+    # affine map T's chart -> T''s island: (ua, ub, uc2) -> (UV[ja], UV[jb], UV[jc])
+    S = np.stack([ub - ua, uc2 - ua], 2)
+    sdet = S[:, 0, 0] * S[:, 1, 1] - S[:, 0, 1] * S[:, 1, 0]
+    ok &= np.abs(sdet) > 1e-12
+    Sinv = np.stack([np.stack([S[:, 1, 1], -S[:, 0, 1]], 1), np.stack([-S[:, 1, 0], S[:, 0, 0]], 1)], 1) / \
+        np.where(ok, sdet, 1.0)[:, None, None]
+    D2 = np.stack([UV[jb] - UV[ja], UV[jc] - UV[ja]], 2)
+    A2 = np.einsum("nij,njk->nik", D2, Sinv)
+    idx = np.flatnonzero(ok)
+    if len(idx) == 0:
+        return mapped, coords
+    # sample the seam edges every 0.25 texel; each gutter texel takes its nearest seam edge
+    seg = np.maximum(np.ceil(np.linalg.norm(ub - ua, axis=1)[idx] / 0.25).astype(int), 1)
+    rep = np.repeat(idx, seg + 1)
+    tt = np.concatenate([np.linspace(0, 1, s + 1) for s in seg])
+    pts = ua[rep] + tt[:, None] * (ub[rep] - ua[rep])
+    dist_island, (near_y, near_x) = ndimage.distance_transform_edt(~covered, return_indices=True)
+    gy, gx = np.nonzero((~covered) & (dist_island <= reach))
+    if len(gx) == 0:
+        return mapped, coords
+    q = np.stack([gx, gy], 1).astype(np.float64)
+    # in-plane direction of T' away from the edge (towards c'), for the 3D consistency check
+    dprime = (Pc2 - Pa - along[:, None] * e) / np.maximum(perp, 1e-300)[:, None]
+    Minv = np.linalg.pinv(M)  # texel offset -> local (along e, along d) in mm
+    pos_ok = texel_pos is not None
+    done = np.zeros(len(q), bool)
+    tgt_all = np.zeros((len(q), 2))
+    dd, nn = cKDTree(pts).query(q, k=8, distance_upper_bound=reach + 1.0)
+    for c in range(dd.shape[1]):
+        cand = ~done & np.isfinite(dd[:, c])
+        # the nearest island boundary must be a seam edge, not an open boundary closer by
+        cand &= dd[:, c] <= dist_island[gy, gx] + 1.0
+        h = rep[np.minimum(nn[:, c], len(rep) - 1)]
+        rel = q - ua[h]
+        # beyond the edge from c (outside T), not beside it
+        cross_c = (ub[h, 0] - ua[h, 0]) * (uc[h, 1] - ua[h, 1]) - (ub[h, 1] - ua[h, 1]) * (uc[h, 0] - ua[h, 0])
+        cross_g = (ub[h, 0] - ua[h, 0]) * rel[:, 1] - (ub[h, 1] - ua[h, 1]) * rel[:, 0]
+        cand &= np.sign(cross_g) != np.sign(cross_c)
+        tgt = UV[ja][h] + np.einsum("nij,nj->ni", A2[h], rel)
+        cand &= np.all((tgt >= -0.5) & (tgt <= n - 0.5), axis=1)
+        ti = np.clip(np.round(tgt).astype(int), 0, n - 1)
+        # landed on the other island, or within 2 texels of it (its outline is not T''s edge
+        # exactly): then its nearest covered texel
+        cand &= dist_island[ti[:, 1], ti[:, 0]] <= 2.0
+        snap = ~covered[ti[:, 1], ti[:, 0]]
+        sy, sx = near_y[ti[:, 1], ti[:, 0]], near_x[ti[:, 1], ti[:, 0]]
+        tgt = np.where(snap[:, None], np.stack([sx, sy], 1).astype(np.float64), tgt)
+        ti = np.where(snap[:, None], np.stack([sx, sy], 1), ti)
+        if pos_ok:
+            loc = np.einsum("nij,nj->ni", Minv[h], rel)
+            expect = Pa[h] + loc[:, :1] * e[h] + loc[:, 1:] * dprime[h]
+            got = texel_pos[ti[:, 1], ti[:, 0]]
+            tol = 1.5 * texel_mm + 0.25 * np.abs(loc[:, 1])
+            cand &= np.linalg.norm(got - expect, axis=1) <= tol
+        tgt_all[cand] = tgt[cand]
+        done |= cand
+    have = done
+    tgt = tgt_all
+    mapped[gy[have], gx[have]] = True
+    coords[gy[have], gx[have]] = tgt[have]
+    return mapped, coords

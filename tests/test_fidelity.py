@@ -1,0 +1,268 @@
+"""Texture-space fidelity (issue 10): the beam light integrated over each texel's footprint, ..."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import small_settings
+
+from skinviewer.physics import accuracy as A
+from skinviewer.scene.scenes import build_scene
+
+# ---------------------------------------------------------------------------------------------
+# item 5: the laser beam keeps its power at every map size
+
+
+def _beam_power_ratio(renderer, scene, tech, n, offset=(0.0, 0.0), radius=0.02):
+    key = "deon.irradiance_size" if tech == "deon" else "gosselin.light_map_size"
+    res = "deon_irradiance" if tech == "deon" else "gosselin_light_map"
+    s = small_settings(scene, tech, 32, **{key: n, "deon.energy_conservation": False,
+                                           "lights.0.position": [offset[0], offset[1], 0.0],
+                                           "lights.0.beam_radius": radius})
+    renderer.render(s)
+    E = renderer.graph(tech).read(res)[..., :3].astype(np.float64)
+    m = build_scene(scene).mesh
+    _, _, area = A.plane_coords(m.positions, m.uvs, m.mm_per_unit, n)
+    L = s.lights[0]
+    return E.sum((0, 1)) * area / (math.pi * radius ** 2 * L.intensity)
+
+
+@pytest.mark.parametrize("n", [256, 512, 1024])
+@pytest.mark.parametrize("offset", [(0.0, 0.0), (0.013, -0.007)])
+def test_laser_power_at_every_map_size(renderer, n, offset):
+    # the 0.02 mm beam at the slab's centre hits a texel corner: point-sampled it lit nothing at
+    # 256^2 and 512^2 and carried 1.9x its power at 1024^2
+    for tech in ("deon", "gosselin"):
+        ratio = _beam_power_ratio(renderer, "laser", tech, n, offset)
+        assert np.allclose(ratio, 1.0, atol=0.01), (tech, n, offset, ratio)
+
+
+def test_beam_power_on_stretched_texels_and_wide_beams(renderer):
+    # 4:1 texel footprints (stretch-plane), and a beam wider than many texels
+    assert np.allclose(_beam_power_ratio(renderer, "stretch-plane", "deon", 256, (0.011, 0.03)), 1.0, atol=0.01)
+    assert np.allclose(_beam_power_ratio(renderer, "laser", "deon", 256, (0.3, -0.2), radius=1.3), 1.0, atol=0.01)
+
+
+# ---------------------------------------------------------------------------------------------
+# items 3-4: transmission (translucent shadow map) without terminator lines, thin parts glow
+
+
+def _uv_sphere_obj(path, radius=40.0, nlon=128, nlat=64):
+    """A lat-long sphere (seam at -x, the side away from a light at +x) written as OBJ."""
+    import trimesh
+    lon = np.pi + np.linspace(0.0, 2.0 * np.pi, nlon + 1)
+    lat = np.linspace(-np.pi / 2, np.pi / 2, nlat + 1)
+    LO, LA = np.meshgrid(lon, lat)
+    P = np.stack([np.cos(LA) * np.cos(LO), np.sin(LA), np.cos(LA) * np.sin(LO)], -1).reshape(-1, 3) * radius
+    UV = np.stack([0.02 + 0.96 * (LO - np.pi) / (2 * np.pi), 0.02 + 0.96 * (LA + np.pi / 2) / np.pi], -1).reshape(-1, 2)
+    idx = []
+    for j in range(nlat):
+        for i in range(nlon):
+            a = j * (nlon + 1) + i
+            idx += [(a, a + nlon + 1, a + nlon + 2), (a, a + nlon + 2, a + 1)]
+    trimesh.Trimesh(P, np.array(idx), process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    return str(path)
+
+
+def test_no_red_line_along_the_terminator(renderer, tmp_path):
+    """A 40 mm sphere lit from +x, seen from +z: the image's middle row runs along the equator (a
+    great circle) across the terminator at its centre. The red channel must fall monotonically from
+    the lit side into the shadow: the TSM term used the depth below the lit point (-> 0 at grazing
+    light) and put a red line just past the terminator."""
+    mesh = _uv_sphere_obj(tmp_path / "sphere.obj")
+    s = small_settings("head", "deon", 192, **{
+        "scene.mesh": mesh, "scene.mm_per_unit": 1.0, "camera.yaw": 0.0, "camera.pitch": 0.0,
+        "camera.distance": 200.0, "camera.target": [0.0, 0.0, 0.0], "deon.irradiance_size": 512,
+        "deon.tsm_size": 512, "specular.rho_s": 0.0,
+        "lights": [{"kind": "directional", "direction": [1.0, 0.0, 0.0], "intensity": 2.0, "cast_shadow": True}]})
+    renderer.render(s)
+    lit = renderer.read(s, "lit")[..., :3].astype(np.float64)
+    row = lit[lit.shape[0] // 2, :, 0]
+    n = row.size
+    # the sphere spans about the middle 60 % of the row; from its lit limb (right) to its dark limb
+    inside = np.nonzero(lit[lit.shape[0] // 2, :, :].sum(-1) > 0)[0]
+    seg = row[n // 2 - int(0.25 * n): n // 2 + int(0.25 * n)][::-1]  # lit -> dark
+    assert seg[0] > 0.05, (seg[0], inside)
+    rises = np.diff(seg)
+    assert np.all(rises <= 1e-4 * seg[0]), np.round(seg * 1000).astype(int)
+
+
+def _project(view, p, n):
+    c = view.view_proj @ np.append(p, 1.0)
+    ndc = c[:3] / c[3]
+    return int((ndc[1] + 1) / 2 * n), int((ndc[0] + 1) / 2 * n)  # (row, col), row 0 at the bottom
+
+
+def test_backlit_ear_transmits_the_thin_slab_profile(renderer):
+    """backlit-ear (a flap 1.5 mm thick at the top, 6 mm at the bottom) lit from behind: at the
+    front points 2, 3 and 4 mm thick the final image is C^(1-mix) sum_i w_i exp(-m^2/2v_i) blur_i(uv_A),
+    m the path through the flap along the light, A where that ray enters the back (seed 000 eq. 33)."""
+    from skinviewer.passes.deon import mean_texel_mm
+    from skinviewer.physics.diffusion import blur_plan_texels, texture_of
+    from skinviewer.scene.camera import orbit_view
+    from skinviewer.scene.scenes import _flap_thickness
+    n = 160
+    s = small_settings("backlit-ear", "deon", n, **{"deon.irradiance_size": 512, "deon.tsm_size": 512,
+                                                   "deon.energy_conservation": False})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    lit = renderer.read(s, "lit")[..., :3].astype(np.float64)
+    scene = renderer.scene.gpu
+    view = orbit_view(s.camera, scene.center, scene.radius, (n, n))
+    L = np.array(s.lights[0].direction, np.float64)
+    L /= np.linalg.norm(L)
+    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
+                            mean_texel_mm(scene, 512))
+    blurs = [g.read(texture_of(p))[..., :3].astype(np.float64) for p in plan]
+    from skinviewer.passes.output import srgb_to_linear
+    albedo = srgb_to_linear(np.array([0.85, 0.62, 0.55]))  # the scene's sRGB albedo, linear in the shaders
+    for d in (2.0, 3.0, 4.0):
+        y = 20.0 - (d - 1.5) * 40.0 / 4.5
+        C = np.array([0.0, y, 0.5 * _flap_thickness(np.array(y))])
+        # walk towards the light to the back surface z = -t(y)/2
+        ts = np.linspace(0.0, 3 * d, 30001)
+        P = C[None, :] + ts[:, None] * L[None, :]
+        k = int(np.argmax(P[:, 2] <= -0.5 * _flap_thickness(P[:, 1])))
+        A, m = P[k], ts[k]
+        s_a, t_a = (A[0] + 15.0) / 30.0, (A[1] + 20.0) / 40.0
+        uvA = np.array([0.52 + 0.46 * (1.0 - s_a), 0.02 + 0.96 * t_a])
+        ij = (uvA[::-1] * 512).astype(int)
+        expect = sum(np.asarray(x.weights) * np.exp(-m * m / (2 * x.variance)) * b[ij[0], ij[1]]
+                     for x, b in zip(s.deon.gaussians, blurs)) * albedo ** (1 - s.deon.mix)
+        row, col = _project(view, C, n)
+        got = lit[row, col]
+        assert abs(got[0] / expect[0] - 1) < 0.10, (d, m, got, expect)
+
+
+def test_no_transmission_through_the_head(renderer):
+    """Light from behind the default head, seen from the front: the face (~150 mm of head behind
+    it) gets no transmitted light; the thin ears do. Before: red contours along every terminator."""
+    from skinviewer.core.settings import with_values
+    n = 160
+    s = small_settings("head", "deon", n, **{"camera.yaw": 0.0, "camera.pitch": 5.0, "deon.irradiance_size": 512,
+                                             "deon.tsm_size": 512, "shadow.map_size": 1024,
+                                             "lights": [{"kind": "directional", "direction": [0.0, 0.15, -1.0],
+                                                         "intensity": 3.0, "cast_shadow": True}]})
+    renderer.render(s)
+    on = renderer.read(s, "lit")[..., 0].astype(np.float64).copy()
+    renderer.render(with_values(s, {"deon.tsm": False}))
+    off = renderer.read(s, "lit")[..., 0].astype(np.float64)
+    t = on - off
+    face = t[int(0.3 * n):int(0.8 * n), int(0.38 * n):int(0.62 * n)]  # between the ears
+    assert face.max() < 1e-3, (face.max(), np.argwhere(face >= 1e-3)[:10])
+    assert t.max() > 0.05  # the ears glow
+
+
+# ---------------------------------------------------------------------------------------------
+# item 1: seam-aware blurs
+
+
+def _plane_obj(path, cut: bool, size=80.0, uv_per_mm=0.0093):
+    """An 80 mm plane (normal +z), uncut (one UV island) or cut along x = 0 into two islands 0.22
+    apart in u (the same texel density either way)."""
+    import trimesh
+
+    from skinviewer.scene.scenes import _merge, grid
+    w = size * uv_per_mm
+    if cut:
+        parts = []
+        for x0, u0 in ((-size / 4, 0.02), (size / 4, 0.98 - w / 2)):
+            p, nrm, uv, idx = grid(20, 40, size / 2, size, uv_rect=(u0, 0.5 - w / 2, u0 + w / 2, 0.5 + w / 2))
+            p[:, 0] += x0
+            parts.append((p, nrm, uv, idx))
+        P, _, UV, F = _merge(parts)
+    else:
+        P, _, UV, F = grid(40, 40, size, size, uv_rect=(0.5 - w / 2, 0.5 - w / 2, 0.5 + w / 2, 0.5 + w / 2))
+    trimesh.Trimesh(P, F, process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    return str(path), UV, P
+
+
+def _diffused(renderer, mesh, seam_aware=True, n=256, beam=(2.5, 2.0), **extra):
+    from skinviewer.passes.deon import mean_texel_mm
+    from skinviewer.physics.diffusion import blur_plan_texels, texture_of
+    prof = [{"variance": 0.5, "weights": [0.4, 0.6, 0.8]}, {"variance": 3.0, "weights": [0.6, 0.4, 0.2]}]
+    s = small_settings("laser", "deon", 32, **{
+        "scene.mesh": mesh, "scene.mm_per_unit": 1.0, "scene.seam_aware": seam_aware, "deon.irradiance_size": n,
+        "deon.tsm": False, "deon.energy_conservation": False, "deon.gaussians": prof,
+        "deon.reuse_irradiance_below_texels": 0.0, "camera.target": None, "camera.distance": None,
+        "lights": [{"kind": "beam", "direction": [0.0, 0.0, 1.0], "position": [beam[0], 0.0, 0.0], "beam_radius": beam[1],
+                    "intensity": 1.0, "cast_shadow": False}], **extra})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    plan = blur_plan_texels([x["variance"] for x in prof], 0.0, mean_texel_mm(renderer.scene.gpu, n))
+    return sum(np.asarray(x["weights"]) * g.read(texture_of(p))[..., :3].astype(np.float64) for x, p in zip(prof, plan))
+
+
+def test_diffusion_across_a_uv_cut_equals_the_uncut_plane(renderer, tmp_path):
+    """A beam beside the cut (2.5 mm right of it, 2 mm radius): the blurred irradiance on both islands equals the uncut plane's at
+    the same surface points (within 2 % of the peak); with gutters that repeat the island's edge
+    texel (scene.seam_aware off) it does not."""
+    from scipy.ndimage import map_coordinates
+    n, upm = 256, 0.0093
+    cut, _, _ = _plane_obj(tmp_path / "cut.obj", True, uv_per_mm=upm)
+    whole, _, _ = _plane_obj(tmp_path / "whole.obj", False, uv_per_mm=upm)
+    ref = _diffused(renderer, whole, n=n)
+    w = 80.0 * upm
+
+    def compare(D):
+        errs = []
+        for u0, x0 in ((0.02, -40.0), (0.98 - w / 2, 0.0)):
+            i0, i1 = int(np.ceil(u0 * n)), int((u0 + w / 2) * n) - 1
+            j0, j1 = int(np.ceil((0.5 - w / 2) * n)), int((0.5 + w / 2) * n) - 1
+            jj, ii = np.mgrid[j0:j1 + 1, i0:i1 + 1]
+            x = x0 + ((ii + 0.5) / n - u0) / upm           # mm on the plane
+            ui = ((0.5 - w / 2) + (x + 40.0) * upm) * n - 0.5  # the uncut map's texel coordinate there
+            for c in range(3):
+                r = map_coordinates(ref[..., c], [jj.astype(float), ui], order=1)
+                errs.append(np.abs(D[j0:j1 + 1, i0:i1 + 1, c] - r).max() / ref[..., c].max())
+        return max(errs)
+
+    err_on = compare(_diffused(renderer, cut, True, n))
+    err_off = compare(_diffused(renderer, cut, False, n))
+    print(f"uv cut: max error seam-aware {err_on:.4f}, edge-texel gutters {err_off:.4f}")
+    assert err_on < 0.02 and err_off > 0.05, (err_on, err_off)
+
+
+# ---------------------------------------------------------------------------------------------
+# item 2: stretch with shear
+
+
+def _sheared_plane_obj(path, shear_deg: float, upm=0.0096):
+    """A 60 mm plane, u = 0.5 + upm (x + y tan(shear)), v = 0.5 + upm y: texels sheared by
+    ``shear_deg`` on the surface (the same texel area either way)."""
+    import trimesh
+
+    from skinviewer.scene.scenes import grid
+    P, _, UV, F = grid(40, 40, 60.0, 60.0)
+    t = np.tan(np.radians(shear_deg))
+    UV = np.stack([0.5 + upm * (P[:, 0] + P[:, 1] * t), 0.5 + upm * P[:, 1]], 1)
+    trimesh.Trimesh(P, F, process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    return str(path)
+
+
+def test_sheared_uvs_diffuse_like_unsheared(renderer, tmp_path):
+    """Seed 000 eq. 27 keeps per-axis lengths only: on UVs skewed by 30 deg the blur came out
+    anisotropic. With the full Jacobian the profile matches the unsheared plane's within 2 % of the
+    peak at the same surface points."""
+    from scipy.ndimage import map_coordinates
+    n, upm = 256, 0.0096
+    ref = _diffused(renderer, _sheared_plane_obj(tmp_path / "plane.obj", 0.0), n=n, beam=(0.0, 1.0))
+    D = _diffused(renderer, _sheared_plane_obj(tmp_path / "sheared.obj", 30.0), n=n, beam=(0.0, 1.0),
+                  **{"deon.stretch_shear": True})
+    t = np.tan(np.radians(30.0))
+    jj, ii = np.mgrid[0:n, 0:n]
+    y = ((jj + 0.5) / n - 0.5) / upm
+    x = ((ii + 0.5) / n - 0.5) / upm - y * t
+    keep = (np.hypot(x, y) < 12.0)
+    err = 0.0
+    for c in range(3):
+        r = map_coordinates(ref[..., c], [(0.5 + upm * y) * n - 0.5, (0.5 + upm * x) * n - 0.5], order=1)
+        err = max(err, np.abs(D[..., c] - r)[keep].max() / ref[..., c].max())
+    D0 = _diffused(renderer, _sheared_plane_obj(tmp_path / "sheared.obj", 30.0), n=n, beam=(0.0, 1.0))
+    err0 = 0.0
+    for c in range(3):
+        r = map_coordinates(ref[..., c], [(0.5 + upm * y) * n - 0.5, (0.5 + upm * x) * n - 0.5], order=1)
+        err0 = max(err0, np.abs(D0[..., c] - r)[keep].max() / ref[..., c].max())
+    print(f"sheared plane: max error {err:.4f} of the peak (per-axis stretch: {err0:.4f})")
+    assert err < 0.02 and err0 > 0.05, (err, err0)
