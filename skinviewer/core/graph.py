@@ -835,7 +835,7 @@ def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth:
             if n not in live and n != name and outs & set(other.inputs):
                 why = _prune_reason(n, refl, live, depth + 1)
                 if why.startswith("pruned: "):
-                    return why + f" (via {n})"
+                    return why if "(via " in why else why + f" (via {n})"
     return "output not consumed"
 
 
