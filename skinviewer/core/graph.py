@@ -351,30 +351,18 @@ class ExecuteContext:
         self._apply(prog)
         self.graph.gpu.mesh_vao(prog, scene).render()
         self.draws += 1
-        self.gl.disable(moderngl.DEPTH_TEST)
 
     def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
-                        mask: "moderngl.Texture | None" = None, tiles: tuple | None = None) -> None:
+                        tiles: tuple | None = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
         ``targets`` (declared outputs or scratch textures), no depth test, no clear.
 
-        ``mask``: a depth texture of the targets' size, 1 where texels are wanted and 0 elsewhere
-        (texture_space.work_mask): the early depth test drops the others before shading (issue 14:
-        no work on gutter texels no blur can read); those texels keep their previous contents.
         ``tiles``: (texture, count, edge) from texture_space.work_tiles, for a program compiled with
-        ``TILED=1``: only those tiles are rasterised (the same texels come out bit-identical)."""
-        if mask is None:
-            fbo = self._target(targets)
-        else:
-            self._target(targets)  # validates them
-            fbo = self.graph._framebuffer_masked(tuple(self.output(t) if isinstance(t, str) else t
-                                                       for t in targets), mask)
+        ``TILED=1``: only those tiles are rasterised (issue 14: no work on gutter texels no blur can
+        read); the texels drawn come out bit-identical, the others keep their previous contents."""
+        fbo = self._target(targets)
         fbo.use()
-        if mask is None:
-            self.gl.disable(moderngl.DEPTH_TEST)
-        else:
-            self.gl.enable(moderngl.DEPTH_TEST)
-            self.gl.depth_func = "<"  # the triangle's depth 0.5 passes only over a mask of 1
+        self.gl.disable(moderngl.DEPTH_TEST)
         if tiles is not None:
             tex, count, edge = tiles
             self.bind(prog, "u_tiles", tex)
@@ -577,15 +565,6 @@ class RenderGraph:
                 if rb is None:
                     rb = self._depth[size] = self.ctx.depth_renderbuffer(size)
             fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=rb)
-        return fbo
-
-    def _framebuffer_masked(self, texs: tuple, mask: moderngl.Texture) -> moderngl.Framebuffer:
-        """Colour ``texs`` with the depth texture ``mask`` (read-only: depth writes off)."""
-        key = (texs, ("mask", mask.glo))
-        fbo = self._fbos.get(key)
-        if fbo is None:
-            fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=mask)
-            fbo.depth_mask = False
         return fbo
 
     def texture(self, resource: str) -> moderngl.Texture:
@@ -931,7 +910,7 @@ class RenderGraph:
         self._depth.clear()
         for obj in self.shape_state.pop("gl_objects", {}).values():
             if obj is not None:
-                (obj[0] if isinstance(obj, tuple) else obj).release()  # texture_space work masks / tiles
+                obj[0].release()  # texture_space.work_tiles
         self.gpu.release()
         self.shaders.remove_hook(self.gpu.forget_program)
         if self._check_lib is not None:
@@ -960,7 +939,7 @@ def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth:
             if n not in live and n != name and outs & set(other.inputs):
                 why = _prune_reason(n, refl, live, depth + 1)
                 if why.startswith("pruned: "):
-                    return why + f" (via {n})"
+                    return why if "(via " in why else why + f" (via {n})"
     return "output not consumed"
 
 

@@ -64,30 +64,6 @@ def read_gutter(tex: moderngl.Texture) -> np.ndarray:
     return np.frombuffer(tex.read(), dtype=dt).reshape(h, w, tex.components).astype(np.float32)
 
 
-def work_mask(ec, size: int, ring: int) -> moderngl.Texture | None:
-    """A depth texture (size x size) for ``ec.draw_fullscreen(..., mask=)``: 1 on texels covered by
-    a UV island or within ``ring`` texels of one (what a blur can read), 0 on the rest of the
-    gutters. Built on the CPU from the gutter map once per mesh, size and ring (the graph keeps
-    it). None when the ring reaches (nearly) everything: a plain draw is then cheaper."""
-    objs = ec.state.setdefault("gl_objects", {})
-    key = ("work_mask", id(ec.scene), size, int(ring))
-    if key in objs:
-        return objs[key]
-    for k in [k for k in objs if k[0] == "work_mask" and k[1] != id(ec.scene)]:
-        old = objs.pop(k)  # masks of a previous scene
-        if old is not None:
-            old.release()
-    g = read_gutter(ec.input(gutter_resource(size)))
-    y, x = np.mgrid[0:size, 0:size]
-    near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
-    if near.mean() > 0.9:
-        objs[key] = None
-        return None
-    tex = ec.gl.depth_texture((size, size), near.astype(np.float32).tobytes())
-    objs[key] = tex
-    return tex
-
-
 TILE = 16  # texels per tile edge of work_tiles
 
 
