@@ -310,7 +310,7 @@ def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
         s_max = ec.state.get(key)
         if s_max is None:
             tex = ec.input(stretch)
-            a = np.frombuffer(tex.read(), np.float32)
+            a = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components)[:, :2]  # RG: UV per mm (B: shear)
             a = a[np.isfinite(a)]
             s_max = ec.state[key] = float(a.max()) if a.size else 0.0
     else:
