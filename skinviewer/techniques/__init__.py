@@ -3,7 +3,15 @@ description (``base.Technique``); adding one means adding a module here and one 
 from __future__ import annotations
 
 from skinviewer.core.graph import Pass
-from skinviewer.techniques import burley, burley2, deon, gosselin, phong, separable, ssss
+from skinviewer.techniques import (
+    burley,
+    burley2,
+    deon,
+    gosselin,
+    phong,
+    separable,
+    ssss,
+)
 from skinviewer.techniques.base import TARGETS, Technique, shadow_passes
 
 REGISTRY: dict[str, Technique] = {t.name: t for t in (phong.TECHNIQUE, gosselin.TECHNIQUE, deon.TECHNIQUE, ssss.TECHNIQUE,

@@ -12,12 +12,13 @@ from skinviewer.passes.burley import (
     BurleyOutputPass,
     BurleyViewPass,
 )
+from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
 from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [ScreenLightingPass(), BurleyBlurPass("golubev"), BurleyCountPass(), CombinePass(BLURRED),
+    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(), BurleyBlurPass("golubev"), BurleyCountPass(), CombinePass(BLURRED),
                               BurleyViewPass(), BurleyOutputPass("lit")]
 
 

@@ -3,6 +3,7 @@ separable kernel (strength/falloff artist model), two 1-D passes, follow-surface
 per-pixel rotation of the inner taps; Jimenez 2010 transmittance in the lighting pass."""
 from __future__ import annotations
 
+from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
 from skinviewer.passes.screen_space.separable import OUTPUT, SeparableBlurPass
@@ -10,7 +11,7 @@ from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [ScreenLightingPass(), SeparableBlurPass(), CombinePass(OUTPUT), OutputPass("lit")]
+    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(), SeparableBlurPass(), CombinePass(OUTPUT), OutputPass("lit")]
 
 
 def sweep(quick: bool) -> list[Config]:

@@ -6,16 +6,22 @@ from __future__ import annotations
 import functools
 
 from skinviewer.core.settings import Settings
+from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
-from skinviewer.passes.screen_space.jimenez2009 import MAX_GAUSSIANS, SUM, SsssBlurPass, SsssSumPass
+from skinviewer.passes.screen_space.jimenez2009 import (
+    MAX_GAUSSIANS,
+    SUM,
+    SsssBlurPass,
+    SsssSumPass,
+)
 from skinviewer.physics.diffusion import profile
 from skinviewer.physics.fitting import fit_gaussians
 from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
-    return (shadow_passes() + [ScreenLightingPass()] + [SsssBlurPass(i) for i in range(MAX_GAUSSIANS)]
+    return (shadow_passes() + [BeckmannLutPass(), ScreenLightingPass()] + [SsssBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [SsssSumPass(), CombinePass(SUM), OutputPass("lit")])
 
 

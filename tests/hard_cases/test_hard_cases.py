@@ -23,9 +23,12 @@ TINY = {"render.width": 24, "render.height": 24, "scene.head_detail": 0, "shadow
         "gosselin.light_map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 64,
         "specular.lut_size": 16}
 
-# resources that legitimately hold signed values (not light): gutter maps store offsets to the
-# nearest covered texel; the TSM stores light-space position and depth (seed 000 eq. 32)
-SIGNED_PREFIXES = ("gutter", "deon_tsm")
+# resources that legitimately hold signed values (not light): gutter and seam maps store texel
+# coordinates; the TSM stores light-space position and depth (seed 000 eq. 32); stretch maps hold the
+# shear cosine in B; the Burley statistics texture flags skipped pixels with -1
+SIGNED_PREFIXES = ("gutter", "seam", "deon_tsm", "deon_stretch", "stretch", "burley_stats")
+# inputs and outputs of a blur that are not light (lookup tables, geometry, statistics)
+NOT_LIGHT_PREFIXES = SIGNED_PREFIXES + ("ss_depth", "rho_dt", "beckmann")
 
 
 @pytest.fixture(scope="module")
@@ -69,8 +72,10 @@ def _check_frame(renderer, s: Settings, report) -> list[str]:
         if "blur" not in p.name or p.name not in refl:
             continue
         r = refl[p.name]
-        src = r.inputs[0] if r.inputs else None
+        src = next((i for i in r.inputs if not i.startswith(NOT_LIGHT_PREFIXES)), None)  # the light it blurs
         for out in r.outputs:
+            if out.startswith(NOT_LIGHT_PREFIXES):
+                continue
             if src in tex and out in tex and np.all(np.isfinite(tex[src])):
                 e_in = tex[src][..., :3].max(axis=(0, 1))
                 e_out = tex[out][..., :3].max(axis=(0, 1))
