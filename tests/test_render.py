@@ -125,3 +125,16 @@ def test_negative_camera_yaw_on_the_command_line(tmp_path):
     argv = _join_negative_values(["render", "--camera", "-75,5", "--out", "x.png"])
     args = build_parser().parse_args(argv)
     assert args.camera == [-75.0, 5.0]
+
+
+def test_render_writes_linear_exr(tmp_path):
+    """`render --exr`: the linear HDR image (before exposure and tone map) for compositing tools."""
+    from skinviewer.core.files import load_exr
+    out, exr = tmp_path / "x.png", tmp_path / "x.exr"
+    p = subprocess.run([sys.executable, "-m", "skinviewer", "render", "--scene", "laser", "--technique", "phong",
+                        "--size", "32x32", "--set", "render.exposure=4", "--out", str(out), "--exr", str(exr)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    a = load_exr(exr)
+    assert a.shape == (32, 32, 4) and a.dtype == np.float32 and np.isfinite(a).all()
+    assert a[..., 3].max() == 1.0 and 0.0 < a[..., :3].max() < 4.0  # linear: the exposure is not applied

@@ -18,6 +18,8 @@ def build_parser() -> argparse.ArgumentParser:
     pr = sub.add_parser("render", help="render one frame headless to a PNG")
     add_scene_args(pr)
     pr.add_argument("--out", required=True, help="output PNG")
+    pr.add_argument("--exr", metavar="FILE.exr", help="also write the linear HDR image (before exposure and tone map) "
+                    "as OpenEXR, for compositing and comparison tools")
     pr.add_argument("--dump-passes", metavar="DIR", help="write every intermediate texture (.npy + .png) and graph.json")
     pr.add_argument("--timings", metavar="FILE.json", help="write per-pass times of the frame")
     pr.add_argument("-v", "--verbose", action="store_true", help="print the pass table")

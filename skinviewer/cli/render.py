@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from skinviewer.cli.args import settings_from_args
-from skinviewer.core.files import atomic_write_text, save_npy, save_png
+from skinviewer.core.files import atomic_write_text, save_exr, save_npy, save_png
 from skinviewer.core.gl import headless_context
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings
@@ -35,6 +35,9 @@ def cmd_render(args) -> int:
         report = r.render(s)
         out = Path(args.out)
         save_png(out, r.image(s))
+        if getattr(args, "exr", None):  # linear HDR radiance, before exposure and tone map
+            save_exr(args.exr, r.read(s, "lit")[::-1])
+            print(f"wrote {args.exr} (linear RGBA float32, alpha = coverage)")
         print(f"wrote {out} ({s.render.width}x{s.render.height}, {s.technique}, "
               f"{report.total_ms:.1f} ms {report.timing_mode})")
         if args.timings:
