@@ -26,7 +26,7 @@ out vec4 f_color;
 // the second along b = (-c s_u, s_v) / sqrt(1 - c^2), which is v's axis when there is no shear.
 vec2 shear_step(vec2 s, float c, vec2 dir) {
     if (dir.x > 0.5) return vec2(s.x, 0.0);
-    c = clamp(deon_finite(c), -0.95, 0.95);
+    c = clamp(finite_f32(c), -0.95, 0.95);
     return vec2(-c * s.x, s.y) * inversesqrt(1.0 - c * c);
 }
 
@@ -35,9 +35,9 @@ void main() {
     vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
     vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0) : vec4(u_uniform_stretch, 0.0, 1.0);
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
-    step_uv = vec2(deon_finite(step_uv.x), deon_finite(step_uv.y));
+    step_uv = vec2(finite_f32(step_uv.x), finite_f32(step_uv.y));
     vec4 acc = vec4(0.0);
     for (int k = 0; k < 7; ++k)
         acc += u_weights[k] * seam_tap(source, uv + step_uv * float(k - 3));
-    f_color = deon_finite4(acc);
+    f_color = finite4_f32(acc);
 }

@@ -92,7 +92,7 @@ void main() {
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
-    diffuse *= deon_safe_pow(C, 1.0 - u_mix) * rho_v;
+    diffuse *= safe_pow(C, 1.0 - u_mix) * rho_v;
     vec3 spec = vec3(0.0);
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;

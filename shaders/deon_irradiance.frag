@@ -25,7 +25,7 @@ out vec4 f_irradiance;
 void main() {
     set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
-    vec3 C = deon_safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
+    vec3 C = safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
     for (int i = 0; i < N_LIGHTS; ++i) {
@@ -49,6 +49,6 @@ void main() {
             }
         }
     }
-    d = clamp(deon_finite(d), 0.0, u_max_thickness);
-    f_irradiance = deon_finite4(vec4(E, d));
+    d = clamp(finite_f32(d), 0.0, u_max_thickness);
+    f_irradiance = finite4_f32(vec4(E, d));
 }

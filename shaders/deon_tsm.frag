@@ -10,5 +10,5 @@ void main() {
     vec3 L = (u_tsm_kind == LIGHT_POINT) ? normalize(u_tsm_pos - v_position) : u_tsm_dir;
     vec3 N = v_normal;
     float nl = length(N) > 1e-12 ? abs(dot(normalize(N), L)) : 1.0;
-    f_tsm = vec4(deon_finite(tsm_distance_mm(v_position)), v_uv, clamp(nl, 0.0, 1.0));
+    f_tsm = vec4(finite_f32(tsm_distance_mm(v_position)), v_uv, clamp(nl, 0.0, 1.0));
 }

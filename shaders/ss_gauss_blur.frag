@@ -23,7 +23,7 @@ out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 c = texelFetch(source, p, 0);
-    if (c.a < 0.5) { f_color = ss_finite4(c); return; }  // not skin: unchanged
+    if (c.a < 0.5) { f_color = finite4_f32(c); return; }  // not skin: unchanged
     vec4 dz = texelFetch(depth_tex, p, 0);
     float grad = u_dir.x > 0.5 ? dz.g : dz.b;
     float s = (u_alpha / 11.0) * u_focal / max(dz.r + u_beta * grad, 1e-6);  // px per mm, eq. 3.2
@@ -47,5 +47,5 @@ void main() {
         vec4 t = texture(source, uv + u_dir * (u_x[k] * step_px) * texel);
         acc += u_w[k] * (t.a < 0.999 ? c.rgb : t.rgb);
     }
-    f_color = ss_finite4(vec4(acc, c.a));
+    f_color = finite4_f32(vec4(acc, c.a));
 }

@@ -18,7 +18,7 @@ out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 c = texelFetch(diffuse, p, 0);
-    if (c.a < 0.5) { f_color = ss_finite4(c); return; }
+    if (c.a < 0.5) { f_color = finite4_f32(c); return; }
     vec3 acc = vec3(0.0);
     if (u_count > 0) acc += u_w[0] * texelFetch(blur0, p, 0).rgb;
     if (u_count > 1) acc += u_w[1] * texelFetch(blur1, p, 0).rgb;
@@ -28,5 +28,5 @@ void main() {
     if (u_count > 5) acc += u_w[5] * texelFetch(blur5, p, 0).rgb;
     if (u_count > 6) acc += u_w[6] * texelFetch(blur6, p, 0).rgb;
     if (u_count > 7) acc += u_w[7] * texelFetch(blur7, p, 0).rgb;
-    f_color = ss_finite4(vec4(acc, c.a));
+    f_color = finite4_f32(vec4(acc, c.a));
 }

@@ -112,10 +112,10 @@ void main() {
     float mask = 1.0;
     if (u_has_regions != 0) mask = u_region_sss[region_at(ivec2(v_uv * vec2(textureSize(region_map, 0))))];
     // non-skin pixels scatter nothing: the transmittance belongs to skin
-    vec3 diffuse = (E + mask * T) * ss_safe_pow(A, u_mix);
-    o_diffuse = ss_finite4(vec4(diffuse, mask));
+    vec3 diffuse = (E + mask * T) * safe_pow(A, u_mix);
+    o_diffuse = finite4_f32(vec4(diffuse, mask));
     o_specular = finite4(vec4(spec, 1.0), HALF_MAX);  // a half-float target
     float d = v_depth_mm;
-    o_depth = ss_finite4(vec4(d, abs(dFdx(d)), abs(dFdy(d)), 1.0));
-    o_albedo = finite4(vec4(ss_safe_pow(A, 1.0 - u_mix), 1.0), HALF_MAX);
+    o_depth = finite4_f32(vec4(d, abs(dFdx(d)), abs(dFdy(d)), 1.0));
+    o_albedo = finite4(vec4(safe_pow(A, 1.0 - u_mix), 1.0), HALF_MAX);
 }

@@ -32,7 +32,7 @@ float ss_hash(ivec2 p) {  // integer hash -> [0, 1) (no sin(): stable across dri
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 c = texelFetch(source, p, 0);
-    if (c.a < 0.5) { f_color = ss_finite4(c); return; }
+    if (c.a < 0.5) { f_color = finite4_f32(c); return; }
     float dM = texelFetch(depth_tex, p, 0).r;
     float step_px = (u_width_mm / 3.0) * u_focal / max(dM, 1e-6) * c.a;
     vec2 texel = 1.0 / vec2(textureSize(source, 0));
@@ -54,5 +54,5 @@ void main() {
         }
         acc += u_k[i] * mix(t.rgb, c.rgb, k);
     }
-    f_color = ss_finite4(vec4(acc, c.a));
+    f_color = finite4_f32(vec4(acc, c.a));
 }

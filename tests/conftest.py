@@ -93,3 +93,15 @@ def renderer(gl_ctx):
     r = Renderer(gl_ctx)
     yield r
     r.release()
+
+
+@pytest.fixture(scope="module")
+def generic(gl_ctx):
+    """A renderer whose shaders are the generic, uniform-driven ones (GENERIC_SHADERS): what every
+    specialised variant must equal."""
+    from skinviewer.core.renderer import Renderer
+    from skinviewer.core.shaders import ShaderLibrary
+    r = Renderer(gl_ctx, ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}))
+    yield r
+    r.release()
+    r.shaders.release()

@@ -18,14 +18,6 @@ def _rec(report, name):
     return {p.name: p for p in report.passes}[name]
 
 
-@pytest.fixture(scope="module")
-def generic(gl_ctx):
-    r = Renderer(gl_ctx, ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}))
-    yield r
-    r.release()
-    r.shaders.release()
-
-
 @pytest.mark.parametrize("technique", ["phong", "gosselin", "deon"])
 def test_zero_intensity_light_has_no_shadow_map_and_no_effect(renderer, technique):
     base = small_settings("head", technique, 48)

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.renderer import Renderer
 from skinviewer.core.shaders import ShaderLibrary
 
 # default lights (two, both shadowed, PCF 1); then three lights of every kind with an unshadowed
@@ -21,14 +20,6 @@ CASES = {
                          {"kind": "directional", "direction": (-0.7, 0.2, -0.9), "intensity": 1.1}]},
     "hard": {"shadow.pcf": 0},
 }
-
-
-@pytest.fixture(scope="module")
-def generic(gl_ctx):
-    r = Renderer(gl_ctx, ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}))
-    yield r
-    r.release()
-    r.shaders.release()
 
 
 @pytest.mark.parametrize("case", list(CASES))

@@ -21,4 +21,14 @@ vec4 finite4(vec4 c, float limit) {
                       isnan(c.w) || isinf(c.w));
     return clamp(mix(c, vec4(0.0), bad), vec4(-limit), vec4(limit));
 }
+// Float32 textures (irradiance, blurs, screen-space diffuse) must keep values beyond the half-float
+// range (lights of 1e6): NaN/Inf -> 0 and clamp to +-FLOAT_MAX instead of HALF_MAX.
+float finite_f32(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -FLOAT_MAX, FLOAT_MAX); }
+vec4 finite4_f32(vec4 c) { return vec4(finite_f32(c.x), finite_f32(c.y), finite_f32(c.z), finite_f32(c.w)); }
+// C^e for albedo C >= 0 without pow(0, 0) (undefined in GLSL): e <= 0 -> 1, C <= 0 -> 0 (seed 000 eq. 28, 34).
+vec3 safe_pow(vec3 c, float e) {
+    c = clamp(c, 0.0, FLOAT_MAX);
+    if (!(e > 0.0)) return vec3(1.0);
+    return vec3(c.x > 0.0 ? pow(c.x, e) : 0.0, c.y > 0.0 ? pow(c.y, e) : 0.0, c.z > 0.0 ? pow(c.z, e) : 0.0);
+}
 #endif

@@ -34,7 +34,7 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
     for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
         vec4 t = texture(tsm_map, c + vec2(x, y) * texel);
         if (t.a < 0.0) continue;
-        float m = deon_finite(dC - t.r);
+        float m = finite_f32(dC - t.r);
         float cosA = clamp(t.a, 0.05, 1.0);
         float tol = u_tsm_gate_mm * (1.0 + 0.5 * sqrt(1.0 - cosA * cosA) / cosA);
         float g = smoothstep(tol, 2.0 * tol, m);
