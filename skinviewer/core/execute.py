@@ -1,0 +1,234 @@
+"""The ``ExecuteContext``: what ``Pass.execute`` may use — its declared settings, inputs, outputs and
+programs, and the graph's GL services (draws, textures bound by sampler name, strict uniforms)."""
+from __future__ import annotations
+
+from typing import Any, Iterable
+
+import moderngl
+
+from skinviewer.core.gpu import write_uniform
+from skinviewer.core.pass_api import GraphError, Pass, Reflection, SettingsView, TexSpec
+from skinviewer.core.report import FrameInputs
+from skinviewer.core.settings import get_path
+
+
+class ExecuteContext:
+    """What ``Pass.execute`` may use: its declared settings, inputs, outputs and programs, and the
+    graph's GL services.
+
+    Drawing::
+
+        prog = ec.program("phong")                    # the (only) declared variant of "phong"
+        ec.uniforms(prog, u_ambient=0.03, u_eye=(0.0, 0.0, 5.0))
+        ec.textures(prog, albedo_map=ec.scene.albedo, blurred="gosselin_blurred")
+        ec.draw_mesh(prog, "lit")                     # depth test, both faces, cleared first
+        ec.draw_fullscreen(prog, "image")             # or a scratch texture: ec.draw_fullscreen(p, tmp)
+
+    * Textures are bound by sampler name; units are allocated per program for this execute and
+      every binding is re-applied before each draw, so a pass never threads unit numbers. Samplers
+      of the program that nothing bound read a 1x1 zero texture of their kind (never a stale unit).
+    * ``set``/``uniforms``/``bind`` raise GraphError (pass, program, name) for a name the program's
+      GLSL source does not declare; a name declared but dropped by the compiler (unused in this
+      variant) is skipped silently; ``optional=True`` also skips a name the source lacks.
+    """
+
+    def __init__(self, graph, p: Pass, refl: Reflection, frame: FrameInputs):  # graph: the RenderGraph
+        self.graph = graph
+        self.gl: moderngl.Context = graph.ctx
+        self.pass_ = p
+        self._refl = refl
+        self._frame = frame
+        self._scratch: list[moderngl.Texture] = []
+        self.draws = 0
+        self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
+
+    @property
+    def scene(self):
+        if not self.pass_.uses_scene:
+            raise GraphError(f"pass {self.pass_.name} did not declare uses_scene")
+        return self._frame.scene
+
+    @property
+    def view(self):
+        if not self.pass_.view_dependent:
+            raise GraphError(f"pass {self.pass_.name} is view-independent: it may not read the camera")
+        return self._frame.view
+
+    def setting(self, path: str) -> Any:
+        if path not in self._refl.settings and not any(path.startswith(d + ".") for d in self._refl.settings):
+            raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")
+        return get_path(self._frame.settings, path)
+
+    def peek(self, path: str) -> Any:
+        """A setting read for the graph's shape only (as Reflection.peek), not declared."""
+        return get_path(self._frame.settings, path)
+
+    @property
+    def state(self) -> dict:
+        """The graph's memory for shape decisions (Reflection.state)."""
+        return self.graph.shape_state
+
+    def has_input(self, resource: str) -> bool:
+        """Whether this frame's reflect() declared ``resource`` (optional inputs)."""
+        return resource in self._refl.inputs
+
+    def input_version(self, resource: str) -> int:
+        """The version of a declared input (bumps whenever its producer re-ran)."""
+        self.input(resource)
+        return self.graph._versions.get(resource, 0)
+
+    def input(self, resource: str) -> moderngl.Texture:
+        if resource not in self._refl.inputs:
+            raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")
+        return self.graph._textures[resource]
+
+    def _own(self, resource: str) -> str:
+        if resource not in self._refl.outputs:
+            raise GraphError(f"pass {self.pass_.name} writes '{resource}' it did not declare as an output")
+        return resource
+
+    def output(self, resource: str) -> moderngl.Texture:
+        return self.graph._textures[self._own(resource)]
+
+    def framebuffer(self, *resources: str) -> moderngl.Framebuffer:
+        return self.graph._framebuffer(tuple(self._own(r) for r in resources))
+
+    def program(self, name: str, **defines) -> moderngl.Program:
+        """A declared program. Without ``defines``: the one variant of ``name`` reflect() declared."""
+        declared = [d for n, d in self._refl.programs if n == name]
+        key = tuple(sorted(defines.items()))
+        if not defines and len(declared) == 1:
+            key = declared[0]
+        elif key not in declared:
+            raise GraphError(f"pass {self.pass_.name} uses program '{name}'{dict(key) or ''} it did not declare"
+                             + (f" (declared variants: {[dict(d) for d in declared]})" if declared else ""))
+        return self.graph.shaders.get(name, dict(key) or None)
+
+    def section(self, prefix: str, fields: Iterable[str]) -> SettingsView:
+        """The declared settings ``prefix.f`` (for f in ``fields``) as a read-only view."""
+        return SettingsView(prefix, {f: self.setting(f"{prefix}.{f}") for f in fields})
+
+    # -- uniforms and textures -------------------------------------------------------------------
+    def _check(self, prog: moderngl.Program, name: str, optional: bool) -> bool:
+        """Whether ``name`` is live in ``prog``; GraphError when its source does not declare it."""
+        if name in prog:
+            return True
+        try:
+            pname, declared = self.graph.shaders.describe(prog)
+        except KeyError:
+            raise GraphError(f"pass {self.pass_.name}: program not from the graph's shader library") from None
+        if name in declared or optional:
+            return False  # declared but dropped by the compiler (unused in this variant)
+        raise GraphError(f"pass {self.pass_.name}: program '{pname}' declares no uniform '{name}'")
+
+    def set(self, prog: moderngl.Program, name: str, value: Any, optional: bool = False) -> None:
+        """Set a uniform: numbers, bools, tuples (vectors), numpy arrays (uniform arrays, cut to what
+        the compiler kept) or bytes (e.g. a column-major matrix)."""
+        if self._check(prog, name, optional):
+            try:
+                write_uniform(prog[name], value)
+            except (ValueError, TypeError, moderngl.Error) as exc:
+                raise GraphError(f"pass {self.pass_.name}: uniform '{name}': {exc}") from None
+
+    def uniforms(self, prog: moderngl.Program, **values: Any) -> None:
+        """``set`` for each keyword (all required to be declared)."""
+        for name, value in values.items():
+            self.set(prog, name, value)
+
+    def bind(self, prog: moderngl.Program, sampler: str, texture: "moderngl.Texture | str",
+             optional: bool = False) -> None:
+        """Bind ``texture`` (a texture, or the name of a declared input) to ``sampler`` of ``prog``;
+        it stays bound for every draw of ``prog`` in this execute (rebinding replaces it)."""
+        tex = self.input(texture) if isinstance(texture, str) else texture
+        if not self._check(prog, sampler, optional):
+            return
+        bound = self._bound.setdefault(id(prog), {})
+        unit = bound[sampler][0] if sampler in bound else len(bound)
+        if unit >= self.graph.gpu.binding_units:
+            raise GraphError(f"pass {self.pass_.name}: too many textures for one program")
+        bound[sampler] = (unit, tex)
+
+    def textures(self, prog: moderngl.Program, **samplers: "moderngl.Texture | str") -> None:
+        """``bind`` for each keyword: ``ec.textures(prog, source=tex, gutter="gutter_512")``."""
+        for sampler, tex in samplers.items():
+            self.bind(prog, sampler, tex)
+
+    def _apply(self, prog: moderngl.Program) -> None:
+        """Before a draw: this program's textures on their units, the other samplers on dummies."""
+        bound = self._bound.get(id(prog), {})
+        gpu = self.graph.gpu
+        for name, gl_type in gpu.samplers(prog).items():
+            if name in bound:
+                unit, tex = bound[name]
+                tex.use(unit)
+            else:
+                unit = gpu.dummy(gl_type)
+            prog[name].value = unit
+
+    # -- draws ---------------------------------------------------------------------------------
+    def _target(self, targets) -> moderngl.Framebuffer:
+        if not targets:
+            raise GraphError(f"pass {self.pass_.name}: a draw needs a target")
+        if all(isinstance(t, str) for t in targets):
+            return self.framebuffer(*targets)
+        if any(isinstance(t, str) or t not in self._scratch for t in targets):
+            raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
+        return self.graph._framebuffer_for(tuple(targets))
+
+    def draw_mesh(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
+                  clear: tuple | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True) -> None:
+        """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
+        depth buffer, or scratch textures): both faces, depth-tested unless ``depth_test=False``
+        (texture-space unwraps), after clearing colour to ``clear`` and depth to 1 (None: no clear)."""
+        scene = self.scene
+        fbo = self._target(targets)
+        fbo.use()
+        if clear is not None:
+            fbo.clear(*clear, depth=1.0)
+        if depth_test:
+            self.gl.enable(moderngl.DEPTH_TEST)
+        else:
+            self.gl.disable(moderngl.DEPTH_TEST)
+        self.gl.disable(moderngl.CULL_FACE)
+        self._apply(prog)
+        self.graph.gpu.mesh_vao(prog, scene).render()
+        self.draws += 1
+
+    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
+                        tiles: tuple | None = None) -> None:
+        """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
+        ``targets`` (declared outputs or scratch textures), no depth test, no clear.
+
+        ``tiles``: (texture, count, edge) from texture_space.work_tiles, for a program compiled with
+        ``TILED=1``: only those tiles are rasterised (issue 14: no work on gutter texels no blur can
+        read); the texels drawn come out bit-identical, the others keep their previous contents."""
+        fbo = self._target(targets)
+        fbo.use()
+        self.gl.disable(moderngl.DEPTH_TEST)
+        if tiles is not None:
+            tex, count, edge = tiles
+            self.bind(prog, "u_tiles", tex)
+            w, h = fbo.size
+            self.uniforms(prog, u_tile=float(edge), u_target_size=(float(w), float(h)))
+        self._apply(prog)
+        self.graph.gpu.fullscreen_vao(prog).render(vertices=3 if tiles is None else 6 * tiles[1])
+        self.draws += 1
+        self.gl.disable(moderngl.DEPTH_TEST)
+
+    def note(self, text: str, **figures) -> None:
+        """A figure this run measured (e.g. samples counted on the GPU): shown with the pass in the
+        frame report (``PassRecord.note`` / ``figures``), kept while the pass stays cached."""
+        self.graph._notes[self.pass_.name] = (text, dict(figures))
+
+    def scratch(self, spec: TexSpec) -> moderngl.Texture:
+        """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
+        tex = self.graph._pool_take(spec)
+        self._scratch.append(tex)
+        return tex
+
+    def _finish(self):
+        for t in self._scratch:
+            self.graph._pool_give(t)
+        self._scratch.clear()
+
+

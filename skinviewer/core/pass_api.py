@@ -1,0 +1,154 @@
+"""What a render pass is and declares: ``Pass`` (reflect / execute), the ``Reflection`` it fills in
+reflect (settings, inputs, outputs with their ``TexSpec``, programs), read-only ``SettingsView``s
+and the errors of the graph."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Iterable
+
+from skinviewer.core.settings import Settings, get_path
+
+_DTYPES = {"f1": 1, "f2": 2, "f4": 4}
+
+
+@dataclass(frozen=True)
+class TexSpec:
+    """An output texture: size (w, h), components 1-4, dtype f1 (8-bit unorm), f2 or f4 (float).
+    Anything lit is f2 or f4. ``depth`` adds a depth renderbuffer to the pass's framebuffer."""
+    size: tuple[int, int]
+    components: int = 4
+    dtype: str = "f2"
+    filter: str = "linear"
+    depth: bool = False
+
+    def __post_init__(self):
+        if self.dtype not in _DTYPES or not 1 <= self.components <= 4:
+            raise ValueError(f"bad texture spec {self}")
+        if self.size[0] < 1 or self.size[1] < 1:
+            raise ValueError(f"bad texture size {self.size}")
+
+    @property
+    def nbytes(self) -> int:
+        return self.size[0] * self.size[1] * self.components * _DTYPES[self.dtype]
+
+
+class GraphError(RuntimeError):
+    pass
+
+
+class ResourceLimitError(GraphError):
+    """A configuration whose textures would not fit in the memory available: refused before any
+    allocation, with the figure (``needed``, ``available`` in bytes)."""
+
+    def __init__(self, needed: int, available: int, biggest: list[tuple[str, int]]):
+        self.needed, self.available = needed, available
+        top = ", ".join(f"{name} {_gb(b)}" for name, b in biggest[:3])
+        super().__init__(f"this configuration needs {_gb(needed)} of texture memory but only {_gb(available)} "
+                         f"is available (largest: {top}); lower render/map sizes")
+
+
+def _gb(n: int) -> str:
+    return f"{n / 1e9:.2f} GB" if n >= 1e8 else f"{n / 1e6:.1f} MB"
+
+
+class Reflection:
+    """What a pass declares for this frame (``Pass.reflect`` fills it)."""
+
+    def __init__(self, settings: Settings, scene: Any = None, state: dict | None = None):
+        self._settings = settings
+        self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
+        self.settings: list[str] = []
+        self.inputs: list[str] = []
+        self.outputs: dict[str, TexSpec] = {}
+        self.programs: list[tuple[str, tuple]] = []
+        # scene-driven rules (core/rules.py): why this pass is skipped, why a consumer no longer
+        # reads a resource (its producer is pruned with that reason), notes for the frame report
+        self.skip_reason: str | None = None
+        self.dropped: dict[str, str] = {}
+        self.notes: list[str] = []
+        self.state = state if state is not None else {}  # the graph's memory for shape decisions
+
+    def skip(self, reason: str) -> None:
+        """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
+        self.skip_reason = reason
+
+    def drop(self, resource: str, reason: str) -> None:
+        """This pass does not read ``resource`` this frame because of ``reason``: when nothing else
+        reads it its producer is reported "pruned: reason"."""
+        self.dropped.setdefault(resource, reason)
+
+    def note(self, text: str) -> None:
+        """A scene-driven choice shown with the pass in the frame report (e.g. a map size)."""
+        if text not in self.notes:
+            self.notes.append(text)
+
+    def setting(self, path: str) -> Any:
+        """Declare a setting (dotted path) and return its current value."""
+        if path not in self.settings:
+            self.settings.append(path)
+        return get_path(self._settings, path)
+
+    def peek(self, path: str) -> Any:
+        """Read a setting without declaring it: only for the graph's shape (e.g. whether light i
+        exists), never for a value the pass's output depends on."""
+        return get_path(self._settings, path)
+
+    def input(self, resource: str) -> None:
+        if resource not in self.inputs:
+            self.inputs.append(resource)
+
+    def output(self, resource: str, spec: TexSpec) -> None:
+        self.outputs[resource] = spec
+
+    def program(self, name: str, **defines) -> None:
+        """Declare a program, compiled with these ``#define``s (a specialised variant; the defines
+        are part of the cache key). ``ec.program(name)`` then returns it."""
+        key = (name, tuple(sorted(defines.items())))
+        if key not in self.programs:
+            self.programs.append(key)
+
+    def section(self, prefix: str, fields: Iterable[str]) -> "SettingsView":
+        """Declare the settings ``prefix.f`` for each field and return them as a read-only view."""
+        return SettingsView(prefix, {f: self.setting(f"{prefix}.{f}") for f in fields})
+
+
+class SettingsView:
+    """Read-only attribute view of some declared settings (``view.m``); only the declared fields."""
+    __slots__ = ("_prefix", "_values")
+
+    def __init__(self, prefix: str, values: dict[str, Any]):
+        object.__setattr__(self, "_prefix", prefix)
+        object.__setattr__(self, "_values", dict(values))
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(f"settings view '{self._prefix}' has no field '{name}' "
+                                 f"(declared: {sorted(self._values)})") from None
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"settings view '{self._prefix}' is read-only")
+
+    def __repr__(self) -> str:
+        return f"SettingsView({self._prefix!r}, {self._values!r})"
+
+
+class Pass:
+    """Base class of render passes. Subclasses set ``name`` (unique in a graph), override
+    ``reflect`` and ``execute``. ``view_dependent`` passes re-run when the camera moves;
+    ``uses_scene`` passes re-run when the mesh, its maps or its units change."""
+    name: str = "pass"
+    view_dependent: bool = False
+    uses_scene: bool = True
+
+    def reflect(self, r: Reflection) -> None:
+        raise NotImplementedError
+
+    def execute(self, ec) -> None:  # ec: core.execute.ExecuteContext
+        raise NotImplementedError
+
+    def release(self) -> None:
+        """Free GL objects the pass made itself (VAOs, LUT textures)."""
+
+
