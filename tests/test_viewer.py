@@ -273,7 +273,7 @@ def test_shader_error_keeps_rendering_and_recovers(app, shader_dir):
 def test_screenshots_written_where_asked(app, tmp_path):
     from PIL import Image
     app.state.set_screenshot_options(folder=str(tmp_path / "shots"))
-    app.state.set_screenshot_options(save_linear_npy=True)
+    app.state.set_screenshot_options(save_linear_npy=True, save_linear_exr=True)
     p = app.frame.request_screenshot()
     app.step(1)
     assert p.exists() and p.parent == tmp_path / "shots"
@@ -281,7 +281,9 @@ def test_screenshots_written_where_asked(app, tmp_path):
     assert img.shape == (*_view_hw(app), 3) and img.std() > 10  # the 3D view region, no panel
     lin = np.load(p.with_suffix(".npy"))
     assert lin.dtype == np.float32 and lin.shape[:2] == _view_hw(app)
-    app.state.set_screenshot_options(save_linear_npy=False)
+    from skinviewer.core.files import load_exr
+    assert np.array_equal(load_exr(p.with_suffix(".exr")), lin)  # the same linear image, as OpenEXR
+    app.state.set_screenshot_options(save_linear_npy=False, save_linear_exr=False)
     n = len(list((tmp_path / "shots").glob("*.png")))
     app.on_key_event(app.wnd.keys.F12, app.wnd.keys.ACTION_PRESS, app.wnd.modifiers)
     app.step(1)

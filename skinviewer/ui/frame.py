@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Protocol
 
 from skinviewer import techniques
-from skinviewer.core.files import save_npy, save_png
+from skinviewer.core.files import save_exr, save_npy, save_png
 from skinviewer.core.graph import FrameReport
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings
@@ -298,10 +298,14 @@ class FrameController:
                 save_png(path, img)
                 self.screenshots_written.append(path)
                 self.state.say(f"screenshot: {path} ({img.shape[1]}x{img.shape[0]}{', with UI' if include_ui else ''})")
-                if self.state.shots.save_linear_npy:
+                if self.state.shots.save_linear_npy or self.state.shots.save_linear_exr:
                     g = self.renderer.graph(self.state.settings.technique)
                     res = "lit" if "lit" in g.resources() else "image"
-                    save_npy(path.with_suffix(".npy"), g.read(res)[::-1])
+                    linear = g.read(res)[::-1]
+                    if self.state.shots.save_linear_npy:
+                        save_npy(path.with_suffix(".npy"), linear)
+                    if self.state.shots.save_linear_exr:  # what compositing tools read
+                        save_exr(path.with_suffix(".exr"), linear)
             except Exception as exc:
                 self.state.refuse([("screenshot", f"{type(exc).__name__}: {exc}")], f"screenshot {path}")
 

@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 
 from skinviewer.core import paths
+from skinviewer.core.files import list_files
 from skinviewer.core.settings import (
     Settings,
     SettingsError,
@@ -89,8 +90,7 @@ def _free_name(folder: Path, name: str) -> Path:
 def _json_files(folder: Path | None) -> list[Path]:
     if folder is None or not folder.is_dir():
         return []
-    # dot files are our own temporaries (atomic writes) or hidden: never presets
-    return sorted(p for p in folder.glob("*.json") if not p.name.startswith("."))
+    return list_files(folder)  # regular files only: never hidden files or our own save temporaries
 
 
 class PresetState:

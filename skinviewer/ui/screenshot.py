@@ -1,5 +1,5 @@
 """Screenshots: PNG of the 3D view (optionally with the UI), timestamped name in a folder,
-optionally the linear image as float32 .npy. Written atomically."""
+optionally the linear image as float32 .npy and/or OpenEXR. Written atomically."""
 from __future__ import annotations
 
 import datetime as _dt
@@ -15,6 +15,7 @@ class ScreenshotOptions:
     folder: str = "screenshots"
     include_ui: bool = False
     save_linear_npy: bool = False
+    save_linear_exr: bool = False
 
 
 def timestamped_path(folder: str | os.PathLike, prefix: str = "skinviewer", ext: str = ".png") -> Path:

@@ -160,6 +160,11 @@ class ScreenshotSection:
         if ch:
             st.set_screenshot_options(save_linear_npy=v)
         tooltip("also save the linear (before tone mapping) image as float32 .npy, for scripts")
+        ch, v = imgui.checkbox("also linear OpenEXR", o.save_linear_exr)
+        if ch:
+            st.set_screenshot_options(save_linear_exr=v)
+        tooltip("also save the linear (before exposure and tone mapping) image as OpenEXR (float32 RGBA), "
+                "for compositing and comparison tools")
         if imgui.button("screenshot (F12)"):
             fr.request_screenshot()
         if fr.screenshots_written:
