@@ -34,3 +34,27 @@ def assert_all_finite(renderer, settings: Settings, report=None) -> dict[str, np
         out[name] = arr
     assert not bad, "non-finite texels: " + "; ".join(bad)
     return out
+
+
+def settings_fields():
+    """(dotted path, field name, FieldInfo) of every editable settings field the panel draws: every
+    section of the model (new techniques' included) and the first light."""
+    from pydantic import BaseModel
+
+    from skinviewer.core.settings import Settings
+    from skinviewer.ui.widgets import classify
+    out = []
+
+    def walk(model, prefix):
+        for name, f in type(model).model_fields.items():
+            kind, _, _ = classify(f)
+            if kind == "model":
+                walk(getattr(model, name), f"{prefix}{name}.")
+            elif kind != "other":
+                out.append((f"{prefix}{name}", name, f))
+    s = Settings()
+    for sec, value in s:
+        if isinstance(value, BaseModel):
+            walk(value, sec + ".")
+    walk(s.lights[0], "lights.0.")
+    return out

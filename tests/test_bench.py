@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 
 from skinviewer import techniques
-from skinviewer.core.bench import Result, best_within, load_results, pareto_front, run_bench
+from skinviewer.core.bench import (
+    Result,
+    best_within,
+    load_results,
+    pareto_front,
+    run_bench,
+)
 from skinviewer.core.reference import compute_reference
 from skinviewer.core.settings import Settings, load_preset, with_values
 from skinviewer.scene.scenes import scene_overrides

@@ -110,6 +110,7 @@ def test_portrait_frame_finds_the_head_above_the_shoulders():
 
 def test_portrait_frame_leaves_compact_meshes_alone():
     import trimesh
+
     from skinviewer.scene.mesh import portrait_frame
     for pts in (trimesh.creation.icosphere(subdivisions=4, radius=3.0).vertices,
                 trimesh.creation.box(extents=[4.0, 2.0, 3.0]).vertices,

@@ -9,7 +9,13 @@ import math
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from skinviewer.core.settings import Settings, SettingsError, load_preset, save_preset, to_dict
+from skinviewer.core.settings import (
+    Settings,
+    SettingsError,
+    load_preset,
+    save_preset,
+    to_dict,
+)
 
 FUZZ = settings(max_examples=150, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])

@@ -18,7 +18,14 @@ from helpers import small_settings
 
 from skinviewer.cli import main as cli_main
 from skinviewer.core import files
-from skinviewer.core.graph import FrameInputs, Pass, Reflection, RenderGraph, ResourceLimitError, TexSpec
+from skinviewer.core.graph import (
+    FrameInputs,
+    Pass,
+    Reflection,
+    RenderGraph,
+    ResourceLimitError,
+    TexSpec,
+)
 from skinviewer.core.settings import (
     Settings,
     SettingsError,

@@ -172,7 +172,12 @@ def test_gutter_mask_keeps_images_bit_identical(renderer):
 
 
 def test_folded_sub_texel_blurs_add_their_variance_exactly():
-    from skinviewer.physics.diffusion import IRRADIANCE, blur_plan, blur_resource, texture_of
+    from skinviewer.physics.diffusion import (
+        IRRADIANCE,
+        blur_plan,
+        blur_resource,
+        texture_of,
+    )
     vs = [0.0064, 0.0484, 0.187, 0.567, 1.99]
     p = blur_plan(vs, reuse_below=0.01, fold_below=0.05)
     assert p[0].reused and p[1].reused and texture_of(p[1]) == IRRADIANCE  # folded: blur_1 = irradiance

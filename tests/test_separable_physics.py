@@ -81,7 +81,10 @@ def test_gaussian_taps_unit_variance_and_seven_taps_are_deons():
 
 
 def test_bilinear_compensation_gives_the_exact_variance():
-    from skinviewer.physics.separable import bilinear_compensated_step, bilinear_variance
+    from skinviewer.physics.separable import (
+        bilinear_compensated_step,
+        bilinear_variance,
+    )
     for n in (7, 17, 25):
         x, w = gaussian_taps(n)
         for sigma in (1.3, 2.7, 6.1, 17.0):

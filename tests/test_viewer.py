@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import settings_fields
 
 pytestmark = pytest.mark.viewer
 
@@ -881,25 +882,15 @@ def test_every_label_fits_the_label_column(app):
     from imgui_bundle import imgui
 
     from skinviewer.ui.fielddocs import LABEL_MAX_PX, label_with_unit
-    from skinviewer.ui.widgets import classify
     imgui.set_current_context(app.ui.imgui_ctx)
     app.step(1)
     too_long = []
     imgui.new_frame()
     try:
-        def walk(model, prefix):
-            for name, f in type(model).model_fields.items():
-                kind, _, _ = classify(f)
-                if kind == "model":
-                    walk(getattr(model, name), f"{prefix}{name}.")
-                elif kind != "other":
-                    lab = label_with_unit(name, prefix + name)
-                    if imgui.calc_text_size(lab).x > LABEL_MAX_PX:
-                        too_long.append((prefix + name, lab, imgui.calc_text_size(lab).x))
-        s = app.state.settings
-        for sec in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
-            walk(getattr(s, sec), sec + ".")
-        walk(s.lights[0], "lights.0.")
+        for path, name, _ in settings_fields():
+            lab = label_with_unit(name, path)
+            if imgui.calc_text_size(lab).x > LABEL_MAX_PX:
+                too_long.append((path, lab, imgui.calc_text_size(lab).x))
     finally:
         imgui.end_frame()
     assert not too_long, too_long

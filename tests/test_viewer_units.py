@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import settings_fields
 
 from skinviewer.core.settings import Settings, load_preset, to_dict, with_values
 
@@ -156,21 +157,7 @@ def test_log_plot_bump_height_is_the_weight_whatever_the_width():
 # -- labels and tooltips --------------------------------------------------------------------------
 
 def _fields():
-    from skinviewer.ui.widgets import classify
-    out = []
-
-    def walk(model, prefix):
-        for name, f in type(model).model_fields.items():
-            kind, _, _ = classify(f)
-            if kind == "model":
-                walk(getattr(model, name), f"{prefix}{name}.")
-            elif kind != "other":
-                out.append((f"{prefix}{name}", name, f))
-    s = Settings()
-    for sec in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
-        walk(getattr(s, sec), sec + ".")
-    walk(s.lights[0], "lights.0.")
-    return out
+    return settings_fields()
 
 
 def test_labels_are_words_not_field_names():
