@@ -190,9 +190,9 @@ class AccuracyWindow:
         self._poll()
         self._update_error()
         vx, vy, vw, vh = ui.layout.view
-        # anchored by its bottom-left corner at the bottom-left of the view: collapsed it is a bar along the
-        # bottom edge, expanded it grows upwards (never a bar across the middle of the face)
-        imgui.set_next_window_pos(imgui.ImVec2(vx + 8, vy + vh - 8), imgui.Cond_.first_use_ever.value, imgui.ImVec2(0.0, 1.0))
+        # the top-left corner of the view (the passes window takes the top-right): collapsed, a bar above
+        # the subject, never across the face or over the corners where the camera is dragged
+        imgui.set_next_window_pos(imgui.ImVec2(vx + 8, vy + 8), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_size(imgui.ImVec2(420, 320), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
         expanded = imgui.begin("Accuracy###accuracy")[0]
