@@ -61,6 +61,16 @@ def cam_ms(r: Renderer, s: Settings, k: int) -> tuple[float, list[str]]:
     return ms, out["rep"].ran
 
 
+def light_ms(r: Renderer, s: Settings, k: int) -> float:
+    """A frame after the key light moved: every lighting-dependent pass re-runs, mesh-only passes
+    (gutter and seam maps, stretch, LUTs) stay cached: the cost of dragging a light."""
+    d = s.lights[0].direction
+    s2 = with_values(s, {"lights.0.direction": (d[0] + 0.02 * (k + 1), d[1], d[2])})
+    ms = wall_ms(lambda: (r.render(s2), r.ctx.finish()))
+    r.render(s)  # back to the base light (not timed)
+    return ms
+
+
 def copy_draw_ms(r: Renderer, size: int, repeats: int) -> float:
     """One plain full-screen copy (shaders/copy.frag) into an RGBA32F size x size target."""
     ctx = r.ctx
@@ -117,10 +127,15 @@ def main() -> None:
     far = with_values(close, {"camera.distance": close_distance(r, close) * 12.0})
     extra = {"dark": dark, "close": close, "far": far}
     extra_ms: dict[str, list[float]] = {k: [] for k in extra}
+    unsummed = with_values(base["deon"], {"deon.combine_blurs": False})  # the final pass sums the blurs
+    unsummed_cam: list[float] = []
+    r_unsummed = Renderer(ctx, r.shaders)  # its own graph: switching would re-run the chain
+    light: dict[str, list[float]] = {t: [] for t in ("phong", "deon")}
     for t in names:  # warm-up: compile shaders, build scene, first allocation
         r.render(base[t], force=True)
     for s in extra.values():
         r.render(s, force=True)
+    r_unsummed.render(unsummed, force=True)
     for k in range(args.repeats):
         for t in names:
             full[t].append(full_ms(r, base[t]))
@@ -129,6 +144,9 @@ def main() -> None:
             ran_cam[t] = ran
         for key, s in extra.items():
             extra_ms[key].append(full_ms(r, s))
+        unsummed_cam.append(cam_ms(r_unsummed, unsummed, k)[0])
+        for t in light:
+            light[t].append(light_ms(r, base[t], k))
     # one d'Eon blur draw (pass time / its H+V draws) vs a plain copy of the same size and format
     rep = r.render(base["deon"], force=True)
     blur, draws = blur_draw_ms(rep, "deon_blur_3")
@@ -169,10 +187,15 @@ def main() -> None:
     print(f"{'figure':<58} {'ratio':>7}  {'goal':>6}  detail")
     rows = [
         ("d'Eon full frame / Phong full frame", lit / ref, "<= 3.0", f"{lit:.1f} / {ref:.1f} ms"),
+        ("d'Eon light-move frame / Phong light-move frame", statistics.median(light["deon"])
+         / statistics.median(light["phong"]), "", f"{statistics.median(light['deon']):.1f} / "
+         f"{statistics.median(light['phong']):.1f} ms (mesh-only passes cached)"),
         ("d'Eon full frame / Phong full frame (fresh)", fresh_full["deon"] / fref, "<= 3.0",
          f"{fresh_full['deon']:.1f} / {fref:.1f} ms"),
         ("d'Eon camera-only / Phong camera-only", statistics.median(cam["deon"]) / cref, "<= 1.2",
          f"{statistics.median(cam['deon']):.1f} / {cref:.1f} ms"),
+        ("  the same, deon.combine_blurs off (blurs summed per pixel)", statistics.median(unsummed_cam) / cref,
+         "", f"{statistics.median(unsummed_cam):.1f} / {cref:.1f} ms"),
         ("head under 1 % of the screen / close-up (d'Eon, auto)", m["far"] / m["close"], "<= 0.1",
          f"{m['far']:.1f} / {m['close']:.1f} ms; {coverage}"),
         ("every light at zero / lit frame (d'Eon)", m["dark"] / lit, "<= 0.05", f"{m['dark']:.1f} / {lit:.1f} ms"),
@@ -193,6 +216,7 @@ def main() -> None:
     for key in ("dark", "far"):
         print(f"## d'Eon {key} frame, per pass")
         print(r.render(extra[key], force=True).table())
+    r_unsummed.release()
     r.release()
     ctx.release()
 

@@ -5,8 +5,9 @@
 // stretch in UV per mm (stretch texture, or one uniform scale when stretch correction is off),
 // sigma = sqrt(v_i - v_(i-1)) in mm. Each texel is computed at the island texel the gutter map
 // names, so the output's gutters come out dilated. RGB irradiance and A thickness are blurred alike.
+// With scene.seam_aware, `source` is the seam-filled copy (seam_fill.frag): taps that leave their
+// island read the surface across the seam.
 #include "lib/deon.glsl"
-#include "lib/seam_tap.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D stretch_map;
@@ -38,6 +39,6 @@ void main() {
     step_uv = vec2(finite_f32(step_uv.x), finite_f32(step_uv.y));
     vec4 acc = vec4(0.0);
     for (int k = 0; k < 7; ++k)
-        acc += u_weights[k] * seam_tap(source, uv + step_uv * float(k - 3));
+        acc += u_weights[k] * texture(source, uv + step_uv * float(k - 3));
     f_color = finite4_f32(acc);
 }

@@ -30,6 +30,8 @@ uniform sampler2D blur4;
 uniform sampler2D blur5;
 uniform sampler2D blur6;
 uniform sampler2D blur7;
+uniform sampler2D diffuse_sum;   // sum_i w_i blur_i in texture space (deon_combine.frag)
+uniform int u_combined;          // generic shaders: read diffuse_sum instead of the blurs
 uniform int u_tsm;
 uniform int u_tsm_printed;       // 1: exp(-d^2/v) as printed in seed 000 eq. (33)
 uniform sampler2D tsm_map;
@@ -45,9 +47,11 @@ out vec4 f_color;
 #if defined(GAUSSIAN_MASK) && !defined(GENERIC_SHADERS)
 #define G_MASK GAUSSIAN_MASK
 #define G_TSM DEON_TSM
+#define G_COMBINED DEON_COMBINED
 #else
 #define G_MASK 255
 #define G_TSM 1
+#define G_COMBINED (-1)  // uniform-driven (u_combined)
 #endif
 // blur_i read here: used ones, and blur_(i-1) of a used i >= 1 for its thickness with the TSM
 #define HERE_MASK (G_MASK | ((G_TSM != 0) ? (G_MASK >> 1) : 0))
@@ -79,13 +83,23 @@ void main() {
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
     if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
+    vec3 diffuse = vec3(0.0);
+#if G_COMBINED == 1
+    diffuse = texture(diffuse_sum, v_uv).rgb;  // eq. (34), sum_i w_i blur_i, summed in texture space
+#else
+#if G_COMBINED == -1
+    if (u_combined != 0) diffuse = texture(diffuse_sum, v_uv).rgb; else {
+#endif
     vec4 here[MAX_GAUSSIANS];
     FETCH_BLURS(here, v_uv, HERE_MASK)
-    vec3 diffuse = vec3(0.0);
     for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_count) break;
         if (((G_MASK >> i) & 1) != 0 && u_used[i] != 0) diffuse += u_w[i] * here[i].rgb;  // eq. (34), sum_i w_i blur_i
     }
+#if G_COMBINED == -1
+    }
+#endif
+#endif
 #if G_TSM != 0
     if (u_tsm != 0) diffuse += tsm_transmitted(v_position, v_uv);  // eq. 33 (lib/tsm_transmit.glsl)
 #endif

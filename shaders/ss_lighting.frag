@@ -28,6 +28,8 @@ uniform float u_tr_wrap;
 uniform int u_tr_count;
 uniform vec3 u_tr_w[MAX_GAUSSIANS];
 uniform float u_tr_v[MAX_GAUSSIANS];
+uniform int u_tr_model;              // 0: the Gaussians above; 1: Burley closed form; 2: Burley thick (spec §5.4)
+uniform vec3 u_tr_S;                 // Burley: S = 1/d per channel (1/mm)
 uniform mat4 u_light_matrix_inv[MAX_LIGHTS];
 uniform int u_shadow_map_size;
 layout(location = 0) out vec4 o_diffuse;
@@ -36,6 +38,10 @@ layout(location = 2) out vec4 o_depth;
 layout(location = 3) out vec4 o_albedo;
 
 vec3 transmittance_profile(float d) {  // T(d) = sum_i w_i exp(-d^2 / (div v_i)), T(0) = sum w_i
+    // Burley (spec §5.4, HDRP): int 2 pi r R(sqrt(r^2 + d^2)) dr = (e^(-S d) + 3 e^(-S d / 3)) / 4,
+    // T(0) = 1; thick ("regular") mode without a baked thickness: e^(-S d / 3)
+    if (u_tr_model == 1) return 0.25 * (exp(-u_tr_S * d) + 3.0 * exp(-u_tr_S * d / 3.0));
+    if (u_tr_model == 2) return exp(-u_tr_S * d / 3.0);
     vec3 t = vec3(0.0);
     for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_tr_count) break;

@@ -113,3 +113,39 @@ def test_reuse_keeps_energy_and_lowers_noise(gl_ctx):
     # the same mean response along the edge, with less pixel-to-pixel noise
     assert abs(own[8:-8, col, 0].mean() - pooled[8:-8, col, 0].mean()) < 0.01
     assert pooled[8:-8, col, 0].std(axis=0).mean() < 0.6 * own[8:-8, col, 0].std(axis=0).mean()
+
+
+@pytest.mark.parametrize("mode", ["closed-form", "thick"])
+def test_burley_transmission_through_a_slab(renderer, mode):
+    """Spec §5.4 wired into the Burley techniques: the backlit flap's unlit front shows T(t) x Lc with
+    Burley's closed form (or HDRP's thick mode) at the flap's thickness t, within a shadow texel;
+    T <= T(0) = 1 (no energy from nowhere); jimenez2010 keeps the Gaussian form."""
+    from skinviewer.passes.screen_space import DEPTH, DIFFUSE, focal_px
+    s = small_settings("backlit-ear", "burley", 96, **{"screen.texturing": "post", "shadow.map_size": 512,
+                                                       "lights.0.direction": [0.0, 0.0, -1.0],
+                                                       "burley.transmission": mode})
+    renderer.render(s)
+    E = renderer.read(s, DIFFUSE)
+    dep = renderer.read(s, DEPTH)
+    h = s.render.height
+    f = focal_px(s.camera.fov_y, h)
+    col = h // 2
+    rows = [r for r in range(h) if dep[r, col, 3] > 0.5]
+    ys = np.array([(r + 0.5 - h / 2) * dep[r, col, 0] / f for r in rows])  # world y (mm) at the centre column
+    keep = np.abs(ys) < 17.0
+    thick = 1.5 + (20.0 - ys[keep]) / 40.0 * 4.5
+    got = E[np.array(rows)[keep], col, :3]
+    S = B.profile_of_section(s.burley).S
+    lc = s.lights[0].intensity
+    texel = 2 * 1.02 * 27.0 / 512  # mm: one shadow texel (the flap's bounding radius ~27 mm)
+
+    def T(t):
+        t = np.maximum(t, 0.0)[:, None]
+        return B.transmittance(t, S) if mode == "closed-form" else np.exp(-S * t / 3.0)
+    lo, hi = T(thick + texel) * lc, T(thick - 3 * texel) * lc
+    assert np.all(got >= lo - 1e-3) and np.all(got <= hi + 1e-3)
+    assert np.all(got <= lc + 1e-6) and np.all(np.isfinite(got))
+    assert got[:, 1].max() > 0.05  # Burley's green passes a thin flap (the Gaussian form's does not)
+    gauss = with_values(s, {"burley.transmission": "jimenez2010"})
+    renderer.render(gauss)
+    assert not np.allclose(renderer.read(gauss, DIFFUSE)[np.array(rows)[keep], col, :3], got, atol=1e-3)

@@ -293,6 +293,7 @@ def test_caching_rules(renderer):
     r0 = renderer.render(s)
     assert "deon_stretch" in r0.ran and "deon_tsm" in r0.ran
     blurs = [f"deon_blur_{i}" for i in range(1, 6)]
+    summed = ["deon_combine", "deon_final", "output"]  # sum_i w_i blur_i, then the view
 
     def ran(**kw):
         nonlocal s
@@ -301,14 +302,14 @@ def test_caching_rules(renderer):
 
     assert ran(**{"camera.yaw": 40.0}) == ["deon_final", "output"]  # orbit
     got = ran(**{"lights.0.direction": [0.1, 0.3, -1.0]})  # light move
-    assert set(got) == {"shadow_map_0", "deon_tsm", "deon_irradiance", *blurs, "deon_final", "output"}, got
+    assert set(got) == {"shadow_map_0", "deon_tsm", "deon_irradiance", *blurs, *summed}, got
     got = ran(**{"lights.0.intensity": 5.0})  # light colour/intensity: no shadow map, no TSM
-    assert set(got) == {"deon_irradiance", *blurs, "deon_final", "output"}, got
-    assert ran(**{"deon.gaussians.2.weights": [0.2, 0.1, 0.0]}) == ["deon_final", "output"]  # weight edit
+    assert set(got) == {"deon_irradiance", *blurs, *summed}, got
+    assert ran(**{"deon.gaussians.2.weights": [0.2, 0.1, 0.0]}) == summed  # weight edit: no blur
     got = ran(**{"deon.gaussians.3.variance": 0.6})  # v_4 (index 3)
-    assert set(got) == {"deon_blur_3", "deon_blur_4", "deon_blur_5", "deon_final", "output"}, got
+    assert set(got) == {"deon_blur_3", "deon_blur_4", "deon_blur_5", *summed}, got
     got = ran(**{"specular.f0": 0.04})
-    assert set(got) == {"rho_dt_lut", "deon_irradiance", *blurs, "deon_final", "output"}, got
+    assert set(got) == {"rho_dt_lut", "deon_irradiance", *blurs, *summed}, got
     assert ran(**{"specular.m": 0.35}) and "rho_dt_lut" not in renderer.graph("deon").last_report.ran
     rep = renderer.render(with_values(s, {"deon.gaussians.5.weights": [0, 0, 0], "deon.gaussians.4.weights": [0, 0, 0]}))
     assert {"deon_blur_4", "deon_blur_5"} <= set(rep.pruned) and "deon_blur_3" in rep.cached

@@ -46,7 +46,9 @@ def test_all_lights_zero_is_black_and_runs_only_the_final_pass(renderer, generic
 
 def test_zero_weight_gaussian_pruned_and_not_sampled(renderer, generic):
     gs = small_settings().deon.gaussians
-    s = small_settings("head", "deon", 64, **{"deon.gaussians": [g.model_dump() for g in gs]})
+    # (at 64 px the remaining widest Gaussian spans 0.2 px: keep the blurs, this tests the weights)
+    s = small_settings("head", "deon", 64, **{"deon.gaussians": [g.model_dump() for g in gs],
+                                              "deon.subpixel_kernel_px": 0.0})
     s = with_values(s, {"deon.gaussians.5.weights": (0.0, 0.0, 0.0)})
     rep = renderer.render(s)
     assert _rec(rep, "deon_blur_5").status == "pruned"
@@ -199,3 +201,58 @@ def test_fold_prunes_sub_texel_blurs_with_a_reason(renderer):
     # not bit-identical (hence off by default): 64x64 head, 512^2 maps
     # measured on the v5 head with the key/rim/fill rig: 8.8 % of pixels change, 0.6 % by more than 2 levels
     assert np.count_nonzero(diff) < 0.10 * diff.size and np.count_nonzero(diff > 2) < 0.008 * diff.size
+
+
+def test_diffuse_sum_is_the_weighted_blurs_and_an_orbit_reads_only_it(renderer):
+    """deon_combine holds sum_i w_i blur_i (eq. 34) per texel; the final pass reading it gives the
+    image of the per-blur sum up to float rounding; a camera move re-runs only deon_final."""
+    from skinviewer.passes.deon import DIFFUSE
+    s = small_settings("head", "deon", 64, **{"deon.tsm": False})
+    renderer.render(s, force=True)
+    g = renderer.graph("deon")
+    summed = g.read(DIFFUSE)[..., :3].astype(np.float64)
+    blurs = g._last_refl["deon_combine"].inputs  # blur_i (or what it reuses), in Gaussian order
+    assert len(blurs) == len(s.deon.gaussians)
+    expect = sum(np.asarray(gs.weights) * g.read(b)[..., :3].astype(np.float64)
+                 for b, gs in zip(blurs, s.deon.gaussians))
+    assert summed.max() > 0.05
+    assert np.allclose(summed, expect, rtol=1e-5, atol=1e-6)
+    lit = renderer.read(s, "lit")
+    off = with_values(s, {"deon.combine_blurs": False})
+    rep = renderer.render(off)
+    assert _rec(rep, "deon_combine").status == "pruned"
+    ref = renderer.read(off, "lit")
+    assert np.abs(lit[..., :3] - ref[..., :3]).max() <= 1e-5 * max(ref[..., :3].max(), 1.0)
+    renderer.render(s)
+    rep = renderer.render(with_values(s, {"camera.yaw": s.camera.yaw + 40.0}))
+    assert rep.ran == ["deon_final", "output"]
+    assert _rec(rep, "deon_combine").status == "cached"
+
+
+def test_kernel_under_a_pixel_skips_the_diffusion_chain(renderer):
+    """Far away (the widest Gaussian under deon.subpixel_kernel_px on screen) d'Eon's blurs, stretch
+    and TSM are skipped with their reason and the final pass reads the irradiance; the image stays
+    close to the full chain's; the hysteresis keeps the decision just above the limit."""
+    from skinviewer.passes.rules import kernel_px
+    s = small_settings("head", "deon", 96, **{"camera.distance": 4500.0})
+    full = with_values(s, {"deon.subpixel_kernel_px": 0.0})
+    renderer.render(full)
+    ref = renderer.read(full, "lit")
+    scene = renderer.scene.gpu
+    px = kernel_px(s, scene)
+    assert 0.05 < px < s.deon.subpixel_kernel_px
+    rep = renderer.render(s)
+    for name in ("deon_blur_3", "deon_tsm"):
+        assert _rec(rep, name).status == "pruned" and "kernel under a pixel" in _rec(rep, name).reason
+    assert _rec(rep, "deon_stretch").status == "pruned"
+    lit = renderer.read(s, "lit")
+    mask = ref[..., :3].sum(-1) > 0
+    assert mask.sum() > 50
+    err = np.sqrt(np.mean((lit - ref)[mask][:, :3] ** 2)) / np.sqrt(np.mean(ref[mask][:, :3] ** 2))
+    assert err < 0.03  # the diffusion a sub-pixel kernel does is under 3 % of the image
+    # hysteresis: just above the limit the rule stays on once on, and is off from fresh
+    limit = px / 1.1
+    on = with_values(s, {"deon.subpixel_kernel_px": limit})
+    assert "kernel under a pixel" in _rec(renderer.render(on), "deon_blur_3").reason
+    renderer.render(full)
+    assert _rec(renderer.render(on), "deon_blur_3").status != "pruned"

@@ -271,6 +271,13 @@ class DeonSettings(_Model):
                            "(early depth test on a mask; images identical): for GPUs with early-Z, no gain on llvmpipe")
     tsm_auto: bool = Field(
         True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
+    subpixel_kernel_px: float = Field(
+        0.3, ge=0.0, le=4.0,
+        description="when the widest Gaussian's sigma spans under this many pixels on screen, diffusion cannot "
+                    "show: blurs, stretch and TSM are skipped and the final pass reads the irradiance (0: never)")
+    combine_blurs: bool = Field(
+        True, description="sum the weighted blurs (eq. 34) once in texture space, so a camera move reads one "
+                          "texture instead of one per Gaussian (issue 14; equal up to float rounding)")
     reuse_irradiance_below_texels: float = Field(
         0.5, ge=0.0, le=8.0,
         description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "
@@ -293,6 +300,11 @@ class BurleySettings(_Model):
                           "cutoff (kernel under ~1 px: no blur) applies either way")
     view: Literal["image", "extra", "samples"] = Field(
         "image", description="extra: tint pixels that took extra samples (and skipped ones blue); samples: heat map")
+    transmission: Literal["closed-form", "thick", "jimenez2010"] = Field(
+        "closed-form", description="through thin parts, from the shadow-map thickness t (spec §5.4, HDRP): closed-form "
+        "T(t) = (e^(-S t) + 3 e^(-S t/3)) / 4, the Burley profile integrated over the plane at depth t (thin mode); "
+        "thick: e^(-S t/3) (HDRP's regular mode, no baked thickness); jimenez2010: the Gaussian T(d) of the "
+        "`transmittance` section")
 
     @field_validator("albedo")
     @classmethod

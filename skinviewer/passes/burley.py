@@ -33,7 +33,7 @@ STATS = "burley_stats"
 COUNT = "burley_count"
 VIEW = "burley_view"
 
-PROFILE_FIELDS = ("albedo", "mfp", "fit", "scale")
+PROFILE_FIELDS = B.PROFILE_FIELDS
 
 
 def profile_of(get) -> B.Profile:

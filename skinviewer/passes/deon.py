@@ -10,7 +10,8 @@ Graph (resources in quotes):
     deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
     deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
     deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26)
-    deon_final          "lit"              weights, camera, ...               (eq. 34-35)
+    deon_combine        "deon_diffuse"     weights, blurs                     (eq. 34's sum)
+    deon_final          "lit"              camera, mix, specular, ...         (eq. 34-35)
     output              "image"
 
 The key light of the TSM is the first enabled shadow-casting light (one TSM; other lights get no
@@ -35,7 +36,7 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
-from skinviewer.passes.rules import coverage_size, light_map_size, light_on, tsm_needed
+from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
     gutter_resource,
@@ -45,6 +46,7 @@ from skinviewer.passes.texture_space import (
 )
 from skinviewer.physics.diffusion import (
     IRRADIANCE,
+    BlurStep,
     KERNEL7,
     blur_plan_texels,
     blur_resource,
@@ -56,6 +58,7 @@ from skinviewer.scene.camera import gl_bytes, light_space
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
+DIFFUSE = "deon_diffuse"  # sum_i w_i blur_i (DiffuseSumPass)
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 
@@ -78,6 +81,10 @@ def tsm_light_index(r) -> int | None:
               and light_on(r.peek(f"lights.{j}"))]
     want = r.setting("deon.tsm_light")
     j = want if want is not None and want in usable else (usable[0] if usable else None)
+    if j is not None and kernel_under_pixel(r):  # transmission is part of the diffusion
+        if hasattr(r, "drop"):
+            r.drop(TSM, kernel_under_pixel(r))
+        return None
     if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
         s = r._settings if hasattr(r, "_settings") else r._frame.settings
@@ -182,7 +189,10 @@ def mean_texel_mm(scene, n: int) -> float:
 
 
 def plan_of(variances, r) -> list:
-    """The blur chain for these variances (r: a Reflection or ExecuteContext of a scene pass)."""
+    """The blur chain for these variances (r: a Reflection or ExecuteContext of a scene pass); every
+    blur is the irradiance itself when the kernel is under a pixel on screen (rules.py)."""
+    if kernel_under_pixel(r):
+        return [BlurStep(i, IRRADIANCE, 0.0, 0.0, True) for i in range(len(variances))]
     return blur_plan_texels(variances, r.setting("deon.reuse_irradiance_below_texels"),
                             mean_texel_mm(r.scene, map_size(r)), r.setting("deon.fold_below_texels"))
 
@@ -227,6 +237,10 @@ class GaussianBlurPass(Pass):
             return
         step = self._step(r)
         if step.reused:  # blur_i is its source: the final pass reads that, this pass is pruned
+            subpixel = kernel_under_pixel(r)
+            if subpixel:
+                r.skip(subpixel)
+                return
             r.skip(f"kernel under {r.setting('deon.fold_below_texels' if self.i else 'deon.reuse_irradiance_below_texels')}"
                    f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
             return
@@ -234,13 +248,18 @@ class GaussianBlurPass(Pass):
         stretch = self._stretch_input(r, step)
         if stretch:
             r.setting("deon.stretch_shear")
-        if r.setting("scene.seam_aware"):
+        seam = r.setting("scene.seam_aware")
+        skip_gutters = r.setting("deon.skip_gutters")
+        if seam:
             r.input(seam_resource(n))
         r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
         r.input(gutter_resource(n))
         if stretch:
             r.input(stretch)
-        r.program("deon_blur", **({"TILED": 1} if r.setting("deon.skip_gutters") else {}))
+        tiled = {"TILED": 1} if skip_gutters else {}
+        r.program("deon_blur", **tiled)
+        if seam:
+            r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
 
     def _spec(self, n: int) -> TexSpec:
@@ -258,10 +277,7 @@ class GaussianBlurPass(Pass):
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
-                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")),
-                    u_seam=ec.has_input(seam_resource(n)))
-        if ec.has_input(seam_resource(n)):
-            ec.bind(prog, "seam_map", seam_resource(n))
+                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
         ec.bind(prog, "gutter", gutter_resource(n))
@@ -270,23 +286,75 @@ class GaussianBlurPass(Pass):
         spec = self._spec(n)
         tmp = ec.scratch(spec)
         tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
+        seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
+        filled = ec.scratch(spec) if seam else None
+        fill = ec.program("seam_fill") if seam else None
+        if seam:
+            ec.bind(fill, "seam_map", seam)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
         for k, sigma in enumerate(sigmas):
-            ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
-            ec.bind(prog, "source", src)  # horizontal: src -> tmp
-            ec.set(prog, "u_dir", (1.0, 0.0))
-            ec.draw_fullscreen(prog, tmp, tiles=tiles)
-            ec.bind(prog, "source", tmp)  # vertical: tmp -> tmp2, or the output on the last sub-step
-            ec.set(prog, "u_dir", (0.0, 1.0))
             last = k == len(sigmas) - 1
-            ec.draw_fullscreen(prog, self._output() if last else tmp2, tiles=tiles)
+            ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
+            for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
+                                              ((0.0, 1.0), tmp, self._output() if last else tmp2)):
+                if seam:  # the source with its seam gutters continued across the seam
+                    ec.bind(fill, "source", source)
+                    ec.draw_fullscreen(fill, filled, tiles=tiles)
+                    source = filled
+                ec.set(prog, "u_dir", direction)
+                ec.bind(prog, "source", source)
+                ec.draw_fullscreen(prog, target, tiles=tiles)
             src = tmp2
 
 
-def final_defines(mask: int, tsm: bool) -> dict[str, int]:
-    """deon_final.frag's specialisation: GAUSSIAN_MASK (bit i: Gaussian i has weight), DEON_TSM."""
-    return {"GAUSSIAN_MASK": int(mask), "DEON_TSM": int(bool(tsm))}
+def final_defines(mask: int, tsm: bool, combined: bool = False) -> dict[str, int]:
+    """deon_final.frag's specialisation: GAUSSIAN_MASK (bit i: Gaussian i has weight), DEON_TSM,
+    DEON_COMBINED (the diffuse sum comes from deon_combine)."""
+    return {"GAUSSIAN_MASK": int(mask), "DEON_TSM": int(bool(tsm)), "DEON_COMBINED": int(bool(combined))}
+
+
+def used_mask(r) -> int:
+    """Bit i: Gaussian i has weight in some channel (its blur is read; eq. 34)."""
+    return sum(1 << i for i, g in enumerate(r.setting("deon.gaussians")) if any(w > 0 for w in g.weights))
+
+
+def combined(r) -> bool:
+    """Whether deon_final reads the texture-space sum (deon.combine_blurs, some Gaussian used, a light on)."""
+    return bool(r.setting("deon.combine_blurs")) and used_mask(r) != 0 and any(
+        light_on(l) for l in r.peek("lights")[:MAX_LIGHTS])  # shape only: the blurs exist
+
+
+class DiffuseSumPass(Pass):
+    """sum_i w_i blur_i (eq. 34's sum) in texture space, once per change of the blurs or the weights:
+    an orbit re-runs only deon_final, which then reads this one texture instead of every blur."""
+    name = "deon_combine"
+
+    def reflect(self, r: Reflection) -> None:
+        if not combined(r):
+            return
+        mask = used_mask(r)
+        for i, step in enumerate(_plan(r)):
+            if (mask >> i) & 1:
+                r.input(texture_of(step))
+        n = map_size(r)
+        r.program("deon_combine", GAUSSIAN_MASK=mask)
+        r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
+
+    def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
+        """deon_combine one weight toggle away: warmed while idle, with deon_final's."""
+        return [("deon_combine", v) for n, d in r.programs if n == "deon_combine"
+                for v in likely_final_variants(dict(d))[:MAX_GAUSSIANS]]
+
+    def execute(self, ec) -> None:
+        prog = ec.program("deon_combine")
+        ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+        for i, (g, step) in enumerate(zip(ec.setting("deon.gaussians"), _plan(ec))):
+            if ec.has_input(texture_of(step)):
+                ws[i] = g.weights
+                ec.bind(prog, f"blur{i}", texture_of(step))
+        ec.set(prog, "u_w", ws)
+        ec.draw_fullscreen(prog, DIFFUSE)
 
 
 def likely_final_variants(defines: dict) -> list[dict]:
@@ -343,18 +411,22 @@ class DeonFinalPass(Pass):
         if tsm:
             r.setting("deon.tsm_form")
             r.input(TSM)
+        summed = combined(r)
+        if summed:
+            r.input(DIFFUSE)
         mask = 0
         for i, (g, step) in enumerate(zip(gs, plan)):
             if any(w > 0 for w in g.weights):
                 mask |= 1 << i
-                r.input(texture_of(step))
-                if tsm and i >= 1:
+                if tsm or not summed:  # the TSM reads each blur at the lit point A
+                    r.input(texture_of(step))
+                if tsm and i >= 1 and not summed:
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
         if tsm and r.setting("deon.stretch"):
             r.input(STRETCH)
-        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm))
+        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
@@ -387,7 +459,9 @@ class DeonFinalPass(Pass):
                 used[i] = 1 if any(w > 0 for w in g.weights) else 0
                 ec.bind(prog, f"blur{i}", res)
         ec.uniforms(prog, u_count=len(gs), u_w=ws, u_var=var, u_used=used, u_mix=float(ec.setting("deon.mix")),
-                    u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM))
+                    u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM), u_combined=has(DIFFUSE))
+        if has(DIFFUSE):
+            ec.bind(prog, "diffuse_sum", DIFFUSE)
         if has(RHO_DT_RESOURCE):
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
         bind_specular(ec, prog)

@@ -5,7 +5,8 @@ graph's shape from the scene and the settings, and says why in the frame report
 * a light of zero intensity (or black colour) is no light: no shadow map, no lighting;
 * the TSM runs only when a light is behind a part thin enough to transmit and that part is in view;
 * the irradiance-map size follows the head's screen coverage (deon.irradiance_size_mode = "auto"),
-  with hysteresis so an orbit does not thrash the cache.
+  with hysteresis so an orbit does not thrash the cache;
+* d'Eon's diffusion is skipped when its widest Gaussian spans under a pixel on screen.
 """
 from __future__ import annotations
 
@@ -72,6 +73,33 @@ def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
     if hasattr(r, "note") and cur != user:
         r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
     return cur
+
+
+def kernel_px(settings, scene) -> float:
+    """The widest used Gaussian's standard deviation (seed 000 eq. 21) in screen pixels at the
+    head: sqrt(v_max) mm * pixels per mm of the scene's bounding sphere on screen."""
+    v = max((g.variance for g in settings.deon.gaussians if max(g.weights) > 0), default=0.0)
+    d_px = screen_diameter_px(settings, scene)
+    return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.radius * scene.mm_per_unit)
+
+
+def kernel_under_pixel(r) -> str | None:
+    """The screen-space rule of the Burley techniques (kernel under a pixel: no blur) for d'Eon:
+    when the widest Gaussian spans under deon.subpixel_kernel_px pixels on screen, diffusion cannot
+    show, so the blurs, stretch and TSM are skipped and the final pass reads the irradiance. With
+    hysteresis (on below the limit, off above HYSTERESIS x it). Returns the reason, or None."""
+    limit = float(r.setting("deon.subpixel_kernel_px"))
+    if r.scene is None:
+        return None
+    key = ("subpixel_kernel", id(r.scene))
+    if not limit > 0.0:
+        r.state[key] = False
+        return None
+    s = r._settings if hasattr(r, "_settings") else r._frame.settings
+    px = kernel_px(s, r.scene)
+    on = px < limit * (HYSTERESIS if r.state.get(key, False) else 1.0)
+    r.state[key] = on
+    return f"kernel under a pixel (widest Gaussian sigma {px:.2f} px on screen)" if on else None
 
 
 def light_map_size(r, path: str, mode_path: str) -> int:

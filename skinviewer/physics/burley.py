@@ -165,6 +165,14 @@ def profile(albedo, mfp, fit: str = "searchlight-dmfp", scale: float = 1.0) -> P
     return Profile(shape_distance(albedo, mfp, fit) * float(scale))
 
 
+PROFILE_FIELDS = ("albedo", "mfp", "fit", "scale")  # the fields of a `burley` settings section a profile needs
+
+
+def profile_of_section(b) -> Profile:
+    """The profile of a ``burley`` settings section (albedo, mfp, fit, scale)."""
+    return profile(b.albedo, b.mfp, b.fit, b.scale)
+
+
 # ---------------------------------------------------------------------------------------------
 # transmission (spec §5.4, HDRP ComputeTransmittanceDisney)
 

@@ -18,7 +18,7 @@ from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(), BurleyBlurPass("golubev"), BurleyCountPass(), CombinePass(BLURRED),
+    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(burley=True), BurleyBlurPass("golubev"), BurleyCountPass(), CombinePass(BLURRED),
                               BurleyViewPass(), BurleyOutputPass("lit")]
 
 

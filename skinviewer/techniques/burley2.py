@@ -19,7 +19,7 @@ from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(), BurleyBlurPass("two_level"), BurleyReusePass(), BurleyCountPass(),
+    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(burley=True), BurleyBlurPass("two_level"), BurleyReusePass(), BurleyCountPass(),
                               CombinePass(BLURRED), BurleyViewPass(), BurleyOutputPass("lit")]
 
 

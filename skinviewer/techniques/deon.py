@@ -6,6 +6,7 @@ from skinviewer.core.constants import MAX_GAUSSIANS
 from skinviewer.passes.deon import (
     SIZE,
     DeonFinalPass,
+    DiffuseSumPass,
     GaussianBlurPass,
     IrradiancePass,
     StretchPass,
@@ -25,7 +26,7 @@ def build():
                TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
-            + [DeonFinalPass(), OutputPass("lit")])
+            + [DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])
 
 
 def fewer_gaussians(k: int) -> list[dict]:

@@ -14,6 +14,7 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
+from skinviewer.physics import burley as B
 from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
 from skinviewer.scene.camera import gl_bytes, light_space
 
@@ -41,8 +42,15 @@ class ScreenLightingPass(Pass):
     name = "ss_lighting"
     view_dependent = True
 
-    def __init__(self, transmittance_profile: str = "deon.gaussians"):
+    def __init__(self, transmittance_profile: str = "deon.gaussians", burley: bool = False):
         self.transmittance_profile = transmittance_profile
+        self.burley = burley  # the Burley techniques: burley.transmission picks Burley's T(t) (spec §5.4)
+
+    def _burley_model(self, r) -> int:
+        """0: Jimenez 2010's Gaussian T(d); 1: Burley closed form; 2: Burley thick (HDRP)."""
+        if not self.burley:
+            return 0
+        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.setting("burley.transmission")]
 
     def reflect(self, r: Reflection) -> None:
         defines = declare_lighting(r)
@@ -50,7 +58,10 @@ class ScreenLightingPass(Pass):
         r.section("screen", ("texturing", "mix", "non_skin_regions"))
         if r.setting("transmittance.enabled"):
             r.section("transmittance", ("translucency", "form", "wrap"))
-            r.setting(self.transmittance_profile)
+            if self._burley_model(r):
+                r.section("burley", B.PROFILE_FIELDS)
+            else:
+                r.setting(self.transmittance_profile)
         size = screen_size(r)
         r.program("ss_lighting", **defines)
         r.output(DIFFUSE, TexSpec(size, 4, "f4", depth=True))
@@ -83,7 +94,7 @@ class ScreenLightingPass(Pass):
         if not on:
             return
         tr = ec.section("transmittance", ("translucency", "form", "wrap"))
-        gs = self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
+        gs = [] if self._burley_model(ec) else self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
         w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         v = np.zeros(MAX_GAUSSIANS, np.float32)
         for i, (var, wt) in enumerate(gs):
@@ -93,8 +104,14 @@ class ScreenLightingPass(Pass):
         active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if l.enabled]
         for slot, l in enumerate(active):
             inv[slot] = np.linalg.inv(light_space(l, scene.center, scene.radius).gl_matrix).T  # column-major
+        model = self._burley_model(ec)
+        if model:  # Burley: the shadow-map thickness in mm, S = 1/d per channel (spec §5.4)
+            S = B.profile_of_section(ec.section("burley", B.PROFILE_FIELDS)).S
+            ec.uniforms(prog, u_tr_model=model, u_tr_S=tuple(float(x) for x in S), u_tr_scale=1.0)
+        else:
+            ec.set(prog, "u_tr_model", 0)
         # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
         ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs),
-                    u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM),
+                    **({} if model else {"u_tr_scale": float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM)}),
                     u_tr_div=1.0 if tr.form == "printed" else 2.0, u_tr_wrap=float(tr.wrap),
                     u_light_matrix_inv=inv, u_shadow_map_size=int(ec.setting("shadow.map_size")))
