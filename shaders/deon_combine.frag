@@ -4,6 +4,7 @@
 // the blurs and the weights only, so a camera move does not re-run it and deon_final reads one
 // texture instead of one per Gaussian. Bilinear filtering is linear: sampling this sum equals the
 // sum of the samples up to float rounding. Specialised by GAUSSIAN_MASK (bit i: Gaussian i used).
+// The light transmitted through thin parts (eq. 33), view-independent too, is added here.
 #include "lib/color.glsl"
 uniform vec3 u_w[MAX_GAUSSIANS];
 uniform sampler2D blur0;
@@ -14,6 +15,8 @@ uniform sampler2D blur4;
 uniform sampler2D blur5;
 uniform sampler2D blur6;
 uniform sampler2D blur7;
+uniform sampler2D transmitted;  // deon_transmitted (eq. 33) when the TSM runs
+uniform int u_transmitted;
 out vec4 f_color;
 
 #if defined(GAUSSIAN_MASK) && !defined(GENERIC_SHADERS)
@@ -29,5 +32,6 @@ void main() {
     vec3 acc = vec3(0.0);
     ADD(0, blur0) ADD(1, blur1) ADD(2, blur2) ADD(3, blur3)
     ADD(4, blur4) ADD(5, blur5) ADD(6, blur6) ADD(7, blur7)
+    if (u_transmitted != 0) acc += texelFetch(transmitted, min(p, textureSize(transmitted, 0) - 1), 0).rgb;
     f_color = vec4(finite3(acc), 1.0);
 }

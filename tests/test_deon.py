@@ -293,7 +293,8 @@ def test_caching_rules(renderer):
     r0 = renderer.render(s)
     assert "deon_stretch" in r0.ran and "deon_tsm" in r0.ran
     blurs = [f"deon_blur_{i}" for i in range(1, 6)]
-    summed = ["deon_combine", "deon_final", "output"]  # sum_i w_i blur_i, then the view
+    # transmitted (eq. 33, texture space) + sum_i w_i blur_i, then the view
+    summed = ["deon_transmitted", "deon_combine", "deon_final", "output"]
 
     def ran(**kw):
         nonlocal s

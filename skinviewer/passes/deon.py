@@ -10,7 +10,8 @@ Graph (resources in quotes):
     deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
     deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
     deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26)
-    deon_combine        "deon_diffuse"     weights, blurs                     (eq. 34's sum)
+    deon_transmitted    "deon_transmitted" TSM, blurs, weights                (eq. 33)
+    deon_combine        "deon_diffuse"     weights, blurs, transmitted        (eq. 34's sum)
     deon_final          "lit"              camera, mix, specular, ...         (eq. 34-35)
     output              "image"
 
@@ -58,7 +59,8 @@ from skinviewer.scene.camera import gl_bytes, light_space
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
-DIFFUSE = "deon_diffuse"  # sum_i w_i blur_i (DiffuseSumPass)
+DIFFUSE = "deon_diffuse"  # sum_i w_i blur_i + transmitted (DiffuseSumPass)
+TRANSMITTED = "deon_transmitted"  # eq. 33 in texture space (TransmittedPass)
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 
@@ -325,6 +327,74 @@ def combined(r) -> bool:
         light_on(l) for l in r.peek("lights")[:MAX_LIGHTS])  # shape only: the blurs exist
 
 
+def declare_blurs(r, mask: int) -> None:
+    """The blurred textures of the used Gaussians (bit i of ``mask``) as inputs."""
+    for i, step in enumerate(_plan(r)):
+        if (mask >> i) & 1:
+            r.input(texture_of(step))
+
+
+def bind_blurs(ec, prog) -> None:
+    """lib/deon_blurs.glsl's blur samplers and per-Gaussian uniforms (unbound slots: the dummy)."""
+    gs = ec.setting("deon.gaussians")
+    ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+    var = np.zeros(MAX_GAUSSIANS, np.float32)
+    used = np.zeros(MAX_GAUSSIANS, np.int32)
+    for i, (g, step) in enumerate(zip(gs, _plan(ec))):
+        res = texture_of(step)
+        var[i] = step.variance
+        if ec.has_input(res):
+            ws[i] = g.weights
+            used[i] = 1 if any(w > 0 for w in g.weights) else 0
+            ec.bind(prog, f"blur{i}", res)
+    ec.uniforms(prog, u_count=len(gs), u_w=ws, u_var=var, u_used=used)
+
+
+def declare_tsm_read(r) -> None:
+    """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the stretch map."""
+    r.setting("deon.tsm_form")
+    r.section(f"lights.{tsm_light_index(r)}", LIGHT_POSE_FIELDS)  # its light space
+    r.input(TSM)
+    if r.setting("deon.stretch"):
+        r.input(STRETCH)
+
+
+def bind_tsm_read(ec, prog) -> None:
+    """lib/tsm_transmit.glsl's TSM, stretch and gate uniforms (declare_tsm_read)."""
+    ec.bind(prog, "tsm_map", TSM)
+    if ec.has_input(STRETCH):
+        ec.bind(prog, "stretch_map", STRETCH)
+    ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
+    # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
+    texel_mm = ls.texel_world(ec.input(TSM).size[0]) * ec.scene.mm_per_unit
+    ec.set(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
+    s = ec.scene.mean_uv_per_mm
+    ec.uniforms(prog, u_tsm_printed=ec.setting("deon.tsm_form") == "printed",
+                u_use_stretch=ec.has_input(STRETCH), u_uniform_stretch=(s, s))
+
+
+class TransmittedPass(Pass):
+    """eq. 33's transmitted light (lib/tsm_transmit.glsl) in texture space, gutters dilated: it
+    does not depend on the camera, so with deon.combine_blurs it joins the diffuse sum and an
+    orbit does not pay its 3x3 TSM taps and per-Gaussian terms per pixel."""
+    name = "deon_transmitted"
+
+    def reflect(self, r: Reflection) -> None:
+        if not combined(r) or tsm_light_index(r) is None:
+            return
+        mask = used_mask(r)
+        declare_blurs(r, mask)
+        declare_tsm_read(r)
+        n = map_size(r)
+        declare_unwrapped(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask)
+
+    def execute(self, ec) -> None:
+        prog = ec.program("deon_transmitted")
+        bind_blurs(ec, prog)
+        bind_tsm_read(ec, prog)
+        unwrap_dilated(ec, prog, map_size(ec), TRANSMITTED)
+
+
 class DiffuseSumPass(Pass):
     """sum_i w_i blur_i (eq. 34's sum) in texture space, once per change of the blurs or the weights:
     an orbit re-runs only deon_final, which then reads this one texture instead of every blur."""
@@ -334,9 +404,9 @@ class DiffuseSumPass(Pass):
         if not combined(r):
             return
         mask = used_mask(r)
-        for i, step in enumerate(_plan(r)):
-            if (mask >> i) & 1:
-                r.input(texture_of(step))
+        declare_blurs(r, mask)
+        if tsm_light_index(r) is not None:
+            r.input(TRANSMITTED)
         n = map_size(r)
         r.program("deon_combine", GAUSSIAN_MASK=mask)
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
@@ -353,7 +423,9 @@ class DiffuseSumPass(Pass):
             if ec.has_input(texture_of(step)):
                 ws[i] = g.weights
                 ec.bind(prog, f"blur{i}", texture_of(step))
-        ec.set(prog, "u_w", ws)
+        ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED))
+        if ec.has_input(TRANSMITTED):
+            ec.bind(prog, "transmitted", TRANSMITTED)
         ec.draw_fullscreen(prog, DIFFUSE)
 
 
@@ -407,25 +479,22 @@ class DeonFinalPass(Pass):
         declare_specular(r)
         if r.setting("deon.energy_conservation"):
             r.input(RHO_DT_RESOURCE)
-        tsm = tsm_light_index(r) is not None
-        if tsm:
-            r.setting("deon.tsm_form")
-            r.input(TSM)
         summed = combined(r)
+        tsm = tsm_light_index(r) is not None and not summed  # summed: deon_transmitted has it
         if summed:
             r.input(DIFFUSE)
+        if tsm:
+            declare_tsm_read(r)
         mask = 0
         for i, (g, step) in enumerate(zip(gs, plan)):
             if any(w > 0 for w in g.weights):
                 mask |= 1 << i
-                if tsm or not summed:  # the TSM reads each blur at the lit point A
+                if not summed:
                     r.input(texture_of(step))
-                if tsm and i >= 1 and not summed:
+                if tsm and i >= 1:
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
-        if tsm and r.setting("deon.stretch"):
-            r.input(STRETCH)
         declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
@@ -446,34 +515,14 @@ class DeonFinalPass(Pass):
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         has = ec.has_input
-        gs = ec.setting("deon.gaussians")
-        plan = _plan(ec)
-        ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
-        var = np.zeros(MAX_GAUSSIANS, np.float32)
-        used = np.zeros(MAX_GAUSSIANS, np.int32)
-        for i, (g, step) in enumerate(zip(gs, plan)):
-            res = texture_of(step)
-            var[i] = step.variance
-            if has(res):  # unbound blur slots read the graph's dummy texture
-                ws[i] = g.weights
-                used[i] = 1 if any(w > 0 for w in g.weights) else 0
-                ec.bind(prog, f"blur{i}", res)
-        ec.uniforms(prog, u_count=len(gs), u_w=ws, u_var=var, u_used=used, u_mix=float(ec.setting("deon.mix")),
-                    u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM), u_combined=has(DIFFUSE))
+        bind_blurs(ec, prog)  # unbound blur slots read the graph's dummy texture
+        ec.uniforms(prog, u_mix=float(ec.setting("deon.mix")), u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM),
+                    u_combined=has(DIFFUSE))
         if has(DIFFUSE):
             ec.bind(prog, "diffuse_sum", DIFFUSE)
         if has(RHO_DT_RESOURCE):
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
         bind_specular(ec, prog)
         if has(TSM):
-            ec.bind(prog, "tsm_map", TSM)
-            if has(STRETCH):  # read with the TSM only
-                ec.bind(prog, "stretch_map", STRETCH)
-            ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
-            # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
-            texel_mm = ls.texel_world(ec.input(TSM).size[0]) * ec.scene.mm_per_unit
-            ec.set(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
-            s = ec.scene.mean_uv_per_mm
-            ec.uniforms(prog, u_tsm_printed=ec.setting("deon.tsm_form") == "printed",
-                        u_use_stretch=has(STRETCH), u_uniform_stretch=(s, s))
+            bind_tsm_read(ec, prog)
         ec.draw_mesh(prog, LIT)

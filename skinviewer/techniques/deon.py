@@ -7,6 +7,7 @@ from skinviewer.passes.deon import (
     SIZE,
     DeonFinalPass,
     DiffuseSumPass,
+    TransmittedPass,
     GaussianBlurPass,
     IrradiancePass,
     StretchPass,
@@ -26,7 +27,7 @@ def build():
                TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
-            + [DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])
+            + [TransmittedPass(), DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])
 
 
 def fewer_gaussians(k: int) -> list[dict]:
