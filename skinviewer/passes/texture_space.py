@@ -2,6 +2,8 @@
 (nearest island texel for every texel outside the islands) and the dilation that uses it."""
 from __future__ import annotations
 
+import hashlib
+
 import moderngl
 import numpy as np
 
@@ -42,13 +44,21 @@ class GutterMapPass(Pass):
         cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
         spec = gutter_spec(size)
-        table = gutter_table(covered)[..., :spec.components]
-        ec.output(gutter_resource(size)).write(table.astype(np.float16 if spec.dtype == "f2" else np.float32).tobytes())
+        # the CPU tables depend on the mesh and the coverage only: kept on the scene, so a forced
+        # re-run or a second technique at the same size only uploads them
+        cache = ec.scene.__dict__.setdefault("_texel_tables", {})
+        key = (size, hashlib.blake2b(covered.tobytes(), digest_size=16).digest())
+        if ("gutter",) + key not in cache:
+            table = gutter_table(covered)[..., :spec.components]
+            cache[("gutter",) + key] = table.astype(np.float16 if spec.dtype == "f2" else np.float32).tobytes()
+        ec.output(gutter_resource(size)).write(cache[("gutter",) + key])
 
         if ec.setting("scene.seam_aware"):
-            pos = rasterize_unwrapped(ec, ec.program("uv_position"), size)
-            pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
-            ec.output(seam_resource(size)).write(seam_map(covered, ec.scene, pos).tobytes())
+            if ("seam",) + key not in cache:
+                pos = rasterize_unwrapped(ec, ec.program("uv_position"), size)
+                pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
+                cache[("seam",) + key] = seam_map(covered, ec.scene, pos).tobytes()
+            ec.output(seam_resource(size)).write(cache[("seam",) + key])
 
 
 def gutter_spec(size: int) -> TexSpec:
