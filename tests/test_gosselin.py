@@ -205,3 +205,53 @@ def test_nan_maps_and_normals(renderer, monkeypatch):
                   **{"specular.per_region": {"nose": {"m": 0.05}}})
     tex = assert_all_finite(renderer, s)
     assert tex[BLUR][..., 0].max() > 0.5
+
+
+# ---------------------------------------------------------------------------------------------
+# gosselin.radius_mode = "mm" (issue 10 item 6): radii from the profile's variance, in mm
+
+
+def _profile_variance(gs) -> np.ndarray:
+    w = np.array([g.weights for g in gs], np.float64)
+    v = np.array([g.variance for g in gs], np.float64)
+    return (w * v[:, None]).sum(0) / w.sum(0)
+
+
+def test_mm_radii_give_the_profile_variance():
+    from skinviewer.physics.poisson import POISSON_12, kernel_axis_moment, radii_mm
+    pts = np.vstack([np.zeros((1, 2)), np.asarray(POISSON_12, np.float64)])  # eq. 13: centre + 12 taps
+    assert kernel_axis_moment() == pytest.approx(np.mean(pts[:, 0] ** 2 + pts[:, 1] ** 2) / 2.0)
+    gs = small_settings().deon.gaussians
+    for n in (1, 4, 9):
+        R = radii_mm([g.variance for g in gs], [g.weights for g in gs], n)
+        np.testing.assert_allclose(n * kernel_axis_moment() * R ** 2, _profile_variance(gs), rtol=1e-12)
+    assert np.all(radii_mm([g.variance for g in gs], [g.weights for g in gs], 0) == 0)
+
+
+def _laser_spread(renderer, size: int, mode: str) -> tuple[np.ndarray, np.ndarray]:
+    """Per-axis variance (mm^2) the blur adds around the beam, per channel, and power out / in."""
+    s = small_settings("laser", "gosselin", 48, **{"gosselin.light_map_size": size, "gosselin.radius_mode": mode})
+    renderer.render(s)
+    L = renderer.read(s, G.LIGHT_MAP)[..., :3].astype(np.float64)
+    B = renderer.read(s, G.BLURRED)[..., :3].astype(np.float64)
+    mm = 24.0 / 0.96 / size  # the slab: 24 mm over uv 0.02-0.98
+    y, x = np.mgrid[0:size, 0:size] * mm
+
+    def var(img):
+        t = img.sum((0, 1))
+        cx, cy = (img * x[..., None]).sum((0, 1)) / t, (img * y[..., None]).sum((0, 1)) / t
+        return ((img * ((x[..., None] - cx) ** 2 + (y[..., None] - cy) ** 2)).sum((0, 1)) / t) / 2.0, t
+    (vb, tb), (vl, tl) = var(B), var(L)
+    return vb - vl, tb / tl
+
+
+def test_mm_mode_blurs_the_laser_like_the_profile_at_any_size(renderer):
+    V = _profile_variance(small_settings().deon.gaussians)
+    v512, power = _laser_spread(renderer, 512, "mm")
+    np.testing.assert_allclose(power, 1.0, rtol=0.01)  # the blur moves light, never makes it
+    np.testing.assert_allclose(v512[:2], V[:2], rtol=0.05)  # red, green (blue: a few texels of bilinear)
+    assert abs(v512[2] - V[2]) < 0.1 * V[2]
+    v256, _ = _laser_spread(renderer, 256, "mm")
+    assert abs(v256[0] - v512[0]) < 0.02 * V[0]  # the same on the surface at another map size
+    printed, _ = _laser_spread(renderer, 512, "printed")
+    assert np.all(printed < 0.05 * V[0])  # eq. 12's texels: ~15x too narrow in red on this slab

@@ -214,6 +214,10 @@ class GosselinSettings(_Model):
     scale_x: float = Field(2.0, ge=0.0, le=1000.0)
     scale_y: float = Field(0.0, ge=0.0, le=1000.0)
     regions: dict[str, RegionKernel] = Field(default_factory=_default_gosselin_regions)
+    radius_mode: Literal["printed", "mm"] = Field(
+        "printed", description="printed: eq. (12) radii in texels at a 1024 map (region kernels); mm: per-channel "
+        "radii in mm from the d'Eon profile's variance (deon.gaussians: iterations x the kernel's second moment "
+        "= sum w v / sum w), through the stretch map, so the blur matches the profile at any map size")
     specular_shadow: Literal["visibility", "printed"] = Field(
         "visibility", description="eq. (18) attenuation: visibility = LUM(blurred)/LUM(unshadowed irradiance) "
         "in [0, 1] (default); printed = LUM(blurred) as printed (scales with Lc^2)")

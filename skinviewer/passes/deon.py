@@ -120,15 +120,19 @@ class StretchPass(Pass):
     gutters dilated. Depends on the mesh, mm_per_unit (scene) and the size only."""
     name = "deon_stretch"
 
+    def __init__(self, name: str = "deon_stretch", resource: str = STRETCH, size_of=None):
+        self.name, self.resource = name, resource
+        self.size_of = size_of or map_size  # the map size it serves, given r (Gosselin: its light map)
+
     def reflect(self, r: Reflection) -> None:
-        n = map_size(r)
-        declare_unwrapped(r, "deon_stretch", n, STRETCH, TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
+        n = self.size_of(r)
+        declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
+        n = self.size_of(ec)
         prog = ec.program("deon_stretch")
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        unwrap_dilated(ec, prog, n, STRETCH)
+        unwrap_dilated(ec, prog, n, self.resource)
 
 
 class TsmPass(Pass):

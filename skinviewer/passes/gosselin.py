@@ -2,6 +2,7 @@
 
     shadow_map_i --> gosselin_light_map --> gosselin_blur --> gosselin_final --> output
     gutter_map  -/        gosselin_radius -/   beckmann_lut -/ (mode beckmann_lut only)
+                          (or gosselin_stretch, radius_mode "mm")
 
 * ``gosselin_light_map`` (eq. 8-10): the mesh unwrapped into texture space, sum of
   fac_shadow * Lc * max(N.L, 0) over the lights (mesh normal map applied), f4 RGBA (a 1e5 light does
@@ -15,6 +16,10 @@
   where regions meet, gutters first take the radius of their nearest island texel, then the map is
   smoothed with a Gaussian of sigma = clamp(0.5 * R_max, 1, 24) texels (R_max: the largest region
   radius in the map), so R varies continuously over about one blur footprint across a border.
+* ``gosselin.radius_mode = "mm"`` (issue 10 item 6): instead of eq. 12's texels, each channel's
+  radius is R_c mm with iterations x m R_c^2 = the d'Eon profile's per-axis variance (physics/
+  poisson.radii_mm; m the kernel's second moment), turned into UV per texel by a stretch map at the
+  light-map size, so the blur is the same on the surface at any map size and compares with d'Eon.
 * ``gosselin_blur`` (eq. 11-13): ``iterations`` 13-tap Poisson blurs (POISSON_12), ping-pong in
   scratch textures, each iteration reading the previous one, gutters re-dilated after every
   iteration so islands never bleed into each other. 0 iterations (or R = 0) = the light map itself.
@@ -50,11 +55,12 @@ from skinviewer.passes.texture_space import (
     seam_resource,
     unwrap_dilated,
 )
-from skinviewer.physics.poisson import POISSON_12
+from skinviewer.physics.poisson import POISSON_12, radii_mm
 
 LIGHT_MAP = "gosselin_light_map"
 RADIUS_MAP = "gosselin_radius"
 BLURRED = "gosselin_blurred"
+STRETCH = "gosselin_stretch"  # UV per mm at the light-map size (seed 000 eq. 27; radius_mode "mm")
 SIZE = "gosselin.light_map_size"
 REFERENCE_SIZE = 1024  # eq. 12's size = 1/1024: radii are "texels at 1024"
 MAX_SMOOTH_SIGMA = 24.0
@@ -152,11 +158,18 @@ class PoissonBlurPass(Pass):
         size = r.setting(SIZE)
         r.setting("gosselin.iterations")
         r.input(LIGHT_MAP)
-        r.input(RADIUS_MAP)
+        mm = r.setting("gosselin.radius_mode") == "mm"
+        if mm:  # per-channel radii (mm) from the d'Eon profile, through the stretch map
+            r.setting("deon.gaussians")
+            r.input(STRETCH)
+        else:
+            r.input(RADIUS_MAP)
         r.input(gutter_resource(size))
         if r.setting("scene.seam_aware"):
             r.input(seam_resource(size))
-        r.program("poisson_blur")
+        r.program("poisson_blur", **({"RADIUS_MM": 1} if mm else {}))
+        if r.setting("scene.seam_aware"):
+            r.program("seam_fill")
         r.program("dilate")
         r.output(BLURRED, _map_spec(size))
 
@@ -169,15 +182,26 @@ class PoissonBlurPass(Pass):
             return
         prog = ec.program("poisson_blur")
         ec.set(prog, "u_poisson", np.asarray(POISSON_12, dtype=np.float32))
-        ec.set(prog, "u_seam", ec.has_input(seam_resource(size)))
-        if ec.has_input(seam_resource(size)):
-            ec.bind(prog, "seam_map", seam_resource(size))
-        ec.bind(prog, "radius_map", RADIUS_MAP)
+        seam = seam_resource(size) if ec.has_input(seam_resource(size)) else None
+        if seam:  # taps that leave their island read the surface across the seam (seam_fill.frag)
+            fill = ec.program("seam_fill")
+            ec.bind(fill, "seam_map", seam)
+            filled = ec.scratch(_map_spec(size))
+        if ec.has_input(STRETCH):
+            gs = ec.setting("deon.gaussians")
+            radii = radii_mm([g.variance for g in gs], [g.weights for g in gs], n)
+            ec.set(prog, "u_radius_mm", tuple(float(x) for x in radii))
+            ec.bind(prog, "stretch_map", STRETCH)
+        else:
+            ec.bind(prog, "radius_map", RADIUS_MAP)
         tmp = ec.scratch(_map_spec(size))
         ping = ec.scratch(_map_spec(size)) if n > 1 else None
         cur = LIGHT_MAP
         for k in range(n):
-            ec.bind(prog, "source", cur)
+            if seam:
+                ec.bind(fill, "source", cur)
+                ec.draw_fullscreen(fill, filled)
+            ec.bind(prog, "source", filled if seam else cur)
             ec.draw_fullscreen(prog, tmp)
             last = k == n - 1
             dilate(ec, tmp, gutter, BLURRED if last else ping)

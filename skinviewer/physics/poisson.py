@@ -109,3 +109,23 @@ if __name__ == "__main__":
     pts = generate_poisson_disk()
     print(format_literal(pts))
     print("#", stats(pts))
+
+
+def kernel_axis_moment(points=None) -> float:
+    """Per-axis second moment of one Poisson blur (eq. 13: the centre and the 12 taps, equal
+    weights), in units of the radius R squared: one iteration adds m R^2 of variance per axis."""
+    p = np.asarray(POISSON_12 if points is None else points, dtype=np.float64)
+    return float(np.sum(p ** 2) / 2.0 / (len(p) + 1))
+
+
+def radii_mm(variances, weights, iterations: int) -> np.ndarray:
+    """Per-channel Poisson radius (mm) whose ``iterations`` blurs have the sum-of-Gaussians
+    profile's per-axis variance V_c = sum_i w_ic v_i / sum_i w_ic (seed 000 eq. 21: a 2D Gaussian of
+    variance v spreads v per axis): iterations * m * R_c^2 = V_c (Gosselin's mm mode, issue 10)."""
+    v = np.asarray(variances, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64).reshape(len(v), 3)
+    total = np.maximum(w.sum(axis=0), 1e-30)
+    V = (w * v[:, None]).sum(axis=0) / total
+    if iterations <= 0:
+        return np.zeros(3)
+    return np.sqrt(np.maximum(V, 0.0) / (iterations * kernel_axis_moment()))
