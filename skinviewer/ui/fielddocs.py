@@ -81,6 +81,22 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "deon.reuse_irradiance_below_texels": ("texels", "skip the finest blur when its width is under this many "
                                              "texels (a blur narrower than a texel changes nothing): blur 1 "
                                              "reuses the irradiance itself"),
+    "deon.irradiance_size_mode": ("", "fixed: the blur map size above; auto: sized from the head's size on screen "
+                                  "(about a texel per pixel, the size above at most, with hysteresis)"),
+    "deon.fold_below_texels": ("texels", "skip a later blur whose width step is under this many texels; the next "
+                               "blur adds its width exactly (0: off; not bit-identical)"),
+    "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a blur can read "
+                          "(images identical; pays off on GPUs)"),
+    "deon.tsm_auto": ("", "skip the translucent shadow map when no light is behind a thin part that is in view"),
+    "deon.subpixel_kernel_px": ("px", "when the widest Gaussian spans under this many pixels on screen, the "
+                                "diffusion cannot show: the blurs and TSM are skipped (0: never)"),
+    "deon.combine_blurs": ("", "sum the weighted blurs and the transmitted light once in texture space, so an "
+                           "orbit reads one texture (eq. 33-34; equal up to rounding)"),
+    "gosselin.radius_mode": ("", "printed: eq. 12's radii in texels at a 1024 map; mm: per-channel radii from the "
+                             "d'Eon profile's variance, through the stretch map (compares with d'Eon)"),
+    "shadow.map_size_mode": ("", "fixed: the shadow map size above; auto: from the head's size on screen"),
+    "burley.transmission": ("", "light through thin parts from the shadow-map thickness t (spec §5.4): closed "
+                            "form (e^(-St) + 3e^(-St/3))/4, HDRP's thick mode e^(-St/3), or Jimenez 2010's"),
 }
 
 # path -> label (default: the field name with spaces). Short: the panel's label column is narrow.
@@ -121,6 +137,12 @@ LABELS: dict[str, str] = {
     "deon.energy_conservation": "energy conservation",
     "deon.irradiance_size": "blur map size",
     "deon.reuse_irradiance_below_texels": "skip finest blur",
+    "deon.irradiance_size_mode": "blur map sizing",
+    "deon.fold_below_texels": "fold narrow blurs",
+    "deon.subpixel_kernel_px": "skip blur under",
+    "deon.combine_blurs": "sum in texture space",
+    "gosselin.radius_mode": "radius units",
+    "shadow.map_size_mode": "shadow map sizing",
     "lights.*.intensity": "intensity",
     "lights.*.beam_radius": "beam radius",
     "lights.*.cast_shadow": "casts shadow",
