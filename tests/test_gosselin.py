@@ -8,7 +8,7 @@ from helpers import assert_all_finite, small_settings
 
 from skinviewer.core.settings import REGIONS, GosselinSettings, with_values
 from skinviewer.passes import gosselin as G
-from skinviewer.physics.accuracy import width_10_90
+from skinviewer.physics.accuracy import profile_variance, width_10_90
 from skinviewer.scene import scenes
 from skinviewer.scene.mesh import MeshData
 
@@ -212,9 +212,7 @@ def test_nan_maps_and_normals(renderer, monkeypatch):
 
 
 def _profile_variance(gs) -> np.ndarray:
-    w = np.array([g.weights for g in gs], np.float64)
-    v = np.array([g.variance for g in gs], np.float64)
-    return (w * v[:, None]).sum(0) / w.sum(0)
+    return profile_variance([g.variance for g in gs], [g.weights for g in gs])
 
 
 def test_mm_radii_give_the_profile_variance():

@@ -29,7 +29,7 @@ from typing import Sequence
 import numpy as np
 from scipy.special import ndtr
 
-from skinviewer.physics.diffusion import blur_plan, gaussian, sub_steps
+from skinviewer.physics.diffusion import blur_plan, gaussian, profile_variance, sub_steps  # noqa: F401
 from skinviewer.physics.poisson import POISSON_12
 
 # ---------------------------------------------------------------------------------------------
@@ -143,15 +143,6 @@ def laser_errors(D, E, X, Y, area, variances, weights, rmax: float = 10.0, bins:
         kept = Dn.sum((0, 1)) * area / np.where(wsum > 0, wsum, np.nan)
     return {"l1": l1_radial_error(Dn, ref, R, rmax, bins), "eq31": eq31_error(Dn, ref, R, rmax),
             "power": tot, "kept": kept, "centre": (cx, cy)}
-
-
-def profile_variance(variances, weights) -> np.ndarray:
-    """Per-axis variance (mm^2) of sum_i w_i G(v_i, r) per channel: sum w_i v_i / sum w_i."""
-    v = np.asarray(variances, dtype=np.float64)
-    w = np.asarray(weights, dtype=np.float64).reshape(len(v), 3)
-    s = w.sum(0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(s > 0, (w * v[:, None]).sum(0) / s, 0.0)
 
 
 def deon_blur_passes(variances, reuse_below: float, texel: float) -> list[int]:

@@ -193,3 +193,12 @@ def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int
         s2 += cap
     out.append(float(np.sqrt(rest)))
     return out
+
+
+def profile_variance(variances, weights) -> np.ndarray:
+    """Per-axis variance (mm^2) of sum_i w_i G(v_i, r) per channel: sum w_i v_i / sum w_i."""
+    v = np.asarray(variances, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64).reshape(len(v), 3)
+    s = w.sum(0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(s > 0, (w * v[:, None]).sum(0) / s, 0.0)

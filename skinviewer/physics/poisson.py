@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from skinviewer.physics.diffusion import profile_variance
+
 SEED = 2004  # Gosselin et al. 2004
 MIN_DISTANCE = 0.657  # lower bound of POISSON_12's minimum pairwise distance (tested)
 
@@ -122,10 +124,7 @@ def radii_mm(variances, weights, iterations: int) -> np.ndarray:
     """Per-channel Poisson radius (mm) whose ``iterations`` blurs have the sum-of-Gaussians
     profile's per-axis variance V_c = sum_i w_ic v_i / sum_i w_ic (seed 000 eq. 21: a 2D Gaussian of
     variance v spreads v per axis): iterations * m * R_c^2 = V_c (Gosselin's mm mode, issue 10)."""
-    v = np.asarray(variances, dtype=np.float64)
-    w = np.asarray(weights, dtype=np.float64).reshape(len(v), 3)
-    total = np.maximum(w.sum(axis=0), 1e-30)
-    V = (w * v[:, None]).sum(axis=0) / total
+    V = profile_variance(variances, weights)
     if iterations <= 0:
         return np.zeros(3)
     return np.sqrt(np.maximum(V, 0.0) / (iterations * kernel_axis_moment()))
