@@ -38,7 +38,25 @@ void main() {
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
     step_uv = vec2(finite_f32(step_uv.x), finite_f32(step_uv.y));
     vec4 acc = vec4(0.0);
+#ifdef NARROW_TAPS
+    // a sigma of at most ~2 texels (issue 10 item 5): taps at whole texels along the axis, so no
+    // bilinear smoothing adds variance: under a texel the 3-tap kernel of exactly sigma^2
+    // (w_+-1 = sigma^2 / 2), above it the Gaussian sampled at the texels (variance within 0.4 %)
+    float s_t = length(step_uv * vec2(textureSize(source, 0)));  // sigma in texels
+    ivec2 d = ivec2(u_dir);
+    ivec2 hi = textureSize(source, 0) - 1;
+    float wsum = 0.0;
+    for (int k = -NARROW_TAPS; k <= NARROW_TAPS; ++k) {
+        float fk = float(k);
+        float w = (s_t <= 1.0) ? ((k == 0) ? 1.0 - s_t * s_t : ((abs(k) == 1) ? 0.5 * s_t * s_t : 0.0))
+                               : exp(-fk * fk / (2.0 * s_t * s_t));
+        acc += w * texelFetch(source, clamp(src + k * d, ivec2(0), hi), 0);
+        wsum += w;
+    }
+    acc /= max(wsum, 1e-30);
+#else
     for (int k = 0; k < 7; ++k)
         acc += u_weights[k] * texture(source, uv + step_uv * float(k - 3));
+#endif
     f_color = finite4_f32(acc);
 }

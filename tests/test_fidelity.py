@@ -247,7 +247,9 @@ def test_sheared_uvs_diffuse_like_unsheared(renderer, tmp_path):
     peak at the same surface points."""
     from scipy.ndimage import map_coordinates
     n, upm = 256, 0.0096
-    ref = _diffused(renderer, _sheared_plane_obj(tmp_path / "plane.obj", 0.0), n=n, beam=(0.0, 1.0))
+    # the same blur settings on both (stretch_shear keeps the bilinear taps; a c = 0 plane is unsheared)
+    ref = _diffused(renderer, _sheared_plane_obj(tmp_path / "plane.obj", 0.0), n=n, beam=(0.0, 1.0),
+                    **{"deon.stretch_shear": True})
     D = _diffused(renderer, _sheared_plane_obj(tmp_path / "sheared.obj", 30.0), n=n, beam=(0.0, 1.0),
                   **{"deon.stretch_shear": True})
     t = np.tan(np.radians(30.0))
@@ -266,3 +268,25 @@ def test_sheared_uvs_diffuse_like_unsheared(renderer, tmp_path):
         err0 = max(err0, np.abs(D0[..., c] - r)[keep].max() / ref[..., c].max())
     print(f"sheared plane: max error {err:.4f} of the peak (per-axis stretch: {err0:.4f})")
     assert err < 0.02 and err0 > 0.05, (err, err0)
+
+
+def test_laser_error_falls_with_map_size(renderer):
+    """Issue 10 item 5: the d'Eon laser error (l1 radial, seed 002 §14.4.1) falls from 256^2 to 512^2 and
+    stays at its floor above: a blur of 1-8 texels takes whole-texel taps (deon_blur.frag NARROW_TAPS)
+    instead of bilinear taps whose own smoothing added variance (512^2 was worse than 256^2)."""
+    from skinviewer.passes.deon import DIFFUSE
+    from skinviewer.physics import accuracy as A
+    from skinviewer.physics.diffusion import IRRADIANCE
+    from skinviewer.scene.scenes import build_scene
+    m = build_scene("laser").mesh
+    errs = {}
+    for n in (256, 512, 1024):
+        s = small_settings("laser", "deon", 32, **{"deon.irradiance_size": n, "deon.energy_conservation": False})
+        renderer.render(s)
+        g = renderer.graph("deon")
+        D, E = (g.read(x)[..., :3].astype(np.float64) for x in (DIFFUSE, IRRADIANCE))
+        X, Y, area = A.plane_coords(m.positions, m.uvs, m.mm_per_unit, n)
+        gs = s.deon.gaussians
+        errs[n] = A.laser_errors(D, E, X, Y, area, [x.variance for x in gs], [x.weights for x in gs])["l1"]
+    assert np.all(errs[512] < 0.5 * errs[256]), errs
+    assert np.all(errs[1024] <= errs[512] + 0.002) and np.all(errs[1024] < 0.01), errs

@@ -264,6 +264,9 @@ class GaussianBlurPass(Pass):
             r.input(stretch)
         tiled = {"TILED": 1} if skip_gutters else {}
         r.program("deon_blur", **tiled)
+        if mean_texel_mm(r.scene, n) <= np.sqrt(step.increment) < NARROW_TEXELS * mean_texel_mm(r.scene, n):
+            for taps in NARROW_TAPS:  # which one: from the largest stretch, known in execute
+                r.program("deon_blur", **tiled, NARROW_TAPS=taps)
         if seam:
             r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
@@ -278,14 +281,22 @@ class GaussianBlurPass(Pass):
     def execute(self, ec) -> None:
         n = map_size(ec)
         step = self._step(ec)
-        prog = ec.program("deon_blur")
         stretch = self._stretch_input(ec, step)
+        tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
+        # issue 10 item 5: sigma of 1 (mean) to NARROW_TEXELS (largest stretch) texels: whole-texel taps
+        # (below a texel the bilinear 7 taps' own smoothing is closer to the surface integral)
+        narrow = (mean_texel_mm(ec.scene, n) <= np.sqrt(step.increment) < NARROW_TEXELS * mean_texel_mm(ec.scene, n)
+                  and np.sqrt(step.increment) * max_stretch(ec, stretch) * n <= NARROW_TEXELS
+                  and not (stretch and ec.setting("deon.stretch_shear")))
+        widest = np.sqrt(step.increment) * max_stretch(ec, stretch) * n if narrow else 0.0
+        prog = ec.program("deon_blur", **tiled, **({"NARROW_TAPS": narrow_taps(widest)} if narrow else {}))
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
                     u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")))
         texel_mm = mean_texel_mm(ec.scene, n)
-        sigmas = sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm)
+        sigmas = ([np.sqrt(step.increment)] if narrow else
+                  sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm))
         ec.bind(prog, "gutter", gutter_resource(n))
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
@@ -444,21 +455,34 @@ def likely_final_variants(defines: dict) -> list[dict]:
     return out
 
 
+def max_stretch(ec, stretch: str | None) -> float:
+    """The largest UV per mm of the stretch map (read back once per version), or the uniform one."""
+    if not stretch:
+        return ec.scene.mean_uv_per_mm
+    key = ("max_stretch", stretch, ec.input_version(stretch), id(ec.scene))
+    s_max = ec.state.get(key)
+    if s_max is None:
+        tex = ec.input(stretch)
+        a = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components)[:, :2]  # RG: UV per mm (B: shear)
+        a = a[np.isfinite(a)]
+        s_max = ec.state[key] = float(a.max()) if a.size else 0.0
+    return s_max
+
+
+NARROW_TEXELS = 8.0  # a blur whose sigma is 1 to this many texels takes whole-texel taps (deon_blur.frag)
+NARROW_TAPS = (3, 6, 12, 24)  # program variants: +-taps covering 3 sigma of the widest texel
+
+
+def narrow_taps(sigma_texels: float) -> int:
+    return next(t for t in NARROW_TAPS if t >= 3.0 * sigma_texels)
+
+
 def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
     """Texels beyond the islands that readers of blur_i can reach (seed 000 eq. 25: taps at k * s *
     sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n for this blur's own V taps on its
     H output and the next blur's taps on its output (sigma <= sqrt(increment); i None: the whole
     chain), plus one for bilinear taps and one for the final pass's bilinear lookups."""
-    if stretch:
-        key = ("max_stretch", stretch, ec.input_version(stretch), id(ec.scene))
-        s_max = ec.state.get(key)
-        if s_max is None:
-            tex = ec.input(stretch)
-            a = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components)[:, :2]  # RG: UV per mm (B: shear)
-            a = a[np.isfinite(a)]
-            s_max = ec.state[key] = float(a.max()) if a.size else 0.0
-    else:
-        s_max = ec.scene.mean_uv_per_mm
+    s_max = max_stretch(ec, stretch)
     plan = plan_of([g.variance for g in ec.peek("deon.gaussians")], ec)  # the whole chain's widest step
     near = plan if i is None else plan[i:i + 2]
     sigma = max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0)
