@@ -90,7 +90,7 @@ class Bench:
     def settings(self, scene: str, tech: str, values: dict) -> Settings:
         base = {"scene.name": scene, **scene_overrides(scene), "technique": tech, "render.timing": self.timing,
                 "render.width": self.image, "render.height": self.image, "shadow.map_size": 1024,
-                "deon.tsm_size": 256}
+                "deon.tsm_size": 256, "deon.subpixel_kernel_px": 0.0}  # texture-space maps are measured
         return with_values(Settings(), {**base, **values})
 
     def mesh(self, scene: str):

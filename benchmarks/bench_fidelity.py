@@ -34,7 +34,8 @@ DEF_W = np.array([g.weights for g in DEFAULT])
 
 def settings(scene: str, tech: str, values: dict) -> Settings:
     base = {"scene.name": scene, **scene_overrides(scene), "technique": tech, "render.width": 64,
-            "render.height": 64, "shadow.map_size": 256, "deon.tsm_size": 256}
+            "render.height": 64, "shadow.map_size": 256, "deon.tsm_size": 256,
+            "deon.subpixel_kernel_px": 0.0}  # the maps are measured, not the 64 px view of them
     return with_values(Settings(), {**base, **values})
 
 
