@@ -70,7 +70,7 @@ def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
         pow2 = 2 ** math.ceil(math.log2(min(max(wanted, MIN_AUTO_SIZE), 1 << 20)))
         cur = int(min(pow2, user))
     r.state[key] = cur
-    if hasattr(r, "note") and cur != user:
+    if hasattr(r, "notes") and cur != user:  # reflect only (an ExecuteContext note would outlive the frame)
         r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
     return cur
 
