@@ -169,7 +169,20 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
 def tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
     """Whether the TSM term can show: a vertex in view whose normal faces away from the light
     while the light enters the mesh within a thickness that transmits, estimated as in
-    deon_final.frag: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS."""
+    deon_final.frag: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS.
+    Memoised per light pose, profile and view (several passes ask every frame)."""
+    memo = scene.__dict__.setdefault("_tsm_needed", {})
+    key = (pose.kind, tuple(pose.direction), tuple(pose.position),
+           tuple((g.variance, tuple(g.weights)) for g in gaussians),
+           settings.camera.model_dump_json(), settings.render.width, settings.render.height)
+    if key not in memo:
+        if len(memo) > 16:
+            memo.clear()
+        memo[key] = _tsm_needed(settings, scene, pose, gaussians)
+    return memo[key]
+
+
+def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
     try:
         idx, t, cos_a = thickness_toward(scene, pose)
     except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
