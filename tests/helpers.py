@@ -58,3 +58,21 @@ def settings_fields():
             walk(value, sec + ".")
     walk(s.lights[0], "lights.0.")
     return out
+
+
+def backlit_flap_column(renderer, s: Settings):
+    """Render ``s`` (the backlit-ear scene, a screen-space technique) and read the lighting pass's
+    diffuse down the image's centre column over the flap: (row indices, flap thickness in mm there,
+    diffuse RGB there). The flap is 1.5 mm thick at y = 20 mm and 6 mm at y = -20 mm."""
+    from skinviewer.passes.screen_space import DEPTH, DIFFUSE, focal_px
+    renderer.render(s)
+    E = renderer.read(s, DIFFUSE)
+    dep = renderer.read(s, DEPTH)
+    h = s.render.height
+    f = focal_px(s.camera.fov_y, h)
+    col = h // 2
+    rows = [r for r in range(h) if dep[r, col, 3] > 0.5]
+    ys = np.array([(r + 0.5 - h / 2) * dep[r, col, 0] / f for r in rows])  # world y (mm) at the centre column
+    keep = np.abs(ys) < 17.0
+    rows = np.array(rows)[keep]
+    return rows, 1.5 + (20.0 - ys[keep]) / 40.0 * 4.5, E[rows, col, :3]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from burley_gpu import Harness, plane
-from helpers import assert_all_finite, small_settings
+from helpers import assert_all_finite, backlit_flap_column, small_settings
 
 from skinviewer.core.settings import SettingsError, with_values
 from skinviewer.passes import burley as PB
@@ -120,21 +120,10 @@ def test_burley_transmission_through_a_slab(renderer, mode):
     """Spec §5.4 wired into the Burley techniques: the backlit flap's unlit front shows T(t) x Lc with
     Burley's closed form (or HDRP's thick mode) at the flap's thickness t, within a shadow texel;
     T <= T(0) = 1 (no energy from nowhere); jimenez2010 keeps the Gaussian form."""
-    from skinviewer.passes.screen_space import DEPTH, DIFFUSE, focal_px
     s = small_settings("backlit-ear", "burley", 96, **{"screen.texturing": "post", "shadow.map_size": 512,
                                                        "lights.0.direction": [0.0, 0.0, -1.0],
                                                        "burley.transmission": mode})
-    renderer.render(s)
-    E = renderer.read(s, DIFFUSE)
-    dep = renderer.read(s, DEPTH)
-    h = s.render.height
-    f = focal_px(s.camera.fov_y, h)
-    col = h // 2
-    rows = [r for r in range(h) if dep[r, col, 3] > 0.5]
-    ys = np.array([(r + 0.5 - h / 2) * dep[r, col, 0] / f for r in rows])  # world y (mm) at the centre column
-    keep = np.abs(ys) < 17.0
-    thick = 1.5 + (20.0 - ys[keep]) / 40.0 * 4.5
-    got = E[np.array(rows)[keep], col, :3]
+    _, thick, got = backlit_flap_column(renderer, s)
     S = B.profile_of_section(s.burley).S
     lc = s.lights[0].intensity
     texel = 2 * 1.02 * 27.0 / 512  # mm: one shadow texel (the flap's bounding radius ~27 mm)
@@ -146,6 +135,5 @@ def test_burley_transmission_through_a_slab(renderer, mode):
     assert np.all(got >= lo - 1e-3) and np.all(got <= hi + 1e-3)
     assert np.all(got <= lc + 1e-6) and np.all(np.isfinite(got))
     assert got[:, 1].max() > 0.05  # Burley's green passes a thin flap (the Gaussian form's does not)
-    gauss = with_values(s, {"burley.transmission": "jimenez2010"})
-    renderer.render(gauss)
-    assert not np.allclose(renderer.read(gauss, DIFFUSE)[np.array(rows)[keep], col, :3], got, atol=1e-3)
+    _, _, gauss = backlit_flap_column(renderer, with_values(s, {"burley.transmission": "jimenez2010"}))
+    assert not np.allclose(gauss, got, atol=1e-3)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import assert_all_finite, small_settings
+from helpers import assert_all_finite, backlit_flap_column, small_settings
 from scipy.signal import fftconvolve
 
 from skinviewer.core.settings import with_values
@@ -238,17 +238,8 @@ def test_transmittance_through_a_slab(renderer):
     within a shadow texel of the true thickness; off: nothing."""
     s = small_settings("backlit-ear", "ssss", 96, **{"screen.texturing": "post", "shadow.map_size": 512,
                                                      "lights.0.direction": [0.0, 0.0, -1.0]})
-    renderer.render(s)
-    E = renderer.read(s, DIFFUSE)
-    dep = renderer.read(s, DEPTH)
-    h = s.render.height
-    f = focal_px(s.camera.fov_y, h)
-    col = h // 2
-    rows = [r for r in range(h) if dep[r, col, 3] > 0.5]
-    ys = np.array([(r + 0.5 - h / 2) * dep[r, col, 0] / f for r in rows])  # world y (mm) at the centre column
-    keep = np.abs(ys) < 17.0
-    thick = 1.5 + (20.0 - ys[keep]) / 40.0 * 4.5
-    got = E[np.array(rows)[keep], col, :3]
+    rows, thick, got = backlit_flap_column(renderer, s)
+    col = s.render.height // 2
     gs = [(g.variance, g.weights) for g in s.deon.gaussians]
     tr = s.transmittance
     lc = s.lights[0].intensity
@@ -262,7 +253,7 @@ def test_transmittance_through_a_slab(renderer):
     assert np.all(np.diff(red_by_thickness) <= 1e-4)  # thicker: darker
     off = with_values(s, {"transmittance.enabled": False})
     renderer.render(off)
-    assert np.all(renderer.read(off, DIFFUSE)[np.array(rows)[keep], col, :3] == 0)
+    assert np.all(renderer.read(off, DIFFUSE)[rows, col, :3] == 0)
 
 
 def test_caching_rules(renderer):
