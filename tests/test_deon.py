@@ -405,3 +405,15 @@ def test_tsm_light_is_selectable(renderer):
     renderer.render(s2)
     rep = renderer.render(with_values(s2, {"lights.0.direction": [0.3, 0.15, 1.0]}))
     assert "deon_tsm" in rep.ran
+
+
+def test_max_stretch_from_the_mesh_bounds_the_stretch_map(renderer):
+    """The narrow-blur choice (deon_blur NARROW_TAPS) is made in reflect from the mesh's largest
+    per-triangle stretch: it must bound what deon_stretch.frag writes."""
+    s = _deon("head")
+    renderer.render(s)
+    st = renderer.read(s, "deon_stretch")[..., :2]
+    gpu_max = float(st[np.isfinite(st)].max())
+    cpu_max = renderer.scene.gpu.max_uv_per_mm
+    assert gpu_max <= cpu_max * (1 + 1e-4)
+    assert cpu_max < 20 * gpu_max  # and is not a loose bound

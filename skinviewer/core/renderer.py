@@ -16,7 +16,7 @@ from skinviewer.core.graph import FrameInputs, FrameReport, RenderGraph, Texture
 from skinviewer.core.settings import Settings
 from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes.output import srgb_to_linear
-from skinviewer.physics.diffusion import uniform_uv_per_mm
+from skinviewer.physics.diffusion import max_uv_per_mm, uniform_uv_per_mm
 from skinviewer.scene.camera import View, orbit_view
 from skinviewer.scene.mesh import (
     VERTEX_ATTRS,
@@ -73,6 +73,12 @@ class GpuScene:
         stretch used when stretch correction is off, and the mean texel size in mm at n x n (1/(n*x))."""
         m = self.mesh
         return uniform_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
+
+    @functools.cached_property
+    def max_uv_per_mm(self) -> float:
+        """The largest per-axis stretch any triangle has (UV per mm; the stretch map's maximum)."""
+        m = self.mesh
+        return max_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
 
     def vertex_array(self, prog: moderngl.Program) -> moderngl.VertexArray:
         """A new VAO of the mesh for ``prog`` (the graph's GpuServices caches it per program)."""

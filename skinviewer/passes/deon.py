@@ -263,10 +263,7 @@ class GaussianBlurPass(Pass):
         if stretch:
             r.input(stretch)
         tiled = {"TILED": 1} if skip_gutters else {}
-        r.program("deon_blur", **tiled)
-        if mean_texel_mm(r.scene, n) <= np.sqrt(step.increment) < NARROW_TEXELS * mean_texel_mm(r.scene, n):
-            for taps in NARROW_TAPS:  # which one: from the largest stretch, known in execute
-                r.program("deon_blur", **tiled, NARROW_TAPS=taps)
+        r.program("deon_blur", **tiled, **self._narrow(r, step, stretch, n))
         if seam:
             r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
@@ -278,18 +275,24 @@ class GaussianBlurPass(Pass):
         vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
         return plan_of(vs, r)[self.i]
 
+    @staticmethod
+    def _narrow(r, step, stretch: str | None, n: int) -> dict:
+        """Issue 10 item 5: a sigma of 1 (mean) to NARROW_TEXELS (largest stretch, deon_stretch's
+        maximum from the mesh) texels takes whole-texel taps, NARROW_TAPS covering 3 sigma; under a
+        texel the bilinear 7 taps' own smoothing is closer to the texel integral. {} or the define."""
+        sigma = np.sqrt(step.increment)
+        widest = sigma * (r.scene.max_uv_per_mm if stretch else r.scene.mean_uv_per_mm) * n
+        if sigma < mean_texel_mm(r.scene, n) or widest > NARROW_TEXELS or (stretch and r.setting("deon.stretch_shear")):
+            return {}
+        return {"NARROW_TAPS": narrow_taps(widest)}
+
     def execute(self, ec) -> None:
         n = map_size(ec)
         step = self._step(ec)
         stretch = self._stretch_input(ec, step)
         tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
-        # issue 10 item 5: sigma of 1 (mean) to NARROW_TEXELS (largest stretch) texels: whole-texel taps
-        # (below a texel the bilinear 7 taps' own smoothing is closer to the surface integral)
-        narrow = (mean_texel_mm(ec.scene, n) <= np.sqrt(step.increment) < NARROW_TEXELS * mean_texel_mm(ec.scene, n)
-                  and np.sqrt(step.increment) * max_stretch(ec, stretch) * n <= NARROW_TEXELS
-                  and not (stretch and ec.setting("deon.stretch_shear")))
-        widest = np.sqrt(step.increment) * max_stretch(ec, stretch) * n if narrow else 0.0
-        prog = ec.program("deon_blur", **tiled, **({"NARROW_TAPS": narrow_taps(widest)} if narrow else {}))
+        narrow = self._narrow(ec, step, stretch, n)
+        prog = ec.program("deon_blur", **tiled, **narrow)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),

@@ -173,6 +173,30 @@ def uniform_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
     return float(np.sqrt(a_t / a_w))
 
 
+MAX_UV_PER_MM = 10.0  # deon_stretch.frag's clamp (tiny or zero world area)
+
+
+def max_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
+    """The largest per-axis stretch (UV per mm, seed 000 eq. 27) over the mesh's triangles, as
+    deon_stretch.frag computes it per triangle (the UV -> surface Jacobian, clamped): the largest
+    value the stretch map can hold, known without reading it back."""
+    p = np.asarray(positions, dtype=np.float64)[indices] * float(mm_per_unit)
+    t = np.asarray(uvs, dtype=np.float64)[indices]
+    e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
+    t1, t2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    det = t1[:, 0] * t2[:, 1] - t2[:, 0] * t1[:, 1]
+    ok = np.abs(det) > 1e-20
+    if not ok.any():
+        return MAX_UV_PER_MM
+    d = det[ok, None]
+    pu = (e1[ok] * t2[ok, 1:2] - e2[ok] * t1[ok, 1:2]) / d
+    pv = (e2[ok] * t1[ok, 0:1] - e1[ok] * t2[ok, 0:1]) / d
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = 1.0 / np.concatenate([np.linalg.norm(pu, axis=1), np.linalg.norm(pv, axis=1)])
+    s = np.clip(np.nan_to_num(s, nan=1e-7, posinf=MAX_UV_PER_MM), 1e-7, MAX_UV_PER_MM)
+    return float(s.max())
+
+
 def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int = 8) -> list[float]:
     """Split one blur increment (variance, mm^2) into 7-tap sub-blurs (standard deviations, mm)
     whose tap spacing never exceeds the smoothness of what they blur: sigma_k <= s_k / SMOOTH_RATIO
