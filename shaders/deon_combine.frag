@@ -17,6 +17,7 @@ uniform sampler2D blur6;
 uniform sampler2D blur7;
 uniform sampler2D transmitted;  // deon_transmitted (eq. 33) when the TSM runs
 uniform int u_transmitted;
+uniform vec2 u_size;            // this map's size (the transmitted map is half of it)
 out vec4 f_color;
 
 #if defined(GAUSSIAN_MASK) && !defined(GENERIC_SHADERS)
@@ -32,6 +33,6 @@ void main() {
     vec3 acc = vec3(0.0);
     ADD(0, blur0) ADD(1, blur1) ADD(2, blur2) ADD(3, blur3)
     ADD(4, blur4) ADD(5, blur5) ADD(6, blur6) ADD(7, blur7)
-    if (u_transmitted != 0) acc += texelFetch(transmitted, min(p, textureSize(transmitted, 0) - 1), 0).rgb;
+    if (u_transmitted != 0) acc += texture(transmitted, (vec2(p) + 0.5) / u_size).rgb;
     f_color = vec4(finite3(acc), 1.0);
 }

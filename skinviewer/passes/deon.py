@@ -391,6 +391,11 @@ def bind_tsm_read(ec, prog) -> None:
                 u_use_stretch=ec.has_input(STRETCH), u_uniform_stretch=(s, s))
 
 
+def transmitted_size(r) -> int:
+    """deon_transmitted's map: half the irradiance map's (the term is smooth: a 3x3-filtered TSM)."""
+    return max(map_size(r) // 2, 32)
+
+
 class TransmittedPass(Pass):
     """eq. 33's transmitted light (lib/tsm_transmit.glsl) in texture space, gutters dilated: it
     does not depend on the camera, so with deon.combine_blurs it joins the diffuse sum and an
@@ -403,14 +408,14 @@ class TransmittedPass(Pass):
         mask = used_mask(r)
         declare_blurs(r, mask)
         declare_tsm_read(r)
-        n = map_size(r)
+        n = transmitted_size(r)
         declare_unwrapped(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask)
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_transmitted")
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        unwrap_dilated(ec, prog, map_size(ec), TRANSMITTED)
+        unwrap_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):
@@ -441,7 +446,8 @@ class DiffuseSumPass(Pass):
             if ec.has_input(texture_of(step)):
                 ws[i] = g.weights
                 ec.bind(prog, f"blur{i}", texture_of(step))
-        ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED))
+        n = map_size(ec)
+        ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED), u_size=(float(n), float(n)))
         if ec.has_input(TRANSMITTED):
             ec.bind(prog, "transmitted", TRANSMITTED)
         ec.draw_fullscreen(prog, DIFFUSE)

@@ -13,6 +13,7 @@ from skinviewer.passes.deon import (
     StretchPass,
     TsmPass,
     map_size,
+    transmitted_size,
 )
 from skinviewer.passes.luts import BeckmannLutPass
 from skinviewer.passes.output import OutputPass
@@ -23,7 +24,8 @@ from skinviewer.techniques.base import Technique, shadow_passes
 
 def build():
     return (shadow_passes()
-            + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
+            + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size),
+               GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
