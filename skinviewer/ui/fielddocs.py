@@ -84,7 +84,7 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "deon.irradiance_size_mode": ("", "fixed: the blur map size above; auto: sized from the head's size on screen "
                                   "(about a texel per pixel, the size above at most, with hysteresis)"),
     "deon.fold_below_texels": ("texels", "skip a later blur whose width step is under this many texels; the next "
-                               "blur adds its width exactly (0: off; not bit-identical)"),
+                               "blur adds its width exactly (0: off). 1: closer to the ground truth than 0"),
     "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a blur can read "
                           "(images identical; pays off on GPUs)"),
     "deon.tsm_auto": ("", "skip the translucent shadow map when no light is behind a thin part that is in view"),
