@@ -83,9 +83,10 @@ def tsm_light_index(r) -> int | None:
               and light_on(r.peek(f"lights.{j}"))]
     want = r.setting("deon.tsm_light")
     j = want if want is not None and want in usable else (usable[0] if usable else None)
-    if j is not None and kernel_under_pixel(r):  # transmission is part of the diffusion
+    subpixel = kernel_under_pixel(r) if j is not None else None
+    if subpixel:  # transmission is part of the diffusion
         if hasattr(r, "drop"):
-            r.drop(TSM, kernel_under_pixel(r))
+            r.drop(TSM, subpixel)
         return None
     if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
@@ -352,20 +353,26 @@ def declare_blurs(r, mask: int) -> None:
             r.input(texture_of(step))
 
 
-def bind_blurs(ec, prog) -> None:
-    """lib/deon_blurs.glsl's blur samplers and per-Gaussian uniforms (unbound slots: the dummy)."""
-    gs = ec.setting("deon.gaussians")
+def bind_blur_slots(ec, prog) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Bind each declared blur to its sampler blur{i} (unbound slots read the graph's dummy) and
+    return the per-slot weights, variances and used flags."""
     ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
     var = np.zeros(MAX_GAUSSIANS, np.float32)
     used = np.zeros(MAX_GAUSSIANS, np.int32)
-    for i, (g, step) in enumerate(zip(gs, _plan(ec))):
+    for i, (g, step) in enumerate(zip(ec.setting("deon.gaussians"), _plan(ec))):
         res = texture_of(step)
         var[i] = step.variance
         if ec.has_input(res):
             ws[i] = g.weights
             used[i] = 1 if any(w > 0 for w in g.weights) else 0
             ec.bind(prog, f"blur{i}", res)
-    ec.uniforms(prog, u_count=len(gs), u_w=ws, u_var=var, u_used=used)
+    return ws, var, used
+
+
+def bind_blurs(ec, prog) -> None:
+    """lib/deon_blurs.glsl's blur samplers and per-Gaussian uniforms."""
+    ws, var, used = bind_blur_slots(ec, prog)
+    ec.uniforms(prog, u_count=len(ec.setting("deon.gaussians")), u_w=ws, u_var=var, u_used=used)
 
 
 def declare_tsm_read(r) -> None:
@@ -441,11 +448,7 @@ class DiffuseSumPass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_combine")
-        ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
-        for i, (g, step) in enumerate(zip(ec.setting("deon.gaussians"), _plan(ec))):
-            if ec.has_input(texture_of(step)):
-                ws[i] = g.weights
-                ec.bind(prog, f"blur{i}", texture_of(step))
+        ws, _, _ = bind_blur_slots(ec, prog)
         n = map_size(ec)
         ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED), u_size=(float(n), float(n)))
         if ec.has_input(TRANSMITTED):
