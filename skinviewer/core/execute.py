@@ -191,7 +191,10 @@ class ExecuteContext:
             self.gl.disable(moderngl.DEPTH_TEST)
         self.gl.disable(moderngl.CULL_FACE)
         self._apply(prog)
-        self.graph.gpu.mesh_vao(prog, scene).render()
+        lod = self._frame.mesh_lod
+        self.graph.gpu.mesh_vao(prog, scene, lod).render()
+        if lod:
+            self.graph._lod_notes[self.pass_.name] = self._frame.lod_note
         self.draws += 1
 
     def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",

@@ -30,8 +30,8 @@ class GpuServices:
         self.binding_units = self.max_units - len(_SAMPLER_KINDS)  # the top units hold the dummies
 
     # -- vertex arrays -------------------------------------------------------------------------
-    def _vao(self, prog, owner, make) -> moderngl.VertexArray:
-        key = (id(prog), id(owner))
+    def _vao(self, prog, owner, make, tag=None) -> moderngl.VertexArray:
+        key = (id(prog), id(owner), tag)
         hit = self._vaos.get(key)
         if hit is not None and hit[0] is prog and hit[1] is owner:
             return hit[2]
@@ -45,9 +45,9 @@ class GpuServices:
         """A VAO without buffers: the vertex stage makes a full-screen triangle from gl_VertexID."""
         return self._vao(prog, None, lambda: self.ctx.vertex_array(prog, []))
 
-    def mesh_vao(self, prog: moderngl.Program, scene) -> moderngl.VertexArray:
-        """The scene's mesh (``scene.vertex_array(prog)``) for ``prog``."""
-        return self._vao(prog, scene, lambda: scene.vertex_array(prog))
+    def mesh_vao(self, prog: moderngl.Program, scene, lod: int = 0) -> moderngl.VertexArray:
+        """The scene's mesh at level of detail ``lod`` (``scene.vertex_array(prog, lod)``) for ``prog``."""
+        return self._vao(prog, scene, lambda: scene.vertex_array(prog, lod), lod)
 
     def keep_scene(self, scene) -> None:
         """Release the mesh VAOs of every scene but ``scene`` (a new scene replaced the old one)."""

@@ -65,6 +65,7 @@ class RenderGraph:
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
+        self._lod_notes: dict[str, str] = {}  # pass name -> the mesh LOD its last run drew at ("" = full)
         self._produced: dict[str, set[str]] = {}  # pass -> outputs it last declared (freed when pruned)
         self.shape_state: dict = {}
         self._last_draws = 0  # memory of scene-driven rules (e.g. map-size hysteresis)
@@ -196,7 +197,7 @@ class RenderGraph:
             "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
         }
         if p.uses_scene:
-            key["scene"] = frame.scene_version
+            key["scene"] = (frame.scene_version, frame.mesh_lod)
         if p.view_dependent:
             key["camera"] = frame.view_key
         return key
@@ -226,7 +227,7 @@ class RenderGraph:
         last, so a deferred frame leaves the previous image intact."""
         # an idle frame: the very same settings object, scene, camera, targets and shaders as the last
         # complete frame -> nothing can re-run; skip reflecting every pass and building cache keys
-        idle = (frame.settings, frame.scene_version, frame.view_key, tuple(targets or self.targets),
+        idle = (frame.settings, (frame.scene_version, frame.mesh_lod), frame.view_key, tuple(targets or self.targets),
                 self.shaders.revision, timing)
         last = self.last_report
         if not force and self._idle is not None and last is not None and last.complete \
@@ -288,6 +289,8 @@ class RenderGraph:
                 rec.note, rec.figures = self._notes[p.name]
             if rec.status == "cached" and r.notes:
                 rec.reason = "; ".join(r.notes)
+            if self._lod_notes.get(p.name):  # it drew the mesh at a coarser level (rules.mesh_lod)
+                rec.reason = "; ".join(x for x in (rec.reason, self._lod_notes[p.name]) if x)
             records[p.name] = rec
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         for p in self.passes:
@@ -308,6 +311,7 @@ class RenderGraph:
 
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str) -> float | None:
         ec = ExecuteContext(self, p, r, frame)
+        self._lod_notes.pop(p.name, None)
         try:
             if timing == "sync":
                 self.ctx.finish()

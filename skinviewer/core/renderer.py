@@ -15,9 +15,11 @@ from skinviewer import techniques
 from skinviewer.core.graph import FrameInputs, FrameReport, RenderGraph, TexturePool
 from skinviewer.core.settings import Settings
 from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.passes import rules
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics.diffusion import max_uv_per_mm, uniform_uv_per_mm
 from skinviewer.scene.camera import View, orbit_view
+from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
     VERTEX_ATTRS,
     VERTEX_FORMAT,
@@ -44,6 +46,7 @@ class GpuScene:
         self.frame = mesh.frame  # what the camera frames by default (the head of a bust)
         self.vbo = ctx.buffer(mesh.interleaved().tobytes())
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
+        self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
         self.has_normal_map = mesh.normal_map is not None
@@ -80,15 +83,37 @@ class GpuScene:
         m = self.mesh
         return max_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
 
-    def vertex_array(self, prog: moderngl.Program) -> moderngl.VertexArray:
-        """A new VAO of the mesh for ``prog`` (the graph's GpuServices caches it per program)."""
+    @functools.cached_property
+    def lod_triangles(self) -> list[int]:
+        """Triangles each level of detail aims at (scene/lod.py); level 0 is the mesh."""
+        return level_targets(len(self.mesh.indices))
+
+    def lod_buffers(self, level: int) -> tuple[moderngl.Buffer, moderngl.Buffer, int]:
+        """Vertex and index buffers of level ``level`` (built on first use) and its triangle count."""
+        if level <= 0:
+            return self.vbo, self.ibo, len(self.mesh.indices)
+        hit = self._lods.get(level)
+        if hit is None:
+            m = decimate(self.mesh, self.lod_triangles[min(level, len(self.lod_triangles) - 1)])
+            hit = self._lods[level] = (self.ctx.buffer(m.interleaved().tobytes()),
+                                       self.ctx.buffer(m.indices.astype(np.uint32).tobytes()), len(m.indices))
+        return hit
+
+    def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
+        """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
+        caches it per program)."""
+        vbo, ibo, _ = self.lod_buffers(lod)
         attrs = [a for a in VERTEX_ATTRS if a in prog]
         fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
-        return self.ctx.vertex_array(prog, [(self.vbo, fmt, *attrs)], index_buffer=self.ibo, index_element_size=4)
+        return self.ctx.vertex_array(prog, [(vbo, fmt, *attrs)], index_buffer=ibo, index_element_size=4)
 
     def release(self) -> None:
         for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
             obj.release()
+        for vbo, ibo, _ in self._lods.values():
+            vbo.release()
+            ibo.release()
+        self._lods.clear()
 
 
 def _fmt(f: str, used: bool) -> str:
@@ -121,6 +146,7 @@ class Renderer:
         self.graphs: dict[str, RenderGraph] = {}
         self.scene: LoadedScene | None = None
         self.scene_version = 0
+        self._lod_state: dict = {}  # the mesh-LOD rule's hysteresis
         self.last_view: View | None = None
         # bytes textures may use (None: what the system has, see available_memory); tests set it
         self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")
@@ -205,8 +231,9 @@ class Renderer:
                            scene.gpu.frame)
         self.last_view = view
         g = self.graph(s.technique)
+        lod, lod_note = rules.mesh_lod(s, scene.gpu, self._lod_state)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
-                            view_key=view.key())
+                            view_key=view.key(), mesh_lod=lod, lod_note=lod_note)
         report = g.run(frame, targets=targets, timing=timing or s.render.timing, force=force, budget_ms=budget_ms)
         self.ctx.screen.use() if self.ctx.screen is not None else None
         return report

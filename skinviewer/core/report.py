@@ -15,6 +15,8 @@ class FrameInputs:
     scene_version: int
     view: Any  # View (camera) or None
     view_key: str
+    mesh_lod: int = 0  # the mesh's level of detail this frame (passes/rules.mesh_lod)
+    lod_note: str = ""  # why, for the frame report of passes that draw the mesh
 
 
 @dataclass

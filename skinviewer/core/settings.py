@@ -156,6 +156,9 @@ class RenderSettings(_Model):
         "the frame report names a pass whose output is not finite")
     timing: Literal["sync", "gpu"] = Field(
         "sync", description="sync: glFinish + wall clock per pass (right on llvmpipe); gpu: GL timer queries")
+    mesh_lod: Literal["auto", "full"] = Field(
+        "auto", description="auto: draw a coarser copy of the mesh (1/4 of the triangles per level) when the "
+        "head is so small on screen that its triangles are far under a pixel; full: always the whole mesh")
 
     _bg = field_validator("background")(_finite_vec)
 

@@ -6,7 +6,8 @@ graph's shape from the scene and the settings, and says why in the frame report
 * the TSM runs only when a light is behind a part thin enough to transmit and that part is in view;
 * the irradiance-map size follows the head's screen coverage (deon.irradiance_size_mode = "auto"),
   with hysteresis so an orbit does not thrash the cache;
-* d'Eon's diffusion is skipped when its widest Gaussian spans under a pixel on screen.
+* d'Eon's diffusion is skipped when its widest Gaussian spans under a pixel on screen;
+* the mesh is drawn at a coarser level of detail when its triangles are far under a pixel.
 """
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM 
 MAX_RAYS = 4096     # rays cast per light pose for the TSM rule (Embree via trimesh)
 MIN_AUTO_SIZE = 64  # smallest irradiance map "auto" chooses
 HYSTERESIS = 1.25   # "auto" changes size only when the wanted size leaves [c / 2 / H, c * H]
+LOD_TRIANGLES_PER_PX = 4.0  # a level of detail keeps at least this many triangles per pixel of the head
+LOD_HYSTERESIS = 0.2  # in levels: the level changes only when the wanted one leaves [c - H, c + 1 + H)
 
 
 def light_on(light) -> bool:
@@ -73,6 +76,34 @@ def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
     if hasattr(r, "notes") and cur != user:  # reflect only (an ExecuteContext note would outlive the frame)
         r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
     return cur
+
+
+def mesh_lod(settings, scene, state: dict) -> tuple[int, str]:
+    """The mesh's level of detail for this frame (render.mesh_lod = "auto"): the coarsest level
+    (scene/lod.py, 1/4 of the triangles per level) that still has LOD_TRIANGLES_PER_PX triangles per
+    pixel of the head (half the triangles face the camera, over the disc of the bounding sphere on
+    screen), so silhouettes and shading stay sub-pixel; with hysteresis. Returns (level, reason)."""
+    key = ("mesh_lod", id(scene))
+    levels = scene.lod_triangles
+    if settings.render.mesh_lod != "auto" or len(levels) < 2:
+        state[key] = 0
+        return 0, ""
+    d_px = screen_diameter_px(settings, scene)
+    area = math.pi / 4.0 * d_px * d_px
+    if not area > 0.0 or not math.isfinite(area):
+        state[key] = 0
+        return 0, ""
+    per_px = levels[0] / 2.0 / area
+    wanted = math.log(max(per_px / LOD_TRIANGLES_PER_PX, 1e-9), 4.0)  # fractional level
+    cur = state.get(key)
+    if cur is None or not (cur - LOD_HYSTERESIS <= wanted < cur + 1 + LOD_HYSTERESIS):
+        cur = int(min(max(math.floor(wanted), 0), len(levels) - 1))
+    cur = int(min(max(cur, 0), len(levels) - 1))
+    state[key] = cur
+    if cur == 0:
+        return 0, ""
+    return cur, (f"mesh LOD {cur}: ~{levels[cur]:,} of {levels[0]:,} triangles from screen coverage "
+                 f"(head {d_px:.0f} px)")
 
 
 def kernel_px(settings, scene) -> float:

@@ -38,6 +38,9 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "render.background": ("linear RGB", "clear colour of the 3D view"),
     "render.timing": ("", "sync: glFinish + wall clock per pass (true cost on llvmpipe); "
                       "gpu: GL_TIME_ELAPSED queries (accurate on real GPUs, far too low on llvmpipe)"),
+    "render.mesh_lod": ("", "auto: when the head is so small on screen that its triangles are far under a pixel "
+                        "(over 4 per pixel), draw a coarser copy (1/4 of the triangles per level, UV seams kept) "
+                        "and say so in the passes window; full: always the whole mesh"),
     "render.check_finite": ("", "after a pass runs, scan its outputs for NaN/Inf on the GPU; the passes window "
                             "names a pass whose output is not finite (the screen shows the background there)"),
     # phong
@@ -110,6 +113,7 @@ LABELS: dict[str, str] = {
     "camera.target": "look at",
     "render.background": "background",
     "render.timing": "timing method",
+    "render.mesh_lod": "mesh level of detail",
     "shadow.map_size": "shadow map size",
     "shadow.tol": "shadow bias",
     "shadow.pcf": "shadow softness",
