@@ -32,7 +32,9 @@ def cmd_render(args) -> int:
         scene = r.ensure_scene(s)
         for note in scene.notes:
             print(f"note: {note}", file=sys.stderr)
-        report = r.render(s)
+        report, frames = r.render_settled(s)  # a progressive pass (burley2.temporal) refines first
+        if frames > 1:
+            print(f"refined over {frames} frames (burley2.temporal); figures are the last frame's")
         out = Path(args.out)
         save_png(out, r.image(s))
         if getattr(args, "exr", None):  # linear HDR radiance, before exposure and tone map

@@ -104,7 +104,7 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
         full.append(renderer.render(s, force=True, timing="sync").total_ms)
     for k in range(runs):
         cam.append(renderer.render(_nudge(s, k), timing="sync").total_ms)
-    renderer.render(s, timing="sync")  # back at the measured camera
+    renderer.render_settled(s, timing="sync")  # back at the measured camera (refined, if progressive)
     return full, cam
 
 

@@ -218,6 +218,11 @@ class ExecuteContext:
         self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
+    def refine(self, more: bool) -> None:
+        """A progressive pass (e.g. temporal accumulation) asks for another frame even when nothing
+        changed (``more``), or says it has converged: the graph does not idle while any pass asks."""
+        (self.graph.refining.add if more else self.graph.refining.discard)(self.pass_.name)
+
     def note(self, text: str, **figures) -> None:
         """A figure this run measured (e.g. samples counted on the GPU): shown with the pass in the
         frame report (``PassRecord.note`` / ``figures``), kept while the pass stays cached."""

@@ -65,6 +65,7 @@ class RenderGraph:
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
+        self.refining: set[str] = set()  # passes that asked for another frame (progressive refinement)
         self._lod_notes: dict[str, str] = {}  # pass name -> the mesh LOD its last run drew at ("" = full)
         self._produced: dict[str, set[str]] = {}  # pass -> outputs it last declared (freed when pruned)
         self.shape_state: dict = {}
@@ -196,6 +197,8 @@ class RenderGraph:
             "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
             "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
         }
+        if r.depends_on:
+            key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
         if p.uses_scene:
             key["scene"] = (frame.scene_version, frame.mesh_lod)
         if p.view_dependent:
@@ -230,7 +233,7 @@ class RenderGraph:
         idle = (frame.settings, (frame.scene_version, frame.mesh_lod), frame.view_key, tuple(targets or self.targets),
                 self.shaders.revision, timing)
         last = self.last_report
-        if not force and self._idle is not None and last is not None and last.complete \
+        if not force and self._idle is not None and last is not None and last.complete and not self.refining \
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.last_report = FrameReport(self.frame, timing, [
@@ -302,6 +305,7 @@ class RenderGraph:
                         self._free(res)
                 self._keys.pop(p.name, None)
                 self._nonfinite.pop(p.name, None)
+                self.refining.discard(p.name)
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report

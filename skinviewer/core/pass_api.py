@@ -67,6 +67,7 @@ class Reflection:
         self.dropped: dict[str, str] = {}
         self.notes: list[str] = []
         self.state = state if state is not None else {}  # the graph's memory for shape decisions
+        self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
 
     def skip(self, reason: str) -> None:
         """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
@@ -92,6 +93,11 @@ class Reflection:
         """Read a setting without declaring it: only for the graph's shape (e.g. whether light i
         exists), never for a value the pass's output depends on."""
         return get_path(self._settings, path)
+
+    def depends(self, name: str, value: Any) -> None:
+        """The output also depends on ``value`` (e.g. a progressive pass's frame index, kept in
+        ``state``): part of the cache key, so the pass re-runs when it changes."""
+        self.depends_on[name] = value
 
     def input(self, resource: str) -> None:
         if resource not in self.inputs:

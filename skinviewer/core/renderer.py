@@ -238,6 +238,17 @@ class Renderer:
         self.ctx.screen.use() if self.ctx.screen is not None else None
         return report
 
+    def render_settled(self, s: Settings, max_frames: int = 65, **kw) -> tuple[FrameReport, int]:
+        """Render until no pass asks for another frame (progressive passes such as burley2.temporal
+        refine a still view over several frames), at most ``max_frames``. Returns the last report and
+        the number of frames rendered."""
+        report = self.render(s, **kw)
+        n = 1
+        while self.graph(s.technique).refining and n < max_frames:
+            report = self.render(s, **{k: v for k, v in kw.items() if k != "force"})
+            n += 1
+        return report, n
+
     def image(self, s: Settings) -> np.ndarray:
         """The sRGB image of the last frame as uint8 (H, W, 3), top row first."""
         g = self.graph(s.technique)

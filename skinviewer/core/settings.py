@@ -360,6 +360,9 @@ class Burley2Settings(_Model):
     wide_px: float = Field(1e6, gt=0.0, le=1e6, description="kernels at least this wide (filter radius, px) scale "
                                                               "the contrast cutoffs by wide_scale (a footprint LOD)")
     wide_scale: float = Field(1.0, ge=0.0, le=100.0, description="cutoff multiplier for wide kernels")
+    temporal: int = Field(0, ge=0, le=64, description="temporal reuse on a still view: frames in each pixel's "
+                          "running mean (0 off). Each frame turns the sample disks by a new seed; any change, the "
+                          "camera included, restarts the mean; the image refines for this many frames, then stops")
 
     @field_validator("channel_scale")
     @classmethod

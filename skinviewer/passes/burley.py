@@ -9,13 +9,13 @@ A the base contrast (max channel; -1 where none was computed). ``BurleyCountPass
 on the GPU (a two-stage reduction) and puts the frame's sample count in the pass report."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.output import OutputPass
-from skinviewer.passes.screen_space import DEPTH, DIFFUSE
+from skinviewer.passes.screen_space import DEPTH, DIFFUSE, CombinePass
 from skinviewer.physics import burley as B
 
 # the screen-space framework's resources (skinviewer/passes/screen_space): ss_diffuse rgb irradiance,
@@ -30,6 +30,12 @@ NEAR_W = "burley_near_w"
 FAR = "burley_far"
 FAR_W = "burley_far_w"
 STATS = "burley_stats"
+# temporal accumulation: the accumulated estimate, and the running mean / its depth, ping-ponged
+TEMPORAL = "burley_temporal"
+HISTORY = ("burley_history_0", "burley_history_1")
+TEMPORAL_FRAME = ("burley_temporal", "frame")  # shape_state: the seed index of the frame being accumulated
+TEMPORAL_LEFT = ("burley_temporal", "left")  # shape_state: frames still to take on this view
+SEED_STEP = 7919  # u_seed step per accumulated frame (any change decorrelates the rotation hash)
 COUNT = "burley_count"
 VIEW = "burley_view"
 
@@ -56,11 +62,18 @@ class Plan:
     reuse_dz: float = 0.05  # depth tolerance beyond the local slope, as a fraction of the filter radius
     wide_px: float = 1e30  # kernels at least this wide (filter radius, px) multiply the cutoffs by wide_scale
     wide_scale: float = 1.0
+    temporal: int = 0  # frames in each pixel's running mean (BurleyTemporalPass; 0: off)
 
     def sampling(self, budget: bool) -> B.Sampling:
         cut = tuple(-1.0 if self.always else c for c in self.cutoffs)
         return B.Sampling(self.levels, cut, self.split, self.contrast, budget, self.nested, self.seed, self.wide_px,
                           self.wide_scale)
+
+
+def seed_of(plan: Plan, state: dict) -> int:
+    """The rotation-hash seed of this frame: the plan's, stepped per accumulated frame (temporal)."""
+    j = state.get(TEMPORAL_FRAME, 0) if plan.temporal else 0
+    return (int(plan.seed) + SEED_STEP * int(j)) % (1 << 32)
 
 
 def _floats(v) -> str:
@@ -104,7 +117,7 @@ def two_level_plan(get) -> Plan:
     ``three-level``: a third level and a second cutoff on top of it."""
     mode = get("burley2.mode")
     if mode == "beyond":
-        return BEYOND_PLAN
+        return replace(BEYOND_PLAN, temporal=int(get("burley2.temporal")))
     t = get("burley2.threshold")
     c1 = tuple(float(t) * float(s) for s in get("burley2.channel_scale"))
     levels = (int(get("burley2.base")), int(get("burley2.extra")))
@@ -115,7 +128,8 @@ def two_level_plan(get) -> Plan:
         cutoffs += (tuple(t2 * float(s) for s in get("burley2.channel_scale")),)
     return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"), nested=mode == "nested",
                 reuse=int(get("burley2.reuse")), reuse_split=float(get("burley2.reuse_split")),
-                wide_px=float(get("burley2.wide_px")), wide_scale=float(get("burley2.wide_scale")))
+                wide_px=float(get("burley2.wide_px")), wide_scale=float(get("burley2.wide_scale")),
+                temporal=int(get("burley2.temporal")))
 
 
 class BurleyBlurPass(Pass):
@@ -148,6 +162,8 @@ class BurleyBlurPass(Pass):
                 r.setting("burley2")
         plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
         r.program("burley_blur", **table_defines(plan, budget))
+        if plan.temporal:
+            r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
         for res in (IRRADIANCE, DEPTH):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
@@ -166,7 +182,7 @@ class BurleyBlurPass(Pass):
         h = ec.setting("render.height")
         cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
         ec.uniforms(prog, u_proj_scale=float(view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
-                    u_S=tuple(float(v) for v in prof.S), u_d=prof.d, u_seed=int(plan.seed))
+                    u_S=tuple(float(v) for v in prof.S), u_d=prof.d, u_seed=seed_of(plan, ec.state))
         # the cutoffs are dropped by the compiler in Golubev's variant (no contrast test)
         ec.set(prog, "u_cutoff1", tuple(float(c) for c in cut[0]), optional=True)
         ec.set(prog, "u_cutoff2", tuple(float(c) for c in cut[1]), optional=True)
@@ -216,6 +232,73 @@ class BurleyReusePass(Pass):
         ec.uniforms(prog, u_reuse_dz=plan.reuse_dz * prof.filter_radius)
         ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W, lin_depth=DEPTH)
         ec.draw_fullscreen(prog, BLURRED)
+
+
+class BurleyTemporalPass(Pass):
+    """Temporal accumulation on a still view (``burley2.temporal`` frames; shaders/burley_temporal.frag):
+    each frame's estimate, taken with a new rotation seed, joins a per-pixel running mean of up to N
+    frames. Any change (camera included) restarts the mean from that frame, so a moving view shows the
+    plain per-frame estimate. While the mean fills, the pass asks the graph for more frames
+    (``ec.refine``); once N frames are in, it and the blur stay cached. Declares nothing (pruned) when
+    temporal is 0."""
+    view_dependent = True
+    uses_scene = True  # a new scene restarts the mean
+    name = "burley_temporal"
+
+    def __init__(self, plan: Plan | None = None):
+        self.fixed_plan = plan
+        self._last: tuple | None = None  # (what the mean was taken of, history index written)
+
+    def _plan(self, get) -> Plan:
+        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(get)
+
+    def reflect(self, r: Reflection) -> None:
+        if self.fixed_plan is None:
+            if r.peek("burley2.temporal") == 0:
+                return
+            r.setting("burley2")
+        r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
+        r.program("burley_temporal")
+        r.input(BLURRED)
+        w, h = r.setting("render.width"), r.setting("render.height")
+        r.output(TEMPORAL, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
+        for res in HISTORY:
+            r.output(res, TexSpec((w, h), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
+        s = ec._frame.settings
+        # the mean holds while nothing but how the frame is timed or shown changes
+        taken_of = (s.model_dump_json(exclude={"render": {"timing"}, "burley": {"view"}}),
+                    ec._frame.scene_version, id(ec.scene), ec.view.key())
+        last = self._last
+        reset = last is None or last[0] != taken_of
+        write = 0 if last is None else 1 - last[1]
+        prog = ec.program("burley_temporal")
+        ec.uniforms(prog, u_max_n=float(plan.temporal), u_reset=int(reset))
+        ec.textures(prog, current=BLURRED, history=ec.output(HISTORY[1 - write]))
+        ec.draw_fullscreen(prog, TEMPORAL, HISTORY[write])
+        self._last = (taken_of, write)
+        # frames still to take: N - 1 after a restart, then one fewer per frame
+        left = plan.temporal - 1 if reset else max(int(ec.state.get(TEMPORAL_LEFT, 0)) - 1, 0)
+        ec.state[TEMPORAL_LEFT] = left
+        if left > 0:
+            ec.state[TEMPORAL_FRAME] = int(ec.state.get(TEMPORAL_FRAME, 0)) + 1
+        ec.refine(left > 0)
+        done = plan.temporal - left
+        ec.note(f"temporal: frame {done} of {plan.temporal} in the mean" + (" (restarted)" if reset else ""),
+                frames=done, restarted=bool(reset))
+
+    def release(self) -> None:
+        self._last = None
+
+
+class BurleyCombinePass(CombinePass):
+    """The framework's combine pass reading the accumulated estimate when ``burley2.temporal`` is on."""
+
+    def reflect(self, r: Reflection) -> None:
+        self.source = TEMPORAL if r.peek("burley2.temporal") > 0 else BLURRED
+        super().reflect(r)
 
 
 @dataclass(frozen=True)

@@ -76,18 +76,24 @@ def display_encode(x: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
 
 
-def dssim(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> float:
-    """DSSIM = (1 - SSIM) / 2 (seed 001 eq. 4.3), with the setup in ``DSSIM_SETUP``."""
+def dssim_map(x: np.ndarray, ref: np.ndarray, exposure: float = 1.0) -> np.ndarray:
+    """Per-pixel DSSIM (1 - SSIM) / 2 (seed 001 eq. 4.3; setup ``DSSIM_SETUP``), the channel mean."""
     from skimage.metrics import structural_similarity
 
     x, ref = _check(x, ref)
-    m = _mask(x, mask)
     a, b = display_encode(x, exposure), display_encode(ref, exposure)
     _, smap = structural_similarity(a, b, data_range=1.0, channel_axis=-1, gaussian_weights=True, sigma=1.5,
                                     use_sample_covariance=False, full=True)
-    smap = smap.mean(axis=-1)
-    s = float(smap[m].mean()) if m.any() else 1.0
-    return float(np.clip((1.0 - s) / 2.0, 0.0, 1.0))
+    return (1.0 - smap.mean(axis=-1)) / 2.0
+
+
+def dssim(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> float:
+    """DSSIM = (1 - SSIM) / 2 (seed 001 eq. 4.3), with the setup in ``DSSIM_SETUP``: the mean of
+    ``dssim_map`` over the mask."""
+    x, ref = _check(x, ref)
+    m = _mask(x, mask)
+    d = dssim_map(x, ref, exposure)
+    return float(np.clip(d[m].mean(), 0.0, 1.0)) if m.any() else 0.0
 
 
 @dataclass(frozen=True)

@@ -8,19 +8,21 @@ from skinviewer.passes.burley import (
     BLURRED,
     COUNT,
     BurleyBlurPass,
+    BurleyCombinePass,
     BurleyCountPass,
     BurleyOutputPass,
     BurleyReusePass,
+    BurleyTemporalPass,
     BurleyViewPass,
 )
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
-from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
+from skinviewer.passes.screen_space import ScreenLightingPass
 from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(burley=True), BurleyBlurPass("two_level"), BurleyReusePass(), BurleyCountPass(),
-                              CombinePass(BLURRED), BurleyViewPass(), BurleyOutputPass("lit")]
+    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(burley=True), BurleyBlurPass("two_level"), BurleyReusePass(), BurleyTemporalPass(),
+                              BurleyCountPass(), BurleyCombinePass(BLURRED), BurleyViewPass(), BurleyOutputPass("lit")]
 
 
 def sweep(quick: bool):
@@ -32,6 +34,8 @@ def sweep(quick: bool):
             out.append((f"{base}+{extra} @{t}", {"burley2.base": base, "burley2.extra": extra, "burley2.threshold": t}))
     out.append(("12+10 equal-count rings @0.25", {"burley2.split": "equal-count"}))
     out.append(("beyond: 8+14 @0.25 reuse 1", {"burley2.base": 8, "burley2.extra": 14, "burley2.reuse": 1}))
+    out.append(("beyond mode", {"burley2.mode": "beyond"}))
+    out.append(("beyond mode, temporal 16 (still view)", {"burley2.mode": "beyond", "burley2.temporal": 16}))
     return out
 
 
