@@ -24,7 +24,8 @@ from skinviewer.core.gl import describe, headless_context  # noqa: E402
 from skinviewer.core.renderer import Renderer  # noqa: E402
 from skinviewer.core.settings import DeonSettings, Settings, with_values  # noqa: E402
 from skinviewer.physics import accuracy as A  # noqa: E402
-from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels, texture_of  # noqa: E402
+from skinviewer.passes.deon import DIFFUSE as DEON_DIFFUSE  # noqa: E402
+from skinviewer.physics.diffusion import IRRADIANCE  # noqa: E402
 from skinviewer.scene.scenes import build_scene, scene_overrides  # noqa: E402
 
 DEFAULT = DeonSettings().gaussians
@@ -46,7 +47,8 @@ def laser(r: Renderer, sizes, offsets=((0.0, 0.0), (0.013, -0.007))) -> None:
     for tech, key in (("deon", "deon.irradiance_size"), ("gosselin", "gosselin.light_map_size")):
         for n in sizes:
             for off in offsets:
-                s = settings("laser", tech, {key: n, "deon.energy_conservation": False, "lights.0.position": [off[0], off[1], 0.0]})
+                s = settings("laser", tech, {key: n, "deon.energy_conservation": False, "deon.tsm": False,
+                                             "lights.0.position": [off[0], off[1], 0.0]})
                 r.render(s)
                 g = r.graph(tech)
                 E = g.read(IRRADIANCE if tech == "deon" else "gosselin_light_map")[..., :3].astype(np.float64)
@@ -56,10 +58,7 @@ def laser(r: Renderer, sizes, offsets=((0.0, 0.0), (0.013, -0.007))) -> None:
                 ratio = E[..., 0].sum() * area / p_true
                 err = "   (no lit texel: no error measurable)"
                 if tech == "deon" and ratio > 0:
-                    plan = blur_plan_texels(list(DEF_V), s.deon.reuse_irradiance_below_texels,
-                                            A.texel_mm(m.positions, m.uvs, m.mm_per_unit, n)[0])
-                    D = sum(np.asarray(gs.weights) * g.read(texture_of(p))[..., :3].astype(np.float64)
-                            for gs, p in zip(s.deon.gaussians, plan))
+                    D = g.read(DEON_DIFFUSE)[..., :3].astype(np.float64)  # sum_i w_i blur_i (TSM off)
                     e = A.laser_errors(D, E, X, Y, area, DEF_V, DEF_W)
                     err = "  " + " ".join(f"{100 * x:5.1f}" for x in e["l1"]) + "  " + \
                         " ".join(f"{100 * x:5.1f}" for x in e["eq31"])
@@ -73,7 +72,8 @@ SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().pa
 SCAN = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
 
 
-def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = None, dump: str | None = None) -> dict:
+def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = None, dump: str | None = None,
+          tissue_only: bool = False) -> dict:
     from scipy import ndimage
 
     from skinviewer.physics import metrics
@@ -87,15 +87,21 @@ def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = Non
     g = r.graph("deon")
     m = r.scene.gpu.mesh
     E = g.read(IRRADIANCE)[..., :3].astype(np.float64)
-    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
-                            1.0 / (n * r.scene.gpu.mean_uv_per_mm))
-    D = sum(np.asarray(x.weights) * g.read(texture_of(p))[..., :3].astype(np.float64)
-            for x, p in zip(s.deon.gaussians, plan))
+    # the diffused map the final pass reads: sum_i w_i blur_i summed in texture space (TSM off: nothing
+    # transmitted), with the shipped defaults (sub-texel blurs folded into the next, deon.fold_below_texels)
+    D = g.read(DEON_DIFFUSE)[..., :3].astype(np.float64)
     tri, pos, area = texel_surface(m.positions, m.uvs, m.indices, n, r.scene.gpu.mm_per_unit)
     cov = tri >= 0
     ref = surface_diffusion_reference(E, pos, area, cov, [x.variance for x in s.deon.gaussians],
                                       [x.weights for x in s.deon.gaussians])
     lit = cov & (E.max(-1) > 0)
+    if tissue_only:  # a reference that does not couple points across air (contacts, cavities)
+        Pm, Fm = m.positions.astype(np.float64), m.indices.astype(np.int64)
+        fn = np.cross(Pm[Fm[:, 1]] - Pm[Fm[:, 0]], Pm[Fm[:, 2]] - Pm[Fm[:, 0]])
+        fn /= np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-30)
+        nrm = np.where(cov[..., None], fn[np.maximum(tri, 0)], 0.0)
+        ref = surface_diffusion_reference(E, pos, area, cov, [x.variance for x in s.deon.gaussians],
+                                          [x.weights for x in s.deon.gaussians], normals=nrm)
     rms = metrics.rel_rms(D, ref, lit)
     p99 = metrics.p99_rel(D, ref, lit)
     err = metrics.rel_error_map(D, ref, lit)
@@ -129,6 +135,10 @@ def main() -> int:
         print_seams("seam-aware gutters on", seams(r))
         print_seams("  + stretch_shear", seams(r, extra={"deon.stretch_shear": True}))
         print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_shear": True, "deon.stretch_per_gaussian": True}))
+        print("## the same (seam-aware on) against a reference that couples texels through tissue only: no pair whose")
+        print("## straight path leaves a point into the air (lips / eyelids touching, nostril and ear cavities)")
+        print_seams("seam-aware gutters on", seams(r, tissue_only=True))
+        print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}, tissue_only=True))
     if "laser" in a.parts:
         laser(r, sizes)
     r.release()

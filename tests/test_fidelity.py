@@ -290,3 +290,30 @@ def test_laser_error_falls_with_map_size(renderer):
         errs[n] = A.laser_errors(D, E, X, Y, area, [x.variance for x in gs], [x.weights for x in gs])["l1"]
     assert np.all(errs[512] < 0.5 * errs[256]), errs
     assert np.all(errs[1024] <= errs[512] + 0.002) and np.all(errs[1024] < 0.01), errs
+
+
+def test_tissue_only_reference_does_not_couple_across_air():
+    """scene.texels.surface_diffusion_reference with normals: two plates facing each other 1 mm apart
+    (lips touching) exchange light through 3D distance, but not through tissue; a flat plate alone is
+    unchanged by the option."""
+    from skinviewer.scene.texels import surface_diffusion_reference
+    n = 16
+    g = (np.arange(n) - n / 2 + 0.5) * 0.5  # mm
+    X, Y = np.meshgrid(g, g)
+    pos = np.zeros((n, 2 * n, 3))
+    pos[:, :n] = np.stack([X, Y, np.zeros_like(X)], -1)          # lower plate, normal +z
+    pos[:, n:] = np.stack([X, Y, np.ones_like(X)], -1)           # upper plate above it, normal -z
+    nrm = np.zeros_like(pos)
+    nrm[:, :n, 2], nrm[:, n:, 2] = 1.0, -1.0
+    E = np.zeros((n, 2 * n, 3))
+    E[:, :n] = 1.0  # only the lower plate is lit
+    area = np.full((n, 2 * n), 0.25)
+    cov = np.ones((n, 2 * n), bool)
+    v, w = [1.0], [(1.0, 1.0, 1.0)]
+    through_air = surface_diffusion_reference(E, pos, area, cov, v, w)
+    tissue = surface_diffusion_reference(E, pos, area, cov, v, w, normals=nrm)
+    assert through_air[:, n:, 0].max() > 0.1  # the 3D-distance reference lights the upper plate
+    assert tissue[:, n:, 0].max() == 0.0 and np.allclose(tissue[:, :n], 1.0)
+    flat = surface_diffusion_reference(E[:, :n], pos[:, :n], area[:, :n], cov[:, :n], v, w)
+    assert np.array_equal(flat, surface_diffusion_reference(E[:, :n], pos[:, :n], area[:, :n], cov[:, :n], v, w,
+                                                            normals=nrm[:, :n]))

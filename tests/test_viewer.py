@@ -984,3 +984,24 @@ def test_burley2_in_the_viewer_shows_extra_samples_and_the_gpu_count(app):
     assert app.state.apply({"burley.view": "image"}, "burley.view")
     assert app.state.set_technique("phong")
     app.step(1)
+
+
+def test_temporal_refines_in_the_viewer_without_hiding_the_change(app):
+    """burley2.temporal: the viewer keeps rendering while the running mean fills (nothing changed), then
+    idles; the cost line keeps the change that started it, not a refinement frame."""
+    try:
+        assert app.state.apply({"technique": "burley2", "burley2.mode": "beyond", "burley2.temporal": 4,
+                                "render.width": 96, "render.height": 96})
+        app.step(1)
+        first = app.frame.last_change
+        assert first is not None and any(n == "ss_lighting" for n, _ in first.passes)
+        frames = []
+        for _ in range(6):
+            app.step(1)
+            rec = {p.name: p for p in app.frame.report.passes}["burley_temporal"]
+            frames.append((rec.status, rec.figures.get("frames")))
+        assert ("ran", 4) in frames and frames[-1][0] == "cached"  # refined to 4 frames, then idle
+        assert app.frame.last_change is first  # refinement frames are not changes
+    finally:
+        app.state.apply({"technique": "phong", "burley2.temporal": 0, "burley2.mode": "thesis"})
+        app.step(1)

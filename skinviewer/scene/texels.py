@@ -54,18 +54,23 @@ def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
 
 
 def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutoff_sigmas: float = 3.5,
-                                block: int = 8192) -> np.ndarray:
+                                block: int = 8192, normals=None, air_sin: float = 0.5) -> np.ndarray:
     """D(x) = sum_i w_i [sum_y E(y) A(y) G(v_i, |x - y|)] / [sum_y A(y) G(v_i, |x - y|)] over covered
     texels x, y (3D distance in mm). The normalisation makes each Gaussian a weighted mean of E, so a
     Gaussian narrower than a texel (skin's first, sigma 0.08 mm) is the identity instead of a
     point-sampled spike, and equals the plain sum on flat, closed, well-sampled surfaces. E (n, n, 3);
-    returns (n, n, 3), 0 outside ``covered``."""
+    returns (n, n, 3), 0 outside ``covered``.
+    ``normals`` (n, n, 3) outward unit normals: pairs whose straight path crosses air do not couple
+    (tissue paths only): the other point in front of x's tangent plane while the normals face each other
+    (opposite walls: lips or eyelids touching, a nostril), or more than ``air_sin`` x r in front of either
+    tangent plane (a deep cavity). Mild concavities and thin parts (the other point behind) still couple."""
     v = np.asarray(variances, np.float64)
     w = np.asarray(weights, np.float64).reshape(len(v), 3)
     idx = np.flatnonzero(covered.ravel())
     X = pos.reshape(-1, 3)[idx]
     a = area.ravel()[idx]
     src = np.asarray(E, np.float64).reshape(-1, 3)[idx] * a[:, None]
+    Nrm = None if normals is None else np.asarray(normals, np.float64).reshape(-1, 3)[idx]
     tree = cKDTree(X)
     out = np.zeros((len(idx), 3))
     for vi, wi in zip(v, w):
@@ -76,6 +81,12 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
             m = min(block, len(idx) - s)
             pairs = cKDTree(X[s:s + m]).sparse_distance_matrix(tree, rmax, output_type="ndarray")
             i, j, r = pairs["i"], pairs["j"], pairs["v"]  # self pairs (r = 0) included
+            if Nrm is not None:
+                d = X[j] - X[s + i]
+                up_i, up_j = (d * Nrm[s + i]).sum(1), (-d * Nrm[j]).sum(1)  # height above each tangent plane
+                facing = (Nrm[s + i] * Nrm[j]).sum(1) < 0.0  # opposite walls of a gap
+                air = ((up_i > 0.0) & facing) | (up_i > air_sin * r) | (up_j > air_sin * r)
+                i, j, r = i[~air], j[~air], r[~air]
             k = np.exp(-r * r / (2 * vi))
             den = np.bincount(i, k * a[j], minlength=m)
             for c in range(3):

@@ -235,7 +235,10 @@ class FrameController:
         for p in report.passes:
             if p.status == "ran" and p.ms is not None:
                 self.last_ms[p.name] = p.ms
-        if report.ran or self._change_source == "technique":  # a cached technique switch costs 0 ms: say so
+        # a cached technique switch costs 0 ms: say so; a frame that only refined a still view
+        # (burley2.temporal: nothing changed) is not a change
+        refining_only = not pending and not self._change_source and self._shown is live
+        if (report.ran and not refining_only) or self._change_source == "technique":
             self._record_change(report, live.technique)
         self._shown = live
         self._change_source = ""
