@@ -68,7 +68,8 @@ def test_still_view_refines_n_frames_then_idles_and_converges(renderer, gl_ctx, 
     np.testing.assert_allclose(mean[mask][:, :3].sum(0), one[mask][:, :3].sum(0), rtol=0.01)
 
 
-@pytest.mark.parametrize("change", [{"lights.0.intensity": 1.5}, {"camera.yaw": 12.0}])
+@pytest.mark.parametrize("change", [{"lights.0.intensity": 1.5}, {"camera.yaw": 12.0},
+                                    {"burley.mfp": (3.0, 1.2, 0.7)}, {"burley.budget": True}])
 def test_any_change_restarts_the_mean(renderer, beyond, change):
     s = with_values(beyond, {"burley2.temporal": N})
     for _ in range(N):

@@ -242,7 +242,7 @@ class BurleyTemporalPass(Pass):
     (``ec.refine``); once N frames are in, it and the blur stay cached. Declares nothing (pruned) when
     temporal is 0."""
     view_dependent = True
-    uses_scene = True  # a new scene restarts the mean
+    uses_scene = False
     name = "burley_temporal"
 
     def __init__(self, plan: Plan | None = None):
@@ -259,7 +259,11 @@ class BurleyTemporalPass(Pass):
             r.setting("burley2")
         r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
         r.program("burley_temporal")
-        r.input(BLURRED)
+        for f in PROFILE_FIELDS + ("budget",):
+            r.setting(f"burley.{f}")
+        # the lighting pass's outputs: a new version (camera, lights, scene, size...) restarts the mean
+        for res in (BLURRED, IRRADIANCE, DEPTH):
+            r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
         r.output(TEMPORAL, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
         for res in HISTORY:
@@ -267,10 +271,10 @@ class BurleyTemporalPass(Pass):
 
     def execute(self, ec) -> None:
         plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
-        s = ec._frame.settings
-        # the mean holds while nothing but how the frame is timed or shown changes
-        taken_of = (s.model_dump_json(exclude={"render": {"timing"}, "burley": {"view"}}),
-                    ec._frame.scene_version, id(ec.scene), ec.view.key())
+        # the mean holds while the lighting pass's outputs (their versions), the profile and the plan are
+        # the ones it was taken of: only the blur's seed changed
+        taken_of = (ec.input_version(IRRADIANCE), ec.input_version(DEPTH), plan,
+                    tuple(repr(ec.setting(f"burley.{f}")) for f in PROFILE_FIELDS + ("budget",)))
         last = self._last
         reset = last is None or last[0] != taken_of
         write = 0 if last is None else 1 - last[1]
