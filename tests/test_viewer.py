@@ -994,7 +994,7 @@ def test_temporal_refines_in_the_viewer_without_hiding_the_change(app):
                                 "render.width": 96, "render.height": 96})
         app.step(1)
         first = app.frame.last_change
-        assert first is not None and any(n == "ss_lighting" for n, _ in first.passes)
+        assert first is not None and any(n == "burley_temporal" for n, _ in first.passes)
         frames = []
         for _ in range(6):
             app.step(1)

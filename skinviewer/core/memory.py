@@ -30,5 +30,5 @@ def renderer_memory(renderer) -> dict[str, int]:
         for tex in (sc.albedo, sc.normal_map, sc.specular_map):
             out["scene maps"] += texture_bytes(tex, mipmapped=True)
         out["scene maps"] += texture_bytes(sc.region_map)
-        out["mesh buffers"] = sc.vbo.size + sc.ibo.size + sum(v.size + i.size for v, i, _ in sc._lods.values())
+        out["mesh buffers"] = sc.mesh_bytes()
     return out

@@ -99,6 +99,10 @@ class GpuScene:
                                        self.ctx.buffer(m.indices.astype(np.uint32).tobytes()), len(m.indices))
         return hit
 
+    def mesh_bytes(self) -> int:
+        """Bytes of the mesh buffers: the mesh and every level of detail built so far."""
+        return self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
+
     def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
         caches it per program)."""

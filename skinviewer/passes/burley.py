@@ -30,7 +30,7 @@ NEAR_W = "burley_near_w"
 FAR = "burley_far"
 FAR_W = "burley_far_w"
 STATS = "burley_stats"
-# temporal accumulation: the accumulated estimate, and the running mean / its depth, ping-ponged
+# temporal accumulation: the accumulated estimate, and the running mean (rgb, a = frames in it), ping-ponged
 TEMPORAL = "burley_temporal"
 HISTORY = ("burley_history_0", "burley_history_1")
 TEMPORAL_FRAME = ("burley_temporal", "frame")  # shape_state: the seed index of the frame being accumulated
