@@ -80,9 +80,11 @@ VARIANTS: dict[str, Plan] = {
     # more savings, less quality: 6 + 10 with reuse
     "6+10 reuse": Plan((6, 10), (c3(0.25),), reuse=1, reuse_split=0.5),
     # temporal reuse (burley2.temporal): the same per-frame samples, 8 frames in a running mean
-    # temporal reuse on a still view (burley2.temporal): the same samples per frame, N frames in a running mean
+    # temporal reuse on a still view (burley2.temporal): the same samples per frame, N frames in a running mean;
+    # with reuse the shown image moves from the pooled mean to the mean of the pixels' own samples
     "beyond+temporal 8": replace(BEYOND_PLAN, temporal=8),
     "beyond+temporal 16": replace(BEYOND_PLAN, temporal=16),
+    "beyond w/o reuse+temporal 16": replace(BEYOND_PLAN, reuse=0, temporal=16),  # ablation: no pooled frame 1
     # the same estimators with a rotation hash not shared with golubev-30 (seed): how much of a method's
     # DSSIM to the 30-sample image is noise it shares with that image
     "golubev-22 own seed": Plan((22,), seed=3),

@@ -11,6 +11,7 @@ from skinviewer.core.settings import with_values
 from skinviewer.passes import burley as PB
 
 N = 8
+N_CONVERGE = 16  # beyond pools neighbours' samples: the own-sample mean it converges to needs ~16 frames
 
 
 @pytest.fixture
@@ -37,13 +38,13 @@ def test_still_view_refines_n_frames_then_idles_and_converges(renderer, gl_ctx, 
     renderer.render(beyond)
     fd = framing_distance(renderer.scene.gpu.radius, beyond.camera.fov_y)
     # a close-up: wide kernels, where the estimate's noise (not its bias) is the error
-    s = with_values(beyond, {"burley2.temporal": N, "camera.distance": 0.3 * fd})
+    s = with_values(beyond, {"burley2.temporal": N_CONVERGE, "camera.distance": 0.3 * fd})
     first = renderer.render(s)
     assert "restarted" in _temporal(first).note
     one = renderer.read(s, PB.TEMPORAL).copy()
     assert np.array_equal(one, renderer.read(s, PB.BLURRED))  # frame 1: the plain estimate
     mask = one[..., 3] > 0.5
-    for k in range(2, N + 1):
+    for k in range(2, N_CONVERGE + 1):
         rep = renderer.render(s)
         # only the sampling re-runs: lighting, shadows and the scene stay cached
         assert set(rep.ran) == {"burley_blur", "burley_reuse", "burley_temporal", "ss_combine", "output",
@@ -52,8 +53,13 @@ def test_still_view_refines_n_frames_then_idles_and_converges(renderer, gl_ctx, 
     assert renderer.render(s).ran == [] and renderer.render(s).ran == []  # converged: idle
     mean = renderer.read(s, PB.TEMPORAL)
     assert np.all(np.isfinite(mean)) and np.all(mean[mask][:, :3] >= 0)
+    # converged, what is shown is the mean of each pixel's own samples (no pooled, 1-px-shifted ones)
+    own = [renderer.read(s, h)[..., :3] for h in PB.HISTORY_OWN]
+    assert any(np.array_equal(mean[mask][:, :3], o[mask]) for o in own)
+    assert not any(np.array_equal(mean[mask][:, :3], renderer.read(s, h)[..., :3][mask]) for h in PB.HISTORY)
     # against a converged image of the same frame (64 samples x 32 frames, no reuse): the mean of N frames
-    # is closer than one frame (independent seeds: the noise falls; the estimator's own bias stays)
+    # is closer than one frame (independent seeds: the noise falls; it ends on the own samples' mean,
+    # without the pooling's bias)
     from skinviewer.core.renderer import Renderer
     ref_r = Renderer(gl_ctx)
     ref_s = with_values(s, {"burley2.mode": "thesis", "burley2.base": 64, "burley2.threshold": 1.0,

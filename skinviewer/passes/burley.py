@@ -33,6 +33,7 @@ STATS = "burley_stats"
 # temporal accumulation: the accumulated estimate, and the running mean (rgb, a = frames in it), ping-ponged
 TEMPORAL = "burley_temporal"
 HISTORY = ("burley_history_0", "burley_history_1")
+HISTORY_OWN = ("burley_history_own_0", "burley_history_own_1")  # with reuse: the mean of the own samples
 TEMPORAL_FRAME = ("burley_temporal", "frame")  # shape_state: the seed index of the frame being accumulated
 TEMPORAL_LEFT = ("burley_temporal", "left")  # shape_state: frames still to take on this view
 SEED_STEP = 7919  # u_seed step per accumulated frame (any change decorrelates the rotation hash)
@@ -238,7 +239,9 @@ class BurleyTemporalPass(Pass):
     """Temporal accumulation on a still view (``burley2.temporal`` frames; shaders/burley_temporal.frag):
     each frame's estimate, taken with a new rotation seed, joins a per-pixel running mean of up to N
     frames. Any change (camera included) restarts the mean from that frame, so a moving view shows the
-    plain per-frame estimate. While the mean fills, the pass asks the graph for more frames
+    plain per-frame estimate. With neighbourhood reuse (beyond) it also keeps the mean of each pixel's
+    own samples and moves to it as frames come in: the restart frame is the clean pooled estimate, the
+    converged image has no pooling bias. While the mean fills, the pass asks the graph for more frames
     (``ec.refine``); once N frames are in, it and the blur stay cached. Declares nothing (pruned) when
     temporal is 0."""
     view_dependent = True
@@ -257,17 +260,22 @@ class BurleyTemporalPass(Pass):
             if r.peek("burley2.temporal") == 0:
                 return
             r.setting("burley2")
+        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
         r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
-        r.program("burley_temporal")
+        r.program("burley_temporal", **self._defines(plan))
         for f in PROFILE_FIELDS + ("budget",):
             r.setting(f"burley.{f}")
         # the lighting pass's outputs: a new version (camera, lights, scene, size...) restarts the mean
-        for res in (BLURRED, IRRADIANCE, DEPTH):
+        for res in (BLURRED, IRRADIANCE, DEPTH) + ((PARTIAL, NEAR_W, FAR, FAR_W) if plan.reuse else ()):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
         r.output(TEMPORAL, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
-        for res in HISTORY:
+        for res in HISTORY + (HISTORY_OWN if plan.reuse else ()):
             r.output(res, TexSpec((w, h), 4, "f4", filter="nearest"))
+
+    @staticmethod
+    def _defines(plan: Plan) -> dict[str, str]:
+        return {"TEMPORAL_REUSE": "1" if plan.reuse else "0"}
 
     def execute(self, ec) -> None:
         plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
@@ -278,10 +286,15 @@ class BurleyTemporalPass(Pass):
         last = self._last
         reset = last is None or last[0] != taken_of
         write = 0 if last is None else 1 - last[1]
-        prog = ec.program("burley_temporal")
+        prog = ec.program("burley_temporal", **self._defines(plan))
         ec.uniforms(prog, u_max_n=float(plan.temporal), u_reset=int(reset))
         ec.textures(prog, current=BLURRED, history=ec.output(HISTORY[1 - write]))
-        ec.draw_fullscreen(prog, TEMPORAL, HISTORY[write])
+        targets = (TEMPORAL, HISTORY[write])
+        if plan.reuse:  # the own samples' mean beside the pooled one (shaders/burley_temporal.frag)
+            ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W,
+                        history_own=ec.output(HISTORY_OWN[1 - write]))
+            targets += (HISTORY_OWN[write],)
+        ec.draw_fullscreen(prog, *targets)
         self._last = (taken_of, write)
         # frames still to take: N - 1 after a restart, then one fewer per frame
         left = plan.temporal - 1 if reset else max(int(ec.state.get(TEMPORAL_LEFT, 0)) - 1, 0)
