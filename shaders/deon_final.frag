@@ -21,6 +21,12 @@ uniform sampler2D rho_dt_tex;
 uniform int u_tsm;
 uniform sampler2D diffuse_sum;   // sum_i w_i blur_i (+ transmitted) in texture space (deon_combine.frag)
 uniform int u_combined;          // generic shaders: read diffuse_sum instead of the blurs
+#ifndef DEON_TEXTURE_SHADOWS
+#define DEON_TEXTURE_SHADOWS 0
+#endif
+#if DEON_TEXTURE_SHADOWS
+uniform sampler2D visibility;    // fac_shadow per light slot, from the irradiance pass (deon_irradiance.frag)
+#endif
 out vec4 f_color;
 
 // Specialised (issue 14) by GAUSSIAN_MASK (bit i: Gaussian i has weight and its blur is bound),
@@ -74,12 +80,19 @@ void main() {
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
     diffuse *= safe_pow(C, 1.0 - u_mix) * rho_v;
     vec3 spec = vec3(0.0);
+#if DEON_TEXTURE_SHADOWS
+    vec4 vis = texture(visibility, v_uv);  // eq. 10 per texel: no shadow-map lookups on a camera move
+#endif
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         if (!(dot(N, L) > 0.0)) continue;
         float ks = surface_ks(N, L, V, sp);
+#if DEON_TEXTURE_SHADOWS
+        spec += Lc * (ks * vis[i]);
+#else
         spec += Lc * (ks * shadow_factor(i, v_position, normalize(v_normal)));
+#endif
     }
     f_color = vec4(finite3(diffuse + spec), 1.0);
 }

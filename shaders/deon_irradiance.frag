@@ -21,19 +21,29 @@ uniform int u_tsm;
 uniform sampler2D tsm_map;
 uniform mat4 u_tsm_matrix;
 uniform float u_max_thickness;   // mm
-out vec4 f_irradiance;
+layout(location = 0) out vec4 f_irradiance;
+#ifndef DEON_VISIBILITY
+#define DEON_VISIBILITY 0
+#endif
+#if DEON_VISIBILITY
+// fac_shadow of each light slot (eq. 10) where it lights the texel (N.L > 0), else 0: the final pass's
+// specular reads it instead of testing the shadow maps per pixel (deon.specular_shadows = texture)
+layout(location = 1) out vec4 f_visibility;
+#endif
 void main() {
     set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 C = safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
+    vec4 vis = vec4(0.0);
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);
         if (!(ndl > 0.0)) continue;
         float s = shadow_factor(i, v_position, normalize(v_normal));
+        vis[i] = s;
         float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
         E += Lc * (ndl * s * rho);
     }
@@ -51,4 +61,7 @@ void main() {
     }
     d = clamp(finite_f32(d), 0.0, u_max_thickness);
     f_irradiance = finite4_f32(vec4(E, d));
+#if DEON_VISIBILITY
+    f_visibility = vis;
+#endif
 }

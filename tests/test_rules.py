@@ -280,3 +280,26 @@ def test_transmission_in_texture_space_matches_the_per_pixel_term(renderer):
     assert np.sqrt(np.mean((lit - ref)[glow] ** 2) / np.mean(ref[glow] ** 2)) < 0.04
     renderer.render(s)
     assert renderer.render(with_values(s, {"camera.yaw": s.camera.yaw + 20.0})).ran == ["deon_final", "output"]
+
+
+def test_texture_shadows_camera_move_reads_no_shadow_map(renderer):
+    """deon.specular_shadows = texture (issue 14): the irradiance pass keeps each light's fac_shadow per
+    texel, the final pass's specular reads it, so a camera move samples no shadow map; the image stays
+    within a fraction of a percent of the per-pixel test."""
+    s = small_settings("head", "deon", 96)
+    assert s.deon.specular_shadows == "texture"
+    rep = renderer.render(s)
+    fin = _rec(rep, "deon_final")
+    assert "deon_visibility" in fin.inputs and not any(i.startswith("shadow_map") for i in fin.inputs)
+    vis = renderer.read(s, "deon_visibility")
+    assert vis.min() >= 0.0 and vis.max() <= 1.0 and (vis[..., 0] == 1.0).any() and (vis[..., 0] == 0.0).any()
+    tex = renderer.read(s, "lit")[..., :3].astype(np.float64)
+    moved = renderer.render(with_values(s, {"camera.yaw": s.camera.yaw + 4.0}))
+    assert moved.ran == ["deon_final", "output"]
+    pix_s = with_values(s, {"deon.specular_shadows": "pixel"})
+    renderer.render(pix_s)
+    assert any(i.startswith("shadow_map") for i in _rec(renderer.render(pix_s), "deon_final").inputs)
+    pix = renderer.read(pix_s, "lit")[..., :3].astype(np.float64)
+    m = pix.max(-1) > 0
+    assert np.sqrt(((tex - pix)[m] ** 2).mean()) / pix[m].mean() < 0.01
+    assert not np.array_equal(tex, pix)  # the specular's shadow test really moved to texture space

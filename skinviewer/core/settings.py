@@ -286,6 +286,10 @@ class DeonSettings(_Model):
     combine_blurs: bool = Field(
         True, description="sum the weighted blurs (eq. 34) once in texture space, so a camera move reads one "
                           "texture instead of one per Gaussian (issue 14; equal up to float rounding)")
+    specular_shadows: Literal["texture", "pixel"] = Field(
+        "texture", description="where the specular's shadow test (eq. 10) is evaluated: texture: once per texel "
+        "by the irradiance pass (the same PCF, kept per light), so a camera move does no shadow-map lookups; "
+        "pixel: per pixel in the final pass")
     reuse_irradiance_below_texels: float = Field(
         0.5, ge=0.0, le=8.0,
         description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "

@@ -18,9 +18,10 @@ def shadow_resource(i: int) -> str:
     return f"shadow_map_{i}"
 
 
-def declare_lighting(r: Reflection) -> dict[str, int]:
+def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, int]:
     """Declare what a lit pass reads: every light, the shadow test settings, and the shadow maps
-    of shadow-casting lights. Returns the defines that specialise shaders/lib/lights.glsl to this
+    of shadow-casting lights (not with ``shadow_maps=False``: a pass that reads the shadow test's
+    result from elsewhere). Returns the defines that specialise shaders/lib/lights.glsl to this
     frame's lights (declare the lit program with them: ``r.program(name, **defines)``)."""
     lights = r.setting("lights")
     r.setting("shadow.tol")
@@ -33,13 +34,15 @@ def declare_lighting(r: Reflection) -> dict[str, int]:
     mask = 0
     for slot, (i, l) in enumerate(active):
         if l.cast_shadow:
-            r.input(shadow_resource(i))
+            if shadow_maps:
+                r.input(shadow_resource(i))
             mask |= 1 << slot
     return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_MASK": mask}
 
 
-def set_lighting(ec, prog) -> None:
-    """Set the uniforms and shadow maps of shaders/lib/lights.glsl (slot k = k-th enabled light)."""
+def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
+    """Set the uniforms and shadow maps of shaders/lib/lights.glsl (slot k = k-th enabled light);
+    ``shadow_maps=False``: the uniforms only (see declare_lighting)."""
     scene = ec.scene
     lights = ec.setting("lights")
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if light_on(l)]
@@ -63,7 +66,7 @@ def set_lighting(ec, prog) -> None:
         shadowed[slot] = 1 if l.cast_shadow else 0
         mats[slot] = ls.gl_matrix.T  # column-major
         texels[slot] = ls.texel_world(map_size)
-        if l.cast_shadow:
+        if l.cast_shadow and shadow_maps:
             ec.bind(prog, f"shadow_map{slot}", shadow_resource(i))
     ec.uniforms(prog, u_light_count=len(active), u_light_kind=kind, u_light_radiance=radiance,
                 u_light_dir=dirs, u_light_pos=poss, u_beam_radius=radii, u_light_shadowed=shadowed,

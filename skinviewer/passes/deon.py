@@ -40,6 +40,7 @@ from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
+    dilate,
     gutter_resource,
     seam_resource,
     unwrap_dilated,
@@ -61,6 +62,7 @@ STRETCH = "deon_stretch"
 TSM = "deon_tsm"
 DIFFUSE = "deon_diffuse"  # sum_i w_i blur_i + transmitted (DiffuseSumPass)
 TRANSMITTED = "deon_transmitted"  # eq. 33 in texture space (TransmittedPass)
+VISIBILITY = "deon_visibility"  # fac_shadow (eq. 10) per light slot and texel (deon.specular_shadows)
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 
@@ -170,7 +172,11 @@ class IrradiancePass(Pass):
             r.input(RHO_DT_RESOURCE)
         if tsm_light_index(r) is not None:
             r.input(TSM)
-        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting)
+        vis = texture_shadows(r)
+        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
+                          DEON_VISIBILITY=int(vis))
+        if vis:
+            r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
     def execute(self, ec) -> None:
         n = map_size(ec)
@@ -187,7 +193,15 @@ class IrradiancePass(Pass):
         if use_tsm:
             ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
-        unwrap_dilated(ec, prog, n, IRRADIANCE)
+        if not texture_shadows(ec):
+            unwrap_dilated(ec, prog, n, IRRADIANCE)
+            return
+        # one unwrap into two targets (irradiance, per-light fac_shadow), each with its gutters filled
+        raw = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
+        raw_vis = ec.scratch(TexSpec((n, n), 4, "f2", filter="nearest"))
+        ec.draw_mesh(prog, raw, raw_vis, depth_test=False)
+        dilate(ec, raw, gutter_resource(n), IRRADIANCE)
+        dilate(ec, raw_vis, gutter_resource(n), VISIBILITY)
 
 
 def mean_texel_mm(scene, n: int) -> float:
@@ -327,6 +341,12 @@ class GaussianBlurPass(Pass):
                 ec.bind(prog, "source", source)
                 ec.draw_fullscreen(prog, target, tiles=tiles)
             src = tmp2
+
+
+def texture_shadows(r) -> bool:
+    """deon.specular_shadows = texture: the irradiance pass keeps each light's fac_shadow per texel
+    (VISIBILITY) and the final pass's specular reads it: a camera move does no shadow-map lookups."""
+    return r.setting("deon.specular_shadows") == "texture"
 
 
 def final_defines(mask: int, tsm: bool, combined: bool = False) -> dict[str, int]:
@@ -507,7 +527,8 @@ class DeonFinalPass(Pass):
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
-        lighting = declare_lighting(r)
+        vis = texture_shadows(r)
+        lighting = declare_lighting(r, shadow_maps=not vis)  # texture shadows: no shadow map is read
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
         if lighting["LIGHT_COUNT"] == 0:  # every light off: black (no irradiance, no specular)
@@ -525,6 +546,8 @@ class DeonFinalPass(Pass):
             r.input(DIFFUSE)
         if tsm:
             declare_tsm_read(r)
+        if vis:
+            r.input(VISIBILITY)
         mask = 0
         for i, (g, step) in enumerate(zip(gs, plan)):
             if any(w > 0 for w in g.weights):
@@ -535,7 +558,7 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
-        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed))
+        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), DEON_TEXTURE_SHADOWS=int(vis))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
@@ -553,8 +576,8 @@ class DeonFinalPass(Pass):
             ec.draw_mesh(prog, LIT)
             return
         bind_surface(ec, prog)
-        set_lighting(ec, prog)
         has = ec.has_input
+        set_lighting(ec, prog, shadow_maps=not has(VISIBILITY))
         bind_blurs(ec, prog)  # unbound blur slots read the graph's dummy texture
         ec.uniforms(prog, u_mix=float(ec.setting("deon.mix")), u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM),
                     u_combined=has(DIFFUSE))
@@ -565,4 +588,6 @@ class DeonFinalPass(Pass):
         bind_specular(ec, prog)
         if has(TSM):
             bind_tsm_read(ec, prog)
+        if has(VISIBILITY):
+            ec.bind(prog, "visibility", VISIBILITY)
         ec.draw_mesh(prog, LIT)

@@ -38,6 +38,10 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "render.background": ("linear RGB", "clear colour of the 3D view"),
     "render.timing": ("", "sync: glFinish + wall clock per pass (true cost on llvmpipe); "
                       "gpu: GL_TIME_ELAPSED queries (accurate on real GPUs, far too low on llvmpipe)"),
+    "deon.specular_shadows": ("", "where the specular's shadow test (eq. 10) is evaluated. texture: once per "
+                               "irradiance texel, with the same PCF, kept per light, so orbiting does no "
+                               "shadow-map lookups (a camera move costs about a quarter less). pixel: per "
+                               "pixel in the final pass"),
     "render.mesh_lod": ("", "auto: when the head is so small on screen that its triangles are far under a pixel "
                         "(over 4 per pixel), draw a coarser copy (1/4 of the triangles per level, UV seams kept) "
                         "and say so in the passes window; full: always the whole mesh"),
@@ -114,6 +118,7 @@ LABELS: dict[str, str] = {
     "render.background": "background",
     "render.timing": "timing method",
     "render.mesh_lod": "mesh level of detail",
+    "deon.specular_shadows": "specular shadows",
     "shadow.map_size": "shadow map size",
     "shadow.tol": "shadow bias",
     "shadow.pcf": "shadow softness",
