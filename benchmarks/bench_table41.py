@@ -79,7 +79,6 @@ VARIANTS: dict[str, Plan] = {
     "12+10 equal-count": Plan((12, 10), (c3(0.25),), split="equal-count"),
     # more savings, less quality: 6 + 10 with reuse
     "6+10 reuse": Plan((6, 10), (c3(0.25),), reuse=1, reuse_split=0.5),
-    # temporal reuse (burley2.temporal): the same per-frame samples, 8 frames in a running mean
     # temporal reuse on a still view (burley2.temporal): the same samples per frame, N frames in a running mean;
     # with reuse the shown image moves from the pooled mean to the mean of the pixels' own samples
     "beyond+temporal 8": replace(BEYOND_PLAN, temporal=8),
@@ -117,21 +116,18 @@ def make_graph(r: Renderer, plan: Plan) -> tuple[RenderGraph, BurleyCountPass]:
         passes.append(BurleyReusePass(plan))
     if plan.temporal:
         passes.append(BurleyTemporalPass(plan))
-    g = RenderGraph(r.ctx, r.shaders, passes, [LIT, COUNT, DIFFUSE], r.pool)
-    g.shape_state["bench_temporal"] = plan.temporal
-    return g, count
+    return RenderGraph(r.ctx, r.shaders, passes, [LIT, COUNT, DIFFUSE], r.pool), count
 
 
 def run_frame(r: Renderer, g: RenderGraph, s: Settings):
     """One frame; a temporal method runs until its running mean is full on the still view (the figures
     are the last frame's: samples per frame, and the blur passes' milliseconds of that frame)."""
     scene = r.ensure_scene(s)
-    frames = max(g.shape_state.get("bench_temporal", 0), 1)
     for p in g.passes:
         if isinstance(p, BurleyTemporalPass):
             p.release()  # each measurement starts its running mean afresh (no history from another framing)
     view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height))
-    for _ in range(frames):
+    for _ in range(65):  # burley2.temporal <= 64
         g.run(FrameInputs(settings=s, scene=scene.gpu, scene_version=r.scene_version, view=view, view_key=view.key()),
               timing="sync")
         if not g.refining:
