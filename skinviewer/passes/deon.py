@@ -40,7 +40,6 @@ from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
     declare_unwrapped,
-    dilate,
     gutter_resource,
     seam_resource,
     unwrap_dilated,
@@ -193,15 +192,8 @@ class IrradiancePass(Pass):
         if use_tsm:
             ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
-        if not texture_shadows(ec):
-            unwrap_dilated(ec, prog, n, IRRADIANCE)
-            return
-        # one unwrap into two targets (irradiance, per-light fac_shadow), each with its gutters filled
-        raw = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
-        raw_vis = ec.scratch(TexSpec((n, n), 4, "f2", filter="nearest"))
-        ec.draw_mesh(prog, raw, raw_vis, depth_test=False)
-        dilate(ec, raw, gutter_resource(n), IRRADIANCE)
-        dilate(ec, raw_vis, gutter_resource(n), VISIBILITY)
+        # with texture shadows the same draw also writes each light's fac_shadow (location 1)
+        unwrap_dilated(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
 
 
 def mean_texel_mm(scene, n: int) -> float:

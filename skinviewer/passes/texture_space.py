@@ -125,10 +125,20 @@ def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spe
     r.output(resource, spec)
 
 
-def unwrap_dilated(ec, prog, size: int, resource: str) -> None:
-    """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled."""
-    raw = rasterize_unwrapped(ec, prog, size)
-    dilate(ec, raw, gutter_resource(size), resource)
+def unwrap_dilated(ec, prog, size: int, resource: str, *more: str) -> None:
+    """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled.
+    ``more``: further outputs the program writes in the same draw (layout locations 1, 2, ...), each
+    rasterised into a scratch of its own format and dilated the same way."""
+    if not more:
+        raw = rasterize_unwrapped(ec, prog, size)
+        dilate(ec, raw, gutter_resource(size), resource)
+        return
+    raws = [ec.scratch(TexSpec((size, size), 4, "f4", filter="nearest"))]
+    raws += [ec.scratch(TexSpec((size, size), ec.output(r).components, ec.output(r).dtype, filter="nearest"))
+             for r in more]
+    ec.draw_mesh(prog, *raws, depth_test=False)
+    for raw, res in zip(raws, (resource,) + more):
+        dilate(ec, raw, gutter_resource(size), res)
 
 
 SEAM_REACH_TEXELS = 24.0  # gutter texels this close to a seam continue across it (blur taps reach ~3 sigma)
