@@ -1,67 +1,12 @@
 #version 330 core
 #pragma vertex_stage "vs/unwrap.vert"
-// Irradiance in texture space (seed 000 eq. 28, 32): sum over lights of
-//   Lc (N.L) fac_shadow rho_dt(x, L) C^mix
-// and, in alpha, the thickness d = (d(C) - d(A)) cos(theta) in mm read from the modified TSM
-// (§4.2.7), so the blur chain blurs it with the irradiance. float32 target: lights beyond the
-// half-float range stay finite and exact.
-#include "lib/color.glsl"
-#include "lib/lights.glsl"
-#include "lib/surface.glsl"
-#include "lib/specular_params.glsl"
-#include "lib/deon.glsl"
+// Irradiance in texture space by rasterising the mesh unwrapped (seed 000 eq. 8, 28, 32):
+// lib/deon_irradiance.glsl. deon_irradiance_texels.frag computes the same from the texel surface map.
+#include "lib/deon_irradiance.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
-uniform float u_mix;
-uniform int u_energy;            // eq. (32) on/off
-uniform sampler2D rho_dt_tex;
-uniform int u_tsm;
-uniform sampler2D tsm_map;
-uniform mat4 u_tsm_matrix;
-uniform float u_max_thickness;   // mm
-layout(location = 0) out vec4 f_irradiance;
-#ifndef DEON_VISIBILITY
-#define DEON_VISIBILITY 0
-#endif
-#if DEON_VISIBILITY
-// fac_shadow of each light slot (eq. 10) where it lights the texel (N.L > 0), else 0: the final pass's
-// specular reads it instead of testing the shadow maps per pixel (deon.specular_shadows = texture)
-layout(location = 1) out vec4 f_visibility;
-#endif
 void main() {
-    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
-    vec3 N = surface_normal(v_normal, v_tangent, v_uv);
-    vec3 C = safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
-    vec3 E = vec3(0.0);
-    SpecParams sp = specular_params(v_uv);
-    vec4 vis = vec4(0.0);
-    for (int i = 0; i < N_LIGHTS; ++i) {
-        vec3 L;
-        vec3 Lc = light_incident(i, v_position, L);
-        float ndl = dot(N, L);
-        if (!(ndl > 0.0)) continue;
-        float s = shadow_factor(i, v_position, normalize(v_normal));
-        vis[i] = s;
-        float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
-        E += Lc * (ndl * s * rho);
-    }
-    E *= C;
-    float d = 0.0;
-    if (u_tsm != 0) {
-        vec4 p = u_tsm_matrix * vec4(v_position, 1.0);
-        if (p.w > 0.0) {
-            vec2 c = p.xy / p.w * 0.5 + 0.5;
-            if (all(greaterThanEqual(c, vec2(0.0))) && all(lessThanEqual(c, vec2(1.0)))) {
-                vec4 t = texture(tsm_map, c);
-                if (t.a >= 0.0) d = (tsm_distance_mm(v_position) - t.r) * t.a;
-            }
-        }
-    }
-    d = clamp(finite_f32(d), 0.0, u_max_thickness);
-    f_irradiance = finite4_f32(vec4(E, d));
-#if DEON_VISIBILITY
-    f_visibility = vis;
-#endif
+    deon_irradiance(v_position, v_normal, v_uv, v_tangent, dFdx(v_position), dFdy(v_position));
 }

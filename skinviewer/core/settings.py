@@ -286,6 +286,10 @@ class DeonSettings(_Model):
     combine_blurs: bool = Field(
         True, description="sum the weighted blurs (eq. 34) once in texture space, so a camera move reads one "
                           "texture instead of one per Gaussian (issue 14; equal up to float rounding)")
+    texel_surface: bool = Field(
+        True, description="shade the irradiance map from the texel surface map (the mesh's attributes per texel, "
+                          "rasterised once per mesh and size): one fragment per texel instead of the mesh's small "
+                          "triangles each shading whole pixel blocks (issue 14; the same values up to float rounding)")
     specular_shadows: Literal["texture", "pixel"] = Field(
         "texture", description="where the specular's shadow test (eq. 10) is evaluated: texture: once per texel "
         "by the irradiance pass (the same PCF, kept per light), so a camera move does no shadow-map lookups; "

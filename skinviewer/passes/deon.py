@@ -39,9 +39,11 @@ from skinviewer.passes.common import (
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
+    declare_texels,
     declare_unwrapped,
     gutter_resource,
     seam_resource,
+    shade_texels_dilated,
     unwrap_dilated,
     work_tiles,
 )
@@ -122,19 +124,27 @@ class StretchPass(Pass):
     gutters dilated. Depends on the mesh, mm_per_unit (scene) and the size only."""
     name = "deon_stretch"
 
-    def __init__(self, name: str = "deon_stretch", resource: str = STRETCH, size_of=None):
+    def __init__(self, name: str = "deon_stretch", resource: str = STRETCH, size_of=None, texels: str | None = None):
         self.name, self.resource = name, resource
         self.size_of = size_of or map_size  # the map size it serves, given r (Gosselin: its light map)
+        self.texels = texels  # the setting that computes it from the texel surface map (TexelSurfacePass)
+
+    def _texels(self, r) -> bool:
+        return bool(self.texels and r.setting(self.texels))
 
     def reflect(self, r: Reflection) -> None:
         n = self.size_of(r)
-        declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
+        texels = self._texels(r)
+        (declare_texels if texels else declare_unwrapped)(
+            r, "deon_stretch_texels" if texels else "deon_stretch", n, self.resource,
+            TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
 
     def execute(self, ec) -> None:
         n = self.size_of(ec)
-        prog = ec.program("deon_stretch")
+        texels = self._texels(ec)
+        prog = ec.program("deon_stretch_texels" if texels else "deon_stretch")
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        unwrap_dilated(ec, prog, n, self.resource)
+        (shade_texels_dilated if texels else unwrap_dilated)(ec, prog, n, self.resource)
 
 
 class TsmPass(Pass):
@@ -172,14 +182,18 @@ class IrradiancePass(Pass):
         if tsm_light_index(r) is not None:
             r.input(TSM)
         vis = texture_shadows(r)
-        declare_unwrapped(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
-                          DEON_VISIBILITY=int(vis))
+        declare = declare_texels if r.setting("deon.texel_surface") else declare_unwrapped
+        declare(r, self._program(r), n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting, DEON_VISIBILITY=int(vis))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
+    @staticmethod
+    def _program(r) -> str:
+        return "deon_irradiance_texels" if r.setting("deon.texel_surface") else "deon_irradiance"
+
     def execute(self, ec) -> None:
         n = map_size(ec)
-        prog = ec.program("deon_irradiance")
+        prog = ec.program(self._program(ec))
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         energy = bool(ec.setting("deon.energy_conservation"))
@@ -193,7 +207,8 @@ class IrradiancePass(Pass):
             ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
         # with texture shadows the same draw also writes each light's fac_shadow (location 1)
-        unwrap_dilated(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
+        shade = shade_texels_dilated if ec.setting("deon.texel_surface") else unwrap_dilated
+        shade(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
 
 
 def mean_texel_mm(scene, n: int) -> float:
@@ -428,13 +443,17 @@ class TransmittedPass(Pass):
         declare_blurs(r, mask)
         declare_tsm_read(r)
         n = transmitted_size(r)
-        declare_unwrapped(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask)
+        texels = r.setting("deon.texel_surface")
+        (declare_texels if texels else declare_unwrapped)(
+            r, "deon_transmitted_texels" if texels else "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"),
+            GAUSSIAN_MASK=mask)
 
     def execute(self, ec) -> None:
-        prog = ec.program("deon_transmitted")
+        texels = ec.setting("deon.texel_surface")
+        prog = ec.program("deon_transmitted_texels" if texels else "deon_transmitted")
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        unwrap_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
+        (shade_texels_dilated if texels else unwrap_dilated)(ec, prog, transmitted_size(ec), TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):

@@ -18,15 +18,16 @@ from skinviewer.passes.deon import (
 from skinviewer.passes.luts import BeckmannLutPass
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.rho_dt import RhoDtLutPass
-from skinviewer.passes.texture_space import GutterMapPass
+from skinviewer.passes.texture_space import GutterMapPass, TexelSurfacePass
 from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
     return (shadow_passes()
             + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size),
-               GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
-               TsmPass(), IrradiancePass()]
+               GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(texels="deon.texel_surface"), RhoDtLutPass(), BeckmannLutPass(),
+               TexelSurfacePass("deon_texel_surface", map_size, "deon.texel_surface"),
+               TexelSurfacePass("deon_texel_surface_half", transmitted_size, "deon.texel_surface"), TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
             + [TransmittedPass(), DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])
