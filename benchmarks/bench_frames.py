@@ -66,6 +66,8 @@ def light_ms(r: Renderer, s: Settings, k: int) -> float:
     (gutter and seam maps, stretch, LUTs) stay cached: the cost of dragging a light."""
     d = s.lights[0].direction
     s2 = with_values(s, {"lights.0.direction": (d[0] + 0.02 * (k + 1), d[1], d[2])})
+    r.render(s)  # from the base frame (not timed): a frame of other settings may have run in between
+    r.ctx.finish()
     ms = wall_ms(lambda: (r.render(s2), r.ctx.finish()))
     r.render(s)  # back to the base light (not timed)
     return ms
