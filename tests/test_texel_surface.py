@@ -22,8 +22,8 @@ def _maps(renderer, s):
 @pytest.mark.parametrize("scene", ["head", "backlit-ear", "laser"])
 def test_texel_surface_shades_what_the_unwrapped_mesh_shades(renderer, scene):
     base = small_settings(scene, "deon", 48)
-    ref = _maps(renderer, with_values(base, {"deon.texel_surface": False}))
-    got = _maps(renderer, with_values(base, {"deon.texel_surface": True}))
+    ref = _maps(renderer, with_values(base, {"render.texel_surface": False}))
+    got = _maps(renderer, with_values(base, {"render.texel_surface": True}))
     assert set(got) == set(ref) and "deon_irradiance" in got
     if scene == "backlit-ear":
         assert "deon_transmitted" in got  # the TSM light's transmitted map took the texel path too
@@ -45,5 +45,21 @@ def test_texel_surface_is_built_once_per_mesh_and_size(renderer):
     assert "deon_irradiance" in rep.ran and "deon_texel_surface" in rep.cached
     rep = renderer.render(with_values(moved, {"deon.irradiance_size": 512}))
     assert "deon_texel_surface" in rep.ran  # a new size is a new map
-    off = renderer.render(with_values(s, {"deon.texel_surface": False}))
+    off = renderer.render(with_values(s, {"render.texel_surface": False}))
     assert "deon_texel_surface" in off.pruned and "texel_surface_256_p" not in renderer.graph("deon").resources()
+
+
+@pytest.mark.parametrize("radius_mode", ["printed", "mm"])
+def test_gosselin_light_map_from_the_texel_surface(renderer, radius_mode):
+    base = small_settings("head", "gosselin", 48, **{"gosselin.radius_mode": radius_mode})
+    out = {}
+    for on in (False, True):
+        s = with_values(base, {"render.texel_surface": on})
+        rep = renderer.render(s)
+        g = renderer.graph("gosselin")
+        out[on] = {k: g.read(k).astype(np.float64) for k in ("gosselin_light_map", "gosselin_stretch", "lit")
+                   if k in g.resources()}
+        assert ("gosselin_texel_surface" in rep.ran + rep.cached) == on
+    for k, a in out[False].items():
+        tol = 1e-5 if k == "gosselin_light_map" else 1e-4
+        assert np.abs(a - out[True][k]).max() <= tol * max(np.abs(a).max(), 1e-12), k

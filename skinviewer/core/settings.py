@@ -156,6 +156,11 @@ class RenderSettings(_Model):
         "the frame report names a pass whose output is not finite")
     timing: Literal["sync", "gpu"] = Field(
         "sync", description="sync: glFinish + wall clock per pass (right on llvmpipe); gpu: GL timer queries")
+    texel_surface: bool = Field(
+        True, description="texture-space techniques (d'Eon's irradiance, transmitted light and stretch, Gosselin's "
+                          "light map) shade once per texel from the texel surface map (the mesh's attributes per "
+                          "texel, rasterised once per mesh and size) instead of rasterising the mesh's small "
+                          "triangles each time (issue 14; the same values up to float rounding)")
     mesh_lod: Literal["auto", "full"] = Field(
         "auto", description="auto: draw a coarser copy of the mesh (1/4 of the triangles per level) when the "
         "head is so small on screen that its triangles are far under a pixel; full: always the whole mesh")
@@ -286,10 +291,6 @@ class DeonSettings(_Model):
     combine_blurs: bool = Field(
         True, description="sum the weighted blurs (eq. 34) once in texture space, so a camera move reads one "
                           "texture instead of one per Gaussian (issue 14; equal up to float rounding)")
-    texel_surface: bool = Field(
-        True, description="shade the irradiance map from the texel surface map (the mesh's attributes per texel, "
-                          "rasterised once per mesh and size): one fragment per texel instead of the mesh's small "
-                          "triangles each shading whole pixel blocks (issue 14; the same values up to float rounding)")
     specular_shadows: Literal["texture", "pixel"] = Field(
         "texture", description="where the specular's shadow test (eq. 10) is evaluated: texture: once per texel "
         "by the irradiance pass (the same PCF, kept per light), so a camera move does no shadow-map lookups; "

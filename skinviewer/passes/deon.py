@@ -182,14 +182,14 @@ class IrradiancePass(Pass):
         if tsm_light_index(r) is not None:
             r.input(TSM)
         vis = texture_shadows(r)
-        declare = declare_texels if r.setting("deon.texel_surface") else declare_unwrapped
+        declare = declare_texels if r.setting("render.texel_surface") else declare_unwrapped
         declare(r, self._program(r), n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting, DEON_VISIBILITY=int(vis))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
     @staticmethod
     def _program(r) -> str:
-        return "deon_irradiance_texels" if r.setting("deon.texel_surface") else "deon_irradiance"
+        return "deon_irradiance_texels" if r.setting("render.texel_surface") else "deon_irradiance"
 
     def execute(self, ec) -> None:
         n = map_size(ec)
@@ -207,7 +207,7 @@ class IrradiancePass(Pass):
             ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
         # with texture shadows the same draw also writes each light's fac_shadow (location 1)
-        shade = shade_texels_dilated if ec.setting("deon.texel_surface") else unwrap_dilated
+        shade = shade_texels_dilated if ec.setting("render.texel_surface") else unwrap_dilated
         shade(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
 
 
@@ -443,13 +443,13 @@ class TransmittedPass(Pass):
         declare_blurs(r, mask)
         declare_tsm_read(r)
         n = transmitted_size(r)
-        texels = r.setting("deon.texel_surface")
+        texels = r.setting("render.texel_surface")
         (declare_texels if texels else declare_unwrapped)(
             r, "deon_transmitted_texels" if texels else "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"),
             GAUSSIAN_MASK=mask)
 
     def execute(self, ec) -> None:
-        texels = ec.setting("deon.texel_surface")
+        texels = ec.setting("render.texel_surface")
         prog = ec.program("deon_transmitted_texels" if texels else "deon_transmitted")
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)

@@ -48,11 +48,13 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.passes.texture_space import (
+    declare_texels,
     declare_unwrapped,
     dilate,
     gutter_resource,
     read_gutter,
     seam_resource,
+    shade_texels_dilated,
     unwrap_dilated,
 )
 from skinviewer.physics.poisson import POISSON_12, radii_mm
@@ -78,14 +80,17 @@ class GosselinLightMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         size = r.setting(SIZE)
-        declare_unwrapped(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
+        texels = r.setting("render.texel_surface")
+        (declare_texels if texels else declare_unwrapped)(
+            r, "light_map_texels" if texels else "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
-        prog = ec.program("light_map")
+        texels = ec.setting("render.texel_surface")
+        prog = ec.program("light_map_texels" if texels else "light_map")
         bind_surface(ec, prog)
         set_lighting(ec, prog)
-        unwrap_dilated(ec, prog, size, LIGHT_MAP)
+        (shade_texels_dilated if texels else unwrap_dilated)(ec, prog, size, LIGHT_MAP)
 
 
 def region_radii(g, size: int) -> np.ndarray:

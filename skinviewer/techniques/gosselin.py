@@ -13,14 +13,15 @@ from skinviewer.passes.gosselin import (
 )
 from skinviewer.passes.luts import BeckmannLutPass
 from skinviewer.passes.output import OutputPass
-from skinviewer.passes.texture_space import GutterMapPass
+from skinviewer.passes.texture_space import GutterMapPass, TexelSurfacePass
 from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
     return shadow_passes() + [
-        GutterMapPass(SIZE), GosselinLightMapPass(), GosselinRadiusMapPass(),
-        StretchPass("gosselin_stretch", STRETCH, lambda r: r.setting(SIZE)), PoissonBlurPass(),
+        GutterMapPass(SIZE), TexelSurfacePass("gosselin_texel_surface", lambda r: r.setting(SIZE), "render.texel_surface"),
+        GosselinLightMapPass(), GosselinRadiusMapPass(),
+        StretchPass("gosselin_stretch", STRETCH, lambda r: r.setting(SIZE), texels="render.texel_surface"), PoissonBlurPass(),
         BeckmannLutPass(), GosselinFinalPass(), OutputPass("lit"),
     ]
 

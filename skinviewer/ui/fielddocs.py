@@ -94,8 +94,8 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
                                "blur adds its width exactly (0: off). 1: closer to the ground truth than 0"),
     "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a blur can read "
                           "(images identical; pays off on GPUs)"),
-    "deon.texel_surface": ("", "shade the irradiance map once per texel from a per-mesh map of the surface "
-                           "instead of rasterising the mesh each time (same image, much faster here)"),
+    "render.texel_surface": ("", "texture-space maps are shaded once per texel from a per-mesh map of the surface "
+                             "instead of rasterising the mesh each time (same image, much faster; more memory)"),
     "deon.tsm_auto": ("", "skip the translucent shadow map when no light is behind a thin part that is in view"),
     "deon.subpixel_kernel_px": ("px", "when the widest Gaussian spans under this many pixels on screen, the "
                                 "diffusion cannot show: the blurs and TSM are skipped (0: never)"),
