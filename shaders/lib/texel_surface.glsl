@@ -12,4 +12,6 @@ TexelSurface texel_surface() {
     vec4 p = texelFetch(surface_p, q, 0), n = texelFetch(surface_n, q, 0), d = texelFetch(surface_d, q, 0);
     return TexelSurface(p.xyz, n.xyz, texelFetch(surface_t, q, 0), vec3(p.w, n.w, d.w), d.xyz);
 }
+// the position alone (a pass that declares only the "p" map)
+vec3 texel_position() { return texelFetch(surface_p, ivec2(gl_FragCoord.xy), 0).xyz; }
 #endif

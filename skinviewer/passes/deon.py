@@ -444,16 +444,21 @@ class TransmittedPass(Pass):
         declare_tsm_read(r)
         n = transmitted_size(r)
         texels = r.setting("render.texel_surface")
-        (declare_texels if texels else declare_unwrapped)(
-            r, "deon_transmitted_texels" if texels else "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"),
-            GAUSSIAN_MASK=mask)
+        if texels:
+            declare_texels(r, "deon_transmitted_texels", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), maps="p",
+                           GAUSSIAN_MASK=mask)
+        else:
+            declare_unwrapped(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask)
 
     def execute(self, ec) -> None:
         texels = ec.setting("render.texel_surface")
         prog = ec.program("deon_transmitted_texels" if texels else "deon_transmitted")
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        (shade_texels_dilated if texels else unwrap_dilated)(ec, prog, transmitted_size(ec), TRANSMITTED)
+        if texels:
+            shade_texels_dilated(ec, prog, transmitted_size(ec), TRANSMITTED, maps="p")
+        else:
+            unwrap_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):

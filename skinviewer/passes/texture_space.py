@@ -125,44 +125,53 @@ def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spe
     r.output(resource, spec)
 
 
-def texel_surface_resources(size: int) -> tuple[str, ...]:
-    """The texel surface map at ``size``: P + dP/dx.x, vertex normal + dP/dx.y, tangent, dP/dy + dP/dx.z."""
-    return tuple(f"texel_surface_{size}_{k}" for k in "pntd")
+TEXEL_SURFACE_MAPS = "pntd"  # P + dP/dx.x, vertex normal + dP/dx.y, tangent, dP/dy + dP/dx.z
+TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n", "t": "surface_t", "d": "surface_d"}
+
+
+def texel_surface_resources(size: int, maps: str = TEXEL_SURFACE_MAPS) -> tuple[str, ...]:
+    """The texel surface map at ``size`` (those of ``maps``; "p" alone: the position)."""
+    return tuple(f"texel_surface_{size}_{k}" for k in maps)
 
 
 class TexelSurfacePass(Pass):
     """The mesh's interpolated attributes at every covered texel centre (shaders/texel_surface.frag),
     so per-frame texture-space shading is one full-screen draw (shade_texels_dilated) instead of a
     raster of the whole mesh, whose small triangles each shade whole pixel blocks (issue 14). Depends
-    on the mesh and the size only: runs once per scene/size."""
+    on the mesh and the size only: runs once per scene/size. ``maps``: the ones its readers need
+    (d'Eon's transmitted light reads only the position)."""
 
-    def __init__(self, name: str, size_of, enabled: str):
-        self.name, self.size_of, self.enabled = name, size_of, enabled
+    def __init__(self, name: str, size_of, enabled: str, maps: str = TEXEL_SURFACE_MAPS):
+        self.name, self.size_of, self.enabled, self.maps = name, size_of, enabled, maps
 
     def reflect(self, r: Reflection) -> None:
         if not r.peek(self.enabled):
             return
         n = self.size_of(r)
         r.program("texel_surface")
-        for res in texel_surface_resources(n):
+        for res in texel_surface_resources(n, self.maps):
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        ec.draw_mesh(ec.program("texel_surface"), *texel_surface_resources(self.size_of(ec)), depth_test=False)
+        # a fragment output without an attachment is discarded: the program is the same for any maps
+        ec.draw_mesh(ec.program("texel_surface"), *texel_surface_resources(self.size_of(ec), self.maps),
+                     depth_test=False)
 
 
-def declare_texels(r: Reflection, program: str, size: int, resource: str, spec: TexSpec, **defines) -> None:
+def declare_texels(r: Reflection, program: str, size: int, resource: str, spec: TexSpec,
+                   maps: str = TEXEL_SURFACE_MAPS, **defines) -> None:
     """Like declare_unwrapped, for a program shading the texel surface map (shade_texels_dilated)."""
-    for res in texel_surface_resources(size):
+    for res in texel_surface_resources(size, maps):
         r.input(res)
     declare_unwrapped(r, program, size, resource, spec, TILED=1, **defines)
 
 
-def shade_texels_dilated(ec, prog, size: int, resource: str, *more: str) -> None:
-    """unwrap_dilated for a full-screen program over the texel surface map (samplers surface_p, _n,
-    _t, _d): only the tiles holding island texels are drawn (the gutters come from the dilation)."""
-    for name, res in zip(("surface_p", "surface_n", "surface_t", "surface_d"), texel_surface_resources(size)):
-        ec.bind(prog, name, res)
+def shade_texels_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TEXEL_SURFACE_MAPS) -> None:
+    """unwrap_dilated for a full-screen program over the texel surface map (its samplers surface_p,
+    _n, _t, _d for ``maps``): only the tiles holding island texels are drawn (the gutters come from
+    the dilation)."""
+    for k, res in zip(maps, texel_surface_resources(size, maps)):
+        ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
     raws = [ec.scratch(TexSpec((size, size), 4, "f4", filter="nearest"))]
     raws += [ec.scratch(TexSpec((size, size), ec.output(r).components, ec.output(r).dtype, filter="nearest"))
              for r in more]
