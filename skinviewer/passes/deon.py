@@ -124,27 +124,19 @@ class StretchPass(Pass):
     gutters dilated. Depends on the mesh, mm_per_unit (scene) and the size only."""
     name = "deon_stretch"
 
-    def __init__(self, name: str = "deon_stretch", resource: str = STRETCH, size_of=None, texels: str | None = None):
+    def __init__(self, name: str = "deon_stretch", resource: str = STRETCH, size_of=None):
         self.name, self.resource = name, resource
         self.size_of = size_of or map_size  # the map size it serves, given r (Gosselin: its light map)
-        self.texels = texels  # the setting that computes it from the texel surface map (TexelSurfacePass)
-
-    def _texels(self, r) -> bool:
-        return bool(self.texels and r.setting(self.texels))
 
     def reflect(self, r: Reflection) -> None:
         n = self.size_of(r)
-        texels = self._texels(r)
-        (declare_texels if texels else declare_unwrapped)(
-            r, "deon_stretch_texels" if texels else "deon_stretch", n, self.resource,
-            TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
+        declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
 
     def execute(self, ec) -> None:
         n = self.size_of(ec)
-        texels = self._texels(ec)
-        prog = ec.program("deon_stretch_texels" if texels else "deon_stretch")
+        prog = ec.program("deon_stretch")
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        (shade_texels_dilated if texels else unwrap_dilated)(ec, prog, n, self.resource)
+        unwrap_dilated(ec, prog, n, self.resource)
 
 
 class TsmPass(Pass):

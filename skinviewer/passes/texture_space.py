@@ -125,8 +125,8 @@ def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spe
     r.output(resource, spec)
 
 
-TEXEL_SURFACE_MAPS = "pntd"  # P + dP/dx.x, vertex normal + dP/dx.y, tangent, dP/dy + dP/dx.z
-TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n", "t": "surface_t", "d": "surface_d"}
+TEXEL_SURFACE_MAPS = "pn"  # position + tangent handedness, octahedral normal + tangent (texel_surface.frag)
+TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n"}
 
 
 def texel_surface_resources(size: int, maps: str = TEXEL_SURFACE_MAPS) -> tuple[str, ...]:
@@ -160,15 +160,18 @@ class TexelSurfacePass(Pass):
 
 def declare_texels(r: Reflection, program: str, size: int, resource: str, spec: TexSpec,
                    maps: str = TEXEL_SURFACE_MAPS, **defines) -> None:
-    """Like declare_unwrapped, for a program shading the texel surface map (shade_texels_dilated)."""
+    """Like declare_unwrapped, for a program shading the texel surface map (shade_texels_dilated).
+    TEXEL_STEPS: the position's change per texel (beam footprints) only when a beam light is on."""
+    from skinviewer.passes.rules import light_on
     for res in texel_surface_resources(size, maps):
         r.input(res)
-    declare_unwrapped(r, program, size, resource, spec, TILED=1, **defines)
+    steps = any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
+    declare_unwrapped(r, program, size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
 
 
 def shade_texels_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TEXEL_SURFACE_MAPS) -> None:
-    """unwrap_dilated for a full-screen program over the texel surface map (its samplers surface_p,
-    _n, _t, _d for ``maps``): only the tiles holding island texels are drawn (the gutters come from
+    """unwrap_dilated for a full-screen program over the texel surface map (its samplers surface_p
+    and surface_n for ``maps``): only the tiles holding island texels are drawn (the gutters come from
     the dilation)."""
     for k, res in zip(maps, texel_surface_resources(size, maps)):
         ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)

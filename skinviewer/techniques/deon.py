@@ -25,7 +25,7 @@ from skinviewer.techniques.base import Technique, shadow_passes
 def build():
     return (shadow_passes()
             + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size),
-               GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(texels="render.texel_surface"), RhoDtLutPass(), BeckmannLutPass(),
+               GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TexelSurfacePass("deon_texel_surface", map_size, "render.texel_surface"),
                TexelSurfacePass("deon_texel_surface_half", transmitted_size, "render.texel_surface", maps="p"), TsmPass(), IrradiancePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]

@@ -21,7 +21,7 @@ def build():
     return shadow_passes() + [
         GutterMapPass(SIZE), TexelSurfacePass("gosselin_texel_surface", lambda r: r.setting(SIZE), "render.texel_surface"),
         GosselinLightMapPass(), GosselinRadiusMapPass(),
-        StretchPass("gosselin_stretch", STRETCH, lambda r: r.setting(SIZE), texels="render.texel_surface"), PoissonBlurPass(),
+        StretchPass("gosselin_stretch", STRETCH, lambda r: r.setting(SIZE)), PoissonBlurPass(),
         BeckmannLutPass(), GosselinFinalPass(), OutputPass("lit"),
     ]
 
