@@ -157,8 +157,8 @@ class RenderSettings(_Model):
     timing: Literal["sync", "gpu"] = Field(
         "sync", description="sync: glFinish + wall clock per pass (right on llvmpipe); gpu: GL timer queries")
     texel_surface: bool = Field(
-        True, description="texture-space techniques (d'Eon's irradiance, transmitted light and stretch, Gosselin's "
-                          "light map) shade once per texel from the texel surface map (the mesh's attributes per "
+        True, description="texture-space techniques (d'Eon's irradiance and transmitted light, Gosselin's light "
+                          "map) shade once per texel from the texel surface map (the mesh's attributes per "
                           "texel, rasterised once per mesh and size) instead of rasterising the mesh's small "
                           "triangles each time (issue 14; the same values up to float rounding)")
     mesh_lod: Literal["auto", "full"] = Field(
