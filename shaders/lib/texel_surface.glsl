@@ -23,12 +23,13 @@ uniform sampler2D surface_n;  // octahedral vertex normal (xy) and tangent (zw)
 struct TexelSurface { vec3 P; vec3 N; vec4 T; vec3 dPdx; vec3 dPdy; };
 // the position's change per texel step: the difference to a covered neighbour (forward, else
 // backward; 0 when neither side is covered)
-vec3 texel_step(ivec2 q, ivec2 d, vec3 P) {
+vec4 covered_texel(ivec2 q) {  // w = 0 outside the map or the islands
     ivec2 hi = textureSize(surface_p, 0) - 1;
-    vec4 f = texelFetch(surface_p, clamp(q + d, ivec2(0), hi), 0);
-    vec4 b = texelFetch(surface_p, clamp(q - d, ivec2(0), hi), 0);
-    return (f.w != 0.0 && q + d == clamp(q + d, ivec2(0), hi)) ? f.xyz - P
-         : ((b.w != 0.0 && q - d == clamp(q - d, ivec2(0), hi)) ? P - b.xyz : vec3(0.0));
+    return (q == clamp(q, ivec2(0), hi)) ? texelFetch(surface_p, q, 0) : vec4(0.0);
+}
+vec3 texel_step(ivec2 q, ivec2 d, vec3 P) {
+    vec4 f = covered_texel(q + d), b = covered_texel(q - d);
+    return (f.w != 0.0) ? f.xyz - P : ((b.w != 0.0) ? P - b.xyz : vec3(0.0));
 }
 // TEXEL_STEPS (a beam light is on: its footprint needs them) or zero steps
 TexelSurface texel_surface() {

@@ -39,11 +39,12 @@ from skinviewer.passes.common import (
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map_size, light_on, tsm_needed
 from skinviewer.passes.texture_space import (
-    declare_texels,
+    declare_shaded,
     declare_unwrapped,
     gutter_resource,
     seam_resource,
-    shade_texels_dilated,
+    shade_dilated,
+    shading_program,
     unwrap_dilated,
     work_tiles,
 )
@@ -174,18 +175,14 @@ class IrradiancePass(Pass):
         if tsm_light_index(r) is not None:
             r.input(TSM)
         vis = texture_shadows(r)
-        declare = declare_texels if r.setting("render.texel_surface") else declare_unwrapped
-        declare(r, self._program(r), n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting, DEON_VISIBILITY=int(vis))
+        declare_shaded(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
+                       DEON_VISIBILITY=int(vis))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
-    @staticmethod
-    def _program(r) -> str:
-        return "deon_irradiance_texels" if r.setting("render.texel_surface") else "deon_irradiance"
-
     def execute(self, ec) -> None:
         n = map_size(ec)
-        prog = ec.program(self._program(ec))
+        prog = ec.program(shading_program(ec, "deon_irradiance"))
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         energy = bool(ec.setting("deon.energy_conservation"))
@@ -199,8 +196,7 @@ class IrradiancePass(Pass):
             ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, tsm_light_index(ec))
         # with texture shadows the same draw also writes each light's fac_shadow (location 1)
-        shade = shade_texels_dilated if ec.setting("render.texel_surface") else unwrap_dilated
-        shade(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
+        shade_dilated(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
 
 
 def mean_texel_mm(scene, n: int) -> float:
@@ -435,22 +431,13 @@ class TransmittedPass(Pass):
         declare_blurs(r, mask)
         declare_tsm_read(r)
         n = transmitted_size(r)
-        texels = r.setting("render.texel_surface")
-        if texels:
-            declare_texels(r, "deon_transmitted_texels", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), maps="p",
-                           GAUSSIAN_MASK=mask)
-        else:
-            declare_unwrapped(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask)
+        declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), maps="p", GAUSSIAN_MASK=mask)
 
     def execute(self, ec) -> None:
-        texels = ec.setting("render.texel_surface")
-        prog = ec.program("deon_transmitted_texels" if texels else "deon_transmitted")
+        prog = ec.program(shading_program(ec, "deon_transmitted"))
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        if texels:
-            shade_texels_dilated(ec, prog, transmitted_size(ec), TRANSMITTED, maps="p")
-        else:
-            unwrap_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
+        shade_dilated(ec, prog, transmitted_size(ec), TRANSMITTED, maps="p")
 
 
 class DiffuseSumPass(Pass):

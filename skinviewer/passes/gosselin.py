@@ -48,14 +48,13 @@ from skinviewer.passes.common import (
     set_lighting,
 )
 from skinviewer.passes.texture_space import (
-    declare_texels,
-    declare_unwrapped,
+    declare_shaded,
     dilate,
     gutter_resource,
     read_gutter,
     seam_resource,
-    shade_texels_dilated,
-    unwrap_dilated,
+    shade_dilated,
+    shading_program,
 )
 from skinviewer.physics.poisson import POISSON_12, radii_mm
 
@@ -80,17 +79,14 @@ class GosselinLightMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         size = r.setting(SIZE)
-        texels = r.setting("render.texel_surface")
-        (declare_texels if texels else declare_unwrapped)(
-            r, "light_map_texels" if texels else "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
+        declare_shaded(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
         size = ec.setting(SIZE)
-        texels = ec.setting("render.texel_surface")
-        prog = ec.program("light_map_texels" if texels else "light_map")
+        prog = ec.program(shading_program(ec, "light_map"))
         bind_surface(ec, prog)
         set_lighting(ec, prog)
-        (shade_texels_dilated if texels else unwrap_dilated)(ec, prog, size, LIGHT_MAP)
+        shade_dilated(ec, prog, size, LIGHT_MAP)
 
 
 def region_radii(g, size: int) -> np.ndarray:

@@ -9,6 +9,7 @@ import numpy as np
 
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.rules import light_on
 from skinviewer.scene.texels import seam_indirection
 
 
@@ -136,7 +137,7 @@ def texel_surface_resources(size: int, maps: str = TEXEL_SURFACE_MAPS) -> tuple[
 
 class TexelSurfacePass(Pass):
     """The mesh's interpolated attributes at every covered texel centre (shaders/texel_surface.frag),
-    so per-frame texture-space shading is one full-screen draw (shade_texels_dilated) instead of a
+    so per-frame texture-space shading is one full-screen draw (shade_dilated) instead of a
     raster of the whole mesh, whose small triangles each shade whole pixel blocks (issue 14). Depends
     on the mesh and the size only: runs once per scene/size. ``maps``: the ones its readers need
     (d'Eon's transmitted light reads only the position)."""
@@ -158,21 +159,40 @@ class TexelSurfacePass(Pass):
                      depth_test=False)
 
 
-def declare_texels(r: Reflection, program: str, size: int, resource: str, spec: TexSpec,
+def texel_shading(r) -> bool:
+    """render.texel_surface: texture-space shading reads the texel surface map (one fragment per
+    texel) instead of rasterising the mesh unwrapped; r: a Reflection or ExecuteContext."""
+    return bool(r.setting("render.texel_surface"))
+
+
+def shading_program(r, base: str) -> str:
+    """The program of a texture-space shading pass: ``base`` (mesh unwrapped, vs/unwrap.vert) or
+    ``base``_texels (full-screen over the texel surface map), per texel_shading."""
+    return f"{base}_texels" if texel_shading(r) else base
+
+
+def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: TexSpec,
                    maps: str = TEXEL_SURFACE_MAPS, **defines) -> None:
-    """Like declare_unwrapped, for a program shading the texel surface map (shade_texels_dilated).
-    TEXEL_STEPS: the position's change per texel (beam footprints) only when a beam light is on."""
-    from skinviewer.passes.rules import light_on
+    """Declare a texture-space shading pass writing ``resource`` with its gutters filled, whichever
+    way it shades (shading_program): declare_unwrapped, plus for the texel path the maps ``maps``
+    it reads, TILED and TEXEL_STEPS (the position's change per texel, which only beam footprints
+    need, from the neighbouring texels when a beam light is on)."""
+    if not texel_shading(r):
+        declare_unwrapped(r, base, size, resource, spec, **defines)
+        return
     for res in texel_surface_resources(size, maps):
         r.input(res)
     steps = any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
-    declare_unwrapped(r, program, size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
+    declare_unwrapped(r, shading_program(r, base), size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
 
 
-def shade_texels_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TEXEL_SURFACE_MAPS) -> None:
-    """unwrap_dilated for a full-screen program over the texel surface map (its samplers surface_p
-    and surface_n for ``maps``): only the tiles holding island texels are drawn (the gutters come from
-    the dilation)."""
+def shade_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TEXEL_SURFACE_MAPS) -> None:
+    """Run a pass declared with declare_shaded: unwrap_dilated, or one full-screen draw of ``prog``
+    over the texel surface map (samplers surface_p / surface_n for ``maps``) on the tiles holding
+    island texels, then the same dilation of the gutters."""
+    if not texel_shading(ec):
+        unwrap_dilated(ec, prog, size, resource, *more)
+        return
     for k, res in zip(maps, texel_surface_resources(size, maps)):
         ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
     raws = [ec.scratch(TexSpec((size, size), 4, "f4", filter="nearest"))]
