@@ -63,3 +63,21 @@ def test_gosselin_light_map_from_the_texel_surface(renderer, radius_mode):
     for k, a in out[False].items():
         tol = 1e-5 if k == "gosselin_light_map" else 1e-4
         assert np.abs(a - out[True][k]).max() <= tol * max(np.abs(a).max(), 1e-12), k
+
+
+@pytest.mark.parametrize("technique", ["deon", "gosselin"])
+def test_gutter_and_seam_maps_from_the_texel_surface(renderer, technique):
+    """With the texel surface map the gutter pass takes coverage and texel positions from it instead
+    of two more rasters of the mesh: the gutter and seam maps are the same."""
+    base = small_settings("head", technique, 48)
+    out = {}
+    for on in (False, True):
+        s = with_values(base, {"render.texel_surface": on})
+        renderer.render(s)
+        renderer.scene.__dict__.pop("_texel_tables", None)  # the CPU tables are rebuilt, not reused
+        renderer.render(s, force=True)
+        g = renderer.graph(technique)
+        out[on] = {k: g.read(k) for k in g.resources() if k.startswith(("gutter_", "seam_"))}
+    assert out[False] and set(out[False]) == set(out[True])
+    for k, a in out[False].items():
+        np.testing.assert_array_equal(a, out[True][k], err_msg=k)

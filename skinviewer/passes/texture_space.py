@@ -21,7 +21,9 @@ class GutterMapPass(Pass):
     """Per texel: the integer texel coordinate of the nearest texel covered by a UV island (RG) and
     coverage (B); with scene.seam_aware also the seam map (seam_resource: RG the fractional texel
     coordinate of the surface point across the UV seam, B 1 where there is one; seam_map). Depends
-    on the mesh and the texture size only, so it runs once per scene/size.
+    on the mesh and the texture size only, so it runs once per scene/size. With render.texel_surface
+    the coverage and the texel positions come from the texel surface map of the same size (its
+    TexelSurfacePass is in every graph that has this pass) instead of two more rasters of the mesh.
     ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
 
     def __init__(self, size_setting: str, name: str | None = None, size_of=None):
@@ -34,15 +36,29 @@ class GutterMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         size = self._n(r)
-        r.program("uv_coverage")
+        seam = r.setting("scene.seam_aware")
+        if texel_shading(r):
+            r.input(texel_surface_resources(size, "p")[0])
+            r.program("texel_coverage")
+        else:
+            r.program("uv_coverage")
+            if seam:
+                r.program("uv_position")
         r.output(gutter_resource(size), gutter_spec(size))
-        if r.setting("scene.seam_aware"):
-            r.program("uv_position")
+        if seam:
             r.output(seam_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         size = self._n(ec)
-        cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
+        texels = texel_shading(ec)
+        if texels:
+            surface = texel_surface_resources(size, "p")[0]
+            prog = ec.program("texel_coverage")
+            ec.bind(prog, "surface_p", surface)
+            cover = ec.scratch(TexSpec((size, size), 1, "f1", filter="nearest"))
+            ec.draw_fullscreen(prog, cover)
+        else:
+            cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
         spec = gutter_spec(size)
         # the CPU tables depend on the mesh and the coverage only: kept on the scene, so a forced
@@ -56,7 +72,7 @@ class GutterMapPass(Pass):
 
         if ec.setting("scene.seam_aware"):
             if ("seam",) + key not in cache:
-                pos = rasterize_unwrapped(ec, ec.program("uv_position"), size)
+                pos = ec.input(surface) if texels else rasterize_unwrapped(ec, ec.program("uv_position"), size)
                 pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
                 cache[("seam",) + key] = seam_map(covered, ec.scene, pos).tobytes()
             ec.output(seam_resource(size)).write(cache[("seam",) + key])
