@@ -158,11 +158,11 @@ class TexelSurfacePass(Pass):
     on the mesh and the size only: runs once per scene/size. ``maps``: the ones its readers need
     (d'Eon's transmitted light reads only the position)."""
 
-    def __init__(self, name: str, size_of, enabled: str, maps: str = TEXEL_SURFACE_MAPS):
-        self.name, self.size_of, self.enabled, self.maps = name, size_of, enabled, maps
+    def __init__(self, name: str, size_of, maps: str = TEXEL_SURFACE_MAPS):
+        self.name, self.size_of, self.maps = name, size_of, maps
 
     def reflect(self, r: Reflection) -> None:
-        if not r.peek(self.enabled):
+        if not r.peek("render.texel_surface"):  # shape only: the map's content does not depend on it
             return
         n = self.size_of(r)
         r.program("texel_surface")

@@ -19,7 +19,7 @@ from skinviewer.techniques.base import Technique, shadow_passes
 
 def build():
     return shadow_passes() + [
-        GutterMapPass(SIZE), TexelSurfacePass("gosselin_texel_surface", lambda r: r.setting(SIZE), "render.texel_surface"),
+        GutterMapPass(SIZE), TexelSurfacePass("gosselin_texel_surface", lambda r: r.setting(SIZE)),
         GosselinLightMapPass(), GosselinRadiusMapPass(),
         StretchPass("gosselin_stretch", STRETCH, lambda r: r.setting(SIZE)), PoissonBlurPass(),
         BeckmannLutPass(), GosselinFinalPass(), OutputPass("lit"),
