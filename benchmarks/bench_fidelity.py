@@ -131,13 +131,17 @@ def main() -> int:
     sizes = [int(x) for x in a.sizes.split(",")]
     if "seams" in a.parts:
         print("## seams: the scan at 512^2, d'Eon diffused map vs the 3D-distance reference over lit texels")
+        tri = {"scene.stretch_metric": "triangle"}
         print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}))
-        print_seams("seam-aware gutters on", seams(r))
-        print_seams("  + stretch_shear", seams(r, extra={"deon.stretch_shear": True}))
-        print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_shear": True, "deon.stretch_per_gaussian": True}))
-        print("## the same (seam-aware on) against a reference that couples texels through tissue only: no pair whose")
+        print_seams("on, eq. 27 per triangle", seams(r, extra={**tri, "deon.stretch_shear": False}))
+        print_seams("  + stretch_shear", seams(r, extra=tri))
+        print_seams("on, vertex metric", seams(r, extra={"deon.stretch_shear": False}))
+        print_seams("  + shear (the default)", seams(r))
+        print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_per_gaussian": True}))
+        print("## the same (defaults) against a reference that couples texels through tissue only: no pair whose")
         print("## straight path leaves a point into the air (lips / eyelids touching, nostril and ear cavities)")
-        print_seams("seam-aware gutters on", seams(r, tissue_only=True))
+        print_seams("defaults", seams(r, tissue_only=True))
+        print_seams("eq. 27 per triangle", seams(r, extra={**tri, "deon.stretch_shear": False}, tissue_only=True))
         print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}, tissue_only=True))
     if "laser" in a.parts:
         laser(r, sizes)

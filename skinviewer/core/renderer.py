@@ -17,10 +17,11 @@ from skinviewer.core.settings import Settings
 from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes import rules
 from skinviewer.passes.output import srgb_to_linear
-from skinviewer.physics.diffusion import max_uv_per_mm, uniform_uv_per_mm
+from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
 from skinviewer.scene.camera import View, orbit_view
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
+    UV_COVARIANCE_ATTR,
     VERTEX_ATTRS,
     VERTEX_FORMAT,
     MeshData,
@@ -47,6 +48,7 @@ class GpuScene:
         self.vbo = ctx.buffer(mesh.interleaved().tobytes())
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
         self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
+        self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
         self.has_normal_map = mesh.normal_map is not None
@@ -84,6 +86,12 @@ class GpuScene:
         return max_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
 
     @functools.cached_property
+    def max_shear_cos(self) -> float:
+        """The largest |cos| between the UV axes on the surface (0: no texel is sheared)."""
+        m = self.mesh
+        return max_shear_cos(m.positions, m.uvs, m.indices, self.mm_per_unit)
+
+    @functools.cached_property
     def lod_triangles(self) -> list[int]:
         """Triangles each level of detail aims at (scene/lod.py); level 0 is the mesh."""
         return level_targets(len(self.mesh.indices))
@@ -101,7 +109,8 @@ class GpuScene:
 
     def mesh_bytes(self) -> int:
         """Bytes of the mesh buffers: the mesh and every level of detail built so far."""
-        return self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
+        return (self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
+                + sum(b.size for b in self._uv_cov.values()))
 
     def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
@@ -109,7 +118,20 @@ class GpuScene:
         vbo, ibo, _ = self.lod_buffers(lod)
         attrs = [a for a in VERTEX_ATTRS if a in prog]
         fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
-        return self.ctx.vertex_array(prog, [(vbo, fmt, *attrs)], index_buffer=ibo, index_element_size=4)
+        content = [(vbo, fmt, *attrs)]
+        if UV_COVARIANCE_ATTR in prog:  # only the stretch pass reads it (deon_stretch.frag VERTEX_METRIC)
+            content.append((self.uv_covariance_buffer(lod), "3f", UV_COVARIANCE_ATTR))
+        return self.ctx.vertex_array(prog, content, index_buffer=ibo, index_element_size=4)
+
+    def uv_covariance_buffer(self, level: int = 0) -> moderngl.Buffer:
+        """Per vertex, the UV covariance of a unit surface Gaussian (physics/diffusion.vertex_uv_covariance;
+        issue 10 items 1-2), built on first use per level of detail."""
+        hit = self._uv_cov.get(level)
+        if hit is None:
+            m = self.mesh if level <= 0 else decimate(self.mesh, self.lod_triangles[min(level, len(self.lod_triangles) - 1)])
+            cov = vertex_uv_covariance(m.positions, m.uvs, m.indices, self.mm_per_unit)
+            hit = self._uv_cov[level] = self.ctx.buffer(np.ascontiguousarray(cov, np.float32).tobytes())
+        return hit
 
     def release(self) -> None:
         for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
@@ -118,6 +140,9 @@ class GpuScene:
             vbo.release()
             ibo.release()
         self._lods.clear()
+        for buf in self._uv_cov.values():
+            buf.release()
+        self._uv_cov.clear()
 
 
 def _fmt(f: str, used: bool) -> str:

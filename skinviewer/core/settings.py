@@ -82,6 +82,10 @@ class SceneSettings(_Model):
     head_detail: int = Field(1, ge=0, le=2, description="default head resolution level (0 small, 1 normal, 2 fine)")
     seam_aware: bool = Field(True, description="texture-space gutters near UV seams continue on the island across "
                              "the seam (3D adjacency), so blurs do not read invented values there (issue 10)")
+    stretch_metric: Literal["vertex", "triangle"] = Field(
+        "vertex", description="the stretch map (seed 000 eq. 27) from the UV->surface metric averaged at the "
+        "vertices and interpolated (vertex: smooth over the surface where the UVs are not, e.g. slivers) or "
+        "per triangle, as printed (triangle)")
 
     _paths = field_validator("mesh", "albedo_map", "normal_map", "specular_map", "region_map")(_file_path)
 
@@ -260,9 +264,10 @@ class DeonSettings(_Model):
     mix: float = Field(0.5, ge=0.0, le=1.0, description="pre/post-scatter texturing, eq. (28), (34)")
     stretch: bool = True
     stretch_per_gaussian: bool = False
-    stretch_shear: bool = Field(False, description="blur along the full UV->surface Jacobian (the second pass follows "
-                                "the texels' shear) instead of eq. 27's per-axis lengths; exact on sheared planes, "
-                                "not yet better on the scan (issue 10 item 2, notes/fidelity.md)")
+    stretch_shear: bool = Field(True, description="blur along the full UV->surface Jacobian (the second pass follows "
+                                "the texels' shear, covariance sigma^2 (J^T J)^-1) instead of eq. 27's per-axis lengths "
+                                "(issue 10 item 2: exact on sheared planes; with scene.stretch_metric = vertex also "
+                                "closer on the scan, notes/fidelity.md)")
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
     tsm_light: int | None = Field(

@@ -119,6 +119,13 @@ def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
 
 # -- passes --------------------------------------------------------------------------------------
 
+SHEAR_COS_NONE = 1e-4  # a mesh whose UV axes are this close to orthogonal everywhere is not sheared
+
+
+def stretch_defines(r) -> dict:
+    return {"VERTEX_METRIC": 1} if r.setting("scene.stretch_metric") == "vertex" else {}
+
+
 class StretchPass(Pass):
     """eq. (27): UV per mm along u and v (RG) and the shear of the UV axes on the surface (B, the
     cosine between them: deon.stretch_shear), from derivatives while rasterising in texture space;
@@ -131,11 +138,12 @@ class StretchPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = self.size_of(r)
-        declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"))  # RG stretch, B shear
+        declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"),  # RG stretch, B shear
+                          **stretch_defines(r))
 
     def execute(self, ec) -> None:
         n = self.size_of(ec)
-        prog = ec.program("deon_stretch")
+        prog = ec.program("deon_stretch", **stretch_defines(ec))
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
         unwrap_dilated(ec, prog, n, self.resource)
 
@@ -292,7 +300,8 @@ class GaussianBlurPass(Pass):
         texel the bilinear 7 taps' own smoothing is closer to the texel integral. {} or the define."""
         sigma = np.sqrt(step.increment)
         widest = sigma * (r.scene.max_uv_per_mm if stretch else r.scene.mean_uv_per_mm) * n
-        if sigma < mean_texel_mm(r.scene, n) or widest > NARROW_TEXELS or (stretch and r.setting("deon.stretch_shear")):
+        sheared = stretch and r.setting("deon.stretch_shear") and r.scene.max_shear_cos > SHEAR_COS_NONE
+        if sigma < mean_texel_mm(r.scene, n) or widest > NARROW_TEXELS or sheared:
             return {}
         return {"NARROW_TAPS": narrow_taps(widest)}
 
@@ -490,8 +499,11 @@ def max_stretch(ec, stretch: str | None) -> float:
     s_max = ec.state.get(key)
     if s_max is None:
         tex = ec.input(stretch)
-        a = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components)[:, :2]  # RG: UV per mm (B: shear)
-        a = a[np.isfinite(a)]
+        a = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components).astype(np.float64)
+        if a.shape[1] >= 3 and ec.setting("deon.stretch_shear"):  # the sheared pass's step (deon_blur shear_step)
+            c = np.clip(np.nan_to_num(a[:, 2]), -0.95, 0.95)
+            a = np.column_stack([a[:, 0], np.sqrt((c * c * a[:, 0] ** 2 + a[:, 1] ** 2) / (1.0 - c * c))])
+        a = a[:, :2][np.isfinite(a[:, :2])]  # RG: UV per mm (B: shear)
         s_max = ec.state[key] = float(a.max()) if a.size else 0.0
     return s_max
 

@@ -176,25 +176,107 @@ def uniform_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
 MAX_UV_PER_MM = 10.0  # deon_stretch.frag's clamp (tiny or zero world area)
 
 
-def max_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
-    """The largest per-axis stretch (UV per mm, seed 000 eq. 27) over the mesh's triangles, as
-    deon_stretch.frag computes it per triangle (the UV -> surface Jacobian, clamped): the largest
-    value the stretch map can hold, known without reading it back."""
+def uv_jacobians(positions, uvs, indices, mm_per_unit: float):
+    """Per triangle, the UV -> surface Jacobian's columns dP/du, dP/dv (mm per UV unit; seed 000
+    eq. 27) and whether the triangle has a UV area at all (``ok``): (pu, pv, ok)."""
     p = np.asarray(positions, dtype=np.float64)[indices] * float(mm_per_unit)
     t = np.asarray(uvs, dtype=np.float64)[indices]
     e1, e2 = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]
     t1, t2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
     det = t1[:, 0] * t2[:, 1] - t2[:, 0] * t1[:, 1]
-    ok = np.abs(det) > 1e-20
+    ok = (np.abs(det) > 1e-20) & np.isfinite(det)
+    d = np.where(ok, det, 1.0)[:, None]
+    with np.errstate(invalid="ignore", over="ignore"):
+        pu = np.where(ok[:, None], (e1 * t2[:, 1:2] - e2 * t1[:, 1:2]) / d, 0.0)
+        pv = np.where(ok[:, None], (e2 * t1[:, 0:1] - e1 * t2[:, 0:1]) / d, 0.0)
+    return pu, pv, ok & np.isfinite(pu).all(1) & np.isfinite(pv).all(1)
+
+
+def max_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
+    """A bound on the stretch map (UV per mm, seed 000 eq. 27), known without reading it back: the
+    largest per-axis UV standard deviation of a unit surface Gaussian, sqrt(S_uu), sqrt(S_vv) of
+    S = (J^T J)^-1 per triangle (triangle_uv_covariance). It bounds deon_stretch.frag's per-triangle
+    1/|dP/du| (S_uu = 1 / (|dP/du|^2 sin^2)) and, S being convex in the vertex mode, its interpolated
+    one too."""
+    S, ok, _ = triangle_uv_covariance(positions, uvs, indices, mm_per_unit)
     if not ok.any():
         return MAX_UV_PER_MM
-    d = det[ok, None]
-    pu = (e1[ok] * t2[ok, 1:2] - e2[ok] * t1[ok, 1:2]) / d
-    pv = (e2[ok] * t1[ok, 0:1] - e1[ok] * t2[ok, 0:1]) / d
+    return float(np.clip(np.sqrt(S[ok][:, [0, 2]].max()), 1e-7, MAX_UV_PER_MM))
+
+
+def triangle_uv_covariance(positions, uvs, indices, mm_per_unit: float):
+    """Per triangle (S_uu, S_uv, S_vv) = (J^T J)^-1, UV^2 per mm^2, clamped like deon_stretch.frag
+    (per axis at most MAX_UV_PER_MM^2; a triangle with no surface area gets the clamp), whether it
+    has a UV area (ok: it is rasterised in texture space) and its surface area (mm^2; 0 if none)."""
+    pu, pv, ok = uv_jacobians(positions, uvs, indices, mm_per_unit)
+    E, F, G = (pu * pu).sum(1), (pu * pv).sum(1), (pv * pv).sum(1)
+    det = E * G - F * F
+    surface = ok & (det > 1e-30 * np.maximum(E * G, 1e-300))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        S = np.stack([G / det, -F / det, E / det], axis=1)  # G^-1 = [[G, -F], [-F, E]] / det
+    lim = MAX_UV_PER_MM ** 2
+    S = np.where(surface[:, None] & np.isfinite(S).all(1, keepdims=True), S, [lim, 0.0, lim])
+    S /= np.maximum(np.maximum(S[:, 0], S[:, 2]) / lim, 1.0)[:, None]  # a tiny surface triangle: as clamped
+    area = 0.5 * np.sqrt(np.maximum(det, 0.0)) * np.abs(_uv_area2(uvs, indices))
+    return S, ok, np.where(surface & np.isfinite(area), area, 0.0)
+
+
+def max_shear_cos(positions, uvs, indices, mm_per_unit: float) -> float:
+    """The largest |cos| of the angle between dP/du and dP/dv over the mesh's triangles (0: the UV
+    axes are orthogonal on the surface everywhere, so a shear-following blur is the per-axis one)."""
+    pu, pv, ok = uv_jacobians(positions, uvs, indices, mm_per_unit)
+    if not ok.any():
+        return 0.0
+    lu, lv = np.linalg.norm(pu[ok], axis=1), np.linalg.norm(pv[ok], axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = 1.0 / np.concatenate([np.linalg.norm(pu, axis=1), np.linalg.norm(pv, axis=1)])
-    s = np.clip(np.nan_to_num(s, nan=1e-7, posinf=MAX_UV_PER_MM), 1e-7, MAX_UV_PER_MM)
-    return float(s.max())
+        c = np.abs((pu[ok] * pv[ok]).sum(1)) / (lu * lv)
+    return float(np.nan_to_num(c, nan=0.0).max())
+
+
+def vertex_uv_covariance(positions, uvs, indices, mm_per_unit: float) -> np.ndarray:
+    """(N, 3) float32 per vertex: (S_uu, S_uv, S_vv), the UV covariance of a unit surface Gaussian,
+    S = G^-1 with G = J^T J the metric of the UV -> surface Jacobian (seed 000 eq. 27 without
+    dropping the shear; UV^2 per mm^2). A blur of sigma mm needs the UV covariance sigma^2 S.
+    Per vertex it is the mean of its triangles' S weighted by their surface area: the UV covariance
+    of a small surface disc around the vertex (a mixture of its triangles' pieces), smooth over the
+    surface where the parametrisation is not: a texel that lands in a UV sliver (a triangle squeezed
+    in UV, whose own S is ~0 across it, so eq. 27 per triangle would stop the blur there) gets its
+    vertices' mixture. Interpolated over a triangle it stays positive definite (a convex
+    combination). Vertices are split at UV seams, so each vertex's triangles share one chart.
+    Clamped like deon_stretch.frag (per axis <= MAX_UV_PER_MM)."""
+    S, ok, area = triangle_uv_covariance(positions, uvs, indices, mm_per_unit)
+    area = area + 1e-300
+    lim = MAX_UV_PER_MM ** 2
+    n = len(positions)
+    acc = np.zeros((n, 3))
+    wsum = np.zeros(n)
+    for k in range(3):
+        np.add.at(acc, indices[:, k], S * area[:, None])
+        np.add.at(wsum, indices[:, k], area)
+    out = np.where(wsum[:, None] > 1e-290, acc / np.maximum(wsum, 1e-300)[:, None], [lim, 0.0, lim])
+    return out.astype(np.float32)
+
+
+def stretch_from_uv_covariance(S) -> np.ndarray:
+    """(..., 3) stretch map texels (s_u, s_v, c) from UV covariances (S_uu, S_uv, S_vv), as
+    deon_stretch.frag (VERTEX_METRIC) writes them: G = S^-1, s_u = 1/sqrt(G_uu), s_v = 1/sqrt(G_vv)
+    (eq. 27's UV per mm along u and v), c = G_uv / sqrt(G_uu G_vv) (the shear, clamped to +-0.95)."""
+    S = np.asarray(S, np.float64)
+    det = S[..., 0] * S[..., 2] - S[..., 1] ** 2
+    ok = (det > 0) & (S[..., 0] > 0) & (S[..., 2] > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        su = np.sqrt(np.where(ok, det / S[..., 2], 1.0))
+        sv = np.sqrt(np.where(ok, det / S[..., 0], 1.0))
+        c = np.where(ok, -S[..., 1] / np.sqrt(S[..., 0] * S[..., 2]), 0.0)
+    su = np.where(ok, np.clip(su, 1e-7, MAX_UV_PER_MM), MAX_UV_PER_MM)
+    sv = np.where(ok, np.clip(sv, 1e-7, MAX_UV_PER_MM), MAX_UV_PER_MM)
+    return np.stack([su, sv, np.clip(c, -0.95, 0.95)], -1)
+
+
+def _uv_area2(uvs, indices) -> np.ndarray:
+    t = np.asarray(uvs, dtype=np.float64)[indices]
+    t1, t2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    return t1[:, 0] * t2[:, 1] - t2[:, 0] * t1[:, 1]
 
 
 def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int = 8) -> list[float]:

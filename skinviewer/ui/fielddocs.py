@@ -78,6 +78,10 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
                  "albedo^mix before, albedo^(1-mix) after, eq. 28 and 34. 0: sharp colour detail, 1: blurred"),
     "deon.stretch": ("", "stretch-corrected blur radii from the UV stretch map (eq. 27, used in eq. 25)"),
     "deon.stretch_per_gaussian": ("", "a stretch map per Gaussian width instead of one (eq. 25-27)"),
+    "deon.stretch_shear": ("", "the blur follows the full UV->surface Jacobian: the second pass runs along the "
+                           "texels' shear, so a skewed parametrisation blurs round (eq. 27 keeps lengths only)"),
+    "scene.stretch_metric": ("", "vertex: the stretch map from the surface metric averaged at the vertices and "
+                             "interpolated (smooth where the UVs are not); triangle: per triangle, as printed (eq. 27)"),
     "deon.tsm": ("", "translucent shadow map: light through thin parts (ears), eq. 32-33"),
     "deon.tsm_size": ("texels", "translucent shadow map (TSM) resolution, eq. 32. Texture-space cost"),
     "deon.tsm_form": ("", "how light through thin parts fades with thickness d (translucent shadow map, eq. 33). "
@@ -141,6 +145,8 @@ LABELS: dict[str, str] = {
     "deon.mix": "colour before blur",
     "deon.stretch": "stretch correction",
     "deon.stretch_per_gaussian": "stretch per Gaussian",
+    "deon.stretch_shear": "stretch with shear",
+    "scene.stretch_metric": "stretch from",
     "deon.tsm": "translucency (TSM)",
     "deon.tsm_size": "translucency map",
     "deon.tsm_light": "translucency light",
