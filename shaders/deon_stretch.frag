@@ -5,7 +5,7 @@
 // dP/du and dP/dv from the screen derivatives of the world position and of the UV (solving the
 // 2x2 Jacobian, so it does not assume the unwrap's one-texel-per-pixel mapping). B: the shear,
 // cos(angle between dP/du and dP/dv), for the blur's shear-corrected second pass (deon_blur.frag).
-// VERTEX_METRIC (deon.stretch_metric = "vertex"): the same three from the UV covariance S = G^-1
+// VERTEX_METRIC (scene.stretch_metric = "vertex"): the same three from the UV covariance S = G^-1
 // interpolated from the vertices (issue 10 items 1-2), smooth across triangles; else per triangle.
 in vec3 v_position;
 in vec2 v_uv;

@@ -399,3 +399,52 @@ def test_tissue_only_reference_does_not_couple_across_air():
     flat = surface_diffusion_reference(E[:, :n], pos[:, :n], area[:, :n], cov[:, :n], v, w)
     assert np.array_equal(flat, surface_diffusion_reference(E[:, :n], pos[:, :n], area[:, :n], cov[:, :n], v, w,
                                                             normals=nrm[:, :n]))
+
+
+def _hairpin(fold_mm: float = 1.0, plate_mm: float = 24.0, width_mm: float = 8.0, step: float = 1.0):
+    """A strip folded back on itself (a lip or an eyelid margin seen in section): a top plate at
+    z = +fold, a half cylinder of radius ``fold`` and a bottom plate at z = -fold, one UV island.
+    Returns (positions mm, uvs, indices, arc length s per vertex)."""
+    arc = np.pi * fold_mm
+    total = 2 * plate_mm + arc
+    s = np.unique(np.r_[np.arange(0.0, total, step), np.arange(plate_mm, plate_mm + arc, step / 4), total])
+    y = np.arange(0.0, width_mm + 1e-9, step)
+    S, Y = np.meshgrid(s, y, indexing="ij")
+    th = np.clip((S - plate_mm) / fold_mm, 0.0, np.pi)
+    X = np.where(S < plate_mm, plate_mm - S, np.where(S > plate_mm + arc, S - plate_mm - arc, -fold_mm * np.sin(th)))
+    Z = np.where(S < plate_mm, fold_mm, np.where(S > plate_mm + arc, -fold_mm, fold_mm * np.cos(th)))
+    P = np.stack([X, Y, Z], -1).reshape(-1, 3)
+    UV = np.stack([0.05 + 0.9 * S / total, 0.3 + 0.4 * Y / width_mm], -1).reshape(-1, 2)
+    ns, ny = len(s), len(y)
+    q = (np.arange(ns - 1)[:, None] * ny + np.arange(ny - 1)[None, :]).ravel()
+    F = np.concatenate([np.stack([q, q + ny, q + 1], 1), np.stack([q + 1, q + ny, q + ny + 1], 1)])
+    return P, UV, F, S.ravel()
+
+
+def test_surface_path_reference_couples_along_the_surface_only():
+    """scene.texels.SurfacePaths: on a strip folded back on itself 2 mm thick, the 3D-distance
+    reference lights the bottom plate under a spot on the top plate (2 mm away in 3D, ~35 mm along the
+    surface) and dilutes the spot with it; the surface-path reference does neither, yet carries light
+    round the fold itself."""
+    from skinviewer.scene.texels import SurfacePaths, surface_diffusion_reference, texel_surface
+    P, UV, F, _ = _hairpin()
+    n = 128
+    tri, pos, area = texel_surface(P, UV, F, n)
+    cov = tri >= 0
+    E = np.zeros((n, n, 3))
+    spot = cov & (np.hypot(pos[..., 0] - 16.0, pos[..., 1] - 4.0) < 2.0) & (pos[..., 2] > 0.9)  # top plate
+    E[spot] = 1.0
+    fold_lit = cov & (pos[..., 0] < 0.5) & (pos[..., 2] > 0.5)  # the top plate's end and the fold's top
+    E[fold_lit] = 1.0
+    v, w = [4.0], [(1.0, 1.0, 1.0)]
+    sp = SurfacePaths(P, F, tri, pos, 1.0, reach_mm=3.5 * 2.0)
+    d3 = surface_diffusion_reference(E, pos, area, cov, v, w)
+    ds = surface_diffusion_reference(E, pos, area, cov, v, w, surface_paths=sp)
+    below = cov & (np.hypot(pos[..., 0] - 16.0, pos[..., 1] - 4.0) < 1.0) & (pos[..., 2] < -0.9)
+    assert below.sum() > 4
+    assert d3[below, 0].min() > 0.1            # through the 2 mm gap
+    assert ds[below, 0].max() < 1e-6           # not along the surface
+    around = cov & (pos[..., 0] < 0.5) & (pos[..., 2] < -0.5) & (pos[..., 2] > -0.99)  # the fold's lower half
+    assert around.sum() > 4 and ds[around, 0].mean() > 0.5 * d3[around, 0].mean() > 0.01  # round the fold
+    top = cov & (np.hypot(pos[..., 0] - 16.0, pos[..., 1] - 4.0) < 1.0) & (pos[..., 2] > 0.9)
+    assert (ds[top, 0] > 1.5 * d3[top, 0]).all()  # the 3D reference dilutes the spot with the dark plate below

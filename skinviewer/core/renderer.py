@@ -49,6 +49,7 @@ class GpuScene:
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
         self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
+        self._lod_meshes: dict[int, MeshData] = {}
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
         self.has_normal_map = mesh.normal_map is not None
@@ -96,13 +97,22 @@ class GpuScene:
         """Triangles each level of detail aims at (scene/lod.py); level 0 is the mesh."""
         return level_targets(len(self.mesh.indices))
 
+    def lod_mesh(self, level: int) -> MeshData:
+        """The mesh at level of detail ``level`` (decimated on first use; level 0 is the mesh)."""
+        if level <= 0:
+            return self.mesh
+        key = min(level, len(self.lod_triangles) - 1)
+        if key not in self._lod_meshes:
+            self._lod_meshes[key] = decimate(self.mesh, self.lod_triangles[key])
+        return self._lod_meshes[key]
+
     def lod_buffers(self, level: int) -> tuple[moderngl.Buffer, moderngl.Buffer, int]:
         """Vertex and index buffers of level ``level`` (built on first use) and its triangle count."""
         if level <= 0:
             return self.vbo, self.ibo, len(self.mesh.indices)
         hit = self._lods.get(level)
         if hit is None:
-            m = decimate(self.mesh, self.lod_triangles[min(level, len(self.lod_triangles) - 1)])
+            m = self.lod_mesh(level)
             hit = self._lods[level] = (self.ctx.buffer(m.interleaved().tobytes()),
                                        self.ctx.buffer(m.indices.astype(np.uint32).tobytes()), len(m.indices))
         return hit
@@ -128,7 +138,7 @@ class GpuScene:
         issue 10 items 1-2), built on first use per level of detail."""
         hit = self._uv_cov.get(level)
         if hit is None:
-            m = self.mesh if level <= 0 else decimate(self.mesh, self.lod_triangles[min(level, len(self.lod_triangles) - 1)])
+            m = self.lod_mesh(level)
             cov = vertex_uv_covariance(m.positions, m.uvs, m.indices, self.mm_per_unit)
             hit = self._uv_cov[level] = self.ctx.buffer(np.ascontiguousarray(cov, np.float32).tobytes())
         return hit
@@ -143,6 +153,7 @@ class GpuScene:
         for buf in self._uv_cov.values():
             buf.release()
         self._uv_cov.clear()
+        self._lod_meshes.clear()
 
 
 def _fmt(f: str, used: bool) -> str:

@@ -84,8 +84,8 @@ class SceneSettings(_Model):
                              "the seam (3D adjacency), so blurs do not read invented values there (issue 10)")
     stretch_metric: Literal["vertex", "triangle"] = Field(
         "vertex", description="the stretch map (seed 000 eq. 27) from the UV->surface metric averaged at the "
-        "vertices and interpolated (vertex: smooth over the surface where the UVs are not, e.g. slivers) or "
-        "per triangle, as printed (triangle)")
+        "vertices and interpolated (vertex: smooth where the UVs are not, e.g. slivers; the lowest RMS on the seam "
+        "bench) or per triangle, as printed (triangle)")
 
     _paths = field_validator("mesh", "albedo_map", "normal_map", "specular_map", "region_map")(_file_path)
 
@@ -266,8 +266,8 @@ class DeonSettings(_Model):
     stretch_per_gaussian: bool = False
     stretch_shear: bool = Field(True, description="blur along the full UV->surface Jacobian (the second pass follows "
                                 "the texels' shear, covariance sigma^2 (J^T J)^-1) instead of eq. 27's per-axis lengths "
-                                "(issue 10 item 2: exact on sheared planes; with scene.stretch_metric = vertex also "
-                                "closer on the scan, notes/fidelity.md)")
+                                "(issue 10 item 2: exact on sheared planes; on the scan red p99 lower over four "
+                                "lights, notes/fidelity.md)")
     tsm: bool = True
     tsm_size: int = Field(1024, ge=64, le=8192)
     tsm_light: int | None = Field(

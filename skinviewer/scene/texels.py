@@ -7,6 +7,8 @@
   not a UV edge), so blur taps that leave an island continue on the surface.
 * :func:`surface_diffusion_reference` — the brute-force 3D-distance reference of a texture-space
   diffusion: D(x) = sum_y E(y) A(y) R(|x - y|) over covered texels (R a sum of Gaussians, mm).
+* :class:`SurfacePaths` — which texel pairs are joined along the surface (mesh-graph Dijkstra), so the
+  reference can leave out shortcuts through air or thin tissue that no texture-space blur takes.
 """
 from __future__ import annotations
 
@@ -54,7 +56,8 @@ def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
 
 
 def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutoff_sigmas: float = 3.5,
-                                block: int = 8192, normals=None, air_sin: float = 0.5) -> np.ndarray:
+                                block: int = 8192, normals=None, air_sin: float = 0.5,
+                                surface_paths: "SurfacePaths | None" = None) -> np.ndarray:
     """D(x) = sum_i w_i [sum_y E(y) A(y) G(v_i, |x - y|)] / [sum_y A(y) G(v_i, |x - y|)] over covered
     texels x, y (3D distance in mm). The normalisation makes each Gaussian a weighted mean of E, so a
     Gaussian narrower than a texel (skin's first, sigma 0.08 mm) is the identity instead of a
@@ -63,7 +66,10 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
     ``normals`` (n, n, 3) outward unit normals: pairs whose straight path crosses air do not couple
     (tissue paths only): the other point in front of x's tangent plane while the normals face each other
     (opposite walls: lips or eyelids touching, a nostril), or more than ``air_sin`` x r in front of either
-    tangent plane (a deep cavity). Mild concavities and thin parts (the other point behind) still couple."""
+    tangent plane (a deep cavity). Mild concavities and thin parts (the other point behind) still couple.
+    ``surface_paths`` (SurfacePaths of the same texels): only pairs joined by a path along the surface
+    not much longer than their 3D distance couple: what a texture-space blur computes, without the
+    shortcuts through air or through thin tissue (lips, lids, ears: the TSM's part, eq. 32-33)."""
     v = np.asarray(variances, np.float64)
     w = np.asarray(weights, np.float64).reshape(len(v), 3)
     idx = np.flatnonzero(covered.ravel())
@@ -87,6 +93,9 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
                 facing = (Nrm[s + i] * Nrm[j]).sum(1) < 0.0  # opposite walls of a gap
                 air = ((up_i > 0.0) & facing) | (up_i > air_sin * r) | (up_j > air_sin * r)
                 i, j, r = i[~air], j[~air], r[~air]
+            if surface_paths is not None:
+                keep = surface_paths.connected(idx[s + i], idx[j], r)
+                i, j, r = i[keep], j[keep], r[keep]
             k = np.exp(-r * r / (2 * vi))
             den = np.bincount(i, k * a[j], minlength=m)
             for c in range(3):
@@ -95,6 +104,70 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
     D = np.zeros(E.shape[:2] + (3,))
     D.reshape(-1, 3)[idx] = out
     return D
+
+
+class SurfacePaths:
+    """Surface (geodesic) distances between texels, from Dijkstra on the mesh's edge graph (vertices
+    welded by position, so paths cross UV seams), to tell a pair joined along the surface from one joined
+    only through air or thin tissue. A texel reaches the graph through its triangle's corners; the path
+    x -> corner a -> ... -> corner b -> y over-estimates the surface distance by up to the two triangles'
+    sizes, so a pair couples when  path <= stretch * r + e_x + e_y  (e: the longest edge of the texel's
+    triangle), or when their triangles share a corner."""
+
+    def __init__(self, positions, indices, tri, pos, mm_per_unit: float, reach_mm: float, stretch: float = 1.5):
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
+        P = np.asarray(positions, np.float64) * mm_per_unit
+        F = np.asarray(indices, np.int64)
+        scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
+        wid = _weld(P, 1e-6 * scale)
+        nv = int(wid.max()) + 1
+        Pw = np.zeros((nv, 3))
+        Pw[wid] = P
+        Fw = wid[F]
+        a, b = Fw[:, [0, 1, 2]].ravel(), Fw[:, [1, 2, 0]].ravel()
+        ln = np.linalg.norm(Pw[a] - Pw[b], axis=1)
+        graph = coo_matrix((np.r_[ln, ln], (np.r_[a, b], np.r_[b, a])), shape=(nv, nv)).tocsr()
+        self.stretch = float(stretch)
+        self.limit = self.stretch * reach_mm + 2.0 * float(ln.max(initial=0.0))
+        rows, cols, vals = [], [], []
+        chunk = max(1, 20_000_000 // nv)  # rows of the dense distance block at a time (<= 160 MB)
+        for s0 in range(0, nv, chunk):
+            d = dijkstra(graph, indices=np.arange(s0, min(nv, s0 + chunk)), limit=self.limit)
+            rr, cc = np.nonzero(np.isfinite(d))
+            rows.append(rr + s0)
+            cols.append(cc)
+            vals.append(d[rr, cc])
+        rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+        self._key = rows * nv + cols
+        order = np.argsort(self._key)
+        self._key, self._val, self._nv = self._key[order], vals[order], nv
+        t = np.asarray(tri).ravel()
+        covered = t >= 0
+        corners = np.full((t.size, 3), -1, np.int64)
+        corners[covered] = Fw[t[covered]]
+        x = np.asarray(pos, np.float64).reshape(-1, 3)
+        self._corner = corners
+        self._leg = np.where(covered[:, None], np.linalg.norm(x[:, None, :] - Pw[np.maximum(corners, 0)], axis=2), np.inf)
+        edges = np.linalg.norm(Pw[Fw] - Pw[np.roll(Fw, 1, axis=1)], axis=2).max(1)
+        self._edge = np.where(covered, edges[np.maximum(t, 0)], 0.0)
+
+    def _graph(self, a, b) -> np.ndarray:
+        key = a * self._nv + b
+        if not len(self._key):
+            return np.full(key.shape, np.inf)
+        k = np.minimum(np.searchsorted(self._key, key), len(self._key) - 1)
+        return np.where(self._key[k] == key, self._val[k], np.inf)
+
+    def connected(self, x, y, r) -> np.ndarray:
+        """For texel indices x, y (flat) at 3D distance r (mm): joined along the surface?"""
+        best = np.full(len(x), np.inf)
+        for p in range(3):
+            for q in range(3):
+                a, b = self._corner[x, p], self._corner[y, q]
+                best = np.minimum(best, self._leg[x, p] + self._graph(a, b) + self._leg[y, q])
+        shared = (self._corner[x][:, :, None] == self._corner[y][:, None, :]).any((1, 2))
+        return shared | (best <= self.stretch * r + self._edge[x] + self._edge[y])
 
 
 def _weld(keys: np.ndarray, tol: float) -> np.ndarray:
