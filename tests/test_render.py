@@ -138,3 +138,27 @@ def test_render_writes_linear_exr(tmp_path):
     a = load_exr(exr)
     assert a.shape == (32, 32, 4) and a.dtype == np.float32 and np.isfinite(a).all()
     assert a[..., 3].max() == 1.0 and 0.0 < a[..., :3].max() < 4.0  # linear: the exposure is not applied
+
+
+@pytest.mark.parametrize("pcf_filter", ["bilinear", "box"])
+def test_pcf_filter_bilinear_has_no_shadow_map_terraces(renderer, pcf_filter):
+    """shadow.pcf_filter: across the shadow-edge scene's edge, sampled much finer than a shadow-map
+    texel (d'Eon's per-texel visibility, 1024^2 over the 60 mm plane, 256^2 shadow map), the box
+    PCF takes only the (2 pcf + 2) levels k / (2 pcf + 1) of whole texels (terraces one shadow texel
+    wide); the bilinear one slides with the position: many levels, monotonic, the same 0 and 1."""
+    s = small_settings("shadow-edge", "deon", 32, **{"shadow.map_size": 256, "shadow.pcf": 1,
+                                                     "shadow.pcf_filter": pcf_filter, "deon.irradiance_size": 1024,
+                                                     "deon.subpixel_kernel_px": 0.0})
+    renderer.render(s)
+    vis = renderer.graph("deon").read("deon_visibility")[..., 0].astype(np.float64)
+    n = vis.shape[0]
+    row = vis[n // 2, int(0.3 * n):int(0.75 * n)]  # across the edge at x = 0, on the plane's island
+    assert row.min() < 0.01 and row.max() > 0.99
+    levels = np.unique(np.round(row, 4))
+    if pcf_filter == "box":
+        assert len(levels) <= 4 and np.allclose(levels * 3, np.round(levels * 3), atol=1e-3)
+    else:
+        assert len(levels) >= 8
+    edge = np.nonzero((row > 0.001) & (row < 0.999))[0]
+    window = row[max(edge.min() - 8, 0):edge.max() + 9]  # the edge at x = 0 (the blade's far edge is not in it)
+    assert edge.max() - edge.min() < 40 and (np.diff(window) >= -1e-3).all()  # one monotonic ramp (half floats)

@@ -19,6 +19,7 @@ CASES = {
                           "cast_shadow": False},
                          {"kind": "directional", "direction": (-0.7, 0.2, -0.9), "intensity": 1.1}]},
     "hard": {"shadow.pcf": 0},
+    "box": {"shadow.pcf_filter": "box"},
 }
 
 
@@ -33,6 +34,7 @@ def test_specialised_equals_generic(renderer, generic, technique, case):
     defines = dict(prog)
     assert defines["LIGHT_COUNT"] == sum(1 for l in s.lights if l.enabled)
     assert defines["SHADOW_PCF"] == s.shadow.pcf
+    assert defines["SHADOW_BILINEAR"] == (s.shadow.pcf_filter == "bilinear")
     want_mask = sum(1 << k for k, l in enumerate([l for l in s.lights if l.enabled]) if l.cast_shadow)
     assert defines["SHADOW_MASK"] == want_mask
     for res in ("lit", "image") + (("deon_irradiance",) if technique == "deon" else ()) \

@@ -32,7 +32,9 @@ def test_texel_surface_shades_what_the_unwrapped_mesh_shades(renderer, scene):
         assert np.isfinite(b).all(), k
         # the same inputs; only the texel-centre UV and the UV derivatives round differently (the
         # stretch within ~3e-5, which moves the blur taps of what is downstream of it by as much)
-        tol = 1e-5 if k in ("deon_irradiance", "deon_visibility", "deon_stretch") else 1e-4
+        tol = 1e-5 if k in ("deon_irradiance", "deon_stretch") else 1e-4
+        if k == "deon_visibility":  # bilinear PCF: continuous in position, so it follows that rounding too
+            tol = 2e-3
         assert np.abs(a - b).max() <= tol * max(np.abs(a).max(), 1e-12), k
 
 

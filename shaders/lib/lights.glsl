@@ -1,6 +1,6 @@
 // Lights and shadow lookups shared by every technique (seed 000 §4.1.1-4.1.2).
 // Specialisation (skinviewer.passes.common.declare_lighting): a lit program is compiled with
-// LIGHT_COUNT, SHADOW_PCF and SHADOW_MASK (bit k: light slot k has a shadow map) for the frame's
+// LIGHT_COUNT, SHADOW_PCF, SHADOW_BILINEAR and SHADOW_MASK (bit k: light slot k has a shadow map) for the frame's
 // lights, so its loops have constant bounds and absent shadow lookups vanish: a SIMD rasteriser
 // pays every tap of a loop that merely `continue`s. GENERIC_SHADERS (or no LIGHT_COUNT) compiles
 // the uniform-driven version; both give bit-identical images (tests/test_specialise.py).
@@ -28,6 +28,7 @@ uniform sampler2D shadow_map3;
 uniform float u_shadow_tol;                 // eq. (7)
 uniform float u_shadow_texel[MAX_LIGHTS];   // world size of one shadow-map texel at the subject
 uniform int u_shadow_pcf;
+uniform int u_shadow_bilinear;              // shadow.pcf_filter (generic shaders; SHADOW_BILINEAR when specialised)
 
 // Direction to the light L and incident radiance Lc at world point P (eq. 9).
 vec3 light_incident(int i, vec3 P, out vec3 L) {
@@ -47,11 +48,36 @@ vec3 light_incident(int i, vec3 P, out vec3 L) {
     return Lc;
 }
 
+// The eq. (7) test against shadow-map texel q (clamped to the map).
+float shadow_test(sampler2D sm, ivec2 q, float z) {
+    q = clamp(q, ivec2(0), textureSize(sm, 0) - 1);
+    return (z - texelFetch(sm, q, 0).r > u_shadow_tol) ? 0.0 : 1.0;
+}
+
+// PCF weight of the tap at offset k (-r .. r + 1) along one axis: a (2r + 1)-texel box slid by the
+// sub-texel position t of the lookup, so the filtered visibility varies continuously with position
+// (bilinear PCF) instead of in steps of one texel (the terraces of a shadow edge).
+float pcf_weight(int k, int r, float t) {
+    return (k == -r) ? 1.0 - t : ((k == r + 1) ? t : 1.0);
+}
+
 float shadow_compare(sampler2D sm, vec3 c) {
-    // eq. (7): shadowed if d(P) - ds > tol; PCF averages the test over (2 pcf + 1)^2 texels
+    // eq. (7): shadowed if d(P) - ds > tol; PCF averages the test over a (2 pcf + 1)^2-texel box.
+    // shadow.pcf_filter = bilinear: the box slides with the lookup's sub-texel position (the
+    // (2 pcf + 2)^2 texels it touches, edge ones weighted by their overlap), so visibility varies
+    // continuously instead of in one-texel terraces; box: the box snapped to texels.
+    // pcf = 0: the printed hard test at one texel.
 #ifdef LIGHTS_SPECIALISED
 #if SHADOW_PCF <= 0
     return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+#elif defined(SHADOW_BILINEAR) && SHADOW_BILINEAR != 0
+    const int r = SHADOW_PCF;
+    vec2 f = c.xy * vec2(textureSize(sm, 0)) - 0.5;
+    vec2 i0 = floor(f), t = f - i0;
+    float lit = 0.0;
+    for (int y = -SHADOW_PCF; y <= SHADOW_PCF + 1; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF + 1; ++x)
+        lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c.z);
+    return lit / float((2 * r + 1) * (2 * r + 1));
 #else
     vec2 texel = 1.0 / vec2(textureSize(sm, 0));
     float lit = 0.0, n = 0.0;
@@ -63,11 +89,22 @@ float shadow_compare(sampler2D sm, vec3 c) {
     return lit / n;
 #endif
 #else
-    if (u_shadow_pcf <= 0) return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+    int r = u_shadow_pcf;
+    if (r <= 0) return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+    float lit = 0.0;
+    if (u_shadow_bilinear != 0) {
+        vec2 f = c.xy * vec2(textureSize(sm, 0)) - 0.5;
+        vec2 i0 = floor(f), t = f - i0;
+        for (int y = -MAX_PCF; y <= MAX_PCF + 1; ++y) for (int x = -MAX_PCF; x <= MAX_PCF + 1; ++x) {
+            if (x < -r || x > r + 1 || y < -r || y > r + 1) continue;
+            lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c.z);
+        }
+        return lit / float((2 * r + 1) * (2 * r + 1));
+    }
     vec2 texel = 1.0 / vec2(textureSize(sm, 0));
-    float lit = 0.0, n = 0.0;
+    float n = 0.0;
     for (int y = -MAX_PCF; y <= MAX_PCF; ++y) for (int x = -MAX_PCF; x <= MAX_PCF; ++x) {
-        if (abs(x) > u_shadow_pcf || abs(y) > u_shadow_pcf) continue;
+        if (abs(x) > r || abs(y) > r) continue;
         float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
         lit += (c.z - ds > u_shadow_tol) ? 0.0 : 1.0;
         n += 1.0;

@@ -145,6 +145,9 @@ class ShadowSettings(_Model):
     # seed 000 eq. (7): shadowed if d(P) - ds > tol; tol in normalised light-space depth
     tol: float = Field(0.002, ge=0.0, le=0.5)
     pcf: int = Field(1, ge=0, le=MAX_PCF, description="percentage-closer filter radius in texels (0 = eq. 7 hard test)")
+    pcf_filter: Literal["bilinear", "box"] = Field(
+        "bilinear", description="bilinear: the PCF box slides with the lookup's sub-texel position, so shadow edges "
+        "have no one-texel terraces (16 instead of 9 taps at pcf 1; closer to the ground truth); box: snapped to texels")
 
 
 class RenderSettings(_Model):

@@ -26,6 +26,7 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, int]:
     lights = r.setting("lights")
     r.setting("shadow.tol")
     pcf = r.setting("shadow.pcf")
+    bilinear = r.setting("shadow.pcf_filter") == "bilinear"
     shadow_map_size(r)
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if light_on(l)]
     for i, l in enumerate(lights[:MAX_LIGHTS]):
@@ -37,7 +38,7 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, int]:
             if shadow_maps:
                 r.input(shadow_resource(i))
             mask |= 1 << slot
-    return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_MASK": mask}
+    return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_BILINEAR": int(bilinear), "SHADOW_MASK": mask}
 
 
 def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
@@ -71,7 +72,8 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     ec.uniforms(prog, u_light_count=len(active), u_light_kind=kind, u_light_radiance=radiance,
                 u_light_dir=dirs, u_light_pos=poss, u_beam_radius=radii, u_light_shadowed=shadowed,
                 u_light_matrix=mats, u_shadow_texel=texels,
-                u_shadow_tol=ec.setting("shadow.tol"), u_shadow_pcf=ec.setting("shadow.pcf"))
+                u_shadow_tol=ec.setting("shadow.tol"), u_shadow_pcf=ec.setting("shadow.pcf"),
+                u_shadow_bilinear=ec.setting("shadow.pcf_filter") == "bilinear")
 
 
 def bind_surface(ec, prog) -> None:

@@ -33,6 +33,8 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "shadow.tol": ("", "depth tolerance of the shadow test, eq. 7: shadowed if d(P) - d_s > tol "
                    "(normalised light-space depth)"),
     "shadow.pcf": ("texels", "percentage-closer filter radius (0 = the hard test of eq. 7)"),
+    "shadow.pcf_filter": ("", "bilinear: the filter box slides with the exact lookup position, so shadow edges are "
+                          "smooth instead of stepped in shadow-map texels (a little more work); box: snapped to texels"),
     # render
     "render.exposure": ("x", "linear exposure multiplier before the sRGB encode"),
     "render.background": ("linear RGB", "clear colour of the 3D view"),
@@ -128,6 +130,7 @@ LABELS: dict[str, str] = {
     "shadow.map_size": "shadow map size",
     "shadow.tol": "shadow bias",
     "shadow.pcf": "shadow softness",
+    "shadow.pcf_filter": "shadow filter",
     "phong.shininess": "shininess",
     "specular.m": "roughness",
     "specular.f0": "reflectance F0",
