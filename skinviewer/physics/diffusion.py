@@ -244,8 +244,8 @@ def vertex_uv_covariance(positions, uvs, indices, mm_per_unit: float) -> np.ndar
     vertices' mixture. Interpolated over a triangle it stays positive definite (a convex
     combination). Vertices are split at UV seams, so each vertex's triangles share one chart.
     Clamped like deon_stretch.frag (per axis <= MAX_UV_PER_MM)."""
-    S, ok, area = triangle_uv_covariance(positions, uvs, indices, mm_per_unit)
-    area = area + 1e-300
+    S, _, area = triangle_uv_covariance(positions, uvs, indices, mm_per_unit)
+    area = area + 1e-300  # a vertex whose triangles have no surface area: the mean of their clamps
     lim = MAX_UV_PER_MM ** 2
     n = len(positions)
     acc = np.zeros((n, 3))
