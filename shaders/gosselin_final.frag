@@ -29,6 +29,7 @@ void main() {
     set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = ks_safe_normalize(u_eye - v_position);
+    if (!gl_FrontFacing) N = -N;  // the back of an open sheet (scene.back_faces: show)
     vec3 C = max(finite3(texture(albedo_map, v_uv).rgb), vec3(0.0));
     vec3 E = max(finite3(texture(blurred, v_uv).rgb), vec3(0.0));
     vec3 color = C * E;                                                 // (17)

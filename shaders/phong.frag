@@ -16,7 +16,7 @@ void main() {
     set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
-    if (dot(N, V) < 0.0) N = -N;  // two-sided (open meshes)
+    if (!gl_FrontFacing) N = -N;  // the back of an open sheet (scene.back_faces: show)
     vec3 C = texture(albedo_map, v_uv).rgb;
     vec3 color = u_ambient * C;
     for (int i = 0; i < N_LIGHTS; ++i) {

@@ -95,8 +95,7 @@ void main() {
     vec3 Ng = normalize(v_normal);
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
-    if (dot(N, V) < 0.0) N = -N;   // two-sided (open meshes)
-    if (dot(Ng, V) < 0.0) Ng = -Ng;
+    if (!gl_FrontFacing) { N = -N; Ng = -Ng; }  // the back of an open sheet (scene.back_faces: show)
     vec3 A = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);
     vec3 E = vec3(0.0), spec = vec3(0.0), T = vec3(0.0);

@@ -119,3 +119,29 @@ def test_embedded_textures_are_used(tmp_path):
     # the red texel row maps to the vertices with v = 1 (the top edge of the quad)
     top = m.uvs[:, 1].max()
     assert np.isclose(top, 1.0)
+
+
+def test_is_closed_welds_seams_and_finds_borders():
+    """scene.back_faces = auto culls on closed meshes: vertices split at UV seams still close the
+    surface (welded by position, also when two copies straddle a rounding boundary); one missing
+    triangle opens it; the built-in slab is open, the default head is closed."""
+    import trimesh
+
+    from skinviewer.scene.mesh import culls_back_faces, is_closed
+    from skinviewer.scene.scenes import build_scene
+    sp = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+    p, f = np.asarray(sp.vertices, np.float64), np.asarray(sp.faces)
+    assert is_closed(p, f) and not is_closed(p, f[1:])
+    # split every vertex of the first 40 faces (a UV seam), copies off by less than a float32 step
+    q = p.copy()
+    extra = f[:40].ravel()
+    p2 = np.vstack([q, q[extra] + 3e-8])
+    f2 = f.copy()
+    f2[:40] = len(q) + np.arange(120).reshape(40, 3)
+    assert is_closed(p2, f2)
+    laser = build_scene("laser").mesh
+    assert not is_closed(laser.positions, laser.indices)
+    head = build_scene("head", 1).mesh  # the default detail (detail 0's coarse ears leave 80 rim edges open)
+    assert is_closed(head.positions, head.indices)
+    assert culls_back_faces("auto", True) and not culls_back_faces("auto", False)
+    assert culls_back_faces("cull", False) and not culls_back_faces("show", True)

@@ -162,3 +162,69 @@ def test_pcf_filter_bilinear_has_no_shadow_map_terraces(renderer, pcf_filter):
     edge = np.nonzero((row > 0.001) & (row < 0.999))[0]
     window = row[max(edge.min() - 8, 0):edge.max() + 9]  # the edge at x = 0 (the blade's far edge is not in it)
     assert edge.max() - edge.min() < 40 and (np.diff(window) >= -1e-3).all()  # one monotonic ramp (half floats)
+
+
+
+def _coarse_sphere():
+    import trimesh
+
+    from skinviewer.scene.mesh import MeshData, vertex_normals
+    sp = trimesh.creation.icosphere(subdivisions=1, radius=15.0)  # 80 facets: smooth normals far from the facets'
+    p, idx = np.asarray(sp.vertices, np.float64), np.asarray(sp.faces)
+    uv = np.stack([0.5 + np.arctan2(p[:, 2], p[:, 0]) / (2 * np.pi), 0.5 + np.arcsin(p[:, 1] / 15.0) / np.pi], 1)
+    return MeshData(p, vertex_normals(p, idx), uv, idx, albedo=np.full((2, 2, 3), 0.8, np.float32), name="coarse")
+
+
+@pytest.mark.parametrize("technique,resource", [("phong", "lit"), ("ssss", "ss_diffuse")])
+def test_front_faces_keep_their_normal_near_the_silhouette(renderer, monkeypatch, technique, resource):
+    """Near a silhouette the interpolated normal of a front face can point away from the camera.
+    Reversing it there ("two-sided" by N.V) shaded lit skin with the far side's normal: black pixels
+    along lit contours (the ear's rim). Only a back face (gl_FrontFacing) reverses it now. On a
+    coarse sphere lit from the side, the diffuse per unit N.L is the same where N.V < 0 as elsewhere."""
+    from skinviewer.core.reference import Surface, camera_hits
+    from skinviewer.scene import scenes
+    sdef = scenes.SceneDef("laser", _coarse_sphere(), {}, "coarse sphere")
+    monkeypatch.setattr("skinviewer.core.renderer.build_scene", lambda name, detail=1: sdef)
+    light = [{"kind": "directional", "direction": [1.0, 0.2, -0.3], "intensity": 1.0, "cast_shadow": False}]
+    s = small_settings("laser", technique, 160, lights=light, **{"camera.yaw": 0.0, "camera.pitch": 0.0,
+                                                                 "phong.specular": 0.0, "phong.ambient": 0.0})
+    renderer.render(s)
+    img = renderer.read(s, resource)[::-1, :, 0].astype(np.float64)
+    mask, tri, bary, eye = camera_hits(Surface(sdef.mesh, 1.0, s), s)
+    a = Surface(sdef.mesh, 1.0, s).attributes(tri, bary)
+    V = eye[None] - a["P"]
+    V /= np.linalg.norm(V, axis=1)[:, None]
+    L = np.array(light[0]["direction"]) / np.linalg.norm(light[0]["direction"])
+    ndl, ndv = a["N"] @ L, (a["N"] * V).sum(1)
+    per_ndl = img[mask] / np.maximum(ndl, 1e-6)
+    away = (ndv < -0.02) & (ndl > 0.3)
+    inside = (ndv > 0.2) & (ndl > 0.3)
+    assert away.sum() >= 20 and inside.sum() >= 200  # the case is there
+    assert np.percentile(per_ndl[away], 5) > 0.8 * np.median(per_ndl[inside])
+
+
+def test_back_faces_culled_on_a_closed_mesh_shown_on_an_open_one(renderer, monkeypatch):
+    """scene.back_faces = auto: from inside a closed sphere nothing can be seen (its inside is never
+    visible from outside, so a back face the camera meets has won a depth fight with the near side
+    or comes from a self-intersection); `show` draws it. An open sheet seen from behind stays visible,
+    lit through its reversed normal. The ground truth's camera does the same."""
+    from skinviewer.core.reference import Surface, camera_hits
+    from skinviewer.scene import scenes
+    sdef = scenes.SceneDef("laser", _coarse_sphere(), {}, "coarse sphere")
+    monkeypatch.setattr("skinviewer.core.renderer.build_scene", lambda name, detail=1: sdef)
+    inside = {"camera.distance": 5.0, "camera.target": [0.0, 0.0, 0.0]}
+    light = [{"kind": "directional", "direction": [0.0, 0.0, 1.0], "intensity": 1.0, "cast_shadow": False}]
+    seen = {}
+    for mode in ("auto", "cull", "show"):
+        s = small_settings("laser", "phong", 48, lights=light, **inside, **{"scene.back_faces": mode})
+        renderer.render(s)
+        lit = renderer.read(s, "lit")[::-1]
+        seen[mode] = lit[..., 3] > 0.5
+        assert (seen[mode] == camera_hits(Surface(sdef.mesh, 1.0, s), s)[0]).mean() > 0.99
+        if mode == "show":
+            assert lit[seen[mode], 0].max() > 0.3  # the inside, lit through the reversed normal
+    assert not seen["auto"].any() and not seen["cull"].any() and seen["show"].all()
+    monkeypatch.undo()
+    s = small_settings("laser", "phong", 48, **{"camera.yaw": 180.0})  # the open slab from behind
+    renderer.render(s)
+    assert (renderer.read(s, "lit")[..., 3] > 0.5).mean() > 0.2

@@ -176,10 +176,12 @@ class ExecuteContext:
         return self.graph._framebuffer_for(tuple(targets))
 
     def draw_mesh(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
-                  clear: tuple | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True) -> None:
+                  clear: tuple | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
+                  cull_back: bool = False) -> None:
         """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
-        depth buffer, or scratch textures): both faces, depth-tested unless ``depth_test=False``
-        (texture-space unwraps), after clearing colour to ``clear`` and depth to 1 (None: no clear)."""
+        depth buffer, or scratch textures): both faces unless ``cull_back`` (counter-clockwise is
+        front), depth-tested unless ``depth_test=False`` (texture-space unwraps), after clearing
+        colour to ``clear`` and depth to 1 (None: no clear)."""
         scene = self.scene
         fbo = self._target(targets)
         fbo.use()
@@ -189,10 +191,16 @@ class ExecuteContext:
             self.gl.enable(moderngl.DEPTH_TEST)
         else:
             self.gl.disable(moderngl.DEPTH_TEST)
-        self.gl.disable(moderngl.CULL_FACE)
+        if cull_back:
+            self.gl.front_face = "ccw"
+            self.gl.cull_face = "back"
+            self.gl.enable(moderngl.CULL_FACE)
+        else:
+            self.gl.disable(moderngl.CULL_FACE)
         self._apply(prog)
         lod = self._frame.mesh_lod
         self.graph.gpu.mesh_vao(prog, scene, lod).render()
+        self.gl.disable(moderngl.CULL_FACE)
         if lod:
             self.graph._lod_notes[self.pass_.name] = self._frame.lod_note
         self.draws += 1

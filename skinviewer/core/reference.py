@@ -44,10 +44,10 @@ from skinviewer.physics.specular import (
     sample_bilinear,
 )
 from skinviewer.scene.camera import orbit_view
-from skinviewer.scene.mesh import MeshData, load_mesh, load_texture_maps
+from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 2                 # bump when the reference's maths change (invalidates the cache)
+VERSION = 3                 # bump when the reference's maths change (invalidates the cache)
 DEFAULT_H_MM = 0.5          # source element edge
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
@@ -111,6 +111,7 @@ class Surface:
         self.center = mesh.center.astype(np.float64)
         self.frame = mesh.frame  # what the camera frames (the head of a bust), as the renderer does
         self.eps = 1e-5 * self.radius + 1e-6
+        self.cull_back = culls_back_faces(s.scene.back_faces, is_closed(self.P, self.F))
         self.rays = RayMeshIntersector(trimesh.Trimesh(self.P, self.F, process=False))
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3)) * np.asarray(DEFAULT_SKIN_SRGB)
         self.albedo = srgb_to_linear(np.nan_to_num(np.asarray(albedo, np.float64), nan=0.0))
@@ -323,6 +324,18 @@ def camera_hits(surf: Surface, s: Settings, grid: tuple[int, int] | None = None)
     d /= np.linalg.norm(d, axis=1)[:, None]
     o = np.broadcast_to(view.eye, d.shape).copy()
     tri, ray, loc = surf.rays.intersects_id(o, d, multiple_hits=False, return_locations=True)
+    if surf.cull_back:  # as the raster with scene.back_faces = cull: go on through back faces
+        for _ in range(8):
+            back = (surf.Ng[tri] * d[ray]).sum(1) > 0.0
+            if not back.any():
+                break
+            keep = ~back
+            r2 = ray[back]
+            t2, i2, l2 = surf.rays.intersects_id(loc[back] + d[r2] * surf.eps, d[r2], multiple_hits=False,
+                                                 return_locations=True)
+            tri, ray, loc = np.r_[tri[keep], t2], np.r_[ray[keep], r2[i2]], np.r_[loc[keep], l2]
+        front = (surf.Ng[tri] * d[ray]).sum(1) <= 0.0
+        tri, ray, loc = tri[front], ray[front], loc[front]
     mask = np.zeros(W * H, bool)
     mask[ray] = True
     order = np.argsort(ray)
@@ -374,7 +387,7 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
 def cache_key(s: Settings, h_mm: float, profile=None) -> str:
     from skinviewer.core.renderer import Renderer
     d = s.model_dump(mode="json")
-    parts = {"v": VERSION, "scene": Renderer.scene_key(s), "camera": d["camera"],
+    parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
              "size": [s.render.width, s.render.height], "lights": d["lights"], "specular": d["specular"],
              "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
              "profile": [np.asarray(p).tolist() for p in (profile or profile_of(s))]}
@@ -510,7 +523,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
     V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
-    N = a["N"] * np.where((a["N"] * V).sum(1) < 0, -1.0, 1.0)[:, None]  # two-sided, as deon_final
+    N = a["N"] * np.where((a["Ng"] * V).sum(1) < 0, -1.0, 1.0)[:, None]  # a back face: as deon_final
     a = {**a, "N": N}
     rho_v = surf.rho_dt((N * V).sum(1), a["m"], a["rho"]) if energy else np.ones(len(V))
     diffuse = M * _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]

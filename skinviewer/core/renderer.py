@@ -26,6 +26,7 @@ from skinviewer.scene.mesh import (
     VERTEX_FORMAT,
     MeshData,
     MeshError,
+    is_closed,
     load_mesh,
     load_texture_maps,
 )
@@ -85,6 +86,11 @@ class GpuScene:
         """The largest per-axis stretch any triangle has (UV per mm; the stretch map's maximum)."""
         m = self.mesh
         return max_uv_per_mm(m.positions, m.uvs, m.indices, self.mm_per_unit)
+
+    @functools.cached_property
+    def closed(self) -> bool:
+        """The mesh has no border edge (scene/mesh.is_closed): ``scene.back_faces = auto`` culls."""
+        return is_closed(self.mesh.positions, self.mesh.indices)
 
     @functools.cached_property
     def max_shear_cos(self) -> float:

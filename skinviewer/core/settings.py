@@ -86,6 +86,11 @@ class SceneSettings(_Model):
         "vertex", description="the stretch map (seed 000 eq. 27) from the UV->surface metric averaged at the "
         "vertices and interpolated (vertex: smooth where the UVs are not, e.g. slivers; the lowest RMS on the seam "
         "bench) or per triangle, as printed (triangle)")
+    back_faces: Literal["auto", "cull", "show"] = Field(
+        "auto", description="what the camera sees of back faces. cull: front faces only (a closed surface's "
+        "inside is never visible; a back face that wins a depth fight at a thin fold shows a dark speck); show: the "
+        "back of the surface too, shaded with the normal reversed (open sheets); auto: cull on a closed mesh, show "
+        "on an open one")
 
     _paths = field_validator("mesh", "albedo_map", "normal_map", "specular_map", "region_map")(_file_path)
 

@@ -10,6 +10,7 @@ from skinviewer.core.graph import Reflection, TexSpec
 from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
 from skinviewer.scene.camera import gl_bytes, light_space
+from skinviewer.scene.mesh import culls_back_faces
 
 LIGHT_POSE_FIELDS = ("kind", "direction", "position", "beam_radius", "cast_shadow", "enabled")
 
@@ -92,6 +93,19 @@ def declare_lit(r: Reflection, program: str, **defines) -> None:
     w, h = r.setting("render.width"), r.setting("render.height")
     r.program(program, **defines)
     r.output(LIT, TexSpec((w, h), 4, "f2", depth=True))
+
+
+def declare_view_mesh(r: Reflection) -> None:
+    """A pass that draws the mesh from the camera (draw_view_mesh): it reads ``scene.back_faces``."""
+    r.setting("scene.back_faces")
+
+
+def draw_view_mesh(ec, prog, *targets) -> None:
+    """Draw the mesh from the camera into ``targets``: back faces culled when ``scene.back_faces``
+    resolves to cull for this mesh (auto: a closed mesh), else both sides (the shaders reverse the
+    normal of a back face: gl_FrontFacing)."""
+    cull = culls_back_faces(ec.setting("scene.back_faces"), ec.scene.closed)
+    ec.draw_mesh(prog, *targets, cull_back=cull)
 
 
 def set_camera(ec, prog) -> None:

@@ -33,6 +33,8 @@ from skinviewer.passes.common import (
     declare_lighting,
     declare_lit,
     declare_specular,
+    declare_view_mesh,
+    draw_view_mesh,
     set_camera,
     set_lighting,
 )
@@ -542,6 +544,7 @@ class DeonFinalPass(Pass):
             for step in plan:
                 r.drop(texture_of(step), "every light is off or at zero intensity")
             declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
+            declare_view_mesh(r)
             return
         r.setting("deon.mix")
         declare_specular(r)
@@ -566,6 +569,7 @@ class DeonFinalPass(Pass):
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
         declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), DEON_TEXTURE_SHADOWS=int(vis))
+        declare_view_mesh(r)
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
@@ -580,7 +584,7 @@ class DeonFinalPass(Pass):
         prog = ec.program("deon_final")
         set_camera(ec, prog)
         if self.dark(ec):
-            ec.draw_mesh(prog, LIT)
+            draw_view_mesh(ec, prog, LIT)
             return
         bind_surface(ec, prog)
         has = ec.has_input
@@ -597,4 +601,4 @@ class DeonFinalPass(Pass):
             bind_tsm_read(ec, prog)
         if has(VISIBILITY):
             ec.bind(prog, "visibility", VISIBILITY)
-        ec.draw_mesh(prog, LIT)
+        draw_view_mesh(ec, prog, LIT)

@@ -44,6 +44,8 @@ from skinviewer.passes.common import (
     declare_lighting,
     declare_lit,
     declare_specular,
+    declare_view_mesh,
+    draw_view_mesh,
     set_camera,
     set_lighting,
 )
@@ -220,6 +222,7 @@ class GosselinFinalPass(Pass):
         r.setting("gosselin.specular_shadow")
         r.input(BLURRED)
         declare_lit(r, "gosselin_final", **lighting)
+        declare_view_mesh(r)
 
     def execute(self, ec) -> None:
         prog = ec.program("gosselin_final")
@@ -229,4 +232,4 @@ class GosselinFinalPass(Pass):
         ec.bind(prog, "blurred", BLURRED)
         bind_specular(ec, prog)
         set_lighting(ec, prog)
-        ec.draw_mesh(prog, LIT)
+        draw_view_mesh(ec, prog, LIT)

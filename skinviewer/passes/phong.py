@@ -7,6 +7,8 @@ from skinviewer.passes.common import (
     bind_surface,
     declare_lighting,
     declare_lit,
+    declare_view_mesh,
+    draw_view_mesh,
     set_camera,
     set_lighting,
 )
@@ -20,6 +22,7 @@ class PhongPass(Pass):
         lighting = declare_lighting(r)
         r.section("phong", ("ambient", "specular", "shininess"))
         declare_lit(r, "phong", **lighting)
+        declare_view_mesh(r)
 
     def execute(self, ec) -> None:
         prog = ec.program("phong")
@@ -28,4 +31,4 @@ class PhongPass(Pass):
         ec.uniforms(prog, u_ambient=ph.ambient, u_specular=ph.specular, u_shininess=ph.shininess)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
-        ec.draw_mesh(prog, LIT)
+        draw_view_mesh(ec, prog, LIT)

@@ -112,6 +112,43 @@ VERTEX_ATTRS = ("in_position", "in_normal", "in_uv", "in_tangent")
 UV_COVARIANCE_ATTR = "in_uv_covariance"  # a second buffer, bound only where a program reads it
 
 
+def weld_ids(keys: np.ndarray, tol: float) -> np.ndarray:
+    """Integer id per row of ``keys``, equal for rows within ``tol`` of each other (chains join).
+    Pairs come from a k-d tree, not from rounding, so two copies of a vertex never split at a
+    rounding boundary."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+    k = np.asarray(keys, np.float64)
+    n = len(k)
+    pairs = cKDTree(k).query_pairs(tol, output_type="ndarray") if n else np.zeros((0, 2), np.int64)
+    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    return connected_components(g, directed=False)[1].astype(np.int64)
+
+
+def is_closed(positions: np.ndarray, indices: np.ndarray) -> bool:
+    """True when no triangle edge is a border: every edge (vertices welded by position, so UV seams
+    do not count) is shared by at least two triangles. The inside of a closed surface cannot be seen
+    from outside it: a back face the camera meets there has won a depth fight with the near side
+    (thin folds at grazing angles) or comes from a self-intersection."""
+    P = np.asarray(positions, np.float64)
+    F = np.asarray(indices, np.int64).reshape(-1, 3)
+    if len(F) == 0:
+        return False
+    scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
+    w = weld_ids(P, 1e-6 * scale)[F]
+    a, b = w[:, [0, 1, 2]].ravel(), w[:, [1, 2, 0]].ravel()
+    keep = a != b  # an edge collapsed by welding borders nothing
+    edges = np.stack([np.minimum(a, b), np.maximum(a, b)], 1)[keep]
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(counts.min(initial=2) >= 2)
+
+
+def culls_back_faces(mode: str, closed: bool) -> bool:
+    """``scene.back_faces`` resolved for a mesh: cull, show, or auto (cull when the mesh is closed)."""
+    return mode == "cull" or (mode == "auto" and closed)
+
+
 def vertex_normals(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """Area-weighted vertex normals; degenerate or isolated vertices get +Z (never NaN)."""
     p = positions.astype(np.float64)

@@ -16,6 +16,8 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from skinviewer.scene.mesh import weld_ids
+
 
 def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
     """Rasterise at texel centres (GL convention: texel (i, j) at uv = ((i + .5)/n, (j + .5)/n), row
@@ -120,7 +122,7 @@ class SurfacePaths:
         P = np.asarray(positions, np.float64) * mm_per_unit
         F = np.asarray(indices, np.int64)
         scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
-        wid = _weld(P, 1e-6 * scale)
+        wid = weld_ids(P, 1e-6 * scale)
         nv = int(wid.max()) + 1
         Pw = np.zeros((nv, 3))
         Pw[wid] = P
@@ -170,21 +172,14 @@ class SurfacePaths:
         return shared | (best <= self.stretch * r + self._edge[x] + self._edge[y])
 
 
-def _weld(keys: np.ndarray, tol: float) -> np.ndarray:
-    """Integer id per row of ``keys``, equal for rows within ``tol`` (quantised)."""
-    q = np.round(np.asarray(keys, np.float64) / tol).astype(np.int64)
-    _, ids = np.unique(q, axis=0, return_inverse=True)
-    return ids.ravel()
-
-
 def seam_edges(positions, uvs, indices):
     """Half-edges on UV seams: triangle edges whose 3D edge is shared by exactly two triangles that
     do not share it in UV. Returns (tri, corner k: the edge is (k, k+1), twin tri, twin corner) arrays."""
     P = np.asarray(positions, np.float64)
     F = np.asarray(indices, np.int64)
     scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
-    pid = _weld(P, 1e-6 * scale)
-    uid = _weld(np.hstack([P / scale, np.asarray(uvs, np.float64)]), 1e-6)
+    pid = weld_ids(P, 1e-6 * scale)
+    uid = weld_ids(np.hstack([P / scale, np.asarray(uvs, np.float64)]), 1e-6)
     a = F[:, [0, 1, 2]].ravel()
     b = F[:, [1, 2, 0]].ravel()
     pa, pb = pid[a], pid[b]

@@ -84,6 +84,8 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
                            "texels' shear, so a skewed parametrisation blurs round (eq. 27 keeps lengths only)"),
     "scene.stretch_metric": ("", "vertex: the stretch map from the surface metric averaged at the vertices and "
                              "interpolated (smooth where the UVs are not); triangle: per triangle, as printed (eq. 27)"),
+    "scene.back_faces": ("", "cull: the camera sees front faces only; show: the back of the surface too, lit "
+                         "through the reversed normal (open sheets); auto: cull on a closed mesh, show on an open one"),
     "deon.tsm": ("", "translucent shadow map: light through thin parts (ears), eq. 32-33"),
     "deon.tsm_size": ("texels", "translucent shadow map (TSM) resolution, eq. 32. Texture-space cost"),
     "deon.tsm_form": ("", "how light through thin parts fades with thickness d (translucent shadow map, eq. 33). "
@@ -150,6 +152,7 @@ LABELS: dict[str, str] = {
     "deon.stretch_per_gaussian": "stretch per Gaussian",
     "deon.stretch_shear": "stretch with shear",
     "scene.stretch_metric": "stretch from",
+    "scene.back_faces": "back faces",
     "deon.tsm": "translucency (TSM)",
     "deon.tsm_size": "translucency map",
     "deon.tsm_light": "translucency light",

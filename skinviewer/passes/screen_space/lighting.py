@@ -10,6 +10,8 @@ from skinviewer.passes.common import (
     bind_surface,
     declare_lighting,
     declare_specular,
+    declare_view_mesh,
+    draw_view_mesh,
     set_camera,
     set_lighting,
 )
@@ -64,6 +66,7 @@ class ScreenLightingPass(Pass):
                 r.setting(self.transmittance_profile)
         size = screen_size(r)
         r.program("ss_lighting", **defines)
+        declare_view_mesh(r)
         r.output(DIFFUSE, TexSpec(size, 4, "f4", depth=True))
         r.output(SPECULAR, TexSpec(size, 4, "f2"))
         r.output(DEPTH, TexSpec(size, 4, "f4", filter="nearest"))
@@ -86,7 +89,7 @@ class ScreenLightingPass(Pass):
                     u_mix=float(texturing_exponent(sc.texturing, sc.mix)), u_region_sss=sss,
                     u_has_regions=bool(scene.has_region_map and non_skin))
         self._transmittance(ec, prog)
-        ec.draw_mesh(prog, DIFFUSE, SPECULAR, DEPTH, ALBEDO)
+        draw_view_mesh(ec, prog, DIFFUSE, SPECULAR, DEPTH, ALBEDO)
 
     def _transmittance(self, ec, prog) -> None:
         on = bool(ec.setting("transmittance.enabled"))
