@@ -322,3 +322,26 @@ def test_normal_map_detail_spans_several_texels(head):
     a, b = nx[:, :-1][skin[:, :-1] & skin[:, 1:]], nx[:, 1:][skin[:, :-1] & skin[:, 1:]]
     assert a.std() > 0.003
     assert np.corrcoef(a, b)[0, 1] > 0.55   # single-texel pits (the old map): 0.48
+
+
+def test_ear_rings_are_zipped_into_regular_strips(head):
+    """The helix, scapha and antihelix run along the ear's rings. Rings joined by a Delaunay
+    triangulation with differing point counts zig-zagged across those ridges (a serrated helix and
+    rippled shading) and left the detail-0 rim open; rings are now zipped band by band, and from
+    OUTER_RING out they share one count, staggered: each band is a regular strip."""
+    from skinviewer.scene.head.tessellate import _zip_rings
+    from skinviewer.scene.mesh import is_closed
+    for na, nb in ((6, 12), (93, 93), (40, 57), (57, 40)):
+        a = (np.arange(na) + 0.5 * (na == nb)) * 2 * np.pi / na
+        b = np.arange(nb) * 2 * np.pi / nb
+        t = _zip_rings(a, b, 0, na)
+        assert len(t) == na + nb
+        assert np.all((t < na).sum(1) >= 1) and np.all((t >= na).sum(1) >= 1)  # corners on both rings
+        ring_edges = [tuple(sorted(e)) for tri in t for e in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0]))
+                      if (e[0] < na) == (e[1] < na)]
+        assert sorted(ring_edges) == sorted({tuple(sorted((i, (i + 1) % na))) for i in range(na)}
+                                            | {tuple(sorted((na + j, na + (j + 1) % nb))) for j in range(nb)})
+        if na == nb:  # a staggered pair of equal rings: triangles alternate between the rings
+            on_a = (t < na).sum(1) == 2
+            assert np.all(on_a[1:] != on_a[:-1])
+    assert is_closed(head.positions, head.indices)  # detail 0 too

@@ -19,7 +19,7 @@ from skinviewer.scene.mesh import MeshData
 __all__ = ["EYE_C", "EYE_R", "GENERATOR_VERSION", "default_head", "head_sdf"]
 
 # bump whenever the shape, the atlas or the maps change: old cache files are then not reused
-GENERATOR_VERSION = 5
+GENERATOR_VERSION = 6
 
 # detail level -> (target edge length in mm, texture size)
 LEVELS = {0: (10.5, 512), 1: (4.0, 1024), 2: (2.0, 2048)}

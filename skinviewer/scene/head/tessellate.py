@@ -199,24 +199,60 @@ def _head_skin(atlas: Atlas, spacing: float, parts: _Parts) -> RadiusTable:
 
 
 def _ears(atlas: Atlas, spacing: float, parts: _Parts) -> None:
-    """Unit-disk rings (dense towards the rim so it rounds), two sheets sharing the rim points."""
+    """Unit-disk rings, two sheets sharing the outermost ring. Rings from OUTER_RING outwards (the
+    helix, scapha and antihelix run along them) all have the rim's point count, staggered by half a
+    step ring to ring, so each band between them is one regular strip and the ridges shade smoothly
+    (rings of differing counts joined by a Delaunay triangulation zig-zag across them); inner rings
+    have counts proportional to their radius. Bands are zipped ring to ring, never across a ring."""
     ear_spacing = spacing * 0.54 / Ear.HEIGHT  # ears are small and curled: finer
-    disk = _disk_points(1.0 - Ear.RIM, ear_spacing)
     n_rim = max(int(round(2 * np.pi / ear_spacing)), 24)
-    for f in (0.45, 0.8, 0.95, 1.0):
-        a = (np.arange(n_rim) + 0.5 * (f < 1)) * 2 * np.pi / n_rim
-        rr = 1.0 - Ear.RIM * (1 - f)
-        disk = np.concatenate([disk, np.stack([rr * np.cos(a), rr * np.sin(a)], axis=1)])
-    # triangulated in the ear plane (the UV layout up to scale), not in the unit disk: the
-    # disk -> plane map is not affine, and disk-Delaunay slivers at the rim could flip in UV
-    a, b = Ear.plane(atlas.ears[0], disk[:, 0], disk[:, 1])
-    disk_tris = Delaunay(np.stack([a, b], axis=1)).simplices
+    inner = 1.0 - Ear.RIM
+    n_rings = max(int(round(inner / ear_spacing)), 1)
+    radii = [inner * j / n_rings for j in range(1, n_rings + 1)]
+    radii += [1.0 - Ear.RIM * (1 - f) for f in (0.45, 0.8, 0.95, 1.0)]  # dense towards the rim so it rounds
+    rings = []
+    for j, r in enumerate(radii):
+        n = n_rim if r >= OUTER_RING else max(int(round(2 * np.pi * r / ear_spacing)), 6)
+        rings.append((np.arange(n) + 0.5 * (j % 2)) * 2 * np.pi / n)
+    disk = [np.zeros((1, 2))]
+    for r, ang in zip(radii, rings):
+        disk.append(np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1))
+    first = np.cumsum([1] + [len(a) for a in rings])
+    tris = [np.stack([np.zeros(len(rings[0]), int), first[0] + np.arange(len(rings[0])),
+                      first[0] + (np.arange(len(rings[0])) + 1) % len(rings[0])], axis=1)]
+    for k in range(len(rings) - 1):
+        tris.append(_zip_rings(rings[k], rings[k + 1], first[k], first[k + 1]))
+    disk, disk_tris = np.concatenate(disk), np.concatenate(tris)
     for isl in atlas.ear_islands:
         p = isl.ear.sheet(disk[:, 0], disk[:, 1], isl.front)
         ref = isl.ear.normal if isl.front else -isl.ear.normal
         t = _orient(disk_tris + parts.base, np.concatenate(parts.positions + [p]),
                     np.broadcast_to(ref, (len(disk_tris), 3)))
         parts.add(p, atlas.ear_uv(isl, disk[:, 0], disk[:, 1]), t)
+
+
+OUTER_RING = 0.55  # unit-disk radius from which ear rings share the rim's point count
+
+
+def _zip_rings(a: np.ndarray, b: np.ndarray, ia: int, ib: int) -> np.ndarray:
+    """Triangles of the band between two closed rings of increasing angles ``a`` and ``b`` (radians,
+    first vertex indices ``ia``, ``ib``): walk both rings once by angle, each step closing a triangle
+    on the ring whose next point comes first. Every triangle has its corners on both rings."""
+    na, nb = len(a), len(b)
+    aa = np.append(a, a[0] + 2 * np.pi)
+    j0 = int(np.argmin(np.abs(np.angle(np.exp(1j * (b - a[0]))))))
+    bb = np.unwrap(np.append(np.roll(b, -j0), b[j0]))
+    bb += 2 * np.pi * np.round((aa[0] - bb[0]) / (2 * np.pi))
+    i = j = 0
+    out = []
+    while i < na or j < nb:
+        if j >= nb or (i < na and aa[i + 1] <= bb[j + 1]):
+            out.append((ia + i % na, ib + (j + j0) % nb, ia + (i + 1) % na))
+            i += 1
+        else:
+            out.append((ia + i % na, ib + (j + j0) % nb, ib + (j + 1 + j0) % nb))
+            j += 1
+    return np.asarray(out, np.int64)
 
 
 def _eyeballs(atlas: Atlas, detail: int, parts: _Parts) -> None:
