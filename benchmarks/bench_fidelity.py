@@ -175,6 +175,8 @@ def main() -> int:
         print_seams("on, vertex metric", seams(r, extra=noshear))
         print_seams("  + shear (the default)", seams(r))
         print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_per_gaussian": True}))
+        # a different irradiance (the texel-snapped PCF's stepped penumbra), so its own reference
+        print_seams("defaults, box PCF", seams(r, extra={"shadow.pcf_filter": "box"}))
         for tag, kw in (("through tissue only: no pair whose straight path leaves a point into the air (lips / eyelids "
                          "touching, nostril and ear cavities)", {"tissue_only": True}),
                         ("along the surface only (a path on the mesh at most 1.5x their 3D distance): what a texture-space "
