@@ -6,7 +6,9 @@
 // sigma = sqrt(v_i - v_(i-1)) in mm. Each texel is computed at the island texel the gutter map
 // names, so the output's gutters come out dilated. RGB irradiance and A thickness are blurred alike.
 // With scene.seam_aware, `source` is the seam-filled copy (seam_fill.frag): taps that leave their
-// island read the surface across the seam.
+// island read the surface across the seam, and a tap that would land in another island's zone (the
+// gutter map's B: every texel belongs to its nearest island) is dropped and the kernel renormalised:
+// a UV gutter is not a surface, so no light crosses it (ISLAND_ZONES, also with scene.seam_aware).
 #include "lib/deon.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
@@ -31,8 +33,26 @@ vec2 shear_step(vec2 s, float c, vec2 dir) {
     return vec2(-c * s.x, s.y) * inversesqrt(1.0 - c * c);
 }
 
+// Whether a tap reads island zone `zone` only (gutter map B, negative on a zone's border): a tap in
+// another island's zone would read an unrelated part of the surface across a UV gutter; it is dropped
+// and the kernel renormalised, as at a mesh border (the centre tap always counts). For a bilinear tap
+// (`blend`) the texel nearest to it is enough: if it is inside the zone and not on its border, so are
+// all texels the tap blends; a whole-texel tap reads that texel only.
+float in_zone(ivec2 t, float zone, bool blend) {
+    float b = texelFetch(gutter, clamp(t, ivec2(0), textureSize(gutter, 0) - 1), 0).b;
+    return (abs((blend ? b : abs(b)) - zone) < 0.5) ? 1.0 : 0.0;
+}
+
+#ifdef ISLAND_ZONES  // with scene.seam_aware: taps are tested where they may reach another zone
+#define ISLAND_CHECK(reach) ((reach) > own.a)
+#else
+#define ISLAND_CHECK(reach) false
+#endif
+
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
+    vec4 own = texelFetch(gutter, src, 0);  // B: this island's zone, A: texels to another zone
+    float zone = abs(own.b);
     vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
     vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0) : vec4(u_uniform_stretch, 0.0, 1.0);
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
@@ -46,17 +66,29 @@ void main() {
     ivec2 d = ivec2(u_dir);
     ivec2 hi = textureSize(source, 0) - 1;
     float wsum = 0.0;
+    bool check = ISLAND_CHECK(float(NARROW_TAPS) + 0.5);
     for (int k = -NARROW_TAPS; k <= NARROW_TAPS; ++k) {
         float fk = float(k);
         float w = (s_t <= 1.0) ? ((k == 0) ? 1.0 - s_t * s_t : ((abs(k) == 1) ? 0.5 * s_t * s_t : 0.0))
                                : exp(-fk * fk / (2.0 * s_t * s_t));
-        acc += w * texelFetch(source, clamp(src + k * d, ivec2(0), hi), 0);
+        ivec2 t = clamp(src + k * d, ivec2(0), hi);
+        if (check && k != 0) w *= in_zone(t, zone, false);
+        acc += w * texelFetch(source, t, 0);
         wsum += w;
     }
     acc /= max(wsum, 1e-30);
 #else
-    for (int k = 0; k < 7; ++k)
-        acc += u_weights[k] * texture(source, uv + step_uv * float(k - 3));
+    vec2 ts = vec2(textureSize(source, 0));
+    bool check = ISLAND_CHECK(3.0 * length(step_uv * ts) + 1.5);  // farthest tap, bilinear footprint
+    float wsum = 0.0;
+    for (int k = 0; k < 7; ++k) {
+        vec2 t = uv + step_uv * float(k - 3);
+        float w = u_weights[k];
+        if (check && k != 3) w *= in_zone(ivec2(floor(t * ts)), zone, true);
+        acc += w * texture(source, t);
+        wsum += w;
+    }
+    acc /= max(wsum, 1e-30);
 #endif
     f_color = finite4_f32(acc);
 }

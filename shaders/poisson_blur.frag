@@ -16,6 +16,7 @@ uniform vec2 u_poisson[12];    // skinviewer.poisson.POISSON_12
 uniform vec3 u_radius_mm;
 uniform sampler2D stretch_map;
 #endif
+uniform sampler2D gutter;      // gutter map: B island zone (negative on its border), A texels to another
 out vec4 f_color;
 
 vec4 finite4(vec4 c) {
@@ -24,25 +25,51 @@ vec4 finite4(vec4 c) {
     return clamp(mix(c, vec4(0.0), bad), vec4(0.0), vec4(FLOAT_MAX));
 }
 
+// 1 when a tap at t (UV) reads island zone `zone` only (deon_blur.frag's in_zone): with
+// scene.seam_aware (ISLAND_ZONES) a tap that would land on another UV island is dropped and (13)
+// divides by the taps kept, so no light crosses a UV gutter; 1 for every tap otherwise.
+float kept(vec2 t, float zone, bool check) {
+#ifdef ISLAND_ZONES
+    if (check) {
+        ivec2 n = textureSize(gutter, 0);
+        return (abs(texelFetch(gutter, clamp(ivec2(floor(t * vec2(n))), ivec2(0), n - 1), 0).b - zone) < 0.5)
+            ? 1.0 : 0.0;
+    }
+#endif
+    return 1.0;
+}
+
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec2 size = 1.0 / vec2(textureSize(source, 0));          // (11)
     vec2 uv = (vec2(p) + 0.5) * size;
     vec4 sum = finite4(texelFetch(source, p, 0));
+    vec4 own = texelFetch(gutter, p, 0);
+    float zone = abs(own.b);
 #ifdef RADIUS_MM
     vec2 s = clamp(texelFetch(stretch_map, p, 0).rg, vec2(0.0), vec2(10.0));  // UV per mm
     vec3 R = clamp(u_radius_mm, vec3(0.0), vec3(1e3));
+    bool check = max(R.r, max(R.g, R.b)) * max(s.x, s.y) / size.x + 1.5 > own.a;
+    vec4 cnt = vec4(1.0);
     for (int i = 0; i < 12; ++i) {
         vec2 o = u_poisson[i] * s;
+        vec3 k = vec3(kept(uv + o * R.r, zone, check), kept(uv + o * R.g, zone, check), kept(uv + o * R.b, zone, check));
         vec4 r = finite4(texture(source, uv + o * R.r));
-        sum += vec4(r.r, finite4(texture(source, uv + o * R.g)).g, finite4(texture(source, uv + o * R.b)).b, r.a);
+        sum += vec4(k.r * r.r, k.g * finite4(texture(source, uv + o * R.g)).g,
+                    k.b * finite4(texture(source, uv + o * R.b)).b, k.r * r.a);
+        cnt += k.rgbr;
     }
 #else
     float R = texelFetch(radius_map, p, 0).r;
     R = (R >= 0.0 && R <= 1e6) ? R : 0.0;                       // also rejects NaN
     vec2 radius = size * R;                                     // (12)
-    for (int i = 0; i < 12; ++i)
-        sum += finite4(texture(source, uv + u_poisson[i] * radius));
+    bool check = R + 1.5 > own.a;
+    float cnt = 1.0;
+    for (int i = 0; i < 12; ++i) {
+        float k = kept(uv + u_poisson[i] * radius, zone, check);
+        sum += k * finite4(texture(source, uv + u_poisson[i] * radius));
+        cnt += k;
+    }
 #endif
-    f_color = finite4(sum * (1.0 / 13.0));                      // (13)
+    f_color = finite4(sum / cnt);                               // (13): 13 taps when none is dropped
 }

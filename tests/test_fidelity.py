@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
+from skinviewer.core.settings import with_values
 from skinviewer.physics import accuracy as A
 from skinviewer.scene.scenes import build_scene
 
@@ -133,6 +134,81 @@ def test_backlit_ear_transmits_the_thin_slab_profile(renderer):
         row, col = _project(view, C, n)
         got = lit[row, col]
         assert abs(got[0] / expect[0] - 1) < 0.10, (d, m, got, expect)
+
+
+def test_gutter_table_zones_each_texel_to_its_nearest_island():
+    """B: the zone (nearest island), negative on a zone's border; A: texels to the nearest border."""
+    from skinviewer.passes.texture_space import gutter_table
+    c = np.zeros((12, 24), bool)
+    c[2:10, 2:7] = True
+    c[2:10, 14:20] = True
+    t = gutter_table(c)
+    zone = np.abs(t[..., 2])
+    assert set(np.unique(zone)) == {1.0, 2.0} and (zone[:, :10] == zone[5, 3]).all() and (zone[:, 11:] == zone[5, 15]).all()
+    assert (t[..., 2][:, 10:12] < 0).all() and (t[..., 2][:, :10] > 0).all()  # the border between the zones
+    assert t[5, 3, 3] == 7 and t[5, 9, 3] == 1  # distance (texels) to the border
+    assert (t[c][:, :2] == np.argwhere(c)[:, ::-1]).all()  # RG: an island texel is its own source
+
+
+@pytest.mark.parametrize("tech", ["deon", "gosselin"])
+def test_no_light_crosses_a_uv_gutter(renderer, tech):
+    """backlit-ear's front and back are two UV islands 0.04 apart; the red blur reaches farther
+    (3 sigma = 32 texels at 256^2, the gutter is 10). Without transmission the front, lit by nothing,
+    stays black: no tap of the back's lit irradiance lands on it across the gutter. Gosselin in mm
+    with one iteration reaches as far (15 % of the back's light on the front before)."""
+    extra = {"deon.tsm": False} if tech == "deon" else {"gosselin.radius_mode": "mm", "gosselin.iterations": 1}
+    s = small_settings("backlit-ear", tech, 64, **extra)
+    renderer.render(s)
+    g = renderer.graph(tech)
+    res = "deon_diffuse" if tech == "deon" else "gosselin_blurred"
+    D = g.read(res)[..., 0].astype(np.float64)
+    n = D.shape[0]
+    front = D[:, : int(0.49 * n)]
+    assert front.max() <= 1e-6 * D.max(), front.max() / D.max()
+    off = with_values(s, {"scene.seam_aware": False})  # the gutters as before: the blur reads across them
+    renderer.render(off)
+    leak = renderer.graph(tech).read(res)[..., 0][:, : int(0.49 * n)].max()
+    assert leak > 1e-3 * D.max()
+
+
+def test_islands_a_texel_apart_keep_their_own_light(renderer, tmp_path):
+    """Two 40 mm plates 10 mm apart in 3D, their UV islands 1.3 texels apart at 256^2; a beam lights
+    the left one up to the edge beside the gap. The right plate stays black (no tap reads across the
+    gutter), and the left one's texels beside it (on its zone's border) keep their light."""
+    import trimesh
+
+    from skinviewer.scene.scenes import _merge, grid
+    upm, n = 0.0093, 256
+    w = 40.0 * upm
+    parts = []
+    for x0, u0 in ((-25.0, 0.02), (25.0, 0.02 + w + 1.3 / n)):
+        p, nrm, uv, idx = grid(20, 20, 40.0, 40.0, uv_rect=(u0, 0.5 - w / 2, u0 + w, 0.5 + w / 2))
+        p[:, 0] += x0
+        parts.append((p, nrm, uv, idx))
+    P, _, UV, F = _merge(parts)
+    path = tmp_path / "plates.obj"
+    trimesh.Trimesh(P, F, process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    D = _diffused(renderer, str(path), True, n, beam=(-20.0, 15.5))[..., 0]
+    j = n // 2
+    a_edge = int((0.02 + w) * n) - 1  # the left island's last texel column
+    b = D[:, a_edge + 3:int((0.02 + 2 * w) * n)]
+    assert b.max() <= 1e-6 * D.max(), b.max() / D.max()
+    assert D[j, a_edge] > 0.3 * D[j, a_edge - 8] > 0, (D[j, a_edge - 8:a_edge + 3])
+
+
+def test_backlit_flap_transmits_alike_at_both_sides(renderer):
+    """The flap is symmetric in x and the light has no x component: its left and right edges (the
+    front island's u = 0.02 and 0.48) transmit the same. The TSM's 'already carried by the blur'
+    term (lib/tsm_transmit.glsl) used to measure the front-back distance in UV across islands,
+    which is small at one edge only: a dark band there, hidden by the gutter leak."""
+    s = small_settings("backlit-ear", "deon", 64)
+    renderer.render(s)
+    D = renderer.graph("deon").read("deon_diffuse")[..., 0].astype(np.float64)
+    n = D.shape[0]
+    for v in (0.3, 0.5, 0.7):
+        row = D[int(v * n)]
+        left, right = row[int(0.02 * n) + 2], row[int(0.48 * n) - 3]
+        assert abs(right / left - 1) < 0.05, (v, left, right)
 
 
 def test_no_transmission_through_the_head(renderer):

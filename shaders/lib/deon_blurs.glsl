@@ -18,6 +18,7 @@ uniform sampler2D blur6;
 uniform sampler2D blur7;
 uniform int u_tsm_printed;       // 1: exp(-d^2/v) as printed in seed 000 eq. (33)
 uniform sampler2D tsm_map;
+uniform sampler2D zone_map;      // the blurs' gutter map: B the UV island zone of a texel
 uniform mat4 u_tsm_matrix;
 uniform float u_tsm_gate_mm;     // own thickness under which a point counts as directly lit
 uniform sampler2D stretch_map;

@@ -12,11 +12,19 @@
 //    exp(-r^2 / 2v) relative to r = 0); the path through the body adds only the difference,
 //    exp(-m^2 / 2v) - exp(-r^2 / 2v) >= 0 (m <= r up to sampling). Near a terminator of a convex
 //    surface m ~ r: nothing is counted twice; through an ear r >> m: the full eq. 33 term.
+//    Only when A lies in C's UV island zone (the gutter map's B): a blur never crosses into another
+//    island, so for A on another island (the far side of an ear or a flap cut into two islands)
+//    nothing is carried and the full term counts.
 //  * A_k is C itself (lit) when m_k is within the TSM's depth uncertainty: a constant tolerance
 //    (u_tsm_gate_mm, two TSM texels) plus the depth slope across a texel at A, texel * tan(theta)
 //    (slope-scaled bias), faded in smoothly from tol to 2 tol (thickness fade).
 #ifndef SKINVIEWER_TSM_TRANSMIT_GLSL
 #define SKINVIEWER_TSM_TRANSMIT_GLSL
+float uv_zone(vec2 uv) {
+    ivec2 n = textureSize(zone_map, 0);
+    return abs(texelFetch(zone_map, clamp(ivec2(floor(uv * vec2(n))), ivec2(0), n - 1), 0).b);
+}
+
 vec3 tsm_transmitted(vec3 P, vec2 uvC) {
     vec4 p = u_tsm_matrix * vec4(P, 1.0);
     if (!(p.w > 0.0)) return vec3(0.0);
@@ -28,6 +36,7 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
     float dC = tsm_distance_mm(P);
     vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
     float k2 = (u_tsm_printed != 0) ? 1.0 : 2.0;  // eq. 33 as printed: exp(-x^2 / v)
+    float zoneC = uv_zone(uvC);
     float f[MAX_GAUSSIANS];
     for (int i = 0; i < MAX_GAUSSIANS; ++i) f[i] = 0.0;
     bool any_k = false;
@@ -40,7 +49,7 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
         float g = smoothstep(tol, 2.0 * tol, m);
         if (!(g > 0.0)) continue;
         any_k = true;
-        float r = length((uvC - t.gb) / s);
+        float r = (abs(uv_zone(t.gb) - zoneC) < 0.5) ? length((uvC - t.gb) / s) : 1e18;
         for (int i = 0; i < MAX_GAUSSIANS; ++i) {
             if (i >= u_count) break;
             float v = u_var[i];

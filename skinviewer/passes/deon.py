@@ -283,7 +283,8 @@ class GaussianBlurPass(Pass):
         if stretch:
             r.input(stretch)
         tiled = {"TILED": 1} if skip_gutters else {}
-        r.program("deon_blur", **tiled, **self._narrow(r, step, stretch, n))
+        zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
+        r.program("deon_blur", **tiled, **zones, **self._narrow(r, step, stretch, n))
         if seam:
             r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
@@ -313,7 +314,8 @@ class GaussianBlurPass(Pass):
         stretch = self._stretch_input(ec, step)
         tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
         narrow = self._narrow(ec, step, stretch, n)
-        prog = ec.program("deon_blur", **tiled, **narrow)
+        zones = {"ISLAND_ZONES": 1} if ec.setting("scene.seam_aware") else {}
+        prog = ec.program("deon_blur", **tiled, **zones, **narrow)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
@@ -402,10 +404,12 @@ def bind_blurs(ec, prog) -> None:
 
 
 def declare_tsm_read(r) -> None:
-    """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the stretch map."""
+    """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
+    (island zones), the stretch map."""
     r.setting("deon.tsm_form")
     r.section(f"lights.{tsm_light_index(r)}", LIGHT_POSE_FIELDS)  # its light space
     r.input(TSM)
+    r.input(gutter_resource(map_size(r)))  # island zones: whether the blur already carries A's light
     if r.setting("deon.stretch"):
         r.input(STRETCH)
 
@@ -413,6 +417,7 @@ def declare_tsm_read(r) -> None:
 def bind_tsm_read(ec, prog) -> None:
     """lib/tsm_transmit.glsl's TSM, stretch and gate uniforms (declare_tsm_read)."""
     ec.bind(prog, "tsm_map", TSM)
+    ec.bind(prog, "zone_map", gutter_resource(map_size(ec)))
     if ec.has_input(STRETCH):
         ec.bind(prog, "stretch_map", STRETCH)
     ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))

@@ -170,7 +170,8 @@ class PoissonBlurPass(Pass):
         r.input(gutter_resource(size))
         if r.setting("scene.seam_aware"):
             r.input(seam_resource(size))
-        r.program("poisson_blur", **({"RADIUS_MM": 1} if mm else {}))
+        zones = {"ISLAND_ZONES": 1} if r.setting("scene.seam_aware") else {}  # no tap on another island
+        r.program("poisson_blur", **({"RADIUS_MM": 1} if mm else {}), **zones)
         if r.setting("scene.seam_aware"):
             r.program("seam_fill")
         r.program("dilate")
@@ -185,6 +186,7 @@ class PoissonBlurPass(Pass):
             return
         prog = ec.program("poisson_blur")
         ec.set(prog, "u_poisson", np.asarray(POISSON_12, dtype=np.float32))
+        ec.bind(prog, "gutter", gutter)
         seam = seam_resource(size) if ec.has_input(seam_resource(size)) else None
         if seam:  # taps that leave their island read the surface across the seam (seam_fill.frag)
             fill = ec.program("seam_fill")

@@ -79,9 +79,9 @@ class GutterMapPass(Pass):
 
 
 def gutter_spec(size: int) -> TexSpec:
-    """RG integer texel coordinates: half floats hold every integer up to 2048 exactly (issue 14:
-    exact formats; the coverage flag B of gutter_table is not read by any shader)."""
-    return TexSpec((size, size), 2, "f2" if size <= 2048 else "f4", filter="nearest")
+    """gutter_table's RG integer texel coordinates, B island zone, A distance to another zone: half
+    floats hold every integer up to 2048 exactly (issue 14: exact formats)."""
+    return TexSpec((size, size), 4, "f2" if size <= 2048 else "f4", filter="nearest")
 
 
 def read_gutter(tex: moderngl.Texture) -> np.ndarray:
@@ -258,18 +258,39 @@ def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
     return out
 
 
+ZONE_IDS = 2047  # island zone ids stored as 1 + label % 2047: exact in half floats
+
+
 def gutter_table(covered: np.ndarray) -> np.ndarray:
-    """(H, W, 4) float32: RG = (x, y) of the nearest covered texel (itself when covered), B = covered."""
+    """(H, W, 4) float32: RG = (x, y) of the nearest covered texel (itself when covered); B = the zone
+    id of that texel's UV island (1 + label % ZONE_IDS of the islands' 8-connected components; 0 when
+    nothing is covered), negative on the zone's border (a texel with a neighbour, 8-connected, in
+    another zone): every texel belongs to the island nearest to it; A = the distance (texels)
+    to the nearest texel of another zone. A blur tap that lands in another island's zone would read
+    an unrelated part of the surface (issue 10: light across UV gutters); the blurs drop such taps,
+    and A lets a texel whose taps all stay closer than that skip the test."""
     h, w = covered.shape
     out = np.zeros((h, w, 4), np.float32)
     if covered.any():
         from scipy import ndimage  # here, not at import: scipy costs start-up (issue 14 item 7)
         _, (iy, ix) = ndimage.distance_transform_edt(~covered, return_indices=True)
+        label, _ = ndimage.label(covered, structure=np.ones((3, 3), bool))
+        zone = label[iy, ix]
+        # a texel next to (8-neighbourhood) one of another zone is on a zone border
+        zp = np.pad(zone, 1, mode="edge")
+        border = np.zeros((h, w), bool)
+        for dy in (0, 1, 2):
+            for dx in (0, 1, 2):
+                border |= zp[dy:dy + h, dx:dx + w] != zone
+        safe = ndimage.distance_transform_edt(~border) if border.any() else np.full((h, w), 65504.0)
+        # B < 0 on a zone border: a bilinear tap whose nearest texel has B = +zone blends only texels
+        # of that zone, so one fetch per tap tells
+        out[..., 2] = np.where(border, -1, 1) * (1 + (zone - 1) % ZONE_IDS)
+        out[..., 3] = np.minimum(safe, 65504.0)
     else:
         iy, ix = np.mgrid[0:h, 0:w]
     out[..., 0] = ix
     out[..., 1] = iy
-    out[..., 2] = covered
     return out
 
 
