@@ -10,6 +10,7 @@
 // gutter map's B: every texel belongs to its nearest island) is dropped and the kernel renormalised:
 // a UV gutter is not a surface, so no light crosses it (ISLAND_ZONES, also with scene.seam_aware).
 #include "lib/deon.glsl"
+#include "lib/island_zones.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
 uniform sampler2D stretch_map;
@@ -33,26 +34,27 @@ vec2 shear_step(vec2 s, float c, vec2 dir) {
     return vec2(-c * s.x, s.y) * inversesqrt(1.0 - c * c);
 }
 
-// Whether a tap reads island zone `zone` only (gutter map B, negative on a zone's border): a tap in
-// another island's zone would read an unrelated part of the surface across a UV gutter; it is dropped
-// and the kernel renormalised, as at a mesh border (the centre tap always counts). For a bilinear tap
-// (`blend`) the texel nearest to it is enough: if it is inside the zone and not on its border, so are
-// all texels the tap blends; a whole-texel tap reads that texel only.
-float in_zone(ivec2 t, float zone, bool blend) {
-    float b = texelFetch(gutter, clamp(t, ivec2(0), textureSize(gutter, 0) - 1), 0).b;
-    return (abs((blend ? b : abs(b)) - zone) < 0.5) ? 1.0 : 0.0;
-}
-
-#ifdef ISLAND_ZONES  // with scene.seam_aware: taps are tested where they may reach another zone
+// With scene.seam_aware (ISLAND_ZONES) a tap in another island's zone (lib/island_zones.glsl) is
+// dropped and the kernel renormalised, as at a mesh border (the centre tap always counts); tested only
+// where the farthest tap can reach a zone border.
+#ifdef ISLAND_ZONES
+uniform sampler2D seam_map;  // A: 1 where the nearest island edge is a mesh border (seam_map in Python)
+uniform int u_absorb;        // 1: light (past a border there is none); 0: the stretch chain (a metric)
 #define ISLAND_CHECK(reach) ((reach) > own.a)
+#define PAST_BORDER ((u_absorb != 0) ? texelFetch(seam_map, src, 0).a : 0.0)
 #else
 #define ISLAND_CHECK(reach) false
+#define PAST_BORDER 0.0
 #endif
 
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
     vec4 own = texelFetch(gutter, src, 0);  // B: this island's zone, A: texels to another zone
     float zone = abs(own.b);
+    // next to a mesh border a tap in another zone lies past the surface's end: no light, its weight
+    // kept (RGB); the thickness (A) is renormalised over the taps kept
+    float absorb = PAST_BORDER;
+    float wl = 0.0;
     vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
     vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0) : vec4(u_uniform_stretch, 0.0, 1.0);
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
@@ -72,11 +74,12 @@ void main() {
         float w = (s_t <= 1.0) ? ((k == 0) ? 1.0 - s_t * s_t : ((abs(k) == 1) ? 0.5 * s_t * s_t : 0.0))
                                : exp(-fk * fk / (2.0 * s_t * s_t));
         ivec2 t = clamp(src + k * d, ivec2(0), hi);
-        if (check && k != 0) w *= in_zone(t, zone, false);
-        acc += w * texelFetch(source, t, 0);
-        wsum += w;
+        float in_ = (check && k != 0) ? in_zone(gutter, t, zone, false) : 1.0;
+        acc += w * in_ * texelFetch(source, t, 0);
+        wsum += w * in_;
+        wl += w * max(in_, absorb);
     }
-    acc /= max(wsum, 1e-30);
+    acc /= vec4(vec3(max(wl, 1e-30)), max(wsum, 1e-30));
 #else
     vec2 ts = vec2(textureSize(source, 0));
     bool check = ISLAND_CHECK(3.0 * length(step_uv * ts) + 1.5);  // farthest tap, bilinear footprint
@@ -84,11 +87,12 @@ void main() {
     for (int k = 0; k < 7; ++k) {
         vec2 t = uv + step_uv * float(k - 3);
         float w = u_weights[k];
-        if (check && k != 3) w *= in_zone(ivec2(floor(t * ts)), zone, true);
-        acc += w * texture(source, t);
-        wsum += w;
+        float in_ = (check && k != 3) ? in_zone(gutter, ivec2(floor(t * ts)), zone, true) : 1.0;
+        acc += w * in_ * texture(source, t);
+        wsum += w * in_;
+        wl += w * max(in_, absorb);
     }
-    acc /= max(wsum, 1e-30);
+    acc /= vec4(vec3(max(wl, 1e-30)), max(wsum, 1e-30));
 #endif
     f_color = finite4_f32(acc);
 }

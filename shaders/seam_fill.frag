@@ -5,11 +5,16 @@
 // scene/texels.py), so the blur that reads it with plain bilinear taps continues across seams. One
 // cheap pass instead of redirecting each tap's four bilinear texels by hand in the blur itself.
 uniform sampler2D source;
-uniform sampler2D seam_map;  // RG: texel coordinate across the UV seam, B: 1 where there is one
+// Past a mesh border (B = 2) there is no surface: no light (the ground truth integrates over the
+// surface only, so skin next to an open border receives less), except the share s.a of the edge's
+// value that puts the bilinear ramp's edge where the border is; A (thickness) keeps the edge's value.
+uniform sampler2D seam_map;  // RG: texel coordinate across the UV seam, B: 1 there, 2 past a border
+uniform int u_past_border_dark;  // 1 for light; 0 for a metric (the stretch chain): the edge's value
 out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 s = texelFetch(seam_map, p, 0);
-    f_color = (s.b > 0.5) ? texture(source, (s.rg + 0.5) / vec2(textureSize(source, 0)))
-                          : texelFetch(source, p, 0);
+    vec4 here = texelFetch(source, p, 0);
+    f_color = (s.b > 1.5 && u_past_border_dark != 0) ? vec4(here.rgb * s.a, here.a)
+            : (s.b > 0.5 && s.b < 1.5) ? texture(source, (s.rg + 0.5) / vec2(textureSize(source, 0))) : here;
 }

@@ -20,11 +20,7 @@
 //    (slope-scaled bias), faded in smoothly from tol to 2 tol (thickness fade).
 #ifndef SKINVIEWER_TSM_TRANSMIT_GLSL
 #define SKINVIEWER_TSM_TRANSMIT_GLSL
-float uv_zone(vec2 uv) {
-    ivec2 n = textureSize(zone_map, 0);
-    return abs(texelFetch(zone_map, clamp(ivec2(floor(uv * vec2(n))), ivec2(0), n - 1), 0).b);
-}
-
+#include "lib/island_zones.glsl"
 vec3 tsm_transmitted(vec3 P, vec2 uvC) {
     vec4 p = u_tsm_matrix * vec4(P, 1.0);
     if (!(p.w > 0.0)) return vec3(0.0);
@@ -36,7 +32,7 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
     float dC = tsm_distance_mm(P);
     vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
     float k2 = (u_tsm_printed != 0) ? 1.0 : 2.0;  // eq. 33 as printed: exp(-x^2 / v)
-    float zoneC = uv_zone(uvC);
+    float zoneC = uv_zone(zone_map, uvC);
     float f[MAX_GAUSSIANS];
     for (int i = 0; i < MAX_GAUSSIANS; ++i) f[i] = 0.0;
     bool any_k = false;
@@ -49,7 +45,7 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
         float g = smoothstep(tol, 2.0 * tol, m);
         if (!(g > 0.0)) continue;
         any_k = true;
-        float r = (abs(uv_zone(t.gb) - zoneC) < 0.5) ? length((uvC - t.gb) / s) : 1e18;
+        float r = (abs(uv_zone(zone_map, t.gb) - zoneC) < 0.5) ? length((uvC - t.gb) / s) : 1e18;
         for (int i = 0; i < MAX_GAUSSIANS; ++i) {
             if (i >= u_count) break;
             float v = u_var[i];

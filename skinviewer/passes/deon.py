@@ -333,7 +333,11 @@ class GaussianBlurPass(Pass):
         filled = ec.scratch(spec) if seam else None
         fill = ec.program("seam_fill") if seam else None
         if seam:
+            light = self.chain == "irradiance"
             ec.bind(fill, "seam_map", seam)
+            ec.set(fill, "u_past_border_dark", light)
+            ec.bind(prog, "seam_map", seam)
+            ec.set(prog, "u_absorb", light)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
         for k, sigma in enumerate(sigmas):

@@ -191,6 +191,8 @@ class PoissonBlurPass(Pass):
         if seam:  # taps that leave their island read the surface across the seam (seam_fill.frag)
             fill = ec.program("seam_fill")
             ec.bind(fill, "seam_map", seam)
+            ec.set(fill, "u_past_border_dark", True)
+            ec.bind(prog, "seam_map", seam)
             filled = ec.scratch(_map_spec(size))
         if ec.has_input(STRETCH):
             gs = ec.setting("deon.gaussians")

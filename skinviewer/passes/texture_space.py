@@ -10,7 +10,7 @@ import numpy as np
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.rules import light_on
-from skinviewer.scene.texels import seam_indirection
+from skinviewer.scene.texels import border_gutters, seam_indirection
 
 
 def gutter_resource(size: int) -> str:
@@ -244,15 +244,27 @@ def seam_resource(size: int) -> str:
 
 def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
     """(H, W, 4) float32 for gutter texels near a UV seam (issue 10 item 1): RG the fractional
-    texel coordinate of the surface point the texel stands for on the adjacent island, B = 1 there
-    (0 elsewhere). Blur taps that leave their island read the source there, so they continue on
-    the surface instead of repeating the island's edge texel (scene/texels.seam_indirection)."""
+    texel coordinate of the surface point the texel stands for on the adjacent island, B = 1 there;
+    B = 2 beyond a mesh border (scene/texels.border_gutters), 0 elsewhere; A = 1 on island texels whose
+    nearest island edge is a mesh border, and past a border the share of the edge's light kept. Blur taps that leave their island read the source there, so
+    they continue on the surface instead of repeating the island's edge texel
+    (scene/texels.seam_indirection), and read no light past the surface's end; from a texel with A = 1
+    a tap in another island's zone is past that end too (it counts as no light, not as a dropped tap)."""
     size = covered.shape[0]
     mm = float(scene.mm_per_unit)
     texel_mm = 1.0 / (size * max(scene.mean_uv_per_mm, 1e-12))
     mapped, coords = seam_indirection(scene.mesh.positions, scene.mesh.uvs, scene.mesh.indices, covered,
                                       SEAM_REACH_TEXELS, mm, texel_pos.astype(np.float64) * mm, texel_mm)
+    beyond, dist = border_gutters(scene.mesh.positions, scene.mesh.uvs, scene.mesh.indices, covered,
+                                  SEAM_REACH_TEXELS)
     out = np.zeros((size, size, 4), np.float32)
+    past = beyond & ~mapped & ~covered
+    out[past, 2] = 2.0
+    # A past a border: the share of the edge's value a gutter texel keeps, 1 - 2d (d its distance to
+    # the border, texels): bilinear taps between it and the island's last texel then integrate to the
+    # true edge, not to the gutter texel's centre
+    out[past, 3] = np.clip(1.0 - 2.0 * dist[past], 0.0, 1.0)
+    out[beyond & covered, 3] = 1.0
     out[mapped, :2] = coords[mapped]
     out[mapped, 2] = 1.0
     return out

@@ -198,6 +198,45 @@ def seam_edges(positions, uvs, indices):
     return hs // 3, hs % 3, tw // 3, tw % 3, pid
 
 
+def border_gutters(positions, uvs, indices, covered: np.ndarray, reach: float):
+    """(mask, dist): ``mask`` (n, n) bool, texels within ``reach`` texels of an island's edge (inside
+    or outside it) whose nearest island edge is a mesh border (a 3D edge of one triangle only); ``dist``
+    (n, n) their distance to that border in texels (inf elsewhere). Beyond a border there is no
+    surface, so a blur tap there should read nothing (the ground truth's integral over the surface has
+    no light from there) rather than the island's edge texel repeated."""
+    n = covered.shape[0]
+    out = np.zeros((n, n), bool)
+    dist = np.full((n, n), np.inf)
+    P = np.asarray(positions, np.float64)
+    F = np.asarray(indices, np.int64)
+    if len(F) == 0 or not covered.any():
+        return out, dist
+    scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
+    pid = weld_ids(P, 1e-6 * scale)
+    a, b = F[:, [0, 1, 2]].ravel(), F[:, [1, 2, 0]].ravel()
+    key = np.sort(np.stack([pid[a], pid[b]], 1), axis=1)
+    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    he = np.flatnonzero(cnt[inv.ravel()] == 1)
+    if len(he) == 0:
+        return out, dist
+    UV = np.asarray(uvs, np.float64) * n - 0.5  # texel coordinates
+    ua, ub = UV[a[he]], UV[b[he]]
+    seg = np.maximum(np.ceil(np.linalg.norm(ub - ua, axis=1) / 0.25).astype(int), 1)
+    rep = np.repeat(np.arange(len(he)), seg + 1)
+    tt = np.concatenate([np.linspace(0, 1, k + 1) for k in seg])
+    pts = ua[rep] + tt[:, None] * (ub[rep] - ua[rep])
+    # distance to the nearest island edge: from outside to an island texel, from inside to a gutter
+    to_edge = np.where(covered, ndimage.distance_transform_edt(covered), ndimage.distance_transform_edt(~covered))
+    gy, gx = np.nonzero(to_edge <= reach)
+    if len(gx) == 0:
+        return out, dist
+    d, _ = cKDTree(pts).query(np.stack([gx, gy], 1).astype(np.float64), distance_upper_bound=reach + 1.0)
+    near = np.isfinite(d) & (d <= to_edge[gy, gx] + 1.0)  # the nearest island edge is a border
+    out[gy[near], gx[near]] = True
+    dist[gy[near], gx[near]] = d[near]
+    return out, dist
+
+
 def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float, mm_per_unit: float = 1.0,
                      texel_pos: np.ndarray | None = None, texel_mm: float = 1.0):
     """For every texel outside the islands within ``reach`` texels of a UV seam edge: the texel
