@@ -6,9 +6,8 @@
 // sigma = sqrt(v_i - v_(i-1)) in mm. Each texel is computed at the island texel the gutter map
 // names, so the output's gutters come out dilated. RGB irradiance and A thickness are blurred alike.
 // With scene.seam_aware, `source` is the seam-filled copy (seam_fill.frag): taps that leave their
-// island read the surface across the seam, and a tap that would land in another island's zone (the
-// gutter map's B: every texel belongs to its nearest island) is dropped and the kernel renormalised:
-// a UV gutter is not a surface, so no light crosses it (ISLAND_ZONES, also with scene.seam_aware).
+// island read the surface across the seam, past a mesh border no light, and never another island
+// (ISLAND_ZONES below).
 #include "lib/deon.glsl"
 #include "lib/island_zones.glsl"
 in vec2 v_uv;
@@ -35,8 +34,8 @@ vec2 shear_step(vec2 s, float c, vec2 dir) {
 }
 
 // With scene.seam_aware (ISLAND_ZONES) a tap in another island's zone (lib/island_zones.glsl) is
-// dropped and the kernel renormalised, as at a mesh border (the centre tap always counts); tested only
-// where the farthest tap can reach a zone border.
+// dropped and the kernel renormalised (the centre tap always counts), or, from a texel beside a mesh
+// border, counted as no light; tested only where the farthest tap can reach a zone border.
 #ifdef ISLAND_ZONES
 uniform sampler2D seam_map;  // A: 1 where the nearest island edge is a mesh border (seam_map in Python)
 uniform int u_absorb;        // 1: light (past a border there is none); 0: the stretch chain (a metric)

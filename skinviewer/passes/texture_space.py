@@ -245,11 +245,12 @@ def seam_resource(size: int) -> str:
 def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
     """(H, W, 4) float32 for gutter texels near a UV seam (issue 10 item 1): RG the fractional
     texel coordinate of the surface point the texel stands for on the adjacent island, B = 1 there;
-    B = 2 beyond a mesh border (scene/texels.border_gutters), 0 elsewhere; A = 1 on island texels whose
-    nearest island edge is a mesh border, and past a border the share of the edge's light kept. Blur taps that leave their island read the source there, so
-    they continue on the surface instead of repeating the island's edge texel
-    (scene/texels.seam_indirection), and read no light past the surface's end; from a texel with A = 1
-    a tap in another island's zone is past that end too (it counts as no light, not as a dropped tap)."""
+    B = 2 beyond a mesh border (scene/texels.border_gutters), 0 elsewhere; A = 1 on island texels
+    whose nearest island edge is a mesh border, and past a border the share of the edge's light kept.
+    Blur taps that leave their island read the source there, so they continue on the surface instead
+    of repeating the island's edge texel (scene/texels.seam_indirection), and read no light past the
+    surface's end; from a texel with A = 1 a tap in another island's zone is past that end too (it
+    counts as no light, not as a dropped tap)."""
     size = covered.shape[0]
     mm = float(scene.mm_per_unit)
     texel_mm = 1.0 / (size * max(scene.mean_uv_per_mm, 1e-12))
