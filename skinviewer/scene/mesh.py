@@ -126,22 +126,28 @@ def weld_ids(keys: np.ndarray, tol: float) -> np.ndarray:
     return connected_components(g, directed=False)[1].astype(np.int64)
 
 
-def is_closed(positions: np.ndarray, indices: np.ndarray) -> bool:
-    """True when no triangle edge is a border: every edge (vertices welded by position, so UV seams
-    do not count) is shared by at least two triangles. The inside of a closed surface cannot be seen
-    from outside it: a back face the camera meets there has won a depth fight with the near side
-    (thin folds at grazing angles) or comes from a self-intersection."""
+def border_half_edges(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Half-edges (3 * triangle + corner k: the edge from corner k to k + 1) on a mesh border: their
+    3D edge (vertices welded by position, so UV seams do not count) belongs to one triangle only. An
+    edge collapsed by welding borders nothing."""
     P = np.asarray(positions, np.float64)
     F = np.asarray(indices, np.int64).reshape(-1, 3)
     if len(F) == 0:
-        return False
+        return np.zeros(0, np.int64)
     scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
     w = weld_ids(P, 1e-6 * scale)[F]
     a, b = w[:, [0, 1, 2]].ravel(), w[:, [1, 2, 0]].ravel()
-    keep = a != b  # an edge collapsed by welding borders nothing
+    keep = np.flatnonzero(a != b)
     edges = np.stack([np.minimum(a, b), np.maximum(a, b)], 1)[keep]
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(counts.min(initial=2) >= 2)
+    _, inv, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    return keep[counts[inv.ravel()] == 1]
+
+
+def is_closed(positions: np.ndarray, indices: np.ndarray) -> bool:
+    """True when no triangle edge is a border (border_half_edges). The inside of a closed surface
+    cannot be seen from outside it: a back face the camera meets there has won a depth fight with
+    the near side (thin folds at grazing angles) or comes from a self-intersection."""
+    return len(np.asarray(indices).reshape(-1)) > 0 and len(border_half_edges(positions, indices)) == 0
 
 
 def culls_back_faces(mode: str, closed: bool) -> bool:

@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from skinviewer.scene.mesh import weld_ids
+from skinviewer.scene.mesh import border_half_edges, weld_ids
 
 
 def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
@@ -172,6 +172,15 @@ class SurfacePaths:
         return shared | (best <= self.stretch * r + self._edge[x] + self._edge[y])
 
 
+def _edge_samples(ua: np.ndarray, ub: np.ndarray, step: float = 0.25):
+    """Points every ``step`` (texels) along the edges ua -> ub (ends included): (points, the index
+    of the edge each point lies on)."""
+    seg = np.maximum(np.ceil(np.linalg.norm(ub - ua, axis=1) / step).astype(int), 1)
+    rep = np.repeat(np.arange(len(ua)), seg + 1)
+    tt = np.concatenate([np.linspace(0, 1, k + 1) for k in seg]) if len(seg) else np.zeros(0)
+    return ua[rep] + tt[:, None] * (ub[rep] - ua[rep]), rep
+
+
 def seam_edges(positions, uvs, indices):
     """Half-edges on UV seams: triangle edges whose 3D edge is shared by exactly two triangles that
     do not share it in UV. Returns (tri, corner k: the edge is (k, k+1), twin tri, twin corner) arrays."""
@@ -207,24 +216,12 @@ def border_gutters(positions, uvs, indices, covered: np.ndarray, reach: float):
     n = covered.shape[0]
     out = np.zeros((n, n), bool)
     dist = np.full((n, n), np.inf)
-    P = np.asarray(positions, np.float64)
-    F = np.asarray(indices, np.int64)
-    if len(F) == 0 or not covered.any():
+    he = border_half_edges(positions, indices)
+    if len(he) == 0 or not covered.any():
         return out, dist
-    scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
-    pid = weld_ids(P, 1e-6 * scale)
-    a, b = F[:, [0, 1, 2]].ravel(), F[:, [1, 2, 0]].ravel()
-    key = np.sort(np.stack([pid[a], pid[b]], 1), axis=1)
-    _, inv, cnt = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    he = np.flatnonzero(cnt[inv.ravel()] == 1)
-    if len(he) == 0:
-        return out, dist
+    F = np.asarray(indices, np.int64).reshape(-1, 3)
     UV = np.asarray(uvs, np.float64) * n - 0.5  # texel coordinates
-    ua, ub = UV[a[he]], UV[b[he]]
-    seg = np.maximum(np.ceil(np.linalg.norm(ub - ua, axis=1) / 0.25).astype(int), 1)
-    rep = np.repeat(np.arange(len(he)), seg + 1)
-    tt = np.concatenate([np.linspace(0, 1, k + 1) for k in seg])
-    pts = ua[rep] + tt[:, None] * (ub[rep] - ua[rep])
+    pts, _ = _edge_samples(UV[F[he // 3, he % 3]], UV[F[he // 3, (he % 3 + 1) % 3]])
     # distance to the nearest island edge: from outside to an island texel, from inside to a gutter
     to_edge = np.where(covered, ndimage.distance_transform_edt(covered), ndimage.distance_transform_edt(~covered))
     gy, gx = np.nonzero(to_edge <= reach)
@@ -297,10 +294,8 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
     if len(idx) == 0:
         return mapped, coords
     # sample the seam edges every 0.25 texel; each gutter texel takes its nearest seam edge
-    seg = np.maximum(np.ceil(np.linalg.norm(ub - ua, axis=1)[idx] / 0.25).astype(int), 1)
-    rep = np.repeat(idx, seg + 1)
-    tt = np.concatenate([np.linspace(0, 1, s + 1) for s in seg])
-    pts = ua[rep] + tt[:, None] * (ub[rep] - ua[rep])
+    pts, rep = _edge_samples(ua[idx], ub[idx])
+    rep = idx[rep]
     dist_island, (near_y, near_x) = ndimage.distance_transform_edt(~covered, return_indices=True)
     gy, gx = np.nonzero((~covered) & (dist_island <= reach))
     if len(gx) == 0:
