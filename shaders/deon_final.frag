@@ -73,7 +73,7 @@ void main() {
 #endif
 #endif
 #if G_TSM != 0
-    if (u_tsm != 0) diffuse += tsm_transmitted(v_position, v_uv);  // eq. 33 (lib/tsm_transmit.glsl)
+    if (u_tsm != 0) diffuse += tsm_transmitted(v_position, v_normal, v_uv);  // eq. 33 (lib/tsm_transmit.glsl)
 #endif
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);

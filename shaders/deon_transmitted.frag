@@ -9,5 +9,5 @@ in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
 void main() {
-    deon_transmitted(v_position, v_uv);
+    deon_transmitted(v_position, v_normal, v_uv);
 }

@@ -250,6 +250,75 @@ def test_no_transmission_through_the_head(renderer):
     assert t.max() > 0.05  # the ears glow
 
 
+def _fold_obj(path, half_band: float = 1.5, thickness: float = 2.0):
+    """A sheet ``thickness`` mm thick (faces z = +-thickness/2, 40 mm square) and, 1.5 mm behind it, a
+    strip 2 mm thick and 2 * half_band wide along y: lit from -z the strip shades a band of the
+    sheet's back face, as an ear's fold shades the sheet behind it (half_band 0: no strip). UV
+    islands per face, open borders."""
+    import trimesh
+
+    from skinviewer.scene.scenes import _merge, grid
+    w, h = 2 * half_band, 0.5 * thickness
+    parts = [grid(40, 40, 40.0, 40.0, uv_rect=(0.02, 0.02, 0.48, 0.48), z=h),
+             grid(40, 40, 40.0, 40.0, uv_rect=(0.52, 0.02, 0.98, 0.48), z=-h, flip=True)]
+    if w > 0:
+        parts += [grid(6, 40, w, 40.0, uv_rect=(0.02, 0.52, 0.02 + 0.46 * w / 40, 0.98), z=-h - 1.5),
+                  grid(6, 40, w, 40.0, uv_rect=(0.52, 0.52, 0.52 + 0.46 * w / 40, 0.98), z=-h - 3.5, flip=True)]
+    P, _, UV, F = _merge(parts)
+    trimesh.Trimesh(P, F, process=False, visual=trimesh.visual.TextureVisuals(uv=UV)).export(str(path))
+    return str(path)
+
+
+@pytest.mark.parametrize("gather", [16, 0])
+def test_a_fold_transmits_the_light_lit_beside_its_ray(renderer, tmp_path, gather):
+    """Issue 10 item 4: the sheet's front behind the shaded band receives, through its 2 mm, the
+    back face lit beyond the band (3D distances: sum_i w_i exp(-2^2/2v_i) erfc(b/sqrt(2v_i)) E) and the
+    strip's far face through 5.5 mm. Eq. 33 on the ray alone sees only the strip and leaves the
+    band dark; the light-space gather (deon.tsm_gather) finds the lit back face beside the ray."""
+    from scipy.special import erfc
+    b = 1.5
+    s = small_settings("laser", "deon", 32, **{
+        "scene.mesh": _fold_obj(tmp_path / "fold.obj", b), "scene.mm_per_unit": 1.0, "deon.irradiance_size": 512,
+        "deon.tsm_size": 512, "shadow.map_size": 1024, "deon.energy_conservation": False, "deon.tsm_gather": gather,
+        "camera.target": None, "camera.distance": None,
+        "lights": [{"kind": "directional", "direction": [0.0, 0.0, -1.0], "intensity": 1.0, "cast_shadow": True}]})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    D = g.read("deon_diffuse")[..., 0].astype(np.float64)
+    E = g.read("deon_irradiance")[..., 0].astype(np.float64)
+    n = D.shape[0]
+    e_back = E[int(0.25 * n), int((0.52 + 0.46 * 0.2) * n)]  # the back face, lit, 12 mm from the band
+    v = np.array([x.variance for x in s.deon.gaussians])
+    w = np.array([x.weights[0] for x in s.deon.gaussians])
+    k = np.sqrt(2 * v)
+    expect = e_back * (w * (np.exp(-4 / (2 * v)) * erfc(b / k) + np.exp(-5.5 ** 2 / (2 * v)) * (1 - erfc(b / k)))).sum()
+    got = D[int(0.25 * n), int(0.25 * n)]  # the front face behind the band's centre
+    if gather:
+        assert abs(got / expect - 1) < 0.15, (got, expect)
+    else:
+        assert got < 0.5 * expect, (got, expect)  # the failure the gather mends
+
+
+def test_a_membrane_thinner_than_the_tsm_gate_transmits(renderer, tmp_path):
+    """A 0.3 mm sheet lit from behind: along the ray its back face is within the TSM's depth tolerance
+    (two texels, at least 0.25 mm), which eq. 33 treats as C itself, lit. C faces away from the light,
+    so it is not lit: the gathered Gaussians transmit sum_i w_i exp(-0.3^2 / 2v_i) E (before: ~10 %)."""
+    prof = [{"variance": 1.0, "weights": [0.5, 0.5, 0.5]}, {"variance": 4.0, "weights": [0.5, 0.5, 0.5]}]
+    s = small_settings("laser", "deon", 32, **{
+        "scene.mesh": _fold_obj(tmp_path / "membrane.obj", 0.0, 0.3), "scene.mm_per_unit": 1.0,
+        "deon.irradiance_size": 512, "deon.tsm_size": 512, "deon.energy_conservation": False,
+        "deon.gaussians": prof, "camera.target": None, "camera.distance": None,
+        "lights": [{"kind": "directional", "direction": [0.0, 0.0, -1.0], "intensity": 1.0, "cast_shadow": True}]})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    T = g.read("deon_transmitted")[..., 0].astype(np.float64)
+    E = g.read("deon_irradiance")[..., 0].astype(np.float64)
+    e_back = E[int(0.25 * E.shape[0]), int(0.75 * E.shape[0])]
+    expect = e_back * sum(0.5 * math.exp(-0.09 / (2 * p["variance"])) for p in prof)
+    got = T[int(0.25 * T.shape[0]), int(0.25 * T.shape[0])]
+    assert abs(got / expect - 1) < 0.05, (got, expect)
+
+
 # ---------------------------------------------------------------------------------------------
 # item 1: seam-aware blurs
 

@@ -14,7 +14,7 @@
 #include "lib/deon_blurs.glsl"
 #include "lib/tsm_transmit.glsl"
 out vec4 f_color;
-void deon_transmitted(vec3 P, vec2 uv) {
-    f_color = vec4(finite3(tsm_transmitted(P, uv)), 1.0);
+void deon_transmitted(vec3 P, vec3 N, vec2 uv) {
+    f_color = vec4(finite3(tsm_transmitted(P, N, uv)), 1.0);
 }
 #endif

@@ -18,10 +18,44 @@
 //  * A_k is C itself (lit) when m_k is within the TSM's depth uncertainty: a constant tolerance
 //    (u_tsm_gate_mm, two TSM texels) plus the depth slope across a texel at A, texel * tan(theta)
 //    (slope-scaled bias), faded in smoothly from tol to 2 tol (thickness fade).
+//  * Gathered (deon.tsm_gather): a Gaussian wider than two TSM texels does not take A's blur on the
+//    ray but integrates the first surfaces around it in light space, G(v, |C - A(p)|) E(A(p)) dA =
+//    G2(v, |p|) exp(-m(p)^2 / 2v) E/cos(theta) dp: TSM_GATHER_N samples of the lateral Gaussian
+//    (importance sampled, a fixed spiral), each with its own distance m(p) and E(A(p)) / cos, less the same
+//    surface-blur share. Every directly lit point is some TSM texel's A, so this is the ground
+//    truth's sum over lit points for this light; on the ray alone, a fold whose near sheet is lit
+//    just beside the ray (an ear lit from behind) stays dark (issue 10 item 4).
 #ifndef SKINVIEWER_TSM_TRANSMIT_GLSL
 #define SKINVIEWER_TSM_TRANSMIT_GLSL
 #include "lib/island_zones.glsl"
-vec3 tsm_transmitted(vec3 P, vec2 uvC) {
+#ifndef TSM_GATHER_N
+#define TSM_GATHER_N 0
+#endif
+#if TSM_GATHER_N > 0
+uniform float u_tsm_map_mm;       // the TSM's width in mm (light space; a point light's at the subject)
+uniform sampler2D irradiance_map; // E of the lit points the gather reaches (eq. 28)
+
+// Gaussian i's light-space gather at C (c: C's TSM coordinates, dC its distance, sC its UV per mm).
+vec3 tsm_gathered(float v, vec2 c, float dC, vec2 uvC, vec2 sC, float zoneC, float k2) {
+    float sig = sqrt(0.5 * k2 * v);  // samples ~ exp(-lat^2 / (k2 v))
+    vec3 e = vec3(0.0);
+    for (int k = 0; k < TSM_GATHER_N; ++k) {
+        float rad = sig * sqrt(-2.0 * log(1.0 - (float(k) + 0.5) / float(TSM_GATHER_N)));
+        float th = float(k) * 2.39996323;  // the golden angle
+        vec2 o = rad * vec2(cos(th), sin(th));  // mm in the light's plane
+        vec4 t = texture(tsm_map, c + o / u_tsm_map_mm);
+        float m = finite_f32(dC - t.r);
+        vec2 duv = (uvC - t.gb) / sC;  // the surface blur's share: A in C's island only (as below)
+        float carried = (abs(uv_zone(zone_map, t.gb) - zoneC) < 0.5) ? exp(-max(dot(duv, duv) - dot(o, o), 0.0) / (k2 * v)) : 0.0;
+        float term = max(exp(-m * m / (k2 * v)) - carried, 0.0);
+        vec3 E = texture(irradiance_map, t.gb).rgb / clamp(t.a, 0.05, 1.0);
+        e += (t.a < 0.0) ? vec3(0.0) : term * E;
+    }
+    return e / float(TSM_GATHER_N);
+}
+#endif
+// N: C's (vertex) normal; facing away from the light, C is not lit whatever the TSM's depth says.
+vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
     vec4 p = u_tsm_matrix * vec4(P, 1.0);
     if (!(p.w > 0.0)) return vec3(0.0);
     vec2 c = p.xy / p.w * 0.5 + 0.5;
@@ -33,15 +67,19 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
     vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
     float k2 = (u_tsm_printed != 0) ? 1.0 : 2.0;  // eq. 33 as printed: exp(-x^2 / v)
     float zoneC = uv_zone(zone_map, uvC);
+    vec3 Lc = (u_tsm_kind == LIGHT_POINT) ? normalize(u_tsm_pos - P) : u_tsm_dir;
+    float away = smoothstep(0.0, 0.2, -dot(N, Lc) * inversesqrt(max(dot(N, N), 1e-30)));
     float f[MAX_GAUSSIANS];
     for (int i = 0; i < MAX_GAUSSIANS; ++i) f[i] = 0.0;
     bool any_k = false;
+    float g0 = 0.0;  // how far C is behind the first surface (0: C is lit itself)
     for (int y = -1; y <= 1; ++y) for (int x = -1; x <= 1; ++x) {
         vec4 t = texture(tsm_map, c + vec2(x, y) * texel);
         if (t.a < 0.0) continue;
         float m = finite_f32(dC - t.r);
         float cosA = clamp(t.a, 0.05, 1.0);
         float tol = u_tsm_gate_mm * (1.0 + 0.5 * sqrt(1.0 - cosA * cosA) / cosA);
+        g0 += max(smoothstep(tol, 2.0 * tol, m), m > 0.0 ? away : 0.0) / 9.0;
         float g = smoothstep(tol, 2.0 * tol, m);
         if (!(g > 0.0)) continue;
         any_k = true;
@@ -53,13 +91,23 @@ vec3 tsm_transmitted(vec3 P, vec2 uvC) {
             f[i] += g * max(exp(-m * m / (k2 * v)) - exp(-r * r / (k2 * v)), 0.0);
         }
     }
-    if (!any_k) return vec3(0.0);
+    if (!any_k && !(g0 > 0.0)) return vec3(0.0);
     vec4 there[MAX_GAUSSIANS];
     FETCH_BLURS(there, t0.gb, THERE_MASK)
     vec3 acc = vec3(0.0);
+#if TSM_GATHER_N > 0
+    float texel_mm = u_tsm_map_mm * texel.x;
+    vec2 sC = uv_per_mm(uvC);
+#endif
     for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_count) break;
-        if (((G_MASK >> i) & 1) != 0 && u_used[i] != 0) acc += u_w[i] * (f[i] / 9.0) * there[i].rgb;
+        if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0) continue;
+#if TSM_GATHER_N > 0
+        if (u_var[i] > 4.0 * texel_mm * texel_mm)  // a uniform branch
+            acc += u_w[i] * g0 * tsm_gathered(u_var[i], c, dC, uvC, sC, zoneC, k2);
+        else
+#endif
+            acc += u_w[i] * (f[i] / 9.0) * there[i].rgb;
     }
     return acc;
 }

@@ -282,6 +282,12 @@ class DeonSettings(_Model):
         1, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
     tsm_form: Literal["exact", "printed"] = Field(
         "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
+    tsm_gather: int = Field(
+        16, ge=0, le=64,
+        description="light-space samples per Gaussian wider than two TSM texels: the lit surfaces around the light "
+                    "ray are integrated, each sample at its own 3D distance, instead of eq. (33)'s one lit point on "
+                    "the ray, so an ear's folds lit from behind glow as in the ground truth (0: eq. 33 on the ray; "
+                    "issue 10 item 4, notes/fidelity.md)")
     energy_conservation: bool = True
     irradiance_size: int = Field(1024, ge=256, le=4096)
     irradiance_size_mode: Literal["fixed", "auto"] = Field(

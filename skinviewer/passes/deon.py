@@ -407,15 +407,18 @@ def bind_blurs(ec, prog) -> None:
     ec.uniforms(prog, u_count=len(ec.setting("deon.gaussians")), u_w=ws, u_var=var, u_used=used)
 
 
-def declare_tsm_read(r) -> None:
+def declare_tsm_read(r) -> dict[str, int]:
     """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
-    (island zones), the stretch map."""
+    (island zones), the stretch map, and for the gather the irradiance; returns its defines."""
     r.setting("deon.tsm_form")
     r.section(f"lights.{tsm_light_index(r)}", LIGHT_POSE_FIELDS)  # its light space
     r.input(TSM)
     r.input(gutter_resource(map_size(r)))  # island zones: whether the blur already carries A's light
     if r.setting("deon.stretch"):
         r.input(STRETCH)
+    if r.setting("deon.tsm_gather"):
+        r.input(IRRADIANCE)  # E of the lit points around the ray
+    return {"TSM_GATHER_N": int(r.setting("deon.tsm_gather"))}
 
 
 def bind_tsm_read(ec, prog) -> None:
@@ -431,6 +434,9 @@ def bind_tsm_read(ec, prog) -> None:
     s = ec.scene.mean_uv_per_mm
     ec.uniforms(prog, u_tsm_printed=ec.setting("deon.tsm_form") == "printed",
                 u_use_stretch=ec.has_input(STRETCH), u_uniform_stretch=(s, s))
+    if ec.setting("deon.tsm_gather"):
+        ec.set(prog, "u_tsm_map_mm", float(ls.extent * ec.scene.mm_per_unit))
+        ec.bind(prog, "irradiance_map", IRRADIANCE)
 
 
 def transmitted_size(r) -> int:
@@ -449,15 +455,16 @@ class TransmittedPass(Pass):
             return
         mask = used_mask(r)
         declare_blurs(r, mask)
-        declare_tsm_read(r)
+        tsm_defines = declare_tsm_read(r)
         n = transmitted_size(r)
-        declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), maps="p", GAUSSIAN_MASK=mask)
+        declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask,
+                       **tsm_defines)
 
     def execute(self, ec) -> None:
         prog = ec.program(shading_program(ec, "deon_transmitted"))
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        shade_dilated(ec, prog, transmitted_size(ec), TRANSMITTED, maps="p")
+        shade_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):
@@ -563,8 +570,7 @@ class DeonFinalPass(Pass):
         tsm = tsm_light_index(r) is not None and not summed  # summed: deon_transmitted has it
         if summed:
             r.input(DIFFUSE)
-        if tsm:
-            declare_tsm_read(r)
+        tsm_defines = declare_tsm_read(r) if tsm else {}
         if vis:
             r.input(VISIBILITY)
         mask = 0
@@ -577,7 +583,8 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
-        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), DEON_TEXTURE_SHADOWS=int(vis))
+        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
+                    DEON_TEXTURE_SHADOWS=int(vis))
         declare_view_mesh(r)
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:

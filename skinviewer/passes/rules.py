@@ -197,15 +197,58 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
     return out
 
 
+def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What the TSM's light-space gather (deon.tsm_gather) reaches beside the ray: for each vertex
+    whose normal faces away from the light, the vertices within ``radius_mm`` that face the light
+    from another sheet (normals more than 60 degrees apart: the same sheet's light is the surface
+    blur's, not the TSM's), as pairs (vertex index, pair's vertex k, distance in mm, lit area A cos
+    in mm^2). Shadows ignored (conservative). Cached per scene, light pose and radius."""
+    from scipy.spatial import cKDTree
+    cache = _mesh_rays(scene)
+    key = ("beside", pose.kind, tuple(pose.direction), tuple(pose.position), round(radius_mm, 3))
+    if key in cache:
+        return cache[key]
+    m = scene.mesh
+    p = m.positions.astype(np.float64)
+    n = m.normals.astype(np.float64)
+    if pose.kind == "point":
+        L = np.asarray(pose.position, np.float64) - p
+        L /= np.maximum(np.linalg.norm(L, axis=1, keepdims=True), 1e-12)
+    else:
+        d = np.asarray(pose.direction, np.float64)
+        L = np.broadcast_to(d / np.linalg.norm(d), p.shape)
+    nl = np.einsum("ij,ij->i", n, L)
+    back, lit = np.nonzero(nl < -0.05)[0], np.nonzero(nl > 0.05)[0]
+    back = back[::max(1, len(back) // MAX_RAYS)]
+    mm = scene.mm_per_unit
+    tri = p[m.indices.reshape(-1, 3)] * mm
+    area = np.zeros(len(p))
+    np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
+        np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
+    ks, qs = [], []
+    if len(back) and len(lit):
+        for k, js in enumerate(cKDTree(p[lit]).query_ball_point(p[back], radius_mm / mm)):
+            if js:
+                q = lit[np.asarray(js)]
+                q = q[n[q] @ n[back[k]] < 0.5]
+                ks.append(np.full(len(q), k)), qs.append(q)
+    k = np.concatenate(ks) if ks else np.zeros(0, np.int64)
+    q = np.concatenate(qs) if qs else np.zeros(0, np.int64)
+    out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, area[q] * nl[q])
+    cache[key] = out
+    return out
+
+
 def tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
     """Whether the TSM term can show: a vertex in view whose normal faces away from the light
     while the light enters the mesh within a thickness that transmits, estimated as in
-    deon_final.frag: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS.
+    lib/tsm_transmit.glsl: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS;
+    with deon.tsm_gather also sum_i w_i G(v_i, d) A cos over tissue of another sheet lit beside the ray.
     Memoised per light pose, profile and view (several passes ask every frame)."""
     memo = scene.__dict__.setdefault("_tsm_needed", {})
     key = (pose.kind, tuple(pose.direction), tuple(pose.position),
            tuple((g.variance, tuple(g.weights)) for g in gaussians),
-           settings.camera.model_dump_json(), settings.render.width, settings.render.height)
+           settings.camera.model_dump_json(), settings.render.width, settings.render.height, settings.deon.tsm_gather)
     if key not in memo:
         if len(memo) > 16:
             memo.clear()
@@ -218,8 +261,6 @@ def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
         idx, t, cos_a = thickness_toward(scene, pose)
     except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
         return True, ""
-    if len(idx) == 0:
-        return False, "no light behind a thin part"
     amp = np.zeros(len(idx))
     for i, g in enumerate(gaussians):
         if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
@@ -228,6 +269,16 @@ def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
         amp = np.maximum(amp, max(g.weights) * np.exp(-t * t / (2.0 * g.variance)) * np.minimum(t / (3.0 * sig), 1.0))
     amp *= cos_a
     cand = idx[amp > TSM_EPS]
+    if settings.deon.tsm_gather:  # lit tissue of another sheet beside the ray (lib/tsm_transmit.glsl)
+        wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
+                if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
+        reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
+        if reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
+            back, k, d, acos = lit_beside(scene, pose, reach)
+            a2 = np.zeros(len(back))
+            for v, w in wide:
+                np.add.at(a2, k, w * np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v) * acos)
+            cand = np.union1d(cand, back[a2 > TSM_EPS])
     if len(cand) == 0:
         return False, "no light behind a thin part"
     w, h = settings.render.width, settings.render.height

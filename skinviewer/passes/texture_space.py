@@ -156,7 +156,7 @@ class TexelSurfacePass(Pass):
     so per-frame texture-space shading is one full-screen draw (shade_dilated) instead of a
     raster of the whole mesh, whose small triangles each shade whole pixel blocks (issue 14). Depends
     on the mesh and the size only: runs once per scene/size. ``maps``: the ones its readers need
-    (d'Eon's transmitted light reads only the position)."""
+    (the light maps' gutter mask reads only the position)."""
 
     def __init__(self, name: str, size_of, maps: str = TEXEL_SURFACE_MAPS):
         self.name, self.size_of, self.maps = name, size_of, maps
