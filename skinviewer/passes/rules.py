@@ -162,6 +162,15 @@ def _mesh_rays(scene):
     return cache
 
 
+def _toward_light(pose, p: np.ndarray) -> np.ndarray:
+    """Unit directions from points ``p`` towards the light ``pose`` (LightSettings fields)."""
+    if pose.kind == "point":
+        L = np.asarray(pose.position, np.float64) - p
+        return L / np.maximum(np.linalg.norm(L, axis=1, keepdims=True), 1e-12)
+    d = np.asarray(pose.direction, np.float64)
+    return np.broadcast_to(d / np.linalg.norm(d), p.shape)
+
+
 def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
     """For each vertex whose normal faces away from the light (``pose``: LightSettings fields):
     (vertex index, thickness in mm to the lit surface along the ray to the light, cos at that entry
@@ -174,12 +183,7 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
     m = scene.mesh
     p = m.positions.astype(np.float64)
     n = m.normals.astype(np.float64)
-    if pose.kind == "point":
-        L = np.asarray(pose.position, np.float64) - p
-        L /= np.maximum(np.linalg.norm(L, axis=1, keepdims=True), 1e-12)
-    else:
-        d = np.asarray(pose.direction, np.float64)
-        L = np.broadcast_to(d / np.linalg.norm(d), p.shape)
+    L = _toward_light(pose, p)
     back = np.nonzero(np.einsum("ij,ij->i", n, L) < -0.05)[0]
     back = back[::max(1, len(back) // MAX_RAYS)]  # a sample: thin parts span many vertices
     out = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
@@ -211,12 +215,7 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     m = scene.mesh
     p = m.positions.astype(np.float64)
     n = m.normals.astype(np.float64)
-    if pose.kind == "point":
-        L = np.asarray(pose.position, np.float64) - p
-        L /= np.maximum(np.linalg.norm(L, axis=1, keepdims=True), 1e-12)
-    else:
-        d = np.asarray(pose.direction, np.float64)
-        L = np.broadcast_to(d / np.linalg.norm(d), p.shape)
+    L = _toward_light(pose, p)
     nl = np.einsum("ij,ij->i", n, L)
     back, lit = np.nonzero(nl < -0.05)[0], np.nonzero(nl > 0.05)[0]
     back = back[::max(1, len(back) // MAX_RAYS)]
