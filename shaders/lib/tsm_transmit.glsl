@@ -35,13 +35,15 @@
 uniform float u_tsm_map_mm;       // the TSM's width in mm (light space; a point light's at the subject)
 uniform sampler2D irradiance_map; // E of the lit points the gather reaches (eq. 28)
 
-// Gaussian i's light-space gather at C (c: C's TSM coordinates, dC its distance, sC its UV per mm).
-vec3 tsm_gathered(float v, vec2 c, float dC, vec2 uvC, vec2 sC, float zoneC, float k2) {
+// Gaussian i's light-space gather at C (c: C's TSM coordinates, dC its distance, sC its UV per mm); the
+// spiral turned by `turn` (pi/4 per Gaussian: each one's samples take other directions, so their
+// errors on an edge in the TSM do not add up).
+vec3 tsm_gathered(float v, float turn, vec2 c, float dC, vec2 uvC, vec2 sC, float zoneC, float k2) {
     float sig = sqrt(0.5 * k2 * v);  // samples ~ exp(-lat^2 / (k2 v))
     vec3 e = vec3(0.0);
     for (int k = 0; k < TSM_GATHER_N; ++k) {
         float rad = sig * sqrt(-2.0 * log(1.0 - (float(k) + 0.5) / float(TSM_GATHER_N)));
-        float th = float(k) * 2.39996323;  // the golden angle
+        float th = float(k) * 2.39996323 + turn;  // the golden angle
         vec2 o = rad * vec2(cos(th), sin(th));  // mm in the light's plane
         vec4 t = texture(tsm_map, c + o / u_tsm_map_mm);
         float m = finite_f32(dC - t.r);
@@ -104,7 +106,7 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
         if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0) continue;
 #if TSM_GATHER_N > 0
         if (u_var[i] > 4.0 * texel_mm * texel_mm)  // a uniform branch
-            acc += u_w[i] * g0 * tsm_gathered(u_var[i], c, dC, uvC, sC, zoneC, k2);
+            acc += u_w[i] * g0 * tsm_gathered(u_var[i], float(i) * 0.78539816, c, dC, uvC, sC, zoneC, k2);
         else
 #endif
             acc += u_w[i] * (f[i] / 9.0) * there[i].rgb;
