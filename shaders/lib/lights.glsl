@@ -29,6 +29,9 @@ uniform float u_shadow_tol;                 // eq. (7)
 uniform float u_shadow_texel[MAX_LIGHTS];   // world size of one shadow-map texel at the subject
 uniform int u_shadow_pcf;
 uniform int u_shadow_bilinear;              // shadow.pcf_filter (generic shaders; SHADOW_BILINEAR when specialised)
+#ifndef SHADOW_OFFSET_SLOPE
+#define SHADOW_OFFSET_SLOPE 0.5
+#endif
 
 // Direction to the light L and incident radiance Lc at world point P (eq. 9).
 vec3 light_incident(int i, vec3 P, out vec3 L) {
@@ -48,9 +51,13 @@ vec3 light_incident(int i, vec3 P, out vec3 L) {
     return Lc;
 }
 
-// The eq. (7) test against shadow-map texel q (clamped to the map).
-float shadow_test(sampler2D sm, ivec2 q, float z) {
-    q = clamp(q, ivec2(0), textureSize(sm, 0) - 1);
+// The eq. (7) test against shadow-map texel q (clamped to the map), the receiver's depth taken on its
+// plane at that texel's centre: z + g . (centre - c.xy) (receiver-plane depth bias: a tilted receiver
+// does not shadow itself across the PCF footprint).
+float shadow_test(sampler2D sm, ivec2 q, vec3 c, vec2 g) {
+    ivec2 size = textureSize(sm, 0);
+    float z = c.z + dot(g, (vec2(q) + 0.5) / vec2(size) - c.xy);
+    q = clamp(q, ivec2(0), size - 1);
     return (z - texelFetch(sm, q, 0).r > u_shadow_tol) ? 0.0 : 1.0;
 }
 
@@ -61,7 +68,7 @@ float pcf_weight(int k, int r, float t) {
     return (k == -r) ? 1.0 - t : ((k == r + 1) ? t : 1.0);
 }
 
-float shadow_compare(sampler2D sm, vec3 c) {
+float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
     // eq. (7): shadowed if d(P) - ds > tol; PCF averages the test over a (2 pcf + 1)^2-texel box.
     // shadow.pcf_filter = bilinear: the box slides with the lookup's sub-texel position (the
     // (2 pcf + 2)^2 texels it touches, edge ones weighted by their overlap), so visibility varies
@@ -76,14 +83,14 @@ float shadow_compare(sampler2D sm, vec3 c) {
     vec2 i0 = floor(f), t = f - i0;
     float lit = 0.0;
     for (int y = -SHADOW_PCF; y <= SHADOW_PCF + 1; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF + 1; ++x)
-        lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c.z);
+        lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
     return lit / float((2 * r + 1) * (2 * r + 1));
 #else
     vec2 texel = 1.0 / vec2(textureSize(sm, 0));
     float lit = 0.0, n = 0.0;
     for (int y = -SHADOW_PCF; y <= SHADOW_PCF; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF; ++x) {
         float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
-        lit += (c.z - ds > u_shadow_tol) ? 0.0 : 1.0;
+        lit += (c.z + dot(g, vec2(x, y) * texel) - ds > u_shadow_tol) ? 0.0 : 1.0;
         n += 1.0;
     }
     return lit / n;
@@ -97,7 +104,7 @@ float shadow_compare(sampler2D sm, vec3 c) {
         vec2 i0 = floor(f), t = f - i0;
         for (int y = -MAX_PCF; y <= MAX_PCF + 1; ++y) for (int x = -MAX_PCF; x <= MAX_PCF + 1; ++x) {
             if (x < -r || x > r + 1 || y < -r || y > r + 1) continue;
-            lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c.z);
+            lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
         }
         return lit / float((2 * r + 1) * (2 * r + 1));
     }
@@ -106,7 +113,7 @@ float shadow_compare(sampler2D sm, vec3 c) {
     for (int y = -MAX_PCF; y <= MAX_PCF; ++y) for (int x = -MAX_PCF; x <= MAX_PCF; ++x) {
         if (abs(x) > r || abs(y) > r) continue;
         float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
-        lit += (c.z - ds > u_shadow_tol) ? 0.0 : 1.0;
+        lit += (c.z + dot(g, vec2(x, y) * texel) - ds > u_shadow_tol) ? 0.0 : 1.0;
         n += 1.0;
     }
     return lit / n;
@@ -126,30 +133,43 @@ float shadow_factor(int i, vec3 P, vec3 Ng) {
     float nl = dot(Ng, L);
     vec3 n = nl >= 0.0 ? Ng : -Ng;
     float sin_l = sqrt(clamp(1.0 - nl * nl, 0.0, 1.0));
-    P += n * u_shadow_texel[i] * (0.5 + 1.5 * sin_l);
+    float h = u_shadow_texel[i];
+    P += n * h * (0.5 + SHADOW_OFFSET_SLOPE * sin_l);
     vec4 p = u_light_matrix[i] * vec4(P, 1.0);
     if (p.w <= 0.0) return 1.0;
     vec3 c = p.xyz / p.w * 0.5 + 0.5;  // z/w in [0,1] as stored (eq. 6)
     if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return 1.0;
+    // the receiver's depth gradient over the map (its tangent plane, two steps of one texel),
+    // bounded at a plane 85 degrees from facing the light
+    vec3 t1 = normalize(cross(n, abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0)));
+    vec3 t2 = cross(n, t1);
+    vec4 p1 = u_light_matrix[i] * vec4(P + t1 * h, 1.0), p2 = u_light_matrix[i] * vec4(P + t2 * h, 1.0);
+    vec3 d1 = p1.xyz / p1.w * 0.5 + 0.5 - c, d2 = p2.xyz / p2.w * 0.5 + 0.5 - c;
+    float det = d1.x * d2.y - d2.x * d1.y;
+    vec2 g = (abs(det) > 1e-20) ? vec2(d1.z * d2.y - d2.z * d1.y, d2.z * d1.x - d1.z * d2.x) / det : vec2(0.0);
+    vec4 pl = u_light_matrix[i] * vec4(P + L * h, 1.0);
+    float z_per_uv = abs(pl.z / pl.w * 0.5 + 0.5 - c.z) / max(length(d1.xy), 1e-20);  // depth per map unit at 45 deg
+    float gl = length(g);
+    if (gl > 11.4 * z_per_uv) g *= 11.4 * z_per_uv / gl;
 #ifdef LIGHTS_SPECIALISED
 #if (SHADOW_MASK & 1) != 0
-    if (i == 0) return shadow_compare(shadow_map0, c);
+    if (i == 0) return shadow_compare(shadow_map0, c, g);
 #endif
 #if (SHADOW_MASK & 2) != 0
-    if (i == 1) return shadow_compare(shadow_map1, c);
+    if (i == 1) return shadow_compare(shadow_map1, c, g);
 #endif
 #if (SHADOW_MASK & 4) != 0
-    if (i == 2) return shadow_compare(shadow_map2, c);
+    if (i == 2) return shadow_compare(shadow_map2, c, g);
 #endif
 #if (SHADOW_MASK & 8) != 0
-    if (i == 3) return shadow_compare(shadow_map3, c);
+    if (i == 3) return shadow_compare(shadow_map3, c, g);
 #endif
     return 1.0;
 #else
-    if (i == 0) return shadow_compare(shadow_map0, c);
-    if (i == 1) return shadow_compare(shadow_map1, c);
-    if (i == 2) return shadow_compare(shadow_map2, c);
-    return shadow_compare(shadow_map3, c);
+    if (i == 0) return shadow_compare(shadow_map0, c, g);
+    if (i == 1) return shadow_compare(shadow_map1, c, g);
+    if (i == 2) return shadow_compare(shadow_map2, c, g);
+    return shadow_compare(shadow_map3, c, g);
 #endif
 }
 #endif
