@@ -29,9 +29,7 @@ uniform float u_shadow_tol;                 // eq. (7)
 uniform float u_shadow_texel[MAX_LIGHTS];   // world size of one shadow-map texel at the subject
 uniform int u_shadow_pcf;
 uniform int u_shadow_bilinear;              // shadow.pcf_filter (generic shaders; SHADOW_BILINEAR when specialised)
-#ifndef SHADOW_OFFSET_SLOPE
-#define SHADOW_OFFSET_SLOPE 0.5
-#endif
+const float MAX_RECEIVER_SLOPE = 11.43;     // tan 85 deg: the steepest receiver plane followed
 
 // Direction to the light L and incident radiance Lc at world point P (eq. 9).
 vec3 light_incident(int i, vec3 P, out vec3 L) {
@@ -121,8 +119,10 @@ float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
 }
 
 // fac_shadow of eq. (10): 1 lit, 0 shadowed (fractional with PCF). Ng is the geometric normal:
-// the lookup point moves off the surface by about a shadow texel, more at grazing light (normal
-// offset, a slope-scaled complement of eq. 7's constant tol that removes self-shadowing acne).
+// the lookup point moves off the surface by half a shadow texel to one (normal offset), and each PCF
+// tap compares the map with the receiver's tangent plane at that tap (receiver-plane depth bias):
+// together they remove self-shadowing acne without the large offset that slid grazing lookups
+// sideways past an occluder's silhouette (light in creases).
 float shadow_factor(int i, vec3 P, vec3 Ng) {
 #ifdef LIGHTS_SPECIALISED
     if (((SHADOW_MASK >> i) & 1) == 0) return 1.0;
@@ -134,7 +134,7 @@ float shadow_factor(int i, vec3 P, vec3 Ng) {
     vec3 n = nl >= 0.0 ? Ng : -Ng;
     float sin_l = sqrt(clamp(1.0 - nl * nl, 0.0, 1.0));
     float h = u_shadow_texel[i];
-    P += n * h * (0.5 + SHADOW_OFFSET_SLOPE * sin_l);
+    P += n * h * (0.5 + 0.5 * sin_l);
     vec4 p = u_light_matrix[i] * vec4(P, 1.0);
     if (p.w <= 0.0) return 1.0;
     vec3 c = p.xyz / p.w * 0.5 + 0.5;  // z/w in [0,1] as stored (eq. 6)
@@ -148,9 +148,9 @@ float shadow_factor(int i, vec3 P, vec3 Ng) {
     float det = d1.x * d2.y - d2.x * d1.y;
     vec2 g = (abs(det) > 1e-20) ? vec2(d1.z * d2.y - d2.z * d1.y, d2.z * d1.x - d1.z * d2.x) / det : vec2(0.0);
     vec4 pl = u_light_matrix[i] * vec4(P + L * h, 1.0);
-    float z_per_uv = abs(pl.z / pl.w * 0.5 + 0.5 - c.z) / max(length(d1.xy), 1e-20);  // depth per map unit at 45 deg
+    float z_per_uv = abs(pl.z / pl.w * 0.5 + 0.5 - c.z) / max(length(d1.xy), 1e-20);  // a 45-degree plane's gradient
     float gl = length(g);
-    if (gl > 11.4 * z_per_uv) g *= 11.4 * z_per_uv / gl;
+    if (gl > MAX_RECEIVER_SLOPE * z_per_uv) g *= MAX_RECEIVER_SLOPE * z_per_uv / gl;
 #ifdef LIGHTS_SPECIALISED
 #if (SHADOW_MASK & 1) != 0
     if (i == 0) return shadow_compare(shadow_map0, c, g);
