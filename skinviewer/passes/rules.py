@@ -220,19 +220,19 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     back, lit = np.nonzero(nl < -0.05)[0], np.nonzero(nl > 0.05)[0]
     back = back[::max(1, len(back) // MAX_RAYS)]
     mm = scene.mm_per_unit
-    tri = p[m.indices.reshape(-1, 3)] * mm
-    area = np.zeros(len(p))
-    np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
-        np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
-    ks, qs = [], []
+    if "vertex_area" not in cache:  # a third of each incident triangle's area, mm^2
+        tri = p[m.indices.reshape(-1, 3)] * mm
+        area = np.zeros(len(p))
+        np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
+            np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
+        cache["vertex_area"] = area
+    area = cache["vertex_area"]
+    k = q = np.zeros(0, np.int64)
     if len(back) and len(lit):
-        for k, js in enumerate(cKDTree(p[lit]).query_ball_point(p[back], radius_mm / mm)):
-            if js:
-                q = lit[np.asarray(js)]
-                q = q[n[q] @ n[back[k]] < 0.5]
-                ks.append(np.full(len(q), k)), qs.append(q)
-    k = np.concatenate(ks) if ks else np.zeros(0, np.int64)
-    q = np.concatenate(qs) if qs else np.zeros(0, np.int64)
+        pairs = cKDTree(p[back]).sparse_distance_matrix(cKDTree(p[lit]), radius_mm / mm, output_type="ndarray")
+        k, q = pairs["i"].astype(np.int64), lit[pairs["j"]]
+        other = np.einsum("ij,ij->i", n[q], n[back[k]]) < 0.5
+        k, q = k[other], q[other]
     out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, area[q] * nl[q])
     cache[key] = out
     return out
