@@ -90,6 +90,9 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "deon.tsm_size": ("texels", "translucent shadow map (TSM) resolution, eq. 32. Texture-space cost"),
     "deon.tsm_form": ("", "how light through thin parts fades with thickness d (translucent shadow map, eq. 33). "
                       "exact: exp(-d²/(2 v_i)); printed: exp(-d²/v_i) as printed in seed 000"),
+    "deon.tsm_gather": ("samples", "light through folds: each wide Gaussian gathers this many lit points around the "
+                        "light ray from the TSM, each at its own 3D distance, so an ear's folds lit from behind glow "
+                        "(0: eq. 33's one lit point on the ray). Cost: once per light change"),
     "deon.energy_conservation": ("", "scale diffuse by 1 - rho_dt (eq. 30-31) at the light and the eye (eq. 28, 34)"),
     "deon.irradiance_size": ("texels", "resolution of the texture-space irradiance the blurs run on (eq. 28). "
                              "Texture-space cost ~ size² per blur pass"),
@@ -157,6 +160,7 @@ LABELS: dict[str, str] = {
     "deon.tsm_size": "translucency map",
     "deon.tsm_light": "translucency light",
     "deon.tsm_form": "translucency falloff",
+    "deon.tsm_gather": "fold gather",
     "deon.energy_conservation": "energy conservation",
     "deon.irradiance_size": "blur map size",
     "deon.reuse_irradiance_below_texels": "skip finest blur",
