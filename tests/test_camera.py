@@ -66,6 +66,21 @@ def test_point_light_inside_bounds_is_backed_off():
     assert np.all(np.isfinite(ls.gl_matrix))
 
 
+def test_point_light_frustum_narrows_to_the_vertices():
+    """A point light beside a mesh that fills only part of its bounding sphere (a 2 x 20 x 2 rod, radius
+    ~10): the frustum is the cone that holds the vertices, so its texels are finer, and every vertex
+    still projects inside the map."""
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-1.0, 1.0, (400, 3)) * np.array([1.0, 10.0, 1.0])
+    center, radius = np.zeros(3), float(np.linalg.norm(pts, axis=1).max())
+    light = _light("point", position=(0, 0, 12))
+    wide, tight = light_space(light, center, radius), light_space(light, center, radius, pts)
+    assert tight.extent < 0.7 * wide.extent
+    clip = np.hstack([pts, np.ones((len(pts), 1))]) @ tight.gl_matrix.T
+    ndc = clip[:, :3] / clip[:, 3:]
+    assert np.all(np.abs(ndc[:, :2]) <= 1.0) and np.abs(ndc[:, :2]).max() > 0.9
+
+
 def test_orbit_view_frames_the_mesh():
     cam = CameraSettings(yaw=30, pitch=10)
     v = orbit_view(cam, np.array([1.0, 2.0, 3.0]), 5.0, (200, 100))

@@ -18,7 +18,7 @@ from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes import rules
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
-from skinviewer.scene.camera import View, orbit_view
+from skinviewer.scene.camera import View, light_space, orbit_view
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
     UV_COVARIANCE_ATTR,
@@ -73,6 +73,17 @@ class GpuScene:
         tex.build_mipmaps()
         tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         return tex
+
+    def light_space(self, light):
+        """The shadow map's / TSM's light space of ``light`` (a LightSettings or its pose section),
+        fitted to this mesh (camera.light_space with its vertices), memoised per pose."""
+        memo = self.__dict__.setdefault("_light_spaces", {})
+        key = (light.kind, tuple(light.direction), tuple(light.position))
+        if key not in memo:
+            if len(memo) > 32:
+                memo.clear()
+            memo[key] = light_space(light, self.center, self.radius, self.mesh.positions)
+        return memo[key]
 
     @functools.cached_property
     def mean_uv_per_mm(self) -> float:

@@ -9,7 +9,7 @@ from skinviewer.core.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
 from skinviewer.core.graph import Reflection, TexSpec
 from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
-from skinviewer.scene.camera import gl_bytes, light_space
+from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.mesh import culls_back_faces
 
 LIGHT_POSE_FIELDS = ("kind", "direction", "position", "beam_radius", "cast_shadow", "enabled")
@@ -58,7 +58,7 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     mats = np.zeros((MAX_LIGHTS, 4, 4), np.float32)
     texels = np.zeros(MAX_LIGHTS, np.float32)
     for slot, (i, l) in enumerate(active):
-        ls = light_space(l, scene.center, scene.radius)
+        ls = scene.light_space(l)
         d = np.asarray(l.direction, dtype=np.float64)
         kind[slot] = LIGHT_KINDS[l.kind]
         radiance[slot] = np.asarray(l.color) * l.intensity

@@ -60,7 +60,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
-from skinviewer.scene.camera import gl_bytes, light_space
+from skinviewer.scene.camera import gl_bytes
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
@@ -110,7 +110,7 @@ def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
     ``prog``). Returns its LightSpace."""
     scene = ec.scene
     pose = ec.section(f"lights.{j}", LIGHT_POSE_FIELDS)
-    ls = light_space(pose, scene.center, scene.radius)
+    ls = scene.light_space(pose)
     d = np.asarray(pose.direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
     ec.uniforms(prog, **{matrix: gl_bytes(ls.gl_matrix)}, u_tsm_kind=LIGHT_KINDS[pose.kind],

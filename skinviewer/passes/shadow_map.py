@@ -4,7 +4,7 @@ from __future__ import annotations
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.common import LIGHT_POSE_FIELDS, shadow_resource
 from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
-from skinviewer.scene.camera import gl_bytes, light_space
+from skinviewer.scene.camera import gl_bytes
 
 
 class ShadowMapPass(Pass):
@@ -29,7 +29,7 @@ class ShadowMapPass(Pass):
     def execute(self, ec) -> None:
         i = self.light_index
         scene = ec.scene
-        ls = light_space(ec.section(f"lights.{i}", LIGHT_POSE_FIELDS), scene.center, scene.radius)
+        ls = scene.light_space(ec.section(f"lights.{i}", LIGHT_POSE_FIELDS))
         prog = ec.program("shadow_map")
         ec.set(prog, "u_light_matrix", gl_bytes(ls.gl_matrix))
         ec.draw_mesh(prog, shadow_resource(i), clear=(1.0, 1.0, 1.0, 1.0))

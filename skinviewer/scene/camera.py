@@ -135,8 +135,10 @@ class LightSpace:
         return ph[:, 2] / ph[:, 3]
 
 
-def light_space(light, center: np.ndarray, radius: float) -> LightSpace:
-    """Shadow-map matrices fitted to the mesh's bounding sphere (seed 000 §4.1.1 step 2)."""
+def light_space(light, center: np.ndarray, radius: float, points: np.ndarray | None = None) -> LightSpace:
+    """Shadow-map matrices fitted to the mesh's bounding sphere (seed 000 §4.1.1 step 2). A point
+    light's frustum narrows to the cone that holds ``points`` (the mesh's vertices) when that is
+    tighter than the sphere's: near the head the sphere's cone wastes most of the map."""
     center = np.asarray(center, dtype=np.float64)
     radius = max(float(radius), 1e-6)
     if light.kind == "point":
@@ -150,6 +152,10 @@ def light_space(light, center: np.ndarray, radius: float) -> LightSpace:
             pos = center + (pos - center) / dist * radius * 1e4
             dist = radius * 1e4
         fov = 2.0 * math.asin(min(radius / dist, 0.999))
+        if points is not None and len(points):
+            rel = np.asarray(points, np.float64) - pos
+            cos = rel @ ((center - pos) / dist) / np.maximum(np.linalg.norm(rel, axis=1), 1e-300)
+            fov = min(fov, 2.0 * math.acos(float(np.clip(cos.min(), -1.0, 1.0))) * 1.02)  # 2 % margin
         near, far = max(dist - radius, dist * 1e-3), dist + radius
         vp = light_view_rowvec(pos, center) @ light_projection_rowvec(fov, 1.0, 1.0, near, far)
         return LightSpace(vp, pos, False, 2.0 * dist * math.tan(fov / 2.0))

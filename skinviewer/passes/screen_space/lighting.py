@@ -18,7 +18,7 @@ from skinviewer.passes.common import (
 from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
 from skinviewer.physics import burley as B
 from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
-from skinviewer.scene.camera import gl_bytes, light_space
+from skinviewer.scene.camera import gl_bytes
 
 DIFFUSE = "ss_diffuse"
 SPECULAR = "ss_specular"
@@ -106,7 +106,7 @@ class ScreenLightingPass(Pass):
         inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
         active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if l.enabled]
         for slot, l in enumerate(active):
-            inv[slot] = np.linalg.inv(light_space(l, scene.center, scene.radius).gl_matrix).T  # column-major
+            inv[slot] = np.linalg.inv(scene.light_space(l).gl_matrix).T  # column-major
         model = self._burley_model(ec)
         if model:  # Burley: the shadow-map thickness in mm, S = 1/d per channel (spec §5.4)
             S = B.profile_of_section(ec.section("burley", B.PROFILE_FIELDS)).S
