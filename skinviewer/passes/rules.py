@@ -19,6 +19,7 @@ from skinviewer.scene.camera import orbit_view
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
 MAX_RAYS = 4096     # rays cast per light pose for the TSM rule (Embree via trimesh)
+MAX_LIT = 32768     # lit vertices the rule's gather estimate pairs with them (rules.lit_beside)
 MIN_AUTO_SIZE = 64  # smallest irradiance map "auto" chooses
 HYSTERESIS = 1.25   # "auto" changes size only when the wanted size leaves [c / 2 / H, c * H]
 LOD_TRIANGLES_PER_PX = 4.0  # a level of detail keeps at least this many triangles per pixel of the head
@@ -219,6 +220,8 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     nl = np.einsum("ij,ij->i", n, L)
     back, lit = np.nonzero(nl < -0.05)[0], np.nonzero(nl > 0.05)[0]
     back = back[::max(1, len(back) // MAX_RAYS)]
+    stride = max(1, len(lit) // MAX_LIT)  # a dense scan: a sample of the lit vertices, each for `stride`
+    lit = lit[::stride]
     mm = scene.mm_per_unit
     if "vertex_area" not in cache:  # a third of each incident triangle's area, mm^2
         tri = p[m.indices.reshape(-1, 3)] * mm
@@ -233,7 +236,7 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
         k, q = pairs["i"].astype(np.int64), lit[pairs["j"]]
         other = np.einsum("ij,ij->i", n[q], n[back[k]]) < 0.5
         k, q = k[other], q[other]
-    out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, area[q] * nl[q])
+    out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, stride * area[q] * nl[q])
     cache[key] = out
     return out
 
