@@ -72,6 +72,11 @@ def test_likely_variants_are_one_toggle_away():
     v = likely_final_variants({"GAUSSIAN_MASK": 0b11, "DEON_TSM": 1, "LIGHT_COUNT": 2})
     assert {"GAUSSIAN_MASK": 0b10, "DEON_TSM": 1, "LIGHT_COUNT": 2} in v
     assert {"GAUSSIAN_MASK": 0b11, "DEON_TSM": 0, "LIGHT_COUNT": 2} in v
+    # the TSM's gather define goes with the TSM: off drops it, on takes deon.tsm_gather (final_defines)
+    assert {"GAUSSIAN_MASK": 0b11, "DEON_TSM": 0, "LIGHT_COUNT": 2} in likely_final_variants(
+        {"GAUSSIAN_MASK": 0b11, "DEON_TSM": 1, "TSM_GATHER_N": 16, "LIGHT_COUNT": 2}, 16)
+    assert {"GAUSSIAN_MASK": 0b11, "DEON_TSM": 1, "TSM_GATHER_N": 16} in likely_final_variants(
+        {"GAUSSIAN_MASK": 0b11, "DEON_TSM": 0}, 16)
 
 
 def test_tsm_pruned_on_a_plane_kept_behind_an_ear(renderer):

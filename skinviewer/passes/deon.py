@@ -498,14 +498,19 @@ class DiffuseSumPass(Pass):
         ec.draw_fullscreen(prog, DIFFUSE)
 
 
-def likely_final_variants(defines: dict) -> list[dict]:
+def likely_final_variants(defines: dict, gather: int | None = None) -> list[dict]:
     """The deon_final variants one toggle away from ``defines`` (a weight to/from zero, the TSM
-    on/off): what the viewer compiles while idle so a toggle does not stall."""
+    on/off): what the viewer compiles while idle so a toggle does not stall. ``gather``:
+    deon.tsm_gather, the TSM_GATHER_N a variant with the TSM on is declared with (final_defines)."""
     out = []
     mask, n = defines.get("GAUSSIAN_MASK", 0), MAX_GAUSSIANS
     for i in range(n):
         out.append({**defines, "GAUSSIAN_MASK": mask ^ (1 << i)})
-    out.append({**defines, "DEON_TSM": 1 - defines.get("DEON_TSM", 0)})
+    flipped = {k: v for k, v in defines.items() if k != "TSM_GATHER_N"}
+    flipped["DEON_TSM"] = 1 - defines.get("DEON_TSM", 0)
+    if flipped["DEON_TSM"] and gather is not None:
+        flipped["TSM_GATHER_N"] = int(gather)
+    out.append(flipped)
     return out
 
 
@@ -590,7 +595,7 @@ class DeonFinalPass(Pass):
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
         return [("deon_final", v) for n, d in r.programs if n == "deon_final"
-                for v in likely_final_variants(dict(d))]
+                for v in likely_final_variants(dict(d), r.peek("deon.tsm_gather"))]
 
     @staticmethod
     def dark(ec) -> bool:
