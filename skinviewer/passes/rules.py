@@ -172,6 +172,17 @@ def _toward_light(pose, p: np.ndarray) -> np.ndarray:
     return np.broadcast_to(d / np.linalg.norm(d), p.shape)
 
 
+def _facing(scene, pose):
+    """The mesh's positions, normals, directions to the light and N.L, and the vertices whose normal
+    faces away from the light (N.L < -0.05; a sample of MAX_RAYS: thin parts span many vertices)."""
+    p = scene.mesh.positions.astype(np.float64)
+    n = scene.mesh.normals.astype(np.float64)
+    L = _toward_light(pose, p)
+    nl = np.einsum("ij,ij->i", n, L)
+    back = np.nonzero(nl < -0.05)[0]
+    return p, n, L, nl, back[::max(1, len(back) // MAX_RAYS)]
+
+
 def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
     """For each vertex whose normal faces away from the light (``pose``: LightSettings fields):
     (vertex index, thickness in mm to the lit surface along the ray to the light, cos at that entry
@@ -181,12 +192,7 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
     if key in cache:
         return cache[key]
     sc, face_normals = cache["ray"]
-    m = scene.mesh
-    p = m.positions.astype(np.float64)
-    n = m.normals.astype(np.float64)
-    L = _toward_light(pose, p)
-    back = np.nonzero(np.einsum("ij,ij->i", n, L) < -0.05)[0]
-    back = back[::max(1, len(back) // MAX_RAYS)]  # a sample: thin parts span many vertices
+    p, _, L, _, back = _facing(scene, pose)
     out = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
     if len(back):
         eps = 1e-4 * scene.radius
@@ -214,12 +220,8 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     if key in cache:
         return cache[key]
     m = scene.mesh
-    p = m.positions.astype(np.float64)
-    n = m.normals.astype(np.float64)
-    L = _toward_light(pose, p)
-    nl = np.einsum("ij,ij->i", n, L)
-    back, lit = np.nonzero(nl < -0.05)[0], np.nonzero(nl > 0.05)[0]
-    back = back[::max(1, len(back) // MAX_RAYS)]
+    p, n, _, nl, back = _facing(scene, pose)
+    lit = np.nonzero(nl > 0.05)[0]
     stride = max(1, len(lit) // MAX_LIT)  # a dense scan: a sample of the lit vertices, each for `stride`
     lit = lit[::stride]
     mm = scene.mm_per_unit
