@@ -78,7 +78,7 @@ _REFERENCES: dict = {}  # (judge, E's bytes) -> reference: the irradiance is the
 
 
 def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = None, dump: str | None = None,
-          tissue_only: bool = False, surface_paths: bool = False) -> dict:
+          tissue_only: bool = False, surface_paths: bool = False, shortcuts_add: bool = False) -> dict:
     import hashlib
 
     from scipy import ndimage
@@ -100,14 +100,14 @@ def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = Non
     tri, pos, area = texel_surface(m.positions, m.uvs, m.indices, n, r.scene.gpu.mm_per_unit)
     cov = tri >= 0
     V, W = [x.variance for x in s.deon.gaussians], [x.weights for x in s.deon.gaussians]
-    judge = "tissue" if tissue_only else "paths" if surface_paths else "3d"
+    judge = "tissue" if tissue_only else "sum" if shortcuts_add else "paths" if surface_paths else "3d"
     key = (judge, n, hashlib.blake2b(E.tobytes() + repr((V, W)).encode(), digest_size=16).digest())
     lit = cov & (E.max(-1) > 0)
     if key in _REFERENCES:
         ref = _REFERENCES[key]
-    elif surface_paths:  # only pairs joined along the surface: no shortcut through air or thin tissue
+    elif surface_paths or shortcuts_add:  # normalised by the pairs joined along the surface only
         paths = SurfacePaths(m.positions, m.indices, tri, pos, r.scene.gpu.mm_per_unit, 3.5 * float(np.sqrt(max(V))))
-        ref = surface_diffusion_reference(E, pos, area, cov, V, W, surface_paths=paths)
+        ref = surface_diffusion_reference(E, pos, area, cov, V, W, surface_paths=paths, shortcuts_add=shortcuts_add)
     elif not tissue_only:
         ref = surface_diffusion_reference(E, pos, area, cov, V, W)
     else:  # a reference that does not couple points across air (contacts, cavities)

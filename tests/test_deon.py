@@ -204,8 +204,11 @@ def test_stretch_per_gaussian(renderer):
     v0, v1 = _second_moments(D0, dx, dy, 2.8), _second_moments(D1, dx, dy, 2.8)
     assert np.allclose(v0, v1, rtol=0.02), (v0, v1)
 
-    head = _deon("head", **{"deon.irradiance_size": 256, "deon.fold_below_texels": 0.0})  # folded: blur_5
-    renderer.render(head)                                           # would start from the raw stretch
+    # folded, blur_5 would start from the raw stretch; summed over the surface (deon_surface_gather, a
+    # step under deon.surface_gather_below_texels texels) it reads no stretch chain at all
+    head = _deon("head", **{"deon.irradiance_size": 256, "deon.fold_below_texels": 0.0,
+                            "deon.surface_gather_below_texels": 0.0})
+    renderer.render(head)
     a = renderer.read(head, "blur_5")
     head2 = with_values(head, {"deon.stretch_per_gaussian": True})
     renderer.render(head2)

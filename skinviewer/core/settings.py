@@ -298,6 +298,14 @@ class DeonSettings(_Model):
         description="a later blur whose sigma increment is under this many (mean) texels is folded: blur_i = "
                     "blur_(i-1), the next blur adds its variance exactly (0: off). 1 by the truth bench: lower "
                     "RMS, p99 and DSSIM than 0 at 256-1024^2 maps, and fewer blurs (notes/perf.md)")
+    surface_gather_below_texels: float = Field(
+        2.0, ge=0.0, le=3.0,
+        description="a blur step whose sigma is at most this many (mean) texels is a direct sum over the surface "
+                    "with 3D distances (eq. 21 at texel resolution: the texels around it, then 2 x 2 blocks out to 12 "
+                    "texels) instead of separable taps that assume the surface flat and the stretch constant over "
+                    "the kernel: closer to the truth where the atlas is coarse or uneven, ~130 ms more per step and "
+                    "light change at 512^2 on llvmpipe (0: every step separable; 3: also the next, wider step; "
+                    "issue 10 item 1, notes/fidelity.md)")
     skip_gutters: bool = Field(
         False, description="blurs shade only island texels and the ring of gutter texels a blur can read "
                            "(early depth test on a mask; images identical): for GPUs with early-Z, no gain on llvmpipe")

@@ -9,7 +9,9 @@ Graph (resources in quotes):
     rho_dt_lut          "rho_dt_lut"       specular.f0, specular.rho_s        (eq. 30-31)
     deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
     deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
-    deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26)
+    deon_gather_surface "deon_gather_surface" mesh, size, stretch, seams     (points and areas per texel)
+    deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26; narrow
+                                           steps: a direct sum over the surface, eq. 21)
     deon_transmitted    "deon_transmitted" TSM, blurs, weights                (eq. 33)
     deon_combine        "deon_diffuse"     weights, blurs, transmitted        (eq. 34's sum)
     deon_final          "lit"              camera, mix, specular, ...         (eq. 34-35)
@@ -44,6 +46,8 @@ from skinviewer.passes.texture_space import (
     declare_shaded,
     declare_unwrapped,
     gutter_resource,
+    dilate,
+    rasterize_unwrapped,
     seam_resource,
     shade_dilated,
     shading_program,
@@ -60,6 +64,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
+from skinviewer.physics.surface_gather import GATHER_BLOCKS, SHORTCUT_RATIO
 from skinviewer.scene.camera import gl_bytes
 
 STRETCH = "deon_stretch"
@@ -69,6 +74,7 @@ TRANSMITTED = "deon_transmitted"  # eq. 33 in texture space (TransmittedPass)
 VISIBILITY = "deon_visibility"  # fac_shadow (eq. 10) per light slot and texel (deon.specular_shadows)
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
+GATHER_SURFACE = "deon_gather_surface"  # per texel: point on the surface (mm), area (mm^2)
 
 
 def map_size(r) -> int:
@@ -148,6 +154,66 @@ class StretchPass(Pass):
         prog = ec.program("deon_stretch", **stretch_defines(ec))
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
         unwrap_dilated(ec, prog, n, self.resource)
+
+
+class GatherSurfacePass(Pass):
+    """What the direct gather of narrow blur steps sums over (shaders/deon_gather_surface.frag): per
+    texel its point on the surface in mm and the area it stands for, with seam-filled gutters
+    continuing across seams and area past mesh borders that holds no light. Depends on the mesh,
+    mm_per_unit, the stretch map and the seam map only: once per scene and size."""
+    name = "deon_gather_surface"
+
+    def reflect(self, r: Reflection) -> None:
+        if not gather_used(r):
+            return
+        n = map_size(r)
+        r.input(gutter_resource(n))
+        if r.setting("deon.stretch"):
+            r.input(STRETCH)
+        seam = r.setting("scene.seam_aware")
+        if seam:
+            r.input(seam_resource(n))
+        r.program("uv_position")
+        r.program("dilate")
+        r.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
+        r.output(GATHER_SURFACE, TexSpec((n, n), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        n = map_size(ec)
+        raw = rasterize_unwrapped(ec, ec.program("uv_position"), n)
+        pos = ec.scratch(TexSpec((n, n), 4, "f4"))  # dilated, so bilinear reads across seams stay on the surface
+        dilate(ec, raw, gutter_resource(n), pos)
+        seam = ec.has_input(seam_resource(n))
+        prog = ec.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
+        stretch = ec.has_input(STRETCH)
+        s = ec.scene.mean_uv_per_mm
+        ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(s, s), u_mm=float(ec.scene.mm_per_unit))
+        ec.textures(prog, positions=pos, gutter=gutter_resource(n))
+        if stretch:
+            ec.bind(prog, "stretch_map", STRETCH)
+        if seam:
+            ec.bind(prog, "seam_map", seam_resource(n))
+        ec.draw_fullscreen(prog, GATHER_SURFACE)
+
+
+def gathered(r, step: BlurStep) -> bool:
+    """Whether blur step ``step`` is a direct sum over the surface (deon_surface_gather.frag): its
+    sigma is at most deon.surface_gather_below_texels mean texels (issue 10 item 1)."""
+    limit = r.setting("deon.surface_gather_below_texels")
+    return (not step.reused and limit > 0.0
+            and np.sqrt(step.increment) <= limit * mean_texel_mm(r.scene, map_size(r)))
+
+
+def gather_used(r) -> bool:
+    """Some blur step gathers (gathered(); peeked: whether the gather surface exists is shape, its
+    content depends on the mesh, the size, the stretch and the seams only)."""
+    limit = r.peek("deon.surface_gather_below_texels")  # shape only: the map's content depends on neither
+    if limit <= 0.0 or r.scene is None:
+        return False
+    texel = mean_texel_mm(r.scene, map_size(r))
+    variances = [r.peek(f"deon.gaussians.{k}.variance") for k in range(r.peek("deon.gaussians.#"))]
+    plan = blur_plan_texels(variances, r.peek("deon.reuse_irradiance_below_texels"), texel, r.peek("deon.fold_below_texels"))
+    return any(not st.reused and np.sqrt(st.increment) <= limit * texel for st in plan)
 
 
 class TsmPass(Pass):
@@ -271,6 +337,9 @@ class GaussianBlurPass(Pass):
                    f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
             return
         n = map_size(r)
+        if self.chain == "irradiance" and gathered(r, step):
+            self._reflect_gather(r, step, n)
+            return
         stretch = self._stretch_input(r, step)
         if stretch:
             r.setting("deon.stretch_shear")
@@ -288,6 +357,46 @@ class GaussianBlurPass(Pass):
         if seam:
             r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
+
+    def _reflect_gather(self, r, step, n: int) -> None:
+        """A narrow step as a direct sum over the surface: the gather surface, the step's input
+        (seam-filled first with scene.seam_aware) and the island zones."""
+        seam = r.setting("scene.seam_aware")
+        r.input(step.source)
+        r.input(gutter_resource(n))
+        r.input(GATHER_SURFACE)
+        if r.setting("deon.stretch"):
+            r.input(STRETCH)
+        if seam:
+            r.input(seam_resource(n))
+            r.program("seam_fill")
+        r.program("deon_gather_blocks")
+        r.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
+        r.output(self._output(), self._spec(n))
+
+    def _execute_gather(self, ec, step, n: int) -> None:
+        source = step.source
+        if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
+            fill = ec.program("seam_fill")
+            ec.textures(fill, source=source, seam_map=seam_resource(n))
+            ec.set(fill, "u_past_border_dark", True)
+            source = ec.scratch(self._spec(n))
+            ec.draw_fullscreen(fill, source)
+        h = (n + 1) // 2
+        blocks = [ec.scratch(TexSpec((h, h), 4, "f4", filter="nearest")) for _ in range(4)]
+        prog = ec.program("deon_gather_blocks")
+        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n))
+        ec.draw_fullscreen(prog, *blocks)
+        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
+        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n),
+                    blocks_e=blocks[0], blocks_p=blocks[1], blocks_z=blocks[2], blocks_l=blocks[3])
+        ec.set(prog, "u_var", float(step.increment))
+        stretch = ec.has_input(STRETCH)
+        sc = ec.scene.mean_uv_per_mm
+        ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
+        if stretch:
+            ec.bind(prog, "stretch_map", STRETCH)
+        ec.draw_fullscreen(prog, self._output())
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -311,6 +420,9 @@ class GaussianBlurPass(Pass):
     def execute(self, ec) -> None:
         n = map_size(ec)
         step = self._step(ec)
+        if self.chain == "irradiance" and gathered(ec, step):
+            self._execute_gather(ec, step, n)
+            return
         stretch = self._stretch_input(ec, step)
         tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
         narrow = self._narrow(ec, step, stretch, n)

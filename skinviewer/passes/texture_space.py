@@ -250,7 +250,8 @@ def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
     Blur taps that leave their island read the source there, so they continue on the surface instead
     of repeating the island's edge texel (scene/texels.seam_indirection), and read no light past the
     surface's end; from a texel with A = 1 a tap in another island's zone is past that end too (it
-    counts as no light, not as a dropped tap)."""
+    counts as no light, not as a dropped tap). Across a seam A = 1 marks a point snapped to the other
+    island's nearest texel (the direct gather then continues this side's surface instead)."""
     size = covered.shape[0]
     mm = float(scene.mm_per_unit)
     texel_mm = 1.0 / (size * max(scene.mean_uv_per_mm, 1e-12))
@@ -268,6 +269,9 @@ def seam_map(covered: np.ndarray, scene, texel_pos: np.ndarray) -> np.ndarray:
     out[beyond & covered, 3] = 1.0
     out[mapped, :2] = coords[mapped]
     out[mapped, 2] = 1.0
+    # A = 1 across a seam where the point fell outside the other island's texel centres and was snapped
+    # to its nearest covered texel (whole coordinates): that texel's point is not the one it stands for
+    out[mapped & np.all(coords == np.round(coords), axis=-1), 3] = 1.0
     return out
 
 

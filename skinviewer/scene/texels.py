@@ -59,7 +59,7 @@ def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
 
 def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutoff_sigmas: float = 3.5,
                                 block: int = 8192, normals=None, air_sin: float = 0.5,
-                                surface_paths: "SurfacePaths | None" = None) -> np.ndarray:
+                                surface_paths: "SurfacePaths | None" = None, shortcuts_add: bool = False) -> np.ndarray:
     """D(x) = sum_i w_i [sum_y E(y) A(y) G(v_i, |x - y|)] / [sum_y A(y) G(v_i, |x - y|)] over covered
     texels x, y (3D distance in mm). The normalisation makes each Gaussian a weighted mean of E, so a
     Gaussian narrower than a texel (skin's first, sigma 0.08 mm) is the identity instead of a
@@ -71,7 +71,11 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
     tangent plane (a deep cavity). Mild concavities and thin parts (the other point behind) still couple.
     ``surface_paths`` (SurfacePaths of the same texels): only pairs joined by a path along the surface
     not much longer than their 3D distance couple: what a texture-space blur computes, without the
-    shortcuts through air or through thin tissue (lips, lids, ears: the TSM's part, eq. 32-33)."""
+    shortcuts through air or through thin tissue (lips, lids, ears: the TSM's part, eq. 32-33).
+    ``shortcuts_add`` (with ``surface_paths``): the other pairs still add their light, but only the
+    pairs joined along the surface normalise: the normalisation corrects the sampling of x's own
+    sheet, and light reaching it across a contact or a fold adds to it as in the ground truth's sum
+    over the whole surface (eq. 21), instead of being averaged with it."""
     v = np.asarray(variances, np.float64)
     w = np.asarray(weights, np.float64).reshape(len(v), 3)
     idx = np.flatnonzero(covered.ravel())
@@ -95,11 +99,13 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
                 facing = (Nrm[s + i] * Nrm[j]).sum(1) < 0.0  # opposite walls of a gap
                 air = ((up_i > 0.0) & facing) | (up_i > air_sin * r) | (up_j > air_sin * r)
                 i, j, r = i[~air], j[~air], r[~air]
+            along = np.ones(len(i), bool)
             if surface_paths is not None:
-                keep = surface_paths.connected(idx[s + i], idx[j], r)
-                i, j, r = i[keep], j[keep], r[keep]
+                along = surface_paths.connected(idx[s + i], idx[j], r)
+                if not shortcuts_add:
+                    i, j, r, along = i[along], j[along], r[along], along[along]
             k = np.exp(-r * r / (2 * vi))
-            den = np.bincount(i, k * a[j], minlength=m)
+            den = np.bincount(i, k * a[j] * along, minlength=m)
             for c in range(3):
                 if wi[c] != 0:
                     out[s:s + m, c] += wi[c] * np.bincount(i, k * src[j, c], minlength=m) / np.maximum(den, 1e-300)

@@ -8,6 +8,7 @@ from skinviewer.passes.deon import (
     DeonFinalPass,
     DiffuseSumPass,
     TransmittedPass,
+    GatherSurfacePass,
     GaussianBlurPass,
     IrradiancePass,
     StretchPass,
@@ -27,7 +28,7 @@ def build():
             + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size),
                GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TexelSurfacePass("deon_texel_surface", map_size),
-               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass()]
+               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass(), GatherSurfacePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
             + [TransmittedPass(), DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])

@@ -101,6 +101,9 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
                                              "reuses the irradiance itself"),
     "deon.irradiance_size_mode": ("", "fixed: the blur map size above; auto: sized from the head's size on screen "
                                   "(about a texel per pixel, the size above at most, with hysteresis)"),
+    "deon.surface_gather_below_texels": ("texels", "a blur step at most this many texels wide is summed over the "
+                                         "surface with 3D distances (closer to the truth where the atlas is "
+                                         "coarse or uneven; slower); 0: every blur separable"),
     "deon.fold_below_texels": ("texels", "skip a later blur whose width step is under this many texels; the next "
                                "blur adds its width exactly (0: off). 1: closer to the ground truth than 0"),
     "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a blur can read "
@@ -165,6 +168,7 @@ LABELS: dict[str, str] = {
     "deon.irradiance_size": "blur map size",
     "deon.reuse_irradiance_below_texels": "skip finest blur",
     "deon.irradiance_size_mode": "blur map sizing",
+    "deon.surface_gather_below_texels": "gather narrow blurs",
     "deon.fold_below_texels": "fold narrow blurs",
     "deon.subpixel_kernel_px": "skip blur under",
     "deon.combine_blurs": "sum in texture space",

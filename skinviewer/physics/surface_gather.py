@@ -1,0 +1,133 @@
+"""The direct gather of a narrow d'Eon blur step (issue 10 item 1), in numpy: the twin of
+shaders/deon_gather_blocks.frag + deon_surface_gather.frag, which must agree with it.
+
+A blur step of variance v is seed 000 eq. 21's convolution with 3D distances, summed at texel
+resolution over the texels of x's UV island (and its seam-filled gutter):
+
+    out(x) = sum_y G(v, |P(x) - P(y)|) E(y) A(y) / sum_y G(v, |P(x) - P(y)|) A(y)
+
+y: the 36 texels of the 3 x 3 blocks of 2 x 2 texels around x's block, then 2 x 2 blocks out to
+``blocks`` blocks, each as one Gaussian widened by its own spread s^2 (moment-matched, as the ground
+truth's clusters): (v / (v + s^2)) exp(-r^2 / 2 (v + s^2)), with r to the block's area mean point for
+its area and thickness, and to its light's mean point (weight E.r + E.g + E.b) for its light, so a lit
+texel beside dark ones stays where it is.
+
+A texel nearer in 3D than SHORTCUT_RATIO x its offset along the surface (from the stretch at x: eq. 27
+with shear) is reached across air or a fold (lips, lids, ear folds touching), not along x's sheet: it
+is left out, as a texture-space blur leaves it (light through thin parts is the TSM's, eq. 32-33).
+Averaged in, it darkened a lit lip by its shadowed neighbour; summed as the ground truth's 3D
+distances do, it made texels brighter than any input (energy from nowhere where both are lit).
+
+Inputs per texel: E (n, n, 4) RGB light and A thickness; surface (n, n, 4) the point (mm) and area
+(mm^2; 0 not surface; < 0 past a mesh border: area without light beyond PAST_BORDER_SHARE of the
+seam-filled value); zone (n, n) the island zone (gutter_table's |B|); stretch (n, n, 3) UV per mm
+along u and v and the shear cosine (deon_stretch).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+PAST_BORDER_SHARE = 0.5  # lib/gather_surface.glsl
+SHORTCUT_RATIO = 0.5  # a texel nearer than this x its offset along the surface: across air or a fold
+GATHER_BLOCKS = 5  # the outer reach in 2 x 2 blocks: 2 * 5 + 2 = 12 texels (3.5 sigma at 3.4 texels)
+
+
+def _light(E: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """E with its RGB scaled past a border (w < 0)."""
+    out = np.array(E, np.float64)
+    out[..., :3] *= np.where(w < 0, PAST_BORDER_SHARE, 1.0)[..., None]
+    return out
+
+
+def gather_blocks(E, surface, zone):
+    """deon_gather_blocks.frag: per 2 x 2 block (h = ceil(n / 2)): summed E A (4), the area's mean
+    point, area and spread, the light's mean point and spread, and the zone (0: none or mixed)."""
+    n = E.shape[0]
+    h = (n + 1) // 2
+    idx = np.minimum(np.arange(2 * h), n - 1)
+    S = np.asarray(surface, np.float64)[idx][:, idx]
+    L = _light(np.asarray(E, np.float64), np.asarray(surface)[..., 3])[idx][:, idx]
+    Z = np.asarray(zone, np.float64)[idx][:, idx]
+
+    def quads(x):  # (2h, 2h, ...) -> (h, h, 4, ...): the block's texels in order k = (k & 1, k >> 1)
+        x = x.reshape(h, 2, h, 2, *x.shape[2:])
+        return np.stack([x[:, 0, :, 0], x[:, 0, :, 1], x[:, 1, :, 0], x[:, 1, :, 1]], 2)
+
+    S, L, Z = quads(S), quads(L), quads(Z)
+    a = np.abs(S[..., 3])
+    on = a > 0
+    light = (a[..., None] * L).sum(2)
+    light[..., :3] = (a[..., None] * L[..., :3]).sum(2)
+    origin = S[:, :, 0, :3]
+    d = S[..., :3] - origin[:, :, None]
+    area = a.sum(2)
+    mean = (a[..., None] * d).sum(2) / np.maximum(area, 1e-30)[..., None]
+    spread = np.maximum(0.5 * ((a * (d * d).sum(-1)).sum(2) / np.maximum(area, 1e-30) - (mean * mean).sum(-1)), 0.0)
+    lw = (a[..., None] * L[..., :3]).sum(-1)
+    lsum = lw.sum(2)
+    lmean = (lw[..., None] * d).sum(2) / np.maximum(lsum, 1e-30)[..., None]
+    lspread = np.maximum(0.5 * ((lw * (d * d).sum(-1)).sum(2) / np.maximum(lsum, 1e-30) - (lmean * lmean).sum(-1)), 0.0)
+    has = lsum > 0
+    lmean = np.where(has[..., None], lmean, mean)
+    lspread = np.where(has, lspread, spread)
+    hi, lo = np.where(on, Z, -np.inf).max(2), np.where(on, Z, np.inf).min(2)
+    bz = np.where(on.any(2) & (hi == lo), hi, 0.0)
+    return {"light": light, "point": origin + mean, "area": area, "spread": spread,
+            "lit_point": origin + lmean, "lit_spread": lspread, "zone": bz}
+
+
+def surface_gather(E, surface, zone, stretch, v: float, blocks: int = GATHER_BLOCKS) -> np.ndarray:
+    """deon_surface_gather.frag at every texel (n, n, 4); v the step's variance (mm^2)."""
+    E = np.asarray(E, np.float64)
+    st = np.asarray(stretch, np.float64)
+    S = np.asarray(surface, np.float64)
+    zone = np.asarray(zone, np.float64)
+    n = E.shape[0]
+    v = max(float(v), 1e-30)
+    L = _light(E, S[..., 3])
+    x, z0 = S[..., :3], zone
+    yy, xx = np.mgrid[0:n, 0:n]
+    acc = np.zeros((n, n, 4))
+    wsum = np.zeros((n, n))
+    by, bx = yy >> 1, xx >> 1
+    mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
+    cs = np.clip(st[..., 2], -0.95, 0.95)
+
+    def sheet(d, ou, ov):  # 0 when nearer in 3D than SHORTCUT_RATIO x the offset along the surface
+        a, b = ou * mm_u, ov * mm_v
+        return np.where((d * d).sum(-1) < SHORTCUT_RATIO ** 2 * (a * a + b * b + 2 * cs * a * b), 0.0, 1.0)
+
+    for j in range(-2, 4):
+        for i in range(-2, 4):
+            ty, tx = 2 * by + j, 2 * bx + i
+            inside = (ty >= 0) & (ty < n) & (tx >= 0) & (tx < n)
+            ty, tx = np.clip(ty, 0, n - 1), np.clip(tx, 0, n - 1)
+            s = S[ty, tx]
+            same = np.abs(zone[ty, tx] - z0) < 0.5
+            d = s[..., :3] - x
+            w = inside * same * sheet(d, tx - xx, ty - yy) * np.abs(s[..., 3]) * np.exp(-0.5 * (d * d).sum(-1) / v)
+            acc += w[..., None] * L[ty, tx]
+            wsum += w
+    B = gather_blocks(E, S, zone)
+    h = B["area"].shape[0]
+    for j in range(-blocks, blocks + 1):
+        for i in range(-blocks, blocks + 1):
+            if max(abs(i), abs(j)) <= 1:
+                continue
+            cy, cx = by + j, bx + i
+            inside = (cy >= 0) & (cy < h) & (cx >= 0) & (cx < h)
+            cy, cx = np.clip(cy, 0, h - 1), np.clip(cx, 0, h - 1)
+            area = B["area"][cy, cx]
+            d = B["point"][cy, cx] - x
+            same = (inside & (np.abs(B["zone"][cy, cx] - z0) < 0.5) & (area > 0)) * sheet(d, 2 * cx - xx + 0.5, 2 * cy - yy + 0.5)
+            vb = v + B["spread"][cy, cx]
+            w = same * (v / vb) * np.exp(-0.5 * (d * d).sum(-1) / vb)
+            dl = B["lit_point"][cy, cx] - x
+            vl = v + B["lit_spread"][cy, cx]
+            wl = same * (v / vl) * np.exp(-0.5 * (dl * dl).sum(-1) / vl)
+            e = B["light"][cy, cx]
+            acc[..., :3] += wl[..., None] * e[..., :3]
+            acc[..., 3] += w * e[..., 3]
+            wsum += w * area
+    out = np.where(wsum[..., None] > 0, acc / np.maximum(wsum, 1e-300)[..., None], E)
+    return out
