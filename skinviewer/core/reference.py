@@ -47,7 +47,7 @@ from skinviewer.scene.camera import orbit_view
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 3                 # bump when the reference's maths change (invalidates the cache)
+VERSION = 4                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals
 DEFAULT_H_MM = 0.5          # source element edge
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
