@@ -12,9 +12,9 @@
 #include "lib/color.glsl"
 uniform sampler2D positions;    // uv_position raster, gutters dilated (mesh units)
 uniform sampler2D gutter;       // RG nearest island texel
-uniform sampler2D stretch_map;  // RG UV per mm, B shear cosine (deon_stretch.frag)
+uniform sampler2D stretch_map;  // RG UV per mm, B shear cosine (deon_stretch.frag per triangle)
 uniform int u_use_stretch;
-uniform vec2 u_uniform_stretch; // UV per mm when stretch correction is off
+uniform vec2 u_uniform_stretch; // UV per mm without a map
 uniform float u_mm;             // mm per mesh unit
 #ifdef SEAM
 uniform sampler2D seam_map;     // RG texel across the seam, B 1 there, 2 past a border

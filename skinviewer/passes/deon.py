@@ -158,9 +158,9 @@ class StretchPass(Pass):
 
 class GatherSurfacePass(Pass):
     """What the direct gather of narrow blur steps sums over (shaders/deon_gather_surface.frag): per
-    texel its point on the surface in mm and the area it stands for, with seam-filled gutters
-    continuing across seams and area past mesh borders that holds no light. Depends on the mesh,
-    mm_per_unit, the stretch map and the seam map only: once per scene and size."""
+    texel its point on the surface in mm and the area it stands for (its triangle's, eq. 27), with
+    seam-filled gutters continuing across seams and area past mesh borders that holds no light.
+    Depends on the mesh, mm_per_unit and the seam map only: once per scene and size."""
     name = "deon_gather_surface"
 
     def reflect(self, r: Reflection) -> None:
@@ -168,29 +168,30 @@ class GatherSurfacePass(Pass):
             return
         n = map_size(r)
         r.input(gutter_resource(n))
-        if r.setting("deon.stretch"):
-            r.input(STRETCH)
         seam = r.setting("scene.seam_aware")
         if seam:
             r.input(seam_resource(n))
         r.program("uv_position")
+        r.program("deon_stretch")  # per triangle (eq. 27): a texel's area is its own triangle's
         r.program("dilate")
         r.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
         r.output(GATHER_SURFACE, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         n = map_size(ec)
-        raw = rasterize_unwrapped(ec, ec.program("uv_position"), n)
+        gutter = gutter_resource(n)
         pos = ec.scratch(TexSpec((n, n), 4, "f4"))  # dilated, so bilinear reads across seams stay on the surface
-        dilate(ec, raw, gutter_resource(n), pos)
+        dilate(ec, rasterize_unwrapped(ec, ec.program("uv_position"), n), gutter, pos)
+        # the areas from each texel's own triangle, not the vertex metric the separable taps use (smooth
+        # across triangles, so it spreads a jump in texel size over several texels: wrong weights there)
+        metric = ec.program("deon_stretch")
+        ec.set(metric, "u_mm_per_unit", float(ec.scene.mm_per_unit))
+        stretch = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
+        dilate(ec, rasterize_unwrapped(ec, metric, n), gutter, stretch)
         seam = ec.has_input(seam_resource(n))
         prog = ec.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
-        stretch = ec.has_input(STRETCH)
-        s = ec.scene.mean_uv_per_mm
-        ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(s, s), u_mm=float(ec.scene.mm_per_unit))
-        ec.textures(prog, positions=pos, gutter=gutter_resource(n))
-        if stretch:
-            ec.bind(prog, "stretch_map", STRETCH)
+        ec.uniforms(prog, u_use_stretch=True, u_uniform_stretch=(1.0, 1.0), u_mm=float(ec.scene.mm_per_unit))
+        ec.textures(prog, positions=pos, gutter=gutter, stretch_map=stretch)
         if seam:
             ec.bind(prog, "seam_map", seam_resource(n))
         ec.draw_fullscreen(prog, GATHER_SURFACE)
