@@ -2,8 +2,8 @@
 
   seams   the scan at 512^2 (one shadowed directional light, TSM off): d'Eon's diffused map sum_i w_i blur_i
           against the brute-force 3D-distance reference (scene/texels.surface_diffusion_reference), a
-          tissue-only one and a surface-path one (scene/texels.SurfacePaths): relative RMS and p99 texel
-          error per channel over lit texels, and where the worst 1 % lie.
+          tissue-only one, a surface-path one (scene/texels.SurfacePaths) and one that sums contacts:
+          relative RMS and p99 texel error per channel over lit texels, and where the worst 1 % lie.
   laser   beam power carried by the irradiance map (sum E * texel area / (pi r^2 Lc)) and the laser
           error (physics/accuracy.laser_errors) per irradiance size, d'Eon and Gosselin.
   lights  the stretch choices on the scan over four light directions, against the 3D and surface-path references.
@@ -173,16 +173,20 @@ def main() -> int:
         print_seams("on, eq. 27 per triangle", seams(r, extra={**tri, **noshear}))
         print_seams("  + shear", seams(r, extra=tri))
         print_seams("on, vertex metric", seams(r, extra=noshear))
-        print_seams("  + shear (the default)", seams(r))
+        print_seams("  + shear, separable", seams(r, extra={"deon.surface_gather_below_texels": 0.0}))
+        print_seams("  + narrow steps summed (default)", seams(r))
         print_seams("  + shear, stretch per G", seams(r, extra={"deon.stretch_per_gaussian": True}))
         # a different irradiance (the texel-snapped PCF's stepped penumbra), so its own reference
         print_seams("defaults, box PCF", seams(r, extra={"shadow.pcf_filter": "box"}))
         for tag, kw in (("through tissue only: no pair whose straight path leaves a point into the air (lips / eyelids "
                          "touching, nostril and ear cavities)", {"tissue_only": True}),
                         ("along the surface only (a path on the mesh at most 1.5x their 3D distance): what a texture-space "
-                         "blur is meant to compute; light through thin parts is the TSM's", {"surface_paths": True})):
+                         "blur is meant to compute; light through thin parts is the TSM's", {"surface_paths": True}),
+                        ("by 3D distance, normalised over the pairs joined along the surface only (light across a contact "
+                         "adds, as in the ground truth's sum)", {"shortcuts_add": True})):
             print(f"## against a reference that couples texels {tag}")
             print_seams("defaults", seams(r, **kw))
+            print_seams("every step separable", seams(r, extra={"deon.surface_gather_below_texels": 0.0}, **kw))
             print_seams("eq. 27 per triangle", seams(r, extra={**tri, **noshear}, **kw))
             print_seams("per triangle + shear", seams(r, extra=tri, **kw))
             print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}, **kw))

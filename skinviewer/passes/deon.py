@@ -392,6 +392,8 @@ class GaussianBlurPass(Pass):
         ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n),
                     blocks_e=blocks[0], blocks_p=blocks[1], blocks_z=blocks[2], blocks_l=blocks[3])
         ec.set(prog, "u_var", float(step.increment))
+        texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
+        ec.note(f"summed over the surface: sigma {texels:.2f} mean texels", sigma_texels=float(texels))
         stretch = ec.has_input(STRETCH)
         sc = ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)

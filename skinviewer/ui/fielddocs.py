@@ -168,7 +168,7 @@ LABELS: dict[str, str] = {
     "deon.irradiance_size": "blur map size",
     "deon.reuse_irradiance_below_texels": "skip finest blur",
     "deon.irradiance_size_mode": "blur map sizing",
-    "deon.surface_gather_below_texels": "gather narrow blurs",
+    "deon.surface_gather_below_texels": "surface sum",
     "deon.fold_below_texels": "fold narrow blurs",
     "deon.subpixel_kernel_px": "skip blur under",
     "deon.combine_blurs": "sum in texture space",
