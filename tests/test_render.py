@@ -138,6 +138,13 @@ def test_render_writes_linear_exr(tmp_path):
     a = load_exr(exr)
     assert a.shape == (32, 32, 4) and a.dtype == np.float32 and np.isfinite(a).all()
     assert a[..., 3].max() == 1.0 and 0.0 < a[..., :3].max() < 4.0  # linear: the exposure is not applied
+    # `--out` with an .exr name writes that same image as OpenEXR, not PNG bytes under an .exr name
+    only = tmp_path / "only.exr"
+    p = subprocess.run([sys.executable, "-m", "skinviewer", "render", "--scene", "laser", "--technique", "phong",
+                        "--size", "32x32", "--set", "render.exposure=4", "--out", str(only)],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert np.array_equal(load_exr(only), a)
 
 
 @pytest.mark.parametrize("pcf_filter", ["bilinear", "box"])

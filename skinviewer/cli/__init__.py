@@ -17,7 +17,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     pr = sub.add_parser("render", help="render one frame headless to a PNG")
     add_scene_args(pr)
-    pr.add_argument("--out", required=True, help="output PNG")
+    pr.add_argument("--out", required=True, help="output PNG (a name ending in .exr: the linear HDR image as OpenEXR)")
     pr.add_argument("--exr", metavar="FILE.exr", help="also write the linear HDR image (before exposure and tone map) "
                     "as OpenEXR, for compositing and comparison tools")
     pr.add_argument("--dump-passes", metavar="DIR", help="write every intermediate texture (.npy + .png) and graph.json")

@@ -36,7 +36,10 @@ def cmd_render(args) -> int:
         if frames > 1:
             print(f"refined over {frames} frames (burley2.temporal); figures are the last frame's")
         out = Path(args.out)
-        save_png(out, r.image(s))
+        if out.suffix.lower() == ".exr":  # the linear image, not PNG bytes under an .exr name
+            save_exr(out, r.read(s, "lit")[::-1])
+        else:
+            save_png(out, r.image(s))
         if getattr(args, "exr", None):  # linear HDR radiance, before exposure and tone map
             save_exr(args.exr, r.read(s, "lit")[::-1])
             print(f"wrote {args.exr} (linear RGBA float32, alpha = coverage)")
