@@ -13,8 +13,6 @@
 uniform sampler2D positions;    // uv_position raster, gutters dilated (mesh units)
 uniform sampler2D gutter;       // RG nearest island texel
 uniform sampler2D stretch_map;  // RG UV per mm, B shear cosine (deon_stretch.frag per triangle)
-uniform int u_use_stretch;
-uniform vec2 u_uniform_stretch; // UV per mm without a map
 uniform float u_mm;             // mm per mesh unit
 #ifdef SEAM
 uniform sampler2D seam_map;     // RG texel across the seam, B 1 there, 2 past a border
@@ -24,7 +22,7 @@ out vec4 f_color;
 ivec2 nearest_island(ivec2 t) { return ivec2(texelFetch(gutter, t, 0).rg + 0.5); }
 
 float texel_area(ivec2 t) {
-    vec3 s = (u_use_stretch != 0) ? texelFetch(stretch_map, t, 0).rgb : vec3(u_uniform_stretch, 0.0);
+    vec3 s = texelFetch(stretch_map, t, 0).rgb;
     float n = float(textureSize(gutter, 0).x);
     float c = clamp(s.b, -0.95, 0.95);
     return finite_f32(sqrt(1.0 - c * c) / max(s.r * s.g * n * n, 1e-30));

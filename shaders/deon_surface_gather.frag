@@ -20,8 +20,8 @@
 uniform sampler2D source;     // the blur's input, seam-filled
 uniform sampler2D surface;    // deon_gather_surface.frag: xyz mm, w area mm^2 (< 0: no light)
 uniform sampler2D gutter;     // RG nearest island texel, B zone
-uniform sampler2D blocks_e;   // deon_gather_blocks.frag
-uniform sampler2D blocks_p;   // xyz mean point (mm), w area
+uniform sampler2D blocks_e;   // deon_gather_blocks.frag: sum E A
+uniform sampler2D blocks_p;   // (BLOCK_SURFACE, once per mesh) xyz mean point (mm), w area
 uniform sampler2D blocks_z;   // R zone, G spread (mm^2 per axis)
 uniform sampler2D blocks_l;   // xyz the light's mean point, w its spread
 uniform float u_var;          // variance added, mm^2

@@ -9,7 +9,7 @@ Graph (resources in quotes):
     rho_dt_lut          "rho_dt_lut"       specular.f0, specular.rho_s        (eq. 30-31)
     deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
     deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
-    deon_gather_surface "deon_gather_surface" mesh, size, stretch, seams     (points and areas per texel)
+    deon_gather_surface "deon_gather_surface" mesh, size, seams            (points and areas per texel)
     deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26; narrow
                                            steps: a direct sum over the surface, eq. 21)
     deon_transmitted    "deon_transmitted" TSM, blurs, weights                (eq. 33)
@@ -75,6 +75,8 @@ VISIBILITY = "deon_visibility"  # fac_shadow (eq. 10) per light slot and texel (
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 SIZE = "deon.irradiance_size"
 GATHER_SURFACE = "deon_gather_surface"  # per texel: point on the surface (mm), area (mm^2)
+GATHER_BLOCKS_POINT = "deon_gather_blocks_point"  # per 2 x 2 block: mean point, area
+GATHER_BLOCKS_ZONE = "deon_gather_blocks_zone"  # per 2 x 2 block: zone, spread
 
 
 def map_size(r) -> int:
@@ -175,7 +177,11 @@ class GatherSurfacePass(Pass):
         r.program("deon_stretch")  # per triangle (eq. 27): a texel's area is its own triangle's
         r.program("dilate")
         r.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
+        r.program("deon_gather_blocks", BLOCK_SURFACE=1)
         r.output(GATHER_SURFACE, TexSpec((n, n), 4, "f4", filter="nearest"))
+        h = (n + 1) // 2
+        r.output(GATHER_BLOCKS_POINT, TexSpec((h, h), 4, "f4", filter="nearest"))
+        r.output(GATHER_BLOCKS_ZONE, TexSpec((h, h), 2, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         n = map_size(ec)
@@ -190,19 +196,24 @@ class GatherSurfacePass(Pass):
         dilate(ec, rasterize_unwrapped(ec, metric, n), gutter, stretch)
         seam = ec.has_input(seam_resource(n))
         prog = ec.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
-        ec.uniforms(prog, u_use_stretch=True, u_uniform_stretch=(1.0, 1.0), u_mm=float(ec.scene.mm_per_unit))
+        ec.set(prog, "u_mm", float(ec.scene.mm_per_unit))
         ec.textures(prog, positions=pos, gutter=gutter, stretch_map=stretch)
         if seam:
             ec.bind(prog, "seam_map", seam_resource(n))
         ec.draw_fullscreen(prog, GATHER_SURFACE)
+        blocks = ec.program("deon_gather_blocks", BLOCK_SURFACE=1)
+        ec.textures(blocks, surface=ec.output(GATHER_SURFACE), gutter=gutter)
+        ec.draw_fullscreen(blocks, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE)
+
+
+def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:
+    return not step.reused and limit > 0.0 and np.sqrt(step.increment) <= limit * texel_mm
 
 
 def gathered(r, step: BlurStep) -> bool:
     """Whether blur step ``step`` is a direct sum over the surface (deon_surface_gather.frag): its
     sigma is at most deon.surface_gather_below_texels mean texels (issue 10 item 1)."""
-    limit = r.setting("deon.surface_gather_below_texels")
-    return (not step.reused and limit > 0.0
-            and np.sqrt(step.increment) <= limit * mean_texel_mm(r.scene, map_size(r)))
+    return _gathers(step, r.setting("deon.surface_gather_below_texels"), mean_texel_mm(r.scene, map_size(r)))
 
 
 def gather_used(r) -> bool:
@@ -214,7 +225,7 @@ def gather_used(r) -> bool:
     texel = mean_texel_mm(r.scene, map_size(r))
     variances = [r.peek(f"deon.gaussians.{k}.variance") for k in range(r.peek("deon.gaussians.#"))]
     plan = blur_plan_texels(variances, r.peek("deon.reuse_irradiance_below_texels"), texel, r.peek("deon.fold_below_texels"))
-    return any(not st.reused and np.sqrt(st.increment) <= limit * texel for st in plan)
+    return any(_gathers(st, limit, texel) for st in plan)
 
 
 class TsmPass(Pass):
@@ -365,7 +376,8 @@ class GaussianBlurPass(Pass):
         seam = r.setting("scene.seam_aware")
         r.input(step.source)
         r.input(gutter_resource(n))
-        r.input(GATHER_SURFACE)
+        for res in (GATHER_SURFACE, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE):
+            r.input(res)
         if r.setting("deon.stretch"):
             r.input(STRETCH)
         if seam:
@@ -384,13 +396,13 @@ class GaussianBlurPass(Pass):
             source = ec.scratch(self._spec(n))
             ec.draw_fullscreen(fill, source)
         h = (n + 1) // 2
-        blocks = [ec.scratch(TexSpec((h, h), 4, "f4", filter="nearest")) for _ in range(4)]
+        light, lit = (ec.scratch(TexSpec((h, h), 4, "f4", filter="nearest")) for _ in range(2))
         prog = ec.program("deon_gather_blocks")
-        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n))
-        ec.draw_fullscreen(prog, *blocks)
+        ec.textures(prog, source=source, surface=GATHER_SURFACE)
+        ec.draw_fullscreen(prog, light, lit)
         prog = ec.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
-        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n),
-                    blocks_e=blocks[0], blocks_p=blocks[1], blocks_z=blocks[2], blocks_l=blocks[3])
+        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n), blocks_e=light,
+                    blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
         ec.set(prog, "u_var", float(step.increment))
         texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
         ec.note(f"summed over the surface: sigma {texels:.2f} mean texels", sigma_texels=float(texels))
