@@ -4,10 +4,11 @@
 // distances, the ground truth's sum at texel resolution), instead of the separable taps of eq. 25-26
 // that assume the surface flat and the stretch constant over the kernel:
 //   out(x) = sum_y G(v, |P(x) - P(y)|) E(y) A(y) / sum_y G(v, |P(x) - P(y)|) A(y)
-// y: the 36 texels of the 3 x 3 blocks of 2 x 2 around x's block, then 2 x 2 blocks (summed E A at
-// their mean point, a Gaussian widened by their own spread) out to GATHER_BLOCKS blocks (2 GATHER_BLOCKS + 2 texels: 3.5 sigma at the
-// largest sigma this is used for, deon.surface_gather_below_texels). Only x's island zone counts
-// (its seam-filled gutter continues across seams; area past a mesh border counts, its light does not).
+// y: the 36 texels of the 3 x 3 blocks of 2 x 2 around x's block, then 2 x 2 blocks, each a Gaussian
+// widened by its own spread (its area at its mean point, its light at the light's), out to GATHER_BLOCKS
+// blocks (2 GATHER_BLOCKS + 2 texels: 3.5 sigma at 3.4 texels; deon.surface_gather_below_texels is
+// at most 3). Only x's island zone counts: its seam-filled gutter continues across seams; area past a
+// mesh border counts, but only the light of the part still on the surface (lib/gather_surface.glsl).
 // A texel much nearer in 3D than its offset along the surface (from the stretch at x, eq. 27 with
 // shear) is reached across air or a fold (lips, lids, ear folds touching), not along x's sheet: left
 // out, as a texture-space blur leaves it (physics/surface_gather.py says why).
