@@ -93,10 +93,9 @@ def test_normals_split_along_a_uv_seam_are_made_continuous():
 def test_lee_perry_smith_has_no_normal_step_along_its_seams():
     """The shared scan's file splits its normals along every UV seam (6 deg median, 34 at most: a
     shading line down the back of the head in every technique); loaded, each point has one normal."""
-    from skinviewer.scene.mesh import weld_ids
+    from skinviewer.scene.mesh import position_ids
     m = load_mesh(LPS_GLB)
-    P = m.positions.astype(np.float64)
-    ids = weld_ids(P, 1e-6 * np.ptp(P, axis=0).max())
+    ids = position_ids(m.positions)
     order = np.argsort(ids, kind="stable")
     same = ids[order][1:] == ids[order][:-1]
     a, b = m.normals[order][1:][same], m.normals[order][:-1][same]

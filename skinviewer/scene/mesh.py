@@ -126,6 +126,16 @@ def weld_ids(keys: np.ndarray, tol: float) -> np.ndarray:
     return connected_components(g, directed=False)[1].astype(np.int64)
 
 
+WELD_TOL = 1e-6  # copies of a vertex: within this fraction of the mesh's extent
+
+
+def position_ids(positions: np.ndarray) -> np.ndarray:
+    """weld_ids by position: one id per point of the surface, the same for every copy of a vertex
+    (UV seams, split normals), within WELD_TOL of the mesh's largest extent."""
+    P = np.asarray(positions, np.float64)
+    return weld_ids(P, WELD_TOL * max(float(np.ptp(P, axis=0).max()), 1e-12) if len(P) else 1.0)
+
+
 SEAM_CREASE_DEG = 40.0  # a split vertex's normal this far from its copies' mean is a crease: kept
 
 
@@ -138,7 +148,7 @@ def smooth_seam_normals(positions: np.ndarray, normals: np.ndarray) -> tuple[np.
     N = np.asarray(normals, np.float64)
     if len(P) < 2:
         return N, 0
-    ids = weld_ids(P, 1e-6 * max(float(np.ptp(P, axis=0).max()), 1e-12))
+    ids = position_ids(P)
     _, inv, count = np.unique(ids, return_inverse=True, return_counts=True)
     total = np.zeros((count.size, 3))
     np.add.at(total, inv, N)
@@ -159,8 +169,7 @@ def border_half_edges(positions: np.ndarray, indices: np.ndarray) -> np.ndarray:
     F = np.asarray(indices, np.int64).reshape(-1, 3)
     if len(F) == 0:
         return np.zeros(0, np.int64)
-    scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
-    w = weld_ids(P, 1e-6 * scale)[F]
+    w = position_ids(P)[F]
     a, b = w[:, [0, 1, 2]].ravel(), w[:, [1, 2, 0]].ravel()
     keep = np.flatnonzero(a != b)
     edges = np.stack([np.minimum(a, b), np.maximum(a, b)], 1)[keep]

@@ -16,7 +16,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from skinviewer.scene.mesh import border_half_edges, weld_ids
+from skinviewer.scene.mesh import WELD_TOL, border_half_edges, position_ids, weld_ids
 
 
 def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
@@ -127,8 +127,7 @@ class SurfacePaths:
         from scipy.sparse.csgraph import dijkstra
         P = np.asarray(positions, np.float64) * mm_per_unit
         F = np.asarray(indices, np.int64)
-        scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
-        wid = weld_ids(P, 1e-6 * scale)
+        wid = position_ids(P)
         nv = int(wid.max()) + 1
         Pw = np.zeros((nv, 3))
         Pw[wid] = P
@@ -193,8 +192,8 @@ def seam_edges(positions, uvs, indices):
     P = np.asarray(positions, np.float64)
     F = np.asarray(indices, np.int64)
     scale = max(float(np.ptp(P, axis=0).max()), 1e-12)
-    pid = weld_ids(P, 1e-6 * scale)
-    uid = weld_ids(np.hstack([P / scale, np.asarray(uvs, np.float64)]), 1e-6)
+    pid = position_ids(P)
+    uid = weld_ids(np.hstack([P / scale, np.asarray(uvs, np.float64)]), WELD_TOL)
     a = F[:, [0, 1, 2]].ravel()
     b = F[:, [1, 2, 0]].ravel()
     pa, pb = pid[a], pid[b]
