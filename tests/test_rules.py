@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import LPS_GLB, NEEDS_SCAN
 from helpers import small_settings
 
 from skinviewer.core.renderer import Renderer
@@ -326,3 +327,24 @@ def test_texture_shadows_camera_move_reads_no_shadow_map(renderer):
     m = pix.max(-1) > 0
     assert np.sqrt(((tex - pix)[m] ** 2).mean()) / pix[m].mean() < 0.01
     assert not np.array_equal(tex, pix)  # the specular's shadow test really moved to texture space
+
+
+@NEEDS_SCAN
+def test_rules_see_the_rendered_camera_on_a_bust(renderer):
+    """The scan is a bust: the camera frames its head (MeshData.frame), not its shoulders. The rules
+    (map size from coverage, LOD, kernel size on screen, TSM 'in view') must measure the camera that
+    is rendered; their own copy of the camera once framed the whole bust (1.97x the head's radius)
+    and so saw the head's millimetres half as large on screen as they are drawn."""
+    import math
+
+    s = with_values(small_settings("head", "deon", 64), {"scene.mesh": str(LPS_GLB), "scene.mm_per_unit": 48.0,
+                                                          "camera.yaw": 30.0})
+    gpu = renderer.ensure_scene(s).gpu
+    fc, fr = gpu.frame
+    assert fr < 0.6 * gpu.radius  # a bust: the framed head is much smaller than the whole mesh
+    view = renderer.view(s)  # what the renderer draws with
+    d = float(np.linalg.norm(view.eye - fc))
+    # pixels per mm at the framed centre, from the rendered projection (pinhole, small angle)
+    px_per_mm = s.render.height / (2.0 * d * math.tan(math.radians(s.camera.fov_y) / 2)) / 48.0
+    v = max(g.variance for g in s.deon.gaussians if max(g.weights) > 0)
+    assert rules.kernel_px(s, gpu) == pytest.approx(math.sqrt(v) * px_per_mm, rel=0.05)

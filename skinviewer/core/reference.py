@@ -43,7 +43,7 @@ from skinviewer.physics.specular import (
     rho_dt_table,
     sample_bilinear,
 )
-from skinviewer.scene.camera import orbit_view
+from skinviewer.scene.camera import framed_view
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
@@ -309,7 +309,7 @@ def camera_hits(surf: Surface, s: Settings, grid: tuple[int, int] | None = None)
     """Ray through every pixel centre: (mask (H, W), triangle ids, barycentrics, eye) top row first.
     ``grid``: cast a coarser (W, H) grid over the same view instead (coverage estimates)."""
     W, H = s.render.width, s.render.height
-    view = orbit_view(s.camera, surf.center, surf.radius, (W, H), surf.frame)
+    view = framed_view(s.camera, surf, (W, H))
     if grid is not None:
         W, H = grid
     inv = np.linalg.inv(view.view_proj)

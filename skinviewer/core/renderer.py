@@ -18,7 +18,7 @@ from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes import rules
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
-from skinviewer.scene.camera import View, light_space, orbit_view
+from skinviewer.scene.camera import View, framed_view, light_space
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
     UV_COVARIANCE_ATTR,
@@ -277,15 +277,14 @@ class Renderer:
 
     def view(self, s: Settings) -> View:
         gpu = self.ensure_scene(s).gpu
-        return orbit_view(s.camera, gpu.center, gpu.radius, (s.render.width, s.render.height), gpu.frame)
+        return framed_view(s.camera, gpu, (s.render.width, s.render.height))
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
                force: bool = False, budget_ms: float | None = None) -> FrameReport:
         """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run)."""
         scene = self.ensure_scene(s)
-        view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height),
-                           scene.gpu.frame)
+        view = framed_view(s.camera, scene.gpu, (s.render.width, s.render.height))
         self.last_view = view
         g = self.graph(s.technique)
         lod, lod_note = rules.mesh_lod(s, scene.gpu, self._lod_state)

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from skinviewer.scene.camera import orbit_view
+from skinviewer.scene.camera import framed_view
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
 MAX_RAYS = 4096     # rays cast per light pose for the TSM rule (Embree via trimesh)
@@ -40,11 +40,12 @@ def light_off_reason(i: int, light) -> str:
 def screen_diameter_px(settings, scene) -> float:
     """The projected diameter (pixels, along the image height) of the scene's bounding sphere."""
     w, h = settings.render.width, settings.render.height
-    view = orbit_view(settings.camera, scene.center, scene.radius, (w, h))
-    d = float(np.linalg.norm(np.asarray(view.eye, np.float64) - scene.center))
-    if d <= scene.radius:
+    view = framed_view(settings.camera, scene, (w, h))
+    f_center, f_radius = scene.frame  # what the camera frames: the head of a bust, not its shoulders
+    d = float(np.linalg.norm(np.asarray(view.eye, np.float64) - f_center))
+    if d <= f_radius:
         return float("inf")
-    half = math.asin(min(scene.radius / d, 1.0))
+    half = math.asin(min(f_radius / d, 1.0))
     return h * math.tan(half) / math.tan(math.radians(settings.camera.fov_y) / 2.0)
 
 
@@ -54,7 +55,7 @@ def wanted_map_size(settings, scene) -> float:
     d_px = screen_diameter_px(settings, scene)
     if not math.isfinite(d_px):
         return float("inf")
-    px_per_mm = d_px / (2.0 * scene.radius * scene.mm_per_unit)
+    px_per_mm = d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
     return px_per_mm / max(scene.mean_uv_per_mm, 1e-12)
 
 
@@ -109,10 +110,10 @@ def mesh_lod(settings, scene, state: dict) -> tuple[int, str]:
 
 def kernel_px(settings, scene) -> float:
     """The widest used Gaussian's standard deviation (seed 000 eq. 21) in screen pixels at the
-    head: sqrt(v_max) mm * pixels per mm of the scene's bounding sphere on screen."""
+    head: sqrt(v_max) mm * pixels per mm of the framed part (the head) on screen."""
     v = max((g.variance for g in settings.deon.gaussians if max(g.weights) > 0), default=0.0)
     d_px = screen_diameter_px(settings, scene)
-    return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.radius * scene.mm_per_unit)
+    return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
 
 
 def kernel_under_pixel(r) -> str | None:
@@ -286,7 +287,7 @@ def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
     if len(cand) == 0:
         return False, "no light behind a thin part"
     w, h = settings.render.width, settings.render.height
-    view = orbit_view(settings.camera, scene.center, scene.radius, (w, h))
+    view = framed_view(settings.camera, scene, (w, h))
     p = scene.mesh.positions[cand].astype(np.float64)
     facing = np.einsum("ij,ij->i", scene.mesh.normals[cand].astype(np.float64), view.eye - p) > 0
     ph = np.hstack([p, np.ones((len(p), 1))]) @ view.view_proj.T

@@ -62,6 +62,13 @@ def orbit_view(cam, center: np.ndarray, radius: float, size: tuple[int, int],
     return View(view=view, proj=proj, eye=eye, size=size)
 
 
+def framed_view(cam, scene, size: tuple[int, int]) -> View:
+    """The rendered camera: ``orbit_view`` of a scene (anything with ``center``, ``radius`` and
+    ``frame``, e.g. the renderer's GpuScene) framing ``scene.frame`` -- the head of a bust. The one
+    place the renderer, the reference and the rules build the camera from settings."""
+    return orbit_view(cam, scene.center, scene.radius, size, scene.frame)
+
+
 # ---------------------------------------------------------------------------------------------
 # light space, seed 000 eq. (1)-(6), in the seed's row-vector form p' = p * M * View * P
 
