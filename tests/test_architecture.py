@@ -14,7 +14,7 @@ ALLOWED = {
     "scene": {"scene", "core", "physics"},
     "passes": {"passes", "core", "physics", "scene"},
     "techniques": {"techniques", "passes", "core", "physics", "scene"},
-    "ui": {"ui", "core", "physics", "scene", "passes", "techniques", "cli"},
+    "ui": {"ui", "core", "physics", "scene", "passes", "techniques"},  # the command line parses; the viewer gets Settings
     "cli": {"cli", "core", "physics", "scene", "passes", "techniques", "ui"},
 }
 

@@ -6,7 +6,8 @@ import argparse
 import sys
 
 from skinviewer.cli import settings_list
-from skinviewer.cli.args import CliError, add_scene_args
+from skinviewer import techniques
+from skinviewer.cli.args import CliError, add_scene_args, settings_from_args
 from skinviewer.cli.render import cmd_render
 from skinviewer.core.settings import SettingsError
 
@@ -53,8 +54,13 @@ def cmd_view(args) -> int:
         from skinviewer.ui.app import WindowUnavailableError, run_viewer
     except ImportError as exc:
         raise CliError(f"the viewer is not available: {exc}") from None
+    s = settings_from_args(args)
+    if getattr(args, "technique", None) and args.technique not in techniques.names():
+        raise CliError(f"technique '{args.technique}' is not available (have: {', '.join(techniques.names())})")
     try:
-        return run_viewer(args)
+        return run_viewer(s, technique_given=bool(getattr(args, "technique", None)), frames=args.frames or 0,
+                          screenshot=args.screenshot, size=tuple(args.size) if args.size else None,
+                          preset_path=args.preset, debug=bool(getattr(args, "debug", False)))
     except WindowUnavailableError as exc:
         raise CliError(str(exc)) from None
 

@@ -1,5 +1,5 @@
 """The interactive viewer's window: a thin moderngl-window WindowConfig that wires the parts
-together and forwards events and frames to them. Entry point: ``run_viewer(args)``.
+together and forwards events and frames to them. Entry point: ``run_viewer(settings, ...)`` (the command line parses the arguments).
 
 - ``ui.state.ViewerState`` -- the one state object: settings, scene, presets, messages, A/B
   compare, inspector, screenshot and layout options; changed only through its methods.
@@ -177,21 +177,17 @@ def destroy_app(app: ViewerApp) -> None:
         pass
 
 
-def run_viewer(args) -> int:
-    """``skinviewer [view]``: open the window; with --frames N render N frames and exit
-    (writing --screenshot FILE after the last one)."""
-    from skinviewer.cli.args import CliError, settings_from_args
-    s = settings_from_args(args)
-    if getattr(args, "technique", None) and args.technique not in techniques.names():
-        raise CliError(f"technique '{args.technique}' is not available (have: {', '.join(techniques.names())})")
-    if not getattr(args, "technique", None):
-        preset_tech = s.technique
-        s = with_values(s, {"technique": best_technique(preset_tech)})
-    frames = args.frames or (1 if args.screenshot else 0)
-    size = tuple(args.size) if args.size else DEFAULT_WINDOW
-    options = ViewerOptions(debug=bool(getattr(args, "debug", False)) or os.environ.get("SKINVIEWER_DEBUG") == "1")
-    app = create_app(s, size=size, preset_path=args.preset, options=options)
-    if frames and args.screenshot:
+def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, screenshot: str | None = None,
+               size: tuple[int, int] | None = None, preset_path: str | None = None, debug: bool = False) -> int:
+    """``skinviewer [view]``: open the window on settings ``s`` (the command line parses them); with
+    ``frames`` N render N frames and exit (writing ``screenshot`` after the last one)."""
+    if not technique_given:
+        s = with_values(s, {"technique": best_technique(s.technique)})
+    frames = frames or (1 if screenshot else 0)
+    size = tuple(size) if size else DEFAULT_WINDOW
+    options = ViewerOptions(debug=debug or os.environ.get("SKINVIEWER_DEBUG") == "1")
+    app = create_app(s, size=size, preset_path=preset_path, options=options)
+    if frames and screenshot:
         app.state.set_show_ui(False)  # batch screenshot: the 3D view fills the whole --size window
     for n in app.state.notices:
         print(f"note: {n}", file=sys.stderr)
@@ -199,16 +195,16 @@ def run_viewer(args) -> int:
     try:
         app.timer.start()
         while not wnd.is_closing:
-            if frames and args.screenshot and frame.frames == frames - 1:
-                frame.request_screenshot(args.screenshot, include_ui=False)
+            if frames and screenshot and frame.frames == frames - 1:
+                frame.request_screenshot(screenshot, include_ui=False)
             app.step()
             if frames and frame.frames >= frames:
                 break
-        if args.screenshot:
+        if screenshot:
             if not frame.screenshots_written:
                 print(f"skinviewer: no screenshot written ({frame.render_error or 'no frame'})", file=sys.stderr)
                 return 2
-            print(f"wrote {args.screenshot}")
+            print(f"wrote {screenshot}")
         if frame.render_error and frames:
             print(f"skinviewer: {frame.render_error}", file=sys.stderr)
             return 2
