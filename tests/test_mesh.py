@@ -172,3 +172,23 @@ def test_is_closed_welds_seams_and_finds_borders():
     assert is_closed(head.positions, head.indices)
     assert culls_back_faces("auto", True) and not culls_back_faces("auto", False)
     assert culls_back_faces("cull", False) and not culls_back_faces("show", True)
+
+
+def test_generated_uvs_keep_one_normal_per_point(tmp_path):
+    """A mesh without UVs is cut into xatlas charts; the copies of a vertex on two charts must keep
+    one normal (the welded surface's), else every chart border is a shading line in every technique."""
+    import trimesh
+
+    from skinviewer.scene.mesh import position_ids
+    path = tmp_path / "s.obj"
+    trimesh.creation.icosphere(3, 50.0).export(path)
+    m = load_mesh(path)
+    assert any("xatlas" in n for n in m.notes)
+    ids = position_ids(m.positions)
+    order = np.argsort(ids, kind="stable")
+    same = ids[order][1:] == ids[order][:-1]
+    a, b = m.normals[order][1:][same], m.normals[order][:-1][same]
+    assert same.sum() > 20  # the atlas did split vertices along chart borders
+    assert (a * b).sum(1).min() > 1.0 - 1e-6  # float32 normals
+    radial = m.positions / np.linalg.norm(m.positions, axis=1, keepdims=True)
+    assert (m.normals * radial).sum(1).min() > 0.99  # and that normal is the sphere's

@@ -367,9 +367,12 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
         if not auto_uv:
             raise MeshError(f"{p} has no texture coordinates (UVs); texture-space techniques need them. "
                             "Add UVs in a modelling tool, or load with automatic UVs (xatlas).")
-        positions, indices, uv = _xatlas_uvs(positions, indices, p)
+        # normals of the welded surface, then split with its vertices: each chart's copy of a vertex
+        # keeps the one normal (computed per chart they step at every chart border: stair-step lines)
+        welded_normals = vertex_normals(positions, indices)
+        positions, indices, uv, vmapping = _xatlas_uvs(positions, indices, p)
+        normals = welded_normals[vmapping]
         notes.append("no UVs in the file: generated a UV atlas with xatlas")
-        normals = vertex_normals(positions, indices)
     else:
         n = getattr(tm, "vertex_normals", None)
         normals = np.asarray(n, dtype=np.float64) if n is not None and len(n) == len(positions) else None
@@ -438,7 +441,8 @@ def _xatlas_uvs(positions, indices, p):
         raise MeshError(f"{p} has no UVs and the xatlas package (automatic UVs) is not installed: "
                         "pip install xatlas") from None
     vmapping, new_idx, uvs = xatlas.parametrize(positions.astype(np.float32), indices.astype(np.uint32))
-    return positions[vmapping], new_idx.astype(np.int64), uvs
+    vmapping = np.asarray(vmapping, dtype=np.int64)
+    return positions[vmapping], new_idx.astype(np.int64), uvs, vmapping
 
 
 def framing_distance(radius: float, fov_y_deg: float, margin: float = 1.15) -> float:
