@@ -18,9 +18,11 @@ from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes import rules
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
+from skinviewer.physics.penner import vertex_curvature
 from skinviewer.scene.camera import View, framed_view, light_space
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
+    CURVATURE_ATTR,
     UV_COVARIANCE_ATTR,
     VERTEX_ATTRS,
     VERTEX_FORMAT,
@@ -29,6 +31,7 @@ from skinviewer.scene.mesh import (
     is_closed,
     load_mesh,
     load_texture_maps,
+    position_ids,
 )
 from skinviewer.scene.scenes import build_scene
 
@@ -50,6 +53,7 @@ class GpuScene:
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
         self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
+        self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
         self._lod_meshes: dict[int, MeshData] = {}
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
@@ -137,7 +141,7 @@ class GpuScene:
     def mesh_bytes(self) -> int:
         """Bytes of the mesh buffers: the mesh and every level of detail built so far."""
         return (self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
-                + sum(b.size for b in self._uv_cov.values()))
+                + sum(b.size for b in (*self._uv_cov.values(), *self._curvature.values())))
 
     def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
@@ -148,6 +152,8 @@ class GpuScene:
         content = [(vbo, fmt, *attrs)]
         if UV_COVARIANCE_ATTR in prog:  # only the stretch pass reads it (deon_stretch.frag VERTEX_METRIC)
             content.append((self.uv_covariance_buffer(lod), "3f", UV_COVARIANCE_ATTR))
+        if CURVATURE_ATTR in prog:  # pre-integrated skin (penner.frag)
+            content.append((self.curvature_buffer(lod), "1f", CURVATURE_ATTR))
         return self.ctx.vertex_array(prog, content, index_buffer=ibo, index_element_size=4)
 
     def uv_covariance_buffer(self, level: int = 0) -> moderngl.Buffer:
@@ -160,6 +166,16 @@ class GpuScene:
             hit = self._uv_cov[level] = self.ctx.buffer(np.ascontiguousarray(cov, np.float32).tobytes())
         return hit
 
+    def curvature_buffer(self, level: int = 0) -> moderngl.Buffer:
+        """Per vertex, the surface's curvature in mm^-1 (physics/penner.vertex_curvature), one value per
+        point of the surface; built on first use per level of detail."""
+        hit = self._curvature.get(level)
+        if hit is None:
+            m = self.lod_mesh(level)
+            k = vertex_curvature(m.positions, m.normals, m.indices, self.mm_per_unit, position_ids(m.positions))
+            hit = self._curvature[level] = self.ctx.buffer(np.ascontiguousarray(k, np.float32).tobytes())
+        return hit
+
     def release(self) -> None:
         for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
             obj.release()
@@ -167,9 +183,10 @@ class GpuScene:
             vbo.release()
             ibo.release()
         self._lods.clear()
-        for buf in self._uv_cov.values():
+        for buf in (*self._uv_cov.values(), *self._curvature.values()):
             buf.release()
         self._uv_cov.clear()
+        self._curvature.clear()
         self._lod_meshes.clear()
 
 

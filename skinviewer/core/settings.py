@@ -365,6 +365,19 @@ class BurleySettings(_Model):
         return v
 
 
+class PennerSettings(_Model):
+    """Pre-integrated skin (Penner & Borshukov, GPU Pro 2, 2011): the profile in use (deon.gaussians)
+    integrated around rings of every curvature, and across shadow penumbrae, into lookup tables."""
+    lut_size: int = Field(64, ge=8, le=512, description="texels per side of the ring and penumbra tables")
+    max_curvature: float = Field(
+        2.0, gt=0.0, le=50.0, description="the ring table's curvature range, 1/r in mm^-1 (2: down to r = 0.5 mm)")
+    curvature_scale: float = Field(
+        1.0, ge=0.0, le=20.0, description="multiplies the mesh's curvature (0: flat skin, N.L only)")
+    penumbra: bool = Field(True, description="shadow scattering: the PCF penumbra diffused by the profile")
+    penumbra_max_mm: float = Field(
+        10.0, gt=0.0, le=1000.0, description="the penumbra table's range of penumbra widths, mm")
+
+
 class Burley2Settings(_Model):
     """The thesis's contrast-driven two-level sampling, "Golubev Plus" (seed 001 ch. 4, Algorithm 1,
     eq. 4.1-4.2; spec §7). Profile and cutoff/budget from ``burley``."""
@@ -493,7 +506,7 @@ class SeparableSettings(_Model):
 
 class Settings(_Model):
     schema_version: int = SCHEMA_VERSION
-    technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2"] = "deon"
+    technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2", "penner"] = "deon"
     scene: SceneSettings = Field(default_factory=SceneSettings)
     camera: CameraSettings = Field(default_factory=CameraSettings)
     render: RenderSettings = Field(default_factory=RenderSettings)
@@ -517,6 +530,7 @@ class Settings(_Model):
     separable: SeparableSettings = Field(default_factory=SeparableSettings)
     burley: BurleySettings = Field(default_factory=BurleySettings)
     burley2: Burley2Settings = Field(default_factory=Burley2Settings)
+    penner: PennerSettings = Field(default_factory=PennerSettings)
 
     @model_validator(mode="after")
     def _version(self) -> "Settings":

@@ -8,6 +8,7 @@ from skinviewer.techniques import (
     burley2,
     deon,
     gosselin,
+    penner,
     phong,
     separable,
     ssss,
@@ -15,7 +16,8 @@ from skinviewer.techniques import (
 from skinviewer.techniques.base import TARGETS, Technique, shadow_passes
 
 REGISTRY: dict[str, Technique] = {t.name: t for t in (phong.TECHNIQUE, gosselin.TECHNIQUE, deon.TECHNIQUE, ssss.TECHNIQUE,
-                                                  separable.TECHNIQUE, burley.TECHNIQUE, burley2.TECHNIQUE)}
+                                                  separable.TECHNIQUE, burley.TECHNIQUE, burley2.TECHNIQUE,
+                                                  penner.TECHNIQUE)}
 
 
 def names() -> list[str]:

@@ -1,0 +1,103 @@
+"""Pre-integrated skin (Penner & Borshukov, GPU Pro 2, 2011): two lookup tables built in numpy from the
+profile in use (physics/penner.py), and one pass that shades the mesh from the camera with them.
+
+    penner_luts   ring_lut, penumbra_lut   deon.gaussians, penner.*      (no scene, no camera)
+    penner        lit                      lights, shadow maps, LUTs, specular, rho_dt
+"""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.passes.common import (
+    LIT,
+    bind_specular,
+    bind_surface,
+    declare_lighting,
+    declare_lit,
+    declare_specular,
+    declare_view_mesh,
+    draw_view_mesh,
+    set_camera,
+    set_lighting,
+)
+from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
+from skinviewer.physics import penner
+
+RING_LUT = "ring_lut"
+PENUMBRA_LUT = "penumbra_lut"
+LUT_FIELDS = ("lut_size", "max_curvature", "penumbra_max_mm")
+
+
+def profile(gaussians) -> tuple[tuple[float, tuple[float, float, float]], ...]:
+    """The sum of Gaussians in use, as (variance mm^2, RGB weights) pairs (hashable, for the cache)."""
+    return tuple((float(g.variance), tuple(float(w) for w in g.weights)) for g in gaussians)
+
+
+@functools.lru_cache(maxsize=8)
+def _tables(gs, size: int, max_curvature: float, max_width: float) -> tuple[bytes, bytes]:
+    ring = penner.ring_lut(list(gs), size, max_curvature)
+    pen = penner.penumbra_lut(list(gs), size, max_width)
+    return (np.ascontiguousarray(ring, np.float32).tobytes(), np.ascontiguousarray(pen, np.float32).tobytes())
+
+
+class PennerLutPass(Pass):
+    """The ring table D(N.L, curvature) and the penumbra table P(s, W), RGB f4, from deon.gaussians."""
+    name = "penner_luts"
+    uses_scene = False
+
+    def reflect(self, r: Reflection) -> None:
+        r.setting("deon.gaussians")
+        n = r.section("penner", LUT_FIELDS).lut_size
+        r.output(RING_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
+        r.output(PENUMBRA_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
+
+    def execute(self, ec) -> None:
+        p = ec.section("penner", LUT_FIELDS)
+        ring, pen = _tables(profile(ec.setting("deon.gaussians")), int(p.lut_size), float(p.max_curvature),
+                            float(p.penumbra_max_mm))
+        for name, data in ((RING_LUT, ring), (PENUMBRA_LUT, pen)):
+            tex = ec.output(name)
+            tex.repeat_x = tex.repeat_y = False
+            tex.write(data)
+
+
+class PennerPass(Pass):
+    """The mesh from the camera, lit through the tables; writes ``lit`` (RGBA f2)."""
+    name = "penner"
+    view_dependent = True
+
+    def reflect(self, r: Reflection) -> None:
+        lighting = declare_lighting(r)
+        declare_specular(r)
+        r.section("penner", ("max_curvature", "curvature_scale", "penumbra", "penumbra_max_mm"))
+        r.input(RING_LUT)
+        if r.setting("penner.penumbra"):
+            r.input(PENUMBRA_LUT)
+        if r.setting("deon.energy_conservation"):
+            r.input(RHO_DT_RESOURCE)
+        declare_lit(r, "penner", **lighting)
+        declare_view_mesh(r)
+
+    def execute(self, ec) -> None:
+        prog = ec.program("penner")
+        p = ec.section("penner", ("max_curvature", "curvature_scale", "penumbra", "penumbra_max_mm"))
+        set_camera(ec, prog)
+        bind_surface(ec, prog)
+        bind_specular(ec, prog)
+        set_lighting(ec, prog)
+        ec.bind(prog, "ring_lut", RING_LUT)
+        penumbra = ec.has_input(PENUMBRA_LUT)
+        if penumbra:
+            ec.bind(prog, "penumbra_lut", PENUMBRA_LUT)
+        energy = ec.has_input(RHO_DT_RESOURCE)
+        if energy:
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        pcf = int(ec.setting("shadow.pcf"))
+        ec.uniforms(prog, u_energy=energy, u_penumbra=penumbra,
+                    u_curvature_scale=float(p.curvature_scale) / float(p.max_curvature),
+                    u_penumbra_scale=float(ec.scene.mm_per_unit) / float(p.penumbra_max_mm),
+                    u_penumbra_texels=float(2 * pcf + 1))
+        draw_view_mesh(ec, prog, LIT)

@@ -1,0 +1,106 @@
+"""Pre-integrated skin (Penner & Borshukov 2011; physics/penner.py, shaders/penner.frag): the ring table
+against a brute-force ring integral, its limits, the penumbra table, the mesh's curvature, and the
+shader against its numpy twin on a sphere of known radius."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from helpers import small_settings
+
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.physics import penner
+
+GS = [(g.variance, tuple(g.weights)) for g in Settings().deon.gaussians]
+
+
+@pytest.mark.parametrize("row,col", [(1, 33), (5, 20), (30, 40), (63, 10), (40, 63)])
+def test_ring_table_equals_the_ring_integral(row, col):
+    n, kmax = 64, 2.0
+    lut = penner.ring_lut(GS, n, kmax)
+    k, ndl = (row + 0.5) / n * kmax, (col + 0.5) / n * 2 - 1
+    exact = penner.ring_integral(GS, math.acos(ndl), 1.0 / k)  # 200001 samples over the whole ring
+    # the table integrates each Gaussian over its own support with 257 samples: measured 4e-4 relative
+    assert lut[row, col] == pytest.approx(exact, rel=2e-3, abs=1e-7)
+
+
+def test_ring_table_limits_flat_skin_and_no_light_from_nowhere():
+    lut = penner.ring_lut(GS, 64, 0.05)  # radii of 20 mm and more: the profile sees a plane
+    ndl = (np.arange(64) + 0.5) / 64 * 2 - 1
+    assert np.abs(lut[0] - np.maximum(ndl, 0)[:, None]).max() < 2e-3
+    hot = penner.ring_lut(GS, 64, 20.0)
+    assert hot.min() >= 0.0 and hot.max() <= 1.0  # an average of max(cos, 0): never above 1
+    # light wraps past the terminator, furthest in red (the widest profile)
+    back = penner.ring_lut(GS, 64, 2.0)[32, 25]  # N.L = -0.2 on a 1 mm radius
+    assert back[0] > back[1] > back[2] > 0.0
+
+
+def test_penumbra_table_keeps_its_ends_and_bleeds_red_into_the_shadow():
+    lut = penner.penumbra_lut(GS, 32, 8.0)
+    assert np.all(np.diff(lut, axis=1) >= -1e-6)  # monotone in the shadow value
+    assert lut[:, 0].max() < 0.02 and lut[:, -1].min() > 0.98  # s -> 0 stays dark, s -> 1 stays lit
+    dark = lut[4, 4]  # a quarter into a 1.1 mm penumbra, on its shadowed side
+    assert dark[0] > dark[1] > dark[2]
+
+
+def test_vertex_curvature_is_one_over_the_radius():
+    import trimesh
+    sphere = trimesh.creation.icosphere(4, 10.0)
+    k = penner.vertex_curvature(sphere.vertices, sphere.vertex_normals, sphere.faces, 1.0)
+    assert k == pytest.approx(np.full(len(k), 0.1), rel=0.02)
+    k48 = penner.vertex_curvature(sphere.vertices, sphere.vertex_normals, sphere.faces, 48.0)
+    assert k48 == pytest.approx(k / 48.0, rel=1e-5)  # curvature is per millimetre
+    plane = trimesh.creation.box((10, 10, 0.001))
+    top = plane.vertex_normals  # a box's corners bend; its flat faces' edges do not
+    kp = penner.vertex_curvature(plane.vertices, np.tile([0, 0, 1.0], (8, 1)), plane.faces, 1.0)
+    assert kp.max() == 0.0 and top.shape == (8, 3)
+
+
+RADIUS = 1.0  # mm: red's profile wraps far around it
+
+
+def test_shader_agrees_with_its_numpy_twin_on_a_sphere(renderer, tmp_path):
+    """A 1 mm sphere under one unshadowed light, no specular, no energy term: every pixel of the
+    technique is C Lc D(N.L, 1/R), with N.L read from Phong's Lambert image of the same frame."""
+    import trimesh
+    path = tmp_path / "sphere.obj"
+    trimesh.creation.icosphere(5, RADIUS).export(path)
+    light = {"kind": "directional", "direction": (0.3, 0.2, 1.0), "intensity": 1.0, "color": (1, 1, 1),
+             "cast_shadow": False}
+    base = small_settings("head", "penner", 96, **{"scene.mesh": str(path), "scene.mm_per_unit": 1.0,
+                                                   "lights": [light], "specular.rho_s": 0.0,
+                                                   "deon.energy_conservation": False,
+                                                   "phong.ambient": 0.0, "phong.specular": 0.0})
+    renderer.render(base)
+    got = renderer.read(base, "lit")[..., :3].astype(np.float64)
+    ph = with_values(base, {"technique": "phong"})
+    renderer.render(ph)
+    lambert = renderer.read(ph, "lit")[..., :3].astype(np.float64)  # C * max(N.L, 0)
+    C = renderer.ensure_scene(base).gpu.albedo.read()  # 1x1 default skin tone, linear, f2
+    C = np.frombuffer(C, np.float16).astype(np.float64)[:3]
+    ndl = lambert[..., 1] / C[1]
+    mask = (ndl > 0.05) & (ndl < 0.95)
+    assert mask.sum() > 500
+    n, kmax = base.penner.lut_size, base.penner.max_curvature
+    lut = penner.ring_lut(GS, n, kmax)
+    # bilinear, as the sampler: rows at k / kmax = (1 / R) / kmax, columns at N.L * 0.5 + 0.5
+    t = (1 / RADIUS) / kmax * n - 0.5
+    r0 = int(math.floor(t))
+    row = lut[r0] * (1 - (t - r0)) + lut[r0 + 1] * (t - r0)
+    cols = (np.arange(n) + 0.5) / n
+    expect = np.stack([np.interp(ndl[mask] * 0.5 + 0.5, cols, row[:, c]) for c in range(3)], -1) * C
+    err = np.abs(got[mask] - expect) / expect.max()
+    # f16 images and the sphere's facets: measured 0.25 % of the peak at most, 0.01 % median
+    assert err.max() < 0.01 and np.median(err) < 0.001
+    assert np.abs(got[mask] - lambert[mask]).max() > 0.02  # and it differs from Lambert: it wraps
+
+
+def test_technique_renders_the_head_finite_and_softer_than_phong(renderer):
+    s = small_settings("head", "penner", 64)
+    rep = renderer.render(s)
+    assert "penner" in rep.ran and "penner_luts" in rep.ran
+    img = renderer.read(s, "lit")
+    assert np.isfinite(img).all() and img[..., :3].max() > 0.05
+    again = renderer.render(with_values(s, {"camera.yaw": 20.0}))
+    assert "penner_luts" not in again.ran  # the tables depend on the profile, not on the camera
