@@ -25,9 +25,10 @@ import json
 import math
 import re
 import uuid
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -35,7 +36,12 @@ from skinviewer.core.files import FileReadError, atomic_write_text, read_regular
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.physics import engines as E
 from skinviewer.physics.burley import shape_distance
-from skinviewer.physics.profiles import Burley, burley_normalized, burley_scale, sum_of_gaussians
+from skinviewer.physics.profiles import (
+    Burley,
+    burley_normalized,
+    burley_scale,
+    sum_of_gaussians,
+)
 
 MAX_IMPORT_BYTES = 4 << 20
 HDRP_SCRIPT_GUID = "b2686e09ec7aef44bad2843e4416f057"  # DiffusionProfileSettings (HDRP's own assets)
@@ -76,9 +82,13 @@ def current_profile(s: Settings) -> CurrentProfile:
     return CurrentProfile(gauss, f"{int(keep.sum())} Gaussians of deon.gaussians")
 
 
-def skin_of_settings(s: Settings) -> tuple[E.EngineSkin, E.BurleyFit, str]:
+def skin_of_settings(s: Settings, target: str = "unreal") -> tuple[E.EngineSkin, E.BurleyFit, str]:
+    """The Burley fit the target will render, and its engine-neutral values. HDRP normalises the
+    profile (the material's base colour is the albedo), so there A is R_d and only d is fitted."""
     cur = current_profile(s)
     fit = E.fit_burley(cur.profile)
+    if target == "hdrp":
+        fit = E.fit_burley(cur.profile, fixed_albedo=np.clip(fit.rd_target, 0.0, 1.0))
     skin = E.EngineSkin(fit.A, fit.d, E.beckmann_to_roughness(s.specular.m), E.f0_to_ior(s.specular.f0))
     return skin, fit, cur.description
 
@@ -307,7 +317,7 @@ def export(s: Settings, target: str, out: str | Path, metres_per_unit: float | N
         raise ExchangeError(f"{target} writes a {want} file, not {out.name!r}")
     if out.exists() and not out.is_file():
         raise ExchangeError(f"{out} exists and is not a file")
-    skin, fit, desc = skin_of_settings(s)
+    skin, fit, desc = skin_of_settings(s, target)
     name = _name_of(out)
     if metres_per_unit is None:
         mpu = s.scene.mm_per_unit / E.MM_PER_M if s.scene.mm_per_unit else 1.0
@@ -474,7 +484,7 @@ def read_mtlx(text: str, material: str | None = None) -> Imported:
     doc = mx.createDocument()
     try:
         mx.readFromXmlString(doc, text)
-    except Exception as exc:  # MaterialX raises its own ExceptionParseError
+    except (mx.ExceptionParseError, mx.Exception, ValueError) as exc:
         raise ExchangeError(f"not a MaterialX document: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
     shaders = [n for n in doc.getNodes() if n.getCategory() in ("standard_surface", "open_pbr_surface")]
     mats = [n for n in doc.getMaterialNodes()]

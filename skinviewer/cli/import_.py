@@ -64,8 +64,8 @@ def cmd_import(args) -> int:
         print(f"wrote {args.preset_out}")
     if args.preview:
         from skinviewer.cli.args import _size
-        from skinviewer.core.settings import with_values
         from skinviewer.cli.turntable import render_frames
+        from skinviewer.core.settings import with_values
         w, h = _size(args.size)
         vals = {"render.width": w, "render.height": h}
         if args.technique:

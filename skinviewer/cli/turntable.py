@@ -11,8 +11,8 @@ import shutil
 import sys
 import tempfile
 import time
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -118,7 +118,7 @@ def write_turntable(out: str, frames: Iterable[np.ndarray], fps: float) -> Path:
         if not imgs:
             raise ValueError("no frames")
         buf = io.BytesIO()
-        imgs[0].save(buf, format="GIF", save_all=True, append_images=imgs[1:], duration=int(round(1000 / fps)),
+        imgs[0].save(buf, format="GIF", save_all=True, append_images=imgs[1:], duration=round(1000 / fps),
                      loop=0, optimize=False)
         atomic_write_bytes(target, buf.getvalue())
         return target
@@ -167,7 +167,13 @@ def cmd_turntable(args) -> int:
         return fail(str(exc))
     s = settings_from_args(args)
     views = orbit(s, args.frames, args.light_orbit)
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+    )
     times: list[float] = []
     with Progress(TextColumn("{task.description:<12}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   transient=False) as bar:

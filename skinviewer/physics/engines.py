@@ -36,8 +36,8 @@ Fresnel, F0 = ((n - 1)/(n + 1))^2, as HDRP's UpdateCache does the other way: n =
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -200,13 +200,16 @@ def total_reflectance(profile: Callable, grid: RGrid | None = None) -> np.ndarra
     return TWO_PI * np.trapezoid(probe[:, None] ** 2 * _values(profile(probe)), np.log(probe), axis=0)
 
 
-def fit_burley(profile: Callable[[np.ndarray], np.ndarray], grid: RGrid | None = None) -> BurleyFit:
+def fit_burley(profile: Callable[[np.ndarray], np.ndarray], grid: RGrid | None = None,
+               fixed_albedo=None) -> BurleyFit:
     """Burley's A and d per channel by least squares on r R(r). For a fixed d the best A is linear
     (clamped to [0, 1], still the constrained optimum of a 1-D quadratic); d is found by a log-spaced
-    scan and refined by Brent's bounded method on log d."""
+    scan and refined by Brent's bounded method on log d. ``fixed_albedo`` (3,): only d is fitted (a
+    target that normalises the profile, HDRP, renders A = R_d whatever the fit's A)."""
     g = grid or r_grid(profile)
     T = g.r[:, None] * _values(profile(g.r))
     rd = total_reflectance(profile, g)
+    fixed = None if fixed_albedo is None else np.clip(_rgb(fixed_albedo, "albedo"), 0.0, 1.0)
     A = np.zeros(3)
     d = np.ones(3)
     err = np.zeros(3)
@@ -220,7 +223,10 @@ def fit_burley(profile: Callable[[np.ndarray], np.ndarray], grid: RGrid | None =
         def cost(logd: float, c: int = c, t: np.ndarray = t) -> tuple[float, float]:
             b = g.r * burley_normalized(g.r, math.exp(logd))
             bb = float(g.q @ (b * b))
-            a = min(max(float(g.q @ (b * t)) / bb, 0.0), 1.0) if bb > 0 else 0.0
+            if fixed is not None:
+                a = float(fixed[c])
+            else:
+                a = min(max(float(g.q @ (b * t)) / bb, 0.0), 1.0) if bb > 0 else 0.0
             res = t - a * b
             return float(g.q @ (res * res)), a
 
