@@ -15,7 +15,7 @@ from skinviewer.cli.args import add_scene_args, settings_from_args
 from skinviewer.core.files import atomic_write_bytes
 from skinviewer.core.settings import Settings, to_dict, with_values
 
-VIEWS = {"front": 0.0, "34": 45.0, "side": 90.0, "back": 180.0}
+VIEWS = {"front": 0.0, "34": 45.0, "side": 90.0, "back": 180.0}  # camera yaw, degrees about +Y
 VIEW_LABEL = {"front": "front", "34": "3/4", "side": "side", "back": "back"}
 TIMED_RUNS = 3
 
@@ -75,7 +75,7 @@ def render_sheet(s: Settings, names: list[str], views: list[str], truth: bool = 
         n = 0
         for row, view in enumerate(views):
             for col, name in enumerate(names):
-                t = with_values(s, {"technique": name, "camera.yaw": s.camera.yaw + VIEWS[view]})
+                t = with_values(s, {"technique": name, "camera.yaw": VIEWS[view]})
                 r.render_settled(t, timing="sync")  # compile and settle first: the timed runs are warm
                 ms = []
                 for _ in range(TIMED_RUNS):

@@ -149,6 +149,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--fps", type=float, default=24.0, help="frames per second of the MP4/GIF (default 24)")
     p.add_argument("--light-orbit", action="store_true", help="turn the lights instead of the camera")
     p.add_argument("--out", required=True, help="spin.mp4, spin.gif, or frames/ (a folder of PNGs)")
+    p.add_argument("--progress-lines", action="store_true",
+                   help="print 'progress N TOTAL' lines instead of a bar (for the viewer, which runs this)")
     p.set_defaults(func=cmd_turntable)
     return p
 
@@ -176,11 +178,16 @@ def cmd_turntable(args) -> int:
     )
     times: list[float] = []
     with Progress(TextColumn("{task.description:<12}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  transient=False) as bar:
+                  transient=False, disable=args.progress_lines) as bar:
         task = bar.add_task("turntable", total=len(views))
 
+        def step(n: int) -> None:
+            bar.update(task, completed=n)
+            if args.progress_lines:
+                print(f"progress {n} {len(views)}", flush=True)
+
         def frames() -> Iterator[np.ndarray]:
-            for img, ms in render_frames(s, views, progress=lambda n: bar.update(task, completed=n)):
+            for img, ms in render_frames(s, views, progress=step):
                 times.append(ms)
                 yield img
         try:
