@@ -339,3 +339,17 @@ def test_export_bad_out_and_nothing_half_written(tmp_path, capsys, monkeypatch):
     with pytest.raises(OSError):
         X.export(Settings(), "hdrp", tmp_path / "skin.asset")
     assert list(tmp_path.iterdir()) == []  # the .asset without its .meta is not left behind
+
+
+def test_export_of_a_profile_lab_model(tmp_path, capsys):
+    """--profile-model fits the model itself (not the Gaussians fitted to it); Burley's own model
+    exports without loss, a bad material name is one line."""
+    out = tmp_path / "b.py"
+    code, text, err = _cli(["export", "--to", "unreal", "--profile-model", "burley:Skin1", "--out", str(out)], capsys)
+    assert code == 0, err
+    assert "Burley (dmfp) of Skin1" in text and text.count(" 0.00%") >= 6  # shape and R_d, three channels
+    r = X.export(Settings(), "unreal", out, model="dipole:Skin1")
+    assert r.description == "the Skin1 dipole" and np.all((r.fit.error > 0.1) & (r.fit.error < 0.6))
+    assert "unknown material" in _one_line(*_cli(["export", "--to", "unreal", "--profile-model", "dipole:Nope",
+                                                   "--out", str(tmp_path / "c.py")], capsys)[::2])
+    assert not (tmp_path / "c.py").exists()

@@ -82,10 +82,39 @@ def current_profile(s: Settings) -> CurrentProfile:
     return CurrentProfile(gauss, f"{int(keep.sum())} Gaussians of deon.gaussians")
 
 
-def skin_of_settings(s: Settings, target: str = "unreal") -> tuple[E.EngineSkin, E.BurleyFit, str]:
+def model_profile(spec: str) -> CurrentProfile:
+    """The profile lab's models, unfitted: ``dipole[:MATERIAL]``, ``multipole[:MATERIAL]`` (a 2 mm
+    slab; without a material the three-layer skin example), ``burley[:MATERIAL]`` (searchlight, diffuse
+    mean free path of the material's dipole), as ``skinviewer reference --profile`` names them."""
+    from skinviewer.physics import profiles as P
+    model, _, name = spec.strip().partition(":")
+    try:
+        if model == "dipole":
+            m = P.material(name or "Skin1")
+            return CurrentProfile(P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta), f"the {name or 'Skin1'} dipole")
+        if model == "burley":
+            m = P.material(name or "Skin1")
+            A = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta).total_reflectance()
+            return CurrentProfile(P.Burley(A, P.diffuse_mean_free_path(m.sigma_s_prime, m.sigma_a)),
+                                  f"Burley (dmfp) of {name or 'Skin1'}")
+        if model == "multipole":
+            if name:
+                m = P.material(name)
+                return CurrentProfile(P.Multipole(m.sigma_s_prime, m.sigma_a, 2.0, m.eta), f"a 2 mm {name} slab")
+            return CurrentProfile(P.three_layer_skin(), "the three-layer skin multipole")
+    except KeyError as exc:
+        raise ExchangeError(str(exc.args[0])) from None
+    except ValueError as exc:
+        raise ExchangeError(f"{spec}: {exc}") from None
+    raise ExchangeError(f"unknown profile model {model!r} (have: dipole, multipole, burley)")
+
+
+def skin_of_settings(s: Settings, target: str = "unreal", model: str | None = None
+                     ) -> tuple[E.EngineSkin, E.BurleyFit, str]:
     """The Burley fit the target will render, and its engine-neutral values. HDRP normalises the
-    profile (the material's base colour is the albedo), so there A is R_d and only d is fitted."""
-    cur = current_profile(s)
+    profile (the material's base colour is the albedo), so there A is R_d and only d is fitted.
+    ``model``: fit a profile-lab model (``model_profile``) instead of the current profile."""
+    cur = model_profile(model) if model else current_profile(s)
     fit = E.fit_burley(cur.profile)
     if target == "hdrp":
         fit = E.fit_burley(cur.profile, fixed_albedo=np.clip(fit.rd_target, 0.0, 1.0))
@@ -306,7 +335,7 @@ def _name_of(path: Path) -> str:
 
 
 def export(s: Settings, target: str, out: str | Path, metres_per_unit: float | None = None,
-           world_unit_scale: float = 1.0) -> ExportResult:
+           world_unit_scale: float = 1.0, model: str | None = None) -> ExportResult:
     """Fit and write ``target``'s file(s) at ``out``. Every file is written atomically, and the
     HDRP pair (.asset + .meta) only after both texts are complete."""
     if target not in E.TARGETS:
@@ -317,7 +346,7 @@ def export(s: Settings, target: str, out: str | Path, metres_per_unit: float | N
         raise ExchangeError(f"{target} writes a {want} file, not {out.name!r}")
     if out.exists() and not out.is_file():
         raise ExchangeError(f"{out} exists and is not a file")
-    skin, fit, desc = skin_of_settings(s, target)
+    skin, fit, desc = skin_of_settings(s, target, model)
     name = _name_of(out)
     if metres_per_unit is None:
         mpu = s.scene.mm_per_unit / E.MM_PER_M if s.scene.mm_per_unit else 1.0

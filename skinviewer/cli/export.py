@@ -23,6 +23,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
                    help="HDRP worldScale: metres per world unit (default: scene.mm_per_unit / 1000, else 1 = 1 m)")
     p.add_argument("--unreal-world-unit-scale", type=float, default=1.0, metavar="CM",
                    help="Unreal WorldUnitScale (cm per unit; default 1: a real-scale head, 1 uu = 1 cm)")
+    p.add_argument("--profile-model", metavar="MODEL[:MATERIAL]",
+                   help="fit the profile lab's model instead of the current Gaussians: dipole[:Skin1], "
+                        "multipole[:MATERIAL] (default: three-layer skin), burley[:Skin1]")
     p.set_defaults(func=cmd_export)
     return p
 
@@ -51,7 +54,7 @@ def cmd_export(args) -> int:
         print("skinviewer export: error: --world-scale must be > 0 metres per unit", file=sys.stderr)
         return 2
     try:
-        r = export(s, args.to, args.out, args.world_scale, args.unreal_world_unit_scale)
+        r = export(s, args.to, args.out, args.world_scale, args.unreal_world_unit_scale, args.profile_model)
     except ExchangeError as exc:
         print(f"skinviewer export: error: {exc}", file=sys.stderr)
         return 2

@@ -15,7 +15,13 @@ import tempfile
 import threading
 from pathlib import Path
 
-from skinviewer.cli.exchange import SUFFIX, ExchangeError, export, read_any, settings_with
+from skinviewer.cli.exchange import (
+    SUFFIX,
+    ExchangeError,
+    export,
+    read_any,
+    settings_with,
+)
 from skinviewer.core.settings import Settings, SettingsError, to_dict
 from skinviewer.physics.engines import TARGETS
 
