@@ -115,3 +115,33 @@ def test_sheet_rejects_unknown_names(tmp_path, capsys):
     assert len(err) == 1 and "nope" in err[0]
     assert main(["sheet", "--views", "top", "--out", str(tmp_path / "s.png")]) == 2
     assert "top" in capsys.readouterr().err
+
+
+def test_sheet_labels_the_error_against_a_cached_truth(tmp_path, capsys, monkeypatch):
+    """With a cached ground truth of the view the tile says its RMS error (here a stand-in truth of
+    uniform grey radiance: the figure is the plumbing's, not a judgement of the technique)."""
+    from skinviewer.core import reference
+    calls = []
+
+    def cached(s, *a, **k):
+        calls.append(s.camera.yaw)
+        h, w = s.render.height, s.render.width
+        return reference.Reference(np.full((h, w, 3), 0.05), np.zeros((h, w, 3)), np.zeros((h, w, 3)),
+                                   np.ones((h, w), bool))
+    monkeypatch.setattr(reference, "load_cached", cached)
+    img, recs = sheet_cli.render_sheet(with_values(Settings(), {"render.width": 48, "render.height": 48,
+                                                                "deon.irradiance_size": 256, "deon.tsm_size": 256}),
+                                       ["phong"], ["front", "back"])
+    assert calls == [0.0, 180.0]
+    assert all(r["truth_rms"] is not None and 0 < r["truth_rms"] < 100 for r in recs)
+
+
+def test_import_preview_renders_the_imported_profile(tmp_path, capsys):
+    from skinviewer.cli import exchange as X
+    asset = tmp_path / "skin.asset"
+    X.export(Settings(), "hdrp", asset)
+    png = tmp_path / "preview.png"
+    code = main(["import", str(asset), "--preview", str(png), "--technique", "burley", "--size", "48x48"])
+    assert code == 0, capsys.readouterr().err
+    img = np.asarray(Image.open(png).convert("RGB"))
+    assert img.shape == (48, 48, 3) and img.std() > 5

@@ -151,10 +151,10 @@ class RGrid:
         return np.sqrt(self.q @ (np.asarray(f, float) ** 2))
 
 
-def r_grid(profile: Callable[[np.ndarray], np.ndarray], n: int = 600, rel: float = 1e-9) -> RGrid:
+def r_grid(profile: Callable[[np.ndarray], np.ndarray], n: int = 400, rel: float = 1e-9) -> RGrid:
     """A log-spaced grid holding all but ``rel`` of int (r R_c)^2 dr in every channel (probed over
     1e-5..1e4 mm), trapezoid in log r: int f^2 dr = int r f^2 dlog r."""
-    probe = np.geomspace(1e-5, 1e4, 1401)
+    probe = np.geomspace(1e-5, 1e4, 361)  # 40 a decade
     f = probe[:, None] * _values(profile(probe))
     dens = probe[:, None] * f**2
     tot = dens.sum(0)
