@@ -69,6 +69,7 @@ def test_block_draws_in_every_state(monkeypatch):
     ctx = imgui.create_context()
     try:
         io = imgui.get_io()
+        io.set_ini_filename("")  # no imgui.ini left in the working folder
         io.display_size = imgui.ImVec2(800, 600)
         io.delta_time = 1 / 60
         io.fonts.get_tex_data_as_rgba32()
