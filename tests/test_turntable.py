@@ -145,3 +145,14 @@ def test_import_preview_renders_the_imported_profile(tmp_path, capsys):
     assert code == 0, capsys.readouterr().err
     img = np.asarray(Image.open(png).convert("RGB"))
     assert img.shape == (48, 48, 3) and img.std() > 5
+
+
+def test_frames_into_a_non_empty_folder_is_refused_before_rendering(tmp_path, capsys):
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    (folder / "keep.txt").write_text("mine")
+    assert main(["turntable", "--frames", "2", *TINY, "--out", str(folder) + "/"]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert len(err) == 1 and "not an empty folder" in err[0]
+    assert [p.name for p in folder.iterdir()] == ["keep.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frames"]

@@ -30,6 +30,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     return p
 
 
+UNITS = {"scatteringDistanceMultiplier": "mm (x scatteringDistance = Burley's d)", "worldScale": "m per world unit",
+         "MeanFreePathDistance": "cm (Unreal units)", "WorldUnitScale": "cm per Unreal unit",
+         "radius_scale_mm": "mm", "Subsurface Scale (m)": "m (the script divides by the scene's unit scale)",
+         "smoothness": "(HDRP keeps it in the material)", "MaterialRoughness": "(set on the material)"}
+
+
 def print_result(r: ExportResult, target: str) -> None:
     print(f"fitted Burley to {r.description}")
     print(f"{'channel':>8} {'A':>8} {'d (mm)':>10} {'err r.R(r)':>11} {'err R_d':>9}")
@@ -42,7 +48,7 @@ def print_result(r: ExportResult, target: str) -> None:
             continue
         val = ", ".join(f"{x:.5g}" for x in v) if isinstance(v, (list, tuple)) else \
             (f"{v:.6g}" if isinstance(v, float) else str(v))
-        print(f"  {k}: {val}")
+        print(f"  {k}: {val}" + (f"  {UNITS[k]}" if k in UNITS else ""))
     print(f"  specular: Beckmann m -> roughness {r.skin.roughness:.4f} (alpha = m), F0 -> IOR {r.skin.ior:.4f}")
     for w in r.written:
         print(f"wrote {w}")
