@@ -129,7 +129,7 @@ def test_sheet_labels_the_error_against_a_cached_truth(tmp_path, capsys, monkeyp
         return reference.Reference(np.full((h, w, 3), 0.05), np.zeros((h, w, 3)), np.zeros((h, w, 3)),
                                    np.ones((h, w), bool))
     monkeypatch.setattr(reference, "load_cached", cached)
-    img, recs = sheet_cli.render_sheet(with_values(Settings(), {"render.width": 48, "render.height": 48,
+    _img, recs = sheet_cli.render_sheet(with_values(Settings(), {"render.width": 48, "render.height": 48,
                                                                 "deon.irradiance_size": 256, "deon.tsm_size": 256}),
                                        ["phong"], ["front", "back"])
     assert calls == [0.0, 180.0]
