@@ -36,7 +36,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     settings_list.add_parser(sub)
 
-    from skinviewer.cli import export as export_cli, import_ as import_cli, sheet as sheet_cli, turntable as turntable_cli
+    from skinviewer.cli import export as export_cli
+    from skinviewer.cli import import_ as import_cli
+    from skinviewer.cli import sheet as sheet_cli
+    from skinviewer.cli import turntable as turntable_cli
     export_cli.add_parser(sub)
     import_cli.add_parser(sub)
     turntable_cli.add_parser(sub)
