@@ -353,3 +353,16 @@ def test_export_of_a_profile_lab_model(tmp_path, capsys):
     assert "unknown material" in _one_line(*_cli(["export", "--to", "unreal", "--profile-model", "dipole:Nope",
                                                    "--out", str(tmp_path / "c.py")], capsys)[::2])
     assert not (tmp_path / "c.py").exists()
+
+
+def test_json_of_the_values_an_engine_shows(tmp_path, capsys):
+    """Unreal's details panel names (spaces), with fields this tool has no use for: read, listed."""
+    js = tmp_path / "unreal.json"
+    js.write_text('{"Surface Albedo": [0.8, 0.8, 0.8], "Mean Free Path Color": [1, 0.5, 0.25], '
+                  '"Mean Free Path Distance": 0.3, "Boundary Color Bleed": [1, 1, 1], "Extinction Scale": 1}')
+    code, out, err = _cli(["import", str(js)], capsys)
+    assert code == 0, err
+    assert "skipped (not used here): Boundary Color Bleed, Extinction Scale" in out
+    imp = X.read_any(js)
+    assert imp.target == "unreal"
+    assert imp.skin.d_mm == pytest.approx(np.array([1, 0.5, 0.25]) * 3.0 / (0.6 * 1.05))
