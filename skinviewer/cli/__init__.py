@@ -37,6 +37,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     settings_list.add_parser(sub)
 
+    from skinviewer.cli import export as export_cli
+    from skinviewer.cli import import_ as import_cli
+    from skinviewer.cli import sheet as sheet_cli
+    from skinviewer.cli import turntable as turntable_cli
+    export_cli.add_parser(sub)
+    import_cli.add_parser(sub)
+    turntable_cli.add_parser(sub)
+    sheet_cli.add_parser(sub)
+
     pv = sub.add_parser("view", help="open the viewer (the default command)")
     _add_view_args(pv)
     pv.set_defaults(func=cmd_view)
@@ -83,7 +92,8 @@ def _join_negative_values(argv: list[str]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
-    commands = {"render", "profile", "view", "settings", "reference", "bench", "-h", "--help"}
+    commands = {"render", "profile", "view", "settings", "reference", "bench", "export", "import", "turntable", "sheet",
+                "-h", "--help"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     args = parser.parse_args(argv)

@@ -7,6 +7,7 @@ from pathlib import Path
 from imgui_bundle import imgui
 
 from skinviewer.ui.compare import MODES as COMPARE_MODES
+from skinviewer.ui.exchange import ExchangeTools
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.sections.common import change_line, shader_errors
 from skinviewer.ui.state import PANEL_SIDES, ViewerState
@@ -70,11 +71,13 @@ class RenderSection:
 
 
 class PresetsSection:
-    """Load / save / save as, the shipped and user preset folders, the confirmation before loading over unsaved changes."""
+    """Load / save / save as, the shipped and user preset folders, the confirmation before loading over unsaved changes;
+    Export... / Import... for the engines and a background Turntable (ui/exchange.py)."""
 
     def __init__(self, state: ViewerState, frame: FrameController):
         self.state = state
         self.frame = frame
+        self.exchange = ExchangeTools()
 
     def draw(self, ui: UiContext) -> None:
         st = self.state
@@ -106,6 +109,7 @@ class PresetsSection:
                     st.set_preset_path_text(str(f))
                     st.request_preset(str(f))
                 tooltip(str(f))
+        self.exchange.draw(st, ui)
         if p.message:
             wrapped(p.message, ERR if p.errors else OK)
         if p.errors:
