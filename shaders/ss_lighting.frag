@@ -92,6 +92,7 @@ vec3 transmitted(int i, vec3 P, vec3 Ng) {
 }
 
 void main() {
+    set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage (lib/beam.glsl)
     vec3 Ng = normalize(v_normal);
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 V = normalize(u_eye - v_position);
