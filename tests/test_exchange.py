@@ -13,7 +13,7 @@ import pytest
 import yaml
 from scipy.integrate import quad
 
-from skinviewer.cli import exchange as X
+from skinviewer.core import exchange as X
 from skinviewer.cli import main
 from skinviewer.core.settings import Settings, load_preset, with_values
 from skinviewer.physics import engines as E

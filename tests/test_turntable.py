@@ -137,7 +137,7 @@ def test_sheet_labels_the_error_against_a_cached_truth(tmp_path, capsys, monkeyp
 
 
 def test_import_preview_renders_the_imported_profile(tmp_path, capsys):
-    from skinviewer.cli import exchange as X
+    from skinviewer.core import exchange as X
     asset = tmp_path / "skin.asset"
     X.export(Settings(), "hdrp", asset)
     png = tmp_path / "preview.png"

@@ -22,6 +22,10 @@ float beam_angle(vec2 a, vec2 b) {  // signed angle from a to b (0 for a degener
 }
 // Signed area of the unit disk (radius 1, centre 0) intersected with the triangle (0, p, q).
 float beam_disk_tri(vec2 p, vec2 q) {
+    // a vertex at the disk's centre (a footprint corner on the beam's axis) makes the triangle
+    // degenerate: area 0. Without this, the angle between two ~1e-7 vectors (the corner and its
+    // rounded chord point) came out as +-pi on NVIDIA: a quarter disk too much (issue 31)
+    if (!(dot(p, p) > 1e-12) || !(dot(q, q) > 1e-12)) return 0.0;
     vec2 d = q - p;
     float dd = dot(d, d);
     if (!(dd > 1e-24)) return 0.0;

@@ -63,9 +63,11 @@ uint burley_pcg(uint v) {
     return (word >> 22u) ^ word;
 }
 
-// psi = 2 pi hash(pixel, bits of the linear depth) / 2^32 (spec §5.3 step 4)
+// psi = 2 pi hash(pixel, bits of floor(linear depth in mm)) / 2^32 (spec §5.3 step 4: stable while the
+// view is still). The depth is floored to whole mm: its last bits differ between GPUs (one ulp from
+// NVIDIA to llvmpipe re-rolled every pixel's rotation: 8-18 % image differences, issue 31)
 float burley_phase(ivec2 p, float z) {
-    uint h = burley_pcg(uint(p.x) + burley_pcg(uint(p.y) + burley_pcg(floatBitsToUint(z) + u_seed)));
+    uint h = burley_pcg(uint(p.x) + burley_pcg(uint(p.y) + burley_pcg(floatBitsToUint(floor(z)) + u_seed)));
     return 6.2831855 * (float(h) * 2.3283064e-10);
 }
 

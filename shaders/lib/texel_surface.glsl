@@ -5,7 +5,8 @@
 // a direction as 2 floats (octahedral, Cigolle et al. 2014); (2, 2): none (zero, NaN or Inf)
 vec2 oct_encode(vec3 v) {
     float l1 = abs(v.x) + abs(v.y) + abs(v.z);
-    if (!(l1 > 0.0) || isinf(l1)) return vec2(2.0);
+    // isnan spelled out: NVIDIA's compiler folds !(l1 > 0.0) into l1 <= 0.0, which lets a NaN through
+    if (isnan(l1) || isinf(l1) || l1 <= 0.0) return vec2(2.0);
     v /= l1;
     vec2 s = vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0);
     return (v.z >= 0.0) ? v.xy : (1.0 - abs(v.yx)) * s;

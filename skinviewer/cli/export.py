@@ -1,12 +1,12 @@
 """``skinviewer export --to hdrp|unreal|materialx|openpbr|blender --out PATH``: the current profile,
-fitted with Burley's normalized diffusion, in the file the target reads (see cli/exchange.py)."""
+fitted with Burley's normalized diffusion, in the file the target reads (see core/exchange.py)."""
 from __future__ import annotations
 
 import argparse
 import sys
 
 from skinviewer.cli.args import add_scene_args, settings_from_args
-from skinviewer.cli.exchange import ExchangeError, ExportResult, export
+from skinviewer.core.exchange import ExchangeError, ExportResult, export
 from skinviewer.physics.engines import TARGETS
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from skinviewer.cli.exchange import ExchangeError, Imported, read_any, settings_with
+from skinviewer.core.exchange import ExchangeError, Imported, read_any, settings_with
 from skinviewer.core.settings import Settings, SettingsError, load_preset, save_preset
 from skinviewer.physics import engines as E
 

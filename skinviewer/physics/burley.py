@@ -210,9 +210,10 @@ def pcg_hash(v: np.ndarray) -> np.ndarray:
 
 
 def rotation_phase(px: np.ndarray, py: np.ndarray, z: np.ndarray, seed: int = 0) -> np.ndarray:
-    """psi = 2 pi hash(x, y, bits of the linear depth) / 2^32, float32 like the GLSL (stable while the
-    camera and scene are static, spec §5.3 step 4)."""
-    zb = np.asarray(z, dtype=np.float32).view(np.uint32)
+    """psi = 2 pi hash(x, y, bits of floor(linear depth, mm)) / 2^32, float32 like the GLSL (stable
+    while the camera and scene are static, spec §5.3 step 4; whole mm, so that the depth's last bits,
+    which differ between GPUs, do not re-roll the rotation)."""
+    zb = np.floor(np.asarray(z, dtype=np.float32)).astype(np.float32).view(np.uint32)
     with np.errstate(over="ignore"):
         h = pcg_hash(np.asarray(px, np.uint32) + pcg_hash(np.asarray(py, np.uint32) + pcg_hash(zb + np.uint32(seed))))
     return np.float32(6.2831855) * (h.astype(np.float32) * np.float32(2.3283064e-10))
