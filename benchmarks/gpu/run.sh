@@ -18,6 +18,9 @@ mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
 exec > >(tee -a "$OUT/run.log") 2>&1
 T0=$(date +%s)
+# STEPS: which of renders, frames, suite, truth, diag to run (default all but diag)
+STEPS=${STEPS:-renders frames suite truth}
+want() { [[ " $STEPS " == *" $1 "* ]]; }
 stamp() { echo "== $(( $(date +%s) - T0 )) s: $*"; }
 # the whole run fits in RUN_SECONDS (default 520: a 10-minute call with the machine's start): each
 # step gets at most what is left, less 20 s for the report
@@ -56,12 +59,11 @@ fi
 
 if [ "$LIGHT" = "--light" ]; then SIZE=128; W=320; H=180; REPS=2; TSIZE=96x96; FRAMES_EXTRA=(--small-maps 256); SUITE=(tests/test_settings.py tests/test_graph.py); else SIZE=256; W=1920; H=1080; REPS=5; TSIZE=128x128; FRAMES_EXTRA=(); SUITE=(); fi
 
-stamp "renders and parity"
-timeout "$(cap 120)" python3 benchmarks/gpu/gpu_check.py renders --out "$OUT" --size $SIZE $( [ "$SIZE" = 256 ] && echo --ref .gpuref/renders.npz )
+want renders && stamp "renders and parity" && timeout "$(cap 120)" python3 benchmarks/gpu/gpu_check.py renders --out "$OUT" --size $SIZE $( [ "$SIZE" = 256 ] && echo --ref .gpuref/renders.npz )
 
-stamp "frames, ratios, memory"
-timeout "$(cap 240)" python3 benchmarks/gpu/gpu_check.py frames --out "$OUT" --width $W --height $H --repeats $REPS "${FRAMES_EXTRA[@]}"
+want frames && stamp "frames, ratios, memory" && timeout "$(cap 240)" python3 benchmarks/gpu/gpu_check.py frames --out "$OUT" --width $W --height $H --repeats $REPS "${FRAMES_EXTRA[@]}"
 
+if want suite; then
 stamp "headless test suite"
 ignore=()
 for mod in imageio_ffmpeg moderngl_window imgui_bundle materialx; do
@@ -88,6 +90,9 @@ fi
 tail -n 15 "$OUT/suite.log"
 python3 benchmarks/gpu/gpu_check.py note --out "$OUT" suite summary "$(tail -n 1 "$OUT/suite.log")"
 
+fi
+
+if want truth; then
 stamp "ground truth and bench wall time"
 s0=$(date +%s.%N)
 timeout "$(cap 100)" python3 -m skinviewer reference --size $TSIZE --no-cache --out /tmp/skinviewer-truth.png >/dev/null \
@@ -99,6 +104,13 @@ s0=$(date +%s.%N)
        "$(python3 -c "print(f'{$(date +%s.%N) - $s0:.1f}')")" \
     && cp /tmp/skinviewer-bench/results.md "$OUT/bench.md"
 [ -f "$OUT/bench.md" ] || python3 benchmarks/gpu/gpu_check.py note --out "$OUT" walls "reference or bench" "did not finish in the time left"
+
+fi
+
+if want diag; then
+    stamp "diagnostics"
+    timeout "$(cap 120)" python3 benchmarks/gpu/diag.py --out "$OUT"
+fi
 
 stamp "report"
 python3 benchmarks/gpu/gpu_check.py report --out "$OUT" >/dev/null

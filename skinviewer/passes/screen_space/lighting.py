@@ -69,7 +69,10 @@ class ScreenLightingPass(Pass):
         declare_view_mesh(r)
         r.output(DIFFUSE, TexSpec(size, 4, "f4", depth=True))
         r.output(SPECULAR, TexSpec(size, 4, "f2"))
-        r.output(DEPTH, TexSpec(size, 4, "f4", filter="nearest"))
+        # linear: the separable blur's follow-surface test reads the depth where its tap reads the
+        # (bilinear) colour; nearest gave a sub-pixel tap the centre's own depth, so it gathered its
+        # neighbour's colour across any depth step (every other reader uses texelFetch)
+        r.output(DEPTH, TexSpec(size, 4, "f4"))
         r.output(ALBEDO, TexSpec(size, 4, "f2"))
 
     def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
