@@ -523,3 +523,178 @@ def test_cli_refuses_a_configuration_that_does_not_fit(tmp_path, capsys, monkeyp
 def test_settings_roundtrip_unchanged_by_validators():
     s = Settings()
     assert validate(to_dict(s)) == s
+
+
+# == issue 35: reliability, second round ===========================================================
+# What a mesh points at (FIFOs, missing files, huge buffers), glTF UVs, winding, EXIF, output paths,
+# numeric arguments, the cache, shader roots. Each test failed on the tree before its fix.
+
+def _gltf(path: Path, meshes=1, material=True, nested=False, bin_uri=None, image_uri=None) -> np.ndarray:
+    """A glTF of ``meshes`` unit quads (UVs in [0.25, 0.75]); returns the file's TEXCOORD_0."""
+    import base64
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
+    UV = np.array([[0.25, 0.25], [0.75, 0.3], [0.7, 0.75], [0.3, 0.7]], np.float32)
+    idx = np.array([0, 1, 2, 0, 2, 3], np.uint32)
+    buf = P.tobytes() + UV.tobytes() + idx.tobytes()
+    if bin_uri:
+        (path.parent / bin_uri).write_bytes(buf)
+    uri = bin_uri or "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    d = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": len(buf), "uri": uri}],
+         "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                         {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                         {"buffer": 0, "byteOffset": 80, "byteLength": 24}],
+         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]},
+                       {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                       {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}],
+         "meshes": [], "nodes": [], "scenes": [{"nodes": []}], "scene": 0}
+    for _ in range(meshes):
+        prim = {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}
+        if material:
+            prim["material"] = 0
+        d["meshes"].append({"primitives": [prim]})
+    if material:
+        d["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1]}}]
+        if image_uri:
+            d["images"] = [{"uri": image_uri}]
+            d["textures"] = [{"source": 0}]
+            d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    for k in range(meshes):
+        if nested:  # a parent moves, its child rotates 90 degrees about z
+            d["nodes"].append({"children": [len(d["nodes"]) + 1], "translation": [k * 2.0, 0, 0]})
+            d["nodes"].append({"mesh": k, "rotation": [0, 0, 0.7071068, 0.7071068]})
+            d["scenes"][0]["nodes"].append(len(d["nodes"]) - 2)
+        else:
+            d["nodes"].append({"mesh": k, "translation": [k * 2.0, 0, 0]})
+            d["scenes"][0]["nodes"].append(len(d["nodes"]) - 1)
+    path.write_text(json.dumps(d))
+    return np.tile(UV * [1, -1] + [0, 1], (meshes, 1))  # glTF's v runs down the image
+
+
+@pytest.mark.parametrize("kw", [dict(material=False), dict(meshes=3, material=False),
+                                dict(meshes=2, nested=True, material=False), dict(meshes=2, nested=True)])
+def test_gltf_uvs_are_kept_without_a_material_and_across_meshes(tmp_path, kw):
+    uv = _gltf(tmp_path / "q.gltf", **kw)
+    m = load_mesh(tmp_path / "q.gltf")
+    assert not any("xatlas" in n for n in m.notes), m.notes
+    np.testing.assert_allclose(m.uvs, uv, atol=1e-6)
+    if kw.get("nested"):  # the child's rotation and the parent's translation both apply
+        np.testing.assert_allclose(np.sort(m.positions[:, 0]), [-1, -1, 0, 0, 1, 1, 2, 2], atol=1e-6)
+
+
+def _cube_obj(path: Path, inverted: bool, mtl: str | None = None) -> Path:
+    import trimesh
+    box = trimesh.creation.box()
+    f = box.faces[:, ::-1] if inverted else box.faces
+    lines = ([f"mtllib {mtl}", "usemtl skin"] if mtl else []) + [f"v {x} {y} {z}" for x, y, z in box.vertices]
+    lines += [f"vt {0.1 + 0.1 * (i % 8)} {0.1 + 0.1 * (i // 8)}" for i in range(len(box.vertices))]
+    lines += ["f " + " ".join(f"{a + 1}/{a + 1}" for a in tri) for tri in f]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_inverted_winding_of_a_closed_mesh_is_reversed_and_noted(tmp_path):
+    from skinviewer.scene.mesh import signed_volume
+    good = load_mesh(_cube_obj(tmp_path / "good.obj", inverted=False))
+    bad = load_mesh(_cube_obj(tmp_path / "bad.obj", inverted=True))
+    assert not any("wound inwards" in n for n in good.notes)
+    assert any("wound inwards" in n for n in bad.notes), bad.notes
+    assert signed_volume(bad.positions, bad.indices) == pytest.approx(1.0)
+    # its normals point outwards, like the correctly wound cube's
+    out = bad.positions - bad.positions.mean(0)
+    assert ((bad.normals * out).sum(1) > 0).all()
+
+
+def test_open_mesh_winding_is_left_alone(tmp_path):
+    m = load_mesh(_obj(tmp_path / "plane.obj", 1.0))
+    assert not any("wound" in n for n in m.notes)
+
+
+def _jpeg_with_orientation(path: Path, orientation: int) -> np.ndarray:
+    from PIL import Image
+    a = np.zeros((8, 16, 3), np.uint8)
+    a[:, :8] = 255  # left half white: 16 wide, 8 tall as stored
+    img = Image.fromarray(a)
+    exif = img.getexif()
+    exif[0x0112] = orientation
+    img.save(path, format="JPEG", exif=exif, quality=100)
+    return a
+
+
+def test_jpeg_exif_orientation_is_applied(tmp_path):
+    p = tmp_path / "rot.jpg"
+    _jpeg_with_orientation(p, 6)  # shown rotated 90 degrees clockwise: 8 wide, 16 tall
+    m = load_texture_maps(_plane(), albedo=p)
+    assert m.albedo.shape[:2] == (16, 8)
+    shown = m.albedo[::-1][..., 0]  # image row order
+    assert shown[:8].mean() > 0.9 and shown[8:].mean() < 0.1  # the white half is on top
+
+
+def test_exr_as_albedo_says_so(tmp_path):
+    p = tmp_path / "lin.exr"
+    files.save_exr(p, np.ones((4, 4, 3), np.float32))
+    with pytest.raises(MeshError) as exc:
+        load_texture_maps(_plane(), albedo=p)
+    assert "OpenEXR" in str(exc.value) and "BytesIO" not in str(exc.value)
+
+
+def test_garbage_obj_is_one_clear_line(tmp_path):
+    p = tmp_path / "garbage.obj"
+    p.write_bytes(bytes(range(256)) * 64)
+    with pytest.raises(MeshError) as exc:
+        load_mesh(p)
+    msg = str(exc.value)
+    assert "module" not in msg and "charset" not in msg and str(p) in msg, msg
+
+
+def test_missing_textures_and_mtl_are_noted(tmp_path):
+    _cube_obj(tmp_path / "nomtl.obj", False, mtl="gone.mtl")
+    m = load_mesh(tmp_path / "nomtl.obj")
+    assert any("gone.mtl" in n for n in m.notes), m.notes
+    (tmp_path / "skin.mtl").write_text("newmtl skin\nKd 1 1 1\nmap_Kd missing_albedo.png\n")
+    m = load_mesh(_cube_obj(tmp_path / "notex.obj", False, mtl="skin.mtl"))
+    assert any("missing_albedo.png" in n for n in m.notes), m.notes
+    _gltf(tmp_path / "q.gltf", image_uri="missing_base.png")
+    m = load_mesh(tmp_path / "q.gltf")
+    assert any("missing_base.png" in n for n in m.notes), m.notes
+
+
+def test_fifos_a_mesh_points_at_do_not_hang(tmp_path):
+    """mtllib, map_Kd, a glTF image URI and a glTF buffer that are FIFOs: refused without blocking."""
+    os.mkfifo(tmp_path / "fifo.mtl")
+    os.mkfifo(tmp_path / "fifo.png")
+    os.mkfifo(tmp_path / "fifo.bin")
+    _cube_obj(tmp_path / "a.obj", False, mtl="fifo.mtl")
+    (tmp_path / "tex.mtl").write_text("newmtl skin\nmap_Kd fifo.png\n")
+    _cube_obj(tmp_path / "b.obj", False, mtl="tex.mtl")
+    _gltf(tmp_path / "c.gltf", image_uri="fifo.png")
+    d = json.loads((tmp_path / "c.gltf").read_text())
+    d["buffers"][0]["uri"] = "fifo.bin"
+    (tmp_path / "d.gltf").write_text(json.dumps(d))
+    code = ("import sys\nfrom skinviewer.scene.mesh import MeshError, load_mesh\n"
+            "for a in sys.argv[1:]:\n    try:\n        print(a, load_mesh(a).notes)\n"
+            "    except MeshError as e:\n        print(a, 'ERROR', e)\n")
+    r = _in_child(code, *(str(tmp_path / n) for n in ("a.obj", "b.obj", "c.gltf", "d.gltf")))
+    lines = r.stdout.splitlines()
+    assert r.returncode == 0 and len(lines) == 4, (r.stdout, r.stderr[-800:])
+    assert all("FIFO" in line for line in lines), lines
+    assert "ERROR" in lines[3] and "fifo.bin" in lines[3]  # no geometry without its buffer
+
+
+def test_huge_external_gltf_buffer_is_refused_with_the_reason(tmp_path):
+    _gltf(tmp_path / "q.gltf", bin_uri="big.bin")
+    with open(tmp_path / "big.bin", "r+b") as f:  # sparse: 3 GiB on paper, nothing on disk
+        f.truncate(3 * 2**30)
+    with pytest.raises(MeshError) as exc:
+        load_mesh(tmp_path / "q.gltf")
+    assert "big.bin" in str(exc.value) and "limit" in str(exc.value), str(exc.value)
+
+
+def test_mesh_references_outside_its_folder_are_not_read(tmp_path):
+    (tmp_path / "sub").mkdir()
+    secret = tmp_path / "secret.png"
+    from PIL import Image
+    Image.new("RGB", (4, 4), (255, 0, 0)).save(secret)
+    (tmp_path / "sub" / "x.mtl").write_text("newmtl skin\nmap_Kd ../secret.png\n")
+    m = load_mesh(_cube_obj(tmp_path / "sub" / "x.obj", False, mtl="x.mtl"))
+    assert m.albedo is None and any("outside the mesh's folder" in n for n in m.notes), m.notes
