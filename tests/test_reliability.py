@@ -698,3 +698,165 @@ def test_mesh_references_outside_its_folder_are_not_read(tmp_path):
     (tmp_path / "sub" / "x.mtl").write_text("newmtl skin\nmap_Kd ../secret.png\n")
     m = load_mesh(_cube_obj(tmp_path / "sub" / "x.obj", False, mtl="x.mtl"))
     assert m.albedo is None and any("outside the mesh's folder" in n for n in m.notes), m.notes
+
+
+# -- outputs: the extension says the format; an output never replaces an input ---------------------
+
+def _cli(argv) -> int:
+    """cli_main's exit status, also when argparse exits."""
+    try:
+        return cli_main([str(a) for a in argv])
+    except SystemExit as exc:
+        return int(exc.code)
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+@pytest.mark.parametrize("ext,fmt", [(".jpg", "JPEG"), (".jpeg", "JPEG"), (".tif", "TIFF"), (".tiff", "TIFF"),
+                                     (".bmp", "BMP"), (".png", "PNG")])
+def test_render_writes_the_format_its_extension_names(tmp_path, capsys, ext, fmt):
+    from PIL import Image
+    out = tmp_path / f"x{ext}"
+    assert _cli(["render", "--scene", "stretch-plane", "--technique", "phong", "--size", "16x16", "--out", str(out)]) == 0
+    with Image.open(out) as img:
+        assert img.format == fmt and img.size == (16, 16)
+
+
+@pytest.mark.parametrize("argv", [
+    ["render", "--out", "{d}/x.gif"], ["render", "--out", "{d}/x"], ["render", "--out", "{d}/x.png", "--exr", "{d}/lin.png"],
+    ["reference", "--out", "{d}/r.webp"], ["reference", "--out", "{d}/r.png", "--exr", "{d}/r.tif"],
+    ["reference", "--out", "{d}/r.png", "--npy", "{d}/r.png2"], ["view", "--frames", "1", "--screenshot", "{d}/s.gif"],
+    ["import", "{d}/x.asset", "--preview", "{d}/p.exr"], ["profile", "--plot", "{d}/plot.jpg"],
+])
+def test_outputs_whose_extension_is_not_written_are_refused_before_any_work(tmp_path, capsys, argv):
+    assert _cli([a.format(d=tmp_path) for a in argv]) == 2
+    err = _one_line_error(capsys)
+    assert "extension" in err or "name the file" in err, err
+    assert list(tmp_path.iterdir()) == []  # nothing written, nothing left
+
+
+def test_reference_out_exr_is_the_linear_image(tmp_path, capsys):
+    out = tmp_path / "r.exr"
+    argv = ["reference", "--scene", "stretch-plane", "--size", "16x16", "--h", "2", "--no-cache", "--out", str(out),
+            "--npy", str(tmp_path / "r.npy")]
+    assert _cli(argv) == 0
+    assert out.read_bytes()[:4] == b"\x76\x2f\x31\x01"  # OpenEXR magic, not PNG bytes
+    lin = np.load(tmp_path / "r.npy")
+    np.testing.assert_array_equal(files.load_exr(out)[..., :3], lin[..., :3])
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs an X display (Xvfb)")
+def test_viewer_screenshot_exr_is_the_linear_image(tmp_path):
+    out = tmp_path / "s.exr"
+    r = subprocess.run([sys.executable, "-m", "skinviewer", "view", "--scene", "stretch-plane", "--technique", "phong",
+                        "--size", "64x64", "--frames", "1", "--screenshot", str(out)], cwd=ROOT, capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0, r.stderr[-800:]
+    assert out.read_bytes()[:4] == b"\x76\x2f\x31\x01"
+    assert files.load_exr(out).dtype == np.float32
+
+
+@pytest.mark.parametrize("case", ["map", "mesh", "preset-out", "import", "two-outputs"])
+def test_an_output_never_overwrites_an_input(tmp_path, capsys, case):
+    from PIL import Image
+    alb = tmp_path / "alb.png"
+    Image.new("RGB", (4, 4), (200, 150, 120)).save(alb)
+    mesh = _obj(tmp_path / "m.obj", 1.0)
+    preset = _preset(tmp_path, b'{"schema_version": 1}', "p.json")
+    before = {p: p.read_bytes() for p in (alb, mesh, preset)}
+    argv = {"map": ["render", "--set", f"scene.albedo_map={alb}", "--out", str(alb)],
+            "mesh": ["render", "--mesh", str(mesh), "--out", str(tmp_path / "m.png"), "--exr",
+                     str(tmp_path / ".." / tmp_path.name / "m.obj.exr"), "--timings", str(mesh)],
+            "preset-out": ["profile", "--base-preset", str(preset), "--preset-out", str(preset)],
+            "import": ["import", str(preset), "--preset-out", str(preset)],
+            "two-outputs": ["render", "--out", str(tmp_path / "x.exr"), "--exr", str(tmp_path / "x.exr")],
+            }[case]
+    assert _cli(argv) == 2
+    err = _one_line_error(capsys)
+    assert "would overwrite" in err, err
+    assert {p: p.read_bytes() for p in before} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["alb.png", "m.obj", "p.json"]
+
+
+# -- numeric arguments: finite and in range, checked before any work -------------------------------
+
+@pytest.mark.parametrize("argv,flag", [
+    (["reference", "--max-seconds", "nan"], "--max-seconds"), (["reference", "--max-seconds", "-5"], "--max-seconds"),
+    (["reference", "--h", "inf"], "--h"), (["reference", "--h", "0"], "--h"),
+    (["bench", "--budget-ms", "-1"], "--budget-ms"), (["bench", "--budget-ms", "nan"], "--budget-ms"),
+    (["bench", "--runs", "1e9"], "--runs"), (["bench", "--runs", "2"], "--runs"),
+    (["render", "--camera", "nan,0"], "--camera"), (["render", "--camera", "0,inf"], "--camera"),
+    (["render", "--camera", "0,0,-3"], "--camera"), (["render", "--camera", "0,0,0"], "--camera"),
+    (["view", "--frames", "-1"], "--frames"), (["view", "--frames", "nan"], "--frames"),
+    (["export", "--to", "hdrp", "--world-scale", "nan"], "--world-scale"),
+    (["export", "--to", "hdrp", "--unreal-world-unit-scale", "-1"], "--unreal-world-unit-scale"),
+    (["turntable", "--frames", "0"], "--frames"), (["turntable", "--fps", "nan"], "--fps"),
+    (["turntable", "--fps", "inf"], "--fps"),
+    (["profile", "--eta", "nan"], "--eta"), (["profile", "--thickness", "nan"], "--thickness"),
+    (["profile", "--thickness", "-inf"], "--thickness"), (["profile", "--fit", "0"], "--fit"),
+    (["profile", "--fit", "99"], "--fit"), (["profile", "--model", "multipole", "--layer", "nan:1,1,1:1,1,1"], "--layer"),
+    (["import", "x.asset", "--size", "nanxnan"], "--size"),
+])
+def test_numeric_arguments_are_checked_up_front(tmp_path, capsys, argv, flag):
+    out = ["--out", str(tmp_path / "o.png")] if argv[0] in ("reference", "render") else \
+        ["--out", str(tmp_path / "o")] if argv[0] in ("bench", "turntable") else \
+        ["--out", str(tmp_path / "o.asset")] if argv[0] == "export" else []
+    assert _cli(argv + out) == 2
+    err = _one_line_error(capsys)
+    assert flag in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_schema_version_true_is_not_version_1(tmp_path):
+    with pytest.raises(SettingsError) as exc:
+        load_preset(_preset(tmp_path, b'{"schema_version": true}'))
+    assert "schema_version" in _errors(exc)
+
+
+# -- Ctrl-C and EXR writer failures: one line, nothing half-written --------------------------------
+
+def test_ctrl_c_during_a_render_exits_130_with_one_line(tmp_path, capsys, monkeypatch):
+    from skinviewer.core.renderer import Renderer
+
+    def interrupted(self, *a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(Renderer, "render_settled", interrupted)
+    assert _cli(["render", "--scene", "stretch-plane", "--size", "16x16", "--out", str(tmp_path / "x.png")]) == 130
+    assert "interrupted" in _one_line_error(capsys)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_while_writing_leaves_nothing(tmp_path, monkeypatch):
+    real = os.fsync
+
+    def interrupted(fd):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(os, "fsync", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        files.save_exr(tmp_path / "x.exr", np.ones((4, 4, 3), np.float32))
+    monkeypatch.setattr(os, "fsync", real)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_exr_writer_on_a_full_disk_is_one_line_and_leaves_nothing(tmp_path):
+    """RLIMIT_FSIZE makes every write past 4 KB fail with EFBIG, as a full disk fails with ENOSPC."""
+    code = ("import resource, signal, sys, numpy as np\nfrom skinviewer.core import files\n"
+            "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))\n"
+            "try:\n    files.save_exr(sys.argv[1], np.random.default_rng(0).random((256, 256, 3)))\n"
+            "except OSError as e:\n    print('ERR', e)\n")
+    r = _in_child(code, str(tmp_path / "x.exr"))
+    assert r.returncode == 0 and r.stdout.startswith("ERR cannot write") and "disk full" in r.stdout, \
+        (r.stdout, r.stderr[-500:])
+    assert r.stdout.count("\n") == 1 and list(tmp_path.iterdir()) == []
+
+
+def test_exr_to_a_non_utf8_path_is_written(tmp_path):
+    name = os.fsdecode(os.fsencode(str(tmp_path)) + b"/lin\xff.exr")
+    a = np.random.default_rng(1).random((8, 8, 3)).astype(np.float32)
+    files.save_exr(name, a)
+    np.testing.assert_array_equal(files.load_exr(name), a)

@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from skinviewer import techniques
-from skinviewer.cli.args import add_scene_args, settings_from_args
+from skinviewer.cli.args import add_scene_args, check_outputs, settings_from_args
 from skinviewer.core.files import atomic_write_bytes
 from skinviewer.core.settings import Settings, to_dict, with_values
 
@@ -133,6 +133,7 @@ def cmd_sheet(args) -> int:
         print(f"skinviewer sheet: error: {msg}", file=sys.stderr)
         return 2
     s = settings_from_args(args)
+    check_outputs({"--out": args.out}, {"--preset": args.preset}, s)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
     with Progress(TextColumn("sheet"), BarColumn(), MofNCompleteColumn()) as bar:
         task = bar.add_task("sheet", total=len(names) * len(views))

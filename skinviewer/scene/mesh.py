@@ -288,7 +288,7 @@ def _image_array(img, mode: str) -> np.ndarray:
     from PIL import ImageOps
     try:
         img = ImageOps.exif_transpose(img)  # a JPEG's EXIF orientation, as every image viewer shows it
-    except Exception:  # a malformed EXIF block: the pixels as stored
+    except Exception:  # noqa: BLE001, S110 - a malformed EXIF block: the pixels as stored
         pass
     arr = _unit_float(img)  # (H, W, C) float32 in [0, 1]
     if mode == "L":
@@ -371,10 +371,10 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
     resolver = _Resolver(p, non_images)
     try:
         loaded = trimesh.load(io.BytesIO(data), file_type=ext or None, resolver=resolver, process=False)
-    except Exception as exc:  # trimesh raises many kinds
+    except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
         why = "; ".join(resolver.failed.values()) or str(exc) or type(exc).__name__
         raise MeshError(f"cannot read mesh {p}: {why}") from None
-    for name, why in resolver.failed.items():
+    for why in resolver.failed.values():
         notes.append(f"{why}: that texture is not used")
     if isinstance(loaded, trimesh.Scene):
         geoms = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)] if loaded.geometry else []
@@ -501,7 +501,7 @@ class _Resolver:
 
     __getitem__ = get
 
-    def namespaced(self, namespace: str) -> "_Resolver":
+    def namespaced(self, namespace: str) -> _Resolver:
         return self
 
     def write(self, name, data):  # trimesh's loaders never write; exporting does not come through here
@@ -522,7 +522,7 @@ def _check_image_bytes(data: bytes, what: str) -> None:
     try:
         with Image.open(io.BytesIO(data)) as img:
             w, h = img.size
-    except Exception:
+    except Exception:  # noqa: BLE001 - Pillow raises many kinds for a malformed header
         raise MeshError(f"cannot read {what}: not an image format Pillow reads (PNG, JPEG, TIFF, BMP, TGA, ...)") \
             from None
     if w * h > MAX_IMAGE_PIXELS:
