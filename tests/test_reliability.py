@@ -710,6 +710,31 @@ def _cli(argv) -> int:
         return int(exc.code)
 
 
+@pytest.fixture
+def no_work(monkeypatch):
+    """Every command's expensive step fails the test: a refusal must come before any of it (before
+    these fixes, `reference --max-seconds nan` started a 45-minute reference)."""
+    import skinviewer.cli.export as export_cli
+    import skinviewer.cli.import_ as import_cli
+    import skinviewer.cli.profile as profile_cli
+    import skinviewer.cli.render as render_cli
+    import skinviewer.cli.turntable as turntable_cli
+    import skinviewer.core.bench as bench
+    import skinviewer.core.reference as reference
+
+    def started(*a, **k):
+        raise AssertionError("work started before the arguments were checked")
+    for mod, name in [(reference, "compute_reference"), (bench, "run_bench"), (render_cli, "headless_context"),
+                      (turntable_cli, "render_frames"), (export_cli, "export"), (import_cli, "read_any"),
+                      (profile_cli, "fit_gaussians")]:
+        monkeypatch.setattr(mod, name, started)
+    try:
+        import skinviewer.ui.app as app
+        monkeypatch.setattr(app, "run_viewer", started)
+    except ImportError:
+        pass
+
+
 def _one_line_error(capsys) -> str:
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and "Traceback" not in err, err
@@ -732,7 +757,7 @@ def test_render_writes_the_format_its_extension_names(tmp_path, capsys, ext, fmt
     ["reference", "--out", "{d}/r.png", "--npy", "{d}/r.png2"], ["view", "--frames", "1", "--screenshot", "{d}/s.gif"],
     ["import", "{d}/x.asset", "--preview", "{d}/p.exr"], ["profile", "--plot", "{d}/plot.jpg"],
 ])
-def test_outputs_whose_extension_is_not_written_are_refused_before_any_work(tmp_path, capsys, argv):
+def test_outputs_whose_extension_is_not_written_are_refused_before_any_work(tmp_path, capsys, no_work, argv):
     assert _cli([a.format(d=tmp_path) for a in argv]) == 2
     err = _one_line_error(capsys)
     assert "extension" in err or "name the file" in err, err
@@ -761,7 +786,7 @@ def test_viewer_screenshot_exr_is_the_linear_image(tmp_path):
 
 
 @pytest.mark.parametrize("case", ["map", "mesh", "preset-out", "import", "two-outputs"])
-def test_an_output_never_overwrites_an_input(tmp_path, capsys, case):
+def test_an_output_never_overwrites_an_input(tmp_path, capsys, no_work, case):
     from PIL import Image
     alb = tmp_path / "alb.png"
     Image.new("RGB", (4, 4), (200, 150, 120)).save(alb)
@@ -801,7 +826,7 @@ def test_an_output_never_overwrites_an_input(tmp_path, capsys, case):
     (["profile", "--fit", "99"], "--fit"), (["profile", "--model", "multipole", "--layer", "nan:1,1,1:1,1,1"], "--layer"),
     (["import", "x.asset", "--size", "nanxnan"], "--size"),
 ])
-def test_numeric_arguments_are_checked_up_front(tmp_path, capsys, argv, flag):
+def test_numeric_arguments_are_checked_up_front(tmp_path, capsys, no_work, argv, flag):
     out = ["--out", str(tmp_path / "o.png")] if argv[0] in ("reference", "render") else \
         ["--out", str(tmp_path / "o")] if argv[0] in ("bench", "turntable") else \
         ["--out", str(tmp_path / "o.asset")] if argv[0] == "export" else []
