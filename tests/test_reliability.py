@@ -885,3 +885,57 @@ def test_exr_to_a_non_utf8_path_is_written(tmp_path):
     a = np.random.default_rng(1).random((8, 8, 3)).astype(np.float32)
     files.save_exr(name, a)
     np.testing.assert_array_equal(files.load_exr(name), a)
+
+
+# -- caches: an entry that does not validate is discarded and rebuilt, with a note -----------------
+
+def _tiny_reference(**kw):
+    from skinviewer.core.reference import compute_reference
+    s = small_settings("stretch-plane", "deon", size=16)
+    return s, compute_reference(s, h_mm=2.0, **kw)
+
+
+def _corrupt_truncated(p: Path):
+    p.write_bytes(p.read_bytes()[:300])
+
+
+def _corrupt_shapes(p: Path):
+    with np.load(p) as z:
+        d = {k: z[k] for k in z.files}
+    d["lit"] = d["lit"][:5]
+    np.savez(p, **d)
+
+
+def _corrupt_nan(p: Path):
+    with np.load(p) as z:
+        d = {k: z[k] for k in z.files}
+    d["diffuse"][0, 0, 0] = np.nan
+    np.savez(p, **d)
+
+
+def _corrupt_fifo(p: Path):
+    p.unlink()
+    os.mkfifo(p)
+
+
+@pytest.mark.parametrize("corrupt", [_corrupt_truncated, _corrupt_shapes, _corrupt_nan, _corrupt_fifo])
+def test_a_corrupt_reference_cache_entry_is_discarded_and_rebuilt(tmp_path, monkeypatch, corrupt):
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))
+    s, first = _tiny_reference()
+    (entry,) = (tmp_path / "reference").glob("*.npz")
+    corrupt(entry)
+    _, again = _tiny_reference()  # no BadZipFile / ValueError, no hang on the FIFO
+    assert not again.meta.get("cached") and any("did not validate" in n for n in again.meta["notes"])
+    np.testing.assert_allclose(again.lit, first.lit, rtol=1e-6)
+    _, third = _tiny_reference()  # rebuilt: a valid entry again
+    assert third.meta.get("cached") and not third.meta.get("notes")
+
+
+def test_cache_variable_naming_a_file_says_so(tmp_path, monkeypatch, capsys):
+    f = tmp_path / "not-a-folder"
+    f.write_text("x")
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(f))
+    assert _cli(["reference", "--scene", "stretch-plane", "--size", "16x16", "--h", "2",
+                 "--out", str(tmp_path / "r.png")]) == 2
+    err = _one_line_error(capsys)
+    assert "SKINVIEWER_CACHE" in err and "is a file" in err and "Errno" not in err, err

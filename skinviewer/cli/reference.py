@@ -137,6 +137,8 @@ def cmd_reference(args) -> int:
           + ("from the cache" if m.get("cached") else f"{t:.1f} s") + ")")
     for line in m.get("plan", []):
         print(f"  {line}")
+    for note in m.get("notes", []):
+        print(f"note: {note}", file=sys.stderr)
     return 0
 
 

@@ -85,7 +85,10 @@ def render_sheet(s: Settings, names: list[str], views: list[str], truth: bool = 
                     ms.append(1000.0 * (time.perf_counter() - t0))
                 img = r.image(t)
                 err = None
-                ref = load_cached(t) if truth else None
+                cache_notes: list[str] = []
+                ref = load_cached(t, notes=cache_notes) if truth else None
+                for note in cache_notes:  # a damaged entry: discarded, the tile says "not cached"
+                    print(f"note: {note}", file=sys.stderr)
                 if ref is not None and ref.lit.shape[:2] == img.shape[:2]:
                     lit, cov = linear_image(r, t)
                     err = image_error(lit, ref.lit, compare_mask(ref.mask, cov))
