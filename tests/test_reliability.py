@@ -939,3 +939,53 @@ def test_cache_variable_naming_a_file_says_so(tmp_path, monkeypatch, capsys):
                  "--out", str(tmp_path / "r.png")]) == 2
     err = _one_line_error(capsys)
     assert "SKINVIEWER_CACHE" in err and "is a file" in err and "Errno" not in err, err
+
+
+# -- shaders read only from the shader root ---------------------------------------------------------
+
+@pytest.mark.parametrize("case", ["relative", "absolute", "symlink", "vertex_stage", "symlinked_stage"])
+def test_shaders_never_read_outside_their_root(gl_ctx, tmp_path, case):
+    from skinviewer.core.shaders import ShaderCompileError
+    root = tmp_path / "shaders"
+    (root / "lib").mkdir(parents=True)
+    (root / "lib" / "a.glsl").write_text(LIB_A)
+    secret = tmp_path / "secret.glsl"
+    secret.write_text("float f(float x) { return x; }\n")  # would compile: only the rule refuses it
+    (tmp_path / "x.vert").write_text(VERT.replace('#include "lib/a.glsl"', "float f(float x) { return x; }"))
+    frag = FRAG
+    vert = VERT
+    if case == "relative":
+        vert = VERT.replace("lib/a.glsl", "../secret.glsl")
+    elif case == "absolute":
+        vert = VERT.replace("lib/a.glsl", str(secret))
+    elif case == "symlink":
+        (root / "lib" / "link.glsl").symlink_to(secret)
+        vert = VERT.replace("lib/a.glsl", "lib/link.glsl")
+    elif case == "vertex_stage":
+        frag = '#version 330 core\n#pragma vertex_stage "../x.vert"\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n'
+    if case != "vertex_stage":
+        (root / "p.vert").write_text(vert)
+    if case == "symlinked_stage":
+        (root / "p.vert").unlink()
+        (root / "p.vert").symlink_to(tmp_path / "x.vert")
+    (root / "p.frag").write_text(frag)
+    lib = ShaderLibrary(gl_ctx, root)
+    with pytest.raises(ShaderCompileError) as exc:
+        lib.get("p")
+    assert "outside the shader folder" in str(exc.value), str(exc.value)
+    watched = set(lib._entry("p", None).mtimes)
+    assert not any(tmp_path / n in watched or (tmp_path / n).resolve() in watched
+                   for n in ("secret.glsl", "x.vert")), watched
+
+
+def test_a_fifo_among_the_shaders_does_not_hang(tmp_path):
+    root = tmp_path / "shaders"
+    (root / "lib").mkdir(parents=True)
+    os.mkfifo(root / "lib" / "a.glsl")
+    (root / "p.vert").write_text(VERT)
+    (root / "p.frag").write_text(FRAG)
+    code = ("import sys\nfrom skinviewer.core.gl import headless_context\nfrom skinviewer.core.shaders import "
+            "ShaderLibrary, ShaderCompileError\nlib = ShaderLibrary(headless_context(), sys.argv[1])\n"
+            "try:\n    lib.get('p')\nexcept ShaderCompileError as e:\n    print(e)\n")
+    r = _in_child(code, str(root))
+    assert r.returncode == 0 and "FIFO" in r.stdout, (r.stdout, r.stderr[-500:])
