@@ -376,13 +376,39 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
         raise MeshError(f"cannot read mesh {p}: {why}") from None
     for why in resolver.failed.values():
         notes.append(f"{why}: that texture is not used")
+    try:
+        return _mesh_of(loaded, p, auto_uv, notes)
+    except MeshError:
+        raise
+    except (IndexError, ValueError, TypeError, AttributeError, KeyError, OverflowError) as exc:
+        # what a malformed file can still raise past the checks (the fuzz in tests/test_mesh_fuzz.py)
+        raise MeshError(f"cannot read mesh {p}: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}") \
+            from None
+
+
+def _check_faces(g, p: Path) -> None:
+    """MeshError unless the triangles index the vertices (a malformed file can point anywhere)."""
+    f = np.asarray(g.faces)
+    n = len(g.vertices)
+    if f.size and (f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu" or int(f.min()) < 0
+                   or int(f.max()) >= n):
+        raise MeshError(f"{p}: triangle indices reach {int(f.max()) if f.size and f.dtype.kind in 'iu' else '?'} "
+                        f"but the mesh has {n} vertices")
+
+
+def _mesh_of(loaded, p: Path, auto_uv: bool, notes: list[str]) -> MeshData:
+    """MeshData from what trimesh loaded (see load_mesh)."""
+    import trimesh
     if isinstance(loaded, trimesh.Scene):
         geoms = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)] if loaded.geometry else []
         geoms = [g for g in geoms if len(g.faces)]
+        for g in geoms:
+            _check_faces(g, p)
         if not geoms:
             raise MeshError(f"{p} contains no triangle mesh")
         tm, uv = _joined(geoms)
     elif isinstance(loaded, trimesh.Trimesh):
+        _check_faces(loaded, p)
         tm = loaded
         uv = _uv_of(tm)
     else:
