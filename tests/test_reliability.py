@@ -989,3 +989,37 @@ def test_a_fifo_among_the_shaders_does_not_hang(tmp_path):
             "try:\n    lib.get('p')\nexcept ShaderCompileError as e:\n    print(e)\n")
     r = _in_child(code, str(root))
     assert r.returncode == 0 and "FIFO" in r.stdout, (r.stdout, r.stderr[-500:])
+
+
+# -- a NaN from an edited shader is flagged in the pass that made it -------------------------------
+
+@pytest.mark.parametrize("technique,lib", [("deon", "deon_irradiance.glsl"), ("gosselin", "light_map.glsl")])
+def test_nan_from_an_edited_texture_space_shader_is_flagged(tmp_path, monkeypatch, technique, lib):
+    """A NaN made at runtime (sqrt of a negative uniform expression) in a user edit: before, the
+    gutter fill replaced it by 0 (the skin darkened) and no pass was flagged."""
+    import shutil
+
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    root = tmp_path / "shaders"
+    shutil.copytree(ROOT / "shaders", root)
+    p = root / "lib" / lib
+    text = p.read_text()
+    anchor = "    vec3 E = vec3(0.0);\n"
+    assert anchor in text
+    poison = "    E = vec3(sqrt(-1.0 - abs(v_uv.x)));\n"  # NaN at run time, which no compiler can fold away
+    p.write_text(text.replace(anchor, anchor + poison, 1))
+    monkeypatch.setenv("SKINVIEWER_SHADERS", str(root))
+    ctx = headless_context()
+    r = Renderer(ctx)
+    try:
+        s = small_settings("head", technique, size=32)
+        report = r.render(s)
+        flagged = report.nonfinite
+        first = {"deon": "deon_irradiance", "gosselin": "gosselin_light_map"}[technique]
+        assert first in flagged, flagged  # the pass that made the NaN, by name
+        lit = r.read(s, "lit")
+        assert np.isfinite(lit).all()  # the blurs after it still keep the screen finite
+    finally:
+        r.release()
+        ctx.release()
