@@ -1023,3 +1023,103 @@ def test_nan_from_an_edited_texture_space_shader_is_flagged(tmp_path, monkeypatc
     finally:
         r.release()
         ctx.release()
+
+
+# -- beyond the list: environment variables, the bench's files, imports, the soak's schedule -------
+
+@pytest.mark.parametrize("value", ["abc", "inf", "nan", "-1G", "0", "1e999"])
+def test_memory_limit_variable_that_is_not_a_size_is_one_line(monkeypatch, capsys, tmp_path, value):
+    monkeypatch.setenv("SKINVIEWER_MEMORY_LIMIT", value)
+    assert _cli(["render", "--scene", "stretch-plane", "--size", "16x16", "--out", tmp_path / "x.png"]) == 2
+    err = _one_line_error(capsys)
+    assert "SKINVIEWER_MEMORY_LIMIT" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_memory_limit_units_include_a_trailing_b(monkeypatch):
+    from skinviewer.core.renderer import _env_bytes
+    monkeypatch.setenv("SKINVIEWER_MEMORY_LIMIT", "2GB")
+    assert _env_bytes("SKINVIEWER_MEMORY_LIMIT") == 2 * 2**30  # was 2 bytes
+
+
+def test_shader_folder_variable_that_is_not_a_folder_says_so(monkeypatch, capsys, tmp_path):
+    monkeypatch.setenv("SKINVIEWER_SHADERS", str(tmp_path / "nowhere"))
+    assert _cli(["render", "--scene", "stretch-plane", "--size", "16x16", "--out", tmp_path / "x.png"]) == 2
+    err = _one_line_error(capsys)
+    assert "SKINVIEWER_SHADERS" in err and "not a folder" in err, err
+
+
+def test_last_bench_pointer_and_results_that_are_special_files_do_not_hang(tmp_path):
+    """The viewer's accuracy window reads cache/last_bench.txt and the results.json it names at start."""
+    (tmp_path / "cache").mkdir()
+    os.mkfifo(tmp_path / "cache" / "last_bench.txt")
+    os.mkfifo(tmp_path / "results.json")
+    code = ("import os, sys\nos.environ['SKINVIEWER_CACHE'] = sys.argv[1]\n"
+            "from skinviewer.core.bench import last_bench, load_results\nprint(repr(last_bench()))\n"
+            "try:\n    load_results(sys.argv[2])\nexcept OSError as e:\n    print(e)\n")
+    r = _in_child(code, str(tmp_path / "cache"), str(tmp_path / "results.json"))
+    assert r.returncode == 0 and r.stdout.startswith("''") and "FIFO" in r.stdout, (r.stdout, r.stderr[-500:])
+
+
+@pytest.mark.parametrize("text", ["[1, 2]", '{"results": 5}', '{"results": [1]}', "[" * 100000, '"x"'])
+def test_bench_results_that_are_not_results_are_a_value_error(tmp_path, text):
+    from skinviewer.core.bench import load_results
+    p = tmp_path / "results.json"
+    p.write_text(text)
+    with pytest.raises(ValueError):
+        load_results(p)
+
+
+def _import_err(capsys, tmp_path, name, text) -> str:
+    p = tmp_path / name
+    p.write_text(text)
+    assert _cli(["import", p]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+@pytest.mark.parametrize("name,text", [
+    ("deep.json", '{"a":' + "[" * 50000 + "]" * 50000 + "}"),
+    ("deep.asset", "%YAML 1.1\n%TAG !u! tag:unity3d.com,2011:\n--- !u!114 &1\nMonoBehaviour:\n  a: "
+     + "[" * 20000 + "]" * 20000 + "\n"),
+    ("deep.py", "VALUES = " + "[" * 50000 + "]" * 50000 + "\n"),
+])
+def test_imports_nested_thousands_deep_are_one_line(tmp_path, capsys, name, text):
+    assert "nested" in _import_err(capsys, tmp_path, name, text)
+
+
+def test_materialx_import_never_follows_xinclude(tmp_path, capsys):
+    secret = tmp_path / "secret.mtlx"
+    secret.write_text('<?xml version="1.0"?>\n<materialx version="1.38"><standard_surface name="leak" '
+                      'type="surfaceshader"><input name="subsurface" type="float" value="1"/></standard_surface>'
+                      "</materialx>\n")
+    for href in (str(secret), "/etc/passwd", "missing.mtlx"):
+        err = _import_err(capsys, tmp_path, "inc.mtlx", '<?xml version="1.0"?>\n<materialx version="1.38" '
+                          f'xmlns:xi="http://www.w3.org/2001/XInclude">\n  <xi:include href="{href}" />\n</materialx>\n')
+        assert "leak" not in err and "passwd" not in err and "no nodes" in err, err
+
+
+def test_import_of_a_fifo_or_a_device_does_not_hang(tmp_path):
+    os.mkfifo(tmp_path / "p.asset")
+    code = "import sys\nfrom skinviewer.cli import main\nsys.exit(main(['import', sys.argv[1]]))\n"
+    for target in (tmp_path / "p.asset", Path("/dev/zero")):
+        r = _in_child(code, str(target))
+        assert r.returncode == 2 and "regular file" in r.stderr and "Traceback" not in r.stderr, r.stderr[-500:]
+
+
+def test_soak_measures_drift_at_its_defaults():
+    """benchmarks/soak.py at its defaults: every technique warms up, then runs again, and the drift
+    is measured over as many frames as the warm-up (it was "over 0 frames" with 8 techniques)."""
+    import importlib.util
+
+    from skinviewer import techniques
+    spec = importlib.util.spec_from_file_location("soak", ROOT / "benchmarks" / "soak.py")
+    soak = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(soak)
+    frames = 3000
+    assert f'"--frames", type=int, default={frames}' in (ROOT / "benchmarks" / "soak.py").read_text()
+    per, warm = soak.schedule(frames, len(techniques.names()))
+    assert warm == per * len(techniques.names()) and frames - warm >= warm > 0
+    with pytest.raises(SystemExit):
+        soak.schedule(len(techniques.names()), len(techniques.names()))

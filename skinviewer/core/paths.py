@@ -12,7 +12,10 @@ _CHECKOUT = _PKG.parent
 def _find(name: str, env: str) -> Path:
     override = os.environ.get(env)
     if override:
-        return Path(override).resolve()
+        p = Path(override).resolve()
+        if not p.is_dir():
+            raise FileNotFoundError(f"{env}={override}: not a folder")
+        return p
     source = _CHECKOUT / name
     if source.is_dir() and (_CHECKOUT / "pyproject.toml").is_file():
         return source
