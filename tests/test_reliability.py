@@ -1123,3 +1123,20 @@ def test_soak_measures_drift_at_its_defaults():
     assert warm == per * len(techniques.names()) and frames - warm >= warm > 0
     with pytest.raises(SystemExit):
         soak.schedule(len(techniques.names()), len(techniques.names()))
+
+
+@pytest.mark.parametrize("damage", ["truncate", "fifo"])
+def test_a_damaged_head_cache_is_regenerated_with_a_note(tmp_path, damage):
+    from skinviewer.scene.head import _cache_path, default_head
+    first = default_head(detail=0, cache_dir=tmp_path)
+    entry = _cache_path(0, 7, tmp_path)
+    assert not first.notes and entry.is_file()
+    if damage == "truncate":
+        entry.write_bytes(entry.read_bytes()[:1000])
+    else:
+        entry.unlink()
+        os.mkfifo(entry)
+    again = default_head(detail=0, cache_dir=tmp_path)
+    assert any("did not validate" in n for n in again.notes), again.notes
+    np.testing.assert_array_equal(again.positions, first.positions)
+    assert not default_head(detail=0, cache_dir=tmp_path).notes  # rebuilt

@@ -258,6 +258,7 @@ class Renderer:
         else:
             sdef = build_scene(sc.name, sc.head_detail)
             mesh = sdef.mesh
+            notes += mesh.notes  # e.g. a cached head that did not validate and was regenerated
             mm = sc.mm_per_unit if sc.mm_per_unit is not None else mesh.mm_per_unit
             desc = sdef.description
         mesh.check_renderable()
