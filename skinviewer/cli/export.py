@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from skinviewer.cli.args import add_scene_args, check_outputs, number, settings_from_args
+from skinviewer.cli.args import (
+    add_scene_args,
+    check_outputs,
+    number,
+    settings_from_args,
+)
 from skinviewer.cli.exchange import ExchangeError, ExportResult, export
 from skinviewer.physics.engines import TARGETS
 

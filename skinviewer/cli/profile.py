@@ -80,7 +80,7 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--mfp", metavar="R,G,B", help="burley: (diffuse) mean free path in mm")
     p.add_argument("--burley-config", choices=P.BURLEY_CONFIGS, default="searchlight-dmfp",
                    help="Christensen's s(A) fit: eq. 2.86, 2.88 (default), 2.89")
-    p.add_argument("--fit", type=number(1, 16, integer=True), default=4, metavar="K", help="number of Gaussians (1..16, default 4)")
+    p.add_argument("--fit", type=int, default=4, metavar="K", help="number of Gaussians (1..16, default 4)")
     p.add_argument("--fixed-variances", metavar="V1,V2,...", help="fit only weights for these variances (mm^2)")
     p.add_argument("--per-channel", action="store_true", help="separate variances per channel "
                                                               "(default: shared, as a preset needs)")
