@@ -1,7 +1,8 @@
 #version 330 core
 #pragma vertex_stage "vs/fullscreen.vert"
 // Gutter fill: each texel outside the UV islands copies the nearest island texel (gutter map RG),
-// so blurs and bilinear lookups never pull black in from empty texture space.
+// so blurs and bilinear lookups never pull black in from empty texture space. Inf is bounded to the
+// format's range; a NaN is copied as it is, so that the pass that made it is flagged, not hidden.
 #include "lib/color.glsl"
 in vec2 v_uv;
 uniform sampler2D source;
@@ -10,5 +11,6 @@ uniform float u_limit;     // largest finite value of the target format (HALF_MA
 out vec4 f_color;
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
-    f_color = finite4(texelFetch(source, src, 0), u_limit);
+    // NaN kept (render.check_finite then names the shading pass; the blurs after it replace it by 0)
+    f_color = bounded4(texelFetch(source, src, 0), u_limit);
 }

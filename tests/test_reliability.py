@@ -523,3 +523,620 @@ def test_cli_refuses_a_configuration_that_does_not_fit(tmp_path, capsys, monkeyp
 def test_settings_roundtrip_unchanged_by_validators():
     s = Settings()
     assert validate(to_dict(s)) == s
+
+
+# == issue 35: reliability, second round ===========================================================
+# What a mesh points at (FIFOs, missing files, huge buffers), glTF UVs, winding, EXIF, output paths,
+# numeric arguments, the cache, shader roots. Each test failed on the tree before its fix.
+
+def _gltf(path: Path, meshes=1, material=True, nested=False, bin_uri=None, image_uri=None) -> np.ndarray:
+    """A glTF of ``meshes`` unit quads (UVs in [0.25, 0.75]); returns the file's TEXCOORD_0."""
+    import base64
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
+    UV = np.array([[0.25, 0.25], [0.75, 0.3], [0.7, 0.75], [0.3, 0.7]], np.float32)
+    idx = np.array([0, 1, 2, 0, 2, 3], np.uint32)
+    buf = P.tobytes() + UV.tobytes() + idx.tobytes()
+    if bin_uri:
+        (path.parent / bin_uri).write_bytes(buf)
+    uri = bin_uri or "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    d = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": len(buf), "uri": uri}],
+         "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                         {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                         {"buffer": 0, "byteOffset": 80, "byteLength": 24}],
+         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]},
+                       {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                       {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}],
+         "meshes": [], "nodes": [], "scenes": [{"nodes": []}], "scene": 0}
+    for _ in range(meshes):
+        prim = {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}
+        if material:
+            prim["material"] = 0
+        d["meshes"].append({"primitives": [prim]})
+    if material:
+        d["materials"] = [{"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1]}}]
+        if image_uri:
+            d["images"] = [{"uri": image_uri}]
+            d["textures"] = [{"source": 0}]
+            d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {"index": 0}
+    for k in range(meshes):
+        if nested:  # a parent moves, its child rotates 90 degrees about z
+            d["nodes"].append({"children": [len(d["nodes"]) + 1], "translation": [k * 2.0, 0, 0]})
+            d["nodes"].append({"mesh": k, "rotation": [0, 0, 0.7071068, 0.7071068]})
+            d["scenes"][0]["nodes"].append(len(d["nodes"]) - 2)
+        else:
+            d["nodes"].append({"mesh": k, "translation": [k * 2.0, 0, 0]})
+            d["scenes"][0]["nodes"].append(len(d["nodes"]) - 1)
+    path.write_text(json.dumps(d))
+    return np.tile(UV * [1, -1] + [0, 1], (meshes, 1))  # glTF's v runs down the image
+
+
+@pytest.mark.parametrize("kw", [{"material": False}, {"meshes": 3, "material": False},
+                                {"meshes": 2, "nested": True, "material": False}, {"meshes": 2, "nested": True}])
+def test_gltf_uvs_are_kept_without_a_material_and_across_meshes(tmp_path, kw):
+    uv = _gltf(tmp_path / "q.gltf", **kw)
+    m = load_mesh(tmp_path / "q.gltf")
+    assert not any("xatlas" in n for n in m.notes), m.notes
+    np.testing.assert_allclose(m.uvs, uv, atol=1e-6)
+    if kw.get("nested"):  # the child's rotation and the parent's translation both apply
+        np.testing.assert_allclose(np.sort(m.positions[:, 0]), [-1, -1, 0, 0, 1, 1, 2, 2], atol=1e-6)
+
+
+def _cube_obj(path: Path, inverted: bool, mtl: str | None = None) -> Path:
+    import trimesh
+    box = trimesh.creation.box()
+    f = box.faces[:, ::-1] if inverted else box.faces
+    lines = ([f"mtllib {mtl}", "usemtl skin"] if mtl else []) + [f"v {x} {y} {z}" for x, y, z in box.vertices]
+    lines += [f"vt {0.1 + 0.1 * (i % 8)} {0.1 + 0.1 * (i // 8)}" for i in range(len(box.vertices))]
+    lines += ["f " + " ".join(f"{a + 1}/{a + 1}" for a in tri) for tri in f]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_inverted_winding_of_a_closed_mesh_is_reversed_and_noted(tmp_path):
+    from skinviewer.scene.mesh import signed_volume
+    good = load_mesh(_cube_obj(tmp_path / "good.obj", inverted=False))
+    bad = load_mesh(_cube_obj(tmp_path / "bad.obj", inverted=True))
+    assert not any("wound inwards" in n for n in good.notes)
+    assert any("wound inwards" in n for n in bad.notes), bad.notes
+    assert signed_volume(bad.positions, bad.indices) == pytest.approx(1.0)
+    # its normals point outwards, like the correctly wound cube's
+    out = bad.positions - bad.positions.mean(0)
+    assert ((bad.normals * out).sum(1) > 0).all()
+
+
+def test_open_mesh_winding_is_left_alone(tmp_path):
+    m = load_mesh(_obj(tmp_path / "plane.obj", 1.0))
+    assert not any("wound" in n for n in m.notes)
+
+
+def _jpeg_with_orientation(path: Path, orientation: int) -> np.ndarray:
+    from PIL import Image
+    a = np.zeros((8, 16, 3), np.uint8)
+    a[:, :8] = 255  # left half white: 16 wide, 8 tall as stored
+    img = Image.fromarray(a)
+    exif = img.getexif()
+    exif[0x0112] = orientation
+    img.save(path, format="JPEG", exif=exif, quality=100)
+    return a
+
+
+def test_jpeg_exif_orientation_is_applied(tmp_path):
+    p = tmp_path / "rot.jpg"
+    _jpeg_with_orientation(p, 6)  # shown rotated 90 degrees clockwise: 8 wide, 16 tall
+    m = load_texture_maps(_plane(), albedo=p)
+    assert m.albedo.shape[:2] == (16, 8)
+    shown = m.albedo[::-1][..., 0]  # image row order
+    assert shown[:8].mean() > 0.9 and shown[8:].mean() < 0.1  # the white half is on top
+
+
+def test_exr_as_albedo_says_so(tmp_path):
+    p = tmp_path / "lin.exr"
+    files.save_exr(p, np.ones((4, 4, 3), np.float32))
+    with pytest.raises(MeshError) as exc:
+        load_texture_maps(_plane(), albedo=p)
+    assert "OpenEXR" in str(exc.value) and "BytesIO" not in str(exc.value)
+
+
+def test_garbage_obj_is_one_clear_line(tmp_path):
+    p = tmp_path / "garbage.obj"
+    p.write_bytes(bytes(range(256)) * 64)
+    with pytest.raises(MeshError) as exc:
+        load_mesh(p)
+    msg = str(exc.value)
+    assert "module" not in msg and "charset" not in msg and str(p) in msg, msg
+
+
+def test_missing_textures_and_mtl_are_noted(tmp_path):
+    _cube_obj(tmp_path / "nomtl.obj", False, mtl="gone.mtl")
+    m = load_mesh(tmp_path / "nomtl.obj")
+    assert any("gone.mtl" in n for n in m.notes), m.notes
+    (tmp_path / "skin.mtl").write_text("newmtl skin\nKd 1 1 1\nmap_Kd missing_albedo.png\n")
+    m = load_mesh(_cube_obj(tmp_path / "notex.obj", False, mtl="skin.mtl"))
+    assert any("missing_albedo.png" in n for n in m.notes), m.notes
+    _gltf(tmp_path / "q.gltf", image_uri="missing_base.png")
+    m = load_mesh(tmp_path / "q.gltf")
+    assert any("missing_base.png" in n for n in m.notes), m.notes
+
+
+def test_fifos_a_mesh_points_at_do_not_hang(tmp_path):
+    """mtllib, map_Kd, a glTF image URI and a glTF buffer that are FIFOs: refused without blocking."""
+    os.mkfifo(tmp_path / "fifo.mtl")
+    os.mkfifo(tmp_path / "fifo.png")
+    os.mkfifo(tmp_path / "fifo.bin")
+    _cube_obj(tmp_path / "a.obj", False, mtl="fifo.mtl")
+    (tmp_path / "tex.mtl").write_text("newmtl skin\nmap_Kd fifo.png\n")
+    _cube_obj(tmp_path / "b.obj", False, mtl="tex.mtl")
+    _gltf(tmp_path / "c.gltf", image_uri="fifo.png")
+    d = json.loads((tmp_path / "c.gltf").read_text())
+    d["buffers"][0]["uri"] = "fifo.bin"
+    (tmp_path / "d.gltf").write_text(json.dumps(d))
+    code = ("import sys\nfrom skinviewer.scene.mesh import MeshError, load_mesh\n"
+            "for a in sys.argv[1:]:\n    try:\n        print(a, load_mesh(a).notes)\n"
+            "    except MeshError as e:\n        print(a, 'ERROR', e)\n")
+    r = _in_child(code, *(str(tmp_path / n) for n in ("a.obj", "b.obj", "c.gltf", "d.gltf")))
+    lines = r.stdout.splitlines()
+    assert r.returncode == 0 and len(lines) == 4, (r.stdout, r.stderr[-800:])
+    assert all("FIFO" in line for line in lines), lines
+    assert "ERROR" in lines[3] and "fifo.bin" in lines[3]  # no geometry without its buffer
+
+
+def test_huge_external_gltf_buffer_is_refused_with_the_reason(tmp_path):
+    _gltf(tmp_path / "q.gltf", bin_uri="big.bin")
+    with open(tmp_path / "big.bin", "r+b") as f:  # sparse: 3 GiB on paper, nothing on disk
+        f.truncate(3 * 2**30)
+    with pytest.raises(MeshError) as exc:
+        load_mesh(tmp_path / "q.gltf")
+    assert "big.bin" in str(exc.value) and "limit" in str(exc.value), str(exc.value)
+
+
+def test_mesh_references_outside_its_folder_are_not_read(tmp_path):
+    (tmp_path / "sub").mkdir()
+    secret = tmp_path / "secret.png"
+    from PIL import Image
+    Image.new("RGB", (4, 4), (255, 0, 0)).save(secret)
+    (tmp_path / "sub" / "x.mtl").write_text("newmtl skin\nmap_Kd ../secret.png\n")
+    m = load_mesh(_cube_obj(tmp_path / "sub" / "x.obj", False, mtl="x.mtl"))
+    assert m.albedo is None and any("outside the mesh's folder" in n for n in m.notes), m.notes
+
+
+# -- outputs: the extension says the format; an output never replaces an input ---------------------
+
+def _cli(argv) -> int:
+    """cli_main's exit status, also when argparse exits."""
+    try:
+        return cli_main([str(a) for a in argv])
+    except SystemExit as exc:
+        return int(exc.code)
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    """Every command's expensive step fails the test: a refusal must come before any of it (before
+    these fixes, `reference --max-seconds nan` started a 45-minute reference)."""
+    import skinviewer.cli.export as export_cli
+    import skinviewer.cli.import_ as import_cli
+    import skinviewer.cli.profile as profile_cli
+    import skinviewer.cli.render as render_cli
+    import skinviewer.cli.turntable as turntable_cli
+    from skinviewer.core import bench, reference
+
+    def started(*a, **k):
+        raise AssertionError("work started before the arguments were checked")
+    for mod, name in [(reference, "compute_reference"), (bench, "run_bench"), (render_cli, "headless_context"),
+                      (turntable_cli, "render_frames"), (export_cli, "export"), (import_cli, "read_any"),
+                      (profile_cli, "fit_gaussians")]:
+        monkeypatch.setattr(mod, name, started)
+    try:
+        from skinviewer.ui import app
+        monkeypatch.setattr(app, "run_viewer", started)
+    except ImportError:
+        pass
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+@pytest.mark.parametrize("ext,fmt", [(".jpg", "JPEG"), (".jpeg", "JPEG"), (".tif", "TIFF"), (".tiff", "TIFF"),
+                                     (".bmp", "BMP"), (".png", "PNG")])
+def test_render_writes_the_format_its_extension_names(tmp_path, capsys, ext, fmt):
+    from PIL import Image
+    out = tmp_path / f"x{ext}"
+    assert _cli(["render", "--scene", "stretch-plane", "--technique", "phong", "--size", "16x16", "--out", str(out)]) == 0
+    with Image.open(out) as img:
+        assert img.format == fmt and img.size == (16, 16)
+
+
+@pytest.mark.parametrize("argv", [
+    ["render", "--out", "{d}/x.gif"], ["render", "--out", "{d}/x"], ["render", "--out", "{d}/x.png", "--exr", "{d}/lin.png"],
+    ["reference", "--out", "{d}/r.webp"], ["reference", "--out", "{d}/r.png", "--exr", "{d}/r.tif"],
+    ["reference", "--out", "{d}/r.png", "--npy", "{d}/r.png2"], ["view", "--frames", "1", "--screenshot", "{d}/s.gif"],
+    ["import", "{d}/x.asset", "--preview", "{d}/p.exr"], ["profile", "--plot", "{d}/plot.jpg"],
+])
+def test_outputs_whose_extension_is_not_written_are_refused_before_any_work(tmp_path, capsys, no_work, argv):
+    assert _cli([a.format(d=tmp_path) for a in argv]) == 2
+    err = _one_line_error(capsys)
+    assert "extension" in err or "name the file" in err, err
+    assert list(tmp_path.iterdir()) == []  # nothing written, nothing left
+
+
+def test_reference_out_exr_is_the_linear_image(tmp_path, capsys):
+    out = tmp_path / "r.exr"
+    argv = ["reference", "--scene", "stretch-plane", "--size", "16x16", "--h", "2", "--no-cache", "--out", str(out),
+            "--npy", str(tmp_path / "r.npy")]
+    assert _cli(argv) == 0
+    assert out.read_bytes()[:4] == b"\x76\x2f\x31\x01"  # OpenEXR magic, not PNG bytes
+    lin = np.load(tmp_path / "r.npy")
+    np.testing.assert_array_equal(files.load_exr(out)[..., :3], lin[..., :3])
+
+
+@pytest.mark.skipif(not os.environ.get("DISPLAY"), reason="needs an X display (Xvfb)")
+def test_viewer_screenshot_exr_is_the_linear_image(tmp_path):
+    out = tmp_path / "s.exr"
+    r = subprocess.run([sys.executable, "-m", "skinviewer", "view", "--scene", "stretch-plane", "--technique", "phong",
+                        "--size", "64x64", "--frames", "1", "--screenshot", str(out)], cwd=ROOT, capture_output=True,
+                       text=True, timeout=120, check=False)
+    assert r.returncode == 0, r.stderr[-800:]
+    assert out.read_bytes()[:4] == b"\x76\x2f\x31\x01"
+    assert files.load_exr(out).dtype == np.float32
+
+
+@pytest.mark.parametrize("case", ["map", "mesh", "preset-out", "import", "two-outputs"])
+def test_an_output_never_overwrites_an_input(tmp_path, capsys, no_work, case):
+    from PIL import Image
+    alb = tmp_path / "alb.png"
+    Image.new("RGB", (4, 4), (200, 150, 120)).save(alb)
+    mesh = _obj(tmp_path / "m.obj", 1.0)
+    preset = _preset(tmp_path, b'{"schema_version": 1}', "p.json")
+    before = {p: p.read_bytes() for p in (alb, mesh, preset)}
+    argv = {"map": ["render", "--set", f"scene.albedo_map={alb}", "--out", str(alb)],
+            "mesh": ["render", "--mesh", str(mesh), "--out", str(tmp_path / "m.png"), "--exr",
+                     str(tmp_path / ".." / tmp_path.name / "m.obj.exr"), "--timings", str(mesh)],
+            "preset-out": ["profile", "--base-preset", str(preset), "--preset-out", str(preset)],
+            "import": ["import", str(preset), "--preset-out", str(preset)],
+            "two-outputs": ["render", "--out", str(tmp_path / "x.exr"), "--exr", str(tmp_path / "x.exr")],
+            }[case]
+    assert _cli(argv) == 2
+    err = _one_line_error(capsys)
+    assert "would overwrite" in err, err
+    assert {p: p.read_bytes() for p in before} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["alb.png", "m.obj", "p.json"]
+
+
+# -- numeric arguments: finite and in range, checked before any work -------------------------------
+
+@pytest.mark.parametrize("argv,flag", [
+    (["reference", "--max-seconds", "nan"], "--max-seconds"), (["reference", "--max-seconds", "-5"], "--max-seconds"),
+    (["reference", "--h", "inf"], "--h"), (["reference", "--h", "0"], "--h"),
+    (["bench", "--budget-ms", "-1"], "--budget-ms"), (["bench", "--budget-ms", "nan"], "--budget-ms"),
+    (["bench", "--runs", "1e9"], "--runs"), (["bench", "--runs", "2"], "--runs"),
+    (["render", "--camera", "nan,0"], "--camera"), (["render", "--camera", "0,inf"], "--camera"),
+    (["render", "--camera", "0,0,-3"], "--camera"), (["render", "--camera", "0,0,0"], "--camera"),
+    (["view", "--frames", "-1"], "--frames"), (["view", "--frames", "nan"], "--frames"),
+    (["export", "--to", "hdrp", "--world-scale", "nan"], "--world-scale"),
+    (["export", "--to", "hdrp", "--unreal-world-unit-scale", "-1"], "--unreal-world-unit-scale"),
+    (["turntable", "--frames", "0"], "--frames"), (["turntable", "--fps", "nan"], "--fps"),
+    (["turntable", "--fps", "inf"], "--fps"),
+    (["profile", "--eta", "nan"], "--eta"), (["profile", "--thickness", "nan"], "--thickness"),
+    (["profile", "--thickness", "-inf"], "--thickness"), (["profile", "--material", "Skin1", "--fit", "0"], "--fit"),
+    (["profile", "--material", "Skin1", "--fit", "99"], "--fit"),
+    (["profile", "--model", "multipole", "--layer", "nan:1,1,1:1,1,1"], "--layer"),
+    (["import", "x.asset", "--size", "nanxnan"], "--size"),
+])
+def test_numeric_arguments_are_checked_up_front(tmp_path, capsys, no_work, argv, flag):
+    out = ["--out", str(tmp_path / "o.png")] if argv[0] in ("reference", "render") else \
+        ["--out", str(tmp_path / "o")] if argv[0] in ("bench", "turntable") else \
+        ["--out", str(tmp_path / "o.asset")] if argv[0] == "export" else []
+    assert _cli(argv + out) == 2
+    err = _one_line_error(capsys)
+    assert flag in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_schema_version_true_is_not_version_1(tmp_path):
+    with pytest.raises(SettingsError) as exc:
+        load_preset(_preset(tmp_path, b'{"schema_version": true}'))
+    assert "schema_version" in _errors(exc)
+
+
+# -- Ctrl-C and EXR writer failures: one line, nothing half-written --------------------------------
+
+def test_ctrl_c_during_a_render_exits_130_with_one_line(tmp_path, capsys, monkeypatch):
+    from skinviewer.core.renderer import Renderer
+
+    def interrupted(self, *a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(Renderer, "render_settled", interrupted)
+    assert _cli(["render", "--scene", "stretch-plane", "--size", "16x16", "--out", str(tmp_path / "x.png")]) == 130
+    assert "interrupted" in _one_line_error(capsys)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_ctrl_c_while_writing_leaves_nothing(tmp_path, monkeypatch):
+    real = os.fsync
+
+    def interrupted(fd):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(os, "fsync", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        files.save_exr(tmp_path / "x.exr", np.ones((4, 4, 3), np.float32))
+    monkeypatch.setattr(os, "fsync", real)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_exr_writer_on_a_full_disk_is_one_line_and_leaves_nothing(tmp_path):
+    """RLIMIT_FSIZE makes every write past 4 KB fail with EFBIG, as a full disk fails with ENOSPC."""
+    code = ("import resource, signal, sys, numpy as np\nfrom skinviewer.core import files\n"
+            "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+            "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))\n"
+            "try:\n    files.save_exr(sys.argv[1], np.random.default_rng(0).random((256, 256, 3)))\n"
+            "except OSError as e:\n    print('ERR', e)\n")
+    r = _in_child(code, str(tmp_path / "x.exr"))
+    assert r.returncode == 0 and r.stdout.startswith("ERR cannot write") and "disk full" in r.stdout, \
+        (r.stdout, r.stderr[-500:])
+    assert r.stdout.count("\n") == 1 and list(tmp_path.iterdir()) == []
+
+
+def test_exr_to_a_non_utf8_path_is_written(tmp_path):
+    name = os.fsdecode(os.fsencode(str(tmp_path)) + b"/lin\xff.exr")
+    a = np.random.default_rng(1).random((8, 8, 3)).astype(np.float32)
+    files.save_exr(name, a)
+    np.testing.assert_array_equal(files.load_exr(name), a)
+
+
+# -- caches: an entry that does not validate is discarded and rebuilt, with a note -----------------
+
+def _tiny_reference(**kw):
+    from skinviewer.core.reference import compute_reference
+    s = small_settings("stretch-plane", "deon", size=16)
+    return s, compute_reference(s, h_mm=2.0, **kw)
+
+
+def _corrupt_truncated(p: Path):
+    p.write_bytes(p.read_bytes()[:300])
+
+
+def _corrupt_shapes(p: Path):
+    with np.load(p) as z:
+        d = {k: z[k] for k in z.files}
+    d["lit"] = d["lit"][:5]
+    np.savez(p, **d)
+
+
+def _corrupt_nan(p: Path):
+    with np.load(p) as z:
+        d = {k: z[k] for k in z.files}
+    d["diffuse"][0, 0, 0] = np.nan
+    np.savez(p, **d)
+
+
+def _corrupt_fifo(p: Path):
+    p.unlink()
+    os.mkfifo(p)
+
+
+@pytest.mark.parametrize("corrupt", [_corrupt_truncated, _corrupt_shapes, _corrupt_nan, _corrupt_fifo])
+def test_a_corrupt_reference_cache_entry_is_discarded_and_rebuilt(tmp_path, monkeypatch, corrupt):
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))
+    _, first = _tiny_reference()
+    (entry,) = (tmp_path / "reference").glob("*.npz")
+    corrupt(entry)
+    _, again = _tiny_reference()  # no BadZipFile / ValueError, no hang on the FIFO
+    assert not again.meta.get("cached") and any("did not validate" in n for n in again.meta["notes"])
+    np.testing.assert_allclose(again.lit, first.lit, rtol=1e-6)
+    _, third = _tiny_reference()  # rebuilt: a valid entry again
+    assert third.meta.get("cached") and not third.meta.get("notes")
+
+
+def test_cache_variable_naming_a_file_says_so(tmp_path, monkeypatch, capsys):
+    f = tmp_path / "not-a-folder"
+    f.write_text("x")
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(f))
+    assert _cli(["reference", "--scene", "stretch-plane", "--size", "16x16", "--h", "2",
+                 "--out", str(tmp_path / "r.png")]) == 2
+    err = _one_line_error(capsys)
+    assert "SKINVIEWER_CACHE" in err and "is a file" in err and "Errno" not in err, err
+
+
+# -- shaders read only from the shader root ---------------------------------------------------------
+
+@pytest.mark.parametrize("case", ["relative", "absolute", "symlink", "vertex_stage", "symlinked_stage"])
+def test_shaders_never_read_outside_their_root(gl_ctx, tmp_path, case):
+    from skinviewer.core.shaders import ShaderCompileError
+    root = tmp_path / "shaders"
+    (root / "lib").mkdir(parents=True)
+    (root / "lib" / "a.glsl").write_text(LIB_A)
+    secret = tmp_path / "secret.glsl"
+    secret.write_text("float f(float x) { return x; }\n")  # would compile: only the rule refuses it
+    (tmp_path / "x.vert").write_text(VERT.replace('#include "lib/a.glsl"', "float f(float x) { return x; }"))
+    frag = FRAG
+    vert = VERT
+    if case == "relative":
+        vert = VERT.replace("lib/a.glsl", "../secret.glsl")
+    elif case == "absolute":
+        vert = VERT.replace("lib/a.glsl", str(secret))
+    elif case == "symlink":
+        (root / "lib" / "link.glsl").symlink_to(secret)
+        vert = VERT.replace("lib/a.glsl", "lib/link.glsl")
+    elif case == "vertex_stage":
+        frag = '#version 330 core\n#pragma vertex_stage "../x.vert"\nout vec4 c;\nvoid main() { c = vec4(1.0); }\n'
+    if case != "vertex_stage":
+        (root / "p.vert").write_text(vert)
+    if case == "symlinked_stage":
+        (root / "p.vert").unlink()
+        (root / "p.vert").symlink_to(tmp_path / "x.vert")
+    (root / "p.frag").write_text(frag)
+    lib = ShaderLibrary(gl_ctx, root)
+    with pytest.raises(ShaderCompileError) as exc:
+        lib.get("p")
+    assert "outside the shader folder" in str(exc.value), str(exc.value)
+    watched = set(lib._entry("p", None).mtimes)
+    assert not any(tmp_path / n in watched or (tmp_path / n).resolve() in watched
+                   for n in ("secret.glsl", "x.vert")), watched
+
+
+def test_a_fifo_among_the_shaders_does_not_hang(tmp_path):
+    root = tmp_path / "shaders"
+    (root / "lib").mkdir(parents=True)
+    os.mkfifo(root / "lib" / "a.glsl")
+    (root / "p.vert").write_text(VERT)
+    (root / "p.frag").write_text(FRAG)
+    code = ("import sys\nfrom skinviewer.core.gl import headless_context\nfrom skinviewer.core.shaders import "
+            "ShaderLibrary, ShaderCompileError\nlib = ShaderLibrary(headless_context(), sys.argv[1])\n"
+            "try:\n    lib.get('p')\nexcept ShaderCompileError as e:\n    print(e)\n")
+    r = _in_child(code, str(root))
+    assert r.returncode == 0 and "FIFO" in r.stdout, (r.stdout, r.stderr[-500:])
+
+
+# -- a NaN from an edited shader is flagged in the pass that made it -------------------------------
+
+@pytest.mark.parametrize("technique,lib", [("deon", "deon_irradiance.glsl"), ("gosselin", "light_map.glsl")])
+def test_nan_from_an_edited_texture_space_shader_is_flagged(tmp_path, monkeypatch, technique, lib):
+    """A NaN made at runtime (sqrt of a negative uniform expression) in a user edit: before, the
+    gutter fill replaced it by 0 (the skin darkened) and no pass was flagged."""
+    import shutil
+
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    root = tmp_path / "shaders"
+    shutil.copytree(ROOT / "shaders", root)
+    p = root / "lib" / lib
+    text = p.read_text()
+    anchor = "    vec3 E = vec3(0.0);\n"
+    assert anchor in text
+    poison = "    E = vec3(sqrt(-1.0 - abs(v_uv.x)));\n"  # NaN at run time, which no compiler can fold away
+    p.write_text(text.replace(anchor, anchor + poison, 1))
+    monkeypatch.setenv("SKINVIEWER_SHADERS", str(root))
+    ctx = headless_context()
+    r = Renderer(ctx)
+    try:
+        s = small_settings("head", technique, size=32)
+        report = r.render(s)
+        flagged = report.nonfinite
+        first = {"deon": "deon_irradiance", "gosselin": "gosselin_light_map"}[technique]
+        assert first in flagged, flagged  # the pass that made the NaN, by name
+        lit = r.read(s, "lit")
+        assert np.isfinite(lit).all()  # the blurs after it still keep the screen finite
+    finally:
+        r.release()
+        ctx.release()
+
+
+# -- beyond the list: environment variables, the bench's files, imports, the soak's schedule -------
+
+@pytest.mark.parametrize("value", ["abc", "inf", "nan", "-1G", "0", "1e999"])
+def test_memory_limit_variable_that_is_not_a_size_is_one_line(monkeypatch, capsys, tmp_path, value):
+    monkeypatch.setenv("SKINVIEWER_MEMORY_LIMIT", value)
+    assert _cli(["render", "--scene", "stretch-plane", "--size", "16x16", "--out", tmp_path / "x.png"]) == 2
+    err = _one_line_error(capsys)
+    assert "SKINVIEWER_MEMORY_LIMIT" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_memory_limit_units_include_a_trailing_b(monkeypatch):
+    from skinviewer.core.renderer import _env_bytes
+    monkeypatch.setenv("SKINVIEWER_MEMORY_LIMIT", "2GB")
+    assert _env_bytes("SKINVIEWER_MEMORY_LIMIT") == 2 * 2**30  # was 2 bytes
+
+
+def test_shader_folder_variable_that_is_not_a_folder_says_so(monkeypatch, capsys, tmp_path):
+    monkeypatch.setenv("SKINVIEWER_SHADERS", str(tmp_path / "nowhere"))
+    assert _cli(["render", "--scene", "stretch-plane", "--size", "16x16", "--out", tmp_path / "x.png"]) == 2
+    err = _one_line_error(capsys)
+    assert "SKINVIEWER_SHADERS" in err and "not a folder" in err, err
+
+
+def test_last_bench_pointer_and_results_that_are_special_files_do_not_hang(tmp_path):
+    """The viewer's accuracy window reads cache/last_bench.txt and the results.json it names at start."""
+    (tmp_path / "cache").mkdir()
+    os.mkfifo(tmp_path / "cache" / "last_bench.txt")
+    os.mkfifo(tmp_path / "results.json")
+    code = ("import os, sys\nos.environ['SKINVIEWER_CACHE'] = sys.argv[1]\n"
+            "from skinviewer.core.bench import last_bench, load_results\nprint(repr(last_bench()))\n"
+            "try:\n    load_results(sys.argv[2])\nexcept OSError as e:\n    print(e)\n")
+    r = _in_child(code, str(tmp_path / "cache"), str(tmp_path / "results.json"))
+    assert r.returncode == 0 and r.stdout.startswith("''") and "FIFO" in r.stdout, (r.stdout, r.stderr[-500:])
+
+
+@pytest.mark.parametrize("text", ["[1, 2]", '{"results": 5}', '{"results": [1]}', "[" * 100000, '"x"'])
+def test_bench_results_that_are_not_results_are_a_value_error(tmp_path, text):
+    from skinviewer.core.bench import load_results
+    p = tmp_path / "results.json"
+    p.write_text(text)
+    with pytest.raises(ValueError):
+        load_results(p)
+
+
+def _import_err(capsys, tmp_path, name, text) -> str:
+    p = tmp_path / name
+    p.write_text(text)
+    assert _cli(["import", p]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+@pytest.mark.parametrize("name,text", [
+    ("deep.json", '{"a":' + "[" * 50000 + "]" * 50000 + "}"),
+    ("deep.asset", "%YAML 1.1\n%TAG !u! tag:unity3d.com,2011:\n--- !u!114 &1\nMonoBehaviour:\n  a: "
+     + "[" * 20000 + "]" * 20000 + "\n"),
+    ("deep.py", "VALUES = " + "[" * 50000 + "]" * 50000 + "\n"),
+])
+def test_imports_nested_thousands_deep_are_one_line(tmp_path, capsys, name, text):
+    assert "nested" in _import_err(capsys, tmp_path, name, text)
+
+
+def test_materialx_import_never_follows_xinclude(tmp_path, capsys):
+    secret = tmp_path / "secret.mtlx"
+    secret.write_text('<?xml version="1.0"?>\n<materialx version="1.38"><standard_surface name="leak" '
+                      'type="surfaceshader"><input name="subsurface" type="float" value="1"/></standard_surface>'
+                      "</materialx>\n")
+    for href in (str(secret), "/etc/passwd", "missing.mtlx"):
+        err = _import_err(capsys, tmp_path, "inc.mtlx", '<?xml version="1.0"?>\n<materialx version="1.38" '
+                          f'xmlns:xi="http://www.w3.org/2001/XInclude">\n  <xi:include href="{href}" />\n</materialx>\n')
+        assert "leak" not in err and "passwd" not in err and "no nodes" in err, err
+
+
+def test_import_of_a_fifo_or_a_device_does_not_hang(tmp_path):
+    os.mkfifo(tmp_path / "p.asset")
+    code = "import sys\nfrom skinviewer.cli import main\nsys.exit(main(['import', sys.argv[1]]))\n"
+    for target in (tmp_path / "p.asset", Path("/dev/zero")):
+        r = _in_child(code, str(target))
+        assert r.returncode == 2 and "regular file" in r.stderr and "Traceback" not in r.stderr, r.stderr[-500:]
+
+
+def test_soak_measures_drift_at_its_defaults():
+    """benchmarks/soak.py at its defaults: every technique warms up, then runs again, and the drift
+    is measured over as many frames as the warm-up (it was "over 0 frames" with 8 techniques)."""
+    import importlib.util
+
+    from skinviewer import techniques
+    spec = importlib.util.spec_from_file_location("soak", ROOT / "benchmarks" / "soak.py")
+    soak = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(soak)
+    frames = 3000
+    assert f'"--frames", type=int, default={frames}' in (ROOT / "benchmarks" / "soak.py").read_text()
+    per, warm = soak.schedule(frames, len(techniques.names()))
+    assert warm == per * len(techniques.names()) and frames - warm >= warm > 0
+    with pytest.raises(SystemExit):
+        soak.schedule(len(techniques.names()), len(techniques.names()))
+
+
+@pytest.mark.parametrize("damage", ["truncate", "fifo"])
+def test_a_damaged_head_cache_is_regenerated_with_a_note(tmp_path, damage):
+    from skinviewer.scene.head import _cache_path, default_head
+    first = default_head(detail=0, cache_dir=tmp_path)
+    entry = _cache_path(0, 7, tmp_path)
+    assert not first.notes and entry.is_file()
+    if damage == "truncate":
+        entry.write_bytes(entry.read_bytes()[:1000])
+    else:
+        entry.unlink()
+        os.mkfifo(entry)
+    again = default_head(detail=0, cache_dir=tmp_path)
+    assert any("did not validate" in n for n in again.notes), again.notes
+    np.testing.assert_array_equal(again.positions, first.positions)
+    assert not default_head(detail=0, cache_dir=tmp_path).notes  # rebuilt

@@ -25,6 +25,16 @@ vec4 finite4(vec4 c, float limit) {
 // range (lights of 1e6): NaN/Inf -> 0 and clamp to +-FLOAT_MAX instead of HALF_MAX.
 float finite_f32(float x) { return (isnan(x) || isinf(x)) ? 0.0 : clamp(x, -FLOAT_MAX, FLOAT_MAX); }
 vec4 finite4_f32(vec4 c) { return vec4(finite_f32(c.x), finite_f32(c.y), finite_f32(c.z), finite_f32(c.w)); }
+// For a pass that computes light from scratch (irradiance, light map): Inf -> +-FLOAT_MAX, but a NaN
+// stays NaN so that render.check_finite names this pass (a NaN here is a bug, e.g. in an edited
+// shader: replaced by 0 it only darkened the skin, unflagged); the blurs after it replace it by 0.
+float bounded_f32(float x) { return isnan(x) ? x : clamp(x, -FLOAT_MAX, FLOAT_MAX); }
+vec4 bounded4_f32(vec4 c) { return vec4(bounded_f32(c.x), bounded_f32(c.y), bounded_f32(c.z), bounded_f32(c.w)); }
+// The same with the target format's limit (the gutter fill copies a pass's output: NaN kept, Inf bounded)
+vec4 bounded4(vec4 c, float limit) {
+    bvec4 nan = bvec4(isnan(c.x), isnan(c.y), isnan(c.z), isnan(c.w));
+    return mix(clamp(c, vec4(-limit), vec4(limit)), c, nan);
+}
 // C^e for albedo C >= 0 without pow(0, 0) (undefined in GLSL): e <= 0 -> 1, C <= 0 -> 0 (seed 000 eq. 28, 34).
 vec3 safe_pow(vec3 c, float e) {
     c = clamp(c, 0.0, FLOAT_MAX);

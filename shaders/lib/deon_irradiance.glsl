@@ -60,7 +60,7 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
         }
     }
     d = clamp(finite_f32(d), 0.0, u_max_thickness);
-    f_irradiance = finite4_f32(vec4(E, d));
+    f_irradiance = bounded4_f32(vec4(E, d));  // a NaN in E is flagged (render.check_finite), not hidden
 #if DEON_VISIBILITY
     f_visibility = vis;
 #endif

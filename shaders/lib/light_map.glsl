@@ -28,6 +28,8 @@ void light_map(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, vec3 d
         if (!(ndl > 0.0)) continue;  // also skips NaN normals
         E += Lc * (min(ndl, 1.0) * shadow_factor(i, v_position, normalize(v_normal)));
     }
-    f_color = vec4(finite_f32(E), 1.0);
+    // a NaN (a bug, e.g. in an edited shader) is kept so that render.check_finite flags this pass
+    bvec3 nan = bvec3(isnan(E.x), isnan(E.y), isnan(E.z));
+    f_color = vec4(mix(clamp(E, vec3(0.0), vec3(FLOAT_MAX)), E, nan), 1.0);
 }
 #endif

@@ -7,18 +7,33 @@ import sys
 
 from skinviewer.cli import settings_list
 from skinviewer import techniques
-from skinviewer.cli.args import CliError, add_scene_args, settings_from_args
+from skinviewer.cli.args import (
+    CliError,
+    add_scene_args,
+    check_outputs,
+    image_output,
+    number,
+    settings_from_args,
+)
 from skinviewer.cli.render import cmd_render
 from skinviewer.core.settings import SettingsError
 
 
+class _Parser(argparse.ArgumentParser):
+    """Bad arguments: one line (the usage is one `--help` away), exit 2. Subcommands inherit it."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
+    p = _Parser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
     sub = p.add_subparsers(dest="command")
 
     pr = sub.add_parser("render", help="render one frame headless to a PNG")
     add_scene_args(pr)
-    pr.add_argument("--out", required=True, help="output PNG (a name ending in .exr: the linear HDR image as OpenEXR)")
+    pr.add_argument("--out", required=True, help="output image: .png, .jpg, .tif or .bmp (display-encoded), or .exr "
+                    "(the linear HDR image as OpenEXR)")
     pr.add_argument("--exr", metavar="FILE.exr", help="also write the linear HDR image (before exposure and tone map) "
                     "as OpenEXR, for compositing and comparison tools")
     pr.add_argument("--dump-passes", metavar="DIR", help="write every intermediate texture (.npy + .png) and graph.json")
@@ -54,8 +69,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _add_view_args(p: argparse.ArgumentParser) -> None:
     add_scene_args(p)
-    p.add_argument("--frames", type=int, help="render N frames, then exit (with --screenshot: save it)")
-    p.add_argument("--screenshot", help="PNG to write after --frames")
+    p.add_argument("--frames", type=number(0, 10**7, integer=True),
+                   help="render N frames, then exit (with --screenshot: save it)")
+    p.add_argument("--screenshot", help="image to write after --frames: .png, .jpg, .tif, .bmp, or .exr (the "
+                   "linear HDR image)")
 
 
 def cmd_view(args) -> int:
@@ -64,6 +81,9 @@ def cmd_view(args) -> int:
     except ImportError as exc:
         raise CliError(f"the viewer is not available: {exc}") from None
     s = settings_from_args(args)
+    if args.screenshot:
+        image_output(args.screenshot, "--screenshot")
+        check_outputs({"--screenshot": args.screenshot}, {"--preset": args.preset}, s)
     if getattr(args, "technique", None) and args.technique not in techniques.names():
         raise CliError(f"technique '{args.technique}' is not available (have: {', '.join(techniques.names())})")
     try:
@@ -96,9 +116,12 @@ def main(argv: list[str] | None = None) -> int:
                 "-h", "--help"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
-    args = parser.parse_args(argv)
     try:
+        args = parser.parse_args(argv)
         return int(args.func(args) or 0)
+    except KeyboardInterrupt:  # Ctrl-C: writers remove their temporaries on the way out
+        print("skinviewer: interrupted (Ctrl-C)", file=sys.stderr)
+        return 130
     except SettingsError as exc:
         where = f"{exc.source}: " if exc.source else ""
         print(f"skinviewer: invalid settings: {where}" + "; ".join(f"{p}: {m}" for p, m in exc.errors), file=sys.stderr)
@@ -109,11 +132,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyError as exc:
         print(f"skinviewer: {exc.args[0] if exc.args else exc}", file=sys.stderr)
     except Exception as exc:  # a clear line, not a traceback, for anything the user can cause
+        from skinviewer.core.files import OutputPathError
         from skinviewer.core.gl import GLUnavailableError
         from skinviewer.core.graph import ResourceLimitError
         from skinviewer.core.shaders import ShaderCompileError
         from skinviewer.scene.mesh import MeshError
-        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError, ResourceLimitError)):
+        if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError, ResourceLimitError,
+                            OutputPathError)):
             print(f"skinviewer: {exc}", file=sys.stderr)
         else:
             raise

@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+import os
 
 from skinviewer import techniques
 from skinviewer.core.settings import (
@@ -32,7 +34,81 @@ def _camera(text: str) -> list[float]:
         vals = []
     if len(vals) not in (2, 3):
         raise argparse.ArgumentTypeError(f"--camera expects yaw,pitch[,distance] in degrees/mesh units (got '{text}')")
+    if not all(math.isfinite(v) for v in vals):
+        raise argparse.ArgumentTypeError(f"yaw, pitch and distance must be finite numbers (got '{text}')")
+    if len(vals) == 3 and not vals[2] > 0:
+        raise argparse.ArgumentTypeError(f"the distance must be > 0 (got '{text}')")
     return vals
+
+
+def number(lo: float | None = None, hi: float | None = None, *, integer: bool = False, above: bool = False,
+           allow_inf: bool = False):
+    """An argparse ``type`` for a numeric argument checked up front: an integer or a finite number
+    (``allow_inf``: +inf too) within [lo, hi] (``above``: strictly above lo). NaN is never a value."""
+    def parse(text: str):
+        try:
+            v = int(text) if integer else float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {'an integer' if integer else 'a number'}, got {text!r}") \
+                from None
+        if math.isnan(v) or (math.isinf(v) and not (allow_inf and v > 0)):
+            raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+        if lo is not None and (v < lo or (above and v == lo)):
+            raise argparse.ArgumentTypeError(f"must be {'>' if above else '>='} {lo:g}, got {text!r}")
+        if hi is not None and v > hi:
+            raise argparse.ArgumentTypeError(f"must be <= {hi:g}, got {text!r}")
+        return v
+    parse.__name__ = "integer" if integer else "number"  # argparse names the type in its messages
+    return parse
+
+
+def _same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    try:
+        if os.path.exists(a) and os.path.exists(b):
+            return os.path.samefile(a, b)
+        return os.path.realpath(a) == os.path.realpath(b)
+    except (OSError, ValueError):
+        return False
+
+
+def check_outputs(outputs: dict[str, str | os.PathLike | None], inputs: dict[str, str | os.PathLike | None],
+                  settings: Settings | None = None) -> None:
+    """CliError (one line, before anything is computed) when an output would replace one of the
+    command's inputs (its preset, mesh, maps, or a file another output writes), or is a folder.
+    ``settings``: its scene.mesh and maps count as inputs too."""
+    from skinviewer.core.settings import PATH_FIELDS
+    ins = {k: v for k, v in inputs.items() if v}
+    if settings is not None:
+        for f in PATH_FIELDS:
+            v = getattr(settings.scene, f, None)
+            if v:
+                ins.setdefault(f"scene.{f}", v)
+    seen: dict[str, str | os.PathLike] = {}
+    for flag, out in outputs.items():
+        if not out:
+            continue
+        if os.path.isdir(out) and not flag.endswith("/"):
+            raise CliError(f"{flag} {_shown(out)} is a folder; name a file")
+        for what, path in list(ins.items()) + list(seen.items()):
+            if _same_file(out, path):
+                raise CliError(f"{flag} {_shown(out)} would overwrite {what} (the same file): "
+                               "choose another output name")
+        seen[flag] = out
+
+
+def _shown(p: str | os.PathLike) -> str:
+    return os.fsdecode(p).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def image_output(path: str | os.PathLike | None, flag: str, linear: bool = True, display: bool = True) -> None:
+    """CliError unless ``path``'s extension names a format this writes (files.output_kind)."""
+    from skinviewer.core.files import OutputPathError, output_kind
+    if path:
+        try:
+            output_kind(path, flag, linear=linear, display=display)
+        except OutputPathError as exc:
+            raise CliError(str(exc)) from None
+
 
 
 def add_scene_args(p: argparse.ArgumentParser) -> None:

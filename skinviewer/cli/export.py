@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from skinviewer.cli.args import add_scene_args, settings_from_args
+from skinviewer.cli.args import (
+    add_scene_args,
+    check_outputs,
+    number,
+    settings_from_args,
+)
 from skinviewer.core.exchange import ExchangeError, ExportResult, export
 from skinviewer.physics.engines import TARGETS
 
@@ -19,9 +24,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_scene_args(p)
     p.add_argument("--to", required=True, choices=TARGETS, help="target")
     p.add_argument("--out", required=True, help="file to write (.asset, .py or .mtlx as the target reads)")
-    p.add_argument("--world-scale", type=float, metavar="M",
+    p.add_argument("--world-scale", type=number(0, 1e6, above=True), metavar="M",
                    help="HDRP worldScale: metres per world unit (default: scene.mm_per_unit / 1000, else 1 = 1 m)")
-    p.add_argument("--unreal-world-unit-scale", type=float, default=1.0, metavar="CM",
+    p.add_argument("--unreal-world-unit-scale", type=number(0, 1e6, above=True), default=1.0, metavar="CM",
                    help="Unreal WorldUnitScale (cm per unit; default 1: a real-scale head, 1 uu = 1 cm)")
     p.add_argument("--profile-model", metavar="MODEL[:MATERIAL]",
                    help="fit the profile lab's model instead of the current Gaussians: dipole[:Skin1], "
@@ -56,6 +61,7 @@ def print_result(r: ExportResult, target: str) -> None:
 
 def cmd_export(args) -> int:
     s = settings_from_args(args)
+    check_outputs({"--out": args.out}, {"--preset": args.preset}, s)
     if args.world_scale is not None and not (args.world_scale > 0):
         print("skinviewer export: error: --world-scale must be > 0 metres per unit", file=sys.stderr)
         return 2

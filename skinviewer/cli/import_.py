@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from skinviewer.cli.args import _size, check_outputs, image_output
 from skinviewer.core.exchange import ExchangeError, Imported, read_any, settings_with
 from skinviewer.core.settings import Settings, SettingsError, load_preset, save_preset
 from skinviewer.physics import engines as E
@@ -20,9 +21,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
     p.add_argument("--material", help=".mtlx: which material or surface shader, when it holds several")
     p.add_argument("--base-preset", metavar="FILE.json", help="preset the imported profile goes into")
     p.add_argument("--preset-out", metavar="FILE.json", help="write the result as a preset")
-    p.add_argument("--preview", metavar="FILE.png", help="render the result (headless) to this PNG")
+    p.add_argument("--preview", metavar="FILE.png", help="render the result (headless) to this image (.png, .jpg, "
+                   ".tif or .bmp)")
     p.add_argument("--technique", default=None, help="technique of the preview (default: the preset's)")
-    p.add_argument("--size", default="384x384", help="preview size WxH (default 384x384)")
+    p.add_argument("--size", type=_size, default=(384, 384), help="preview size WxH (default 384x384)")
     p.set_defaults(func=cmd_import)
     return p
 
@@ -48,6 +50,9 @@ def print_import(imp: Imported, fit) -> None:
 
 
 def cmd_import(args) -> int:
+    image_output(args.preview, "--preview", linear=False)
+    check_outputs({"--preset-out": args.preset_out, "--preview": args.preview},
+                  {"the imported file": args.path, "--base-preset": args.base_preset})
     try:
         imp = read_any(args.path, args.material)
         base = load_preset(args.base_preset) if args.base_preset else Settings()
@@ -63,16 +68,15 @@ def cmd_import(args) -> int:
         save_preset(s, args.preset_out)
         print(f"wrote {args.preset_out}")
     if args.preview:
-        from skinviewer.cli.args import _size
         from skinviewer.cli.turntable import render_frames
         from skinviewer.core.settings import with_values
-        w, h = _size(args.size)
+        w, h = args.size
         vals = {"render.width": w, "render.height": h}
         if args.technique:
             vals["technique"] = args.technique
         ps = with_values(s, vals)
         (img, ms), = render_frames(ps, [ps])
-        from skinviewer.core.files import save_png
-        save_png(args.preview, img)
+        from skinviewer.core.files import save_image
+        save_image(args.preview, img)
         print(f"wrote {args.preview} ({ps.technique}, {w}x{h}, {ms:.0f} ms)")
     return 0

@@ -10,6 +10,7 @@ import json
 import math
 import sys
 
+from skinviewer.cli.args import check_outputs, number
 from skinviewer.physics import profiles as P
 from skinviewer.physics.fitting import FitResult, fit_gaussians
 
@@ -52,6 +53,8 @@ def _layer(text: str) -> P.Layer:
         eta = float(parts[3]) if len(parts) == 4 else 1.4
     except ValueError:
         raise _Bad(f"--layer: bad thickness or eta in {text!r}") from None
+    if not (t > 0 and not math.isnan(t) and math.isfinite(eta) and 0 < eta <= 10):
+        raise _Bad(f"--layer: the thickness must be > 0 mm (inf: the last layer) and eta in (0, 10], got {text!r}")
     return P.Layer(_triple(parts[1], "--layer sigma_s'"), _triple(parts[2], "--layer sigma_a"), t, eta)
 
 
@@ -64,9 +67,9 @@ def add_parser(subparsers) -> argparse.ArgumentParser:
     p.add_argument("--material", help=f"Jensen 2001 measured material: {', '.join(P.MATERIALS)}")
     p.add_argument("--sigma-s-prime", metavar="R,G,B", help="reduced scattering coefficient (1/mm)")
     p.add_argument("--sigma-a", metavar="R,G,B", help="absorption coefficient (1/mm)")
-    p.add_argument("--eta", type=float, default=None, help="relative index of refraction (default 1.3; "
+    p.add_argument("--eta", type=number(0, 10, above=True), default=None, help="relative index of refraction (default 1.3; "
                                                            "layers 1.4)")
-    p.add_argument("--thickness", type=float, default=math.inf,
+    p.add_argument("--thickness", type=number(0, None, above=True, allow_inf=True), default=math.inf,
                    help="multipole: slab thickness in mm for --material/--sigma-* (default inf = dipole)")
     p.add_argument("--layer", action="append", default=[], metavar="T:SSP:SA[:ETA]",
                    help="multipole: a layer, top first, e.g. 0.25:8,9,10:0.05,0.15,0.4:1.4; "
@@ -208,6 +211,10 @@ def _print_table(title: str, fit: FitResult, normalize: bool) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.plot and not str(args.plot).lower().endswith(".png"):
+        print(f"skinviewer profile: error: --plot {args.plot}: the plot is a PNG; name the file .png", file=sys.stderr)
+        return 2
+    check_outputs({"--plot": args.plot, "--preset-out": args.preset_out}, {"--base-preset": args.base_preset})
     try:
         model, title = _build_model(args)
         fit = _fit(args, model)

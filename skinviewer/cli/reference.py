@@ -8,15 +8,23 @@ from pathlib import Path
 
 import numpy as np
 
-from skinviewer.cli.args import CliError, add_scene_args, settings_from_args
-from skinviewer.core.files import save_exr, save_npy, save_png
+from skinviewer.cli.args import (
+    CliError,
+    add_scene_args,
+    check_outputs,
+    image_output,
+    number,
+    settings_from_args,
+)
+from skinviewer.core.files import save_exr, save_image, save_npy
 from skinviewer.core.settings import Settings, save_preset
 
 
 def add_parsers(sub) -> None:
     p = sub.add_parser("reference", help="render the ground truth (brute-force diffusion over the surface)")
     add_scene_args(p)
-    p.add_argument("--out", required=True, help="output PNG (exposure, background, sRGB like `render`)")
+    p.add_argument("--out", required=True, help="output image: .png, .jpg, .tif or .bmp (exposure, background, sRGB "
+                   "like `render`), or .exr (the linear image)")
     p.add_argument("--npy", help="also the linear image as float32 .npy")
     p.add_argument("--exr", help="also the linear image as OpenEXR")
     _reference_args(p)
@@ -27,8 +35,9 @@ def add_parsers(sub) -> None:
     b.add_argument("--out", required=True, help="output folder (results.json, results.md, pareto.png, heatmaps/)")
     b.add_argument("--quick", action="store_true", help="a few configurations per technique")
     b.add_argument("--techniques", help="comma-separated subset of the registry")
-    b.add_argument("--runs", type=int, default=3, help="timed frames per configuration (median; >= 3)")
-    b.add_argument("--budget-ms", type=float, help="print the most accurate configuration within this full-frame time")
+    b.add_argument("--runs", type=number(3, 1000, integer=True), default=3,
+                   help="timed frames per configuration (median; >= 3)")
+    b.add_argument("--budget-ms", type=number(0, 1e7, above=True), help="print the most accurate configuration within this full-frame time")
     b.add_argument("--preset-out", help="with --budget-ms: write that configuration as a preset")
     _reference_args(b)
     b.set_defaults(func=cmd_bench)
@@ -36,8 +45,9 @@ def add_parsers(sub) -> None:
 
 def _reference_args(p) -> None:
     g = p.add_argument_group("ground truth")
-    g.add_argument("--h", type=float, default=None, help="source element edge in mm (default 0.5)")
-    g.add_argument("--max-seconds", type=float, default=600.0,
+    g.add_argument("--h", type=number(0, 100, above=True), default=None,
+                   help="source element edge in mm (default 0.5)")
+    g.add_argument("--max-seconds", type=number(0, 1e7, above=True), default=600.0,
                    help="refuse a reference whose estimated time exceeds this (default 600)")
     g.add_argument("--no-cache", action="store_true", help="recompute even when a cached reference exists")
     g.add_argument("--profile", default="gaussians", metavar="MODEL[:MATERIAL]",
@@ -106,8 +116,16 @@ def display_png(s: Settings, lit: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 def cmd_reference(args) -> int:
     s = settings_from_args(args)
+    image_output(args.out, "--out")
+    image_output(args.exr, "--exr", display=False)
+    if args.npy and not str(args.npy).lower().endswith(".npy"):
+        raise CliError(f"--npy {args.npy}: writes NumPy .npy; name the file .npy")
+    check_outputs({"--out": args.out, "--npy": args.npy, "--exr": args.exr}, {"--preset": args.preset}, s)
     ref = reference_with_progress(s, args)
-    save_png(args.out, display_png(s, ref.lit, ref.mask))
+    if str(args.out).lower().endswith(".exr"):  # the linear image, not display bytes under an .exr name
+        save_exr(args.out, ref.lit)
+    else:
+        save_image(args.out, display_png(s, ref.lit, ref.mask))
     if args.npy:
         save_npy(args.npy, ref.lit)
     if args.exr:
@@ -119,6 +137,8 @@ def cmd_reference(args) -> int:
           + ("from the cache" if m.get("cached") else f"{t:.1f} s") + ")")
     for line in m.get("plan", []):
         print(f"  {line}")
+    for note in m.get("notes", []):
+        print(f"note: {note}", file=sys.stderr)
     return 0
 
 
@@ -144,6 +164,9 @@ def cmd_bench(args) -> int:
             techniques.get(n)
     if args.preset_out and args.budget_ms is None:
         raise CliError("--preset-out needs --budget-ms")
+    check_outputs({"--out/": args.out, "--preset-out": args.preset_out}, {"--preset": args.preset}, s)
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise CliError(f"--out {args.out} is a file; bench writes a folder")
     ref = reference_with_progress(s, args)
     out = Path(args.out)
     with _progress() as prog:

@@ -7,8 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
-from skinviewer.cli.args import settings_from_args
-from skinviewer.core.files import atomic_write_text, save_exr, save_npy, save_png
+from skinviewer.cli.args import check_outputs, image_output, settings_from_args
+from skinviewer.core.files import (
+    atomic_write_text,
+    save_exr,
+    save_image,
+    save_npy,
+    save_png,
+)
 from skinviewer.core.gl import headless_context
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings
@@ -26,6 +32,11 @@ def _preview(arr: np.ndarray) -> np.ndarray:
 
 def cmd_render(args) -> int:
     s = settings_from_args(args)
+    # outputs checked before anything renders: the format their extension names, no input replaced
+    image_output(args.out, "--out")
+    image_output(getattr(args, "exr", None), "--exr", display=False)
+    check_outputs({"--out": args.out, "--exr": getattr(args, "exr", None), "--timings": args.timings},
+                  {"--preset": args.preset}, s)
     ctx = headless_context()
     r = Renderer(ctx)
     try:
@@ -38,8 +49,8 @@ def cmd_render(args) -> int:
         out = Path(args.out)
         if out.suffix.lower() == ".exr":  # the linear image, not PNG bytes under an .exr name
             save_exr(out, r.read(s, "lit")[::-1])
-        else:
-            save_png(out, r.image(s))
+        else:  # PNG, JPEG, TIFF or BMP, as the extension says
+            save_image(out, r.image(s))
         if getattr(args, "exr", None):  # linear HDR radiance, before exposure and tone map
             save_exr(args.exr, r.read(s, "lit")[::-1])
             print(f"wrote {args.exr} (linear RGBA float32, alpha = coverage)")

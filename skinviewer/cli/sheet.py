@@ -11,7 +11,7 @@ import time
 import numpy as np
 
 from skinviewer import techniques
-from skinviewer.cli.args import add_scene_args, settings_from_args
+from skinviewer.cli.args import add_scene_args, check_outputs, settings_from_args
 from skinviewer.core.files import atomic_write_bytes
 from skinviewer.core.settings import Settings, to_dict, with_values
 
@@ -85,7 +85,10 @@ def render_sheet(s: Settings, names: list[str], views: list[str], truth: bool = 
                     ms.append(1000.0 * (time.perf_counter() - t0))
                 img = r.image(t)
                 err = None
-                ref = load_cached(t) if truth else None
+                cache_notes: list[str] = []
+                ref = load_cached(t, notes=cache_notes) if truth else None
+                for note in cache_notes:  # a damaged entry: discarded, the tile says "not cached"
+                    print(f"note: {note}", file=sys.stderr)
                 if ref is not None and ref.lit.shape[:2] == img.shape[:2]:
                     lit, cov = linear_image(r, t)
                     err = image_error(lit, ref.lit, compare_mask(ref.mask, cov))
@@ -133,6 +136,7 @@ def cmd_sheet(args) -> int:
         print(f"skinviewer sheet: error: {msg}", file=sys.stderr)
         return 2
     s = settings_from_args(args)
+    check_outputs({"--out": args.out}, {"--preset": args.preset}, s)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
     with Progress(TextColumn("sheet"), BarColumn(), MofNCompleteColumn()) as bar:
         task = bar.add_task("sheet", total=len(names) * len(views))

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skinviewer.cli.args import add_scene_args, settings_from_args
+from skinviewer.cli.args import add_scene_args, check_outputs, settings_from_args
 from skinviewer.core.files import atomic_path, atomic_write_bytes, save_png
 from skinviewer.core.settings import Settings, with_values
 
@@ -168,6 +168,7 @@ def cmd_turntable(args) -> int:
     except ValueError as exc:
         return fail(str(exc))
     s = settings_from_args(args)
+    check_outputs({"--out/" if kind_of(args.out) == "frames" else "--out": args.out}, {"--preset": args.preset}, s)
     views = orbit(s, args.frames, args.light_orbit)
     from rich.progress import (
         BarColumn,

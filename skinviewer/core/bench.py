@@ -178,16 +178,31 @@ def remember_bench(results_json: Path) -> None:
     atomic_write_text(cache_dir() / LAST_BENCH, str(Path(results_json).resolve()) + "\n")
 
 
+MAX_RESULTS_BYTES = 256 * 2**20
+
+
 def last_bench() -> str:
+    """The results.json of the last bench, or "" (a damaged or special file there: "" too; it is
+    read through read_regular_file, so a FIFO never blocks the viewer's start)."""
+    from skinviewer.core.files import read_regular_file
     from skinviewer.core.paths import cache_dir
     try:
-        return (cache_dir() / LAST_BENCH).read_text(encoding="utf-8").strip()
-    except OSError:
+        return read_regular_file(cache_dir() / LAST_BENCH, 64 * 2**10).decode("utf-8").strip()
+    except (OSError, UnicodeDecodeError):
         return ""
 
 
 def load_results(path: str | Path) -> tuple[dict, list[Result]]:
-    data = json.loads(Path(path).read_text(encoding="utf-8"))
+    """A bench's results.json: ValueError (one line) for anything that is not one (not JSON, not an
+    object, results that are not records), OSError when it cannot be read (regular files only)."""
+    from skinviewer.core.files import read_regular_file
+    try:
+        data = json.loads(read_regular_file(path, MAX_RESULTS_BYTES, what=f"bench results {path}").decode("utf-8"))
+    except (UnicodeDecodeError, RecursionError) as exc:
+        raise ValueError(f"{path}: not bench results ({type(exc).__name__})") from None
+    if not isinstance(data, dict) or not isinstance(data.get("results", []), list) \
+            or not all(isinstance(d, dict) for d in data.get("results", [])):
+        raise ValueError(f"{path}: not bench results (expected an object with a list of result records)")
     keys = set(Result.__dataclass_fields__)
     return data, [Result(**{k: v for k, v in d.items() if k in keys}) for d in data.get("results", [])]
 

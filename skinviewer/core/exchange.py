@@ -511,8 +511,10 @@ def read_hdrp(text: str) -> Imported:
 def read_mtlx(text: str, material: str | None = None) -> Imported:
     import MaterialX as mx
     doc = mx.createDocument()
+    opts = mx.XmlReadOptions()
+    opts.readXIncludeFunction = None  # an import reads the one file given: no <xi:include href="/etc/...">
     try:
-        mx.readFromXmlString(doc, text)
+        mx.readFromXmlString(doc, text, mx.FileSearchPath(), opts)
     except (mx.ExceptionParseError, mx.Exception, ValueError) as exc:
         raise ExchangeError(f"not a MaterialX document: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
     shaders = [n for n in doc.getNodes() if n.getCategory() in ("standard_surface", "open_pbr_surface")]
@@ -683,6 +685,13 @@ def read_script(text: str) -> Imported:
 
 
 def read_any(path: str | Path, material: str | None = None) -> Imported:
+    try:
+        return _read_any(path, material)
+    except RecursionError:  # JSON, YAML or a script literal nested thousands deep
+        raise ExchangeError("nested too deeply to be an engine's profile") from None
+
+
+def _read_any(path: str | Path, material: str | None = None) -> Imported:
     p = Path(path)
     try:
         data = read_regular_file(p, MAX_IMPORT_BYTES, what=str(p))

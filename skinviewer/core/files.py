@@ -181,6 +181,46 @@ def save_png(path: str | os.PathLike, img: np.ndarray) -> Path:
     return Path(path)
 
 
+# what an image output's extension means: the display image in that format, or .exr the linear one
+DISPLAY_FORMATS = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG", ".tif": "TIFF", ".tiff": "TIFF", ".bmp": "BMP"}
+
+
+class OutputPathError(ValueError):
+    """An output path refused before anything is computed (its extension, or what it would replace)."""
+
+
+def output_kind(path: str | os.PathLike, flag: str = "--out", linear: bool = True, display: bool = True) -> str:
+    """"exr" or the Pillow format an output's extension names; OutputPathError (one line) for any
+    other extension, so that no file is ever written with bytes its name does not say."""
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if linear and suffix == ".exr":
+        return "exr"
+    if display and suffix in DISPLAY_FORMATS:
+        return DISPLAY_FORMATS[suffix]
+    names = ([".png", ".jpg", ".tif", ".bmp"] if display else []) + ([".exr"] if linear else [])
+    raise OutputPathError(f"{flag} {_shown(path)}: the extension {suffix or '(none)'!r} is not an image format "
+                          f"this writes; use {', '.join(names[:-1]) + ' or ' if len(names) > 1 else ''}{names[-1]}")
+
+
+def _shown(path: str | os.PathLike) -> str:
+    return os.fspath(path).encode("utf-8", "backslashreplace").decode("utf-8") if isinstance(path, str) \
+        else os.fsdecode(path).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def save_image(path: str | os.PathLike, img: np.ndarray) -> Path:
+    """uint8 (H, W, 3|4) display image (top row first) in the format the extension names (PNG, JPEG
+    (quality 95, alpha dropped), TIFF, BMP); OutputPathError for any other extension."""
+    from PIL import Image
+    fmt = output_kind(path, linear=False)
+    a = np.ascontiguousarray(img)
+    if fmt in ("JPEG", "BMP") and a.ndim == 3 and a.shape[2] == 4:
+        a = np.ascontiguousarray(a[..., :3])
+    buf = io.BytesIO()
+    Image.fromarray(a).save(buf, format=fmt, **({"quality": 95} if fmt == "JPEG" else {}))
+    atomic_write_bytes(path, buf.getvalue())
+    return Path(path)
+
+
 def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
     buf = io.BytesIO()
     np.save(buf, np.ascontiguousarray(arr, dtype=np.float32))
@@ -190,7 +230,10 @@ def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
 
 def save_exr(path: str | os.PathLike, img: np.ndarray) -> Path:
     """Linear float image (H, W), (H, W, 1|3|4) as OpenEXR (float32, ZIP), top row first: what
-    compositing and VFX tools read. Written to a temporary file and renamed like every writer."""
+    compositing and VFX tools read. OpenEXR encodes into memory (its own file writer takes only a
+    UTF-8 name and reports a full disk as a bare RuntimeError); the bytes go to ``path`` through
+    atomic_write_bytes like every writer: nothing is ever half-written, any failure is one OSError
+    naming the file."""
     import OpenEXR
 
     a = np.ascontiguousarray(np.nan_to_num(np.asarray(img, np.float32), nan=0.0, posinf=3e38, neginf=-3e38))
@@ -203,9 +246,15 @@ def save_exr(path: str | os.PathLike, img: np.ndarray) -> Path:
     else:
         raise ValueError(f"save_exr: expected 1, 3 or 4 channels, got shape {a.shape}")
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with atomic_path(path, suffix=".exr") as tmp:
+    try:
+        buf = io.BytesIO()
         with OpenEXR.File(header, channels) as f:
-            f.write(str(tmp))
+            f.write(buf)
+        atomic_write_bytes(path, buf.getvalue())
+    except (OSError, RuntimeError, ValueError) as exc:
+        why = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+        full = getattr(exc, "errno", None) in (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
+        raise OSError(f"cannot write {_shown(path)}: {why}" + (" (is the disk full?)" if full else "")) from None
     return Path(path)
 
 
@@ -213,7 +262,8 @@ def load_exr(path: str | os.PathLike) -> np.ndarray:
     """The pixels of an EXR written by ``save_exr`` (float32, top row first)."""
     import OpenEXR
 
-    with OpenEXR.File(str(path)) as f:
+    data = read_regular_file(path, 2**30, what=f"EXR {_shown(path)}")
+    with OpenEXR.File(io.BytesIO(data)) as f:
         ch = f.channels()
         key = next(k for k in ("RGBA", "RGB", "Y") if k in ch) if any(k in ch for k in ("RGBA", "RGB", "Y")) \
             else next(iter(ch))

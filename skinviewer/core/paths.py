@@ -12,7 +12,10 @@ _CHECKOUT = _PKG.parent
 def _find(name: str, env: str) -> Path:
     override = os.environ.get(env)
     if override:
-        return Path(override).resolve()
+        p = Path(override).resolve()
+        if not p.is_dir():
+            raise FileNotFoundError(f"{env}={override}: not a folder")
+        return p
     source = _CHECKOUT / name
     if source.is_dir() and (_CHECKOUT / "pyproject.toml").is_file():
         return source
@@ -30,7 +33,19 @@ def presets_dir() -> Path:
     return _find("presets", "SKINVIEWER_PRESETS")
 
 
+class CacheDirError(OSError):
+    """The cache folder cannot be used; the message names where it came from (SKINVIEWER_CACHE)."""
+
+
 def cache_dir() -> Path:
-    d = Path(os.environ.get("SKINVIEWER_CACHE") or Path.home() / ".cache" / "skinviewer")
-    d.mkdir(parents=True, exist_ok=True)
+    env = os.environ.get("SKINVIEWER_CACHE")
+    d = Path(env or Path.home() / ".cache" / "skinviewer")
+    where = f"SKINVIEWER_CACHE={env}" if env else f"the cache folder {d}"
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the variable
+        why = "it is a file, not a folder" if d.is_file() else getattr(exc, "strerror", None) or str(exc)
+        raise CacheDirError(f"{where}: {why}; point SKINVIEWER_CACHE at a writable folder") from None
+    if not os.access(d, os.W_OK | os.X_OK):
+        raise CacheDirError(f"{where}: not writable; point SKINVIEWER_CACHE at a writable folder")
     return d

@@ -23,6 +23,7 @@ import hashlib
 import io
 import json
 import math
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -398,17 +399,48 @@ def _cache_path(key: str) -> Path:
     return cache_dir() / "reference" / f"{key}.npz"
 
 
-def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None) -> Reference | None:
-    p = _cache_path(cache_key(s, h_mm, profile))
-    if not p.is_file():
+MAX_CACHE_BYTES = 2**31  # a cached reference at the largest size (8192^2) is well under this
+
+
+def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, notes: list[str] | None = None) \
+        -> Reference | None:
+    """The cached reference of these inputs, or None. An entry that does not validate (truncated or
+    not a zip, a missing or wrongly shaped array, a key or size that is not these settings', not a
+    regular file) is deleted, and ``notes`` gets one line saying so: the caller recomputes it."""
+    key = cache_key(s, h_mm, profile)
+    p = _cache_path(key)
+    if not os.path.lexists(p):
         return None
     try:
-        z = np.load(p, allow_pickle=False)
-        meta = json.loads(str(z["meta"]))
-        meta["cached"] = True
-        return Reference(z["lit"], z["diffuse"], z["specular"], z["mask"], meta, z["position"])
-    except (OSError, ValueError, KeyError):
+        return _validated(p, key, (s.render.height, s.render.width))
+    except Exception as exc:  # noqa: BLE001 - anything a damaged file raises (BadZipFile, zlib.error, ...)
+        why = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        try:
+            os.unlink(p)
+            what = "discarded"
+        except OSError:
+            what = "ignored (it cannot be deleted)"
+        if notes is not None:
+            notes.append(f"the cached reference {p.name} did not validate ({why}): {what}, recomputing")
         return None
+
+
+def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
+    from skinviewer.core.files import read_regular_file
+    data = read_regular_file(p, MAX_CACHE_BYTES, what=f"cache entry {p}")
+    with np.load(io.BytesIO(data), allow_pickle=False) as z:
+        arrays = {k: np.array(z[k]) for k in ("lit", "diffuse", "specular", "mask", "position", "meta")}
+    meta = json.loads(str(arrays["meta"]))
+    if not isinstance(meta, dict) or meta.get("key") != key:
+        raise ValueError("its key is not the file name's")
+    for k in ("lit", "diffuse", "specular", "position"):
+        a = arrays[k]
+        if a.shape != (*hw, 3) or a.dtype != np.float32 or not np.all(np.isfinite(a)):
+            raise ValueError(f"'{k}' is {a.shape} {a.dtype}, expected finite float32 {(*hw, 3)}")
+    if arrays["mask"].shape != hw or arrays["mask"].dtype != np.bool_:
+        raise ValueError(f"'mask' is {arrays['mask'].shape} {arrays['mask'].dtype}, expected bool {hw}")
+    meta["cached"] = True
+    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"])
 
 
 def _store(key: str, ref: Reference) -> None:
@@ -484,8 +516,9 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     key = cache_key(s, h_mm, profile)
     if scene is not None:
         use_cache = False
+    cache_notes: list[str] = []
     if use_cache:
-        hit = load_cached(s, h_mm, profile)
+        hit = load_cached(s, h_mm, profile, notes=cache_notes)
         if hit is not None:
             return hit
     report = progress or (lambda stage, f: None)
@@ -541,5 +574,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3])
     if use_cache:
         _store(key, ref)
+    if cache_notes:
+        ref.meta["notes"] = cache_notes
     report("done", 1.0)
     return ref

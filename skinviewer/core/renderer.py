@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -257,6 +258,7 @@ class Renderer:
         else:
             sdef = build_scene(sc.name, sc.head_detail)
             mesh = sdef.mesh
+            notes += mesh.notes  # e.g. a cached head that did not validate and was regenerated
             mm = sc.mm_per_unit if sc.mm_per_unit is not None else mesh.mm_per_unit
             desc = sdef.description
         mesh.check_renderable()
@@ -357,15 +359,21 @@ class Renderer:
 
 
 def _env_bytes(name: str) -> int | None:
-    """An environment size such as 2G, 512M or 1000000 (bytes); None when unset or unreadable."""
-    text = os.environ.get(name, "").strip().upper()
+    """An environment size such as 2G, 512M or 1000000 (bytes); None when unset. A value that is not
+    a positive finite size is an OSError naming the variable (it was silently ignored, and "inf" was
+    an OverflowError traceback)."""
+    raw = os.environ.get(name, "")
+    text = raw.strip().upper()
     if not text:
         return None
-    mult = {"K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}.get(text[-1:], 1)
+    mult = {"K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}.get(text.rstrip("B")[-1:], 1)
     try:
-        return int(float(text.rstrip("KMGTB") or "x") * mult)
+        value = float(text.rstrip("B").rstrip("KMGT") or "x") * mult
     except ValueError:
-        return None
+        value = math.nan
+    if not (math.isfinite(value) and 1 <= value <= 2**60):
+        raise OSError(f"{name}={raw}: expected a positive size such as 2G, 512M or 1000000 (bytes)")
+    return int(value)
 
 
 def _host_available() -> int:

@@ -13,6 +13,7 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    StrictInt,
     ValidationError,
     field_validator,
     model_validator,
@@ -505,7 +506,7 @@ class SeparableSettings(_Model):
 
 
 class Settings(_Model):
-    schema_version: int = SCHEMA_VERSION
+    schema_version: StrictInt = SCHEMA_VERSION  # strict: JSON `true` is not version 1
     technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2", "penner"] = "deon"
     scene: SceneSettings = Field(default_factory=SceneSettings)
     camera: CameraSettings = Field(default_factory=CameraSettings)

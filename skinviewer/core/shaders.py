@@ -18,6 +18,9 @@ import moderngl
 
 from skinviewer.core import paths
 from skinviewer.core.constants import GLSL_DEFINES
+from skinviewer.core.files import FileReadError, read_regular_file
+
+MAX_SHADER_BYTES = 4 * 2**20  # one GLSL file; a FIFO or device among the shaders is refused, never read
 
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 _VERTEX_STAGE = re.compile(r'^\s*#pragma\s+vertex_stage\s+"([^"]+)"\s*$', re.M)
@@ -98,11 +101,15 @@ class ShaderLibrary:
             watch.add(path)
         if path in stack:
             raise _SourceError(ShaderError(self._rel(stack[-1]), 0, f"#include cycle through {self._rel(path)}"))
-        try:
-            text = path.read_text(encoding="utf-8")
-        except OSError as exc:
+        outside = self._outside(path)
+        if outside:
             where = self._rel(stack[-1]) if stack else self._rel(path)
-            raise _SourceError(ShaderError(where, 0, f"cannot read {self._rel(path)}: {exc.strerror}")) from None
+            raise _SourceError(ShaderError(where, 0, outside))
+        try:
+            text = read_regular_file(path, MAX_SHADER_BYTES, what=self._rel(path)).decode("utf-8")
+        except FileReadError as exc:
+            where = self._rel(stack[-1]) if stack else self._rel(path)
+            raise _SourceError(ShaderError(where, 0, str(exc))) from None
         except UnicodeDecodeError as exc:
             raise _SourceError(ShaderError(self._rel(path), text_line(path, exc.start), "not UTF-8 text: "
                                            f"byte 0x{exc.object[exc.start]:02x} at offset {exc.start}")) from None
@@ -116,10 +123,14 @@ class ShaderLibrary:
                 out.append("// " + line.strip())  # read by _stage_files; keeps line numbers
             elif m:
                 candidates = [(path.parent / m.group(1)).resolve(), (self.root / m.group(1)).resolve()]
-                inc = next((c for c in candidates if c.is_file()), None)
+                inside = [c for c in candidates if not self._outside(c)]
+                if not inside:  # never read, compiled or watched: only files under the shader root are
+                    raise _SourceError(ShaderError(self._rel(path), lineno, f'#include "{m.group(1)}" is outside '
+                                                   f"the shader folder {self.root}: refused"))
+                inc = next((c for c in inside if c.exists()), None)  # a FIFO or folder: read_regular_file says so
                 if inc is None:
                     if watch is not None:
-                        watch.update(candidates)  # either appearing fixes it
+                        watch.update(inside)  # either appearing fixes it
                     raise _SourceError(ShaderError(self._rel(path), lineno, f'#include "{m.group(1)}" not found'))
                 out.append(f"#line 1 {len(files) if inc not in files else files.index(inc)}")
                 out.extend(self._expand(inc, files, stack + (path,), watch))
@@ -129,6 +140,18 @@ class ShaderLibrary:
                 if line.lstrip().startswith("#version") and not stack:
                     out.append(f"#line {lineno + 1} {fid}")
         return out
+
+    def _outside(self, p: Path) -> str:
+        """Why ``p`` (symlinks resolved) may not be read, when it lies outside the shader root: a
+        shader file can only ever pull in GLSL from the root, never /etc/passwd or ../secret."""
+        root = self.root.resolve()
+        try:
+            real = Path(p).resolve()
+        except (OSError, RuntimeError):  # a symlink loop
+            return f"{p}: cannot resolve its path (a symlink loop?)"
+        if real == root or root in real.parents:
+            return ""
+        return f"{self._rel(Path(p))} is outside the shader folder {root} (symlinks resolved): refused"
 
     def _rel(self, p: Path) -> str:
         try:
@@ -142,7 +165,7 @@ class ShaderLibrary:
         frag = found.get("fragment_shader")
         if frag is not None:
             try:
-                m = _VERTEX_STAGE.search(frag.read_text(encoding="utf-8"))
+                m = _VERTEX_STAGE.search(read_regular_file(frag, MAX_SHADER_BYTES).decode("utf-8"))
             except (OSError, UnicodeDecodeError):
                 m = None
             if m:
@@ -151,12 +174,19 @@ class ShaderLibrary:
 
     def _assemble(self, name: str, defines: tuple[tuple[str, str], ...], watch: set[Path] | None = None):
         if watch is not None:  # every stage file, present or not: a deleted one may come back
-            watch.update((self.root / f"{name}{ext}").resolve() for ext in STAGES.values())
+            root = self.root.resolve()  # the names themselves: a symlink out of the root is not followed
+            watch.update(root / f"{name}{ext}" for ext in STAGES.values())
         stage_files = self._stage_files(name)
         if "fragment_shader" in stage_files and "vertex_shader" not in stage_files:
             self._expand(stage_files["fragment_shader"].resolve(), [])  # its own error (encoding) first
         if "vertex_shader" not in stage_files or "fragment_shader" not in stage_files:
             raise _SourceError(ShaderError(f"{name}.vert/.frag", 0, "shader files not found in " + str(self.root)))
+        for stage, path in stage_files.items():
+            outside = self._outside(path)
+            if outside:
+                raise _SourceError(ShaderError(f"{name}.frag" if stage == "vertex_shader" else self._rel(path), 0,
+                                               ("#pragma vertex_stage: " if stage == "vertex_shader" else "")
+                                               + outside))
         if not stage_files["vertex_shader"].is_file():
             raise _SourceError(ShaderError(f"{name}.frag", 0, "vertex stage "
                                            f"{self._rel(stage_files['vertex_shader'])} not found"))

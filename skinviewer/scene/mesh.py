@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -260,6 +261,9 @@ def _read_image(path: str | Path, mode: str) -> np.ndarray:
         data = read_regular_file(path, MAX_IMAGE_BYTES, what=f"image {path}")
     except FileReadError as exc:
         raise MeshError(str(exc)) from None
+    if data[:4] == b"\x76\x2f\x31\x01":
+        raise MeshError(f"cannot read image {path}: it is OpenEXR (linear HDR); maps must be PNG, JPEG, TIFF, "
+                        "BMP or TGA (8 or 16 bits)")
     try:
         img = Image.open(io.BytesIO(data))
         w, h = img.size
@@ -269,7 +273,10 @@ def _read_image(path: str | Path, mode: str) -> np.ndarray:
         img.load()
     except Image.DecompressionBombError as exc:
         raise MeshError(f"image {path} is too large to decode safely ({exc})") from None
-    except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as exc:
+    except UnidentifiedImageError:
+        raise MeshError(f"cannot read image {path}: not an image format Pillow reads (PNG, JPEG, TIFF, BMP, "
+                        "TGA, ...)") from None
+    except (OSError, ValueError, SyntaxError) as exc:
         raise MeshError(f"cannot read image {path}: {exc}") from None
     return _image_array(img, mode)
 
@@ -278,6 +285,11 @@ def _image_array(img, mode: str) -> np.ndarray:
     """A PIL image as a map array, row 0 at v = 0 (images store their top row first).
     ``mode`` "L": uint8 (H, W) (region IDs; 16-bit images are rounded to 8 bits, not clipped);
     "RGB"/"RGBA": float32 in [0, 1] of the image's own bit depth (16-bit PNGs stay 16-bit)."""
+    from PIL import ImageOps
+    try:
+        img = ImageOps.exif_transpose(img)  # a JPEG's EXIF orientation, as every image viewer shows it
+    except Exception:  # noqa: BLE001, S110 - a malformed EXIF block: the pixels as stored
+        pass
     arr = _unit_float(img)  # (H, W, C) float32 in [0, 1]
     if mode == "L":
         arr8 = np.rint(arr[..., 0] * 255.0).astype(np.uint8)
@@ -332,27 +344,71 @@ def load_texture_maps(mesh: MeshData, albedo=None, normal=None, specular=None, r
 
 def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
     """Load a glTF/GLB/OBJ/PLY file. A mesh without UVs gets an automatic xatlas atlas when
-    ``auto_uv`` (the default, and said in ``notes``); otherwise it is refused with MeshError."""
+    ``auto_uv`` (the default, and said in ``notes``); otherwise it is refused with MeshError.
+
+    trimesh is given bytes, never a path: the file and everything it references (an OBJ's
+    ``mtllib`` and ``map_Kd``, a glTF's buffers and image URIs) are read by ``_Resolver`` through
+    ``files.read_regular_file`` (regular files only, size-limited, a FIFO never blocks); a reference
+    that cannot be read is named in ``notes`` (a texture) or in the MeshError (a buffer)."""
+    import io
+
     import trimesh
 
-    from skinviewer.core.files import FileReadError, check_regular_file
+    from skinviewer.core.files import FileReadError, read_regular_file
     p = Path(path)
     try:
-        check_regular_file(p, MAX_MESH_BYTES, what=f"mesh {p}")
+        data = read_regular_file(p, MAX_MESH_BYTES, what=f"mesh {p}")
     except FileReadError as exc:
-        raise MeshError(str(exc) if p.exists() else f"mesh file not found: {p}") from None
+        raise MeshError(str(exc) if os.path.lexists(p) else f"mesh file not found: {p}") from None
+    ext = p.suffix.lower().lstrip(".")
+    notes: list[str] = []
+    non_images: set[str] = set()
+    if ext in ("obj", "mtl"):
+        data = _utf8_text(data)
+        non_images = _obj_mtllibs(data)
+    elif ext in ("gltf", "glb"):
+        data, non_images = _gltf_prepared(data, ext, p, notes)
+    resolver = _Resolver(p, non_images)
     try:
-        loaded = trimesh.load(str(p), process=False)
-    except Exception as exc:  # trimesh raises many kinds
-        raise MeshError(f"cannot read mesh {p}: {exc}") from None
+        loaded = trimesh.load(io.BytesIO(data), file_type=ext or None, resolver=resolver, process=False)
+    except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
+        why = "; ".join(resolver.failed.values()) or str(exc) or type(exc).__name__
+        raise MeshError(f"cannot read mesh {p}: {why}") from None
+    for why in resolver.failed.values():
+        notes.append(f"{why}: that texture is not used")
+    try:
+        return _mesh_of(loaded, p, auto_uv, notes)
+    except MeshError:
+        raise
+    except (IndexError, ValueError, TypeError, AttributeError, KeyError, OverflowError) as exc:
+        # what a malformed file can still raise past the checks (the fuzz in tests/test_mesh_fuzz.py)
+        raise MeshError(f"cannot read mesh {p}: {type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}") \
+            from None
+
+
+def _check_faces(g, p: Path) -> None:
+    """MeshError unless the triangles index the vertices (a malformed file can point anywhere)."""
+    f = np.asarray(g.faces)
+    n = len(g.vertices)
+    if f.size and (f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu" or int(f.min()) < 0
+                   or int(f.max()) >= n):
+        raise MeshError(f"{p}: triangle indices reach {int(f.max()) if f.size and f.dtype.kind in 'iu' else '?'} "
+                        f"but the mesh has {n} vertices")
+
+
+def _mesh_of(loaded, p: Path, auto_uv: bool, notes: list[str]) -> MeshData:
+    """MeshData from what trimesh loaded (see load_mesh)."""
+    import trimesh
     if isinstance(loaded, trimesh.Scene):
         geoms = [g for g in loaded.dump() if isinstance(g, trimesh.Trimesh)] if loaded.geometry else []
+        geoms = [g for g in geoms if len(g.faces)]
+        for g in geoms:
+            _check_faces(g, p)
         if not geoms:
             raise MeshError(f"{p} contains no triangle mesh")
-        uv_ok = all(_uv_of(g) is not None for g in geoms)
-        tm = trimesh.util.concatenate(geoms) if len(geoms) > 1 else geoms[0]
-        uv = _uv_of(tm) if uv_ok else None
+        tm, uv = _joined(geoms)
     elif isinstance(loaded, trimesh.Trimesh):
+        _check_faces(loaded, p)
         tm = loaded
         uv = _uv_of(tm)
     else:
@@ -363,11 +419,13 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
     indices = np.asarray(tm.faces, dtype=np.int64)
     if not np.all(np.isfinite(positions)):
         raise MeshError(f"{p} has non-finite vertex positions")
-    notes = []
     if uv is None:
         if not auto_uv:
             raise MeshError(f"{p} has no texture coordinates (UVs); texture-space techniques need them. "
                             "Add UVs in a modelling tool, or load with automatic UVs (xatlas).")
+        indices, flipped = _outward_winding(positions, indices)
+        if flipped:
+            notes.append(flipped)
         # normals of the welded surface, then split with its vertices: each chart's copy of a vertex
         # keeps the one normal (computed per chart they step at every chart border: stair-step lines)
         welded_normals = vertex_normals(positions, indices)
@@ -377,10 +435,15 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
     else:
         n = getattr(tm, "vertex_normals", None)
         normals = np.asarray(n, dtype=np.float64) if n is not None and len(n) == len(positions) else None
+        indices, flipped = _outward_winding(positions, indices)
+        if flipped:
+            notes.append(flipped)
         if normals is None or not np.all(np.isfinite(normals)):
             normals = vertex_normals(positions, indices)
         else:
             normals = _normalize_or(normals, np.array([0.0, 0.0, 1.0]))
+            if flipped and float((normals * vertex_normals(positions, indices)).sum()) < 0.0:
+                normals = -normals  # the file's normals pointed inwards with its winding
         normals, split = smooth_seam_normals(positions, normals)
         if split:
             notes.append(f"normals made continuous at {split} vertices split along UV seams (the file's "
@@ -396,6 +459,190 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
         uv = uv - np.floor(uv)
     return MeshData(positions=positions, normals=normals, uvs=uv, indices=indices, name=p.stem, notes=notes,
                     albedo=albedo, normal_map=normal_map)
+
+
+def signed_volume(positions: np.ndarray, indices: np.ndarray) -> float:
+    """Volume enclosed by a closed triangle mesh, positive when its triangles wind counter-clockwise
+    seen from outside (the glTF/OBJ convention): the sum of det(v0, v1, v2) / 6 (divergence theorem)."""
+    P = np.asarray(positions, np.float64)
+    F = np.asarray(indices, np.int64).reshape(-1, 3)
+    c = P.mean(axis=0) if len(P) else np.zeros(3)
+    a, b, d = P[F[:, 0]] - c, P[F[:, 1]] - c, P[F[:, 2]] - c
+    return float(np.einsum("ij,ij->i", a, np.cross(b, d)).sum() / 6.0)
+
+
+def _outward_winding(positions: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, str]:
+    """A closed mesh whose triangles wind clockwise seen from outside (negative signed volume)
+    renders inside out with back faces culled: its winding is reversed, and the note says so."""
+    if len(indices) < 4 or not is_closed(positions, indices):
+        return indices, ""
+    if signed_volume(positions, indices) >= 0.0:
+        return indices, ""
+    return indices[:, [0, 2, 1]].copy(), ("the closed mesh's triangles wound inwards (negative volume: it "
+                                           "would render inside out); their winding was reversed")
+
+
+class _Resolver:
+    """What trimesh reads besides the mesh file (OBJ ``mtllib``/``map_Kd``, glTF buffers and image
+    URIs): through ``files.read_regular_file`` only, inside the mesh's folder (as trimesh's own
+    resolver), images checked from their header (format, pixel count) before trimesh decodes them,
+    all of it within MAX_MESH_BYTES together. ``failed`` maps each reference not read to why."""
+
+    def __init__(self, mesh_path: Path, non_images: set[str]):
+        self.folder = Path(os.path.abspath(mesh_path)).parent
+        self.mesh = mesh_path
+        self.non_images = non_images
+        self.failed: dict[str, str] = {}
+        self.read = 0
+
+    def _path(self, name: str) -> Path:
+        from urllib.parse import unquote
+        clean = unquote(name.strip())
+        parent = self.folder.resolve()
+        path = (parent / clean).resolve()
+        if not path.is_relative_to(parent):
+            raise MeshError(f"'{name}' is outside the mesh's folder {self.folder}")
+        return path
+
+    def get(self, name: str) -> bytes:
+        from skinviewer.core.files import FileReadError, read_regular_file
+        image = name not in self.non_images
+        what = f"{'texture' if image else 'file'} {name!r} referenced by {self.mesh.name}"
+        try:
+            path = self._path(name)
+            data = read_regular_file(path, min(MAX_IMAGE_BYTES if image else MAX_MESH_BYTES,
+                                               MAX_MESH_BYTES - self.read), what=what)
+            self.read += len(data)
+            if image:
+                _check_image_bytes(data, what)
+            elif name.lower().endswith(".mtl"):
+                data = _utf8_text(data)
+        except (FileReadError, MeshError) as exc:
+            msg = str(exc)
+            if isinstance(exc, MeshError) and not msg.startswith("cannot"):
+                msg = f"cannot read {what}: {msg}"
+            self.failed[name] = msg
+            raise FileNotFoundError(msg) from None
+        return data
+
+    __getitem__ = get
+
+    def namespaced(self, namespace: str) -> _Resolver:
+        return self
+
+    def write(self, name, data):  # trimesh's loaders never write; exporting does not come through here
+        raise PermissionError("the mesh loader does not write files")
+
+    def keys(self):
+        return iter(())
+
+
+def _check_image_bytes(data: bytes, what: str) -> None:
+    """MeshError unless ``data`` is an image Pillow reads within MAX_IMAGE_PIXELS (header only)."""
+    import io
+
+    from PIL import Image
+    if data[:4] == b"\x76\x2f\x31\x01":
+        raise MeshError(f"cannot read {what}: it is OpenEXR (linear HDR); maps must be PNG, JPEG, TIFF, "
+                        "BMP or TGA (8 or 16 bits)")
+    try:
+        with Image.open(io.BytesIO(data)) as img:
+            w, h = img.size
+    except Exception:  # noqa: BLE001 - Pillow raises many kinds for a malformed header
+        raise MeshError(f"cannot read {what}: not an image format Pillow reads (PNG, JPEG, TIFF, BMP, TGA, ...)") \
+            from None
+    if w * h > MAX_IMAGE_PIXELS:
+        raise MeshError(f"cannot read {what}: {w}x{h} ({w * h / 1e6:.0f} megapixels) is over the "
+                        f"{MAX_IMAGE_PIXELS / 1e6:.0f} megapixel limit")
+
+
+def _utf8_text(data: bytes) -> bytes:
+    """OBJ/MTL text as UTF-8: files in another 8-bit encoding are read as Latin-1 (their keywords and
+    numbers are ASCII either way), so trimesh never guesses an encoding."""
+    try:
+        data.decode("utf-8")
+        return data
+    except UnicodeDecodeError:
+        return data.decode("latin-1").encode("utf-8")
+
+
+def _obj_mtllibs(data: bytes) -> set[str]:
+    names = set()
+    for line in data.decode("utf-8", "replace").splitlines():
+        s = line.strip()
+        if s[:7].lower() == "mtllib ":
+            names.add(s[7:].strip())
+            names.update(s.split()[1:])
+    return names
+
+
+def _gltf_prepared(data: bytes, ext: str, p: Path, notes: list[str]) -> tuple[bytes, set[str]]:
+    """A glTF (or GLB) whose primitives with TEXCOORD_0 but no material get a plain one: trimesh keeps
+    a primitive's UVs only when it has a material. Also the buffer URIs (not images). The JSON is
+    rewritten only when a primitive needed it."""
+    import json
+    import struct
+    try:
+        if ext == "glb":
+            if len(data) < 20 or data[:4] != b"glTF":
+                raise ValueError("not a GLB file (no 'glTF' header)")
+            clen, ctype = struct.unpack_from("<II", data, 12)
+            if ctype != 0x4E4F534A or 20 + clen > len(data):
+                raise ValueError("the GLB's first chunk is not its JSON")
+            tree = json.loads(data[20:20 + clen].decode("utf-8"))
+        else:
+            tree = json.loads(data.decode("utf-8"))
+    except (ValueError, UnicodeDecodeError, RecursionError) as exc:
+        raise MeshError(f"cannot read mesh {p}: {exc}") from None
+    if not isinstance(tree, dict):
+        raise MeshError(f"cannot read mesh {p}: the glTF JSON is not an object")
+    buffers = {b["uri"] for b in tree.get("buffers", []) if isinstance(b, dict) and isinstance(b.get("uri"), str)}
+    changed = False
+    meshes = tree.get("meshes", [])
+    for m in meshes if isinstance(meshes, list) else []:
+        for prim in (m.get("primitives", []) if isinstance(m, dict) else []):
+            if isinstance(prim, dict) and "material" not in prim \
+                    and "TEXCOORD_0" in (prim.get("attributes") or {}):
+                mats = tree.setdefault("materials", [])
+                if not isinstance(mats, list):
+                    continue
+                if "_skinviewer_plain" not in tree:
+                    mats.append({"name": "skinviewer_plain"})
+                    tree["_skinviewer_plain"] = len(mats) - 1
+                prim["material"] = tree["_skinviewer_plain"]
+                changed = True
+    if not changed:
+        return data, buffers
+    tree.pop("_skinviewer_plain", None)
+    text = json.dumps(tree).encode("utf-8")
+    if ext == "glb":
+        text += b" " * (-len(text) % 4)
+        rest = data[20 + clen:]
+        body = struct.pack("<II", len(text), 0x4E4F534A) + text + rest
+        return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body, buffers
+    return text, buffers
+
+
+def _joined(geoms) -> tuple:
+    """One mesh from a scene's (already transformed) geometries, keeping each one's own UVs (trimesh's
+    concatenate would pack differing materials into an atlas and move the UVs); the first geometry's
+    material stands for all (see _embedded_textures). UVs are None unless every geometry has them."""
+    import trimesh
+    if len(geoms) == 1:
+        return geoms[0], _uv_of(geoms[0])
+    uvs = [_uv_of(g) for g in geoms]
+    offsets = np.cumsum([0] + [len(g.vertices) for g in geoms])
+    vertices = np.concatenate([np.asarray(g.vertices, np.float64) for g in geoms])
+    faces = np.concatenate([np.asarray(g.faces, np.int64) + o for g, o in zip(geoms, offsets)])
+    normals = np.concatenate([np.asarray(g.vertex_normals, np.float64) for g in geoms])
+    tm = trimesh.Trimesh(vertices=vertices, faces=faces, vertex_normals=normals, process=False)
+    if all(u is not None for u in uvs):
+        uv = np.concatenate([np.asarray(u, np.float64) for u in uvs])
+        first = next((g.visual.material for g in geoms if getattr(getattr(g, "visual", None), "material", None)
+                      is not None), None)
+        tm.visual = trimesh.visual.TextureVisuals(uv=uv, material=first)
+        return tm, uv
+    return tm, None
 
 
 def _embedded_textures(tm, notes: list[str]):

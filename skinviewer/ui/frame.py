@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Protocol
 
 from skinviewer import techniques
-from skinviewer.core.files import save_exr, save_npy, save_png
+from skinviewer.core.files import save_exr, save_image, save_npy
 from skinviewer.core.graph import FrameReport
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings
@@ -298,19 +298,25 @@ class FrameController:
             img = read_screen(self.ctx, self.layout.view_fb[2:], origin=self.layout.view_fb[:2])
         for path, _ in todo:
             try:
-                save_png(path, img)
+                if path.suffix.lower() == ".exr":  # the linear image, as `render --out x.exr`
+                    save_exr(path, self._linear())
+                else:  # PNG, JPEG, TIFF or BMP as the extension says (OutputPathError for others)
+                    save_image(path, img)
                 self.screenshots_written.append(path)
                 self.state.say(f"screenshot: {path} ({img.shape[1]}x{img.shape[0]}{', with UI' if include_ui else ''})")
                 if self.state.shots.save_linear_npy or self.state.shots.save_linear_exr:
-                    g = self.renderer.graph(self.state.settings.technique)
-                    res = "lit" if "lit" in g.resources() else "image"
-                    linear = g.read(res)[::-1]
+                    linear = self._linear()
                     if self.state.shots.save_linear_npy:
                         save_npy(path.with_suffix(".npy"), linear)
                     if self.state.shots.save_linear_exr:  # what compositing tools read
                         save_exr(path.with_suffix(".exr"), linear)
             except Exception as exc:
                 self.state.refuse([("screenshot", f"{type(exc).__name__}: {exc}")], f"screenshot {path}")
+
+    def _linear(self):
+        """The frame's linear HDR image (before exposure and tone map), top row first."""
+        g = self.renderer.graph(self.state.settings.technique)
+        return g.read("lit" if "lit" in g.resources() else "image")[::-1]
 
     def release(self) -> None:
         self.view.release()

@@ -7,6 +7,7 @@ head, eyes, ears), ``atlas`` (UV layout and its inverse), ``tessellate`` (triang
 """
 from __future__ import annotations
 
+import io
 import os
 import tempfile
 from pathlib import Path
@@ -38,10 +39,13 @@ def default_head(detail: int = 1, seed: int = 7, cache_dir: str | Path | None = 
         raise ValueError(f"head detail must be one of {sorted(LEVELS)}, got {detail}")
     path = _cache_path(detail, seed, cache_dir)
     arrays = _load_cache(path)
+    notes = []
     if arrays is None:
+        if os.path.lexists(path):  # there, but truncated, inconsistent or not a regular file
+            notes.append(f"the cached head {path.name} did not validate: regenerated")
         arrays = _generate(detail, seed)
         _save_cache(path, arrays)
-    return MeshData(
+    return MeshData(notes=notes,
         positions=arrays["positions"], normals=arrays["normals"], uvs=arrays["uvs"],
         indices=arrays["indices"], mm_per_unit=1.0,
         albedo=arrays["albedo"].astype(np.float32),
@@ -76,7 +80,9 @@ def _load_cache(path: Path) -> dict[str, np.ndarray] | None:
     if not path.is_file():
         return None
     try:
-        with np.load(path, allow_pickle=False) as z:
+        from skinviewer.core.files import read_regular_file
+        data = read_regular_file(path, 2**31, what=f"cache entry {path}")  # never blocks, never unbounded
+        with np.load(io.BytesIO(data), allow_pickle=False) as z:
             arrays = {k: z[k] for k in _ARRAY_KEYS}
     except Exception:  # truncated zip, bad header, missing key...: all mean "regenerate"
         return None
