@@ -64,7 +64,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
-from skinviewer.physics.surface_gather import GATHER_BLOCKS, SHORTCUT_RATIO
+from skinviewer.physics.surface_gather import SHORTCUT_RATIO, gather_blocks_for
 from skinviewer.scene.camera import gl_bytes
 
 STRETCH = "deon_stretch"
@@ -210,6 +210,11 @@ def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:
     return not step.reused and limit > 0.0 and np.sqrt(step.increment) <= limit * texel_mm
 
 
+def gather_reach(r, step: BlurStep, n: int) -> int:
+    """The summed step's reach in 2 x 2 blocks, from its sigma in mean texels (gather_blocks_for)."""
+    return gather_blocks_for(np.sqrt(step.increment) / mean_texel_mm(r.scene, n))
+
+
 def gathered(r, step: BlurStep) -> bool:
     """Whether blur step ``step`` is a direct sum over the surface (deon_surface_gather.frag): its
     sigma is at most deon.surface_gather_below_texels mean texels (issue 10 item 1)."""
@@ -250,8 +255,10 @@ class TsmPass(Pass):
 
 
 class IrradiancePass(Pass):
-    """eq. (28)/(32) in texture space, thickness in alpha; float32; gutters dilated."""
+    """eq. (28)/(32) in texture space, thickness in alpha; float32; gutters dilated. Tileable: under
+    the viewer's frame budget it is shaded in row bands, across frames (issue 27)."""
     name = "deon_irradiance"
+    tileable = True
 
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
@@ -325,6 +332,12 @@ class GaussianBlurPass(Pass):
         self.i = i
         self.chain = chain
         self.name = f"deon_blur_{i}" if chain == "irradiance" else f"deon_stretch_blur_{i}"
+        self._gathers = False  # this frame's step is summed over the surface (then tileable)
+
+    @property
+    def tileable(self) -> bool:  # type: ignore[override]
+        """A summed step (the frame's most expensive draw at the defaults) runs in row bands."""
+        return self._gathers
 
     def _output(self) -> str:
         return blur_resource(self.i) if self.chain == "irradiance" else stretch_blur_resource(self.i)
@@ -335,6 +348,7 @@ class GaussianBlurPass(Pass):
         return stretch_of(step.source) if r.setting("deon.stretch_per_gaussian") else STRETCH
 
     def reflect(self, r: Reflection) -> None:
+        self._gathers = False
         if r.peek("deon.gaussians.#") <= self.i:
             return
         if self.chain == "stretch" and not (r.peek("deon.stretch") and r.peek("deon.stretch_per_gaussian")):
@@ -350,6 +364,7 @@ class GaussianBlurPass(Pass):
             return
         n = map_size(r)
         if self.chain == "irradiance" and gathered(r, step):
+            self._gathers = True
             self._reflect_gather(r, step, n)
             return
         stretch = self._stretch_input(r, step)
@@ -384,23 +399,27 @@ class GaussianBlurPass(Pass):
             r.input(seam_resource(n))
             r.program("seam_fill")
         r.program("deon_gather_blocks")
-        r.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
+        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n))
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec, step, n: int) -> None:
         source = step.source
+        # the seam fill and the block sums are made once (first band) and kept across the bands
         if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
-            fill = ec.program("seam_fill")
-            ec.textures(fill, source=source, seam_map=seam_resource(n))
-            ec.set(fill, "u_past_border_dark", True)
-            source = ec.scratch(self._spec(n))
-            ec.draw_fullscreen(fill, source)
+            filled, fresh = ec.held("filled", self._spec(n))
+            if fresh:
+                fill = ec.program("seam_fill")
+                ec.textures(fill, source=source, seam_map=seam_resource(n))
+                ec.set(fill, "u_past_border_dark", True)
+                ec.draw_fullscreen(fill, filled)
+            source = filled
         h = (n + 1) // 2
-        light, lit = (ec.scratch(TexSpec((h, h), 4, "f4", filter="nearest")) for _ in range(2))
-        prog = ec.program("deon_gather_blocks")
-        ec.textures(prog, source=source, surface=GATHER_SURFACE)
-        ec.draw_fullscreen(prog, light, lit)
-        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
+        (light, fresh), (lit, _) = (ec.held(k, TexSpec((h, h), 4, "f4", filter="nearest")) for k in ("light", "lit"))
+        if fresh:
+            prog = ec.program("deon_gather_blocks")
+            ec.textures(prog, source=source, surface=GATHER_SURFACE)
+            ec.draw_fullscreen(prog, light, lit)
+        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(ec, step, n))
         ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n), blocks_e=light,
                     blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
         ec.set(prog, "u_var", float(step.increment))
@@ -411,7 +430,8 @@ class GaussianBlurPass(Pass):
         ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
         if stretch:
             ec.bind(prog, "stretch_map", STRETCH)
-        ec.draw_fullscreen(prog, self._output())
+        with ec.band():
+            ec.draw_fullscreen(prog, self._output())
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
