@@ -1,0 +1,185 @@
+"""The quality governor (issue 27): its pick on the calibration it holds, refinement up to the
+user's settings (never backwards while still, the last step the ungoverned render bit for bit),
+off = today's behaviour, and the calibration cache (missing, stale or corrupt: rebuilt)."""
+from __future__ import annotations
+
+import json
+import random
+
+import numpy as np
+import pytest
+
+from skinviewer.core import calibration
+from skinviewer.core.calibration import Calibration, Entry, rung_key, signature
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.techniques.preview import FINAL, ladder
+from skinviewer.ui.governor import Governor
+from tests.helpers import small_settings
+
+
+def fake_calibration(technique: str, s: Settings, seed: int = 0, errors: bool = True) -> Calibration:
+    """Rungs of ``s``'s ladder with random costs (FINAL the dearest) and errors (FINAL the least)."""
+    rnd = random.Random(seed)
+    entries = []
+    for r in ladder(s):
+        light = 1000.0 if r.final else rnd.uniform(5.0, 900.0)
+        entries.append(Entry(technique, r.label, dict(r.changes), r.scale, light, light * rnd.uniform(0.1, 1.0),
+                             (0.01 if r.final else rnd.uniform(0.02, 0.3)) if errors else None))
+    return Calibration("test renderer", "small", (640, 640), {technique: entries}, signature=signature([technique]))
+
+
+@pytest.mark.parametrize("technique", ["deon", "gosselin", "burley2", "separable", "phong"])
+def test_the_pick_never_costs_more_than_the_budget_on_the_calibration_held(technique):
+    s = with_values(Settings(), {"technique": technique})
+    for seed in range(30):
+        for errors in (True, False):
+            cal = fake_calibration(technique, s, seed, errors)
+            g = Governor("interactive", random.Random(seed).uniform(1.0, 1200.0), cal)
+            for camera in (False, True):
+                p = g.pick(s, camera)
+                cheapest = min((g.cost(technique, r, camera) for r in ladder(s)
+                                if not camera or r.changes == {}))
+                if cheapest <= g.budget_ms:
+                    assert p.ms <= g.budget_ms and not p.note
+                    # and it is the most accurate of those that fit
+                    fits = [r for r in ladder(s) if g.cost(technique, r, camera) <= g.budget_ms
+                            and (not camera or r.changes == {})]
+                    if errors:
+                        assert p.error == min(cal.entry(technique, r).error for r in fits)
+                else:
+                    assert p.ms == cheapest and "nothing fits" in p.note
+
+
+def test_a_budget_of_zero_or_less_says_so_and_shows_the_cheapest():
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s)
+    for budget in (0.0, -5.0):
+        g = Governor("interactive", budget, cal)
+        p = g.pick(s)
+        assert p.ms == min(e.light_ms for e in cal.entries["deon"])
+        assert "not positive" in p.note and "cheapest" in p.note
+
+
+def test_refinement_steps_up_to_the_users_settings_and_never_back_while_still():
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, seed=3)
+    g = Governor("interactive", 200.0, cal)
+    first = g.rung_for(s, interacting=True, camera=False, last_complete=True)
+    assert not first.final and g.status(s).startswith("preview: ")
+    errors = [cal.entry("deon", first).error]
+    shown = [first]
+    for complete in [False, True, False, True, True, True, True]:
+        r = g.rung_for(s, interacting=False, camera=False, last_complete=complete)
+        if r != shown[-1]:
+            errors.append(cal.entry("deon", r).error)
+            shown.append(r)
+        if not complete:  # an unfinished frame is never left for another rung
+            assert r == shown[-1]
+    assert shown[-1] == FINAL and not g.refining
+    assert errors == sorted(errors, reverse=True)  # never backwards
+    assert len(shown) <= 3  # at most one step between the preview and the user's settings
+    assert g.settings_for(s, FINAL) is s  # the user's settings themselves: the ungoverned render
+    assert g.status(s) == ""
+
+
+def test_off_is_todays_behaviour_and_fixed_budget_holds_the_pick():
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, seed=1)
+    g = Governor("off", 200.0, cal)
+    assert g.rung_for(s, True, False, True) == FINAL and g.settings_for(s, FINAL) is s and g.status(s) == ""
+    g.configure("fixed-budget")
+    r = g.rung_for(s, False, False, True)
+    assert not r.final and g.rung_for(s, False, False, True) == r and "fixed" in g.status(s)
+    with pytest.raises(ValueError):
+        g.configure("sometimes")
+
+
+def test_a_camera_drag_keeps_the_texture_space_work_on_screen():
+    s = with_values(Settings(), {"technique": "deon"})
+    g = Governor("interactive", 1e9, fake_calibration("deon", s))
+    assert g.pick(s, camera=True).rung.changes == {}
+    g = Governor("interactive", 1.0, fake_calibration("deon", s))
+    assert g.pick(s, camera=True).rung.changes == {}  # nothing fits: still no texture-space re-render
+
+
+def test_ladders_cap_never_raise_and_end_with_the_users_settings():
+    from skinviewer import techniques
+    for name in techniques.names():
+        s = with_values(Settings(), {"technique": name, "deon.irradiance_size": 256})
+        rungs = ladder(s)
+        assert rungs[-1] == FINAL and len({rung_key(name, r) for r in rungs}) == len(rungs)
+        assert all(r.changes.get("deon.irradiance_size", 256) <= 256 for r in rungs)
+
+
+# -- the calibration cache -----------------------------------------------------------------------
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))
+    return tmp_path
+
+
+def test_calibration_round_trips_and_bad_files_are_rebuilt_never_trusted(cache):
+    s = with_values(Settings(), {"technique": "phong"})
+    cal = fake_calibration("phong", s)
+    cal.renderer = "GPU X"
+    cal, why = calibration.load("GPU X", "small")
+    assert cal is None and "no calibration" in why
+    cal = fake_calibration("phong", s)
+    cal.renderer = "GPU X"
+    path = calibration.save(cal)
+    back, why = calibration.load("GPU X", "small")
+    assert why == "" and back.entries["phong"][0].light_ms == cal.entries["phong"][0].light_ms
+    assert calibration.load("GPU Y", "small")[0] is None  # per renderer string
+    assert calibration.load("GPU X", "large")[0] is None  # and mesh size class
+    good = path.read_text()
+    for bad, words in (("{ not json", "unreadable"), (good.replace('"version": 1', '"version": 0'), "another version"),
+                       (good.replace(rung_key("phong", FINAL).replace('"', '\\"'), "x"), "other preview ladders"),
+                       (json.dumps({**json.loads(good), "entries": {"phong": [{"technique": "phong"}]}}), "unreadable")):
+        path.write_text(bad)
+        got, why = calibration.load("GPU X", "small")
+        assert got is None and words in why, why
+    # a negative or NaN time is not trusted either
+    d = json.loads(good)
+    d["entries"]["phong"][0]["light_ms"] = float("nan")
+    path.write_text(json.dumps(d))
+    assert calibration.load("GPU X", "small")[0] is None
+
+
+def test_calibrate_measures_every_rung_and_rebuilds_a_corrupt_file(cache, gl_ctx):
+    from skinviewer.core.renderer import Renderer
+    base = small_settings("shadow-edge", "phong")
+    r = Renderer(gl_ctx)
+    try:
+        renderer = calibration.renderer_name(gl_ctx)
+        path = calibration.calibration_path(renderer, "small")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("garbage")
+        assert calibration.load(renderer, "small")[0] is None
+        cal = calibration.calibrate(r, base, ["phong"], runs=1)
+        calibration.save(cal)
+        back, why = calibration.load(renderer, cal.mesh_class)
+        assert why == "" and [e.label for e in back.entries["phong"]] == [x.label for x in ladder(with_values(Settings(), {"technique": "phong"}))]
+        assert all(e.light_ms > 0 and e.camera_ms > 0 for e in back.entries["phong"])
+        assert not list(path.parent.glob("*.tmp*"))  # the atomic write left nothing behind
+    finally:
+        r.release()
+
+
+def test_governed_refinement_converges_to_exactly_the_ungoverned_image(renderer):
+    """Previews of the rungs, then the refinement's last step (the user's settings): the image is
+    the one a fresh renderer makes of the user's settings, bit for bit."""
+    from skinviewer.core.calibration import rung_settings
+    from skinviewer.core.renderer import Renderer
+    s = small_settings("head", "deon", size=64)
+    g = Governor("interactive", 1e9, fake_calibration("deon", s, seed=5))
+    for rung in ladder(s)[:-1]:
+        renderer.render(rung_settings(s, rung))  # what the drag showed, in the same graphs and pool
+    renderer.render(g.settings_for(s, FINAL))
+    got = renderer.image(s)
+    fresh = Renderer(renderer.ctx)
+    try:
+        fresh.render(s)
+        want = fresh.image(s)
+    finally:
+        fresh.release()
+    assert np.array_equal(got, want)
