@@ -183,3 +183,83 @@ def test_governed_refinement_converges_to_exactly_the_ungoverned_image(renderer)
     finally:
         fresh.release()
     assert np.array_equal(got, want)
+
+
+# -- in the viewer's frame loop (Xvfb) ----------------------------------------------------------
+@pytest.fixture(scope="module")
+def viewer():
+    import os
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY and no Xvfb")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui.app import create_app, destroy_app
+    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "deon",
+                                 "shadow.map_size": 256, "deon.irradiance_size": 512, "deon.tsm_size": 256})
+    try:
+        a = create_app(s, size=(420, 300), vsync=False)
+    except RuntimeError as exc:
+        pytest.skip(f"cannot open a window: {exc}")
+    a.state.set_show_ui(False)
+    a.step(2)
+    yield a
+    destroy_app(a)
+
+
+def _still(app, max_frames=200):
+    """Input stopped: step until the governor has refined to the user's settings and the frame is complete."""
+    app.frame.scheduler.changed_at = -1e9  # the last edit is long past (no 0.35 s wait in a test)
+    for _ in range(max_frames):
+        app.step(1)
+        if not app.frame.governor.refining and app.frame.report is not None and app.frame.report.complete:
+            return
+    raise AssertionError("never refined")
+
+
+def test_the_viewer_previews_while_dragging_and_refines_to_the_ungoverned_image(viewer):
+    app = viewer
+    s = app.state.settings
+    cal = fake_calibration("deon", s, seed=2)
+    # the user's settings cost 1000 ms, every preview less: a 950 ms budget previews a light drag
+    app.frame.governor.calibration = cal
+    assert app.state.apply({"render.governor_budget_ms": 950.0})
+    _still(app)
+    full = (app.state.settings.render.width, app.state.settings.render.height)
+    app.frame.set_dragging(True)
+    try:
+        for k in range(3):
+            assert app.state.apply({"lights.0.direction": [0.2 + 0.1 * k, 0.3, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+            status = app.frame.governor_status
+            assert status.startswith("preview: "), status
+            shown = app.frame.governor.shown
+            assert not shown.final and cal.entry("deon", shown).light_ms <= 950.0
+            g = app.renderer.graph("deon")
+            for path, value in shown.changes.items():  # the graph rendered the preview's knobs
+                if path == "deon.irradiance_size":
+                    assert g.resources()["deon_irradiance"].size == (value, value)
+    finally:
+        app.frame.set_dragging(False)
+    _still(app)
+    assert app.frame.governor_status == ""
+    assert (app.state.settings.render.width, app.state.settings.render.height) == full
+    live = app.state.settings
+    got = app.renderer.image(live)
+    app.renderer.render(live, force=True)  # the ungoverned render of the same settings, every pass re-run
+    assert np.array_equal(got, app.renderer.image(live))
+
+
+def test_governor_off_in_the_viewer_is_todays_frame(viewer):
+    app = viewer
+    app.frame.governor.calibration = fake_calibration("deon", app.state.settings, seed=2)
+    assert app.state.apply({"render.governor": "off", "render.governor_budget_ms": 1.0})
+    try:
+        app.frame.set_dragging(True)
+        assert app.state.apply({"lights.0.direction": [0.5, 0.1, 1.0]}, "lights.0 (key light drag)")
+        app.step(1)
+        assert app.frame.governor.shown.final and app.frame.governor_status == ""
+        # the user's settings rendered: the irradiance at the user's size
+        assert app.renderer.graph("deon").resources()["deon_irradiance"].size == (512, 512)
+    finally:
+        app.frame.set_dragging(False)
+        app.state.apply({"render.governor": "interactive", "render.governor_budget_ms": 100.0})
