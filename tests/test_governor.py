@@ -37,8 +37,8 @@ def test_the_pick_never_costs_more_than_the_budget_on_the_calibration_held(techn
             g = Governor("interactive", random.Random(seed).uniform(1.0, 1200.0), cal)
             for camera in (False, True):
                 p = g.pick(s, camera)
-                cheapest = min((g.cost(technique, r, camera) for r in ladder(s)
-                                if not camera or r.changes == {}))
+                cheapest = min(g.cost(technique, r, camera) for r in ladder(s)
+                                if not camera or r.changes == {})
                 if cheapest <= g.budget_ms:
                     assert p.ms <= g.budget_ms and not p.note
                     # and it is the most accurate of those that fit

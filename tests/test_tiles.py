@@ -3,7 +3,6 @@ passes and between bands of a pass under a frame time budget, its cache consiste
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from skinviewer.core.settings import with_values
 from tests.helpers import small_settings

@@ -92,7 +92,7 @@ class Calibration:
                 "entries": {t: [asdict(e) for e in es] for t, es in self.entries.items()}}
 
     @classmethod
-    def from_json(cls, d: dict) -> "Calibration":
+    def from_json(cls, d: dict) -> Calibration:
         entries = {t: [Entry(**e) for e in es] for t, es in d["entries"].items()}
         for es in entries.values():
             for e in es:
@@ -181,7 +181,7 @@ def calibrate(renderer, base: Settings, names: list[str] | None = None, runs: in
     defaults = with_values(Settings(), {"scene": base.scene.model_dump(mode="json"),
                                         "render.width": CALIBRATION_SIZE[0], "render.height": CALIBRATION_SIZE[1]})
     scene = renderer.ensure_scene(defaults)
-    tris = int(len(scene.gpu.mesh.indices))
+    tris = len(scene.gpu.mesh.indices)
     cal = Calibration(renderer_name(renderer.ctx), mesh_class(tris), CALIBRATION_SIZE,
                       created=time.strftime("%Y-%m-%d %H:%M:%S"))
     if into is not None and (into.renderer, into.mesh_class) == (cal.renderer, cal.mesh_class):

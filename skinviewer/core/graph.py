@@ -39,8 +39,7 @@ from skinviewer.core.settings import Settings, value_key
 from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
 from skinviewer.core.texture_pool import TexturePool  # noqa: F401
 
-
-MAX_TILES = 32  # row bands a tileable pass is split into at most
+MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
 
 

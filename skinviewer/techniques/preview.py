@@ -8,8 +8,9 @@ changes nothing is left out. The governor times the rungs on the machine at hand
 (core/calibration.py) and picks among them; this module only says what they are."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from skinviewer.core.settings import Settings, get_path
 

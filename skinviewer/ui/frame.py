@@ -136,7 +136,7 @@ class FrameController:
         scene = self.renderer.scene
         tris = int(len(scene.gpu.mesh.indices)) if scene is not None else 0
         cal, why = calibration.load(calibration.renderer_name(self.ctx), calibration.mesh_class(tris))
-        self.governor.calibration = cal
+        self.governor.set_calibration(cal)
         self._auto_calibrate = auto
         if why:
             self.state.say(why)
@@ -156,7 +156,7 @@ class FrameController:
             return
         self.calibrating = None
         if c.result is not None:
-            self.governor.calibration = c.result
+            self.governor.set_calibration(c.result)
             self.state.say(f"calibrated {sum(len(v) for v in c.result.entries.values())} configurations on "
                            f"{c.result.renderer}: the governor uses them")
         elif c.error:

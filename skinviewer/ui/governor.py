@@ -56,6 +56,11 @@ class Governor:
         if budget_ms is not None:
             self.budget_ms = float(budget_ms)
 
+    def set_calibration(self, cal: Calibration | None) -> None:
+        """The calibration to pick on (None: none; the viewer renders the user's settings)."""
+        self.calibration = cal
+        self._memo = None
+
     @property
     def active(self) -> bool:
         return self.mode != "off"
@@ -192,7 +197,7 @@ class BackgroundCalibration:
         self._stop = threading.Event()
         self.thread = threading.Thread(target=self._run, name="skinviewer-calibrate", daemon=True)
 
-    def start(self) -> "BackgroundCalibration":
+    def start(self) -> BackgroundCalibration:
         self.thread.start()
         return self
 
