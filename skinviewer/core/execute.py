@@ -278,25 +278,38 @@ class ExecuteContext:
     def band_rect(self, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
         """The scissor rectangle (x, y, w, h) of this band in a target of ``size``; None: no band."""
         k, n = self.tile
-        if n <= 1:
-            return None
-        w, h = size
-        y0, y1 = (k * h) // n, ((k + 1) * h) // n
-        return (0, y0, w, y1 - y0)
+        return None if n <= 1 else _rows(size, k, n)
 
     @contextmanager
-    def band(self):
+    def band(self, sub: int | None = None, subs: int | None = None):
         """Draws inside only write this band's rows of their targets (a scissor; each fragment is
-        computed as without it, so the bands together are bit-identical to one whole draw)."""
-        self._banded = True
+        computed as without it, so the bands together are bit-identical to one whole draw).
+        ``sub``/``subs``: band ``sub`` of ``subs`` instead of the pass's own (see ``units``)."""
+        self._banded = (sub, subs) if sub is not None else True
         try:
             yield
         finally:
             self._banded = False
 
+    def units(self, draws: int) -> list[tuple[int, int, int]]:
+        """A pass of ``draws`` full-target draws in sequence, each reading the ones before, split over
+        its bands: the (draw, sub-band, sub-bands) this band runs, in order. Each draw is cut in
+        ceil(bands / draws) row bands and a band runs a contiguous share of them, so every draw is
+        complete before the next one starts; one band (no budget): every draw whole, in order."""
+        k, n = self.tile
+        per = max(1, -(-n // max(draws, 1)))
+        total = draws * per
+        return [(u // per, u % per, per) for u in range((k * total) // n, ((k + 1) * total) // n)]
+
     def _scissor(self, fbo: moderngl.Framebuffer):
         """Set the band's scissor on ``fbo`` before it is used (reset after the draw); None: none."""
-        rect = self.band_rect(fbo.size) if self._banded else None
+        if self._banded is True:
+            rect = self.band_rect(fbo.size)
+        elif self._banded:
+            sub, subs = self._banded
+            rect = None if subs <= 1 else _rows(fbo.size, sub, subs)
+        else:
+            rect = None
         if rect is not None:
             fbo.scissor = rect
         return rect
@@ -311,3 +324,8 @@ class ExecuteContext:
             self._held.clear()
 
 
+def _rows(size: tuple[int, int], k: int, n: int) -> tuple[int, int, int, int]:
+    """Row band ``k`` of ``n`` of a target of ``size``: (x, y, w, h)."""
+    w, h = size
+    y0, y1 = (k * h) // n, ((k + 1) * h) // n
+    return (0, y0, w, y1 - y0)

@@ -332,12 +332,8 @@ class GaussianBlurPass(Pass):
         self.i = i
         self.chain = chain
         self.name = f"deon_blur_{i}" if chain == "irradiance" else f"deon_stretch_blur_{i}"
-        self._gathers = False  # this frame's step is summed over the surface (then tileable)
 
-    @property
-    def tileable(self) -> bool:  # type: ignore[override]
-        """A summed step (the frame's most expensive draw at the defaults) runs in row bands."""
-        return self._gathers
+    tileable = True  # in row bands: the summed step's one draw, or each separable draw in turn
 
     def _output(self) -> str:
         return blur_resource(self.i) if self.chain == "irradiance" else stretch_blur_resource(self.i)
@@ -348,7 +344,6 @@ class GaussianBlurPass(Pass):
         return stretch_of(step.source) if r.setting("deon.stretch_per_gaussian") else STRETCH
 
     def reflect(self, r: Reflection) -> None:
-        self._gathers = False
         if r.peek("deon.gaussians.#") <= self.i:
             return
         if self.chain == "stretch" and not (r.peek("deon.stretch") and r.peek("deon.stretch_per_gaussian")):
@@ -364,7 +359,6 @@ class GaussianBlurPass(Pass):
             return
         n = map_size(r)
         if self.chain == "irradiance" and gathered(r, step):
-            self._gathers = True
             self._reflect_gather(r, step, n)
             return
         stretch = self._stretch_input(r, step)
@@ -474,10 +468,12 @@ class GaussianBlurPass(Pass):
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
         spec = self._spec(n)
-        tmp = ec.scratch(spec)
-        tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
+        # scratch kept across the pass's bands (ExecuteContext.held): a blur runs in row bands
+        # under the viewer's frame budget, each draw complete before the next one's first band
+        tmp = ec.held("tmp", spec)[0]
+        tmp2 = ec.held("tmp2", spec)[0] if len(sigmas) > 1 else None
         seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
-        filled = ec.scratch(spec) if seam else None
+        filled = ec.held("filled", spec)[0] if seam else None
         fill = ec.program("seam_fill") if seam else None
         if seam:
             light = self.chain == "irradiance"
@@ -487,19 +483,23 @@ class GaussianBlurPass(Pass):
             ec.set(prog, "u_absorb", light)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
+        draws = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
-            ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, self._output() if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    ec.bind(fill, "source", source)
-                    ec.draw_fullscreen(fill, filled, tiles=tiles)
+                    draws.append((fill, {}, source, filled))
                     source = filled
-                ec.set(prog, "u_dir", direction)
-                ec.bind(prog, "source", source)
-                ec.draw_fullscreen(prog, target, tiles=tiles)
+                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction}, source, target))  # spacing = sigma (eq. 25)
             src = tmp2
+        for d, sub, subs in ec.units(len(draws)):
+            program, values, source, target = draws[d]
+            for name, value in values.items():
+                ec.set(program, name, value)
+            ec.bind(program, "source", source)
+            with ec.band(sub, subs):
+                ec.draw_fullscreen(program, target, tiles=tiles)
 
 
 def texture_shadows(r) -> bool:
