@@ -234,7 +234,8 @@ def test_the_viewer_previews_while_dragging_and_refines_to_the_ungoverned_image(
             assert status.startswith("preview: "), status
             shown = app.frame.governor.shown
             assert not shown.final and cal.entry("deon", shown).light_ms <= 950.0
-            g = app.renderer.graph("deon")
+            g = app.frame.graph()  # the preview's own graph (its maps stay cached there)
+            assert (g is app.renderer.graph("deon")) == (not shown.changes)
             for path, value in shown.changes.items():  # the graph rendered the preview's knobs
                 if path == "deon.irradiance_size":
                     assert g.resources()["deon_irradiance"].size == (value, value)
@@ -259,6 +260,7 @@ def test_governor_off_in_the_viewer_is_todays_frame(viewer):
         app.step(1)
         assert app.frame.governor.shown.final and app.frame.governor_status == ""
         # the user's settings rendered: the irradiance at the user's size
+        assert app.frame.graph() is app.renderer.graph("deon")
         assert app.renderer.graph("deon").resources()["deon_irradiance"].size == (512, 512)
     finally:
         app.frame.set_dragging(False)

@@ -11,6 +11,7 @@ It owns the renderer's frame products (report, per-pass costs, the last change's
 time-budget options; the state owns what the user chose."""
 from __future__ import annotations
 
+import json
 import time
 import traceback
 from collections import deque
@@ -90,6 +91,7 @@ class FrameController:
         self._calibration_tried: set[str] = set()
         self._rung: Rung = FINAL
         self._governing = False  # the governor picks this frame (on, and this technique calibrated)
+        self._variant = ""  # the renderer graph of the frame: "" the user's settings, else a preview's
         self._camera_input = False  # the last user change moved only the camera
         self._gov_note = ""
         self.layout: Layout = self._compute_layout()
@@ -204,9 +206,10 @@ class FrameController:
         return self.scheduler.deferred
 
     def graph(self):
-        """The current technique's graph (None when the technique is not available)."""
+        """The graph of the image on screen: the current technique's (its governor preview's while
+        one is shown); None when the technique is not available."""
         t = self.state.settings.technique
-        return self.renderer.graph(t) if t in techniques.names() else None
+        return self.renderer.graph(t, self._variant) if t in techniques.names() else None
 
     def cost_hint(self, path: str) -> str:
         """What editing ``path`` re-runs in the current technique and what that cost last time."""
@@ -299,7 +302,11 @@ class FrameController:
         self.scheduler.set_deferred(defer)
         target = self._shown if defer else self.governor.settings_for(live, self._rung if self._governing else FINAL)
         try:
-            report = self.renderer.render(target, budget_ms=self.frame_budget_ms)
+            rung = self._rung if self._governing and not defer else FINAL
+            variant = "" if not rung.changes else "preview " + json.dumps(sorted((k, repr(v)) for k, v in rung.changes.items()))
+            report = self.renderer.render(target, budget_ms=self.frame_budget_ms, variant=variant)
+            if report.complete:  # until then the view shows the last complete image, in its graph
+                self._variant = variant
             self.render_error = ""
             self._rendered = (target.technique, target.render.width, target.render.height)
         except Exception as exc:
