@@ -596,6 +596,7 @@ class TransmittedPass(Pass):
     does not depend on the camera, so with deon.combine_blurs it joins the diffuse sum and an
     orbit does not pay its 3x3 TSM taps and per-Gaussian terms per pixel."""
     name = "deon_transmitted"
+    tileable = True  # one draw (view mesh / texel shading): in row bands under a frame budget (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         if not combined(r) or tsm_light_index(r) is None:
@@ -701,6 +702,7 @@ def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
 class DeonFinalPass(Pass):
     """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output)."""
     name = "deon_final"
+    tileable = True  # one draw (view mesh / texel shading): in row bands under a frame budget (issue 27)
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:
