@@ -6,8 +6,8 @@
 //   out(x) = sum_y G(v, |P(x) - P(y)|) E(y) A(y) / sum_y G(v, |P(x) - P(y)|) A(y)
 // y: the 36 texels of the 3 x 3 blocks of 2 x 2 around x's block, then 2 x 2 blocks, each a Gaussian
 // widened by its own spread (its area at its mean point, its light at the light's), out to GATHER_BLOCKS
-// blocks (2 GATHER_BLOCKS + 2 texels: 3.5 sigma at 3.4 texels; deon.surface_gather_below_texels is
-// at most 3). Only x's island zone counts: its seam-filled gutter continues across seams; area past a
+// blocks (2 GATHER_BLOCKS + 2 texels: 3.5 sigma at 1.6 x the step's sigma in mean texels,
+// physics/surface_gather.gather_blocks_for, 5 at most). Only x's island zone counts: its seam-filled gutter continues across seams; area past a
 // mesh border counts, but only the light of the part still on the surface (lib/gather_surface.glsl).
 // A texel much nearer in 3D than its offset along the surface (from the stretch at x, eq. 27 with
 // shear) is reached across air or a fold (lips, lids, ear folds touching), not along x's sheet: left
@@ -68,15 +68,15 @@ void main() {
     }
     for (int j = -GATHER_BLOCKS; j <= GATHER_BLOCKS; ++j) {
         for (int i = -GATHER_BLOCKS; i <= GATHER_BLOCKS; ++i) {
+            if (max(abs(i), abs(j)) <= 1) continue;  // the inner 3 x 3 blocks: texel by texel above (uniform branch)
             ivec2 c = b + ivec2(i, j);
-            float outer = (max(abs(i), abs(j)) > 1) ? 1.0 : 0.0;  // the inner 3 x 3 blocks: texel by texel above
             float inside = (all(greaterThanEqual(c, ivec2(0))) && all(lessThanEqual(c, bhi))) ? 1.0 : 0.0;
             c = clamp(c, ivec2(0), bhi);
             vec4 p = texelFetch(blocks_p, c, 0);
             vec2 z = texelFetch(blocks_z, c, 0).rg;
             float same = (abs(z.r - zone) < 0.5 && p.w > 0.0) ? 1.0 : 0.0;
             vec3 d = p.xyz - x;
-            same *= outer * inside * sheet(d, (vec2(2 * c - src) + 0.5) * mm_per_texel, cs);
+            same *= inside * sheet(d, (vec2(2 * c - src) + 0.5) * mm_per_texel, cs);
             // G(v + s^2, r) of the block's own spread s^2, relative to G(v, .) of single texels: for
             // its area (the normalisation, thickness) and, at the light's own mean point, its light
             float vb = var + z.g;

@@ -706,7 +706,7 @@ def test_surface_gather_shader_agrees_with_its_numpy_twin(renderer):
     from skinviewer.passes.deon import GATHER_SURFACE, STRETCH, mean_texel_mm
     from skinviewer.passes.texture_space import gutter_resource, seam_resource
     from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels, blur_resource
-    from skinviewer.physics.surface_gather import surface_gather
+    from skinviewer.physics.surface_gather import gather_blocks_for, surface_gather
     n = 256
     s = small_settings("head", "deon", 32, **{"deon.irradiance_size": n, "deon.tsm": False, "deon.subpixel_kernel_px": 0.0})
     renderer.render(s)
@@ -719,7 +719,9 @@ def test_surface_gather_shader_agrees_with_its_numpy_twin(renderer):
     gut = g.read(gutter_resource(n)).astype(np.float64)
     E = _seam_filled(g.read(IRRADIANCE).astype(np.float64), g.read(seam_resource(n)).astype(np.float64))
     got = g.read(blur_resource(step.index)).astype(np.float64)
-    want = surface_gather(E, g.read(GATHER_SURFACE), np.abs(gut[..., 2]), g.read(STRETCH), step.increment)
+    blocks = gather_blocks_for(np.sqrt(step.increment) / texel)  # the reach follows sigma (issue 27)
+    assert blocks < 5
+    want = surface_gather(E, g.read(GATHER_SURFACE), np.abs(gut[..., 2]), g.read(STRETCH), step.increment, blocks)
     island = (gut[..., 0] == np.arange(n)[None, :]) & (gut[..., 1] == np.arange(n)[:, None])
     assert island.sum() > 0.3 * n * n
     err = np.abs(got - want)[island].max(0) / np.maximum(np.abs(want[island]).max(0), 1e-12)

@@ -60,6 +60,8 @@ def build_parser() -> argparse.ArgumentParser:
     import_cli.add_parser(sub)
     turntable_cli.add_parser(sub)
     sheet_cli.add_parser(sub)
+    from skinviewer.cli import calibrate as calibrate_cli
+    calibrate_cli.add_parser(sub)
 
     pv = sub.add_parser("view", help="open the viewer (the default command)")
     _add_view_args(pv)
@@ -113,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
     commands = {"render", "profile", "view", "settings", "reference", "bench", "export", "import", "turntable", "sheet",
-                "-h", "--help"}
+                "calibrate", "-h", "--help"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     try:

@@ -2,6 +2,7 @@
 programs, and the graph's GL services (draws, textures bound by sampler name, strict uniforms)."""
 from __future__ import annotations
 
+from contextlib import contextmanager
 from typing import Any, Iterable
 
 import moderngl
@@ -32,8 +33,13 @@ class ExecuteContext:
       variant) is skipped silently; ``optional=True`` also skips a name the source lacks.
     """
 
-    def __init__(self, graph, p: Pass, refl: Reflection, frame: FrameInputs):  # graph: the RenderGraph
+    def __init__(self, graph, p: Pass, refl: Reflection, frame: FrameInputs,  # graph: the RenderGraph
+                 tile: tuple[int, int] = (0, 1), held: dict | None = None):
         self.graph = graph
+        self.tile = tile  # (band, bands) of a tileable pass; (0, 1): the whole pass at once
+        self._held = {} if held is None else held
+        self._own_held = held is None  # not kept across bands: returned with the scratch
+        self._banded = False
         self.gl: moderngl.Context = graph.ctx
         self.pass_ = p
         self._refl = refl
@@ -171,7 +177,8 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name}: a draw needs a target")
         if all(isinstance(t, str) for t in targets):
             return self.framebuffer(*targets)
-        if any(isinstance(t, str) or t not in self._scratch for t in targets):
+        held = list(self._held.values())
+        if any(isinstance(t, str) or (t not in self._scratch and t not in held) for t in targets):
             raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
         return self.graph._framebuffer_for(tuple(targets))
 
@@ -184,9 +191,10 @@ class ExecuteContext:
         colour to ``clear`` and depth to 1 (None: no clear)."""
         scene = self.scene
         fbo = self._target(targets)
+        rect = self._scissor(fbo)
         fbo.use()
         if clear is not None:
-            fbo.clear(*clear, depth=1.0)
+            fbo.clear(*clear, depth=1.0, viewport=rect)
         if depth_test:
             self.gl.enable(moderngl.DEPTH_TEST)
         else:
@@ -201,6 +209,8 @@ class ExecuteContext:
         lod = self._frame.mesh_lod
         self.graph.gpu.mesh_vao(prog, scene, lod).render()
         self.gl.disable(moderngl.CULL_FACE)
+        if rect is not None:
+            fbo.scissor = None
         if lod:
             self.graph._lod_notes[self.pass_.name] = self._frame.lod_note
         self.draws += 1
@@ -214,6 +224,7 @@ class ExecuteContext:
         ``TILED=1``: only those tiles are rasterised (issue 14: no work on gutter texels no blur can
         read); the texels drawn come out bit-identical, the others keep their previous contents."""
         fbo = self._target(targets)
+        rect = self._scissor(fbo)
         fbo.use()
         self.gl.disable(moderngl.DEPTH_TEST)
         if tiles is not None:
@@ -223,6 +234,8 @@ class ExecuteContext:
             self.uniforms(prog, u_tile=float(edge), u_target_size=(float(w), float(h)))
         self._apply(prog)
         self.graph.gpu.fullscreen_vao(prog).render(vertices=3 if tiles is None else 6 * tiles[1])
+        if rect is not None:
+            fbo.scissor = None
         self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
@@ -242,9 +255,77 @@ class ExecuteContext:
         self._scratch.append(tex)
         return tex
 
+    # -- tiles (Pass.tileable): the same pass in row bands, across frames ----------------------
+    @property
+    def first_tile(self) -> bool:
+        return self.tile[0] == 0
+
+    @property
+    def last_tile(self) -> bool:
+        return self.tile[0] == self.tile[1] - 1
+
+    def held(self, name: str, spec: TexSpec) -> tuple[moderngl.Texture, bool]:
+        """A scratch texture kept across the bands of this run (work done once, in the first band,
+        and read by every band): (texture, fresh) -- fresh: just taken, its content is to be made."""
+        tex = self._held.get(name)
+        if tex is not None and (tex.size, tex.components, tex.dtype) == (spec.size, spec.components, spec.dtype):
+            return tex, False
+        if tex is not None:
+            self.graph._pool_give(tex)
+        tex = self._held[name] = self.graph._pool_take(spec)
+        return tex, True
+
+    def band_rect(self, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
+        """The scissor rectangle (x, y, w, h) of this band in a target of ``size``; None: no band."""
+        k, n = self.tile
+        return None if n <= 1 else _rows(size, k, n)
+
+    @contextmanager
+    def band(self, sub: int | None = None, subs: int | None = None):
+        """Draws inside only write this band's rows of their targets (a scissor; each fragment is
+        computed as without it, so the bands together are bit-identical to one whole draw).
+        ``sub``/``subs``: band ``sub`` of ``subs`` instead of the pass's own (see ``units``)."""
+        self._banded = (sub, subs) if sub is not None else True
+        try:
+            yield
+        finally:
+            self._banded = False
+
+    def units(self, draws: int) -> list[tuple[int, int, int]]:
+        """A pass of ``draws`` full-target draws in sequence, each reading the ones before, split over
+        its bands: the (draw, sub-band, sub-bands) this band runs, in order. Each draw is cut in
+        ceil(bands / draws) row bands and a band runs a contiguous share of them, so every draw is
+        complete before the next one starts; one band (no budget): every draw whole, in order."""
+        k, n = self.tile
+        per = max(1, -(-n // max(draws, 1)))
+        total = draws * per
+        return [(u // per, u % per, per) for u in range((k * total) // n, ((k + 1) * total) // n)]
+
+    def _scissor(self, fbo: moderngl.Framebuffer):
+        """Set the band's scissor on ``fbo`` before it is used (reset after the draw); None: none."""
+        if self._banded is True:
+            rect = self.band_rect(fbo.size)
+        elif self._banded:
+            sub, subs = self._banded
+            rect = None if subs <= 1 else _rows(fbo.size, sub, subs)
+        else:
+            rect = None
+        if rect is not None:
+            fbo.scissor = rect
+        return rect
+
     def _finish(self):
         for t in self._scratch:
             self.graph._pool_give(t)
         self._scratch.clear()
+        if self._own_held:
+            for t in self._held.values():
+                self.graph._pool_give(t)
+            self._held.clear()
 
 
+def _rows(size: tuple[int, int], k: int, n: int) -> tuple[int, int, int, int]:
+    """Row band ``k`` of ``n`` of a target of ``size``: (x, y, w, h)."""
+    w, h = size
+    y0, y1 = (k * h) // n, ((k + 1) * h) // n
+    return (0, y0, w, y1 - y0)

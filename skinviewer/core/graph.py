@@ -14,7 +14,9 @@ settings they declared (``section``). The graph owns the GL objects behind them 
 """
 from __future__ import annotations
 
+import math
 import time
+from dataclasses import dataclass, field
 from typing import Any, Iterable
 
 import moderngl
@@ -36,6 +38,20 @@ from skinviewer.core.report import TIMING_NOTES, FrameInputs, FrameReport, PassR
 from skinviewer.core.settings import Settings, value_key
 from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
 from skinviewer.core.texture_pool import TexturePool  # noqa: F401
+
+MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
+UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
+
+
+@dataclass
+class TileProgress:
+    """A tileable pass part-way through its bands (issue 27): resumed next frame while its cache key
+    is unchanged, cancelled (held textures freed, outputs left unkeyed) as soon as it differs."""
+    key: dict
+    count: int
+    done: int = 0
+    ms: float = 0.0
+    held: dict = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
 
 
 class RenderGraph:
@@ -77,6 +93,8 @@ class RenderGraph:
         self.memory_available: Any = None
         self._checked_plan: tuple | None = None
         self._check_lib: ShaderLibrary | None = None
+        self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
+        self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
 
     # -- texture management ------------------------------------------------------------------
     def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
@@ -227,7 +245,11 @@ class RenderGraph:
         ``budget_ms``: once at least one pass ran and this much wall time has passed, the passes
         still to run are deferred (status "deferred", cache keys untouched); the next frame resumes
         where this one stopped, since the passes that did run are then cached. Targets are written
-        last, so a deferred frame leaves the previous image intact."""
+        last, so a deferred frame leaves the previous image intact. A ``tileable`` pass runs in row
+        bands (as many as its last cost needs to fit half the budget) and may stop between bands: it
+        resumes next frame while its key is unchanged, and is cancelled (started over) when it
+        changed. While its bands are part-way its outputs are under no cache key, so a pass cancelled
+        mid-way is never found cached, whatever the settings return to."""
         # an idle frame: the very same settings object, scene, camera, targets and shaders as the last
         # complete frame -> nothing can re-run; skip reflecting every pass and building cache keys
         idle = (frame.settings, (frame.scene_version, frame.mesh_lod), frame.view_key, tuple(targets or self.targets),
@@ -255,29 +277,60 @@ class RenderGraph:
         self._last_refl = refl
         check_finite = bool(getattr(frame.settings.render, "check_finite", False))
         records: dict[str, PassRecord] = {}
+        partial: set[str] = set()  # outputs of passes part-way through their bands this frame
+        self.cancelled = []
         for p in order:
             r = refl[p.name]
             realloc = False
             for res, spec in r.outputs.items():
                 realloc |= self._ensure(res, spec)
             key = self._key(p, r, frame)
+            if realloc:  # garbage under any key: run before it may be found cached
+                self._keys.pop(p.name, None)
             old = self._keys.get(p.name)
             rec = PassRecord(p.name, "cached", inputs=list(r.inputs),
                              outputs={k: {"size": list(v.size), "components": v.components, "dtype": v.dtype}
                                       for k, v in r.outputs.items()})
+            progress = self._progress.get(p.name)
+            if progress is not None and (force or progress.key != key):
+                self._cancel(p.name)  # what its bands were computing is no longer wanted
+                progress = None
             if force or realloc or old != key:
-                # a freshly (re)allocated output holds garbage: that pass always runs
-                if budget_ms is not None and any_ran and not realloc \
-                        and (time.perf_counter() - t_start) * 1000.0 > budget_ms:
+                # a freshly (re)allocated output holds garbage: that pass always runs (unless an
+                # input is part-way through its bands: it runs once that is complete)
+                waits = partial & set(r.inputs)
+                spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 > budget_ms
+                if waits or (any_ran and spent and (not realloc or p.tileable)):
                     rec.status = "deferred"
-                    rec.reason = "frame time budget spent"
+                    rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
                     rec.nonfinite = list(self._nonfinite.get(p.name, []))
                     records[p.name] = rec
+                    if waits:
+                        partial.update(r.outputs)
                     continue
                 any_ran = True
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
-                rec.ms = self._execute(p, r, frame, timing)
+                if p.tileable and budget_ms is not None:
+                    if progress is not None:
+                        rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
+                    progress = progress or TileProgress(key, self._tile_count(p, budget_ms))
+                    self._progress[p.name] = progress
+                    self._keys.pop(p.name, None)  # its outputs are being overwritten band by band
+                    rec.ms = self._run_bands(p, r, frame, timing, progress, t_start, budget_ms)
+                    rec.draws = self._last_draws
+                    if progress.done < progress.count:
+                        rec.status = "deferred"
+                        rec.reason = f"{rec.reason}; band {progress.done}/{progress.count} done, resumed next frame"
+                        records[p.name] = rec
+                        partial.update(r.outputs)
+                        continue
+                    self._finish_bands(p.name)
+                    rec.ms = progress.ms
+                    if progress.count > 1:
+                        rec.reason += f"; in {progress.count} bands"
+                else:
+                    rec.ms = self._execute(p, r, frame, timing)
                 rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
@@ -306,6 +359,8 @@ class RenderGraph:
                 self._keys.pop(p.name, None)
                 self._nonfinite.pop(p.name, None)
                 self.refining.discard(p.name)
+                if p.name in self._progress:
+                    self._cancel(p.name)
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
@@ -313,8 +368,48 @@ class RenderGraph:
         self._idle = idle[:4] + (self.shaders.revision, timing) if report.complete else None
         return report
 
-    def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str) -> float | None:
-        ec = ExecuteContext(self, p, r, frame)
+    # -- tiles: a long pass in row bands, across frames --------------------------------------
+    def _tile_count(self, p: Pass, budget_ms: float) -> int:
+        """Bands for a tileable pass: its last full cost over half the budget (so a band leaves room
+        for the rest of the frame), UNMEASURED_TILES before it was ever timed."""
+        ms = self._last_ms.get(p.name)
+        if ms is None:
+            return UNMEASURED_TILES
+        return max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
+
+    def _run_bands(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str, progress: TileProgress,
+                   t_start: float, budget_ms: float) -> float | None:
+        """Run bands of ``p`` from where ``progress`` stopped until all are done or the budget is
+        spent (at least one band per call). Returns the ms of the bands run now."""
+        ms_now = 0.0
+        while progress.done < progress.count:
+            ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
+            progress.done += 1
+            ms_now += ms or 0.0
+            progress.ms += ms or 0.0
+            if (time.perf_counter() - t_start) * 1000.0 > budget_ms:
+                break
+        return ms_now
+
+    def _finish_bands(self, name: str) -> None:
+        progress = self._progress.pop(name)
+        for tex in progress.held.values():
+            self._pool_give(tex)
+
+    def _cancel(self, name: str) -> None:
+        """Abandon a pass's unfinished bands: held textures back to the pool, no key for its outputs."""
+        self._finish_bands(name)
+        self._keys.pop(name, None)
+        self.cancelled.append(name)
+
+    @property
+    def in_progress(self) -> dict[str, tuple[int, int]]:
+        """Tileable passes part-way: name -> (bands done, bands)."""
+        return {n: (pr.done, pr.count) for n, pr in self._progress.items()}
+
+    def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
+                 tile: tuple[int, int] = (0, 1), held: dict | None = None) -> float | None:
+        ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         try:
             if timing == "sync":
@@ -457,10 +552,16 @@ class RenderGraph:
         """Forget cache keys (all, or one pass) so they re-run next frame."""
         if pass_name is None:
             self._keys.clear()
+            for name in list(self._progress):
+                self._cancel(name)
         else:
             self._keys.pop(pass_name, None)
+            if pass_name in self._progress:
+                self._cancel(pass_name)
 
     def release(self) -> None:
+        for name in list(self._progress):
+            self._finish_bands(name)
         for p in self.passes:
             p.release()
         for res in list(self._textures):

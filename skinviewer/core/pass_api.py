@@ -147,6 +147,9 @@ class Pass:
     name: str = "pass"
     view_dependent: bool = False
     uses_scene: bool = True
+    # a pass whose draws into its outputs are per-fragment independent (issue 27): under a frame time
+    # budget the graph runs it in row bands (ExecuteContext.band / tile / held), across frames if need be
+    tileable: bool = False
 
     def reflect(self, r: Reflection) -> None:
         raise NotImplementedError

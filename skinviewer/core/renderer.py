@@ -271,13 +271,17 @@ class Renderer:
         return self.scene
 
     # -- graphs ------------------------------------------------------------------------------
-    def graph(self, technique: str) -> RenderGraph:
-        g = self.graphs.get(technique)
+    def graph(self, technique: str, variant: str = "") -> RenderGraph:
+        """The technique's graph; ``variant`` names another graph of the same technique with a cache
+        of its own (the viewer's governor keeps each preview's maps there, so switching between a
+        preview and the user's settings re-runs no once-per-mesh pass on either side)."""
+        key = f"{technique}|{variant}" if variant else technique
+        g = self.graphs.get(key)
         if g is None:
             passes, targets = techniques.build(technique)
             g = RenderGraph(self.ctx, self.shaders, passes, targets, self.pool)
             g.memory_available = self.available_memory
-            self.graphs[technique] = g
+            self.graphs[key] = g
         return g
 
     def available_memory(self) -> int:
@@ -299,13 +303,14 @@ class Renderer:
         return framed_view(s.camera, gpu, (s.render.width, s.render.height))
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
-               force: bool = False, budget_ms: float | None = None) -> FrameReport:
+               force: bool = False, budget_ms: float | None = None, variant: str = "") -> FrameReport:
         """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
-        ``budget_ms`` spreads a long frame over several calls (RenderGraph.run)."""
+        ``budget_ms`` spreads a long frame over several calls (RenderGraph.run); ``variant``: the
+        graph to run it in (Renderer.graph)."""
         scene = self.ensure_scene(s)
         view = framed_view(s.camera, scene.gpu, (s.render.width, s.render.height))
         self.last_view = view
-        g = self.graph(s.technique)
+        g = self.graph(s.technique, variant)
         lod, lod_note = rules.mesh_lod(s, scene.gpu, self._lod_state)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
                             view_key=view.key(), mesh_lod=lod, lod_note=lod_note)

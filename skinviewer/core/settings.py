@@ -177,6 +177,14 @@ class RenderSettings(_Model):
     mesh_lod: Literal["auto", "full"] = Field(
         "auto", description="auto: draw a coarser copy of the mesh (1/4 of the triangles per level) when the "
         "head is so small on screen that its triangles are far under a pixel; full: always the whole mesh")
+    governor: Literal["off", "interactive", "fixed-budget"] = Field(
+        "interactive", description="the viewer's quality governor (issue 27; `render`/`bench` ignore it): "
+        "interactive: while you drag or edit, the most accurate preview of the technique's own knobs that fits "
+        "governor_budget_ms on this machine (skinviewer calibrate), refined up to your settings when input "
+        "stops; fixed-budget: that preview always; off: every frame at your settings")
+    governor_budget_ms: float = Field(
+        100.0, ge=-1e6, le=1e6, description="the interaction budget (ms a frame) the governor's preview must fit; "
+        "<= 0 or one nothing fits: the cheapest preview, said in the status bar")
 
     _bg = field_validator("background")(_finite_vec)
 

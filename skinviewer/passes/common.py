@@ -105,7 +105,8 @@ def draw_view_mesh(ec, prog, *targets) -> None:
     resolves to cull for this mesh (auto: a closed mesh), else both sides (the shaders reverse the
     normal of a back face: gl_FrontFacing)."""
     cull = culls_back_faces(ec.setting("scene.back_faces"), ec.scene.closed)
-    ec.draw_mesh(prog, *targets, cull_back=cull)
+    with ec.band():  # a tileable pass (issue 27): this band's rows (depth cleared and tested per band)
+        ec.draw_mesh(prog, *targets, cull_back=cull)
 
 
 def set_camera(ec, prog) -> None:

@@ -64,7 +64,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
-from skinviewer.physics.surface_gather import GATHER_BLOCKS, SHORTCUT_RATIO
+from skinviewer.physics.surface_gather import SHORTCUT_RATIO, gather_blocks_for
 from skinviewer.scene.camera import gl_bytes
 
 STRETCH = "deon_stretch"
@@ -210,6 +210,11 @@ def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:
     return not step.reused and limit > 0.0 and np.sqrt(step.increment) <= limit * texel_mm
 
 
+def gather_reach(r, step: BlurStep, n: int) -> int:
+    """The summed step's reach in 2 x 2 blocks, from its sigma in mean texels (gather_blocks_for)."""
+    return gather_blocks_for(np.sqrt(step.increment) / mean_texel_mm(r.scene, n))
+
+
 def gathered(r, step: BlurStep) -> bool:
     """Whether blur step ``step`` is a direct sum over the surface (deon_surface_gather.frag): its
     sigma is at most deon.surface_gather_below_texels mean texels (issue 10 item 1)."""
@@ -250,8 +255,10 @@ class TsmPass(Pass):
 
 
 class IrradiancePass(Pass):
-    """eq. (28)/(32) in texture space, thickness in alpha; float32; gutters dilated."""
+    """eq. (28)/(32) in texture space, thickness in alpha; float32; gutters dilated. Tileable: under
+    the viewer's frame budget it is shaded in row bands, across frames (issue 27)."""
     name = "deon_irradiance"
+    tileable = True
 
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
@@ -326,6 +333,8 @@ class GaussianBlurPass(Pass):
         self.chain = chain
         self.name = f"deon_blur_{i}" if chain == "irradiance" else f"deon_stretch_blur_{i}"
 
+    tileable = True  # in row bands: the summed step's one draw, or each separable draw in turn
+
     def _output(self) -> str:
         return blur_resource(self.i) if self.chain == "irradiance" else stretch_blur_resource(self.i)
 
@@ -384,23 +393,27 @@ class GaussianBlurPass(Pass):
             r.input(seam_resource(n))
             r.program("seam_fill")
         r.program("deon_gather_blocks")
-        r.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
+        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n))
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec, step, n: int) -> None:
         source = step.source
+        # the seam fill and the block sums are made once (first band) and kept across the bands
         if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
-            fill = ec.program("seam_fill")
-            ec.textures(fill, source=source, seam_map=seam_resource(n))
-            ec.set(fill, "u_past_border_dark", True)
-            source = ec.scratch(self._spec(n))
-            ec.draw_fullscreen(fill, source)
+            filled, fresh = ec.held("filled", self._spec(n))
+            if fresh:
+                fill = ec.program("seam_fill")
+                ec.textures(fill, source=source, seam_map=seam_resource(n))
+                ec.set(fill, "u_past_border_dark", True)
+                ec.draw_fullscreen(fill, filled)
+            source = filled
         h = (n + 1) // 2
-        light, lit = (ec.scratch(TexSpec((h, h), 4, "f4", filter="nearest")) for _ in range(2))
-        prog = ec.program("deon_gather_blocks")
-        ec.textures(prog, source=source, surface=GATHER_SURFACE)
-        ec.draw_fullscreen(prog, light, lit)
-        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=GATHER_BLOCKS)
+        (light, fresh), (lit, _) = (ec.held(k, TexSpec((h, h), 4, "f4", filter="nearest")) for k in ("light", "lit"))
+        if fresh:
+            prog = ec.program("deon_gather_blocks")
+            ec.textures(prog, source=source, surface=GATHER_SURFACE)
+            ec.draw_fullscreen(prog, light, lit)
+        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(ec, step, n))
         ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n), blocks_e=light,
                     blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
         ec.set(prog, "u_var", float(step.increment))
@@ -411,7 +424,8 @@ class GaussianBlurPass(Pass):
         ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
         if stretch:
             ec.bind(prog, "stretch_map", STRETCH)
-        ec.draw_fullscreen(prog, self._output())
+        with ec.band():
+            ec.draw_fullscreen(prog, self._output())
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -454,10 +468,12 @@ class GaussianBlurPass(Pass):
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
         spec = self._spec(n)
-        tmp = ec.scratch(spec)
-        tmp2 = ec.scratch(spec) if len(sigmas) > 1 else None
+        # scratch kept across the pass's bands (ExecuteContext.held): a blur runs in row bands
+        # under the viewer's frame budget, each draw complete before the next one's first band
+        tmp = ec.held("tmp", spec)[0]
+        tmp2 = ec.held("tmp2", spec)[0] if len(sigmas) > 1 else None
         seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
-        filled = ec.scratch(spec) if seam else None
+        filled = ec.held("filled", spec)[0] if seam else None
         fill = ec.program("seam_fill") if seam else None
         if seam:
             light = self.chain == "irradiance"
@@ -467,19 +483,23 @@ class GaussianBlurPass(Pass):
             ec.set(prog, "u_absorb", light)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
+        draws = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
-            ec.set(prog, "u_sigma_mm", float(sigma))  # tap spacing = sigma (eq. 25)
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, self._output() if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    ec.bind(fill, "source", source)
-                    ec.draw_fullscreen(fill, filled, tiles=tiles)
+                    draws.append((fill, {}, source, filled))
                     source = filled
-                ec.set(prog, "u_dir", direction)
-                ec.bind(prog, "source", source)
-                ec.draw_fullscreen(prog, target, tiles=tiles)
+                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction}, source, target))  # spacing = sigma (eq. 25)
             src = tmp2
+        for d, sub, subs in ec.units(len(draws)):
+            program, values, source, target = draws[d]
+            for name, value in values.items():
+                ec.set(program, name, value)
+            ec.bind(program, "source", source)
+            with ec.band(sub, subs):
+                ec.draw_fullscreen(program, target, tiles=tiles)
 
 
 def texture_shadows(r) -> bool:
@@ -576,6 +596,7 @@ class TransmittedPass(Pass):
     does not depend on the camera, so with deon.combine_blurs it joins the diffuse sum and an
     orbit does not pay its 3x3 TSM taps and per-Gaussian terms per pixel."""
     name = "deon_transmitted"
+    tileable = True  # one draw (view mesh / texel shading): in row bands under a frame budget (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         if not combined(r) or tsm_light_index(r) is None:
@@ -681,6 +702,7 @@ def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
 class DeonFinalPass(Pass):
     """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output)."""
     name = "deon_final"
+    tileable = True  # one draw (view mesh / texel shading): in row bands under a frame budget (issue 27)
     view_dependent = True
 
     def reflect(self, r: Reflection) -> None:

@@ -211,28 +211,31 @@ def shade_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TE
         return
     for k, res in zip(maps, texel_surface_resources(size, maps)):
         ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
-    raws = [ec.scratch(TexSpec((size, size), 4, "f4", filter="nearest"))]
-    raws += [ec.scratch(TexSpec((size, size), ec.output(r).components, ec.output(r).dtype, filter="nearest"))
-             for r in more]
-    ec.draw_fullscreen(prog, *raws, tiles=work_tiles(ec, size, 0))
-    for raw, res in zip(raws, (resource,) + more):
-        dilate(ec, raw, gutter_resource(size), res)
+    raws = _raws(ec, size, more)
+    with ec.band():  # a tileable pass (issue 27): this band's rows; the dilation once all are shaded
+        ec.draw_fullscreen(prog, *raws, tiles=work_tiles(ec, size, 0))
+    if ec.last_tile:
+        for raw, res in zip(raws, (resource,) + more):
+            dilate(ec, raw, gutter_resource(size), res)
+
+
+def _raws(ec, size: int, more: tuple[str, ...]) -> list:
+    """The undilated targets of a texture-space shading draw, kept across a tileable pass's bands."""
+    specs = [TexSpec((size, size), 4, "f4", filter="nearest")]
+    specs += [TexSpec((size, size), ec.output(r).components, ec.output(r).dtype, filter="nearest") for r in more]
+    return [ec.held(f"raw{i}", spec)[0] for i, spec in enumerate(specs)]
 
 
 def unwrap_dilated(ec, prog, size: int, resource: str, *more: str) -> None:
     """Rasterise ``prog`` in texture space, then copy into ``resource`` with the gutters filled.
     ``more``: further outputs the program writes in the same draw (layout locations 1, 2, ...), each
     rasterised into a scratch of its own format and dilated the same way."""
-    if not more:
-        raw = rasterize_unwrapped(ec, prog, size)
-        dilate(ec, raw, gutter_resource(size), resource)
-        return
-    raws = [ec.scratch(TexSpec((size, size), 4, "f4", filter="nearest"))]
-    raws += [ec.scratch(TexSpec((size, size), ec.output(r).components, ec.output(r).dtype, filter="nearest"))
-             for r in more]
-    ec.draw_mesh(prog, *raws, depth_test=False)
-    for raw, res in zip(raws, (resource,) + more):
-        dilate(ec, raw, gutter_resource(size), res)
+    raws = _raws(ec, size, more)
+    with ec.band():  # a tileable pass (issue 27): this band's rows; the dilation once all are drawn
+        ec.draw_mesh(prog, *raws, depth_test=False)
+    if ec.last_tile:
+        for raw, res in zip(raws, (resource,) + more):
+            dilate(ec, raw, gutter_resource(size), res)
 
 
 SEAM_REACH_TEXELS = 24.0  # gutter texels this close to a seam continue across it (blur taps reach ~3 sigma)

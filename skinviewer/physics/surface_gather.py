@@ -29,7 +29,17 @@ import numpy as np
 
 PAST_BORDER_SHARE = 0.5  # lib/gather_surface.glsl
 SHORTCUT_RATIO = 0.5  # a texel nearer than this x its offset along the surface: across air or a fold
-GATHER_BLOCKS = 5  # the outer reach in 2 x 2 blocks: 2 * 5 + 2 = 12 texels (3.5 sigma at 3.4 texels)
+GATHER_BLOCKS = 5  # the outer reach in 2 x 2 blocks at most: 2 * 5 + 2 = 12 texels (3.5 sigma at 3.4 texels)
+REACH_SIGMAS = 3.5  # the sum reaches 3.5 sigma (exp(-3.5^2 / 2) = 0.2 % of the centre weight)
+STRETCH_HEADROOM = 1.6  # texels at x may be this much smaller than the atlas mean (sigma in mean texels)
+
+
+def gather_blocks_for(sigma_texels: float) -> int:
+    """The reach in 2 x 2 blocks for a step of ``sigma_texels`` mean texels (issue 27: the reach
+    follows sigma): REACH_SIGMAS sigma at STRETCH_HEADROOM x the mean texel density, 2 blocks at
+    least (the texel ring plus one), GATHER_BLOCKS at most."""
+    reach = REACH_SIGMAS * STRETCH_HEADROOM * max(float(sigma_texels), 0.0)
+    return int(min(GATHER_BLOCKS, max(2, int(np.ceil((reach - 2.0) / 2.0)))))
 
 
 def _light(E: np.ndarray, w: np.ndarray) -> np.ndarray:

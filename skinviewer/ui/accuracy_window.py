@@ -200,6 +200,7 @@ class AccuracyWindow:
             self._truth_ui(imgui)
             imgui.separator()
             self._chart_ui(imgui)
+            self._governor_ui(imgui)
         pos, size = imgui.get_window_pos(), imgui.get_window_size()
         ui.claim((pos.x, pos.y, size.x, size.y))
         imgui.end()
@@ -265,6 +266,40 @@ class AccuracyWindow:
                 if imgui.is_mouse_clicked(0):
                     self.apply(hovered)
             implot.end_plot()
+
+    def governor_points(self) -> list[tuple[str, float, float | None, bool]]:
+        """The governor's front for the technique on screen, as calibrated on this machine:
+        (label, light-move ms, error vs the truth or None, whether it is the governor's current pick)."""
+        g = self.frame.governor
+        t = self.state.settings.technique
+        if g.calibration is None or t not in g.calibration.entries:
+            return []
+        pick = g.shown.label if g.active else None
+        return [(e.label, e.light_ms, e.error, e.label == pick) for e in g.calibration.entries[t]]
+
+    def _governor_ui(self, imgui) -> None:
+        """Issue 27: what the calibration measured for this technique, the governor's pick marked."""
+        from imgui_bundle import implot
+        pts = self.governor_points()
+        if not pts:
+            imgui.text_disabled("governor: no calibration for this technique yet (skinviewer calibrate)")
+            return
+        imgui.text(f"governor's front on this machine ({self.frame.governor.budget_ms:g} ms budget)")
+        timed = [x for x in pts if x[2] is not None]
+        if timed and implot.begin_plot("##governor", imgui.ImVec2(-1, 160)):
+            implot.setup_axes("light-move frame ms", "RMS %")
+            implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
+            implot.plot_scatter("rungs", np.array([x[1] for x in timed], np.float64),
+                                np.array([100 * x[2] for x in timed], np.float64))
+            picked = [x for x in timed if x[3]]
+            if picked:
+                implot.plot_scatter("governor's pick", np.array([picked[0][1]], np.float64),
+                                    np.array([100 * picked[0][2]], np.float64))
+            implot.plot_inf_lines("budget", np.array([self.frame.governor.budget_ms], np.float64))
+            implot.end_plot()
+        for label, ms, err, picked in pts:
+            line = f"{'>' if picked else ' '} {label}: {ms:.0f} ms" + ("" if err is None else f", {err:.1%}")
+            (imgui.text if picked else imgui.text_disabled)(line)
 
     @staticmethod
     def _nearest(implot, pts, radius_px: float = 10.0):

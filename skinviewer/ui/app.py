@@ -187,6 +187,9 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
     size = tuple(size) if size else DEFAULT_WINDOW
     options = ViewerOptions(debug=debug or os.environ.get("SKINVIEWER_DEBUG") == "1")
     app = create_app(s, size=size, preset_path=preset_path, options=options)
+    # the quality governor's calibration (issue 27): loaded, or measured in the background for the
+    # techniques it lacks (not for scripted --frames runs; SKINVIEWER_CALIBRATE=0 turns it off)
+    app.frame.load_calibration(auto=not frames and os.environ.get("SKINVIEWER_CALIBRATE", "1") != "0")
     if frames and screenshot:
         app.state.set_show_ui(False)  # batch screenshot: the 3D view fills the whole --size window
     for n in app.state.notices:

@@ -11,6 +11,7 @@ It owns the renderer's frame products (report, per-pass costs, the last change's
 time-budget options; the state owns what the user chose."""
 from __future__ import annotations
 
+import json
 import time
 import traceback
 from collections import deque
@@ -23,6 +24,8 @@ from skinviewer.core.graph import FrameReport
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings
 from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.techniques.preview import FINAL, Rung
+from skinviewer.ui.governor import BackgroundCalibration, Governor
 from skinviewer.ui.hot_reload import ShaderWatcher
 from skinviewer.ui.layout import Layout, compute_layout
 from skinviewer.ui.scheduler import MODES as SCHEDULE_MODES
@@ -79,6 +82,18 @@ class FrameController:
         self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
         self._last_frame_t: float | None = None
         self._window = (tuple(window_size), tuple(buffer_size))
+        # the quality governor (issue 27): what each frame renders while the user drags, and the
+        # refinement to the user's settings after; its calibration is loaded or measured on start
+        r = state.settings.render
+        self.governor = Governor(r.governor, r.governor_budget_ms)
+        self.calibrating: BackgroundCalibration | None = None
+        self._auto_calibrate = False  # measure techniques the calibration lacks (run_viewer turns it on)
+        self._calibration_tried: set[str] = set()
+        self._rung: Rung = FINAL
+        self._governing = False  # the governor picks this frame (on, and this technique calibrated)
+        self._variant = ""  # the renderer graph of the frame: "" the user's settings, else a preview's
+        self._camera_input = False  # the last user change moved only the camera
+        self._gov_note = ""
         self.layout: Layout = self._compute_layout()
         state.set_render_size(*self.layout.view_fb[2:])
         state.subscribe(self._on_change)
@@ -111,7 +126,78 @@ class FrameController:
 
     def _on_change(self, source: str) -> None:
         self._change_source = source
+        self._camera_input = source.startswith("camera")
         self.scheduler.note_change()
+
+    # -- the quality governor (ui/governor.py) --------------------------------------------------
+    def load_calibration(self, auto: bool = True) -> str:
+        """The cached calibration for this GL renderer and mesh class; with ``auto`` the techniques
+        it lacks are measured in the background when first governed (missing, stale or unreadable:
+        rebuilt, never trusted). Returns the one-line message, if any."""
+        from skinviewer.core import calibration
+        scene = self.renderer.scene
+        tris = int(len(scene.gpu.mesh.indices)) if scene is not None else 0
+        cal, why = calibration.load(calibration.renderer_name(self.ctx), calibration.mesh_class(tris))
+        self.governor.set_calibration(cal)
+        self._auto_calibrate = auto
+        if why:
+            self.state.say(why)
+        return why
+
+    def _calibrate_missing(self, technique: str) -> None:
+        cal = self.governor.calibration
+        if not self._auto_calibrate or self.calibrating is not None or technique in self._calibration_tried \
+                or (cal is not None and technique in cal.entries):
+            return
+        self._calibration_tried.add(technique)
+        self.calibrating = BackgroundCalibration(self.state.settings, [technique], into=cal).start()
+
+    def _poll_calibration(self) -> None:
+        c = self.calibrating
+        if c is None or c.running:
+            return
+        self.calibrating = None
+        if c.result is not None:
+            self.governor.set_calibration(c.result)
+            self.state.say(f"calibrated {sum(len(v) for v in c.result.entries.values())} configurations on "
+                           f"{c.result.renderer}: the governor uses them")
+        elif c.error:
+            self.state.say(c.error, error=True)
+
+    def _govern(self) -> Rung:
+        """This frame's rung: the governor's pick while the user interacts, its refinement after."""
+        s = self.state.settings
+        g = self.governor
+        self._governing = False
+        try:
+            g.configure(s.render.governor, s.render.governor_budget_ms)
+        except ValueError:
+            return FINAL
+        self._poll_calibration()
+        if not g.active:
+            g.rung_for(s, False, False, True)  # forgets any preview
+            return FINAL
+        self._calibrate_missing(s.technique)
+        if g.calibration is None or s.technique not in g.calibration.entries:
+            return FINAL  # not measured here yet: today's behaviour (orbit resolution, deferred edits)
+        self._governing = True
+        interacting = self._dragging or self._widget_active or \
+            time.perf_counter() - self.scheduler.changed_at < self.scheduler.rest_s
+        complete = self.report is None or self.report.complete
+        rung = g.rung_for(s, interacting, self._camera_input, complete)
+        if g.message and g.message != self._gov_note:
+            self.state.say(g.message)
+        self._gov_note = g.message
+        return rung
+
+    @property
+    def governor_status(self) -> str:
+        """The status bar's words for what is shown (preview, error, refining k/n, calibrating)."""
+        c = self.calibrating
+        if c is not None and c.running:
+            what, i, n = c.progress
+            return f"calibrating {i + 1}/{n}: {what}"
+        return self.governor.status(self.state.settings) if self._governing else ""
 
     # -- reading -----------------------------------------------------------------------------
     @property
@@ -120,9 +206,10 @@ class FrameController:
         return self.scheduler.deferred
 
     def graph(self):
-        """The current technique's graph (None when the technique is not available)."""
+        """The graph of the image on screen: the current technique's (its governor preview's while
+        one is shown); None when the technique is not available."""
         t = self.state.settings.technique
-        return self.renderer.graph(t) if t in techniques.names() else None
+        return self.renderer.graph(t, self._variant) if t in techniques.names() else None
 
     def cost_hint(self, path: str) -> str:
         """What editing ``path`` re-runs in the current technique and what that cost last time."""
@@ -178,6 +265,7 @@ class FrameController:
         if ui is not None and self.state.view.show_ui:
             self.layout = self._compute_layout()
             ui_built = ui.build(frametime, self.layout)
+        self._rung = self._govern()
         self._sync_size()
         self.report = self._render_main()
         if self.report is not None and self.report.complete and not self.report.ran:
@@ -194,7 +282,7 @@ class FrameController:
         """The render size follows the 3D view region (framebuffer pixels), not the whole window."""
         self.layout = self._compute_layout()
         vw, vh = self.layout.view_fb[2:]
-        scale = self.drag_scale()
+        scale = self._rung.scale if self._governing else self.drag_scale()
         if scale < 1.0:
             vw, vh = max(16, int(vw * scale)), max(16, int(vh * scale))
         if self.state.set_render_size(vw, vh) and not self._change_source:
@@ -208,13 +296,17 @@ class FrameController:
         pending = self._shown is None or (self._shown is not live and self._shown != live)
         last_cost = self.last_change.total_ms if self.last_change else None
         # a spread frame in progress is finished first, whatever the scheduler says
-        defer = not self._partial_ran and self._shown is not None \
+        defer = not self._partial_ran and self._shown is not None and not self._governing \
             and self.scheduler.should_defer(pending, self._widget_active, last_cost) \
             and not self._scene_changed(self._shown)
         self.scheduler.set_deferred(defer)
-        target = self._shown if defer else live
+        target = self._shown if defer else self.governor.settings_for(live, self._rung if self._governing else FINAL)
         try:
-            report = self.renderer.render(target, budget_ms=self.frame_budget_ms)
+            rung = self._rung if self._governing and not defer else FINAL
+            variant = "" if not rung.changes else "preview " + json.dumps(sorted((k, repr(v)) for k, v in rung.changes.items()))
+            report = self.renderer.render(target, budget_ms=self.frame_budget_ms, variant=variant)
+            if report.complete:  # until then the view shows the last complete image, in its graph
+                self._variant = variant
             self.render_error = ""
             self._rendered = (target.technique, target.render.width, target.render.height)
         except Exception as exc:

@@ -44,6 +44,9 @@ class StatusBar:
         out.append((f"{mode} timing", DIM))
         ft = list(fr.frame_ms)[-20:]
         out.append((f"frame {np.mean(ft):.1f} ms" if ft else "frame -", TEXT))
+        gov = fr.governor_status  # the quality governor: what is shown (issue 27)
+        if gov:
+            out.append((gov, WARN))
         if fr.render_deferred:
             out.append(("preview paused while dragging", WARN))
         if fr.report is not None and not fr.report.complete:

@@ -1,0 +1,76 @@
+"""The error against the ground truth of every preview rung (techniques/preview.py), for the
+governor's status line and the Accuracy window: writes the shipped table
+skinviewer/techniques/preview_errors.json (``core/calibration.attach_errors`` reads it).
+
+    python benchmarks/bench_governor_errors.py [--size 160] [--out skinviewer/techniques/preview_errors.json]
+
+The default head, the default settings (1024² maps) but the image size; the truth is
+``skinviewer reference`` of the same settings (core/reference, its cache). A rung on a smaller view
+is rendered at its size and enlarged bilinearly to the truth's (what the viewer shows stretched).
+Error: the mean over channels of the relative RMS (physics/metrics.image_error)."""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.ndimage import zoom
+
+from skinviewer import techniques
+from skinviewer.core.bench import compare_mask, linear_image
+from skinviewer.core.calibration import rung_key, rung_settings
+from skinviewer.core.files import atomic_write_text
+from skinviewer.core.gl import describe, headless_context
+from skinviewer.core.reference import compute_reference
+from skinviewer.core.renderer import Renderer
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.physics.metrics import image_error
+from skinviewer.techniques.preview import ladder
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def enlarge(a: np.ndarray, shape: tuple[int, int], order: int) -> np.ndarray:
+    f = (shape[0] / a.shape[0], shape[1] / a.shape[1]) + ((1,) if a.ndim == 3 else ())
+    out = zoom(a, f, order=order)
+    return out[: shape[0], : shape[1]]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--size", type=int, default=160)
+    ap.add_argument("--out", default=str(ROOT / "skinviewer" / "techniques" / "preview_errors.json"))
+    ap.add_argument("--techniques", default=",".join(techniques.names()))
+    args = ap.parse_args()
+    base = with_values(Settings(), {"render.width": args.size, "render.height": args.size})
+    ref = compute_reference(base)
+    ctx = headless_context()
+    r = Renderer(ctx)
+    errors: dict[str, float] = {}
+    rows = []
+    for name in args.techniques.split(","):
+        s = with_values(base, {"technique": name})
+        for rung in ladder(s):
+            rs = rung_settings(s, rung)
+            r.render_settled(rs)
+            img, cov = linear_image(r, rs)
+            if img.shape[:2] != ref.lit.shape[:2]:
+                img = enlarge(img, ref.lit.shape[:2], 1)
+                cov = enlarge(cov.astype(np.uint8), ref.lit.shape[:2], 0) > 0
+            e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=base.render.exposure)
+            err = float(np.mean(e.rms))
+            errors[rung_key(name, rung)] = err
+            rows.append((name, rung.label, err))
+            print(f"{name:<10} {rung.label:<50} {err:8.2%}", flush=True)
+        r.trim()
+    data = {"what": "mean relative RMS against the ground truth of each preview rung (benchmarks/bench_governor_errors.py)",
+            "scene": "head (default settings, 1024² maps)", "size": [args.size, args.size],
+            "renderer": describe(ctx), "date": time.strftime("%Y-%m-%d"), "errors": errors}
+    atomic_write_text(args.out, json.dumps(data, indent=1, ensure_ascii=False) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

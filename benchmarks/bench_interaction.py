@@ -1,0 +1,205 @@
+"""The viewer's interactivity with the quality governor off and on (issue 27), side by side in one
+run: the real viewer's frame loop (a window: run it under Xvfb, `xvfb-run -a -s "-screen 0
+1280x800x24" python3 benchmarks/bench_interaction.py`) driven through a scripted sequence per
+technique: an orbit drag, a key-light drag, slider edits (the key light's intensity, one edit a
+frame), then a still view until the image is final.
+
+    python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scan] [--seconds 3]
+
+Per technique and governor mode it prints:
+- p95 of the interval between visible image updates while dragging (a frame that completed and ran
+  passes puts a new image on screen); goal <= 150 ms;
+- release -> final: from the last input to the complete image at the user's settings; its ratio to
+  that settings' light-move frame measured alone (sync timing, no budget); goal <= 1.5;
+- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms;
+- the preview's error against the ground truth (the calibration's figure for the rung shown at
+  the end of the light drag: techniques/preview_errors.json, measured at 160² on the default view),
+  and whether the final image equals the ungoverned render of the same settings bit for bit.
+
+The defaults a user gets: the default settings (1024² maps), a 1040 x 700 window (the view beside
+the 400 px panel is 640 px wide), the governor's 100 ms budget and the calibration of this machine
+(measured first when missing: `skinviewer calibrate`). ``--quick``: d'Eon and Phong on the default
+head, 1.5 s phases and 6 slider edits (the same settings, a shorter script)."""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+from skinviewer.core import calibration
+from skinviewer.core.gl import describe
+from skinviewer.core.settings import Settings, with_values
+
+WINDOW = (1040, 700)
+
+
+def p95(xs: list[float]) -> float:
+    return float(np.percentile(xs, 95)) if xs else float("nan")
+
+
+class Driver:
+    """The scripted user: mouse drags and edits into a ViewerApp, one frame per step, timed."""
+
+    def __init__(self, app):
+        self.app = app
+        self.frame_ms: list[float] = []
+        self.updates: list[float] = []  # perf_counter of frames that put a new, complete image on screen
+
+    def step(self) -> None:
+        t0 = time.perf_counter()
+        self.app.step(1)
+        t1 = time.perf_counter()
+        self.frame_ms.append((t1 - t0) * 1000.0)
+        rep = self.app.frame.report
+        if rep is not None and rep.complete and rep.ran:
+            self.updates.append(t1)
+
+    def drag(self, button, seconds: float, dx: float = 6.0, dy: float = 1.5) -> list[float]:
+        """Drag in the view for ``seconds``; the intervals between visible updates meanwhile (ms)."""
+        app = self.app
+        vx, vy, vw, vh = app.frame.layout.view
+        x, y = vx + vw * 0.5, vy + vh * 0.5
+        app.on_mouse_position_event(x, y, 0, 0)
+        app.on_mouse_press_event(x, y, button)
+        start, n0 = time.perf_counter(), len(self.updates)
+        k = 0
+        while time.perf_counter() - start < seconds:
+            k += 1
+            sgn = 1 if (k // 20) % 2 == 0 else -1
+            x, y = x + sgn * dx, y + sgn * dy
+            app.on_mouse_drag_event(x, y, sgn * dx, sgn * dy)
+            self.step()
+        app.on_mouse_release_event(x, y, button)
+        times = [start] + self.updates[n0:] + [time.perf_counter()]
+        return [(b - a) * 1000.0 for a, b in zip(times, times[1:])]
+
+    def edits(self, n: int) -> list[float]:
+        app = self.app
+        start, n0 = time.perf_counter(), len(self.updates)
+        base = app.state.settings.lights[0].intensity
+        for k in range(n):
+            app.state.apply({"lights.0.intensity": base * (1.0 + 0.02 * ((k % 5) + 1))}, "lights.0.intensity")
+            self.step()
+        app.state.apply({"lights.0.intensity": base}, "lights.0.intensity")
+        self.step()
+        times = [start] + self.updates[n0:] + [time.perf_counter()]
+        return [(b - a) * 1000.0 for a, b in zip(times, times[1:])]
+
+    def until_final(self, limit_s: float = 120.0) -> float:
+        """ms from now (input released) to the complete image at the user's settings."""
+        fr = self.app.frame
+        start = time.perf_counter()
+        while time.perf_counter() - start < limit_s:
+            self.step()
+            rep = fr.report
+            still = time.perf_counter() - fr.scheduler.changed_at >= fr.scheduler.rest_s
+            if still and rep is not None and rep.complete and not fr.governor.refining \
+                    and fr.governor_status == "" and not fr._partial_ran:
+                return (time.perf_counter() - start) * 1000.0
+        return float("nan")
+
+
+def full_frame_alone(app) -> float:
+    """The user's settings' light-move frame, sync timing, no budget, measured alone (median of 2)."""
+    s = app.state.settings
+    r = app.renderer
+    ms = []
+    for k in range(2):
+        d = list(s.lights[0].direction)
+        d[0] += 0.03 if k % 2 == 0 else -0.03
+        ms.append(r.render(with_values(s, {"lights.0.direction": d}), timing="sync").total_ms)
+    r.render(s, timing="sync")
+    return statistics.median(ms)
+
+
+def run_one(app, technique: str, mode: str, seconds: float, n_edits: int) -> dict:
+    from skinviewer.core.settings import validate
+    st = app.state
+    st.set_settings(validate({**st.settings.model_dump(mode="json"), "technique": technique}), "technique")
+    st.apply({"render.governor": mode})
+    d = Driver(app)
+    d.until_final()
+    d.frame_ms.clear()
+    drag = d.drag(app.wnd.mouse.left, seconds)
+    orbit_final = d.until_final()
+    light = d.drag(app.wnd.mouse.right, seconds)
+    fr = app.frame
+    shown = fr.governor.shown
+    entry = fr.governor.entry(technique, shown) if mode != "off" else None
+    preview_err = entry.error if entry is not None else None
+    preview = shown.label if mode != "off" else "(your settings)"
+    release = d.until_final()
+    edits = d.edits(n_edits)
+    edit_final = d.until_final()
+    live = st.settings
+    img = app.renderer.image(live)
+    app.renderer.render(live, force=True)
+    identical = bool(np.array_equal(img, app.renderer.image(live)))
+    alone = full_frame_alone(app)
+    return {"technique": technique, "mode": mode, "p95_drag": p95(drag + light), "p95_orbit": p95(drag),
+            "p95_light": p95(light), "p95_edits": p95(edits), "release_ms": release, "alone_ms": alone,
+            "orbit_final_ms": orbit_final, "edit_final_ms": edit_final, "stall_ms": max(d.frame_ms),
+            "preview": preview, "preview_err": preview_err, "identical": identical}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--techniques")
+    ap.add_argument("--scan", action="store_true", help="also the shared head scan (../shared/assets/lee-perry-smith)")
+    ap.add_argument("--seconds", type=float)
+    ap.add_argument("--edits", type=int)
+    args = ap.parse_args()
+    from skinviewer import techniques
+    names = args.techniques.split(",") if args.techniques else (["deon", "phong"] if args.quick else techniques.names())
+    seconds = args.seconds or (1.5 if args.quick else 3.0)
+    n_edits = args.edits or (6 if args.quick else 20)
+    scenes = {"head": {}}
+    if args.scan:
+        sys.path.insert(0, os.path.dirname(__file__))
+        from bench_tsm_gather import scenes as shared
+        scenes.update({k: v for k, v in shared().items() if k != "head"})
+    os.environ.setdefault("SKINVIEWER_CALIBRATE", "0")
+    from skinviewer.ui.app import create_app, destroy_app
+    rows = []
+    for scene_name, scene in scenes.items():
+        app = create_app(with_values(Settings(), scene), size=WINDOW, vsync=False)
+        try:
+            app.step(2)
+            fr = app.frame
+            fr.load_calibration(auto=False)
+            cal = fr.governor.calibration
+            missing = [n for n in names if cal is None or n not in cal.entries]
+            if missing:
+                print(f"# calibrating {', '.join(missing)} on this machine first", file=sys.stderr, flush=True)
+                cal = calibration.calibrate(app.renderer, app.state.settings, missing, runs=2, into=cal)
+                calibration.save(cal)
+                fr.governor.set_calibration(cal)
+            if scene_name == "head":
+                w, h = app.state.settings.render.width, app.state.settings.render.height
+                print(f"# bench_interaction — {describe(app.ctx)}; window {WINDOW[0]}x{WINDOW[1]} (view {w}x{h}), "
+                      f"default settings (1024² maps), governor budget {app.state.settings.render.governor_budget_ms:g} ms; "
+                      f"{seconds:g} s drags, {n_edits} edits; sync timing for 'alone'")
+                print(f"{'scene':<6} {'technique':<9} {'governor':<11} {'p95 drag':>9} {'p95 edits':>9} "
+                      f"{'release→final':>13} {'alone':>8} {'ratio':>6} {'stall':>8} {'preview (end of light drag)':<48} "
+                      f"{'error':>7} {'final = ungoverned':>18}", flush=True)
+            for name in names:
+                for mode in ("off", "interactive"):
+                    row = run_one(app, name, mode, seconds, n_edits)
+                    row["scene"] = scene_name
+                    rows.append(row)
+                    err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
+                    print(f"{scene_name:<6} {name:<9} {mode:<11} {row['p95_drag']:9.0f} {row['p95_edits']:9.0f} "
+                          f"{row['release_ms']:13.0f} {row['alone_ms']:8.0f} {row['release_ms'] / row['alone_ms']:6.2f} "
+                          f"{row['stall_ms']:8.0f} {row['preview']:<48} {err:>7} {row['identical']!s:>18}", flush=True)
+        finally:
+            destroy_app(app)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

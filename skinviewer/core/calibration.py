@@ -1,0 +1,238 @@
+"""What each technique's preview rungs cost on the machine at hand (issue 27): the quality
+governor's front, measured, not hard-coded.
+
+``calibrate`` renders every rung of each technique's preview ladder (techniques/preview.py) on the
+default settings and the scene given, and times two interaction frames (sync timing: glFinish +
+wall clock per pass, medians): a **light move** (the key light nudged: texture-space and view
+work re-run, what a light drag, most slider edits and a technique's own knobs cost) and a
+**camera move** (only view-dependent work). Error figures against the ground truth come from the
+last bench (``skinviewer bench``) where a rung matches a configuration it measured, else from
+the shipped table (techniques/preview_errors.json, measured by ``benchmarks/bench_governor.py``).
+
+The result is cached per GL renderer string and mesh size class in the cache folder, written
+atomically; a file that is missing, unreadable, of another version or made for another ladder is
+rebuilt (with a message), never trusted."""
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from skinviewer import techniques
+from skinviewer.core.files import atomic_write_text
+from skinviewer.core.paths import cache_dir
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.techniques.preview import Rung, ladder
+
+VERSION = 1
+SIZE_CLASSES = ((20_000, "small"), (250_000, "medium"))  # triangles below -> class; above: "large"
+CALIBRATION_SIZE = (640, 640)  # the viewer's default render size: what the rungs are timed at
+ERRORS_TABLE = Path(__file__).resolve().parents[1] / "techniques" / "preview_errors.json"
+
+
+def renderer_name(ctx) -> str:
+    """The GL renderer string a calibration is cached under (GL_RENDERER: the device and driver)."""
+    return str(ctx.info.get("GL_RENDERER", "unknown"))
+
+
+def mesh_class(triangles: int) -> str:
+    """The mesh size class a calibration holds for (costs follow the triangle count only loosely:
+    the maps and the view dominate, so three classes)."""
+    for limit, name in SIZE_CLASSES:
+        if triangles < limit:
+            return name
+    return "large"
+
+
+def rung_key(technique: str, rung: Rung) -> str:
+    """A stable name of one rung: technique, changes and scale (labels may be reworded)."""
+    return json.dumps([technique, sorted((k, repr(v)) for k, v in rung.changes.items()), rung.scale])
+
+
+@dataclass
+class Entry:
+    technique: str
+    label: str
+    changes: dict[str, Any]
+    scale: float
+    light_ms: float  # a light-move frame (texture-space + view work), sync timing, median
+    camera_ms: float  # a camera-move frame (view work only)
+    error: float | None = None  # mean relative RMS against the ground truth (None: not measured)
+    error_source: str = ""  # "bench <path>" | "shipped table" | ""
+
+    @property
+    def key(self) -> str:
+        return rung_key(self.technique, Rung(self.label, self.changes, self.scale))
+
+
+@dataclass
+class Calibration:
+    renderer: str  # GL_RENDERER
+    mesh_class: str
+    size: tuple[int, int]
+    entries: dict[str, list[Entry]] = field(default_factory=dict)  # technique -> its rungs
+    created: str = ""
+    version: int = VERSION
+    signature: dict[str, list[str]] = field(default_factory=dict)  # technique -> the ladder's rung keys
+
+    def entry(self, technique: str, rung: Rung) -> Entry | None:
+        key = rung_key(technique, rung)
+        return next((e for e in self.entries.get(technique, []) if e.key == key), None)
+
+    def to_json(self) -> dict:
+        return {"version": self.version, "renderer": self.renderer, "mesh_class": self.mesh_class,
+                "size": list(self.size), "created": self.created, "signature": self.signature,
+                "timing": "sync (glFinish + wall clock per pass), median of the runs",
+                "entries": {t: [asdict(e) for e in es] for t, es in self.entries.items()}}
+
+    @classmethod
+    def from_json(cls, d: dict) -> Calibration:
+        entries = {t: [Entry(**e) for e in es] for t, es in d["entries"].items()}
+        for es in entries.values():
+            for e in es:
+                if not (e.light_ms >= 0 and e.camera_ms >= 0):  # also refuses NaN
+                    raise ValueError(f"{e.technique} {e.label}: a negative or non-finite time")
+        return cls(str(d["renderer"]), str(d["mesh_class"]), tuple(d["size"]), entries, str(d.get("created", "")),
+                   int(d["version"]), {t: list(v) for t, v in d.get("signature", {}).items()})
+
+
+def signature(names: list[str] | None = None) -> dict[str, list[str]]:
+    """Techniques' ladders on the default settings, as rung keys: a calibration made for another
+    ladder (the code changed) is stale."""
+    base = Settings()
+    out = {}
+    for name in names or techniques.names():
+        s = with_values(base, {"technique": name})
+        out[name] = [rung_key(name, r) for r in ladder(s)]
+    return out
+
+
+def calibration_path(renderer: str, mclass: str) -> Path:
+    slug = re.sub(r"[^a-z0-9]+", "-", renderer.lower()).strip("-")[:40]
+    digest = hashlib.sha1(f"{renderer}|{mclass}".encode()).hexdigest()[:10]
+    return cache_dir() / "calibration" / f"{slug}-{mclass}-{digest}.json"
+
+
+def load(renderer: str, mclass: str) -> tuple[Calibration | None, str]:
+    """The cached calibration, or None and why it is to be (re)built (one line)."""
+    path = calibration_path(renderer, mclass)
+    if not path.is_file():
+        return None, f"no calibration for {renderer} ({mclass} meshes) yet: measuring the techniques on this machine"
+    try:
+        cal = Calibration.from_json(json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        return None, f"calibration {path} unreadable ({type(exc).__name__}: {exc}): rebuilding it"
+    if cal.version != VERSION or cal.renderer != renderer or cal.mesh_class != mclass:
+        return None, f"calibration {path} is of another version or machine: rebuilding it"
+    held = sorted(cal.entries)
+    if cal.signature != signature(held) or any(t not in techniques.names() for t in held):
+        return None, f"calibration {path} was made for other preview ladders: rebuilding it"
+    return cal, ""
+
+
+def save(cal: Calibration) -> Path:
+    path = calibration_path(cal.renderer, cal.mesh_class)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, json.dumps(cal.to_json(), indent=1) + "\n")
+    return path
+
+
+def _nudge_light(s: Settings, k: int) -> Settings:
+    d = list(s.lights[0].direction)
+    d[0] += 0.03 if k % 2 == 0 else -0.03
+    return with_values(s, {"lights.0.direction": d})
+
+
+def _nudge_camera(s: Settings, k: int) -> Settings:
+    return with_values(s, {"camera.yaw": s.camera.yaw + (0.25 if k % 2 == 0 else -0.25)})
+
+
+def rung_settings(s: Settings, rung: Rung) -> Settings:
+    """``s`` with a rung's changes and its view scale applied to the render size."""
+    changes = dict(rung.changes)
+    if rung.scale != 1.0:
+        changes["render.width"] = max(16, int(s.render.width * rung.scale))
+        changes["render.height"] = max(16, int(s.render.height * rung.scale))
+    return with_values(s, changes) if changes else s
+
+
+def measure_rung(renderer, s: Settings, runs: int = 2) -> tuple[float, float]:
+    """(light-move ms, camera-move ms) of ``s``: medians of ``runs`` sync-timed frames each, after
+    a warm-up frame (programs compiled, textures allocated, once-per-mesh maps made)."""
+    renderer.render_settled(s, timing="sync")
+    light = [renderer.render(_nudge_light(s, k), timing="sync").total_ms for k in range(runs)]
+    renderer.render(s, timing="sync")
+    cam = [renderer.render(_nudge_camera(s, k), timing="sync").total_ms for k in range(runs)]
+    return statistics.median(light), statistics.median(cam)
+
+
+def calibrate(renderer, base: Settings, names: list[str] | None = None, runs: int = 2,
+              progress: Callable[[str, int, int], None] | None = None,
+              cancelled: Callable[[], bool] | None = None, into: Calibration | None = None) -> Calibration:
+    """Time every rung of each technique's ladder (on ``base``'s scene, the default settings
+    otherwise, CALIBRATION_SIZE) with ``renderer`` (a core Renderer); error figures attached.
+    ``into``: a calibration of the same renderer and mesh class to add these techniques to."""
+    defaults = with_values(Settings(), {"scene": base.scene.model_dump(mode="json"),
+                                        "render.width": CALIBRATION_SIZE[0], "render.height": CALIBRATION_SIZE[1]})
+    scene = renderer.ensure_scene(defaults)
+    tris = len(scene.gpu.mesh.indices)
+    cal = Calibration(renderer_name(renderer.ctx), mesh_class(tris), CALIBRATION_SIZE,
+                      created=time.strftime("%Y-%m-%d %H:%M:%S"))
+    if into is not None and (into.renderer, into.mesh_class) == (cal.renderer, cal.mesh_class):
+        cal.entries = {t: list(es) for t, es in into.entries.items()}
+    names = list(names or techniques.names())
+    for name in names:
+        cal.entries.pop(name, None)
+    todo = [(name, rung) for name in names for rung in ladder(with_values(defaults, {"technique": name}))]
+    for n, (name, rung) in enumerate(todo):
+        if cancelled is not None and cancelled():
+            raise InterruptedError("calibration cancelled")
+        if progress is not None:
+            progress(f"{name}: {rung.label}", n, len(todo))
+        s = rung_settings(with_values(defaults, {"technique": name}), rung)
+        light, cam = measure_rung(renderer, s, runs)
+        cal.entries.setdefault(name, []).append(Entry(name, rung.label, dict(rung.changes), rung.scale, light, cam))
+        renderer.trim()
+    cal.signature = signature(sorted(cal.entries))
+    attach_errors(cal)
+    return cal
+
+
+def attach_errors(cal: Calibration, bench_results: str | Path | None = None) -> None:
+    """Error figures for the entries: the last bench's where it measured the same configuration
+    (the defaults with the rung's changes, at full view), else the shipped table's."""
+    shipped: dict[str, float] = {}
+    try:
+        shipped = json.loads(ERRORS_TABLE.read_text(encoding="utf-8")).get("errors", {})
+    except (OSError, ValueError):
+        pass
+    bench = _bench_errors(bench_results)
+    for es in cal.entries.values():
+        for e in es:
+            key = e.key
+            if key in bench:
+                e.error, e.error_source = bench[key]
+            elif key in shipped:
+                e.error, e.error_source = float(shipped[key]), "shipped table"
+
+
+def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, str]]:
+    from skinviewer.core.bench import last_bench, load_results
+    path = path or last_bench()
+    if not path:
+        return {}
+    try:
+        _, results = load_results(path)
+    except Exception:  # an unreadable bench: no figures from it (the shipped table stays)
+        return {}
+    out = {}
+    for r in results:
+        if r.rms_mean is not None and not r.error:
+            out[rung_key(r.technique, Rung(r.label, dict(r.changes), 1.0))] = (r.rms_mean, f"bench {path}")
+    return out

@@ -1,0 +1,233 @@
+"""The quality governor (issue 27): while the user drags or edits, each technique shows the most
+accurate rung of its own preview ladder (techniques/preview.py) whose measured cost on this machine
+(core/calibration.py) fits the interaction budget; when input stops it refines, step by step, up
+to the user's own settings, never going back down while the view is still. The last step renders
+the user's settings themselves, so the final image is the ungoverned render, bit for bit.
+
+Modes (``render.governor``): ``off`` (today's viewer: every frame renders the user's settings,
+spread over frames by the frame budget), ``interactive`` (the default in the viewer), and
+``fixed-budget`` (the pick that fits the budget is shown even when still: a constant frame cost).
+``skinviewer render`` and ``bench`` never use it: it is a viewer-side policy over the settings a
+frame renders, not a change to any technique.
+
+A camera drag only considers rungs that keep the texture-space work already made (the same
+changes as the image on screen, on a smaller view), timed by their camera-move cost; any other
+edit considers every rung, timed by its light-move cost."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from skinviewer.core.calibration import Calibration, Entry, rung_settings
+from skinviewer.core.settings import Settings
+from skinviewer.techniques.preview import FINAL, Rung, ladder
+
+MODES = ("off", "interactive", "fixed-budget")
+REFINE_STEP_SHARE = 0.25  # an intermediate refinement step costs at most this share of the final frame
+
+
+@dataclass
+class Pick:
+    rung: Rung
+    ms: float | None  # its calibrated cost for the interaction at hand (None: not calibrated)
+    error: float | None
+    note: str = ""  # why (nothing fits, budget <= 0, no calibration)
+
+
+class Governor:
+    def __init__(self, mode: str = "interactive", budget_ms: float = 100.0, calibration: Calibration | None = None):
+        self.mode = mode
+        self.budget_ms = float(budget_ms)
+        self.calibration = calibration
+        self.shown: Rung = FINAL  # the rung whose frame is on screen (or being rendered)
+        self._plan: list[Rung] = []  # the refinement steps left, in order, ending with FINAL
+        self._steps = 0  # refinement steps in the current plan (for "refining 2/4")
+        self._pick: Pick | None = None
+        self._memo: tuple | None = None  # (user settings, rung, rendered settings)
+        self.message = ""  # one line: why the pick is what it is (budget, nothing fits, calibrating)
+
+    # -- configuration ---------------------------------------------------------------------------
+    def configure(self, mode: str | None = None, budget_ms: float | None = None) -> None:
+        if mode is not None:
+            if mode not in MODES:
+                raise ValueError(f"render.governor '{mode}' (have: {', '.join(MODES)})")
+            if mode != self.mode:
+                self._plan, self.shown = [], FINAL
+            self.mode = mode
+        if budget_ms is not None:
+            self.budget_ms = float(budget_ms)
+
+    def set_calibration(self, cal: Calibration | None) -> None:
+        """The calibration to pick on (None: none; the viewer renders the user's settings)."""
+        self.calibration = cal
+        self._memo = None
+
+    @property
+    def active(self) -> bool:
+        return self.mode != "off"
+
+    # -- the pick ------------------------------------------------------------------------------
+    def entry(self, technique: str, rung: Rung) -> Entry | None:
+        return None if self.calibration is None else self.calibration.entry(technique, rung)
+
+    def cost(self, technique: str, rung: Rung, camera: bool) -> float | None:
+        e = self.entry(technique, rung)
+        return None if e is None else (e.camera_ms if camera else e.light_ms)
+
+    def _accuracy_order(self, technique: str, rungs: list[Rung]) -> list[Rung]:
+        """Least accurate first: by error against the truth where every rung has one, else by the
+        cost of a light move (the front's assumption: what costs more is closer), FINAL last."""
+        entries = {r: self.entry(technique, r) for r in rungs}
+        rest = [r for r in rungs if not r.final]
+        if rest and all(entries[r] is not None and entries[r].error is not None for r in rest):
+            rest.sort(key=lambda r: -entries[r].error)
+        else:
+            rest.sort(key=lambda r: entries[r].light_ms if entries[r] is not None else 0.0)
+        return rest + [r for r in rungs if r.final]
+
+    def pick(self, s: Settings, camera: bool = False) -> Pick:
+        """The most accurate rung of ``s``'s ladder that fits the budget on the calibration held
+        (for a camera drag: only rungs keeping the texture-space work on screen). Budget <= 0 or
+        nothing fits: the cheapest, with a note saying so. No calibration: FINAL, noted."""
+        t = s.technique
+        rungs = ladder(s)
+        if camera:
+            rungs = [r for r in rungs if r.changes in ({}, self.shown.changes)]
+        if self.calibration is None or t not in self.calibration.entries:
+            return Pick(FINAL, None, None, "governor: no calibration for this technique yet (shown at your settings)")
+        timed = [(r, self.cost(t, r, camera)) for r in rungs]
+        timed = [(r, ms) for r, ms in timed if ms is not None]
+        if not timed:
+            return Pick(FINAL, None, None, "governor: no calibration for this ladder (shown at your settings)")
+        order = self._accuracy_order(t, [r for r, _ in timed])
+        ms_of = dict(timed)
+        cheapest = min(timed, key=lambda x: x[1])[0]
+        if self.budget_ms <= 0:
+            note = f"governor budget {self.budget_ms:g} ms is not positive: showing the cheapest configuration"
+            return Pick(cheapest, ms_of[cheapest], self._error(t, cheapest), note)
+        fits = [r for r in order if ms_of[r] <= self.budget_ms]
+        if not fits:
+            note = (f"nothing fits the {self.budget_ms:g} ms budget on this machine (cheapest: "
+                    f"{ms_of[cheapest]:.0f} ms): showing the cheapest configuration")
+            return Pick(cheapest, ms_of[cheapest], self._error(t, cheapest), note)
+        best = fits[-1]
+        return Pick(best, ms_of[best], self._error(t, best))
+
+    def _error(self, technique: str, rung: Rung) -> float | None:
+        e = self.entry(technique, rung)
+        return None if e is None else e.error
+
+    # -- per frame -----------------------------------------------------------------------------
+    def rung_for(self, s: Settings, interacting: bool, camera: bool, last_complete: bool) -> Rung:
+        """The rung to render this frame. ``interacting``: the user drags or edits (a camera-only
+        drag when ``camera``); ``last_complete``: the last frame finished (its rung is on screen)."""
+        if not self.active:
+            self.shown, self._plan, self.message = FINAL, [], ""
+            return FINAL
+        if interacting or self.mode == "fixed-budget":
+            p = self.pick(s, camera and interacting)
+            self._pick, self.message = p, p.note
+            self.shown = p.rung
+            self._plan = [] if self.mode == "fixed-budget" else self._refinement(s, p.rung)
+            self._steps = len(self._plan)
+            return self.shown
+        # still: once the frame on screen is complete, step up (never down) towards FINAL
+        if self._plan and last_complete:
+            self.shown = self._plan.pop(0)
+        return self.shown
+
+    def _refinement(self, s: Settings, start: Rung) -> list[Rung]:
+        """Steps from ``start`` up to FINAL: at most one intermediate rung (the most accurate costing
+        at most REFINE_STEP_SHARE of the final frame and more accurate than ``start``), then FINAL."""
+        if start.final:
+            return []
+        t = s.technique
+        order = self._accuracy_order(t, ladder(s))
+        above = order[order.index(start) + 1:-1] if start in order else []
+        final_ms = self.cost(t, FINAL, False)
+        cheap = [r for r in above if final_ms is not None and (self.cost(t, r, False) or 0.0) <= REFINE_STEP_SHARE * final_ms]
+        return ([cheap[-1]] if cheap else []) + [FINAL]
+
+    def settings_for(self, s: Settings, rung: Rung) -> Settings:
+        """``s`` with ``rung`` applied (the same object for FINAL; memoised, so an idle frame hands
+        the graph the very same settings object and stays idle)."""
+        if rung.final:
+            return s
+        if self._memo is not None and self._memo[0] is s and self._memo[1] == rung:
+            return self._memo[2]
+        out = rung_settings(s, Rung(rung.label, rung.changes))  # the view scale: the frame sizes the view
+        self._memo = (s, rung, out)
+        return out
+
+    @property
+    def refining(self) -> bool:
+        return bool(self._plan)
+
+    def status(self, s: Settings) -> str:
+        """What is shown: "preview: irradiance 256², separable blurs — 6.1 % from the truth · refining 2/4"."""
+        if not self.active or (self.shown.final and not self._plan):
+            return ""
+        e = self._error(s.technique, self.shown)
+        text = f"preview: {self.shown.label}" if not self.shown.final else "your settings"
+        if e is not None:
+            text += f" — {e:.1%} from the truth"
+        if self._plan:
+            done = self._steps - len(self._plan)
+            text += f" · refining {done + 1}/{self._steps}"
+        elif self.mode == "fixed-budget":
+            text += f" · fixed {self.budget_ms:g} ms budget"
+        return text
+
+
+class BackgroundCalibration:
+    """``core.calibration.calibrate`` in a worker thread with its own headless context (the
+    viewer's first start, or when the cached one is missing, stale or unreadable): the viewer stays
+    live meanwhile (at the user's settings); ``result`` is set when it is done, ``error`` (one line)
+    if it failed. ``cancel()`` stops it between rungs."""
+
+    def __init__(self, base: Settings, names: list[str] | None = None, runs: int = 2,
+                 into: Calibration | None = None):
+        import threading
+        self.base = base
+        self.into = into
+        self.names = names
+        self.runs = runs
+        self.result: Calibration | None = None
+        self.error = ""
+        self.progress = ("starting", 0, 1)
+        self._stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="skinviewer-calibrate", daemon=True)
+
+    def start(self) -> BackgroundCalibration:
+        self.thread.start()
+        return self
+
+    def cancel(self) -> None:
+        self._stop.set()
+
+    @property
+    def running(self) -> bool:
+        return self.thread.is_alive()
+
+    def _run(self) -> None:
+        from skinviewer.core import calibration
+        from skinviewer.core.gl import headless_context
+        from skinviewer.core.renderer import Renderer
+        try:
+            ctx = headless_context()
+        except Exception as exc:
+            self.error = f"calibration: no headless OpenGL context ({exc})"
+            return
+        r = Renderer(ctx)
+        try:
+            cal = calibration.calibrate(r, self.base, self.names, self.runs,
+                                        progress=lambda what, i, n: setattr(self, "progress", (what, i, n)),
+                                        cancelled=self._stop.is_set, into=self.into)
+            calibration.save(cal)
+            self.result = cal
+        except InterruptedError:
+            self.error = "calibration cancelled"
+        except Exception as exc:  # reported in the status bar; the viewer goes on ungoverned
+            self.error = f"calibration failed: {type(exc).__name__}: {exc}"
+        finally:
+            r.release()
+            ctx.release()

@@ -1,0 +1,267 @@
+"""The quality governor (issue 27): its pick on the calibration it holds, refinement up to the
+user's settings (never backwards while still, the last step the ungoverned render bit for bit),
+off = today's behaviour, and the calibration cache (missing, stale or corrupt: rebuilt)."""
+from __future__ import annotations
+
+import json
+import random
+
+import numpy as np
+import pytest
+
+from skinviewer.core import calibration
+from skinviewer.core.calibration import Calibration, Entry, rung_key, signature
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.techniques.preview import FINAL, ladder
+from skinviewer.ui.governor import Governor
+from tests.helpers import small_settings
+
+
+def fake_calibration(technique: str, s: Settings, seed: int = 0, errors: bool = True) -> Calibration:
+    """Rungs of ``s``'s ladder with random costs (FINAL the dearest) and errors (FINAL the least)."""
+    rnd = random.Random(seed)
+    entries = []
+    for r in ladder(s):
+        light = 1000.0 if r.final else rnd.uniform(5.0, 900.0)
+        entries.append(Entry(technique, r.label, dict(r.changes), r.scale, light, light * rnd.uniform(0.1, 1.0),
+                             (0.01 if r.final else rnd.uniform(0.02, 0.3)) if errors else None))
+    return Calibration("test renderer", "small", (640, 640), {technique: entries}, signature=signature([technique]))
+
+
+@pytest.mark.parametrize("technique", ["deon", "gosselin", "burley2", "separable", "phong"])
+def test_the_pick_never_costs_more_than_the_budget_on_the_calibration_held(technique):
+    s = with_values(Settings(), {"technique": technique})
+    for seed in range(30):
+        for errors in (True, False):
+            cal = fake_calibration(technique, s, seed, errors)
+            g = Governor("interactive", random.Random(seed).uniform(1.0, 1200.0), cal)
+            for camera in (False, True):
+                p = g.pick(s, camera)
+                cheapest = min(g.cost(technique, r, camera) for r in ladder(s)
+                                if not camera or r.changes == {})
+                if cheapest <= g.budget_ms:
+                    assert p.ms <= g.budget_ms and not p.note
+                    # and it is the most accurate of those that fit
+                    fits = [r for r in ladder(s) if g.cost(technique, r, camera) <= g.budget_ms
+                            and (not camera or r.changes == {})]
+                    if errors:
+                        assert p.error == min(cal.entry(technique, r).error for r in fits)
+                else:
+                    assert p.ms == cheapest and "nothing fits" in p.note
+
+
+def test_a_budget_of_zero_or_less_says_so_and_shows_the_cheapest():
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s)
+    for budget in (0.0, -5.0):
+        g = Governor("interactive", budget, cal)
+        p = g.pick(s)
+        assert p.ms == min(e.light_ms for e in cal.entries["deon"])
+        assert "not positive" in p.note and "cheapest" in p.note
+
+
+def test_refinement_steps_up_to_the_users_settings_and_never_back_while_still():
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, seed=3)
+    g = Governor("interactive", 200.0, cal)
+    first = g.rung_for(s, interacting=True, camera=False, last_complete=True)
+    assert not first.final and g.status(s).startswith("preview: ")
+    errors = [cal.entry("deon", first).error]
+    shown = [first]
+    for complete in [False, True, False, True, True, True, True]:
+        r = g.rung_for(s, interacting=False, camera=False, last_complete=complete)
+        if r != shown[-1]:
+            errors.append(cal.entry("deon", r).error)
+            shown.append(r)
+        if not complete:  # an unfinished frame is never left for another rung
+            assert r == shown[-1]
+    assert shown[-1] == FINAL and not g.refining
+    assert errors == sorted(errors, reverse=True)  # never backwards
+    assert len(shown) <= 3  # at most one step between the preview and the user's settings
+    assert g.settings_for(s, FINAL) is s  # the user's settings themselves: the ungoverned render
+    assert g.status(s) == ""
+
+
+def test_off_is_todays_behaviour_and_fixed_budget_holds_the_pick():
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, seed=1)
+    g = Governor("off", 200.0, cal)
+    assert g.rung_for(s, True, False, True) == FINAL and g.settings_for(s, FINAL) is s and g.status(s) == ""
+    g.configure("fixed-budget")
+    r = g.rung_for(s, False, False, True)
+    assert not r.final and g.rung_for(s, False, False, True) == r and "fixed" in g.status(s)
+    with pytest.raises(ValueError):
+        g.configure("sometimes")
+
+
+def test_a_camera_drag_keeps_the_texture_space_work_on_screen():
+    s = with_values(Settings(), {"technique": "deon"})
+    g = Governor("interactive", 1e9, fake_calibration("deon", s))
+    assert g.pick(s, camera=True).rung.changes == {}
+    g = Governor("interactive", 1.0, fake_calibration("deon", s))
+    assert g.pick(s, camera=True).rung.changes == {}  # nothing fits: still no texture-space re-render
+
+
+def test_ladders_cap_never_raise_and_end_with_the_users_settings():
+    from skinviewer import techniques
+    for name in techniques.names():
+        s = with_values(Settings(), {"technique": name, "deon.irradiance_size": 256})
+        rungs = ladder(s)
+        assert rungs[-1] == FINAL and len({rung_key(name, r) for r in rungs}) == len(rungs)
+        assert all(r.changes.get("deon.irradiance_size", 256) <= 256 for r in rungs)
+
+
+# -- the calibration cache -----------------------------------------------------------------------
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))
+    return tmp_path
+
+
+def test_calibration_round_trips_and_bad_files_are_rebuilt_never_trusted(cache):
+    s = with_values(Settings(), {"technique": "phong"})
+    cal = fake_calibration("phong", s)
+    cal.renderer = "GPU X"
+    cal, why = calibration.load("GPU X", "small")
+    assert cal is None and "no calibration" in why
+    cal = fake_calibration("phong", s)
+    cal.renderer = "GPU X"
+    path = calibration.save(cal)
+    back, why = calibration.load("GPU X", "small")
+    assert why == "" and back.entries["phong"][0].light_ms == cal.entries["phong"][0].light_ms
+    assert calibration.load("GPU Y", "small")[0] is None  # per renderer string
+    assert calibration.load("GPU X", "large")[0] is None  # and mesh size class
+    good = path.read_text()
+    for bad, words in (("{ not json", "unreadable"), (good.replace('"version": 1', '"version": 0'), "another version"),
+                       (good.replace(rung_key("phong", FINAL).replace('"', '\\"'), "x"), "other preview ladders"),
+                       (json.dumps({**json.loads(good), "entries": {"phong": [{"technique": "phong"}]}}), "unreadable")):
+        path.write_text(bad)
+        got, why = calibration.load("GPU X", "small")
+        assert got is None and words in why, why
+    # a negative or NaN time is not trusted either
+    d = json.loads(good)
+    d["entries"]["phong"][0]["light_ms"] = float("nan")
+    path.write_text(json.dumps(d))
+    assert calibration.load("GPU X", "small")[0] is None
+
+
+def test_calibrate_measures_every_rung_and_rebuilds_a_corrupt_file(cache, gl_ctx):
+    from skinviewer.core.renderer import Renderer
+    base = small_settings("shadow-edge", "phong")
+    r = Renderer(gl_ctx)
+    try:
+        renderer = calibration.renderer_name(gl_ctx)
+        path = calibration.calibration_path(renderer, "small")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("garbage")
+        assert calibration.load(renderer, "small")[0] is None
+        cal = calibration.calibrate(r, base, ["phong"], runs=1)
+        calibration.save(cal)
+        back, why = calibration.load(renderer, cal.mesh_class)
+        assert why == "" and [e.label for e in back.entries["phong"]] == [x.label for x in ladder(with_values(Settings(), {"technique": "phong"}))]
+        assert all(e.light_ms > 0 and e.camera_ms > 0 for e in back.entries["phong"])
+        assert not list(path.parent.glob("*.tmp*"))  # the atomic write left nothing behind
+    finally:
+        r.release()
+
+
+def test_governed_refinement_converges_to_exactly_the_ungoverned_image(renderer):
+    """Previews of the rungs, then the refinement's last step (the user's settings): the image is
+    the one a fresh renderer makes of the user's settings, bit for bit."""
+    from skinviewer.core.calibration import rung_settings
+    from skinviewer.core.renderer import Renderer
+    s = small_settings("head", "deon", size=64)
+    g = Governor("interactive", 1e9, fake_calibration("deon", s, seed=5))
+    for rung in ladder(s)[:-1]:
+        renderer.render(rung_settings(s, rung))  # what the drag showed, in the same graphs and pool
+    renderer.render(g.settings_for(s, FINAL))
+    got = renderer.image(s)
+    fresh = Renderer(renderer.ctx)
+    try:
+        fresh.render(s)
+        want = fresh.image(s)
+    finally:
+        fresh.release()
+    assert np.array_equal(got, want)
+
+
+# -- in the viewer's frame loop (Xvfb) ----------------------------------------------------------
+@pytest.fixture(scope="module")
+def viewer():
+    import os
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY and no Xvfb")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui.app import create_app, destroy_app
+    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "deon",
+                                 "shadow.map_size": 256, "deon.irradiance_size": 512, "deon.tsm_size": 256})
+    try:
+        a = create_app(s, size=(420, 300), vsync=False)
+    except RuntimeError as exc:
+        pytest.skip(f"cannot open a window: {exc}")
+    a.state.set_show_ui(False)
+    a.step(2)
+    yield a
+    destroy_app(a)
+
+
+def _still(app, max_frames=200):
+    """Input stopped: step until the governor has refined to the user's settings and the frame is complete."""
+    app.frame.scheduler.changed_at = -1e9  # the last edit is long past (no 0.35 s wait in a test)
+    for _ in range(max_frames):
+        app.step(1)
+        if not app.frame.governor.refining and app.frame.report is not None and app.frame.report.complete:
+            return
+    raise AssertionError("never refined")
+
+
+def test_the_viewer_previews_while_dragging_and_refines_to_the_ungoverned_image(viewer):
+    app = viewer
+    s = app.state.settings
+    cal = fake_calibration("deon", s, seed=2)
+    # the user's settings cost 1000 ms, every preview less: a 950 ms budget previews a light drag
+    app.frame.governor.calibration = cal
+    assert app.state.apply({"render.governor_budget_ms": 950.0})
+    _still(app)
+    full = (app.state.settings.render.width, app.state.settings.render.height)
+    app.frame.set_dragging(True)
+    try:
+        for k in range(3):
+            assert app.state.apply({"lights.0.direction": [0.2 + 0.1 * k, 0.3, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+            status = app.frame.governor_status
+            assert status.startswith("preview: "), status
+            shown = app.frame.governor.shown
+            assert not shown.final and cal.entry("deon", shown).light_ms <= 950.0
+            g = app.frame.graph()  # the preview's own graph (its maps stay cached there)
+            assert (g is app.renderer.graph("deon")) == (not shown.changes)
+            for path, value in shown.changes.items():  # the graph rendered the preview's knobs
+                if path == "deon.irradiance_size":
+                    assert g.resources()["deon_irradiance"].size == (value, value)
+    finally:
+        app.frame.set_dragging(False)
+    _still(app)
+    assert app.frame.governor_status == ""
+    assert (app.state.settings.render.width, app.state.settings.render.height) == full
+    live = app.state.settings
+    got = app.renderer.image(live)
+    app.renderer.render(live, force=True)  # the ungoverned render of the same settings, every pass re-run
+    assert np.array_equal(got, app.renderer.image(live))
+
+
+def test_governor_off_in_the_viewer_is_todays_frame(viewer):
+    app = viewer
+    app.frame.governor.calibration = fake_calibration("deon", app.state.settings, seed=2)
+    assert app.state.apply({"render.governor": "off", "render.governor_budget_ms": 1.0})
+    try:
+        app.frame.set_dragging(True)
+        assert app.state.apply({"lights.0.direction": [0.5, 0.1, 1.0]}, "lights.0 (key light drag)")
+        app.step(1)
+        assert app.frame.governor.shown.final and app.frame.governor_status == ""
+        # the user's settings rendered: the irradiance at the user's size
+        assert app.frame.graph() is app.renderer.graph("deon")
+        assert app.renderer.graph("deon").resources()["deon_irradiance"].size == (512, 512)
+    finally:
+        app.frame.set_dragging(False)
+        app.state.apply({"render.governor": "interactive", "render.governor_budget_ms": 100.0})
