@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from skinviewer.cli import settings_list
-from skinviewer import techniques
+from skinviewer import __version__, techniques
 from skinviewer.cli.args import CliError, add_scene_args, settings_from_args
 from skinviewer.cli.render import cmd_render
 from skinviewer.core.settings import SettingsError
@@ -14,6 +14,7 @@ from skinviewer.core.settings import SettingsError
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
+    p.add_argument("--version", action="version", version=f"skinviewer {__version__}")
     sub = p.add_subparsers(dest="command")
 
     pr = sub.add_parser("render", help="render one frame headless to a PNG")
@@ -93,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
     commands = {"render", "profile", "view", "settings", "reference", "bench", "export", "import", "turntable", "sheet",
-                "-h", "--help"}
+                "-h", "--help", "--version"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     args = parser.parse_args(argv)
