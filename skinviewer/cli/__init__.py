@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from skinviewer.cli import settings_list
 from skinviewer import __version__, techniques
+from skinviewer.cli import settings_list
 from skinviewer.cli.args import CliError, add_scene_args, settings_from_args
 from skinviewer.cli.render import cmd_render
 from skinviewer.core.settings import SettingsError

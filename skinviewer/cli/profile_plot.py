@@ -4,7 +4,7 @@ ImGui/implot panel; ``save_plot`` writes a PNG headlessly (matplotlib Agg), atom
 from __future__ import annotations
 
 import os
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

@@ -158,7 +158,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
         "scene": base.scene.mesh or base.scene.name,
         "size": [base.render.width, base.render.height],
         "camera": base.camera.model_dump(mode="json"),
-        "timing": "sync (glFinish + wall clock per pass), median of %d frames" % runs,
+        "timing": f"sync (glFinish + wall clock per pass), median of {runs} frames",
         "metrics": {"rms": "relative RMS per channel over compared pixels", "p99": "99th percentile of the "
                     "per-pixel relative error per channel", "dssim": DSSIM_SETUP},
         "reference": ref.meta,

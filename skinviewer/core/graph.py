@@ -15,7 +15,8 @@ settings they declared (``section``). The graph owns the GL objects behind them 
 from __future__ import annotations
 
 import time
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import moderngl
 import numpy as np
@@ -43,7 +44,7 @@ class RenderGraph:
     shared pool so switching technique reuses allocations."""
 
     def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary, passes: Iterable[Pass],
-                 targets: Iterable[str], pool: "TexturePool | None" = None):
+                 targets: Iterable[str], pool: TexturePool | None = None):
         self.ctx = ctx
         self.shaders = shaders
         self.passes: list[Pass] = list(passes)

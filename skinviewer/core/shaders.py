@@ -207,9 +207,6 @@ class ShaderLibrary:
         self.revision += 1
         return True
 
-    def _guess_files(self, name: str) -> set[Path]:
-        return {p.resolve() for p in self._stage_files(name).values()}
-
     def _remember_files(self, entry: _Entry, files) -> None:
         entry.mtimes = {}
         for p in files:

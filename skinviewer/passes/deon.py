@@ -45,8 +45,8 @@ from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map
 from skinviewer.passes.texture_space import (
     declare_shaded,
     declare_unwrapped,
-    gutter_resource,
     dilate,
+    gutter_resource,
     rasterize_unwrapped,
     seam_resource,
     shade_dilated,
@@ -56,8 +56,8 @@ from skinviewer.passes.texture_space import (
 )
 from skinviewer.physics.diffusion import (
     IRRADIANCE,
-    BlurStep,
     KERNEL7,
+    BlurStep,
     blur_plan_texels,
     blur_resource,
     stretch_blur_resource,

@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
 
 import numpy as np
 from scipy.optimize import minimize, nnls
@@ -54,7 +54,7 @@ class FitGrid:
             return np.where(den > 0, num / den, 0.0)
 
     @classmethod
-    def from_samples(cls, r: Sequence[float], R: np.ndarray) -> "FitGrid":
+    def from_samples(cls, r: Sequence[float], R: np.ndarray) -> FitGrid:
         """A grid from tabulated (e.g. measured) samples: r ascending (mm), R (n,) or (n, 3);
         trapezoid weights of int r f^2 dr over [r_0, r_n-1] (plus [0, r_0] at the first value)."""
         r = np.asarray(r, dtype=float)

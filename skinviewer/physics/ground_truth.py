@@ -179,7 +179,6 @@ class PointSources:
 
 
 MIN_CELL = 2.0     # mm: cell of the receiver/source grid (at least the search radius)
-BATCH = 1_500_000  # pairs evaluated at once
 
 
 def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None):
@@ -224,27 +223,6 @@ def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | 
         else:
             ns = normals[sj]
             yield ri, sj, d2, xr @ ns.T - (sr * ns).sum(1)[None]
-
-
-def neighbour_pairs(x: np.ndarray, src: np.ndarray, radius):
-    """All (receiver i, source j) with |x_i - src_j| < radius (a scalar, or one per source), in
-    batches of about BATCH pairs."""
-    per_source = np.ndim(radius) > 0
-    rmax = float(np.max(radius)) if per_source else float(radius)
-    bi, bj, count = [], [], 0
-    for ri, sj, d2 in blocks(x, src, rmax):
-        lim = (np.asarray(radius)[sj] ** 2)[None] if per_source else rmax * rmax
-        ii, jj = np.nonzero(d2 < lim)
-        if len(ii) == 0:
-            continue
-        bi.append(ri[ii])
-        bj.append(sj[jj])
-        count += len(ii)
-        if count >= BATCH:
-            yield np.concatenate(bi), np.concatenate(bj)
-            bi, bj, count = [], [], 0
-    if count:
-        yield np.concatenate(bi), np.concatenate(bj)
 
 
 def _gauss(v, d2):

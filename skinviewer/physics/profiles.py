@@ -26,8 +26,8 @@ form is kept where it can be selected (``printed=True`` / ``form="printed"``):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Sequence
 
 import numpy as np
 from scipy.special import j0
@@ -293,7 +293,7 @@ class Multipole:
     def semi_infinite(self) -> bool:
         return math.isinf(self.thickness)
 
-    def flipped(self) -> "Multipole":
+    def flipped(self) -> Multipole:
         return Multipole(self.sigma_s_prime, self.sigma_a, self.thickness, self.eta,
                          self.eta_below, self.eta_above, self.n_dipoles)
 

@@ -90,7 +90,7 @@ class MeshData:
             raise MeshError(f"{self.name}: the mesh is {extent:.3g} units across but {reach:.3g} from the origin: "
                             "float32 cannot resolve it there; centre it near the origin")
 
-    def replace(self, **kw) -> "MeshData":
+    def replace(self, **kw) -> MeshData:
         return dataclasses.replace(self, **kw)
 
     def interleaved(self) -> np.ndarray:

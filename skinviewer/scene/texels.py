@@ -59,7 +59,7 @@ def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
 
 def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutoff_sigmas: float = 3.5,
                                 block: int = 8192, normals=None, air_sin: float = 0.5,
-                                surface_paths: "SurfacePaths | None" = None, shortcuts_add: bool = False) -> np.ndarray:
+                                surface_paths: SurfacePaths | None = None, shortcuts_add: bool = False) -> np.ndarray:
     """D(x) = sum_i w_i [sum_y E(y) A(y) G(v_i, |x - y|)] / [sum_y A(y) G(v_i, |x - y|)] over covered
     texels x, y (3D distance in mm). The normalisation makes each Gaussian a weighted mean of E, so a
     Gaussian narrower than a texel (skin's first, sigma 0.08 mm) is the identity instead of a

@@ -21,7 +21,6 @@ from pathlib import Path
 import moderngl_window as mglw
 from moderngl_window.timers.clock import Timer
 
-from skinviewer import techniques
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.core.shaders import ShaderLibrary

@@ -8,8 +8,9 @@ No GL, no imgui: the scene is loaded through the ``load_scene`` function it is g
 renderer's ``ensure_scene``), so a state whose mesh cannot load is refused like any invalid value."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any, Callable
+from typing import Any
 
 from skinviewer import techniques
 from skinviewer.core.renderer import Renderer

@@ -10,9 +10,10 @@ from __future__ import annotations
 import math
 import types
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass
 from dataclasses import field as dc_field
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 from imgui_bundle import imgui
 from pydantic import BaseModel

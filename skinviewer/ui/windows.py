@@ -19,7 +19,8 @@ True when it drew the view region (``viewport``: x, y, w, h in framebuffer pixel
 from __future__ import annotations
 
 import traceback
-from typing import Callable, Protocol
+from collections.abc import Callable
+from typing import Protocol
 
 from skinviewer.ui.accuracy_window import AccuracyWindow
 from skinviewer.ui.frame import FrameController
