@@ -164,7 +164,7 @@ class ExecuteContext:
                 tex.use(unit)
             else:
                 unit = gpu.dummy(gl_type)
-            prog[name].value = unit
+            write_uniform(prog[name], unit)
 
     # -- draws ---------------------------------------------------------------------------------
     def _target(self, targets) -> moderngl.Framebuffer:
@@ -177,7 +177,7 @@ class ExecuteContext:
         return self.graph._framebuffer_for(tuple(targets))
 
     def draw_mesh(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
-                  clear: tuple | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
+                  clear: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
                   cull_back: bool = False) -> None:
         """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
         depth buffer, or scratch textures): both faces unless ``cull_back`` (counter-clockwise is

@@ -220,7 +220,7 @@ class ShaderLibrary:
         for s in files_per_stage:
             if s in text or s.replace("_", " ") in text.lower():
                 stage = s
-        files = files_per_stage.get(stage) or next(iter(files_per_stage.values()))
+        files = (files_per_stage.get(stage) if stage else None) or next(iter(files_per_stage.values()))
         out = []
         for line in text.splitlines():
             for pat in _ERR_PATTERNS:

@@ -23,6 +23,8 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from skinviewer.core.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
@@ -113,9 +115,10 @@ def tsm_light_index(r) -> int | None:
     return j
 
 
-def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
+def set_tsm_uniforms(ec, prog, j: int | None, matrix: str = "u_tsm_matrix"):
     """The TSM light's uniforms (lib/deon.glsl; ``matrix``: the name of its light-space matrix in
-    ``prog``). Returns its LightSpace."""
+    ``prog``). Returns its LightSpace. Only called by passes that read the TSM, so a light is named."""
+    assert j is not None, "a TSM pass runs only when tsm_light_index names a light"
     scene = ec.scene
     pose = ec.section(f"lights.{j}", LIGHT_POSE_FIELDS)
     ls = scene.light_space(pose)
@@ -534,7 +537,7 @@ def bind_blurs(ec, prog) -> None:
     ec.uniforms(prog, u_count=len(ec.setting("deon.gaussians")), u_w=ws, u_var=var, u_used=used)
 
 
-def declare_tsm_read(r) -> dict[str, int]:
+def declare_tsm_read(r) -> dict[str, Any]:
     """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
     (island zones), the stretch map, and for the gather the irradiance; returns its defines."""
     r.setting("deon.tsm_form")

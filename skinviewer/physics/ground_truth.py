@@ -167,7 +167,7 @@ def cluster(el: Elements, voxel: float) -> Clusters:
     m2 = np.bincount(inv, el.area * ((el.centroid ** 2).sum(1) + 2.0 * el.s2), n) / sa
     s2 = np.maximum(m2 - (c ** 2).sum(1), 0.0) / 2.0
     nrm = np.stack([np.bincount(inv, el.area * el.normal[:, k], n) for k in range(3)], 1)
-    nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
+    nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
     return Clusters(c, a, ea, s2, voxel, nrm)
 
 
@@ -245,7 +245,7 @@ class Diffusion:
         self.points = points
         self.s2max = float(el.s2.max()) if len(el.s2) else 0.0
         self._levels: dict[float, Clusters] = {}
-        self._edges = None
+        self._edges: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         self._tree: cKDTree | None = None
         self._radius: np.ndarray | None = None
 
@@ -313,15 +313,15 @@ class Diffusion:
                 for i, j in self._tree_pairs(x, r):
                     k = self._exact(x[i], j, v)
                     val = el.ea[j]
-                    if own is not None:
+                    if own is not None and ea_here is not None:
                         val = np.where((own[i] == j)[:, None], ea_here[i], val)
                     m += _accumulate(i, k[:, None] * val, len(x))
                     if cancelled is not None and cancelled():
                         raise InterruptedError("cancelled")
             else:
                 src = el if kind == "elements" else self.level(voxel)
-                r = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
-                for ri, sj, d2, z in blocks(x, src.centroid, r, src.normal):
+                reach = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
+                for ri, sj, d2, z in blocks(x, src.centroid, reach, src.normal):
                     # moment matching in the source's plane only; the height z over it enters
                     # exactly, exp(-z^2 / 2v) (eq. 20 is separable): a flap's far side stays right
                     ve = v + src.s2[sj]

@@ -4,6 +4,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -95,6 +96,7 @@ class MeshData:
 
     def interleaved(self) -> np.ndarray:
         """(N, 12) float32: position, normal, uv, tangent — the vertex layout every pass uses."""
+        assert self.tangents is not None, "set in __post_init__"
         return np.hstack([self.positions, self.normals, self.uvs, self.tangents]).astype(np.float32)
 
 
@@ -350,7 +352,7 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
         if not geoms:
             raise MeshError(f"{p} contains no triangle mesh")
         uv_ok = all(_uv_of(g) is not None for g in geoms)
-        tm = trimesh.util.concatenate(geoms) if len(geoms) > 1 else geoms[0]
+        tm = cast(trimesh.Trimesh, trimesh.util.concatenate(geoms)) if len(geoms) > 1 else geoms[0]
         uv = _uv_of(tm) if uv_ok else None
     elif isinstance(loaded, trimesh.Trimesh):
         tm = loaded

@@ -24,7 +24,7 @@ class Technique:
     title: str  # what it is, in the papers' terms, with the seeds it follows
     build: Callable[[], list[Pass]]
     # the configurations ``skinviewer bench`` sweeps (quick=True: a few for CI-sized runs)
-    sweep: Callable[[bool], list[Config]] = field(default=lambda quick: [("default", {})])
+    sweep: Callable[[bool], list[Config]] = field(default=lambda quick: [("default", dict[str, Any]())])
     targets: tuple[str, ...] = tuple(TARGETS)
 
 

@@ -78,7 +78,8 @@ class FrameController:
         self._shown: Settings | None = None  # the settings of the image on screen
         self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
         self._last_frame_t: float | None = None
-        self._window = (tuple(window_size), tuple(buffer_size))
+        self._window: tuple[tuple[int, int], tuple[int, int]] = (
+            (window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         self.layout: Layout = self._compute_layout()
         state.set_render_size(*self.layout.view_fb[2:])
         state.subscribe(self._on_change)
@@ -170,7 +171,7 @@ class FrameController:
             self.frame_ms.append((now - self._last_frame_t) * 1000.0)
         self._last_frame_t = now
         self.frames += 1
-        self._window = (tuple(window_size), tuple(buffer_size))
+        self._window = ((window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         self.watcher.poll()
         # the UI is built first: this frame's edits (and panel resizes) are rendered this frame;
         # the panel shows the previous frame's report (identical on idle frames)
@@ -186,7 +187,7 @@ class FrameController:
         self.watcher.refresh_errors()
         self._trim_texture_pools()
         self._take_shots(include_ui=False)
-        if ui_built:
+        if ui_built and ui is not None:
             ui.present()
         self._take_shots(include_ui=True)
 
@@ -212,7 +213,7 @@ class FrameController:
             and self.scheduler.should_defer(pending, self._widget_active, last_cost) \
             and not self._scene_changed(self._shown)
         self.scheduler.set_deferred(defer)
-        target = self._shown if defer else live
+        target = self._shown if defer and self._shown is not None else live
         try:
             report = self.renderer.render(target, budget_ms=self.frame_budget_ms)
             self.render_error = ""

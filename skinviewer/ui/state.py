@@ -71,7 +71,7 @@ class ViewerState:
         self.errors: list[tuple[str, str]] = []  # the last refused edit
         self.error_title = ""
         self.message = ("", False)  # status bar: (text, is_error)
-        self.scene = None  # the loaded scene (description, notes, bounds)
+        self.scene: Any = None  # the loaded scene (description, notes, bounds)
         s = settings or Settings()
         if s.technique not in techniques.names():
             s = with_values(s, {"technique": best_technique(s.technique)})

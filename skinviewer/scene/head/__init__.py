@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -91,7 +92,7 @@ def _load_cache(path: Path) -> dict[str, np.ndarray] | None:
     return arrays if ok else None
 
 
-def _save_cache(path: Path, arrays: dict[str, np.ndarray]) -> None:
+def _save_cache(path: Path, arrays: dict[str, Any]) -> None:
     """Atomic write (temp file + os.replace); an unwritable cache only costs regeneration."""
     tmp = None
     try:
