@@ -2,6 +2,7 @@
 another folder — is in .ci/run; this is its fast half), and `skinviewer --version` answers."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -53,3 +54,24 @@ def test_package_data_patterns_cover_every_shader_and_preset():
                 # setuptools' "**/" also matches files at the top of the folder
                 assert any(fnmatch.fnmatch(rel, pat) or fnmatch.fnmatch(rel, pat.removeprefix("**/"))
                            for pat in patterns), f"{folder}/{rel} matches no package-data pattern"
+
+
+def test_a_shipped_preset_is_found_by_name_outside_the_checkout(tmp_path, monkeypatch):
+    """An installed wheel has no presets/ folder beside the user: `--preset burley2_beyond` and the
+    README's `--preset presets/burley2_beyond.json` still find the shipped one; a local file wins."""
+    from skinviewer.cli import build_parser
+    from skinviewer.cli.args import settings_from_args
+    from skinviewer.core.paths import presets_dir
+    monkeypatch.chdir(tmp_path)
+    for given in ("burley2_beyond", "presets/burley2_beyond.json"):
+        args = build_parser().parse_args(["render", "--preset", given, "--out", "x.png"])
+        assert args.preset == str(presets_dir() / "burley2_beyond.json")
+        assert settings_from_args(args).burley2.mode == "beyond"
+    (tmp_path / "presets").mkdir()
+    version = json.loads((presets_dir() / "phong.json").read_text(encoding="utf-8"))["schema_version"]
+    (tmp_path / "presets" / "burley2_beyond.json").write_text(
+        json.dumps({"schema_version": version, "technique": "phong"}), encoding="utf-8")
+    args = build_parser().parse_args(["render", "--preset", "presets/burley2_beyond.json", "--out", "x.png"])
+    assert settings_from_args(args).technique == "phong"
+    args = build_parser().parse_args(["render", "--preset", "no_such_preset", "--out", "x.png"])
+    assert args.preset == "no_such_preset"
