@@ -404,7 +404,7 @@ def part3(b: Bench, n: int) -> None:
         print(f"{label:<36} {sg:>14} {c['frame']:7.1f} {c['tex']:7.1f} {c['relight']:7.1f} {c['final']:6.1f}  "
               f"{rgb(c['l1'])}  {rgb(c['eq31'])}")
     print("Gosselin's radius is in texels (at a 1024 map), not mm: the default preset is tuned on the default "
-          f"head ({'%.3f' % head if head else '?'} mm/texel at 1024) and is "
+          f"head ({f'{head:.3f}' if head else '?'} mm/texel at 1024) and is "
           f"{'%.0fx' % (head / b.texel('laser', 1024)[0]) if head else 'much'} narrower on this slab. "
           "'head mm' transplants its width in mm; 'var = d'Eon X' scales the kernel so its variance equals "
           "channel X's profile variance (the best a one-kernel grey blur can be matched to that channel: only "

@@ -40,12 +40,12 @@ from skinviewer.passes.burley import (
     BLURRED,
     COUNT,
     STATS,
+    TEMPORAL,
     BurleyBlurPass,
     BurleyCountPass,
     BurleyReusePass,
     BurleyTemporalPass,
     Plan,
-    TEMPORAL,
 )
 from skinviewer.passes.common import LIT
 from skinviewer.passes.screen_space import DIFFUSE, CombinePass, ScreenLightingPass
@@ -250,7 +250,7 @@ def main(argv=None) -> int:
               f"{' / '.join('-' if dr is None else ('yes' if dr else 'no') for _, _, dr in v)} -> "
               f"{'REACHED' if ok else 'not reached'}{' (also vs the reference)' if ok and okref else ''}")
     if "golubev-22 own seed" in methods and "beyond own seed" in methods:
-        mine, base = (["%.5f" % np.mean(results[f][k].d30) for f, _ in framings]
+        mine, base = ([f"{np.mean(results[f][k].d30):.5f}" for f, _ in framings]
                       for k in ("beyond own seed", "golubev-22 own seed"))
         print("  with rotation hashes not shared with golubev-30, DSSIM/30: beyond "
               f"{' / '.join(mine)} vs golubev-22 {' / '.join(base)}")

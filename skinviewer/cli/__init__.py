@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from skinviewer import __version__, techniques
 from skinviewer.cli import settings_list
-from skinviewer import techniques
 from skinviewer.cli.args import (
     CliError,
     add_scene_args,
@@ -28,6 +28,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
+    p.add_argument("--version", action="version", version=f"skinviewer {__version__}")
     sub = p.add_subparsers(dest="command")
 
     pr = sub.add_parser("render", help="render one frame headless to a PNG")
@@ -115,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     parser = build_parser()
     commands = {"render", "profile", "view", "settings", "reference", "bench", "export", "import", "turntable", "sheet",
-                "calibrate", "-h", "--help"}
+                "calibrate", "-h", "--help", "--version"}
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     try:

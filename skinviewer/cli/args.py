@@ -19,6 +19,24 @@ class CliError(Exception):
     """One clear line for the user; exit code 2."""
 
 
+def _preset(text: str) -> str:
+    """A preset file; failing that, a shipped preset by name (``burley2_beyond``, or as the README
+    writes it, ``presets/burley2_beyond.json``), which an installed wheel carries inside the package.
+    A name that is neither stays as given, for load_preset's one-line error."""
+    if os.path.exists(text):
+        return text
+    from skinviewer.core.paths import presets_dir
+    try:
+        shipped = presets_dir()
+    except FileNotFoundError:
+        return text
+    name = os.path.basename(text)
+    for candidate in (shipped / name, shipped / f"{name}.json"):
+        if candidate.is_file():
+            return str(candidate)
+    return text
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(x) for x in text.lower().split("x"))
@@ -117,7 +135,8 @@ def add_scene_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--scene", choices=SCENES, help=f"built-in scene (brings its own lights and camera); default: {d.scene.name}")
     g.add_argument("--mesh", help="glTF/GLB/OBJ/PLY mesh to render instead of a built-in scene")
     g.add_argument("--technique", help=f"one of {', '.join(techniques.names())}; default: {d.technique}")
-    g.add_argument("--preset", help="preset JSON (a partial preset overrides the defaults)")
+    g.add_argument("--preset", type=_preset, help="preset JSON (a partial preset overrides the defaults), or the "
+                   "name of a shipped preset (e.g. burley2_beyond)")
     g.add_argument("--set", dest="assign", action="append", default=[], metavar="KEY=VALUE",
                    help="set any setting by dotted path, e.g. --set lights.0.intensity=4 (repeatable)")
     g.add_argument("--size", type=_size, help=f"image size WxH; default: {d.render.width}x{d.render.height}")

@@ -132,11 +132,11 @@ def _build_model(a):
     if a.model == "dipole":
         if a.layer or a.skin_example or not math.isinf(a.thickness):
             raise _Bad("--layer/--skin-example/--thickness are multipole options")
-        if ssp is None:
+        if ssp is None or sa is None:
             raise _Bad("dipole needs --material NAME or --sigma-s-prime R,G,B --sigma-a R,G,B")
         return P.Dipole(ssp, sa, eta), f"dipole: {name}"
     # multipole
-    if ssp is not None:
+    if ssp is not None and sa is not None:
         if a.layer or a.skin_example:
             raise _Bad("give either a material/coefficients (one slab) or --layer/--skin-example")
         if not (a.thickness > 0):

@@ -4,7 +4,7 @@ ImGui/implot panel; ``save_plot`` writes a PNG headlessly (matplotlib Agg), atom
 from __future__ import annotations
 
 import os
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -52,7 +52,7 @@ def save_plot(path: str | os.PathLike, profile: Callable[[np.ndarray], np.ndarra
     try:
         for c, (name, color) in enumerate(CHANNELS):
             ax.plot(data["r"], data["rR"][:, c], color=color, lw=1.8, label=f"{name} profile")
-            if "rG" in data:
+            if "rG" in data and fit is not None:
                 err = f" (E = {100 * fit.errors[c]:.3g} %)"
                 ax.plot(data["r"], data["rG"][:, c], color=color, lw=1.4, ls="--",
                         label=f"{name} {fit.k}-Gaussian fit{err}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -181,15 +182,16 @@ def cmd_bench(args) -> int:
     failed = [r for r in results if r.error]
     print(f"wrote {out}/results.json, results.md, pareto.png, heatmaps/ ({len(results)} configurations"
           + (f", {len(failed)} failed" if failed else "") + ")")
-    for r in sorted((r for r in results if r.pareto), key=lambda r: r.full_ms):
-        print(f"  Pareto: {r.name:<28} {r.full_ms:8.1f} ms  RMS {100 * r.rms_mean:5.2f} %  DSSIM {r.dssim:.4f}")
+    for r in sorted((r for r in results if r.pareto), key=lambda r: r.ms):
+        print(f"  Pareto: {r.name:<28} {r.ms:8.1f} ms  RMS {100 * r.err:5.2f} %  DSSIM {r.dssim:.4f}")
     if args.budget_ms is not None:
         best = best_within(results, args.budget_ms)
         if best is None:
             print(f"no configuration fits {args.budget_ms:g} ms", file=sys.stderr)
             return 1
-        print(f"best within {args.budget_ms:g} ms: {best.name} ({best.full_ms:.1f} ms, RMS "
-              f"{100 * best.rms_mean:.2f} %, p99 {100 * max(best.p99):.1f} %, DSSIM {best.dssim:.4f})")
+        p99 = max(best.p99) if best.p99 else math.nan
+        print(f"best within {args.budget_ms:g} ms: {best.name} ({best.ms:.1f} ms, RMS "
+              f"{100 * best.err:.2f} %, p99 {100 * p99:.1f} %, DSSIM {best.dssim:.4f})")
         if args.preset_out:
             save_preset(config_settings(s, best.technique, best.changes), args.preset_out)
             print(f"wrote preset {args.preset_out}")

@@ -88,4 +88,9 @@ def add_parser(sub) -> None:
     p = sub.add_parser("settings", help="list every settable key (for --set and presets)")
     p.add_argument("--list", action="store_true", default=True, help="list keys with type, default, range, unit")
     p.add_argument("--json", action="store_true", help="as JSON")
-    p.set_defaults(func=lambda args: print_list(args.json) or 0)
+    p.set_defaults(func=_cmd_list)
+
+
+def _cmd_list(args) -> int:
+    print_list(args.json)
+    return 0

@@ -6,6 +6,7 @@ viewer's Accuracy window (results.json, Pareto front, configurations as settings
 from __future__ import annotations
 
 import json
+import math
 import statistics
 import time
 from collections.abc import Callable
@@ -49,6 +50,16 @@ class Result:
     def name(self) -> str:
         return f"{self.technique} {self.label}"
 
+    @property
+    def ms(self) -> float:
+        """Full-frame ms of a measured configuration (inf when it was not measured)."""
+        return math.inf if self.full_ms is None else self.full_ms
+
+    @property
+    def err(self) -> float:
+        """Mean relative RMS of a measured configuration (inf when it was not measured)."""
+        return math.inf if self.rms is None else float(np.mean(self.rms))
+
     def to_json(self) -> dict:
         d = asdict(self)
         d["rms_mean"] = self.rms_mean
@@ -83,13 +94,13 @@ def pareto_front(results: list[Result]) -> None:
     """Mark the configurations no other one beats in both full-frame time and mean relative RMS."""
     ok = [r for r in results if r.error is None and r.full_ms is not None and r.rms is not None]
     for r in ok:
-        r.pareto = not any((o.full_ms <= r.full_ms and o.rms_mean <= r.rms_mean)
-                           and (o.full_ms < r.full_ms or o.rms_mean < r.rms_mean) for o in ok)
+        r.pareto = not any((o.ms <= r.ms and o.err <= r.err) and (o.ms < r.ms or o.err < r.err) for o in ok)
 
 
 def best_within(results: list[Result], budget_ms: float) -> Result | None:
-    ok = [r for r in results if r.error is None and r.full_ms is not None and r.full_ms <= budget_ms]
-    return min(ok, key=lambda r: r.rms_mean) if ok else None
+    ok = [r for r in results if r.error is None and r.full_ms is not None and r.full_ms <= budget_ms
+          and r.rms is not None]
+    return min(ok, key=lambda r: r.err) if ok else None
 
 
 def _nudge(s: Settings, k: int) -> Settings:
@@ -158,7 +169,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
         "scene": base.scene.mesh or base.scene.name,
         "size": [base.render.width, base.render.height],
         "camera": base.camera.model_dump(mode="json"),
-        "timing": "sync (glFinish + wall clock per pass), median of %d frames" % runs,
+        "timing": f"sync (glFinish + wall clock per pass), median of {runs} frames",
         "metrics": {"rms": "relative RMS per channel over compared pixels", "p99": "99th percentile of the "
                     "per-pixel relative error per channel", "dssim": DSSIM_SETUP},
         "reference": ref.meta,
@@ -231,9 +242,9 @@ def results_markdown(data: dict) -> str:
         mark = "**Pareto**" if r.pareto else ""
         lines.append(f"| {mark} | {r.technique} | {r.label} | {r.full_ms:.0f} | {r.camera_ms:.0f} | "
                      f"{_pct(r.rms)} | {_pct(r.p99)} | {r.dssim:.4f} |")
-    front = sorted((r for r in results if r.pareto), key=lambda r: r.full_ms)
+    front = sorted((r for r in results if r.pareto), key=lambda r: r.ms)
     lines += ["", "Pareto front (faster to more accurate): " + ", ".join(
-        f"{r.name} ({r.full_ms:.0f} ms, {100 * r.rms_mean:.1f} %)" for r in front), ""]
+        f"{r.name} ({r.ms:.0f} ms, {100 * r.err:.1f} %)" for r in front), ""]
     return "\n".join(lines)
 
 
@@ -247,17 +258,18 @@ def pareto_plot(results: list[Result], path: Path, title: str = "") -> None:
 
     ok = [r for r in results if r.error is None and r.full_ms is not None]
     fig, ax = plt.subplots(figsize=(8, 5.5), dpi=110)
-    cycle = iter(plt.rcParams["axes.prop_cycle"].by_key()["color"][3:])
+    # the other techniques in colours none of COLORS uses (the default cycle's 4th is tab:red, d'Eon's)
+    cycle = iter(["tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"])
     for tech in dict.fromkeys(r.technique for r in ok):
         pts = [r for r in ok if r.technique == tech]
         col = COLORS.get(tech) or next(cycle, "k")
-        ax.scatter([r.full_ms for r in pts], [100 * r.rms_mean for r in pts], color=col, label=tech, zorder=3)
+        ax.scatter([r.ms for r in pts], [100 * r.err for r in pts], color=col, label=tech, zorder=3)
         for r in pts:
-            ax.annotate(r.label, (r.full_ms, 100 * r.rms_mean), fontsize=7, xytext=(3, 3),
+            ax.annotate(r.label, (r.ms, 100 * r.err), fontsize=7, xytext=(3, 3),
                         textcoords="offset points")
-    front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)
+    front = sorted((r for r in ok if r.pareto), key=lambda r: r.ms)
     if front:
-        ax.step([r.full_ms for r in front], [100 * r.rms_mean for r in front], where="post", color="k",
+        ax.step([r.ms for r in front], [100 * r.err for r in front], where="post", color="k",
                 lw=1.2, ls="--", label="Pareto front", zorder=2)
     ax.set_xscale("log")
     ax.set_xlabel("full frame ms (sync timing, median)")

@@ -2,8 +2,9 @@
 programs, and the graph's GL services (draws, textures bound by sampler name, strict uniforms)."""
 from __future__ import annotations
 
+from collections.abc import Iterable
 from contextlib import contextmanager
-from typing import Any, Iterable
+from typing import Any
 
 import moderngl
 
@@ -141,7 +142,7 @@ class ExecuteContext:
         for name, value in values.items():
             self.set(prog, name, value)
 
-    def bind(self, prog: moderngl.Program, sampler: str, texture: "moderngl.Texture | str",
+    def bind(self, prog: moderngl.Program, sampler: str, texture: moderngl.Texture | str,
              optional: bool = False) -> None:
         """Bind ``texture`` (a texture, or the name of a declared input) to ``sampler`` of ``prog``;
         it stays bound for every draw of ``prog`` in this execute (rebinding replaces it)."""
@@ -154,7 +155,7 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name}: too many textures for one program")
         bound[sampler] = (unit, tex)
 
-    def textures(self, prog: moderngl.Program, **samplers: "moderngl.Texture | str") -> None:
+    def textures(self, prog: moderngl.Program, **samplers: moderngl.Texture | str) -> None:
         """``bind`` for each keyword: ``ec.textures(prog, source=tex, gutter="gutter_512")``."""
         for sampler, tex in samplers.items():
             self.bind(prog, sampler, tex)
@@ -169,7 +170,7 @@ class ExecuteContext:
                 tex.use(unit)
             else:
                 unit = gpu.dummy(gl_type)
-            prog[name].value = unit
+            write_uniform(prog[name], unit)
 
     # -- draws ---------------------------------------------------------------------------------
     def _target(self, targets) -> moderngl.Framebuffer:
@@ -182,8 +183,8 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
         return self.graph._framebuffer_for(tuple(targets))
 
-    def draw_mesh(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
-                  clear: tuple | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
+    def draw_mesh(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
+                  clear: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
                   cull_back: bool = False) -> None:
         """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
         depth buffer, or scratch textures): both faces unless ``cull_back`` (counter-clockwise is
@@ -215,7 +216,7 @@ class ExecuteContext:
             self.graph._lod_notes[self.pass_.name] = self._frame.lod_note
         self.draws += 1
 
-    def draw_fullscreen(self, prog: moderngl.Program, *targets: "str | moderngl.Texture",
+    def draw_fullscreen(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
                         tiles: tuple | None = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
         ``targets`` (declared outputs or scratch textures), no depth test, no clear.

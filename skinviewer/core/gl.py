@@ -3,6 +3,7 @@ the headless one made here)."""
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import moderngl
 
@@ -27,7 +28,8 @@ def headless_context(require: int = MIN_GL, backend: str | None = None) -> moder
     refuses to make a GLX context current on a thread that had an EGL one."""
     errors = []
     backend = backend or os.environ.get("SKINVIEWER_GL_BACKEND") or "egl"
-    for kwargs in ({"backend": backend}, {}):
+    attempts: tuple[dict[str, Any], ...] = ({"backend": backend}, {})
+    for kwargs in attempts:
         try:
             ctx = moderngl.create_standalone_context(require=require, **kwargs)
         except Exception as exc:  # glcontext raises plain Exceptions

@@ -3,6 +3,8 @@ vertex arrays (full-screen triangle and scene mesh per program), 1x1 dummy textu
 samplers a draw does not bind, and uniform writes by value type."""
 from __future__ import annotations
 
+from typing import Any
+
 import moderngl
 import numpy as np
 
@@ -23,7 +25,7 @@ class GpuServices:
 
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
-        self._vaos: dict[tuple[int, int], tuple[moderngl.Program, object, moderngl.VertexArray]] = {}
+        self._vaos: dict[tuple[int, int, Any], tuple[moderngl.Program, object, moderngl.VertexArray]] = {}
         self._samplers: dict[int, tuple[moderngl.Program, dict[str, int]]] = {}
         self._dummies: dict[int, tuple[moderngl.Texture, int]] = {}
         self.max_units = int(ctx.info.get("GL_MAX_TEXTURE_IMAGE_UNITS", 16))
@@ -98,7 +100,7 @@ class GpuServices:
         self._dummies.clear()
 
 
-def write_uniform(u: moderngl.Uniform, value) -> None:
+def write_uniform(u: Any, value: Any) -> None:
     """Write ``value`` into uniform ``u``: bytes as they are; a numpy array as the uniform's element
     type, cut to the elements the compiler kept (an array whose tail is unused is shortened);
     anything else (number, bool, tuple) through ``.value``."""

@@ -16,14 +16,15 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any, Iterable
+from typing import Any
 
 import moderngl
 import numpy as np
 
 from skinviewer.core.execute import ExecuteContext
-from skinviewer.core.gpu import GpuServices
+from skinviewer.core.gpu import GpuServices, write_uniform
 from skinviewer.core.pass_api import (  # noqa: F401
     GraphError,
     Pass,
@@ -59,7 +60,7 @@ class RenderGraph:
     shared pool so switching technique reuses allocations."""
 
     def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary, passes: Iterable[Pass],
-                 targets: Iterable[str], pool: "TexturePool | None" = None):
+                 targets: Iterable[str], pool: TexturePool | None = None):
         self.ctx = ctx
         self.shaders = shaders
         self.passes: list[Pass] = list(passes)
@@ -466,7 +467,7 @@ class RenderGraph:
         """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back
         (<= 4 KB per output). 8-bit outputs cannot hold one and are skipped."""
         vao_of = self.gpu.fullscreen_vao
-        bad = []
+        bad: list[str] = []
         for res, spec in outputs.items():
             if spec.dtype == "f1" or res not in self._textures:
                 continue
@@ -481,9 +482,9 @@ class RenderGraph:
                 fbo = self._framebuffer_for((flags,))
                 fbo.use()
                 self._textures[res].use(0)
-                prog["src"].value = 0
-                prog["u_tile"].value = tile
-                prog["u_size"].value = (w, h)
+                write_uniform(prog["src"], 0)
+                write_uniform(prog["u_tile"], tile)
+                write_uniform(prog["u_size"], (w, h))
                 vao_of(prog).render(vertices=3)
                 if np.frombuffer(flags.read(alignment=1), dtype=np.uint8).any():
                     bad.append(res)

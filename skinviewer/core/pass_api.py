@@ -3,8 +3,9 @@ reflect (settings, inputs, outputs with their ``TexSpec``, programs), read-only 
 and the errors of the graph."""
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any
 
 from skinviewer.core.settings import Settings, get_path
 
@@ -113,7 +114,7 @@ class Reflection:
         if key not in self.programs:
             self.programs.append(key)
 
-    def section(self, prefix: str, fields: Iterable[str]) -> "SettingsView":
+    def section(self, prefix: str, fields: Iterable[str]) -> SettingsView:
         """Declare the settings ``prefix.f`` for each field and return them as a read-only view."""
         return SettingsView(prefix, {f: self.setting(f"{prefix}.{f}") for f in fields})
 

@@ -104,6 +104,7 @@ class Surface:
         self.F = mesh.indices.astype(np.int64)
         self.Nv = mesh.normals.astype(np.float64)
         self.UV = mesh.uvs.astype(np.float64)
+        assert mesh.tangents is not None, "GpuScene-ready meshes carry tangents"
         self.T = mesh.tangents.astype(np.float64)
         tri = self.P[self.F]
         fn = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -361,6 +362,7 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
     lab's presets)."""
     from skinviewer.physics import profiles as P
     from skinviewer.physics.fitting import fit_gaussians
+    prof: P.Dipole | P.Burley | P.Multipole | P.LayeredMultipole
     if model == "dipole":
         m = P.material(material or "Skin1")
         prof = P.Dipole(m.sigma_s_prime, m.sigma_a, m.eta)
@@ -445,6 +447,7 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
 
 def _store(key: str, ref: Reference) -> None:
     buf = io.BytesIO()
+    assert ref.position is not None, "a computed reference has its surface positions"
     np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
                         specular=ref.specular.astype(np.float32), mask=ref.mask,
                         position=ref.position.astype(np.float32), meta=json.dumps(ref.meta))
@@ -569,7 +572,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
         imgs.append(img.reshape(H, W, 3))
     times["total"] = time.perf_counter() - t0
     meta = {"key": key, "version": VERSION, "h_mm": h_mm, "elements": n_el, "pixels": int(mask.sum()),
-            "beam_rays": len(points.position), "seconds": times, "estimate_s": est,
+            "beam_rays": 0 if points is None else len(points.position), "seconds": times, "estimate_s": est,
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False}
     ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3])
     if use_cache:

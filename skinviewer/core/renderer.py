@@ -56,7 +56,7 @@ class GpuScene:
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
         self._lod_meshes: dict[int, MeshData] = {}
-        albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.float32(DEFAULT_SKIN_SRGB)
+        albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
         self.has_normal_map = mesh.normal_map is not None
         nm = mesh.normal_map if mesh.normal_map is not None else np.array([[[0.5, 0.5, 1.0]]], np.float32)

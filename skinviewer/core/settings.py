@@ -200,7 +200,7 @@ class RegionSpecular(_Model):
     rho_s: float | None = Field(None, ge=0.0, le=10.0)
 
 
-def _default_region_specular() -> dict[str, "RegionSpecular"]:
+def _default_region_specular() -> dict[str, RegionSpecular]:
     # seed 002 §14.3: Weyrich et al. 2006 measured m and rho_s per facial region; the pattern they found
     # (nose and lips shinier, cheeks and chin rougher) with values inside their measured range
     table = {"forehead": (0.32, 0.20), "nose": (0.28, 0.24), "lips": (0.30, 0.22), "cheeks": (0.38, 0.15),
@@ -430,7 +430,7 @@ class Burley2Settings(_Model):
         return v
 
     @model_validator(mode="after")
-    def _nested(self) -> "Burley2Settings":
+    def _nested(self) -> Burley2Settings:
         total = self.base + self.extra
         if self.mode == "nested" and (total % self.base or (total // self.base) % 2 == 0):
             raise ValueError(f"nested mode needs (base + extra) / base odd, e.g. 6 + 24 or 10 + 20 (got {self.base} + "
@@ -542,7 +542,7 @@ class Settings(_Model):
     penner: PennerSettings = Field(default_factory=PennerSettings)
 
     @model_validator(mode="after")
-    def _version(self) -> "Settings":
+    def _version(self) -> Settings:
         if self.schema_version != SCHEMA_VERSION:
             raise ValueError(f"schema_version {self.schema_version} is not supported (this build reads {SCHEMA_VERSION})")
         return self

@@ -237,9 +237,6 @@ class ShaderLibrary:
         self.revision += 1
         return True
 
-    def _guess_files(self, name: str) -> set[Path]:
-        return {p.resolve() for p in self._stage_files(name).values()}
-
     def _remember_files(self, entry: _Entry, files) -> None:
         entry.mtimes = {}
         for p in files:
@@ -253,7 +250,7 @@ class ShaderLibrary:
         for s in files_per_stage:
             if s in text or s.replace("_", " ") in text.lower():
                 stage = s
-        files = files_per_stage.get(stage) or next(iter(files_per_stage.values()))
+        files = (files_per_stage.get(stage) if stage else None) or next(iter(files_per_stage.values()))
         out = []
         for line in text.splitlines():
             for pat in _ERR_PATTERNS:

@@ -52,7 +52,7 @@ def profile_of(get) -> B.Profile:
 class Plan:
     """The sample levels a blur pass takes, and how it decides (physics.burley.Sampling in GLSL terms)."""
     levels: tuple[int, ...]
-    cutoffs: tuple[tuple[float, float, float], ...] = ()
+    cutoffs: tuple[tuple[float, ...], ...] = ()  # one RGB triple per level beyond the base
     split: str = "half-radius"
     contrast: str = "rings"
     always: bool = False
@@ -121,8 +121,8 @@ def two_level_plan(get) -> Plan:
         return replace(BEYOND_PLAN, temporal=int(get("burley2.temporal")))
     t = get("burley2.threshold")
     c1 = tuple(float(t) * float(s) for s in get("burley2.channel_scale"))
-    levels = (int(get("burley2.base")), int(get("burley2.extra")))
-    cutoffs = (c1,)
+    levels: tuple[int, ...] = (int(get("burley2.base")), int(get("burley2.extra")))
+    cutoffs: tuple[tuple[float, ...], ...] = (c1,)
     if mode == "three-level" and int(get("burley2.third")) > 0:
         t2 = float(get("burley2.threshold2"))
         levels += (int(get("burley2.third")),)
@@ -289,7 +289,7 @@ class BurleyTemporalPass(Pass):
         prog = ec.program("burley_temporal", **self._defines(plan))
         ec.uniforms(prog, u_max_n=float(plan.temporal), u_reset=int(reset))
         ec.textures(prog, current=BLURRED, history=ec.output(HISTORY[1 - write]))
-        targets = (TEMPORAL, HISTORY[write])
+        targets: tuple[str, ...] = (TEMPORAL, HISTORY[write])
         if plan.reuse:  # the own samples' mean beside the pooled one (shaders/burley_temporal.frag)
             ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W,
                         history_own=ec.output(HISTORY_OWN[1 - write]))

@@ -3,6 +3,8 @@
 the final passes and the lit image they write. GL work goes through the ExecuteContext services."""
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from skinviewer.core.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
@@ -19,7 +21,7 @@ def shadow_resource(i: int) -> str:
     return f"shadow_map_{i}"
 
 
-def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, int]:
+def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
     """Declare what a lit pass reads: every light, the shadow test settings, and the shadow maps
     of shadow-casting lights (not with ``shadow_maps=False``: a pass that reads the shadow test's
     result from elsewhere). Returns the defines that specialise shaders/lib/lights.glsl to this
@@ -51,7 +53,7 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     map_size = shadow_map_size(ec)
     kind = np.zeros(MAX_LIGHTS, np.int32)
     radiance = np.zeros((MAX_LIGHTS, 3), np.float32)
-    dirs = np.tile(np.float32([0.0, 0.0, 1.0]), (MAX_LIGHTS, 1))
+    dirs = np.tile(np.array([0.0, 0.0, 1.0], np.float32), (MAX_LIGHTS, 1))
     poss = np.zeros((MAX_LIGHTS, 3), np.float32)
     radii = np.ones(MAX_LIGHTS, np.float32)
     shadowed = np.zeros(MAX_LIGHTS, np.int32)

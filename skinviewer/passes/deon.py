@@ -23,6 +23,8 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from skinviewer.core.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
@@ -45,8 +47,8 @@ from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map
 from skinviewer.passes.texture_space import (
     declare_shaded,
     declare_unwrapped,
-    gutter_resource,
     dilate,
+    gutter_resource,
     rasterize_unwrapped,
     seam_resource,
     shade_dilated,
@@ -56,8 +58,8 @@ from skinviewer.passes.texture_space import (
 )
 from skinviewer.physics.diffusion import (
     IRRADIANCE,
-    BlurStep,
     KERNEL7,
+    BlurStep,
     blur_plan_texels,
     blur_resource,
     stretch_blur_resource,
@@ -113,9 +115,10 @@ def tsm_light_index(r) -> int | None:
     return j
 
 
-def set_tsm_uniforms(ec, prog, j: int, matrix: str = "u_tsm_matrix"):
+def set_tsm_uniforms(ec, prog, j: int | None, matrix: str = "u_tsm_matrix"):
     """The TSM light's uniforms (lib/deon.glsl; ``matrix``: the name of its light-space matrix in
-    ``prog``). Returns its LightSpace."""
+    ``prog``). Returns its LightSpace. Only called by passes that read the TSM, so a light is named."""
+    assert j is not None, "a TSM pass runs only when tsm_light_index names a light"
     scene = ec.scene
     pose = ec.section(f"lights.{j}", LIGHT_POSE_FIELDS)
     ls = scene.light_space(pose)
@@ -554,7 +557,7 @@ def bind_blurs(ec, prog) -> None:
     ec.uniforms(prog, u_count=len(ec.setting("deon.gaussians")), u_w=ws, u_var=var, u_used=used)
 
 
-def declare_tsm_read(r) -> dict[str, int]:
+def declare_tsm_read(r) -> dict[str, Any]:
     """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
     (island zones), the stretch map, and for the gather the irradiance; returns its defines."""
     r.setting("deon.tsm_form")

@@ -33,6 +33,8 @@
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
@@ -203,7 +205,7 @@ class PoissonBlurPass(Pass):
             ec.bind(prog, "radius_map", RADIUS_MAP)
         tmp = ec.scratch(_map_spec(size))
         ping = ec.scratch(_map_spec(size)) if n > 1 else None
-        cur = LIGHT_MAP
+        cur: Any = LIGHT_MAP  # the light map's name, then the scratch texture
         for k in range(n):
             if seam:
                 ec.bind(fill, "source", cur)
@@ -211,7 +213,7 @@ class PoissonBlurPass(Pass):
             ec.bind(prog, "source", filled if seam else cur)
             ec.draw_fullscreen(prog, tmp)
             last = k == n - 1
-            dilate(ec, tmp, gutter, BLURRED if last else ping)
+            dilate(ec, tmp, gutter, BLURRED if last or ping is None else ping)
             cur = ping
 
 

@@ -5,7 +5,6 @@ import numpy as np
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 
-
 TONE_MAPS = {"linear": 0, "filmic": 1}
 
 

@@ -33,7 +33,8 @@ LUT_FIELDS = ("lut_size", "max_curvature", "penumbra_max_mm")
 
 def profile(gaussians) -> tuple[tuple[float, tuple[float, float, float]], ...]:
     """The sum of Gaussians in use, as (variance mm^2, RGB weights) pairs (hashable, for the cache)."""
-    return tuple((float(g.variance), tuple(float(w) for w in g.weights)) for g in gaussians)
+    return tuple((float(g.variance), (float(g.weights[0]), float(g.weights[1]), float(g.weights[2])))
+                 for g in gaussians)
 
 
 @functools.lru_cache(maxsize=8)

@@ -16,7 +16,7 @@ class RhoDtLutPass(Pass):
     uses_scene = False
 
     def __init__(self, size: tuple[int, int] = RHO_DT_SIZE):
-        self.size = tuple(size)
+        self.size = (int(size[0]), int(size[1]))
 
     def reflect(self, r: Reflection) -> None:
         r.setting("specular.f0")

@@ -184,7 +184,7 @@ def _facing(scene, pose):
     return p, n, L, nl, back[::max(1, len(back) // MAX_RAYS)]
 
 
-def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray]:
+def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For each vertex whose normal faces away from the light (``pose``: LightSettings fields):
     (vertex index, thickness in mm to the lit surface along the ray to the light, cos at that entry
     point). Cached per scene and light pose."""

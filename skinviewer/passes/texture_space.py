@@ -188,7 +188,7 @@ def shading_program(r, base: str) -> str:
 
 
 def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: TexSpec,
-                   maps: str = TEXEL_SURFACE_MAPS, **defines) -> None:
+                   maps: str = TEXEL_SURFACE_MAPS, **defines: object) -> None:
     """Declare a texture-space shading pass writing ``resource`` with its gutters filled, whichever
     way it shades (shading_program): declare_unwrapped, plus for the texel path the maps ``maps``
     it reads, TILED and TEXEL_STEPS (the position's change per texel, which only beam footprints

@@ -24,7 +24,7 @@ Units: mm for the laser, texels for the edge helpers (the caller scales).
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 from scipy.special import ndtr

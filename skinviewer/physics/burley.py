@@ -273,7 +273,7 @@ class Result:
     count: np.ndarray  # (H, W) samples taken
     level: np.ndarray  # (H, W) levels taken beyond the base (0: base only)
     skipped: np.ndarray  # (H, W) SSS pixels under the pixel cutoff
-    contrast: np.ndarray = field(default=None)  # (H, W, 3) base contrast (nan where not computed)
+    contrast: np.ndarray | None = field(default=None)  # (H, W, 3) base contrast (nan where not computed)
 
 
 def pixel_scale(z_mm: np.ndarray, proj_scale: float) -> np.ndarray:

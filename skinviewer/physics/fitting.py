@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
 
 import numpy as np
+import numpy.typing as npt
 from scipy.optimize import minimize, nnls
 
 from skinviewer.physics.profiles import sum_of_gaussians
@@ -54,7 +55,7 @@ class FitGrid:
             return np.where(den > 0, num / den, 0.0)
 
     @classmethod
-    def from_samples(cls, r: Sequence[float], R: np.ndarray) -> "FitGrid":
+    def from_samples(cls, r: npt.ArrayLike, R: npt.ArrayLike) -> FitGrid:
         """A grid from tabulated (e.g. measured) samples: r ascending (mm), R (n,) or (n, 3);
         trapezoid weights of int r f^2 dr over [r_0, r_n-1] (plus [0, r_0] at the first value)."""
         r = np.asarray(r, dtype=float)
@@ -279,13 +280,14 @@ def _fit_channels(grid: FitGrid, channels: Sequence[int], k: int, fixed: np.ndar
                        options={"maxiter": 400, "ftol": 1e-13, "gtol": 1e-10})
         if best is None or res.fun < best.fun:
             best = res
+    assert best is not None, "max_starts >= 1"
     theta = np.sort(best.x)
     _, _, W = prob.solve(theta)
     return np.exp(theta), W * prob.scale, prob.nfev
 
 
 def fit_gaussians(profile: Callable[[np.ndarray], np.ndarray] | FitGrid, k: int = 4, *, shared: bool = True,
-                  fixed_variances: Sequence[float] | None = None, init: Sequence[float] | None = None,
+                  fixed_variances: npt.ArrayLike | None = None, init: Sequence[float] | None = None,
                   grid_points: int = 200, max_starts: int = 6) -> FitResult:
     """Fit ``k`` Gaussians (weights >= 0, variances ascending) to ``profile`` (a callable r -> (..., 3),
     e.g. a model from :mod:`skinviewer.physics.profiles`, or a prepared :class:`FitGrid`).

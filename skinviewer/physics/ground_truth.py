@@ -167,7 +167,7 @@ def cluster(el: Elements, voxel: float) -> Clusters:
     m2 = np.bincount(inv, el.area * ((el.centroid ** 2).sum(1) + 2.0 * el.s2), n) / sa
     s2 = np.maximum(m2 - (c ** 2).sum(1), 0.0) / 2.0
     nrm = np.stack([np.bincount(inv, el.area * el.normal[:, k], n) for k in range(3)], 1)
-    nrm /= np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
+    nrm = nrm / np.maximum(np.linalg.norm(nrm, axis=1), 1e-300)[:, None]
     return Clusters(c, a, ea, s2, voxel, nrm)
 
 
@@ -179,7 +179,6 @@ class PointSources:
 
 
 MIN_CELL = 2.0     # mm: cell of the receiver/source grid (at least the search radius)
-BATCH = 1_500_000  # pairs evaluated at once
 
 
 def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None):
@@ -226,27 +225,6 @@ def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | 
             yield ri, sj, d2, xr @ ns.T - (sr * ns).sum(1)[None]
 
 
-def neighbour_pairs(x: np.ndarray, src: np.ndarray, radius):
-    """All (receiver i, source j) with |x_i - src_j| < radius (a scalar, or one per source), in
-    batches of about BATCH pairs."""
-    per_source = np.ndim(radius) > 0
-    rmax = float(np.max(radius)) if per_source else float(radius)
-    bi, bj, count = [], [], 0
-    for ri, sj, d2 in blocks(x, src, rmax):
-        lim = (np.asarray(radius)[sj] ** 2)[None] if per_source else rmax * rmax
-        ii, jj = np.nonzero(d2 < lim)
-        if len(ii) == 0:
-            continue
-        bi.append(ri[ii])
-        bj.append(sj[jj])
-        count += len(ii)
-        if count >= BATCH:
-            yield np.concatenate(bi), np.concatenate(bj)
-            bi, bj, count = [], [], 0
-    if count:
-        yield np.concatenate(bi), np.concatenate(bj)
-
-
 def _gauss(v, d2):
     return np.exp(-d2 / (2.0 * v)) / (2.0 * np.pi * v)
 
@@ -267,7 +245,7 @@ class Diffusion:
         self.points = points
         self.s2max = float(el.s2.max()) if len(el.s2) else 0.0
         self._levels: dict[float, Clusters] = {}
-        self._edges = None
+        self._edges: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         self._tree: cKDTree | None = None
         self._radius: np.ndarray | None = None
 
@@ -335,15 +313,15 @@ class Diffusion:
                 for i, j in self._tree_pairs(x, r):
                     k = self._exact(x[i], j, v)
                     val = el.ea[j]
-                    if own is not None:
+                    if own is not None and ea_here is not None:
                         val = np.where((own[i] == j)[:, None], ea_here[i], val)
                     m += _accumulate(i, k[:, None] * val, len(x))
                     if cancelled is not None and cancelled():
                         raise InterruptedError("cancelled")
             else:
                 src = el if kind == "elements" else self.level(voxel)
-                r = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
-                for ri, sj, d2, z in blocks(x, src.centroid, r, src.normal):
+                reach = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
+                for ri, sj, d2, z in blocks(x, src.centroid, reach, src.normal):
                     # moment matching in the source's plane only; the height z over it enters
                     # exactly, exp(-z^2 / 2v) (eq. 20 is separable): a flap's far side stays right
                     ve = v + src.s2[sj]

@@ -116,5 +116,6 @@ class ImageError:
 
 
 def image_error(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> ImageError:
-    return ImageError(tuple(float(v) for v in rel_rms(x, ref, mask)), tuple(float(v) for v in p99_rel(x, ref, mask)),
+    rms, p99 = rel_rms(x, ref, mask), p99_rel(x, ref, mask)
+    return ImageError((float(rms[0]), float(rms[1]), float(rms[2])), (float(p99[0]), float(p99[1]), float(p99[2])),
                       dssim(x, ref, mask, exposure))

@@ -140,5 +140,5 @@ def vertex_curvature(positions: np.ndarray, normals: np.ndarray, indices: np.nda
     if ids is not None:
         inv = np.unique(np.asarray(ids), return_inverse=True)[1].ravel()
         total = np.bincount(inv, weights=total)[inv]
-        count = np.bincount(inv, weights=count)[inv]
+        count = np.bincount(inv, weights=count)[inv].astype(np.float64)
     return (total / np.maximum(count, 1.0)).astype(np.float32)

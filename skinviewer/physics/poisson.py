@@ -91,6 +91,7 @@ def generate_poisson_disk(n: int = 12, seed: int = SEED, sets: int = 256, darts:
         d = float(_min_dist(q))
         if d > best_d:
             best, best_d = q, d
+    assert best is not None, "relax >= 1"
     best = best - best.mean(axis=0)
     best = best / max(1.0, float(np.linalg.norm(best, axis=1).max()))
     return np.trunc(best * 1e6) / 1e6 + 0.0  # 6 decimals towards 0: stays in the disk; no -0.0

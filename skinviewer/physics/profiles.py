@@ -26,8 +26,8 @@ form is kept where it can be selected (``printed=True`` / ``form="printed"``):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Sequence
 
 import numpy as np
 from scipy.special import j0
@@ -293,7 +293,7 @@ class Multipole:
     def semi_infinite(self) -> bool:
         return math.isinf(self.thickness)
 
-    def flipped(self) -> "Multipole":
+    def flipped(self) -> Multipole:
         return Multipole(self.sigma_s_prime, self.sigma_a, self.thickness, self.eta,
                          self.eta_below, self.eta_above, self.n_dipoles)
 
@@ -577,7 +577,7 @@ def burley_normalized(r: ArrayLike, d: ArrayLike) -> np.ndarray:
     r = 0 is integrable but infinite: r is floored at R_FLOOR * d (1e-12 d: nothing a plot or a fit
     resolves), so the value stays finite."""
     d = np.asarray(d, dtype=float)
-    r = np.maximum(np.abs(np.asarray(r, dtype=float)), R_FLOOR * np.where(np.isfinite(d), d, 0.0))
+    r = np.asarray(np.maximum(np.abs(np.asarray(r, dtype=float)), R_FLOOR * np.where(np.isfinite(d), d, 0.0)))
     with np.errstate(divide="ignore", under="ignore", invalid="ignore"):
         num = np.exp(-r / d) + np.exp(-r / (3.0 * d))
         out = num / (8.0 * math.pi * d * r)
@@ -661,7 +661,7 @@ def burley_inverse_cdf(u: ArrayLike, d: ArrayLike = 1.0, printed: bool = False) 
       G(u) = 1 + 4u (2u + sqrt(1 + 4u^2)),  r/d = 3 log((1 + G^(-1/3) + G^(1/3)) / (4u)).
     u is clamped to [tiny, 1]: u -> 0 gives a large finite radius (~2100 d), u = 1 gives 0.
     ``printed=True`` evaluates the seed's printed (1 + 2 G^(-1/3)) form, which is not an inverse."""
-    u = np.clip(np.asarray(u, dtype=float), np.finfo(float).tiny, 1.0)
+    u = np.asarray(np.clip(np.asarray(u, dtype=float), np.finfo(float).tiny, 1.0))
     G = 1.0 + 4.0 * u * (2.0 * u + np.sqrt(1.0 + 4.0 * u * u))
     g = np.cbrt(G)
     num = 1.0 + (2.0 / g if printed else 1.0 / g + g)

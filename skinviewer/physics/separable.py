@@ -166,10 +166,10 @@ def follow_surface(tap, centre, dz_mm, threshold_mm: float):
 def preintegrated_gaussians(x, gaussians) -> np.ndarray:
     """seed 001 eq. 3.5 for a sum of Gaussians: a_p(x) = sum w_i exp(-x^2 / 2 v_i) / sqrt(2 pi v_i)."""
     x = np.asarray(x, dtype=np.float64)[..., None]
-    out = 0.0
+    out: np.ndarray | float = 0.0
     for v, w in gaussians:
         out = out + np.asarray(w, np.float64) * np.exp(-x * x / (2.0 * v)) / math.sqrt(2.0 * math.pi * v)
-    return out
+    return np.asarray(out)
 
 
 def rotated_taps(offsets, fraction: float, angle: float) -> np.ndarray:

@@ -245,7 +245,8 @@ def rho_dt(cos_theta, m, f0=F0_SKIN, rho_s=0.18) -> np.ndarray:
 def _rho_tables(n_cos: int, n_m: int):
     c = texel_centres(n_cos)[None, :]
     mm = texel_centres(n_m)[:, None]
-    i_e, i_1 = _rho_integrals(*np.broadcast_arrays(c, mm))
+    cos_b, m_b = np.broadcast_arrays(c, mm)
+    i_e, i_1 = _rho_integrals(cos_b, m_b)
     i_e.setflags(write=False)
     i_1.setflags(write=False)
     return i_e, i_1

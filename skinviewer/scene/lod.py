@@ -53,6 +53,7 @@ def decimate(mesh: MeshData, target_triangles: int) -> MeshData:
     rep[out_index[kept]] = kept  # output vertex -> the input vertex that survived as it
     tri = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     kept = rep
+    assert mesh.tangents is not None, "MeshData sets its tangents"
     return MeshData(positions=mesh.positions[kept], normals=mesh.normals[kept], uvs=mesh.uvs[kept],
                     indices=tri.astype(np.uint32), tangents=mesh.tangents[kept], mm_per_unit=mesh.mm_per_unit,
                     name=f"{mesh.name} (LOD, {len(tri)} triangles)")

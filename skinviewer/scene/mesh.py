@@ -5,6 +5,7 @@ import dataclasses
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -91,11 +92,12 @@ class MeshData:
             raise MeshError(f"{self.name}: the mesh is {extent:.3g} units across but {reach:.3g} from the origin: "
                             "float32 cannot resolve it there; centre it near the origin")
 
-    def replace(self, **kw) -> "MeshData":
+    def replace(self, **kw) -> MeshData:
         return dataclasses.replace(self, **kw)
 
     def interleaved(self) -> np.ndarray:
         """(N, 12) float32: position, normal, uv, tangent — the vertex layout every pass uses."""
+        assert self.tangents is not None, "set in __post_init__"
         return np.hstack([self.positions, self.normals, self.uvs, self.tangents]).astype(np.float32)
 
 

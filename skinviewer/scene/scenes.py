@@ -49,7 +49,10 @@ def grid(nx: int, ny: int, size_x: float, size_y: float, uv_rect=(0.02, 0.02, 0.
 def _merge(parts):
     pos, nrm, uv, idx, off = [], [], [], [], 0
     for p, n, u, i in parts:
-        pos.append(p), nrm.append(n), uv.append(u), idx.append(i + off)
+        pos.append(p)
+        nrm.append(n)
+        uv.append(u)
+        idx.append(i + off)
         off += len(p)
     return np.vstack(pos), np.vstack(nrm), np.vstack(uv), np.vstack(idx)
 
@@ -68,8 +71,8 @@ def _box(center, size, uv_rect):
              ((cx - sx / 2, cy - sy / 2, cz - sz / 2), (0, 0, sz), (0, sy, 0)),
              ((cx - sx / 2, cy + sy / 2, cz + sz / 2), (sx, 0, 0), (0, 0, -sz)),
              ((cx - sx / 2, cy - sy / 2, cz - sz / 2), (sx, 0, 0), (0, 0, sz))]
-    for k, (o, a, b) in enumerate(specs):
-        o, a, b = map(np.asarray, (o, a, b))
+    for k, spec in enumerate(specs):
+        o, a, b = map(np.asarray, spec)
         n = np.cross(a, b)
         n = n / np.linalg.norm(n)
         cu, cv = u0 + (k % 3) * cw, v0 + (k // 3) * ch

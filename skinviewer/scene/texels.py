@@ -59,7 +59,7 @@ def texel_surface(positions, uvs, indices, n: int, mm_per_unit: float = 1.0):
 
 def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutoff_sigmas: float = 3.5,
                                 block: int = 8192, normals=None, air_sin: float = 0.5,
-                                surface_paths: "SurfacePaths | None" = None, shortcuts_add: bool = False) -> np.ndarray:
+                                surface_paths: SurfacePaths | None = None, shortcuts_add: bool = False) -> np.ndarray:
     """D(x) = sum_i w_i [sum_y E(y) A(y) G(v_i, |x - y|)] / [sum_y A(y) G(v_i, |x - y|)] over covered
     texels x, y (3D distance in mm). The normalisation makes each Gaussian a weighted mean of E, so a
     Gaussian narrower than a texel (skin's first, sigma 0.08 mm) is the identity instead of a
@@ -137,7 +137,9 @@ class SurfacePaths:
         graph = coo_matrix((np.r_[ln, ln], (np.r_[a, b], np.r_[b, a])), shape=(nv, nv)).tocsr()
         self.stretch = float(stretch)
         self.limit = self.stretch * reach_mm + 2.0 * float(ln.max(initial=0.0))
-        rows, cols, vals = [], [], []
+        rows: list[np.ndarray] = []
+        cols: list[np.ndarray] = []
+        vals: list[np.ndarray] = []
         chunk = max(1, 20_000_000 // nv)  # rows of the dense distance block at a time (<= 160 MB)
         for s0 in range(0, nv, chunk):
             d = dijkstra(graph, indices=np.arange(s0, min(nv, s0 + chunk)), limit=self.limit)
@@ -145,10 +147,10 @@ class SurfacePaths:
             rows.append(rr + s0)
             cols.append(cc)
             vals.append(d[rr, cc])
-        rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
-        self._key = rows * nv + cols
+        row, col, val = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+        self._key = row * nv + col
         order = np.argsort(self._key)
-        self._key, self._val, self._nv = self._key[order], vals[order], nv
+        self._key, self._val, self._nv = self._key[order], val[order], nv
         t = np.asarray(tri).ravel()
         covered = t >= 0
         corners = np.full((t.size, 3), -1, np.int64)
@@ -309,7 +311,6 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
     # in-plane direction of T' away from the edge (towards c'), for the 3D consistency check
     dprime = (Pc2 - Pa - along[:, None] * e) / np.maximum(perp, 1e-300)[:, None]
     Minv = np.linalg.pinv(M)  # texel offset -> local (along e, along d) in mm
-    pos_ok = texel_pos is not None
     done = np.zeros(len(q), bool)
     tgt_all = np.zeros((len(q), 2))
     dd, nn = cKDTree(pts).query(q, k=8, distance_upper_bound=reach + 1.0)
@@ -333,7 +334,7 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
         sy, sx = near_y[ti[:, 1], ti[:, 0]], near_x[ti[:, 1], ti[:, 0]]
         tgt = np.where(snap[:, None], np.stack([sx, sy], 1).astype(np.float64), tgt)
         ti = np.where(snap[:, None], np.stack([sx, sy], 1), ti)
-        if pos_ok:
+        if texel_pos is not None:
             loc = np.einsum("nij,nj->ni", Minv[h], rel)
             expect = Pa[h] + loc[:, :1] * e[h] + loc[:, 1:] * dprime[h]
             got = texel_pos[ti[:, 1], ti[:, 0]]

@@ -4,8 +4,9 @@ Each technique module defines one ``Technique``: its name, what it is (with the 
 follows), how to build its passes, and the quality knobs ``skinviewer bench`` sweeps."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from skinviewer.core.constants import MAX_LIGHTS
 from skinviewer.core.graph import Pass
@@ -23,7 +24,7 @@ class Technique:
     title: str  # what it is, in the papers' terms, with the seeds it follows
     build: Callable[[], list[Pass]]
     # the configurations ``skinviewer bench`` sweeps (quick=True: a few for CI-sized runs)
-    sweep: Callable[[bool], list[Config]] = field(default=lambda quick: [("default", {})])
+    sweep: Callable[[bool], list[Config]] = field(default=lambda quick: [("default", dict[str, Any]())])
     targets: tuple[str, ...] = tuple(TARGETS)
 
 

@@ -17,7 +17,7 @@ from skinviewer.passes.burley import (
 )
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.screen_space import ScreenLightingPass
-from skinviewer.techniques.base import Technique, shadow_passes
+from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
@@ -25,10 +25,10 @@ def build():
                               BurleyCountPass(), BurleyCombinePass(BLURRED), BurleyViewPass(), BurleyOutputPass("lit")]
 
 
-def sweep(quick: bool):
+def sweep(quick: bool) -> list[Config]:
     if quick:
         return [("thesis 12+10 @0.25", {}), ("12+10 @0.1", {"burley2.threshold": 0.1})]
-    out = []
+    out: list[Config] = []
     for base, extra in ((6, 6), (8, 14), (12, 10), (12, 18), (16, 14), (6, 24)):
         for t in (0.0, 0.1, 0.25, 0.5, 1.0):
             out.append((f"{base}+{extra} @{t}", {"burley2.base": base, "burley2.extra": extra, "burley2.threshold": t}))

@@ -7,11 +7,11 @@ from skinviewer.passes.deon import (
     SIZE,
     DeonFinalPass,
     DiffuseSumPass,
-    TransmittedPass,
     GatherSurfacePass,
     GaussianBlurPass,
     IrradiancePass,
     StretchPass,
+    TransmittedPass,
     TsmPass,
     map_size,
     transmitted_size,
@@ -20,7 +20,7 @@ from skinviewer.passes.luts import BeckmannLutPass
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.rho_dt import RhoDtLutPass
 from skinviewer.passes.texture_space import GutterMapPass, TexelSurfacePass
-from skinviewer.techniques.base import Technique, shadow_passes
+from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
@@ -45,13 +45,13 @@ def fewer_gaussians(k: int) -> list[dict]:
     return [{"variance": v, "weights": list(w)} for v, w in fit.table()]
 
 
-def sweep(quick: bool):
+def sweep(quick: bool) -> list[Config]:
     """Irradiance/blur texture size (the blurs' taps are tied to its texels: eq. 25 sub-steps),
     stretch correction, the TSM, and the number of Gaussians (eq. 21)."""
     if quick:
         return ([(f"irr{n}", {"deon.irradiance_size": n}) for n in (256, 512, 1024)]
                 + [("irr512 4G", {"deon.irradiance_size": 512, "deon.gaussians": fewer_gaussians(4)})])
-    out = [(f"irr{n}", {"deon.irradiance_size": n}) for n in (256, 512, 1024, 2048)]
+    out: list[Config] = [(f"irr{n}", {"deon.irradiance_size": n}) for n in (256, 512, 1024, 2048)]
     out += [("irr1024 no-stretch", {"deon.irradiance_size": 1024, "deon.stretch": False}),
             ("irr1024 no-tsm", {"deon.irradiance_size": 1024, "deon.tsm": False}),
             ("irr1024 tsm512", {"deon.irradiance_size": 1024, "deon.tsm_size": 512}),

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import threading
+from typing import Any
 
 import numpy as np
 
@@ -37,7 +38,7 @@ class _Job:
         self.key = reference_key(s)
         self.stage = "starting"
         self.fraction = 0.0
-        self.result = None
+        self.result: Any = None
         self.error = ""
         self.cancel = threading.Event()
         self.thread = threading.Thread(target=self._run, args=(max_seconds,), daemon=True)
@@ -68,7 +69,7 @@ class AccuracyWindow:
         self.state, self.frame = state, frame  # ui.state.ViewerState, ui.frame.FrameController
         self.open = True
         self.job: _Job | None = None
-        self.reference = None
+        self.reference: Any = None
         self.ref_key = ""
         self.max_seconds = 180.0
         self.view_mode = 0

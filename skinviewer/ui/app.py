@@ -21,7 +21,6 @@ from pathlib import Path
 import moderngl_window as mglw
 from moderngl_window.timers.clock import Timer
 
-from skinviewer import techniques
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.core.shaders import ShaderLibrary
@@ -36,9 +35,9 @@ DEFAULT_WINDOW = (1280, 800)
 class ViewerApp(mglw.WindowConfig):
     title = "skinviewer"
     gl_version = (3, 3)
-    aspect_ratio = None
+    aspect_ratio = None  # type: ignore[assignment]  # moderngl-window accepts None (free aspect); its annotation does not
     resizable = True
-    clear_color = None
+    clear_color = None  # type: ignore[assignment]  # None: no clear by the window (the frame draws everything)
     vsync = True
 
     def __init__(self, settings: Settings | None = None, preset_path: str | None = None,
@@ -143,7 +142,7 @@ def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, 
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")  # glfw reports its init failure as a warning too
                     cls = mglw.get_local_window_cls(name)
-                    wnd = cls(title="skinviewer", size=tuple(size), resizable=True, visible=visible,
+                    wnd = cls(title="skinviewer", size=(int(size[0]), int(size[1])), resizable=True, visible=visible,
                               gl_version=(3, 3), aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
                 mglw.activate_context(window=wnd)
                 # moderngl-window closes the window on Escape by default: that quit the session (unsaved
@@ -184,9 +183,9 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
     if not technique_given:
         s = with_values(s, {"technique": best_technique(s.technique)})
     frames = frames or (1 if screenshot else 0)
-    size = tuple(size) if size else DEFAULT_WINDOW
+    win = (int(size[0]), int(size[1])) if size else DEFAULT_WINDOW
     options = ViewerOptions(debug=debug or os.environ.get("SKINVIEWER_DEBUG") == "1")
-    app = create_app(s, size=size, preset_path=preset_path, options=options)
+    app = create_app(s, size=win, preset_path=preset_path, options=options)
     # the quality governor's calibration (issue 27): loaded, or measured in the background for the
     # techniques it lacks (not for scripted --frames runs; SKINVIEWER_CALIBRATE=0 turns it off)
     app.frame.load_calibration(auto=not frames and os.environ.get("SKINVIEWER_CALIBRATE", "1") != "0")

@@ -53,7 +53,7 @@ class OrbitController:
         pitch = max(-89.0, min(89.0, s.camera.pitch + dy * ORBIT_DEG_PER_PX))
         return {"camera.yaw": round(yaw, 4), "camera.pitch": round(pitch, 4)}
 
-    def pan(self, s: Settings, dx: float, dy: float, viewport_h: int) -> dict:
+    def pan(self, s: Settings, dx: float, dy: float, viewport_h: float) -> dict:
         cam = s.camera
         dist = self._distance(s)
         target = self._target(s)

@@ -10,6 +10,7 @@ technique's textures and a second copy of the mesh."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from skinviewer.core.settings import Settings, SettingsError, load_preset, with_values
 
@@ -94,12 +95,13 @@ class CompareState:
         """The slot's settings at the live window size (and camera, when following). Validated once
         per change of those inputs, not every frame."""
         s = slot.settings
+        assert s is not None, "only a filled slot is shown"
         cam = live.camera if self.follow_camera else None
         key = (live.render.width, live.render.height, cam)
         last = self._framed.get(slot.label)
         if last is not None and last[0][0] is s and last[0][1:] == key:
             return last[1]
-        upd = {"render.width": live.render.width, "render.height": live.render.height}
+        upd: dict[str, Any] = {"render.width": live.render.width, "render.height": live.render.height}
         if cam is not None:
             upd["camera"] = cam.model_dump(mode="json")
         out = with_values(s, upd)

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import moderngl
 
+from skinviewer.core.gpu import write_uniform
+
 CHANNELS = ("RGB", "R", "G", "B", "A")
 # mode: 0 = show as-is (already display-encoded), 1 = inspect (exposure + sRGB encode + channel),
 #       2 = A/B split at u_divider, 3 = |A-B| heat map
@@ -76,7 +78,7 @@ class Display:
 
     def _set(self, name, value):
         if name in self.prog:
-            self.prog[name].value = value
+            write_uniform(self.prog[name], value)
 
     def _draw(self, tex: moderngl.Texture, viewport: tuple[int, int, int, int], mode: int, letterbox: bool,
               tex_b: moderngl.Texture | None = None, **uniforms) -> None:

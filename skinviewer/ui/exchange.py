@@ -76,10 +76,10 @@ class TurntableJob:
         self._proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
         self._err: list[str] = []
         threading.Thread(target=self._read, daemon=True).start()
-        threading.Thread(target=lambda: self._err.extend(self._proc.stderr), daemon=True).start()
+        threading.Thread(target=lambda: self._err.extend(self._proc.stderr or ()), daemon=True).start()
 
     def _read(self) -> None:
-        for line in self._proc.stdout:
+        for line in self._proc.stdout or ():
             parts = line.split()
             if len(parts) == 3 and parts[0] == "progress":
                 self.done = int(parts[1])

@@ -81,7 +81,8 @@ class FrameController:
         self._shown: Settings | None = None  # the settings of the image on screen
         self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
         self._last_frame_t: float | None = None
-        self._window = (tuple(window_size), tuple(buffer_size))
+        self._window: tuple[tuple[int, int], tuple[int, int]] = (
+            (window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         # the quality governor (issue 27): what each frame renders while the user drags, and the
         # refinement to the user's settings after; its calibration is loaded or measured on start
         r = state.settings.render
@@ -257,7 +258,7 @@ class FrameController:
             self.frame_ms.append((now - self._last_frame_t) * 1000.0)
         self._last_frame_t = now
         self.frames += 1
-        self._window = (tuple(window_size), tuple(buffer_size))
+        self._window = ((window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         self.watcher.poll()
         # the UI is built first: this frame's edits (and panel resizes) are rendered this frame;
         # the panel shows the previous frame's report (identical on idle frames)
@@ -274,7 +275,7 @@ class FrameController:
         self.watcher.refresh_errors()
         self._trim_texture_pools()
         self._take_shots(include_ui=False)
-        if ui_built:
+        if ui_built and ui is not None:
             ui.present()
         self._take_shots(include_ui=True)
 
@@ -300,7 +301,8 @@ class FrameController:
             and self.scheduler.should_defer(pending, self._widget_active, last_cost) \
             and not self._scene_changed(self._shown)
         self.scheduler.set_deferred(defer)
-        target = self._shown if defer else self.governor.settings_for(live, self._rung if self._governing else FINAL)
+        target = self._shown if defer and self._shown is not None else self.governor.settings_for(
+            live, self._rung if self._governing else FINAL)
         try:
             rung = self._rung if self._governing and not defer else FINAL
             variant = "" if not rung.changes else "preview " + json.dumps(sorted((k, repr(v)) for k, v in rung.changes.items()))

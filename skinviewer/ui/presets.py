@@ -113,7 +113,7 @@ class PresetState:
 
     @property
     def read_only(self) -> bool:
-        return bool(self.path) and is_shipped(self.path)
+        return self.path is not None and bool(self.path) and is_shipped(self.path)
 
     @staticmethod
     def listing() -> list[tuple[str, list[Path]]]:

@@ -8,8 +8,9 @@ No GL, no imgui: the scene is loaded through the ``load_scene`` function it is g
 renderer's ``ensure_scene``), so a state whose mesh cannot load is refused like any invalid value."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any, Callable
+from typing import Any
 
 from skinviewer import techniques
 from skinviewer.core.renderer import Renderer
@@ -70,7 +71,7 @@ class ViewerState:
         self.errors: list[tuple[str, str]] = []  # the last refused edit
         self.error_title = ""
         self.message = ("", False)  # status bar: (text, is_error)
-        self.scene = None  # the loaded scene (description, notes, bounds)
+        self.scene: Any = None  # the loaded scene (description, notes, bounds)
         s = settings or Settings()
         if s.technique not in techniques.names():
             s = with_values(s, {"technique": best_technique(s.technique)})

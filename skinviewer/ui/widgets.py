@@ -10,9 +10,10 @@ from __future__ import annotations
 import math
 import types
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass
 from dataclasses import field as dc_field
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 from imgui_bundle import imgui
 from pydantic import BaseModel
@@ -118,7 +119,7 @@ class UiContext:
 
     def claim(self, rect: tuple[float, float, float, float]) -> None:
         """This window covers ``rect`` (x, y, w, h): the mouse there belongs to the UI, not the view."""
-        self.rects.append(tuple(rect))
+        self.rects.append((rect[0], rect[1], rect[2], rect[3]))
 
 
 def _unwrap_optional(ann) -> tuple[Any, bool]:

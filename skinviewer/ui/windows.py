@@ -19,7 +19,8 @@ True when it drew the view region (``viewport``: x, y, w, h in framebuffer pixel
 from __future__ import annotations
 
 import traceback
-from typing import Callable, Protocol
+from collections.abc import Callable
+from typing import Protocol
 
 from skinviewer.ui.accuracy_window import AccuracyWindow
 from skinviewer.ui.frame import FrameController
@@ -126,7 +127,8 @@ class UiHost:
 
     def view_hooks(self) -> list:
         """The windows' own view modes (``draw_view``), in drawing order."""
-        return [w.draw_view for w in self.windows if callable(getattr(w, "draw_view", None))]
+        hooks = [getattr(w, "draw_view", None) for w in self.windows]
+        return [h for h in hooks if callable(h)]
 
     def covers(self, x: float, y: float) -> bool:
         """A UI window was drawn at (x, y) last frame."""
@@ -143,8 +145,9 @@ class UiHost:
     def release(self) -> None:
         from imgui_bundle import imgui, implot
         for w in self.windows:
-            if callable(getattr(w, "release", None)):
-                w.release()
+            release = getattr(w, "release", None)
+            if callable(release):
+                release()
         try:
             self.renderer.shutdown()
         except Exception:

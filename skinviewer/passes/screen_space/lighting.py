@@ -15,8 +15,8 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
-from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
 from skinviewer.physics import burley as B
+from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
 from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
 from skinviewer.scene.camera import gl_bytes
 

@@ -11,6 +11,7 @@ import io
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -97,7 +98,7 @@ def _load_cache(path: Path) -> dict[str, np.ndarray] | None:
     return arrays if ok else None
 
 
-def _save_cache(path: Path, arrays: dict[str, np.ndarray]) -> None:
+def _save_cache(path: Path, arrays: dict[str, Any]) -> None:
     """Atomic write (temp file + os.replace); an unwritable cache only costs regeneration."""
     tmp = None
     try:

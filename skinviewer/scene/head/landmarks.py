@@ -7,6 +7,7 @@ evaluated at |x| (both sides). The implicit surface is built by folding ``FEATUR
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -100,10 +101,10 @@ FEATURES: tuple[Feature, ...] = (
 
 # collar cut: y = Y + SLOPE * (z - 40 mm) - DROP * x², lower at the back and down the shoulders,
 # rounded over BLEND mm
-CUT = dict(y=-196.0, slope=0.17, drop=0.0025, blend=8.0)
+CUT: dict[str, Any] = dict(y=-196.0, slope=0.17, drop=0.0025, blend=8.0)
 
 # eyes: the right eyeball (x > 0; the left mirrors), its cornea, and the palpebral fissure
-EYE = dict(
+EYE: dict[str, Any] = dict(
     centre=(32.0, 12.0, 70.0),   # eyeball centre
     radius=12.0,                 # sclera (24 mm globe)
     cornea_radius=7.8,           # corneal curvature radius
@@ -119,7 +120,7 @@ EYE = dict(
 )
 
 # ears: a planar outline (a back, b up from the attachment in front of the tragus)
-EAR = dict(
+EAR: dict[str, Any] = dict(
     height=32.0,                 # half height of the outline
     centre_back=9.0,             # outline centre behind the attachment point
     half_width=(15.0, 3.5, -2.0),  # half width = c0 + c1 y + c2 y² (y in [-1, 1] down..up)
@@ -134,10 +135,10 @@ EAR = dict(
 # (a rounded U at the nape, not a V); HAIR: the soft edge's width, its jitter, the hair colour
 HAIRLINE = ([0.0, 0.55, 0.9, 1.12, 1.28, 1.42, 1.75, 2.1, 2.5, np.pi],
             [82.0, 78.0, 58.0, 34.0, 8.0, 30.0, 26.0, -28.0, -50.0, -54.0])
-HAIR = dict(edge=(-6.0, 12.0), jitter=4.0, colour=(0.085, 0.062, 0.048), cover=0.72, specular=0.35)
+HAIR: dict[str, Any] = dict(edge=(-6.0, 12.0), jitter=4.0, colour=(0.085, 0.062, 0.048), cover=0.72, specular=0.35)
 
 # brow centre line y(|x|) = base + lift * exp(-((|x| - peak_x) / width)²) - droop * (|x| - 30)²
-BROW = dict(base=30.5, lift=5.5, peak_x=31.0, width=15.0, droop=0.004)
+BROW: dict[str, Any] = dict(base=30.5, lift=5.5, peak_x=31.0, width=15.0, droop=0.004)
 
 # jaw line (under-jaw crease) height against depth z: neck below it
 JAW_LINE = ([-120.0, -40.0, 0.0, 40.0, 70.0, 90.0], [-72.0, -72.0, -96.0, -110.0, -116.0, -118.0])
@@ -146,7 +147,7 @@ JAW_LINE = ([-120.0, -40.0, 0.0, 40.0, 70.0, 90.0], [-72.0, -72.0, -96.0, -110.0
 # paint: region shapes, flushes and colours (mm; |x|, y, z)
 
 # facial regions as ellipses in (|x|, y): centre, semi-axes, and the depth the region starts at
-REGION_SHAPES = dict(
+REGION_SHAPES: dict[str, Any] = dict(
     cheeks=dict(centre=(36.0, -28.0), axes=(30.0, 40.0), z_min=30.0),
     forehead=dict(centre=(0.0, 30.0), axes=(58.0, 200.0), z_min=30.0),
     chin=dict(centre=(0.0, -104.0), axes=(30.0, 24.0), z_min=45.0),
@@ -167,7 +168,7 @@ BLUSH_EARS = 0.65
 NOSTRIL_SHADE = ((6.8, -39.5, 100.0), (2.6, 2.2, 4.0))
 
 # linear-light reflectances
-SKIN_COLOURS = dict(base=(0.62, 0.40, 0.31), flush=(0.60, 0.27, 0.22), lips=(0.52, 0.18, 0.16),
+SKIN_COLOURS: dict[str, Any] = dict(base=(0.62, 0.40, 0.31), flush=(0.60, 0.27, 0.22), lips=(0.52, 0.18, 0.16),
                     conjunctiva=(0.50, 0.20, 0.18), brow=(0.07, 0.05, 0.035),
                     beard=(0.16, 0.12, 0.05))   # beard: fractional darkening per channel
 

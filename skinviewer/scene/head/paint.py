@@ -88,7 +88,7 @@ def regions(p, island):
     lips = (ax / lp["axes"][0]) ** 2 + ((y - lp["centre"][1]) / half_h) ** 2 < 1.0
     r[lips & (z > lp["z_min"])] = REGION["lips"]
     ns = sh["nose"]
-    nose_w = ns["width"][0] + ns["width"][1] * smoothstep(*ns["widen"], y)
+    nose_w = ns["width"][0] + ns["width"][1] * smoothstep(ns["widen"][0], ns["widen"][1], y)
     nose = (y < ns["top"]) & (y > ns["bottom"] + 0.02 * ax * ax) & (ax < nose_w) & (z > ns["z_min"])
     r[nose] = REGION["nose"]
     r[(y < jaw_y(z)) & (r != REGION["chin"])] = REGION["neck"]

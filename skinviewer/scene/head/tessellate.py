@@ -2,6 +2,8 @@
 the lid margins, the crown cap, the two-sheet ears and the eyeballs, with their atlas UVs."""
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.spatial import Delaunay
 
@@ -24,7 +26,7 @@ from skinviewer.scene.head.shapes import smoothstep
 from skinviewer.scene.mesh import vertex_normals
 
 EYE_SEGMENTS = {0: (16, 10), 1: (28, 15), 2: (48, 24)}   # detail -> (segments, rings) per eyeball
-EYE_WINDOW = dict(x=(14.0, 50.0), y=(-3.0, 27.0), z_min=50.0)   # band cells re-meshed around an eye
+EYE_WINDOW: dict[str, Any] = dict(x=(14.0, 50.0), y=(-3.0, 27.0), z_min=50.0)   # band cells re-meshed around an eye
 
 
 def _warp(lo, hi, n, density):
@@ -214,15 +216,15 @@ def _ears(atlas: Atlas, spacing: float, parts: _Parts) -> None:
     for j, r in enumerate(radii):
         n = n_rim if r >= OUTER_RING else max(int(round(2 * np.pi * r / ear_spacing)), 6)
         rings.append((np.arange(n) + 0.5 * (j % 2)) * 2 * np.pi / n)
-    disk = [np.zeros((1, 2))]
+    disk_parts = [np.zeros((1, 2))]
     for r, ang in zip(radii, rings):
-        disk.append(np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1))
+        disk_parts.append(np.stack([r * np.cos(ang), r * np.sin(ang)], axis=1))
     first = np.cumsum([1] + [len(a) for a in rings])
     tris = [np.stack([np.zeros(len(rings[0]), int), first[0] + np.arange(len(rings[0])),
                       first[0] + (np.arange(len(rings[0])) + 1) % len(rings[0])], axis=1)]
     for k in range(len(rings) - 1):
         tris.append(_zip_rings(rings[k], rings[k + 1], first[k], first[k + 1]))
-    disk, disk_tris = np.concatenate(disk), np.concatenate(tris)
+    disk, disk_tris = np.concatenate(disk_parts), np.concatenate(tris)
     for isl in atlas.ear_islands:
         p = isl.ear.sheet(disk[:, 0], disk[:, 1], isl.front)
         ref = isl.ear.normal if isl.front else -isl.ear.normal

@@ -4,6 +4,7 @@ section for every other settings group (a new technique's settings show up with 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from imgui_bundle import imgui
@@ -211,7 +212,7 @@ class SpecularSection:
                     ch, on = imgui.checkbox("##on", cur is not None)
                     tooltip(f"{reg}: its own {'roughness m' if fname == 'm' else 'intensity rho_s'} "
                             "(unchecked: the global value)")
-                    row = ov.model_dump() if ov else {"m": None, "rho_s": None}
+                    row: dict[str, Any] = ov.model_dump() if ov else {"m": None, "rho_s": None}
                     if ch:
                         row[fname] = float(glob) if on else None
                         ui.edits.set(f"specular.per_region.{reg}", row)
