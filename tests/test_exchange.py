@@ -13,8 +13,8 @@ import pytest
 import yaml
 from scipy.integrate import quad
 
-from skinviewer.core import exchange as X
 from skinviewer.cli import main
+from skinviewer.core import exchange as X
 from skinviewer.core.settings import Settings, load_preset, with_values
 from skinviewer.physics import engines as E
 from skinviewer.physics.profiles import deon_skin_profile

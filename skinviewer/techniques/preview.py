@@ -129,7 +129,7 @@ def ladder(s: Settings) -> list[Rung]:
     # the user's own settings on a smaller view: what an orbit can show without re-rendering the
     # texture-space work it has cached (ui/governor.py restricts a camera drag to these)
     views = [("", {}, 0.25), ("", {}, 0.5)]
-    for label, caps, scale in views + LADDERS.get(s.technique, lambda s: [])(s):
+    for _label, caps, scale in views + LADDERS.get(s.technique, lambda s: [])(s):
         ch = _cap(s, caps)
         key = (tuple(sorted((k, repr(v)) for k, v in ch.items())), scale)
         if (not ch and scale == 1.0) or key in seen:
