@@ -4,6 +4,8 @@ from __future__ import annotations
 import argparse
 
 from skinviewer import techniques
+from skinviewer.core.look import apply_look
+from skinviewer.core.look import resolve as resolve_look
 from skinviewer.core.settings import (
     Settings,
     load_preset,
@@ -52,7 +54,7 @@ def settings_from_args(args) -> Settings:
     """Defaults <- scene's own lights/camera <- preset <- --mesh/--technique/--size/--camera <- --set."""
     s = Settings()
     if args.preset:
-        s = load_preset(args.preset)
+        s = apply_look(load_preset(args.preset))
     if args.scene:
         s = with_values(s, {"scene.name": args.scene, "scene.mesh": None, **scene_overrides(args.scene)})
     direct: dict = {}
@@ -67,6 +69,8 @@ def settings_from_args(args) -> Settings:
         if len(args.camera) == 3:
             direct["camera.distance"] = args.camera[2]
     direct.update(parse_assignments(args.assign))
-    return with_values(s, direct) if direct else s
+    # the artist model (core/look.py): --set look.* re-derives the profile, a hand edit of a derived table
+    # hands it back to the table
+    return resolve_look(with_values(s, direct), direct) if direct else apply_look(s)
 
 

@@ -12,6 +12,8 @@ from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 from skinviewer import techniques
+from skinviewer.core.look import apply_look
+from skinviewer.core.look import resolve as resolve_look
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, SettingsError, with_values
 from skinviewer.scene.scenes import scene_overrides
@@ -106,7 +108,7 @@ class ViewerState:
         if not assignments:
             return True
         try:
-            new = with_values(self.settings, assignments)
+            new = resolve_look(with_values(self.settings, assignments), assignments)
         except SettingsError as exc:
             self.refuse(exc.errors, source or "invalid setting")
             return False
@@ -192,6 +194,12 @@ class ViewerState:
         if s is None:
             errs = self.presets.errors
             self.say(f"refused preset {path}" + (f": {errs[0][0]}: {errs[0][1]}" if errs else ""), error=True)
+            return False
+        try:
+            s = apply_look(s)  # a preset whose look drives the profile: its tables re-derived (the same values)
+        except SettingsError as exc:
+            self.presets.refused(path, exc.errors)
+            self.say(f"refused preset {path}: {exc}", error=True)
             return False
         if not self.set_settings(s, f"preset {path}"):
             # refused after loading: the current preset file and its saved baseline stay (Ctrl+S
