@@ -50,6 +50,20 @@ def add_scene_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--camera", type=_camera, help=f"yaw,pitch[,distance] in degrees and mesh units; default: {d.camera.yaw:g},{d.camera.pitch:g} at a distance that frames the mesh")
 
 
+def _note_technique_conflict(preset: str, technique: str) -> None:
+    """--technique X --preset Y where Y names another technique: say which one wins (the option)."""
+    import json
+    import sys
+    try:
+        with open(preset, encoding="utf-8-sig") as f:
+            named = json.load(f).get("technique")
+    except (OSError, ValueError, AttributeError):
+        return
+    if isinstance(named, str) and named != technique:
+        print(f"skinviewer: note: --technique {technique} overrides the technique of preset {preset} ({named}); "
+              f"its {named} settings are kept but unused", file=sys.stderr)
+
+
 def settings_from_args(args) -> Settings:
     """Defaults <- scene's own lights/camera <- preset <- --mesh/--technique/--size/--camera <- --set."""
     s = Settings()
@@ -62,6 +76,8 @@ def settings_from_args(args) -> Settings:
         direct["scene.mesh"] = args.mesh
     if args.technique:
         direct["technique"] = args.technique
+        if args.preset:
+            _note_technique_conflict(args.preset, args.technique)
     if args.size:
         direct["render.width"], direct["render.height"] = args.size
     if args.camera:

@@ -695,10 +695,30 @@ def with_values(s: Settings, assignments: dict[str, Any]) -> Settings:
             else:
                 raise KeyError(last)
         except (KeyError, IndexError, ValueError, TypeError):
-            errors.append((path, "no such setting"))
+            errors.append((path, "no such setting" + _did_you_mean(data, parts)))
     if errors:
         raise SettingsError(errors)
     return validate(data)
+
+
+def _did_you_mean(data: Any, parts: list[str]) -> str:
+    """'; did you mean lights.0.intensity?' for a mistyped dotted path (the closest key where it goes wrong)."""
+    import difflib
+    cur, done = data, []
+    for p in parts:
+        if isinstance(cur, dict) and p in cur:
+            cur, done = cur[p], done + [p]
+        elif isinstance(cur, list) and p.isdigit() and int(p) < len(cur):
+            cur, done = cur[int(p)], done + [p]
+        elif isinstance(cur, dict):
+            close = difflib.get_close_matches(p, list(cur), n=1, cutoff=0.6)
+            if not close:
+                return ""
+            rest = parts[len(done) + 1:]
+            return f"; did you mean {'.'.join(done + close + rest)}?"
+        else:
+            return ""
+    return ""
 
 
 def _is_free_dict(parent: list[str]) -> bool:
