@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 
 from skinviewer.core import look
-from skinviewer.core.settings import Settings, SettingsError, to_dict, validate, with_values
+from skinviewer.core.settings import (
+    Settings,
+    SettingsError,
+    to_dict,
+    validate,
+    with_values,
+)
 from skinviewer.physics import artist
 from skinviewer.physics.profiles import Burley
 
@@ -116,7 +122,7 @@ def test_a_hand_edit_of_the_table_hands_the_profile_back():
 def test_defaults_are_untouched_and_the_default_look_matches_deons_table():
     s = Settings()
     assert s.look.source == "table" and look.apply_look(s) == s
-    color, radius, where = look.shown_look(s, "deon")
+    _color, radius, where = look.shown_look(s, "deon")
     assert where.startswith("estimated")
     np.testing.assert_allclose(radius, s.look.scatter_radius, rtol=3e-3)  # the default look is d'Eon's reach
     # burley shows its own parameters
@@ -126,6 +132,7 @@ def test_defaults_are_untouched_and_the_default_look_matches_deons_table():
 
 def test_cli_set_look_rederives(tmp_path):
     from argparse import Namespace
+
     from skinviewer.cli.args import settings_from_args
     args = Namespace(preset=None, scene=None, mesh=None, technique="deon", size=None, camera=None,
                      assign=["look.source=look", "look.scatter_radius=2,1,0.5"])

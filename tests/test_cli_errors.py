@@ -45,6 +45,7 @@ def test_a_mistyped_setting_gets_did_you_mean(capsys, tmp_path):
 
 def test_technique_and_preset_conflict_is_stated(capsys):
     from argparse import Namespace
+
     from skinviewer.cli.args import settings_from_args
     args = Namespace(preset=str(ROOT / "presets" / "gosselin.json"), scene=None, mesh=None, technique="ssss",
                      size=None, camera=None, assign=[])
@@ -62,11 +63,11 @@ def test_technique_and_preset_conflict_is_stated(capsys):
                                   "scan.exr", "ref.npy", "bench/pareto.png", "best.json", "skin1.json",
                                   "screenshots/a.png", "spin.mp4", "lights.gif", "skin.mtlx", "frames/0001.png"])
 def test_readme_outputs_are_ignored(path):
-    r = subprocess.run(["git", "check-ignore", "-q", "--no-index", path], cwd=ROOT)
+    r = subprocess.run(["git", "check-ignore", "-q", "--no-index", path], cwd=ROOT, check=False)
     assert r.returncode == 0, f"{path} is not ignored by .gitignore"
 
 
 @pytest.mark.skipif(shutil.which("git") is None or not (ROOT / ".git").exists(), reason="not a git checkout")
 def test_shipped_files_are_not_ignored():
     for path in ("presets/deon.json", "docs/pareto.png", "skinviewer/cli/render.py"):
-        assert subprocess.run(["git", "check-ignore", "-q", "--no-index", path], cwd=ROOT).returncode == 1, path
+        assert subprocess.run(["git", "check-ignore", "-q", "--no-index", path], cwd=ROOT, check=False).returncode == 1, path

@@ -193,7 +193,10 @@ class AccuracyWindow:
         # the top-left corner of the view (the passes window takes the top-right): collapsed, a bar above
         # the subject, never across the face or over the corners where the camera is dragged
         imgui.set_next_window_pos(imgui.ImVec2(vx + 8, vy + 8), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(420, 320), imgui.Cond_.first_use_ever.value)
+        # half the view at most (the passes window has the other half), so their title bars never overlap
+        # and a 960x600 window keeps most of the image visible
+        imgui.set_next_window_size(imgui.ImVec2(min(420.0, max(200.0, vw / 2 - 12)), min(360.0, max(160.0, vh * 0.6))),
+                                   imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
         expanded = imgui.begin("Accuracy###accuracy")[0]
         if expanded:
@@ -223,6 +226,9 @@ class AccuracyWindow:
             imgui.text_disabled("the view or lighting changed: the ground truth is for another view")
         if self.current and self.error is not None:
             e = self.error
+            shown = self.state.compare.shown()
+            imgui.text_disabled(f"image: the live state ({self.state.settings.technique})"
+                                + (f"; view: {shown}" if shown else ""))
             imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
             imgui.text(f"p99  {' / '.join(f'{100 * c:.1f}' for c in e.p99)} %")
             imgui.text(f"DSSIM {e.dssim:.4f}")
@@ -243,11 +249,21 @@ class AccuracyWindow:
         ok = [r for r in self.results if r.error is None and r.full_ms and r.rms]
         if not ok:
             return
-        if implot.begin_plot("##pareto", imgui.ImVec2(-1, 200)):
+        h = max(180.0, imgui.get_content_region_avail().y - 4)
+        if implot.begin_plot("##pareto", imgui.ImVec2(-1, h)):
             implot.setup_axes("full frame ms", "RMS %")
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
-            for tech in dict.fromkeys(r.technique for r in ok):
+            # the legend above the plot (never over the points); the RMS axis clipped at the bulk of the
+            # points (an outlier of several hundred % would flatten the rest)
+            implot.setup_legend(implot.Location_.north.value,
+                                implot.LegendFlags_.outside.value | implot.LegendFlags_.horizontal.value)
+            ys = np.array([100 * r.rms_mean for r in ok])
+            top = float(min(ys.max(), 1.5 * np.percentile(ys, 90, method="lower"))) * 1.08
+            implot.setup_axis_limits(implot.ImAxis_.y1.value, 0.0, max(top, 1e-3), implot.Cond_.once.value)
+            for k, tech in enumerate(dict.fromkeys(r.technique for r in ok)):
                 pts = [r for r in ok if r.technique == tech]
+                implot.set_next_marker_style(implot.Marker_.circle.value, 4.0,
+                                             implot.get_colormap_color(k, implot.Colormap_.deep.value))  # distinct per technique
                 implot.plot_scatter(tech, np.array([r.full_ms for r in pts], np.float64),
                                     np.array([100 * r.rms_mean for r in pts], np.float64))
             front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)

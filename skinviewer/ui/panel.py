@@ -32,7 +32,7 @@ from skinviewer.ui.sections.tools import (
     ShadersSection,
 )
 from skinviewer.ui.state import ViewerState
-from skinviewer.ui.widgets import UiContext, begin_docked
+from skinviewer.ui.widgets import UiContext, begin_docked, tooltip
 
 LABEL_COLUMN_PX = LABEL_MAX_PX + 8.0  # room for labels with units (fielddocs keeps them this short)
 
@@ -97,8 +97,7 @@ class Panel:
             self.advanced_open = ui.header(ADVANCED_TITLE)
             tooltip_text = ("every technique's full settings (the raw Gaussian table, blur and cache switches), "
                             "render, shaders, the profile lab")
-            if imgui.is_item_hovered():
-                imgui.set_tooltip(tooltip_text)
+            tooltip(tooltip_text)
             if self.advanced_open:
                 imgui.indent(8.0)
                 for s in self.sections[n:m]:

@@ -237,10 +237,31 @@ class ViewerState:
         p = self.presets
         if path:
             ok = p.save(self.settings, path)
+        elif not p.path:  # no name yet: ask for one (Save as), never a timestamped file
+            self.request_save_as()
+            return False
         else:
             target, note = p.save_target()
             ok = p.save(self.settings, target, note)
         self.say(p.message, error=not ok)
+        return ok
+
+    def request_save_as(self) -> None:
+        """Ctrl+Shift+S (or Ctrl+S without a named preset): the *Save as* popup asks for a name."""
+        self.presets.ask_name()
+        self.say("save as: name the preset")
+
+    def save_preset_named(self, name: str) -> bool:
+        """*Save as* answered: a bare name goes to the user folder as NAME.json (a shipped folder is
+        refused by ``save``); the named file is then what Ctrl+S writes."""
+        from skinviewer.ui.presets import name_to_path
+        target = name_to_path(name)
+        if target is None:
+            self.say("save as: type a name", error=True)
+            return False
+        ok = self.save_preset(str(target))
+        if ok:
+            self.presets.close_naming()
         return ok
 
     def set_preset_path_text(self, text: str) -> None:

@@ -22,6 +22,7 @@ import traceback
 from typing import Callable, Protocol
 
 from skinviewer.ui.accuracy_window import AccuracyWindow
+from skinviewer.ui.compare_overlay import CompareOverlay
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.layout import Layout
 from skinviewer.ui.panel import Panel
@@ -45,6 +46,7 @@ WINDOWS: tuple[WindowFactory, ...] = (
     StatusBar,
     PassesWindow,
     AccuracyWindow,
+    CompareOverlay,
 )
 
 

@@ -34,8 +34,7 @@ def _header(ui: UiContext, name: str, active: str) -> bool:
     in the tooltip; open when it is the active technique."""
     tech = techniques.REGISTRY.get(name)
     opened = ui.header(f"{name}{'  (active)' if name == active else ''}###{name}", name == active)
-    if imgui.is_item_hovered():
-        imgui.set_tooltip(tech.title if tech is not None else f"settings group '{name}'")
+    tooltip(tech.title if tech is not None else f"settings group '{name}'")
     return opened
 
 
@@ -47,8 +46,7 @@ class PhongSection:
         self.frame = frame
 
     def draw(self, ui: UiContext) -> None:
-        if ui.header(f"phong{_active(self.state, 'phong')}###Phong"):
-            tooltip(techniques.REGISTRY["phong"].title if "phong" in techniques.REGISTRY else "Phong / Lambert")
+        if _header(ui, "phong", self.state.settings.technique):
             edit_model(self.state.settings.phong, "phong", ui)
             change_line(self.frame, ("phong",))
 

@@ -8,8 +8,8 @@ from imgui_bundle import imgui
 from skinviewer.ui.frame import DRAG_RESOLUTIONS, FrameController
 from skinviewer.ui.scheduler import MODES as RENDER_MODES
 from skinviewer.ui.scheduler import split_ms
-from skinviewer.ui.sections.look import QualitySection
 from skinviewer.ui.sections.common import TEX_COL, VIEW_COL, change_line, shader_errors
+from skinviewer.ui.sections.look import QualitySection
 from skinviewer.ui.state import ViewerState
 from skinviewer.ui.widgets import (
     DIM,
@@ -66,7 +66,7 @@ class TechniqueSection:
         self.quality = QualitySection(state, frame)
 
     def draw(self, ui: UiContext) -> None:
-        st, fr = self.state, self.frame
+        fr = self.frame
         if not ui.header("Quality & cost", True):
             return
         self.quality.draw(ui)  # the technique (in Look) and its resolutions / samples
