@@ -22,7 +22,7 @@ from skinviewer.core.bench import (
 )
 from skinviewer.core.settings import Settings, value_key, with_values
 from skinviewer.physics.metrics import image_error, rel_error_map
-from skinviewer.ui.widgets import show_tooltip
+from skinviewer.ui.widgets import show_tooltip, wrapped
 
 VIEW_MODES = ("image", "heat map", "split image | heat map")
 def reference_key(s: Settings) -> str:
@@ -250,13 +250,12 @@ class AccuracyWindow:
         if self.current and self.error is not None:
             e = self.error
             shown = self.state.compare.shown()
-            imgui.text_disabled(f"image: the live state ({self.state.settings.technique})"
-                                + (f"; view: {shown}" if shown else ""))
+            wrapped(f"image: the live state ({self.state.settings.technique})" + (f"; view: {shown}" if shown else ""))
             frac = float(self.reference.meta.get("fraction", 1.0))
             if frac < 1.0 and self.rms_se is not None:
                 rms, se = self.rms_se
                 imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}+-{100 * d:.2f}' for c, d in zip(rms, se))} %")
-                imgui.text_disabled(f"(from {100 * frac:.0f} % of the pixels, +- one standard error)")
+                wrapped(f"(from {100 * frac:.0f} % of the pixels, +- one standard error)")
             else:
                 imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
             imgui.text(f"p99  {' / '.join(f'{100 * c:.1f}' for c in e.p99)} %")
@@ -265,7 +264,7 @@ class AccuracyWindow:
             imgui.set_next_item_width(200)
             _, self.view_mode = imgui.combo("view", self.view_mode, list(VIEW_MODES))
             if self.view_mode:
-                imgui.text_disabled("heat map: relative error 0 (black) .. 50 % (white)")
+                wrapped("heat map: relative error 0 (black) .. 50 % (white)")
 
     def _chart_ui(self, imgui) -> None:
         from imgui_bundle import implot

@@ -3,7 +3,7 @@ dragging its inner edge; the 3D view takes the rest (``ui/layout.py``). It is a 
 (``ui/sections/``, plus the profile lab), each drawing itself under its collapsing header, built
 mostly from the settings model (``widgets.edit_model``, labels, units and tooltips from
 ``fielddocs``); the Gaussian, per-region and light tables are hand-built. Each section shows what
-the last change made in it cost (which passes re-ran, in ms), and the Technique section splits the
+the last change made in it cost (which passes re-ran, in ms), and the Quality & cost section splits the
 frame cost into texture-space and view-dependent work. Adding a section is one line in ``SECTIONS``."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The top of the panel (scene, preset, messages, errors) and the Technique & cost section."""
+"""The top of the panel (scene, preset, messages, errors) and the Quality & cost section."""
 from __future__ import annotations
 
 from pathlib import Path
