@@ -241,7 +241,6 @@ class AccuracyWindow:
         else:
             if imgui.button("Ground truth for this view"):
                 self.start()
-            imgui.same_line()
             _, self.follow = imgui.checkbox("follow the view", self.follow)
         if self.status:
             imgui.text_wrapped(self.status)

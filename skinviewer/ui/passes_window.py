@@ -76,12 +76,14 @@ class PassesWindow:
         bad = getattr(rep, "nonfinite", {})
         if bad:  # render.check_finite: a pass wrote NaN/Inf (e.g. a shader edit); the screen stays finite
             imgui.text_colored(ERR, "NaN/Inf in " + ", ".join(f"{n} ({', '.join(o)})" for n, o in bad.items()))
-        flags = imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
+        # scrolls sideways when the window is narrower than the table (a 960x600 window): no column cut off
+        flags = (imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value
+                 | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)
         if imgui.begin_table("passes", 4, flags):
             imgui.table_setup_column("pass")
             imgui.table_setup_column("status")
             imgui.table_setup_column("ms")
-            imgui.table_setup_column("reason", imgui.TableColumnFlags_.width_stretch.value)
+            imgui.table_setup_column("reason")
             imgui.table_headers_row()
             for p in rep.passes:
                 imgui.table_next_row()
