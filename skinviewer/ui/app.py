@@ -54,7 +54,6 @@ class ViewerApp(mglw.WindowConfig):
         self.ui = UiHost(self.wnd, self.state, self.frame)
         self.input = InputController(self.state, self.frame, self.ui, self.wnd.keys, self.wnd.mouse)
         self._title = ""
-        self.startup_lines: list[tuple[float, str]] = []  # the start-up screen's steps (ui/splash.py)
 
     # -- frames --------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
@@ -184,7 +183,6 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
     if sp is not None:
         sp.show(f"first frame of {app.state.settings.technique}: compiling its shaders and rendering "
                 "(on llvmpipe this takes a while; later changes re-run only what they touch)")
-        app.startup_lines = list(sp.lines)
         sp.release()
     wnd.swap_buffers()
     wnd.set_default_viewport()
