@@ -555,11 +555,11 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
 # rebuilds them. The pixels come in stages (every 4th pixel in x and y, every 2nd, all), each a
 # Reference whose mask holds the pixels done so far, so the figures and the heat map refine while the
 # user looks; before the whole-surface sources exist, a coarse stage (visible part only, elements of
-# COARSE_H_MM, every 4th pixel) gives a first figure in seconds. The final stage's element set is the
+# COARSE_H_MM, every 4th pixel) gives a first figure in seconds (coarse: a little low on the head). The final stage's element set is the
 # whole surface (compute_reference keeps only what reaches a visible pixel): the same integral, its
 # clusters of the widest Gaussians grouped differently (figures within a few 0.01 %).
 
-COARSE_H_MM = 1.0
+COARSE_H_MM = 2.0
 STRIDES = (4, 2, 1)
 
 
