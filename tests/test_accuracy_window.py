@@ -84,14 +84,33 @@ def test_cancel(app):
     assert acc.status in ("cancelled",) or acc.current
 
 
-def test_too_slow_says_so(app):
+def test_the_truth_follows_the_view_refining_and_reusing_its_sources(app):
+    """Once asked, the truth follows the view: an orbit restarts it without a new surface irradiance
+    (the session's sources), its stages arrive one by one (figures and heat map refine), and each
+    stage's figures are of the pixels done so far."""
     acc = _acc(app)
-    acc.max_seconds = 1e-6
-    app.state.apply({"camera.yaw": 30.0})
     acc.start()
     _wait(app)
-    acc.max_seconds = 180.0
-    assert "would take about" in acc.status
+    assert acc.current and acc.follow
+    builds = acc.session.builds
+    seen = []
+    app.state.apply({"camera.yaw": 40.0})
+    t0 = time.monotonic()
+    while not acc.current and time.monotonic() - t0 < 120:
+        app.step()
+        if acc.partial is not None and acc.partial.stage not in seen:
+            seen.append(acc.partial.stage)
+    while acc.job is not None and time.monotonic() - t0 < 120:
+        app.step()
+        if acc.partial is not None and acc.partial.stage not in seen:
+            seen.append(acc.partial.stage)
+    assert acc.current and acc.partial.final
+    assert acc.session.builds == builds  # the orbit re-used the diffusion's sources
+    assert not any("coarse" in st for st in seen)
+    app.step()
+    assert acc.error is not None and acc.rms_se is not None and np.all(acc.rms_se[1] == 0)
+    acc.cancel()
+    assert not acc.follow
 
 
 def test_pareto_point_applies_its_configuration(app, tmp_path):

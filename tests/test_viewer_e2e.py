@@ -214,11 +214,12 @@ def test_real_input_drives_the_viewer(xdisplay, tmp_path):
         cx, cy = vx + a.shape[1] // 2, a.shape[0] // 2
         s.drag(1, cx, cy, cx + 120, cy + 20)
         b = s.f12(lambda img: _diff(img, a) > 2.0)
-        assert "*" in s.title(), "an orbit is an unsaved change"
+        assert "*" not in s.title(), "an orbit is not an unsaved change (unless the camera is part of the preset)"
 
         # a click (press + release, as fast as xdotool makes it) on the first panel header collapses it
         hdr = s.wait(lambda: _header_bands(s.grab()[:WIN_H, :400]), 10, "the panel headers")
-        assert len(hdr) >= 2 and hdr[1] - hdr[0] > 60, f"'Technique & cost' starts open (headers at {hdr})"
+        # 'Look' starts open: its section fills the panel (the next header is far below, or off screen)
+        assert hdr and (len(hdr) == 1 or hdr[1] - hdr[0] > 60), f"'Look' starts open (headers at {hdr})"
         s.xdo("mousemove", "--window", s.win, "60", str(hdr[0] + 10))
         s.xdo("click", "1")
         s.wait(lambda: (lambda h: len(h) >= 2 and h[0] == hdr[0] and h[1] - h[0] < 40)(

@@ -19,15 +19,35 @@ from skinviewer.cli.render import cmd_render
 from skinviewer.core.settings import SettingsError
 
 
-class _Parser(argparse.ArgumentParser):
-    """Bad arguments: one line (the usage is one `--help` away), exit 2. Subcommands inherit it."""
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with errors in one line (no usage block), a "did you mean" where a close name exists,
+    and a pointer to --help; exit status 2 as before. Sub-commands inherit it (add_subparsers)."""
 
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+    def error(self, message: str):  # type: ignore[override]
+        import difflib
+        import re
+        hint = ""
+        m = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        if m:
+            choices = re.findall(r"'([^']*)'", m.group(2))
+            close = difflib.get_close_matches(m.group(1), choices, n=1, cutoff=0.5)
+            if close:
+                hint = f"; did you mean '{close[0]}'?"
+        m = re.search(r"unrecognized arguments: (\S+)", message)
+        if m:
+            parsers = [self] + [sp for a in self._actions if isinstance(a, argparse._SubParsersAction)
+                                for sp in a.choices.values()]
+            opts = sorted({o for sp in parsers for a in sp._actions for o in a.option_strings})
+            close = difflib.get_close_matches(m.group(1).split("=")[0], opts, n=1, cutoff=0.6)
+            if close:
+                hint = f"; did you mean {close[0]}?"
+        if "required: --out" in message:
+            hint = "; e.g. --out head.png"
+        self.exit(2, f"{self.prog}: {message}{hint} (see {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
+    p = OneLineParser(prog="skinviewer", description="Interactive tuning of real-time skin shaders.")
     p.add_argument("--version", action="version", version=f"skinviewer {__version__}")
     sub = p.add_subparsers(dest="command")
 
@@ -117,6 +137,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     commands = {"render", "profile", "view", "settings", "reference", "bench", "export", "import", "turntable", "sheet",
                 "calibrate", "-h", "--help", "--version"}
+    if argv and argv[0] not in commands and not argv[0].startswith("-"):
+        import difflib
+        close = difflib.get_close_matches(argv[0], sorted(commands - {"calibrate", "-h", "--help", "--version"}), n=1, cutoff=0.6)
+        print(f"skinviewer: unknown command '{argv[0]}'" + (f"; did you mean '{close[0]}'?" if close else "")
+              + " (see skinviewer --help)", file=sys.stderr)
+        return 2
     if not argv or argv[0] not in commands:
         argv = ["view"] + argv  # `skinviewer --mesh X` opens the viewer
     try:

@@ -6,6 +6,8 @@ import math
 import os
 
 from skinviewer import techniques
+from skinviewer.core.look import apply_look
+from skinviewer.core.look import resolve as resolve_look
 from skinviewer.core.settings import (
     Settings,
     load_preset,
@@ -143,11 +145,25 @@ def add_scene_args(p: argparse.ArgumentParser) -> None:
     g.add_argument("--camera", type=_camera, help=f"yaw,pitch[,distance] in degrees and mesh units; default: {d.camera.yaw:g},{d.camera.pitch:g} at a distance that frames the mesh")
 
 
+def _note_technique_conflict(preset: str, technique: str) -> None:
+    """--technique X --preset Y where Y names another technique: say which one wins (the option)."""
+    import json
+    import sys
+    try:
+        with open(preset, encoding="utf-8-sig") as f:
+            named = json.load(f).get("technique")
+    except (OSError, ValueError, AttributeError):
+        return
+    if isinstance(named, str) and named != technique:
+        print(f"skinviewer: note: --technique {technique} overrides the technique of preset {preset} ({named}); "
+              f"its {named} settings are kept but unused", file=sys.stderr)
+
+
 def settings_from_args(args) -> Settings:
     """Defaults <- scene's own lights/camera <- preset <- --mesh/--technique/--size/--camera <- --set."""
     s = Settings()
     if args.preset:
-        s = load_preset(args.preset)
+        s = apply_look(load_preset(args.preset))
     if args.scene:
         s = with_values(s, {"scene.name": args.scene, "scene.mesh": None, **scene_overrides(args.scene)})
     direct: dict = {}
@@ -155,6 +171,8 @@ def settings_from_args(args) -> Settings:
         direct["scene.mesh"] = args.mesh
     if args.technique:
         direct["technique"] = args.technique
+        if args.preset:
+            _note_technique_conflict(args.preset, args.technique)
     if args.size:
         direct["render.width"], direct["render.height"] = args.size
     if args.camera:
@@ -162,6 +180,8 @@ def settings_from_args(args) -> Settings:
         if len(args.camera) == 3:
             direct["camera.distance"] = args.camera[2]
     direct.update(parse_assignments(args.assign))
-    return with_values(s, direct) if direct else s
+    # the artist model (core/look.py): --set look.* re-derives the profile, a hand edit of a derived table
+    # hands it back to the table
+    return resolve_look(with_values(s, direct), direct) if direct else apply_look(s)
 
 

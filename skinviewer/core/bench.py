@@ -248,36 +248,86 @@ def results_markdown(data: dict) -> str:
     return "\n".join(lines)
 
 
-COLORS = {"phong": "tab:gray", "gosselin": "tab:blue", "deon": "tab:red"}
+# one colour and marker per technique (every technique distinct: d'Eon and ssss used to share a red)
+COLORS = {"phong": "tab:gray", "gosselin": "tab:blue", "deon": "tab:red", "ssss": "tab:orange",
+          "separable": "tab:green", "burley": "tab:purple", "burley2": "tab:brown", "penner": "tab:pink"}
+MARKERS = {"phong": "s", "gosselin": "D", "deon": "o", "ssss": "^", "separable": "v", "burley": "P",
+           "burley2": "X", "penner": "*"}
+# the knob abbreviations of the sweeps' labels (techniques/*.py ``sweep``), for the chart's legend
+KNOBS = (("irrN", "d'Eon irradiance map N²"), ("NG", "N Gaussians"), ("tsmN", "TSM N²"),
+         ("reuseN", "reuse irradiance < N texels"), ("smN", "shadow map N²"), ("pcfN", "PCF radius N"),
+         ("mapN", "Gosselin light map N²"), ("itN", "N blur iterations"), ("mm", "mm radii"),
+         ("Ng-Tt", "ssss: N Gaussians, T taps"), ("Tt-rotF", "separable: T taps, rotate F"),
+         ("n=N", "burley: N samples"), ("B+E @C", "burley2: base+extra @ contrast"),
+         ("lutN kK", "penner: N² LUT, curvature xK"))
+
+
+def _clip_top(ys: list[float]) -> float:
+    """The RMS axis top: the bulk of the points (1.5 x the 90th percentile) unless that holds them all."""
+    a = np.asarray(ys, dtype=float)
+    if a.size == 0:
+        return 1.0
+    top = min(float(a.max()), 1.5 * float(np.percentile(a, 90, method="lower")))
+    return max(top, 1e-6) * 1.08
 
 
 def pareto_plot(results: list[Result], path: Path, title: str = "") -> None:
+    """Accuracy vs time: one colour and marker per technique, the Pareto front, labels on the front and
+    each technique's best point placed so they do not collide (adjustText), the RMS axis clipped at the
+    bulk of the points (outliers drawn on the top edge with their value), a legend of the knob
+    abbreviations."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     ok = [r for r in results if r.error is None and r.full_ms is not None]
-    fig, ax = plt.subplots(figsize=(8, 5.5), dpi=110)
-    # the other techniques in colours none of COLORS uses (the default cycle's 4th is tab:red, d'Eon's)
-    cycle = iter(["tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"])
+    fig, ax = plt.subplots(figsize=(10.5, 7), dpi=110)
+    fig.subplots_adjust(left=0.08, right=0.76, top=0.93, bottom=0.1)
+    cycle = iter(plt.rcParams["axes.prop_cycle"].by_key()["color"])
+    ys_all = [100 * r.rms_mean for r in ok]
+    top = _clip_top(ys_all)
+    texts = []
+    front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)
     for tech in dict.fromkeys(r.technique for r in ok):
         pts = [r for r in ok if r.technique == tech]
         col = COLORS.get(tech) or next(cycle, "k")
-        ax.scatter([r.ms for r in pts], [100 * r.err for r in pts], color=col, label=tech, zorder=3)
-        for r in pts:
-            ax.annotate(r.label, (r.ms, 100 * r.err), fontsize=7, xytext=(3, 3),
-                        textcoords="offset points")
-    front = sorted((r for r in ok if r.pareto), key=lambda r: r.ms)
+        mk = MARKERS.get(tech, "o")
+        inside = [r for r in pts if 100 * r.rms_mean <= top]
+        above = [r for r in pts if 100 * r.rms_mean > top]
+        ax.scatter([r.full_ms for r in inside], [100 * r.rms_mean for r in inside], color=col, marker=mk, s=36,
+                   label=tech, zorder=3, edgecolors="white", linewidths=0.5)
+        if above:  # clipped outliers: a marker on the top edge, the value beside it
+            ax.scatter([r.full_ms for r in above], [top * 0.985] * len(above), color=col, marker=r"$\uparrow$",
+                       s=80, zorder=3, clip_on=False, label=None if inside else tech)
+            for r in above:
+                texts.append(ax.text(r.full_ms, top * 0.95, f"{r.label} {100 * r.rms_mean:.0f} %", fontsize=7,
+                                     color=col))
+        best = min(pts, key=lambda r: r.rms_mean)
+        for r in inside:
+            if r.pareto or r is best:
+                texts.append(ax.text(r.full_ms, 100 * r.rms_mean, r.label, fontsize=7.5, color=col))
     if front:
-        ax.step([r.ms for r in front], [100 * r.err for r in front], where="post", color="k",
+        ax.step([r.full_ms for r in front], [min(100 * r.rms_mean, top) for r in front], where="post", color="k",
                 lw=1.2, ls="--", label="Pareto front", zorder=2)
     ax.set_xscale("log")
+    ax.set_ylim(0.0, top)
     ax.set_xlabel("full frame ms (sync timing, median)")
     ax.set_ylabel("relative RMS error vs ground truth, mean of R/G/B (%)")
-    ax.set_title(f"Accuracy vs time {title}")
+    ax.set_title(f"Accuracy vs time {title}".strip())
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, title="technique", title_fontsize=8,
+              frameon=False)
+    knobs = "\n".join(f"{k:<8} {v}" for k, v in KNOBS)
+    fig.text(0.775, 0.50, "labels: the Pareto front and\neach technique's most accurate\n\n" + knobs
+             + "\n\nRMS of |image - truth| / truth\nper pixel; p99 over 100 %:\nthe worst 1 % of pixels are\n"
+             "off by more than the truth\n(dark pixels, shadow edges)", fontsize=6.5, family="monospace",
+             va="top")
+    if texts:
+        try:
+            from adjustText import adjust_text  # label placement without overlaps (pyproject: bench extra)
+            adjust_text(texts, ax=ax, arrowprops={"arrowstyle": "-", "color": "0.5", "lw": 0.5}, expand=(1.2, 1.4))
+        except ImportError:
+            pass  # labels at their points
     from io import BytesIO
     buf = BytesIO()
     fig.savefig(buf, format="png")

@@ -513,6 +513,40 @@ class SeparableSettings(_Model):
         return v
 
 
+class LookSettings(_Model):
+    """The artist model (physics/artist.py): scatter colour and radius per channel, Burley's surface albedo
+    and (diffuse) mean free path as Unreal's Burley profile and HDRP present them (seed 001 eq. 2.84, 2.88).
+    With source = look they drive deon.gaussians (d'Eon, ssss, penner, Gosselin in mm mode) and
+    burley.albedo / burley.mfp (burley, burley2); the raw tables stay editable under Advanced."""
+    source: Literal["table", "look"] = Field(
+        "table", description="look: the scatter colour and radius below set each technique's profile; table: the "
+        "techniques' own tables (deon.gaussians, burley.albedo/mfp) as they are, the look only shown as an estimate")
+    scatter_color: Vec3 = Field(
+        (0.436, 0.227, 0.131), description="surface albedo A per channel: the profile's total diffuse reflectance "
+        "(eq. 2.84) and its shape s(A) (eq. 2.88)")
+    scatter_radius: Vec3 = Field(
+        (1.574, 0.364, 0.244), description="mean free path per channel, mm (Unreal: mean free path colour x distance): "
+        "the profile's scale d = radius / s(A), its mean radius 2.5 d (default: d'Eon's table)")
+    gaussians: int = Field(6, ge=2, le=MAX_GAUSSIANS, description="Gaussians of the fitted table (d'Eon, ssss, penner)")
+    energy: Literal["albedo-map", "profile"] = Field(
+        "albedo-map", description="albedo-map: the table's weights sum to 1 per channel (d'Eon's convention: the "
+        "colour is in the albedo map); profile: they sum to the scatter colour (the profile tints the skin)")
+
+    @field_validator("scatter_color")
+    @classmethod
+    def _color(cls, v: Vec3) -> Vec3:
+        if any((not math.isfinite(c)) or c < 0 or c > 1 for c in v):
+            raise ValueError("scatter colour components must be in [0, 1]")
+        return v
+
+    @field_validator("scatter_radius")
+    @classmethod
+    def _radius(cls, v: Vec3) -> Vec3:
+        if any((not math.isfinite(c)) or c < 0.01 or c > 50 for c in v):
+            raise ValueError("scatter radius components must be in [0.01, 50] mm")
+        return v
+
+
 class Settings(_Model):
     schema_version: StrictInt = SCHEMA_VERSION  # strict: JSON `true` is not version 1
     technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2", "penner"] = "deon"
@@ -540,6 +574,7 @@ class Settings(_Model):
     burley: BurleySettings = Field(default_factory=BurleySettings)
     burley2: Burley2Settings = Field(default_factory=Burley2Settings)
     penner: PennerSettings = Field(default_factory=PennerSettings)
+    look: LookSettings = Field(default_factory=LookSettings)
 
     @model_validator(mode="after")
     def _version(self) -> Settings:
@@ -669,10 +704,30 @@ def with_values(s: Settings, assignments: dict[str, Any]) -> Settings:
             else:
                 raise KeyError(last)
         except (KeyError, IndexError, ValueError, TypeError):
-            errors.append((path, "no such setting"))
+            errors.append((path, "no such setting" + _did_you_mean(data, parts)))
     if errors:
         raise SettingsError(errors)
     return validate(data)
+
+
+def _did_you_mean(data: Any, parts: list[str]) -> str:
+    """'; did you mean lights.0.intensity?' for a mistyped dotted path (the closest key where it goes wrong)."""
+    import difflib
+    cur, done = data, []
+    for p in parts:
+        if isinstance(cur, dict) and p in cur:
+            cur, done = cur[p], done + [p]
+        elif isinstance(cur, list) and p.isdigit() and int(p) < len(cur):
+            cur, done = cur[int(p)], done + [p]
+        elif isinstance(cur, dict):
+            close = difflib.get_close_matches(p, list(cur), n=1, cutoff=0.6)
+            if not close:
+                return ""
+            rest = parts[len(done) + 1:]
+            return f"; did you mean {'.'.join(done + close + rest)}?"
+        else:
+            return ""
+    return ""
 
 
 def _is_free_dict(parent: list[str]) -> bool:

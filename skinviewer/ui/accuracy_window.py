@@ -23,7 +23,7 @@ from skinviewer.core.bench import (
 )
 from skinviewer.core.settings import Settings, value_key, with_values
 from skinviewer.physics.metrics import image_error, rel_error_map
-from skinviewer.ui.widgets import show_tooltip
+from skinviewer.ui.widgets import show_tooltip, wrapped
 
 VIEW_MODES = ("image", "heat map", "split image | heat map")
 def reference_key(s: Settings) -> str:
@@ -33,24 +33,27 @@ def reference_key(s: Settings) -> str:
 
 
 class _Job:
-    def __init__(self, s: Settings, max_seconds: float):
+    """A progressive truth in a worker thread (core.reference.TruthSession): each finished stage is
+    handed over through ``partial`` (one assignment), picked up by the window on the UI thread."""
+
+    def __init__(self, s: Settings, session):
         self.settings = s
         self.key = reference_key(s)
         self.stage = "starting"
         self.fraction = 0.0
-        self.result: Any = None
+        self.partial: Any = None  # the last finished stage (core.reference.Partial)
+        self.result: Any = None  # the final Reference
         self.error = ""
         self.cancel = threading.Event()
-        self.thread = threading.Thread(target=self._run, args=(max_seconds,), daemon=True)
+        self.thread = threading.Thread(target=self._run, args=(session,), daemon=True)
         self.thread.start()
 
-    def _run(self, max_seconds: float) -> None:
-        from skinviewer.core.reference import ReferenceTooSlow, compute_reference
+    def _run(self, session) -> None:
         try:
-            self.result = compute_reference(self.settings, max_seconds=max_seconds, progress=self._progress,
-                                            cancelled=self.cancel.is_set)
-        except ReferenceTooSlow as exc:
-            self.error = str(exc)
+            for part in session.progressive(self.settings, progress=self._progress, cancelled=self.cancel.is_set):
+                self.partial = part
+                if part.final:
+                    self.result = part.reference
         except InterruptedError:
             self.error = "cancelled"
         except Exception as exc:  # shown in the window, the viewer goes on
@@ -71,7 +74,12 @@ class AccuracyWindow:
         self.job: _Job | None = None
         self.reference: Any = None
         self.ref_key = ""
-        self.max_seconds = 180.0
+        self.max_seconds = 180.0  # bench / CLI references; the window's truth is progressive (no limit)
+        from skinviewer.core.reference import TruthSession
+        self.session = TruthSession()  # sources kept across camera and profile changes, recent truths
+        self.follow = False  # once asked, a truth follows the view (restarts on a change, reusing sources)
+        self.partial = None  # the stage shown (core.reference.Partial)
+        self.rms_se = None  # (rms (3,), standard error (3,)) of the figures while the truth refines
         self.view_mode = 0
         self.error = None        # ImageError of the image on screen
         self.error_for = None    # (settings object, report id) the figures are for
@@ -88,25 +96,34 @@ class AccuracyWindow:
     def start(self) -> None:
         if self.job is not None and not self.job.done:
             return
-        self.job = _Job(self.state.settings, self.max_seconds)
+        self.job = _Job(self.state.settings, self.session)
+        self.follow = True
         self.status = ""
 
     def cancel(self) -> None:
+        self.follow = False
         if self.job is not None:
             self.job.cancel.set()
 
     def _poll(self) -> None:
         job = self.job
-        if job is None or not job.done:
-            return
-        if job.result is not None:
-            self.reference, self.ref_key = job.result, job.key
-            t = job.result.meta.get("seconds", {}).get("total", 0.0)
-            self.status = "ground truth ready" + (" (cached)" if job.result.meta.get("cached") else f" ({t:.1f} s)")
-            self.error_for = None
-        else:
-            self.status = job.error
-        self.job = None
+        if job is not None:
+            part = job.partial
+            if part is not None and part is not self.partial:  # a new stage: the figures and heat map refine
+                self.partial = part
+                self.reference, self.ref_key = part.reference, job.key
+                self.error_for = None
+                self.status = (f"ground truth: {part.stage}, {100 * part.fraction:.0f} % of the pixels, "
+                               f"{part.seconds:.1f} s" + ("" if part.final else " - refining"))
+            if not job.done:
+                if self.follow and job.key != reference_key(self.state.settings):
+                    job.cancel.set()  # the view changed: start again (the session keeps the sources)
+                return
+            if job.result is None and job.error:
+                self.status = job.error
+            self.job = None
+        if self.follow and not self.current and not self.frame._dragging:
+            self.job = _Job(self.state.settings, self.session)
 
     @property
     def current(self) -> bool:
@@ -129,9 +146,16 @@ class AccuracyWindow:
         img = np.asarray(lit[..., :3], np.float64)
         if img.shape != self.reference.lit.shape:
             return
-        m = compare_mask(self.reference.mask, lit[..., 3] > 0.5)
-        self.error = image_error(img, self.reference.lit, m, exposure=st.settings.render.exposure)
-        self._upload_heat(rel_error_map(img, self.reference.lit, m))
+        ref = self.reference
+        visible = ref.meta.get("visible_mask")
+        if visible is None:
+            visible = ref.mask
+        # the rim of the whole visible region, then the pixels the (progressive) truth has so far
+        m = compare_mask(visible, lit[..., 3] > 0.5) & ref.mask
+        self.error = image_error(img, ref.lit, m, exposure=st.settings.render.exposure)
+        from skinviewer.core.reference import sampled_rms
+        self.rms_se = sampled_rms(img, ref, m)
+        self._upload_heat(rel_error_map(img, ref.lit, m))
 
     def _upload_heat(self, emap: np.ndarray) -> None:
         rgb = np.ascontiguousarray(heat_rgb(emap)[::-1])  # GL rows bottom-up
@@ -194,7 +218,10 @@ class AccuracyWindow:
         # the top-left corner of the view (the passes window takes the top-right): collapsed, a bar above
         # the subject, never across the face or over the corners where the camera is dragged
         imgui.set_next_window_pos(imgui.ImVec2(vx + 8, vy + 8), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(420, 320), imgui.Cond_.first_use_ever.value)
+        # half the view at most (the passes window has the other half), so their title bars never overlap
+        # and a 960x600 window keeps most of the image visible
+        imgui.set_next_window_size(imgui.ImVec2(min(420.0, max(200.0, vw / 2 - 12)), min(360.0, max(160.0, vh * 0.6))),
+                                   imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
         expanded = imgui.begin("Accuracy###accuracy")[0]
         if expanded:
@@ -216,22 +243,29 @@ class AccuracyWindow:
         else:
             if imgui.button("Ground truth for this view"):
                 self.start()
-            imgui.same_line()
-            imgui.set_next_item_width(110)
-            _, self.max_seconds = imgui.slider_float("limit s", self.max_seconds, 10.0, 1800.0, "%.0f")
+            _, self.follow = imgui.checkbox("follow the view", self.follow)
         if self.status:
             imgui.text_wrapped(self.status)
-        if self.reference is not None and not self.current:
+        if self.reference is not None and not self.current and self.job is None:
             imgui.text_disabled("the view or lighting changed: the ground truth is for another view")
         if self.current and self.error is not None:
             e = self.error
-            imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
+            shown = self.state.compare.shown()
+            wrapped(f"image: the live state ({self.state.settings.technique})" + (f"; view: {shown}" if shown else ""))
+            frac = float(self.reference.meta.get("fraction", 1.0))
+            if frac < 1.0 and self.rms_se is not None:
+                rms, se = self.rms_se
+                imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}+-{100 * d:.2f}' for c, d in zip(rms, se))} %")
+                wrapped(f"(from {100 * frac:.0f} % of the pixels, +- one standard error)")
+            else:
+                imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
             imgui.text(f"p99  {' / '.join(f'{100 * c:.1f}' for c in e.p99)} %")
-            imgui.text(f"DSSIM {e.dssim:.4f}")
+            if frac >= 1.0:
+                imgui.text(f"DSSIM {e.dssim:.4f}")
             imgui.set_next_item_width(200)
             _, self.view_mode = imgui.combo("view", self.view_mode, list(VIEW_MODES))
             if self.view_mode:
-                imgui.text_disabled("heat map: relative error 0 (black) .. 50 % (white)")
+                wrapped("heat map: relative error 0 (black) .. 50 % (white)")
 
     def _chart_ui(self, imgui) -> None:
         from imgui_bundle import implot
@@ -245,11 +279,21 @@ class AccuracyWindow:
         ok = [r for r in self.results if r.error is None and r.full_ms and r.rms]
         if not ok:
             return
-        if implot.begin_plot("##pareto", imgui.ImVec2(-1, 200)):
+        h = max(180.0, imgui.get_content_region_avail().y - 4)
+        if implot.begin_plot("##pareto", imgui.ImVec2(-1, h)):
             implot.setup_axes("full frame ms", "RMS %")
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
-            for tech in dict.fromkeys(r.technique for r in ok):
+            # the legend above the plot (never over the points); the RMS axis clipped at the bulk of the
+            # points (an outlier of several hundred % would flatten the rest)
+            implot.setup_legend(implot.Location_.north.value,
+                                implot.LegendFlags_.outside.value | implot.LegendFlags_.horizontal.value)
+            ys = np.array([100 * r.rms_mean for r in ok])
+            top = float(min(ys.max(), 1.5 * np.percentile(ys, 90, method="lower"))) * 1.08
+            implot.setup_axis_limits(implot.ImAxis_.y1.value, 0.0, max(top, 1e-3), implot.Cond_.once.value)
+            for k, tech in enumerate(dict.fromkeys(r.technique for r in ok)):
                 pts = [r for r in ok if r.technique == tech]
+                implot.set_next_marker_style(implot.Marker_.circle.value, 4.0,
+                                             implot.get_colormap_color(k, implot.Colormap_.deep.value))  # distinct per technique
                 implot.plot_scatter(tech, np.array([r.full_ms for r in pts], np.float64),
                                     np.array([100 * r.rms_mean for r in pts], np.float64))
             front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)

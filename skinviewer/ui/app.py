@@ -158,10 +158,31 @@ def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, 
 
 def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True,
                vsync: bool = True, preset_path: str | None = None, shaders_root=None,
-               notices: list[str] | None = None, options: ViewerOptions | None = None) -> ViewerApp:
+               notices: list[str] | None = None, options: ViewerOptions | None = None,
+               splash: bool = False) -> ViewerApp:
+    """The viewer in a new window. ``splash``: the window shows the start-up steps and their times
+    (ui/splash.py) until the first frame, instead of staying black."""
     wnd = create_window(size, visible=visible, vsync=vsync)
+    sp = None
+    if splash:
+        from skinviewer.ui.splash import Splash
+        sp = Splash(wnd)
+        sp.show("window open")
+        s0 = settings or Settings()
+        if not s0.scene.mesh and s0.scene.name == "head":
+            from skinviewer.scene.scenes import build_scene
+            try:  # generated once, then read from the cache: here in a worker while the screen ticks
+                sp.run("the default head: generating it (first start only) or reading it from the cache",
+                       lambda: build_scene("head", s0.scene.head_detail))
+            except Exception:
+                pass  # the viewer's own load below reports it
+        sp.show("loading the scene onto the GPU, the shader library")
     app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
                     options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer())
+    if sp is not None:
+        sp.show(f"first frame of {app.state.settings.technique}: compiling its shaders and rendering "
+                "(on llvmpipe this takes a while; later changes re-run only what they touch)")
+        sp.release()
     wnd.swap_buffers()
     wnd.set_default_viewport()
     return app
@@ -185,7 +206,7 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
     frames = frames or (1 if screenshot else 0)
     win = (int(size[0]), int(size[1])) if size else DEFAULT_WINDOW
     options = ViewerOptions(debug=debug or os.environ.get("SKINVIEWER_DEBUG") == "1")
-    app = create_app(s, size=win, preset_path=preset_path, options=options)
+    app = create_app(s, size=win, preset_path=preset_path, options=options, splash=not frames)
     # the quality governor's calibration (issue 27): loaded, or measured in the background for the
     # techniques it lacks (not for scripted --frames runs; SKINVIEWER_CALIBRATE=0 turns it off)
     app.frame.load_calibration(auto=not frames and os.environ.get("SKINVIEWER_CALIBRATE", "1") != "0")

@@ -82,6 +82,24 @@ class CompareState:
     def set_follow_camera(self, on: bool) -> None:
         self.follow_camera = bool(on)
 
+    def slot_name(self, slot: Slot) -> str:
+        """'A: deon (captured)' -- the slot, its technique and where it came from."""
+        if slot.settings is None:
+            return f"{slot.label}: (empty)"
+        src = slot.source if slot.source and not slot.source.startswith("captured") else "captured"
+        return f"{slot.label}: {slot.settings.technique} ({src})"
+
+    def shown(self) -> str:
+        """What the 3D view shows while comparing, for every readout (status bar, passes, accuracy):
+        '' when not comparing."""
+        if not self.active:
+            return ""
+        if self.mode == "toggle":
+            return f"showing {self.slot_name(self.b if self.show_b else self.a)}"
+        if self.mode == "split":
+            return f"left {self.slot_name(self.a)} | right {self.slot_name(self.b)}"
+        return f"|A - B| x {self.diff_gain:g}: {self.slot_name(self.a)} vs {self.slot_name(self.b)}"
+
     def flip(self) -> str:
         """Space: switch to toggle mode, then flip A / B; returns the slot shown."""
         if self.mode != "toggle":

@@ -149,7 +149,10 @@ class InputController:
             st.toggle_ui()
             return
         if ctrl and key == keys.S:
-            st.save_preset()
+            if self._shift:
+                st.request_save_as()  # Ctrl+Shift+S: always ask for a name
+            else:
+                st.save_preset()  # the named preset; without one it asks
             return
         if st.view.show_ui and self.ui.wants_keyboard():
             return

@@ -3,7 +3,7 @@ dragging its inner edge; the 3D view takes the rest (``ui/layout.py``). It is a 
 (``ui/sections/``, plus the profile lab), each drawing itself under its collapsing header, built
 mostly from the settings model (``widgets.edit_model``, labels, units and tooltips from
 ``fielddocs``); the Gaussian, per-region and light tables are hand-built. Each section shows what
-the last change made in it cost (which passes re-ran, in ms), and the Technique section splits the
+the last change made in it cost (which passes re-ran, in ms), and the Quality & cost section splits the
 frame cost into texture-space and view-dependent work. Adding a section is one line in ``SECTIONS``."""
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ from imgui_bundle import imgui
 from skinviewer.ui.fielddocs import LABEL_MAX_PX
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.profile_lab import ProfileLab
+from skinviewer.ui.sections.look import LookSection
 from skinviewer.ui.sections.scene import CameraSection, LightsSection, SceneSection
 from skinviewer.ui.sections.screen_space import ScreenSpaceSection
 from skinviewer.ui.sections.shading import (
@@ -31,17 +32,24 @@ from skinviewer.ui.sections.tools import (
     ShadersSection,
 )
 from skinviewer.ui.state import ViewerState
-from skinviewer.ui.widgets import UiContext, begin_docked
+from skinviewer.ui.widgets import UiContext, begin_docked, tooltip
 
 LABEL_COLUMN_PX = LABEL_MAX_PX + 8.0  # room for labels with units (fielddocs keeps them this short)
 
-# the panel's sections, top to bottom: each made with (state, frame), drawn with draw(ui)
+# the panel's sections, top to bottom: each made with (state, frame), drawn with draw(ui). Look first
+# (technique, skin, specular, translucency, lights), then Quality & cost; then the scene, camera, presets,
+# A/B and screenshots; the engine internals (every technique's full settings, the raw Gaussian table,
+# render, shaders, the profile lab) under ADVANCED, collapsed
 SECTIONS = (
-    StatusSection, TechniqueSection, SceneSection, CameraSection, LightsSection,
-    PhongSection, GosselinSection, DeonSection, SpecularSection, OtherSettingsSection, ScreenSpaceSection,
-    RenderSection, PresetsSection, ScreenshotSection, CompareSection, ShadersSection,
-    ProfileLab, HelpSection,
+    StatusSection, LookSection, LightsSection, TechniqueSection, SceneSection, CameraSection,
+    PresetsSection, CompareSection, ScreenshotSection,
 )
+ADVANCED = (
+    PhongSection, GosselinSection, DeonSection, SpecularSection, OtherSettingsSection, ScreenSpaceSection,
+    RenderSection, ShadersSection, ProfileLab,
+)
+TAIL = (HelpSection,)
+ADVANCED_TITLE = "Advanced (engine internals)"
 
 
 class Panel:
@@ -50,7 +58,8 @@ class Panel:
     def __init__(self, state: ViewerState, frame: FrameController):
         self.state = state
         self.frame = frame
-        self.sections = [cls(state, frame) for cls in SECTIONS]
+        self.sections = [cls(state, frame) for cls in SECTIONS + ADVANCED + TAIL]
+        self.advanced_open = False  # the Advanced group was drawn open last frame (tests)
         self.scroll_y = 0.0  # the column's scroll position last frame (tests)
         self._scroll_to: float | None = None
 
@@ -82,7 +91,19 @@ class Panel:
         self.scroll_y = float(imgui.get_scroll_y())
         if opened:
             imgui.push_item_width(-min(LABEL_COLUMN_PX, pw * 0.42))  # room for labels with units
-            for s in self.sections:
+            n, m = len(SECTIONS), len(SECTIONS) + len(ADVANCED)
+            for s in self.sections[:n]:
+                s.draw(ui)
+            self.advanced_open = ui.header(ADVANCED_TITLE)
+            tooltip_text = ("every technique's full settings (the raw Gaussian table, blur and cache switches), "
+                            "render, shaders, the profile lab")
+            tooltip(tooltip_text)
+            if self.advanced_open:
+                imgui.indent(8.0)
+                for s in self.sections[n:m]:
+                    s.draw(ui)
+                imgui.unindent(8.0)
+            for s in self.sections[m:]:
                 s.draw(ui)
             imgui.pop_item_width()
         ui.claim((x, y, pw, ph))

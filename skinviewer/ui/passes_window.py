@@ -25,8 +25,10 @@ class PassesWindow:
     def draw(self, ui: UiContext) -> None:
         vx, vy, vw, vh = ui.layout.view
         # first shown at the top-right corner of the 3D view; then wherever the user moves it
-        imgui.set_next_window_pos(imgui.ImVec2(max(vx, vx + vw - WIDTH - 8), vy + 8), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(WIDTH, min(520.0, vh - 16)), imgui.Cond_.first_use_ever.value)
+        # half the view at most: the accuracy window takes the top-left half, their title bars never overlap
+        w = min(WIDTH, max(200.0, vw / 2 - 12))
+        imgui.set_next_window_pos(imgui.ImVec2(max(vx, vx + vw - w - 8), vy + 8), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(w, min(520.0, vh - 16)), imgui.Cond_.first_use_ever.value)
         if vw < 900:  # small views: start collapsed so the image stays visible
             imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
         if self._rect is not None:
@@ -38,6 +40,12 @@ class PassesWindow:
                 imgui.set_next_window_pos(imgui.ImVec2(nx, ny), imgui.Cond_.always.value)
         expanded = imgui.begin("Passes###passes")[0]
         if expanded:
+            shown = self.state.compare.shown()
+            if shown:  # the table is the live state's graph, not necessarily what the view shows
+                imgui.push_text_wrap_pos(0)
+                imgui.text_colored(imgui.ImVec4(1.0, 0.8, 0.4, 1.0),
+                                   f"passes of the live state ({self.state.settings.technique}); view: {shown}")
+                imgui.pop_text_wrap_pos()
             self._timing()
             self._inspector()
             self._table()
@@ -68,12 +76,14 @@ class PassesWindow:
         bad = getattr(rep, "nonfinite", {})
         if bad:  # render.check_finite: a pass wrote NaN/Inf (e.g. a shader edit); the screen stays finite
             imgui.text_colored(ERR, "NaN/Inf in " + ", ".join(f"{n} ({', '.join(o)})" for n, o in bad.items()))
-        flags = imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value | imgui.TableFlags_.sizing_fixed_fit.value
+        # scrolls sideways when the window is narrower than the table (a 960x600 window): no column cut off
+        flags = (imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value
+                 | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)
         if imgui.begin_table("passes", 4, flags):
             imgui.table_setup_column("pass")
             imgui.table_setup_column("status")
             imgui.table_setup_column("ms")
-            imgui.table_setup_column("reason", imgui.TableColumnFlags_.width_stretch.value)
+            imgui.table_setup_column("reason")
             imgui.table_headers_row()
             for p in rep.passes:
                 imgui.table_next_row()

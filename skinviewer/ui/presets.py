@@ -29,10 +29,12 @@ _VOLATILE = (("render", "width"), ("render", "height"))
 FLOAT_DIGITS = 6
 
 
-def _comparable(s: Settings) -> dict:
+def _comparable(s: Settings, camera: bool = True) -> dict:
     d = to_dict(s)
     for a, b in _VOLATILE:
         d.get(a, {}).pop(b, None)
+    if not camera:
+        d.pop("camera", None)  # orbiting is looking, not editing (unless the user opts in)
     return d
 
 
@@ -46,9 +48,34 @@ def _rounded(v):
     return v
 
 
-def preset_payload(s: Settings) -> dict:
-    """What the viewer writes to a preset file: the settings without the render size, floats rounded."""
-    return _rounded(_comparable(s))
+def preset_payload(s: Settings, camera: bool = True) -> dict:
+    """What the viewer writes to a preset file: the settings without the render size (and without the
+    camera unless ``camera``), floats rounded."""
+    return _rounded(_comparable(s, camera))
+
+
+def _names_camera(path: str) -> bool:
+    """The preset file sets a camera (a preset saved without one keeps the viewer's)."""
+    import json
+    try:
+        with open(path, encoding="utf-8-sig") as f:
+            return isinstance(json.load(f).get("camera"), dict)
+    except (OSError, ValueError, AttributeError, RecursionError):
+        return True
+
+
+def name_to_path(name: str) -> Path | None:
+    """A preset name typed in *Save as*: a bare name goes to the user folder as NAME.json; a path is
+    taken as it is. None for an empty or unusable name."""
+    name = name.strip()
+    if not name or "\x00" in name or name in (".", ".."):
+        return None
+    p = Path(name).expanduser()
+    if len(p.parts) == 1:
+        p = user_presets_dir() / (name if name.endswith(".json") else f"{name}.json")
+    elif p.suffix != ".json":
+        p = p.with_suffix(".json")
+    return p
 
 
 def user_presets_dir() -> Path:
@@ -99,6 +126,10 @@ class PresetState:
         self.edit_path: str = path or ""
         self._baseline = _comparable(settings)
         self._dirty_of: tuple[Settings, bool] | None = None  # (settings, dirty): asked several times a frame
+        # camera moves are unsaved changes and presets store the camera only when the user opts in
+        self.track_camera = False
+        self.naming = False  # the "Save as" name popup is open
+        self.name_text = ""
         self.errors: list[tuple[str, str]] = []
         self.error_source: str = ""
         self.message: str = ""
@@ -108,8 +139,26 @@ class PresetState:
     def dirty(self, s: Settings) -> bool:
         # Settings are replaced, never edited in place (with_values): the answer for the same object holds
         if self._dirty_of is None or self._dirty_of[0] is not s:
-            self._dirty_of = (s, _comparable(s) != self._baseline)
+            base = dict(self._baseline)
+            if not self.track_camera:
+                base.pop("camera", None)
+            self._dirty_of = (s, _comparable(s, self.track_camera) != base)
         return self._dirty_of[1]
+
+    def set_track_camera(self, on: bool) -> None:
+        self.track_camera = bool(on)
+        self._dirty_of = None
+
+    def ask_name(self, suggestion: str = "") -> None:
+        """Open *Save as*: the name field starts with ``suggestion`` (the current preset's name)."""
+        self.naming = True
+        self.name_text = suggestion or (Path(self.path).stem if self.path else "my-skin")
+
+    def set_name_text(self, text: str) -> None:
+        self.name_text = text
+
+    def close_naming(self) -> None:
+        self.naming = False
 
     @property
     def read_only(self) -> bool:
@@ -143,7 +192,10 @@ class PresetState:
         except SettingsError as exc:
             self.refused(path, exc.errors, exc.source or path)
             return None
-        return with_values(s, {"render.width": current.render.width, "render.height": current.render.height})
+        keep = {"render.width": current.render.width, "render.height": current.render.height}
+        if not _names_camera(path):
+            keep["camera"] = current.camera.model_dump(mode="json")  # saved without a camera: keep the view
+        return with_values(s, keep)
 
     def accepted(self, s: Settings, path: str) -> None:
         """``s`` (loaded from ``path``) is now the viewer's state: it becomes the saved baseline."""
@@ -163,7 +215,7 @@ class PresetState:
         """Where Ctrl+S writes, and a note: the current file; a new file in the user folder when
         there is none; a copy in the user folder when the current one is shipped (read-only)."""
         user = user_presets_dir()
-        if not self.path:
+        if not self.path:  # the viewer asks for a name first (ViewerState.save_preset); scripts get a stamp
             return timestamped_path(user, prefix="preset", ext=".json"), ""
         if is_shipped(self.path):
             name = Path(self.path).name
@@ -183,7 +235,7 @@ class PresetState:
             return False
         try:
             Path(target).parent.mkdir(parents=True, exist_ok=True)
-            save_preset(s, target, preset_payload(s))  # scene paths relative to the preset's folder
+            save_preset(s, target, preset_payload(s, self.track_camera))  # scene paths relative to its folder
         except OSError as exc:
             self.errors = [("<file>", f"cannot write: {exc.strerror or exc}")]
             self.error_source = target

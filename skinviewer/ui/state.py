@@ -13,6 +13,8 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from skinviewer import techniques
+from skinviewer.core.look import apply_look
+from skinviewer.core.look import resolve as resolve_look
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, SettingsError, with_values
 from skinviewer.scene.scenes import scene_overrides
@@ -107,7 +109,7 @@ class ViewerState:
         if not assignments:
             return True
         try:
-            new = with_values(self.settings, assignments)
+            new = resolve_look(with_values(self.settings, assignments), assignments)
         except SettingsError as exc:
             self.refuse(exc.errors, source or "invalid setting")
             return False
@@ -194,6 +196,12 @@ class ViewerState:
             errs = self.presets.errors
             self.say(f"refused preset {path}" + (f": {errs[0][0]}: {errs[0][1]}" if errs else ""), error=True)
             return False
+        try:
+            s = apply_look(s)  # a preset whose look drives the profile: its tables re-derived (the same values)
+        except SettingsError as exc:
+            self.presets.refused(path, exc.errors)
+            self.say(f"refused preset {path}: {exc}", error=True)
+            return False
         if not self.set_settings(s, f"preset {path}"):
             # refused after loading: the current preset file and its saved baseline stay (Ctrl+S
             # must not write this state over the file that was refused)
@@ -230,10 +238,31 @@ class ViewerState:
         p = self.presets
         if path:
             ok = p.save(self.settings, path)
+        elif not p.path:  # no name yet: ask for one (Save as), never a timestamped file
+            self.request_save_as()
+            return False
         else:
             target, note = p.save_target()
             ok = p.save(self.settings, target, note)
         self.say(p.message, error=not ok)
+        return ok
+
+    def request_save_as(self) -> None:
+        """Ctrl+Shift+S (or Ctrl+S without a named preset): the *Save as* popup asks for a name."""
+        self.presets.ask_name()
+        self.say("save as: name the preset")
+
+    def save_preset_named(self, name: str) -> bool:
+        """*Save as* answered: a bare name goes to the user folder as NAME.json (a shipped folder is
+        refused by ``save``); the named file is then what Ctrl+S writes."""
+        from skinviewer.ui.presets import name_to_path
+        target = name_to_path(name)
+        if target is None:
+            self.say("save as: type a name", error=True)
+            return False
+        ok = self.save_preset(str(target))
+        if ok:
+            self.presets.close_naming()
         return ok
 
     def set_preset_path_text(self, text: str) -> None:

@@ -38,7 +38,8 @@ class StatusBar:
         name = Path(s.scene.mesh).name if s.scene.mesh else s.scene.name
         tris = triangle_count(st.scene)
         out.append((f"{name}" + (f"  {tris:,} tris" if tris is not None else ""), TEXT))
-        out.append((s.technique, TEXT))
+        shown = st.compare.shown()  # A/B: name what the view shows, not the live state's technique
+        out.append((f"A/B {shown}" if shown else s.technique, TEXT))
         out.append((f"{s.render.width}x{s.render.height} px", DIM))
         mode = fr.report.timing_mode if fr.report is not None else s.render.timing
         out.append((f"{mode} timing", DIM))

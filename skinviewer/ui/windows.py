@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Protocol
 
 from skinviewer.ui.accuracy_window import AccuracyWindow
+from skinviewer.ui.compare_overlay import CompareOverlay
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.layout import Layout
 from skinviewer.ui.panel import Panel
@@ -46,6 +47,7 @@ WINDOWS: tuple[WindowFactory, ...] = (
     StatusBar,
     PassesWindow,
     AccuracyWindow,
+    CompareOverlay,
 )
 
 

@@ -28,7 +28,7 @@ def change_line(frame: FrameController, sections: tuple[str, ...] | None) -> Non
     if fr.render_deferred:
         imgui.text_colored(WARN, "preview paused: release (or hold still) to render")
         tooltip(f"the last change cost {ch.total_ms:.0f} ms > the {fr.scheduler.budget_ms:.0f} ms budget "
-                "(Technique > scheduling)" if ch else "render scheduling: on release")
+                "(Quality & cost > scheduling)" if ch else "render scheduling: on release")
     if ch is None or (sections is not None and ch.section() not in sections):
         return
     if sections is not None and ch.source in ("render size",):

@@ -17,6 +17,8 @@ from skinviewer.ui.widgets import (
 )
 
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
+# a light's fields that do not apply to its kind (settings.LightSettings)
+LIGHT_SKIP = {"directional": ("position", "beam_radius"), "point": ("direction", "beam_radius"), "beam": ()}
 
 
 class SceneSection:
@@ -94,7 +96,7 @@ class LightsSection:
                     if ch1 or ch2:
                         ui.edits.set(f"lights.{i}.direction", list(angles_to_direction(az, el)))
                     self._direction_pad(i, az, el, ui)
-                edit_model(light, f"lights.{i}", ui)
+                edit_model(light, f"lights.{i}", ui, skip=LIGHT_SKIP[light.kind])
                 if len(lights) > 1 and imgui.small_button("remove light"):
                     remove = i
                 imgui.tree_pop()

@@ -30,6 +30,15 @@ def _active(state: ViewerState, name: str) -> str:
     return "  (active)" if state.settings.technique == name else ""
 
 
+def _header(ui: UiContext, name: str, active: str) -> bool:
+    """A technique's section: titled with its one name (the combo's, the keys', the CLI's), the paper
+    in the tooltip; open when it is the active technique."""
+    tech = techniques.REGISTRY.get(name)
+    opened = ui.header(f"{name}{'  (active)' if name == active else ''}###{name}", name == active)
+    tooltip(tech.title if tech is not None else f"settings group '{name}'")
+    return opened
+
+
 class PhongSection:
     """Phong / Lambert baseline settings."""
 
@@ -38,7 +47,7 @@ class PhongSection:
         self.frame = frame
 
     def draw(self, ui: UiContext) -> None:
-        if ui.header(f"Phong{_active(self.state, 'phong')}###Phong"):
+        if _header(ui, "phong", self.state.settings.technique):
             edit_model(self.state.settings.phong, "phong", ui)
             change_line(self.frame, ("phong",))
 
@@ -52,7 +61,7 @@ class GosselinSection:
 
     def draw(self, ui: UiContext) -> None:
         s = self.state.settings
-        if ui.header(f"Gosselin 2004{_active(self.state, 'gosselin')}###Gosselin", s.technique == "gosselin"):
+        if _header(ui, "gosselin", s.technique):
             wrapped("seed 000 §4.1, eq. 8-19: texture-space light map + Poisson blurs")
             edit_model(s.gosselin, "gosselin", ui, skip=("regions",))
             self._region_kernels(ui)
@@ -100,7 +109,7 @@ class DeonSection:
 
     def draw(self, ui: UiContext) -> None:
         s = self.state.settings
-        if ui.header(f"d'Eon 2007{_active(self.state, 'deon')}###deon", s.technique == "deon"):
+        if _header(ui, "deon", s.technique):
             wrapped("seed 000 §4.2, eq. 20-35: sum-of-Gaussians diffusion in texture space")
             self._gaussians(ui)
             self._profile_plot()
@@ -250,8 +259,6 @@ class OtherSettingsSection:
     def draw(self, ui: UiContext) -> None:
         s = self.state.settings
         for name in self.groups:
-            tech = techniques.REGISTRY.get(name)
-            title = tech.title.split(":")[0] if tech is not None else name.replace("_", " ").capitalize()
-            if ui.header(f"{title}{_active(self.state, name)}###{name}", s.technique == name):
+            if _header(ui, name, s.technique):
                 edit_model(getattr(s, name), name, ui)
                 change_line(self.frame, (name,))

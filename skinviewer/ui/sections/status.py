@@ -1,4 +1,4 @@
-"""The top of the panel (scene, preset, messages, errors) and the Technique & cost section."""
+"""The top of the panel (scene, preset, messages, errors) and the Quality & cost section."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -9,6 +9,7 @@ from skinviewer.ui.frame import DRAG_RESOLUTIONS, FrameController
 from skinviewer.ui.scheduler import MODES as RENDER_MODES
 from skinviewer.ui.scheduler import split_ms
 from skinviewer.ui.sections.common import TEX_COL, VIEW_COL, change_line, shader_errors
+from skinviewer.ui.sections.look import QualitySection
 from skinviewer.ui.state import ViewerState
 from skinviewer.ui.widgets import (
     DIM,
@@ -57,24 +58,18 @@ class StatusSection:
 
 
 class TechniqueSection:
-    """Technique & cost: the technique, the frame cost split into texture-space and view-dependent work, render scheduling and the time budget."""
+    """Quality & cost: the active technique's resolutions and samples, the frame cost split into texture-space and view-dependent work, render scheduling and the time budget."""
 
     def __init__(self, state: ViewerState, frame: FrameController):
         self.state = state
         self.frame = frame
+        self.quality = QualitySection(state, frame)
 
     def draw(self, ui: UiContext) -> None:
-        st, fr = self.state, self.frame
-        if not ui.header("Technique & cost", True):
+        fr = self.frame
+        if not ui.header("Quality & cost", True):
             return
-        names = st.technique_names()
-        cur = names.index(st.settings.technique) if st.settings.technique in names else 0
-        imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)
-        ch, i = imgui.combo(f"technique (keys 1-{min(len(names), 9)})", cur, names)
-        if ch:
-            st.set_technique(names[i])
-        tooltip("keys " + " / ".join(f"{k + 1}: {n}" for k, n in enumerate(names[:9]))
-                + ". Each technique keeps its own cached graph: switching back is instant")
+        self.quality.draw(ui)  # the technique (in Look) and its resolutions / samples
         self._cost_split()
         sch = fr.scheduler
         imgui.set_next_item_width(imgui.get_content_region_avail().x * 0.5)

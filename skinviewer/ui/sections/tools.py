@@ -24,6 +24,7 @@ from skinviewer.ui.widgets import (
 
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
 CONFIRM_POPUP = "Unsaved changes###confirm_load"
+SAVE_AS_POPUP = "Save preset as###save_as"
 
 
 def shortcuts(technique_names: list[str]) -> tuple[tuple[str, str], ...]:
@@ -35,7 +36,8 @@ def shortcuts(technique_names: list[str]) -> tuple[tuple[str, str], ...]:
         ("RMB drag (view)", "move the key light"), ("R", "reset view"),
         (keys, " / ".join(technique_names[:n])),
         ("F1", "hide / show the UI"), ("F12", "screenshot"),
-        ("Ctrl+S", "save preset (a shipped one: a copy in your folder)"),
+        ("Ctrl+S", "save the named preset (none yet: asks for a name; a shipped one: a copy in your folder)"),
+        ("Ctrl+Shift+S", "save as: asks for a name"),
         ("Space", "A/B: toggle A and B (compare on)"), ("Esc", "leave the pass inspector"),
     )
 
@@ -83,6 +85,7 @@ class PresetsSection:
         st = self.state
         p = st.presets
         self._confirm_load_popup()
+        self._save_as_popup()
         if not ui.header("Presets"):
             return
         # Enter in the path field loads it (same as the button below)
@@ -98,8 +101,14 @@ class PresetsSection:
             st.save_preset()
         tooltip("write the current preset file; a shipped preset is read-only: a copy goes to your folder")
         imgui.same_line()
-        if imgui.button("save as") and p.edit_path.strip():
-            st.save_preset(p.edit_path.strip())
+        if imgui.button("save as... (Ctrl+Shift+S)"):
+            st.request_save_as()
+        tooltip("asks for a name: the preset goes to your folder as NAME.json (or type a path)")
+        ch, on = imgui.checkbox("camera is part of the preset", p.track_camera)
+        if ch:
+            p.set_track_camera(on)
+        tooltip("off (default): orbiting and zooming are not unsaved changes and presets are saved without the "
+                "camera (loading one keeps your view); on: the camera is saved and its moves count as changes")
         for title, files in p.listing():
             imgui.text_disabled(title + ":")
             if not files:
@@ -115,6 +124,41 @@ class PresetsSection:
         if p.errors:
             imgui.text_colored(ERR, f"{p.error_source}: state kept")
             error_list(p.errors, 12)
+
+    def _save_as_popup(self) -> None:
+        """*Save as*: a name field (Enter saves), the folder it goes to, save / cancel."""
+        st = self.state
+        p = st.presets
+        if not p.naming:
+            return
+        if not imgui.is_popup_open(SAVE_AS_POPUP):
+            imgui.open_popup(SAVE_AS_POPUP)
+            self._focus_name = True
+        imgui.set_next_window_size(imgui.ImVec2(min(440.0, imgui.get_io().display_size.x * 0.9), 0.0))
+        if imgui.begin_popup_modal(SAVE_AS_POPUP, None, imgui.WindowFlags_.no_saved_settings.value)[0]:
+            from skinviewer.ui.presets import name_to_path
+            if getattr(self, "_focus_name", False):
+                imgui.set_keyboard_focus_here()
+                self._focus_name = False
+            imgui.set_next_item_width(-60)
+            entered, text = imgui.input_text("name", p.name_text, _ENTER)
+            if text != p.name_text:
+                p.set_name_text(text)
+            target = name_to_path(p.name_text)
+            if target is not None:
+                wrapped(f"-> {target}" + ("  (exists: it will be replaced)" if target.exists() else ""),
+                        WARN if target.exists() else None)
+            if (imgui.button("save") or entered) and target is not None:
+                if st.save_preset_named(p.name_text):
+                    imgui.close_current_popup()
+            imgui.same_line()
+            if imgui.button("cancel") or imgui.is_key_pressed(imgui.Key.escape):
+                p.close_naming()
+                st.say("save as cancelled")
+                imgui.close_current_popup()
+            if p.errors:
+                error_list(p.errors, 3)
+            imgui.end_popup()
 
     def _confirm_load_popup(self) -> None:
         """"Discard unsaved changes?" before a preset is loaded over them."""

@@ -1,0 +1,81 @@
+"""The viewer's progressive ground truth (core.reference.TruthSession): time to the first figure, to
+each refinement, to a relative-RMS figure within +-0.5 % (bootstrap standard error of the pixels done,
+core.reference.sampled_rms, of a d'Eon render of the same view), an orbit that re-uses the sources,
+and the one-shot compute_reference of the same view, side by side in one run.
+
+    python3 -m benchmarks.bench_truth [--scene head] [--size 256] [--yaw 20]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+
+import numpy as np
+
+from skinviewer.core import reference as R
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.scene.scenes import scene_overrides
+
+
+def _render_lit(s: Settings) -> np.ndarray:
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    r = Renderer(headless_context())
+    r.render_settled(s)
+    lit = r.read(s, "lit")[::-1]
+    return np.asarray(lit[..., :3], np.float64), lit[..., 3] > 0.5
+
+
+def run(scene: str, size: int, yaw: float, technique: str) -> dict:
+    s = with_values(Settings(), {"scene.name": scene, **scene_overrides(scene), "render.width": size,
+                                 "render.height": size, "technique": technique})
+    img, cover = _render_lit(s)
+    out: dict = {"scene": scene, "size": size, "technique": technique, "stages": []}
+    ses = R.TruthSession()
+    t0 = time.perf_counter()
+    within = None
+    for p in ses.progressive(s):
+        rms, se = R.sampled_rms(img, p.reference, cover)
+        row = {"stage": p.stage, "s": round(time.perf_counter() - t0, 2), "pixels": round(p.fraction, 3),
+               "rms_pct": [round(100 * x, 3) for x in rms], "se_pct": [round(100 * x, 3) for x in se]}
+        out["stages"].append(row)
+        print(row, flush=True)
+        if within is None and "coarse" not in p.stage and np.all(100 * se <= 0.5):
+            within = row["s"]
+    out["to_within_0.5pct_s"] = within
+    final = p.reference
+    s2 = with_values(s, {"camera.yaw": s.camera.yaw + yaw})
+    t = time.perf_counter()
+    for q in ses.progressive(s2):
+        pass
+    out["orbit_reusing_s"] = round(time.perf_counter() - t, 2)
+    t = time.perf_counter()
+    fresh = R.TruthSession()
+    for q2 in fresh.progressive(s2):
+        pass
+    out["orbit_fresh_s"] = round(time.perf_counter() - t, 2)
+    out["orbit_identical"] = bool(np.array_equal(q.reference.lit, q2.reference.lit))
+    t = time.perf_counter()
+    one = R.compute_reference(s, use_cache=False)
+    out["compute_reference_s"] = round(time.perf_counter() - t, 2)
+    m = one.mask & final.mask
+    out["session_vs_compute_reference_rel_rms_pct"] = [
+        round(100 * x, 4) for x in np.sqrt(((final.lit - one.lit)[m] ** 2).sum(0) / (one.lit[m] ** 2).sum(0))]
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scene", default="head")
+    ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--yaw", type=float, default=20.0)
+    ap.add_argument("--technique", default="deon")
+    a = ap.parse_args(argv)
+    print(json.dumps(run(a.scene, a.size, a.yaw, a.technique), indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

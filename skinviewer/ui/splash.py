@@ -1,0 +1,138 @@
+"""The start-up screen: from the moment the window exists until the viewer's first frame, the window shows
+what is happening and for how long (generating the default head on a first start, loading the scene,
+compiling the shaders and rendering the first frame) instead of staying black.
+
+No imgui (its context belongs to the viewer's UI host, made later): the lines are drawn with Pillow into
+one texture, shown by a full-window triangle. Long steps run in a worker thread while the screen is
+redrawn every ``interval`` seconds with the elapsed time (GL stays on the main thread)."""
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+_VS = """#version 330
+out vec2 uv;
+void main() {
+    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);  // one triangle covering the window
+    uv = vec2(p.x, 1.0 - p.y);  // image row 0 (uploaded first, t = 0) at the top
+    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}
+"""
+_FS = """#version 330
+in vec2 uv;
+out vec4 color;
+uniform sampler2D tex;
+void main() { color = texture(tex, uv); }
+"""
+BG = (20, 20, 24)
+FG = (225, 225, 230)
+DIM = (150, 150, 160)
+
+
+def _font(size: int):
+    from PIL import ImageFont
+    try:
+        return ImageFont.load_default(size=size)  # Pillow >= 10.1: a scalable built-in font
+    except TypeError:
+        return ImageFont.load_default()
+
+
+class Splash:
+    """``show(line)`` adds a progress line and redraws; ``run(line, fn)`` runs ``fn`` in a thread while
+    the line's elapsed time ticks; ``release()`` frees the GL objects. ``lines``: (seconds, text)."""
+
+    def __init__(self, wnd, interval: float = 0.25):
+        self.wnd = wnd
+        self.ctx = wnd.ctx
+        self.t0 = time.perf_counter()
+        self.interval = float(interval)
+        self.lines: list[tuple[float, str]] = []
+        self.frames = 0  # screens presented (tests)
+        self._prog = self.ctx.program(vertex_shader=_VS, fragment_shader=_FS)
+        self._vao = self.ctx.vertex_array(self._prog, [])
+        self._tex = None
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t0
+
+    def _image(self, busy: str = "") -> np.ndarray:
+        from PIL import Image, ImageDraw
+        w, h = self.wnd.buffer_size
+        w, h = max(int(w), 16), max(int(h), 16)
+        img = Image.new("RGB", (w, h), BG)
+        d = ImageDraw.Draw(img)
+        big, small = _font(28), _font(16)
+        x, y = 40, 40
+        d.text((x, y), "skinviewer", fill=FG, font=big)
+        y += 50
+        d.text((x, y), "starting: the panel and the image appear when the first frame is ready", fill=DIM, font=small)
+        y += 34
+        for k, (t, text) in enumerate(self.lines):
+            last = k == len(self.lines) - 1
+            tail = f"  ({self.elapsed() - t:.1f} s){busy}" if last else ""
+            d.text((x, y), f"{t:5.1f} s   {text}{tail}", fill=FG if last else DIM, font=small)
+            y += 24
+        return np.asarray(img, np.uint8)
+
+    def draw(self, busy: str = "") -> None:
+        img = np.ascontiguousarray(self._image(busy))
+        h, w = img.shape[:2]
+        if self._tex is None or self._tex.size != (w, h):
+            if self._tex is not None:
+                self._tex.release()
+            self._tex = self.ctx.texture((w, h), 3, img.tobytes(), alignment=1)
+        else:
+            self._tex.write(img.tobytes(), alignment=1)
+        self.ctx.screen.use()
+        self.ctx.viewport = (0, 0, w, h)
+        self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND)
+        self._tex.use(0)
+        self._prog["tex"].value = 0
+        self._vao.render(vertices=3)
+        self.wnd.swap_buffers()
+        self.frames += 1
+
+    def show(self, line: str) -> None:
+        self.lines.append((self.elapsed(), line))
+        try:
+            self.draw()
+        except Exception:  # a start-up screen must never stop the start
+            pass
+
+    def run(self, line: str, fn: Callable[[], Any]) -> Any:
+        """``fn()`` in a worker thread, the screen redrawn meanwhile; its result (or its exception)."""
+        self.show(line)
+        out: dict = {}
+
+        def work():
+            try:
+                out["value"] = fn()
+            except BaseException as exc:  # re-raised on the main thread
+                out["error"] = exc
+
+        th = threading.Thread(target=work, daemon=True)
+        th.start()
+        dots = 0
+        while th.is_alive():
+            th.join(self.interval)
+            dots = (dots + 1) % 4
+            try:
+                self.draw(" " + "." * dots)  # swap_buffers also polls the window's events
+            except Exception:
+                pass
+        if "error" in out:
+            raise out["error"]
+        return out.get("value")
+
+    def release(self) -> None:
+        for obj in (self._tex, self._vao, self._prog):
+            try:
+                if obj is not None:
+                    obj.release()
+            except Exception:
+                pass
+        self._tex = None

@@ -1,0 +1,105 @@
+"""The viewer's progressive ground truth (core.reference.TruthSession): stages that refine, the
+view-independent sources kept across an orbit (identical figures, no rebuild) and a profile change,
+rebuilt for a light change, recent truths kept."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skinviewer.core import reference as R
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.scene.scenes import scene_overrides
+
+SIZE = 40
+
+
+@pytest.fixture(scope="module")
+def base():
+    return with_values(Settings(), {"scene.name": "backlit-ear", **scene_overrides("backlit-ear"),
+                                    "render.width": SIZE, "render.height": SIZE})
+
+
+@pytest.fixture(scope="module")
+def session_and_first(base):
+    ses = R.TruthSession()
+    parts = list(ses.progressive(base))
+    return ses, parts
+
+
+def test_stages_refine_to_the_whole_view(session_and_first):
+    ses, parts = session_and_first
+    assert "coarse" in parts[0].stage and not parts[0].final  # a first figure before the sources exist
+    assert [p.final for p in parts] == [False] * (len(parts) - 1) + [True]
+    fine = [p for p in parts if "coarse" not in p.stage]
+    counts = [int(p.reference.mask.sum()) for p in fine]
+    assert counts == sorted(counts) and counts[0] < counts[-1]
+    for a, b in zip(fine, fine[1:]):
+        assert np.all(b.reference.mask[a.reference.mask])  # a stage keeps the pixels of the last
+        # and their values: the diffusion of a pixel is computed once
+        m = a.reference.mask
+        assert np.array_equal(a.reference.lit[m], b.reference.lit[m])
+    assert fine[-1].fraction == 1.0 and ses.builds == 1
+
+
+def test_final_stage_agrees_with_compute_reference(base, session_and_first):
+    _, parts = session_and_first
+    final = parts[-1].reference
+    one = R.compute_reference(base, use_cache=False)
+    assert np.array_equal(final.mask, one.mask)
+    m = one.mask
+    rel = np.sqrt(((final.lit - one.lit)[m] ** 2).sum(0) / (one.lit[m] ** 2).sum(0))
+    assert np.all(rel < 2e-3), rel  # the same integral; only the whole-surface clustering differs
+
+
+def test_an_orbit_reuses_the_diffusion_sources(base, session_and_first):
+    ses, _ = session_and_first
+    orbit = with_values(base, {"camera.yaw": base.camera.yaw + 25.0})
+    parts = list(ses.progressive(orbit))
+    assert ses.builds == 1  # no new surface irradiance: only camera rays, specular and the gather
+    assert not any("coarse" in p.stage for p in parts)  # straight to the full-resolution sources
+    fresh = R.TruthSession()
+    again = list(fresh.progressive(orbit))
+    assert fresh.builds == 1
+    assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)  # identical figures
+
+
+def test_a_profile_change_reuses_a_light_change_rebuilds(base, session_and_first):
+    ses, parts = session_and_first
+    before = ses.builds
+    prof = with_values(base, {"deon.gaussians.5.variance": 4.0})
+    p = list(ses.progressive(prof))[-1]
+    assert ses.builds == before and not np.array_equal(p.reference.lit, parts[-1].reference.lit)
+    light = with_values(base, {"lights.0.intensity": base.lights[0].intensity * 2})
+    list(ses.progressive(light))
+    assert ses.builds == before + 1
+
+
+def test_recent_truths_come_back_at_once(base, session_and_first):
+    ses, parts = session_and_first
+    again = list(ses.progressive(base))
+    assert len(again) == 1 and again[0].stage == "recent" and again[0].reference is parts[-1].reference
+
+
+def test_sampled_rms_uncertainty_is_calibrated_and_shrinks_to_zero():
+    """The figure of a partial truth (every 4th / 2nd pixel) brackets the whole image's within its
+    standard error as often as a standard error should (synthetic images, smooth truth, noisy render)."""
+    rng = np.random.default_rng(7)
+    H = W = 96
+    yy, xx = np.mgrid[0:H, 0:W]
+    inside = []
+    for trial in range(40):
+        truth = 0.2 + 0.8 * np.exp(-((xx - 48) ** 2 + (yy - 40) ** 2) / (2 * (10 + trial) ** 2))
+        truth = np.repeat(truth[..., None], 3, axis=2) * np.array([1.0, 0.7, 0.5])
+        img = truth * (1.0 + 0.1 * rng.standard_normal(truth.shape))
+        mask = np.ones((H, W), bool)
+        full = R.Reference(truth, truth, truth * 0, mask, {"fraction": 1.0})
+        rms_full, se_full = R.sampled_rms(img, full, mask)
+        assert np.all(se_full == 0)
+        for stride in (4, 2):
+            m = (yy % stride == 0) & (xx % stride == 0)
+            part = R.Reference(np.where(m[..., None], truth, 0.0), truth, truth * 0, m,
+                               {"fraction": float(m.mean())})
+            rms, se = R.sampled_rms(img, part, mask, seed=trial)
+            assert np.all(se > 0) and np.all(np.isfinite(se))
+            inside.append(np.abs(rms - rms_full) <= 2 * se)
+    assert np.mean(inside) > 0.85
