@@ -148,9 +148,8 @@ class PresetsSection:
             if target is not None:
                 wrapped(f"-> {target}" + ("  (exists: it will be replaced)" if target.exists() else ""),
                         WARN if target.exists() else None)
-            if (imgui.button("save") or entered) and target is not None:
-                if st.save_preset_named(p.name_text):
-                    imgui.close_current_popup()
+            if (imgui.button("save") or entered) and target is not None and st.save_preset_named(p.name_text):
+                imgui.close_current_popup()
             imgui.same_line()
             if imgui.button("cancel") or imgui.is_key_pressed(imgui.Key.escape):
                 p.close_naming()
