@@ -47,7 +47,7 @@ from skinviewer.scene.camera import framed_view
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 4                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals
+VERSION = 5                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut
 DEFAULT_H_MM = 0.5          # source element edge
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
@@ -210,21 +210,44 @@ class Surface:
 
     def irradiance(self, a: dict, mix: float, energy: bool) -> np.ndarray:
         """E A (eq. 28, 32) from the directional and point lights (beams are point sources)."""
-        E = np.zeros((len(a["P"]), 3))
-        for light in self.lights:
-            if light.kind == "beam":
-                continue
+        U, vis = self.irradiance_parts(a, mix, energy)
+        return (U * vis[..., None]).sum(0) if len(U) else np.zeros((len(a["P"]), 3))
+
+    def shadow_lights(self) -> list:
+        """The directional and point lights, in the order of irradiance_parts."""
+        return [l for l in self.lights if l.kind != "beam"]
+
+    def irradiance_parts(self, a: dict, mix: float, energy: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Per light of shadow_lights(): the unshadowed E A, Lc (N.L)+ rho_dt(N.L) C^mix (L, N, 3), and
+        the visibility (L, N) (True where N.L <= 0: nothing to shadow there), so E A = sum U vis."""
+        lights = self.shadow_lights()
+        n = len(a["P"])
+        U = np.zeros((len(lights), n, 3))
+        vis = np.ones((len(lights), n), bool)
+        cmix = _safe_pow(a["C"], mix)
+        for li, light in enumerate(lights):
             L = self.light_dir(light, a["P"])
             ndl = (a["N"] * L).sum(1)
             lit = ndl > 0
             if not lit.any():
                 continue
             sub = {k: v[lit] for k, v in a.items()}
-            vis = self.visible(light, sub, np.ascontiguousarray(L[lit]))
+            vis[li, lit] = self.visible(light, sub, np.ascontiguousarray(L[lit]))
             rho = self.rho_dt(ndl[lit], sub["m"], sub["rho"]) if energy else 1.0
             Lc = np.asarray(light.color, np.float64) * light.intensity
-            E[lit] += Lc[None] * (ndl[lit] * vis * rho)[:, None]
-        return E * _safe_pow(a["C"], mix)
+            U[li, lit] = Lc[None] * (ndl[lit] * rho)[:, None] * cmix[lit]
+        return U, vis
+
+    def visibility_at(self, li: int, tri: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        """Light li's visibility (as irradiance_parts: True where N.L <= 0) at (triangle, barycentrics)."""
+        light = self.shadow_lights()[li]
+        a = self.attributes(tri, bary)
+        L = self.light_dir(light, a["P"])
+        out = np.ones(len(tri), bool)
+        lit = (a["N"] * L).sum(1) > 0
+        if lit.any():
+            out[lit] = self.visible(light, {k: v[lit] for k, v in a.items()}, np.ascontiguousarray(L[lit]))
+        return out
 
     def beam_sources(self, mix: float, energy: bool) -> gt.PointSources:
         pos, power = [], []
@@ -433,7 +456,7 @@ def estimate_seconds(n_pixels: int, n_elements: int) -> float:
 
 def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances, weights, mix: float,
                     energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
-                    report=None, check=None) -> gt.Diffusion:
+                    report=None, check=None, split_edges: bool = True) -> gt.Diffusion:
     """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
     the beams' point sources, and the Diffusion sum over them."""
     report = report or (lambda stage, f: None)
@@ -457,25 +480,100 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
         raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU ({n_px} pixels, "
                                f"{n_el} source elements of {h_mm:g} mm), over the {max_seconds:.0f} s limit")
     report("irradiance", 0.0)
-    # E A at the element corners (shared inside each parent triangle); an element's value is the
-    # mean of its corners (exact for linear variation)
-    ea_v = np.zeros((n_v, 3))
+    # E A at the element corners (shared inside each parent triangle), per light unshadowed and its
+    # visibility; an element's value is the mean of its corners (exact for linear variation)
+    n_l = len(surf.shadow_lights())
+    U = np.zeros((n_l, n_v, 3))
+    vis = np.ones((n_l, n_v), bool)
     step = 200_000
     for s0 in range(0, n_v, step):
         if check():
             raise InterruptedError("cancelled")
         sl = slice(s0, min(n_v, s0 + step))
-        ea_v[sl] = surf.irradiance(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
+        U[:, sl], vis[:, sl] = surf.irradiance_parts(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
         report("irradiance", sl.stop / max(n_v, 1))
     vpos = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])
-    el = gt.Elements(vpos[elem], ea_v[elem].mean(1))
+    ea_v = (U * vis[..., None]).sum(0) if n_l else np.zeros((n_v, 3))
+    corners, ea, split = vpos[elem], ea_v[elem].mean(1), None
+    if split_edges and n_l:
+        corners, ea, split = split_shadow_edges(surf, vpar, vbary, vpos, elem, U, vis, check)
+    el = gt.Elements(corners, ea, split=split)
     return gt.Diffusion(el, variances, weights, h_mm, surf.beam_sources(mix, energy))
+
+
+EDGE_BISECTIONS = 10  # shadow-edge crossings located to 2^-11 of an element edge (0.25 um at 0.5 mm)
+
+
+def split_shadow_edges(surf: Surface, vpar, vbary, vpos, elem, U, vis, check=None):
+    """Elements whose corners disagree on a light's visibility (a cast-shadow edge crosses them) are
+    cut along the edge, found by bisecting the two element edges it crosses with shadow rays
+    (EDGE_BISECTIONS each) and taken straight inside the element; each piece carries its own side's
+    light (that light's unshadowed E A interpolated linearly, times 1 or 0), the others' as before.
+    The exact Owen's-T integral then integrates the lit part exactly, so the narrow Gaussians see a
+    step where the shadow ray sees one, not the corners' mean smeared over the element.
+    Returns (corners (E', 3, 3), E A (E', 3), split (E',) bool: the pieces)."""
+    n_l = U.shape[0]
+    ev = vis[:, elem]                                   # (L, E, 3)
+    carries = U[:, elem].sum(3).max(2) > 0              # (L, E): the light reaches some corner
+    mixed = ev.any(2) & ~ev.all(2) & carries
+    ea_v = (U * vis[..., None]).sum(0)
+    ea = ea_v[elem].mean(1)
+    corners = vpos[elem]
+    idx = np.nonzero(mixed.any(0))[0]
+    if len(idx) == 0:
+        return corners, ea, np.zeros(len(elem), bool)
+    li = np.argmax(mixed[:, idx], axis=0)               # the first light whose edge crosses it
+    v3 = ev[li, idx]                                    # (M, 3)
+    lone = np.argmax((v3 != v3[:, [1, 2, 0]]) & (v3 != v3[:, [2, 0, 1]]), axis=1)
+    order = (lone[:, None] + np.arange(3)[None]) % 3    # a (the lone corner), b, c, winding kept
+    ids = np.take_along_axis(elem[idx], order, 1)       # vertex ids of a, b, c
+    parent = vpar[ids[:, 0]]
+    va = vis[li, ids[:, 0]]
+
+    def crossing(j: int) -> np.ndarray:
+        lo, hi = np.zeros(len(idx)), np.ones(len(idx))
+        for _ in range(EDGE_BISECTIONS):
+            if check is not None and check():
+                raise InterruptedError("cancelled")
+            mid = 0.5 * (lo + hi)
+            bary = (1.0 - mid)[:, None] * vbary[ids[:, 0]] + mid[:, None] * vbary[ids[:, j]]
+            same = np.empty(len(idx), bool)
+            for k in range(n_l):
+                sel = li == k
+                if sel.any():
+                    same[sel] = surf.visibility_at(k, parent[sel], bary[sel]) == va[sel]
+            lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+        return 0.5 * (lo + hi)
+
+    W, side_a = gt.cut_weights(crossing(1), crossing(2))   # (M, 3 pieces, 3 corners, 3)
+    Wm = W.mean(2)                                          # mean weights over a piece's corners
+    Uabc = U[:, ids]                                        # (L, M, 3 corners, 3 ch)
+    Vabc = vis[:, ids].astype(np.float64)
+    # other lights: the corners' mean of U vis (as an unsplit element); the cut light: U x its side
+    mean_uv = np.einsum("mpk,lmkc->lmpc", Wm, Uabc * Vabc[..., None])
+    mean_u = np.einsum("mpk,lmkc->lmpc", Wm, Uabc)
+    rows = np.arange(len(idx))
+    side = np.where(va[:, None], side_a[None], 1.0 - side_a[None])  # (M, 3 pieces): lit or not
+    piece_ea = mean_uv.sum(0) - mean_uv[li, rows] + mean_u[li, rows] * side[..., None]
+    piece_corners = np.einsum("mpqk,mkd->mpqd", W, vpos[ids])
+    # the pieces take their element's place (the order of the elements stays the mesh's)
+    count = np.ones(len(elem), np.int64)
+    count[idx] = 3
+    at = np.cumsum(count) - count
+    out_c = np.repeat(corners, count, axis=0)
+    out_e = np.repeat(ea, count, axis=0)
+    split = np.zeros(len(out_c), bool)
+    put = (at[idx][:, None] + np.arange(3)[None]).ravel()
+    out_c[put] = piece_corners.reshape(-1, 3, 3)
+    out_e[put] = piece_ea.reshape(-1, 3)
+    split[put] = True
+    return out_c, out_e, split
 
 
 def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use_cache: bool = True,
                       max_seconds: float | None = None, scene: tuple[MeshData, float] | None = None,
                       progress: Callable[[str, float], None] | None = None,
-                      cancelled: Callable[[], bool] | None = None) -> Reference:
+                      cancelled: Callable[[], bool] | None = None, split_edges: bool = True) -> Reference:
     """The ground truth of ``s`` (see the module doc). ``profile``: (variances, weights (k, 3)) to
     use instead of ``s.deon.gaussians``. ``max_seconds``: raise ReferenceTooSlow (before the
     expensive part) when the estimate exceeds it. ``progress(stage, fraction)``; ``cancelled()``
@@ -512,7 +610,8 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     times["camera"] = time.perf_counter() - t0
     report("scene", 1.0)
     x_mm = a["P"] * mm
-    diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check)
+    diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check,
+                           split_edges=split_edges)
     n_el = len(diff.el.area)
     est = estimate_seconds(len(x_mm), n_el)
     points = diff.points
