@@ -67,6 +67,7 @@ class Reference:
     mask: np.ndarray
     meta: dict = field(default_factory=dict)
     position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
+    uncertainty: np.ndarray | None = None  # (H, W, 3) of ``lit``: |M_h - M_2h| (see coarse_uncertainty)
 
 
 # -- scene -------------------------------------------------------------------------------------
@@ -249,10 +250,10 @@ class Surface:
             out[lit] = self.visible(light, {k: v[lit] for k, v in a.items()}, np.ascontiguousarray(L[lit]))
         return out
 
-    def beam_sources(self, mix: float, energy: bool) -> gt.PointSources:
+    def beam_sources(self, mix: float, energy: bool, rays: int = BEAM_RAYS) -> gt.PointSources:
         pos, power = [], []
-        k = np.arange(BEAM_RAYS) + 0.5
-        rad, ang = np.sqrt(k / BEAM_RAYS), k * math.pi * (3.0 - math.sqrt(5.0))  # sunflower: equal areas
+        k = np.arange(rays) + 0.5
+        rad, ang = np.sqrt(k / rays), k * math.pi * (3.0 - math.sqrt(5.0))  # sunflower: equal areas
         for light in self.lights:
             if light.kind != "beam":
                 continue
@@ -275,7 +276,7 @@ class Surface:
             ngl = np.maximum(np.abs((a["Ng"] * L).sum(1)), 1e-3)
             rho = self.rho_dt(ndl, a["m"], a["rho"]) if energy else 1.0
             Lc = np.asarray(light.color, np.float64) * light.intensity
-            area = math.pi * (r * self.mm) ** 2 / BEAM_RAYS  # each ray's share of the beam, mm^2
+            area = math.pi * (r * self.mm) ** 2 / rays  # each ray's share of the beam, mm^2
             power.append(Lc[None] * (area * ndl / ngl * rho)[:, None] * _safe_pow(a["C"], mix))
             pos.append(a["P"] * self.mm)
         if not pos:
@@ -407,13 +408,17 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
     return v, w, np.asarray(fit.errors, np.float64)
 
 
-def cache_key(s: Settings, h_mm: float, profile=None) -> str:
+def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, uncertainty: bool = True) -> str:
     from skinviewer.core.renderer import Renderer
     d = s.model_dump(mode="json")
     parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
              "size": [s.render.width, s.render.height], "lights": d["lights"], "specular": d["specular"],
              "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
              "profile": [np.asarray(p).tolist() for p in (profile or profile_of(s))]}
+    if not split_edges:
+        parts["split_edges"] = False
+    if not uncertainty:
+        parts["uncertainty"] = False
     return hashlib.sha1(json.dumps(parts, sort_keys=True).encode()).hexdigest()
 
 
@@ -421,15 +426,17 @@ def _cache_path(key: str) -> Path:
     return cache_dir() / "reference" / f"{key}.npz"
 
 
-def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None) -> Reference | None:
-    p = _cache_path(cache_key(s, h_mm, profile))
+def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, split_edges: bool = True,
+                uncertainty: bool = True) -> Reference | None:
+    p = _cache_path(cache_key(s, h_mm, profile, split_edges, uncertainty))
     if not p.is_file():
         return None
     try:
         z = np.load(p, allow_pickle=False)
         meta = json.loads(str(z["meta"]))
         meta["cached"] = True
-        return Reference(z["lit"], z["diffuse"], z["specular"], z["mask"], meta, z["position"])
+        return Reference(z["lit"], z["diffuse"], z["specular"], z["mask"], meta, z["position"],
+                         z["uncertainty"] if "uncertainty" in z.files else None)
     except (OSError, ValueError, KeyError):
         return None
 
@@ -438,7 +445,8 @@ def _store(key: str, ref: Reference) -> None:
     buf = io.BytesIO()
     np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
                         specular=ref.specular.astype(np.float32), mask=ref.mask,
-                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta))
+                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta),
+                        **({} if ref.uncertainty is None else {"uncertainty": ref.uncertainty.astype(np.float32)}))
     atomic_write_bytes(_cache_path(key), buf.getvalue())
 
 
@@ -450,13 +458,16 @@ _SEC_PER_PIXEL = 2.5e-4
 _SEC_PER_ELEMENT = 1.2e-5
 
 
-def estimate_seconds(n_pixels: int, n_elements: int) -> float:
-    return _SEC_PER_PIXEL * n_pixels + _SEC_PER_ELEMENT * n_elements
+def estimate_seconds(n_pixels: int, n_elements: int, uncertainty: bool = False) -> float:
+    """CPU seconds of a reference; with its uncertainty, the coarse pass (a quarter of the pixels
+    and of the elements) besides."""
+    base = _SEC_PER_PIXEL * n_pixels + _SEC_PER_ELEMENT * n_elements
+    return base * (1.25 if uncertainty else 1.0)
 
 
 def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances, weights, mix: float,
                     energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
-                    report=None, check=None, split_edges: bool = True) -> gt.Diffusion:
+                    report=None, check=None, split_edges: bool = True, beam_rays: int = BEAM_RAYS) -> gt.Diffusion:
     """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
     the beams' point sources, and the Diffusion sum over them."""
     report = report or (lambda stage, f: None)
@@ -498,7 +509,7 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
     if split_edges and n_l:
         corners, ea, split = split_shadow_edges(surf, vpar, vbary, vpos, elem, U, vis, check)
     el = gt.Elements(corners, ea, split=split)
-    return gt.Diffusion(el, variances, weights, h_mm, surf.beam_sources(mix, energy))
+    return gt.Diffusion(el, variances, weights, h_mm, surf.beam_sources(mix, energy, beam_rays))
 
 
 EDGE_BISECTIONS = 10  # shadow-edge crossings located to 2^-11 of an element edge (0.25 um at 0.5 mm)
@@ -570,20 +581,85 @@ def split_shadow_edges(surf: Surface, vpar, vbary, vpos, elem, U, vis, check=Non
     return out_c, out_e, split
 
 
+UNCERTAINTY_COARSER = 2.0   # the coarser level of the uncertainty: elements twice as large, half the beam rays
+UNCERTAINTY_STRIDE = 2      # its receivers: every 2nd pixel in x and y (then the 3 x 3 maximum)
+GCI_SAFETY = 3.0            # Roache's grid convergence index: safety factor 3 for a two-level estimate
+TRUNCATE_LOSS = 5e-5        # relative: the weight beyond TRUNCATE sigma, exp(-4.5^2 / 2) = 4e-5, and float32
+UNCERTAINTY_NOTE = ("per pixel: 3 |M(h={h:g} mm) - M(h={h2:g} mm, half the beam rays)| (Roache's grid convergence "
+                    "index, first order, safety factor 3; the coarse level on every 2nd pixel, the largest of the "
+                    "pixel's 3x3 neighbourhood) + |grad M| x the shadow edge's position tolerance (ray offset and "
+                    "bisection bracket) + 5e-5 M (truncation), times C^(1-mix) rho_dt(N.V); specular is exact")
+
+
+def coarse_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, M: np.ndarray,
+                       h_mm: float, variances, weights, mix: float, energy: bool, split_edges: bool = True,
+                       check=None) -> np.ndarray:
+    """The truth's own uncertainty at each receiver (N, 3), Roache's grid convergence index (1994):
+    GCI_SAFETY |M_h - M_2h| / (2^p - 1) with p = 1 (the default head's residual halves per halving of
+    h), the coarse level with elements UNCERTAINTY_COARSER times as large and half the beam rays, run
+    on every UNCERTAINTY_STRIDE-th pixel (and every pixel no such pixel neighbours); each pixel takes
+    the largest of its 3 x 3 neighbourhood (a feature between samples is covered). Plus what both
+    levels share: a shadow edge's position is known to the shadow ray's offset (2 eps, at most 1 mm x
+    2e-5 of the scene) and half the bisection's last bracket, so |grad M| (across pixels, 3 x 3 max)
+    times that; and the truncation of every Gaussian at TRUNCATE sigma (TRUNCATE_LOSS M)."""
+    from scipy.ndimage import binary_dilation, maximum_filter
+    H, W = mask.shape
+    k = UNCERTAINTY_STRIDE
+    grid = np.zeros((H, W), bool)
+    grid[::k, ::k] = True
+    grid &= mask
+    sel_img = grid | (mask & ~binary_dilation(grid, np.ones((3, 3), bool)))
+    sel = sel_img[mask]
+    h2 = UNCERTAINTY_COARSER * h_mm
+    diff2 = build_diffusion(surf, x_mm[sel], h2, variances, weights, mix, energy, check=check,
+                            split_edges=split_edges, beam_rays=BEAM_RAYS // 2)
+    M2 = diff2.exitance(x_mm[sel], ea_here[sel], cancelled=check)
+    rows, cols = np.nonzero(mask)
+
+    def max3(vals: np.ndarray, where: np.ndarray) -> np.ndarray:
+        img = np.full((H, W, 3), -np.inf)
+        img[rows[where], cols[where]] = vals
+        img = maximum_filter(img, size=(3, 3, 1), mode="constant", cval=-np.inf)
+        return np.maximum(img[mask], 0.0)
+
+    u = max3(GCI_SAFETY * np.abs(M[sel] - M2), sel)
+    # |grad M| between 4-neighbours (per mm of surface), over the pixel's 3 x 3 neighbourhood
+    full = np.zeros((H, W, 3))
+    pos = np.full((H, W, 3), np.nan)
+    full[mask], pos[mask] = M, x_mm
+    grad = np.zeros((H, W, 3))
+    for ax in (0, 1):
+        dm = np.abs(np.diff(full, axis=ax))
+        dx = np.linalg.norm(np.diff(pos, axis=ax), axis=2, keepdims=True)
+        both = np.isfinite(dx) & (dx > 0)
+        g = np.where(both, dm / np.where(both, dx, 1.0), 0.0)
+        sl = [slice(None)] * 3
+        sl[ax] = slice(1, None)
+        grad[tuple(sl)] = np.maximum(grad[tuple(sl)], g)
+        sl[ax] = slice(None, -1)
+        grad[tuple(sl)] = np.maximum(grad[tuple(sl)], g)
+    delta = 2.0 * surf.eps * surf.mm + 0.5 * h_mm * 2.0 ** -EDGE_BISECTIONS
+    u += max3(grad[mask], np.ones(len(M), bool)) * delta
+    return u + TRUNCATE_LOSS * np.abs(M)
+
+
 def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use_cache: bool = True,
                       max_seconds: float | None = None, scene: tuple[MeshData, float] | None = None,
                       progress: Callable[[str, float], None] | None = None,
-                      cancelled: Callable[[], bool] | None = None, split_edges: bool = True) -> Reference:
+                      cancelled: Callable[[], bool] | None = None, split_edges: bool = True,
+                      uncertainty: bool = True) -> Reference:
     """The ground truth of ``s`` (see the module doc). ``profile``: (variances, weights (k, 3)) to
     use instead of ``s.deon.gaussians``. ``max_seconds``: raise ReferenceTooSlow (before the
     expensive part) when the estimate exceeds it. ``progress(stage, fraction)``; ``cancelled()``
     -> True stops with InterruptedError. ``scene``: (mesh, mm per unit) instead of s.scene (not
-    cached)."""
-    key = cache_key(s, h_mm, profile)
+    cached). ``uncertainty``: also the per-pixel uncertainty of ``lit`` (coarse_uncertainty, about
+    +20 % time). ``split_edges``: False = elements crossed by a shadow edge carry their corners'
+    mean (the version-4 truth; for comparisons)."""
+    key = cache_key(s, h_mm, profile, split_edges, uncertainty)
     if scene is not None:
         use_cache = False
     if use_cache:
-        hit = load_cached(s, h_mm, profile)
+        hit = load_cached(s, h_mm, profile, split_edges, uncertainty)
         if hit is not None:
             return hit
     report = progress or (lambda stage, f: None)
@@ -601,7 +677,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
         area = 0.5 * np.linalg.norm(np.cross(tri_mm[:, 1] - tri_mm[:, 0], tri_mm[:, 2] - tri_mm[:, 0]), axis=1).sum()
         n_px = int(cover * s.render.width * s.render.height)
         n_el = int(0.5 * area / (0.17 * h_mm * h_mm))  # about half the surface can reach a visible point
-        est = estimate_seconds(n_px, n_el)
+        est = estimate_seconds(n_px, n_el, uncertainty)
         if est > max_seconds:
             raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU (~{n_px} pixels, "
                                    f"~{n_el} source elements of {h_mm:g} mm), over the {max_seconds:.0f} s limit")
@@ -613,12 +689,21 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check,
                            split_edges=split_edges)
     n_el = len(diff.el.area)
-    est = estimate_seconds(len(x_mm), n_el)
+    est = estimate_seconds(len(x_mm), n_el, uncertainty)
     points = diff.points
     ea_here = surf.irradiance(a, mix, energy)
     times["irradiance"] = time.perf_counter() - t0 - times["camera"]
     M = diff.exitance(x_mm, ea_here, progress=lambda f: report("diffusion", f), cancelled=check)
     times["diffusion"] = time.perf_counter() - t0 - times["camera"] - times["irradiance"]
+    H, W = mask.shape
+    u_M = None
+    if uncertainty:
+        t1 = time.perf_counter()
+        report("uncertainty", 0.0)
+        u_M = coarse_uncertainty(surf, mask, x_mm, ea_here, M, h_mm, variances, weights, mix, energy,
+                                 split_edges, check)
+        report("uncertainty", 1.0)
+        times["uncertainty"] = time.perf_counter() - t1
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
     V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
@@ -627,9 +712,9 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     rho_v = surf.rho_dt((N * V).sum(1), a["m"], a["rho"]) if energy else np.ones(len(V))
     diffuse = M * _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
     spec = surf.specular(a, V)
-    H, W = mask.shape
     imgs = []
-    for arr in (diffuse + spec, diffuse, spec, a["P"]):
+    scale = _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
+    for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * scale,)):
         img = np.zeros((H * W, 3))
         img[mask.ravel()] = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
         imgs.append(img.reshape(H, W, 3))
@@ -637,7 +722,9 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     meta = {"key": key, "version": VERSION, "h_mm": h_mm, "elements": n_el, "pixels": int(mask.sum()),
             "beam_rays": len(points.position), "seconds": times, "estimate_s": est,
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False}
-    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3])
+    if u_M is not None:
+        meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm)
+    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None)
     if use_cache:
         _store(key, ref)
     report("done", 1.0)

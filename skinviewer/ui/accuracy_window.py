@@ -21,7 +21,7 @@ from skinviewer.core.bench import (
     pareto_front,
 )
 from skinviewer.core.settings import Settings, value_key, with_values
-from skinviewer.physics.metrics import image_error, rel_error_map
+from skinviewer.physics.metrics import image_error, rel_error_map, with_u
 from skinviewer.ui.widgets import show_tooltip
 
 VIEW_MODES = ("image", "heat map", "split image | heat map")
@@ -129,7 +129,8 @@ class AccuracyWindow:
         if img.shape != self.reference.lit.shape:
             return
         m = compare_mask(self.reference.mask, lit[..., 3] > 0.5)
-        self.error = image_error(img, self.reference.lit, m, exposure=st.settings.render.exposure)
+        self.error = image_error(img, self.reference.lit, m, exposure=st.settings.render.exposure,
+                                 uncertainty=getattr(self.reference, "uncertainty", None))
         self._upload_heat(rel_error_map(img, self.reference.lit, m))
 
     def _upload_heat(self, emap: np.ndarray) -> None:
@@ -223,9 +224,9 @@ class AccuracyWindow:
             imgui.text_disabled("the view or lighting changed: the ground truth is for another view")
         if self.current and self.error is not None:
             e = self.error
-            imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
-            imgui.text(f"p99  {' / '.join(f'{100 * c:.1f}' for c in e.p99)} %")
-            imgui.text(f"DSSIM {e.dssim:.4f}")
+            imgui.text(f"RMS  {with_u(e.rms, e.rms_u, 2)} %")  # ± the ground truth's own uncertainty
+            imgui.text(f"p99  {with_u(e.p99, e.p99_u)} %")
+            imgui.text(f"DSSIM {e.dssim:.4f}" + (f" ± {e.dssim_u:.4f}" if e.dssim_u is not None else ""))
             imgui.set_next_item_width(200)
             _, self.view_mode = imgui.combo("view", self.view_mode, list(VIEW_MODES))
             if self.view_mode:
