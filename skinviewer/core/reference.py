@@ -525,7 +525,7 @@ def split_shadow_edges(surf: Surface, vpar, vbary, vpos, elem, U, vis, check=Non
     Returns (corners (E', 3, 3), E A (E', 3), split (E',) bool: the pieces)."""
     n_l = U.shape[0]
     ev = vis[:, elem]                                   # (L, E, 3)
-    carries = U[:, elem].sum(3).max(2) > 0              # (L, E): the light reaches some corner
+    carries = (U.sum(2) > 0)[:, elem].any(2)            # (L, E): the light reaches some corner
     mixed = ev.any(2) & ~ev.all(2) & carries
     ea_v = (U * vis[..., None]).sum(0)
     ea = ea_v[elem].mean(1)
