@@ -24,10 +24,10 @@ from scipy.special import ndtr
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from skinviewer.core.reference import compute_reference  # noqa: E402
-from skinviewer.core.settings import Settings, with_values  # noqa: E402
-from skinviewer.physics import ground_truth as gt  # noqa: E402
-from skinviewer.scene.scenes import scene_overrides  # noqa: E402
+from skinviewer.core.reference import compute_reference
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.physics import ground_truth as gt
+from skinviewer.scene.scenes import scene_overrides
 
 G = Settings().deon.gaussians
 V = np.array([g.variance for g in G])
@@ -43,9 +43,7 @@ def scene(name: str, size: int, **assign) -> Settings:
 
 
 def zoomed_edge(size: int) -> Settings:
-    return scene("shadow-edge", size, **{
-        "lights": [{"kind": "directional", "direction": [-0.5, 0.0, 0.866], "intensity": 0.8, "cast_shadow": True}],
-        "camera": {"yaw": 0.0, "pitch": 0.0, "distance": 100.0, "target": [XE, 0.0, 0.0], "fov_y": 3.0}})
+    return scene("shadow-edge", size, lights=[{"kind": "directional", "direction": [-0.5, 0.0, 0.866], "intensity": 0.8, "cast_shadow": True}], camera={"yaw": 0.0, "pitch": 0.0, "distance": 100.0, "target": [XE, 0.0, 0.0], "fov_y": 3.0})
 
 
 def edge_expect(p):

@@ -222,7 +222,7 @@ def main(argv=None) -> int:
                 row.ms.append(ms)
             for k, e in eq.items():  # equal samples per image: a one-frame Golubev with the temporal mean's samples
                 c = imgs[k][3]
-                kk = max(1, int(round(c.samples * methods[k].temporal / max(c.pixels, 1))))
+                kk = max(1, int(c.samples * methods[k].temporal / max(c.pixels, 1) + 0.5))
                 if kk not in golubev_k:
                     golubev_k[kk] = make_graph(r, Plan((kk,)))
                 gimg, _, _ = run_frame(r, golubev_k[kk][0], s)

@@ -18,7 +18,13 @@ import numpy as np
 from skinviewer import techniques
 from skinviewer.core.files import atomic_write_text, save_exr, save_png
 from skinviewer.core.settings import Settings, with_values
-from skinviewer.physics.metrics import DSSIM_SETUP, image_error, rel_error_map, tied, with_u
+from skinviewer.physics.metrics import (
+    DSSIM_SETUP,
+    image_error,
+    rel_error_map,
+    tied,
+    with_u,
+)
 
 RUNS = 3
 LAST_BENCH = "last_bench.txt"  # in cache_dir(): the results.json of the last bench (the viewer's chart)
