@@ -246,3 +246,22 @@ def test_truth_sees_the_view_the_renderer_draws(renderer):
     _, cov = linear_image(renderer, s)
     iou = (mask & cov).sum() / max((mask | cov).sum(), 1)
     assert iou > 0.95, iou
+
+
+def test_reference_cli_writes_the_uncertainty_beside_the_image(tmp_path, monkeypatch, capsys):
+    """`skinviewer reference --npy X.npy --exr X.exr`: X.uncertainty.npy beside the image, an EXR layer
+    uncertainty.R/G/B, and its median / p99 printed."""
+    import OpenEXR
+
+    from skinviewer.cli import main
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path / "cache"))
+    rc = main(["reference", "--scene", "laser", "--size", "24x24", "--out", str(tmp_path / "r.png"),
+               "--npy", str(tmp_path / "r.npy"), "--exr", str(tmp_path / "r.exr")])
+    assert rc == 0
+    img, u = np.load(tmp_path / "r.npy"), np.load(tmp_path / "r.uncertainty.npy")
+    assert u.shape == img.shape and np.all(u >= 0) and u.max() > 0
+    with OpenEXR.File(str(tmp_path / "r.exr"), separate_channels=True) as f:
+        ch = f.channels()
+        assert {"uncertainty.R", "uncertainty.G", "uncertainty.B"} <= set(ch)
+        np.testing.assert_allclose(np.asarray(ch["uncertainty.G"].pixels), u[..., 1], rtol=1e-6)
+    assert "uncertainty of the image" in capsys.readouterr().out
