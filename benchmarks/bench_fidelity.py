@@ -8,7 +8,10 @@
           error (physics/accuracy.laser_errors) per irradiance size, d'Eon and Gosselin.
   lights  the stretch choices on the scan over four light directions, against the 3D and surface-path references.
 
-Run: python3 benchmarks/bench_fidelity.py [--parts laser,seams,lights] [--sizes 256,512,1024,2048]
+Run: python3 benchmarks/bench_fidelity.py [--parts laser,seams,lights] [--sizes 256,512,1024,2048] [--seams-quick]
+
+The seams judge is the converged, supersampled one (issue 30): its level and one level finer are
+printed with how much the figures move between them.
 """
 from __future__ import annotations
 
@@ -78,13 +81,26 @@ _REFERENCES: dict = {}  # (judge, E's bytes) -> reference: the irradiance is the
 
 
 def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = None, dump: str | None = None,
-          tissue_only: bool = False, surface_paths: bool = False, shortcuts_add: bool = False) -> dict:
+          tissue_only: bool = False, surface_paths: bool = False, shortcuts_add: bool = False,
+          centres: bool = False, level: int | None = None, share: float = 1.0) -> dict:
+    """The seam bench's figures of d'Eon's diffused map. The default judge is the converged one
+    (scene/texels.supersampled_diffusion_reference at ``level``, default JUDGE_LEVEL): it shares no
+    texel grid with the technique. ``centres``: the old judge (a sum at the texel centres with texel
+    areas, the discretisation of the surface gather it judges) for comparison; the tissue-only and
+    surface-path judges are still texel-centre sums (not supersampled). ``share`` < 1: the figures over
+    a fixed random share of the lit texels (the converged judge's cost on a shared CPU)."""
     import hashlib
 
     from scipy import ndimage
 
     from skinviewer.physics import metrics
-    from skinviewer.scene.texels import SurfacePaths, surface_diffusion_reference, texel_surface
+    from skinviewer.scene.texels import (
+        JUDGE_LEVEL,
+        SurfacePaths,
+        supersampled_diffusion_reference,
+        surface_diffusion_reference,
+        texel_surface,
+    )
     vals = {"scene.mesh": str(scan), "scene.mm_per_unit": 48.0, "deon.irradiance_size": n, "deon.tsm": False,
             "shadow.map_size": 2048,
             "lights": [{"kind": "directional", "direction": [0.55, 0.35, 1.0], "intensity": 1.4, "cast_shadow": True}]}
@@ -100,11 +116,19 @@ def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = Non
     tri, pos, area = texel_surface(m.positions, m.uvs, m.indices, n, r.scene.gpu.mm_per_unit)
     cov = tri >= 0
     V, W = [x.variance for x in s.deon.gaussians], [x.weights for x in s.deon.gaussians]
-    judge = "tissue" if tissue_only else "sum" if shortcuts_add else "paths" if surface_paths else "3d"
+    level = JUDGE_LEVEL if level is None else level
+    judge = "tissue" if tissue_only else "sum" if shortcuts_add else "paths" if surface_paths else \
+        "3d" if centres else f"converged{level}"
     key = (judge, n, hashlib.blake2b(E.tobytes() + repr((V, W)).encode(), digest_size=16).digest())
     lit = cov & (E.max(-1) > 0)
+    if share < 1.0:
+        lit &= np.random.default_rng(30).random(lit.shape) < share
+        key = key + (share,)
     if key in _REFERENCES:
         ref = _REFERENCES[key]
+    elif judge.startswith("converged"):
+        ref = supersampled_diffusion_reference(E, cov, m.positions, m.uvs, m.indices, n, r.scene.gpu.mm_per_unit,
+                                               V, W, level=level, receivers=lit)
     elif surface_paths or shortcuts_add:  # normalised by the pairs joined along the surface only
         paths = SurfacePaths(m.positions, m.indices, tri, pos, r.scene.gpu.mm_per_unit, 3.5 * float(np.sqrt(max(V))))
         ref = surface_diffusion_reference(E, pos, area, cov, V, W, surface_paths=paths, shortcuts_add=shortcuts_add)
@@ -161,13 +185,38 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--parts", default="laser")
     ap.add_argument("--sizes", default="256,512,1024,2048")
+    ap.add_argument("--seams-share", type=float, default=1.0,
+                    help="seams: figures over this fixed random share of the lit texels (the converged judge's cost)")
+    ap.add_argument("--seams-texel-samples", action="store_true", help="seams: also deon.texel_samples = 4")
+    ap.add_argument("--seams-quick", action="store_true",
+                    help="seams: only the defaults and every-step-separable rows against the converged and the old judge")
     a = ap.parse_args()
     ctx = headless_context()
     r = Renderer(ctx)
     print(f"# {describe(ctx)}")
     sizes = [int(x) for x in a.sizes.split(",")]
     if "seams" in a.parts:
-        print("## seams: the scan at 512^2, d'Eon diffused map vs the 3D-distance reference over lit texels")
+        from skinviewer.scene.texels import JUDGE_LEVEL
+        print("## seams: the scan at 512^2, d'Eon diffused map vs the converged 3D-distance judge over lit texels "
+              f"(supersampled, level {JUDGE_LEVEL}: scene/texels.supersampled_diffusion_reference)")
+        sh = {"share": a.seams_share}
+        if a.seams_share < 1.0:
+            print(f"   (figures over a fixed random {100 * a.seams_share:.0f} % of the lit texels)")
+        e0, e1 = seams(r, **sh), seams(r, level=JUDGE_LEVEL + 1, **sh)
+        print_seams("defaults, judge level " + str(JUDGE_LEVEL), e0)
+        print_seams("defaults, judge level " + str(JUDGE_LEVEL + 1), e1)
+        ch = [abs(a1 - a0) / max(a0, 1e-12) for a0, a1 in zip(list(e0["rms"]) + list(e0["p99"]),
+                                                              list(e1["rms"]) + list(e1["p99"]))]
+        print(f"   one level finer changes the figures by at most {100 * max(ch):.1f} % of themselves "
+              f"({'converged' if max(ch) < 0.1 else 'NOT converged'}: < 10 %)")
+        print_seams("defaults, old judge (texel centres)", seams(r, centres=True, **sh))
+        print_seams("  every step separable, old judge", seams(r, extra={"deon.surface_gather_below_texels": 0.0},
+                                                             centres=True, **sh))
+        print_seams("every step separable", seams(r, extra={"deon.surface_gather_below_texels": 0.0}, **sh))
+        if a.seams_texel_samples:
+            print_seams("deon.texel_samples 4", seams(r, extra={"deon.texel_samples": 4}, **sh))
+            print_seams("deon.texel_samples 4, old judge", seams(r, extra={"deon.texel_samples": 4}, centres=True, **sh))
+    if "seams" in a.parts and not a.seams_quick:
         noshear, tri = {"deon.stretch_shear": False}, {"scene.stretch_metric": "triangle"}
         print_seams("seam-aware gutters off", seams(r, extra={"scene.seam_aware": False}))
         print_seams("on, eq. 27 per triangle", seams(r, extra={**tri, **noshear}))

@@ -16,7 +16,9 @@ from skinviewer.core.bench import (
     best_within,
     load_results,
     pareto_front,
+    results_markdown,
     run_bench,
+    ties_of,
 )
 from skinviewer.core.reference import compute_reference
 from skinviewer.core.settings import Settings, load_preset, with_values
@@ -47,6 +49,27 @@ def test_pareto_and_budget():
     assert best_within(rs, 5) is None
 
 
+def test_differences_within_the_truths_uncertainty_are_ties():
+    """Mean RMS 5.0 vs 5.2 % with the truth's uncertainty +- 0.15 %: a tie, so the faster one is
+    picked within a budget and the slower one is off the Pareto front; 5.0 vs 6.0 % is ranked."""
+    u = [0.0015] * 3
+    fast = Result("a", "fast", {}, full_ms=10, rms=[0.052] * 3, rms_u=u)
+    slow = Result("a", "slow", {}, full_ms=20, rms=[0.050] * 3, rms_u=u)
+    worse = Result("b", "worse", {}, full_ms=5, rms=[0.060] * 3, rms_u=u)
+    rs = [fast, slow, worse]
+    pareto_front(rs)
+    assert [r.label for r in rs if r.pareto] == ["fast", "worse"]
+    assert best_within(rs, 30) is fast and ties_of(fast, rs) == [slow]
+    exact = [Result("a", "fast", {}, full_ms=10, rms=[0.052] * 3), Result("a", "slow", {}, full_ms=20, rms=[0.050] * 3)]
+    pareto_front(exact)
+    assert all(r.pareto for r in exact) and best_within(exact, 30).label == "slow"  # no uncertainty: ranked
+    md = results_markdown({"scene": "x", "size": [8, 8], "timing": "t", "metrics": {"dssim": "d"},
+                           "reference": {"uncertainty": "note"},
+                           "results": [dict(r.to_json(), dssim=0.01, dssim_u=0.001, p99=[0.1] * 3, p99_u=[0.01] * 3,
+                                            camera_ms=1.0) for r in rs]})
+    assert "5.2 / 5.2 / 5.2 ± 0.1 / 0.1 / 0.1" in md and "0.0100 ± 0.0010" in md and "| a slow |" in md
+
+
 def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch, gl_ctx):
     bad = Technique("broken", "a configuration that cannot be built", techniques.REGISTRY["phong"].build,
                     lambda quick: [("ok", {}), ("invalid", {"shadow.map_size": 3})])
@@ -71,6 +94,11 @@ def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch, gl_
     assert "Pareto" in md and "failed" in md
     meta, rs = load_results(out / "results.json")
     assert meta["reference"]["elements"] > 0 and len(rs) == len(data["results"])
+    # every figure carries the truth's uncertainty
+    for r in rs:
+        if r.error is None:
+            assert len(r.rms_u) == 3 and len(r.p99_u) == 3 and r.dssim_u is not None and min(r.rms_u) > 0
+    assert " ± " in md and "tied with" in md
 
 
 def test_bench_cli_budget_preset(tmp_path):

@@ -420,3 +420,37 @@ def test_max_stretch_from_the_mesh_bounds_the_stretch_map(renderer):
     cpu_max = renderer.scene.gpu.max_uv_per_mm
     assert gpu_max <= cpu_max * (1 + 1e-4)
     assert cpu_max < 20 * gpu_max  # and is not a loose bound
+
+
+@pytest.mark.parametrize("texel_surface", [True, False])
+def test_a_texel_a_shadow_edge_crosses_carries_its_lit_fraction(renderer, texel_surface):
+    """deon.texel_samples = 4 (issue 30 item 4): the irradiance pass averages the shadow test over a
+    rotated 2 x 2 grid of the texel's patch, so a texel the cast edge crosses (shadow-edge lit at 30
+    degrees, hard shadow, 256^2 map: 0.31 mm texels) is within a quarter of its lit fraction, while one
+    sample per texel gives all or nothing."""
+    import math
+
+    from skinviewer.physics.diffusion import IRRADIANCE
+    from skinviewer.scene.scenes import build_scene
+    xe = 21.0 * math.tan(math.radians(30.0))
+    m = build_scene("shadow-edge").mesh
+    X, _, _ = plane_coords(m.positions, m.uvs, m.mm_per_unit, 256, np.abs(m.positions[:, 2]) < 1e-6)
+    lit = 0.8 * 0.866 / math.hypot(0.5, 0.866)
+    frac = np.clip((X[0] - xe) / (X[0, 1] - X[0, 0]) + 0.5, 0.0, 1.0)
+    edge = (frac > 0.05) & (frac < 0.95)
+    near = np.abs(X[0] - xe) < 3.0
+    got = {}
+    for k in (1, 4):
+        s = small_settings("shadow-edge", "deon", 32, **{
+            "deon.irradiance_size": 256, "deon.tsm": False, "deon.energy_conservation": False,
+            "shadow.map_size": 4096, "shadow.pcf": 0, "deon.texel_samples": k,
+            "render.texel_surface": texel_surface,
+            "lights": [{"kind": "directional", "direction": [-0.5, 0.0, 0.866], "intensity": 0.8,
+                        "cast_shadow": True}]})
+        renderer.render(s)
+        got[k] = renderer.graph("deon").read(IRRADIANCE)[128, :, 0].astype(np.float64) / lit
+    assert edge.sum() >= 1
+    assert np.all(np.isin(np.round(got[1][near], 3), (0.0, 1.0)))
+    assert np.abs(got[4][edge] - frac[edge]).max() <= 0.26
+    assert np.abs(got[4][near & ~edge] - np.round(frac[near & ~edge])).max() < 1e-3
+    assert 0.0 < got[4][edge].max() < 1.0

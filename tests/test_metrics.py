@@ -52,3 +52,21 @@ def test_bad_inputs_are_refused():
     bad[0, 0, 0] = np.nan
     with pytest.raises(ValueError):
         M.image_error(bad, a)
+
+
+def test_figure_uncertainty_bounds_every_reference_within_it():
+    """A reference moved anywhere within its per-pixel uncertainty u moves RMS and p99 by no more
+    than their stated uncertainty (triangle inequality; monotone percentile)."""
+    from skinviewer.physics.metrics import image_error
+    rng = np.random.default_rng(5)
+    ref = rng.uniform(0.2, 1.0, (32, 32, 3))
+    x = ref * (1 + 0.05 * rng.normal(size=ref.shape))
+    u = 0.01 * ref * rng.uniform(0.5, 1.5, ref.shape)
+    e = image_error(x, ref, uncertainty=u)
+    assert e.rms_u is not None and min(e.rms_u) > 0 and min(e.p99_u) > 0 and e.dssim_u > 0
+    assert "±" in e.summary()
+    for _ in range(5):
+        moved = ref + u * rng.uniform(-1, 1, ref.shape)
+        f = image_error(x, moved)
+        assert np.all(np.abs(np.subtract(f.rms, e.rms)) <= np.array(e.rms_u) + 1e-12)
+        assert np.all(np.abs(np.subtract(f.p99, e.p99)) <= np.array(e.p99_u) + 0.01 * np.array(e.p99))

@@ -30,6 +30,15 @@ layout(location = 1) out vec4 f_visibility;
 #endif
 // P, Nv, uv, T: the interpolated vertex position, normal, UV and tangent at the texel centre;
 // dPdx, dPdy: the position's change per texel step (beam footprints)
+// deon.texel_samples = 4 (issue 30 item 4): the shadow test and N.L averaged over the texel's surface
+// patch at a rotated 2 x 2 grid (offsets in texels; P moves along dPdx, dPdy, the normal map is read at
+// the sample's uv), so a texel a shadow edge crosses carries its lit fraction as the ground truth's
+// integral over the surface does, instead of all or nothing at its centre.
+uniform int u_texel_samples;
+uniform vec2 u_texel_uv;          // 1 / the irradiance map's size
+const vec2 TEXEL_SAMPLE[4] = vec2[4](vec2(-0.375, -0.125), vec2(0.125, -0.375), vec2(0.375, 0.125),
+                                     vec2(-0.125, 0.375));
+
 void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, vec3 dPdx, vec3 dPdy) {
     set_light_footprint(dPdx, dPdy);  // beam lights: area coverage
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
@@ -37,15 +46,35 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
     vec4 vis = vec4(0.0);
+    int ns = (u_texel_samples >= 4) ? 4 : 1;
+    vec2 duv = u_texel_uv;  // one texel of the irradiance map in uv
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
-        float ndl = dot(N, L);
-        if (!(ndl > 0.0)) continue;
-        float s = shadow_factor(i, v_position, normalize(v_normal));
-        vis[i] = s;
-        float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
-        E += Lc * (ndl * s * rho);
+        if (ns == 1) {
+            float ndl = dot(N, L);
+            if (!(ndl > 0.0)) continue;
+            float s = shadow_factor(i, v_position, normalize(v_normal));
+            vis[i] = s;
+            float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
+            E += Lc * (ndl * s * rho);
+            continue;
+        }
+        float e = 0.0, sv = 0.0;
+        for (int k = 0; k < 4; ++k) {
+            vec2 o = TEXEL_SAMPLE[k];
+            vec3 Pk = v_position + dPdx * o.x + dPdy * o.y;
+            vec3 Lk;
+            light_incident(i, Pk, Lk);
+            float ndl = dot(surface_normal(v_normal, v_tangent, v_uv + o * duv), Lk);
+            if (!(ndl > 0.0)) continue;
+            float s = shadow_factor(i, Pk, normalize(v_normal));
+            sv += s;
+            float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
+            e += ndl * s * rho;
+        }
+        vis[i] = 0.25 * sv;
+        E += Lc * (0.25 * e);
     }
     E *= C;
     float d = 0.0;

@@ -127,10 +127,13 @@ def cmd_reference(args) -> int:
         save_exr(args.out, ref.lit)
     else:
         save_image(args.out, display_png(s, ref.lit, ref.mask))
+    u = ref.uncertainty
     if args.npy:
         save_npy(args.npy, ref.lit)
+        if u is not None:
+            save_npy(uncertainty_path(args.npy), u)
     if args.exr:
-        save_exr(args.exr, ref.lit)
+        save_exr(args.exr, ref.lit, extra=None if u is None else {"uncertainty": u})
     m = ref.meta
     t = m.get("seconds", {}).get("total", 0.0)
     print(f"wrote {args.out} ({s.render.width}x{s.render.height}, ground truth, {m['pixels']} pixels, "
@@ -140,7 +143,21 @@ def cmd_reference(args) -> int:
         print(f"  {line}")
     for note in m.get("notes", []):
         print(f"note: {note}", file=sys.stderr)
+    if u is not None:
+        mk = ref.mask & (ref.lit.sum(-1) > 0)
+        rel = u[mk] / np.maximum(ref.lit[mk], 1e-3 * np.maximum(ref.lit[mk].mean(0), 1e-12))
+        print("  uncertainty of the image, relative (median / p99 R G B %): "
+              + " / ".join(f"{100 * c:.2f}" for c in np.median(rel, 0)) + ", "
+              + " / ".join(f"{100 * c:.2f}" for c in np.percentile(rel, 99, 0))
+              + (f"; written to {uncertainty_path(args.npy)}" if args.npy else "")
+              + (f"; EXR channels uncertainty.R/G/B in {args.exr}" if args.exr else ""))
     return 0
+
+
+def uncertainty_path(npy: str) -> str:
+    """ref.npy -> ref.uncertainty.npy (the per-pixel uncertainty beside the image)."""
+    p = Path(npy)
+    return str(p.with_name(p.stem + ".uncertainty" + (p.suffix or ".npy")))
 
 
 def cmd_bench(args) -> int:
@@ -150,6 +167,7 @@ def cmd_bench(args) -> int:
         config_settings,
         load_results,
         run_bench,
+        ties_of,
     )
 
     s = settings_from_args(args)
@@ -182,16 +200,21 @@ def cmd_bench(args) -> int:
     failed = [r for r in results if r.error]
     print(f"wrote {out}/results.json, results.md, pareto.png, heatmaps/ ({len(results)} configurations"
           + (f", {len(failed)} failed" if failed else "") + ")")
-    for r in sorted((r for r in results if r.pareto), key=lambda r: r.ms):
-        print(f"  Pareto: {r.name:<28} {r.ms:8.1f} ms  RMS {100 * r.err:5.2f} %  DSSIM {r.dssim:.4f}")
+    for r in sorted((r for r in results if r.pareto), key=lambda r: r.full_ms):
+        u = f" ± {100 * r.rms_mean_u:.2f}" if r.rms_mean_u is not None else ""
+        print(f"  Pareto: {r.name:<28} {r.full_ms:8.1f} ms  RMS {100 * r.rms_mean:5.2f}{u} %  DSSIM {r.dssim:.4f}")
     if args.budget_ms is not None:
         best = best_within(results, args.budget_ms)
         if best is None:
             print(f"no configuration fits {args.budget_ms:g} ms", file=sys.stderr)
             return 1
-        p99 = max(best.p99) if best.p99 else math.nan
-        print(f"best within {args.budget_ms:g} ms: {best.name} ({best.ms:.1f} ms, RMS "
-              f"{100 * best.err:.2f} %, p99 {100 * p99:.1f} %, DSSIM {best.dssim:.4f})")
+        u = f" ± {100 * best.rms_mean_u:.2f}" if best.rms_mean_u is not None else ""
+        print(f"best within {args.budget_ms:g} ms: {best.name} ({best.full_ms:.1f} ms, RMS "
+              f"{100 * best.rms_mean:.2f}{u} %, p99 {100 * (max(best.p99) if best.p99 else math.nan):.1f} %, DSSIM {best.dssim:.4f})")
+        ties = [o for o in ties_of(best, results) if o.full_ms is not None and o.full_ms <= args.budget_ms]
+        if ties:
+            print("  tied within the ground truth's uncertainty (the fastest is chosen): "
+                  + ", ".join(o.name for o in ties))
         if args.preset_out:
             save_preset(config_settings(s, best.technique, best.changes), args.preset_out)
             print(f"wrote preset {args.preset_out}")

@@ -19,7 +19,13 @@ import numpy as np
 from skinviewer import techniques
 from skinviewer.core.files import atomic_write_text, save_exr, save_png
 from skinviewer.core.settings import Settings, with_values
-from skinviewer.physics.metrics import DSSIM_SETUP, image_error, rel_error_map
+from skinviewer.physics.metrics import (
+    DSSIM_SETUP,
+    image_error,
+    rel_error_map,
+    tied,
+    with_u,
+)
 
 RUNS = 3
 LAST_BENCH = "last_bench.txt"  # in cache_dir(): the results.json of the last bench (the viewer's chart)
@@ -36,6 +42,9 @@ class Result:
     rms: list[float] | None = None
     p99: list[float] | None = None
     dssim: float | None = None
+    rms_u: list[float] | None = None   # the ground truth's uncertainty of each figure (metrics.figure_uncertainty)
+    p99_u: list[float] | None = None
+    dssim_u: float | None = None
     pareto: bool = False
     heatmap: str | None = None
     error: str | None = None
@@ -45,6 +54,11 @@ class Result:
     @property
     def rms_mean(self) -> float | None:
         return None if self.rms is None else float(np.mean(self.rms))
+
+    @property
+    def rms_mean_u(self) -> float | None:
+        """The uncertainty of rms_mean (the mean of the channels' bounds)."""
+        return None if self.rms_u is None else float(np.mean(self.rms_u))
 
     @property
     def name(self) -> str:
@@ -63,6 +77,7 @@ class Result:
     def to_json(self) -> dict:
         d = asdict(self)
         d["rms_mean"] = self.rms_mean
+        d["rms_mean_u"] = self.rms_mean_u
         return d
 
 
@@ -90,17 +105,39 @@ def heat_rgb(err: np.ndarray, vmax: float = HEAT_MAX) -> np.ndarray:
     return (colormaps["magma"](e)[..., :3] * 255 + 0.5).astype(np.uint8)
 
 
+def same_accuracy(a: Result, b: Result) -> bool:
+    """Mean relative RMS within the ground truth's uncertainty of either: a tie, never ranked."""
+    return tied(a.rms_mean, a.rms_mean_u, b.rms_mean, b.rms_mean_u)
+
+
 def pareto_front(results: list[Result]) -> None:
-    """Mark the configurations no other one beats in both full-frame time and mean relative RMS."""
+    """Mark the configurations no other one beats in both full-frame time and mean relative RMS; two
+    errors within the truth's uncertainty are a tie (then the faster one beats the slower)."""
     ok = [r for r in results if r.error is None and r.full_ms is not None and r.rms is not None]
+
+    def beats(o: Result, r: Result) -> bool:
+        tie = same_accuracy(o, r)
+        as_good = tie or o.rms_mean <= r.rms_mean
+        better = (not tie and o.rms_mean < r.rms_mean) or o.full_ms < r.full_ms
+        return o is not r and o.full_ms <= r.full_ms and as_good and better
     for r in ok:
-        r.pareto = not any((o.ms <= r.ms and o.err <= r.err) and (o.ms < r.ms or o.err < r.err) for o in ok)
+        r.pareto = not any(beats(o, r) for o in ok)
 
 
 def best_within(results: list[Result], budget_ms: float) -> Result | None:
+    """The most accurate configuration within the budget; among those tied with it (within the
+    truth's uncertainty), the fastest."""
     ok = [r for r in results if r.error is None and r.full_ms is not None and r.full_ms <= budget_ms
           and r.rms is not None]
-    return min(ok, key=lambda r: r.err) if ok else None
+    if not ok:
+        return None
+    best = min(ok, key=lambda r: r.rms_mean)
+    return min((r for r in ok if same_accuracy(r, best)), key=lambda r: (r.full_ms, r.rms_mean))
+
+
+def ties_of(r: Result, results: list[Result]) -> list[Result]:
+    """The other configurations whose mean RMS is within the truth's uncertainty of r's."""
+    return [o for o in results if o is not r and o.error is None and o.rms is not None and same_accuracy(o, r)]
 
 
 def _nudge(s: Settings, k: int) -> Settings:
@@ -149,8 +186,11 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
                 res.camera_ms = statistics.median(res.camera_runs)
                 img, cov = linear_image(r, s)
                 m = compare_mask(ref.mask, cov)
-                e = image_error(img, ref.lit, m, exposure=base.render.exposure)
+                e = image_error(img, ref.lit, m, exposure=base.render.exposure,
+                                uncertainty=getattr(ref, "uncertainty", None))
                 res.rms, res.p99, res.dssim = list(e.rms), list(e.p99), e.dssim
+                if e.rms_u is not None:
+                    res.rms_u, res.p99_u, res.dssim_u = list(e.rms_u), list(e.p99_u), e.dssim_u
                 emap = rel_error_map(img, ref.lit, m)
                 stem = f"{tech}_{label}".replace(" ", "_").replace("/", "-")
                 save_png(out / "heatmaps" / f"{stem}.png", heat_rgb(emap))
@@ -171,7 +211,9 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
         "camera": base.camera.model_dump(mode="json"),
         "timing": f"sync (glFinish + wall clock per pass), median of {runs} frames",
         "metrics": {"rms": "relative RMS per channel over compared pixels", "p99": "99th percentile of the "
-                    "per-pixel relative error per channel", "dssim": DSSIM_SETUP},
+                    "per-pixel relative error per channel", "dssim": DSSIM_SETUP,
+                    "uncertainty": "*_u: how far the figure moves within the ground truth's per-pixel uncertainty "
+                                   "(metrics.figure_uncertainty); mean RMS within either's uncertainty: a tie"},
         "reference": ref.meta,
         "base_settings": base.model_dump(mode="json"),
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
@@ -218,8 +260,8 @@ def load_results(path: str | Path) -> tuple[dict, list[Result]]:
     return data, [Result(**{k: v for k, v in d.items() if k in keys}) for d in data.get("results", [])]
 
 
-def _pct(v) -> str:
-    return " / ".join(f"{100 * c:.1f}" for c in v) if v is not None else "-"
+def _pct(v, u=None) -> str:
+    return with_u(v, u) if v is not None else "-"
 
 
 def results_markdown(data: dict) -> str:
@@ -231,20 +273,26 @@ def results_markdown(data: dict) -> str:
              f"{ref.get('h_mm')} mm, {ref.get('pixels')} pixels, {ref.get('seconds', {}).get('total', 0):.1f} s "
              f"(cached: {ref.get('cached')}). Timing: {data['timing']}.", "",
              "Errors against the ground truth over the pixels both images cover (less a 1-pixel rim): relative "
-             "RMS and p99 relative error per channel (R / G / B, %), DSSIM (" + data["metrics"]["dssim"] + ").", "",
-             "| | technique | configuration | full ms | camera-only ms | RMS % | p99 % | DSSIM |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "RMS and p99 relative error per channel (R / G / B, %), DSSIM (" + data["metrics"]["dssim"] + "). "
+             "± u: how far the figure moves within the ground truth's own uncertainty (" +
+             str(ref.get("uncertainty", "not computed")) + "); configurations whose mean RMS differ by less "
+             "than that are ties (column 'tied with'), not ranked.", "",
+             "| | technique | configuration | full ms | camera-only ms | RMS % | p99 % | DSSIM | tied with |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     order = sorted(results, key=lambda r: (r.technique, r.full_ms if r.full_ms is not None else 1e30))
     for r in order:
         if r.error:
-            lines.append(f"| | {r.technique} | {r.label} | failed: {r.error} | | | | |")
+            lines.append(f"| | {r.technique} | {r.label} | failed: {r.error} | | | | | |")
             continue
         mark = "**Pareto**" if r.pareto else ""
+        ds = f"{r.dssim:.4f}" + (f" ± {r.dssim_u:.4f}" if r.dssim_u is not None else "")
+        ties = ", ".join(o.name for o in ties_of(r, results)) if r.rms_u is not None else ""
         lines.append(f"| {mark} | {r.technique} | {r.label} | {r.full_ms:.0f} | {r.camera_ms:.0f} | "
-                     f"{_pct(r.rms)} | {_pct(r.p99)} | {r.dssim:.4f} |")
-    front = sorted((r for r in results if r.pareto), key=lambda r: r.ms)
+                     f"{_pct(r.rms, r.rms_u)} | {_pct(r.p99, r.p99_u)} | {ds} | {ties} |")
+    front = sorted((r for r in results if r.pareto), key=lambda r: r.full_ms)
     lines += ["", "Pareto front (faster to more accurate): " + ", ".join(
-        f"{r.name} ({r.ms:.0f} ms, {100 * r.err:.1f} %)" for r in front), ""]
+        f"{r.name} ({r.full_ms:.0f} ms, {100 * r.rms_mean:.1f}"
+        + (f" ± {100 * r.rms_mean_u:.1f}" if r.rms_mean_u is not None else "") + " %)" for r in front), ""]
     return "\n".join(lines)
 
 

@@ -228,12 +228,13 @@ def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
     return Path(path)
 
 
-def save_exr(path: str | os.PathLike, img: np.ndarray) -> Path:
+def save_exr(path: str | os.PathLike, img: np.ndarray, extra: dict[str, np.ndarray] | None = None) -> Path:
     """Linear float image (H, W), (H, W, 1|3|4) as OpenEXR (float32, ZIP), top row first: what
     compositing and VFX tools read. OpenEXR encodes into memory (its own file writer takes only a
     UTF-8 name and reports a full disk as a bare RuntimeError); the bytes go to ``path`` through
     atomic_write_bytes like every writer: nothing is ever half-written, any failure is one OSError
-    naming the file."""
+    naming the file.
+    ``extra``: named (H, W, 3) layers beside it (channels NAME.R, NAME.G, NAME.B)."""
     import OpenEXR
 
     a = np.ascontiguousarray(np.nan_to_num(np.asarray(img, np.float32), nan=0.0, posinf=3e38, neginf=-3e38))
@@ -245,6 +246,10 @@ def save_exr(path: str | os.PathLike, img: np.ndarray) -> Path:
         channels = {"RGBA"[:a.shape[2]]: a}
     else:
         raise ValueError(f"save_exr: expected 1, 3 or 4 channels, got shape {a.shape}")
+    for name, layer in (extra or {}).items():
+        b = np.nan_to_num(np.asarray(layer, np.float32), nan=0.0, posinf=3e38, neginf=-3e38)
+        for c, cn in enumerate("RGB"):
+            channels[f"{name}.{cn}"] = np.ascontiguousarray(b[..., c])
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     try:
         buf = io.BytesIO()

@@ -48,7 +48,7 @@ from skinviewer.scene.camera import framed_view
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 4                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals
+VERSION = 5                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut
 DEFAULT_H_MM = 0.5          # source element edge
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
@@ -68,6 +68,7 @@ class Reference:
     mask: np.ndarray
     meta: dict = field(default_factory=dict)
     position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
+    uncertainty: np.ndarray | None = None  # (H, W, 3) of ``lit``: |M_h - M_2h| (see coarse_uncertainty)
 
 
 # -- scene -------------------------------------------------------------------------------------
@@ -212,26 +213,49 @@ class Surface:
 
     def irradiance(self, a: dict, mix: float, energy: bool) -> np.ndarray:
         """E A (eq. 28, 32) from the directional and point lights (beams are point sources)."""
-        E = np.zeros((len(a["P"]), 3))
-        for light in self.lights:
-            if light.kind == "beam":
-                continue
+        U, vis = self.irradiance_parts(a, mix, energy)
+        return (U * vis[..., None]).sum(0) if len(U) else np.zeros((len(a["P"]), 3))
+
+    def shadow_lights(self) -> list:
+        """The directional and point lights, in the order of irradiance_parts."""
+        return [l for l in self.lights if l.kind != "beam"]
+
+    def irradiance_parts(self, a: dict, mix: float, energy: bool) -> tuple[np.ndarray, np.ndarray]:
+        """Per light of shadow_lights(): the unshadowed E A, Lc (N.L)+ rho_dt(N.L) C^mix (L, N, 3), and
+        the visibility (L, N) (True where N.L <= 0: nothing to shadow there), so E A = sum U vis."""
+        lights = self.shadow_lights()
+        n = len(a["P"])
+        U = np.zeros((len(lights), n, 3))
+        vis = np.ones((len(lights), n), bool)
+        cmix = _safe_pow(a["C"], mix)
+        for li, light in enumerate(lights):
             L = self.light_dir(light, a["P"])
             ndl = (a["N"] * L).sum(1)
             lit = ndl > 0
             if not lit.any():
                 continue
             sub = {k: v[lit] for k, v in a.items()}
-            vis = self.visible(light, sub, np.ascontiguousarray(L[lit]))
+            vis[li, lit] = self.visible(light, sub, np.ascontiguousarray(L[lit]))
             rho = self.rho_dt(ndl[lit], sub["m"], sub["rho"]) if energy else 1.0
             Lc = np.asarray(light.color, np.float64) * light.intensity
-            E[lit] += Lc[None] * (ndl[lit] * vis * rho)[:, None]
-        return E * _safe_pow(a["C"], mix)
+            U[li, lit] = Lc[None] * (ndl[lit] * rho)[:, None] * cmix[lit]
+        return U, vis
 
-    def beam_sources(self, mix: float, energy: bool) -> gt.PointSources:
+    def visibility_at(self, li: int, tri: np.ndarray, bary: np.ndarray) -> np.ndarray:
+        """Light li's visibility (as irradiance_parts: True where N.L <= 0) at (triangle, barycentrics)."""
+        light = self.shadow_lights()[li]
+        a = self.attributes(tri, bary)
+        L = self.light_dir(light, a["P"])
+        out = np.ones(len(tri), bool)
+        lit = (a["N"] * L).sum(1) > 0
+        if lit.any():
+            out[lit] = self.visible(light, {k: v[lit] for k, v in a.items()}, np.ascontiguousarray(L[lit]))
+        return out
+
+    def beam_sources(self, mix: float, energy: bool, rays: int = BEAM_RAYS) -> gt.PointSources:
         pos, power = [], []
-        k = np.arange(BEAM_RAYS) + 0.5
-        rad, ang = np.sqrt(k / BEAM_RAYS), k * math.pi * (3.0 - math.sqrt(5.0))  # sunflower: equal areas
+        k = np.arange(rays) + 0.5
+        rad, ang = np.sqrt(k / rays), k * math.pi * (3.0 - math.sqrt(5.0))  # sunflower: equal areas
         for light in self.lights:
             if light.kind != "beam":
                 continue
@@ -254,7 +278,7 @@ class Surface:
             ngl = np.maximum(np.abs((a["Ng"] * L).sum(1)), 1e-3)
             rho = self.rho_dt(ndl, a["m"], a["rho"]) if energy else 1.0
             Lc = np.asarray(light.color, np.float64) * light.intensity
-            area = math.pi * (r * self.mm) ** 2 / BEAM_RAYS  # each ray's share of the beam, mm^2
+            area = math.pi * (r * self.mm) ** 2 / rays  # each ray's share of the beam, mm^2
             power.append(Lc[None] * (area * ndl / ngl * rho)[:, None] * _safe_pow(a["C"], mix))
             pos.append(a["P"] * self.mm)
         if not pos:
@@ -387,13 +411,17 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
     return v, w, np.asarray(fit.errors, np.float64)
 
 
-def cache_key(s: Settings, h_mm: float, profile=None) -> str:
+def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, uncertainty: bool = True) -> str:
     from skinviewer.core.renderer import Renderer
     d = s.model_dump(mode="json")
     parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
              "size": [s.render.width, s.render.height], "lights": d["lights"], "specular": d["specular"],
              "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
              "profile": [np.asarray(p).tolist() for p in (profile or profile_of(s))]}
+    if not split_edges:
+        parts["split_edges"] = False
+    if not uncertainty:
+        parts["uncertainty"] = False
     return hashlib.sha1(json.dumps(parts, sort_keys=True).encode()).hexdigest()
 
 
@@ -404,12 +432,12 @@ def _cache_path(key: str) -> Path:
 MAX_CACHE_BYTES = 2**31  # a cached reference at the largest size (8192^2) is well under this
 
 
-def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, notes: list[str] | None = None) \
-        -> Reference | None:
+def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, split_edges: bool = True,
+                uncertainty: bool = True, notes: list[str] | None = None) -> Reference | None:
     """The cached reference of these inputs, or None. An entry that does not validate (truncated or
     not a zip, a missing or wrongly shaped array, a key or size that is not these settings', not a
     regular file) is deleted, and ``notes`` gets one line saying so: the caller recomputes it."""
-    key = cache_key(s, h_mm, profile)
+    key = cache_key(s, h_mm, profile, split_edges, uncertainty)
     p = _cache_path(key)
     if not os.path.lexists(p):
         return None
@@ -432,6 +460,8 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
     data = read_regular_file(p, MAX_CACHE_BYTES, what=f"cache entry {p}")
     with np.load(io.BytesIO(data), allow_pickle=False) as z:
         arrays = {k: np.array(z[k]) for k in ("lit", "diffuse", "specular", "mask", "position", "meta")}
+        names = set(z.files)
+        z_unc = np.array(z["uncertainty"]) if "uncertainty" in names else None
     meta = json.loads(str(arrays["meta"]))
     if not isinstance(meta, dict) or meta.get("key") != key:
         raise ValueError("its key is not the file name's")
@@ -441,8 +471,13 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
             raise ValueError(f"'{k}' is {a.shape} {a.dtype}, expected finite float32 {(*hw, 3)}")
     if arrays["mask"].shape != hw or arrays["mask"].dtype != np.bool_:
         raise ValueError(f"'mask' is {arrays['mask'].shape} {arrays['mask'].dtype}, expected bool {hw}")
+    unc = None
+    if "uncertainty" in names:
+        unc = np.array(z_unc)
+        if unc.shape != (*hw, 3) or not np.all(np.isfinite(unc)):
+            raise ValueError(f"'uncertainty' is {unc.shape}, expected finite {(*hw, 3)}")
     meta["cached"] = True
-    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"])
+    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"], unc)
 
 
 def _store(key: str, ref: Reference) -> None:
@@ -450,7 +485,8 @@ def _store(key: str, ref: Reference) -> None:
     assert ref.position is not None, "a computed reference has its surface positions"
     np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
                         specular=ref.specular.astype(np.float32), mask=ref.mask,
-                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta))
+                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta),
+                        **({} if ref.uncertainty is None else {"uncertainty": ref.uncertainty.astype(np.float32)}))
     atomic_write_bytes(_cache_path(key), buf.getvalue())
 
 
@@ -462,13 +498,16 @@ _SEC_PER_PIXEL = 2.5e-4
 _SEC_PER_ELEMENT = 1.2e-5
 
 
-def estimate_seconds(n_pixels: int, n_elements: int) -> float:
-    return _SEC_PER_PIXEL * n_pixels + _SEC_PER_ELEMENT * n_elements
+def estimate_seconds(n_pixels: int, n_elements: int, uncertainty: bool = False) -> float:
+    """CPU seconds of a reference; with its uncertainty, the coarse pass (a quarter of the pixels
+    and of the elements) besides."""
+    base = _SEC_PER_PIXEL * n_pixels + _SEC_PER_ELEMENT * n_elements
+    return base * (1.35 if uncertainty else 1.0)  # default head 512^2: 77.9 vs 58.4 s CPU (cut included)
 
 
 def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances, weights, mix: float,
                     energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
-                    report=None, check=None) -> gt.Diffusion:
+                    report=None, check=None, split_edges: bool = True, beam_rays: int = BEAM_RAYS) -> gt.Diffusion:
     """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
     the beams' point sources, and the Diffusion sum over them."""
     report = report or (lambda stage, f: None)
@@ -492,36 +531,176 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
         raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU ({n_px} pixels, "
                                f"{n_el} source elements of {h_mm:g} mm), over the {max_seconds:.0f} s limit")
     report("irradiance", 0.0)
-    # E A at the element corners (shared inside each parent triangle); an element's value is the
-    # mean of its corners (exact for linear variation)
-    ea_v = np.zeros((n_v, 3))
+    # E A at the element corners (shared inside each parent triangle), per light unshadowed and its
+    # visibility; an element's value is the mean of its corners (exact for linear variation)
+    n_l = len(surf.shadow_lights())
+    U = np.zeros((n_l, n_v, 3))
+    vis = np.ones((n_l, n_v), bool)
     step = 200_000
     for s0 in range(0, n_v, step):
         if check():
             raise InterruptedError("cancelled")
         sl = slice(s0, min(n_v, s0 + step))
-        ea_v[sl] = surf.irradiance(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
+        U[:, sl], vis[:, sl] = surf.irradiance_parts(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
         report("irradiance", sl.stop / max(n_v, 1))
     vpos = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])
-    el = gt.Elements(vpos[elem], ea_v[elem].mean(1))
-    return gt.Diffusion(el, variances, weights, h_mm, surf.beam_sources(mix, energy))
+    ea_v = (U * vis[..., None]).sum(0) if n_l else np.zeros((n_v, 3))
+    corners, ea, split = vpos[elem], ea_v[elem].mean(1), None
+    if split_edges and n_l:
+        corners, ea, split = split_shadow_edges(surf, vpar, vbary, vpos, elem, U, vis, check)
+    el = gt.Elements(corners, ea, split=split)
+    return gt.Diffusion(el, variances, weights, h_mm, surf.beam_sources(mix, energy, beam_rays))
+
+
+EDGE_BISECTIONS = 10  # shadow-edge crossings located to 2^-11 of an element edge (0.25 um at 0.5 mm)
+
+
+def split_shadow_edges(surf: Surface, vpar, vbary, vpos, elem, U, vis, check=None):
+    """Elements whose corners disagree on a light's visibility (a cast-shadow edge crosses them) are
+    cut along the edge, found by bisecting the two element edges it crosses with shadow rays
+    (EDGE_BISECTIONS each) and taken straight inside the element; each piece carries its own side's
+    light (that light's unshadowed E A interpolated linearly, times 1 or 0), the others' as before.
+    The exact Owen's-T integral then integrates the lit part exactly, so the narrow Gaussians see a
+    step where the shadow ray sees one, not the corners' mean smeared over the element.
+    Returns (corners (E', 3, 3), E A (E', 3), split (E',) bool: the pieces)."""
+    n_l = U.shape[0]
+    ev = vis[:, elem]                                   # (L, E, 3)
+    carries = (U.sum(2) > 0)[:, elem].any(2)            # (L, E): the light reaches some corner
+    mixed = ev.any(2) & ~ev.all(2) & carries
+    ea_v = (U * vis[..., None]).sum(0)
+    ea = ea_v[elem].mean(1)
+    corners = vpos[elem]
+    idx = np.nonzero(mixed.any(0))[0]
+    if len(idx) == 0:
+        return corners, ea, np.zeros(len(elem), bool)
+    li = np.argmax(mixed[:, idx], axis=0)               # the first light whose edge crosses it
+    v3 = ev[li, idx]                                    # (M, 3)
+    lone = np.argmax((v3 != v3[:, [1, 2, 0]]) & (v3 != v3[:, [2, 0, 1]]), axis=1)
+    order = (lone[:, None] + np.arange(3)[None]) % 3    # a (the lone corner), b, c, winding kept
+    ids = np.take_along_axis(elem[idx], order, 1)       # vertex ids of a, b, c
+    parent = vpar[ids[:, 0]]
+    va = vis[li, ids[:, 0]]
+
+    def crossing(j: int) -> np.ndarray:
+        lo, hi = np.zeros(len(idx)), np.ones(len(idx))
+        for _ in range(EDGE_BISECTIONS):
+            if check is not None and check():
+                raise InterruptedError("cancelled")
+            mid = 0.5 * (lo + hi)
+            bary = (1.0 - mid)[:, None] * vbary[ids[:, 0]] + mid[:, None] * vbary[ids[:, j]]
+            same = np.empty(len(idx), bool)
+            for k in range(n_l):
+                sel = li == k
+                if sel.any():
+                    same[sel] = surf.visibility_at(k, parent[sel], bary[sel]) == va[sel]
+            lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+        return 0.5 * (lo + hi)
+
+    W, side_a = gt.cut_weights(crossing(1), crossing(2))   # (M, 3 pieces, 3 corners, 3)
+    Wm = W.mean(2)                                          # mean weights over a piece's corners
+    Uabc = U[:, ids]                                        # (L, M, 3 corners, 3 ch)
+    Vabc = vis[:, ids].astype(np.float64)
+    # other lights: the corners' mean of U vis (as an unsplit element); the cut light: U x its side
+    mean_uv = np.einsum("mpk,lmkc->lmpc", Wm, Uabc * Vabc[..., None])
+    mean_u = np.einsum("mpk,lmkc->lmpc", Wm, Uabc)
+    rows = np.arange(len(idx))
+    side = np.where(va[:, None], side_a[None], 1.0 - side_a[None])  # (M, 3 pieces): lit or not
+    piece_ea = mean_uv.sum(0) - mean_uv[li, rows] + mean_u[li, rows] * side[..., None]
+    piece_corners = np.einsum("mpqk,mkd->mpqd", W, vpos[ids])
+    # the pieces take their element's place (the order of the elements stays the mesh's)
+    count = np.ones(len(elem), np.int64)
+    count[idx] = 3
+    at = np.cumsum(count) - count
+    out_c = np.repeat(corners, count, axis=0)
+    out_e = np.repeat(ea, count, axis=0)
+    split = np.zeros(len(out_c), bool)
+    put = (at[idx][:, None] + np.arange(3)[None]).ravel()
+    out_c[put] = piece_corners.reshape(-1, 3, 3)
+    out_e[put] = piece_ea.reshape(-1, 3)
+    split[put] = True
+    return out_c, out_e, split
+
+
+UNCERTAINTY_COARSER = 2.0   # the coarser level of the uncertainty: elements twice as large, half the beam rays
+UNCERTAINTY_STRIDE = 2      # its receivers: every 2nd pixel in x and y (then the 3 x 3 maximum)
+GCI_SAFETY = 3.0            # Roache's grid convergence index: safety factor 3 for a two-level estimate
+TRUNCATE_LOSS = 5e-5        # relative: the weight beyond TRUNCATE sigma, exp(-4.5^2 / 2) = 4e-5, and float32
+UNCERTAINTY_NOTE = ("per pixel: 3 |M(h={h:g} mm) - M(h={h2:g} mm, half the beam rays)| (Roache's grid convergence "
+                    "index, first order, safety factor 3; the coarse level on every 2nd pixel, the largest of the "
+                    "pixel's 3x3 neighbourhood) + |grad M| x the shadow edge's position tolerance (ray offset and "
+                    "bisection bracket) + 5e-5 M (truncation), times C^(1-mix) rho_dt(N.V); specular is exact")
+
+
+def coarse_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, M: np.ndarray,
+                       h_mm: float, variances, weights, mix: float, energy: bool, split_edges: bool = True,
+                       check=None) -> np.ndarray:
+    """The truth's own uncertainty at each receiver (N, 3), Roache's grid convergence index (1994):
+    GCI_SAFETY |M_h - M_2h| / (2^p - 1) with p = 1 (the default head's residual halves per halving of
+    h), the coarse level with elements UNCERTAINTY_COARSER times as large and half the beam rays, run
+    on every UNCERTAINTY_STRIDE-th pixel (and every pixel no such pixel neighbours); each pixel takes
+    the largest of its 3 x 3 neighbourhood (a feature between samples is covered). Plus what both
+    levels share: a shadow edge's position is known to the shadow ray's offset (2 eps, at most 1 mm x
+    2e-5 of the scene) and half the bisection's last bracket, so |grad M| (across pixels, 3 x 3 max)
+    times that; and the truncation of every Gaussian at TRUNCATE sigma (TRUNCATE_LOSS M)."""
+    from scipy.ndimage import binary_dilation, maximum_filter
+    H, W = mask.shape
+    k = UNCERTAINTY_STRIDE
+    grid = np.zeros((H, W), bool)
+    grid[::k, ::k] = True
+    grid &= mask
+    sel_img = grid | (mask & ~binary_dilation(grid, np.ones((3, 3), bool)))
+    sel = sel_img[mask]
+    h2 = UNCERTAINTY_COARSER * h_mm
+    diff2 = build_diffusion(surf, x_mm[sel], h2, variances, weights, mix, energy, check=check,
+                            split_edges=split_edges, beam_rays=BEAM_RAYS // 2)
+    M2 = diff2.exitance(x_mm[sel], ea_here[sel], cancelled=check)
+    rows, cols = np.nonzero(mask)
+
+    def max3(vals: np.ndarray, where: np.ndarray) -> np.ndarray:
+        img = np.full((H, W, 3), -np.inf)
+        img[rows[where], cols[where]] = vals
+        img = maximum_filter(img, size=(3, 3, 1), mode="constant", cval=-np.inf)
+        return np.maximum(img[mask], 0.0)
+
+    u = max3(GCI_SAFETY * np.abs(M[sel] - M2), sel)
+    # |grad M| between 4-neighbours (per mm of surface), over the pixel's 3 x 3 neighbourhood
+    full = np.zeros((H, W, 3))
+    pos = np.full((H, W, 3), np.nan)
+    full[mask], pos[mask] = M, x_mm
+    grad = np.zeros((H, W, 3))
+    for ax in (0, 1):
+        dm = np.abs(np.diff(full, axis=ax))
+        dx = np.linalg.norm(np.diff(pos, axis=ax), axis=2, keepdims=True)
+        both = np.isfinite(dx) & (dx > 0)
+        g = np.where(both, dm / np.where(both, dx, 1.0), 0.0)
+        sl = [slice(None)] * 3
+        sl[ax] = slice(1, None)
+        grad[tuple(sl)] = np.maximum(grad[tuple(sl)], g)
+        sl[ax] = slice(None, -1)
+        grad[tuple(sl)] = np.maximum(grad[tuple(sl)], g)
+    delta = 2.0 * surf.eps * surf.mm + 0.5 * h_mm * 2.0 ** -EDGE_BISECTIONS
+    u += max3(grad[mask], np.ones(len(M), bool)) * delta
+    return u + TRUNCATE_LOSS * np.abs(M)
 
 
 def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use_cache: bool = True,
                       max_seconds: float | None = None, scene: tuple[MeshData, float] | None = None,
                       progress: Callable[[str, float], None] | None = None,
-                      cancelled: Callable[[], bool] | None = None) -> Reference:
+                      cancelled: Callable[[], bool] | None = None, split_edges: bool = True,
+                      uncertainty: bool = True) -> Reference:
     """The ground truth of ``s`` (see the module doc). ``profile``: (variances, weights (k, 3)) to
     use instead of ``s.deon.gaussians``. ``max_seconds``: raise ReferenceTooSlow (before the
     expensive part) when the estimate exceeds it. ``progress(stage, fraction)``; ``cancelled()``
     -> True stops with InterruptedError. ``scene``: (mesh, mm per unit) instead of s.scene (not
-    cached)."""
-    key = cache_key(s, h_mm, profile)
+    cached). ``uncertainty``: also the per-pixel uncertainty of ``lit`` (coarse_uncertainty, about
+    +25 % CPU time). ``split_edges``: False = elements crossed by a shadow edge carry their corners'
+    mean (the version-4 truth; for comparisons)."""
+    key = cache_key(s, h_mm, profile, split_edges, uncertainty)
     if scene is not None:
         use_cache = False
     cache_notes: list[str] = []
     if use_cache:
-        hit = load_cached(s, h_mm, profile, notes=cache_notes)
+        hit = load_cached(s, h_mm, profile, split_edges, uncertainty, notes=cache_notes)
         if hit is not None:
             return hit
     report = progress or (lambda stage, f: None)
@@ -539,7 +718,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
         area = 0.5 * np.linalg.norm(np.cross(tri_mm[:, 1] - tri_mm[:, 0], tri_mm[:, 2] - tri_mm[:, 0]), axis=1).sum()
         n_px = int(cover * s.render.width * s.render.height)
         n_el = int(0.5 * area / (0.17 * h_mm * h_mm))  # about half the surface can reach a visible point
-        est = estimate_seconds(n_px, n_el)
+        est = estimate_seconds(n_px, n_el, uncertainty)
         if est > max_seconds:
             raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU (~{n_px} pixels, "
                                    f"~{n_el} source elements of {h_mm:g} mm), over the {max_seconds:.0f} s limit")
@@ -548,14 +727,24 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     times["camera"] = time.perf_counter() - t0
     report("scene", 1.0)
     x_mm = a["P"] * mm
-    diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check)
+    diff = build_diffusion(surf, x_mm, h_mm, variances, weights, mix, energy, max_seconds, report=report, check=check,
+                           split_edges=split_edges)
     n_el = len(diff.el.area)
-    est = estimate_seconds(len(x_mm), n_el)
+    est = estimate_seconds(len(x_mm), n_el, uncertainty)
     points = diff.points
     ea_here = surf.irradiance(a, mix, energy)
     times["irradiance"] = time.perf_counter() - t0 - times["camera"]
     M = diff.exitance(x_mm, ea_here, progress=lambda f: report("diffusion", f), cancelled=check)
     times["diffusion"] = time.perf_counter() - t0 - times["camera"] - times["irradiance"]
+    H, W = mask.shape
+    u_M = None
+    if uncertainty:
+        t1 = time.perf_counter()
+        report("uncertainty", 0.0)
+        u_M = coarse_uncertainty(surf, mask, x_mm, ea_here, M, h_mm, variances, weights, mix, energy,
+                                 split_edges, check)
+        report("uncertainty", 1.0)
+        times["uncertainty"] = time.perf_counter() - t1
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
     V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
@@ -564,9 +753,9 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     rho_v = surf.rho_dt((N * V).sum(1), a["m"], a["rho"]) if energy else np.ones(len(V))
     diffuse = M * _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
     spec = surf.specular(a, V)
-    H, W = mask.shape
     imgs = []
-    for arr in (diffuse + spec, diffuse, spec, a["P"]):
+    scale = _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
+    for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * scale,)):
         img = np.zeros((H * W, 3))
         img[mask.ravel()] = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
         imgs.append(img.reshape(H, W, 3))
@@ -574,7 +763,9 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     meta = {"key": key, "version": VERSION, "h_mm": h_mm, "elements": n_el, "pixels": int(mask.sum()),
             "beam_rays": 0 if points is None else len(points.position), "seconds": times, "estimate_s": est,
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False}
-    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3])
+    if u_M is not None:
+        meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm)
+    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None)
     if use_cache:
         _store(key, ref)
     if cache_notes:

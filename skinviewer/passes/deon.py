@@ -267,6 +267,7 @@ class IrradiancePass(Pass):
         n = map_size(r)
         lighting = declare_lighting(r)
         r.setting("deon.mix")
+        over_texel = r.setting("deon.texel_samples") > 1  # the texel's extent (TEXEL_STEPS) for its samples
         if r.setting("deon.energy_conservation"):
             declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
@@ -274,7 +275,7 @@ class IrradiancePass(Pass):
             r.input(TSM)
         vis = texture_shadows(r)
         declare_shaded(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
-                       DEON_VISIBILITY=int(vis))
+                       steps=over_texel, DEON_VISIBILITY=int(vis))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
@@ -284,7 +285,8 @@ class IrradiancePass(Pass):
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         energy = bool(ec.setting("deon.energy_conservation"))
-        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.setting("deon.mix")))
+        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.setting("deon.mix")),
+                    u_texel_samples=int(ec.setting("deon.texel_samples")), u_texel_uv=(1.0 / n, 1.0 / n))
         if energy:
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
             bind_specular(ec, prog)

@@ -188,17 +188,17 @@ def shading_program(r, base: str) -> str:
 
 
 def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: TexSpec,
-                   maps: str = TEXEL_SURFACE_MAPS, **defines: object) -> None:
+                   maps: str = TEXEL_SURFACE_MAPS, steps: bool = False, **defines: object) -> None:
     """Declare a texture-space shading pass writing ``resource`` with its gutters filled, whichever
     way it shades (shading_program): declare_unwrapped, plus for the texel path the maps ``maps``
     it reads, TILED and TEXEL_STEPS (the position's change per texel, which only beam footprints
-    need, from the neighbouring texels when a beam light is on)."""
+    need, from the neighbouring texels when a beam light is on, or ``steps``: samples over the texel)."""
     if not texel_shading(r):
         declare_unwrapped(r, base, size, resource, spec, **defines)
         return
     for res in texel_surface_resources(size, maps):
         r.input(res)
-    steps = any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
+    steps = steps or any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
     declare_unwrapped(r, shading_program(r, base), size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
 
 

@@ -98,10 +98,14 @@ def dssim(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposu
 
 @dataclass(frozen=True)
 class ImageError:
-    """The three figures reported everywhere: relative RMS and p99 per channel (R, G, B), and DSSIM."""
+    """The three figures reported everywhere: relative RMS and p99 per channel (R, G, B), and DSSIM;
+    with a reference's per-pixel uncertainty, each figure's uncertainty (``figure_uncertainty``)."""
     rms: tuple[float, float, float]
     p99: tuple[float, float, float]
     dssim: float
+    rms_u: tuple[float, float, float] | None = None
+    p99_u: tuple[float, float, float] | None = None
+    dssim_u: float | None = None
 
     @property
     def rms_mean(self) -> float:
@@ -112,10 +116,56 @@ class ImageError:
 
     def summary(self) -> str:
         pct = lambda v: " / ".join(f"{100 * c:.2f}" for c in v)  # noqa: E731
-        return f"RMS {pct(self.rms)} %  p99 {pct(self.p99)} %  DSSIM {self.dssim:.4f}"
+        if self.rms_u is None or self.p99_u is None or self.dssim_u is None:
+            return f"RMS {pct(self.rms)} %  p99 {pct(self.p99)} %  DSSIM {self.dssim:.4f}"
+        return (f"RMS {pct(self.rms)} ± {pct(self.rms_u)} %  p99 {pct(self.p99)} ± {pct(self.p99_u)} %  "
+                f"DSSIM {self.dssim:.4f} ± {self.dssim_u:.4f}")
 
 
-def image_error(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> ImageError:
-    rms, p99 = rel_rms(x, ref, mask), p99_rel(x, ref, mask)
-    return ImageError((float(rms[0]), float(rms[1]), float(rms[2])), (float(p99[0]), float(p99[1]), float(p99[2])),
-                      dssim(x, ref, mask, exposure))
+def with_u(values, u, digits: int = 1, scale: float = 100.0) -> str:
+    """'4.2 / 3.1 / 2.0 ± 0.3 / 0.1 / 0.1' (percent by default); without ``u`` just the values."""
+    v = " / ".join(f"{scale * c:.{digits}f}" for c in values)
+    return v if u is None else v + " ± " + " / ".join(f"{scale * c:.{digits}f}" for c in u)
+
+
+def figure_uncertainty(x: np.ndarray, ref: np.ndarray, u: np.ndarray, mask: np.ndarray | None = None,
+                       exposure: float = 1.0) -> tuple[np.ndarray, np.ndarray, float]:
+    """How far each figure can move while the reference moves by at most its per-pixel uncertainty
+    ``u`` (H, W, 3): RMS by the triangle inequality, |rms(x - r') - rms(x - r)| <= rms(r' - r) <=
+    rms(u) (over the same norm); p99 between the p99 of (|x - ref| -/+ u)+ / max(ref, floor) (every
+    pixel's error lies in that interval and a percentile is monotone); DSSIM: the larger change
+    against ref + u and ref - u. Returns (rms_u (3,), p99_u (3,), dssim_u)."""
+    x, ref = _check(x, ref)
+    u = np.abs(np.asarray(u, np.float64)[..., :3])
+    m = _mask(x, mask)
+    if not m.any():
+        return np.zeros(3), np.zeros(3), 0.0
+    rms_u = np.sqrt((u[m] ** 2).sum(0) / np.maximum((ref[m] ** 2).sum(0), 1e-30))
+    floor = np.maximum(0.01 * ref[m].mean(axis=0), 1e-12)
+    d = np.abs(x - ref)[m]
+    den = np.maximum(ref[m], floor)
+    p = np.percentile(d / den, 99, axis=0)
+    hi = np.percentile((d + u[m]) / den, 99, axis=0)
+    lo = np.percentile(np.maximum(d - u[m], 0.0) / den, 99, axis=0)
+    p99_u = np.maximum(hi - p, p - lo)
+    d0 = dssim(x, ref, m, exposure)
+    dssim_u = max(abs(dssim(x, np.maximum(ref + u, 0.0), m, exposure) - d0),
+                  abs(dssim(x, np.maximum(ref - u, 0.0), m, exposure) - d0))
+    return rms_u, p99_u, float(dssim_u)
+
+
+def tied(a: float, ua: float | None, b: float, ub: float | None) -> bool:
+    """Two figures whose difference is within their uncertainties (either reference's): not ranked."""
+    return abs(a - b) <= (ua or 0.0) + (ub or 0.0)
+
+
+def image_error(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0,
+                uncertainty: np.ndarray | None = None) -> ImageError:
+    """The figures; with the reference's per-pixel ``uncertainty`` (H, W, 3) each figure's too."""
+    rms = tuple(float(v) for v in rel_rms(x, ref, mask))
+    p99 = tuple(float(v) for v in p99_rel(x, ref, mask))
+    d = dssim(x, ref, mask, exposure)
+    if uncertainty is None:
+        return ImageError(rms, p99, d)
+    ru, pu, du = figure_uncertainty(x, ref, uncertainty, mask, exposure)
+    return ImageError(rms, p99, d, tuple(float(v) for v in ru), tuple(float(v) for v in pu), du)

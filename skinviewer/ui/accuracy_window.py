@@ -22,7 +22,7 @@ from skinviewer.core.bench import (
     pareto_front,
 )
 from skinviewer.core.settings import Settings, value_key, with_values
-from skinviewer.physics.metrics import image_error, rel_error_map
+from skinviewer.physics.metrics import image_error, rel_error_map, with_u
 from skinviewer.ui.widgets import show_tooltip, wrapped
 
 VIEW_MODES = ("image", "heat map", "split image | heat map")
@@ -152,7 +152,8 @@ class AccuracyWindow:
             visible = ref.mask
         # the rim of the whole visible region, then the pixels the (progressive) truth has so far
         m = compare_mask(visible, lit[..., 3] > 0.5) & ref.mask
-        self.error = image_error(img, ref.lit, m, exposure=st.settings.render.exposure)
+        self.error = image_error(img, ref.lit, m, exposure=st.settings.render.exposure,
+                                 uncertainty=getattr(ref, "uncertainty", None))
         from skinviewer.core.reference import sampled_rms
         self.rms_se = sampled_rms(img, ref, m)
         self._upload_heat(rel_error_map(img, ref.lit, m))
@@ -258,10 +259,10 @@ class AccuracyWindow:
                 imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}+-{100 * d:.2f}' for c, d in zip(rms, se))} %")
                 wrapped(f"(from {100 * frac:.0f} % of the pixels, +- one standard error)")
             else:
-                imgui.text(f"RMS  {' / '.join(f'{100 * c:.2f}' for c in e.rms)} %")
-            imgui.text(f"p99  {' / '.join(f'{100 * c:.1f}' for c in e.p99)} %")
+                imgui.text(f"RMS  {with_u(e.rms, e.rms_u, 2)} %")  # ± the ground truth's own uncertainty
+            imgui.text(f"p99  {with_u(e.p99, e.p99_u)} %")
             if frac >= 1.0:
-                imgui.text(f"DSSIM {e.dssim:.4f}")
+                imgui.text(f"DSSIM {e.dssim:.4f}" + (f" ± {e.dssim_u:.4f}" if e.dssim_u is not None else ""))
             imgui.set_next_item_width(200)
             _, self.view_mode = imgui.combo("view", self.view_mode, list(VIEW_MODES))
             if self.view_mode:

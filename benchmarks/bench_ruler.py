@@ -1,0 +1,179 @@
+"""The ruler's own figures (issue 30; printed, never asserted):
+
+  edge    the zoomed shadow-edge (light -0.5, 0, 0.866; camera 100 mm above the cast edge x = 21 tan 30,
+          3 deg field; no specular, rho_dt off) against E sum_i w_i Phi((x - x_e) / sigma_i): the worst
+          pixel in % of the lit level, version 4 (elements carry their corners' mean) and version 5
+          (elements cut along the shadow edge), at 0.5 and 0.25 mm elements.
+  head    the default head's truth: CPU seconds (time.process_time) of version 4 and of version 5 with its
+          uncertainty, in one process; how far the truth moved; its uncertainty (median / p99 / as RMS).
+  unc     the stated uncertainty against the true error on the analytic scenes (zoomed edge, lit slab, laser).
+  rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square.
+
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,head] [--size 512] [--edge-size 32]
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from scipy.special import ndtr
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from skinviewer.core.reference import compute_reference
+from skinviewer.core.settings import Settings, with_values
+from skinviewer.physics import ground_truth as gt
+from skinviewer.scene.scenes import scene_overrides
+
+G = Settings().deon.gaussians
+V = np.array([g.variance for g in G])
+W = np.array([g.weights for g in G])
+XE = 21.0 * math.tan(math.radians(30.0))
+LIT = 0.8 * 0.866 / math.hypot(0.5, 0.866)
+
+
+def scene(name: str, size: int, **assign) -> Settings:
+    return with_values(Settings(), {"scene.name": name, **scene_overrides(name), "render.width": size,
+                                    "render.height": size, "deon.energy_conservation": False,
+                                    "specular.rho_s": 0.0, **assign})
+
+
+def zoomed_edge(size: int) -> Settings:
+    return scene("shadow-edge", size, lights=[{"kind": "directional", "direction": [-0.5, 0.0, 0.866], "intensity": 0.8, "cast_shadow": True}], camera={"yaw": 0.0, "pitch": 0.0, "distance": 100.0, "target": [XE, 0.0, 0.0], "fov_y": 3.0})
+
+
+def edge_expect(p):
+    return LIT * (W[None] * ndtr((p[:, :1] - XE) / np.sqrt(V)[None])[..., None]).sum(1)
+
+
+def slab(size: int) -> Settings:
+    return scene("laser", size, lights=[{"kind": "directional", "direction": [0, 0, 1], "intensity": 2.0,
+                                          "cast_shadow": True}])
+
+
+def box(u, sd, a=12.0):
+    return ndtr((a - u) / sd) - ndtr((-a - u) / sd)
+
+
+def slab_expect(p):
+    sd = np.sqrt(V)[None, :]
+    return 2.0 * (W[None] * (box(p[:, :1], sd) * box(p[:, 1:2], sd))[..., None]).sum(1)
+
+
+def part_edge(size: int) -> None:
+    print(f"## zoomed shadow edge, {size}^2: worst pixel, % of the lit level (R / G / B)")
+    for h in (0.5, 0.25):
+        row = []
+        for split in (False, True):
+            ref = compute_reference(zoomed_edge(size), h_mm=h, use_cache=False, split_edges=split, uncertainty=False)
+            p = ref.position[ref.mask]
+            err = np.abs(ref.diffuse[ref.mask] - edge_expect(p)).max(0) / LIT
+            row.append(" / ".join(f"{100 * e:.2f}" for e in err))
+        print(f"  {h} mm elements: version 4 {row[0]}   version 5 {row[1]}")
+
+
+def part_unc() -> None:
+    print("## the stated uncertainty u against the true error |truth - analytic|")
+    cases = []
+    ref = compute_reference(zoomed_edge(24), use_cache=False)
+    cases.append(("zoomed edge 24^2", ref, edge_expect(ref.position[ref.mask]), ref.mask))
+    ref = compute_reference(slab(48), use_cache=False)
+    cases.append(("lit slab 48^2", ref, slab_expect(ref.position[ref.mask]), ref.mask))
+    ref = compute_reference(scene("laser", 64), use_cache=False)
+    p = ref.position[ref.mask]
+    r = np.hypot(p[:, 0], p[:, 1])
+    keep = (r > 0.15) & (r < 8.0)
+    expect = 400.0 * sum(W[None, i] * gt.gaussian_disc_convolution(r[keep], V[i], 0.02)[:, None] for i in range(len(V)))
+    sel = ref.mask.copy()
+    sel[ref.mask] = keep
+    cases.append(("laser 64^2, r 0.15-8 mm", ref, expect, sel))
+    for name, ref, expect, sel in cases:
+        u, err = ref.uncertainty[sel], np.abs(ref.diffuse[sel] - expect)
+        print(f"  {name:26s} err > u at {' / '.join(f'{100 * x:.2f}' for x in (err > u).mean(0))} % of pixels; "
+              f"worst err/u {' / '.join(f'{x:.2f}' for x in (err / u).max(0))}; RMS err "
+              f"{' / '.join(f'{x:.2e}' for x in np.sqrt((err ** 2).mean(0)))} vs RMS u "
+              f"{' / '.join(f'{x:.2e}' for x in np.sqrt((u ** 2).mean(0)))}")
+
+
+def part_head(size: int) -> None:
+    print(f"## default head {size}^2: CPU seconds in one process")
+    s = with_values(Settings(), {"render.width": size, "render.height": size})
+    out = {}
+    for split, unc in ((False, False), (True, False), (True, True)):
+        c0 = time.process_time()
+        r = compute_reference(s, use_cache=False, split_edges=split, uncertainty=unc)
+        out[(split, unc)] = (time.process_time() - c0, r)
+        print(f"  cut {split!s:5s} uncertainty {unc!s:5s}: {out[(split, unc)][0]:6.1f} s CPU, "
+              f"{r.meta['elements']} elements", flush=True)
+    base = out[(False, False)][0]
+    print("  ratios: cut " + f"{out[(True, False)][0] / base:.2f}, cut + uncertainty {out[(True, True)][0] / base:.2f}")
+    a, b = out[(False, False)][1], out[(True, True)][1]
+    m = b.mask
+    den = np.maximum(b.lit[m], 0.01 * b.lit[m].mean(0))
+    rel = np.abs(a.lit[m] - b.lit[m]) / den
+    print("  the truth moved by p99 " + " / ".join(f"{100 * x:.1f}" for x in np.percentile(rel, 99, 0)) +
+          " %, p99.9 " + " / ".join(f"{100 * x:.1f}" for x in np.percentile(rel, 99.9, 0)) + " %")
+    u = b.uncertainty[m]
+    print("  uncertainty: median " + " / ".join(f"{100 * x:.2f}" for x in np.median(u / den, 0)) + " %, p99 "
+          + " / ".join(f"{100 * x:.1f}" for x in np.percentile(u / den, 99, 0)) + " %, as an RMS figure "
+          + " / ".join(f"{100 * x:.2f}" for x in np.sqrt((u ** 2).sum(0) / (b.lit[m] ** 2).sum(0))) + " %")
+
+
+def part_rim(n: int = 1024) -> None:
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    from skinviewer.passes.deon import DIFFUSE
+    from skinviewer.physics import accuracy as A
+    from skinviewer.physics.diffusion import IRRADIANCE
+    from skinviewer.scene.scenes import build_scene
+    s = scene("laser", 64, **{"technique": "deon", "deon.irradiance_size": n, "deon.tsm": False,
+                               "deon.subpixel_kernel_px": 0.0,
+                               "lights": [{"kind": "directional", "direction": [0, 0, 1], "intensity": 1.0,
+                                           "cast_shadow": False}]})
+    ctx = headless_context()
+    r = Renderer(ctx)
+    r.render(s)
+    g = r.graph("deon")
+    E = g.read(IRRADIANCE)[..., :3].astype(np.float64)
+    D = g.read(DIFFUSE)[..., :3].astype(np.float64)
+    m = build_scene("laser").mesh
+    X, Y, _ = A.plane_coords(m.positions, m.uvs, m.mm_per_unit, n)
+    inside = (np.abs(X) < 12) & (np.abs(Y) < 12)
+    xs = np.linspace(-12, 12, 4801)
+    ana = np.array([W[i] * np.trapezoid(box(xs, np.sqrt(V[i])), xs) ** 2 / 24 ** 2 for i in range(len(V))]).sum(0)
+    kept = D[inside].sum(0) / E[inside].sum(0)
+    print(f"## d'Eon on the uniformly lit 24 mm slab, {n}^2 map: power kept R / G / B "
+          f"{' / '.join(f'{x:.4f}' for x in kept)}, analytic open square {' / '.join(f'{x:.4f}' for x in ana)}")
+    row = int(np.argmin(np.abs(Y[:, 0])))
+    for d in (0.0, 0.5, 1.0):
+        j = int(np.argmin(np.abs(X[0] - (12 - d))))
+        got = D[row, j] / E[inside].mean(0)
+        exp = (W * box(X[0, j], np.sqrt(V))[:, None]).sum(0)
+        print(f"  {d} mm in: d'Eon {' / '.join(f'{x:.3f}' for x in got)}, analytic {' / '.join(f'{x:.3f}' for x in exp)}")
+    r.release()
+    ctx.release()
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--parts", default="edge,unc,rim")
+    ap.add_argument("--size", type=int, default=512, help="head size")
+    ap.add_argument("--edge-size", type=int, default=32)
+    a = ap.parse_args()
+    if "edge" in a.parts:
+        part_edge(a.edge_size)
+    if "unc" in a.parts:
+        part_unc()
+    if "rim" in a.parts:
+        part_rim()
+    if "head" in a.parts:
+        part_head(a.size)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
