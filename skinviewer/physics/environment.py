@@ -403,3 +403,104 @@ def mc_irradiance(img: np.ndarray, P: np.ndarray, N: np.ndarray, Ng: np.ndarray,
         est[sl] = f.mean(1)
         err[sl] = f.std(1) / math.sqrt(k)
     return est, err
+
+
+class EnvSampler:
+    """A piecewise-constant environment (the equirect box-filtered to ``width`` texels) for the ground
+    truth's irradiance: the exact unoccluded integral by summing texels, and directions drawn in
+    proportion to each texel's luminance x solid angle (uniform in solid angle inside the texel)."""
+
+    def __init__(self, img: np.ndarray, yaw_deg: float = 0.0, width: int = 128):
+        self.img = downsample(img, width)
+        self.h, self.w = self.img.shape[:2]
+        self.yaw = float(yaw_deg)
+        self.rad = self.img.reshape(-1, self.img.shape[2])
+        self.omega = equirect_solid_angles(self.w, self.h).reshape(-1)
+        self.dirs = rotate_yaw(equirect_directions(self.w, self.h), self.yaw).reshape(-1, 3)
+        lum = self.rad @ np.array([0.2126, 0.7152, 0.0722]) + 1e-6 * self.rad.mean()
+        p = np.maximum(lum, 0.0) * self.omega
+        self.p = p / p.sum()  # probability of each texel
+        self.cdf = np.cumsum(self.p)
+        self.cos_edges = np.cos(np.arange(self.h + 1) / self.h * math.pi)
+
+    def lookup(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(radiance (N, C), texel index (N,)) of the texel holding each direction (nearest)."""
+        uv = direction_to_uv(rotate_yaw(d, -self.yaw))
+        x = np.clip((uv[:, 0] * self.w).astype(np.int64), 0, self.w - 1)
+        y = np.clip((uv[:, 1] * self.h).astype(np.int64), 0, self.h - 1)
+        t = y * self.w + x
+        return self.rad[t], t
+
+    def sample(self, u0: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+        """Directions (..., 3) for uniforms u0 (the texel), u1, u2 (the point inside it)."""
+        t = np.minimum(np.searchsorted(self.cdf, u0), len(self.cdf) - 1)
+        y, x = t // self.w, t % self.w
+        c = self.cos_edges[y] + (self.cos_edges[y + 1] - self.cos_edges[y]) * u1
+        s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+        phi = (x + u2) / self.w * 2.0 * math.pi - math.pi
+        return rotate_yaw(np.stack([s * np.sin(phi), c, -s * np.cos(phi)], -1), self.yaw)
+
+    def unoccluded(self, N: np.ndarray, weight=None, chunk: int = 2048) -> np.ndarray:
+        """(N, C) sum_t L_t max(N.w_t, 0) weight(N.w_t) Omega_t: the piecewise-constant environment's
+        irradiance without occlusion (weight(mu (n, T), sl): rho_dt, None: 1)."""
+        out = np.zeros((len(N), self.rad.shape[1]))
+        ro = self.rad * self.omega[:, None]
+        for s0 in range(0, len(N), chunk):
+            sl = slice(s0, min(len(N), s0 + chunk))
+            mu = np.maximum(N[sl] @ self.dirs.T, 0.0)
+            if weight is not None:
+                mu = mu * np.asarray(weight(mu, sl), np.float64)
+            out[sl] = mu @ ro
+        return out
+
+
+def mc_irradiance_cv(sampler: EnvSampler, P: np.ndarray, N: np.ndarray, Ng: np.ndarray, caster, samples: int,
+                     rng: np.random.Generator, eps: float, weight=None, batches: int = 4,
+                     chunk: int = 2048) -> tuple[np.ndarray, np.ndarray]:
+    """The occluded irradiance int L V max(N.w, 0) weight dw as E0 - O: E0 the exact unoccluded sum
+    (EnvSampler.unoccluded, a control variate) and O = int L (1 - V) max(N.w, 0) weight dw the light
+    the mesh blocks, by Monte Carlo with multiple importance sampling (balance heuristic, Veach 1997)
+    of cosine-weighted and environment-proportional directions, half each, both stratified; a
+    direction below the geometric surface Ng is blocked. ``batches`` independent estimates give the
+    standard error. Returns (estimate (N, C), standard error (N, C))."""
+    P = np.asarray(P, np.float64)
+    E0 = sampler.unoccluded(N, weight)
+    per = max(samples // (2 * batches), 1)
+    k = max(int(math.isqrt(per)), 1)
+    n_cos = k * k
+    n_env = per
+    occl = np.zeros((batches,) + E0.shape)
+    for s0 in range(0, len(P), chunk):
+        sl = slice(s0, min(len(P), s0 + chunk))
+        n, ng, cnt = N[sl], Ng[sl], len(N[sl])
+        t, b = tangent_frames(n)
+        for bi in range(batches):
+            loc = stratified_cosine_directions(n_cos, rng)
+            ang = rng.random(cnt) * 2.0 * math.pi
+            c, s = np.cos(ang)[:, None], np.sin(ang)[:, None]
+            tt, bb = c * t + s * b, -s * t + c * b
+            d_cos = loc[None, :, :1] * tt[:, None] + loc[None, :, 1:2] * bb[:, None] + loc[None, :, 2:] * n[:, None]
+            u0 = (np.arange(n_env)[None] + rng.random((cnt, n_env))) / n_env
+            d_env = sampler.sample(u0, rng.random((cnt, n_env)), rng.random((cnt, n_env)))
+            d = np.concatenate([d_cos, d_env], 1)  # (cnt, n_cos + n_env, 3)
+            m = d.shape[1]
+            mu = (d * n[:, None]).sum(2)
+            L, tex = sampler.lookup(d.reshape(-1, 3))
+            L = L.reshape(cnt, m, -1)
+            p_cos = np.maximum(mu, 0.0) / math.pi
+            p_env = (sampler.p / sampler.omega)[tex].reshape(cnt, m)
+            front = mu > 0.0
+            above = (d * ng[:, None]).sum(2) > 0.0
+            blocked = np.ones((cnt, m), bool)
+            test = (front & above).reshape(-1)
+            if test.any():
+                o = np.repeat(P[sl] + ng * eps, m, axis=0)
+                dd = np.ascontiguousarray(d.reshape(-1, 3))
+                blocked.reshape(-1)[test] = caster.intersects_any(o[test], dd[test])
+            g = np.where(front & blocked, mu, 0.0)
+            if weight is not None:
+                g = g * np.asarray(weight(np.maximum(mu, 0.0), sl), np.float64)
+            f = L * (g / np.maximum(n_cos * p_cos + n_env * p_env, 1e-300))[..., None]
+            occl[bi, sl] = f.sum(1)  # balance heuristic: sum_j f / (n1 p1 + n2 p2)
+    est = E0[None] - occl
+    return est.mean(0), est.std(0, ddof=1) / math.sqrt(batches)
