@@ -280,10 +280,10 @@ class Surface:
         est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, ENV_DIFFUSE_RAYS,
                                     self.env_rng, self.eps, weight=weight, batches=ENV_BATCHES)
         # adaptive: points whose standard error exceeds ENV_TARGET of max(their irradiance, the median's)
-        # (the occluded ones: folds, ears) get 4x, then 16x the rays, combined by ray count
+        # (the occluded ones: folds, ears) get 4x the rays more, combined by ray count
         rays = np.full(len(est), float(ENV_DIFFUSE_RAYS))
         scale = max(float(np.median(est.sum(1))), 1e-300)
-        for more in (4, 16):
+        for more in (4,):
             bad = np.nonzero(np.sqrt((err ** 2).sum(1)) > ENV_TARGET * np.maximum(est.sum(1), scale))[0]
             if len(bad) == 0:
                 break
