@@ -344,3 +344,17 @@ def test_monte_carlo_irradiance_at_the_foot_of_a_wall_is_half():
     e_open, err_open = env.mc_irradiance_cv(sampler, np.array([[0.0, 2000.0, 0.0]]), n[:1], n[:1], caster, 64,
                                             np.random.default_rng(4), 1e-4)
     np.testing.assert_allclose(e_open[0], sampler.unoccluded(n[:1])[0], rtol=1e-9)
+
+
+def test_exposure_from_the_scene_luminance():
+    from pathlib import Path
+
+    from skinviewer.core.settings import Settings, load_preset
+    from skinviewer.passes.environment import exposure_from_luminance
+    assert exposure_from_luminance(Settings()) == pytest.approx(0.9)  # the three-light rig: the default 0.9
+    s = load_preset(Path(__file__).resolve().parents[1] / "presets" / "studio-environment.json")
+    e = exposure_from_luminance(s)
+    assert s.render.exposure == pytest.approx(e, rel=0.02)  # the shipped preset's exposure is this figure
+    brighter = with_values(s, {"lights.0.intensity": 2.0 * s.lights[0].intensity,
+                               "lights.1.intensity": 2.0 * s.lights[1].intensity})
+    assert exposure_from_luminance(brighter) == pytest.approx(e / 2.0, rel=1e-6)

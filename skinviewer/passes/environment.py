@@ -118,3 +118,40 @@ def set_environment(ec, prog, specular: bool = True) -> None:
                     u_env_level_m=np.asarray(env.SPEC_LEVELS_M, np.float32))
         ec.bind(prog, "env_prefiltered", ENV_PREFILTERED)
         ec.bind(prog, "env_rho_dt", ENV_RHO_DT)
+
+
+def scene_luminance(settings, samples: int = 256) -> float:
+    """The mean luminance of the irradiance reaching normals that face the camera (cosine-weighted
+    about the view direction): every enabled analytic light (unshadowed) plus the environment's SH
+    irradiance. What ``exposure_from_luminance`` divides by."""
+    from skinviewer.passes.rules import analytic_on
+    from skinviewer.scene.camera import orbit_eye
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    view = orbit_eye((0.0, 0.0, 0.0), settings.camera.yaw, settings.camera.pitch, 1.0)  # towards the camera
+    view = np.asarray(view, np.float64) / np.linalg.norm(view)
+    rng = np.random.default_rng(0)
+    loc = env.stratified_cosine_directions(samples, rng)
+    t, b = env.tangent_frames(view[None])
+    n = loc[:, :1] * t + loc[:, 1:2] * b + loc[:, 2:] * view[None]
+    E = np.zeros((len(n), 3))
+    for light in settings.lights:
+        if light.kind in ("directional", "beam") and analytic_on(light):
+            d = np.asarray(light.direction, np.float64)
+            E += np.maximum(n @ (d / np.linalg.norm(d)), 0.0)[:, None] * (np.asarray(light.color) * light.intensity)
+        elif light.kind == "point" and analytic_on(light):
+            E += 0.5 * np.asarray(light.color) * light.intensity
+    hit = environment_light(settings.lights)
+    if hit is not None:
+        E += env.sh_irradiance(sh_uniform(hit[1]).astype(np.float64), n)
+    return float((E @ lum).mean())
+
+
+def exposure_from_luminance(settings, reference_exposure: float = 0.9) -> float:
+    """render.exposure for ``settings`` so its camera-facing luminance shows as the three-light rig's
+    does at the default exposure (0.9): reference_exposure x L(three-light rig) / L(scene)."""
+    from skinviewer.core.settings import LightSettings
+    rig = settings.model_copy(update={"lights": [
+        LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
+        LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
+        LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False)]})
+    return reference_exposure * scene_luminance(rig) / max(scene_luminance(settings), 1e-9)
