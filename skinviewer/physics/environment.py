@@ -311,7 +311,7 @@ def beckmann_lobe(cos_angle: np.ndarray, m: float) -> np.ndarray:
     return np.where(c > 0.0, np.exp(-t2 / (m * m)) / (m * m * ch ** 4) * c, 0.0)
 
 
-def prefilter_specular(img: np.ndarray, levels_m=SPEC_LEVELS_M, size=SPEC_SIZE, src_w: int = 128) -> np.ndarray:
+def prefilter_specular(img: np.ndarray, levels_m=SPEC_LEVELS_M, size=SPEC_SIZE, src_w: int = 64) -> np.ndarray:
     """(len(levels_m) * H, W, 3) float32: for each Beckmann m the radiance averaged over the lobe
     around each texel's direction R (split-sum first factor), levels stacked top to bottom
     (lib/environment.glsl env_prefiltered). Weights include each source texel's solid angle."""
