@@ -358,3 +358,11 @@ def test_exposure_from_the_scene_luminance():
     brighter = with_values(s, {"lights.0.intensity": 2.0 * s.lights[0].intensity,
                                "lights.1.intensity": 2.0 * s.lights[1].intensity})
     assert exposure_from_luminance(brighter) == pytest.approx(e / 2.0, rel=1e-6)
+
+
+def test_right_drag_turns_an_environment():
+    from skinviewer.ui.camera_control import OrbitController
+    s = small_settings().model_validate({**small_settings().model_dump(), **_env_lights()})
+    ctl = OrbitController.__new__(OrbitController)
+    out = ctl.move_light(s, 0, 100.0, 0.0)
+    assert list(out) == ["lights.0.yaw"] and out["lights.0.yaw"] != 0.0 and -180.0 <= out["lights.0.yaw"] < 180.0
