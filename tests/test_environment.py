@@ -366,3 +366,28 @@ def test_right_drag_turns_an_environment():
     ctl = OrbitController.__new__(OrbitController)
     out = ctl.move_light(s, 0, 100.0, 0.0)
     assert list(out) == ["lights.0.yaw"] and out["lights.0.yaw"] != 0.0 and -180.0 <= out["lights.0.yaw"] < 180.0
+
+
+def test_ground_truth_environment_specular_and_irradiance_on_an_open_plane():
+    """Under a white environment an open plane's specular is the KS albedo 1 - rho_dt(N.V) (eq. 30, the
+    split sum's second factor) and its irradiance pi: the ground truth's Beckmann-sampled specular and
+    Monte Carlo irradiance (core/reference.py), independent of the shaders' tables."""
+    from skinviewer.core import reference as R
+    from skinviewer.core.settings import Settings
+    from skinviewer.physics.specular import rho_dt
+    from skinviewer.scene.mesh import MeshData
+    P = np.array([[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]], np.float32)
+    m = MeshData(P, np.tile([0, 0, 1.0], (4, 1)), np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32),
+                 np.array([[0, 1, 2], [0, 2, 3]]))
+    s = Settings.model_validate({**Settings().model_dump(), "lights": [{"kind": "environment", "intensity": 1.0}]})
+    surf = R.Surface(m, 1.0, s)
+    surf.env_img = np.ones((64, 128, 3))
+    surf.env_sampler = env.EnvSampler(surf.env_img, 0.0, 64)
+    tri, bary = np.zeros(400, int), np.tile([1 / 3, 1 / 3, 1 / 3], (400, 1))
+    a = surf.attributes(tri, bary)
+    for cv in (1.0, 0.5, 0.2):
+        V = np.tile([math.sqrt(1 - cv * cv), 0.0, cv], (400, 1))
+        spec = surf.env_specular(a, V)[:, 0]
+        want = 1.0 - float(rho_dt(cv, a["m"][0], s.specular.f0, a["rho"][0]))
+        assert abs(spec.mean() - want) < 0.01 * want
+    np.testing.assert_allclose(surf.env_irradiance(tri[:5], bary[:5], False), math.pi, rtol=1e-6)
