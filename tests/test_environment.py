@@ -391,3 +391,13 @@ def test_ground_truth_environment_specular_and_irradiance_on_an_open_plane():
         want = 1.0 - float(rho_dt(cv, a["m"][0], s.specular.f0, a["rho"][0]))
         assert abs(spec.mean() - want) < 0.01 * want
     np.testing.assert_allclose(surf.env_irradiance(tri[:5], bary[:5], False), math.pi, rtol=1e-6)
+
+
+def test_bench_sweeps_the_sh_order_and_the_ao_bake_with_an_environment():
+    from skinviewer.core.bench import environment_sweep
+    from skinviewer.core.settings import Settings
+    s = Settings.model_validate({**Settings().model_dump(), **_env_lights()})
+    labels = {label: ch for _, label, ch in environment_sweep(s, quick=False)}
+    assert labels["env sh0"] == {"lights.0.sh_order": 0} and labels["env no AO"] == {"lights.0.occlusion": False}
+    assert "env AO 16 rays" in labels and "env AO 256 rays" in labels
+    assert environment_sweep(Settings(), quick=False) == []  # no environment: nothing added
