@@ -137,14 +137,14 @@ def builtin_environment(name: str, size: tuple[int, int] = BUILTIN_SIZE) -> np.n
         horizon = np.clip(-y / 0.03, 0.0, 1.0)[..., None]
         L = np.where((y < 0)[..., None], L * (1 - horizon) + ground * horizon, L)
     elif name == "window":
-        wall = np.array([0.09, 0.065, 0.045])
-        floor = np.array([0.07, 0.045, 0.028])
+        wall = np.array([0.085, 0.07, 0.055])  # warm, not orange: a backlit face still reads as skin
+        floor = np.array([0.07, 0.052, 0.036])
         L = np.where((y < -0.05)[..., None], floor, wall) * np.ones((h, w, 3))
         win = _smooth_box(d, 70.0, 12.0, 24.0, 26.0, 5.0)
         sky = np.array([5.0, 5.2, 5.6]) + np.array([1.5, 1.0, 0.4]) * np.clip(1.0 - (d[..., 1] + 0.3) * 2, 0, 1)[..., None]
         L = L * (1 - win[..., None]) + win[..., None] * sky
         # the sunlit floor patch under the window warms the room's bounce light
-        L += _smooth_box(d, 55.0, -40.0, 20.0, 10.0, 12.0)[..., None] * np.array([0.9, 0.6, 0.35])
+        L += _smooth_box(d, 55.0, -40.0, 20.0, 10.0, 12.0)[..., None] * np.array([0.8, 0.62, 0.42])
     else:
         raise KeyError(f"unknown built-in environment {name!r} (have: {', '.join(BUILTIN_ENVIRONMENTS)})")
     return np.ascontiguousarray(L, np.float32)
