@@ -401,3 +401,20 @@ def test_bench_sweeps_the_sh_order_and_the_ao_bake_with_an_environment():
     assert labels["env sh0"] == {"lights.0.sh_order": 0} and labels["env no AO"] == {"lights.0.occlusion": False}
     assert "env AO 16 rays" in labels and "env AO 256 rays" in labels
     assert environment_sweep(Settings(), quick=False) == []  # no environment: nothing added
+
+
+def test_viewer_refuses_a_bad_environment_and_keeps_the_last_good_one(tmp_path):
+    from types import SimpleNamespace
+
+    from PIL import Image
+
+    from skinviewer.core.settings import Settings
+    from skinviewer.ui.state import ViewerState
+    png = tmp_path / "sky.png"
+    Image.fromarray(np.zeros((16, 32, 3), np.uint8)).save(png)
+    s = Settings.model_validate({**Settings().model_dump(), **_env_lights(environment="window")})
+    st = ViewerState(s, lambda _s: SimpleNamespace(notes=[]))
+    assert not st.apply({"lights.0.environment": str(png)})
+    assert st.settings.lights[0].environment == "window"  # the last good environment stays
+    assert st.errors and "not an HDR image" in st.errors[0][1] and "\n" not in st.errors[0][1]
+    assert st.apply({"lights.0.environment": "overcast"}) and st.settings.lights[0].environment == "overcast"
