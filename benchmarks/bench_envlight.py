@@ -35,7 +35,7 @@ def scenes(args):
     base = load_preset(ROOT / "presets" / "studio-environment.json")
     base = with_values(base, {"render.width": args.size, "render.height": args.size})
     out = [("head", base)]
-    if args.scan and Path(args.scan).is_file():
+    if args.scan and Path(args.scan).is_file() and not args.no_scan:
         out.append(("scan", with_values(base, {"scene.mesh": args.scan, "scene.mm_per_unit": 48.0})))
     return out
 
@@ -59,6 +59,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--out", default="bench_envlight")
     ap.add_argument("--techniques", default=",".join(techniques.names()))
+    ap.add_argument("--no-scan", action="store_true")
     args = ap.parse_args()
     names = args.techniques.split(",")
     out = Path(args.out)
@@ -109,6 +110,8 @@ def main() -> None:
                 print(f"{scene:5s} deon {label:7s} RMS {100 * e.rms_mean:6.2f} %  DSSIM {e.dssim:.4f}", flush=True)
         finally:
             r.release()
+        (out / "results.json").write_text(json.dumps({"gl": describe(ctx), "size": args.size, "rows": rows,
+                                                      "references": extra}, indent=2) + "\n")
     (out / "results.json").write_text(json.dumps({"gl": describe(ctx), "size": args.size, "rows": rows,
                                                   "references": extra}, indent=2) + "\n")
 

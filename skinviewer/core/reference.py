@@ -220,6 +220,28 @@ class Surface:
             return np.ones_like(t)
         return np.clip(1.0 - (1.0 - t) * rho_s / r0, 0.0, 1.0)
 
+    def rho_dt_rows(self, m: np.ndarray) -> np.ndarray:
+        """(N, n_cos) the rho_dt table interpolated to each point's m at the table's cos columns: with
+        rho_dt_along, Surface.rho_dt for many N.L per point at the cost of a 1-D lookup."""
+        n_cos = self.rho_table.shape[1]
+        xs = (np.arange(n_cos) + 0.5) / n_cos
+        return sample_bilinear(self.rho_table, np.broadcast_to(xs[None], (len(m), n_cos)),
+                               np.broadcast_to(np.clip(m, 0, 1)[:, None], (len(m), n_cos)))
+
+    def rho_dt_along(self, rows: np.ndarray, rho_s: np.ndarray, cos_theta: np.ndarray) -> np.ndarray:
+        """Surface.rho_dt at cos_theta (N, K) for the points of ``rows`` (rho_dt_rows) and their rho_s."""
+        n_cos = rows.shape[1]
+        pos = np.clip(np.clip(cos_theta, 0.0, 1.0) * n_cos - 0.5, 0.0, n_cos - 1.0)
+        i0 = np.floor(pos).astype(np.int64)
+        i1 = np.minimum(i0 + 1, n_cos - 1)
+        f = pos - i0
+        r = np.arange(len(rows))[:, None]
+        t = np.clip(rows[r, i0] * (1.0 - f) + rows[r, i1] * f, 0.0, 1.0)
+        r0 = self.s.specular.rho_s
+        if not r0 > 0:
+            return np.ones_like(t)
+        return np.clip(1.0 - (1.0 - t) * np.asarray(rho_s)[:, None] / r0, 0.0, 1.0)
+
     def light_dir(self, light, P):
         if light.kind == "point":
             d = np.asarray(light.position, np.float64) - P
@@ -273,10 +295,10 @@ class Surface:
         a = self.attributes(tri, bary)
         weight = None
         if energy:
-            m, rho = a["m"], a["rho"]
+            rows, rho = self.rho_dt_rows(a["m"]), a["rho"]
 
             def weight(mu, sl):
-                return self.rho_dt(mu, np.broadcast_to(m[sl][:, None], mu.shape), np.broadcast_to(rho[sl][:, None], mu.shape))
+                return self.rho_dt_along(rows[sl], rho[sl], mu)
         est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, ENV_DIFFUSE_RAYS,
                                     self.env_rng, self.eps, weight=weight, batches=ENV_BATCHES)
         # adaptive: points whose standard error exceeds ENV_TARGET of max(their irradiance, the median's)
