@@ -418,3 +418,14 @@ def test_viewer_refuses_a_bad_environment_and_keeps_the_last_good_one(tmp_path):
     assert st.settings.lights[0].environment == "window"  # the last good environment stays
     assert st.errors and "not an HDR image" in st.errors[0][1] and "\n" not in st.errors[0][1]
     assert st.apply({"lights.0.environment": "overcast"}) and st.settings.lights[0].environment == "overcast"
+
+
+def test_ground_truth_rho_dt_rows_equal_the_bilinear_table():
+    from skinviewer.core import reference as R
+    from skinviewer.core.settings import Settings
+    from skinviewer.scene.scenes import build_scene
+    surf = R.Surface(build_scene("head", 0).mesh, 1.0, Settings())
+    rng = np.random.default_rng(0)
+    m, rho, mu = rng.random(50) * 0.6 + 0.1, rng.random(50) * 0.3, rng.random((50, 40)) * 1.2 - 0.1
+    want = surf.rho_dt(mu, np.broadcast_to(m[:, None], mu.shape), np.broadcast_to(rho[:, None], mu.shape))
+    np.testing.assert_allclose(surf.rho_dt_along(surf.rho_dt_rows(m), rho, mu), want, atol=1e-12)
