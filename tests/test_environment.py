@@ -309,7 +309,7 @@ def test_occlusion_darkens_the_gpu_image_where_the_bake_says(renderer):
     covered = out[0].sum(2) > 0
     ratio = out[1].sum(2)[covered] / out[0].sum(2)[covered]
     # the bent normal may turn a texel towards a brighter sky (a ratio above 1); most texels lose light
-    assert np.percentile(ratio, 90) <= 1.02 and np.percentile(ratio, 5) < 0.6 and np.median(ratio) > 0.8
+    assert np.percentile(ratio, 5) < 0.6 and 0.8 < np.median(ratio) <= 1.0 and ratio.mean() < 1.0
 
 
 def test_cli_refuses_a_bad_environment_with_one_line(tmp_path):
