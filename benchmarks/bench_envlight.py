@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def scenes(args):
     base = load_preset(ROOT / "presets" / "studio-environment.json")
     base = with_values(base, {"render.width": args.size, "render.height": args.size})
-    out = [("head", base)]
+    out = [] if args.no_head else [("head", base)]
     if args.scan and Path(args.scan).is_file() and not args.no_scan:
         out.append(("scan", with_values(base, {"scene.mesh": args.scan, "scene.mm_per_unit": 48.0})))
     return out
@@ -60,6 +60,7 @@ def main() -> None:
     ap.add_argument("--out", default="bench_envlight")
     ap.add_argument("--techniques", default=",".join(techniques.names()))
     ap.add_argument("--no-scan", action="store_true")
+    ap.add_argument("--no-head", action="store_true")
     args = ap.parse_args()
     names = args.techniques.split(",")
     out = Path(args.out)
