@@ -20,13 +20,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from skinviewer import techniques  # noqa: E402
-from skinviewer.core.bench import compare_mask, linear_image  # noqa: E402
-from skinviewer.core.gl import describe, headless_context  # noqa: E402
-from skinviewer.core.reference import compute_reference  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import load_preset, with_values  # noqa: E402
-from skinviewer.physics.metrics import image_error  # noqa: E402
+from skinviewer import techniques
+from skinviewer.core.bench import compare_mask, linear_image
+from skinviewer.core.gl import describe, headless_context
+from skinviewer.core.reference import compute_reference
+from skinviewer.core.renderer import Renderer
+from skinviewer.core.settings import load_preset, with_values
+from skinviewer.physics.metrics import image_error
 
 ROOT = Path(__file__).resolve().parents[1]
 

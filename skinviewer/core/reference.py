@@ -41,10 +41,10 @@ from skinviewer.core.files import atomic_write_bytes
 from skinviewer.core.paths import cache_dir
 from skinviewer.core.settings import REGIONS, Settings
 from skinviewer.passes.common import per_region_specular
-from skinviewer.passes.rules import environment_light
-from skinviewer.physics.environment import EnvSampler
 from skinviewer.passes.output import srgb_to_linear
+from skinviewer.passes.rules import environment_light
 from skinviewer.physics import ground_truth as gt
+from skinviewer.physics.environment import EnvSampler
 from skinviewer.physics.specular import (
     beckmann_lut,
     ks_specular,
@@ -348,7 +348,7 @@ class Surface:
         sp = self.s.specular
         n_pts = len(V)
         out = np.zeros((n_pts, 3))
-        k = int(math.isqrt(ENV_SPEC_RAYS))
+        k = math.isqrt(ENV_SPEC_RAYS)
         batches = []
         for s0 in range(0, n_pts, 4096):
             sl = slice(s0, min(n_pts, s0 + 4096))

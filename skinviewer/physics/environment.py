@@ -204,7 +204,7 @@ def irradiance_exact(img: np.ndarray, n: np.ndarray, yaw_deg: float = 0.0, max_w
 def stratified_cosine_directions(n: int, rng: np.random.Generator) -> np.ndarray:
     """(n, 3) cosine-weighted directions about +z, one per cell of a sqrt(n) x sqrt(n) grid
     (n rounded down to a square), jittered: stratified sampling of the projected disc."""
-    k = max(int(math.isqrt(n)), 1)
+    k = max(math.isqrt(n), 1)
     i, j = np.meshgrid(np.arange(k), np.arange(k))
     u1 = (i.ravel() + rng.random(k * k)) / k
     u2 = (j.ravel() + rng.random(k * k)) / k
@@ -466,7 +466,7 @@ def mc_irradiance_cv(sampler: EnvSampler, P: np.ndarray, N: np.ndarray, Ng: np.n
     P = np.asarray(P, np.float64)
     E0 = sampler.unoccluded(N, weight)
     per = max(samples // (2 * batches), 1)
-    k = max(int(math.isqrt(per)), 1)
+    k = max(math.isqrt(per), 1)
     n_cos = k * k
     n_env = per
     occl = np.zeros((batches,) + E0.shape)

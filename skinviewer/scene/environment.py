@@ -22,7 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from skinviewer.core.files import FileReadError, read_regular_file
-from skinviewer.physics.environment import BUILTIN_ENVIRONMENTS, builtin_environment, equirect_directions
+from skinviewer.physics.environment import (
+    BUILTIN_ENVIRONMENTS,
+    builtin_environment,
+    equirect_directions,
+)
 
 MAX_BYTES = 1024**3
 MAX_WIDTH = 16384    # a 16k panorama is the largest published; 32768 wide is refused
@@ -66,7 +70,7 @@ def _decode(path: str, data: bytes) -> np.ndarray:
         import imagecodecs
         try:
             return np.asarray(imagecodecs.rgbe_decode(data), np.float32)
-        except Exception as exc:  # imagecodecs raises its own RgbeError / ValueError
+        except Exception as exc:  # noqa: BLE001  (imagecodecs raises its own RgbeError, ValueError, ...)
             raise EnvironmentMapError(f"environment {path}: not a readable Radiance HDR file ({exc})") from None
     if suffix == ".exr" or data[:4] == b"\x76\x2f\x31\x01":
         import OpenEXR
@@ -86,7 +90,7 @@ def _decode(path: str, data: bytes) -> np.ndarray:
                 return np.asarray(ch[key].pixels, np.float32)
         except EnvironmentMapError:
             raise
-        except Exception as exc:
+        except Exception as exc:  # noqa: BLE001  (the OpenEXR binding raises plain Exceptions)
             raise EnvironmentMapError(f"environment {path}: not a readable OpenEXR file ({exc})") from None
     raise EnvironmentMapError(f"environment {path}: not an HDR image (use a Radiance .hdr or an OpenEXR .exr of linear "
                            "radiance; an 8-bit PNG/JPEG clips the bright sources that light the skin)")

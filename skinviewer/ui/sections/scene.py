@@ -31,7 +31,7 @@ def _thumbnail(spec: str, layout: str, yaw: float, w: int = 64):
         img = downsample(environment_image(spec, layout), w)
     except EnvironmentMapError:
         return None
-    shift = int(round(yaw / 360.0 * img.shape[1]))
+    shift = round(yaw / 360.0 * img.shape[1])
     img = np.roll(img, -shift, axis=1)  # the view from the head at phi shows L(phi + yaw)
     return np.clip(img / (1.0 + img), 0.0, 1.0) ** (1 / 2.2)
 
