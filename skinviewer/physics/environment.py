@@ -366,45 +366,6 @@ def env_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, m: np.ndarray, s
 
 # -- Monte Carlo (the ground truth's) ------------------------------------------------------------------
 
-def mc_irradiance(img: np.ndarray, P: np.ndarray, N: np.ndarray, Ng: np.ndarray, caster, samples: int,
-                  rng: np.random.Generator, eps: float, yaw_deg: float = 0.0, weight=None,
-                  chunk: int = 4096) -> tuple[np.ndarray, np.ndarray]:
-    """int L(w) V(w) max(N.w, 0) weight(N.w) dw at points P (N, 3) by stratified cosine-weighted
-    sampling about the shading normal N (``samples`` rays each, jittered strata) with Embree
-    visibility: a ray below the geometric surface Ng counts as blocked. Returns (estimate (N, 3),
-    its standard error (N, 3) from the spread of the per-sample values / sqrt(n), an upper bound for
-    stratified sampling). ``weight(mu (n, k), sl)``: rho_dt of eq. 32 at the points ``sl`` (None: 1)."""
-    P = np.asarray(P, np.float64)
-    est = np.zeros((len(P), img.shape[2]))
-    err = np.zeros_like(est)
-    for s0 in range(0, len(P), chunk):
-        sl = slice(s0, min(len(P), s0 + chunk))
-        n = N[sl]
-        local = stratified_cosine_directions(samples, rng)
-        k = len(local)
-        t, b = tangent_frames(n)
-        ang = rng.random(len(n)) * 2.0 * math.pi
-        c, s = np.cos(ang)[:, None], np.sin(ang)[:, None]
-        t, b = c * t + s * b, -s * t + c * b
-        d = local[None, :, :1] * t[:, None] + local[None, :, 1:2] * b[:, None] + local[None, :, 2:] * n[:, None]
-        ng = Ng[sl]
-        above = (d * ng[:, None]).sum(2) > 0.0
-        o = np.repeat(P[sl] + ng * eps, k, axis=0)
-        dd = np.ascontiguousarray(d.reshape(-1, 3))
-        hit = np.ones(len(dd), bool)
-        a = above.reshape(-1)
-        if a.any():
-            hit[a] = caster.intersects_any(o[a], dd[a])
-        vis = (~hit).reshape(len(n), k)
-        L = sample_equirect(img, dd, yaw_deg).reshape(len(n), k, -1)
-        f = L * (math.pi * vis)[..., None]  # cosine-weighted pdf cos/pi: f cos / pdf = pi L V
-        if weight is not None:
-            f = f * np.asarray(weight(np.broadcast_to(local[None, :, 2], vis.shape), sl), np.float64)[..., None]
-        est[sl] = f.mean(1)
-        err[sl] = f.std(1) / math.sqrt(k)
-    return est, err
-
-
 class EnvSampler:
     """A piecewise-constant environment (the equirect box-filtered to ``width`` texels) for the ground
     truth's irradiance: the exact unoccluded integral by summing texels, and directions drawn in
