@@ -10,6 +10,7 @@
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
 #include "lib/deon.glsl"
+#include "lib/environment.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -94,5 +95,9 @@ void main() {
         spec += Lc * (ks * shadow_factor(i, v_position, normalize(v_normal)));
 #endif
     }
+#if ENV_LIGHT
+    ENV_VIS_IN();
+    spec += env_specular(N, V, v_normal, sp);  // split sum, specular occlusion (lib/environment.glsl)
+#endif
     f_color = vec4(finite3(diffuse + spec), 1.0);
 }

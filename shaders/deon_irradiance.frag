@@ -8,5 +8,6 @@ in vec3 v_normal;
 in vec2 v_uv;
 in vec4 v_tangent;
 void main() {
+    ENV_VIS_IN();
     deon_irradiance(v_position, v_normal, v_uv, v_tangent, dFdx(v_position), dFdy(v_position));
 }

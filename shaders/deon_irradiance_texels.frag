@@ -8,6 +8,7 @@
 #include "lib/texel_surface.glsl"
 in vec2 v_uv;
 void main() {
+    ENV_VIS_IN();
     TexelSurface s = texel_surface();
     deon_irradiance(s.P, s.N, v_uv, s.T, s.dPdx, s.dPdy);
 }

@@ -14,6 +14,7 @@
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
+#include "lib/environment.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -49,6 +50,10 @@ void main() {
         if (u_spec_shadow == 1) ks /= max(ndl, 1e-6);  // the bare BRDF of eq. (16)
         spec += ks * Lc;
     }
+#if ENV_LIGHT
+    ENV_VIS_IN();
+    E0 += env_sh_irradiance(N);  // the environment's unoccluded irradiance is in the light map too
+#endif
     float att;
     if (u_spec_shadow == 1) {
         att = lumE;
@@ -57,5 +62,8 @@ void main() {
         att = lumE0 > 1e-20 ? clamp(lumE / lumE0, 0.0, 1.0) : 0.0;
     }
     color += finite3(spec) * att;                                       // (18), (19)
+#if ENV_LIGHT
+    color += env_specular(N, V, v_normal, sp);  // split sum, specular occlusion (lib/environment.glsl)
+#endif
     f_color = vec4(finite3(color), 1.0);
 }

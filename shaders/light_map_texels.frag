@@ -6,6 +6,7 @@
 #include "lib/texel_surface.glsl"
 in vec2 v_uv;
 void main() {
+    ENV_VIS_IN();
     TexelSurface s = texel_surface();
     light_map(s.P, s.N, v_uv, s.T, s.dPdx, s.dPdy);
 }

@@ -10,6 +10,7 @@
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
+#include "lib/environment.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -52,6 +53,11 @@ void main() {
         diffuse += Lc * rho * D * P;
         if (ndl > 0.0) spec += Lc * (surface_ks(N, L, V, sp) * s);
     }
+#if ENV_LIGHT
+    ENV_VIS_IN();
+    diffuse += env_irradiance(N, v_normal) * ((u_energy != 0) ? env_rho_dt_mean(rho_dt_tex, sp) : 1.0);
+    spec += env_specular(N, V, v_normal, sp);
+#endif
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
     f_color = vec4(finite3(C * rho_v * diffuse + spec), 1.0);
 }

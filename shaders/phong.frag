@@ -3,6 +3,7 @@
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
+#include "lib/environment.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -29,5 +30,9 @@ void main() {
         float spec = u_specular * pow(max(dot(N, H), 0.0), u_shininess);
         color += Lc * s * (C * ndl + spec * ndl);
     }
+#if ENV_LIGHT
+    ENV_VIS_IN();
+    color += C * env_irradiance(N, v_normal);  // the environment's diffuse (its own Blinn-Phong lobe: lights only)
+#endif
     f_color = vec4(finite3(color), 1.0);
 }

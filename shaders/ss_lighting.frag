@@ -10,6 +10,7 @@
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
 #include "lib/screen_space.glsl"
+#include "lib/environment.glsl"
 in vec3 v_position;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -115,6 +116,11 @@ void main() {
             if (back > 0.0) T += Lc * back * transmitted(i, v_position, Ng);
         }
     }
+#if ENV_LIGHT
+    ENV_VIS_IN();
+    E += env_irradiance(N, v_normal);             // before the screen blur, like the lights
+    spec += env_specular(N, V, v_normal, sp);
+#endif
     float mask = 1.0;
     if (u_has_regions != 0) mask = u_region_sss[region_at(ivec2(v_uv * vec2(textureSize(region_map, 0))))];
     // non-skin pixels scatter nothing: the transmittance belongs to skin

@@ -14,6 +14,7 @@ void main() {
     v_normal = in_normal;
     v_uv = in_uv;
     v_tangent = in_tangent;
+    ENV_VIS_OUT();
     v_depth_mm = -(u_view * vec4(in_position, 1.0)).z * u_mm_per_unit;
     gl_Position = u_view_proj * vec4(in_position, 1.0);
 }

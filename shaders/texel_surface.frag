@@ -17,8 +17,15 @@ in vec2 v_uv;
 in vec4 v_tangent;
 layout(location = 0) out vec4 f_p;
 layout(location = 1) out vec4 f_n;
+#if defined(ENV_LIGHT) && ENV_LIGHT && defined(ENV_RAYS) && ENV_RAYS > 0
+in vec4 v_env_vis;
+layout(location = 2) out vec4 f_v;  // the environment's baked bent normal + AO (issue 32)
+#endif
 void main() {
     bool bad = any(isnan(v_position)) || any(isinf(v_position));
     f_p = vec4(bad ? vec3(0.0) : v_position, v_tangent.w < 0.0 ? -1.0 : 1.0);
     f_n = vec4(oct_encode(v_normal), oct_encode(v_tangent.xyz));
+#if defined(ENV_LIGHT) && ENV_LIGHT && defined(ENV_RAYS) && ENV_RAYS > 0
+    f_v = v_env_vis;
+#endif
 }

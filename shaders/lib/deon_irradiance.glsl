@@ -12,6 +12,7 @@
 #include "lib/surface.glsl"
 #include "lib/specular_params.glsl"
 #include "lib/deon.glsl"
+#include "lib/environment.glsl"
 uniform float u_mix;
 uniform int u_energy;            // eq. (32) on/off
 uniform sampler2D rho_dt_tex;
@@ -76,6 +77,10 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
         vis[i] = 0.25 * sv;
         E += Lc * (0.25 * e);
     }
+#if ENV_LIGHT
+    // the environment, occluded, with eq. (32)'s rho_dt averaged over the hemisphere
+    E += env_irradiance(N, v_normal) * ((u_energy != 0) ? env_rho_dt_mean(rho_dt_tex, sp) : 1.0);
+#endif
     E *= C;
     float d = 0.0;
     if (u_tsm != 0) {

@@ -8,6 +8,7 @@
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
+#include "lib/environment.glsl"
 out vec4 f_color;
 
 vec3 finite_f32(vec3 c) {
@@ -28,6 +29,9 @@ void light_map(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, vec3 d
         if (!(ndl > 0.0)) continue;  // also skips NaN normals
         E += Lc * (min(ndl, 1.0) * shadow_factor(i, v_position, normalize(v_normal)));
     }
+#if ENV_LIGHT
+    E += env_irradiance(N, v_normal);  // the environment, occluded (lib/environment.glsl)
+#endif
     // a NaN (a bug, e.g. in an edited shader) is kept so that render.check_finite flags this pass
     bvec3 nan = bvec3(isnan(E.x), isnan(E.y), isnan(E.z));
     f_color = vec4(mix(clamp(E, vec3(0.0), vec3(FLOAT_MAX)), E, nan), 1.0);

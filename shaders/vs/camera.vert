@@ -11,5 +11,6 @@ void main() {
     v_normal = in_normal;
     v_uv = in_uv;
     v_tangent = in_tangent;
+    ENV_VIS_OUT();
     gl_Position = u_view_proj * vec4(in_position, 1.0);
 }

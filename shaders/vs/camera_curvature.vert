@@ -13,6 +13,7 @@ void main() {
     v_normal = in_normal;
     v_uv = in_uv;
     v_tangent = in_tangent;
+    ENV_VIS_OUT();
     v_curvature = in_curvature;
     gl_Position = u_view_proj * vec4(in_position, 1.0);
 }

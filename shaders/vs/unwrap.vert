@@ -11,5 +11,6 @@ void main() {
     v_normal = in_normal;
     v_uv = in_uv;
     v_tangent = in_tangent;
+    ENV_VIS_OUT();
     gl_Position = vec4(in_uv * 2.0 - 1.0, 0.0, 1.0);
 }

@@ -156,6 +156,21 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
     return full, cam
 
 
+def environment_sweep(base: Settings, quick: bool, names: list[str] | None = None) -> list[tuple[str, str, dict]]:
+    """With an environment light (issue 32): d'Eon with its SH order and ambient-occlusion bake swept
+    (order 0 / 1 against the default 2; no occlusion, fewer and more rays per vertex)."""
+    from skinviewer.passes.rules import environment_light
+    hit = environment_light(base.lights)
+    if hit is None or (names is not None and "deon" not in names):
+        return []
+    i, light = hit
+    orders = [o for o in (0, 1) if o != light.sh_order]
+    rays = [16] if quick else [16, 256]
+    return ([("deon", f"env sh{o}", {f"lights.{i}.sh_order": o}) for o in orders]
+            + [("deon", "env no AO", {f"lights.{i}.occlusion": False})]
+            + [("deon", f"env AO {n} rays", {f"lights.{i}.ao_rays": n}) for n in rays if n != light.ao_rays])
+
+
 def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] | None = None,
               reference=None, runs: int = RUNS,
               progress: Callable[[str, int, int], None] | None = None, ctx=None) -> dict:
@@ -168,6 +183,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
     (out / "heatmaps").mkdir(parents=True, exist_ok=True)
     configs = [(t.name, label, ch) for t in techniques.REGISTRY.values() if names is None or t.name in names
                for label, ch in t.sweep(quick)]
+    configs += environment_sweep(base, quick, names)
     ref = reference
     results: list[Result] = []
     own_ctx = ctx is None

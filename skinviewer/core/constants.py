@@ -19,7 +19,7 @@ HALF_MAX = 65000.0
 FLOAT_MAX = 1e30
 
 # Light kinds as the shaders see them (u_light_kind, u_tsm_kind).
-LIGHT_KINDS: dict[str, int] = {"directional": 0, "point": 1, "beam": 2}
+LIGHT_KINDS: dict[str, int] = {"directional": 0, "point": 1, "beam": 2, "environment": 3}
 
 
 def _glsl_float(x: float) -> str:

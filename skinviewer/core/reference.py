@@ -14,6 +14,13 @@ except to look up the surface's own maps.
   the 3D distance (G(v, sqrt(r^2 + d^2)) for a flap of thickness d), which is the light the
   techniques' translucent shadow maps approximate (eq. 33).
 - Pixel = C^(1-mix) rho_dt(N.V) M(x) + sum_lights Lc KS(N, L, V) vis  (eq. 34, 35).
+- An environment light (issue 32): its irradiance int L(w) V(w) (N.w) rho_dt(N.w) dw as the exact
+  unoccluded sum over the environment's texels less the blocked light, estimated by Monte Carlo with
+  multiple importance sampling (cosine and environment directions, stratified) and Embree visibility
+  (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at three points inside each source triangle, linear
+  between them; its
+  specular int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (ENV_SPEC_RAYS per
+  pixel). meta["env"] holds the standard errors (from independent batches).
 
 Results are cached on disk (``cache_dir()/reference``) by a hash of everything they depend on.
 """
@@ -36,7 +43,9 @@ from skinviewer.core.paths import cache_dir
 from skinviewer.core.settings import REGIONS, Settings
 from skinviewer.passes.common import per_region_specular
 from skinviewer.passes.output import srgb_to_linear
+from skinviewer.passes.rules import environment_light
 from skinviewer.physics import ground_truth as gt
+from skinviewer.physics.environment import EnvSampler
 from skinviewer.physics.specular import (
     beckmann_lut,
     ks_specular,
@@ -45,10 +54,20 @@ from skinviewer.physics.specular import (
     sample_bilinear,
 )
 from skinviewer.scene.camera import framed_view
+from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 5                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut
+VERSION = 6                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments
+ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
+ENV_SPEC_RAYS = 64          # per pixel
+ENV_BATCHES = 4
+ENV_TARGET = 0.004          # adaptive sampling's goal: standard error / max(irradiance, its median)
+ENV_SAMPLER_WIDTH = 128     # the irradiance's environment, box-filtered (0.03 % from the full image's irradiance)
+# the three points of a source triangle the environment's irradiance is estimated at, and the map
+# from a point's barycentrics to the linear interpolation weights of those three
+_ENV_B = np.array([[4.0, 1.0, 1.0], [1.0, 4.0, 1.0], [1.0, 1.0, 4.0]]) / 6.0
+_ENV_W = np.linalg.inv(_ENV_B)
 DEFAULT_H_MM = 0.5          # source element edge
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
@@ -125,7 +144,21 @@ class Surface:
         sp = s.specular
         self.rho_table = np.nan_to_num(np.clip(rho_dt_table(sp.f0, sp.rho_s, *RHO_DT_SIZE), 0, 1), nan=1.0)
         self.beckmann = beckmann_lut(sp.lut_size) if sp.mode == "beckmann_lut" else None
-        self.lights = [l for l in s.lights[:4] if l.enabled]
+        self.lights = [l for l in s.lights[:4] if l.enabled and l.kind != "environment"]
+        hit = environment_light(s.lights)
+        self.env = None
+        if hit is not None:
+            e = hit[1]
+            self.env = e
+            self.env_img = np.asarray(environment_image(e.environment, e.layout), np.float64) * \
+                (np.asarray(e.color, np.float64) * e.intensity)[None, None]
+            self.env_rng = np.random.default_rng(12345)
+            self.env_sampler = EnvSampler(self.env_img, e.yaw, ENV_SAMPLER_WIDTH)
+            self.env_tri = np.zeros((len(self.F), 3, 3))  # per triangle: E at its three _ENV_B points
+            self.env_err = np.zeros((len(self.F), 3, 3))
+            self.env_done = np.zeros(len(self.F), bool)
+            self.env_spec_err: np.ndarray | None = None
+            self.env_rays_used = 0.0
 
     # per-point attributes
     def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict:
@@ -144,7 +177,8 @@ class Surface:
             pk, nk = self.P[f[:, k]], self.Nv[f[:, k]]
             d = np.minimum(((P - pk) * nk).sum(1), 0.0)
             lift += bary[:, k:k + 1] * (-d[:, None] * nk)
-        return {"P": P, "Ps": P + lift, "Ng": self.Ng[tri], "Nv": nv, "N": N, "uv": uv, "C": C, "m": m, "rho": rho}
+        return {"P": P, "Ps": P + lift, "Ng": self.Ng[tri], "Nv": nv, "N": N, "uv": uv, "C": C, "m": m, "rho": rho,
+                "tri": tri, "bary": bary}
 
     def _shading_normal(self, n, t, uv):
         """shaders/lib/surface.glsl surface_normal."""
@@ -189,6 +223,28 @@ class Surface:
             return np.ones_like(t)
         return np.clip(1.0 - (1.0 - t) * rho_s / r0, 0.0, 1.0)
 
+    def rho_dt_rows(self, m: np.ndarray) -> np.ndarray:
+        """(N, n_cos) the rho_dt table interpolated to each point's m at the table's cos columns: with
+        rho_dt_along, Surface.rho_dt for many N.L per point at the cost of a 1-D lookup."""
+        n_cos = self.rho_table.shape[1]
+        xs = (np.arange(n_cos) + 0.5) / n_cos
+        return sample_bilinear(self.rho_table, np.broadcast_to(xs[None], (len(m), n_cos)),
+                               np.broadcast_to(np.clip(m, 0, 1)[:, None], (len(m), n_cos)))
+
+    def rho_dt_along(self, rows: np.ndarray, rho_s: np.ndarray, cos_theta: np.ndarray) -> np.ndarray:
+        """Surface.rho_dt at cos_theta (N, K) for the points of ``rows`` (rho_dt_rows) and their rho_s."""
+        n_cos = rows.shape[1]
+        pos = np.clip(np.clip(cos_theta, 0.0, 1.0) * n_cos - 0.5, 0.0, n_cos - 1.0)
+        i0 = np.floor(pos).astype(np.int64)
+        i1 = np.minimum(i0 + 1, n_cos - 1)
+        f = pos - i0
+        r = np.arange(len(rows))[:, None]
+        t = np.clip(rows[r, i0] * (1.0 - f) + rows[r, i1] * f, 0.0, 1.0)
+        r0 = self.s.specular.rho_s
+        if not r0 > 0:
+            return np.ones_like(t)
+        return np.clip(1.0 - (1.0 - t) * np.asarray(rho_s)[:, None] / r0, 0.0, 1.0)
+
     def light_dir(self, light, P):
         if light.kind == "point":
             d = np.asarray(light.position, np.float64) - P
@@ -212,9 +268,13 @@ class Surface:
         return ~self.rays.intersects_any(o, np.ascontiguousarray(L))
 
     def irradiance(self, a: dict, mix: float, energy: bool) -> np.ndarray:
-        """E A (eq. 28, 32) from the directional and point lights (beams are point sources)."""
+        """E A (eq. 28, 32) from the directional and point lights (beams are point sources) and the
+        environment (issue 32: its occluded irradiance, Monte Carlo)."""
         U, vis = self.irradiance_parts(a, mix, energy)
-        return (U * vis[..., None]).sum(0) if len(U) else np.zeros((len(a["P"]), 3))
+        E = (U * vis[..., None]).sum(0) if len(U) else np.zeros((len(a["P"]), 3))
+        if self.env is not None:
+            E = E + self.env_irradiance(a["tri"], a["bary"], energy) * _safe_pow(a["C"], mix)
+        return E
 
     def shadow_lights(self) -> list:
         """The directional and point lights, in the order of irradiance_parts."""
@@ -250,6 +310,108 @@ class Surface:
         lit = (a["N"] * L).sum(1) > 0
         if lit.any():
             out[lit] = self.visible(light, {k: v[lit] for k, v in a.items()}, np.ascontiguousarray(L[lit]))
+        return out
+
+    # -- the environment light (issue 32) ------------------------------------------------------------
+    def _env_estimate(self, tris: np.ndarray, energy: bool) -> None:
+        """Monte Carlo irradiance at the three _ENV_B points of each triangle in ``tris``."""
+        from skinviewer.physics.environment import mc_irradiance_cv
+        if len(tris) == 0:
+            return
+        tri = np.repeat(tris, 3)
+        bary = np.tile(_ENV_B, (len(tris), 1))
+        a = self.attributes(tri, bary)
+        weight = None
+        if energy:
+            rows, rho = self.rho_dt_rows(a["m"]), a["rho"]
+
+            def weight(mu, sl):
+                return self.rho_dt_along(rows[sl], rho[sl], mu)
+        est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, ENV_DIFFUSE_RAYS,
+                                    self.env_rng, self.eps, weight=weight, batches=ENV_BATCHES)
+        # adaptive: points whose standard error exceeds ENV_TARGET of max(their irradiance, the median's)
+        # (the occluded ones: folds, ears) get 4x the rays more, combined by ray count
+        rays = np.full(len(est), float(ENV_DIFFUSE_RAYS))
+        scale = max(float(np.median(est.sum(1))), 1e-300)
+        for more in (4,):
+            bad = np.nonzero(np.sqrt((err ** 2).sum(1)) > ENV_TARGET * np.maximum(est.sum(1), scale))[0]
+            if len(bad) == 0:
+                break
+            sub = {k: v[bad] for k, v in a.items()}
+
+            def w_sub(mu, sl, _bad=bad):
+                return weight(mu, _bad[sl]) if weight is not None else 1.0
+            e2, s2 = mc_irradiance_cv(self.env_sampler, sub["Ps"], sub["N"], sub["Ng"], self.rays,
+                                      ENV_DIFFUSE_RAYS * more, self.env_rng, self.eps,
+                                      weight=w_sub if weight is not None else None, batches=ENV_BATCHES)
+            n1, n2 = rays[bad][:, None], float(ENV_DIFFUSE_RAYS * more)
+            est[bad] = (n1 * est[bad] + n2 * e2) / (n1 + n2)
+            err[bad] = np.sqrt(n1 ** 2 * err[bad] ** 2 + n2 ** 2 * s2 ** 2) / (n1 + n2)
+            rays[bad] += n2
+        self.env_rays_used += float(rays.sum())
+        self.env_tri[tris] = est.reshape(len(tris), 3, -1)
+        self.env_err[tris] = err.reshape(len(tris), 3, -1)
+        self.env_done[tris] = True
+
+    def env_irradiance(self, tri: np.ndarray, bary: np.ndarray, energy: bool) -> np.ndarray:
+        """The environment's occluded irradiance (x rho_dt with ``energy``) at points (tri, bary): linear
+        through the triangle's three Monte Carlo points."""
+        todo = np.unique(tri[~self.env_done[tri]])
+        for s0 in range(0, len(todo), 20000):
+            self._env_estimate(todo[s0:s0 + 20000], energy)
+        w = bary @ _ENV_W
+        return np.einsum("nk,nkc->nc", w, self.env_tri[tri])
+
+    def env_relative_error(self, tri: np.ndarray) -> np.ndarray:
+        """The standard error of the environment's irradiance at triangles ``tri`` relative to it."""
+        v = self.env_tri[tri].sum(2).mean(1)
+        e = np.sqrt((self.env_err[tri] ** 2).sum(2).mean(1))
+        return e / np.maximum(v, 1e-300)
+
+    def env_specular(self, a: dict, V: np.ndarray) -> np.ndarray:
+        """int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (seed 000 eq. 15-16):
+        h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h)."""
+        from skinviewer.physics.environment import sample_equirect, tangent_frames
+        from skinviewer.physics.specular import beckmann
+        sp = self.s.specular
+        n_pts = len(V)
+        out = np.zeros((n_pts, 3))
+        k = math.isqrt(ENV_SPEC_RAYS)
+        batches = []
+        for s0 in range(0, n_pts, 4096):
+            sl = slice(s0, min(n_pts, s0 + 4096))
+            N, Vs, m = a["N"][sl], V[sl], np.maximum(a["m"][sl], 1e-3)
+            cnt = len(N)
+            i, j = np.meshgrid(np.arange(k), np.arange(k))
+            u1 = (i.ravel()[None] + self.env_rng.random((cnt, k * k))) / k
+            u2 = (j.ravel()[None] + self.env_rng.random((cnt, k * k))) / k
+            t2 = -(m[:, None] ** 2) * np.log1p(-np.minimum(u1, 1 - 1e-12))
+            ch = 1.0 / np.sqrt(1.0 + t2)
+            sh = np.sqrt(np.maximum(1.0 - ch * ch, 0.0))
+            t, b = tangent_frames(N)
+            phi = 2.0 * math.pi * u2
+            h = (sh * np.cos(phi))[..., None] * t[:, None] + (sh * np.sin(phi))[..., None] * b[:, None] \
+                + ch[..., None] * N[:, None]
+            vh = (Vs[:, None] * h).sum(2)
+            w = 2.0 * vh[..., None] * h - Vs[:, None]
+            nl = (N[:, None] * w).sum(2)
+            ok = (nl > 0) & (vh > 0) & ((a["Ng"][sl][:, None] * w).sum(2) > 0)
+            pdf = beckmann(ch, m[:, None]) * ch / (4.0 * math.pi * np.maximum(vh, 1e-12))
+            ks = ks_specular(np.broadcast_to(N[:, None], w.shape), w, np.broadcast_to(Vs[:, None], w.shape),
+                             m[:, None], a["rho"][sl][:, None], sp.f0)
+            f = np.where(ok, ks / np.maximum(pdf, 1e-300), 0.0)
+            o = np.repeat(a["Ps"][sl] + a["Ng"][sl] * self.eps, k * k, axis=0)
+            dd = np.ascontiguousarray(w.reshape(-1, 3))
+            okf = ok.reshape(-1) & (f.reshape(-1) > 0)
+            vis = np.zeros(len(dd), bool)
+            if okf.any():
+                vis[okf] = ~self.rays.intersects_any(o[okf], dd[okf])
+            L = sample_equirect(self.env_img, dd, self.env.yaw).reshape(cnt, k * k, -1)
+            val = L * (f * vis.reshape(cnt, k * k))[..., None]
+            out[sl] = val.mean(1)
+            # the spread of the samples / sqrt(n): an upper bound of a stratified estimate's error
+            batches.append(np.sqrt((val.std(1) ** 2).sum(1)) / (k * k) ** 0.5)
+        self.env_spec_err = np.concatenate(batches) if batches else np.zeros(0)
         return out
 
     def beam_sources(self, mix: float, energy: bool, rays: int = BEAM_RAYS) -> gt.PointSources:
@@ -306,6 +468,8 @@ class Surface:
             sub = {k: v[on] for k, v in a.items()}
             vis = self.visible(light, sub, L[on])
             out[on] += Lc[None] * (ks[on] * vis)[:, None]
+        if self.env is not None:
+            out += self.env_specular(a, V)
         return out
 
 
@@ -416,6 +580,7 @@ def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, 
     d = s.model_dump(mode="json")
     parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
              "size": [s.render.width, s.render.height], "lights": d["lights"], "specular": d["specular"],
+             "env_files": _env_stamps(s),
              "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
              "profile": [np.asarray(p).tolist() for p in (profile or profile_of(s))]}
     if not split_edges:
@@ -423,6 +588,19 @@ def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, 
     if not uncertainty:
         parts["uncertainty"] = False
     return hashlib.sha1(json.dumps(parts, sort_keys=True).encode()).hexdigest()
+
+
+def _env_stamps(s: Settings) -> list:
+    """Size and modification time of each environment file (a changed file is another reference)."""
+    out = []
+    for light in s.lights:
+        if light.kind == "environment":
+            try:
+                st = Path(light.environment).stat()
+                out.append([light.environment, st.st_size, st.st_mtime_ns])
+            except OSError:
+                out.append([light.environment])
+    return out
 
 
 def _cache_path(key: str) -> Path:
@@ -536,15 +714,22 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
     n_l = len(surf.shadow_lights())
     U = np.zeros((n_l, n_v, 3))
     vis = np.ones((n_l, n_v), bool)
+    env_v = np.zeros((n_v, 3)) if surf.env is not None else None
     step = 200_000
     for s0 in range(0, n_v, step):
         if check():
             raise InterruptedError("cancelled")
         sl = slice(s0, min(n_v, s0 + step))
-        U[:, sl], vis[:, sl] = surf.irradiance_parts(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
+        a_sl = surf.attributes(vpar[sl], vbary[sl])
+        U[:, sl], vis[:, sl] = surf.irradiance_parts(a_sl, mix, energy)
+        if env_v is not None:  # the environment's occluded irradiance (issue 32): smooth, never cut
+            env_v[sl] = surf.env_irradiance(a_sl["tri"], a_sl["bary"], energy) * _safe_pow(a_sl["C"], mix)
         report("irradiance", sl.stop / max(n_v, 1))
+    if env_v is not None:  # one more "light", visible everywhere: the edge cut leaves it as the corners' mean
+        U = np.concatenate([U, env_v[None]])
+        vis = np.concatenate([vis, np.ones((1, n_v), bool)])
     vpos = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])
-    ea_v = (U * vis[..., None]).sum(0) if n_l else np.zeros((n_v, 3))
+    ea_v = (U * vis[..., None]).sum(0) if len(U) else np.zeros((n_v, 3))
     corners, ea, split = vpos[elem], ea_v[elem].mean(1), None
     if split_edges and n_l:
         corners, ea, split = split_shadow_edges(surf, vpar, vbary, vpos, elem, U, vis, check)
@@ -753,6 +938,20 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     rho_v = surf.rho_dt((N * V).sum(1), a["m"], a["rho"]) if energy else np.ones(len(V))
     diffuse = M * _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
     spec = surf.specular(a, V)
+    env_meta = {}
+    if surf.env is not None:  # the Monte Carlo's standard errors (issue 32)
+        rel = surf.env_relative_error(tri)
+        e_here = surf.env_tri[tri].sum(2).mean(1)
+        e_err = np.sqrt((surf.env_err[tri] ** 2).sum(2).mean(1))
+        lit_sum = np.maximum((diffuse + spec).sum(1), 1e-300)
+        spec_rel = surf.env_spec_err / lit_sum
+        env_meta = {"diffuse_rays": ENV_DIFFUSE_RAYS, "specular_rays": ENV_SPEC_RAYS,
+                    "diffuse_rays_mean": surf.env_rays_used / max(3 * int(surf.env_done.sum()), 1),
+                    "irradiance_rms_stderr_over_mean": float(np.sqrt((e_err ** 2).mean()) / max(e_here.mean(), 1e-300)),
+                    "irradiance_rel_stderr_p50": float(np.median(rel)), "irradiance_rel_stderr_p95": float(np.percentile(rel, 95)),
+                    "specular_stderr_of_pixel_p50": float(np.median(spec_rel)),
+                    "specular_stderr_of_pixel_p95": float(np.percentile(spec_rel, 95))}
+    H, W = mask.shape
     imgs = []
     scale = _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
     for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * scale,)):
@@ -762,7 +961,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use
     times["total"] = time.perf_counter() - t0
     meta = {"key": key, "version": VERSION, "h_mm": h_mm, "elements": n_el, "pixels": int(mask.sum()),
             "beam_rays": 0 if points is None else len(points.position), "seconds": times, "estimate_s": est,
-            "plan": diff.plan(), "mm_per_unit": mm, "cached": False}
+            "plan": diff.plan(), "mm_per_unit": mm, "cached": False, "env": env_meta}
     if u_M is not None:
         meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm)
     ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None)

@@ -21,9 +21,11 @@ from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
 from skinviewer.physics.penner import vertex_curvature
 from skinviewer.scene.camera import View, framed_view, light_space
+from skinviewer.scene.environment import environment_image
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
     CURVATURE_ATTR,
+    ENV_VIS_ATTR,
     UV_COVARIANCE_ATTR,
     VERTEX_ATTRS,
     VERTEX_FORMAT,
@@ -55,6 +57,9 @@ class GpuScene:
         self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
+        self._env_vis: dict[tuple[int, int], moderngl.Buffer] = {}  # (level, rays) -> bent normal + AO
+        self.env_rays = 64  # the bake the vertex arrays bind (set by passes/environment.set_environment)
+        self.env_bake_seconds: dict[tuple[int, int], float] = {}  # (level, rays) -> seconds (0: from the cache)
         self._lod_meshes: dict[int, MeshData] = {}
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)
         self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
@@ -142,7 +147,7 @@ class GpuScene:
     def mesh_bytes(self) -> int:
         """Bytes of the mesh buffers: the mesh and every level of detail built so far."""
         return (self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
-                + sum(b.size for b in (*self._uv_cov.values(), *self._curvature.values())))
+                + sum(b.size for b in (*self._uv_cov.values(), *self._curvature.values(), *self._env_vis.values())))
 
     def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
@@ -155,6 +160,8 @@ class GpuScene:
             content.append((self.uv_covariance_buffer(lod), "3f", UV_COVARIANCE_ATTR))
         if CURVATURE_ATTR in prog:  # pre-integrated skin (penner.frag)
             content.append((self.curvature_buffer(lod), "1f", CURVATURE_ATTR))
+        if ENV_VIS_ATTR in prog:  # the environment light's occlusion (lib/environment.glsl)
+            content.append((self.env_visibility_buffer(lod, self.env_rays), "4f", ENV_VIS_ATTR))
         return self.ctx.vertex_array(prog, content, index_buffer=ibo, index_element_size=4)
 
     def uv_covariance_buffer(self, level: int = 0) -> moderngl.Buffer:
@@ -165,6 +172,50 @@ class GpuScene:
             m = self.lod_mesh(level)
             cov = vertex_uv_covariance(m.positions, m.uvs, m.indices, self.mm_per_unit)
             hit = self._uv_cov[level] = self.ctx.buffer(np.ascontiguousarray(cov, np.float32).tobytes())
+        return hit
+
+    def env_visibility(self, level: int = 0, rays: int = 64) -> np.ndarray:
+        """(N, 4) per vertex of level ``level``: the bent normal and ambient occlusion of the environment
+        light (physics/environment.bake_visibility with Embree), baked once per mesh and ray count and
+        cached on disk (``cache_dir()/envvis``, by a hash of the vertices, normals and triangles)."""
+        import time
+
+        from skinviewer.core.files import atomic_write_bytes
+        from skinviewer.core.paths import cache_dir
+        from skinviewer.physics.environment import bake_visibility
+        m = self.lod_mesh(level)
+        h = hashlib.sha1(b"envvis1")
+        for a in (m.positions, m.normals, m.indices):
+            h.update(np.ascontiguousarray(a).tobytes())
+        h.update(str(int(rays)).encode())
+        path = cache_dir() / "envvis" / f"{h.hexdigest()}.npy"
+        t0 = time.perf_counter()
+        try:
+            vis = np.load(path, allow_pickle=False)
+            if vis.shape != (len(m.positions), 4) or not np.all(np.isfinite(vis)):
+                raise ValueError("stale")
+            self.env_bake_seconds[(level, rays)] = 0.0
+            return vis.astype(np.float32)
+        except (OSError, ValueError):
+            pass
+        vis = bake_visibility(m.positions, m.normals, m.indices, rays=int(rays))
+        self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
+        import io
+        buf = io.BytesIO()
+        np.save(buf, vis)
+        try:
+            atomic_write_bytes(path, buf.getvalue())
+        except OSError:
+            pass  # a read-only cache folder: bake again next time
+        return vis
+
+    def env_visibility_buffer(self, level: int = 0, rays: int = 64) -> moderngl.Buffer:
+        """env_visibility on the GPU (one buffer per level of detail and ray count)."""
+        key = (max(level, 0), int(rays))
+        hit = self._env_vis.get(key)
+        if hit is None:
+            vis = self.env_visibility(key[0], key[1])
+            hit = self._env_vis[key] = self.ctx.buffer(np.ascontiguousarray(vis, np.float32).tobytes())
         return hit
 
     def curvature_buffer(self, level: int = 0) -> moderngl.Buffer:
@@ -184,10 +235,11 @@ class GpuScene:
             vbo.release()
             ibo.release()
         self._lods.clear()
-        for buf in (*self._uv_cov.values(), *self._curvature.values()):
+        for buf in (*self._uv_cov.values(), *self._curvature.values(), *self._env_vis.values()):
             buf.release()
         self._uv_cov.clear()
         self._curvature.clear()
+        self._env_vis.clear()
         self._lod_meshes.clear()
 
 
@@ -308,6 +360,9 @@ class Renderer:
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run); ``variant``: the
         graph to run it in (Renderer.graph)."""
         scene = self.ensure_scene(s)
+        env = rules.environment_light(s.lights)
+        if env is not None:  # a bad environment file: one clear error before any pass runs
+            environment_image(env[1].environment, env[1].layout)
         view = framed_view(s.camera, scene.gpu, (s.render.width, s.render.height))
         self.last_view = view
         g = self.graph(s.technique, variant)

@@ -110,7 +110,8 @@ class CameraSettings(_Model):
 class LightSettings(_Model):
     # beam: a collimated beam of radius beam_radius (mesh units) along -direction through position
     # (the laser of GPU Gems 3 §14.4.1)
-    kind: Literal["directional", "point", "beam"] = "directional"
+    # environment: an HDR image around the scene (issue 32; the fields below the shadow flag)
+    kind: Literal["directional", "point", "beam", "environment"] = "directional"
     color: Vec3 = (1.0, 1.0, 1.0)
     intensity: float = Field(3.0, ge=0.0, le=1e6)
     # directional: direction the light travels *from* (towards the light); point: position in mesh units
@@ -119,6 +120,20 @@ class LightSettings(_Model):
     beam_radius: float = Field(0.05, gt=0.0, le=1e6)
     cast_shadow: bool = True
     enabled: bool = True
+    environment: str = Field(
+        "studio", description="kind environment: a built-in (studio, overcast, window) or the path of a Radiance "
+        ".hdr / OpenEXR .exr of linear radiance (notes/envlight.md)")
+    layout: Literal["auto", "equirect", "cross"] = Field(
+        "auto", description="the file's layout: equirect (2:1), cube cross (4:3 / 3:4), auto from the aspect")
+    yaw: float = Field(0.0, ge=-3600, le=3600, description="degrees the environment is turned about +y")
+    sh_order: int = Field(2, ge=0, le=2, description="spherical-harmonic order of the environment's diffuse "
+                          "irradiance (Ramamoorthi & Hanrahan 2001; 2: 9 coefficients)")
+    occlusion: bool = Field(True, description="the environment's light is occluded by the mesh: per-vertex "
+                            "ambient occlusion and bent normals baked with Embree, and specular occlusion")
+    ao_rays: int = Field(64, ge=4, le=4096, description="rays per vertex of the ambient-occlusion bake "
+                         "(stratified, cosine-weighted; once per mesh, cached)")
+
+    _env_path = field_validator("environment")(_file_path)
 
     @field_validator("color")
     @classmethod

@@ -10,7 +10,7 @@ import numpy as np
 from skinviewer.core.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
 from skinviewer.core.graph import Reflection, TexSpec
 from skinviewer.passes.luts import BECKMANN_LUT
-from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
+from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.mesh import culls_back_faces
 
@@ -31,9 +31,9 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
     pcf = r.setting("shadow.pcf")
     bilinear = r.setting("shadow.pcf_filter") == "bilinear"
     shadow_map_size(r)
-    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if light_on(l)]
+    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if analytic_on(l)]
     for i, l in enumerate(lights[:MAX_LIGHTS]):
-        if not light_on(l) and l.cast_shadow:
+        if not analytic_on(l) and l.cast_shadow:
             r.drop(shadow_resource(i), light_off_reason(i, l))
     mask = 0
     for slot, (i, l) in enumerate(active):
@@ -49,7 +49,7 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     ``shadow_maps=False``: the uniforms only (see declare_lighting)."""
     scene = ec.scene
     lights = ec.setting("lights")
-    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if light_on(l)]
+    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if analytic_on(l)]
     map_size = shadow_map_size(ec)
     kind = np.zeros(MAX_LIGHTS, np.int32)
     radiance = np.zeros((MAX_LIGHTS, 3), np.float32)

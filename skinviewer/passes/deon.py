@@ -42,8 +42,16 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
+from skinviewer.passes.environment import declare_environment, env_index, set_environment
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
-from skinviewer.passes.rules import coverage_size, kernel_under_pixel, light_map_size, light_on, tsm_needed
+from skinviewer.passes.rules import (
+    analytic_on,
+    coverage_size,
+    kernel_under_pixel,
+    light_map_size,
+    light_on,
+    tsm_needed,
+)
 from skinviewer.passes.texture_space import (
     declare_shaded,
     declare_unwrapped,
@@ -96,7 +104,7 @@ def tsm_light_index(r) -> int | None:
         return None
     n = min(r.setting("lights.#"), MAX_LIGHTS)
     usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")
-              and light_on(r.peek(f"lights.{j}"))]
+              and analytic_on(r.peek(f"lights.{j}"))]
     want = r.setting("deon.tsm_light")
     j = want if want is not None and want in usable else (usable[0] if usable else None)
     subpixel = kernel_under_pixel(r) if j is not None else None
@@ -265,7 +273,7 @@ class IrradiancePass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
-        lighting = declare_lighting(r)
+        lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
         r.setting("deon.mix")
         over_texel = r.setting("deon.texel_samples") > 1  # the texel's extent (TEXEL_STEPS) for its samples
         if r.setting("deon.energy_conservation"):
@@ -284,6 +292,7 @@ class IrradiancePass(Pass):
         prog = ec.program(shading_program(ec, "deon_irradiance"))
         bind_surface(ec, prog)
         set_lighting(ec, prog)
+        set_environment(ec, prog, specular=False)
         energy = bool(ec.setting("deon.energy_conservation"))
         ec.uniforms(prog, u_energy=energy, u_mix=float(ec.setting("deon.mix")),
                     u_texel_samples=int(ec.setting("deon.texel_samples")), u_texel_uv=(1.0 / n, 1.0 / n))
@@ -715,7 +724,7 @@ class DeonFinalPass(Pass):
         lighting = declare_lighting(r, shadow_maps=not vis)  # texture shadows: no shadow map is read
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
-        if lighting["LIGHT_COUNT"] == 0:  # every light off: black (no irradiance, no specular)
+        if lighting["LIGHT_COUNT"] == 0 and env_index(r) is None:  # every light off: black (no irradiance, no specular)
             for step in plan:
                 r.drop(texture_of(step), "every light is off or at zero intensity")
             declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
@@ -743,7 +752,7 @@ class DeonFinalPass(Pass):
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
         declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
-                    DEON_TEXTURE_SHADOWS=int(vis))
+                    DEON_TEXTURE_SHADOWS=int(vis), **declare_environment(r))
         declare_view_mesh(r)
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
@@ -776,4 +785,5 @@ class DeonFinalPass(Pass):
             bind_tsm_read(ec, prog)
         if has(VISIBILITY):
             ec.bind(prog, "visibility", VISIBILITY)
+        set_environment(ec, prog)
         draw_view_mesh(ec, prog, LIT)

@@ -51,6 +51,7 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
+from skinviewer.passes.environment import declare_environment, set_environment
 from skinviewer.passes.texture_space import (
     declare_shaded,
     dilate,
@@ -81,7 +82,7 @@ class GosselinLightMapPass(Pass):
     name = "gosselin_light_map"
 
     def reflect(self, r: Reflection) -> None:
-        lighting = declare_lighting(r)
+        lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
         size = r.setting(SIZE)
         declare_shaded(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
@@ -90,6 +91,7 @@ class GosselinLightMapPass(Pass):
         prog = ec.program(shading_program(ec, "light_map"))
         bind_surface(ec, prog)
         set_lighting(ec, prog)
+        set_environment(ec, prog, specular=False)
         shade_dilated(ec, prog, size, LIGHT_MAP)
 
 
@@ -227,7 +229,7 @@ class GosselinFinalPass(Pass):
         declare_specular(r)
         r.setting("gosselin.specular_shadow")
         r.input(BLURRED)
-        declare_lit(r, "gosselin_final", **lighting)
+        declare_lit(r, "gosselin_final", **lighting, **declare_environment(r))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
@@ -238,4 +240,5 @@ class GosselinFinalPass(Pass):
         ec.bind(prog, "blurred", BLURRED)
         bind_specular(ec, prog)
         set_lighting(ec, prog)
+        set_environment(ec, prog)
         draw_view_mesh(ec, prog, LIT)

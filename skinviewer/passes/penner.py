@@ -23,6 +23,7 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
+from skinviewer.passes.environment import declare_environment, set_environment
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.physics import penner
 
@@ -79,7 +80,7 @@ class PennerPass(Pass):
             r.input(PENUMBRA_LUT)
         if r.setting("deon.energy_conservation"):
             r.input(RHO_DT_RESOURCE)
-        declare_lit(r, "penner", **lighting)
+        declare_lit(r, "penner", **lighting, **declare_environment(r))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
@@ -89,6 +90,7 @@ class PennerPass(Pass):
         bind_surface(ec, prog)
         bind_specular(ec, prog)
         set_lighting(ec, prog)
+        set_environment(ec, prog)
         ec.bind(prog, "ring_lut", RING_LUT)
         penumbra = ec.has_input(PENUMBRA_LUT)
         if penumbra:

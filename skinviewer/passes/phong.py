@@ -12,6 +12,7 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
+from skinviewer.passes.environment import declare_environment, set_environment
 
 
 class PhongPass(Pass):
@@ -21,7 +22,7 @@ class PhongPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         r.section("phong", ("ambient", "specular", "shininess"))
-        declare_lit(r, "phong", **lighting)
+        declare_lit(r, "phong", **lighting, **declare_environment(r, specular=False))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
@@ -31,4 +32,5 @@ class PhongPass(Pass):
         ec.uniforms(prog, u_ambient=ph.ambient, u_specular=ph.specular, u_shininess=ph.shininess)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
+        set_environment(ec, prog, specular=False)
         draw_view_mesh(ec, prog, LIT)

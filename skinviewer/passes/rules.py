@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from skinviewer.core.constants import MAX_LIGHTS
 from skinviewer.scene.camera import framed_view
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
@@ -31,7 +32,24 @@ def light_on(light) -> bool:
     return bool(light.enabled) and light.intensity > 0.0 and max(light.color) > 0.0
 
 
+def analytic_on(light) -> bool:
+    """A light of the per-light loops and shadow maps (not an environment, which
+    shaders/lib/environment.glsl adds as a whole)."""
+    return light_on(light) and light.kind != "environment"
+
+
+def environment_light(lights):
+    """(index, light) of the first environment light that adds radiance among the first MAX_LIGHTS,
+    or None (issue 32: one environment at a time)."""
+    for i, light in enumerate(lights[:MAX_LIGHTS]):
+        if light.kind == "environment" and light_on(light):
+            return i, light
+    return None
+
+
 def light_off_reason(i: int, light) -> str:
+    if light.enabled and light.kind == "environment":
+        return f"light {i} is an environment (no shadow map)"
     return f"light {i} is disabled" if not light.enabled else f"light {i} has zero intensity"
 
 

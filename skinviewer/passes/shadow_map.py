@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from skinviewer.core.graph import Pass, Reflection, TexSpec
 from skinviewer.passes.common import LIGHT_POSE_FIELDS, shadow_resource
-from skinviewer.passes.rules import light_off_reason, light_on, shadow_map_size
+from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
 from skinviewer.scene.camera import gl_bytes
 
 
@@ -18,7 +18,7 @@ class ShadowMapPass(Pass):
         i = self.light_index
         if r.peek("lights.#") <= i or not r.peek(f"lights.{i}.enabled"):
             return
-        if not light_on(r.peek(f"lights.{i}")):  # peeked: the map does not depend on the colour
+        if not analytic_on(r.peek(f"lights.{i}")):  # peeked: the map does not depend on the colour
             r.skip(light_off_reason(i, r.peek(f"lights.{i}")))
             return
         r.section(f"lights.{i}", LIGHT_POSE_FIELDS)

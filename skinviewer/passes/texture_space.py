@@ -143,7 +143,7 @@ def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spe
 
 
 TEXEL_SURFACE_MAPS = "pn"  # position + tangent handedness, octahedral normal + tangent (texel_surface.frag)
-TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n"}
+TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n", "v": "surface_v"}  # v: the environment's AO
 
 
 def texel_surface_resources(size: int, maps: str = TEXEL_SURFACE_MAPS) -> tuple[str, ...]:
@@ -165,14 +165,25 @@ class TexelSurfacePass(Pass):
         if not r.peek("render.texel_surface"):  # shape only: the map's content does not depend on it
             return
         n = self.size_of(r)
-        r.program("texel_surface")
-        for res in texel_surface_resources(n, self.maps):
+        env = _env_vis_defines(r)
+        r.program("texel_surface", **env)
+        for res in texel_surface_resources(n, self.maps + ("v" if env else "")):
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         # a fragment output without an attachment is discarded: the program is the same for any maps
-        ec.draw_mesh(ec.program("texel_surface"), *texel_surface_resources(self.size_of(ec), self.maps),
-                     depth_test=False)
+        env = _env_vis_defines(ec)
+        if env:
+            ec.scene.env_rays = env["ENV_RAYS"]  # the baked visibility the vertex array binds
+        ec.draw_mesh(ec.program("texel_surface"),
+                     *texel_surface_resources(self.size_of(ec), self.maps + ("v" if env else "")), depth_test=False)
+
+
+def _env_vis_defines(r) -> dict[str, int]:
+    """The environment light's defines when its baked visibility is used (ENV_RAYS > 0), else {}."""
+    from skinviewer.passes.environment import env_defines
+    d = env_defines(r)
+    return d if d.get("ENV_RAYS", 0) > 0 else {}
 
 
 def texel_shading(r) -> bool:
@@ -196,6 +207,9 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
     if not texel_shading(r):
         declare_unwrapped(r, base, size, resource, spec, **defines)
         return
+    if defines.get("ENV_LIGHT") and defines.get("ENV_RAYS", 0) > 0:  # the environment's AO per texel
+        maps += "v"
+        defines = {**defines, "ENV_TEXELS": 1}
     for res in texel_surface_resources(size, maps):
         r.input(res)
     steps = steps or any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
@@ -209,6 +223,8 @@ def shade_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TE
     if not texel_shading(ec):
         unwrap_dilated(ec, prog, size, resource, *more)
         return
+    if ec.has_input(texel_surface_resources(size, "v")[0]):
+        maps += "v"
     for k, res in zip(maps, texel_surface_resources(size, maps)):
         ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
     raws = _raws(ec, size, more)

@@ -113,6 +113,7 @@ VERTEX_FORMAT = "3f 3f 2f 4f"
 VERTEX_ATTRS = ("in_position", "in_normal", "in_uv", "in_tangent")
 UV_COVARIANCE_ATTR = "in_uv_covariance"  # a second buffer, bound only where a program reads it
 CURVATURE_ATTR = "in_curvature"  # likewise: per-vertex curvature, mm^-1 (pre-integrated skin)
+ENV_VIS_ATTR = "in_env_vis"  # likewise: the environment light's bent normal + ambient occlusion (issue 32)
 
 
 def weld_ids(keys: np.ndarray, tol: float) -> np.ndarray:

@@ -10,6 +10,7 @@ from typing import Any
 
 from skinviewer.core.constants import MAX_LIGHTS
 from skinviewer.core.graph import Pass
+from skinviewer.passes.environment import EnvironmentPass
 from skinviewer.passes.shadow_map import ShadowMapPass
 
 TARGETS = ["image"]
@@ -29,4 +30,5 @@ class Technique:
 
 
 def shadow_passes() -> list[Pass]:
-    return [ShadowMapPass(i) for i in range(MAX_LIGHTS)]
+    """The shadow map of each light, and the environment light's pre-filtered maps (issue 32)."""
+    return [ShadowMapPass(i) for i in range(MAX_LIGHTS)] + [EnvironmentPass()]

@@ -77,6 +77,8 @@ class OrbitController:
         if index >= len(s.lights):
             return {}
         light = s.lights[index]
+        if light.kind == "environment":  # turn the environment about the vertical
+            return {f"lights.{index}.yaw": float((light.yaw + dx * LIGHT_DEG_PER_PX + 180.0) % 360.0 - 180.0)}
         if light.kind == "directional":
             az, el = direction_to_angles(light.direction)
             az += dx * LIGHT_DEG_PER_PX

@@ -17,6 +17,7 @@ from skinviewer.core.look import apply_look
 from skinviewer.core.look import resolve as resolve_look
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, SettingsError, with_values
+from skinviewer.scene.environment import environment_problems
 from skinviewer.scene.scenes import scene_overrides
 from skinviewer.ui.compare import CompareState
 from skinviewer.ui.display import CHANNELS
@@ -127,6 +128,12 @@ class ViewerState:
                 self.refuse([("scene", f"{type(exc).__name__}: {exc}")], source or "scene")
                 return False
             self.notices = list(self.scene.notes)
+        if [l.environment for l in new.lights] != [l.environment for l in self.settings.lights] or \
+                [l.layout for l in new.lights] != [l.layout for l in self.settings.lights]:
+            bad = environment_problems(new)  # a bad HDR file: refused, the last good environment stays
+            if bad:
+                self.refuse(bad, source or "environment")
+                return False
         changed = new != self.settings
         self.settings = new
         self.errors = []

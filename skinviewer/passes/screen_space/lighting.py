@@ -15,6 +15,8 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
+from skinviewer.passes.environment import declare_environment, set_environment
+from skinviewer.passes.rules import analytic_on
 from skinviewer.physics import burley as B
 from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
 from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
@@ -55,7 +57,7 @@ class ScreenLightingPass(Pass):
         return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.setting("burley.transmission")]
 
     def reflect(self, r: Reflection) -> None:
-        defines = declare_lighting(r)
+        defines = {**declare_lighting(r), **declare_environment(r)}
         declare_specular(r)
         r.section("screen", ("texturing", "mix", "non_skin_regions"))
         if r.setting("transmittance.enabled"):
@@ -84,6 +86,7 @@ class ScreenLightingPass(Pass):
         set_camera(ec, prog)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
+        set_environment(ec, prog)
         bind_specular(ec, prog)
         sc = ec.section("screen", ("texturing", "mix", "non_skin_regions"))
         non_skin = set(sc.non_skin_regions)
@@ -107,7 +110,7 @@ class ScreenLightingPass(Pass):
             w[i], v[i] = wt, var
         scene = ec.scene
         inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-        active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if l.enabled]
+        active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if analytic_on(l)]  # the slots of set_lighting
         for slot, l in enumerate(active):
             inv[slot] = np.linalg.inv(scene.light_space(l).gl_matrix).T  # column-major
         model = self._burley_model(ec)

@@ -1,0 +1,114 @@
+// Environment light (issue 32; numpy twin: skinviewer/physics/environment.py). Compiled in with
+// ENV_LIGHT = 1 (skinviewer.passes.environment.declare_environment) when an environment light is on.
+//   diffuse:  E(x) = AO(x) E_SH(n_bent)  — Ramamoorthi & Hanrahan 2001 eq. 7 (order 2, 9 coefficients
+//             A_l L_lm, yaw, colour and intensity applied on the CPU) at the shading normal bent as the
+//             baked bent normal bends the vertex normal, times the baked ambient occlusion
+//   specular: split sum: the radiance pre-filtered with the Kelemen/Szirmay-Kalos Beckmann lobe
+//             (seed 000 eq. 14-16) at R = reflect(-V, N) for the point's m, times the KS specular
+//             albedo 1 - rho_dt(N.V) (eq. 30), times specular occlusion (Lagarde & de Rousiers 2014)
+// The baked visibility (bent normal xyz, AO w) is a per-vertex attribute (lib/mesh_vs.glsl) or a
+// texel surface map (lib/texel_surface.glsl); a pass's main copies it into env_vis (ENV_VIS_IN()).
+#if defined(ENV_LIGHT) && ENV_LIGHT && defined(ENV_RAYS) && ENV_RAYS > 0
+#if defined(ENV_TEXELS) && ENV_TEXELS
+#define ENV_VIS_IN() env_vis = texelFetch(surface_v, ivec2(gl_FragCoord.xy), 0)
+#else
+in vec4 v_env_vis;
+#define ENV_VIS_IN() env_vis = v_env_vis
+#endif
+#else
+#define ENV_VIS_IN()
+#endif
+#ifndef SKINVIEWER_ENVIRONMENT_GLSL
+#define SKINVIEWER_ENVIRONMENT_GLSL
+#ifndef ENV_LIGHT
+#define ENV_LIGHT 0
+#endif
+#ifndef ENV_RAYS
+#define ENV_RAYS 0
+#endif
+#if ENV_LIGHT
+#include "lib/specular_params.glsl"
+#define ENV_LEVELS 7
+uniform vec3 u_env_sh[9];           // A_l L_lm x colour x intensity (R&H 2001 eq. 7), yaw applied
+uniform vec3 u_env_scale;           // colour x intensity of the pre-filtered radiance
+uniform vec2 u_env_yaw;             // cos, sin of the environment's yaw
+uniform float u_env_level_m[ENV_LEVELS];  // Beckmann m of each pre-filtered level
+uniform sampler2D env_prefiltered;  // ENV_LEVELS equirect levels stacked (row 0: the zenith of level 0)
+uniform sampler2D env_rho_dt;       // the rho_dt table (eq. 30-31)
+// ENV_RAYS > 0 (lights.N.occlusion, the bake's rays): the baked visibility occludes
+vec4 env_vis = vec4(0.0, 0.0, 1.0, 1.0);  // bent normal, AO of this point (set by the pass's main)
+
+// R&H 2001 eq. 13's polynomial form of sum_lm A_l L_lm Y_lm(n) (basis constants of eq. 3), >= 0
+vec3 env_sh_irradiance(vec3 n) {
+    float x = n.x, y = n.y, z = n.z;
+    vec3 e = u_env_sh[0] * 0.282095
+           + (u_env_sh[1] * y + u_env_sh[2] * z + u_env_sh[3] * x) * 0.488603
+           + (u_env_sh[4] * (x * y) + u_env_sh[5] * (y * z) + u_env_sh[7] * (x * z)) * 1.092548
+           + u_env_sh[6] * (0.315392 * (3.0 * z * z - 1.0)) + u_env_sh[8] * (0.546274 * (x * x - y * y));
+    return max(e, vec3(0.0));
+}
+
+// the shading normal N turned as the bent normal turns the vertex normal Nv (physics bent_shading_normal)
+vec3 env_normal(vec3 N, vec3 Nv) {
+    vec3 v = N + env_vis.xyz - normalize(Nv);
+    float l = length(v);
+    return (l > 1e-9) ? v / l : N;
+}
+
+// the environment's irradiance at shading normal N (vertex normal Nv), occluded
+vec3 env_irradiance(vec3 N, vec3 Nv) {
+#if ENV_RAYS > 0
+    return env_vis.w * env_sh_irradiance(env_normal(N, Nv));
+#else
+    return env_sh_irradiance(N);
+#endif
+}
+
+// the cosine-weighted hemispherical mean of rho_dt (eq. 32 for a whole environment): 3-point
+// Gauss-Legendre in mu^2 (physics.environment.RHO_MU / RHO_W)
+float env_rho_dt_mean(sampler2D rho_tex, SpecParams sp) {
+    return 0.2777778 * surface_rho_dt(rho_tex, 0.3357106, sp) + 0.4444444 * surface_rho_dt(rho_tex, 0.7071068, sp)
+         + 0.2777778 * surface_rho_dt(rho_tex, 0.9419018, sp);
+}
+
+vec3 env_level(float level, vec2 uv) {
+    float h = float(textureSize(env_prefiltered, 0).y) / float(ENV_LEVELS);
+    float v = clamp(uv.y * h, 0.5, h - 0.5);  // stay inside the level (no bleeding into the next)
+    return texture(env_prefiltered, vec2(uv.x, (level * h + v) / (h * float(ENV_LEVELS)))).rgb;
+}
+
+// the pre-filtered radiance arriving from direction R for Beckmann m (linear between levels)
+vec3 env_prefiltered_at(vec3 R, float m) {
+    // the environment turned by yaw: look up R_y(-yaw) R (physics rotate_yaw)
+    vec3 d = vec3(u_env_yaw.x * R.x - u_env_yaw.y * R.z, R.y, u_env_yaw.y * R.x + u_env_yaw.x * R.z);
+    vec2 uv = vec2((atan(d.x, -d.z) + 3.14159265) / 6.28318531, acos(clamp(d.y, -1.0, 1.0)) / 3.14159265);
+    float f = 0.0;
+    if (m >= u_env_level_m[ENV_LEVELS - 1]) f = float(ENV_LEVELS - 1);
+    else for (int k = 0; k < ENV_LEVELS - 1; ++k)
+        if (m >= u_env_level_m[k] && m < u_env_level_m[k + 1])
+            f = float(k) + (m - u_env_level_m[k]) / (u_env_level_m[k + 1] - u_env_level_m[k]);
+    float l0 = floor(f);
+    float t = f - l0;
+    vec3 a = env_level(l0, uv);
+    return (t > 0.0) ? mix(a, env_level(min(l0 + 1.0, float(ENV_LEVELS - 1)), uv), t) : a;
+}
+
+// Lagarde & de Rousiers 2014 eq. 9: specular occlusion from the AO
+float env_specular_occlusion(float nv, float ao, float m) {
+    return clamp(pow(nv + ao, exp2(-16.0 * m - 1.0)) - 1.0 + ao, 0.0, 1.0);
+}
+
+// the environment's specular (split sum), shading normal N, view V, vertex normal Nv
+vec3 env_specular(vec3 N, vec3 V, vec3 Nv, SpecParams sp) {
+    float nv = clamp(dot(N, V), 0.0, 1.0);
+    vec3 R = reflect(-V, N);
+    float albedo = 1.0 - surface_rho_dt(env_rho_dt, nv, sp);
+#if ENV_RAYS > 0
+    float so = env_specular_occlusion(nv, env_vis.w, sp.m);
+#else
+    float so = 1.0;
+#endif
+    return u_env_scale * env_prefiltered_at(R, sp.m) * (albedo * so);
+}
+#endif
+#endif

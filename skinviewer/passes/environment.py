@@ -1,0 +1,157 @@
+"""The environment light (issue 32) as every technique's lit passes read it (shaders/lib/environment.glsl):
+``EnvironmentPass`` makes the pre-filtered specular environment and the rho_dt table it is weighted
+with; ``declare_environment`` / ``set_environment`` declare and set what a lit program reads (the
+SH irradiance coefficients as uniforms, the baked per-vertex visibility as a vertex attribute or a
+texel surface map). Nothing here runs without an environment light."""
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.passes.rules import environment_light
+from skinviewer.physics import environment as env
+from skinviewer.scene.environment import environment_image
+
+ENV_PREFILTERED = "env_prefiltered"
+ENV_RHO_DT = "env_rho_dt"
+ENV_FIELDS = ("kind", "environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "color", "intensity",
+              "enabled")
+ENV_IMAGE_FIELDS = ("environment", "layout")
+
+
+def env_index(r) -> int | None:
+    """The settings index of the environment light in use (peeked: the graph's shape), or None."""
+    hit = environment_light(r.peek("lights"))
+    return None if hit is None else hit[0]
+
+
+@functools.lru_cache(maxsize=4)
+def _prefiltered(spec: str, layout: str) -> np.ndarray:
+    pre = env.prefilter_specular(environment_image(spec, layout))
+    rgba = np.concatenate([pre, np.ones(pre.shape[:2] + (1,), np.float32)], 2)
+    return np.ascontiguousarray(rgba, np.float32)
+
+
+@functools.lru_cache(maxsize=16)
+def _sh(spec: str, layout: str, yaw: float) -> np.ndarray:
+    return env.sh_project(environment_image(spec, layout), yaw)
+
+
+def prefiltered_spec() -> TexSpec:
+    w, h = env.SPEC_SIZE
+    return TexSpec((w, h * len(env.SPEC_LEVELS_M)), 4, "f4", filter="linear")
+
+
+class EnvironmentPass(Pass):
+    """The environment's pre-filtered specular levels (physics.environment.prefilter_specular) and
+    the rho_dt table of the split sum's specular albedo (seed 000 eq. 30). Re-runs when the image
+    or specular.f0/rho_s change; the yaw is applied at lookup."""
+    name = "environment"
+    uses_scene = False
+
+    def reflect(self, r: Reflection) -> None:
+        i = env_index(r)
+        if i is None:
+            r.skip("no environment light")
+            return
+        r.section(f"lights.{i}", ENV_IMAGE_FIELDS)
+        r.setting("specular.f0")
+        r.setting("specular.rho_s")
+        r.output(ENV_PREFILTERED, prefiltered_spec())
+        r.output(ENV_RHO_DT, TexSpec((32, 32), 1, "f4", filter="linear"))
+
+    def execute(self, ec) -> None:
+        from skinviewer.physics.specular import rho_dt_table
+        i = env_index(ec)
+        e = ec.section(f"lights.{i}", ENV_IMAGE_FIELDS)
+        ec.output(ENV_PREFILTERED).write(_prefiltered(e.environment, e.layout).tobytes())
+        table = rho_dt_table(ec.setting("specular.f0"), ec.setting("specular.rho_s"), n_cos=32, n_m=32)
+        table = np.nan_to_num(np.clip(table, 0.0, 1.0), nan=1.0).astype(np.float32)
+        ec.output(ENV_RHO_DT).write(np.ascontiguousarray(table).tobytes())
+
+
+def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
+    """Declare what shaders/lib/environment.glsl reads for a lit program; returns its defines
+    (ENV_LIGHT = 1 and ENV_RAYS, the bake's ray count, so another count is another vertex array),
+    or {} without an environment light. ``specular``: the program adds the split-sum specular."""
+    i = env_index(r)
+    if i is None:
+        return {}
+    e = r.section(f"lights.{i}", ENV_FIELDS)
+    if specular:
+        r.input(ENV_PREFILTERED)
+        r.input(ENV_RHO_DT)
+    return {"ENV_LIGHT": 1, "ENV_RAYS": int(e.ao_rays) if e.occlusion else 0}
+
+
+def env_defines(r) -> dict[str, int]:
+    """The defines declare_environment returns, without declaring anything (shape only)."""
+    i = env_index(r)
+    if i is None:
+        return {}
+    light = r.peek(f"lights.{i}")
+    return {"ENV_LIGHT": 1, "ENV_RAYS": int(light.ao_rays) if light.occlusion else 0}
+
+
+def sh_uniform(light) -> np.ndarray:
+    """(9, 3) float32 A_l L_lm x colour x intensity at the light's yaw and SH order (u_env_sh)."""
+    L_lm = _sh(light.environment, light.layout, float(light.yaw))
+    E_lm = env.sh_irradiance_coefficients(L_lm, int(light.sh_order))
+    return (E_lm * np.asarray(light.color, np.float64)[None] * float(light.intensity)).astype(np.float32)
+
+
+def set_environment(ec, prog, specular: bool = True) -> None:
+    """Set the uniforms and textures of shaders/lib/environment.glsl (no-op without an environment)."""
+    i = env_index(ec)
+    if i is None:
+        return
+    e = ec.section(f"lights.{i}", ENV_FIELDS)
+    ec.scene.env_rays = int(e.ao_rays)  # the vertex arrays' visibility buffer (GpuScene.env_visibility_buffer)
+    scale = np.asarray(e.color, np.float64) * float(e.intensity)
+    yaw = math.radians(float(e.yaw))
+    ec.set(prog, "u_env_sh", sh_uniform(e))
+    if specular:
+        ec.uniforms(prog, u_env_scale=tuple(float(x) for x in scale), u_env_yaw=(math.cos(yaw), math.sin(yaw)),
+                    u_env_level_m=np.asarray(env.SPEC_LEVELS_M, np.float32))
+        ec.bind(prog, "env_prefiltered", ENV_PREFILTERED)
+        ec.bind(prog, "env_rho_dt", ENV_RHO_DT)
+
+
+def scene_luminance(settings, samples: int = 256) -> float:
+    """The mean luminance of the irradiance reaching normals that face the camera (cosine-weighted
+    about the view direction): every enabled analytic light (unshadowed) plus the environment's SH
+    irradiance. What ``exposure_from_luminance`` divides by."""
+    from skinviewer.passes.rules import analytic_on
+    from skinviewer.scene.camera import orbit_eye
+    lum = np.array([0.2126, 0.7152, 0.0722])
+    view = orbit_eye((0.0, 0.0, 0.0), settings.camera.yaw, settings.camera.pitch, 1.0)  # towards the camera
+    view = np.asarray(view, np.float64) / np.linalg.norm(view)
+    rng = np.random.default_rng(0)
+    loc = env.stratified_cosine_directions(samples, rng)
+    t, b = env.tangent_frames(view[None])
+    n = loc[:, :1] * t + loc[:, 1:2] * b + loc[:, 2:] * view[None]
+    E = np.zeros((len(n), 3))
+    for light in settings.lights:
+        if light.kind in ("directional", "beam") and analytic_on(light):
+            d = np.asarray(light.direction, np.float64)
+            E += np.maximum(n @ (d / np.linalg.norm(d)), 0.0)[:, None] * (np.asarray(light.color) * light.intensity)
+        elif light.kind == "point" and analytic_on(light):
+            E += 0.5 * np.asarray(light.color) * light.intensity
+    hit = environment_light(settings.lights)
+    if hit is not None:
+        E += env.sh_irradiance(sh_uniform(hit[1]).astype(np.float64), n)
+    return float((E @ lum).mean())
+
+
+def exposure_from_luminance(settings, reference_exposure: float = 0.9) -> float:
+    """render.exposure for ``settings`` so its camera-facing luminance shows as the three-light rig's
+    does at the default exposure (0.9): reference_exposure x L(three-light rig) / L(scene)."""
+    from skinviewer.core.settings import LightSettings
+    rig = settings.model_copy(update={"lights": [
+        LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
+        LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
+        LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False)]})
+    return reference_exposure * scene_luminance(rig) / max(scene_luminance(settings), 1e-9)
