@@ -23,7 +23,7 @@ class OneLineParser(argparse.ArgumentParser):
     """argparse with errors in one line (no usage block), a "did you mean" where a close name exists,
     and a pointer to --help; exit status 2 as before. Sub-commands inherit it (add_subparsers)."""
 
-    def error(self, message: str):  # type: ignore[override]
+    def error(self, message: str):
         import difflib
         import re
         hint = ""

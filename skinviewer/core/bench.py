@@ -107,7 +107,7 @@ def heat_rgb(err: np.ndarray, vmax: float = HEAT_MAX) -> np.ndarray:
 
 def same_accuracy(a: Result, b: Result) -> bool:
     """Mean relative RMS within the ground truth's uncertainty of either: a tie, never ranked."""
-    return tied(a.rms_mean, a.rms_mean_u, b.rms_mean, b.rms_mean_u)
+    return tied(a.err, a.rms_mean_u, b.err, b.rms_mean_u)
 
 
 def pareto_front(results: list[Result]) -> None:
@@ -117,9 +117,9 @@ def pareto_front(results: list[Result]) -> None:
 
     def beats(o: Result, r: Result) -> bool:
         tie = same_accuracy(o, r)
-        as_good = tie or o.rms_mean <= r.rms_mean
-        better = (not tie and o.rms_mean < r.rms_mean) or o.full_ms < r.full_ms
-        return o is not r and o.full_ms <= r.full_ms and as_good and better
+        as_good = tie or o.err <= r.err
+        better = (not tie and o.err < r.err) or o.ms < r.ms
+        return o is not r and o.ms <= r.ms and as_good and better
     for r in ok:
         r.pareto = not any(beats(o, r) for o in ok)
 
@@ -131,8 +131,8 @@ def best_within(results: list[Result], budget_ms: float) -> Result | None:
           and r.rms is not None]
     if not ok:
         return None
-    best = min(ok, key=lambda r: r.rms_mean)
-    return min((r for r in ok if same_accuracy(r, best)), key=lambda r: (r.full_ms, r.rms_mean))
+    best = min(ok, key=lambda r: r.err)
+    return min((r for r in ok if same_accuracy(r, best)), key=lambda r: (r.ms, r.err))
 
 
 def ties_of(r: Result, results: list[Result]) -> list[Result]:
@@ -205,7 +205,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
                 e = image_error(img, ref.lit, m, exposure=base.render.exposure,
                                 uncertainty=getattr(ref, "uncertainty", None))
                 res.rms, res.p99, res.dssim = list(e.rms), list(e.p99), e.dssim
-                if e.rms_u is not None:
+                if e.rms_u is not None and e.p99_u is not None:
                     res.rms_u, res.p99_u, res.dssim_u = list(e.rms_u), list(e.p99_u), e.dssim_u
                 emap = rel_error_map(img, ref.lit, m)
                 stem = f"{tech}_{label}".replace(" ", "_").replace("/", "-")
@@ -305,9 +305,9 @@ def results_markdown(data: dict) -> str:
         ties = ", ".join(o.name for o in ties_of(r, results)) if r.rms_u is not None else ""
         lines.append(f"| {mark} | {r.technique} | {r.label} | {r.full_ms:.0f} | {r.camera_ms:.0f} | "
                      f"{_pct(r.rms, r.rms_u)} | {_pct(r.p99, r.p99_u)} | {ds} | {ties} |")
-    front = sorted((r for r in results if r.pareto), key=lambda r: r.full_ms)
+    front = sorted((r for r in results if r.pareto), key=lambda r: r.ms)
     lines += ["", "Pareto front (faster to more accurate): " + ", ".join(
-        f"{r.name} ({r.full_ms:.0f} ms, {100 * r.rms_mean:.1f}"
+        f"{r.name} ({r.ms:.0f} ms, {100 * r.err:.1f}"
         + (f" ± {100 * r.rms_mean_u:.1f}" if r.rms_mean_u is not None else "") + " %)" for r in front), ""]
     return "\n".join(lines)
 
@@ -344,34 +344,34 @@ def pareto_plot(results: list[Result], path: Path, title: str = "") -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ok = [r for r in results if r.error is None and r.full_ms is not None]
+    ok = [r for r in results if r.error is None and r.full_ms is not None and r.rms is not None]
     fig, ax = plt.subplots(figsize=(10.5, 7), dpi=110)
     fig.subplots_adjust(left=0.08, right=0.76, top=0.93, bottom=0.1)
     cycle = iter(plt.rcParams["axes.prop_cycle"].by_key()["color"])
-    ys_all = [100 * r.rms_mean for r in ok]
+    ys_all = [100 * r.err for r in ok]
     top = _clip_top(ys_all)
     texts = []
-    front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)
+    front = sorted((r for r in ok if r.pareto), key=lambda r: r.ms)
     for tech in dict.fromkeys(r.technique for r in ok):
         pts = [r for r in ok if r.technique == tech]
         col = COLORS.get(tech) or next(cycle, "k")
         mk = MARKERS.get(tech, "o")
-        inside = [r for r in pts if 100 * r.rms_mean <= top]
-        above = [r for r in pts if 100 * r.rms_mean > top]
-        ax.scatter([r.full_ms for r in inside], [100 * r.rms_mean for r in inside], color=col, marker=mk, s=36,
+        inside = [r for r in pts if 100 * r.err <= top]
+        above = [r for r in pts if 100 * r.err > top]
+        ax.scatter([r.ms for r in inside], [100 * r.err for r in inside], color=col, marker=mk, s=36,
                    label=tech, zorder=3, edgecolors="white", linewidths=0.5)
         if above:  # clipped outliers: a marker on the top edge, the value beside it
-            ax.scatter([r.full_ms for r in above], [top * 0.985] * len(above), color=col, marker=r"$\uparrow$",
+            ax.scatter([r.ms for r in above], [top * 0.985] * len(above), color=col, marker=r"$\uparrow$",
                        s=80, zorder=3, clip_on=False, label=None if inside else tech)
             for r in above:
-                texts.append(ax.text(r.full_ms, top * 0.95, f"{r.label} {100 * r.rms_mean:.0f} %", fontsize=7,
+                texts.append(ax.text(r.ms, top * 0.95, f"{r.label} {100 * r.err:.0f} %", fontsize=7,
                                      color=col))
-        best = min(pts, key=lambda r: r.rms_mean)
+        best = min(pts, key=lambda r: r.err)
         for r in inside:
             if r.pareto or r is best:
-                texts.append(ax.text(r.full_ms, 100 * r.rms_mean, r.label, fontsize=7.5, color=col))
+                texts.append(ax.text(r.ms, 100 * r.err, r.label, fontsize=7.5, color=col))
     if front:
-        ax.step([r.full_ms for r in front], [min(100 * r.rms_mean, top) for r in front], where="post", color="k",
+        ax.step([r.ms for r in front], [min(100 * r.err, top) for r in front], where="post", color="k",
                 lw=1.2, ls="--", label="Pareto front", zorder=2)
     ax.set_xscale("log")
     ax.set_ylim(0.0, top)

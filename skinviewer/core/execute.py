@@ -40,7 +40,7 @@ class ExecuteContext:
         self.tile = tile  # (band, bands) of a tileable pass; (0, 1): the whole pass at once
         self._held = {} if held is None else held
         self._own_held = held is None  # not kept across bands: returned with the scratch
-        self._banded = False
+        self._banded: bool | tuple[int, int | None] = False  # band(): True, or (sub, subs)
         self.gl: moderngl.Context = graph.ctx
         self.pass_ = p
         self._refl = refl
@@ -211,7 +211,7 @@ class ExecuteContext:
         self.graph.gpu.mesh_vao(prog, scene, lod).render()
         self.gl.disable(moderngl.CULL_FACE)
         if rect is not None:
-            fbo.scissor = None
+            fbo.scissor = None  # type: ignore[assignment]  # moderngl's stub omits None (documented: scissor off)
         if lod:
             self.graph._lod_notes[self.pass_.name] = self._frame.lod_note
         self.draws += 1
@@ -236,7 +236,7 @@ class ExecuteContext:
         self._apply(prog)
         self.graph.gpu.fullscreen_vao(prog).render(vertices=3 if tiles is None else 6 * tiles[1])
         if rect is not None:
-            fbo.scissor = None
+            fbo.scissor = None  # type: ignore[assignment]  # moderngl's stub omits None (documented: scissor off)
         self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
@@ -308,6 +308,7 @@ class ExecuteContext:
             rect = self.band_rect(fbo.size)
         elif self._banded:
             sub, subs = self._banded
+            assert subs is not None  # band() is given sub and subs together
             rect = None if subs <= 1 else _rows(fbo.size, sub, subs)
         else:
             rect = None

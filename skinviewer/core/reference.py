@@ -26,6 +26,7 @@ Results are cached on disk (``cache_dir()/reference``) by a hash of everything t
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import io
 import json
@@ -35,6 +36,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -661,10 +663,10 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
 def _store(key: str, ref: Reference) -> None:
     buf = io.BytesIO()
     assert ref.position is not None, "a computed reference has its surface positions"
+    extra: dict[str, Any] = {} if ref.uncertainty is None else {"uncertainty": ref.uncertainty.astype(np.float32)}
     np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
                         specular=ref.specular.astype(np.float32), mask=ref.mask,
-                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta),
-                        **({} if ref.uncertainty is None else {"uncertainty": ref.uncertainty.astype(np.float32)}))
+                        position=ref.position.astype(np.float32), meta=json.dumps(ref.meta), **extra)
     atomic_write_bytes(_cache_path(key), buf.getvalue())
 
 
@@ -1137,7 +1139,7 @@ class TruthSession:
             sel = (rows % stride == 0) & (cols % stride == 0) & ~done
             if sel.any():
                 M[sel] = diff.exitance(x_mm[sel], ea_here[sel],
-                                       progress=lambda f, st=stride: report(f"diffusion 1/{st * st}", f),
+                                       progress=functools.partial(report, f"diffusion 1/{stride * stride}"),
                                        cancelled=check)
             done |= sel
             final = stride == 1

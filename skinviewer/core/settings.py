@@ -732,7 +732,8 @@ def with_values(s: Settings, assignments: dict[str, Any]) -> Settings:
 def _did_you_mean(data: Any, parts: list[str]) -> str:
     """'; did you mean lights.0.intensity?' for a mistyped dotted path (the closest key where it goes wrong)."""
     import difflib
-    cur, done = data, []
+    cur = data
+    done: list[str] = []
     for p in parts:
         if isinstance(cur, dict) and p in cur:
             cur, done = cur[p], done + [p]

@@ -497,7 +497,7 @@ class GaussianBlurPass(Pass):
             ec.set(prog, "u_absorb", light)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         tiles = work_tiles(ec, n, blur_ring(ec, n, stretch, self.i)) if ec.setting("deon.skip_gutters") else None
-        draws = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
+        draws: list[tuple[Any, dict[str, Any], Any, Any]] = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp

@@ -32,6 +32,7 @@ table it made, so a preset goes look -> table -> look without drift.
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numpy as np
 from scipy.optimize import nnls
@@ -111,7 +112,8 @@ def table(color, radius, k: int = 6, normalize: bool = True) -> list[tuple[float
     """:func:`gaussians` as ``deon.gaussians`` rows: (variance, (w_r, w_g, w_b)), rounded to 7
     significant digits so that the JSON of a preset reads back to the same numbers."""
     v, W = gaussians(color, radius, k, normalize)
-    return [(float(f"{vi:.7g}"), tuple(float(f"{x:.7g}") for x in w)) for vi, w in zip(v, W)]
+    return [(float(f"{vi:.7g}"), cast("tuple[float, float, float]", tuple(float(f"{x:.7g}") for x in w)))
+            for vi, w in zip(v, W)]
 
 
 def mean_radius(variances, weights) -> np.ndarray:

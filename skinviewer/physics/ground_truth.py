@@ -318,6 +318,7 @@ class Diffusion:
             ea_here = np.asarray(ea_here, np.float64)
             d, own = self.tree().query(x, k=1)
             # not a piece cut along a shadow edge: x's own value would spread to the other side
+            assert el.split is not None  # Elements.__post_init__ sets it
             own = np.where((d <= el.radius * 1.01) & ~el.split[own], own, -1)
         todo = [(v, w) for v, w in zip(self.v, self.w) if np.any(w > 0)]
         cost = {"delta": 0.02, "exact": 1.0, "elements": 0.5, "clusters": 0.5}

@@ -16,6 +16,7 @@ pixels that count (skin pixels, or every covered pixel):
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from typing import cast
 
 import numpy as np
 
@@ -159,13 +160,18 @@ def tied(a: float, ua: float | None, b: float, ub: float | None) -> bool:
     return abs(a - b) <= (ua or 0.0) + (ub or 0.0)
 
 
+def _rgb(v) -> tuple[float, float, float]:
+    """A per-channel (R, G, B) array as the tuple of floats ImageError holds."""
+    return cast("tuple[float, float, float]", tuple(float(c) for c in v))
+
+
 def image_error(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0,
                 uncertainty: np.ndarray | None = None) -> ImageError:
     """The figures; with the reference's per-pixel ``uncertainty`` (H, W, 3) each figure's too."""
-    rms = tuple(float(v) for v in rel_rms(x, ref, mask))
-    p99 = tuple(float(v) for v in p99_rel(x, ref, mask))
+    rms = _rgb(rel_rms(x, ref, mask))
+    p99 = _rgb(p99_rel(x, ref, mask))
     d = dssim(x, ref, mask, exposure)
     if uncertainty is None:
         return ImageError(rms, p99, d)
     ru, pu, du = figure_uncertainty(x, ref, uncertainty, mask, exposure)
-    return ImageError(rms, p99, d, tuple(float(v) for v in ru), tuple(float(v) for v in pu), du)
+    return ImageError(rms, p99, d, _rgb(ru), _rgb(pu), du)

@@ -372,7 +372,9 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
         data, non_images = _gltf_prepared(data, ext, p, notes)
     resolver = _Resolver(p, non_images)
     try:
-        loaded = trimesh.load(io.BytesIO(data), file_type=ext or None, resolver=resolver, process=False)
+        loaded = trimesh.load(io.BytesIO(data), file_type=ext or None,
+                              resolver=resolver,  # type: ignore[arg-type]  # duck-typed: trimesh calls only get()
+                              process=False)
     except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
         why = "; ".join(resolver.failed.values()) or str(exc) or type(exc).__name__
         raise MeshError(f"cannot read mesh {p}: {why}") from None

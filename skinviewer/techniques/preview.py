@@ -128,7 +128,7 @@ def ladder(s: Settings) -> list[Rung]:
     seen = set()
     # the user's own settings on a smaller view: what an orbit can show without re-rendering the
     # texture-space work it has cached (ui/governor.py restricts a camera drag to these)
-    views = [("", {}, 0.25), ("", {}, 0.5)]
+    views: list[tuple[str, dict, float]] = [("", {}, 0.25), ("", {}, 0.5)]
     for _label, caps, scale in views + LADDERS.get(s.technique, lambda s: [])(s):
         ch = _cap(s, caps)
         key = (tuple(sorted((k, repr(v)) for k, v in ch.items())), scale)

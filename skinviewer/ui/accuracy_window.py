@@ -331,7 +331,7 @@ class AccuracyWindow:
             imgui.text_disabled("governor: no calibration for this technique yet (skinviewer calibrate)")
             return
         imgui.text(f"governor's front on this machine ({self.frame.governor.budget_ms:g} ms budget)")
-        timed = [x for x in pts if x[2] is not None]
+        timed = [(label, ms, err, pick) for label, ms, err, pick in pts if err is not None]
         if timed and implot.begin_plot("##governor", imgui.ImVec2(-1, 160)):
             implot.setup_axes("light-move frame ms", "RMS %")
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
@@ -343,9 +343,9 @@ class AccuracyWindow:
                                     np.array([100 * picked[0][2]], np.float64))
             implot.plot_inf_lines("budget", np.array([self.frame.governor.budget_ms], np.float64))
             implot.end_plot()
-        for label, ms, err, picked in pts:
-            line = f"{'>' if picked else ' '} {label}: {ms:.0f} ms" + ("" if err is None else f", {err:.1%}")
-            (imgui.text if picked else imgui.text_disabled)(line)
+        for label, ms, err, is_pick in pts:
+            line = f"{'>' if is_pick else ' '} {label}: {ms:.0f} ms" + ("" if err is None else f", {err:.1%}")
+            (imgui.text if is_pick else imgui.text_disabled)(line)
 
     @staticmethod
     def _nearest(implot, pts, radius_px: float = 10.0):

@@ -77,11 +77,13 @@ class Governor:
         """Least accurate first: by error against the truth where every rung has one, else by the
         cost of a light move (the front's assumption: what costs more is closer), FINAL last."""
         entries = {r: self.entry(technique, r) for r in rungs}
+        errors = {r: e.error for r, e in entries.items() if e is not None and e.error is not None}
         rest = [r for r in rungs if not r.final]
-        if rest and all(entries[r] is not None and entries[r].error is not None for r in rest):
-            rest.sort(key=lambda r: -entries[r].error)
+        if rest and all(r in errors for r in rest):
+            rest.sort(key=lambda r: -errors[r])
         else:
-            rest.sort(key=lambda r: entries[r].light_ms if entries[r] is not None else 0.0)
+            light = {r: e.light_ms if e is not None else 0.0 for r, e in entries.items()}
+            rest.sort(key=lambda r: light[r])
         return rest + [r for r in rungs if r.final]
 
     def pick(self, s: Settings, camera: bool = False) -> Pick:
@@ -94,8 +96,7 @@ class Governor:
             rungs = [r for r in rungs if r.changes in ({}, self.shown.changes)]
         if self.calibration is None or t not in self.calibration.entries:
             return Pick(FINAL, None, None, "governor: no calibration for this technique yet (shown at your settings)")
-        timed = [(r, self.cost(t, r, camera)) for r in rungs]
-        timed = [(r, ms) for r, ms in timed if ms is not None]
+        timed = [(r, ms) for r in rungs if (ms := self.cost(t, r, camera)) is not None]
         if not timed:
             return Pick(FINAL, None, None, "governor: no calibration for this ladder (shown at your settings)")
         order = self._accuracy_order(t, [r for r, _ in timed])

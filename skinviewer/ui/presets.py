@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 from skinviewer.core import paths
 from skinviewer.core.files import list_files
@@ -192,7 +193,7 @@ class PresetState:
         except SettingsError as exc:
             self.refused(path, exc.errors, exc.source or path)
             return None
-        keep = {"render.width": current.render.width, "render.height": current.render.height}
+        keep: dict[str, Any] = {"render.width": current.render.width, "render.height": current.render.height}
         if not _names_camera(path):
             keep["camera"] = current.camera.model_dump(mode="json")  # saved without a camera: keep the view
         return with_values(s, keep)

@@ -54,7 +54,7 @@ class Splash:
         self.frames = 0  # screens presented (tests)
         self._prog = self.ctx.program(vertex_shader=_VS, fragment_shader=_FS)
         self._vao = self.ctx.vertex_array(self._prog, [])
-        self._tex = None
+        self._tex: Any = None
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0

@@ -17,9 +17,9 @@ from skinviewer.ui.state import ViewerState
 from skinviewer.ui.widgets import DIM, UiContext, edit_model, tooltip, wrapped
 
 # the look controls a technique has of its own (its paper's terms), besides the artist model
-OWN_LOOK = {"separable": ("separable", ("strength", "falloff", "width_mm"))}
-SPECULAR = {"phong": ("phong", ("specular", "shininess"))}  # the rest: Kelemen / Szirmay-Kalos
-TRANSLUCENCY = {
+OWN_LOOK: dict[str, tuple[str, tuple[str, ...]]] = {"separable": ("separable", ("strength", "falloff", "width_mm"))}
+SPECULAR: dict[str, tuple[str, tuple[str, ...]]] = {"phong": ("phong", ("specular", "shininess"))}  # the rest: Kelemen / Szirmay-Kalos
+TRANSLUCENCY: dict[str, tuple[str, tuple[str, ...]]] = {
     "deon": ("deon", ("tsm",)),
     "ssss": ("transmittance", ("enabled", "translucency")),
     "separable": ("transmittance", ("enabled", "translucency")),
