@@ -408,6 +408,7 @@ class Surface:
             vis = np.zeros(len(dd), bool)
             if okf.any():
                 vis[okf] = ~self.rays.intersects_any(o[okf], dd[okf])
+            assert self.env is not None  # env_specular runs only with an environment light
             L = sample_equirect(self.env_img, dd, self.env.yaw).reshape(cnt, k * k, -1)
             val = L * (f * vis.reshape(cnt, k * k))[..., None]
             out[sl] = val.mean(1)

@@ -207,7 +207,7 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
     if not texel_shading(r):
         declare_unwrapped(r, base, size, resource, spec, **defines)
         return
-    if defines.get("ENV_LIGHT") and defines.get("ENV_RAYS", 0) > 0:  # the environment's AO per texel
+    if defines.get("ENV_LIGHT") and int(defines.get("ENV_RAYS", 0)) > 0:  # type: ignore[call-overload]  # the environment's AO per texel
         maps += "v"
         defines = {**defines, "ENV_TEXELS": 1}
     for res in texel_surface_resources(size, maps):

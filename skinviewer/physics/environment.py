@@ -297,7 +297,7 @@ def specular_occlusion(n_dot_v: np.ndarray, ao: np.ndarray, m: np.ndarray) -> np
 def rho_dt_mean(rho_dt_of_mu) -> np.ndarray:
     """The cosine-weighted hemispherical mean of rho_dt (eq. 30-32 for an environment):
     sum_k w_k rho_dt(mu_k) on RHO_MU/RHO_W; ``rho_dt_of_mu(mu)`` -> array."""
-    return sum(w * np.asarray(rho_dt_of_mu(mu), np.float64) for mu, w in zip(RHO_MU, RHO_W))
+    return np.sum([w * np.asarray(rho_dt_of_mu(mu), np.float64) for mu, w in zip(RHO_MU, RHO_W)], axis=0)
 
 
 # -- the pre-filtered specular environment (split sum) ---------------------------------------------
