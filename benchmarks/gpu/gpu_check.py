@@ -362,6 +362,8 @@ def cmd_report(args) -> int:
         lines += ["", "## Headless test suite (`-m \"not viewer\"`)", "", f"`{suite.get('summary', '?')}`"]
         if suite.get("ignored"):
             lines.append(f"(test files left out for packages not carried: {suite['ignored']})")
+        if suite.get("deselected"):
+            lines.append(f"(tests deselected, their decoders not carried: `-k \"{suite['deselected']}\"`)")
     rend = d.get("renders")
     if rend:
         lines += ["", f"## Every technique renders finite ({rend['size']}², default settings)", "",

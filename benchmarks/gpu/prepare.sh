@@ -16,11 +16,12 @@ apt-get $o update -qq
 (cd .gl && apt-get $o download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
 mkdir -p .whl
 plat=""; for n in 2_17 2_24 2_27 2_28 2_31 2_34 2_35; do plat="$plat --platform manylinux_${n}_x86_64"; done
+# (imagecodecs, 28 MB, is left out to stay under 64 MiB: only .hdr decoding needs it)
 # the renderer's packages that the GPU image (numpy, scipy, scikit-image, pillow, matplotlib, rich,
 # pytest, hypothesis, pyyaml, imageio) lacks, at the versions installed here; not the viewer's imgui
 pkgs=""
 for p in moderngl glcontext pyglm trimesh embreex xatlas openexr pydantic pydantic_core typing-inspection \
-         annotated-types fast-simplification materialx; do
+         annotated-types fast-simplification materialx adjusttext; do
     v=$(python3 -m pip show "$p" 2>/dev/null | awk '/^Version:/{print $2}')
     pkgs="$pkgs $p${v:+==$v}"
 done
