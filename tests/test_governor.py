@@ -145,6 +145,32 @@ def test_calibration_round_trips_and_bad_files_are_rebuilt_never_trusted(cache):
     assert calibration.load("GPU X", "small")[0] is None
 
 
+def test_a_shipped_gpu_calibration_is_used_for_its_renderer_until_the_machine_has_its_own(cache, tmp_path, monkeypatch):
+    # issue 31: benchmarks/gpu/run.sh's calibration, shipped in skinviewer/techniques/calibrations/
+    s = with_values(Settings(), {"technique": "phong"})
+    cal = fake_calibration("phong", s)
+    cal.renderer = "NVIDIA Test GPU/PCIe/SSE2"
+    folder = tmp_path / "shipped"
+    folder.mkdir()
+    (folder / "nvidia-test.json").write_text(json.dumps(cal.to_json()))
+    (folder / "broken.json").write_text("{ not json")  # skipped, never trusted
+    monkeypatch.setattr(calibration, "SHIPPED", folder)
+    got, why = calibration.load(cal.renderer, "small")
+    assert why == "" and got is not None and got.entries["phong"][0].light_ms == cal.entries["phong"][0].light_ms
+    assert calibration.load("another GPU", "small")[0] is None  # only for exactly that renderer
+    assert calibration.load(cal.renderer, "large")[0] is None  # and mesh size class
+    own = fake_calibration("phong", s)
+    own.renderer = cal.renderer
+    own.entries["phong"][0].light_ms = 1234.5
+    calibration.save(own)  # this machine's own measurement wins
+    assert calibration.load(cal.renderer, "small")[0].entries["phong"][0].light_ms == 1234.5
+    # a shipped file made for other preview ladders (the code changed) is ignored
+    d = cal.to_json()
+    d["signature"] = {"phong": ["x"]}
+    (folder / "nvidia-test.json").write_text(json.dumps(d))
+    assert calibration.shipped(cal.renderer, "small", folder) is None
+
+
 def test_calibrate_measures_every_rung_and_rebuilds_a_corrupt_file(cache, gl_ctx):
     from skinviewer.core.renderer import Renderer
     base = small_settings("shadow-edge", "phong")

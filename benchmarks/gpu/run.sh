@@ -18,8 +18,8 @@ mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
 exec > >(tee -a "$OUT/run.log") 2>&1
 T0=$(date +%s)
-# STEPS: which of renders, frames, suite, truth, diag to run (default all but diag)
-STEPS=${STEPS:-renders frames suite truth}
+# STEPS: which of renders, frames, suite, truth, calibrate, diag to run (default all but diag)
+STEPS=${STEPS:-renders frames suite truth calibrate}
 want() { [[ " $STEPS " == *" $1 "* ]]; }
 stamp() { echo "== $(( $(date +%s) - T0 )) s: $*"; }
 # the whole run fits in RUN_SECONDS (default 520: a 10-minute call with the machine's start): each
@@ -109,6 +109,12 @@ s0=$(date +%s.%N)
     && cp /tmp/skinviewer-bench/results.md "$OUT/bench.md"
 [ -f "$OUT/bench.md" ] || python3 benchmarks/gpu/gpu_check.py note --out "$OUT" walls "reference or bench" "did not finish in the time left"
 
+fi
+
+if want calibrate; then
+    # the quality governor's calibration of this GPU (issue 27): shipped for exactly this renderer
+    stamp "governor calibration"
+    timeout "$(cap 120)" python3 -m skinviewer calibrate --runs 3 && cp "$SKINVIEWER_CACHE"/calibration/*.json "$OUT/calibration.json"
 fi
 
 if want diag; then

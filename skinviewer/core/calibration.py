@@ -119,10 +119,32 @@ def calibration_path(renderer: str, mclass: str) -> Path:
     return cache_dir() / "calibration" / f"{slug}-{mclass}-{digest}.json"
 
 
+# calibrations measured on GPUs by benchmarks/gpu/run.sh and shipped with the package (issue 31):
+# used for exactly that GL renderer until this machine has its own
+SHIPPED = Path(__file__).resolve().parents[1] / "techniques" / "calibrations"
+
+
+def shipped(renderer: str, mclass: str, folder: Path | None = None) -> Calibration | None:
+    """A shipped calibration of this GL renderer and mesh class, made for today's preview ladders."""
+    for p in sorted((folder or SHIPPED).glob("*.json")):
+        try:
+            cal = Calibration.from_json(json.loads(p.read_text(encoding="utf-8")))
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        if cal.version == VERSION and cal.renderer == renderer and cal.mesh_class == mclass \
+                and cal.signature == signature(sorted(cal.entries)):
+            return cal
+    return None
+
+
 def load(renderer: str, mclass: str) -> tuple[Calibration | None, str]:
-    """The cached calibration, or None and why it is to be (re)built (one line)."""
+    """The cached calibration (else a shipped one of this renderer), or None and why it is to be
+    (re)built (one line)."""
     path = calibration_path(renderer, mclass)
     if not path.is_file():
+        cal = shipped(renderer, mclass)
+        if cal is not None:
+            return cal, ""
         return None, f"no calibration for {renderer} ({mclass} meshes) yet: measuring the techniques on this machine"
     try:
         cal = Calibration.from_json(json.loads(path.read_text(encoding="utf-8")))
