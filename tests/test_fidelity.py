@@ -133,7 +133,10 @@ def test_backlit_ear_transmits_the_thin_slab_profile(renderer):
                      for x, b in zip(s.deon.gaussians, blurs)) * albedo ** (1 - s.deon.mix)
         row, col = _project(view, C, n)
         got = lit[row, col]
-        assert abs(got[0] / expect[0] - 1) < 0.10, (d, m, got, expect)
+        # red: measured +4.3 / +3.2 / +1.6 % at 2 / 3 / 4 mm (llvmpipe, 160^2 image, 512^2 maps; the TSM's
+        # texel footprint and the blurs' rim renormalisation); the band is 1.4x the largest, below a
+        # lost transmission (-100 %) or the albedo split C^(1-mix) taken twice (-17 %)
+        assert -0.01 < got[0] / expect[0] - 1 < 0.06, (d, m, got, expect)
 
 
 def test_gutter_table_zones_each_texel_to_its_nearest_island():
