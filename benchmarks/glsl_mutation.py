@@ -118,7 +118,7 @@ def main(argv=None) -> int:
             t0 = time.perf_counter()
             try:
                 r = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *tests],
-                                   cwd=ROOT, env=env, capture_output=True, text=True, timeout=a.timeout)
+                                   cwd=ROOT, env=env, capture_output=True, text=True, timeout=a.timeout, check=False)
                 rc, out = r.returncode, r.stdout
             except subprocess.TimeoutExpired:
                 rc, out = -1, "timeout"

@@ -43,7 +43,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "core.settings": (["skinviewer/core/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py"]),
 }
 
-_SECTION = re.compile(r"^\[tool\.mutmut\]\n(?:(?!\[).*\n?)*", re.M)
+_SECTION = re.compile(r"^\[tool\.mutmut\]\n(?:(?!\[).*\n?)*", re.MULTILINE)
 
 
 def toml_list(xs) -> str:
@@ -87,16 +87,16 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
     work = Path(tempfile.mkdtemp(prefix=f"mutation-{name}-", dir=keep))
     if tests_from:
         tests = [t for t in tests if subprocess.run(["git", "-C", str(ROOT), "cat-file", "-e", f"{tests_from}:{t}"],
-                                                    capture_output=True).returncode == 0]
+                                                    capture_output=True, check=False).returncode == 0]
     scratch_copy(work, only, tests, tests_from)
     env = {k: v for k, v in os.environ.items() if k not in ("CI", "PYTHONPATH")}
     env.setdefault("SKINVIEWER_CACHE", str(work / "cache"))
     t0 = time.perf_counter()
     run = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(max_children)], cwd=work,
-                         env=env, capture_output=True, text=True)
+                         env=env, capture_output=True, text=True, check=False)
     elapsed = time.perf_counter() - t0
     res = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=work, env=env,
-                         capture_output=True, text=True)
+                         capture_output=True, text=True, check=False)
     per: dict[str, dict[str, list[str]]] = {}
     for line in res.stdout.splitlines():
         m = STATUS_LINE.match(line)
@@ -105,10 +105,10 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
     if not per:
         print(f"{name}: mutmut produced no results (exit {run.returncode})\n{run.stdout[-3000:]}\n{run.stderr[-3000:]}")
     diffs: dict[str, str] = {}
-    for mod, by in per.items():
+    for by in per.values():
         for mutant in by.get("survived", [])[:show]:
             d = subprocess.run([sys.executable, "-m", "mutmut", "show", mutant], cwd=work, env=env,
-                               capture_output=True, text=True)
+                               capture_output=True, text=True, check=False)
             diffs[mutant] = d.stdout
     if keep is None:
         shutil.rmtree(work, ignore_errors=True)

@@ -9,7 +9,11 @@ from pathlib import Path
 
 import pytest
 from skip_guard import configure as _skip_guard_configure
-from skip_guard import pytest_runtest_logreport, pytest_sessionfinish, pytest_terminal_summary  # noqa: F401
+from skip_guard import (  # noqa: F401
+    pytest_runtest_logreport,
+    pytest_sessionfinish,
+    pytest_terminal_summary,
+)
 
 # CI clones the project with shared/ beside the checkout: ../shared from the project root
 SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")

@@ -265,7 +265,7 @@ def test_extra_samples_iff_contrast_above_the_default_threshold_on_the_gpu(harne
     assert Settings().burley2.threshold == 0.25 and Settings().burley2.channel_scale == (1.0, 1.0, 1.0)
     E, z, mask = _scene()
     h = harness("two_level")
-    _, stats, c = h.run(E, z, mask, **DIRECT, **_mfp(D_RGB))
+    _, stats, _ = h.run(E, z, mask, **DIRECT, **_mfp(D_RGB))
     sss = stats[..., 0] > 0
     C, level, count = stats[..., 3][sss], stats[..., 1][sss], stats[..., 0][sss]
     assert np.all(C >= 0.0)

@@ -3,7 +3,6 @@ do not come from re-typing the same formula: the spec's table and closed forms (
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from glsl_eval import glsl_eval
 
 BURLEY_PREAMBLE = "bool burley_fetch(ivec2 q, out vec3 E, out float z) { E = vec3(0.0); z = 0.0; return false; }"
