@@ -76,8 +76,8 @@ MUTATIONS: list[tuple[str, str, str, str, list[str]]] = [
     ("ss-separable-follow", "ss_separable_blur.frag", "acc += u_k[i] * mix(t.rgb, c.rgb, k);", "acc += u_k[i] * t.rgb;",
      [T + "test_ssss.py", "-k", "follow_surface or bleeding"]),
     # shadows (PCF normalisation)
-    ("pcf-normalisation", "lib/lights.glsl", "return lit / float((2 * r + 1) * (2 * r + 1));",
-     "return lit / float((2 * r + 1) * (2 * r + 2));", [T + "test_render.py", T + "test_gosselin.py",
+    ("pcf-normalisation", "lib/lights.glsl", "return lit / float((2 * r + 1) * (2 * r + 1));\n#else",
+     "return lit / float((2 * r + 1) * (2 * r + 2));\n#else", [T + "test_render.py", T + "test_gosselin.py",
                                                          "-k", "pcf or zero_radius"]),
 ]
 
