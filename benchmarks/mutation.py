@@ -40,7 +40,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                          ["tests/test_profiles.py", "tests/test_fitting.py"]),
     "core.graph": (["skinviewer/core/graph.py", "skinviewer/core/execute.py", "skinviewer/core/pass_api.py"],
                    ["tests/test_graph.py"]),
-    "core.settings": (["skinviewer/core/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py"]),
+    "core.settings": (["skinviewer/core/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py",
+                                                        "tests/test_settings_io.py"]),
 }
 
 _SECTION = re.compile(r"^\[tool\.mutmut\]\n(?:(?!\[).*\n?)*", re.MULTILINE)

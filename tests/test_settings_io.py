@@ -5,13 +5,18 @@ from __future__ import annotations
 
 import json
 import os
-from pathlib import Path
 
 import pytest
 from conftest import SHARED
 
 from skinviewer.core import settings as S
-from skinviewer.core.settings import Settings, SettingsError, load_preset, save_preset, with_values
+from skinviewer.core.settings import (
+    Settings,
+    SettingsError,
+    load_preset,
+    save_preset,
+    with_values,
+)
 
 
 def _errors(fn, *a):
@@ -158,7 +163,7 @@ def test_preset_file_errors_are_one_clear_line(tmp_path, raw, where, msg):
 
 
 def test_profile_warnings_name_the_problem():
-    g = lambda v, w: {"variance": v, "weights": w}  # noqa: E731
+    g = lambda v, w: {"variance": v, "weights": w}
     d = with_values(Settings(), {"deon.gaussians": [g(0.0, [0.5, 1.0, 0.5]), g(0.0, [0.49, 0.0, 0.49])]}).deon
     assert S.profile_warnings(d) == [  # R and B sum to 0.99: within the 2 % that is not warned about
         "variances are not strictly ascending: the hierarchical blur clamps v_i - v_(i-1) to 0",
