@@ -39,7 +39,7 @@ MUTATIONS: list[tuple[str, str, str, str, list[str]]] = [
      "float g = float((REUSE_R + 1 - abs(dx)));", [T + "test_burley_techniques.py"]),
     # Phong (the baseline)
     ("phong-lambert", "phong.frag", "color += Lc * s * (C * ndl + spec * ndl);", "color += Lc * s * (C + spec * ndl);",
-     [T + "test_render.py", "-k", "plausible or pcf"]),
+     [T + "test_render.py", T + "test_glsl_pins.py", "-k", "plausible or pcf or phong"]),
     # output: ACES fit and sRGB encoding
     ("output-aces", "output.frag", "2.51 * x + 0.03", "2.51 * x + 0.3", [T + "test_output.py"]),
     ("srgb-encode", "lib/color.glsl", "1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055", "1.055 * pow(c, vec3(1.0 / 2.2)) - 0.055",

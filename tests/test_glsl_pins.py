@@ -28,3 +28,27 @@ def test_burley_inverse_cdf_in_the_shader_matches_the_spec(gl_ctx):
     xs = glsl_eval(gl_ctx, "lib/burley.glsl", "vec4(burley_x_of_u(a.x), 0.0, 0.0, 0.0)", 1.0 - pp[:, None],
                    preamble=BURLEY_PREAMBLE)[:, 0]
     assert np.max(np.abs(burley_cdf(xs) - pp)) < 1e-6  # measured 2.1e-7
+
+
+def test_phong_follows_lamberts_cosine_law(renderer):
+    """phong.frag's diffuse term Lc C max(N.L, 0) (no ambient, no specular) on the laser slab (a flat
+    plane facing +z): tilting the light from the normal to 60 degrees halves every interior pixel, and
+    doubling the intensity doubles it. Ratios, so the albedo texture need not be known."""
+    from helpers import small_settings
+    base = {"phong.ambient": 0.0, "phong.specular": 0.0, "shadow.map_size": 512}
+
+    def lit(direction, intensity):
+        s = small_settings("laser", "phong", 48, **base, lights=[{"kind": "directional", "direction": direction,
+                                                                    "intensity": intensity}])
+        renderer.render(s)
+        return renderer.read(s, "lit").astype(np.float64)
+
+    a = lit([0.0, 0.0, 1.0], 1.0)
+    b = lit([np.sqrt(3.0), 0.0, 1.0], 1.0)  # N.L = 0.5
+    c = lit([0.0, 0.0, 1.0], 2.0)
+    inner = (a[..., 3] > 0.5) & (a[..., :3].min(-1) > 1e-3)
+    inner[:8], inner[-8:], inner[:, :8], inner[:, -8:] = False, False, False, False
+    assert inner.sum() > 200
+    # half floats: measured ratios within 2e-3 (the lit target's 2^-11 rounding); a lost cos is 100 % off
+    np.testing.assert_allclose(b[inner][:, :3] / a[inner][:, :3], 0.5, rtol=2e-3)
+    np.testing.assert_allclose(c[inner][:, :3] / a[inner][:, :3], 2.0, rtol=2e-3)
