@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import random
 import re
 import shutil
 import subprocess
@@ -76,6 +77,20 @@ def scratch_copy(dest: Path, only: list[str], tests: list[str], tests_from: str 
 STATUS_LINE = re.compile(r"^\s*(\S+__mutmut_\d+):\s*(.+?)\s*$")
 
 
+def read_results(work: Path, only_names: list[str] | None = None) -> dict[str, dict[str, list[str]]]:
+    """{module: {status: [mutant names]}} from mutmut's results in a scratch copy."""
+    env = {k: v for k, v in os.environ.items() if k not in ("CI", "PYTHONPATH")}
+    res = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=work, env=env,
+                         capture_output=True, text=True, check=False)
+    keep = set(only_names) if only_names else None
+    per: dict[str, dict[str, list[str]]] = {}
+    for line in res.stdout.splitlines():
+        m = STATUS_LINE.match(line)
+        if m and (keep is None or m.group(1) in keep):
+            per.setdefault(module_of(m.group(1)), {}).setdefault(m.group(2), []).append(m.group(1))
+    return per
+
+
 def module_of(mutant: str) -> str:
     # skinviewer.physics.metrics.x_rel_rms__mutmut_3 / skinviewer.core.graph.xǁRenderGraphǁrun__mutmut_1
     head = mutant.split("__mutmut_")[0]
@@ -83,8 +98,15 @@ def module_of(mutant: str) -> str:
     return ".".join(p for p in parts[:-1]) if len(parts) > 1 else head
 
 
+def all_mutants(work: Path) -> list[str]:
+    names = []
+    for meta in sorted((work / "mutants").rglob("*.meta")):
+        names += sorted(json.loads(meta.read_text()).get("exit_code_by_key", {}))
+    return names
+
+
 def run_group(name: str, only: list[str], tests: list[str], max_children: int, show: int, keep: Path | None,
-              tests_from: str | None = None):
+              tests_from: str | None = None, sample: int = 0, seed: int = 36):
     work = Path(tempfile.mkdtemp(prefix=f"mutation-{name}-", dir=keep))
     if tests_from:
         tests = [t for t in tests if subprocess.run(["git", "-C", str(ROOT), "cat-file", "-e", f"{tests_from}:{t}"],
@@ -93,16 +115,18 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
     env = {k: v for k, v in os.environ.items() if k not in ("CI", "PYTHONPATH")}
     env.setdefault("SKINVIEWER_CACHE", str(work / "cache"))
     t0 = time.perf_counter()
-    run = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(max_children)], cwd=work,
-                         env=env, capture_output=True, text=True, check=False)
+    mm = [sys.executable, "-m", "mutmut", "run", "--max-children", str(max_children)]
+    chosen = None
+    if sample:
+        # generate the mutants and the test mapping (a filter matching nothing stops mutmut right after),
+        # then run a seeded random sample of them: the same sample before and after for a given seed
+        subprocess.run(mm + ["__no_such_mutant__"], cwd=work, env=env, capture_output=True, text=True, check=False)
+        names = all_mutants(work)
+        chosen = sorted(random.Random(seed).sample(names, min(sample, len(names))))
+        mm += chosen
+    run = subprocess.run(mm, cwd=work, env=env, capture_output=True, text=True, check=False)
     elapsed = time.perf_counter() - t0
-    res = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=work, env=env,
-                         capture_output=True, text=True, check=False)
-    per: dict[str, dict[str, list[str]]] = {}
-    for line in res.stdout.splitlines():
-        m = STATUS_LINE.match(line)
-        if m:
-            per.setdefault(module_of(m.group(1)), {}).setdefault(m.group(2), []).append(m.group(1))
+    per = read_results(work, chosen)
     if not per:
         print(f"{name}: mutmut produced no results (exit {run.returncode})\n{run.stdout[-3000:]}\n{run.stderr[-3000:]}")
     diffs: dict[str, str] = {}
@@ -113,7 +137,7 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
             diffs[mutant] = d.stdout
     if keep is None:
         shutil.rmtree(work, ignore_errors=True)
-    return per, diffs, elapsed
+    return per, diffs, elapsed, tests
 
 
 def main(argv=None) -> int:
@@ -125,6 +149,9 @@ def main(argv=None) -> int:
     ap.add_argument("--keep", type=Path, help="keep the scratch copies under this folder (mutmut browse there)")
     ap.add_argument("--tests-from", metavar="REV", help="run the tests/ of git revision REV against today's source "
                     "(e.g. the commit before issue 36's tests: the report's 'before')")
+    ap.add_argument("--sample", type=int, default=0, metavar="N",
+                    help="run a seeded random sample of N mutants per group (CPU-bound machines; say so)")
+    ap.add_argument("--seed", type=int, default=36, help="the sample's seed (same seed: same mutants)")
     ap.add_argument("--list", action="store_true", help="list the groups and exit")
     a = ap.parse_args(argv)
     if a.list:
@@ -141,7 +168,7 @@ def main(argv=None) -> int:
     print(f"{'module':<34} {'killed':>7} {'survived':>9} {'no tests':>9} {'timeout':>8} {'other':>6} {'killed %':>9}")
     for g in a.groups:
         only, tests = GROUPS[g]
-        per, diffs, elapsed = run_group(g, only, tests, a.max_children, a.show, a.keep, a.tests_from)
+        per, diffs, elapsed, tests = run_group(g, only, tests, a.max_children, a.show, a.keep, a.tests_from, a.sample, a.seed)
         for mod, by in sorted(per.items()):
             k, s = len(by.get("killed", [])), len(by.get("survived", []))
             nt, to = len(by.get("no tests", [])), len(by.get("timeout", []))
@@ -152,7 +179,8 @@ def main(argv=None) -> int:
             report[mod] = {"group": g, "seconds": round(elapsed, 1), **{st: v for st, v in by.items()}}
         for mutant, diff in diffs.items():
             print(f"--- survived: {mutant}\n{diff.strip()}\n")
-        print(f"({g}: {elapsed:.0f} s, tests: {' '.join(tests)})")
+        print(f"({g}: {elapsed:.0f} s, tests: {' '.join(tests)}" + (f"; a sample of {a.sample}, seed {a.seed}"
+              if a.sample else "") + ")")
     if a.json:
         a.json.write_text(json.dumps(report, indent=1))
     return 0
