@@ -54,7 +54,7 @@ MUTATIONS: list[tuple[str, str, str, str, list[str]]] = [
     ("deon-blur-narrow-gauss", "deon_blur.frag", ": exp(-fk * fk / (2.0 * s_t * s_t));", ": exp(-fk * fk / (s_t * s_t));",
      [T + "test_deon.py", T + "test_fidelity.py", "-k", "laser_profile or laser_error_falls"]),
     ("deon-final-albedo", "deon_final.frag", "diffuse *= safe_pow(C, 1.0 - u_mix) * rho_v;", "diffuse *= C * rho_v;",
-     [T + "test_bench.py", "-k", "lit_plane"]),
+     [T + "test_bench.py", T + "test_fidelity.py", "-k", "lit_plane or backlit_ear_transmits"]),
     ("deon-irradiance-ndl", "lib/deon_irradiance.glsl", "E += Lc * (ndl * s * rho);", "E += Lc * (s * rho);",
      [T + "test_bench.py", T + "test_deon.py", "-k", "lit_plane or laser_profile"]),
     ("deon-tsm-eq33", "lib/tsm_transmit.glsl", "float term = max(exp(-m * m / (k2 * v)) - carried, 0.0);",
