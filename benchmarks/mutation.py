@@ -58,7 +58,10 @@ def mutmut_section(only: list[str], tests: list[str]) -> str:
             f"only_mutate = {toml_list(only)}\n"
             'also_copy = ["shaders/", "presets/"]\n'
             f"pytest_add_cli_args_test_selection = {toml_list(tests)}\n"
-            'pytest_add_cli_args = ["-p", "no:cacheprovider", "-q"]\n')
+            'pytest_add_cli_args = ["-p", "no:cacheprovider", "-q"]\n'
+            # workers forked from a clean server: forked from mutmut's main process (which ran the suite and
+            # holds its GL context) the GL tests could not make a context and skipped, so mutants "survived"
+            'process_isolation = "forkserver"\n')
 
 
 def scratch_copy(dest: Path, only: list[str], tests: list[str], tests_from: str | None = None) -> None:
