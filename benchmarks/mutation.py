@@ -117,6 +117,8 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
     scratch_copy(work, only, tests, tests_from)
     env = {k: v for k, v in os.environ.items() if k not in ("CI", "PYTHONPATH")}
     env.setdefault("SKINVIEWER_CACHE", str(work / "cache"))
+    # the scratch copy has no ../shared beside it: point the tests at the checkout's (or they skip)
+    env.setdefault("SKINVIEWER_SHARED", str(ROOT.parent / "shared"))
     t0 = time.perf_counter()
     mm = [sys.executable, "-m", "mutmut", "run", "--max-children", str(max_children)]
     chosen = None

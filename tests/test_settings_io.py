@@ -172,3 +172,53 @@ def test_profile_warnings_name_the_problem():
     assert S.profile_warnings(d) == ["channel G weights sum to 1.021: the profile gains energy",
                                      "channel B weights sum to 0.970: the profile loses energy"]
     assert S.profile_warnings(Settings().deon) == []
+
+
+def test_more_rules_the_mutation_run_found_unpinned(tmp_path):
+    s = Settings()
+    e = _errors(with_values, s, {"ssss.taps": 8})
+    assert e.errors == [("ssss.taps", "must be odd (a centre tap)")]
+    e = _errors(S.validate, [1, 2])
+    assert e.errors[0][0] == "<root>" and str(e).startswith("<root>: ")
+    e = SettingsError([("a", "b")], "f.json")
+    assert e.source == "f.json" and e.errors == [("a", "b")]
+    with pytest.raises(KeyError) as ki:
+        S.get_path(s, "render.nope")
+    assert ki.value.args == ("render.nope",)
+    # value_key: sorted keys, dict values converted
+    assert S.value_key(s, "lights.0") == json.dumps(S.to_dict(s)["lights"][0], sort_keys=True)
+    assert S.value_key(s, "lights.0").startswith('{"beam_radius"')
+    assert json.loads(S.value_key(s, "specular.per_region"))["nose"] == {"m": 0.28, "rho_s": 0.24}
+    # replacing a list item; a new key in a region table; values containing '='
+    light = dict(S.to_dict(s)["lights"][0], intensity=0.25)
+    assert with_values(s, {"lights.0": light}).lights[0].intensity == 0.25
+    few = load_preset_text(tmp_path, {"schema_version": 1, "gosselin": {"regions": {"ears": {}}}})
+    assert set(with_values(few, {"gosselin.regions.nose": {"kernel_size": 2.0}}).gosselin.regions) == {"ears", "nose"}
+    assert S.parse_assignments(["scene.mesh=a=b.glb"]) == {"scene.mesh": "a=b.glb"}
+    msg = _errors(S.parse_value, "9" * 5000).errors[0][1]
+    assert msg.startswith("Exceeds the limit") and ";" not in msg
+
+
+def load_preset_text(tmp_path, data, name="p.json"):
+    p = tmp_path / name
+    p.write_text(json.dumps(data))
+    return load_preset(p)
+
+
+def test_preset_edge_cases_found_by_mutation(tmp_path):
+    # per-region tables are replaced by a preset's, not merged
+    s = load_preset_text(tmp_path, {"schema_version": 1, "specular": {"per_region": {"nose": {"m": 0.5}}}})
+    assert set(s.specular.per_region) == {"nose"}
+    # empty and non-text scene paths reach validation (not a crash, not the preset's folder)
+    e = _errors(load_preset_text, tmp_path, {"schema_version": 1, "scene": {"mesh": ""}})
+    assert e.errors == [("scene.mesh", "path is empty")]
+    e = _errors(load_preset_text, tmp_path, {"schema_version": 1, "scene": {"mesh": 5}})
+    assert e.errors[0][0] == "scene.mesh"
+    # UTF-16 big-endian too; a missing file names the preset and its path
+    (tmp_path / "be.json").write_bytes(b"\xfe\xff\x00{\x00}")
+    assert _errors(load_preset, tmp_path / "be.json").errors == [("<file>", "UTF-16 text: save the preset as UTF-8")]
+    e = _errors(load_preset, tmp_path / "missing.json")
+    assert e.source == str(tmp_path / "missing.json") and "preset" in e.errors[0][1]
+    # save_preset writes the payload it is given, indented by two spaces
+    save_preset(Settings(), tmp_path / "t.json", data={"schema_version": 1, "render": {"width": 64}})
+    assert (tmp_path / "t.json").read_text() == '{\n  "schema_version": 1,\n  "render": {\n    "width": 64\n  }\n}\n'
