@@ -52,3 +52,22 @@ def test_phong_follows_lamberts_cosine_law(renderer):
     # half floats: measured ratios within 2e-3 (the lit target's 2^-11 rounding); a lost cos is 100 % off
     np.testing.assert_allclose(b[inner][:, :3] / a[inner][:, :3], 0.5, rtol=2e-3)
     np.testing.assert_allclose(c[inner][:, :3] / a[inner][:, :3], 2.0, rtol=2e-3)
+
+
+def test_gosselin_without_blur_is_albedo_times_irradiance(renderer):
+    """gosselin_final.frag eq. (17) C E: with no blur iterations and no specular, Gosselin's image is
+    Phong's Lambert term Lc C max(N.L, 0) on the backlit-ear flap lit from the front (albedo 0.85 / 0.62 /
+    0.55 sRGB: the analysis scenes' white albedo would hide a lost C)."""
+    from helpers import small_settings
+    common = {"phong.ambient": 0.0, "phong.specular": 0.0, "specular.rho_s": 0.0, "gosselin.iterations": 0,
+              "shadow.map_size": 512, "lights": [{"kind": "directional", "direction": [0.3, 0.0, 1.0]}]}
+    out = {}
+    for t in ("phong", "gosselin"):
+        s = small_settings("backlit-ear", t, 48, **common)
+        renderer.render(s)
+        out[t] = renderer.read(s, "lit").astype(np.float64)
+    a, b = out["phong"], out["gosselin"]
+    inner = (a[..., 3] > 0.5) & (a[..., :3].min(-1) > 1e-3)
+    inner[:8], inner[-8:], inner[:, :8], inner[:, -8:] = False, False, False, False
+    assert inner.sum() > 200
+    np.testing.assert_allclose(b[inner][:, :3] / a[inner][:, :3], 1.0, rtol=1e-2)
