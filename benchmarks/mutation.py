@@ -108,6 +108,22 @@ def all_mutants(work: Path) -> list[str]:
     return names
 
 
+def start_xvfb():
+    """A private X server for the whole mutmut run: without one, tests/conftest.py starts an Xvfb per
+    pytest session and stops it when that session ends -- the session mutmut's workers are forked from --
+    so the workers' GL tests found a dead display, skipped, and every mutant they covered "survived"."""
+    exe = shutil.which("Xvfb")
+    if exe is None:
+        return None, None
+    r, w = os.pipe()
+    proc = subprocess.Popen([exe, "-displayfd", str(w), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
+                            pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(w)
+    with os.fdopen(r, "rb") as f:
+        num = f.readline().strip()
+    return proc, (f":{num.decode()}" if num else None)
+
+
 def run_group(name: str, only: list[str], tests: list[str], max_children: int, show: int, keep: Path | None,
               tests_from: str | None = None, sample: int = 0, seed: int = 36):
     work = Path(tempfile.mkdtemp(prefix=f"mutation-{name}-", dir=keep))
@@ -119,6 +135,9 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
     env.setdefault("SKINVIEWER_CACHE", str(work / "cache"))
     # the scratch copy has no ../shared beside it: point the tests at the checkout's (or they skip)
     env.setdefault("SKINVIEWER_SHARED", str(ROOT.parent / "shared"))
+    xvfb, display = (None, os.environ.get("DISPLAY")) if os.environ.get("DISPLAY") else start_xvfb()
+    if display:
+        env["DISPLAY"] = display
     t0 = time.perf_counter()
     mm = [sys.executable, "-m", "mutmut", "run", "--max-children", str(max_children)]
     chosen = None
@@ -129,7 +148,12 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
         names = all_mutants(work)
         chosen = sorted(random.Random(seed).sample(names, min(sample, len(names))))
         mm += chosen
-    run = subprocess.run(mm, cwd=work, env=env, capture_output=True, text=True, check=False)
+    try:
+        run = subprocess.run(mm, cwd=work, env=env, capture_output=True, text=True, check=False)
+    finally:
+        if xvfb is not None:
+            xvfb.terminate()
+            xvfb.wait(5)
     elapsed = time.perf_counter() - t0
     per = read_results(work, chosen)
     if not per:
