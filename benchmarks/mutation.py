@@ -33,6 +33,10 @@ ROOT = Path(__file__).resolve().parents[1]
 GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.metrics": (["skinviewer/physics/metrics.py"], ["tests/test_metrics.py"]),
     "physics.burley": (["skinviewer/physics/burley.py"], ["tests/test_burley_physics.py"]),
+    # the same module with the GPU tests that compare the shader to its numpy twin (burley.blur): slower
+    "physics.burley+gpu": (["skinviewer/physics/burley.py"],
+                           ["tests/test_burley_physics.py", "tests/test_burley_gpu.py::test_glsl_matches_the_numpy_reference",
+                            "tests/test_burley_gpu.py::test_depth_bilateral_t47"]),
     "physics.transmittance": (["skinviewer/physics/transmittance.py", "skinviewer/physics/separable.py"],
                               ["tests/test_separable_physics.py"]),
     "physics.poisson": (["skinviewer/physics/poisson.py"], ["tests/test_poisson.py"]),
