@@ -89,12 +89,6 @@ def test_no_red_line_along_the_terminator(renderer, tmp_path):
     assert np.all(rises <= 1e-4 * seg[0]), np.round(seg * 1000).astype(int)
 
 
-def _project(view, p, n):
-    c = view.view_proj @ np.append(p, 1.0)
-    ndc = c[:3] / c[3]
-    return int((ndc[1] + 1) / 2 * n), int((ndc[0] + 1) / 2 * n)  # (row, col), row 0 at the bottom
-
-
 def test_backlit_ear_transmits_the_thin_slab_profile(renderer):
     """backlit-ear (a flap 1.5 mm thick at the top, 6 mm at the bottom) lit from behind: at the
     front points 2, 3 and 4 mm thick the final image is C^(1-mix) sum_i w_i exp(-m^2/2v_i) blur_i(uv_A),
