@@ -8,6 +8,12 @@ import time
 from pathlib import Path
 
 import pytest
+from skip_guard import configure as _skip_guard_configure
+from skip_guard import (  # noqa: F401
+    pytest_runtest_logreport,
+    pytest_sessionfinish,
+    pytest_terminal_summary,
+)
 
 # CI clones the project with shared/ beside the checkout: ../shared from the project root
 SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")
@@ -46,6 +52,7 @@ def _start_xvfb() -> str | None:
 
 
 def pytest_configure(config):
+    _skip_guard_configure(config)
     # One GL platform per test process: with a display (xvfb-run, or a private Xvfb started here)
     # the in-process headless context is GLX, so the viewer tests' GLX window can coexist with it.
     if not os.environ.get("DISPLAY"):

@@ -76,3 +76,48 @@ def backlit_flap_column(renderer, s: Settings):
     keep = np.abs(ys) < 17.0
     rows = np.array(rows)[keep]
     return rows, 1.5 + (20.0 - ys[keep]) / 40.0 * 4.5, E[rows, col, :3]
+
+
+def backlit_ear_deviation(renderer, n: int = 160) -> dict[float, np.ndarray]:
+    """backlit-ear lit from behind, d'Eon at 512^2 maps: at the front points 2, 3 and 4 mm thick, the final
+    image / C^(1-mix) sum_i w_i exp(-m^2/2v_i) blur_i(uv_A) - 1 per channel (seed 000 eq. 33; m the path
+    through the flap along the light, A where that ray enters the back). Shared by test_fidelity.py and
+    benchmarks/claims.py."""
+    from skinviewer.passes.deon import mean_texel_mm
+    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.physics.diffusion import blur_plan_texels, texture_of
+    from skinviewer.scene.camera import orbit_view
+    from skinviewer.scene.scenes import _flap_thickness
+    s = small_settings("backlit-ear", "deon", n, **{"deon.irradiance_size": 512, "deon.tsm_size": 512,
+                                                   "deon.energy_conservation": False})
+    renderer.render(s)
+    g = renderer.graph("deon")
+    lit = renderer.read(s, "lit")[..., :3].astype(np.float64)
+    scene = renderer.scene.gpu
+    view = orbit_view(s.camera, scene.center, scene.radius, (n, n))
+    L = np.array(s.lights[0].direction, np.float64)
+    L /= np.linalg.norm(L)
+    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
+                            mean_texel_mm(scene, 512))
+    blurs = [g.read(texture_of(p))[..., :3].astype(np.float64) for p in plan]
+    albedo = srgb_to_linear(np.array([0.85, 0.62, 0.55]))  # the scene's sRGB albedo, linear in the shaders
+    out = {}
+    for d in (2.0, 3.0, 4.0):
+        y = 20.0 - (d - 1.5) * 40.0 / 4.5
+        C = np.array([0.0, y, 0.5 * _flap_thickness(np.array(y))])
+        # walk towards the light to the back surface z = -t(y)/2
+        ts = np.linspace(0.0, 3 * d, 30001)
+        P = C[None, :] + ts[:, None] * L[None, :]
+        k = int(np.argmax(P[:, 2] <= -0.5 * _flap_thickness(P[:, 1])))
+        A, m = P[k], ts[k]
+        s_a, t_a = (A[0] + 15.0) / 30.0, (A[1] + 20.0) / 40.0
+        uvA = np.array([0.52 + 0.46 * (1.0 - s_a), 0.02 + 0.96 * t_a])
+        ij = (uvA[::-1] * 512).astype(int)
+        expect = sum(np.asarray(x.weights) * np.exp(-m * m / (2 * x.variance)) * b[ij[0], ij[1]]
+                     for x, b in zip(s.deon.gaussians, blurs)) * albedo ** (1 - s.deon.mix)
+        c = view.view_proj @ np.append(C, 1.0)
+        ndc = c[:3] / c[3]
+        row, col = int((ndc[1] + 1) / 2 * n), int((ndc[0] + 1) / 2 * n)  # row 0 at the bottom
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[d] = lit[row, col] / expect - 1.0
+    return out

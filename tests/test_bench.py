@@ -135,7 +135,9 @@ def test_deon_on_a_lit_plane_is_close_to_the_truth(renderer):
         errs[t] = rel_rms(img, ref.lit, m)
         errs[t + " inside"] = rel_rms(img, ref.lit, inner)
     # away from the open rim (where the truth loses the light that leaves the slab and the
-    # texture-space blur does not) d'Eon agrees within 1 %: irradiance, mix, rho_dt, specular
-    assert errs["deon inside"].max() < 0.01, errs
-    assert errs["deon"].max() < 0.08, errs
+    # texture-space blur does not) d'Eon agrees within 0.2 %: irradiance, mix, rho_dt, specular. Measured
+    # 0.05 / 0.04 / 0.04 % inside (llvmpipe, 48^2 image, 512^2 maps) and 1.9 % red with the rim; the bounds
+    # are ~4x and 1.5x those, below the 1.4 % effect issue 36 found this test guarding, far below Phong's 23-28 %
+    assert errs["deon inside"].max() < 0.002, errs
+    assert errs["deon"].max() < 0.03, errs
     assert errs["deon"].mean() < errs["phong"].mean(), errs

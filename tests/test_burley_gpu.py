@@ -246,3 +246,32 @@ def test_sample_count_reaches_the_pass_report(harness):
     assert rec.figures["samples"] == h.count.last.samples > 0
     assert "samples on the GPU" in rec.note and f"{h.count.last.samples:,}" in rec.note
     assert "burley_count" in h.graph.last_report.table()
+
+
+def _iff_above(level, C, t):
+    """level > 0 iff C > t, except where the f2 statistics texture rounded C onto the other side of t
+    (|C - t| within half a half-float ulp, 2^-11 relative): those may go either way and are few."""
+    near = np.abs(C - t) <= 2.0 ** -11 * max(abs(t), 1e-3)
+    assert near.mean() < 0.01
+    np.testing.assert_array_equal((level > 0.5)[~near], (C > t)[~near])
+
+
+def test_extra_samples_iff_contrast_above_the_default_threshold_on_the_gpu(harness):
+    """Algorithm 1 on the GPU with the default settings (threshold not assigned): a pixel takes the extra
+    level iff the base contrast the pass writes (stats.a = max_c C_c, eq. 4.1) exceeds 0.25, the thesis's
+    cutoff (seed 001 §4.3; spec §7.4: C > 0.25 under either reading of the offset). Pixels on both sides of
+    0.25 and between 0.25 and 0.5 are present, so a changed default or comparison fails."""
+    from skinviewer.core.settings import Settings
+    assert Settings().burley2.threshold == 0.25 and Settings().burley2.channel_scale == (1.0, 1.0, 1.0)
+    E, z, mask = _scene()
+    h = harness("two_level")
+    _, stats, _ = h.run(E, z, mask, **DIRECT, **_mfp(D_RGB))
+    sss = stats[..., 0] > 0
+    C, level, count = stats[..., 3][sss], stats[..., 1][sss], stats[..., 0][sss]
+    assert np.all(C >= 0.0)
+    assert ((C > 0.26) & (C < 0.49)).sum() >= 20 and (C < 0.24).sum() >= 20 and (C > 0.51).sum() >= 1
+    _iff_above(level, C, 0.25)
+    np.testing.assert_array_equal(count, np.where(level > 0.5, 22, 12))
+    # an assigned threshold moves the cutoff, the comparison still on the written contrast
+    _, stats, _ = h.run(E, z, mask, **DIRECT, **_mfp(D_RGB), **{"burley2.threshold": 0.1})
+    _iff_above(stats[..., 1][sss], stats[..., 3][sss], 0.1)

@@ -189,3 +189,95 @@ def test_edge_response_reference_values_t43():
     np.testing.assert_allclose(B.edge_response([0.1, 0.5, 1, 2, 5, 10]), [0.5632, 0.6898, 0.7770, 0.8706, 0.9653,
                                                                            0.9949], atol=1e-4)
     np.testing.assert_allclose(B.edge_response(-0.5), 1 - 0.6898, atol=1e-4)
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 36: pins that the mutation run found missing (benchmarks/mutation.py, notes/mutation.md)
+
+def test_nested_sets_keep_golubevs_base_radii_and_complete_one_set():
+    """nested_sets (n_base, n_total = m n_base, m odd): the base set has exactly Golubev's n_base radii
+    (entries m k + (m - 1)/2 of the n_total set have u = (k + 0.5)/n_base), base and extra together are
+    the n_total set, the extra level has no ring flags; m even, < 3 or not whole is refused."""
+    for nb, nt in ((6, 30), (10, 30), (4, 20)):
+        base, extra = B.nested_sets(nb, nt)
+        full = B.sample_set(nt)
+        np.testing.assert_allclose(base.x, B.sample_set(nb).x, rtol=1e-12)
+        assert base.n == nb and extra.n == nt - nb and len(extra.x) == nt - nb
+        np.testing.assert_allclose(np.sort(np.concatenate([base.x, extra.x])), np.sort(full.x), rtol=1e-12)
+        np.testing.assert_allclose(np.sort(np.concatenate([base.phi, extra.phi])), np.sort(full.phi))
+        np.testing.assert_allclose(base.rcp_pdf * B.polar_pdf_unit(base.x), 1.0)
+        np.testing.assert_allclose(extra.rcp_pdf * B.polar_pdf_unit(extra.x), 1.0)
+        np.testing.assert_array_equal(base.inner, B.ring_flags(base.x))
+        assert not extra.inner.any()
+    np.testing.assert_array_equal(B.nested_sets(6, 30, "equal-count")[0].inner, [1, 1, 1, 0, 0, 0])
+    for nb, nt in ((6, 24), (6, 31), (6, 6), (5, 10)):
+        with pytest.raises(ValueError, match="odd"):
+            B.nested_sets(nb, nt)
+    s = B.Sampling(levels=(6, 24), cutoffs=(0.25,), nested=True).sets()
+    np.testing.assert_allclose(s[0].x, B.nested_sets(6, 30)[0].x)
+    assert [x.n for x in s] == [6, 24]
+    with pytest.raises(ValueError, match="exactly two levels"):
+        B.Sampling(levels=(6, 24, 8), cutoffs=(0.1, 0.2), nested=True).sets()
+    # not nested: each level its own stratified set, turned by EXTRA_PHASE per level
+    s = B.Sampling(levels=(12, 10), cutoffs=(0.25,), split="equal-count").sets()
+    np.testing.assert_allclose(s[1].x, B.sample_set(10).x)
+    np.testing.assert_allclose(s[1].phi, B.sample_set(10).phi + B.EXTRA_PHASE)
+    assert s[0].inner.sum() == 6
+    assert B.Sampling(levels=(12, 10), cutoffs=(0.25,)).max_samples == 22
+
+
+def test_sampling_refuses_inconsistent_plans():
+    with pytest.raises(ValueError, match="one cutoff per extra level"):
+        B.Sampling(levels=(12, 10), cutoffs=())
+    with pytest.raises(ValueError, match="unknown contrast"):
+        B.Sampling(levels=(12,), contrast="nope")
+    with pytest.raises(ValueError, match="unknown ring split"):
+        B.Sampling(levels=(12,), split="nope")
+    with pytest.raises(ValueError, match="1..1024"):
+        B.sample_set(0)
+
+
+def test_contrast_of_rings_and_minmax_values():
+    """eq. 4.1 per channel: |L_in - L_out| / (L_in + L_out) of the ring means; 0 for an empty ring;
+    minmax: (max - min) / (max + min), 0 where no sample was valid."""
+    in_sum = np.array([[3.0, 2.0, 0.0], [1.0, 1.0, 1.0]])
+    out_sum = np.array([[2.0, 4.0, 0.0], [1.0, 1.0, 1.0]])
+    n_in, n_out = np.array([3, 0]), np.array([4, 2])
+    C = B.contrast_of("rings", in_sum, out_sum, n_in, n_out, None, None)
+    # pixel 0: L_in = (1, 2/3, 0), L_out = (0.5, 1, 0) -> (1/3, 0.2, 0); pixel 1: empty inner ring -> 0
+    np.testing.assert_allclose(C, [[1 / 3, 0.2, 0.0], [0.0, 0.0, 0.0]], atol=1e-12)
+    lo = np.array([[0.2, 1.0, np.inf], [np.inf, np.inf, np.inf]])
+    hi = np.array([[0.6, 1.0, -np.inf], [-np.inf, -np.inf, -np.inf]])
+    C = B.contrast_of("minmax", None, None, None, None, lo, hi)
+    np.testing.assert_allclose(C, [[0.5, 0.0, 0.0], [0.0, 0.0, 0.0]], atol=1e-12)
+
+
+def test_profile_of_a_settings_section_and_its_scale():
+    from skinviewer.core.settings import Settings, with_values
+    b = with_values(Settings(), {"burley.fit": "direct", "burley.mfp": [1.0, 2.0, 4.0], "burley.scale": 0.5}).burley
+    p = B.profile_of_section(b)
+    np.testing.assert_allclose(p.d_rgb, [0.5, 1.0, 2.0])
+    np.testing.assert_allclose(p.S, [2.0, 1.0, 0.5])
+    assert p.d == 2.0 and p.filter_radius == pytest.approx(2.0 * B.FILTER_RADIUS_UNIT)
+    d = Settings().burley
+    np.testing.assert_allclose(B.profile_of_section(d).d_rgb, B.shape_distance(d.albedo, d.mfp, d.fit) * d.scale)
+
+
+def test_pcg_hash_and_rotation_phase_equal_the_shader(gl_ctx):
+    """The numpy twins are bit-exact with shaders/lib/burley.glsl evaluated on the GPU (the hash as two
+    16-bit halves, exact in float32; the phase to float32 rounding)."""
+    from glsl_eval import glsl_eval
+    from test_glsl_pins import BURLEY_PREAMBLE
+    v = np.array([0, 1, 2, 12345, 2**31 - 1, 2**32 - 1, 747796405, 99], np.uint32)
+    got = glsl_eval(gl_ctx, "lib/burley.glsl", "vec4(float(burley_pcg(uint(a.x) * 65536u + uint(a.y)) >> 16u), "
+                    "float(burley_pcg(uint(a.x) * 65536u + uint(a.y)) & 65535u), 0.0, 0.0)",
+                    np.stack([v >> 16, v & 0xFFFF], 1).astype(np.float64), preamble=BURLEY_PREAMBLE)
+    h = B.pcg_hash(v)
+    np.testing.assert_array_equal(got[:, 0].astype(np.uint32) * 65536 + got[:, 1].astype(np.uint32), h)
+    assert len(set(h.tolist())) == len(v)  # no collisions among these
+    ys, xs = np.mgrid[0:4, 0:6]
+    z = np.linspace(37.0, 912.5, xs.size).reshape(xs.shape).astype(np.float32)
+    pts = np.stack([xs.ravel(), ys.ravel(), z.ravel()], 1).astype(np.float64)
+    ph = glsl_eval(gl_ctx, "lib/burley.glsl", "vec4(burley_phase(ivec2(a.xy), a.z), 0.0, 0.0, 0.0)", pts,
+                   preamble=BURLEY_PREAMBLE)[:, 0]
+    np.testing.assert_allclose(ph, B.rotation_phase(xs, ys, z).ravel(), rtol=1e-6, atol=1e-6)

@@ -50,7 +50,13 @@ def test_profile_warnings_never_crash():
     d = DeonSettings(gaussians=[Gaussian(variance=1.0, weights=(0, 0, 0)), Gaussian(variance=0.0, weights=(2, 0, 0))])
     w = profile_warnings(d)
     assert any("ascending" in x for x in w) and any("energy" in x for x in w)
-    assert profile_warnings(DeonSettings()) == [] or all("energy" not in x or "G" in x or "B" in x for x in profile_warnings(DeonSettings()))
+    assert profile_warnings(DeonSettings()) == []  # the default table sums to 1 per channel
+    # a G table summing to 1.1 (or 0.9) is named, per channel, with the direction of the error
+    for scale, verb in ((1.1, "gains"), (0.9, "loses")):
+        gs = [Gaussian(variance=g.variance, weights=(g.weights[0], g.weights[1] * scale, g.weights[2]))
+              for g in DeonSettings().gaussians]
+        w = profile_warnings(DeonSettings(gaussians=gs))
+        assert len(w) == 1 and "channel G" in w[0] and verb in w[0], w
 
 
 def test_tsm_identity():

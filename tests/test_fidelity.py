@@ -89,51 +89,17 @@ def test_no_red_line_along_the_terminator(renderer, tmp_path):
     assert np.all(rises <= 1e-4 * seg[0]), np.round(seg * 1000).astype(int)
 
 
-def _project(view, p, n):
-    c = view.view_proj @ np.append(p, 1.0)
-    ndc = c[:3] / c[3]
-    return int((ndc[1] + 1) / 2 * n), int((ndc[0] + 1) / 2 * n)  # (row, col), row 0 at the bottom
-
-
 def test_backlit_ear_transmits_the_thin_slab_profile(renderer):
     """backlit-ear (a flap 1.5 mm thick at the top, 6 mm at the bottom) lit from behind: at the
     front points 2, 3 and 4 mm thick the final image is C^(1-mix) sum_i w_i exp(-m^2/2v_i) blur_i(uv_A),
-    m the path through the flap along the light, A where that ray enters the back (seed 000 eq. 33)."""
-    from skinviewer.passes.deon import mean_texel_mm
-    from skinviewer.physics.diffusion import blur_plan_texels, texture_of
-    from skinviewer.scene.camera import orbit_view
-    from skinviewer.scene.scenes import _flap_thickness
-    n = 160
-    s = small_settings("backlit-ear", "deon", n, **{"deon.irradiance_size": 512, "deon.tsm_size": 512,
-                                                   "deon.energy_conservation": False})
-    renderer.render(s)
-    g = renderer.graph("deon")
-    lit = renderer.read(s, "lit")[..., :3].astype(np.float64)
-    scene = renderer.scene.gpu
-    view = orbit_view(s.camera, scene.center, scene.radius, (n, n))
-    L = np.array(s.lights[0].direction, np.float64)
-    L /= np.linalg.norm(L)
-    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels,
-                            mean_texel_mm(scene, 512))
-    blurs = [g.read(texture_of(p))[..., :3].astype(np.float64) for p in plan]
-    from skinviewer.passes.output import srgb_to_linear
-    albedo = srgb_to_linear(np.array([0.85, 0.62, 0.55]))  # the scene's sRGB albedo, linear in the shaders
-    for d in (2.0, 3.0, 4.0):
-        y = 20.0 - (d - 1.5) * 40.0 / 4.5
-        C = np.array([0.0, y, 0.5 * _flap_thickness(np.array(y))])
-        # walk towards the light to the back surface z = -t(y)/2
-        ts = np.linspace(0.0, 3 * d, 30001)
-        P = C[None, :] + ts[:, None] * L[None, :]
-        k = int(np.argmax(P[:, 2] <= -0.5 * _flap_thickness(P[:, 1])))
-        A, m = P[k], ts[k]
-        s_a, t_a = (A[0] + 15.0) / 30.0, (A[1] + 20.0) / 40.0
-        uvA = np.array([0.52 + 0.46 * (1.0 - s_a), 0.02 + 0.96 * t_a])
-        ij = (uvA[::-1] * 512).astype(int)
-        expect = sum(np.asarray(x.weights) * np.exp(-m * m / (2 * x.variance)) * b[ij[0], ij[1]]
-                     for x, b in zip(s.deon.gaussians, blurs)) * albedo ** (1 - s.deon.mix)
-        row, col = _project(view, C, n)
-        got = lit[row, col]
-        assert abs(got[0] / expect[0] - 1) < 0.10, (d, m, got, expect)
+    m the path through the flap along the light, A where that ray enters the back (seed 000 eq. 33).
+    (helpers.backlit_ear_deviation; benchmarks/claims.py prints the same figures for the README.)"""
+    from helpers import backlit_ear_deviation
+    for d, dev in backlit_ear_deviation(renderer).items():
+        # red: measured +4.3 / +3.2 / +1.6 % at 2 / 3 / 4 mm (llvmpipe, 160^2 image, 512^2 maps; the TSM's
+        # texel footprint and the blurs' rim renormalisation); the band is 1.4x the largest, below a
+        # lost transmission (-100 %) or the albedo split C^(1-mix) taken twice (-17 %)
+        assert -0.01 < dev[0] < 0.06, (d, dev)
 
 
 def test_gutter_table_zones_each_texel_to_its_nearest_island():

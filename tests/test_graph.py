@@ -422,3 +422,32 @@ def test_settings_sections_are_read_only_and_declared(gl_ctx, shader_dir):
     assert seen["ambient"] == 0.125
     rep = g.run(frame(with_values(Settings(), {"phong.ambient": 0.25})))
     assert rep.ran == ["s"]  # a section's fields are declared settings
+
+
+class Counting(Fill):
+    """A Fill that reports a figure (what a pass like burley_count puts in the frame report)."""
+
+    def execute(self, ec):
+        super().execute(ec)
+        ec.note("filled", value=float(ec.setting(self.setting_path)))
+
+
+def test_frames_count_by_one_and_cached_passes_keep_their_figures(gl_ctx, shader_dir):
+    """Issue 36's mutation run: the frame counter steps by one per run; a cached pass's record keeps the
+    figures of the run that made its output; the reason names what changed; a bad TexSpec says why."""
+    g, _ = make_graph(gl_ctx, shader_dir, [Counting("fill_a", "out", "render.exposure")], ["out"])
+    s = with_values(Settings(), {"render.exposure": 2.0})
+    frames = []
+    for k in range(3):
+        rep = g.run(frame(s))
+        frames.append(rep.frame)
+        rec = next(p for p in rep.passes if p.name == "fill_a")
+        assert rec.status == ("ran" if k == 0 else "cached") and rec.figures == {"value": 2.0}, rec
+    assert frames[1] - frames[0] == 1 and frames[2] - frames[1] == 1
+    rep = g.run(frame(with_values(s, {"render.exposure": 3.0})))
+    rec = next(p for p in rep.passes if p.name == "fill_a")
+    assert rec.status == "ran" and "render.exposure" in rec.reason and rec.figures == {"value": 3.0}
+    with pytest.raises(ValueError, match=r"bad texture size \(0, 8\)"):
+        TexSpec((0, 8), 4, "f4")
+    with pytest.raises(ValueError):
+        TexSpec((8, 8), 4, "f8")

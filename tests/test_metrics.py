@@ -46,11 +46,13 @@ def test_mask_restricts_every_figure():
 
 def test_bad_inputs_are_refused():
     a = _img()
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match=r"image shape \(47, 40, 3\) does not match the reference \(48, 40, 3\)"):
         M.rel_rms(a[:-1], a)
+    with pytest.raises(ValueError, match=r"mask shape \(48, 41\) does not match the image \(48, 40\)"):
+        M.rel_rms(a, a, np.ones((48, 41), bool))
     bad = a.copy()
     bad[0, 0, 0] = np.nan
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="^images must be finite$"):
         M.image_error(bad, a)
 
 
@@ -70,3 +72,115 @@ def test_figure_uncertainty_bounds_every_reference_within_it():
         f = image_error(x, moved)
         assert np.all(np.abs(np.subtract(f.rms, e.rms)) <= np.array(e.rms_u) + 1e-12)
         assert np.all(np.abs(np.subtract(f.p99, e.p99)) <= np.array(e.p99_u) + 0.01 * np.array(e.p99))
+
+
+def _srgb(c):
+    """IEC 61966-2-1 sRGB encoding of linear [0, 1] values (written here, not imported)."""
+    c = np.clip(c, 0.0, 1.0)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055)
+
+
+def _ssim_at(a, b, i, j):
+    """Wang et al. 2004 SSIM at pixel (i, j) of 2-D images, summed directly over an 11 x 11 Gaussian window
+    (sigma 1.5, normalised), population moments, C1 = 0.01^2, C2 = 0.03^2 (L = 1)."""
+    t = np.arange(-5, 6)
+    g = np.exp(-t * t / (2 * 1.5 ** 2))
+    w = np.outer(g, g) / np.outer(g, g).sum()
+    pa, pb = a[i - 5:i + 6, j - 5:j + 6], b[i - 5:i + 6, j - 5:j + 6]
+    ma, mb = (w * pa).sum(), (w * pb).sum()
+    va, vb = (w * pa * pa).sum() - ma * ma, (w * pb * pb).sum() - mb * mb
+    cov = (w * pa * pb).sum() - ma * mb
+    c1, c2 = 0.01 ** 2, 0.03 ** 2
+    return (2 * ma * mb + c1) * (2 * cov + c2) / ((ma * ma + mb * mb + c1) * (va + vb + c2))
+
+
+def test_dssim_value_on_a_known_pair():
+    """DSSIM = (1 - SSIM) / 2 (seed 001 eq. 4.3) pinned against an independent SSIM: a closed form for flat
+    images, a direct window sum (tests' own code) for a textured pair. Without the /2 the first is 0.9999."""
+    white, black = np.ones((16, 16, 3)), np.zeros((16, 16, 3))
+    c1 = 1e-4
+    assert M.dssim(white, black) == pytest.approx((1 - c1 / (1 + c1)) / 2, abs=1e-12)  # 0.49995
+    # flat 0.2 against flat 0.5 (linear): only the luminance term, on the sRGB-encoded values
+    a, b = float(_srgb(0.2)), float(_srgb(0.5))
+    flat = (1 - (2 * a * b + c1) / (a * a + b * b + c1)) / 2
+    assert M.dssim(np.full((16, 16, 3), 0.2), np.full((16, 16, 3), 0.5)) == pytest.approx(flat, abs=1e-12)
+    # textured pair: every interior pixel (window inside the image) equals the direct sum
+    rng = np.random.default_rng(7)
+    x = rng.random((24, 24, 3)) * 0.6
+    y = np.clip(x + 0.15 * rng.standard_normal(x.shape), 0, 1)
+    ex, ey = _srgb(x), _srgb(y)
+    inner = np.zeros((24, 24), bool)
+    inner[5:19, 5:19] = True
+    want = np.array([[np.mean([(1 - _ssim_at(ex[..., c], ey[..., c], i, j)) / 2 for c in range(3)])
+                      for j in range(5, 19)] for i in range(5, 19)])
+    np.testing.assert_allclose(M.dssim_map(x, y)[5:19, 5:19], want, atol=1e-12)
+    assert M.dssim(x, y, inner) == pytest.approx(want.mean(), abs=1e-12)
+    assert 0.05 < want.mean() < 0.5  # a pair far from both ends (the value is not a degenerate 0 or 1/2)
+
+
+def test_alpha_is_ignored_and_figures_are_exact_on_small_values():
+    """RGBA inputs: only RGB counts. A reference of tiny radiance (1e-4) still gives the relative figures
+    (no absolute floor on sum ref^2 but 1e-30)."""
+    a = _img() * 1e-4
+    ra = np.concatenate([a, np.ones(a.shape[:2] + (1,))], -1)
+    rb = np.concatenate([1.1 * a, np.zeros(a.shape[:2] + (1,))], -1)  # alpha differs: must not count
+    np.testing.assert_allclose(M.rel_rms(rb, ra), [0.1] * 3, rtol=1e-9)
+    np.testing.assert_allclose(M.p99_rel(rb, ra), [0.1] * 3, rtol=1e-9)
+    assert M.dssim(np.concatenate([a, a[..., :1]], -1), np.concatenate([a, 1 + a[..., :1]], -1)) == 0.0
+
+
+def test_relative_error_floor_mask_and_percentile():
+    """rel_error_map divides by max(ref, 1 % of the channel's mean over the mask) and is 0 outside the
+    mask; p99 is numpy's 99th percentile of it over the mask; an empty mask gives zeros."""
+    ref = np.ones((12, 100, 3)) * (1.0, 0.5, 0.25)  # channels differ: the floor is per channel
+    ref[0, :40] = 0.0  # black pixels (3.6 % of the mask, so p99 is theirs): divided by the floor 0.01 * mean
+    ref[11] = 100.0  # outside the mask: must not enter the floor's mean
+    x = ref.copy()
+    x[0, :40] = 0.002
+    rng = np.random.default_rng(2)
+    x[1:] *= 1.0 + rng.random((11, 100, 1)) * 0.1
+    m = np.ones((12, 100), bool)
+    m[11] = False
+    x[11] = 50.0  # outside the mask
+    e = M.rel_error_map(x, ref, m)
+    mean = ref[:11].reshape(-1, 3).mean(0)
+    np.testing.assert_allclose(e[0, :40], 0.002 / (0.01 * mean[None, :]) * np.ones((40, 3)))
+    np.testing.assert_array_equal(e[11], 0.0)
+    np.testing.assert_allclose(e[1:11], np.abs(x[1:11] / ref[1:11] - 1.0))
+    np.testing.assert_allclose(M.p99_rel(x, ref, m), 0.002 / (0.01 * mean))  # the black pixels' error
+    empty = np.zeros((12, 100), bool)
+    np.testing.assert_array_equal(M.p99_rel(x, ref, empty), np.zeros(3))
+    assert M.p99_rel(x, ref, empty).shape == (3,)
+    np.testing.assert_array_equal(M.rel_error_map(x, ref, empty), np.zeros((12, 100, 3)))
+    assert M.dssim(x, ref, empty) == 0.0
+
+
+def test_display_encoding_exposure_and_clamp():
+    v = np.array([[[0.0, 0.5, 2.0], [-1.0, 0.1, 0.25]]])
+    want = _srgb(np.clip(v * 2.0, 0, 1))
+    np.testing.assert_allclose(M.display_encode(v, exposure=2.0), want, atol=1e-15)
+    assert M.display_encode(np.full((1, 1, 4), 0.5))[0, 0].shape == (3,)
+    # the exposure reaches DSSIM and image_error: exposure 2 is the same as doubling both images
+    a, b = _img(1) * 0.4, _img(2) * 0.4
+    assert M.dssim(a, b, exposure=2.0) == pytest.approx(M.dssim(2 * a, 2 * b), abs=1e-15)
+    assert M.dssim(a, b, exposure=2.0) != pytest.approx(M.dssim(a, b), abs=1e-6)
+    np.testing.assert_allclose(M.dssim_map(a, b, exposure=2.0), M.dssim_map(2 * a, 2 * b), atol=1e-15)
+    e = M.image_error(a, b, exposure=2.0)
+    assert e.dssim == M.dssim(a, b, exposure=2.0) and M.image_error(a, b).dssim == M.dssim(a, b)
+
+
+def test_image_error_summary_and_json():
+    e = M.ImageError((0.01, 0.02, 0.5), (0.1, 0.2, 0.3), 0.01234)
+    assert e.summary() == "RMS 1.00 / 2.00 / 50.00 %  p99 10.00 / 20.00 / 30.00 %  DSSIM 0.0123"
+    assert e.rms_mean == pytest.approx(0.53 / 3)
+    j = e.to_json()
+    assert j["rms"] == (0.01, 0.02, 0.5) and j["dssim"] == 0.01234 and j["dssim_setup"] == M.DSSIM_SETUP
+
+
+def test_integer_images_are_compared_as_numbers():
+    """8-bit images (a PNG read back) give the figures of the same values as floats (no uint8 wrap-around)."""
+    rng = np.random.default_rng(4)
+    a = rng.integers(0, 256, (16, 16, 3)).astype(np.uint8)
+    b = rng.integers(0, 256, (16, 16, 3)).astype(np.uint8)
+    np.testing.assert_allclose(M.rel_rms(a, b), M.rel_rms(a.astype(float), b.astype(float)), rtol=1e-12)
+    np.testing.assert_allclose(M.p99_rel(a, b), M.p99_rel(a.astype(float), b.astype(float)), rtol=1e-12)

@@ -5,10 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from skinviewer.core import paths
 from skinviewer.physics import specular as S
 
 ROOT = Path(__file__).resolve().parents[1]
-KELEMEN = ROOT / "shaders" / "lib" / "kelemen.glsl"
+KELEMEN = paths.shaders_dir() / "lib" / "kelemen.glsl"  # SKINVIEWER_SHADERS: a mutated copy (glsl_mutation.py)
 Z = np.array([0.0, 0.0, 1.0])
 
 

@@ -64,11 +64,12 @@ def app(display, shader_dir, user_presets):
     from skinviewer.ui.app import create_app, destroy_app
     s = with_values(Settings(), {"scene.name": SCENE, **scene_overrides(SCENE), "shadow.map_size": 256,
                                  "gosselin.light_map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
+    from skinviewer.ui.app import WindowUnavailableError
     try:
         a = create_app(s, size=(W, H), vsync=False)
-        a.frame.set_frame_budget(None)  # one complete frame per step (spreading is tested on its own)
-    except RuntimeError as exc:
+    except WindowUnavailableError as exc:  # no window at all (display or GL driver); a start-up bug fails
         pytest.skip(f"cannot open a window: {exc}")
+    a.frame.set_frame_budget(None)  # one complete frame per step (spreading is tested on its own)
     assert str(a.shaders.root) == str(shader_dir)
     a.step(2)
     yield a
@@ -197,9 +198,7 @@ def test_drag_over_panel_does_not_orbit(app):
 def test_switch_technique_changes_image(app):
     from skinviewer import techniques
     names = techniques.names()
-    other = next(t for t in names if t != "phong") if len(names) > 1 else None
-    if other is None:
-        pytest.skip("only one technique available")
+    other = next(t for t in names if t != "phong")
     assert app.state.set_technique("phong")
     app.step(1)
     phong = _view_image(app)
@@ -362,8 +361,7 @@ def test_resize_follows_framebuffer(app):
 def test_profile_lab_fit_applies_to_deon_gaussians(app):
     from skinviewer.ui.panel import Panel
     lab = app.ui.window(Panel).lab
-    if lab is None:
-        pytest.skip("skinviewer.physics.profiles / skinviewer.physics.fitting not available")
+    assert lab is not None, "the profile lab did not start (skinviewer.physics.profiles / fitting)"
     old = app.state.settings.deon.gaussians
     lab.k = 3
     lab.start_fit(wait=True)
@@ -528,9 +526,7 @@ def test_expensive_change_waits_for_release(app):
     app.frame.set_schedule(mode="on release")
     from skinviewer import techniques
     old = app.state.settings.model_dump(mode="json")
-    tech = next((t for t in ("deon", "gosselin") if t in techniques.names()), None)
-    if tech is None:
-        pytest.skip("no texture-space technique available")
+    tech = next(t for t in ("deon", "gosselin") if t in techniques.names())
     path = {"deon": "deon.mix", "gosselin": "gosselin.scale_x"}[tech]
     try:
         assert app.state.set_technique(tech)
@@ -587,19 +583,39 @@ def test_orbit_renders_smaller_while_dragging_when_slow(app):
     app.frame.set_drag_budget(60.0)
 
 
-def test_every_settings_field_has_a_widget(app):
-    """The generic panel draws every field of the model, optional ones included (auto / value)."""
+def test_every_settings_field_has_a_widget(app, monkeypatch):
+    """The generic panel draws every field of every section of the model (sections added later
+    included), optional ones included (auto / value): each field drawn once, by a widget of its kind
+    (not the read-only fallback) that leaves a visible imgui item."""
     from imgui_bundle import imgui
+    from pydantic import BaseModel
 
     from skinviewer.ui import widgets
-    for section in ("scene", "camera", "render", "shadow", "phong", "specular", "gosselin", "deon"):
+    drawn: dict[str, tuple[str, int]] = {}
+    real = widgets.edit_field
+
+    def spy(name, field, value, path, ui):
+        real(name, field, value, path, ui)
+        assert path not in drawn, f"{path} drawn twice"
+        drawn[path] = (widgets.classify(field)[0], imgui.get_item_rect_size().x)
+
+    monkeypatch.setattr(widgets, "edit_field", spy)
+    expected = set()
+    sections = [name for name, value in app.state.settings if isinstance(value, BaseModel)]
+    assert {"scene", "camera", "render", "deon", "burley", "burley2", "penner"} <= set(sections)
+    for section in sections:
         model = getattr(app.state.settings, section)
+        expected |= {f"{section}.{n}" for n, f in type(model).model_fields.items() if widgets.classify(f)[0] != "other"}
         ui = widgets.UiContext(layout=app.frame.layout)
         imgui.new_frame()
         try:
             widgets.edit_model(model, section, ui)
         finally:
             imgui.end_frame()
+    assert set(drawn) == expected, set(drawn) ^ expected
+    assert len(expected) > 100
+    assert all(kind in widgets._WIDGETS for kind, _ in drawn.values())
+    assert all(w > 0 for _, w in drawn.values()), [p for p, (_, w) in drawn.items() if w <= 0]  # something drawn
 
 
 def test_long_frames_are_spread_and_shown_once_complete(app):
@@ -725,8 +741,7 @@ def test_profile_lab_discards_a_fit_of_an_edited_model(app, monkeypatch):
 
     from skinviewer.ui.panel import Panel
     lab = app.ui.window(Panel).lab
-    if lab is None:
-        pytest.skip("skinviewer.physics.profiles / skinviewer.physics.fitting not available")
+    assert lab is not None, "the profile lab did not start (skinviewer.physics.profiles / fitting)"
     from skinviewer.physics import fitting
     release = threading.Event()
     real = fitting.fit_gaussians

@@ -406,27 +406,16 @@ class Diffusion:
 
     def _exact(self, x: np.ndarray, j: np.ndarray, v: float) -> np.ndarray:
         """integral over element j of G(v, |x - y|) dA(y), exactly: Owen's T over the flat triangle
-        times exp(-z^2 / 2v) for x's height z over its plane (eq. 20 is separable)."""
-        e1, e2, q, u = self._edge_data()
+        (gaussian_triangle_mass, in units of sigma around x's foot point) times exp(-z^2 / 2v) for x's
+        height z over its plane (eq. 20 is separable)."""
+        e1, e2, q, _ = self._edge_data()
         s = math.sqrt(v)
         d = x - self.el.corners[j, 0]
         z = (d * self.el.normal[j]).sum(1)
         p = np.stack([(d * e1[j]).sum(1), (d * e2[j]).sum(1)], 1)
         qj = q[j]
-        uj = u[j]
-        total = np.zeros(len(j))
-        for k in range(3):
-            A = (qj[:, k] - p) / s
-            B = (qj[:, (k + 1) % 3] - p) / s
-            ux, uy = uj[:, k, 0], uj[:, k, 1]
-            hs = A[:, 0] * uy - A[:, 1] * ux
-            h = np.abs(hs)
-            good = h > 1e-12
-            hh = np.where(good, h, 1.0)
-            part = _wedge(hh, B[:, 0] * ux + B[:, 1] * uy) - _wedge(hh, A[:, 0] * ux + A[:, 1] * uy)
-            total += np.where(good, np.sign(hs) * part, 0.0)
-        # corners are wound counter-clockwise in (e1, e2) (e2 = n x e1), so the sum is >= 0
-        return np.maximum(total, 0.0) * np.exp(-z * z / (2.0 * v))
+        mass = gaussian_triangle_mass((qj[:, 0] - p) / s, (qj[:, 1] - p) / s, (qj[:, 2] - p) / s)
+        return mass * np.exp(-z * z / (2.0 * v))
 
 
 def _accumulate(i: np.ndarray, vals: np.ndarray, n: int) -> np.ndarray:

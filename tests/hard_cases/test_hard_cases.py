@@ -94,20 +94,46 @@ def _diffuse_bound(s: Settings) -> float:
     return lc * w * 2.0 * 1.02 + 1e-4
 
 
+# Light loss against Phong on the diffuse-only cases: a technique's normalised kernels move light, so its
+# mean radiance is Phong's (Lambert, same lights and albedo): measured 1.00-1.03 (penner 1.028) at these
+# sizes; the band is 3x that, below the 17 % of an albedo factor taken twice. Known losses (found by this
+# check, issue 36; the entry must go when fixed): at huge intensity Gosselin keeps 39 % and d'Eon 63 % of
+# Phong's light (likely their half-float maps saturating at 65504; not investigated here).
+ENERGY_BAND = (0.9, 1.1)
+KNOWN_LIGHT_LOSS = {("huge-intensity", "gosselin"), ("huge-intensity", "deon")}
+
+
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_hard_case(renderer, mesh_dir, name):
     failures = []
+    means: dict[str, float] = {}
     for technique in techniques.names():
         s = case_settings(name, technique, mesh_dir)
         report = renderer.render(s)
         problems = _check_frame(renderer, s, report)
         if name in DIFFUSE_ONLY:
             lit = renderer.read(s, "lit")[..., :3]
+            means[technique] = float(lit.astype(np.float64).mean())
             if lit.max() > _diffuse_bound(s):
                 problems.append(f"lit max {lit.max():.4g} above the lights' {_diffuse_bound(s):.4g}")
         failures += [f"{technique}: {p}" for p in problems]
     renderer.trim()
+    if means.get("phong", 0.0) > 0.0:
+        for technique, mean in means.items():
+            ratio = mean / means["phong"]
+            if (name, technique) in KNOWN_LIGHT_LOSS:
+                if ratio >= ENERGY_BAND[0]:
+                    failures.append(f"{technique}: no longer loses light ({ratio:.3f} of Phong): remove it from "
+                                    "KNOWN_LIGHT_LOSS")
+            elif not ENERGY_BAND[0] <= ratio <= ENERGY_BAND[1]:
+                failures.append(f"{technique}: mean radiance {ratio:.3f} of Phong's (light "
+                                f"{'lost' if ratio < 1 else 'made'})")
     assert not failures, f"{name}: " + "; ".join(failures)
+
+
+def test_light_loss_check_has_cases():
+    """The energy comparison runs on at least two diffuse-only cases with Phong in the registry."""
+    assert len(DIFFUSE_ONLY) >= 2 and "phong" in techniques.names()
 
 
 def test_the_suite_is_large_enough():
