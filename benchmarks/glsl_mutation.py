@@ -100,10 +100,10 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     todo = [m for m in MUTATIONS if not a.ids or m[0] in a.ids]
     if a.list or not todo:
-        for mid, f, old, new, tests in MUTATIONS:
+        for mid, f, _old, _new, tests in MUTATIONS:
             print(f"{mid:<28} {f:<26} {' '.join(tests)}")
         return 0 if a.list else 2
-    for mid, f, old, new, _ in todo:  # every original present once before any run
+    for mid, f, old, _new, _ in todo:  # every original present once before any run
         if (ROOT / "shaders" / f).read_text().count(old) != 1:
             print(f"{mid}: the original text is not in shaders/{f} exactly once", file=sys.stderr)
             return 2
