@@ -65,6 +65,20 @@ def test_cli_render_dump_and_timings(tmp_path):
     assert {"frame", "timing_mode", "passes", "total_ms"} <= set(t)
 
 
+def test_cli_render_verbose_prints_the_pass_table_and_the_memory_held(tmp_path, capsys):
+    from skinviewer.core.memory import texture_bytes
+    out = tmp_path / "x.png"
+    assert main(["render", "--scene", "shadow-edge", "--technique", "phong", "--size", "64x48", "--out", str(out),
+                 "--set", "shadow.map_size=256", "-v"]) == 0
+    text = capsys.readouterr().out
+    assert "shadow_map_0" in text
+    line = next(ln for ln in text.splitlines() if ln.startswith("GPU memory held:"))
+    mib = float(line.split(":")[1].split("MiB")[0])
+    class _T:  # the 64x48 RGBA32F image alone: the renderer holds more (maps, mesh), and nothing absurd
+        size, components, dtype = (64, 48), 4, "f4"
+    assert texture_bytes(_T()) / 2**20 < mib < 512
+
+
 @pytest.mark.parametrize("argv,msg", [
     (["--scene", "nowhere"], "invalid choice"),
     (["--set", "lights.0.intensity=-1"], "lights.0.intensity"),

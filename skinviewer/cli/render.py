@@ -63,6 +63,10 @@ def cmd_render(args) -> int:
             print(f"dumped {len(r.graph(s.technique).resources())} textures to {args.dump_passes}")
         if args.verbose:
             print(report.table())
+            from skinviewer.core.memory import renderer_memory
+            held = renderer_memory(r)  # what the renderer holds on the GPU, counted from each object's format
+            print(f"GPU memory held: {sum(held.values()) / 2**20:.1f} MiB ("
+                  + ", ".join(f"{k} {v / 2**20:.1f}" for k, v in held.items()) + ")")
     finally:
         r.release()
         ctx.release()
