@@ -39,7 +39,7 @@ def glsl_eval(ctx: moderngl.Context, include: str | list[str], expr: str, inputs
         Path(d, "eval.frag").write_text(_FRAG.format(
             root=root, preamble=preamble, expr=expr,
             includes="\n".join(f'#include "{root / i}"' for i in incs)))
-        lib = ShaderLibrary(ctx, root=Path(d))
+        lib = ShaderLibrary(ctx, root=Path(d), include_roots=(root,))
         try:
             prog = lib.get("eval", defines)
             n = len(x)

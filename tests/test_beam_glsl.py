@@ -55,7 +55,7 @@ def _inside_area(ctx, rows: np.ndarray) -> np.ndarray:
 def test_four_footprints_around_the_beam_share_its_disk(gl_ctx):
     s = 3.0  # half side: footprints 6 beam radii wide, as the laser's pixels and texels are
     rows = []
-    eps = [0.0, 1e-7, -1e-7, 3e-8, -2.5e-7, 1e-6]
+    eps = [0.0, 1e-7, -1e-7, 3e-8, -2.5e-7, 1e-6, 1e-5, -3e-5, 1e-4]  # NVIDIA's rounding reached ~1e-5
     for ex in eps:
         for ey in eps:
             for sx in (-1, 1):
@@ -64,4 +64,4 @@ def test_four_footprints_around_the_beam_share_its_disk(gl_ctx):
     area = _inside_area(gl_ctx, np.array(rows)).reshape(len(eps) * len(eps), 4)
     np.testing.assert_allclose(area.sum(axis=1), math.pi, rtol=1e-4)
     # each footprint holds a quarter of the disk (the corner within 1e-6 radii of the centre)
-    np.testing.assert_allclose(area, math.pi / 4, rtol=1e-3)
+    np.testing.assert_allclose(area, math.pi / 4, rtol=2e-3)

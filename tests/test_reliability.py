@@ -1140,3 +1140,20 @@ def test_a_damaged_head_cache_is_regenerated_with_a_note(tmp_path, damage):
     assert any("did not validate" in n for n in again.notes), again.notes
     np.testing.assert_array_equal(again.positions, first.positions)
     assert not default_head(detail=0, cache_dir=tmp_path).notes  # rebuilt
+
+
+def test_a_shader_library_reads_its_include_roots_and_nothing_beyond(gl_ctx, tmp_path):
+    # a test's programs in a temporary folder may include the product's lib/ (include_roots); the
+    # confinement still holds for anything else
+    from skinviewer.core import paths
+    from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
+    (tmp_path / "a.frag").write_text('#version 330 core\n#pragma vertex_stage "vs/fullscreen.vert"\n'
+                                    '#include "lib/color.glsl"\nout vec4 f;\nvoid main() { f = vec4(0.0); }\n')
+    (tmp_path / "vs").symlink_to(paths.shaders_dir() / "vs", target_is_directory=True)
+    (tmp_path / "lib").symlink_to(paths.shaders_dir() / "lib", target_is_directory=True)
+    with pytest.raises(ShaderCompileError, match="outside the shader folder"):
+        ShaderLibrary(gl_ctx, tmp_path).get("a")
+    assert ShaderLibrary(gl_ctx, tmp_path, include_roots=(paths.shaders_dir(),)).get("a") is not None
+    (tmp_path / "b.frag").write_text('#version 330 core\n#include "/etc/hostname"\nout vec4 f;\nvoid main() { f = vec4(0.0); }\n')
+    with pytest.raises(ShaderCompileError, match="outside the shader folder"):
+        ShaderLibrary(gl_ctx, tmp_path, include_roots=(paths.shaders_dir(),)).get("b")

@@ -111,19 +111,17 @@ def test_headless_context_failure_says_what_to_install(monkeypatch):
 
 
 def test_package_data_globs_cover_shaders_and_presets():
-    """The wheel ships shaders/ and presets/ (pyproject package-data): every file must match a glob."""
-    import fnmatch
-
+    """The wheel ships shaders/ and presets/ (pyproject package-data): every file must match a glob,
+    read as setuptools reads it (recursive glob: `**/` matches zero or more folders)."""
     import tomllib
 
     from skinviewer.core import paths
     cfg = tomllib.loads((paths.shaders_dir().parent / "pyproject.toml").read_text())["tool"]["setuptools"]
     for pkg, folder in (("skinviewer.shaders", paths.shaders_dir()), ("skinviewer.presets", paths.presets_dir())):
-        globs = cfg["package-data"][pkg]
+        covered = {p for g in cfg["package-data"][pkg] for p in folder.glob(g)}
         for f in folder.rglob("*"):
             if f.is_file() and "__pycache__" not in f.parts:
-                rel = f.relative_to(folder).as_posix()
-                assert any(fnmatch.fnmatch(rel, g) for g in globs), f"{rel} would be missing from the wheel"
+                assert f in covered, f"{f.relative_to(folder).as_posix()} would be missing from the wheel"
 
 
 def test_viewer_without_a_display_says_how_to_run_it(tmp_path):

@@ -187,7 +187,8 @@ def test_more_rules_the_mutation_run_found_unpinned(tmp_path):
     assert ki.value.args == ("render.nope",)
     # value_key: sorted keys, dict values converted
     assert S.value_key(s, "lights.0") == json.dumps(S.to_dict(s)["lights"][0], sort_keys=True)
-    assert S.value_key(s, "lights.0").startswith('{"beam_radius"')
+    keys = list(json.loads(S.value_key(s, "lights.0")))
+    assert keys == sorted(keys) and len(keys) > 3  # sorted, not the model's field order
     assert json.loads(S.value_key(s, "specular.per_region"))["nose"] == {"m": 0.28, "rho_s": 0.24}
     # replacing a list item; a new key in a region table; values containing '='
     light = dict(S.to_dict(s)["lights"][0], intensity=0.25)

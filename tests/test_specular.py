@@ -275,7 +275,7 @@ def _program(ctx, tmp_path):
     except ImportError:  # no shader library yet: splice the include by hand
         return ctx.program(vertex_shader=_VERT,
                            fragment_shader=_FRAG.replace('#include "lib/kelemen.glsl"', KELEMEN.read_text()))
-    return ShaderLibrary(ctx, root=tmp_path).get("kelemen_test")
+    return ShaderLibrary(ctx, root=tmp_path, include_roots=(KELEMEN.parent.parent,)).get("kelemen_test")
 
 
 def _run_glsl(ctx, tmp_path, n, l, v, params, scalars, lut, rho):

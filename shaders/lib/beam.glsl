@@ -35,7 +35,9 @@ float beam_disk_tri(vec2 p, vec2 q) {
     float sq = sqrt(det);
     float s = max(0.0, -a - sq), t = min(1.0, -a + sq);
     if (t < 0.0 || 1.0 <= s) return 0.5 * beam_angle(p, q);
-    vec2 u = p + d * s, v = p + d * t;
+    // the chord's ends; an end that is the vertex itself is taken exactly (p + d * 1 is not q in
+    // float: the angle between q and its rounded copy is noise when q lies near the centre)
+    vec2 u = (s <= 0.0) ? p : p + d * s, v = (t >= 1.0) ? q : p + d * t;
     return 0.5 * beam_angle(p, u) + 0.5 * beam_cross(u, v) + 0.5 * beam_angle(v, q);
 }
 

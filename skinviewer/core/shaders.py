@@ -82,9 +82,13 @@ class ShaderLibrary:
     """Programs by (name, defines). ``defines``: library-wide extra defines (e.g. ``{"GENERIC_SHADERS":
     1}`` compiles every program unspecialised, for tests and comparisons)."""
 
-    def __init__(self, ctx: moderngl.Context, root: Path | None = None, defines: dict | None = None):
+    def __init__(self, ctx: moderngl.Context, root: Path | None = None, defines: dict | None = None,
+                 include_roots: tuple[Path, ...] = ()):
         self.ctx = ctx
         self.root = Path(root) if root else paths.shaders_dir()
+        # folders besides the root that #include / vertex_stage may read (a test's programs in a
+        # temporary folder including the product's lib/); nothing else is ever read
+        self.include_roots = tuple(Path(r) for r in include_roots)
         self.defines = {**GLSL_DEFINES, **{str(k): str(v) for k, v in (defines or {}).items()}}
         self._entries: dict[tuple, _Entry] = {}
         self._by_program: dict[int, _Entry] = {}
@@ -149,8 +153,9 @@ class ShaderLibrary:
             real = Path(p).resolve()
         except (OSError, RuntimeError):  # a symlink loop
             return f"{p}: cannot resolve its path (a symlink loop?)"
-        if real == root or root in real.parents:
-            return ""
+        for r in (root, *(x.resolve() for x in self.include_roots)):
+            if real == r or r in real.parents:
+                return ""
         return f"{self._rel(Path(p))} is outside the shader folder {root} (symlinks resolved): refused"
 
     def _rel(self, p: Path) -> str:

@@ -197,6 +197,9 @@ def destroy_app(app: ViewerApp) -> None:
         pass
 
 
+SETTLE_FRAMES = 600  # a batch screenshot waits at most this many frames more for a complete image
+
+
 def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, screenshot: str | None = None,
                size: tuple[int, int] | None = None, preset_path: str | None = None, debug: bool = False) -> int:
     """``skinviewer [view]``: open the window on settings ``s`` (the command line parses them); with
@@ -217,12 +220,20 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
     wnd, frame = app.wnd, app.frame
     try:
         app.timer.start()
+        # --frames N: N frames, then (with --screenshot) more until the image is complete — passes
+        # split over frames under the time budget (row bands) would otherwise leave it unfinished
+        shot_requested, settle = False, 0
         while not wnd.is_closing:
-            if frames and screenshot and frame.frames == frames - 1:
-                frame.request_screenshot(screenshot, include_ui=False)
             app.step()
-            if frames and frame.frames >= frames:
+            if not frames or frame.frames < frames:
+                continue
+            if not screenshot or shot_requested:
                 break
+            if (frame.report is not None and frame.report.complete) or settle >= SETTLE_FRAMES:
+                frame.request_screenshot(screenshot, include_ui=False)  # written by the next frame
+                shot_requested = True
+            else:
+                settle += 1
         if screenshot:
             if not frame.screenshots_written:
                 print(f"skinviewer: no screenshot written ({frame.render_error or 'no frame'})", file=sys.stderr)
