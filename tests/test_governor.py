@@ -291,3 +291,15 @@ def test_governor_off_in_the_viewer_is_todays_frame(viewer):
     finally:
         app.frame.set_dragging(False)
         app.state.apply({"render.governor": "interactive", "render.governor_budget_ms": 100.0})
+
+
+def test_the_shipped_gpu_calibrations_parse_and_fit_todays_ladders():
+    # benchmarks/gpu/run.sh's calibrate step; a ladder change makes a shipped file stale: re-run the GPU
+    # check (or delete the file), since load() would silently ignore it
+    files = sorted(calibration.SHIPPED.glob("*.json"))
+    assert files, "no shipped calibration"
+    for p in files:
+        cal = Calibration.from_json(json.loads(p.read_text()))
+        assert cal.version == calibration.VERSION, p.name
+        assert cal.signature == signature(sorted(cal.entries)), f"{p.name} was made for other preview ladders"
+        assert calibration.shipped(cal.renderer, cal.mesh_class) is not None
