@@ -24,7 +24,7 @@ bool burley_fetch(ivec2 q, out vec3 E, out float z) {
     if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, textureSize(irradiance, 0))))
         return false;
     vec4 e = texelFetch(irradiance, q, 0);
-    if (!(e.a > 0.5))
+    if ((isnan(e.a) || e.a <= 0.5))
         return false;
     E = e.rgb;
     z = texelFetch(lin_depth, q, 0).r;
@@ -43,13 +43,13 @@ void main() {
     o_far = vec4(0.0);
     o_far_w = vec4(0.0);
 #endif
-    if (!(c.a > 0.5))
+    if ((isnan(c.a) || c.a <= 0.5))
         return;
     float zc = texelFetch(lin_depth, p, 0).r;
     float ppm = u_proj_scale / max(zc, 1e-6);
     float rad = u_filter_radius * ppm;
     float n_avail = floor(BURLEY_PI * rad * rad / 4.0);
-    if (!(n_avail >= 1.0)) {
+    if ((isnan(n_avail) || n_avail < 1.0)) {
         o_stats = vec4(0.0, 0.0, 1.0, -1.0);
         return;
     }

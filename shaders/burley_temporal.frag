@@ -38,7 +38,7 @@ void main() {
 #if TEMPORAL_REUSE
     o_history_own = vec4(cur.rgb, 0.0);
 #endif
-    if (!(cur.a > 0.5))
+    if ((isnan(cur.a) || cur.a <= 0.5))
         return;  // not an SSS pixel: passed through, no history
     float n = 1.0;
     vec3 mean = cur.rgb;

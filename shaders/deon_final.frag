@@ -87,7 +87,7 @@ void main() {
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
-        if (!(dot(N, L) > 0.0)) continue;
+        if ((isnan(dot(N, L)) || dot(N, L) <= 0.0)) continue;
         float ks = surface_ks(N, L, V, sp);
 #if DEON_TEXTURE_SHADOWS
         spec += Lc * (ks * vis[i]);

@@ -18,7 +18,7 @@ out vec4 f_stretch;
 float per_mm(vec3 dp) {
     float l = length(dp) * u_mm_per_unit;      // mm per UV unit
     if (isnan(l) || isinf(l)) return MIN_UV_PER_MM;
-    if (!(l > 1.0 / MAX_UV_PER_MM)) return MAX_UV_PER_MM;
+    if (isnan(l) || l <= 1.0 / MAX_UV_PER_MM) return MAX_UV_PER_MM;
     return clamp(1.0 / l, MIN_UV_PER_MM, MAX_UV_PER_MM);
 }
 #ifdef VERTEX_METRIC

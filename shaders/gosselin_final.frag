@@ -44,7 +44,7 @@ void main() {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);
-        if (!(ndl > 0.0)) continue;
+        if ((isnan(ndl) || ndl <= 0.0)) continue;
         E0 += Lc * min(ndl, 1.0);
         float ks = surface_ks(N, L, V, sp);
         if (u_spec_shadow == 1) ks /= max(ndl, 1e-6);  // the bare BRDF of eq. (16)

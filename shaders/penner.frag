@@ -42,7 +42,7 @@ void main() {
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);
         vec3 D = texture(ring_lut, vec2(clamp(ndl * 0.5 + 0.5, 0.0, 1.0), k)).rgb;
-        if (!(max(D.r, max(D.g, D.b)) > 0.0)) continue;
+        if ((isnan(max(D.r, max(D.g, D.b))) || max(D.r, max(D.g, D.b)) <= 0.0)) continue;
         float s = shadow_factor(i, v_position, normalize(v_normal));
         vec3 P = vec3(s);
         if (u_penumbra != 0 && s > 0.0 && s < 1.0) {

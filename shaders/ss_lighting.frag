@@ -66,7 +66,7 @@ float shadow_sample(int i, vec2 c) {
 vec3 transmitted(int i, vec3 P, vec3 Ng) {
     vec3 Ps = P - Ng * u_shadow_texel[i];
     vec4 p = u_light_matrix[i] * vec4(Ps, 1.0);
-    if (!(p.w > 0.0)) return vec3(0.0);
+    if ((isnan(p.w) || p.w <= 0.0)) return vec3(0.0);
     vec3 c = p.xyz / p.w * 0.5 + 0.5;
     if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return vec3(0.0);
     vec2 texel = 1.0 / vec2(u_shadow_map_size);
@@ -83,7 +83,7 @@ vec3 transmitted(int i, vec3 P, vec3 Ng) {
         float ds = shadow_sample(i, cc);
         if (ds >= 1.0) continue;  // no surface in front: nothing crossed
         vec4 a = u_light_matrix_inv[i] * vec4(cc * 2.0 - 1.0, ds * 2.0 - 1.0, 1.0);
-        if (!(abs(a.w) > 1e-30)) continue;
+        if ((isnan(abs(a.w)) || abs(a.w) <= 1e-30)) continue;
         // the distance along the light (not the lateral texel offset), less the quantisation
         d_sum += max(abs(dot(a.xyz / a.w - Ps, Lv)) * u_mm_per_unit - tol_mm, 0.0);
         n += 1.0;

@@ -25,10 +25,10 @@ float beam_disk_tri(vec2 p, vec2 q) {
     // a vertex at the disk's centre (a footprint corner on the beam's axis) makes the triangle
     // degenerate: area 0. Without this, the angle between two ~1e-7 vectors (the corner and its
     // rounded chord point) came out as +-pi on NVIDIA: a quarter disk too much (issue 31)
-    if (!(dot(p, p) > 1e-12) || !(dot(q, q) > 1e-12)) return 0.0;
+    if ((isnan(dot(p, p)) || dot(p, p) <= 1e-12) || (isnan(dot(q, q)) || dot(q, q) <= 1e-12)) return 0.0;
     vec2 d = q - p;
     float dd = dot(d, d);
-    if (!(dd > 1e-24)) return 0.0;
+    if ((isnan(dd) || dd <= 1e-24)) return 0.0;
     float a = dot(d, p) / dd, b = (dot(p, p) - 1.0) / dd;
     float det = a * a - b;
     if (det <= 0.0) return 0.5 * beam_angle(p, q);
@@ -51,7 +51,7 @@ float beam_coverage(vec3 P, vec3 O, vec3 L, float r) {
     vec2 a = vec2(dot(g_footprint_dx, e1), dot(g_footprint_dx, e2)) / r;
     vec2 b = vec2(dot(g_footprint_dy, e1), dot(g_footprint_dy, e2)) / r;
     float area = abs(beam_cross(a, b));
-    if (!(area > 1e-12) || !(r > 0.0)) return length(c) <= 1.0 ? 1.0 : 0.0;
+    if ((isnan(area) || area <= 1e-12) || (isnan(r) || r <= 0.0)) return length(c) <= 1.0 ? 1.0 : 0.0;
     float reach = 0.5 * (length(a) + length(b));  // circumradius of the footprint
     float dc = length(c);
     if (dc >= 1.0 + reach) return 0.0;

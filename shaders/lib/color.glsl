@@ -38,7 +38,7 @@ vec4 bounded4(vec4 c, float limit) {
 // C^e for albedo C >= 0 without pow(0, 0) (undefined in GLSL): e <= 0 -> 1, C <= 0 -> 0 (seed 000 eq. 28, 34).
 vec3 safe_pow(vec3 c, float e) {
     c = clamp(c, 0.0, FLOAT_MAX);
-    if (!(e > 0.0)) return vec3(1.0);
+    if ((isnan(e) || e <= 0.0)) return vec3(1.0);
     return vec3(c.x > 0.0 ? pow(c.x, e) : 0.0, c.y > 0.0 ? pow(c.y, e) : 0.0, c.z > 0.0 ? pow(c.z, e) : 0.0);
 }
 #endif

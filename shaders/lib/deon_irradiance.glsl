@@ -54,7 +54,7 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
         vec3 Lc = light_incident(i, v_position, L);
         if (ns == 1) {
             float ndl = dot(N, L);
-            if (!(ndl > 0.0)) continue;
+            if ((isnan(ndl) || ndl <= 0.0)) continue;
             float s = shadow_factor(i, v_position, normalize(v_normal));
             vis[i] = s;
             float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)
@@ -68,7 +68,7 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
             vec3 Lk;
             light_incident(i, Pk, Lk);
             float ndl = dot(surface_normal(v_normal, v_tangent, v_uv + o * duv), Lk);
-            if (!(ndl > 0.0)) continue;
+            if ((isnan(ndl) || ndl <= 0.0)) continue;
             float s = shadow_factor(i, Pk, normalize(v_normal));
             sv += s;
             float rho = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, ndl, sp) : 1.0;  // eq. (32)

@@ -14,7 +14,7 @@ const float KS_HH_EPS = 1e-6;  // |L+V|^2 below this: H undefined
 vec3 ks_safe_normalize(vec3 v) {
     vec3 a = abs(v);
     float big = max(a.x, max(a.y, a.z));
-    if (!(big > 1e-30)) return vec3(0.0);
+    if ((isnan(big) || big <= 1e-30)) return vec3(0.0);
     v /= big;  // pre-scale: no overflow/underflow in dot()
     return v * inversesqrt(dot(v, v));
 }
@@ -29,7 +29,7 @@ float fresnel_schlick(float h_dot_v, float f0) {
 
 // eq. 15 from cos and sin^2 of the N-H angle: exp(-tan^2/m^2) / (m^2 cos^4)
 float ks_beckmann_sc(float c, float s2, float m) {
-    if (!(c > 0.0)) return 0.0;
+    if ((isnan(c) || c <= 0.0)) return 0.0;
     float mm = max(m, KS_M_MIN);
     float m2 = mm * mm;
     float c2 = max(c * c, 1e-12);  // exp(-s2/(c2 m2)) underflows to 0 long before this bites
@@ -60,10 +60,10 @@ bool ks_frame(inout vec3 N, vec3 L, inout vec3 V, out vec3 H, out float hh, out 
     ndotl = dot(N, L);
     H = vec3(0.0);
     hh = 0.0;
-    if (!(ndotl > 0.0) || dot(V, V) < 0.5) return false;  // N.L <= 0, or V was a zero vector
+    if ((isnan(ndotl) || ndotl <= 0.0) || dot(V, V) < 0.5) return false;  // N.L <= 0, or V was a zero vector
     vec3 h = L + V;
     hh = dot(h, h);
-    if (!(hh >= KS_HH_EPS)) return false;
+    if ((isnan(hh) || hh < KS_HH_EPS)) return false;
     H = h * inversesqrt(hh);
     return true;
 }
@@ -99,7 +99,7 @@ float ks_specular_lut(vec3 N, vec3 L, vec3 V, float m, float rho_s, float f0, sa
     float hh, ndotl;
     if (!ks_frame(N, L, V, H, hh, ndotl)) return 0.0;
     float ndoth = dot(N, H);
-    if (!(ndoth > 0.0)) return 0.0;
+    if ((isnan(ndoth) || ndoth <= 0.0)) return 0.0;
     float PH = ks_decode_beckmann(ks_table_bilinear(beckmann_tex, vec2(min(ndoth, 1.0), max(m, KS_M_MIN))));
     return ks_combine(PH, H, V, hh, ndotl, rho_s, f0);
 }

@@ -26,7 +26,7 @@ void light_map(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, vec3 d
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
         float ndl = dot(N, L);
-        if (!(ndl > 0.0)) continue;  // also skips NaN normals
+        if ((isnan(ndl) || ndl <= 0.0)) continue;  // also skips NaN normals
         E += Lc * (min(ndl, 1.0) * shadow_factor(i, v_position, normalize(v_normal)));
     }
 #if ENV_LIGHT

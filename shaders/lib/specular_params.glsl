@@ -50,7 +50,7 @@ float surface_ks(vec3 N, vec3 L, vec3 V, SpecParams sp) {
 // rho_s rescales its complement exactly.
 float surface_rho_dt(sampler2D rho_dt_tex, float cos_theta, SpecParams sp) {
     float t = rho_dt_lookup(rho_dt_tex, cos_theta, sp.m);
-    if (!(u_spec_rho_s_table > 0.0)) return 1.0;
+    if ((isnan(u_spec_rho_s_table) || u_spec_rho_s_table <= 0.0)) return 1.0;
     return clamp(1.0 - (1.0 - t) * sp.rho_s / u_spec_rho_s_table, 0.0, 1.0);
 }
 #endif

@@ -59,7 +59,7 @@ vec3 tsm_gathered(float v, float turn, vec2 c, float dC, vec2 uvC, vec2 sC, floa
 // N: C's (vertex) normal; facing away from the light, C is not lit whatever the TSM's depth says.
 vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
     vec4 p = u_tsm_matrix * vec4(P, 1.0);
-    if (!(p.w > 0.0)) return vec3(0.0);
+    if ((isnan(p.w) || p.w <= 0.0)) return vec3(0.0);
     vec2 c = p.xy / p.w * 0.5 + 0.5;
     if (any(lessThan(c, vec2(0.0))) || any(greaterThan(c, vec2(1.0)))) return vec3(0.0);
     vec4 t0 = texture(tsm_map, c);
@@ -83,17 +83,17 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
         float tol = u_tsm_gate_mm * (1.0 + 0.5 * sqrt(1.0 - cosA * cosA) / cosA);
         g0 += max(smoothstep(tol, 2.0 * tol, m), m > 0.0 ? away : 0.0) / 9.0;
         float g = smoothstep(tol, 2.0 * tol, m);
-        if (!(g > 0.0)) continue;
+        if ((isnan(g) || g <= 0.0)) continue;
         any_k = true;
         float r = (abs(uv_zone(zone_map, t.gb) - zoneC) < 0.5) ? length((uvC - t.gb) / s) : 1e18;
         for (int i = 0; i < MAX_GAUSSIANS; ++i) {
             if (i >= u_count) break;
             float v = u_var[i];
-            if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0 || !(v > 0.0)) continue;
+            if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0 || (isnan(v) || v <= 0.0)) continue;
             f[i] += g * max(exp(-m * m / (k2 * v)) - exp(-r * r / (k2 * v)), 0.0);
         }
     }
-    if (!any_k && !(g0 > 0.0)) return vec3(0.0);
+    if (!any_k && (isnan(g0) || g0 <= 0.0)) return vec3(0.0);
     vec4 there[MAX_GAUSSIANS];
     FETCH_BLURS(there, t0.gb, THERE_MASK)
     vec3 acc = vec3(0.0);
