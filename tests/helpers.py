@@ -121,3 +121,24 @@ def backlit_ear_deviation(renderer, n: int = 160) -> dict[float, np.ndarray]:
         with np.errstate(divide="ignore", invalid="ignore"):
             out[d] = lit[row, col] / expect - 1.0
     return out
+
+
+def quad_gltf(uv: np.ndarray, uri: str | None = None) -> tuple[dict, bytes]:
+    """The buffer part of a glTF of one unit quad (positions, ``uv`` as TEXCOORD_0, six indices): the
+    dict's buffers, bufferViews and accessors 0/1/2, and the buffer's bytes — embedded as a data URI
+    unless ``uri`` names the external .bin the caller writes."""
+    import base64
+    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
+    idx = np.array([0, 1, 2, 0, 2, 3], np.uint32)
+    buf = P.tobytes() + np.asarray(uv, np.float32).tobytes() + idx.tobytes()
+    d = {"asset": {"version": "2.0"},
+         "buffers": [{"byteLength": len(buf),
+                      "uri": uri or "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
+         "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                         {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                         {"buffer": 0, "byteOffset": 80, "byteLength": 24}],
+         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                        "min": [0, 0, 0], "max": [1, 1, 0]},
+                       {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                       {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}]}
+    return d, buf

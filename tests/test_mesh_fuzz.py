@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import quad_gltf
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -88,21 +89,8 @@ def test_obj_and_mtl_text(folder, lines, keep_valid, mtl):
 
 
 def _base_gltf() -> dict:
-    import base64
-    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
-    UV = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
-    idx = np.array([0, 1, 2, 0, 2, 3], np.uint32)
-    buf = P.tobytes() + UV.tobytes() + idx.tobytes()
-    return {"asset": {"version": "2.0"},
-            "buffers": [{"byteLength": len(buf),
-                         "uri": "data:application/octet-stream;base64," + base64.b64encode(buf).decode()}],
-            "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                            {"buffer": 0, "byteOffset": 80, "byteLength": 24}],
-            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-                           "min": [0, 0, 0], "max": [1, 1, 0]},
-                          {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-                          {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}],
+    d, _ = quad_gltf(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32))
+    return {**d,
             "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
             "textures": [{"source": 0}], "images": [{"uri": "tex.png"}],
             "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2,

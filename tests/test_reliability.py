@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from helpers import small_settings
+from helpers import quad_gltf, small_settings
 
 from skinviewer.cli import main as cli_main
 from skinviewer.core import files
@@ -531,23 +531,11 @@ def test_settings_roundtrip_unchanged_by_validators():
 
 def _gltf(path: Path, meshes=1, material=True, nested=False, bin_uri=None, image_uri=None) -> np.ndarray:
     """A glTF of ``meshes`` unit quads (UVs in [0.25, 0.75]); returns the file's TEXCOORD_0."""
-    import base64
-    P = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], np.float32)
     UV = np.array([[0.25, 0.25], [0.75, 0.3], [0.7, 0.75], [0.3, 0.7]], np.float32)
-    idx = np.array([0, 1, 2, 0, 2, 3], np.uint32)
-    buf = P.tobytes() + UV.tobytes() + idx.tobytes()
+    d, buf = quad_gltf(UV, bin_uri)
     if bin_uri:
         (path.parent / bin_uri).write_bytes(buf)
-    uri = bin_uri or "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
-    d = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": len(buf), "uri": uri}],
-         "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
-                         {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-                         {"buffer": 0, "byteOffset": 80, "byteLength": 24}],
-         "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-                        "min": [0, 0, 0], "max": [1, 1, 0]},
-                       {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-                       {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}],
-         "meshes": [], "nodes": [], "scenes": [{"nodes": []}], "scene": 0}
+    d.update({"meshes": [], "nodes": [], "scenes": [{"nodes": []}], "scene": 0})
     for _ in range(meshes):
         prim = {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}
         if material:
