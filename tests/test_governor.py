@@ -50,6 +50,34 @@ def test_the_pick_never_costs_more_than_the_budget_on_the_calibration_held(techn
                     assert p.ms == cheapest and "nothing fits" in p.note
 
 
+def test_the_costs_seen_here_replace_the_calibration_and_scale_the_rest():
+    """A calibration made on a busier day (every cost 10x what this machine takes now): once a few
+    frames were seen, the pick is what fits as the machine is now, not as it was calibrated."""
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, seed=3)
+    g = Governor("interactive", 100.0, cal)
+    rungs = ladder(s)
+    assert g.scale("deon") == 1.0 and g.cost("deon", rungs[0], False) == cal.entry("deon", rungs[0]).light_ms
+    g.observe("deon", rungs[0], False, cal.entry("deon", rungs[0]).light_ms / 10.0)
+    g.observe("deon", FINAL, False, 100.0)  # FINAL was calibrated at 1000 ms
+    assert g.scale("deon") == pytest.approx(0.1)
+    assert g.cost("deon", FINAL, False) == 100.0  # seen: its own figure
+    for r in rungs[1:-1]:  # not seen: calibrated x the scale the seen ones show
+        assert g.cost("deon", r, False) == pytest.approx(0.1 * cal.entry("deon", r).light_ms)
+    assert g.pick(s).rung == FINAL  # the user's settings fit the budget as the machine is now
+    # a running mean: one slow frame moves the figure half way, it does not replace it
+    g.observe("deon", FINAL, False, 300.0)
+    assert g.cost("deon", FINAL, False) == pytest.approx(200.0)
+    # what is no measurement is ignored
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        g.observe("deon", FINAL, False, bad)
+    assert g.cost("deon", FINAL, False) == pytest.approx(200.0)
+    # a technique never seen borrows every technique's ratio
+    s2 = with_values(Settings(), {"technique": "phong"})
+    cal.entries["phong"] = fake_calibration("phong", s2, seed=4).entries["phong"]
+    assert g.scale("phong") == pytest.approx(g.scale("deon"))
+
+
 def test_a_budget_of_zero_or_less_says_so_and_shows_the_cheapest():
     s = with_values(Settings(), {"technique": "deon"})
     cal = fake_calibration("deon", s)
@@ -259,7 +287,7 @@ def test_the_viewer_previews_while_dragging_and_refines_to_the_ungoverned_image(
             status = app.frame.governor_status
             assert status.startswith("preview: "), status
             shown = app.frame.governor.shown
-            assert not shown.final and cal.entry("deon", shown).light_ms <= 950.0
+            assert not shown.final and app.frame.governor.cost("deon", shown, False) <= 950.0
             g = app.frame.graph()  # the preview's own graph (its maps stay cached there)
             assert (g is app.renderer.graph("deon")) == (not shown.changes)
             for path, value in shown.changes.items():  # the graph rendered the preview's knobs
@@ -303,3 +331,54 @@ def test_the_shipped_gpu_calibrations_parse_and_fit_todays_ladders():
         assert cal.version == calibration.VERSION, p.name
         assert cal.signature == signature(sorted(cal.entries)), f"{p.name} was made for other preview ladders"
         assert calibration.shipped(cal.renderer, cal.mesh_class) is not None
+
+
+def test_letting_go_of_a_drag_starts_the_refinement_at_once(viewer):
+    """No rest wait after a mouse release: the next frame already steps up towards the user's settings."""
+    app = viewer
+    cal = fake_calibration("deon", app.state.settings, seed=2)
+    app.frame.governor.set_calibration(cal)
+    assert app.state.apply({"render.governor_budget_ms": 950.0})
+    _still(app)
+    app.frame.governor._seen.clear()  # the fake calibration's costs decide (FINAL 1000 ms: a preview)
+    app.frame.set_dragging(True)
+    assert app.state.apply({"lights.0.direction": [0.25, 0.3, 1.0]}, "lights.0 (key light drag)")
+    app.step(1)
+    assert not app.frame.governor.shown.final
+    app.frame.set_dragging(False)  # released a moment after the last change: within the rest time
+    app.step(1)
+    assert not app.frame._interacting and (app.frame.governor.refining or app.frame.governor.shown.final)
+    # an edit without a held widget (a typed value) still waits for the rest time
+    assert app.state.apply({"lights.0.direction": [0.3, 0.3, 1.0]}, "lights.0.direction")
+    app.step(1)
+    assert app.frame._interacting
+    _still(app)
+
+
+def test_a_drag_finishes_each_preview_frame_instead_of_cancelling_it(viewer):
+    """A preview that takes several frames (under a small frame budget) is finished before the newest
+    drag position is taken: a drag changing the light every frame still gets complete images."""
+    app = viewer
+    cal = fake_calibration("deon", app.state.settings, seed=2)
+    app.frame.governor.set_calibration(cal)
+    assert app.state.apply({"render.governor_budget_ms": 950.0})
+    _still(app)
+    app.frame.governor._seen.clear()  # the fake calibration's costs decide: a preview is picked
+    app.frame.set_frame_budget(2.0)  # the preview's passes in row bands, a few frames each
+    try:
+        app.frame.set_dragging(True)
+        completed = partial = 0
+        for k in range(1500):
+            assert app.state.apply({"lights.0.direction": [0.2 + 0.001 * k, 0.3, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+            rep = app.frame.report
+            completed += bool(rep is not None and rep.complete and rep.ran)
+            partial += bool(rep is not None and not rep.complete)
+            if completed >= 2:
+                break
+        assert partial, "no preview frame was spread over frames: nothing was tested"
+        assert completed >= 2, "the drag never showed a complete preview"
+    finally:
+        app.frame.set_dragging(False)
+        app.frame.set_frame_budget(100.0)
+    _still(app)

@@ -139,6 +139,7 @@ class BurleyBlurPass(Pass):
     ``plan`` fixes the levels instead (tests, the bench's pooled estimator)."""
     view_dependent = True
     uses_scene = False
+    tileable = True  # one full-screen draw: in row bands under the viewer's frame budget (issue 27)
 
     def __init__(self, variant: str = "golubev", plan: Plan | None = None, name: str = "burley_blur"):
         if variant not in ("golubev", "two_level"):
@@ -192,7 +193,8 @@ class BurleyBlurPass(Pass):
         ec.textures(prog, irradiance=IRRADIANCE, lin_depth=DEPTH)
         if plan.reuse:
             ec.set(prog, "u_reuse_split", float(plan.reuse_split))
-        ec.draw_fullscreen(prog, *((PARTIAL, STATS, NEAR_W, FAR, FAR_W) if plan.reuse else (BLURRED, STATS)))
+        with ec.band():  # a tileable pass (issue 27): this band's rows
+            ec.draw_fullscreen(prog, *((PARTIAL, STATS, NEAR_W, FAR, FAR_W) if plan.reuse else (BLURRED, STATS)))
 
 
 class BurleyReusePass(Pass):

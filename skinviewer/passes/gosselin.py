@@ -80,6 +80,7 @@ def _map_spec(size: int) -> TexSpec:
 class GosselinLightMapPass(Pass):
     """Eq. 8-10 into an f4 texture of light_map_size; gutters dilated."""
     name = "gosselin_light_map"
+    tileable = True  # texel shading in row bands under a frame budget, dilated after the last (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
@@ -160,6 +161,7 @@ class PoissonBlurPass(Pass):
     """``gosselin.iterations`` Poisson blurs of the light map (eq. 11-13), ping-pong, gutters
     re-dilated after each iteration."""
     name = "gosselin_blur"
+    tileable = True  # each draw in row bands under a frame budget, in order (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         size = r.setting(SIZE)
@@ -186,7 +188,9 @@ class PoissonBlurPass(Pass):
         n = ec.setting("gosselin.iterations")
         gutter = gutter_resource(size)
         if n <= 0:
-            dilate(ec, LIGHT_MAP, gutter, BLURRED)  # a copy: the light map is already dilated
+            for _d, sub, subs in ec.units(1):
+                with ec.band(sub, subs):
+                    dilate(ec, LIGHT_MAP, gutter, BLURRED)  # a copy: the light map is already dilated
             return
         prog = ec.program("poisson_blur")
         ec.set(prog, "u_poisson", np.asarray(POISSON_12, dtype=np.float32))
@@ -197,7 +201,7 @@ class PoissonBlurPass(Pass):
             ec.bind(fill, "seam_map", seam)
             ec.set(fill, "u_past_border_dark", True)
             ec.bind(prog, "seam_map", seam)
-            filled = ec.scratch(_map_spec(size))
+            filled = ec.held("filled", _map_spec(size))[0]
         if ec.has_input(STRETCH):
             gs = ec.setting("deon.gaussians")
             radii = radii_mm([g.variance for g in gs], [g.weights for g in gs], n)
@@ -205,24 +209,37 @@ class PoissonBlurPass(Pass):
             ec.bind(prog, "stretch_map", STRETCH)
         else:
             ec.bind(prog, "radius_map", RADIUS_MAP)
-        tmp = ec.scratch(_map_spec(size))
-        ping = ec.scratch(_map_spec(size)) if n > 1 else None
+        # scratch kept across the pass's bands (issue 27): under the viewer's frame budget each draw
+        # (seam fill, blur, dilation per iteration) runs in row bands, complete before the next starts
+        tmp = ec.held("tmp", _map_spec(size))[0]
+        ping = ec.held("ping", _map_spec(size))[0] if n > 1 else None
+        draws: list[tuple[str, Any, Any]] = []  # (what, source, target) in order
         cur: Any = LIGHT_MAP  # the light map's name, then the scratch texture
         for k in range(n):
             if seam:
-                ec.bind(fill, "source", cur)
-                ec.draw_fullscreen(fill, filled)
-            ec.bind(prog, "source", filled if seam else cur)
-            ec.draw_fullscreen(prog, tmp)
+                draws.append(("fill", cur, filled))
+            draws.append(("blur", filled if seam else cur, tmp))
             last = k == n - 1
-            dilate(ec, tmp, gutter, BLURRED if last or ping is None else ping)
+            draws.append(("dilate", tmp, BLURRED if last or ping is None else ping))
             cur = ping
+        for d, sub, subs in ec.units(len(draws)):
+            what, source, target = draws[d]
+            with ec.band(sub, subs):
+                if what == "fill":
+                    ec.bind(fill, "source", source)
+                    ec.draw_fullscreen(fill, target)
+                elif what == "blur":
+                    ec.bind(prog, "source", source)
+                    ec.draw_fullscreen(prog, target)
+                else:
+                    dilate(ec, source, gutter, target)
 
 
 class GosselinFinalPass(Pass):
     """Eq. 17-19 on the mesh from the camera; writes ``lit`` (RGBA f2, alpha 1 on the mesh)."""
     name = "gosselin_final"
     view_dependent = True
+    tileable = True  # in row bands under the viewer's frame budget (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)

@@ -70,6 +70,7 @@ class PennerPass(Pass):
     """The mesh from the camera, lit through the tables; writes ``lit`` (RGBA f2)."""
     name = "penner"
     view_dependent = True
+    tileable = True  # in row bands under the viewer's frame budget (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)

@@ -18,6 +18,7 @@ from skinviewer.passes.environment import declare_environment, set_environment
 class PhongPass(Pass):
     name = "phong"
     view_dependent = True
+    tileable = True  # one view-mesh draw: in row bands under the viewer's frame budget (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)

@@ -94,6 +94,12 @@ class FrameController:
         self._governing = False  # the governor picks this frame (on, and this technique calibrated)
         self._variant = ""  # the renderer graph of the frame: "" the user's settings, else a preview's
         self._camera_input = False  # the last user change moved only the camera
+        self._released = False  # a drag or held widget was let go since the last change: input has stopped
+        self._interacting = False  # this frame renders the governor's interaction pick
+        # a governed frame started during a drag or edit and part-way through (spread over frames):
+        # (settings, variant, rung); it is finished before newer input is taken, so a drag always
+        # gets complete images (a refinement frame, started while still, is abandoned instead)
+        self._inflight: tuple[Settings, str, Rung] | None = None
         self._gov_note = ""
         self.layout: Layout = self._compute_layout()
         state.set_render_size(*self.layout.view_fb[2:])
@@ -115,10 +121,14 @@ class FrameController:
 
     def set_dragging(self, on: bool) -> None:
         """The input controller: the camera is being dragged in the view (a move, not a mere click)."""
+        if self._dragging and not on:
+            self._released = True  # the refinement starts now, not after the scheduler's rest
         self._dragging = bool(on)
 
     def set_widget_active(self, on: bool) -> None:
         """The UI: a widget is held this frame (an expensive edit may wait for its release)."""
+        if self._widget_active and not on:
+            self._released = True
         self._widget_active = bool(on)
 
     def ui_failed(self, text: str) -> None:
@@ -128,6 +138,7 @@ class FrameController:
     def _on_change(self, source: str) -> None:
         self._change_source = source
         self._camera_input = source.startswith("camera")
+        self._released = False
         self.scheduler.note_change()
 
     # -- the quality governor (ui/governor.py) --------------------------------------------------
@@ -182,8 +193,11 @@ class FrameController:
         if g.calibration is None or s.technique not in g.calibration.entries:
             return FINAL  # not measured here yet: today's behaviour (orbit resolution, deferred edits)
         self._governing = True
-        interacting = self._dragging or self._widget_active or \
-            time.perf_counter() - self.scheduler.changed_at < self.scheduler.rest_s
+        # input has stopped when a drag or a held widget was let go after the last change, or the
+        # last change (a key, a typed value) is older than the scheduler's rest
+        recent = time.perf_counter() - self.scheduler.changed_at < self.scheduler.rest_s
+        interacting = self._dragging or self._widget_active or (recent and not self._released)
+        self._interacting = interacting
         complete = self.report is None or self.report.complete
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
@@ -303,11 +317,23 @@ class FrameController:
         self.scheduler.set_deferred(defer)
         target = self._shown if defer and self._shown is not None else self.governor.settings_for(
             live, self._rung if self._governing else FINAL)
+        rung = self._rung if self._governing and not defer else FINAL
+        variant = "" if not rung.changes else "preview " + json.dumps(sorted((k, repr(v)) for k, v in rung.changes.items()))
+        inflight = self._inflight
+        if inflight is not None and self._governing and self._interacting and not defer \
+                and inflight[0].technique == live.technique and not self._scene_changed(inflight[0]):
+            # an interaction frame part-way is finished first (newer input waits for the next
+            # frame): re-targeting it every frame of a drag would cancel its bands every frame
+            target, variant, rung = inflight
+        self._inflight = None
         try:
-            rung = self._rung if self._governing and not defer else FINAL
-            variant = "" if not rung.changes else "preview " + json.dumps(sorted((k, repr(v)) for k, v in rung.changes.items()))
             report = self.renderer.render(target, budget_ms=self.frame_budget_ms, variant=variant)
+            if not report.complete and self._governing and self._interacting:
+                self._inflight = (target, variant, rung)
             if report.complete:  # until then the view shows the last complete image, in its graph
+                if self._governing and variant == self._variant:  # the same graph as the last image
+                    self._observe(report if not self._partial_ran else self._merge_partial(report, keep=True),
+                                  target.technique, rung)
                 self._variant = variant
             self.render_error = ""
             self._rendered = (target.technique, target.render.width, target.render.height)
@@ -344,10 +370,18 @@ class FrameController:
         scene = self.renderer.scene
         return scene is None or scene.key != Renderer.scene_key(s)
 
-    def _merge_partial(self, report: FrameReport) -> FrameReport:
+    def _observe(self, report: FrameReport, technique: str, rung: Rung) -> None:
+        """Tell the governor what this complete frame of ``rung`` cost (the passes it ran, sync
+        timing): its picks follow this machine as it is now, not only its calibration."""
+        ms = [p.ms for p in report.passes if p.status == "ran" and p.ms is not None]
+        if ms and report.timing_mode == "sync":
+            self.governor.observe(technique, rung, self._camera_input, float(sum(ms)))
+
+    def _merge_partial(self, report: FrameReport, keep: bool = False) -> FrameReport:
         """One report for a frame spread over several: the passes that ran in any of them."""
         ran = {p.name: p for p in self._partial_ran}
-        self._partial_ran = []
+        if not keep:
+            self._partial_ran = []
         passes = [p if p.status == "ran" else ran.get(p.name, p) for p in report.passes]
         return FrameReport(report.frame, report.timing_mode, passes)
 

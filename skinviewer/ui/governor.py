@@ -12,7 +12,12 @@ frame renders, not a change to any technique.
 
 A camera drag only considers rungs that keep the texture-space work already made (the same
 changes as the image on screen, on a smaller view), timed by their camera-move cost; any other
-edit considers every rung, timed by its light-move cost."""
+edit considers every rung, timed by its light-move cost.
+
+The costs are the calibration's until the viewer has seen a rung's frames itself: each complete
+frame the viewer renders is reported (``observe``) and its cost replaces the calibrated one (a
+running mean), and rungs not yet seen are scaled by how far the seen ones are from their
+calibration (the machine's load, another window size, a calibration made on a busier day)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -23,6 +28,7 @@ from skinviewer.techniques.preview import FINAL, Rung, ladder
 
 MODES = ("off", "interactive", "fixed-budget")
 REFINE_STEP_SHARE = 0.25  # an intermediate refinement step costs at most this share of the final frame
+OBSERVED_WEIGHT = 0.5  # the running mean of the costs seen: the newest frame's share
 
 
 @dataclass
@@ -44,6 +50,8 @@ class Governor:
         self._pick: Pick | None = None
         self._memo: tuple | None = None  # (user settings, rung, rendered settings)
         self.message = ""  # one line: why the pick is what it is (budget, nothing fits, calibrating)
+        # costs seen here: (technique, rung, camera) -> running mean ms of its complete frames
+        self._seen: dict[tuple[str, Rung, bool], float] = {}
 
     # -- configuration ---------------------------------------------------------------------------
     def configure(self, mode: str | None = None, budget_ms: float | None = None) -> None:
@@ -69,9 +77,46 @@ class Governor:
     def entry(self, technique: str, rung: Rung) -> Entry | None:
         return None if self.calibration is None else self.calibration.entry(technique, rung)
 
-    def cost(self, technique: str, rung: Rung, camera: bool) -> float | None:
+    def calibrated(self, technique: str, rung: Rung, camera: bool) -> float | None:
+        """The calibration's cost of ``rung`` for a camera (or any other) change; None: not measured."""
         e = self.entry(technique, rung)
         return None if e is None else (e.camera_ms if camera else e.light_ms)
+
+    def cost(self, technique: str, rung: Rung, camera: bool) -> float | None:
+        """What a frame of ``rung`` costs on this machine now: the running mean of its frames seen
+        here, else its calibrated cost times the scale the seen rungs show; None: not calibrated."""
+        seen = self._seen.get((technique, rung, camera))
+        if seen is not None:
+            return seen
+        cal = self.calibrated(technique, rung, camera)
+        return None if cal is None else cal * self.scale(technique)
+
+    def observe(self, technique: str, rung: Rung, camera: bool, ms: float) -> None:
+        """A complete frame of ``rung`` (a camera-only change when ``camera``) cost ``ms`` here."""
+        if not (ms > 0.0 and ms < 1e7):  # NaN, 0 (nothing ran) or absurd: not a measurement
+            return
+        key = (technique, rung, camera)
+        old = self._seen.get(key)
+        self._seen[key] = ms if old is None else (1.0 - OBSERVED_WEIGHT) * old + OBSERVED_WEIGHT * ms
+
+    def scale(self, technique: str) -> float:
+        """Seen over calibrated cost, the median over the rungs seen of ``technique`` (of every
+        technique when none of it was seen yet); 1 when nothing comparable was seen."""
+        def ratios(only: str | None) -> list[float]:
+            out = []
+            for (t, rung, camera), ms in self._seen.items():
+                if only is not None and t != only:
+                    continue
+                cal = self.calibrated(t, rung, camera)
+                if cal is not None and cal > 0.0:
+                    out.append(ms / cal)
+            return out
+        r = ratios(technique) or ratios(None)
+        if not r:
+            return 1.0
+        r.sort()
+        n = len(r)
+        return r[n // 2] if n % 2 else 0.5 * (r[n // 2 - 1] + r[n // 2])
 
     def _accuracy_order(self, technique: str, rungs: list[Rung]) -> list[Rung]:
         """Least accurate first: by error against the truth where every rung has one, else by the

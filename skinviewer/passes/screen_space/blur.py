@@ -15,6 +15,7 @@ def blur_spec(r) -> TexSpec:
 class SeparableScreenBlur(Pass):
     """``source`` -> ``output``: rgb blurred, alpha (the SSS mask) kept. Reads ss_depth too."""
     uses_scene = False
+    tileable = True
 
     def __init__(self, name: str, source: str, output: str):
         self.name = name
@@ -41,10 +42,12 @@ class SeparableScreenBlur(Pass):
     def execute(self, ec) -> None:
         prog = self.program(ec)
         self.set_uniforms(ec, prog)
-        tmp = ec.scratch(blur_spec(ec))
-        ec.textures(prog, source=self.source, depth_tex=DEPTH)
-        ec.set(prog, "u_dir", (1.0, 0.0))
-        ec.draw_fullscreen(prog, tmp)
-        ec.bind(prog, "source", tmp)
-        ec.set(prog, "u_dir", (0.0, 1.0))
-        ec.draw_fullscreen(prog, self.output)
+        # the horizontal result is kept across the pass's bands (issue 27): under the viewer's frame
+        # budget each draw runs in row bands, the horizontal one complete before the vertical starts
+        tmp = ec.held("tmp", blur_spec(ec))[0]
+        ec.bind(prog, "depth_tex", DEPTH)
+        for d, sub, subs in ec.units(2):
+            ec.bind(prog, "source", self.source if d == 0 else tmp)
+            ec.set(prog, "u_dir", (1.0, 0.0) if d == 0 else (0.0, 1.0))
+            with ec.band(sub, subs):
+                ec.draw_fullscreen(prog, tmp if d == 0 else self.output)

@@ -10,6 +10,7 @@ class CombinePass(Pass):
     """``source``: the resource holding the blurred diffuse (rgb); DIFFUSE = no scattering."""
     name = "ss_combine"
     uses_scene = False
+    tileable = True  # in row bands under the viewer's frame budget (issue 27)
 
     def __init__(self, source: str = DIFFUSE):
         self.source = source
@@ -22,4 +23,5 @@ class CombinePass(Pass):
     def execute(self, ec) -> None:
         prog = ec.program("ss_combine")
         ec.textures(prog, diffuse=self.source, specular=SPECULAR, albedo=ALBEDO)
-        ec.draw_fullscreen(prog, LIT)
+        with ec.band():
+            ec.draw_fullscreen(prog, LIT)

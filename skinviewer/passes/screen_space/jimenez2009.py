@@ -65,6 +65,7 @@ class SsssSumPass(Pass):
     the widest kept one)."""
     name = "ssss_sum"
     uses_scene = False
+    tileable = True  # in row bands under the viewer's frame budget (issue 27)
 
     def reflect(self, r: Reflection) -> None:
         n = gaussian_count(r)
@@ -87,4 +88,5 @@ class SsssSumPass(Pass):
         ec.bind(prog, "diffuse", DIFFUSE)
         for i in range(len(kept)):
             ec.bind(prog, f"blur{i}", blur_resource(i))
-        ec.draw_fullscreen(prog, SUM)
+        with ec.band():
+            ec.draw_fullscreen(prog, SUM)

@@ -45,6 +45,7 @@ class ScreenLightingPass(Pass):
     with another profile overrides ``transmittance_gaussians``."""
     name = "ss_lighting"
     view_dependent = True
+    tileable = True  # one view-mesh draw (four targets): in row bands under a frame budget (issue 27)
 
     def __init__(self, transmittance_profile: str = "deon.gaussians", burley: bool = False):
         self.transmittance_profile = transmittance_profile
