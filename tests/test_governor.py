@@ -72,6 +72,13 @@ def test_the_costs_seen_here_replace_the_calibration_and_scale_the_rest():
     for bad in (0.0, -1.0, float("nan"), float("inf")):
         g.observe("deon", FINAL, False, bad)
     assert g.cost("deon", FINAL, False) == pytest.approx(200.0)
+    # what a displayed frame costs besides rendering comes out of the budget
+    g.observe("deon", FINAL, False, 90.0)  # running mean (200 + 90) / 2 = 145 ms: over 100
+    g.budget_ms = 160.0
+    assert g.pick(s).rung == FINAL
+    g.overhead_ms = 30.0  # 145 + 30 > 160: a preview now
+    assert g.pick(s).rung != FINAL and g.pick(s).ms <= 130.0
+    g.overhead_ms, g.budget_ms = 0.0, 100.0
     # a technique never seen borrows every technique's ratio
     s2 = with_values(Settings(), {"technique": "phong"})
     cal.entries["phong"] = fake_calibration("phong", s2, seed=4).entries["phong"]
@@ -364,7 +371,7 @@ def test_a_drag_finishes_each_preview_frame_instead_of_cancelling_it(viewer):
     assert app.state.apply({"render.governor_budget_ms": 950.0})
     _still(app)
     app.frame.governor._seen.clear()  # the fake calibration's costs decide: a preview is picked
-    app.frame.set_frame_budget(2.0)  # the preview's passes in row bands, a few frames each
+    app.frame.set_frame_budget(40.0)  # the preview's passes in row bands, a few frames each
     try:
         app.frame.set_dragging(True)
         completed = partial = 0

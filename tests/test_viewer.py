@@ -624,7 +624,7 @@ def test_long_frames_are_spread_and_shown_once_complete(app):
     app.state.set_technique("gosselin")
     app.step(1)
     before = _view_image(app)
-    app.frame.set_frame_budget(1e-6)  # one pass per frame
+    app.frame.set_frame_budget(1e-6)  # one pass (or band) per frame
     try:
         app.state.apply({"lights.0.direction": [0.6, 0.3, 0.7]}, "test light move")
         frames = 0
@@ -634,7 +634,7 @@ def test_long_frames_are_spread_and_shown_once_complete(app):
             if app.frame.report is not None and app.frame.report.complete:
                 break
             assert np.array_equal(_view_image(app), before)  # the old image until it is complete
-            assert frames < 20
+            assert frames < 2000  # one pass, or one row band of a tileable pass, per frame
         assert frames > 1
         assert np.abs(_view_image(app) - before).mean() > 0.5
         ran = {name for name, _ in app.frame.last_change.passes}
@@ -1019,4 +1019,37 @@ def test_temporal_refines_in_the_viewer_without_hiding_the_change(app):
         assert app.frame.last_change is first  # refinement frames are not changes
     finally:
         app.state.apply({"technique": "phong", "burley2.temporal": 0, "burley2.mode": "thesis"})
+        app.step(1)
+
+
+def test_a_resized_view_keeps_the_last_image_while_its_frame_is_spread(app):
+    """The view shows the last complete image until the next one is complete, also when the render
+    size changed (its textures are reallocated, then made in row bands over many frames): never a
+    black or half-made view (hiding the UI, a governed preview's smaller size, a window resize)."""
+    from skinviewer.ui.screenshot import read_screen
+    app.state.set_technique("phong")
+    for _ in range(3):
+        app.step(1)
+
+    def view():
+        vp = app.frame.layout.view_fb
+        return read_screen(app.ctx, vp[2:], origin=vp[:2]).astype(np.float32)
+
+    shown = view()
+    assert shown.std() > 10
+    app.frame.set_frame_budget(1e-6)  # one band per frame
+    try:
+        app.state.set_show_ui(False)  # the view is the whole window now: a new render size
+        app.step(1)
+        assert app.frame.report is not None and not app.frame.report.complete
+        now = view()
+        assert now.shape != shown.shape and now.std() > 10  # the last image, stretched, not black
+        for _ in range(4000):
+            app.step(1)
+            if app.frame.report.complete:
+                break
+        assert app.frame.report.complete and view().std() > 10
+    finally:
+        app.frame.set_frame_budget(None)
+        app.state.set_show_ui(True)
         app.step(1)

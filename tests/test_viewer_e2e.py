@@ -217,7 +217,14 @@ def test_real_input_drives_the_viewer(xdisplay, tmp_path):
         assert "*" not in s.title(), "an orbit is not an unsaved change (unless the camera is part of the preset)"
 
         # a click (press + release, as fast as xdotool makes it) on the first panel header collapses it
-        hdr = s.wait(lambda: _header_bands(s.grab()[:WIN_H, :400]), 10, "the panel headers")
+        # the panel settled first: the orbit's frames may still be completing (row bands), and the
+        # "last change" line above the headers takes one or two lines as they finish
+        def settled():
+            first = s.grab()[:WIN_H, :400]
+            time.sleep(1.5)
+            again = s.grab()[:WIN_H, :400]
+            return _header_bands(again) if np.array_equal(first, again) else None
+        hdr = s.wait(settled, 30, "the panel headers, settled")
         # 'Look' starts open: its section fills the panel (the next header is far below, or off screen)
         assert hdr and (len(hdr) == 1 or hdr[1] - hdr[0] > 60), f"'Look' starts open (headers at {hdr})"
         s.xdo("mousemove", "--window", s.win, "60", str(hdr[0] + 10))

@@ -300,14 +300,15 @@ class RenderGraph:
                 # a freshly (re)allocated output holds garbage: that pass always runs (unless an
                 # input is part-way through its bands: it runs once that is complete)
                 waits = partial & set(r.inputs)
-                spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 > budget_ms
+                # spent: what this pass (or its next band) last cost would take the frame past the budget
+                spent = budget_ms is not None and \
+                    (time.perf_counter() - t_start) * 1000.0 + self._next_ms(p, progress, budget_ms) > budget_ms
                 if waits or (any_ran and spent and (not realloc or p.tileable)):
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
                     rec.nonfinite = list(self._nonfinite.get(p.name, []))
                     records[p.name] = rec
-                    if waits:
-                        partial.update(r.outputs)
+                    partial.update(r.outputs)  # its consumers wait too (a cheaper one may fit after it)
                     continue
                 any_ran = True
                 rec.status = "ran"
@@ -378,17 +379,30 @@ class RenderGraph:
             return UNMEASURED_TILES
         return max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
 
+    def _next_ms(self, p: Pass, progress: TileProgress | None, budget_ms: float) -> float:
+        """What running ``p`` next costs, as last measured: its next band for a tileable pass (the
+        mean of its bands so far, else its last whole cost over its bands), else its last run; 0
+        when never measured."""
+        last = self._last_ms.get(p.name, 0.0) or 0.0
+        if not p.tileable:
+            return last
+        if progress is not None and progress.done > 0:
+            return progress.ms / progress.done
+        count = progress.count if progress is not None else self._tile_count(p, budget_ms)
+        return last / max(count, 1)
+
     def _run_bands(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str, progress: TileProgress,
                    t_start: float, budget_ms: float) -> float | None:
-        """Run bands of ``p`` from where ``progress`` stopped until all are done or the budget is
-        spent (at least one band per call). Returns the ms of the bands run now."""
+        """Run bands of ``p`` from where ``progress`` stopped until all are done or the next band
+        (at its mean cost so far) would take the frame past the budget; at least one band per call.
+        Returns the ms of the bands run now."""
         ms_now = 0.0
         while progress.done < progress.count:
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
-            if (time.perf_counter() - t_start) * 1000.0 > budget_ms:
+            if (time.perf_counter() - t_start) * 1000.0 + progress.ms / progress.done > budget_ms:
                 break
         return ms_now
 

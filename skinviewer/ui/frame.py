@@ -81,6 +81,10 @@ class FrameController:
         self._shown: Settings | None = None  # the settings of the image on screen
         self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
         self._last_frame_t: float | None = None
+        # what a frame costs besides the render graph (the UI, the view, presenting it; llvmpipe
+        # under Xvfb: tens of ms): the graph gets the frame budget less this, so a whole frame fits
+        self._render_ms: float | None = None  # the last frame's graph time (wall clock)
+        self.overhead_ms: float | None = None  # running mean of the rest of the frame
         self._window: tuple[tuple[int, int], tuple[int, int]] = (
             (window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         # the quality governor (issue 27): what each frame renders while the user drags, and the
@@ -108,6 +112,14 @@ class FrameController:
     # -- options (the panel edits them through these) ---------------------------------------
     def set_frame_budget(self, ms: float | None) -> None:
         self.frame_budget_ms = None if ms is None else max(float(ms), 1e-6)
+
+    def graph_budget_ms(self) -> float | None:
+        """The render graph's share of the frame budget: the budget less what the rest of a frame
+        costs here (at least 30 % of it); None: no budget (one frame, however long)."""
+        fb = self.frame_budget_ms
+        if fb is None:
+            return None
+        return max(0.3 * fb, fb - (self.overhead_ms or 0.0))
 
     def set_drag_resolution(self, mode: str) -> None:
         if mode in DRAG_RESOLUTIONS:
@@ -199,6 +211,7 @@ class FrameController:
         interacting = self._dragging or self._widget_active or (recent and not self._released)
         self._interacting = interacting
         complete = self.report is None or self.report.complete
+        g.set_overhead(self.overhead_ms)
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
@@ -269,7 +282,11 @@ class FrameController:
     def run(self, frametime: float, window_size, buffer_size, ui: UiLayer | None = None) -> None:
         now = time.perf_counter()
         if self._last_frame_t is not None:
-            self.frame_ms.append((now - self._last_frame_t) * 1000.0)
+            interval = (now - self._last_frame_t) * 1000.0
+            self.frame_ms.append(interval)
+            if self._render_ms is not None:
+                rest = max(interval - self._render_ms, 0.0)
+                self.overhead_ms = rest if self.overhead_ms is None else 0.8 * self.overhead_ms + 0.2 * rest
         self._last_frame_t = now
         self.frames += 1
         self._window = ((window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
@@ -283,6 +300,9 @@ class FrameController:
         self._rung = self._govern()
         self._sync_size()
         self.report = self._render_main()
+        g = self.graph()
+        if g is not None and self.report is not None and self.report.complete:
+            self.view.keep(g, bool(self.report.ran))  # the view shows the last complete image
         if self.report is not None and self.report.complete and not self.report.ran:
             self.renderer.warm(self.state.settings.technique, budget_ms=30.0)  # idle: likely shader variants
         self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
@@ -327,7 +347,9 @@ class FrameController:
             target, variant, rung = inflight
         self._inflight = None
         try:
-            report = self.renderer.render(target, budget_ms=self.frame_budget_ms, variant=variant)
+            t0 = time.perf_counter()
+            report = self.renderer.render(target, budget_ms=self.graph_budget_ms(), variant=variant)
+            self._render_ms = (time.perf_counter() - t0) * 1000.0
             if not report.complete and self._governing and self._interacting:
                 self._inflight = (target, variant, rung)
             if report.complete:  # until then the view shows the last complete image, in its graph

@@ -50,6 +50,9 @@ class Governor:
         self._pick: Pick | None = None
         self._memo: tuple | None = None  # (user settings, rung, rendered settings)
         self.message = ""  # one line: why the pick is what it is (budget, nothing fits, calibrating)
+        # what a displayed frame costs here besides rendering (UI, presenting): a rung fits when its
+        # render cost plus this is within the budget (the frame controller keeps it up to date)
+        self.overhead_ms = 0.0
         # costs seen here: (technique, rung, camera) -> running mean ms of its complete frames
         self._seen: dict[tuple[str, Rung, bool], float] = {}
 
@@ -63,6 +66,10 @@ class Governor:
             self.mode = mode
         if budget_ms is not None:
             self.budget_ms = float(budget_ms)
+
+    def set_overhead(self, ms: float | None) -> None:
+        """What a displayed frame costs here besides rendering (None: not measured yet)."""
+        self.overhead_ms = max(float(ms or 0.0), 0.0)
 
     def set_calibration(self, cal: Calibration | None) -> None:
         """The calibration to pick on (None: none; the viewer renders the user's settings)."""
@@ -150,7 +157,8 @@ class Governor:
         if self.budget_ms <= 0:
             note = f"governor budget {self.budget_ms:g} ms is not positive: showing the cheapest configuration"
             return Pick(cheapest, ms_of[cheapest], self._error(t, cheapest), note)
-        fits = [r for r in order if ms_of[r] <= self.budget_ms]
+        room = self.budget_ms - max(self.overhead_ms, 0.0)  # the render's share of a frame
+        fits = [r for r in order if ms_of[r] <= room]
         if not fits:
             note = (f"nothing fits the {self.budget_ms:g} ms budget on this machine (cheapest: "
                     f"{ms_of[cheapest]:.0f} ms): showing the cheapest configuration")

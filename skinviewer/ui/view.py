@@ -17,6 +17,10 @@ class ViewPresenter:
         self.shaders = shaders
         self.display = Display(ctx)
         self._slot_renderers: dict[str, Renderer] = {}
+        # a copy of the last complete image: what the view shows while the next frame is spread
+        # over several (row bands) -- its own textures may be reallocated (a new size) or half made
+        self._kept = None
+        self._kept_from: tuple[int, int] | None = None  # (graph, texture) it was copied from
 
     def renderers(self) -> list[Renderer]:
         """The compare slots' renderers made so far."""
@@ -34,6 +38,27 @@ class ViewPresenter:
         except Exception as exc:
             slot.set_error(f"{type(exc).__name__}: {exc}")
             return None
+
+    def keep(self, graph, changed: bool) -> None:
+        """The frame of ``graph`` is complete: copy its image for the view (``changed``: passes ran;
+        an idle frame of the same graph copies nothing)."""
+        if "image" not in graph.resources():
+            return
+        tex = graph.texture("image")
+        src = (id(graph), tex.glo)
+        if not changed and src == self._kept_from and self._kept is not None:
+            return
+        k = self._kept
+        if k is None or (k.size, k.components, k.dtype) != (tex.size, tex.components, tex.dtype):
+            if k is not None:
+                k.release()
+            k = self._kept = self.ctx.texture(tex.size, tex.components, dtype=tex.dtype)
+        fbo = self.ctx.framebuffer(color_attachments=[tex])
+        try:
+            self.ctx.copy_framebuffer(k, fbo)
+        finally:
+            fbo.release()
+        self._kept_from = src
 
     def draw(self, graph, layout: Layout, hooks=()) -> None:
         """Clear the window, then show in the view region: A/B when comparing, else the inspected
@@ -69,10 +94,15 @@ class ViewPresenter:
         for hook in hooks:
             if hook(viewport):
                 return
-        if "image" in graph.resources():
+        if self._kept is not None:
+            self.display.show(self._kept, viewport)
+        elif "image" in graph.resources():
             self.display.show(graph.texture("image"), viewport)
 
     def release(self) -> None:
+        if self._kept is not None:
+            self._kept.release()
+            self._kept = None
         for r in self._slot_renderers.values():
             r.release()
         self._slot_renderers = {}
