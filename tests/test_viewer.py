@@ -1053,3 +1053,39 @@ def test_a_resized_view_keeps_the_last_image_while_its_frame_is_spread(app):
         app.frame.set_frame_budget(None)
         app.state.set_show_ui(True)
         app.step(1)
+
+
+def test_a_still_frame_spread_over_several_renders_without_presenting_until_complete(app):
+    """While a still view's frame is made in row bands and no input comes, frames only render (no
+    UI, no swap: presenting costs tens of ms a frame on llvmpipe); the frame that completes is
+    presented, and any input event presents the next frame at once."""
+    app.state.set_technique("phong")
+    app.step(2)
+    app.frame.set_frame_budget(1e-6)  # one band per frame
+    presented = []
+    real = app.frame.run
+    app.frame.run = lambda *a, **k: (presented.append(k.get("present", True)), real(*a, **k))[1]
+    try:
+        app.state.apply({"lights.0.direction": [0.4, 0.5, 0.8]}, "test light move")
+        app._events = 0
+        for _ in range(4000):
+            app.step(1)
+            if app.frame.report.complete:
+                break
+        assert app.frame.report.complete
+        assert False in presented, "no frame skipped presenting"
+        assert presented[0] is True  # the change's first frame shows the UI's own edit at once
+        # input while a spread frame runs: the next frame presents
+        app.state.apply({"lights.0.direction": [0.3, 0.5, 0.8]}, "test light move")
+        app.step(1)
+        presented.clear()
+        app.on_mouse_position_event(10, 10, 1, 1)
+        app.step(1)
+        assert presented == [True]
+    finally:
+        app.frame.run = real
+        app.frame.set_frame_budget(None)
+        for _ in range(4000):
+            app.step(1)
+            if app.frame.report.complete:
+                break

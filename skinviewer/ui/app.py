@@ -53,19 +53,34 @@ class ViewerApp(mglw.WindowConfig):
         self.ui = UiHost(self.wnd, self.state, self.frame)
         self.input = InputController(self.state, self.frame, self.ui, self.wnd.keys, self.wnd.mouse)
         self._title = ""
+        self._events = 0  # input events since the last presented frame (FrameController.can_skip_present)
 
     # -- frames --------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
-        """Render ``n`` complete frames (render, UI, swap): for tests and --frames."""
+        """Run ``n`` frames (render, UI, swap -- or, while a still view's frame is spread over
+        several and no input came, render only and poll events): the viewer's loop, tests, --frames."""
         for _ in range(n):
             self.wnd.use()
-            self.on_render(time.perf_counter(), 1 / 60)
-            self.wnd.swap_buffers()
+            if self.on_render(time.perf_counter(), 1 / 60):
+                self._events = 0
+                self.wnd.swap_buffers()
+            else:
+                self._poll_events()
 
-    def on_render(self, t: float, frametime: float) -> None:
+    def on_render(self, t: float, frametime: float) -> bool:
         self._follow_vsync()
-        self.frame.run(frametime, self.wnd.size, self.wnd.buffer_size, self.ui)
+        present = not self.frame.can_skip_present(self._events)
+        drew = self.frame.run(frametime, self.wnd.size, self.wnd.buffer_size, self.ui, present=present)
         self._update_title()
+        return drew
+
+    def _poll_events(self) -> None:
+        """Input without a buffer swap (a frame that only rendered)."""
+        try:
+            import glfw
+            glfw.poll_events()
+        except Exception:  # another window backend: it polls on its next swap
+            pass
 
     def _follow_vsync(self) -> None:
         want = self.state.view.vsync
@@ -89,33 +104,41 @@ class ViewerApp(mglw.WindowConfig):
 
     # -- events: to imgui and to the input controller ----------------------------------------
     def on_mouse_position_event(self, x, y, dx, dy):
+        self._events += 1
         self.ui.renderer.mouse_position_event(x, y, dx, dy)
         self.input.position(x, y)
 
     def on_mouse_press_event(self, x, y, button):
+        self._events += 1
         self.ui.renderer.mouse_press_event(x, y, button)
         self.input.press(x, y, button)
 
     def on_mouse_release_event(self, x, y, button):
+        self._events += 1
         self.ui.renderer.mouse_release_event(x, y, button)
         self.input.release(x, y, button)
 
     def on_mouse_drag_event(self, x, y, dx, dy):
+        self._events += 1
         self.ui.renderer.mouse_drag_event(x, y, dx, dy)
         self.input.drag(x, y, dx, dy, shift_held=bool(getattr(self.wnd.modifiers, "shift", False)))
 
     def on_mouse_scroll_event(self, x_offset, y_offset):
+        self._events += 1
         self.ui.renderer.mouse_scroll_event(x_offset, y_offset)
         self.input.scroll(x_offset, y_offset)
 
     def on_key_event(self, key, action, modifiers):
+        self._events += 1
         self.ui.renderer.key_event(key, action, modifiers)
         self.input.key(key, action, modifiers)
 
     def on_unicode_char_entered(self, char):
+        self._events += 1
         self.ui.renderer.unicode_char_entered(char)
 
     def on_resize(self, width, height):
+        self._events += 1
         self.ui.renderer.resize(width, height)
 
     # -- teardown ------------------------------------------------------------------------------

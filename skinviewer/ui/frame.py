@@ -35,6 +35,7 @@ from skinviewer.ui.state import ViewerState
 from skinviewer.ui.view import ViewPresenter
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
+PRESENT_EVERY_S = 0.25  # a refinement rendering without presenting still refreshes the screen this often
 
 
 class UiLayer(Protocol):
@@ -85,6 +86,9 @@ class FrameController:
         # under Xvfb: tens of ms): the graph gets the frame budget less this, so a whole frame fits
         self._render_ms: float | None = None  # the last frame's graph time (wall clock)
         self.overhead_ms: float | None = None  # running mean of the rest of the frame
+        self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
+        self._presented_at = 0.0
+        self._last_presented = True
         self._window: tuple[tuple[int, int], tuple[int, int]] = (
             (window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         # the quality governor (issue 27): what each frame renders while the user drags, and the
@@ -279,12 +283,25 @@ class FrameController:
         v = self.state.view
         return compute_layout(self._window[0], self._window[1], v.show_ui, v.panel_width, v.panel_side)
 
-    def run(self, frametime: float, window_size, buffer_size, ui: UiLayer | None = None) -> None:
+    def can_skip_present(self, input_events: int) -> bool:
+        """This frame may only render (no UI, no view, no buffer swap): a frame spread over several
+        is in progress, no input arrived since the last presented frame, no widget is held, no
+        screenshot waits, and the screen was refreshed less than PRESENT_EVERY_S ago. Presenting
+        costs tens of ms a frame under Xvfb on llvmpipe: a still view's refinement gets that time."""
+        r = self.report
+        return (self.quiet_frames and input_events == 0 and r is not None and not r.complete
+                and not self._widget_active and not self._dragging and not self._pending_shots
+                and time.perf_counter() - self._presented_at < PRESENT_EVERY_S)
+
+    def run(self, frametime: float, window_size, buffer_size, ui: UiLayer | None = None,
+            present: bool = True) -> bool:
+        """One frame; ``present`` False (``can_skip_present``): render only, unless the frame
+        completes (then the view and UI are drawn as usual). Returns whether it drew the screen."""
         now = time.perf_counter()
         if self._last_frame_t is not None:
             interval = (now - self._last_frame_t) * 1000.0
             self.frame_ms.append(interval)
-            if self._render_ms is not None:
+            if self._render_ms is not None and self._last_presented:
                 rest = max(interval - self._render_ms, 0.0)
                 self.overhead_ms = rest if self.overhead_ms is None else 0.8 * self.overhead_ms + 0.2 * rest
         self._last_frame_t = now
@@ -294,15 +311,24 @@ class FrameController:
         # the UI is built first: this frame's edits (and panel resizes) are rendered this frame;
         # the panel shows the previous frame's report (identical on idle frames)
         ui_built = False
-        if ui is not None and self.state.view.show_ui:
+        if present and ui is not None and self.state.view.show_ui:
             self.layout = self._compute_layout()
             ui_built = ui.build(frametime, self.layout)
         self._rung = self._govern()
         self._sync_size()
-        self.report = self._render_main()
+        self.report = self._render_main(None if present else self.frame_budget_ms)
         g = self.graph()
         if g is not None and self.report is not None and self.report.complete:
             self.view.keep(g, bool(self.report.ran))  # the view shows the last complete image
+        if not present:
+            if self.report is None or not self.report.complete:
+                self._last_presented = False
+                return False
+            if ui is not None and self.state.view.show_ui:  # complete: shown now, with the UI
+                self.layout = self._compute_layout()
+                ui_built = ui.build(frametime, self.layout)
+        self._last_presented = True
+        self._presented_at = time.perf_counter()
         if self.report is not None and self.report.complete and not self.report.ran:
             self.renderer.warm(self.state.settings.technique, budget_ms=30.0)  # idle: likely shader variants
         self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
@@ -312,6 +338,7 @@ class FrameController:
         if ui_built and ui is not None:
             ui.present()
         self._take_shots(include_ui=True)
+        return True
 
     def _sync_size(self) -> None:
         """The render size follows the 3D view region (framebuffer pixels), not the whole window."""
@@ -326,7 +353,7 @@ class FrameController:
                                    "render size")
         self._drag_scaled = scale < 1.0
 
-    def _render_main(self) -> FrameReport | None:
+    def _render_main(self, budget_ms: float | None = None) -> FrameReport | None:
         live = self.state.settings
         pending = self._shown is None or (self._shown is not live and self._shown != live)
         last_cost = self.last_change.total_ms if self.last_change else None
@@ -348,7 +375,8 @@ class FrameController:
         self._inflight = None
         try:
             t0 = time.perf_counter()
-            report = self.renderer.render(target, budget_ms=self.graph_budget_ms(), variant=variant)
+            budget = self.graph_budget_ms() if budget_ms is None else budget_ms
+            report = self.renderer.render(target, budget_ms=budget, variant=variant)
             self._render_ms = (time.perf_counter() - t0) * 1000.0
             if not report.complete and self._governing and self._interacting:
                 self._inflight = (target, variant, rung)
