@@ -61,13 +61,17 @@ class ViewerApp(mglw.WindowConfig):
         several and no input came, render only and poll events): the viewer's loop, tests, --frames."""
         for _ in range(n):
             self.wnd.use()
-            if self.on_render(time.perf_counter(), 1 / 60):
+            if self.render_frame(1 / 60):
                 self._events = 0
                 self.wnd.swap_buffers()
             else:
                 self._poll_events()
 
-    def on_render(self, t: float, frametime: float) -> bool:
+    def on_render(self, t: float, frametime: float) -> None:
+        self.render_frame(frametime)
+
+    def render_frame(self, frametime: float) -> bool:
+        """One frame; returns whether it drew the screen (False: rendered only, no swap needed)."""
         self._follow_vsync()
         present = not self.frame.can_skip_present(self._events)
         drew = self.frame.run(frametime, self.wnd.size, self.wnd.buffer_size, self.ui, present=present)
