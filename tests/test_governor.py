@@ -101,6 +101,10 @@ def test_refinement_steps_up_to_the_users_settings_and_never_back_while_still():
     g = Governor("interactive", 200.0, cal)
     first = g.rung_for(s, interacting=True, camera=False, last_complete=True)
     assert not first.final and g.status(s).startswith("preview: ")
+    e = cal.entry("deon", first)
+    assert f"— {100 * e.error:.1f} % from the truth" in g.status(s)
+    e.uncertainty = 0.0186  # the ruler's own uncertainty goes beside its figure
+    assert f"— {100 * e.error:.1f} % ± 1.9 from the truth" in g.status(s)
     errors = [cal.entry("deon", first).error]
     shown = [first]
     for complete in [False, True, False, True, True, True, True]:
@@ -389,3 +393,23 @@ def test_a_drag_finishes_each_preview_frame_instead_of_cancelling_it(viewer):
         app.frame.set_dragging(False)
         app.frame.set_frame_budget(100.0)
     _still(app)
+
+
+def test_the_error_table_s_uncertainty_reaches_the_calibration(tmp_path, monkeypatch):
+    """preview_errors.json's 'uncertainty' (the ruler's, per rung) is attached beside each error."""
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, errors=False)
+    keys = [e.key for e in cal.entries["deon"]]
+    table = tmp_path / "errors.json"
+    table.write_text(json.dumps({"errors": {k: 0.05 for k in keys}, "uncertainty": {keys[0]: 0.02}}))
+    monkeypatch.setattr(calibration, "ERRORS_TABLE", table)
+    monkeypatch.setattr(calibration, "_bench_errors", lambda path: {})
+    calibration.attach_errors(cal)
+    es = cal.entries["deon"]
+    assert es[0].error == 0.05 and es[0].uncertainty == 0.02
+    assert all(e.error == 0.05 and e.uncertainty is None for e in es[1:])
+    # a file of today's calibration (no 'uncertainty' in its entries) still loads
+    d = cal.to_json()
+    for e in d["entries"]["deon"]:
+        e.pop("uncertainty")
+    assert Calibration.from_json(d).entries["deon"][0].uncertainty is None

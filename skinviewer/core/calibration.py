@@ -65,6 +65,7 @@ class Entry:
     camera_ms: float  # a camera-move frame (view work only)
     error: float | None = None  # mean relative RMS against the ground truth (None: not measured)
     error_source: str = ""  # "bench <path>" | "shipped table" | ""
+    uncertainty: float | None = None  # the ground truth's own uncertainty of ``error`` (None: not stated)
 
     @property
     def key(self) -> str:
@@ -230,21 +231,25 @@ def attach_errors(cal: Calibration, bench_results: str | Path | None = None) -> 
     """Error figures for the entries: the last bench's where it measured the same configuration
     (the defaults with the rung's changes, at full view), else the shipped table's."""
     shipped: dict[str, float] = {}
+    shipped_u: dict[str, float] = {}
     try:
-        shipped = json.loads(ERRORS_TABLE.read_text(encoding="utf-8")).get("errors", {})
-    except (OSError, ValueError):
+        table = json.loads(ERRORS_TABLE.read_text(encoding="utf-8"))
+        shipped, shipped_u = table.get("errors", {}), table.get("uncertainty", {})
+    except (OSError, ValueError, AttributeError):
         pass
     bench = _bench_errors(bench_results)
     for es in cal.entries.values():
         for e in es:
             key = e.key
             if key in bench:
-                e.error, e.error_source = bench[key]
+                e.error, e.uncertainty, e.error_source = bench[key]
             elif key in shipped:
                 e.error, e.error_source = float(shipped[key]), "shipped table"
+                u = shipped_u.get(key)
+                e.uncertainty = float(u) if isinstance(u, (int, float)) else None
 
 
-def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, str]]:
+def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, float | None, str]]:
     from skinviewer.core.bench import last_bench, load_results
     path = path or last_bench()
     if not path:
@@ -256,5 +261,5 @@ def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, str]]:
     out = {}
     for r in results:
         if r.rms_mean is not None and not r.error:
-            out[rung_key(r.technique, Rung(r.label, dict(r.changes), 1.0))] = (r.rms_mean, f"bench {path}")
+            out[rung_key(r.technique, Rung(r.label, dict(r.changes), 1.0))] = (r.rms_mean, r.rms_mean_u, f"bench {path}")
     return out

@@ -35,7 +35,7 @@ from skinviewer.ui.state import ViewerState
 from skinviewer.ui.view import ViewPresenter
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
-PRESENT_EVERY_S = 0.25  # a refinement rendering without presenting still refreshes the screen this often
+PRESENT_EVERY_S = 0.5  # a refinement rendering without presenting still refreshes the screen this often
 
 
 class UiLayer(Protocol):

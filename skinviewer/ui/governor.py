@@ -27,7 +27,7 @@ from skinviewer.core.settings import Settings
 from skinviewer.techniques.preview import FINAL, Rung, ladder
 
 MODES = ("off", "interactive", "fixed-budget")
-REFINE_STEP_SHARE = 0.25  # an intermediate refinement step costs at most this share of the final frame
+REFINE_STEP_SHARE = 0.1  # an intermediate refinement step costs at most this share of the final frame
 OBSERVED_WEIGHT = 0.5  # the running mean of the costs seen: the newest frame's share
 
 
@@ -217,13 +217,16 @@ class Governor:
         return bool(self._plan)
 
     def status(self, s: Settings) -> str:
-        """What is shown: "preview: irradiance 256², separable blurs — 6.1 % from the truth · refining 2/4"."""
+        """What is shown: "preview: irradiance 256², separable blurs — 6.1 % ± 1.9 from the truth · refining 2/4"."""
         if not self.active or (self.shown.final and not self._plan):
             return ""
         e = self._error(s.technique, self.shown)
         text = f"preview: {self.shown.label}" if not self.shown.final else "your settings"
         if e is not None:
-            text += f" — {e:.1%} from the truth"
+            entry = self.entry(s.technique, self.shown)
+            u = entry.uncertainty if entry is not None else None
+            # the ruler's own uncertainty beside its figure (issue 30): "6.1 % ± 1.9"
+            text += f" — {100 * e:.1f} %{f' ± {100 * u:.1f}' if u is not None else ''} from the truth"
         if self._plan:
             done = self._steps - len(self._plan)
             text += f" · refining {done + 1}/{self._steps}"
