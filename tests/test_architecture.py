@@ -78,3 +78,15 @@ def test_layers_import_downwards():
             dl = d.split(".")
             if len(dl) >= 2 and dl[1] in ALLOWED:
                 assert dl[1] in ALLOWED[parts[1]], f"{mod} imports {d}: layer {parts[1]} may not import {dl[1]}"
+
+
+def test_viewer_programs_come_from_the_shader_library():
+    """The viewer compiles no inline GLSL (issue 28): its programs are files under shaders/ served by
+    the ShaderLibrary (hot reload, defines, one error format). The start-up screen is the exception:
+    it is drawn before the library (and the rest of the viewer) is loaded."""
+    import re
+    from pathlib import Path
+    ui = Path(__file__).resolve().parents[1] / "skinviewer" / "ui"
+    inline = [p.name for p in ui.rglob("*.py") if p.name != "splash.py"
+              and re.search(r"\.program\(\s*vertex_shader", p.read_text(encoding="utf-8"))]
+    assert not inline, f"inline GLSL in {inline}"

@@ -15,7 +15,7 @@ class ViewPresenter:
         self.ctx = ctx
         self.state = state
         self.shaders = shaders
-        self.display = Display(ctx)
+        self.display = Display(ctx, shaders)
         self._slot_renderers: dict[str, Renderer] = {}
         # a copy of the last complete image: what the view shows while the next frame is spread
         # over several (row bands) -- its own textures may be reallocated (a new size) or half made
