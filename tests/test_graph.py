@@ -482,3 +482,22 @@ def test_a_budget_defers_the_pass_its_last_cost_would_push_past_it(gl_ctx, shade
     rep = g.run(frame(s2), budget_ms=40.0)
     assert rep.ran == ["fill_b", "sum"] and rep.complete  # the adder's last cost fits beside it
     assert np.allclose(g.read("out"), 4.0)
+
+
+def test_auto_timing_is_sync_on_a_software_rasterizer_and_timer_queries_on_a_gpu(renderer):
+    """render.timing = auto (the default): no glFinish between passes on a hardware GPU (timer
+    queries there), sync on llvmpipe & co., whose timer queries are far too low."""
+    from types import SimpleNamespace
+
+    from skinviewer.core.gl import software_renderer
+    assert Settings().render.timing == "auto"
+    for name, soft in (("llvmpipe (LLVM 15.0.6, 256 bits)", True), ("softpipe", True),
+                       ("Google SwiftShader", True), ("NVIDIA H100 80GB HBM3/PCIe/SSE2", False),
+                       ("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 17.0.6, DRM 3.54)", False),
+                       ("Mesa Intel(R) Arc(tm) A770 Graphics (DG2)", False)):
+        assert software_renderer(SimpleNamespace(info={"GL_RENDERER": name})) is soft, name
+    want = "sync" if software_renderer(renderer.ctx) else "gpu"
+    assert renderer.timing_mode("auto") == want
+    assert renderer.timing_mode("sync") == "sync" and renderer.timing_mode("gpu") == "gpu"
+    rep = renderer.render(small_settings("shadow-edge", "phong", size=32))
+    assert rep.timing_mode == want

@@ -44,6 +44,15 @@ def headless_context(require: int = MIN_GL, backend: str | None = None) -> moder
                              f"({'; '.join(errors)}). {_HELP}")
 
 
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "swrast", "software rasterizer")
+
+
+def software_renderer(ctx: moderngl.Context) -> bool:
+    """A rasterizer on the CPU (Mesa llvmpipe and the like): lazy, its timer queries untrustworthy."""
+    name = str(ctx.info.get("GL_RENDERER", "")).lower()
+    return any(s in name for s in SOFTWARE_RENDERERS)
+
+
 def describe(ctx: moderngl.Context) -> str:
     info = ctx.info
     return f"{info.get('GL_RENDERER', '?')} / OpenGL {info.get('GL_VERSION', '?')}"

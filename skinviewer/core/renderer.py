@@ -268,6 +268,7 @@ class Renderer:
     def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None):
         self.ctx = ctx
         self._own_shaders = shaders is None  # a library we made is ours to release
+        self._software: bool | None = None  # a software rasterizer (render.timing = auto), asked once
         self.shaders = shaders or ShaderLibrary(ctx)
         self.pool = TexturePool(ctx)
         self.graphs: dict[str, RenderGraph] = {}
@@ -369,9 +370,20 @@ class Renderer:
         lod, lod_note = rules.mesh_lod(s, scene.gpu, self._lod_state)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
                             view_key=view.key(), mesh_lod=lod, lod_note=lod_note)
-        report = g.run(frame, targets=targets, timing=timing or s.render.timing, force=force, budget_ms=budget_ms)
+        report = g.run(frame, targets=targets, timing=self.timing_mode(timing or s.render.timing), force=force,
+                       budget_ms=budget_ms)
         self.ctx.screen.use() if self.ctx.screen is not None else None
         return report
+
+    def timing_mode(self, mode: str) -> str:
+        """``render.timing`` resolved: auto is sync on a software rasterizer (its timer queries are
+        far too low), timer queries on a hardware GPU (a glFinish per pass would cost its overlap)."""
+        if mode != "auto":
+            return mode
+        if self._software is None:
+            from skinviewer.core.gl import software_renderer
+            self._software = software_renderer(self.ctx)
+        return "sync" if self._software else "gpu"
 
     def render_settled(self, s: Settings, max_frames: int = 65, **kw) -> tuple[FrameReport, int]:
         """Render until no pass asks for another frame (progressive passes such as burley2.temporal

@@ -182,8 +182,10 @@ class RenderSettings(_Model):
     check_finite: bool = Field(
         True, description="after a pass runs, check its outputs for NaN/Inf (a small GPU reduction); "
         "the frame report names a pass whose output is not finite")
-    timing: Literal["sync", "gpu"] = Field(
-        "sync", description="sync: glFinish + wall clock per pass (right on llvmpipe); gpu: GL timer queries")
+    timing: Literal["auto", "sync", "gpu"] = Field(
+        "auto", description="auto: GL timer queries on a hardware GPU (no glFinish between passes), sync on a "
+        "software rasterizer (llvmpipe: its timer queries are far too low); sync: glFinish + wall clock per "
+        "pass; gpu: GL timer queries")
     texel_surface: bool = Field(
         True, description="texture-space techniques (d'Eon's irradiance and transmitted light, Gosselin's light "
                           "map) shade once per texel from the texel surface map (the mesh's attributes per "

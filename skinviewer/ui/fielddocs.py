@@ -38,8 +38,10 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     # render
     "render.exposure": ("x", "linear exposure multiplier before the sRGB encode"),
     "render.background": ("linear RGB", "clear colour of the 3D view"),
-    "render.timing": ("", "sync: glFinish + wall clock per pass (true cost on llvmpipe); "
-                      "gpu: GL_TIME_ELAPSED queries (accurate on real GPUs, far too low on llvmpipe)"),
+    "render.timing": ("", "auto (default): gpu on a hardware GPU, sync on a software rasterizer; "
+                      "sync: glFinish + wall clock per pass (true cost on llvmpipe, but a glFinish between "
+                      "passes costs a GPU its overlap); gpu: GL_TIME_ELAPSED queries (accurate on real GPUs, "
+                      "far too low on llvmpipe)"),
     "deon.specular_shadows": ("", "where the specular's shadow test (eq. 10) is evaluated. texture: once per "
                                "irradiance texel, with the same PCF, kept per light, so orbiting does no "
                                "shadow-map lookups (a camera move costs about a quarter less). pixel: per "

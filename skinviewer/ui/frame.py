@@ -424,7 +424,7 @@ class FrameController:
         """Tell the governor what this complete frame of ``rung`` cost (the passes it ran, sync
         timing): its picks follow this machine as it is now, not only its calibration."""
         ms = [p.ms for p in report.passes if p.status == "ran" and p.ms is not None]
-        if ms and report.timing_mode == "sync":
+        if ms and report.timing_mode in ("sync", "gpu"):
             self.governor.observe(technique, rung, self._camera_input, float(sum(ms)))
 
     def _merge_partial(self, report: FrameReport, keep: bool = False) -> FrameReport:
