@@ -7,7 +7,8 @@
   head    the default head's truth: CPU seconds (time.process_time) of version 4 and of version 5 with its
           uncertainty, in one process; how far the truth moved; its uncertainty (median / p99 / as RMS).
   unc     the stated uncertainty against the true error on the analytic scenes (zoomed edge, lit slab, laser).
-  rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square.
+  rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square,
+          deon.open_border absorb (before issue 30 item 5) and reflect (the default).
 
 Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,head] [--size 512] [--edge-size 32]
 """
@@ -123,7 +124,7 @@ def part_head(size: int) -> None:
           + " / ".join(f"{100 * x:.2f}" for x in np.sqrt((u ** 2).sum(0) / (b.lit[m] ** 2).sum(0))) + " %")
 
 
-def part_rim(n: int = 1024) -> None:
+def part_rim(n: int = 1024, mode: str = "reflect") -> None:
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
     from skinviewer.passes.deon import DIFFUSE
@@ -131,6 +132,7 @@ def part_rim(n: int = 1024) -> None:
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     s = scene("laser", 64, **{"technique": "deon", "deon.irradiance_size": n, "deon.tsm": False,
+                               "deon.open_border": mode,
                                "deon.subpixel_kernel_px": 0.0,
                                "lights": [{"kind": "directional", "direction": [0, 0, 1], "intensity": 1.0,
                                            "cast_shadow": False}]})
@@ -146,7 +148,7 @@ def part_rim(n: int = 1024) -> None:
     xs = np.linspace(-12, 12, 4801)
     ana = np.array([W[i] * np.trapezoid(box(xs, np.sqrt(V[i])), xs) ** 2 / 24 ** 2 for i in range(len(V))]).sum(0)
     kept = D[inside].sum(0) / E[inside].sum(0)
-    print(f"## d'Eon on the uniformly lit 24 mm slab, {n}^2 map: power kept R / G / B "
+    print(f"## d'Eon on the uniformly lit 24 mm slab, {n}^2 map, deon.open_border={mode}: power kept R / G / B "
           f"{' / '.join(f'{x:.4f}' for x in kept)}, analytic open square {' / '.join(f'{x:.4f}' for x in ana)}")
     row = int(np.argmin(np.abs(Y[:, 0])))
     for d in (0.0, 0.5, 1.0):
@@ -163,13 +165,16 @@ def main() -> int:
     ap.add_argument("--parts", default="edge,unc,rim")
     ap.add_argument("--size", type=int, default=512, help="head size")
     ap.add_argument("--edge-size", type=int, default=32)
+    ap.add_argument("--rim-size", type=int, default=1024, help="d'Eon's map on the slab")
+    ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
     a = ap.parse_args()
     if "edge" in a.parts:
         part_edge(a.edge_size)
     if "unc" in a.parts:
         part_unc()
     if "rim" in a.parts:
-        part_rim()
+        for mode in a.rim_modes.split(","):
+            part_rim(a.rim_size, mode)
     if "head" in a.parts:
         part_head(a.size)
     return 0

@@ -521,3 +521,63 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
     mapped[gy[have], gx[have]] = True
     coords[gy[have], gx[have]] = tgt[have]
     return mapped, coords
+
+
+def border_frame(positions, uvs, indices, covered: np.ndarray, reach: float) -> np.ndarray:
+    """(n, n, 4) float32, for every texel within ``reach`` texels of a mesh border of its own UV island
+    (the island nearest to it, 8-connected texels): R the signed distance (texels) from the texel's
+    centre to that border edge's line, > 0 inside the island, < 0 past the border; GB the edge's unit
+    normal in texel coordinates pointing into the island; A 1 there, 0 elsewhere (R = 65504, no border
+    near). Locally the border is a straight line s = 0 and a point of the texture at s < 0 is past the
+    surface's end: what the open-border extension of the d'Eon blurs (issue 30 item 5,
+    physics/open_border.py) reflects across it."""
+    n = covered.shape[0]
+    out = np.zeros((n, n, 4), np.float32)
+    out[..., 0] = 65504.0
+    he = border_half_edges(positions, indices)
+    if len(he) == 0 or not covered.any():
+        return out
+    F = np.asarray(indices, np.int64).reshape(-1, 3)
+    UV = np.asarray(uvs, np.float64) * n - 0.5  # texel coordinates, centres at integers
+    ua, ub, uc = UV[F[he // 3, he % 3]], UV[F[he // 3, (he % 3 + 1) % 3]], UV[F[he // 3, (he % 3 + 2) % 3]]
+    e = ub - ua
+    el = np.linalg.norm(e, axis=1)
+    ok = el > 1e-9
+    nrm = np.stack([-e[:, 1], e[:, 0]], 1) / np.maximum(el, 1e-300)[:, None]
+    nrm *= np.where(((uc - ua) * nrm).sum(1) < 0.0, -1.0, 1.0)[:, None]  # towards the triangle's third corner
+    ua, ub, nrm = ua[ok], ub[ok], nrm[ok]
+    if len(ua) == 0:
+        return out
+    pts, rep = _edge_samples(ua, ub)
+    # the island of each edge and of each texel: the 8-connected covered components (gutter_table's)
+    _, (iy, ix) = ndimage.distance_transform_edt(~covered, return_indices=True)
+    label, _ = ndimage.label(covered, structure=np.ones((3, 3), bool))
+    zone = label[iy, ix]
+    mid = np.clip(np.round((ua + ub) / 2.0).astype(int), 0, n - 1)
+    edge_zone = zone[mid[:, 1], mid[:, 0]]
+    near = np.zeros((n, n), bool)
+    pi = np.clip(np.round(pts).astype(int), 0, n - 1)
+    near[pi[:, 1], pi[:, 0]] = True
+    gy, gx = np.nonzero(ndimage.distance_transform_edt(~near) <= reach + 1.0)
+    if len(gx) == 0:
+        return out
+    q = np.stack([gx, gy], 1).astype(np.float64)
+    k = min(16, len(pts))
+    dd, nn = cKDTree(pts).query(q, k=k)
+    dd, nn = dd.reshape(len(q), k), nn.reshape(len(q), k)
+    pick = np.full(len(q), -1)
+    for c in range(k):  # the nearest border edge of the texel's own island
+        take = (pick < 0) & (edge_zone[rep[nn[:, c]]] == zone[gy, gx]) & (dd[:, c] <= reach + 1.0)
+        pick[take] = rep[nn[take, c]]
+    have = pick >= 0
+    h = pick[have]
+    s = ((q[have] - ua[h]) * nrm[h]).sum(1)
+    # the texel's foot on that line must lie in its own island's zone (past a corner it may not)
+    foot = np.clip(np.round(q[have] - s[:, None] * nrm[h]).astype(int), 0, n - 1)
+    keep = zone[foot[:, 1], foot[:, 0]] == zone[gy[have], gx[have]]
+    have[have] = keep
+    h, s = h[keep], s[keep]
+    out[gy[have], gx[have], 0] = s
+    out[gy[have], gx[have], 1:3] = nrm[h]
+    out[gy[have], gx[have], 3] = 1.0
+    return out
