@@ -555,29 +555,32 @@ def border_frame(positions, uvs, indices, covered: np.ndarray, reach: float) -> 
     zone = label[iy, ix]
     mid = np.clip(np.round((ua + ub) / 2.0).astype(int), 0, n - 1)
     edge_zone = zone[mid[:, 1], mid[:, 0]]
-    near = np.zeros((n, n), bool)
     pi = np.clip(np.round(pts).astype(int), 0, n - 1)
-    near[pi[:, 1], pi[:, 0]] = True
-    gy, gx = np.nonzero(ndimage.distance_transform_edt(~near) <= reach + 1.0)
-    if len(gx) == 0:
+    keep_pt = edge_zone[rep] == zone[pi[:, 1], pi[:, 0]]
+    pi, rep = pi[keep_pt], rep[keep_pt]
+    owner = np.full((n, n), -1, np.int64)  # the border edge a texel the border passes through belongs to
+    owner[pi[:, 1], pi[:, 0]] = rep
+    r = int(np.ceil(reach)) + 1
+    gys, gxs, hs = [], [], []
+    for z in np.unique(edge_zone[rep]):  # per island: its texels' nearest border texel of its own edges
+        on = owner >= 0
+        on &= zone == z
+        ys, xs = np.nonzero(on)
+        y0, y1, x0, x1 = max(ys.min() - r, 0), min(ys.max() + r + 1, n), max(xs.min() - r, 0), min(xs.max() + r + 1, n)
+        d, (ny, nx) = ndimage.distance_transform_edt(~on[y0:y1, x0:x1], return_indices=True)
+        gy, gx = np.nonzero((d <= reach) & (zone[y0:y1, x0:x1] == z))
+        gys.append(gy + y0)
+        gxs.append(gx + x0)
+        hs.append(owner[ny[gy, gx] + y0, nx[gy, gx] + x0])
+    if not gys:
         return out
+    gy, gx, h = np.concatenate(gys), np.concatenate(gxs), np.concatenate(hs)
     q = np.stack([gx, gy], 1).astype(np.float64)
-    k = min(16, len(pts))
-    dd, nn = cKDTree(pts).query(q, k=k)
-    dd, nn = dd.reshape(len(q), k), nn.reshape(len(q), k)
-    pick = np.full(len(q), -1)
-    for c in range(k):  # the nearest border edge of the texel's own island
-        take = (pick < 0) & (edge_zone[rep[nn[:, c]]] == zone[gy, gx]) & (dd[:, c] <= reach + 1.0)
-        pick[take] = rep[nn[take, c]]
-    have = pick >= 0
-    h = pick[have]
-    s = ((q[have] - ua[h]) * nrm[h]).sum(1)
+    s = ((q - ua[h]) * nrm[h]).sum(1)
     # the texel's foot on that line must lie in its own island's zone (past a corner it may not)
-    foot = np.clip(np.round(q[have] - s[:, None] * nrm[h]).astype(int), 0, n - 1)
-    keep = zone[foot[:, 1], foot[:, 0]] == zone[gy[have], gx[have]]
-    have[have] = keep
-    h, s = h[keep], s[keep]
-    out[gy[have], gx[have], 0] = s
-    out[gy[have], gx[have], 1:3] = nrm[h]
+    foot = np.clip(np.round(q - s[:, None] * nrm[h]).astype(int), 0, n - 1)
+    have = zone[foot[:, 1], foot[:, 0]] == zone[gy, gx]
+    out[gy[have], gx[have], 0] = s[have]
+    out[gy[have], gx[have], 1:3] = nrm[h[have]]
     out[gy[have], gx[have], 3] = 1.0
     return out
