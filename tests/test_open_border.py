@@ -100,3 +100,38 @@ def test_the_uniformly_lit_slab_keeps_the_open_squares_power_and_rim(renderer):
     assert np.abs(rim).max() < 0.02, rim
     power, _ = _slab_figures(renderer, 256, "absorb")
     assert power[0] < 0.99, power
+
+
+def test_border_frame_measures_each_texel_from_its_own_islands_border():
+    """scene/texels.border_frame on two open squares side by side (two UV islands): inside each, the
+    signed distance (texels) to its nearest border line and the inward normal; past a border the
+    distance is negative; a texel is never measured from the other island's border; far away none."""
+    from skinviewer.scene.scenes import grid
+    from skinviewer.scene.texels import border_frame
+    n = 64
+    a = grid(4, 4, 10.0, 10.0, uv_rect=(0.1, 0.1, 0.45, 0.9))
+    b = grid(4, 4, 10.0, 10.0, uv_rect=(0.55, 0.1, 0.9, 0.9))
+    b[0][:, 0] += 30.0  # apart in 3D too: two open plates
+    pos = np.concatenate([a[0], b[0]])
+    uv = np.concatenate([a[2], b[2]])
+    idx = np.concatenate([a[3], b[3] + len(a[0])])
+    U = uv * n - 0.5
+    iy, ix = np.mgrid[0:n, 0:n]
+    covered = np.zeros((n, n), bool)
+    for lo, hi in ((0.1, 0.45), (0.55, 0.9)):
+        covered |= (ix >= lo * n - 0.5) & (ix <= hi * n - 0.5) & (iy >= 0.1 * n - 0.5) & (iy <= 0.9 * n - 0.5)
+    f = border_frame(pos, uv, idx, covered, reach=20.0)
+    row = n // 2
+    left_edge = U[:, 0].min()  # island a's left border, texel coordinates
+    for x in range(int(np.ceil(left_edge)), int(np.ceil(left_edge)) + 4):
+        assert f[row, x, 3] == 1.0 and abs(f[row, x, 0] - (x - left_edge)) < 1e-4
+        np.testing.assert_allclose(f[row, x, 1:3], [1.0, 0.0], atol=1e-6)
+    x = int(np.floor(left_edge)) - 1  # a gutter texel past it
+    assert f[row, x, 0] < 0 and f[row, x, 3] == 1.0
+    # between the islands: each gutter texel is measured from its own (nearest) island's border
+    gap_a, gap_b = 0.45 * n - 0.5, 0.55 * n - 0.5
+    for x in range(int(np.ceil(gap_a)), int(np.floor(gap_b)) + 1):
+        own = gap_a if x - gap_a < gap_b - x else gap_b
+        assert abs(abs(f[row, x, 0]) - abs(x - own)) < 1e-4 and f[row, x, 0] < 0, (x, f[row, x])
+    far = border_frame(pos, uv, idx, covered, reach=3.0)
+    assert far[row, int(0.27 * n), 3] == 0.0  # the middle of island a is farther than the reach

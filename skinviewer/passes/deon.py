@@ -74,9 +74,9 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
-from skinviewer.scene.texels import border_frame
 from skinviewer.physics.surface_gather import SHORTCUT_RATIO, gather_blocks_for
 from skinviewer.scene.camera import gl_bytes
+from skinviewer.scene.texels import border_frame
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
