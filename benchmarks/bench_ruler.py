@@ -10,7 +10,9 @@
   rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square,
           deon.open_border absorb (before issue 30 item 5) and reflect (the default).
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,head] [--size 512] [--edge-size 32]
+  cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
+
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,cost,head] [--size 512] [--edge-size 32]
 """
 from __future__ import annotations
 
@@ -160,6 +162,34 @@ def part_rim(n: int = 1024, mode: str = "reflect") -> None:
     ctx.release()
 
 
+def part_rim_cost(n: int, repeats: int = 3) -> None:
+    """What deon.open_border = reflect costs against absorb: forced frames of the zoomed-out
+    shadow-edge scene (open borders all round; 160^2 image, n^2 maps), interleaved, sync timing
+    (glFinish + wall clock), medians of the blur passes' sum; and the border frame, once per mesh and size."""
+    import statistics
+
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    ctx = headless_context()
+    r = Renderer(ctx)
+    base = scene("shadow-edge", 160, **{"technique": "deon", "deon.irradiance_size": n, "render.timing": "sync"})
+    variants = {m: with_values(base, {"deon.open_border": m}) for m in ("absorb", "reflect")}
+    once = 0.0
+    for m, s in variants.items():  # warm-up: compile, scene, the once-per-mesh maps
+        rep = r.render(s, force=True)
+        once += sum(p.ms or 0.0 for p in rep.passes if p.name == "deon_border_frame" and p.status == "ran")
+    ms: dict[str, list[float]] = {m: [] for m in variants}
+    for _ in range(repeats):
+        for m, s in variants.items():
+            rep = r.render(s, force=True)
+            ms[m].append(sum(p.ms or 0.0 for p in rep.passes if p.name.startswith("deon_blur_") and p.status == "ran"))
+    a, b = statistics.median(ms["absorb"]), statistics.median(ms["reflect"])
+    print(f"## open border cost, shadow-edge {n}^2 maps, sync timing, {repeats} interleaved repeats: blur passes "
+          f"absorb {a:.0f} ms, reflect {b:.0f} ms ({b / a:.2f}x); border frame once per mesh and size {once:.0f} ms")
+    r.release()
+    ctx.release()
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--parts", default="edge,unc,rim")
@@ -175,6 +205,8 @@ def main() -> int:
     if "rim" in a.parts:
         for mode in a.rim_modes.split(","):
             part_rim(a.rim_size, mode)
+    if "cost" in a.parts:
+        part_rim_cost(a.rim_size)
     if "head" in a.parts:
         part_head(a.size)
     return 0

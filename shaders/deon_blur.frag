@@ -76,6 +76,12 @@ void main() {
 #ifdef OPEN_BORDER
     vec4 bf = texelFetch(border_map, src, 0);
     bool reflect_on = u_reflect != 0 && bf.a > 0.5;
+    // E / 2 where this pass's line of taps crosses the border (one read per texel, not per tap; along
+    // the border's normal it is every tap's foot), or at x's foot when the line runs along the border
+    vec2 tap_tx = step_uv * vec2(textureSize(source, 0));  // texels per unit of tap offset
+    float rate = dot(bf.gb, tap_tx);
+    vec3 half_e = !reflect_on ? vec3(0.0) : (abs(rate) > 1e-6) ? border_half_e(uv - bf.r / rate * step_uv, 0.0, bf.gb)
+                                                            : border_half_e(uv, bf.r, bf.gb);
 #endif
 #ifdef NARROW_TAPS
     // a sigma of at most ~2 texels (issue 10 item 5): taps at whole texels along the axis, so no
@@ -86,6 +92,12 @@ void main() {
     ivec2 hi = textureSize(source, 0) - 1;
     float wsum = 0.0;
     bool check = ISLAND_CHECK(float(NARROW_TAPS) + 0.5);
+#ifdef OPEN_BORDER
+    float rate_n = dot(bf.gb, vec2(d));  // whole-texel taps along d
+    vec3 half_e_n = !reflect_on ? vec3(0.0)
+                  : (abs(rate_n) > 1e-6) ? border_half_e(uv - bf.r / rate_n * vec2(d) / vec2(textureSize(source, 0)), 0.0, bf.gb)
+                                         : border_half_e(uv, bf.r, bf.gb);
+#endif
     for (int k = -NARROW_TAPS; k <= NARROW_TAPS; ++k) {
         float fk = float(k);
         float w = (s_t <= 1.0) ? ((k == 0) ? 1.0 - s_t * s_t : ((abs(k) == 1) ? 0.5 * s_t * s_t : 0.0))
@@ -97,7 +109,7 @@ void main() {
         float s_k = bf.r + fk * dot(bf.gb, vec2(d));  // texels into the surface at this tap's centre
         vec2 p_k = (vec2(src + k * d) + 0.5) / vec2(textureSize(source, 0));
         if (reflect_on && k != 0 && s_k < 0.0 && own_border(p_k, s_k, bf.gb, zone)) {
-            acc += w * past_border_light(source, p_k, s_k, bf.gb);
+            acc += w * past_border_light(source, p_k, s_k, bf.gb, half_e_n);
             wsum += w;
             wl += w;
             continue;
@@ -108,7 +120,7 @@ void main() {
             float s_p = 0.5 * (s_k - half_k);  // the middle of its part past the border
             vec4 v = texelFetch(source, t, 0);
             vec4 past = (u_reflect != 0)
-                ? past_border_light(source, p_k + (s_p - s_k) * bf.gb / vec2(textureSize(source, 0)), s_p, bf.gb)
+                ? past_border_light(source, p_k + (s_p - s_k) * bf.gb / vec2(textureSize(source, 0)), s_p, bf.gb, half_e_n)
                 : vec4(0.0);
             acc += w * vec4(c * v.rgb + (1.0 - c) * past.rgb, v.a);
             wsum += w;
@@ -132,7 +144,7 @@ void main() {
 #ifdef OPEN_BORDER
         float s_k = bf.r + float(k - 3) * dot(bf.gb, step_uv * ts);  // texels into the surface at this tap
         if (reflect_on && k != 3 && s_k < 0.0 && own_border(t, s_k, bf.gb, zone)) {
-            acc += w * past_border_light(source, t, s_k, bf.gb);
+            acc += w * past_border_light(source, t, s_k, bf.gb, half_e);
             wsum += w;
             wl += w;
             continue;

@@ -23,7 +23,8 @@ void main() {
 #ifdef OPEN_BORDER
     vec4 bf = texelFetch(border_map, p, 0);
     if (u_reflect != 0 && u_past_border_dark != 0 && s.b > 1.5 && bf.a > 0.5 && bf.r < 0.0) {
-        f_color = past_border_light(source, (vec2(p) + 0.5) / vec2(textureSize(source, 0)), bf.r, bf.gb);
+        vec2 uv = (vec2(p) + 0.5) / vec2(textureSize(source, 0));
+        f_color = past_border_light(source, uv, bf.r, bf.gb, border_half_e(uv, bf.r, bf.gb));
         return;
     }
 #endif

@@ -8,12 +8,14 @@
 #define SKINVIEWER_OPEN_BORDER_GLSL
 uniform sampler2D border_map;
 uniform sampler2D irradiance_map;  // E: what blur 0 blurs
-// blur_(i-1) (``src``) at uv ``p``, ``s`` texels past the border (s < 0) along the inward normal ``nrm``
-vec4 past_border_light(sampler2D src, vec2 p, float s, vec2 nrm) {
-    vec2 n_uv = nrm / vec2(textureSize(src, 0));
-    vec2 foot = p - s * n_uv;  // on the border
-    vec3 half_e = max(0.5 * texture(irradiance_map, foot).rgb, vec3(0.0));
-    vec3 mirror = texture(src, p - 2.0 * s * n_uv).rgb;  // |s| inside
-    return vec4(clamp(2.0 * half_e - mirror, vec3(0.0), half_e), texture(src, foot).a);
+// E / 2 on the border at the foot of uv ``p``, ``s`` texels from it along the inward normal ``nrm``
+vec3 border_half_e(vec2 p, float s, vec2 nrm) {
+    return max(0.5 * texture(irradiance_map, p - s * nrm / vec2(textureSize(irradiance_map, 0))).rgb, vec3(0.0));
+}
+// blur_(i-1) (``src``) at uv ``p``, ``s`` texels past the border (s < 0) along the inward normal ``nrm``,
+// from E / 2 on the border (border_half_e) and the value |s| inside (the mirror point; its A too)
+vec4 past_border_light(sampler2D src, vec2 p, float s, vec2 nrm, vec3 half_e) {
+    vec4 mirror = texture(src, p - 2.0 * s * nrm / vec2(textureSize(src, 0)));
+    return vec4(clamp(2.0 * half_e - mirror.rgb, vec3(0.0), half_e), mirror.a);
 }
 #endif
