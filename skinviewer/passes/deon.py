@@ -226,7 +226,16 @@ BORDER_REACH_MM = 10.0  # the border frame reaches this far: 3.5 sigma of the wi
 
 
 def open_border(r) -> bool:
-    """deon.open_border = reflect with scene.seam_aware (which knows where the mesh borders are)."""
+    """deon.open_border = reflect with scene.seam_aware (which knows where the mesh borders are), on a
+    mesh that has an open border (peeked: a closed mesh, such as the default head, pays nothing)."""
+    if r.scene is None or not r.peek("scene.seam_aware") or r.peek("deon.open_border") != "reflect":
+        return False
+    cache = r.scene.__dict__.setdefault("_texel_tables", {})
+    if "has_border" not in cache:
+        from skinviewer.scene.mesh import border_half_edges
+        cache["has_border"] = len(border_half_edges(r.scene.mesh.positions, r.scene.mesh.indices)) > 0
+    if not cache["has_border"]:
+        return False
     return bool(r.setting("scene.seam_aware")) and r.setting("deon.open_border") == "reflect"
 
 
