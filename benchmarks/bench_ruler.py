@@ -10,9 +10,10 @@
   rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square,
           deon.open_border absorb (before issue 30 item 5) and reflect (the default).
 
+  truth   d'Eon, open border absorb and reflect, against the ground truth on the scenes with open borders.
   cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,cost,head] [--size 512] [--edge-size 32]
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head] [--size 512] [--edge-size 32]
 """
 from __future__ import annotations
 
@@ -175,7 +176,7 @@ def part_rim_cost(n: int, repeats: int = 3) -> None:
     base = scene("shadow-edge", 160, **{"technique": "deon", "deon.irradiance_size": n, "render.timing": "sync"})
     variants = {m: with_values(base, {"deon.open_border": m}) for m in ("absorb", "reflect")}
     once = 0.0
-    for m, s in variants.items():  # warm-up: compile, scene, the once-per-mesh maps
+    for s in variants.values():  # warm-up: compile, scene, the once-per-mesh maps
         rep = r.render(s, force=True)
         once += sum(p.ms or 0.0 for p in rep.passes if p.name == "deon_border_frame" and p.status == "ran")
     ms: dict[str, list[float]] = {m: [] for m in variants}
@@ -186,6 +187,33 @@ def part_rim_cost(n: int, repeats: int = 3) -> None:
     a, b = statistics.median(ms["absorb"]), statistics.median(ms["reflect"])
     print(f"## open border cost, shadow-edge {n}^2 maps, sync timing, {repeats} interleaved repeats: blur passes "
           f"absorb {a:.0f} ms, reflect {b:.0f} ms ({b / a:.2f}x); border frame once per mesh and size {once:.0f} ms")
+    r.release()
+    ctx.release()
+
+
+def part_rim_truth(size: int = 128) -> None:
+    """d'Eon with deon.open_border absorb and reflect against the ground truth on the scenes with open
+    borders: the laser slab under a uniform light (tests/test_bench.py's plane), backlit-ear, shadow-edge."""
+    from skinviewer.core.bench import compare_mask, linear_image
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    from skinviewer.physics.metrics import image_error
+    ctx = headless_context()
+    r = Renderer(ctx)
+    print(f"## d'Eon against the ground truth, {size}^2, open border absorb / reflect")
+    lit_plane = [{"kind": "directional", "direction": [0.2, 0.1, 1.0], "intensity": 1.5, "cast_shadow": True}]
+    for name, sc, extra in (("lit slab", "laser", {"lights": lit_plane}), ("backlit-ear", "backlit-ear", {}),
+                            ("shadow-edge", "shadow-edge", {})):
+        base = with_values(Settings(), {"scene.name": sc, **scene_overrides(sc), "render.width": size,
+                                        "render.height": size, **extra})
+        ref = compute_reference(base)
+        for mode in ("absorb", "reflect"):
+            s = with_values(base, {"technique": "deon", "deon.open_border": mode})
+            r.render_settled(s)
+            img, cov = linear_image(r, s)
+            e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=s.render.exposure,
+                            uncertainty=ref.uncertainty)
+            print(f"  {name:12s} {mode:8s} {e.summary()}", flush=True)
     r.release()
     ctx.release()
 
@@ -205,6 +233,8 @@ def main() -> int:
     if "rim" in a.parts:
         for mode in a.rim_modes.split(","):
             part_rim(a.rim_size, mode)
+    if "truth" in a.parts:
+        part_rim_truth()
     if "cost" in a.parts:
         part_rim_cost(a.rim_size)
     if "head" in a.parts:
