@@ -7,7 +7,11 @@ skinviewer/techniques/preview_errors.json (``core/calibration.attach_errors`` re
 The default head, the default settings (1024² maps) but the image size; the truth is
 ``skinviewer reference`` of the same settings (core/reference, its cache). A rung on a smaller view
 is rendered at its size and enlarged bilinearly to the truth's (what the viewer shows stretched).
-Error: the mean over channels of the relative RMS (physics/metrics.image_error)."""
+Error: the mean over channels of the relative RMS (physics/metrics.image_error). Beside it, under
+the key ``uncertainty`` (same rung keys), the ruler's uncertainty of that figure: the mean over
+channels of ``ImageError.rms_u``, how far the figure can move while the truth moves within its
+per-pixel uncertainty (core/reference.coarse_uncertainty, issue 30), so a status line can read
+"6.1 % ± 0.4"."""
 from __future__ import annotations
 
 import argparse
@@ -49,6 +53,7 @@ def main() -> None:
     ctx = headless_context()
     r = Renderer(ctx)
     errors: dict[str, float] = {}
+    uncertainty: dict[str, float] = {}
     rows = []
     for name in args.techniques.split(","):
         s = with_values(base, {"technique": name})
@@ -59,15 +64,22 @@ def main() -> None:
             if img.shape[:2] != ref.lit.shape[:2]:
                 img = enlarge(img, ref.lit.shape[:2], 1)
                 cov = enlarge(cov.astype(np.uint8), ref.lit.shape[:2], 0) > 0
-            e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=base.render.exposure)
+            e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=base.render.exposure,
+                            uncertainty=ref.uncertainty)
             err = float(np.mean(e.rms))
             errors[rung_key(name, rung)] = err
+            if e.rms_u is not None:
+                uncertainty[rung_key(name, rung)] = float(np.mean(e.rms_u))
             rows.append((name, rung.label, err))
-            print(f"{name:<10} {rung.label:<50} {err:8.2%}", flush=True)
+            print(f"{name:<10} {rung.label:<50} {err:8.2%} ± {uncertainty.get(rung_key(name, rung), float('nan')):.2%}",
+                  flush=True)
         r.trim()
     data = {"what": "mean relative RMS against the ground truth of each preview rung (benchmarks/bench_governor_errors.py)",
             "scene": "head (default settings, 1024² maps)", "size": [args.size, args.size],
-            "renderer": describe(ctx), "date": time.strftime("%Y-%m-%d"), "errors": errors}
+            "renderer": describe(ctx), "date": time.strftime("%Y-%m-%d"), "errors": errors,
+            "uncertainty_what": "the ground truth's own uncertainty of each error figure: mean over channels of "
+                                "ImageError.rms_u (issue 30); the error is known to +- this",
+            "uncertainty": uncertainty}
     atomic_write_text(args.out, json.dumps(data, indent=1, ensure_ascii=False) + "\n")
     print(f"wrote {args.out}")
 

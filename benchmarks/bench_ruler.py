@@ -7,9 +7,13 @@
   head    the default head's truth: CPU seconds (time.process_time) of version 4 and of version 5 with its
           uncertainty, in one process; how far the truth moved; its uncertainty (median / p99 / as RMS).
   unc     the stated uncertainty against the true error on the analytic scenes (zoomed edge, lit slab, laser).
-  rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square.
+  rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square,
+          deon.open_border absorb (before issue 30 item 5) and reflect (the default).
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,head] [--size 512] [--edge-size 32]
+  truth   d'Eon, open border absorb and reflect, against the ground truth on the scenes with open borders.
+  cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
+
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head] [--size 512] [--edge-size 32]
 """
 from __future__ import annotations
 
@@ -123,7 +127,7 @@ def part_head(size: int) -> None:
           + " / ".join(f"{100 * x:.2f}" for x in np.sqrt((u ** 2).sum(0) / (b.lit[m] ** 2).sum(0))) + " %")
 
 
-def part_rim(n: int = 1024) -> None:
+def part_rim(n: int = 1024, mode: str = "reflect") -> None:
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
     from skinviewer.passes.deon import DIFFUSE
@@ -131,6 +135,7 @@ def part_rim(n: int = 1024) -> None:
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     s = scene("laser", 64, **{"technique": "deon", "deon.irradiance_size": n, "deon.tsm": False,
+                               "deon.open_border": mode,
                                "deon.subpixel_kernel_px": 0.0,
                                "lights": [{"kind": "directional", "direction": [0, 0, 1], "intensity": 1.0,
                                            "cast_shadow": False}]})
@@ -146,7 +151,7 @@ def part_rim(n: int = 1024) -> None:
     xs = np.linspace(-12, 12, 4801)
     ana = np.array([W[i] * np.trapezoid(box(xs, np.sqrt(V[i])), xs) ** 2 / 24 ** 2 for i in range(len(V))]).sum(0)
     kept = D[inside].sum(0) / E[inside].sum(0)
-    print(f"## d'Eon on the uniformly lit 24 mm slab, {n}^2 map: power kept R / G / B "
+    print(f"## d'Eon on the uniformly lit 24 mm slab, {n}^2 map, deon.open_border={mode}: power kept R / G / B "
           f"{' / '.join(f'{x:.4f}' for x in kept)}, analytic open square {' / '.join(f'{x:.4f}' for x in ana)}")
     row = int(np.argmin(np.abs(Y[:, 0])))
     for d in (0.0, 0.5, 1.0):
@@ -158,18 +163,80 @@ def part_rim(n: int = 1024) -> None:
     ctx.release()
 
 
+def part_rim_cost(n: int, repeats: int = 3) -> None:
+    """What deon.open_border = reflect costs against absorb: forced frames of the zoomed-out
+    shadow-edge scene (open borders all round; 160^2 image, n^2 maps), interleaved, sync timing
+    (glFinish + wall clock), medians of the blur passes' sum; and the border frame, once per mesh and size."""
+    import statistics
+
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    ctx = headless_context()
+    r = Renderer(ctx)
+    base = scene("shadow-edge", 160, **{"technique": "deon", "deon.irradiance_size": n, "render.timing": "sync"})
+    variants = {m: with_values(base, {"deon.open_border": m}) for m in ("absorb", "reflect")}
+    once = 0.0
+    for s in variants.values():  # warm-up: compile, scene, the once-per-mesh maps
+        rep = r.render(s, force=True)
+        once += sum(p.ms or 0.0 for p in rep.passes if p.name == "deon_border_frame" and p.status == "ran")
+    ms: dict[str, list[float]] = {m: [] for m in variants}
+    for _ in range(repeats):
+        for m, s in variants.items():
+            rep = r.render(s, force=True)
+            ms[m].append(sum(p.ms or 0.0 for p in rep.passes if p.name.startswith("deon_blur_") and p.status == "ran"))
+    a, b = statistics.median(ms["absorb"]), statistics.median(ms["reflect"])
+    print(f"## open border cost, shadow-edge {n}^2 maps, sync timing, {repeats} interleaved repeats: blur passes "
+          f"absorb {a:.0f} ms, reflect {b:.0f} ms ({b / a:.2f}x); border frame once per mesh and size {once:.0f} ms")
+    r.release()
+    ctx.release()
+
+
+def part_rim_truth(size: int = 128) -> None:
+    """d'Eon with deon.open_border absorb and reflect against the ground truth on the scenes with open
+    borders: the laser slab under a uniform light (tests/test_bench.py's plane), backlit-ear, shadow-edge."""
+    from skinviewer.core.bench import compare_mask, linear_image
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    from skinviewer.physics.metrics import image_error
+    ctx = headless_context()
+    r = Renderer(ctx)
+    print(f"## d'Eon against the ground truth, {size}^2, open border absorb / reflect")
+    lit_plane = [{"kind": "directional", "direction": [0.2, 0.1, 1.0], "intensity": 1.5, "cast_shadow": True}]
+    for name, sc, extra in (("lit slab", "laser", {"lights": lit_plane}), ("backlit-ear", "backlit-ear", {}),
+                            ("shadow-edge", "shadow-edge", {})):
+        base = with_values(Settings(), {"scene.name": sc, **scene_overrides(sc), "render.width": size,
+                                        "render.height": size, **extra})
+        ref = compute_reference(base)
+        for mode in ("absorb", "reflect"):
+            s = with_values(base, {"technique": "deon", "deon.open_border": mode})
+            r.render_settled(s)
+            img, cov = linear_image(r, s)
+            e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=s.render.exposure,
+                            uncertainty=ref.uncertainty)
+            print(f"  {name:12s} {mode:8s} {e.summary()}", flush=True)
+    r.release()
+    ctx.release()
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--parts", default="edge,unc,rim")
     ap.add_argument("--size", type=int, default=512, help="head size")
     ap.add_argument("--edge-size", type=int, default=32)
+    ap.add_argument("--rim-size", type=int, default=1024, help="d'Eon's map on the slab")
+    ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
     a = ap.parse_args()
     if "edge" in a.parts:
         part_edge(a.edge_size)
     if "unc" in a.parts:
         part_unc()
     if "rim" in a.parts:
-        part_rim()
+        for mode in a.rim_modes.split(","):
+            part_rim(a.rim_size, mode)
+    if "truth" in a.parts:
+        part_rim_truth()
+    if "cost" in a.parts:
+        part_rim_cost(a.rim_size)
     if "head" in a.parts:
         part_head(a.size)
     return 0

@@ -46,6 +46,20 @@ uniform int u_absorb;        // 1: light (past a border there is none); 0: the s
 #define PAST_BORDER 0.0
 #endif
 
+// deon.open_border = reflect (issue 30 item 5): when `source` is a blur of E, a tap past the island's
+// mesh border (s < 0 on the border's line through x's nearest border point) reads the odd reflection
+// of the light about the border (lib/open_border.glsl) instead of no light: the light the previous
+// steps carried past the border comes back, as in eq. 21's one-go blur of E over the surface.
+#ifdef OPEN_BORDER
+#include "lib/open_border.glsl"
+uniform int u_reflect;  // 0 for the first step's first pass over E itself (nothing past the border)
+// the tap's foot on the border line lies in x's own island zone (past a corner it may not: then the
+// tap is judged by its zone as before)
+bool own_border(vec2 p, float s, vec2 nrm, float zone) {
+    return abs(uv_zone(gutter, p - s * nrm / vec2(textureSize(gutter, 0))) - zone) < 0.5;
+}
+#endif
+
 void main() {
     ivec2 src = ivec2(texelFetch(gutter, ivec2(gl_FragCoord.xy), 0).rg + 0.5);
     vec4 own = texelFetch(gutter, src, 0);  // B: this island's zone, A: texels to another zone
@@ -59,6 +73,16 @@ void main() {
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
     step_uv = vec2(finite_f32(step_uv.x), finite_f32(step_uv.y));
     vec4 acc = vec4(0.0);
+#ifdef OPEN_BORDER
+    vec4 bf = texelFetch(border_map, src, 0);
+    bool reflect_on = u_reflect != 0 && bf.a > 0.5;
+    // E / 2 where this pass's line of taps crosses the border (one read per texel, not per tap; along
+    // the border's normal it is every tap's foot), or at x's foot when the line runs along the border
+    vec2 tap_tx = step_uv * vec2(textureSize(source, 0));  // texels per unit of tap offset
+    float rate = dot(bf.gb, tap_tx);
+    vec3 half_e = !reflect_on ? vec3(0.0) : (abs(rate) > 1e-6) ? border_half_e(uv - bf.r / rate * step_uv, 0.0, bf.gb)
+                                                            : border_half_e(uv, bf.r, bf.gb);
+#endif
 #ifdef NARROW_TAPS
     // a sigma of at most ~2 texels (issue 10 item 5): taps at whole texels along the axis, so no
     // bilinear smoothing adds variance: under a texel the 3-tap kernel of exactly sigma^2
@@ -68,11 +92,42 @@ void main() {
     ivec2 hi = textureSize(source, 0) - 1;
     float wsum = 0.0;
     bool check = ISLAND_CHECK(float(NARROW_TAPS) + 0.5);
+#ifdef OPEN_BORDER
+    float rate_n = dot(bf.gb, vec2(d));  // whole-texel taps along d
+    vec3 half_e_n = !reflect_on ? vec3(0.0)
+                  : (abs(rate_n) > 1e-6) ? border_half_e(uv - bf.r / rate_n * vec2(d) / vec2(textureSize(source, 0)), 0.0, bf.gb)
+                                         : border_half_e(uv, bf.r, bf.gb);
+#endif
     for (int k = -NARROW_TAPS; k <= NARROW_TAPS; ++k) {
         float fk = float(k);
         float w = (s_t <= 1.0) ? ((k == 0) ? 1.0 - s_t * s_t : ((abs(k) == 1) ? 0.5 * s_t * s_t : 0.0))
                                : exp(-fk * fk / (2.0 * s_t * s_t));
         ivec2 t = clamp(src + k * d, ivec2(0), hi);
+#ifdef OPEN_BORDER
+        // whole texels: a tap whose cell along the pass the border line crosses stands for its share c on
+        // the surface (the discrete step would otherwise sit at the texel's edge, not at the border)
+        float s_k = bf.r + fk * dot(bf.gb, vec2(d));  // texels into the surface at this tap's centre
+        vec2 p_k = (vec2(src + k * d) + 0.5) / vec2(textureSize(source, 0));
+        if (reflect_on && k != 0 && s_k < 0.0 && own_border(p_k, s_k, bf.gb, zone)) {
+            acc += w * past_border_light(source, p_k, s_k, bf.gb, half_e_n);
+            wsum += w;
+            wl += w;
+            continue;
+        }
+        float half_k = 0.5 * abs(dot(bf.gb, vec2(d)));  // the tap's cell [k - 1/2, k + 1/2] spans s_k +- half_k
+        if (bf.a > 0.5 && s_k >= 0.0 && s_k < half_k && in_zone(gutter, t, zone, false) > 0.5) {
+            float c = 0.5 + 0.5 * s_k / half_k;
+            float s_p = 0.5 * (s_k - half_k);  // the middle of its part past the border
+            vec4 v = texelFetch(source, t, 0);
+            vec4 past = (u_reflect != 0)
+                ? past_border_light(source, p_k + (s_p - s_k) * bf.gb / vec2(textureSize(source, 0)), s_p, bf.gb, half_e_n)
+                : vec4(0.0);
+            acc += w * vec4(c * v.rgb + (1.0 - c) * past.rgb, v.a);
+            wsum += w;
+            wl += w;
+            continue;
+        }
+#endif
         float in_ = (check && k != 0) ? in_zone(gutter, t, zone, false) : 1.0;
         acc += w * in_ * texelFetch(source, t, 0);
         wsum += w * in_;
@@ -86,6 +141,15 @@ void main() {
     for (int k = 0; k < 7; ++k) {
         vec2 t = uv + step_uv * float(k - 3);
         float w = u_weights[k];
+#ifdef OPEN_BORDER
+        float s_k = bf.r + float(k - 3) * dot(bf.gb, step_uv * ts);  // texels into the surface at this tap
+        if (reflect_on && k != 3 && s_k < 0.0 && own_border(t, s_k, bf.gb, zone)) {
+            acc += w * past_border_light(source, t, s_k, bf.gb, half_e);
+            wsum += w;
+            wl += w;
+            continue;
+        }
+#endif
         float in_ = (check && k != 3) ? in_zone(gutter, ivec2(floor(t * ts)), zone, true) : 1.0;
         acc += w * in_ * texture(source, t);
         wsum += w * in_;

@@ -10,11 +10,24 @@ uniform sampler2D source;
 // value that puts the bilinear ramp's edge where the border is; A (thickness) keeps the edge's value.
 uniform sampler2D seam_map;  // RG: texel coordinate across the UV seam, B: 1 there, 2 past a border
 uniform int u_past_border_dark;  // 1 for light; 0 for a metric (the stretch chain): the edge's value
+#ifdef OPEN_BORDER
+// a blur of E (not E itself): past the border the odd reflection of the light (lib/open_border.glsl)
+#include "lib/open_border.glsl"
+uniform int u_reflect;
+#endif
 out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 s = texelFetch(seam_map, p, 0);
     vec4 here = texelFetch(source, p, 0);
+#ifdef OPEN_BORDER
+    vec4 bf = texelFetch(border_map, p, 0);
+    if (u_reflect != 0 && u_past_border_dark != 0 && s.b > 1.5 && bf.a > 0.5 && bf.r < 0.0) {
+        vec2 uv = (vec2(p) + 0.5) / vec2(textureSize(source, 0));
+        f_color = past_border_light(source, uv, bf.r, bf.gb, border_half_e(uv, bf.r, bf.gb));
+        return;
+    }
+#endif
     f_color = (s.b > 1.5 && u_past_border_dark != 0) ? vec4(here.rgb * s.a, here.a)
             : (s.b > 0.5 && s.b < 1.5) ? texture(source, (s.rg + 0.5) / vec2(textureSize(source, 0))) : here;
 }

@@ -134,10 +134,11 @@ def test_deon_on_a_lit_plane_is_close_to_the_truth(renderer):
         inner = m & (np.abs(ref.position[..., :2]) < 6.0).all(-1)  # 6 mm inside the slab's rim
         errs[t] = rel_rms(img, ref.lit, m)
         errs[t + " inside"] = rel_rms(img, ref.lit, inner)
-    # away from the open rim (where the truth loses the light that leaves the slab and the
-    # texture-space blur does not) d'Eon agrees within 0.2 %: irradiance, mix, rho_dt, specular. Measured
-    # 0.05 / 0.04 / 0.04 % inside (llvmpipe, 48^2 image, 512^2 maps) and 1.9 % red with the rim; the bounds
-    # are ~4x and 1.5x those, below the 1.4 % effect issue 36 found this test guarding, far below Phong's 23-28 %
+    # away from the open rim d'Eon agrees within 0.2 %: irradiance, mix, rho_dt, specular. Measured
+    # 0.04 / 0.04 / 0.04 % inside (llvmpipe, 48^2 image, 512^2 maps) and 0.32 / 0.04 / 0.04 % with the rim
+    # since issue 30 item 5 (deon.open_border = reflect; 1.9 % red before, when every blur step dropped the
+    # light past the rim); the bounds are ~4x and ~3x those, below the 1.4 % effect issue 36 found this
+    # test guarding, far below Phong's 23-28 %
     assert errs["deon inside"].max() < 0.002, errs
-    assert errs["deon"].max() < 0.03, errs
+    assert errs["deon"].max() < 0.01, errs
     assert errs["deon"].mean() < errs["phong"].mean(), errs

@@ -288,3 +288,17 @@ def test_reference_cli_writes_the_uncertainty_beside_the_image(tmp_path, monkeyp
         assert {"uncertainty.R", "uncertainty.G", "uncertainty.B"} <= set(ch)
         np.testing.assert_allclose(np.asarray(ch["uncertainty.G"].pixels), u[..., 1], rtol=1e-6)
     assert "uncertainty of the image" in capsys.readouterr().out
+
+
+def test_the_shipped_preview_errors_carry_the_rulers_uncertainty():
+    """benchmarks/bench_governor_errors.py writes, beside each preview rung's error (key "errors"), the
+    ground truth's uncertainty of that figure (key "uncertainty", metrics.figure_uncertainty's RMS
+    bound, mean over channels) for every rung, so the status line can read "6.1 % ± 0.4"."""
+    import json
+
+    from skinviewer.core.calibration import ERRORS_TABLE
+    data = json.loads(ERRORS_TABLE.read_text(encoding="utf-8"))
+    errors, unc = data["errors"], data["uncertainty"]
+    assert errors and set(unc) == set(errors)
+    assert all(np.isfinite(v) and 0.0 < v < 0.1 for v in unc.values()), unc
+    assert all(unc[k] < errors[k] for k in errors)  # every rung is farther from the truth than the ruler's doubt

@@ -356,6 +356,11 @@ class DeonSettings(_Model):
         1, description="irradiance samples per texel: 4 averages the shadow test and N.L over a rotated 2 x 2 "
                        "grid of the texel's surface patch, so a texel a shadow edge crosses carries its lit "
                        "fraction (issue 30 item 4; 4x the shadow lookups of the irradiance pass)")
+    open_border: Literal["reflect", "absorb"] = Field(
+        "reflect", description="past an open mesh border (with scene.seam_aware): reflect: each blur after the first "
+        "reads the odd reflection of the light about the border, so the light earlier steps carried past it comes "
+        "back as in one blur of E over the surface (issue 30 item 5); absorb: no light there before every step "
+        "(loses light at the rim)")
 
 
 class BurleySettings(_Model):

@@ -76,6 +76,7 @@ from skinviewer.physics.diffusion import (
 )
 from skinviewer.physics.surface_gather import SHORTCUT_RATIO, gather_blocks_for
 from skinviewer.scene.camera import gl_bytes
+from skinviewer.scene.texels import border_frame
 
 STRETCH = "deon_stretch"
 TSM = "deon_tsm"
@@ -215,6 +216,55 @@ class GatherSurfacePass(Pass):
         blocks = ec.program("deon_gather_blocks", BLOCK_SURFACE=1)
         ec.textures(blocks, surface=ec.output(GATHER_SURFACE), gutter=gutter)
         ec.draw_fullscreen(blocks, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE)
+
+
+def border_resource(size: int) -> str:
+    return f"deon_border_{size}"
+
+
+BORDER_REACH_MM = 10.0  # the border frame reaches this far: 3.5 sigma of the widest skin Gaussian (2.7 mm)
+
+
+def open_border(r) -> bool:
+    """deon.open_border = reflect with scene.seam_aware (which knows where the mesh borders are), on a
+    mesh that has an open border (peeked: a closed mesh, such as the default head, pays nothing)."""
+    if r.scene is None or not r.peek("scene.seam_aware") or r.peek("deon.open_border") != "reflect":
+        return False
+    cache = r.scene.__dict__.setdefault("_texel_tables", {})
+    if "has_border" not in cache:
+        from skinviewer.scene.mesh import border_half_edges
+        cache["has_border"] = len(border_half_edges(r.scene.mesh.positions, r.scene.mesh.indices)) > 0
+    if not cache["has_border"]:
+        return False
+    return bool(r.setting("scene.seam_aware")) and r.setting("deon.open_border") == "reflect"
+
+
+class BorderFramePass(Pass):
+    """Per texel near a mesh border of its own island: the signed distance to the border's line and its
+    inward normal (scene/texels.border_frame), for the blurs' open-border reflection (issue 30 item 5).
+    Depends on the mesh and the size only (the coverage from the gutter map): once per scene and size."""
+    name = "deon_border_frame"
+
+    def reflect(self, r: Reflection) -> None:
+        if not open_border(r):
+            return
+        n = map_size(r)
+        r.input(gutter_resource(n))
+        r.output(border_resource(n), TexSpec((n, n), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        from skinviewer.passes.texture_space import read_gutter
+        n = map_size(ec)
+        g = read_gutter(ec.input(gutter_resource(n)))
+        iy, ix = np.mgrid[0:n, 0:n]
+        covered = (g[..., 0] == ix) & (g[..., 1] == iy)
+        cache = ec.scene.__dict__.setdefault("_texel_tables", {})
+        key = ("border", n, hash(covered.tobytes()))
+        if key not in cache:
+            m = ec.scene.mesh
+            reach = min(float(n), BORDER_REACH_MM * ec.scene.max_uv_per_mm * n)
+            cache[key] = border_frame(m.positions, m.uvs, m.indices, covered, reach).tobytes()
+        ec.output(border_resource(n)).write(cache[key])
 
 
 def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:
@@ -388,9 +438,13 @@ class GaussianBlurPass(Pass):
             r.input(stretch)
         tiled = {"TILED": 1} if skip_gutters else {}
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
-        r.program("deon_blur", **tiled, **zones, **self._narrow(r, step, stretch, n))
+        border = self._open_border(r)
+        if border:
+            r.input(border_resource(n))
+            r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
+        r.program("deon_blur", **tiled, **zones, **border, **self._narrow(r, step, stretch, n))
         if seam:
-            r.program("seam_fill", **tiled)
+            r.program("seam_fill", **tiled, **border)
         r.output(self._output(), self._spec(n))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -444,6 +498,10 @@ class GaussianBlurPass(Pass):
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
 
+    def _open_border(self, r) -> dict:
+        """{"OPEN_BORDER": 1} when this light blur reflects the light past open borders (open_border)."""
+        return {"OPEN_BORDER": 1} if self.chain == "irradiance" and open_border(r) else {}
+
     def _step(self, r):
         vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
         return plan_of(vs, r)[self.i]
@@ -470,7 +528,8 @@ class GaussianBlurPass(Pass):
         tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
         narrow = self._narrow(ec, step, stretch, n)
         zones = {"ISLAND_ZONES": 1} if ec.setting("scene.seam_aware") else {}
-        prog = ec.program("deon_blur", **tiled, **zones, **narrow)
+        border = self._open_border(ec)
+        prog = ec.program("deon_blur", **tiled, **zones, **border, **narrow)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
@@ -489,6 +548,10 @@ class GaussianBlurPass(Pass):
         seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
         filled = ec.held("filled", spec)[0] if seam else None
         fill = ec.program("seam_fill") if seam else None
+        if border:
+            for p_ in (prog, fill):
+                ec.bind(p_, "border_map", border_resource(n))
+                ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
             ec.bind(fill, "seam_map", seam)
@@ -500,12 +563,14 @@ class GaussianBlurPass(Pass):
         draws: list[tuple[Any, dict[str, Any], Any, Any]] = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
+            # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
+            refl = {"u_reflect": int(not (k == 0 and step.source == IRRADIANCE))} if border else {}
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, self._output() if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    draws.append((fill, {}, source, filled))
+                    draws.append((fill, refl, source, filled))
                     source = filled
-                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction}, source, target))  # spacing = sigma (eq. 25)
+                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target))  # spacing = sigma (eq. 25)
             src = tmp2
         for d, sub, subs in ec.units(len(draws)):
             program, values, source, target = draws[d]

@@ -521,3 +521,66 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
     mapped[gy[have], gx[have]] = True
     coords[gy[have], gx[have]] = tgt[have]
     return mapped, coords
+
+
+def border_frame(positions, uvs, indices, covered: np.ndarray, reach: float) -> np.ndarray:
+    """(n, n, 4) float32, for every texel within ``reach`` texels of a mesh border of its own UV island
+    (the island nearest to it, 8-connected texels): R the signed distance (texels) from the texel's
+    centre to that border edge's line, > 0 inside the island, < 0 past the border; GB the edge's unit
+    normal in texel coordinates pointing into the island; A 1 there, 0 elsewhere (R = 65504, no border
+    near). Locally the border is a straight line s = 0 and a point of the texture at s < 0 is past the
+    surface's end: what the open-border extension of the d'Eon blurs (issue 30 item 5,
+    physics/open_border.py) reflects across it."""
+    n = covered.shape[0]
+    out = np.zeros((n, n, 4), np.float32)
+    out[..., 0] = 65504.0
+    he = border_half_edges(positions, indices)
+    if len(he) == 0 or not covered.any():
+        return out
+    F = np.asarray(indices, np.int64).reshape(-1, 3)
+    UV = np.asarray(uvs, np.float64) * n - 0.5  # texel coordinates, centres at integers
+    ua, ub, uc = UV[F[he // 3, he % 3]], UV[F[he // 3, (he % 3 + 1) % 3]], UV[F[he // 3, (he % 3 + 2) % 3]]
+    e = ub - ua
+    el = np.linalg.norm(e, axis=1)
+    ok = el > 1e-9
+    nrm = np.stack([-e[:, 1], e[:, 0]], 1) / np.maximum(el, 1e-300)[:, None]
+    nrm *= np.where(((uc - ua) * nrm).sum(1) < 0.0, -1.0, 1.0)[:, None]  # towards the triangle's third corner
+    ua, ub, nrm = ua[ok], ub[ok], nrm[ok]
+    if len(ua) == 0:
+        return out
+    pts, rep = _edge_samples(ua, ub)
+    # the island of each edge and of each texel: the 8-connected covered components (gutter_table's)
+    _, (iy, ix) = ndimage.distance_transform_edt(~covered, return_indices=True)
+    label, _ = ndimage.label(covered, structure=np.ones((3, 3), bool))
+    zone = label[iy, ix]
+    mid = np.clip(np.round((ua + ub) / 2.0).astype(int), 0, n - 1)
+    edge_zone = zone[mid[:, 1], mid[:, 0]]
+    pi = np.clip(np.round(pts).astype(int), 0, n - 1)
+    keep_pt = edge_zone[rep] == zone[pi[:, 1], pi[:, 0]]
+    pi, rep = pi[keep_pt], rep[keep_pt]
+    owner = np.full((n, n), -1, np.int64)  # the border edge a texel the border passes through belongs to
+    owner[pi[:, 1], pi[:, 0]] = rep
+    r = int(np.ceil(reach)) + 1
+    gys, gxs, hs = [], [], []
+    for z in np.unique(edge_zone[rep]):  # per island: its texels' nearest border texel of its own edges
+        on = owner >= 0
+        on &= zone == z
+        ys, xs = np.nonzero(on)
+        y0, y1, x0, x1 = max(ys.min() - r, 0), min(ys.max() + r + 1, n), max(xs.min() - r, 0), min(xs.max() + r + 1, n)
+        d, (ny, nx) = ndimage.distance_transform_edt(~on[y0:y1, x0:x1], return_indices=True)
+        gy, gx = np.nonzero((d <= reach) & (zone[y0:y1, x0:x1] == z))
+        gys.append(gy + y0)
+        gxs.append(gx + x0)
+        hs.append(owner[ny[gy, gx] + y0, nx[gy, gx] + x0])
+    if not gys:
+        return out
+    gy, gx, h = np.concatenate(gys), np.concatenate(gxs), np.concatenate(hs)
+    q = np.stack([gx, gy], 1).astype(np.float64)
+    s = ((q - ua[h]) * nrm[h]).sum(1)
+    # the texel's foot on that line must lie in its own island's zone (past a corner it may not)
+    foot = np.clip(np.round(q - s[:, None] * nrm[h]).astype(int), 0, n - 1)
+    have = zone[foot[:, 1], foot[:, 0]] == zone[gy, gx]
+    out[gy[have], gx[have], 0] = s[have]
+    out[gy[have], gx[have], 1:3] = nrm[h[have]]
+    out[gy[have], gx[have], 3] = 1.0
+    return out

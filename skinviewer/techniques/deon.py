@@ -5,6 +5,7 @@ from __future__ import annotations
 from skinviewer.core.constants import MAX_GAUSSIANS
 from skinviewer.passes.deon import (
     SIZE,
+    BorderFramePass,
     DeonFinalPass,
     DiffuseSumPass,
     GatherSurfacePass,
@@ -28,7 +29,8 @@ def build():
             + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size),
                GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TexelSurfacePass("deon_texel_surface", map_size),
-               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass(), GatherSurfacePass()]
+               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass(), GatherSurfacePass(),
+               BorderFramePass()]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
             + [TransmittedPass(), DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])

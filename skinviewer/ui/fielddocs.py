@@ -108,6 +108,9 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
                                          "coarse or uneven; slower); 0: every blur separable"),
     "deon.fold_below_texels": ("texels", "skip a later blur whose width step is under this many texels; the next "
                                "blur adds its width exactly (0: off). 1: closer to the ground truth than 0"),
+    "deon.open_border": ("", "reflect: past an open mesh border each blur after the first reads the light "
+                         "reflected about the border, so the rim keeps the light the surface keeps (issue 30); "
+                         "absorb: no light there (the rim loses light)"),
     "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a blur can read "
                           "(images identical; pays off on GPUs)"),
     "render.texel_surface": ("", "texture-space maps are shaded once per texel from a per-mesh map of the surface "
@@ -171,6 +174,7 @@ LABELS: dict[str, str] = {
     "deon.reuse_irradiance_below_texels": "skip finest blur",
     "deon.irradiance_size_mode": "blur map sizing",
     "deon.surface_gather_below_texels": "surface sum",
+    "deon.open_border": "open border",
     "deon.fold_below_texels": "fold narrow blurs",
     "deon.subpixel_kernel_px": "skip blur under",
     "deon.combine_blurs": "sum in texture space",
