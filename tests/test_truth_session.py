@@ -63,6 +63,25 @@ def test_an_orbit_reuses_the_diffusion_sources(base, session_and_first):
     assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)  # identical figures
 
 
+def test_an_orbit_rebuilds_none_of_the_diffusion_structures(base, session_and_first):
+    """The whole-surface structures of the gather (cluster levels, KD-tree, edge frames, source grids)
+    are the bulk of an orbit's time when made again for each view (issue 34): an orbit and a profile
+    edit re-use them; the figures are those of a session that made them for that view."""
+    ses, _ = session_and_first
+    built = ses.structures_built(base)
+    assert built.get("cluster", 0) >= 1 and built.get("grid", 0) >= 1 and built.get("tree", 0) == 1
+    orbit = with_values(base, {"camera.yaw": base.camera.yaw - 35.0, "camera.pitch": base.camera.pitch + 10.0})
+    parts = list(ses.progressive(orbit))
+    assert ses.structures_built(orbit) == built  # nothing built again
+    prof = with_values(orbit, {"deon.gaussians.4.weights": [0.2, 0.3, 0.1]})
+    list(ses.progressive(prof))
+    assert ses.structures_built(prof) == built
+    fresh = R.TruthSession()
+    again = list(fresh.progressive(orbit))
+    assert fresh.structures_built(orbit) == built  # a fresh session builds the same, once
+    assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)
+
+
 def test_a_profile_change_reuses_a_light_change_rebuilds(base, session_and_first):
     ses, parts = session_and_first
     before = ses.builds
