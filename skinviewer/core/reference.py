@@ -1063,7 +1063,7 @@ class TruthSession:
             hit = (gt.Elements(vpos[elem], ea_v[elem].mean(1)), surf.beam_sources(mix, energy))
             self.builds += 1
         self._sources[key] = hit  # most recent last
-        self._structures[key] = self._structures.pop(key, None) or {}
+        self._structures[key] = self._structures.pop(key, {})
         while len(self._sources) > self.source_sets:
             old = next(iter(self._sources))
             self._sources.pop(old)
