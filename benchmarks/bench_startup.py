@@ -6,7 +6,7 @@ is started to the viewer's own marks (``SKINVIEWER_STARTUP_TRACE``, ui/startup.p
 ``--runs`` runs is printed beside each run's figures. Needs a display: run it under Xvfb,
 
     xvfb-run -a -s "-screen 0 1280x800x24" python3 benchmarks/bench_startup.py [--runs 3]
-        [--technique deon] [--size 1280x800] [--first-start] [--shots DIR --shot-at 1,2]
+        [--technique deon] [--size 1280x800] [--first-start] [--shots DIR --shot-at 1,2] [--compare TREE]
 
 ``--first-start``: an empty cache folder for every run (the default head is generated, no governor
 calibration: what a fresh install meets); otherwise the cache folder in use (``SKINVIEWER_CACHE`` or
@@ -46,13 +46,13 @@ def read_trace(path: Path) -> dict[str, float]:
 
 
 def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | None = None,
-            shot_at: tuple[float, ...] = ()) -> dict[str, float]:
+            shot_at: tuple[float, ...] = (), root: Path = ROOT, tag: str = "") -> dict[str, float]:
     """Seconds from the process start to each event of one viewer start (missing: not reached)."""
     with tempfile.TemporaryDirectory(prefix="sv-startup-") as tmp:
         trace = Path(tmp) / "trace.jsonl"
         env = {**env, "SKINVIEWER_STARTUP_TRACE": str(trace)}
         t0 = time.time()
-        proc = subprocess.Popen([sys.executable, "-m", "skinviewer", *argv], cwd=ROOT, env=env,
+        proc = subprocess.Popen([sys.executable, "-m", "skinviewer", *argv], cwd=root, env={**env, "PYTHONPATH": str(root)},
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         pending = sorted(shot_at)
         try:
@@ -62,7 +62,7 @@ def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | 
                     from PIL import ImageGrab
                     s = pending.pop(0)
                     try:
-                        ImageGrab.grab(xdisplay=os.environ.get("DISPLAY")).save(shots / f"startup-{s:g}s.png")
+                        ImageGrab.grab(xdisplay=os.environ.get("DISPLAY")).save(shots / f"startup{tag}-{s:g}s.png")
                     except Exception as exc:  # no X screen to grab: the figures still count
                         print(f"screen grab at {s:g} s failed: {exc}", file=sys.stderr)
                 if "image" in marks and not pending:
@@ -93,6 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--shots", type=Path, help="grab the X screen into this folder (first run)")
     ap.add_argument("--shot-at", default="1,2", help="seconds after the start of the grabs, e.g. 0.5,1,2")
+    ap.add_argument("--compare", type=Path, metavar="CHECKOUT",
+                    help="another source tree (with ui/startup.py's marks), run alternately with this one: "
+                         "before/after figures in one run")
     a = ap.parse_args(argv)
     if not os.environ.get("DISPLAY"):
         print("no DISPLAY: run it under xvfb-run", file=sys.stderr)
@@ -103,20 +106,26 @@ def main(argv: list[str] | None = None) -> int:
     if a.shots:
         a.shots.mkdir(parents=True, exist_ok=True)
     shot_at = tuple(float(x) for x in a.shot_at.split(",") if x) if a.shots else ()
-    rows = []
+    trees = [("this checkout", ROOT)] + ([("compared", a.compare.resolve())] if a.compare else [])
+    rows: dict[str, list[dict[str, float]]] = {name: [] for name, _ in trees}
     for k in range(a.runs):
-        with tempfile.TemporaryDirectory(prefix="sv-cache-") as cache:
-            run_env = {**env, "SKINVIEWER_CACHE": cache} if a.first_start else env
-            rows.append(one_run(viewer, run_env, a.timeout, a.shots if k == 0 else None, shot_at))
-        print(f"run {k + 1}: " + "  ".join(f"{e} {rows[-1][e]:.2f} s" if e in rows[-1] else f"{e} -" for e in EVENTS),
-              flush=True)
+        for name, root in trees:
+            with tempfile.TemporaryDirectory(prefix="sv-cache-") as cache:
+                run_env = {**env, "SKINVIEWER_CACHE": cache} if a.first_start else env
+                tag = "" if root == ROOT else "-compared"
+                r = one_run(viewer, run_env, a.timeout, a.shots if k == 0 else None, shot_at, root, tag)
+            rows[name].append(r)
+            print(f"run {k + 1} {name}: " + "  ".join(f"{e} {r[e]:.2f} s" if e in r else f"{e} -" for e in EVENTS),
+                  flush=True)
     load = os.getloadavg()[0]
-    print(f"\nviewer start ({a.technique}, {a.size}, {'empty cache' if a.first_start else 'cache as is'}; "
-          f"{os.cpu_count()} CPUs, load {load:.1f}): median of {a.runs}")
-    for e in EVENTS:
-        xs = [r[e] for r in rows if e in r]
-        print(f"  to {e:6s} {statistics.median(xs):6.2f} s  (runs: {', '.join(f'{x:.2f}' for x in xs)})" if xs
-              else f"  to {e:6s}   not reached")
+    for name, root in trees:
+        print(f"\nviewer start, {name} ({root}; {a.technique}, {a.size}, "
+              f"{'empty cache' if a.first_start else 'cache as is'}; {os.cpu_count()} CPUs, load {load:.1f}): "
+              f"median of {a.runs}")
+        for e in EVENTS:
+            xs = [r[e] for r in rows[name] if e in r]
+            print(f"  to {e:6s} {statistics.median(xs):6.2f} s  (runs: {', '.join(f'{x:.2f}' for x in xs)})" if xs
+                  else f"  to {e:6s}   not reached")
     return 0
 
 
