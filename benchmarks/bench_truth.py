@@ -3,7 +3,7 @@ each refinement, to a relative-RMS figure within +-0.5 % (bootstrap standard err
 core.reference.sampled_rms, of a d'Eon render of the same view), an orbit that re-uses the sources,
 and the one-shot compute_reference of the same view, side by side in one run.
 
-    python3 -m benchmarks.bench_truth [--scene head] [--size 256] [--yaw 20]
+    python3 -m benchmarks.bench_truth [--scene head] [--size 256] [--yaw 20] [--orbit-only]
 """
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def _render_lit(s: Settings) -> np.ndarray:
     return np.asarray(lit[..., :3], np.float64), lit[..., 3] > 0.5
 
 
-def run(scene: str, size: int, yaw: float, technique: str) -> dict:
+def run(scene: str, size: int, yaw: float, technique: str, orbit_only: bool = False) -> dict:
     s = with_values(Settings(), {"scene.name": scene, **scene_overrides(scene), "render.width": size,
                                  "render.height": size, "technique": technique})
     img, cover = _render_lit(s)
@@ -47,9 +47,28 @@ def run(scene: str, size: int, yaw: float, technique: str) -> dict:
     out["to_within_0.5pct_s"] = within
     final = p.reference
     s2 = with_values(s, {"camera.yaw": s.camera.yaw + yaw})
+    # the same orbit twice in one run: first with the diffusion's whole-surface structures (cluster
+    # levels, KD-tree, edge frames, source grids) made again, as every view did before (issue 34),
+    # then re-using them; the whole-surface sources (E A) are kept in both
+    key = R.sources_key(s, ses.h_mm)
+    kept = ses._structures[key]
+    ses._structures[key] = {}
+    t = time.perf_counter()
+    *_, q0 = ses.progressive(s2)
+    out["orbit_rebuilding_structures_s"] = round(time.perf_counter() - t, 2)
+    out["orbit_rebuilt"] = ses.structures_built(s2)
+    ses._structures[key] = kept
+    ses.recent.clear()
+    before = ses.structures_built(s2)
     t = time.perf_counter()
     *_, q = ses.progressive(s2)  # every stage, the last kept
     out["orbit_reusing_s"] = round(time.perf_counter() - t, 2)
+    after = ses.structures_built(s2)
+    out["orbit_reusing_built"] = {k: after.get(k, 0) - before.get(k, 0) for k in after}
+    out["orbit_identical_to_rebuilding"] = bool(np.array_equal(q.reference.lit, q0.reference.lit))
+    print({k: v for k, v in out.items() if k.startswith("orbit")}, flush=True)
+    if orbit_only:
+        return out
     t = time.perf_counter()
     fresh = R.TruthSession()
     *_, q2 = fresh.progressive(s2)
@@ -70,8 +89,10 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--yaw", type=float, default=20.0)
     ap.add_argument("--technique", default="deon")
+    ap.add_argument("--orbit-only", action="store_true", help="stop after the orbit (no fresh session, no "
+                    "compute_reference of the first view)")
     a = ap.parse_args(argv)
-    print(json.dumps(run(a.scene, a.size, a.yaw, a.technique), indent=1))
+    print(json.dumps(run(a.scene, a.size, a.yaw, a.technique, a.orbit_only), indent=1))
     return 0
 
 

@@ -102,9 +102,9 @@ def test_refinement_steps_up_to_the_users_settings_and_never_back_while_still():
     first = g.rung_for(s, interacting=True, camera=False, last_complete=True)
     assert not first.final and g.status(s).startswith("preview: ")
     e = cal.entry("deon", first)
-    assert f"— {100 * e.error:.1f} % from the truth" in g.status(s)
+    assert f", {100 * e.error:.1f} % from the truth" in g.status(s)
     e.uncertainty = 0.0186  # the ruler's own uncertainty goes beside its figure
-    assert f"— {100 * e.error:.1f} % ± 1.9 from the truth" in g.status(s)
+    assert f", {100 * e.error:.1f} % ± 1.9 from the truth" in g.status(s)
     errors = [cal.entry("deon", first).error]
     shown = [first]
     for complete in [False, True, False, True, True, True, True]:

@@ -63,6 +63,25 @@ def test_an_orbit_reuses_the_diffusion_sources(base, session_and_first):
     assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)  # identical figures
 
 
+def test_an_orbit_rebuilds_none_of_the_diffusion_structures(base, session_and_first):
+    """The whole-surface structures of the gather (cluster levels, KD-tree, edge frames, source grids)
+    are the bulk of an orbit's time when made again for each view (issue 34): an orbit and a profile
+    edit re-use them; the figures are those of a session that made them for that view."""
+    ses, _ = session_and_first
+    built = ses.structures_built(base)
+    assert built.get("cluster", 0) >= 1 and built.get("grid", 0) >= 1 and built.get("tree", 0) == 1
+    orbit = with_values(base, {"camera.yaw": base.camera.yaw - 35.0, "camera.pitch": base.camera.pitch + 10.0})
+    parts = list(ses.progressive(orbit))
+    assert ses.structures_built(orbit) == built  # nothing built again
+    prof = with_values(orbit, {"deon.gaussians.4.weights": [0.2, 0.3, 0.1]})
+    list(ses.progressive(prof))
+    assert ses.structures_built(prof) == built
+    fresh = R.TruthSession()
+    again = list(fresh.progressive(orbit))
+    assert fresh.structures_built(orbit) == built  # a fresh session builds the same, once
+    assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)
+
+
 def test_a_profile_change_reuses_a_light_change_rebuilds(base, session_and_first):
     ses, parts = session_and_first
     before = ses.builds
@@ -103,3 +122,21 @@ def test_sampled_rms_uncertainty_is_calibrated_and_shrinks_to_zero():
             assert np.all(se > 0) and np.all(np.isfinite(se))
             inside.append(np.abs(rms - rms_full) <= 2 * se)
     assert np.mean(inside) > 0.85
+
+
+def test_a_kept_source_grid_gives_the_blocks_bit_for_bit():
+    """gt.SourceGrid bins the sources once; ``blocks`` with it yields exactly what it yields binning
+    them afresh (the same cells, the same source order), and bins afresh for receivers it does not fit."""
+    from skinviewer.physics import ground_truth as gt
+    rng = np.random.default_rng(3)
+    src = rng.uniform(0.0, 40.0, (3000, 3))
+    normals = rng.normal(size=(3000, 3))
+    for x in (rng.uniform(4.0, 36.0, (500, 3)), np.vstack([rng.uniform(4.0, 36.0, (50, 3)), [[-3.0, 5.0, 5.0]]])):
+        for radius in (0.5, 3.0, 9.0):
+            grid = gt.SourceGrid(src, max(radius, gt.MIN_CELL))
+            assert grid.fits(x) == bool(x.min() >= 0.0)
+            fresh = list(gt.blocks(x, src, radius, normals))
+            kept = list(gt.blocks(x, src, radius, normals, grid))
+            assert len(fresh) == len(kept) > 0
+            for a, b in zip(fresh, kept):
+                assert all(np.array_equal(u, v) for u, v in zip(a, b))

@@ -1024,6 +1024,9 @@ class TruthSession:
         self._scene: tuple[str, tuple[MeshData, float]] | None = None
         self._surface: tuple[str, Surface] | None = None
         self._sources: dict[str, tuple[gt.Elements, gt.PointSources]] = {}
+        # per source set: the Diffusion structures over the whole surface (cluster levels, KD-tree,
+        # edge frames, source grids: most of an orbit's time when rebuilt for every view; issue 34)
+        self._structures: dict[str, dict] = {}
         self.recent: dict[str, Reference] = {}  # full key -> final truth, oldest first
         self.builds = 0  # whole-surface source sets built (tests: an orbit builds none)
 
@@ -1060,9 +1063,17 @@ class TruthSession:
             hit = (gt.Elements(vpos[elem], ea_v[elem].mean(1)), surf.beam_sources(mix, energy))
             self.builds += 1
         self._sources[key] = hit  # most recent last
+        self._structures[key] = self._structures.pop(key, {})
         while len(self._sources) > self.source_sets:
-            self._sources.pop(next(iter(self._sources)))
+            old = next(iter(self._sources))
+            self._sources.pop(old)
+            self._structures.pop(old, None)
         return hit
+
+    def structures_built(self, s: Settings) -> dict[str, int]:
+        """What the diffusion over ``s``'s source set has built so far, by kind (cluster levels, KD-tree,
+        edge frames, radii, source grids): an orbit or a profile edit re-using the set adds nothing."""
+        return dict(self._structures.get(sources_key(s, self.h_mm), {}).get("built", {}))
 
     def has_sources(self, s: Settings) -> bool:
         return sources_key(s, self.h_mm) in self._sources
@@ -1133,7 +1144,7 @@ class TruthSession:
             yield image(M, first, f"coarse ({self.coarse_h_mm:g} mm elements, 1/{STRIDES[0] ** 2} of the pixels)",
                         self.coarse_h_mm, False)
         el, pts = self._whole_sources(surf, s, report, check)
-        diff = gt.Diffusion(el, variances, weights, self.h_mm, pts)
+        diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=self._structures[sources_key(s, self.h_mm)])
         M = np.zeros((len(pix), 3))
         done = np.zeros(len(pix), bool)
         for stride in STRIDES:

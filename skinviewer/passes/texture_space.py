@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import os
 
 import moderngl
 import numpy as np
@@ -66,16 +67,71 @@ class GutterMapPass(Pass):
         cache = ec.scene.__dict__.setdefault("_texel_tables", {})
         key = (size, hashlib.blake2b(covered.tobytes(), digest_size=16).digest())
         if ("gutter",) + key not in cache:
-            table = gutter_table(covered)[..., :spec.components]
-            cache[("gutter",) + key] = table.astype(np.float16 if spec.dtype == "f2" else np.float32).tobytes()
+            dtype = np.float16 if spec.dtype == "f2" else np.float32
+            cache[("gutter",) + key] = stored_table(
+                ["gutter", spec.components], covered, ((size, size, spec.components), dtype),
+                lambda: gutter_table(covered)[..., :spec.components].astype(dtype)).tobytes()
         ec.output(gutter_resource(size)).write(cache[("gutter",) + key])
 
         if ec.setting("scene.seam_aware"):
             if ("seam",) + key not in cache:
                 pos = ec.input(surface) if texels else rasterize_unwrapped(ec, ec.program("uv_position"), size)
                 pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
-                cache[("seam",) + key] = seam_map(covered, ec.scene, pos).tobytes()
+                sc = ec.scene
+                m = sc.mesh
+                cache[("seam",) + key] = stored_table(
+                    ["seam", SEAM_REACH_TEXELS, float(sc.mm_per_unit), float(sc.mean_uv_per_mm)],
+                    (covered, pos, m.positions, m.uvs, m.indices), ((size, size, 4), np.float32),
+                    lambda: seam_map(covered, sc, pos)).tobytes()
             ec.output(seam_resource(size)).write(cache[("seam",) + key])
+
+
+TABLES_VERSION = 1  # bump when gutter_table or seam_map change what they compute
+TABLES_KEPT = 24  # files kept in the cache folder's texel-tables/ (the least recently used go)
+
+
+def stored_table(what: list, inputs, like: tuple, compute) -> np.ndarray:
+    """A CPU table of the texture-space passes (the gutter table, the seam map: seconds of numpy for a
+    1024² atlas, most of a first frame) from the cache folder when it was made before from the very
+    same inputs (their bytes are the key: the mesh, the coverage and texel positions as this GL
+    rasterised them; ``like``: its shape and dtype), else ``compute()``, then stored (atomically; a store that fails, or a file that
+    does not read back, only costs the computation). The viewer's first image of a known mesh then
+    skips them."""
+    shape, dtype = tuple(like[0]), np.dtype(like[1])
+    h = hashlib.blake2b(repr([TABLES_VERSION, shape, dtype.str] + list(what)).encode(), digest_size=20)
+    for a in (inputs if isinstance(inputs, tuple) else (inputs,)):
+        a = np.ascontiguousarray(a)
+        h.update(repr((a.dtype.str, a.shape)).encode())
+        h.update(a.tobytes())
+    try:
+        from skinviewer.core.paths import cache_dir
+        folder = cache_dir() / "texel-tables"
+    except OSError:
+        return compute()
+    path = folder / f"{what[0]}-{h.hexdigest()}.npy"
+    try:
+        table = np.load(path, allow_pickle=False)
+        if table.shape == shape and table.dtype == dtype:
+            os.utime(path)  # recently used
+            return table
+    except Exception:
+        pass  # not made yet, or unreadable: made again
+    table = np.ascontiguousarray(compute())
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        with open(tmp, "wb") as f:
+            np.save(f, table, allow_pickle=False)
+        os.replace(tmp, path)
+        old = sorted(folder.glob("*.npy"), key=lambda p: p.stat().st_mtime)
+        for p in old[:-TABLES_KEPT]:
+            p.unlink(missing_ok=True)
+    except OSError:
+        try:
+            tmp.unlink(missing_ok=True)
+        except (OSError, UnboundLocalError):
+            pass
+    return table
 
 
 def gutter_spec(size: int) -> TexSpec:

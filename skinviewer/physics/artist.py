@@ -35,7 +35,6 @@ import math
 from typing import cast
 
 import numpy as np
-from scipy.optimize import nnls
 
 from skinviewer.physics.profiles import burley_cdf, burley_scale, sum_of_gaussians
 
@@ -82,6 +81,7 @@ def gaussians(color, radius, k: int = 6, normalize: bool = True) -> tuple[np.nda
     """The sum of ``k`` Gaussians (shared variances, ascending) for the look: (variances (k,) mm^2,
     weights (k, 3)). Per channel the weights sum to A (``normalize``: to 1, d'Eon's convention where the
     albedo map carries the colour and A only shapes the profile) and the mean radius is 2.5 d."""
+    from scipy.optimize import nnls  # here, not at import: scipy costs the viewer's start (issue 34)
     if not (1 <= int(k) <= 64):
         raise ValueError("the number of Gaussians must be between 1 and 64")
     k = int(k)

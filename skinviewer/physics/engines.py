@@ -40,7 +40,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from skinviewer.physics.profiles import burley_normalized, burley_scale
 
@@ -206,6 +205,7 @@ def fit_burley(profile: Callable[[np.ndarray], np.ndarray], grid: RGrid | None =
     (clamped to [0, 1], still the constrained optimum of a 1-D quadratic); d is found by a log-spaced
     scan and refined by Brent's bounded method on log d. ``fixed_albedo`` (3,): only d is fitted (a
     target that normalises the profile, HDRP, renders A = R_d whatever the fit's A)."""
+    from scipy.optimize import minimize_scalar  # here, not at import: scipy costs the viewer's start (issue 34)
     g = grid or r_grid(profile)
     T = g.r[:, None] * _values(profile(g.r))
     rd = total_reflectance(profile, g)

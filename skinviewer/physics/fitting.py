@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import minimize, nnls
 
 from skinviewer.physics.profiles import sum_of_gaussians
 
@@ -210,6 +209,7 @@ class _Problem:
 
     def solve(self, theta: np.ndarray):
         """Objective sum_c E_c^2, its gradient in theta, weights (k, m) for the unit-norm targets."""
+        from scipy.optimize import nnls  # here, not at import: scipy costs the viewer's start (issue 34)
         self.nfev += 1
         v, A, cn = self.design(theta)
         An = A / cn
@@ -266,6 +266,7 @@ def _pad_init(theta: np.ndarray, k: int, a: float, b: float) -> np.ndarray:
 
 def _fit_channels(grid: FitGrid, channels: Sequence[int], k: int, fixed: np.ndarray | None,
                   init: np.ndarray | None, max_starts: int):
+    from scipy.optimize import minimize  # here, not at import: scipy costs the viewer's start (issue 34)
     prob = _Problem(grid, channels)
     lo = 2.0 * math.log(grid.r[0]) - math.log(16.0)
     hi = 2.0 * math.log(grid.r[-1]) + math.log(4.0)

@@ -205,24 +205,61 @@ class PointSources:
 MIN_CELL = 2.0     # mm: cell of the receiver/source grid (at least the search radius)
 
 
-def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None):
+GRID_MARGIN = 4  # cells of a kept source grid beyond the sources' far corner, for receivers there
+
+
+class SourceGrid:
+    """Sources binned in cells of ``cell`` mm, sorted by cell (what ``blocks`` does first): depends on
+    the sources only, so a Diffusion keeps one per (sources, cell) for every receiver set it is asked
+    about (stages, orbits). The cells are those ``blocks`` would make for receivers inside the
+    sources' box (its origin is the sources' minimum less a cell), so the sums are the same, bit for bit."""
+
+    def __init__(self, src: np.ndarray, cell: float):
+        self.cell = float(cell)
+        self.smin = src.min(0)
+        self.lo = self.smin - self.cell
+        ks = np.floor((src - self.lo) / self.cell).astype(np.int64)
+        self.kmax = ks.max(0)
+        self.dims = self.kmax + 2 + GRID_MARGIN
+        skey = self.key(ks)
+        self.sorder = np.argsort(skey, kind="stable")
+        self.ssorted = skey[self.sorder]
+
+    def key(self, k: np.ndarray) -> np.ndarray:
+        return (k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]
+
+    def fits(self, x: np.ndarray) -> bool:
+        """``blocks`` for receivers ``x`` makes the same cells: x is not below the sources' minimum
+        (the origin would move) nor past the margin."""
+        if not np.all(x.min(0) >= self.smin):
+            return False
+        return bool(np.all(np.floor((x.max(0) - self.lo) / self.cell) <= self.kmax + GRID_MARGIN))
+
+
+def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None,
+           grid: SourceGrid | None = None):
     """Receivers and sources binned in cells of max(radius, MIN_CELL): yields, per occupied
     receiver cell, (receiver indices, source indices of the 27 cells around it, dense |x - s|^2)
-    and, given source ``normals``, the dense heights (x - s).n over the sources' planes."""
+    and, given source ``normals``, the dense heights (x - s).n over the sources' planes. ``grid``:
+    the sources already binned (SourceGrid of ``src`` and that cell), used when it fits ``x``."""
     if len(x) == 0 or len(src) == 0:
         return
     cell = max(radius, MIN_CELL)
-    lo = np.minimum(x.min(0), src.min(0)) - cell
-    kx = np.floor((x - lo) / cell).astype(np.int64)
-    ks = np.floor((src - lo) / cell).astype(np.int64)
-    dims = np.maximum(kx.max(0), ks.max(0)) + 2
+    if grid is not None and grid.cell == cell and grid.fits(x):
+        lo, dims, sorder, ssorted, key = grid.lo, grid.dims, grid.sorder, grid.ssorted, grid.key
+        kx = np.floor((x - lo) / cell).astype(np.int64)
+    else:
+        lo = np.minimum(x.min(0), src.min(0)) - cell
+        kx = np.floor((x - lo) / cell).astype(np.int64)
+        ks = np.floor((src - lo) / cell).astype(np.int64)
+        dims = np.maximum(kx.max(0), ks.max(0)) + 2
 
-    def key(k):
-        return (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
+        def key(k):
+            return (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
 
-    skey = key(ks)
-    sorder = np.argsort(skey, kind="stable")
-    ssorted = skey[sorder]
+        skey = key(ks)
+        sorder = np.argsort(skey, kind="stable")
+        ssorted = skey[sorder]
     rkey = key(kx)
     rorder = np.argsort(rkey, kind="stable")
     cells, rstart = np.unique(rkey[rorder], return_index=True)
@@ -261,17 +298,34 @@ class Diffusion:
     """M(x) for source elements and a sum-of-Gaussians profile (variances mm^2, weights (k, 3));
     ``h`` the element edge (mm). Receivers are surface points in mm."""
 
-    def __init__(self, el: Elements, variances, weights, h: float, points: PointSources | None = None):
+    def __init__(self, el: Elements, variances, weights, h: float, points: PointSources | None = None,
+                 shared: dict | None = None):
         self.el = el
         self.h = float(h)
         self.v = np.asarray(variances, np.float64).ravel()
         self.w = np.asarray(weights, np.float64).reshape(len(self.v), 3)
         self.points = points
         self.s2max = float(el.s2.max()) if len(el.s2) else 0.0
-        self._levels: dict[float, Clusters] = {}
-        self._edges: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
-        self._tree: cKDTree | None = None
-        self._radius: np.ndarray | None = None
+        # what depends on the elements only (cluster levels, the KD-tree, edge frames, radii, source
+        # grids), built on first use: ``shared`` lets Diffusions of the same elements with another
+        # profile or other receivers (the viewer's truth session: an orbit, a profile edit) build it
+        # once; ``shared["built"]`` counts what was built (tests: an orbit builds nothing)
+        self._shared = {} if shared is None else shared
+        self._shared.setdefault("built", {})
+        self._levels: dict[float, Clusters] = self._shared.setdefault("levels", {})
+
+    def _built(self, what: str) -> None:
+        b = self._shared["built"]
+        b[what] = b.get(what, 0) + 1
+
+    def _grid(self, src: np.ndarray, cell: float) -> SourceGrid:
+        grids = self._shared.setdefault("grids", {})
+        k = (id(src), max(float(cell), MIN_CELL))
+        g = grids.get(k)
+        if g is None or g[0] is not src:
+            g = grids[k] = (src, SourceGrid(src, k[1]))
+            self._built("grid")
+        return g[1]
 
     def method(self, v: float):
         """('delta', None) | ('exact', None) | ('elements', None) | ('clusters', voxel)."""
@@ -289,6 +343,7 @@ class Diffusion:
     def level(self, voxel: float) -> Clusters:
         if voxel not in self._levels:
             self._levels[voxel] = cluster(self.el, voxel)
+            self._built("cluster")
         return self._levels[voxel]
 
     def plan(self) -> list[str]:
@@ -347,7 +402,7 @@ class Diffusion:
             else:
                 src = el if kind == "elements" else self.level(voxel)
                 reach = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
-                for ri, sj, d2, z in blocks(x, src.centroid, reach, src.normal):
+                for ri, sj, d2, z in blocks(x, src.centroid, reach, src.normal, self._grid(src.centroid, reach)):
                     # moment matching in the source's plane only; the height z over it enters
                     # exactly, exp(-z^2 / 2v) (eq. 20 is separable): a flap's far side stays right
                     ve = v + src.s2[sj]
@@ -369,9 +424,10 @@ class Diffusion:
         return out
 
     def tree(self) -> cKDTree:
-        if self._tree is None:
-            self._tree = cKDTree(self.el.centroid)
-        return self._tree
+        if "tree" not in self._shared:
+            self._shared["tree"] = cKDTree(self.el.centroid)
+            self._built("tree")
+        return self._shared["tree"]
 
     def _tree_pairs(self, x: np.ndarray, radius: np.ndarray, chunk: int = 8192):
         """(receiver, element) pairs closer than the element's ``radius`` (KD-trees: for small radii)."""
@@ -383,15 +439,16 @@ class Diffusion:
 
     def _el_radius(self) -> np.ndarray:
         """Per element: the largest corner distance from its centroid."""
-        if self._radius is None:
+        if "radius" not in self._shared:
             d = self.el.corners - self.el.centroid[:, None]
-            self._radius = np.sqrt((d * d).sum(2).max(1))
-        return self._radius
+            self._shared["radius"] = np.sqrt((d * d).sum(2).max(1))
+            self._built("radius")
+        return self._shared["radius"]
 
     def _edge_data(self):
         """Per element: 2D frame (e1, e2), corners in it (relative to corner 0), and per edge the
         unit direction u and right-hand normal (u_y, -u_x)."""
-        if self._edges is None:
+        if "edges" not in self._shared:
             c = self.el.corners
             e1 = c[:, 1] - c[:, 0]
             e1 /= np.maximum(np.linalg.norm(e1, axis=1), 1e-300)[:, None]
@@ -401,8 +458,9 @@ class Diffusion:
             d = q[:, [1, 2, 0]] - q
             ln = np.maximum(np.linalg.norm(d, axis=2), 1e-300)
             u = d / ln[..., None]
-            self._edges = (e1, e2, q, u)
-        return self._edges
+            self._shared["edges"] = (e1, e2, q, u)
+            self._built("edges")
+        return self._shared["edges"]
 
     def _exact(self, x: np.ndarray, j: np.ndarray, v: float) -> np.ndarray:
         """integral over element j of G(v, |x - y|) dA(y), exactly: Owen's T over the flat triangle

@@ -30,7 +30,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import j0
 
 from skinviewer.physics.diffusion import gaussian as _diffusion_gaussian
 
@@ -413,6 +412,7 @@ def _inverse_hankel(F: Callable[[np.ndarray], np.ndarray], r: np.ndarray) -> np.
     """f(r) = 1/(2pi) int_0^inf F(k) J0(k r) k dk for F smooth and decaying in k: composite 8-point
     Gauss-Legendre panels up to where F has decayed (no endpoint error at k = 0, unlike the trapezoid
     rule). Radii are processed by octaves so each group's panels are a quarter of its shortest J0 period."""
+    from scipy.special import j0  # here, not at import: scipy costs the viewer's start (issue 34)
     r = np.atleast_1d(np.asarray(r, dtype=float))
     out = np.zeros(r.shape + (3,))
     probe = np.geomspace(1e-3, 1e6, 400)

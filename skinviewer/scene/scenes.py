@@ -197,7 +197,21 @@ _BUILDERS = {
 }
 
 
+_PREFETCHED: dict[tuple[str, int], SceneDef] = {}
+
+
+def prefetch_scene(name: str, detail: int = 1) -> SceneDef:
+    """``build_scene`` now (the viewer: in a worker thread while its window shows the start-up screen);
+    the next ``build_scene`` of the same name and detail takes this one instead of reading it again."""
+    sd = build_scene(name, detail)
+    _PREFETCHED[(name, int(detail))] = sd
+    return sd
+
+
 def build_scene(name: str, detail: int = 1) -> SceneDef:
+    pre = _PREFETCHED.pop((name, int(detail)), None)
+    if pre is not None:
+        return pre
     if name == "head":
         return head_scene(detail)
     if name not in _BUILDERS:

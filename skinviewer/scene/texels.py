@@ -15,8 +15,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import ndimage
-from scipy.spatial import cKDTree
 
 from skinviewer.scene.mesh import WELD_TOL, border_half_edges, position_ids, weld_ids
 
@@ -78,6 +76,7 @@ def surface_diffusion_reference(E, pos, area, covered, variances, weights, cutof
     pairs joined along the surface normalise: the normalisation corrects the sampling of x's own
     sheet, and light reaching it across a contact or a fold adds to it as in the ground truth's sum
     over the whole surface (eq. 21), instead of being averaged with it."""
+    from scipy.spatial import cKDTree  # here, not at import: scipy costs the viewer's start (issue 34)
     v = np.asarray(variances, np.float64)
     w = np.asarray(weights, np.float64).reshape(len(v), 3)
     idx = np.flatnonzero(covered.ravel())
@@ -244,6 +243,7 @@ def supersampled_diffusion_reference(E, covered, positions, uvs, indices, n: int
     need more than 2 level samples per texel side) is instead integrated over x's tangent plane on a
     grid of sigma / level (_narrow_local). Converged when ``level`` + 2 changes a figure by < 10 % of
     it (tests/test_fidelity.py)."""
+    from scipy.spatial import cKDTree  # here, not at import: scipy costs the viewer's start (issue 34)
     v = np.asarray(variances, np.float64).ravel()
     w = np.asarray(weights, np.float64).reshape(len(v), 3)
     E = np.asarray(E, np.float64)[..., :3]
@@ -394,6 +394,8 @@ def border_gutters(positions, uvs, indices, covered: np.ndarray, reach: float):
     (n, n) their distance to that border in texels (inf elsewhere). Beyond a border there is no
     surface, so a blur tap there should read nothing (the ground truth's integral over the surface has
     no light from there) rather than the island's edge texel repeated."""
+    from scipy import ndimage  # here, not at import: scipy costs the viewer's start (issue 34)
+    from scipy.spatial import cKDTree  # here, not at import: scipy costs the viewer's start (issue 34)
     n = covered.shape[0]
     out = np.zeros((n, n), bool)
     dist = np.full((n, n), np.inf)
@@ -425,6 +427,8 @@ def seam_indirection(positions, uvs, indices, covered: np.ndarray, reach: float,
     the unfolded surface says (within 1.5 texels + 25 % of the distance from the edge): the 8
     nearest seam edges are tried in turn. Returns (mapped (n, n) bool, coords (n, n, 2)); unmapped
     texels keep their nearest island texel (gutter_table)."""
+    from scipy import ndimage  # here, not at import: scipy costs the viewer's start (issue 34)
+    from scipy.spatial import cKDTree  # here, not at import: scipy costs the viewer's start (issue 34)
     n = covered.shape[0]
     P = np.asarray(positions, np.float64) * mm_per_unit
     UV = np.asarray(uvs, np.float64) * n - 0.5  # texel coordinates
@@ -531,6 +535,7 @@ def border_frame(positions, uvs, indices, covered: np.ndarray, reach: float) -> 
     near). Locally the border is a straight line s = 0 and a point of the texture at s < 0 is past the
     surface's end: what the open-border extension of the d'Eon blurs (issue 30 item 5,
     physics/open_border.py) reflects across it."""
+    from scipy import ndimage  # here, not at import: scipy costs start-up (issue 34)
     n = covered.shape[0]
     out = np.zeros((n, n, 4), np.float32)
     out[..., 0] = 65504.0

@@ -23,12 +23,12 @@ from moderngl_window.timers.clock import Timer
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.ui import startup
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.input import InputController
+from skinviewer.ui.startup import DEFAULT_WINDOW, WindowUnavailableError, create_window  # noqa: F401  (the window is startup's)
 from skinviewer.ui.state import ViewerOptions, ViewerState, best_technique
 from skinviewer.ui.windows import UiHost
-
-DEFAULT_WINDOW = (1280, 800)
 
 
 class ViewerApp(mglw.WindowConfig):
@@ -53,6 +53,7 @@ class ViewerApp(mglw.WindowConfig):
         self.input = InputController(self.state, self.frame, self.ui, self.wnd.keys, self.wnd.mouse)
         self._title = ""
         self._events = 0  # input events since the last presented frame (FrameController.can_skip_present)
+        self._marked: set[str] = set()
 
     # -- frames --------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
@@ -66,6 +67,25 @@ class ViewerApp(mglw.WindowConfig):
             else:
                 self._poll_events()
 
+    def ui_frame(self) -> None:
+        """One frame of the panel and the view's start-up screen without rendering: the start shows
+        the panel before the first image (whose shaders and tables take seconds on a first frame)."""
+        self.wnd.use()
+        ctx, layout = self.ctx, self.frame.layout
+        built = self.state.view.show_ui and self.ui.build(1 / 60, layout)
+        ctx.screen.use()
+        ctx.viewport = (0, 0, *layout.framebuffer)
+        ctx.clear(*self.state.settings.render.background, 1.0)
+        ctx.viewport = layout.view_fb
+        for hook in self.ui.view_hooks():
+            if hook(layout.view_fb):
+                break
+        if built:
+            self.ui.present()
+            self._marked.add("ui")
+            startup.mark("ui")
+        self.wnd.swap_buffers()
+
     def on_render(self, t: float, frametime: float) -> None:
         self.render_frame(frametime)
 
@@ -75,6 +95,7 @@ class ViewerApp(mglw.WindowConfig):
         present = not self.frame.can_skip_present(self._events)
         drew = self.frame.run(frametime, self.wnd.size, self.wnd.buffer_size, self.ui, present=present)
         self._update_title()
+        self._mark_startup()
         return drew
 
     def _poll_events(self) -> None:
@@ -84,6 +105,16 @@ class ViewerApp(mglw.WindowConfig):
             glfw.poll_events()
         except Exception:  # another window backend: it polls on its next swap
             pass
+
+    def _mark_startup(self) -> None:
+        """The start-up timeline (ui/startup.py): the first frame with the panel, the first image."""
+        if "ui" not in self._marked and self.state.view.show_ui:
+            self._marked.add("ui")
+            startup.mark("ui")
+        rep = self.frame.report
+        if "image" not in self._marked and rep is not None and rep.complete:
+            self._marked.add("image")
+            startup.mark("image", technique=self.state.settings.technique)
 
     def _follow_vsync(self) -> None:
         want = self.state.view.vsync
@@ -151,65 +182,39 @@ class ViewerApp(mglw.WindowConfig):
         self.shaders.release()
 
 
-class WindowUnavailableError(RuntimeError):
-    """No window could be opened (no display, no OpenGL 3.3 driver)."""
-
-
-def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, vsync: bool = True,
-                  backend: str = "glfw"):
-    """A moderngl-window window (glfw by default; pyglet as a fallback) with a GL 3.3 core context."""
-    import warnings
-    errors = []
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) and sys.platform.startswith("linux"):
-        errors.append("no DISPLAY or WAYLAND_DISPLAY")
-    else:
-        for name in ([backend] + [b for b in ("glfw", "pyglet") if b != backend]):
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")  # glfw reports its init failure as a warning too
-                    cls = mglw.get_local_window_cls(name)
-                    wnd = cls(title="skinviewer", size=(int(size[0]), int(size[1])), resizable=True, visible=visible,
-                              gl_version=(3, 3), aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
-                mglw.activate_context(window=wnd)
-                # moderngl-window closes the window on Escape by default: that quit the session (unsaved
-                # edits and all) when Escape was meant for a text field or for leaving the pass inspector
-                wnd.exit_key = None
-                return wnd
-            except Exception as exc:
-                errors.append(f"{name}: {exc}")
-    raise WindowUnavailableError(
-        "cannot open a window (" + "; ".join(errors) + "). Without a display run it under Xvfb: "
-        "xvfb-run -a -s '-screen 0 1280x800x24' skinviewer ...; headless renders: skinviewer render --out FILE.png")
-
-
 def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True,
                vsync: bool = True, preset_path: str | None = None, shaders_root=None,
                notices: list[str] | None = None, options: ViewerOptions | None = None,
                splash: bool = False) -> ViewerApp:
     """The viewer in a new window. ``splash``: the window shows the start-up steps and their times
     (ui/splash.py) until the first frame, instead of staying black."""
-    wnd = create_window(size, visible=visible, vsync=vsync)
-    sp = None
-    if splash:
+    early = startup.take_early(size) if splash else None  # the launcher's window, already showing its screen
+    wnd = early[0] if early else create_window(size, visible=visible, vsync=vsync)
+    sp = early[1] if early else None
+    if splash and sp is None:
         from skinviewer.ui.splash import Splash
         sp = Splash(wnd)
         sp.show("window open")
+        startup.mark("window")
+    if sp is not None:
         s0 = settings or Settings()
         if not s0.scene.mesh and s0.scene.name == "head":
-            from skinviewer.scene.scenes import build_scene
+            from skinviewer.scene.scenes import prefetch_scene
             try:  # generated once, then read from the cache: here in a worker while the screen ticks
                 sp.run("the default head: generating it (first start only) or reading it from the cache",
-                       lambda: build_scene("head", s0.scene.head_detail))
+                       lambda: prefetch_scene("head", s0.scene.head_detail))
             except Exception:
                 pass  # the viewer's own load below reports it
         sp.show("loading the scene onto the GPU, the shader library")
     app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
                     options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer())
-    if sp is not None:
-        sp.show(f"first frame of {app.state.settings.technique}: compiling its shaders and rendering "
-                "(on llvmpipe this takes a while; later changes re-run only what they touch)")
-        sp.release()
-    wnd.swap_buffers()
+    if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
+        sp.headline = "the panel works; the image appears here when its first frame is complete"
+        sp.lines.append((sp.elapsed(), f"the first image of {app.state.settings.technique}: shaders and tables"))
+        from skinviewer.ui.splash import StartupView
+        app.ui.add_window(lambda state, frame: StartupView(sp, frame))
+    else:
+        wnd.swap_buffers()
     wnd.set_default_viewport()
     return app
 
@@ -243,6 +248,13 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
         app.state.set_show_ui(False)  # batch screenshot: the 3D view fills the whole --size window
     for n in app.state.notices:
         print(f"note: {n}", file=sys.stderr)
+    if not frames:
+        app.ui_frame()  # the panel first (two frames: plots fit their axes on their second), then the image
+        app.ui_frame()
+        # the first image is the quality governor's (issue 27): the start counts as an edit, so a
+        # calibrated technique shows the most accurate preview that fits the budget, then refines
+        # to the user's settings as after any edit (no calibration yet: the settings themselves)
+        app.frame.scheduler.note_change()
     wnd, frame = app.wnd, app.frame
     try:
         app.timer.start()

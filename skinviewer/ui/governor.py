@@ -217,7 +217,7 @@ class Governor:
         return bool(self._plan)
 
     def status(self, s: Settings) -> str:
-        """What is shown: "preview: irradiance 256², separable blurs — 6.1 % ± 1.9 from the truth · refining 2/4"."""
+        """What is shown: "preview: irradiance 256², separable blurs, 6.1 % ± 1.9 from the truth · refining 2/4"."""
         if not self.active or (self.shown.final and not self._plan):
             return ""
         e = self._error(s.technique, self.shown)
@@ -226,7 +226,8 @@ class Governor:
             entry = self.entry(s.technique, self.shown)
             u = entry.uncertainty if entry is not None else None
             # the ruler's own uncertainty beside its figure (issue 30): "6.1 % ± 1.9"
-            text += f" — {100 * e:.1f} %{f' ± {100 * u:.1f}' if u is not None else ''} from the truth"
+            # (a comma, not a dash: the panel's font has no em dash)
+            text += f", {100 * e:.1f} %{f' ± {100 * u:.1f}' if u is not None else ''} from the truth"
         if self._plan:
             done = self._steps - len(self._plan)
             text += f" · refining {done + 1}/{self._steps}"

@@ -55,13 +55,15 @@ class Splash:
         self._prog = self.ctx.program(vertex_shader=_VS, fragment_shader=_FS)
         self._vao = self.ctx.vertex_array(self._prog, [])
         self._tex: Any = None
+        self._drawn_at = 0.0
+        self.headline = "starting: the panel comes first, then the image"
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
 
-    def _image(self, busy: str = "") -> np.ndarray:
+    def _image(self, busy: str = "", size: tuple[int, int] | None = None) -> np.ndarray:
         from PIL import Image, ImageDraw
-        w, h = self.wnd.buffer_size
+        w, h = size or self.wnd.buffer_size
         w, h = max(int(w), 16), max(int(h), 16)
         img = Image.new("RGB", (w, h), BG)
         d = ImageDraw.Draw(img)
@@ -69,7 +71,7 @@ class Splash:
         x, y = 40, 40
         d.text((x, y), "skinviewer", fill=FG, font=big)
         y += 50
-        d.text((x, y), "starting: the panel and the image appear when the first frame is ready", fill=DIM, font=small)
+        d.text((x, y), self.headline, fill=DIM, font=small)
         y += 34
         for k, (t, text) in enumerate(self.lines):
             last = k == len(self.lines) - 1
@@ -79,22 +81,35 @@ class Splash:
         return np.asarray(img, np.uint8)
 
     def draw(self, busy: str = "") -> None:
-        img = np.ascontiguousarray(self._image(busy))
-        h, w = img.shape[:2]
-        if self._tex is None or self._tex.size != (w, h):
-            if self._tex is not None:
-                self._tex.release()
-            self._tex = self.ctx.texture((w, h), 3, img.tobytes(), alignment=1)
-        else:
-            self._tex.write(img.tobytes(), alignment=1)
+        w, h = self.wnd.buffer_size
+        self.draw_into((0, 0, int(w), int(h)), busy, force=True)
+        self.wnd.swap_buffers()
+        self.frames += 1
+
+    def draw_into(self, viewport: tuple[int, int, int, int], busy: str = "", force: bool = False) -> None:
+        """The screen's image in ``viewport`` (x, y, w, h framebuffer pixels) of the window, not
+        presented: the viewer's view region while its first image is being made (the panel beside it)."""
+        x0, y0, vw, vh = (int(v) for v in viewport)
+        now = time.perf_counter()
+        # the text is drawn again at most every ``interval`` (the viewer's frames come faster than that)
+        if force or self._tex is None or self._tex.size != (max(vw, 16), max(vh, 16)) \
+                or now - self._drawn_at >= self.interval:
+            img = np.ascontiguousarray(self._image(busy, (vw, vh)))
+            h, w = img.shape[:2]
+            if self._tex is None or self._tex.size != (w, h):
+                if self._tex is not None:
+                    self._tex.release()
+                self._tex = self.ctx.texture((w, h), 3, img.tobytes(), alignment=1)
+            else:
+                self._tex.write(img.tobytes(), alignment=1)
+            self._drawn_at = now
+        w, h = self._tex.size
         self.ctx.screen.use()
-        self.ctx.viewport = (0, 0, w, h)
+        self.ctx.viewport = (x0, y0, w, h)
         self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND)
         self._tex.use(0)
         self._prog["tex"].value = 0
         self._vao.render(vertices=3)
-        self.wnd.swap_buffers()
-        self.frames += 1
 
     def show(self, line: str) -> None:
         self.lines.append((self.elapsed(), line))
@@ -128,6 +143,9 @@ class Splash:
             raise out["error"]
         return out.get("value")
 
+    def released(self) -> bool:
+        return self._prog is None
+
     def release(self) -> None:
         for obj in (self._tex, self._vao, self._prog):
             try:
@@ -135,4 +153,38 @@ class Splash:
                     obj.release()
             except Exception:
                 pass
-        self._tex = None
+        self._tex = self._vao = self._prog = None
+
+
+class StartupView:
+    """The start-up screen in the 3D view until the viewer's first complete image, the panel beside it
+    (a window of ui/windows.py that draws no imgui, only its ``draw_view``): the steps and the running
+    time of the first image stay readable, and the panel can be used meanwhile. Releases the screen
+    once an image is complete or the first render failed (the status bar says why)."""
+
+    def __init__(self, splash: Splash, frame):
+        self.splash: Splash | None = splash
+        self.frame = frame
+
+    def draw(self, ui) -> None:
+        pass
+
+    def draw_view(self, viewport) -> bool:
+        sp = self.splash
+        if sp is None:
+            return False
+        rep = self.frame.report
+        if (rep is not None and rep.complete) or self.frame.render_error:
+            self.release()
+            return False
+        try:
+            sp.draw_into(viewport)
+        except Exception:  # never in the way of the viewer
+            self.release()
+            return False
+        return True
+
+    def release(self) -> None:
+        if self.splash is not None:
+            self.splash.release()
+            self.splash = None
