@@ -129,9 +129,12 @@ class LightSettings(_Model):
     sh_order: int = Field(2, ge=0, le=2, description="spherical-harmonic order of the environment's diffuse "
                           "irradiance (Ramamoorthi & Hanrahan 2001; 2: 9 coefficients)")
     occlusion: bool = Field(True, description="the environment's light is occluded by the mesh: per-vertex "
-                            "ambient occlusion and bent normals baked with Embree, and specular occlusion")
-    ao_rays: int = Field(64, ge=4, le=4096, description="rays per vertex of the ambient-occlusion bake "
-                         "(stratified, cosine-weighted; once per mesh, cached)")
+                            "SH transfer vectors baked with Embree, and specular occlusion")
+    ao_rays: int = Field(256, ge=4, le=4096, description="rays per vertex of the visibility bake (SH transfer "
+                         "vectors and ambient occlusion; stratified, cosine-weighted; once per mesh, cached)")
+    transfer_order: int = Field(4, ge=0, le=4, description="SH bands of the per-vertex transfer vectors that shadow "
+                                "the environment's diffuse light (Sloan et al. 2002; 4: 25 coefficients, 2: 9); "
+                                "0: ambient occlusion x SH irradiance at the bent normal")
 
     _env_path = field_validator("environment")(_file_path)
 

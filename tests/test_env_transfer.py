@@ -1,0 +1,171 @@
+"""SH transfer vectors of the environment light (issue 32; Sloan, Kautz & Snyder 2002): the basis
+against scipy's spherical harmonics, the Embree bake against quadrature on an open plane and at the
+foot of a wall, AO and bent normal recovered from the vector, and the vertex stage's GLSL twin."""
+from __future__ import annotations
+
+import math
+
+import moderngl
+import numpy as np
+import pytest
+
+from skinviewer.core.paths import shaders_dir
+from skinviewer.physics import environment as env
+
+
+def _grid(n=12, size=20.0):
+    xs = np.linspace(-size / 2, size / 2, n)
+    P = np.array([(x, y, 0.0) for y in xs for x in xs])
+    idx = []
+    for j in range(n - 1):
+        for i in range(n - 1):
+            a = j * n + i
+            idx += [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]
+    return P, np.tile([0.0, 0.0, 1.0], (n * n, 1)), np.array(idx)
+
+
+def _hemisphere_quadrature(visible, n_theta=400, n_phi=800):
+    """Directions of the upper (+z) hemisphere on a midpoint grid with their solid angles, kept where
+    ``visible(d)``: an integration that shares nothing with the bake's stratified rays."""
+    th = (np.arange(n_theta) + 0.5) / n_theta * (math.pi / 2)
+    ph = (np.arange(n_phi) + 0.5) / n_phi * 2 * math.pi
+    T, F = np.meshgrid(th, ph, indexing="ij")
+    d = np.stack([np.sin(T) * np.cos(F), np.sin(T) * np.sin(F), np.cos(T)], -1).reshape(-1, 3)
+    w = (np.sin(T) * (math.pi / 2 / n_theta) * (2 * math.pi / n_phi)).reshape(-1)
+    keep = visible(d)
+    return d[keep], w[keep]
+
+
+def test_sh25_is_scipys_real_spherical_harmonics():
+    from scipy.special import sph_harm_y
+    d = np.random.default_rng(3).normal(size=(500, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    ours = env.sh_basis25(d)
+    np.testing.assert_allclose(ours[:, :9], env.sh_basis(d))  # R&H's nine come first, unchanged
+    th, ph = np.arccos(d[:, 2]), np.arctan2(d[:, 1], d[:, 0])
+    k = 0
+    for l in range(5):
+        for m in range(-l, l + 1):
+            y = sph_harm_y(l, abs(m), th, ph)
+            ref = y.real if m == 0 else math.sqrt(2) * (y.imag if m < 0 else y.real)
+            sign = np.sign(ref @ ours[:, k])  # the Condon-Shortley phase differs between conventions; 6-digit constants
+            np.testing.assert_allclose(sign * ours[:, k], ref, atol=1e-5, err_msg=f"Y_{l},{m}")
+            k += 1
+
+
+def test_unoccluded_transfer_reproduces_the_sh_irradiance():
+    P, N, F = _grid()
+    T = env.bake_transfer(P, N, F, rays=1024).astype(np.float64)
+    np.testing.assert_allclose(T, env.transfer_unoccluded(N), atol=0.01)  # stratified MC of the clamped cosine
+    img = env.builtin_environment("studio")
+    L = env.sh_project25(img)
+    E = env.sh_irradiance_coefficients(env.sh_project(img))
+    want = env.sh_irradiance(E, N)
+    np.testing.assert_allclose(env.transfer_irradiance(T, L, 2), want, rtol=0.01)
+    # order 4 is closer to the exact (texel-summed) irradiance than R&H's order 2
+    exact = env.irradiance_exact(img, N[:1])[0]
+    assert abs(env.transfer_irradiance(T, L, 4)[0] - exact).max() < 0.5 * abs(want[0] - exact).max()
+
+
+def test_plane_at_the_foot_of_a_box_loses_the_blocked_half():
+    import trimesh
+    P, N, F = _grid(n=5, size=2.0)
+    box = trimesh.creation.box(extents=(2000.0, 4000.0, 2000.0))
+    bp = np.asarray(box.vertices) + np.array([1000.0 + 1.2, 0.0, 1000.0 - 1.0])  # the wall face at x = 1.2
+    Pm = np.r_[P, bp]
+    Fm = np.r_[F, np.asarray(box.faces) + len(P)]
+    T = env.bake_transfer(Pm, np.r_[N, np.tile([1.0, 0, 0], (len(bp), 1))], Fm, rays=4096)[:len(P)].astype(np.float64)
+    for i in (6, 12, 18):  # plane vertices at x = -0.5, 0, 0.5: what they see of the box, by quadrature
+        d, w = _hemisphere_quadrature(lambda d: d[:, 0] <= 0)  # the wall takes every direction towards +x
+        want = (env.sh_basis25(d) * (d[:, 2] * w)[:, None]).sum(0)
+        np.testing.assert_allclose(T[i], want, atol=0.02)
+    assert env.transfer_ao(T[12:13])[0] == pytest.approx(0.5, abs=0.01)
+    bent = env.transfer_bent_normal(T[12:13], N[12:13])[0]  # int V cos w dw = (-2/3, 0, pi/3)
+    np.testing.assert_allclose(bent, np.array([-2 / 3, 0.0, math.pi / 3]) / math.hypot(2 / 3, math.pi / 3), atol=0.01)
+    # the studio's key soft box is on the camera's left (-x): a wall at +x leaves it, a wall at -x takes it
+    img = env.builtin_environment("studio")
+    L, E = env.sh_project25(img), env.sh_irradiance_coefficients(env.sh_project(img))
+    d, w = _hemisphere_quadrature(lambda d: d[:, 0] < 0)
+    exact = (env.sample_equirect(img, d) * (d[:, 2] * w)[:, None]).sum(0)
+    got = env.transfer_irradiance(T[12:13], L)[0]
+    ao_sh = env.env_diffuse_transfer(E, L, N[12:13], N[12:13], T[12:13], order=0)[0]
+    assert abs(got - exact).max() < 0.1 * exact.max()
+    assert abs(got - exact).max() < abs(ao_sh - exact).max()
+
+
+def test_ao_and_bent_normal_come_out_of_the_transfer_vector():
+    """The same rays (seed, chunk) give bake_visibility's AO and bent normal exactly."""
+    import trimesh
+    P, N, F = _grid(n=8, size=10.0)
+    box = trimesh.creation.box(extents=(4.0, 4.0, 4.0))
+    Pm = np.r_[P, np.asarray(box.vertices) + np.array([3.0, 0.0, 2.5])]
+    Fm = np.r_[F, np.asarray(box.faces) + len(P)]
+    Nm = np.r_[N, np.tile([0.0, 0.0, 1.0], (8, 1))]
+    vis = env.bake_visibility(Pm, Nm, Fm, rays=64, chunk=2048)
+    T = env.bake_transfer(Pm, Nm, Fm, rays=64, chunk=2048)
+    assert vis[:len(P), 3].min() < 0.8  # some vertices see the box
+    np.testing.assert_allclose(env.transfer_ao(T), vis[:, 3], atol=1e-5)
+    np.testing.assert_allclose(env.transfer_bent_normal(T, Nm), vis[:, :3], atol=1e-4)
+
+
+VERT = """#version 330 core
+#define ENV_LIGHT 1
+#define ENV_RAYS 64
+#define ENV_TRANSFER {order}
+{mesh_vs}
+out vec4 v_out;
+uniform int u_count;
+void main() {{
+    ENV_VIS_OUT();
+    v_out = v_env_vis;
+    gl_PointSize = 1.0;
+    gl_Position = vec4((float(gl_VertexID) + 0.5) / float(u_count) * 2.0 - 1.0, 0.0, 0.0, 1.0);
+}}
+"""
+FRAG = """#version 330 core
+in vec4 v_out;
+out vec4 o;
+void main() { o = v_out; }
+"""
+
+
+@pytest.mark.parametrize("order", [4, 2, 0])
+def test_vertex_stage_transfer_agrees_with_numpy(gl_ctx, order):
+    lib = shaders_dir() / "lib"
+    mesh_vs = (lib / "mesh_vs.glsl").read_text().replace('#include "env_sh.glsl"', (lib / "env_sh.glsl").read_text())
+    prog = gl_ctx.program(vertex_shader=VERT.format(order=order, mesh_vs=mesh_vs), fragment_shader=FRAG)
+    rng = np.random.default_rng(11)
+    n = 64
+    Nv = rng.normal(size=(n, 3))
+    Nv /= np.linalg.norm(Nv, axis=1, keepdims=True)
+    T = env.transfer_unoccluded(Nv) * rng.uniform(0.2, 1.0, size=(n, 25))  # partly occluded vectors
+    img = env.builtin_environment("window")
+    L = env.sh_project25(img, 30.0)
+    L[env.TRANSFER_BAND > order] = 0.0
+    E = env.sh_irradiance_coefficients(env.sh_project(img, 30.0))
+    if "u_env_L" in prog:  # not in the AO x SH variant
+        prog["u_env_L"].write(L[:prog["u_env_L"].array_length].astype(np.float32).tobytes())  # cut to what is kept
+    if "u_env_sh" in prog:
+        prog["u_env_sh"].write(E.astype(np.float32).tobytes())
+    prog["u_count"].value = n
+    tbuf = np.zeros((n, 28), np.float32)
+    tbuf[:, :25] = T
+    vb_t, vb_n = gl_ctx.buffer(tbuf.tobytes()), gl_ctx.buffer(Nv.astype(np.float32).tobytes())
+    names = [f"in_env_t{k}" for k in range(7)]
+    fmt = " ".join("4f" if a in prog else "16x" for a in names)
+    content = [(vb_t, fmt, *[a for a in names if a in prog])]
+    if "in_normal" in prog:
+        content.append((vb_n, "3f", "in_normal"))
+    vao = gl_ctx.vertex_array(prog, content)
+    out = gl_ctx.texture((n, 1), 4, dtype="f4")
+    fbo = gl_ctx.framebuffer([out])
+    fbo.use()
+    fbo.viewport = (0, 0, n, 1)
+    fbo.clear()
+    vao.render(moderngl.POINTS, vertices=n)
+    got = np.frombuffer(out.read(), np.float32).reshape(n, 4).astype(np.float64)
+    for o in (vao, fbo, out, vb_t, vb_n, prog):
+        o.release()
+    want = env.env_diffuse_transfer(E, L, Nv, Nv, T, order=order)
+    np.testing.assert_allclose(got[:, :3], want, rtol=2e-4, atol=2e-5 * want.max())
+    np.testing.assert_allclose(got[:, 3], env.transfer_ao(T), atol=1e-5)
