@@ -169,3 +169,53 @@ def test_vertex_stage_transfer_agrees_with_numpy(gl_ctx, order):
     want = env.env_diffuse_transfer(E, L, Nv, Nv, T, order=order)
     np.testing.assert_allclose(got[:, :3], want, rtol=2e-4, atol=2e-5 * want.max())
     np.testing.assert_allclose(got[:, 3], env.transfer_ao(T), atol=1e-5)
+
+
+# -- the environment in the background (render.background_environment) ------------------------------
+
+def _view_dirs(s, renderer, size):
+    from skinviewer.scene.camera import framed_view
+    view = framed_view(s.camera, renderer.scene.gpu, (size, size))
+    inv = np.linalg.inv(view.view_proj)
+    j, i = np.mgrid[0:size, 0:size]  # j: GL rows, bottom first
+    ndc = np.stack([(i + 0.5) / size * 2 - 1, (j + 0.5) / size * 2 - 1], -1).reshape(-1, 2)
+    far = np.c_[ndc, np.ones(len(ndc)), np.ones(len(ndc))] @ inv.T
+    d = far[:, :3] / far[:, 3:] - view.eye
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def test_background_shows_the_environment_through_each_pixel(renderer):
+    from skinviewer.core.settings import with_values
+    from skinviewer.passes.output import tone_map
+    from tests.helpers import small_settings
+    n = 64
+    base = small_settings(technique="phong", size=n)
+    d = base.model_dump()
+    d["lights"] = [{"kind": "environment", "environment": "studio", "intensity": 1.5, "yaw": 70.0,
+                    "cast_shadow": False}]
+    base = base.model_validate({**d, "camera": {**d["camera"], "yaw": 160.0}})
+    images = {}
+    for mode in ("off", "sharp", "blurred"):
+        s = with_values(base, {"render.background_environment": mode})
+        renderer.render(s)
+        g = renderer.graph("phong")
+        images[mode] = g.read("image")[..., :3].astype(np.float64).reshape(-1, 3)
+        alpha = g.read("lit")[..., 3].reshape(-1)
+    bg = alpha == 0
+    assert bg.sum() > 0.3 * n * n
+    np.testing.assert_allclose(images["off"][bg], np.broadcast_to(base.render.background, (bg.sum(), 3)),
+                               atol=1 / 255)  # the background colour (sRGB)
+    img = env.builtin_environment("studio")
+    dirs = _view_dirs(base, renderer, n)[bg]
+
+    def shown(L):
+        c = tone_map(1.5 * L * base.render.exposure)
+        return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+    err = np.abs(images["sharp"][bg] - shown(env.sample_equirect(img, dirs, 70.0)))
+    assert np.median(err) < 2 / 255 and np.percentile(err, 99) < 0.05  # the texture is 1024 x 512 bilinear
+    assert np.ptp(images["sharp"][bg].sum(1)) > 0.2  # the room's wall and floor
+    h = env.SPEC_SIZE[1]
+    level = env.prefilter_specular(img)[h:2 * h]  # blurred: the m = 0.15 level
+    err = np.abs(images["blurred"][bg] - shown(env.sample_equirect(level, dirs, 70.0)))
+    assert np.median(err) < 2 / 255 and np.percentile(err, 99) < 0.05
+    assert np.abs(images["blurred"][bg] - images["sharp"][bg]).mean() > 0.02  # the soft box's glow spreads

@@ -182,6 +182,10 @@ class RenderSettings(_Model):
         "filmic", description="display transform after exposure: filmic (ACES fit, soft highlight roll-off) or "
         "linear (clamp; what measurements compare)")
     background: Vec3 = (0.05, 0.05, 0.06)
+    background_environment: Literal["off", "sharp", "blurred"] = Field(
+        "off", description="with an environment light: the background shows the environment seen from the camera "
+        "(sharp, or blurred as the pre-filtered m = 0.15 level), exposed and tone-mapped like the skin; off: the "
+        "background colour")
     check_finite: bool = Field(
         True, description="after a pass runs, check its outputs for NaN/Inf (a small GPU reduction); "
         "the frame report names a pass whose output is not finite")

@@ -17,6 +17,9 @@ from skinviewer.scene.environment import environment_image
 
 ENV_PREFILTERED = "env_prefiltered"
 ENV_RHO_DT = "env_rho_dt"
+ENV_BACKGROUND = "env_background"  # the environment at BACKGROUND_SIZE for render.background_environment = sharp
+BACKGROUND_SIZE = (1024, 512)
+BACKGROUND_BLUR_LEVEL = 1  # the pre-filtered level (m = 0.15) render.background_environment = blurred shows
 ENV_FIELDS = ("kind", "environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "transfer_order", "color",
               "intensity", "enabled")
 ENV_IMAGE_FIELDS = ("environment", "layout")
@@ -45,6 +48,15 @@ def _sh25(spec: str, layout: str, yaw: float) -> np.ndarray:
     return env.sh_project25(environment_image(spec, layout), yaw)
 
 
+@functools.lru_cache(maxsize=2)
+def _background(spec: str, layout: str) -> np.ndarray:
+    """(H, W, 4) float32: the environment resampled to BACKGROUND_SIZE (box-filtered down first)."""
+    w, h = BACKGROUND_SIZE
+    img = env.downsample(environment_image(spec, layout), w)
+    rgb = env.sample_equirect(img, env.equirect_directions(w, h).reshape(-1, 3)).reshape(h, w, -1)
+    return np.ascontiguousarray(np.concatenate([rgb, np.ones((h, w, 1))], 2), np.float32)
+
+
 def prefiltered_spec() -> TexSpec:
     w, h = env.SPEC_SIZE
     return TexSpec((w, h * len(env.SPEC_LEVELS_M)), 4, "f4", filter="linear")
@@ -67,6 +79,8 @@ class EnvironmentPass(Pass):
         r.setting("specular.rho_s")
         r.output(ENV_PREFILTERED, prefiltered_spec())
         r.output(ENV_RHO_DT, TexSpec((32, 32), 1, "f4", filter="linear"))
+        if r.setting("render.background_environment") == "sharp":
+            r.output(ENV_BACKGROUND, TexSpec(BACKGROUND_SIZE, 4, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
         from skinviewer.physics.specular import rho_dt_table
@@ -76,6 +90,8 @@ class EnvironmentPass(Pass):
         table = rho_dt_table(ec.setting("specular.f0"), ec.setting("specular.rho_s"), n_cos=32, n_m=32)
         table = np.nan_to_num(np.clip(table, 0.0, 1.0), nan=1.0).astype(np.float32)
         ec.output(ENV_RHO_DT).write(np.ascontiguousarray(table).tobytes())
+        if ec.setting("render.background_environment") == "sharp":
+            ec.output(ENV_BACKGROUND).write(_background(e.environment, e.layout).tobytes())
 
 
 def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
