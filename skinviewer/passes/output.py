@@ -61,8 +61,8 @@ class OutputPass(Pass):
     def execute(self, ec) -> None:
         import math
 
-        from skinviewer.scene.camera import gl_bytes
         from skinviewer.passes.environment import BACKGROUND_BLUR_LEVEL, ENV_BACKGROUND, ENV_PREFILTERED
+        from skinviewer.scene.camera import gl_bytes
         i, bg = _background_env(ec)
         prog = ec.program("output", TONE_MAP=TONE_MAPS[ec.setting("render.tone_map")], BG_ENV=bg,
                           BG_LEVEL=BACKGROUND_BLUR_LEVEL)
