@@ -219,3 +219,49 @@ def test_background_shows_the_environment_through_each_pixel(renderer):
     err = np.abs(images["blurred"][bg] - shown(env.sample_equirect(level, dirs, 70.0)))
     assert np.median(err) < 2 / 255 and np.percentile(err, 99) < 0.05
     assert np.abs(images["blurred"][bg] - images["sharp"][bg]).mean() > 0.02  # the soft box's glow spreads
+
+
+# -- Phong's environment specular --------------------------------------------------------------------
+
+@pytest.mark.parametrize("n", [8.0, 32.0, 128.0])
+def test_phong_lobe_albedo_is_the_integral_of_the_lobe(n):
+    t = (np.arange(200000) + 0.5) / 200000 * (math.pi / 2)  # N.L = cos t at V = N, H halfway
+    lobe = np.sqrt((1 + np.cos(t)) / 2) ** n * np.cos(t) * np.sin(t)
+    assert env.phong_env_albedo(n) == pytest.approx(2 * math.pi * lobe.sum() * (math.pi / 2 / 200000), rel=1e-6)
+
+
+def test_phong_sphere_adds_the_pre_filtered_environment_specular(renderer, tmp_path):
+    """Phong (ambient 0) on a convex sphere: C x E_SH(n) + phong.specular x the lobe's albedo x the
+    radiance pre-filtered at R — the GLSL against physics/environment.env_phong_specular per pixel."""
+    from skinviewer.core.reference import DEFAULT_SKIN_SRGB
+    from skinviewer.core.settings import with_values
+    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.scene.camera import framed_view
+    from skinviewer.scene.environment import environment_image
+    from tests.helpers import small_settings
+    from tests.test_environment import _env_lights, _sphere_obj
+    mesh = _sphere_obj(tmp_path / "sphere.obj")
+    size = 96
+    s = with_values(small_settings(technique="phong", size=size), {
+        "scene.mesh": str(mesh), "scene.mm_per_unit": 1.0, "phong.ambient": 0.0, "phong.specular": 0.6,
+        "phong.shininess": 24.0, "camera.yaw": 30.0, "camera.pitch": 20.0})
+    s = s.model_validate({**s.model_dump(), **_env_lights(environment="studio", occlusion=False, yaw=40.0,
+                                                           intensity=1.0)})
+    renderer.render(s)
+    lit = renderer.graph("phong").read("lit")[..., :3].astype(np.float64).reshape(-1, 3)
+    d = _view_dirs(s, renderer, size)
+    view = framed_view(s.camera, renderer.scene.gpu, (size, size))
+    b = d @ view.eye
+    disc = b * b - (view.eye @ view.eye - 50.0 ** 2)
+    t = -b - np.sqrt(np.maximum(disc, 0))
+    n = (view.eye + t[:, None] * d) / 50.0
+    inner = (disc > 0) & ((n * -d).sum(1) > 0.3)
+    img = environment_image("studio")
+    E_lm = env.sh_irradiance_coefficients(env.sh_project(img, 40.0))
+    diffuse = srgb_to_linear(np.array(DEFAULT_SKIN_SRGB)) * env.sh_irradiance(E_lm, n[inner])
+    spec = env.env_phong_specular(env.prefilter_specular(img), n[inner], -d[inner], 24.0, 0.6, yaw_deg=40.0)
+    got = lit[inner]
+    assert inner.sum() > 2000 and spec.max() > 0.5 * diffuse.max()  # the soft box's highlight is in view
+    assert np.median(np.abs(got - diffuse - spec) / (diffuse + spec).max()) < 0.01
+    assert np.percentile(np.abs(got - diffuse - spec), 99) / (diffuse + spec).max() < 0.05  # facets
+    assert np.percentile(np.abs(got - diffuse), 95) / (diffuse + spec).max() > 0.05  # the specular is there

@@ -97,5 +97,22 @@ vec3 env_specular(vec3 N, vec3 V, vec3 Nv, SpecParams sp) {
 #endif
     return u_env_scale * env_prefiltered_at(R, sp.m) * (albedo * so);
 }
+
+// Phong's environment specular (physics/environment.env_phong_specular): the pre-filtered radiance at R for
+// the Blinn-Phong lobe's Beckmann m = sqrt(2 / (n + 2)) x the lobe's albedo at V = N,
+// 8 pi int_{1/sqrt2}^1 c^(n+1) (2c^2 - 1) dc in closed form, x phong.specular x specular occlusion
+float env_phong_albedo(float n) {
+    return 25.13274123 * (2.0 * (1.0 - exp2(-(n + 4.0) * 0.5)) / (n + 4.0) - (1.0 - exp2(-(n + 2.0) * 0.5)) / (n + 2.0));
+}
+vec3 env_phong_specular(vec3 N, vec3 V, float shininess, float specular) {
+    float nv = clamp(dot(N, V), 0.0, 1.0);
+    float m = sqrt(2.0 / (shininess + 2.0));
+#if ENV_RAYS > 0
+    float so = env_specular_occlusion(nv, env_vis.w, m);
+#else
+    float so = 1.0;
+#endif
+    return u_env_scale * env_prefiltered_at(reflect(-V, N), m) * (specular * env_phong_albedo(shininess) * so);
+}
 #endif
 #endif

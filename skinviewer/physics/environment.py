@@ -478,6 +478,35 @@ def env_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, m: np.ndarray, s
     return s if occlusion is None else s * np.asarray(occlusion, np.float64)[:, None]
 
 
+def phong_beckmann_m(shininess: float) -> float:
+    """The Beckmann m of a Blinn-Phong exponent n, sqrt(2 / (n + 2)) (Walter et al. 2007 eq. 32 read
+    backwards): the pre-filtered level Phong's environment specular reads."""
+    return math.sqrt(2.0 / (float(shininess) + 2.0))
+
+
+def phong_env_albedo(shininess: float) -> float:
+    """int (N.H)^n (N.L) dw_L over the hemisphere at V = N (the Blinn-Phong lobe's directional albedo
+    before phong.specular), exactly: with c = cos theta_h, dw_L = 4 (V.H) dw_H and N.L = 2c^2 - 1,
+    8 pi int_{1/sqrt2}^1 c^(n+1) (2c^2 - 1) dc (lib/environment.glsl env_phong_albedo)."""
+    n = float(shininess)
+    return 8.0 * math.pi * (2.0 * (1.0 - 2.0 ** (-(n + 4.0) / 2.0)) / (n + 4.0)
+                            - (1.0 - 2.0 ** (-(n + 2.0) / 2.0)) / (n + 2.0))
+
+
+def env_phong_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, shininess: float, specular: float,
+                       ao: np.ndarray | None = None, yaw_deg: float = 0.0) -> np.ndarray:
+    """(N, 3) Phong's environment specular (split sum): the radiance pre-filtered at R for the lobe's
+    Beckmann m (phong_beckmann_m) x phong.specular x the lobe's albedo (phong_env_albedo) x specular
+    occlusion from ``ao`` (lib/environment.glsl env_phong_specular)."""
+    R = 2.0 * (N * V).sum(1, keepdims=True) * N - V
+    R /= np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-300)
+    m = phong_beckmann_m(shininess)
+    s = sample_prefiltered(pre, R, np.full(len(N), m), yaw_deg) * (specular * phong_env_albedo(shininess))
+    if ao is not None:
+        s = s * specular_occlusion(np.clip((N * V).sum(1), 0.0, 1.0), ao, m)[:, None]
+    return s
+
+
 # -- Monte Carlo (the ground truth's) ------------------------------------------------------------------
 
 class EnvSampler:
