@@ -265,3 +265,84 @@ def test_phong_sphere_adds_the_pre_filtered_environment_specular(renderer, tmp_p
     assert np.median(np.abs(got - diffuse - spec) / (diffuse + spec).max()) < 0.01
     assert np.percentile(np.abs(got - diffuse - spec), 99) / (diffuse + spec).max() < 0.05  # facets
     assert np.percentile(np.abs(got - diffuse), 95) / (diffuse + spec).max() > 0.05  # the specular is there
+
+
+# -- pre-integrated skin's environment term (Penner) --------------------------------------------------
+
+def _band_limited_environment(w=128, h=64):
+    """An environment whose radiance is a polynomial of degree 2 in the direction: SH order 2 holds it exactly."""
+    d = env.equirect_directions(w, h)
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    base = 1.0 + 0.6 * y + 0.4 * x - 0.3 * z + 0.5 * x * y + 0.4 * (z * z - 0.3)
+    return np.stack([base, 0.8 * base + 0.2 * x, 0.6 * base - 0.1 * y], -1) * 0.5
+
+
+def test_penner_band_factors_scatter_the_environment_as_the_ring_table_does():
+    """int L(w) D(N.w, k) dw by summing texels, with D read from the ring table's row, against the SH
+    irradiance with each band scaled by env_band_factors (Funk-Hecke)."""
+    from skinviewer.core.settings import Settings
+    from skinviewer.passes.penner import profile
+    from skinviewer.physics import penner
+    s = Settings()
+    n = 64
+    ring = penner.ring_lut(list(profile(s.deon.gaussians)), n, 2.0)
+    w = penner.env_band_factors(ring)
+    np.testing.assert_allclose(w[0], 1.0, atol=2e-4)  # curvature ~0: the clamped cosine
+    assert w[-1, 2, 0] < 0.85 < w[-1, 2, 2]  # tight curvature blurs red's second band most
+    img = _band_limited_environment()
+    hh, ww = img.shape[:2]
+    dirs = env.equirect_directions(ww, hh).reshape(-1, 3)
+    rad = img.reshape(-1, 3) * env.equirect_solid_angles(ww, hh).reshape(-1, 1)
+    E_lm = env.sh_irradiance_coefficients(env.sh_project(img))
+    N = np.random.default_rng(5).normal(size=(40, 3))
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    mu = (np.arange(n) + 0.5) / n * 2 - 1
+    for row in (0, 20, n - 1):
+        cosines = N @ dirs.T
+        D = np.stack([np.interp(cosines, mu, ring[row, :, c]) for c in range(3)], -1)  # (40, texels, 3)
+        want = np.einsum("ntc,tc->nc", D, rad)
+        got = env.sh_irradiance_scattered(E_lm, N, w[row])
+        np.testing.assert_allclose(got, want, rtol=0.02, atol=0.01 * want.max())
+
+
+def test_penner_sphere_scatters_the_environment_as_numpy_does(renderer, tmp_path):
+    from skinviewer.core.files import save_exr
+    from skinviewer.core.reference import DEFAULT_SKIN_SRGB
+    from skinviewer.core.settings import with_values
+    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.passes.penner import profile
+    from skinviewer.physics import penner
+    from skinviewer.scene.camera import framed_view
+    from tests.helpers import small_settings
+    from tests.test_environment import _sphere_obj
+    path = tmp_path / "band.exr"
+    save_exr(path, _band_limited_environment().astype(np.float32))
+    mesh = _sphere_obj(tmp_path / "sphere.obj")
+    size = 96
+    s = with_values(small_settings(technique="penner", size=size), {
+        "scene.mesh": str(mesh), "scene.mm_per_unit": 0.04, "deon.energy_conservation": False,
+        "specular.rho_s": 0.0, "camera.yaw": 30.0, "camera.pitch": 20.0})
+    s = s.model_validate({**s.model_dump(), "lights": [{"kind": "environment", "environment": str(path),
+                                                        "occlusion": False, "intensity": 1.0, "cast_shadow": False}]})
+    renderer.render(s)
+    lit = renderer.graph("penner").read("lit")[..., :3].astype(np.float64).reshape(-1, 3)
+    d = _view_dirs(s, renderer, size)
+    view = framed_view(s.camera, renderer.scene.gpu, (size, size))
+    b = d @ view.eye
+    disc = b * b - (view.eye @ view.eye - 50.0 ** 2)
+    t = -b - np.sqrt(np.maximum(disc, 0))
+    n = (view.eye + t[:, None] * d) / 50.0
+    inner = (disc > 0) & ((n * -d).sum(1) > 0.3)
+    k = (1.0 / (50.0 * 0.04)) * s.penner.curvature_scale / s.penner.max_curvature  # 0.5 mm^-1, normalised
+    ring = penner.ring_lut(list(profile(s.deon.gaussians)), s.penner.lut_size, s.penner.max_curvature)
+    bands = penner.env_band_factors(ring)
+    rows = (np.arange(len(bands)) + 0.5) / len(bands)
+    w = np.stack([[np.interp(k, rows, bands[:, l, c]) for c in range(3)] for l in range(3)])
+    E_lm = env.sh_irradiance_coefficients(env.sh_project(_band_limited_environment()))
+    want = srgb_to_linear(np.array(DEFAULT_SKIN_SRGB)) * env.sh_irradiance_scattered(E_lm, n[inner], w)
+    flat = srgb_to_linear(np.array(DEFAULT_SKIN_SRGB)) * env.sh_irradiance(E_lm, n[inner])
+    got = lit[inner]
+    assert inner.sum() > 2000
+    err, effect = np.abs(got - want)[:, 0] / want.max(), np.abs(flat - want)[:, 0] / want.max()
+    assert np.median(effect) > 0.003  # red's scattering at this curvature (0.5 mm^-1)
+    assert np.median(err) < 0.2 * np.median(effect) and np.percentile(err, 99) < 0.01

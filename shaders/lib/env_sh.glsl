@@ -13,4 +13,12 @@ vec3 env_sh_irradiance(vec3 n) {
            + u_env_sh[6] * (0.315392 * (3.0 * z * z - 1.0)) + u_env_sh[8] * (0.546274 * (x * x - y * y));
     return max(e, vec3(0.0));
 }
+// the same sum split by band (pre-integrated skin scales each band: physics sh_irradiance_scattered)
+void env_sh_bands(vec3 n, out vec3 b0, out vec3 b1, out vec3 b2) {
+    float x = n.x, y = n.y, z = n.z;
+    b0 = u_env_sh[0] * 0.282095;
+    b1 = (u_env_sh[1] * y + u_env_sh[2] * z + u_env_sh[3] * x) * 0.488603;
+    b2 = (u_env_sh[4] * (x * y) + u_env_sh[5] * (y * z) + u_env_sh[7] * (x * z)) * 1.092548
+       + u_env_sh[6] * (0.315392 * (3.0 * z * z - 1.0)) + u_env_sh[8] * (0.546274 * (x * x - y * y));
+}
 #endif

@@ -51,6 +51,20 @@ vec3 env_irradiance(vec3 N, vec3 Nv) {
 #endif
 }
 
+// pre-integrated skin's environment term (Penner): the SH irradiance with band l scaled by w_l, the ring
+// table's Funk-Hecke band weights at this curvature (physics/penner.env_band_factors), occluded as
+// env_irradiance: the vertex's shadowed irradiance plus AO x (scattered E_SH(N) - E_SH(Nv))
+vec3 env_irradiance_scattered(vec3 N, vec3 Nv, vec3 w0, vec3 w1, vec3 w2) {
+    vec3 b0, b1, b2;
+    env_sh_bands(N, b0, b1, b2);
+    vec3 e = max(w0 * b0 + w1 * b1 + w2 * b2, vec3(0.0));
+#if ENV_RAYS > 0
+    return max(env_vis.rgb + env_vis.w * (e - env_sh_irradiance(normalize(Nv))), vec3(0.0));
+#else
+    return e;
+#endif
+}
+
 // the cosine-weighted hemispherical mean of rho_dt (eq. 32 for a whole environment): 3-point
 // Gauss-Legendre in mu^2 (physics.environment.RHO_MU / RHO_W)
 float env_rho_dt_mean(sampler2D rho_tex, SpecParams sp) {

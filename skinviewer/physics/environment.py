@@ -250,6 +250,16 @@ def sh_irradiance(E_lm: np.ndarray, n: np.ndarray) -> np.ndarray:
     return np.maximum(sh_basis(n) @ E_lm, 0.0)
 
 
+def sh_irradiance_scattered(E_lm: np.ndarray, n: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(N, 3) the SH irradiance with band l scaled by w (N or 1, 3 bands, 3 RGB): pre-integrated skin's
+    environment term, sum_lm w_l A_l L_lm Y_lm(n) clamped at 0 (physics/penner.env_band_factors;
+    lib/environment.glsl env_irradiance_scattered)."""
+    Y = sh_basis(n)  # (N, 9)
+    band = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
+    w = np.broadcast_to(np.asarray(w, np.float64), (len(Y), 3, 3))
+    return np.maximum(np.einsum("nk,kc,nkc->nc", Y, np.asarray(E_lm, np.float64), w[:, band]), 0.0)
+
+
 def irradiance_exact(img: np.ndarray, n: np.ndarray, yaw_deg: float = 0.0, max_w: int = 128) -> np.ndarray:
     """(N, 3) the unoccluded irradiance int L(w) max(n.w, 0) dw by summing every texel (the test's
     judge of the SH series: no truncation)."""
