@@ -210,6 +210,12 @@ class RenderSettings(_Model):
 
     _bg = field_validator("background")(_finite_vec)
 
+    @field_validator("background_environment", mode="before")
+    @classmethod
+    def _bg_env(cls, v: Any) -> Any:
+        # --set reads off / on as false / true
+        return {False: "off", True: "sharp"}.get(v, v) if isinstance(v, bool) else v
+
 
 class PhongSettings(_Model):
     ambient: float = Field(0.03, ge=0.0, le=10.0)
