@@ -513,7 +513,7 @@ def env_phong_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, shininess:
     m = phong_beckmann_m(shininess)
     s = sample_prefiltered(pre, R, np.full(len(N), m), yaw_deg) * (specular * phong_env_albedo(shininess))
     if ao is not None:
-        s = s * specular_occlusion(np.clip((N * V).sum(1), 0.0, 1.0), ao, m)[:, None]
+        s = s * specular_occlusion(np.clip((N * V).sum(1), 0.0, 1.0), ao, np.full(len(N), m))[:, None]
     return s
 
 
