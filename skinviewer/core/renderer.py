@@ -187,7 +187,7 @@ class GpuScene:
         from skinviewer.core.paths import cache_dir
         from skinviewer.physics.environment import TRANSFER_COUNT, bake_transfer
         m = self.lod_mesh(level)
-        h = hashlib.sha1(b"envtransfer1")
+        h = hashlib.sha1(b"envtransfer2")
         for a in (m.positions, m.normals, m.indices):
             h.update(np.ascontiguousarray(a).tobytes())
         h.update(str(int(rays)).encode())

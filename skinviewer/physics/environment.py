@@ -344,7 +344,8 @@ def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarra
                   seed: int = 0, caster=None, chunk: int = 1024) -> np.ndarray:
     """(N, 25) float32 per vertex: the shadowed diffuse transfer vector T_lm = int V(w) max(N.w, 0)
     Y_lm(w) dw, l <= 4 (Sloan et al. 2002 eq. 4's transfer, without interreflection), by ``rays``
-    cosine-weighted stratified Embree rays: T_lm = pi / n sum_i V(w_i) Y_lm(w_i) (pdf cos / pi).
+    cosine-weighted stratified Embree rays (pdf cos / pi) with the unoccluded transfer as a control
+    variate: T_lm = A_l Y_lm(N) - pi / n sum_i (1 - V(w_i)) Y_lm(w_i).
     T_00 / (pi Y_00) is the ambient occlusion and (T_11, T_1-1, T_10) the bent normal's direction
     (transfer_ao, transfer_bent_normal). Rays start a hair above the vertex along its normal; a
     vertex without a usable normal gets the unoccluded transfer of +z."""
@@ -372,8 +373,9 @@ def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarra
         d = (local[None, :, :1] * t[:, None] + local[None, :, 1:2] * b[:, None] + local[None, :, 2:] * N[v][:, None])
         o = np.repeat(P[v] + N[v] * eps, k, axis=0)
         hit = caster.intersects_any(o, np.ascontiguousarray(d.reshape(-1, 3))).reshape(len(v), k)
-        free = (~hit).astype(np.float64)
-        out[v] = math.pi / k * np.einsum("vr,vrk->vk", free, sh_basis25(d))
+        # the unoccluded transfer exactly, less the blocked rays' share: a control variate, unbiased
+        # (E[pi/n sum Y(w_i)] = A_l Y_lm(N)), exact where nothing blocks and noisy only in the blocked part
+        out[v] -= math.pi / k * np.einsum("vr,vrk->vk", hit.astype(np.float64), sh_basis25(d))
     return out.astype(np.float32)
 
 
