@@ -1,8 +1,10 @@
 """Environment lighting (issue 32): every technique's error against the ground truth with the studio
 environment plus a key light, beside its error with the key light alone; the environment's cost in each
-technique's frame; the ambient-occlusion bake apart; and the deon sweep of the SH order / AO rays.
+technique's frame; the visibility bake apart; and the deon sweep of the diffuse visibility (SH transfer
+vectors of order 4 / 2, AO x SH at the bent normal, none), the bake's rays and the SH order.
 
     python benchmarks/bench_envlight.py [--size 192] [--scan PATH] [--runs 3] [--out DIR] [--techniques a,b]
+                                        [--no-head] [--no-scan]
 
 Both references (key alone, environment + key) come from skinviewer.core.reference (Embree, brute-force
 diffusion; the environment by the control-variate Monte Carlo, its standard error printed). Frame times are
@@ -100,9 +102,13 @@ def main() -> None:
                       f"  DSSIM {row['dssim_env']:.4f} / {row['dssim_key']:.4f}  frame {row['ms_env']:8.1f} ms"
                       f" vs {row['ms_key']:8.1f} ms  bake {row['ao_bake_s']}", flush=True)
             # deon: SH order and AO rays against the same truth
-            for label, ch in [("sh0", {"lights.0.sh_order": 0}), ("sh1", {"lights.0.sh_order": 1}),
-                              ("sh2", {}), ("ao off", {"lights.0.occlusion": False}),
-                              ("ao16", {"lights.0.ao_rays": 16}), ("ao256", {"lights.0.ao_rays": 256})]:
+            for label, ch in [("transfer4", {}), ("transfer2", {"lights.0.transfer_order": 2}),
+                              ("AOxSH", {"lights.0.transfer_order": 0}),
+                              ("AOxSH r64", {"lights.0.transfer_order": 0, "lights.0.ao_rays": 64}),
+                              ("no occl", {"lights.0.occlusion": False}),
+                              ("t4 r64", {"lights.0.ao_rays": 64}), ("t4 r1024", {"lights.0.ao_rays": 1024}),
+                              ("sh0 (AO)", {"lights.0.sh_order": 0, "lights.0.transfer_order": 0}),
+                              ("sh1 (AO)", {"lights.0.sh_order": 1, "lights.0.transfer_order": 0})]:
                 s = with_values(s_env, {"technique": "deon", **ch})
                 r.render(s, timing="sync")
                 img, cov = linear_image(r, s)

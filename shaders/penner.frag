@@ -6,6 +6,8 @@
 // D: the profile integrated around a ring of curvature k (ring_lut: rows k / k_max, columns N.L);
 // P: the PCF shadow value s across a penumbra of width W mm, diffused by the profile
 // (penumbra_lut: rows W / W_max, columns s); s = 0 and s = 1 stay exact.
+// An environment light: its SH irradiance with each band scaled by D's Funk-Hecke weight at k
+// (penner_env_bands, physics/penner.env_band_factors): the environment scattered around the ring too.
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
@@ -19,6 +21,7 @@ in float v_curvature;
 uniform vec3 u_eye;
 uniform sampler2D ring_lut;
 uniform sampler2D penumbra_lut;
+uniform sampler2D penner_env_bands;  // the environment's SH band weights per curvature (ENV_LIGHT)
 uniform sampler2D rho_dt_tex;
 uniform int u_energy;
 uniform int u_penumbra;
@@ -55,7 +58,11 @@ void main() {
     }
 #if ENV_LIGHT
     ENV_VIS_IN();
-    diffuse += env_irradiance(N, v_normal) * ((u_energy != 0) ? env_rho_dt_mean(rho_dt_tex, sp) : 1.0);
+    // the ring table's band weights at this curvature (columns: bands 0, 1, 2; rows as ring_lut)
+    vec3 w0 = texture(penner_env_bands, vec2(0.5 / 3.0, k)).rgb, w1 = texture(penner_env_bands, vec2(0.5, k)).rgb,
+         w2 = texture(penner_env_bands, vec2(2.5 / 3.0, k)).rgb;
+    diffuse += env_irradiance_scattered(N, v_normal, w0, w1, w2)
+             * ((u_energy != 0) ? env_rho_dt_mean(rho_dt_tex, sp) : 1.0);
     spec += env_specular(N, V, v_normal, sp);
 #endif
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)

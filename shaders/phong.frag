@@ -32,7 +32,7 @@ void main() {
     }
 #if ENV_LIGHT
     ENV_VIS_IN();
-    color += C * env_irradiance(N, v_normal);  // the environment's diffuse (its own Blinn-Phong lobe: lights only)
+    color += C * env_irradiance(N, v_normal) + env_phong_specular(N, V, u_shininess, u_specular);
 #endif
     f_color = vec4(finite3(color), 1.0);
 }

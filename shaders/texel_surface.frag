@@ -19,7 +19,7 @@ layout(location = 0) out vec4 f_p;
 layout(location = 1) out vec4 f_n;
 #if defined(ENV_LIGHT) && ENV_LIGHT && defined(ENV_RAYS) && ENV_RAYS > 0
 in vec4 v_env_vis;
-layout(location = 2) out vec4 f_v;  // the environment's baked bent normal + AO (issue 32)
+layout(location = 2) out vec4 f_v;  // the vertex's shadowed environment irradiance + AO (issue 32, lib/mesh_vs.glsl)
 #endif
 void main() {
     bool bad = any(isnan(v_position)) || any(isinf(v_position));

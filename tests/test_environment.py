@@ -400,8 +400,10 @@ def test_bench_sweeps_the_sh_order_and_the_ao_bake_with_an_environment():
     from skinviewer.core.settings import Settings
     s = Settings.model_validate({**Settings().model_dump(), **_env_lights()})
     labels = {label: ch for _, label, ch in environment_sweep(s, quick=False)}
-    assert labels["env sh0"] == {"lights.0.sh_order": 0} and labels["env no AO"] == {"lights.0.occlusion": False}
-    assert "env AO 16 rays" in labels and "env AO 256 rays" in labels
+    assert labels["env transfer order 2"] == {"lights.0.transfer_order": 2}
+    assert labels["env AO x SH"] == {"lights.0.transfer_order": 0}
+    assert labels["env no occlusion"] == {"lights.0.occlusion": False}
+    assert labels["env 64 rays"] == {"lights.0.ao_rays": 64} and "env 1024 rays" in labels
     assert environment_sweep(Settings(), quick=False) == []  # no environment: nothing added
 
 

@@ -20,7 +20,7 @@ def test_light_fields_follow_the_kind():
         assert set(skip) <= fields
     assert {"position", "beam_radius"} <= set(LIGHT_SKIP["directional"])
     assert "direction" in LIGHT_SKIP["point"] and "position" not in LIGHT_SKIP["point"]
-    env = {"environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays"}  # an environment light's own fields
+    env = {"environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "transfer_order"}  # an environment light's own fields
     assert set(LIGHT_SKIP["beam"]) == env  # a beam uses every analytic field
     assert env <= set(LIGHT_SKIP["directional"]) and env <= set(LIGHT_SKIP["point"])
     assert not env & set(LIGHT_SKIP["environment"]) and {"direction", "position"} <= set(LIGHT_SKIP["environment"])

@@ -1,13 +1,16 @@
 // Environment light (issue 32; numpy twin: skinviewer/physics/environment.py). Compiled in with
 // ENV_LIGHT = 1 (skinviewer.passes.environment.declare_environment) when an environment light is on.
-//   diffuse:  E(x) = AO(x) E_SH(n_bent)  — Ramamoorthi & Hanrahan 2001 eq. 7 (order 2, 9 coefficients
-//             A_l L_lm, yaw, colour and intensity applied on the CPU) at the shading normal bent as the
-//             baked bent normal bends the vertex normal, times the baked ambient occlusion
+//   diffuse:  with occlusion (ENV_RAYS > 0), the vertex's shadowed irradiance sum_lm L_lm T_lm through
+//             its baked SH transfer vector (Sloan et al. 2002, bands <= ENV_TRANSFER; ENV_TRANSFER = 0:
+//             AO x E_SH at the bent normal), computed in the vertex stage (lib/mesh_vs.glsl), plus the
+//             normal map's change of the unoccluded irradiance, AO x (E_SH(N) - E_SH(Nv)); without
+//             occlusion E_SH(N) — Ramamoorthi & Hanrahan 2001 eq. 7 (order 2, 9 coefficients A_l L_lm,
+//             yaw, colour and intensity applied on the CPU)
 //   specular: split sum: the radiance pre-filtered with the Kelemen/Szirmay-Kalos Beckmann lobe
 //             (seed 000 eq. 14-16) at R = reflect(-V, N) for the point's m, times the KS specular
 //             albedo 1 - rho_dt(N.V) (eq. 30), times specular occlusion (Lagarde & de Rousiers 2014)
-// The baked visibility (bent normal xyz, AO w) is a per-vertex attribute (lib/mesh_vs.glsl) or a
-// texel surface map (lib/texel_surface.glsl); a pass's main copies it into env_vis (ENV_VIS_IN()).
+// The vertex's (shadowed irradiance rgb, AO w) comes per vertex (lib/mesh_vs.glsl) or from a texel
+// surface map (lib/texel_surface.glsl); a pass's main copies it into env_vis (ENV_VIS_IN()).
 #if defined(ENV_LIGHT) && ENV_LIGHT && defined(ENV_RAYS) && ENV_RAYS > 0
 #if defined(ENV_TEXELS) && ENV_TEXELS
 #define ENV_VIS_IN() env_vis = texelFetch(surface_v, ivec2(gl_FragCoord.xy), 0)
@@ -28,39 +31,37 @@ in vec4 v_env_vis;
 #endif
 #if ENV_LIGHT
 #include "lib/specular_params.glsl"
+#include "lib/env_sh.glsl"
 #define ENV_LEVELS 7
-uniform vec3 u_env_sh[9];           // A_l L_lm x colour x intensity (R&H 2001 eq. 7), yaw applied
 uniform vec3 u_env_scale;           // colour x intensity of the pre-filtered radiance
 uniform vec2 u_env_yaw;             // cos, sin of the environment's yaw
 uniform float u_env_level_m[ENV_LEVELS];  // Beckmann m of each pre-filtered level
 uniform sampler2D env_prefiltered;  // ENV_LEVELS equirect levels stacked (row 0: the zenith of level 0)
 uniform sampler2D env_rho_dt;       // the rho_dt table (eq. 30-31)
 // ENV_RAYS > 0 (lights.N.occlusion, the bake's rays): the baked visibility occludes
-vec4 env_vis = vec4(0.0, 0.0, 1.0, 1.0);  // bent normal, AO of this point (set by the pass's main)
-
-// R&H 2001 eq. 13's polynomial form of sum_lm A_l L_lm Y_lm(n) (basis constants of eq. 3), >= 0
-vec3 env_sh_irradiance(vec3 n) {
-    float x = n.x, y = n.y, z = n.z;
-    vec3 e = u_env_sh[0] * 0.282095
-           + (u_env_sh[1] * y + u_env_sh[2] * z + u_env_sh[3] * x) * 0.488603
-           + (u_env_sh[4] * (x * y) + u_env_sh[5] * (y * z) + u_env_sh[7] * (x * z)) * 1.092548
-           + u_env_sh[6] * (0.315392 * (3.0 * z * z - 1.0)) + u_env_sh[8] * (0.546274 * (x * x - y * y));
-    return max(e, vec3(0.0));
-}
-
-// the shading normal N turned as the bent normal turns the vertex normal Nv (physics bent_shading_normal)
-vec3 env_normal(vec3 N, vec3 Nv) {
-    vec3 v = N + env_vis.xyz - normalize(Nv);
-    float l = length(v);
-    return (l > 1e-9) ? v / l : N;
-}
+vec4 env_vis = vec4(0.0, 0.0, 0.0, 1.0);  // the vertex's shadowed irradiance, AO (set by the pass's main)
 
 // the environment's irradiance at shading normal N (vertex normal Nv), occluded
+// (physics/environment.env_diffuse_transfer)
 vec3 env_irradiance(vec3 N, vec3 Nv) {
 #if ENV_RAYS > 0
-    return env_vis.w * env_sh_irradiance(env_normal(N, Nv));
+    return max(env_vis.rgb + env_vis.w * (env_sh_irradiance(N) - env_sh_irradiance(normalize(Nv))), vec3(0.0));
 #else
     return env_sh_irradiance(N);
+#endif
+}
+
+// pre-integrated skin's environment term (Penner): the SH irradiance with band l scaled by w_l, the ring
+// table's Funk-Hecke band weights at this curvature (physics/penner.env_band_factors), occluded as
+// env_irradiance: the vertex's shadowed irradiance plus AO x (scattered E_SH(N) - E_SH(Nv))
+vec3 env_irradiance_scattered(vec3 N, vec3 Nv, vec3 w0, vec3 w1, vec3 w2) {
+    vec3 b0, b1, b2;
+    env_sh_bands(N, b0, b1, b2);
+    vec3 e = max(w0 * b0 + w1 * b1 + w2 * b2, vec3(0.0));
+#if ENV_RAYS > 0
+    return max(env_vis.rgb + env_vis.w * (e - env_sh_irradiance(normalize(Nv))), vec3(0.0));
+#else
+    return e;
 #endif
 }
 
@@ -109,6 +110,23 @@ vec3 env_specular(vec3 N, vec3 V, vec3 Nv, SpecParams sp) {
     float so = 1.0;
 #endif
     return u_env_scale * env_prefiltered_at(R, sp.m) * (albedo * so);
+}
+
+// Phong's environment specular (physics/environment.env_phong_specular): the pre-filtered radiance at R for
+// the Blinn-Phong lobe's Beckmann m = sqrt(2 / (n + 2)) x the lobe's albedo at V = N,
+// 8 pi int_{1/sqrt2}^1 c^(n+1) (2c^2 - 1) dc in closed form, x phong.specular x specular occlusion
+float env_phong_albedo(float n) {
+    return 25.13274123 * (2.0 * (1.0 - exp2(-(n + 4.0) * 0.5)) / (n + 4.0) - (1.0 - exp2(-(n + 2.0) * 0.5)) / (n + 2.0));
+}
+vec3 env_phong_specular(vec3 N, vec3 V, float shininess, float specular) {
+    float nv = clamp(dot(N, V), 0.0, 1.0);
+    float m = sqrt(2.0 / (shininess + 2.0));
+#if ENV_RAYS > 0
+    float so = env_specular_occlusion(nv, env_vis.w, m);
+#else
+    float so = 1.0;
+#endif
+    return u_env_scale * env_prefiltered_at(reflect(-V, N), m) * (specular * env_phong_albedo(shininess) * so);
 }
 #endif
 #endif

@@ -22,7 +22,7 @@ vec3 oct_decode(vec2 e) {
 uniform sampler2D surface_p;  // position (mesh units), tangent handedness (0: not covered)
 uniform sampler2D surface_n;  // octahedral vertex normal (xy) and tangent (zw)
 #if defined(ENV_TEXELS) && ENV_TEXELS
-uniform sampler2D surface_v;  // the environment's baked bent normal + AO (lib/environment.glsl ENV_VIS_IN)
+uniform sampler2D surface_v;  // the vertex's shadowed environment irradiance + AO (lib/environment.glsl ENV_VIS_IN)
 #endif
 struct TexelSurface { vec3 P; vec3 N; vec4 T; vec3 dPdx; vec3 dPdy; };
 // the position's change per texel step: the difference to a covered neighbour (forward, else

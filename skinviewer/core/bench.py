@@ -157,18 +157,20 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
 
 
 def environment_sweep(base: Settings, quick: bool, names: list[str] | None = None) -> list[tuple[str, str, dict]]:
-    """With an environment light (issue 32): d'Eon with its SH order and ambient-occlusion bake swept
-    (order 0 / 1 against the default 2; no occlusion, fewer and more rays per vertex)."""
+    """With an environment light (issue 32): d'Eon with its diffuse visibility swept: the SH transfer
+    vectors' order (2 against the default 4; 0: AO x SH irradiance at the bent normal), no occlusion,
+    fewer and more rays per vertex in the bake."""
     from skinviewer.passes.rules import environment_light
     hit = environment_light(base.lights)
     if hit is None or (names is not None and "deon" not in names):
         return []
     i, light = hit
-    orders = [o for o in (0, 1) if o != light.sh_order]
-    rays = [16] if quick else [16, 256]
-    return ([("deon", f"env sh{o}", {f"lights.{i}.sh_order": o}) for o in orders]
-            + [("deon", "env no AO", {f"lights.{i}.occlusion": False})]
-            + [("deon", f"env AO {n} rays", {f"lights.{i}.ao_rays": n}) for n in rays if n != light.ao_rays])
+    orders = [o for o in (2, 0) if o != light.transfer_order]
+    rays = [64] if quick else [64, 1024]
+    return ([("deon", f"env transfer order {o}" if o else "env AO x SH", {f"lights.{i}.transfer_order": o})
+             for o in orders]
+            + [("deon", "env no occlusion", {f"lights.{i}.occlusion": False})]
+            + [("deon", f"env {n} rays", {f"lights.{i}.ao_rays": n}) for n in rays if n != light.ao_rays])
 
 
 def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] | None = None,

@@ -578,11 +578,16 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
     return v, w, np.asarray(fit.errors, np.float64)
 
 
+TECHNIQUE_ONLY_LIGHT_FIELDS = ("sh_order", "occlusion", "ao_rays", "transfer_order")
+
+
 def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, uncertainty: bool = True) -> str:
     from skinviewer.core.renderer import Renderer
     d = s.model_dump(mode="json")
+    # the environment's approximations (SH order, baked visibility) are the techniques', not the truth's
+    lights = [{k: v for k, v in light.items() if k not in TECHNIQUE_ONLY_LIGHT_FIELDS} for light in d["lights"]]
     parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
-             "size": [s.render.width, s.render.height], "lights": d["lights"], "specular": d["specular"],
+             "size": [s.render.width, s.render.height], "lights": lights, "specular": d["specular"],
              "env_files": _env_stamps(s),
              "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
              "profile": [np.asarray(p).tolist() for p in (profile or profile_of(s))]}

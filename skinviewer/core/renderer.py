@@ -25,7 +25,7 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
     CURVATURE_ATTR,
-    ENV_VIS_ATTR,
+    ENV_VIS_ATTRS,
     UV_COVARIANCE_ATTR,
     VERTEX_ATTRS,
     VERTEX_FORMAT,
@@ -57,8 +57,8 @@ class GpuScene:
         self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
-        self._env_vis: dict[tuple[int, int], moderngl.Buffer] = {}  # (level, rays) -> bent normal + AO
-        self.env_rays = 64  # the bake the vertex arrays bind (set by passes/environment.set_environment)
+        self._env_vis: dict[tuple[int, int], moderngl.Buffer] = {}  # (level, rays) -> SH transfer vectors
+        self.env_rays = 256  # the bake the vertex arrays bind (set by passes/environment.set_environment)
         self.env_bake_seconds: dict[tuple[int, int], float] = {}  # (level, rays) -> seconds (0: from the cache)
         self._lod_meshes: dict[int, MeshData] = {}
         albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)
@@ -160,8 +160,10 @@ class GpuScene:
             content.append((self.uv_covariance_buffer(lod), "3f", UV_COVARIANCE_ATTR))
         if CURVATURE_ATTR in prog:  # pre-integrated skin (penner.frag)
             content.append((self.curvature_buffer(lod), "1f", CURVATURE_ATTR))
-        if ENV_VIS_ATTR in prog:  # the environment light's occlusion (lib/environment.glsl)
-            content.append((self.env_visibility_buffer(lod, self.env_rays), "4f", ENV_VIS_ATTR))
+        env_attrs = [a for a in ENV_VIS_ATTRS if a in prog]
+        if env_attrs:  # the environment light's transfer vectors (lib/mesh_vs.glsl), those the compiler kept
+            fmt = " ".join(_fmt("4f", a in prog) for a in ENV_VIS_ATTRS)
+            content.append((self.env_visibility_buffer(lod, self.env_rays), fmt, *env_attrs))
         return self.ctx.vertex_array(prog, content, index_buffer=ibo, index_element_size=4)
 
     def uv_covariance_buffer(self, level: int = 0) -> moderngl.Buffer:
@@ -174,17 +176,18 @@ class GpuScene:
             hit = self._uv_cov[level] = self.ctx.buffer(np.ascontiguousarray(cov, np.float32).tobytes())
         return hit
 
-    def env_visibility(self, level: int = 0, rays: int = 64) -> np.ndarray:
-        """(N, 4) per vertex of level ``level``: the bent normal and ambient occlusion of the environment
-        light (physics/environment.bake_visibility with Embree), baked once per mesh and ray count and
-        cached on disk (``cache_dir()/envvis``, by a hash of the vertices, normals and triangles)."""
+    def env_visibility(self, level: int = 0, rays: int = 256) -> np.ndarray:
+        """(N, 25) per vertex of level ``level``: the SH transfer vector of the environment light
+        (physics/environment.bake_transfer with Embree: the ambient occlusion and bent normal are its
+        first four coefficients), baked once per mesh and ray count and cached on disk
+        (``cache_dir()/envvis``, by a hash of the vertices, normals and triangles)."""
         import time
 
         from skinviewer.core.files import atomic_write_bytes
         from skinviewer.core.paths import cache_dir
-        from skinviewer.physics.environment import bake_visibility
+        from skinviewer.physics.environment import TRANSFER_COUNT, bake_transfer
         m = self.lod_mesh(level)
-        h = hashlib.sha1(b"envvis1")
+        h = hashlib.sha1(b"envtransfer2")
         for a in (m.positions, m.normals, m.indices):
             h.update(np.ascontiguousarray(a).tobytes())
         h.update(str(int(rays)).encode())
@@ -192,13 +195,13 @@ class GpuScene:
         t0 = time.perf_counter()
         try:
             vis = np.load(path, allow_pickle=False)
-            if vis.shape != (len(m.positions), 4) or not np.all(np.isfinite(vis)):
+            if vis.shape != (len(m.positions), TRANSFER_COUNT) or not np.all(np.isfinite(vis)):
                 raise ValueError("stale")
             self.env_bake_seconds[(level, rays)] = 0.0
             return vis.astype(np.float32)
         except (OSError, ValueError):
             pass
-        vis = bake_visibility(m.positions, m.normals, m.indices, rays=int(rays))
+        vis = bake_transfer(m.positions, m.normals, m.indices, rays=int(rays))
         self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
         import io
         buf = io.BytesIO()
@@ -209,13 +212,16 @@ class GpuScene:
             pass  # a read-only cache folder: bake again next time
         return vis
 
-    def env_visibility_buffer(self, level: int = 0, rays: int = 64) -> moderngl.Buffer:
-        """env_visibility on the GPU (one buffer per level of detail and ray count)."""
+    def env_visibility_buffer(self, level: int = 0, rays: int = 256) -> moderngl.Buffer:
+        """env_visibility on the GPU, padded to 28 floats (7 vec4) a vertex (one buffer per level of
+        detail and ray count)."""
         key = (max(level, 0), int(rays))
         hit = self._env_vis.get(key)
         if hit is None:
             vis = self.env_visibility(key[0], key[1])
-            hit = self._env_vis[key] = self.ctx.buffer(np.ascontiguousarray(vis, np.float32).tobytes())
+            pad = np.zeros((len(vis), 4 * len(ENV_VIS_ATTRS)), np.float32)
+            pad[:, :vis.shape[1]] = vis
+            hit = self._env_vis[key] = self.ctx.buffer(pad.tobytes())
         return hit
 
     def curvature_buffer(self, level: int = 0) -> moderngl.Buffer:

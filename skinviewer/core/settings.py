@@ -129,9 +129,12 @@ class LightSettings(_Model):
     sh_order: int = Field(2, ge=0, le=2, description="spherical-harmonic order of the environment's diffuse "
                           "irradiance (Ramamoorthi & Hanrahan 2001; 2: 9 coefficients)")
     occlusion: bool = Field(True, description="the environment's light is occluded by the mesh: per-vertex "
-                            "ambient occlusion and bent normals baked with Embree, and specular occlusion")
-    ao_rays: int = Field(64, ge=4, le=4096, description="rays per vertex of the ambient-occlusion bake "
-                         "(stratified, cosine-weighted; once per mesh, cached)")
+                            "SH transfer vectors baked with Embree, and specular occlusion")
+    ao_rays: int = Field(256, ge=4, le=4096, description="rays per vertex of the visibility bake (SH transfer "
+                         "vectors and ambient occlusion; stratified, cosine-weighted; once per mesh, cached)")
+    transfer_order: int = Field(4, ge=0, le=4, description="SH bands of the per-vertex transfer vectors that shadow "
+                                "the environment's diffuse light (Sloan et al. 2002; 4: 25 coefficients, 2: 9); "
+                                "0: ambient occlusion x SH irradiance at the bent normal")
 
     _env_path = field_validator("environment")(_file_path)
 
@@ -179,6 +182,10 @@ class RenderSettings(_Model):
         "filmic", description="display transform after exposure: filmic (ACES fit, soft highlight roll-off) or "
         "linear (clamp; what measurements compare)")
     background: Vec3 = (0.05, 0.05, 0.06)
+    background_environment: Literal["off", "sharp", "blurred"] = Field(
+        "off", description="with an environment light: the background shows the environment seen from the camera "
+        "(sharp, or blurred as the pre-filtered m = 0.15 level), exposed and tone-mapped like the skin; off: the "
+        "background colour")
     check_finite: bool = Field(
         True, description="after a pass runs, check its outputs for NaN/Inf (a small GPU reduction); "
         "the frame report names a pass whose output is not finite")
@@ -204,6 +211,12 @@ class RenderSettings(_Model):
         "<= 0 or one nothing fits: the cheapest preview, said in the status bar")
 
     _bg = field_validator("background")(_finite_vec)
+
+    @field_validator("background_environment", mode="before")
+    @classmethod
+    def _bg_env(cls, v: Any) -> Any:
+        # --set reads off / on as false / true
+        return {False: "off", True: "sharp"}.get(v, v) if isinstance(v, bool) else v
 
 
 class PhongSettings(_Model):

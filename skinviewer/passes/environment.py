@@ -17,8 +17,11 @@ from skinviewer.scene.environment import environment_image
 
 ENV_PREFILTERED = "env_prefiltered"
 ENV_RHO_DT = "env_rho_dt"
-ENV_FIELDS = ("kind", "environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "color", "intensity",
-              "enabled")
+ENV_BACKGROUND = "env_background"  # the environment at BACKGROUND_SIZE for render.background_environment = sharp
+BACKGROUND_SIZE = (1024, 512)
+BACKGROUND_BLUR_LEVEL = 1  # the pre-filtered level (m = 0.15) render.background_environment = blurred shows
+ENV_FIELDS = ("kind", "environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "transfer_order", "color",
+              "intensity", "enabled")
 ENV_IMAGE_FIELDS = ("environment", "layout")
 
 
@@ -38,6 +41,20 @@ def _prefiltered(spec: str, layout: str) -> np.ndarray:
 @functools.lru_cache(maxsize=16)
 def _sh(spec: str, layout: str, yaw: float) -> np.ndarray:
     return env.sh_project(environment_image(spec, layout), yaw)
+
+
+@functools.lru_cache(maxsize=16)
+def _sh25(spec: str, layout: str, yaw: float) -> np.ndarray:
+    return env.sh_project25(environment_image(spec, layout), yaw)
+
+
+@functools.lru_cache(maxsize=2)
+def _background(spec: str, layout: str) -> np.ndarray:
+    """(H, W, 4) float32: the environment resampled to BACKGROUND_SIZE (box-filtered down first)."""
+    w, h = BACKGROUND_SIZE
+    img = env.downsample(environment_image(spec, layout), w)
+    rgb = env.sample_equirect(img, env.equirect_directions(w, h).reshape(-1, 3)).reshape(h, w, -1)
+    return np.ascontiguousarray(np.concatenate([rgb, np.ones((h, w, 1))], 2), np.float32)
 
 
 def prefiltered_spec() -> TexSpec:
@@ -62,6 +79,8 @@ class EnvironmentPass(Pass):
         r.setting("specular.rho_s")
         r.output(ENV_PREFILTERED, prefiltered_spec())
         r.output(ENV_RHO_DT, TexSpec((32, 32), 1, "f4", filter="linear"))
+        if r.setting("render.background_environment") == "sharp":
+            r.output(ENV_BACKGROUND, TexSpec(BACKGROUND_SIZE, 4, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
         from skinviewer.physics.specular import rho_dt_table
@@ -71,6 +90,8 @@ class EnvironmentPass(Pass):
         table = rho_dt_table(ec.setting("specular.f0"), ec.setting("specular.rho_s"), n_cos=32, n_m=32)
         table = np.nan_to_num(np.clip(table, 0.0, 1.0), nan=1.0).astype(np.float32)
         ec.output(ENV_RHO_DT).write(np.ascontiguousarray(table).tobytes())
+        if ec.setting("render.background_environment") == "sharp":
+            ec.output(ENV_BACKGROUND).write(_background(e.environment, e.layout).tobytes())
 
 
 def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
@@ -84,7 +105,13 @@ def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
     if specular:
         r.input(ENV_PREFILTERED)
         r.input(ENV_RHO_DT)
-    return {"ENV_LIGHT": 1, "ENV_RAYS": int(e.ao_rays) if e.occlusion else 0}
+    return _defines(e)
+
+
+def _defines(light) -> dict[str, int]:
+    if not light.occlusion:
+        return {"ENV_LIGHT": 1, "ENV_RAYS": 0}
+    return {"ENV_LIGHT": 1, "ENV_RAYS": int(light.ao_rays), "ENV_TRANSFER": int(light.transfer_order)}
 
 
 def env_defines(r) -> dict[str, int]:
@@ -92,8 +119,7 @@ def env_defines(r) -> dict[str, int]:
     i = env_index(r)
     if i is None:
         return {}
-    light = r.peek(f"lights.{i}")
-    return {"ENV_LIGHT": 1, "ENV_RAYS": int(light.ao_rays) if light.occlusion else 0}
+    return _defines(r.peek(f"lights.{i}"))
 
 
 def sh_uniform(light) -> np.ndarray:
@@ -101,6 +127,14 @@ def sh_uniform(light) -> np.ndarray:
     L_lm = _sh(light.environment, light.layout, float(light.yaw))
     E_lm = env.sh_irradiance_coefficients(L_lm, int(light.sh_order))
     return (E_lm * np.asarray(light.color, np.float64)[None] * float(light.intensity)).astype(np.float32)
+
+
+def transfer_uniform(light) -> np.ndarray:
+    """(25, 3) float32 L_lm x colour x intensity at the light's yaw, bands above its transfer_order
+    zeroed (u_env_L: what lib/mesh_vs.glsl dots with the vertex's transfer vector)."""
+    L_lm = np.array(_sh25(light.environment, light.layout, float(light.yaw)), np.float64)
+    L_lm[env.TRANSFER_BAND > int(light.transfer_order)] = 0.0
+    return (L_lm * np.asarray(light.color, np.float64)[None] * float(light.intensity)).astype(np.float32)
 
 
 def set_environment(ec, prog, specular: bool = True) -> None:
@@ -112,7 +146,9 @@ def set_environment(ec, prog, specular: bool = True) -> None:
     ec.scene.env_rays = int(e.ao_rays)  # the vertex arrays' visibility buffer (GpuScene.env_visibility_buffer)
     scale = np.asarray(e.color, np.float64) * float(e.intensity)
     yaw = math.radians(float(e.yaw))
-    ec.set(prog, "u_env_sh", sh_uniform(e))
+    ec.set(prog, "u_env_sh", sh_uniform(e), optional=True)  # optional: a texel surface program without occlusion
+    if e.occlusion:  # the vertex stage's transfer vectors (lib/mesh_vs.glsl)
+        ec.set(prog, "u_env_L", transfer_uniform(e), optional=True)
     if specular:
         ec.uniforms(prog, u_env_scale=tuple(float(x) for x in scale), u_env_yaw=(math.cos(yaw), math.sin(yaw)),
                     u_env_level_m=np.asarray(env.SPEC_LEVELS_M, np.float32))

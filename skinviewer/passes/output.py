@@ -23,24 +23,58 @@ def srgb_to_linear(c):
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
+BACKGROUND_MODES = {"off": 0, "sharp": 1, "blurred": 2}
+BACKGROUND_FIELDS = ("environment", "layout", "yaw", "color", "intensity")
+
+
+def _background_env(r) -> tuple[int | None, int]:
+    """(the environment light's index, BG_ENV: 0 off, 1 sharp, 2 blurred) of render.background_environment."""
+    from skinviewer.passes.environment import env_index
+    i = env_index(r)
+    mode = BACKGROUND_MODES[r.peek("render.background_environment")]
+    return (i, mode) if i is not None and mode else (None, 0)
+
+
 class OutputPass(Pass):
     name = "output"
     uses_scene = False
+    view_dependent = True  # the environment in the background follows the camera (downstream of the view anyway)
 
     def __init__(self, source: str = "lit"):
         self.source = source
 
     def reflect(self, r: Reflection) -> None:
+        from skinviewer.passes.environment import BACKGROUND_BLUR_LEVEL, ENV_BACKGROUND, ENV_PREFILTERED
         r.input(self.source)
         r.setting("render.exposure")
         r.setting("render.background")
+        r.setting("render.background_environment")
         w, h = r.setting("render.width"), r.setting("render.height")
-        r.program("output", TONE_MAP=TONE_MAPS[r.setting("render.tone_map")])
+        i, bg = _background_env(r)
+        if bg:
+            r.section(f"lights.{i}", BACKGROUND_FIELDS)
+            r.input(ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED)
+        r.program("output", TONE_MAP=TONE_MAPS[r.setting("render.tone_map")], BG_ENV=bg,
+                  BG_LEVEL=BACKGROUND_BLUR_LEVEL)
         r.output("image", TexSpec((w, h), 4, "f1"))
 
     def execute(self, ec) -> None:
-        prog = ec.program("output", TONE_MAP=TONE_MAPS[ec.setting("render.tone_map")])
+        import math
+
+        from skinviewer.passes.environment import BACKGROUND_BLUR_LEVEL, ENV_BACKGROUND, ENV_PREFILTERED
+        from skinviewer.scene.camera import gl_bytes
+        i, bg = _background_env(ec)
+        prog = ec.program("output", TONE_MAP=TONE_MAPS[ec.setting("render.tone_map")], BG_ENV=bg,
+                          BG_LEVEL=BACKGROUND_BLUR_LEVEL)
         ec.bind(prog, "lit", self.source)
         ec.uniforms(prog, u_exposure=ec.setting("render.exposure"),
                     u_background=tuple(srgb_to_linear(ec.setting("render.background"))))
+        if bg:  # the environment seen through each pixel: R_y(-yaw) of the view ray (physics rotate_yaw)
+            e = ec.section(f"lights.{i}", BACKGROUND_FIELDS)
+            view = ec.view
+            yaw = math.radians(float(e.yaw))
+            ec.bind(prog, "env_background", ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED)
+            ec.uniforms(prog, u_inv_view_proj=gl_bytes(np.linalg.inv(view.view_proj)),
+                        u_eye=tuple(float(x) for x in view.eye), u_env_yaw=(math.cos(yaw), math.sin(yaw)),
+                        u_env_scale=tuple(float(x) for x in np.asarray(e.color, np.float64) * float(e.intensity)))
         ec.draw_fullscreen(prog, "image")

@@ -1,7 +1,8 @@
 """Pre-integrated skin (Penner & Borshukov, GPU Pro 2, 2011): two lookup tables built in numpy from the
 profile in use (physics/penner.py), and one pass that shades the mesh from the camera with them.
 
-    penner_luts   ring_lut, penumbra_lut   deon.gaussians, penner.*      (no scene, no camera)
+    penner_luts   ring_lut, penumbra_lut,  deon.gaussians, penner.*      (no scene, no camera)
+                  penner_env_bands
     penner        lit                      lights, shadow maps, LUTs, specular, rho_dt
 """
 from __future__ import annotations
@@ -29,6 +30,7 @@ from skinviewer.physics import penner
 
 RING_LUT = "ring_lut"
 PENUMBRA_LUT = "penumbra_lut"
+ENV_BANDS_LUT = "penner_env_bands"  # the environment's SH band weights per curvature (physics/penner.env_band_factors)
 LUT_FIELDS = ("lut_size", "max_curvature", "penumbra_max_mm")
 
 
@@ -39,10 +41,11 @@ def profile(gaussians) -> tuple[tuple[float, tuple[float, float, float]], ...]:
 
 
 @functools.lru_cache(maxsize=8)
-def _tables(gs, size: int, max_curvature: float, max_width: float) -> tuple[bytes, bytes]:
+def _tables(gs, size: int, max_curvature: float, max_width: float) -> tuple[bytes, bytes, bytes]:
     ring = penner.ring_lut(list(gs), size, max_curvature)
     pen = penner.penumbra_lut(list(gs), size, max_width)
-    return (np.ascontiguousarray(ring, np.float32).tobytes(), np.ascontiguousarray(pen, np.float32).tobytes())
+    bands = penner.env_band_factors(ring).reshape(size, 3, 3)  # rows: curvature, columns: band, RGB
+    return tuple(np.ascontiguousarray(a, np.float32).tobytes() for a in (ring, pen, bands))  # type: ignore[return-value]
 
 
 class PennerLutPass(Pass):
@@ -55,12 +58,13 @@ class PennerLutPass(Pass):
         n = r.section("penner", LUT_FIELDS).lut_size
         r.output(RING_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
         r.output(PENUMBRA_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
+        r.output(ENV_BANDS_LUT, TexSpec((3, n), 3, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
         p = ec.section("penner", LUT_FIELDS)
-        ring, pen = _tables(profile(ec.setting("deon.gaussians")), int(p.lut_size), float(p.max_curvature),
-                            float(p.penumbra_max_mm))
-        for name, data in ((RING_LUT, ring), (PENUMBRA_LUT, pen)):
+        ring, pen, bands = _tables(profile(ec.setting("deon.gaussians")), int(p.lut_size), float(p.max_curvature),
+                                   float(p.penumbra_max_mm))
+        for name, data in ((RING_LUT, ring), (PENUMBRA_LUT, pen), (ENV_BANDS_LUT, bands)):
             tex = ec.output(name)
             tex.repeat_x = tex.repeat_y = False
             tex.write(data)
@@ -81,7 +85,10 @@ class PennerPass(Pass):
             r.input(PENUMBRA_LUT)
         if r.setting("deon.energy_conservation"):
             r.input(RHO_DT_RESOURCE)
-        declare_lit(r, "penner", **lighting, **declare_environment(r))
+        env = declare_environment(r)
+        if env:
+            r.input(ENV_BANDS_LUT)
+        declare_lit(r, "penner", **lighting, **env)
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
@@ -93,6 +100,8 @@ class PennerPass(Pass):
         set_lighting(ec, prog)
         set_environment(ec, prog)
         ec.bind(prog, "ring_lut", RING_LUT)
+        if ec.has_input(ENV_BANDS_LUT):
+            ec.bind(prog, "penner_env_bands", ENV_BANDS_LUT)
         penumbra = ec.has_input(PENUMBRA_LUT)
         if penumbra:
             ec.bind(prog, "penumbra_lut", PENUMBRA_LUT)

@@ -23,7 +23,7 @@ class PhongPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         r.section("phong", ("ambient", "specular", "shininess"))
-        declare_lit(r, "phong", **lighting, **declare_environment(r, specular=False))
+        declare_lit(r, "phong", **lighting, **declare_environment(r))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
@@ -33,5 +33,5 @@ class PhongPass(Pass):
         ec.uniforms(prog, u_ambient=ph.ambient, u_specular=ph.specular, u_shininess=ph.shininess)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
-        set_environment(ec, prog, specular=False)
+        set_environment(ec, prog)
         draw_view_mesh(ec, prog, LIT)

@@ -199,7 +199,7 @@ def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spe
 
 
 TEXEL_SURFACE_MAPS = "pn"  # position + tangent handedness, octahedral normal + tangent (texel_surface.frag)
-TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n", "v": "surface_v"}  # v: the environment's AO
+TEXEL_SURFACE_SAMPLERS = {"p": "surface_p", "n": "surface_n", "v": "surface_v"}  # v: the environment's light
 
 
 def texel_surface_resources(size: int, maps: str = TEXEL_SURFACE_MAPS) -> tuple[str, ...]:
@@ -222,6 +222,9 @@ class TexelSurfacePass(Pass):
             return
         n = self.size_of(r)
         env = _env_vis_defines(r)
+        if env:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
+            from skinviewer.passes.environment import ENV_FIELDS, env_index
+            r.section(f"lights.{env_index(r)}", ENV_FIELDS)
         r.program("texel_surface", **env)
         for res in texel_surface_resources(n, self.maps + ("v" if env else "")):
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
@@ -229,9 +232,11 @@ class TexelSurfacePass(Pass):
     def execute(self, ec) -> None:
         # a fragment output without an attachment is discarded: the program is the same for any maps
         env = _env_vis_defines(ec)
+        prog = ec.program("texel_surface")
         if env:
-            ec.scene.env_rays = env["ENV_RAYS"]  # the baked visibility the vertex array binds
-        ec.draw_mesh(ec.program("texel_surface"),
+            from skinviewer.passes.environment import set_environment
+            set_environment(ec, prog, specular=False)  # the transfer vectors' radiance (and env_rays)
+        ec.draw_mesh(prog,
                      *texel_surface_resources(self.size_of(ec), self.maps + ("v" if env else "")), depth_test=False)
 
 

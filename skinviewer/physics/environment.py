@@ -163,6 +163,67 @@ def sh_basis(d: np.ndarray) -> np.ndarray:
         1.092548 * x * z, 0.546274 * (x * x - y * y)], -1)
 
 
+# -- SH transfer vectors (Sloan, Kautz & Snyder 2002, "Precomputed radiance transfer") ----------------
+# Real SH of bands 0..TRANSFER_ORDER in the order of sh_basis (bands 3 and 4 appended, m = -l..l), the
+# constants of Sloan's "Stupid spherical harmonics tricks" (2008) appendix; lib/sh.glsl sh25 is the twin.
+TRANSFER_ORDER = 4  # bands 0..4: 25 coefficients per vertex
+TRANSFER_COUNT = (TRANSFER_ORDER + 1) ** 2
+# R&H 2001 eq. 8 extended: the clamped cosine's A_l (A_3 = 0, A_4 = -pi / 24)
+A_HAT_4 = (math.pi, 2.0 * math.pi / 3.0, math.pi / 4.0, 0.0, -math.pi / 24.0)
+TRANSFER_BAND = np.repeat(np.arange(TRANSFER_ORDER + 1), 2 * np.arange(TRANSFER_ORDER + 1) + 1)
+
+
+def sh_basis25(d: np.ndarray) -> np.ndarray:
+    """(..., 25) real SH Y_lm, l <= 4, at unit directions: sh_basis's 9, then bands 3 and 4 (m = -l..l)."""
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    x2, y2, z2 = x * x, y * y, z * z
+    b3 = [0.590044 * y * (3.0 * x2 - y2), 2.890611 * x * y * z, 0.457046 * y * (5.0 * z2 - 1.0),
+          0.373176 * z * (5.0 * z2 - 3.0), 0.457046 * x * (5.0 * z2 - 1.0), 1.445306 * z * (x2 - y2),
+          0.590044 * x * (x2 - 3.0 * y2)]
+    b4 = [2.503343 * x * y * (x2 - y2), 1.770131 * y * z * (3.0 * x2 - y2), 0.946175 * x * y * (7.0 * z2 - 1.0),
+          0.669047 * y * z * (7.0 * z2 - 3.0), 0.105786 * (35.0 * z2 * z2 - 30.0 * z2 + 3.0),
+          0.669047 * x * z * (7.0 * z2 - 3.0), 0.473087 * (x2 - y2) * (7.0 * z2 - 1.0),
+          1.770131 * x * z * (x2 - 3.0 * y2), 0.625836 * (x2 * (x2 - 3.0 * y2) - y2 * (3.0 * x2 - y2))]
+    return np.concatenate([sh_basis(d), np.stack(b3 + b4, -1)], -1)
+
+
+def sh_project25(img: np.ndarray, yaw_deg: float = 0.0, max_w: int = 256) -> np.ndarray:
+    """(25, 3) radiance coefficients L_lm, l <= 4 (sh_project's sum with sh_basis25)."""
+    img = downsample(img, max_w)
+    h, w = img.shape[:2]
+    d = rotate_yaw(equirect_directions(w, h), yaw_deg)
+    y = sh_basis25(d) * equirect_solid_angles(w, h)[..., None]
+    return np.einsum("hwk,hwc->kc", y, img)
+
+
+def transfer_unoccluded(n: np.ndarray) -> np.ndarray:
+    """(N, 25) the transfer vector of an unoccluded point with normal n: the clamped cosine's
+    coefficients A_l Y_lm(n) (R&H 2001 eq. 8 with A_3 = 0, A_4 = -pi/24)."""
+    return sh_basis25(n) * np.asarray(A_HAT_4)[TRANSFER_BAND]
+
+
+def transfer_irradiance(T: np.ndarray, L_lm: np.ndarray, order: int = TRANSFER_ORDER) -> np.ndarray:
+    """(N, C) the environment's irradiance through transfer vectors T (N, 25): sum_lm L_lm T_lm
+    (Sloan et al. 2002 eq. 4, diffuse shadowed transfer) over bands <= ``order``, clamped at 0
+    (lib/sh.glsl env_transfer)."""
+    k = (order + 1) ** 2
+    return np.maximum(np.asarray(T, np.float64)[:, :k] @ np.asarray(L_lm, np.float64)[:k], 0.0)
+
+
+def transfer_ao(T: np.ndarray) -> np.ndarray:
+    """(N,) the ambient occlusion a transfer vector holds: T_00 / (pi Y_00) (T_00 = int V cos Y_00)."""
+    return np.clip(np.asarray(T, np.float64)[:, 0] / (math.pi * 0.282095), 0.0, 1.0)
+
+
+def transfer_bent_normal(T: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """(N, 3) the bent normal a transfer vector holds: the direction of (T_11, T_1-1, T_10), i.e. of
+    int V cos w dw; ``fallback`` where every ray is blocked."""
+    T = np.asarray(T, np.float64)
+    b = np.stack([T[:, 3], T[:, 1], T[:, 2]], 1)
+    bl = np.linalg.norm(b, axis=1, keepdims=True)
+    return np.where(bl > 1e-9, b / np.maximum(bl, 1e-300), fallback)
+
+
 def sh_project(img: np.ndarray, yaw_deg: float = 0.0, max_w: int = 256) -> np.ndarray:
     """(9, 3) radiance coefficients L_lm = int L(w) Y_lm(w) dw of an equirect image turned by ``yaw``
     (R&H 2001 eq. 6), summed over texels with their exact solid angles."""
@@ -187,6 +248,16 @@ def sh_irradiance(E_lm: np.ndarray, n: np.ndarray) -> np.ndarray:
     coefficients ``E_lm`` (sh_irradiance_coefficients) at unit normals ``n`` (N, 3); clamped at 0
     (the truncated series rings below zero opposite a bright source)."""
     return np.maximum(sh_basis(n) @ E_lm, 0.0)
+
+
+def sh_irradiance_scattered(E_lm: np.ndarray, n: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(N, 3) the SH irradiance with band l scaled by w (N or 1, 3 bands, 3 RGB): pre-integrated skin's
+    environment term, sum_lm w_l A_l L_lm Y_lm(n) clamped at 0 (physics/penner.env_band_factors;
+    lib/environment.glsl env_irradiance_scattered)."""
+    Y = sh_basis(n)  # (N, 9)
+    band = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
+    w = np.broadcast_to(np.asarray(w, np.float64), (len(Y), 3, 3))
+    return np.maximum(np.einsum("nk,kc,nkc->nc", Y, np.asarray(E_lm, np.float64), w[:, band]), 0.0)
 
 
 def irradiance_exact(img: np.ndarray, n: np.ndarray, yaw_deg: float = 0.0, max_w: int = 128) -> np.ndarray:
@@ -269,6 +340,45 @@ def bake_visibility(positions: np.ndarray, normals: np.ndarray, indices: np.ndar
     return out.astype(np.float32)
 
 
+def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, rays: int = 256,
+                  seed: int = 0, caster=None, chunk: int = 1024) -> np.ndarray:
+    """(N, 25) float32 per vertex: the shadowed diffuse transfer vector T_lm = int V(w) max(N.w, 0)
+    Y_lm(w) dw, l <= 4 (Sloan et al. 2002 eq. 4's transfer, without interreflection), by ``rays``
+    cosine-weighted stratified Embree rays (pdf cos / pi) with the unoccluded transfer as a control
+    variate: T_lm = A_l Y_lm(N) - pi / n sum_i (1 - V(w_i)) Y_lm(w_i).
+    T_00 / (pi Y_00) is the ambient occlusion and (T_11, T_1-1, T_10) the bent normal's direction
+    (transfer_ao, transfer_bent_normal). Rays start a hair above the vertex along its normal; a
+    vertex without a usable normal gets the unoccluded transfer of +z."""
+    P = np.asarray(positions, np.float64)
+    N = np.asarray(normals, np.float64)
+    nl = np.linalg.norm(N, axis=1)
+    good = np.isfinite(nl) & (nl > 1e-12)
+    N = np.where(good[:, None], N / np.where(good, nl, 1.0)[:, None], np.array([[0.0, 0.0, 1.0]]))
+    out = transfer_unoccluded(N)
+    if len(P) == 0 or len(indices) == 0:
+        return out.astype(np.float32)
+    caster = caster or ray_caster(P, indices)
+    extent = float(np.ptp(P, axis=0).max())
+    eps = 1e-4 * extent + 1e-9
+    rng = np.random.default_rng(seed)
+    idx = np.nonzero(good)[0]
+    for s0 in range(0, len(idx), chunk):
+        v = idx[s0:s0 + chunk]
+        local = stratified_cosine_directions(rays, rng)
+        k = len(local)
+        t, b = tangent_frames(N[v])
+        ang = rng.random(len(v)) * 2.0 * math.pi
+        c, s = np.cos(ang)[:, None], np.sin(ang)[:, None]
+        t, b = c * t + s * b, -s * t + c * b
+        d = (local[None, :, :1] * t[:, None] + local[None, :, 1:2] * b[:, None] + local[None, :, 2:] * N[v][:, None])
+        o = np.repeat(P[v] + N[v] * eps, k, axis=0)
+        hit = caster.intersects_any(o, np.ascontiguousarray(d.reshape(-1, 3))).reshape(len(v), k)
+        # the unoccluded transfer exactly, less the blocked rays' share: a control variate, unbiased
+        # (E[pi/n sum Y(w_i)] = A_l Y_lm(N)), exact where nothing blocks and noisy only in the blocked part
+        out[v] -= math.pi / k * np.einsum("vr,vrk->vk", hit.astype(np.float64), sh_basis25(d))
+    return out.astype(np.float32)
+
+
 def bent_shading_normal(N: np.ndarray, Nv: np.ndarray, bent: np.ndarray) -> np.ndarray:
     """The normal the environment's irradiance is looked up with: the shading normal N (normal map)
     turned as the bent normal turns the vertex normal, normalize(N + bent - Nv)
@@ -285,6 +395,22 @@ def env_diffuse(E_lm: np.ndarray, N: np.ndarray, Nv: np.ndarray, vis: np.ndarray
         return sh_irradiance(E_lm, N)
     vis = np.asarray(vis, np.float64)
     return vis[:, 3:4] * sh_irradiance(E_lm, bent_shading_normal(N, Nv, vis[:, :3]))
+
+
+def env_diffuse_transfer(E_lm: np.ndarray, L_lm: np.ndarray, N: np.ndarray, Nv: np.ndarray, T: np.ndarray,
+                         order: int = TRANSFER_ORDER) -> np.ndarray:
+    """(N, 3) the environment's irradiance at shading normals N through the vertex's transfer vector T
+    (N, 25) (lib/mesh_vs.glsl env_vertex_light + lib/environment.glsl env_irradiance): the shadowed
+    sum_lm L_lm T_lm (bands <= ``order``; 0: AO x E_SH(bent normal)) plus the normal map's change of
+    the unoccluded SH irradiance, AO x (E_SH(N) - E_SH(Nv)), clamped at 0. ``E_lm`` (9, 3) the SH
+    irradiance coefficients, ``L_lm`` (25, 3) the radiance coefficients (sh_project25)."""
+    ao = transfer_ao(T)[:, None]
+    Nv = np.asarray(Nv, np.float64) / np.linalg.norm(Nv, axis=1, keepdims=True)
+    if order > 0:
+        e = transfer_irradiance(T, L_lm, order)
+    else:
+        e = ao * sh_irradiance(E_lm, transfer_bent_normal(T, Nv))
+    return np.maximum(e + ao * (sh_irradiance(E_lm, N) - sh_irradiance(E_lm, Nv)), 0.0)
 
 
 def specular_occlusion(n_dot_v: np.ndarray, ao: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -362,6 +488,35 @@ def env_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, m: np.ndarray, s
     R /= np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-300)
     s = sample_prefiltered(pre, R, m, yaw_deg) * np.asarray(spec_albedo, np.float64)[:, None]
     return s if occlusion is None else s * np.asarray(occlusion, np.float64)[:, None]
+
+
+def phong_beckmann_m(shininess: float) -> float:
+    """The Beckmann m of a Blinn-Phong exponent n, sqrt(2 / (n + 2)) (Walter et al. 2007 eq. 32 read
+    backwards): the pre-filtered level Phong's environment specular reads."""
+    return math.sqrt(2.0 / (float(shininess) + 2.0))
+
+
+def phong_env_albedo(shininess: float) -> float:
+    """int (N.H)^n (N.L) dw_L over the hemisphere at V = N (the Blinn-Phong lobe's directional albedo
+    before phong.specular), exactly: with c = cos theta_h, dw_L = 4 (V.H) dw_H and N.L = 2c^2 - 1,
+    8 pi int_{1/sqrt2}^1 c^(n+1) (2c^2 - 1) dc (lib/environment.glsl env_phong_albedo)."""
+    n = float(shininess)
+    return 8.0 * math.pi * (2.0 * (1.0 - 2.0 ** (-(n + 4.0) / 2.0)) / (n + 4.0)
+                            - (1.0 - 2.0 ** (-(n + 2.0) / 2.0)) / (n + 2.0))
+
+
+def env_phong_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, shininess: float, specular: float,
+                       ao: np.ndarray | None = None, yaw_deg: float = 0.0) -> np.ndarray:
+    """(N, 3) Phong's environment specular (split sum): the radiance pre-filtered at R for the lobe's
+    Beckmann m (phong_beckmann_m) x phong.specular x the lobe's albedo (phong_env_albedo) x specular
+    occlusion from ``ao`` (lib/environment.glsl env_phong_specular)."""
+    R = 2.0 * (N * V).sum(1, keepdims=True) * N - V
+    R /= np.maximum(np.linalg.norm(R, axis=1, keepdims=True), 1e-300)
+    m = phong_beckmann_m(shininess)
+    s = sample_prefiltered(pre, R, np.full(len(N), m), yaw_deg) * (specular * phong_env_albedo(shininess))
+    if ao is not None:
+        s = s * specular_occlusion(np.clip((N * V).sum(1), 0.0, 1.0), ao, np.full(len(N), m))[:, None]
+    return s
 
 
 # -- Monte Carlo (the ground truth's) ------------------------------------------------------------------

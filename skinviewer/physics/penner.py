@@ -67,6 +67,23 @@ def ring_lut(gaussians: list[tuple[float, tuple[float, float, float]]], size: in
     return out.astype(np.float32)
 
 
+def env_band_factors(ring: np.ndarray) -> np.ndarray:
+    """(rows, 3, 3) float32: for each curvature row of ``ring`` (ring_lut) and SH band l = 0, 1, 2, the
+    factor w_l(k) (RGB) by which pre-integration scales the environment's band-l irradiance: by
+    Funk-Hecke, the zonal kernel D(N.w, k) has the band weights lambda_l = 2 pi int D(mu) P_l(mu) d mu,
+    so int L(w) D(N.w, k) dw = sum_lm lambda_l(k) L_lm Y_lm(N) (R&H 2001 eq. 7 with D for the
+    clamped cosine); w_l = lambda_l(k) / lambda_l(max(mu, 0)), both by the same midpoint rule over
+    the table's N.L columns, so a flat row (k = 0) gives exactly 1 (lib/environment.glsl
+    env_irradiance_scattered)."""
+    ring = np.asarray(ring, np.float64)
+    n = ring.shape[1]
+    mu = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    P = np.stack([np.ones_like(mu), mu, 0.5 * (3.0 * mu * mu - 1.0)])  # Legendre P_0..P_2
+    lam = np.einsum("lj,rjc->rlc", P, ring)  # the common factor 2 pi (2 / n) cancels
+    lam0 = P @ np.maximum(mu, 0.0)
+    return (lam / lam0[None, :, None]).astype(np.float32)
+
+
 def ring_integral(gaussians, theta: float, r: float, samples: int = 200001) -> np.ndarray:
     """The ring integral D(theta, r) by brute force over [-pi, pi] (the tests' independent answer)."""
     x = np.linspace(-math.pi, math.pi, samples)

@@ -113,7 +113,8 @@ VERTEX_FORMAT = "3f 3f 2f 4f"
 VERTEX_ATTRS = ("in_position", "in_normal", "in_uv", "in_tangent")
 UV_COVARIANCE_ATTR = "in_uv_covariance"  # a second buffer, bound only where a program reads it
 CURVATURE_ATTR = "in_curvature"  # likewise: per-vertex curvature, mm^-1 (pre-integrated skin)
-ENV_VIS_ATTR = "in_env_vis"  # likewise: the environment light's bent normal + ambient occlusion (issue 32)
+# likewise: the environment light's SH transfer vector, 25 floats padded to 7 vec4 (issue 32, lib/mesh_vs.glsl)
+ENV_VIS_ATTRS = tuple(f"in_env_t{k}" for k in range(7))
 
 
 def weld_ids(keys: np.ndarray, tol: float) -> np.ndarray:

@@ -137,6 +137,7 @@ LABELS: dict[str, str] = {
     "camera.fov_y": "field of view",
     "camera.target": "look at",
     "render.background": "background",
+    "render.background_environment": "environment behind",
     "render.timing": "timing method",
     "render.mesh_lod": "mesh level of detail",
     "deon.specular_shadows": "specular shadows",

@@ -20,7 +20,7 @@ from skinviewer.ui.widgets import (
 
 _ENTER = imgui.InputTextFlags_.enter_returns_true.value
 # a light's fields that do not apply to its kind (settings.LightSettings)
-_ENV_FIELDS = ("environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays")
+_ENV_FIELDS = ("environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "transfer_order")
 LIGHT_SKIP = {"directional": ("position", "beam_radius") + _ENV_FIELDS, "point": ("direction", "beam_radius") + _ENV_FIELDS,
               "beam": _ENV_FIELDS, "environment": ("direction", "position", "beam_radius", "cast_shadow")}
 
