@@ -413,3 +413,10 @@ def test_the_error_table_s_uncertainty_reaches_the_calibration(tmp_path, monkeyp
     for e in d["entries"]["deon"]:
         e.pop("uncertainty")
     assert Calibration.from_json(d).entries["deon"][0].uncertainty is None
+
+
+def test_set_render_governor_off_on_the_command_line():
+    """`--set render.governor=off` (the parser reads off / on as false / true) means what it says."""
+    from skinviewer.core.settings import parse_value
+    for text, want in (("off", "off"), ("on", "interactive"), ("fixed-budget", "fixed-budget")):
+        assert with_values(Settings(), {"render.governor": parse_value(text)}).render.governor == want

@@ -218,6 +218,12 @@ class RenderSettings(_Model):
         # --set reads off / on as false / true
         return {False: "off", True: "sharp"}.get(v, v) if isinstance(v, bool) else v
 
+    @field_validator("governor", mode="before")
+    @classmethod
+    def _governor_off(cls, v: Any) -> Any:
+        # --set render.governor=off reads "off" as false (on: the default, interactive)
+        return {False: "off", True: "interactive"}.get(v, v) if isinstance(v, bool) else v
+
 
 class PhongSettings(_Model):
     ambient: float = Field(0.03, ge=0.0, le=10.0)
