@@ -90,3 +90,11 @@ def test_viewer_programs_come_from_the_shader_library():
     inline = [p.name for p in ui.rglob("*.py") if p.name != "splash.py"
               and re.search(r"\.program\(\s*vertex_shader", p.read_text(encoding="utf-8"))]
     assert not inline, f"inline GLSL in {inline}"
+
+
+def test_passes_and_techniques_use_the_pass_api_not_the_graph():
+    """A pass module sees the pass API (core/pass_api.py: Pass, Reflection, TexSpec), never the graph
+    that runs it (issue 28): what a pass may rely on is the API, not the executor's internals."""
+    offenders = sorted(m for m, deps in _imports().items()
+                       if m.split(".")[1:2] in (["passes"], ["techniques"]) and "skinviewer.core.graph" in deps)
+    assert not offenders, offenders

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.core.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.rules import environment_light
 from skinviewer.physics import environment as env
 from skinviewer.scene.environment import environment_image

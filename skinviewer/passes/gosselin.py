@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.core.pass_api import Pass, Reflection, TexSpec
 from skinviewer.core.settings import REGIONS, RegionKernel
 from skinviewer.passes.common import (
     LIT,

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.core.pass_api import Pass, Reflection, TexSpec
 
 TONE_MAPS = {"linear": 0, "filmic": 1}
 

@@ -9,7 +9,7 @@ import moderngl
 import numpy as np
 
 from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
-from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.core.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.rules import light_on
 from skinviewer.scene.texels import border_gutters, seam_indirection
 

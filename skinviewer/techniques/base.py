@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from skinviewer.core.constants import MAX_LIGHTS
-from skinviewer.core.graph import Pass
+from skinviewer.core.pass_api import Pass
 from skinviewer.passes.environment import EnvironmentPass
 from skinviewer.passes.shadow_map import ShadowMapPass
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinviewer.core.constants import MAX_GAUSSIANS
-from skinviewer.core.graph import Pass, Reflection
+from skinviewer.core.pass_api import Pass, Reflection
 from skinviewer.passes.screen_space.blur import SeparableScreenBlur, blur_spec
 from skinviewer.passes.screen_space.lighting import DIFFUSE, screen_size
 from skinviewer.physics.separable import focal_px, gaussian_taps, incremental_sigmas, limit_gaussians

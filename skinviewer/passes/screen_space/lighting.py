@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
-from skinviewer.core.graph import Pass, Reflection, TexSpec
+from skinviewer.core.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     bind_specular,
     bind_surface,
