@@ -184,3 +184,18 @@ def test_every_long_pass_is_banded_and_bands_are_bit_identical(renderer, techniq
     assert (ran & tileable) <= banded, sorted((ran & tileable) - banded)
     for res, arr in whole.items():
         assert same(g.read(res), arr), res
+
+
+def test_a_pass_s_expected_cost_follows_its_output_pixels(renderer):
+    """A governed preview renders the view pass at a quarter of the view, then the whole view: the
+    bands of the whole view are sized from the quarter-view cost times the pixels (not the quarter
+    view's cost itself, which made the first band of the whole view one long frame)."""
+    s = small_settings("head", "phong", size=64)
+    renderer.render(s)
+    g = renderer.graph("phong")
+    p = next(p for p in g.passes if p.name == "phong")
+    ms = g._last_ms["phong"]
+    big = with_values(s, {"render.width": 128, "render.height": 128})
+    r = g._reflect_all(big, renderer.scene.gpu)["phong"]
+    assert g._expected_ms(p, r) == pytest.approx(4.0 * ms)
+    assert g._tile_count(p, r, budget_ms=ms) == min(8, 128)  # 4 ms-units of work in bands of half a budget

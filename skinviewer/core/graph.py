@@ -81,6 +81,7 @@ class RenderGraph:
         self._last_refl: dict[str, Reflection] = {}
         self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
+        self._last_px: dict[str, int] = {}  # the pixels of its largest output then (costs scale with them)
         self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
         self.refining: set[str] = set()  # passes that asked for another frame (progressive refinement)
         self._lod_notes: dict[str, str] = {}  # pass name -> the mesh LOD its last run drew at ("" = full)
@@ -302,7 +303,7 @@ class RenderGraph:
                 waits = partial & set(r.inputs)
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
                 spent = budget_ms is not None and \
-                    (time.perf_counter() - t_start) * 1000.0 + self._next_ms(p, progress, budget_ms) > budget_ms
+                    (time.perf_counter() - t_start) * 1000.0 + self._next_ms(p, r, progress, budget_ms) > budget_ms
                 if waits or (any_ran and spent and (not realloc or p.tileable)):
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
@@ -316,7 +317,7 @@ class RenderGraph:
                 if p.tileable and budget_ms is not None:
                     if progress is not None:
                         rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
-                    progress = progress or TileProgress(key, self._tile_count(p, budget_ms))
+                    progress = progress or TileProgress(key, self._tile_count(p, r, budget_ms))
                     self._progress[p.name] = progress
                     self._keys.pop(p.name, None)  # its outputs are being overwritten band by band
                     rec.ms = self._run_bands(p, r, frame, timing, progress, t_start, budget_ms)
@@ -338,6 +339,7 @@ class RenderGraph:
                     rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
                     self._last_ms[p.name] = rec.ms
+                    self._last_px[p.name] = _pixels(r)
                 for res in r.outputs:
                     self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
@@ -371,24 +373,33 @@ class RenderGraph:
         return report
 
     # -- tiles: a long pass in row bands, across frames --------------------------------------
-    def _tile_count(self, p: Pass, budget_ms: float) -> int:
-        """Bands for a tileable pass: its last full cost over half the budget (so a band leaves room
-        for the rest of the frame), UNMEASURED_TILES before it was ever timed."""
+    def _expected_ms(self, p: Pass, r: Reflection) -> float | None:
+        """``p``'s last measured cost scaled to the pixels of its outputs now (a governed preview
+        runs the same pass at a quarter of the view, then the whole view); None: never timed."""
         ms = self._last_ms.get(p.name)
+        if ms is None:
+            return None
+        then, now = self._last_px.get(p.name, 0), _pixels(r)
+        return ms * now / then if then > 0 and now > 0 else ms
+
+    def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
+        """Bands for a tileable pass: its expected cost over half the budget (so a band leaves room
+        for the rest of the frame), UNMEASURED_TILES before it was ever timed."""
+        ms = self._expected_ms(p, r)
         if ms is None:
             return UNMEASURED_TILES
         return max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
 
-    def _next_ms(self, p: Pass, progress: TileProgress | None, budget_ms: float) -> float:
-        """What running ``p`` next costs, as last measured: its next band for a tileable pass (the
-        mean of its bands so far, else its last whole cost over its bands), else its last run; 0
-        when never measured."""
-        last = self._last_ms.get(p.name, 0.0) or 0.0
+    def _next_ms(self, p: Pass, r: Reflection, progress: TileProgress | None, budget_ms: float) -> float:
+        """What running ``p`` next costs, as last measured (scaled to its outputs' pixels now): its
+        next band for a tileable pass (the mean of its bands so far, else its expected cost over
+        its bands), else its whole run; 0 when never measured."""
+        last = self._expected_ms(p, r) or 0.0
         if not p.tileable:
             return last
         if progress is not None and progress.done > 0:
             return progress.ms / progress.done
-        count = progress.count if progress is not None else self._tile_count(p, budget_ms)
+        count = progress.count if progress is not None else self._tile_count(p, r, budget_ms)
         return last / max(count, 1)
 
     def _run_bands(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str, progress: TileProgress,
@@ -601,6 +612,11 @@ class RenderGraph:
         report = self.last_report
         out = report.to_json()["passes"] if report else []
         return out
+
+
+def _pixels(r: Reflection) -> int:
+    """The pixels of a pass's largest output (what its cost follows, to first order)."""
+    return max((int(spec.size[0]) * int(spec.size[1]) for spec in r.outputs.values()), default=0)
 
 
 def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth: int = 0) -> str:
