@@ -28,6 +28,7 @@ from skinviewer.techniques.preview import FINAL, Rung, ladder
 
 MODES = ("off", "interactive", "fixed-budget")
 REFINE_STEP_SHARE = 0.1  # an intermediate refinement step costs at most this share of the final frame
+FIT_MARGIN = 0.85  # a rung fits when its cost is within this share of the frame's render budget
 OBSERVED_WEIGHT = 0.5  # the running mean of the costs seen: the newest frame's share
 
 
@@ -138,6 +139,12 @@ class Governor:
             rest.sort(key=lambda r: light[r])
         return rest + [r for r in rungs if r.final]
 
+    def room(self) -> float:
+        """What a rung's render may cost to fit: the budget less the rest of a frame (UI,
+        presenting), with a margin (a pick that just fits is split over two frames by the graph's
+        own budget whenever the machine is a little slower than last time)."""
+        return FIT_MARGIN * (self.budget_ms - max(self.overhead_ms, 0.0))
+
     def pick(self, s: Settings, camera: bool = False) -> Pick:
         """The most accurate rung of ``s``'s ladder that fits the budget on the calibration held
         (for a camera drag: only rungs keeping the texture-space work on screen). Budget <= 0 or
@@ -157,7 +164,7 @@ class Governor:
         if self.budget_ms <= 0:
             note = f"governor budget {self.budget_ms:g} ms is not positive: showing the cheapest configuration"
             return Pick(cheapest, ms_of[cheapest], self._error(t, cheapest), note)
-        room = self.budget_ms - max(self.overhead_ms, 0.0)  # the render's share of a frame
+        room = self.room()
         fits = [r for r in order if ms_of[r] <= room]
         if not fits:
             note = (f"nothing fits the {self.budget_ms:g} ms budget on this machine (cheapest: "
