@@ -114,6 +114,19 @@ def signature(names: list[str] | None = None) -> dict[str, list[str]]:
     return out
 
 
+def drop_stale(cal: Calibration) -> list[str]:
+    """Remove the techniques whose ladder changed since ``cal`` was measured (or that no longer
+    exist): their figures belong to other configurations. Returns their names; the rest stays."""
+    today = set(techniques.names())
+    held = sorted(cal.entries)
+    now = signature([t for t in held if t in today])
+    stale = [t for t in held if t not in today or cal.signature.get(t) != now.get(t)]
+    for t in stale:
+        cal.entries.pop(t, None)
+        cal.signature.pop(t, None)
+    return stale
+
+
 def calibration_path(renderer: str, mclass: str) -> Path:
     slug = re.sub(r"[^a-z0-9]+", "-", renderer.lower()).strip("-")[:40]
     digest = hashlib.sha1(f"{renderer}|{mclass}".encode()).hexdigest()[:10]
@@ -126,15 +139,17 @@ SHIPPED = Path(__file__).resolve().parents[1] / "techniques" / "calibrations"
 
 
 def shipped(renderer: str, mclass: str, folder: Path | None = None) -> Calibration | None:
-    """A shipped calibration of this GL renderer and mesh class, made for today's preview ladders."""
+    """A shipped calibration of this GL renderer and mesh class: the techniques whose preview
+    ladders are today's (a ladder changed since: that technique is measured here)."""
     for p in sorted((folder or SHIPPED).glob("*.json")):
         try:
             cal = Calibration.from_json(json.loads(p.read_text(encoding="utf-8")))
         except (OSError, ValueError, KeyError, TypeError):
             continue
-        if cal.version == VERSION and cal.renderer == renderer and cal.mesh_class == mclass \
-                and cal.signature == signature(sorted(cal.entries)):
-            return cal
+        if cal.version == VERSION and cal.renderer == renderer and cal.mesh_class == mclass:
+            drop_stale(cal)
+            if cal.entries:
+                return cal
     return None
 
 
@@ -153,9 +168,12 @@ def load(renderer: str, mclass: str) -> tuple[Calibration | None, str]:
         return None, f"calibration {path} unreadable ({type(exc).__name__}: {exc}): rebuilding it"
     if cal.version != VERSION or cal.renderer != renderer or cal.mesh_class != mclass:
         return None, f"calibration {path} is of another version or machine: rebuilding it"
-    held = sorted(cal.entries)
-    if cal.signature != signature(held) or any(t not in techniques.names() for t in held):
+    stale = drop_stale(cal)
+    if not cal.entries:
         return None, f"calibration {path} was made for other preview ladders: rebuilding it"
+    if stale:  # the others are kept; these are measured again when first governed
+        return cal, (f"calibration {path}: {', '.join(stale)} made for other preview ladders: "
+                     f"measuring {'it' if len(stale) == 1 else 'them'} again")
     return cal, ""
 
 

@@ -47,7 +47,10 @@ def _cap(s: Settings, caps: dict[str, Any]) -> dict[str, Any]:
 
 def _deon(s: Settings) -> list[tuple[str, dict, float]]:
     sep = {"deon.surface_gather_below_texels": 0.0}
-    return [("view ½, irradiance 256², separable blurs", {"deon.irradiance_size": 256, "deon.tsm_size": 256, **sep}, 0.5),
+    small = {"deon.irradiance_size": 256, "deon.tsm_size": 256, **sep}
+    # the cheapest: one shadow-map texel per test (PCF halves the 256² irradiance's cost on llvmpipe)
+    return [("view ¼, irradiance 256², separable blurs, hard shadows", {**small, "shadow.pcf": 0}, 0.25),
+            ("view ½, irradiance 256², separable blurs", {"deon.irradiance_size": 256, "deon.tsm_size": 256, **sep}, 0.5),
             ("irradiance 256², separable blurs", {"deon.irradiance_size": 256, "deon.tsm_size": 256, **sep}, 1.0),
             ("irradiance 512², separable blurs", {"deon.irradiance_size": 512, "deon.tsm_size": 512, **sep}, 1.0),
             ("irradiance 512²", {"deon.irradiance_size": 512, "deon.tsm_size": 512}, 1.0),
@@ -105,6 +108,7 @@ _WORDS: dict[str, Callable[[Any], str | None]] = {
     "burley2.extra": lambda v: f"+{v}",
     "burley2.temporal": lambda v: "no temporal" if not v else f"temporal {v}",
     "penner.lut_size": lambda v: f"tables {v}²",
+    "shadow.pcf": lambda v: "hard shadows" if not v else f"PCF {v}",
 }
 
 

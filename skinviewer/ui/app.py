@@ -209,8 +209,8 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
     app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
                     options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer())
     if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
-        sp.headline = "the panel works; the image appears here when its first frame is complete"
-        sp.lines.append((sp.elapsed(), f"the first image of {app.state.settings.technique}: shaders and tables"))
+        sp.hand_over(f"the first image of {app.state.settings.technique}: shaders and tables",
+                     "the panel works; the image appears here when its first frame is complete")
         from skinviewer.ui.splash import StartupView
         app.ui.add_window(lambda state, frame: StartupView(sp, frame))
     else:

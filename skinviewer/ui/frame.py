@@ -372,6 +372,7 @@ class FrameController:
             # an interaction frame part-way is finished first (newer input waits for the next
             # frame): re-targeting it every frame of a drag would cancel its bands every frame
             target, variant, rung = inflight
+            self.governor.hold(rung)
         self._inflight = None
         try:
             t0 = time.perf_counter()

@@ -72,6 +72,11 @@ class Governor:
         """What a displayed frame costs here besides rendering (None: not measured yet)."""
         self.overhead_ms = max(float(ms or 0.0), 0.0)
 
+    def hold(self, rung: Rung) -> None:
+        """The frame controller finishes a frame of ``rung`` begun earlier (a drag's frame part-way):
+        that is what is shown, whatever this frame's pick was."""
+        self.shown = rung
+
     def set_calibration(self, cal: Calibration | None) -> None:
         """The calibration to pick on (None: none; the viewer renders the user's settings)."""
         self.calibration = cal

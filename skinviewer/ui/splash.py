@@ -111,6 +111,11 @@ class Splash:
         self._prog["tex"].value = 0
         self._vao.render(vertices=3)
 
+    def hand_over(self, line: str, headline: str) -> None:
+        """The viewer takes the screen: a last line, and the headline for the view until its first image."""
+        self.headline = headline
+        self.lines.append((self.elapsed(), line))
+
     def show(self, line: str) -> None:
         self.lines.append((self.elapsed(), line))
         try:
