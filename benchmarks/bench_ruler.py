@@ -124,10 +124,12 @@ def part_head(size: int) -> None:
 
 
 def part_rim(n: int = 1024) -> None:
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    import analytic_judge as A
+
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
     from skinviewer.passes.deon import DIFFUSE
-    from skinviewer.physics import accuracy as A
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     s = scene("laser", 64, **{"technique": "deon", "deon.irradiance_size": n, "deon.tsm": False,
