@@ -65,20 +65,6 @@ def read_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -
         os.close(fd)
 
 
-def check_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -> int:
-    """Size of ``path`` if it is a regular file within ``limit`` (for readers that take a path)."""
-    try:
-        st = os.stat(path)
-    except (OSError, ValueError) as exc:
-        raise FileReadError(f"cannot read {what}: {getattr(exc, 'strerror', None) or exc}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise FileReadError(f"cannot read {what}: not a regular file")
-    if st.st_size > limit:
-        raise FileReadError(f"cannot read {what}: {st.st_size / 2**20:.1f} MiB is over the "
-                            f"{limit / 2**20:.0f} MiB limit")
-    return st.st_size
-
-
 # our temporaries: ".<target name>.<pid>-<random>.tmp" (older builds: ".<target name>.<random>.tmp")
 _TMP = re.compile(r"^\.(?P<target>.+)\.(?:(?P<pid>\d+)-)?[A-Za-z0-9_]{6,12}\.tmp$")
 STALE_TMP_SECONDS = 600  # a temporary without a pid is stale after this long
