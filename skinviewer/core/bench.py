@@ -74,7 +74,7 @@ class Result:
         """Mean relative RMS of a measured configuration (inf when it was not measured)."""
         return math.inf if self.rms is None else float(np.mean(self.rms))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         d = asdict(self)
         d["rms_mean"] = self.rms_mean
         d["rms_mean_u"] = self.rms_mean_u
@@ -156,7 +156,7 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
     return full, cam
 
 
-def environment_sweep(base: Settings, quick: bool, names: list[str] | None = None) -> list[tuple[str, str, dict]]:
+def environment_sweep(base: Settings, quick: bool, names: list[str] | None = None) -> list[tuple[str, str, dict[str, Any]]]:
     """With an environment light (issue 32): d'Eon with its SH order and ambient-occlusion bake swept
     (order 0 / 1 against the default 2; no occlusion, fewer and more rays per vertex)."""
     from skinviewer.passes.rules import environment_light
@@ -173,7 +173,7 @@ def environment_sweep(base: Settings, quick: bool, names: list[str] | None = Non
 
 def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] | None = None,
               reference=None, runs: int = RUNS,
-              progress: Callable[[str, int, int], None] | None = None, ctx=None) -> dict:
+              progress: Callable[[str, int, int], None] | None = None, ctx=None) -> dict[str, Any]:
     """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/.
     ``ctx``: a moderngl context to render with (default: a new headless one, released after)."""
     from skinviewer.core.gl import headless_context
@@ -261,7 +261,7 @@ def last_bench() -> str:
         return ""
 
 
-def load_results(path: str | Path) -> tuple[dict, list[Result]]:
+def load_results(path: str | Path) -> tuple[dict[str, Any], list[Result]]:
     """A bench's results.json: ValueError (one line) for anything that is not one (not JSON, not an
     object, results that are not records), OSError when it cannot be read (regular files only)."""
     from skinviewer.core.files import read_regular_file
@@ -280,7 +280,7 @@ def _pct(v, u=None) -> str:
     return with_u(v, u) if v is not None else "-"
 
 
-def results_markdown(data: dict) -> str:
+def results_markdown(data: dict[str, Any]) -> str:
     _, results = None, [Result(**{k: v for k, v in d.items() if k in Result.__dataclass_fields__})
                         for d in data["results"]]
     ref = data["reference"]

@@ -166,7 +166,7 @@ def hdrp_meta(asset_text: str) -> str:
             "  mainObjectFileID: 11400000\n  userData: \n  assetBundleName: \n  assetBundleVariant: \n")
 
 
-def unreal_values(skin: E.EngineSkin, world_unit_scale: float) -> dict:
+def unreal_values(skin: E.EngineSkin, world_unit_scale: float) -> dict[str, Any]:
     u = E.unreal_values(skin)
     return {"target": "unreal", "SurfaceAlbedo": list(u["surface_albedo"]),
             "MeanFreePathColor": list(u["mean_free_path_color"]),
@@ -229,14 +229,14 @@ print("skinviewer: material %s ready" % NAME)
 '''
 
 
-def blender_values(skin: E.EngineSkin) -> dict:
+def blender_values(skin: E.EngineSkin) -> dict[str, Any]:
     v = E.cb_values(skin)
     return {"target": "blender", "Base Color": list(v["subsurface_color"]), "Subsurface Weight": 1.0,
             "Subsurface Radius": list(v["radius_color"]), "Subsurface Scale (m)": v["radius_scale_mm"] / E.MM_PER_M,
             "Roughness": v["roughness"], "IOR": v["ior"], "subsurface_method": "BURLEY"}
 
 
-def _script(values: dict, body: str, name: str, note: str) -> str:
+def _script(values: dict[str, Any], body: str, name: str, note: str) -> str:
     head = "".join(f"# {line}\n" for line in note.splitlines())
     lit = "VALUES = {\n" + "".join(f"    {k!r}: {_py(v)},\n" for k, v in values.items()) + "}\n"
     return head + "# VALUES is read back by `skinviewer import` (never executed there).\n" + lit + body.format(name=name)
@@ -323,7 +323,7 @@ def _note(fit: E.BurleyFit, description: str, extra: str = "") -> str:
 @dataclass
 class ExportResult:
     written: list[Path]
-    fields: dict  # what the target shows, for the table
+    fields: dict[str, Any]  # what the target shows, for the table
     skin: E.EngineSkin
     fit: E.BurleyFit
     description: str
@@ -452,7 +452,7 @@ def _class_loader():
     return Loader
 
 
-def parse_unity_yaml(text: str) -> list[dict]:
+def parse_unity_yaml(text: str) -> list[dict[str, Any]]:
     import yaml
     try:
         docs = [d for d in yaml.load_all(text, Loader=_class_loader()) if d is not None]
@@ -598,7 +598,7 @@ HDRP_USED = {"target", "scatteringdistance", "scatteringdistancemultiplier", "io
              "multiplier"}
 
 
-def skin_from_values(values: dict) -> Imported:
+def skin_from_values(values: dict[str, Any]) -> Imported:
     """The values an engine shows (JSON, or an exported script's VALUES), keyed by the engine's
     names in any spelling (``Mean Free Path Distance``, ``MeanFreePathDistance``, ``mean_free_path_distance``)."""
     if not isinstance(values, dict):
@@ -662,7 +662,7 @@ def skin_from_values(values: dict) -> Imported:
     return Imported(skin, target, skipped, notes, ws, has_roughness=has_rough)
 
 
-def _require(v: dict, keys: list[str], orig: dict, what: str) -> None:
+def _require(v: dict[str, Any], keys: list[str], orig: dict[str, Any], what: str) -> None:
     missing = [k for k in keys if k not in v]
     if missing:
         raise ExchangeError(f"{what} values lack {', '.join(missing)}")

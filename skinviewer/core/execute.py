@@ -9,7 +9,7 @@ from typing import Any
 import moderngl
 
 from skinviewer.core.gpu import write_uniform
-from skinviewer.core.pass_api import GraphError, Pass, Reflection, SettingsView, TexSpec
+from skinviewer.core.pass_api import GraphError, Pass, Reflection, SettingsView, ShapeState, TexSpec
 from skinviewer.core.report import FrameInputs
 from skinviewer.core.settings import get_path
 
@@ -35,7 +35,7 @@ class ExecuteContext:
     """
 
     def __init__(self, graph, p: Pass, refl: Reflection, frame: FrameInputs,  # graph: the RenderGraph
-                 tile: tuple[int, int] = (0, 1), held: dict | None = None):
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None):
         self.graph = graph
         self.tile = tile  # (band, bands) of a tileable pass; (0, 1): the whole pass at once
         self._held = {} if held is None else held
@@ -71,7 +71,7 @@ class ExecuteContext:
         return get_path(self._frame.settings, path)
 
     @property
-    def state(self) -> dict:
+    def state(self) -> ShapeState:
         """The graph's memory for shape decisions (Reflection.state)."""
         return self.graph.shape_state
 

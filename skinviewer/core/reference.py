@@ -87,7 +87,7 @@ class Reference:
     diffuse: np.ndarray
     specular: np.ndarray
     mask: np.ndarray
-    meta: dict = field(default_factory=dict)
+    meta: dict[str, Any] = field(default_factory=dict)
     position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
     uncertainty: np.ndarray | None = None  # (H, W, 3) of ``lit``: |M_h - M_2h| (see coarse_uncertainty)
 
@@ -163,7 +163,7 @@ class Surface:
             self.env_rays_used = 0.0
 
     # per-point attributes
-    def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict:
+    def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict[str, Any]:
         f = self.F[tri]
         P = np.einsum("nk,nkd->nd", bary, self.P[f])
         nv = np.einsum("nk,nkd->nd", bary, self.Nv[f])
@@ -254,7 +254,7 @@ class Surface:
         d = np.asarray(light.direction, np.float64)
         return np.broadcast_to(d / np.linalg.norm(d), P.shape)
 
-    def visible(self, light, a: dict, L: np.ndarray) -> np.ndarray:
+    def visible(self, light, a: dict[str, Any], L: np.ndarray) -> np.ndarray:
         """Shadow ray from the lifted point towards the light (hard, exact)."""
         if not light.cast_shadow or len(L) == 0:
             return np.ones(len(L), bool)
@@ -269,7 +269,7 @@ class Surface:
             return ~hit
         return ~self.rays.intersects_any(o, np.ascontiguousarray(L))
 
-    def irradiance(self, a: dict, mix: float, energy: bool) -> np.ndarray:
+    def irradiance(self, a: dict[str, Any], mix: float, energy: bool) -> np.ndarray:
         """E A (eq. 28, 32) from the directional and point lights (beams are point sources) and the
         environment (issue 32: its occluded irradiance, Monte Carlo)."""
         U, vis = self.irradiance_parts(a, mix, energy)
@@ -282,7 +282,7 @@ class Surface:
         """The directional and point lights, in the order of irradiance_parts."""
         return [l for l in self.lights if l.kind != "beam"]
 
-    def irradiance_parts(self, a: dict, mix: float, energy: bool) -> tuple[np.ndarray, np.ndarray]:
+    def irradiance_parts(self, a: dict[str, Any], mix: float, energy: bool) -> tuple[np.ndarray, np.ndarray]:
         """Per light of shadow_lights(): the unshadowed E A, Lc (N.L)+ rho_dt(N.L) C^mix (L, N, 3), and
         the visibility (L, N) (True where N.L <= 0: nothing to shadow there), so E A = sum U vis."""
         lights = self.shadow_lights()
@@ -370,7 +370,7 @@ class Surface:
         e = np.sqrt((self.env_err[tri] ** 2).sum(2).mean(1))
         return e / np.maximum(v, 1e-300)
 
-    def env_specular(self, a: dict, V: np.ndarray) -> np.ndarray:
+    def env_specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
         """int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (seed 000 eq. 15-16):
         h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h)."""
         from skinviewer.physics.environment import sample_equirect, tangent_frames
@@ -450,7 +450,7 @@ class Surface:
             return gt.PointSources(np.zeros((0, 3)), np.zeros((0, 3)))
         return gt.PointSources(np.concatenate(pos), np.concatenate(power))
 
-    def specular(self, a: dict, V: np.ndarray) -> np.ndarray:
+    def specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
         """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35)."""
         out = np.zeros((len(V), 3))
         sp = self.s.specular

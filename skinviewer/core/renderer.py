@@ -8,6 +8,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import moderngl
 import numpy as np
@@ -273,7 +274,7 @@ class Renderer:
         self.graphs: dict[str, RenderGraph] = {}
         self.scene: LoadedScene | None = None
         self.scene_version = 0
-        self._lod_state: dict = {}  # the mesh-LOD rule's hysteresis
+        self._lod_state: dict[str, Any] = {}  # the mesh-LOD rule's hysteresis
         self.last_view: View | None = None
         # bytes textures may use (None: what the system has, see available_memory); tests set it
         self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")

@@ -38,6 +38,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -130,7 +131,7 @@ class BurleyFit:
     def __call__(self, r) -> np.ndarray:
         return burley_profile(r, self.A, self.d)
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {"albedo": self.A.tolist(), "d_mm": self.d.tolist(), "error_rR": self.error.tolist(),
                 "rd_target": self.rd_target.tolist(), "rd_error": self.rd_error.tolist()}
 
@@ -276,7 +277,7 @@ class EngineSkin:
         return burley_profile(r, self.A, self.d_mm)
 
 
-def hdrp_values(skin: EngineSkin, metres_per_unit: float = 1.0) -> dict:
+def hdrp_values(skin: EngineSkin, metres_per_unit: float = 1.0) -> dict[str, Any]:
     """The DiffusionProfile fields (DiffusionProfileSettings.cs): distances in mm, worldScale = the
     size of one world unit in metres. The profile is normalised (albedo: the material's base colour)."""
     colour, mult = split_colour(skin.d_mm)
@@ -290,7 +291,7 @@ def hdrp_skin(scattering_distance, multiplier: float, ior: float = 1.4, smoothne
     return EngineSkin(np.ones(3), d, 0.548 if smoothness is None else 1.0 - smoothness, ior, albedo_in_profile=False)
 
 
-def unreal_values(skin: EngineSkin) -> dict:
+def unreal_values(skin: EngineSkin) -> dict[str, Any]:
     """FSubsurfaceProfileStruct (UE5, bEnableMeanFreePath): distances in cm (Unreal units)."""
     colour, dist_mm = split_colour(unreal_mfp_mm(skin.A, skin.d_mm))
     return {"surface_albedo": tuple(float(x) for x in skin.A), "mean_free_path_color": colour,
@@ -305,7 +306,7 @@ def unreal_skin(surface_albedo, mfp_color, mfp_distance_cm: float, ior: float = 
     return EngineSkin(A, unreal_d_mm(A, mfp), roughness, ior)
 
 
-def cb_values(skin: EngineSkin) -> dict:
+def cb_values(skin: EngineSkin) -> dict[str, Any]:
     """Christensen-Burley radius (mean free path per channel, mm) as colour x scale (MaterialX,
     OpenPBR, Blender)."""
     colour, scale_mm = split_colour(cb_mfp_mm(skin.A, skin.d_mm))

@@ -21,6 +21,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -174,7 +175,7 @@ class FitResult:
             rows = [(v, w * scale) for v, w in rows]
         return [(v, (float(w[0]), float(w[1]), float(w[2]))) for v, w in rows]
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         ch = {}
         for c, name in enumerate("rgb"):
             v = self.variances if self.shared else self.variances[c]

@@ -16,7 +16,7 @@ pixels that count (skin pixels, or every covered pixel):
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -112,7 +112,7 @@ class ImageError:
     def rms_mean(self) -> float:
         return float(np.mean(self.rms))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         return {**asdict(self), "dssim_setup": DSSIM_SETUP}
 
     def summary(self) -> str:
