@@ -12,3 +12,4 @@ Float32Array = NDArray[np.float32]  # what textures upload and read back
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
 AnyArray = NDArray[Any]  # an array whose dtype the caller chooses (images of any depth, passed through)
+IndexArray = NDArray[np.integer[Any]]  # triangle indices, texel coordinates (any integer width)

@@ -28,12 +28,16 @@ Everything is float64 numpy + scipy (KD-trees and cell blocks for the neighbours
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import overload
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import owens_t
+
+from skinviewer.physics.arrays import FloatArray, IntArray
 
 CLUSTER_RATIO = 1.25  # a cluster level is used for a Gaussian when its voxel <= sigma / 1.25
 TRUNCATE = 4.5        # kernel support in standard deviations (weight beyond: exp(-10.1) = 4e-5)
@@ -41,14 +45,16 @@ TRUNCATE = 4.5        # kernel support in standard deviations (weight beyond: ex
 
 # -- the exact Gaussian integral over a triangle ----------------------------------------------
 
-def _wedge(h: np.ndarray, t: np.ndarray) -> np.ndarray:
+def _wedge(h: FloatArray, t: FloatArray) -> FloatArray:
     """Standard 2D normal mass of the right triangle (0, (h, 0), (h, t)), h > 0, signed by t:
     atan(t/h) / 2pi - T(h, t/h) (Owen's T: T(h, a) = P(X > h, 0 < Y < aX))."""
     a = t / h
-    return np.arctan(a) / (2.0 * np.pi) - owens_t(h, a)
+    out: FloatArray = np.arctan(a) / (2.0 * np.pi) - owens_t(h, a)
+    return out
 
 
-def gaussian_triangle_mass(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+
+def gaussian_triangle_mass(q0: FloatArray, q1: FloatArray, q2: FloatArray) -> FloatArray:
     """Mass of the standard 2D normal (sigma = 1, centred at the origin) inside triangles (q0, q1,
     q2) given as (..., 2) arrays in units of sigma; any orientation (the result is >= 0)."""
     q = [np.asarray(x, np.float64) for x in (q0, q1, q2)]
@@ -77,7 +83,7 @@ def gaussian_triangle_mass(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np
 
 # -- source elements -----------------------------------------------------------------------------
 
-def subdivision_pattern(n: int) -> tuple[np.ndarray, np.ndarray]:
+def subdivision_pattern(n: int) -> tuple[FloatArray, FloatArray]:
     """The n x n regular subdivision of a triangle: barycentric grid vertices ((n+1)(n+2)/2, 3)
     and sub-triangles as vertex indices (n*n, 3), wound like the parent."""
     ij = [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
@@ -93,7 +99,8 @@ def subdivision_pattern(n: int) -> tuple[np.ndarray, np.ndarray]:
     return bary, np.asarray(tris, np.int64)
 
 
-def subdivide(tri_mm: np.ndarray, h: float, keep: np.ndarray | None = None):
+def subdivide(tri_mm: FloatArray, h: float, keep: NDArray[np.bool_] | None = None
+              ) -> tuple[IntArray, FloatArray, IntArray]:
     """Cut triangles (T, 3, 3) (mm) into sub-triangles of edge <= h. Returns (vertex parent (V,),
     vertex barycentrics in the parent (V, 3), element corners as vertex indices (E, 3))."""
     edges = np.linalg.norm(tri_mm[:, [1, 2, 0]] - tri_mm, axis=2).max(axis=1)
@@ -119,14 +126,14 @@ class Elements:
     """Flat source elements in mm: corners (E, 3, 3), ea (E, 3) = E A (mean over the element), and
     per element centroid, unit normal, area, s2 (in-plane per-axis variance of the uniform
     triangle: trace(cov) / 2 = sum |p_k - g|^2 / 24)."""
-    corners: np.ndarray
-    ea: np.ndarray
-    centroid: np.ndarray = field(init=False)
-    normal: np.ndarray = field(init=False)
-    area: np.ndarray = field(init=False)
-    s2: np.ndarray = field(init=False)
+    corners: FloatArray
+    ea: FloatArray
+    centroid: FloatArray = field(init=False)
+    normal: FloatArray = field(init=False)
+    area: FloatArray = field(init=False)
+    s2: FloatArray = field(init=False)
     radius: float = field(init=False)
-    split: np.ndarray | None = None  # (E,) bool: a piece of an element cut along a shadow edge
+    split: FloatArray | None = None  # (E,) bool: a piece of an element cut along a shadow edge
 
     def __post_init__(self) -> None:
         c = np.asarray(self.corners, np.float64)
@@ -146,7 +153,7 @@ class Elements:
 # A triangle (a, b, c) cut by a straight line through p = a + tp (b - a) and q = a + tq (c - a):
 # (a, p, q) on a's side, (p, b, c) and (p, c, q) on the other, each wound like the parent. Rows: the
 # weights of a, b, c at each piece's 3 corners.
-def cut_weights(tp: np.ndarray, tq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def cut_weights(tp: FloatArray, tq: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(W (M, 3 pieces, 3 corners, 3 weights of a, b, c), side (3,): 1 for a's side, 0 the other)."""
     m = len(tp)
     A = np.broadcast_to([1.0, 0.0, 0.0], (m, 3))
@@ -160,12 +167,12 @@ def cut_weights(tp: np.ndarray, tq: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 @dataclass
 class Clusters:
-    centroid: np.ndarray
-    area: np.ndarray
-    ea: np.ndarray      # area-weighted mean E A
-    s2: np.ndarray      # per-axis in-plane variance
+    centroid: FloatArray
+    area: FloatArray
+    ea: FloatArray      # area-weighted mean E A
+    s2: FloatArray      # per-axis in-plane variance
     size: float
-    normal: np.ndarray  # area-weighted mean unit normal
+    normal: FloatArray  # area-weighted mean unit normal
 
 
 def cluster(el: Elements, voxel: float) -> Clusters:
@@ -180,7 +187,7 @@ def cluster(el: Elements, voxel: float) -> Clusters:
     key = ((v[:, 0] * dims[1] + v[:, 1]) * dims[2] + v[:, 2]) * 8 + octant
     _, inv = np.unique(key, return_inverse=True)
     n = int(inv.max()) + 1 if len(inv) else 0
-    a = np.bincount(inv, el.area, n)
+    a = np.bincount(inv, el.area, n).astype(np.float64, copy=False)  # with weights: float64 already
     sa = np.maximum(a, 1e-300)
     ea = np.stack([np.bincount(inv, el.area * el.ea[:, k], n) for k in range(3)], 1) / sa[:, None]
     light = el.area * np.maximum(el.ea.sum(1), 0.0)
@@ -198,14 +205,21 @@ def cluster(el: Elements, voxel: float) -> Clusters:
 @dataclass
 class PointSources:
     """Infinitesimal sources (beam rays): positions (K, 3) mm and power (K, 3)."""
-    position: np.ndarray
-    power: np.ndarray
+    position: FloatArray
+    power: FloatArray
 
 
 MIN_CELL = 2.0     # mm: cell of the receiver/source grid (at least the search radius)
 
 
-def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None):
+@overload
+def blocks(x: FloatArray, src: FloatArray, radius: float, normals: None = None
+           ) -> Iterator[tuple[IntArray, IntArray, FloatArray]]: ...
+@overload
+def blocks(x: FloatArray, src: FloatArray, radius: float, normals: FloatArray
+           ) -> Iterator[tuple[IntArray, IntArray, FloatArray, FloatArray]]: ...
+def blocks(x: FloatArray, src: FloatArray, radius: float, normals: FloatArray | None = None
+           ) -> Iterator[tuple[IntArray, IntArray, FloatArray] | tuple[IntArray, IntArray, FloatArray, FloatArray]]:
     """Receivers and sources binned in cells of max(radius, MIN_CELL): yields, per occupied
     receiver cell, (receiver indices, source indices of the 27 cells around it, dense |x - s|^2)
     and, given source ``normals``, the dense heights (x - s).n over the sources' planes."""
@@ -217,8 +231,10 @@ def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | 
     ks = np.floor((src - lo) / cell).astype(np.int64)
     dims = np.maximum(kx.max(0), ks.max(0)) + 2
 
-    def key(k):
-        return (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
+    def key(k: IntArray) -> IntArray:
+        out: IntArray = (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
+        return out
+
 
     skey = key(ks)
     sorder = np.argsort(skey, kind="stable")
@@ -249,7 +265,7 @@ def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | 
             yield ri, sj, d2, xr @ ns.T - (sr * ns).sum(1)[None]
 
 
-def _gauss(v, d2):
+def _gauss(v: float, d2: FloatArray) -> FloatArray:
     return np.exp(-d2 / (2.0 * v)) / (2.0 * np.pi * v)
 
 
@@ -261,7 +277,7 @@ class Diffusion:
     """M(x) for source elements and a sum-of-Gaussians profile (variances mm^2, weights (k, 3));
     ``h`` the element edge (mm). Receivers are surface points in mm."""
 
-    def __init__(self, el: Elements, variances, weights, h: float, points: PointSources | None = None):
+    def __init__(self, el: Elements, variances: ArrayLike, weights: ArrayLike, h: float, points: PointSources | None = None):
         self.el = el
         self.h = float(h)
         self.v = np.asarray(variances, np.float64).ravel()
@@ -269,11 +285,11 @@ class Diffusion:
         self.points = points
         self.s2max = float(el.s2.max()) if len(el.s2) else 0.0
         self._levels: dict[float, Clusters] = {}
-        self._edges: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._edges: tuple[FloatArray, FloatArray, FloatArray, FloatArray] | None = None
         self._tree: cKDTree | None = None
-        self._radius: np.ndarray | None = None
+        self._radius: FloatArray | None = None
 
-    def method(self, v: float):
+    def method(self, v: float) -> tuple[str, float | None]:
         """('delta', None) | ('exact', None) | ('elements', None) | ('clusters', voxel)."""
         if v < DELTA_V:
             return "delta", None
@@ -302,12 +318,13 @@ class Diffusion:
             elif kind == "elements":
                 out.append(f"v={v:g} mm^2: moment-matched elements ({len(self.el.area)})")
             else:
+                assert voxel is not None  # method(): "clusters" always comes with its voxel
                 out.append(f"v={v:g} mm^2: moment-matched clusters of {voxel:g} mm ({len(self.level(voxel).area)})")
         return out
 
-    def exitance(self, x: np.ndarray, ea_here: np.ndarray | None = None,
+    def exitance(self, x: FloatArray, ea_here: FloatArray | None = None,
                  progress: Callable[[float], None] | None = None,
-                 cancelled: Callable[[], bool] | None = None) -> np.ndarray:
+                 cancelled: Callable[[], bool] | None = None) -> FloatArray:
         """M(x) (N, 3) at receivers x (N, 3) mm. ``ea_here`` (N, 3): E A at x itself, used for the
         element under x (the nearest element centroid within an element radius)."""
         x = np.asarray(x, np.float64)
@@ -345,7 +362,13 @@ class Diffusion:
                     if cancelled is not None and cancelled():
                         raise InterruptedError("cancelled")
             else:
-                src = el if kind == "elements" else self.level(voxel)
+                src: Elements | Clusters
+                if kind == "elements":
+                    src = el
+
+                else:
+                    assert voxel is not None  # method(): "clusters" always comes with its voxel
+                    src = self.level(voxel)
                 reach = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
                 for ri, sj, d2, z in blocks(x, src.centroid, reach, src.normal):
                     # moment matching in the source's plane only; the height z over it enters
@@ -373,7 +396,7 @@ class Diffusion:
             self._tree = cKDTree(self.el.centroid)
         return self._tree
 
-    def _tree_pairs(self, x: np.ndarray, radius: np.ndarray, chunk: int = 8192):
+    def _tree_pairs(self, x: FloatArray, radius: FloatArray, chunk: int = 8192) -> Iterator[tuple[IntArray, IntArray]]:
         """(receiver, element) pairs closer than the element's ``radius`` (KD-trees: for small radii)."""
         rmax = float(radius.max())
         for s0 in range(0, len(x), chunk):
@@ -381,14 +404,14 @@ class Diffusion:
             keep = sm["v"] < radius[sm["j"]]
             yield sm["i"][keep].astype(np.int64) + s0, sm["j"][keep].astype(np.int64)
 
-    def _el_radius(self) -> np.ndarray:
+    def _el_radius(self) -> FloatArray:
         """Per element: the largest corner distance from its centroid."""
         if self._radius is None:
             d = self.el.corners - self.el.centroid[:, None]
             self._radius = np.sqrt((d * d).sum(2).max(1))
         return self._radius
 
-    def _edge_data(self):
+    def _edge_data(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Per element: 2D frame (e1, e2), corners in it (relative to corner 0), and per edge the
         unit direction u and right-hand normal (u_y, -u_x)."""
         if self._edges is None:
@@ -404,7 +427,7 @@ class Diffusion:
             self._edges = (e1, e2, q, u)
         return self._edges
 
-    def _exact(self, x: np.ndarray, j: np.ndarray, v: float) -> np.ndarray:
+    def _exact(self, x: FloatArray, j: IntArray, v: float) -> FloatArray:
         """integral over element j of G(v, |x - y|) dA(y), exactly: Owen's T over the flat triangle
         (gaussian_triangle_mass, in units of sigma around x's foot point) times exp(-z^2 / 2v) for x's
         height z over its plane (eq. 20 is separable)."""
@@ -415,14 +438,15 @@ class Diffusion:
         p = np.stack([(d * e1[j]).sum(1), (d * e2[j]).sum(1)], 1)
         qj = q[j]
         mass = gaussian_triangle_mass((qj[:, 0] - p) / s, (qj[:, 1] - p) / s, (qj[:, 2] - p) / s)
-        return mass * np.exp(-z * z / (2.0 * v))
+        out: FloatArray = mass * np.exp(-z * z / (2.0 * v))
+        return out
 
 
-def _accumulate(i: np.ndarray, vals: np.ndarray, n: int) -> np.ndarray:
+def _accumulate(i: IntArray, vals: FloatArray, n: int) -> FloatArray:
     return np.stack([np.bincount(i, vals[:, c], n) for c in range(vals.shape[1])], 1)
 
 
-def gaussian_disc_convolution(r: np.ndarray, v: float, radius: float, n: int = 48) -> np.ndarray:
+def gaussian_disc_convolution(r: FloatArray, v: float, radius: float, n: int = 48) -> FloatArray:
     """(G(v) * disc)(r): the integral of G(v, |p - (r, 0)|) over the disc of ``radius`` at the
     origin (n x n polar Gauss-Legendre rule); the analytic reference of a laser beam."""
     t, wt = np.polynomial.legendre.leggauss(n)
