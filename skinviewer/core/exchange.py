@@ -28,7 +28,7 @@ import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -42,6 +42,11 @@ from skinviewer.physics.profiles import (
     burley_scale,
     sum_of_gaussians,
 )
+
+if TYPE_CHECKING:
+    import MaterialX
+    import yaml
+
 
 MAX_IMPORT_BYTES = 4 << 20
 HDRP_SCRIPT_GUID = "b2686e09ec7aef44bad2843e4416f057"  # DiffusionProfileSettings (HDRP's own assets)
@@ -250,7 +255,7 @@ def _py(v: Any) -> str:
     return repr(v)
 
 
-def materialx_doc(skin: E.EngineSkin, name: str, kind: str):
+def materialx_doc(skin: E.EngineSkin, name: str, kind: str) -> MaterialX.Document:
     """A MaterialX document with one surface shader and its material; radius lengths in mm, marked
     with MaterialX's distance unit."""
     import MaterialX as mx
@@ -282,10 +287,11 @@ def materialx_doc(skin: E.EngineSkin, name: str, kind: str):
     return doc
 
 
-_LIB = None
+_LIB: MaterialX.Document | None = None
 
 
-def _library():
+
+def _library() -> MaterialX.Document:
     global _LIB
     if _LIB is None:
         import MaterialX as mx
@@ -299,7 +305,7 @@ def _has_openpbr() -> bool:
     return _library().getNodeDef("ND_open_pbr_surface_surfaceshader") is not None
 
 
-def validate_mtlx(doc) -> tuple[bool, str]:
+def validate_mtlx(doc: MaterialX.Document) -> tuple[bool, str]:
     """MaterialX's own validator, against the standard libraries."""
     import MaterialX as mx
     check = mx.createDocument()
@@ -440,14 +446,17 @@ def _skin(make: Callable[[], E.EngineSkin]) -> E.EngineSkin:
         raise ExchangeError(str(exc)) from None
 
 
-def _class_loader():
+def _class_loader() -> type[yaml.SafeLoader]:
     import yaml
 
     class Loader(yaml.SafeLoader):
         pass
 
-    def unity(loader, suffix, node):  # `--- !u!114 &11400000` documents: plain mappings
+    def unity(loader: yaml.SafeLoader, suffix: str, node: yaml.Node) -> dict[Any, Any]:  # `--- !u!114 &11400000` documents: plain mappings
+        if not isinstance(node, yaml.MappingNode):  # Unity's MonoBehaviour documents are mappings
+            raise yaml.constructor.ConstructorError(None, None, f"expected a mapping for {suffix}", node.start_mark)
         return loader.construct_mapping(node, deep=True)
+
     Loader.add_multi_constructor("tag:unity3d.com,2011:", unity)
     return Loader
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -76,13 +76,13 @@ class RenderGraph:
         self._specs: dict[str, TexSpec] = {}
         self._versions: dict[str, int] = {}
         self._keys: dict[str, dict[str, Any]] = {}  # pass name -> last cache key parts
-        self._fbos: dict[tuple, moderngl.Framebuffer] = {}
+        self._fbos: dict[tuple[tuple[moderngl.Texture, ...], bool], moderngl.Framebuffer] = {}
         self._depth: dict[tuple[int, int], moderngl.Renderbuffer] = {}
         self.frame = 0
         self.last_report: FrameReport | None = None
         self.order: list[Pass] = []
         self._last_refl: dict[str, Reflection] = {}
-        self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
+        self._idle: tuple[object, ...] | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._notes: dict[str, tuple[str, dict[str, Any]]] = {}  # pass name -> (text, figures) of its last run
         self.refining: set[str] = set()  # passes that asked for another frame (progressive refinement)
@@ -94,8 +94,8 @@ class RenderGraph:
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
         # bytes of memory textures may take (None: no check); the Renderer sets it
-        self.memory_available: Any = None
-        self._checked_plan: tuple | None = None
+        self.memory_available: int | Callable[[], int] | None = None
+        self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
         self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
@@ -108,7 +108,7 @@ class RenderGraph:
         self._drop_fbos(tex)
         self.pool.give(tex)
 
-    def _drop_fbos(self, tex) -> None:
+    def _drop_fbos(self, tex: moderngl.Texture) -> None:
         for key in [k for k in self._fbos if tex in k[0]]:
             self._fbos.pop(key).release()
 
@@ -133,7 +133,7 @@ class RenderGraph:
         depth = any(self._specs[r].depth for r in resources)
         return self._framebuffer_for(texs, depth)
 
-    def _framebuffer_for(self, texs: tuple, depth: bool = False) -> moderngl.Framebuffer:
+    def _framebuffer_for(self, texs: tuple[moderngl.Texture, ...], depth: bool = False) -> moderngl.Framebuffer:
         key = (texs, depth)
         fbo = self._fbos.get(key)
         if fbo is None:
@@ -191,7 +191,8 @@ class RenderGraph:
         order: list[Pass] = []
         state: dict[str, int] = {}
 
-        def visit(p: Pass, chain: tuple[str, ...]):
+        def visit(p: Pass, chain: tuple[str, ...]) -> None:
+
             s = state.get(p.name, 0)
             if s == 2:
                 return
