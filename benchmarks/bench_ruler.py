@@ -23,6 +23,9 @@ import numpy as np
 from scipy.special import ndtr
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analytic_judge: the tests' closed-form oracle
+
+import analytic_judge as A
 
 from skinviewer.core.reference import compute_reference
 from skinviewer.core.settings import Settings, with_values
@@ -124,9 +127,6 @@ def part_head(size: int) -> None:
 
 
 def part_rim(n: int = 1024) -> None:
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-    import analytic_judge as A
-
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
     from skinviewer.passes.deon import DIFFUSE

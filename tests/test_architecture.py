@@ -72,7 +72,6 @@ def test_type_only_imports_are_told_apart():
 
 def test_no_import_cycles():
     graph = _imports(runtime_only=True)
-
     # packages import their own submodules in __init__; a submodule importing its own package's
     # __init__ is not a cycle of logic, so edges into a package from inside it are left out
     def deps(m):

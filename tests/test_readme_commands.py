@@ -84,8 +84,6 @@ STRICT = ["skinviewer.physics.profiles", "skinviewer.physics.ground_truth", "ski
           "skinviewer.core.reference"]
 
 
-
-
 @pytest.mark.parametrize("module", STRICT)
 def test_strict_modules_get_every_strict_flag(module):
     mypy_main = pytest.importorskip("mypy.main")  # the [lint] extra; CI installs it before the tests

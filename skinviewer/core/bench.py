@@ -289,7 +289,6 @@ def load_results(path: str | Path) -> tuple[dict[str, Any], list[Result]]:
 
 
 def _pct(v: Iterable[float] | None, u: Iterable[float] | None = None) -> str:
-
     return with_u(v, u) if v is not None else "-"
 
 

@@ -290,7 +290,6 @@ def materialx_doc(skin: E.EngineSkin, name: str, kind: str) -> MaterialX.Documen
 _LIB: MaterialX.Document | None = None
 
 
-
 def _library() -> MaterialX.Document:
     global _LIB
     if _LIB is None:

@@ -324,7 +324,6 @@ class ExecuteContext:
         return rect
 
     def _finish(self) -> None:
-
         for t in self._scratch:
             self.graph._pool_give(t)
         self._scratch.clear()

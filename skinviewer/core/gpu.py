@@ -57,7 +57,6 @@ class GpuServices:
         return self._vao(prog, scene, lambda: scene.vertex_array(prog, lod), lod)
 
     def keep_scene(self, scene: GpuScene | None) -> None:
-
         """Release the mesh VAOs of every scene but ``scene`` (a new scene replaced the old one)."""
         for key in [k for k, (_, owner, _) in self._vaos.items() if owner is not None and owner is not scene]:
             self._vaos.pop(key)[2].release()

@@ -192,7 +192,6 @@ class RenderGraph:
         state: dict[str, int] = {}
 
         def visit(p: Pass, chain: tuple[str, ...]) -> None:
-
             s = state.get(p.name, 0)
             if s == 2:
                 return

@@ -64,7 +64,6 @@ def touches_look(assignments: Iterable[str]) -> bool:
 
 
 def resolve(s: Settings, assignments: Collection[str]) -> Settings:
-
     """After ``assignments`` were applied to ``s``: a hand edit of a derived field (and none of the
     look) hands the profile to the table; an edit of the look (unless it sets ``look.source`` itself)
     makes the look drive and re-derives."""

@@ -21,7 +21,6 @@ def texture_bytes(tex: moderngl.Texture, mipmapped: bool = False) -> int:
 
 
 def renderer_memory(renderer: Renderer) -> dict[str, int]:
-
     """Bytes by kind: graph outputs, free pooled scratch, depth buffers, scene maps, mesh buffers."""
     out = {"graph outputs": 0, "pooled scratch (free)": 0, "depth buffers": 0, "scene maps": 0,
            "mesh buffers": 0}

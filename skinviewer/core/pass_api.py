@@ -163,7 +163,6 @@ class Pass:
         raise NotImplementedError
 
     def execute(self, ec: ExecuteContext) -> None:
-
         raise NotImplementedError
 
     def release(self) -> None:

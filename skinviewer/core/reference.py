@@ -228,7 +228,6 @@ class Surface:
             return np.ones_like(t)
         return np.clip(1.0 - (1.0 - t) * np.asarray(rho_s, np.float64) / r0, 0.0, 1.0)
 
-
     def rho_dt_rows(self, m: np.ndarray) -> np.ndarray:
         """(N, n_cos) the rho_dt table interpolated to each point's m at the table's cos columns: with
         rho_dt_along, Surface.rho_dt for many N.L per point at the cost of a 1-D lookup."""
@@ -261,7 +260,6 @@ class Surface:
 
         out: np.ndarray = np.broadcast_to(d / np.linalg.norm(d), P.shape)
         return out
-
 
     def visible(self, light: LightSettings, a: dict[str, Any], L: np.ndarray) -> np.ndarray:
         """Shadow ray from the lifted point towards the light (hard, exact)."""

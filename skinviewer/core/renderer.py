@@ -46,7 +46,6 @@ from skinviewer.scene.scenes import build_scene
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)
 
 
-
 class LightPose(Protocol):
     """What a light's shadow-map space depends on: a LightSettings or its pose section."""
     @property
@@ -55,6 +54,7 @@ class LightPose(Protocol):
     def direction(self) -> Sequence[float]: ...
     @property
     def position(self) -> Sequence[float]: ...
+
 
 class GpuScene:
     """Mesh buffers and texture maps on the GPU. Immutable: a changed scene is a new GpuScene."""
@@ -366,7 +366,6 @@ class Renderer:
         n += sum(int(t.extra.nbytes) for lst in self.pool._free.values() for t in lst)
         return n
 
-
     def view(self, s: Settings) -> View:
         gpu = self.ensure_scene(s).gpu
         return framed_view(s.camera, gpu, (s.render.width, s.render.height))
@@ -391,7 +390,6 @@ class Renderer:
         return report
 
     def render_settled(self, s: Settings, max_frames: int = 65, **kw: Any) -> tuple[FrameReport, int]:
-
         """Render until no pass asks for another frame (progressive passes such as burley2.temporal
         refine a still view over several frames), at most ``max_frames``. Returns the last report and
         the number of frames rendered."""

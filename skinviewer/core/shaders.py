@@ -229,7 +229,6 @@ class ShaderLibrary:
         try:
             prog = self.ctx.program(vertex_shader=sources["vertex_shader"], fragment_shader=sources.get("fragment_shader"),
                                     geometry_shader=sources.get("geometry_shader"))
-
         except Exception as exc:  # moderngl.Error
             entry.errors = self._parse_errors(str(exc), files_per_stage)
             return False
@@ -327,7 +326,6 @@ class ShaderLibrary:
         self._release_hooks.append(hook)
 
     def remove_hook(self, hook: Callable[[moderngl.Program], None]) -> None:
-
         if hook in self._release_hooks:
             self._release_hooks.remove(hook)
 

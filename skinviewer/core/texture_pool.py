@@ -18,7 +18,6 @@ class TexturePool:
 
     @staticmethod
     def _k(spec: TexSpec) -> tuple[object, ...]:
-
         return (spec.size, spec.components, spec.dtype, spec.filter)
 
     def take(self, spec: TexSpec) -> moderngl.Texture:

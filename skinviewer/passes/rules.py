@@ -40,7 +40,6 @@ def analytic_on(light) -> bool:
 
 
 def environment_light(lights: list[LightSettings]) -> tuple[int, LightSettings] | None:
-
     """(index, light) of the first environment light that adds radiance among the first MAX_LIGHTS,
     or None (issue 32: one environment at a time)."""
     for i, light in enumerate(lights[:MAX_LIGHTS]):

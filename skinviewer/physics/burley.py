@@ -339,7 +339,6 @@ def blur(E: ArrayLike, z: FloatArray, mask: ArrayLike, prof: Profile, proj_scale
         dz = zc[syc, sxc] - zc
         rp = np.sqrt(r * r + dz * dz)[..., None]
         w = S / (8.0 * math.pi) * (np.exp(-S * rp) + np.exp(-S * rp / 3.0)) * np.asarray(rcp * d)[..., None]
-
         w = np.where(valid[..., None], w, 0.0)
         acc[...] += w * Ei
         wsum[...] += w
@@ -427,7 +426,6 @@ def edge_response(t: ArrayLike) -> FloatArray:
 
     out: FloatArray = np.vectorize(one, otypes=[np.float64])(np.asarray(t, dtype=np.float64))
     return out
-
 
 
 def samples_saved(total: float, golubev_total: float) -> float:

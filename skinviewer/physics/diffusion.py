@@ -322,7 +322,6 @@ def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int
 
 
 def profile_variance(variances: ArrayLike, weights: ArrayLike) -> FloatArray:
-
     """Per-axis variance (mm^2) of sum_i w_i G(v_i, r) per channel: sum w_i v_i / sum w_i."""
     v = np.asarray(variances, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64).reshape(len(v), 3)

@@ -182,7 +182,6 @@ def r_grid(profile: Callable[[FloatArray], ArrayLike], n: int = 400, rel: float 
 
 def _values(profile_values: ArrayLike) -> FloatArray:
     R = np.asarray(profile_values, np.float64)
-
     if R.ndim == 1:
         R = np.repeat(R[:, None], 3, 1)
     if not np.all(np.isfinite(R)):

@@ -247,7 +247,6 @@ def ray_caster(positions: FloatArray, indices: IndexArray) -> RayCaster:
     return caster
 
 
-
 def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexArray, rays: int = 64,
                     seed: int = 0, caster: RayCaster | None = None, chunk: int = 2048) -> Float32Array:
     """(N, 4) float32 per vertex: the bent normal (xyz: the mean unoccluded direction, normalised;
@@ -319,7 +318,6 @@ def rho_dt_mean(rho_dt_of_mu: Callable[[float], ArrayLike]) -> FloatArray:
     sum_k w_k rho_dt(mu_k) on RHO_MU/RHO_W; ``rho_dt_of_mu(mu)`` -> array."""
     out: FloatArray = np.sum([w * np.asarray(rho_dt_of_mu(mu), np.float64) for mu, w in zip(RHO_MU, RHO_W)], axis=0)
     return out
-
 
 
 # -- the pre-filtered specular environment (split sum) ---------------------------------------------

@@ -269,7 +269,6 @@ def _pad_init(theta: FloatArray, k: int, a: float, b: float) -> FloatArray:
 
 def _fit_channels(grid: FitGrid, channels: Sequence[int], k: int, fixed: FloatArray | None,
                   init: FloatArray | None, max_starts: int) -> tuple[FloatArray, FloatArray, int]:
-
     prob = _Problem(grid, channels)
     lo = 2.0 * math.log(grid.r[0]) - math.log(16.0)
     hi = 2.0 * math.log(grid.r[-1]) + math.log(4.0)

@@ -53,7 +53,6 @@ def _wedge(h: FloatArray, t: FloatArray) -> FloatArray:
     return out
 
 
-
 def gaussian_triangle_mass(q0: FloatArray, q1: FloatArray, q2: FloatArray) -> FloatArray:
     """Mass of the standard 2D normal (sigma = 1, centred at the origin) inside triangles (q0, q1,
     q2) given as (..., 2) arrays in units of sigma; any orientation (the result is >= 0)."""
@@ -234,7 +233,6 @@ def blocks(x: FloatArray, src: FloatArray, radius: float, normals: FloatArray | 
     def key(k: IntArray) -> IntArray:
         out: IntArray = (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
         return out
-
 
     skey = key(ks)
     sorder = np.argsort(skey, kind="stable")

@@ -30,7 +30,6 @@ DSSIM_SETUP = ("SSIM (Wang et al. 2004, scikit-image): Gaussian window sigma 1.5
 
 
 def _mask(x: FloatArray, mask: ArrayLike | None) -> BoolArray:
-
     if mask is None:
         return np.ones(x.shape[:2], bool)
     m = np.asarray(mask).astype(bool)
@@ -125,7 +124,6 @@ class ImageError:
     def summary(self) -> str:
         def pct(v: Iterable[float]) -> str:
             return " / ".join(f"{100 * c:.2f}" for c in v)
-
         if self.rms_u is None or self.p99_u is None or self.dssim_u is None:
             return f"RMS {pct(self.rms)} %  p99 {pct(self.p99)} %  DSSIM {self.dssim:.4f}"
         return (f"RMS {pct(self.rms)} ± {pct(self.rms_u)} %  p99 {pct(self.p99)} ± {pct(self.p99_u)} %  "

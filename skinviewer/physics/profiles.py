@@ -196,7 +196,6 @@ def _cosh_sinh_over_sinh(q: FloatArray, a: FloatArray, b: FloatArray, c: FloatAr
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
         def e(t: FloatArray) -> FloatArray:
             return np.exp(np.minimum(t, 0.0))  # arguments are <= 0 up to rounding
-
         big = 0.5 * (e(q * (a + b - c)) + e(q * (b - a - c)) - e(q * (a - b - c)) - e(-q * (a + b + c)))
         big = big / -np.expm1(-2.0 * x)
         small = np.cosh(q * a) * np.sinh(q * b) / np.sinh(x)
@@ -632,7 +631,6 @@ class Burley:
     def total_reflectance(self) -> FloatArray:
         return np.array(self.albedo, dtype=np.float64)
 
-
     def min_fit_radius(self) -> float:
         """r R^2 ~ 1/r is not integrable at 0 (eq. 2.83): fits and eq. (3.1) start at d/100
         (the profile holds ~0.5 % of its energy inside that radius, eq. 3.9)."""
@@ -747,7 +745,6 @@ def sum_of_gaussians(r: ArrayLike, variances: ArrayLike, weights: ArrayLike) -> 
     if v.ndim == 2 and w.shape == v.shape:
         out: FloatArray = np.einsum("...ck,ck->...c", gaussian(v, r[..., None, None]), w)
         return out
-
     raise ValueError("variances (k,) with weights (k,) or (k, 3); or variances and weights both (3, k)")
 
 

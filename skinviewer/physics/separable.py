@@ -175,7 +175,6 @@ def preintegrated_gaussians(x: ArrayLike, gaussians: Iterable[tuple[float, Array
     out: FloatArray | float = 0.0
     for v, w in gaussians:
         out = out + np.asarray(w, np.float64) * np.exp(-xa * xa / (2.0 * v)) / math.sqrt(2.0 * math.pi * v)
-
     return np.asarray(out)
 
 

@@ -84,7 +84,6 @@ def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
     return out
 
 
-
 # -- eq. 14-15 --------------------------------------------------------------------------------
 def schlick_fresnel(h_dot_v: ArrayLike, f0: ArrayLike) -> FloatArray:
     """Eq. 14 / listing 14-1: (1 - H.V)^5 + f0 (1 - (1 - H.V)^5); base clamped to [0, 1]."""
@@ -292,7 +291,6 @@ def rho_dt_bruteforce(cos_theta: float, m: float, f0: ArrayLike = F0_SKIN, rho_s
 
 
 def upload_table(ctx: moderngl.Context, table: ArrayLike) -> moderngl.Texture:
-
     """An R32F texture of a (height, width) table with the sampling the layouts above assume:
     LINEAR filtering, CLAMP_TO_EDGE (moderngl defaults to repeat)."""
     t = np.ascontiguousarray(table, dtype=np.float32)

@@ -31,7 +31,6 @@ def transmittance(d: ArrayLike, gaussians: Iterable[tuple[float, ArrayLike]], fo
             out = out + wa * np.exp(-da * da / (div * v))
         else:
             out = out + wa * (da == 0)
-
     return out
 
 
