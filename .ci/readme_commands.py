@@ -73,7 +73,6 @@ PLANS: dict[str, Plan] = {
     "--dump-passes passes/ --timings t.json -v": Plan("wheel"),
     "skinviewer settings --list": Plan("wheel"),
     "skinviewer reference --size 256x256 --out ref.png --exr ref.exr": Plan("wheel"),
-    "skinviewer bench --quick --size 160x160 --out bench/": Plan("wheel"),
     "skinviewer bench --quick --size 160x160 --out bench/ --budget-ms 2000 --preset-out best.json": Plan("wheel"),
     "skinviewer calibrate --techniques deon": Plan("wheel"),
     "skinviewer profile --model dipole --material Skin1 --fit 6 --plot skin1.png --preset-out skin1.json":
