@@ -7,7 +7,7 @@ configuration's per-pass time next to its error against the analytic answer.
    the irradiance, the 7-tap sub-steps as implemented (and, patched in this process only, one 7-tap
    blur per Gaussian), stretch on/off (laser and stretch-plane), 2..6 Gaussians fitted to the default
    profile. Error: always against the *default six-Gaussian* profile, so fewer Gaussians show their
-   true error (skinviewer/accuracy.py: l1 = tests/test_deon.py's r-weighted radial metric, eq31 =
+   true error (tests/analytic_judge.py: l1 = tests/test_deon.py's r-weighted radial metric, eq31 =
    seed 001 eq. 3.1 over the plane).
 2. Gosselin on shadow-edge: iterations x kernel scale -> blur time, penumbra width (mm), and the
    blurred edge against an erf edge of the same variance (max abs error, edge normalised to 0..1).
@@ -38,6 +38,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analytic_judge
+
+import analytic_judge as A  # noqa: E402
 
 from skinviewer.core.gl import describe, headless_context  # noqa: E402
 from skinviewer.core.graph import TIMING_NOTES  # noqa: E402
@@ -48,7 +51,6 @@ from skinviewer.core.settings import (  # noqa: E402
     Settings,
     with_values,
 )
-from skinviewer.physics import accuracy as A  # noqa: E402
 from skinviewer.physics.diffusion import (  # noqa: E402
     IRRADIANCE,
     blur_plan_texels,

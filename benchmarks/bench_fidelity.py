@@ -5,7 +5,7 @@
           tissue-only one, a surface-path one (scene/texels.SurfacePaths) and one that sums contacts:
           relative RMS and p99 texel error per channel over lit texels, and where the worst 1 % lie.
   laser   beam power carried by the irradiance map (sum E * texel area / (pi r^2 Lc)) and the laser
-          error (physics/accuracy.laser_errors) per irradiance size, d'Eon and Gosselin.
+          error (tests/analytic_judge.laser_errors) per irradiance size, d'Eon and Gosselin.
   lights  the stretch choices on the scan over four light directions, against the 3D and surface-path references.
 
 Run: python3 benchmarks/bench_fidelity.py [--parts laser,seams,lights] [--sizes 256,512,1024,2048] [--seams-quick]
@@ -24,12 +24,14 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analytic_judge
+
+import analytic_judge as A  # noqa: E402
 
 from skinviewer.core.gl import describe, headless_context  # noqa: E402
 from skinviewer.core.renderer import Renderer  # noqa: E402
 from skinviewer.core.settings import DeonSettings, Settings, with_values  # noqa: E402
 from skinviewer.passes.deon import DIFFUSE as DEON_DIFFUSE  # noqa: E402
-from skinviewer.physics import accuracy as A  # noqa: E402
 from skinviewer.physics.diffusion import IRRADIANCE  # noqa: E402
 from skinviewer.scene.scenes import build_scene, scene_overrides  # noqa: E402
 

@@ -27,6 +27,9 @@ import numpy as np
 from scipy.special import ndtr
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analytic_judge: the tests' closed-form oracle
+
+import analytic_judge as A
 
 from skinviewer.core.reference import compute_reference
 from skinviewer.core.settings import Settings, with_values
@@ -131,7 +134,6 @@ def part_rim(n: int = 1024, mode: str = "reflect") -> None:
     from skinviewer.core.gl import headless_context
     from skinviewer.core.renderer import Renderer
     from skinviewer.passes.deon import DIFFUSE
-    from skinviewer.physics import accuracy as A
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     s = scene("laser", 64, **{"technique": "deon", "deon.irradiance_size": n, "deon.tsm": False,

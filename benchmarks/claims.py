@@ -39,10 +39,10 @@ def claim_ear(ctx, r):
 
 def claim_laser(ctx, r):
     """README: the laser error (l1 radial, red) at 256^2 and 512^2 maps (default surface gather)."""
+    import analytic_judge as A
     from helpers import small_settings
 
     from skinviewer.passes.deon import DIFFUSE
-    from skinviewer.physics import accuracy as A
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     m = build_scene("laser").mesh

@@ -1,14 +1,14 @@
-"""skinviewer.physics.accuracy (the measurements behind benchmarks/bench_accuracy.py) on synthetic data:
+"""tests/analytic_judge.py (the measurements behind benchmarks/bench_accuracy.py) on synthetic data:
 no GL, fast. The benchmark's timings are never asserted."""
 from __future__ import annotations
 
 import math
 
+import analytic_judge as A
 import numpy as np
 import pytest
 
 from skinviewer.core.settings import DeonSettings
-from skinviewer.physics import accuracy as A
 from skinviewer.physics.poisson import POISSON_12
 from skinviewer.physics.profiles import sum_of_gaussians
 from skinviewer.scene.scenes import laser_scene

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from analytic_judge import plane_coords
 from helpers import assert_all_finite, small_settings
 
 from skinviewer.core.settings import (
@@ -14,7 +15,6 @@ from skinviewer.core.settings import (
 )
 from skinviewer.passes.deon import mean_texel_mm
 from skinviewer.physics import diffusion
-from skinviewer.physics.accuracy import plane_coords
 from skinviewer.physics.diffusion import (
     KERNEL7,
     blur_plan,

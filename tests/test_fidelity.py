@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import math
 
+import analytic_judge as A
 import numpy as np
 import pytest
 from helpers import small_settings
 
 from skinviewer.core.settings import with_values
-from skinviewer.physics import accuracy as A
 from skinviewer.scene.scenes import build_scene
 
 # ---------------------------------------------------------------------------------------------
@@ -550,7 +550,6 @@ def test_laser_error_falls_with_map_size(renderer, gather):
     256^2); 256^2 is still 1-4 %. With the narrow steps summed over the surface (the default) 256^2 is
     already at the floor (0.2 %)."""
     from skinviewer.passes.deon import DIFFUSE
-    from skinviewer.physics import accuracy as A
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     m = build_scene("laser").mesh

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from analytic_judge import profile_variance, width_10_90
 from helpers import assert_all_finite, small_settings
 
 from skinviewer.core.settings import REGIONS, GosselinSettings, with_values
 from skinviewer.passes import gosselin as G
-from skinviewer.physics.accuracy import profile_variance, width_10_90
 from skinviewer.scene import scenes
 from skinviewer.scene.mesh import MeshData
 

@@ -69,7 +69,7 @@ vec3 env_irradiance_scattered(vec3 N, vec3 Nv, vec3 w0, vec3 w1, vec3 w2) {
 // Gauss-Legendre in mu^2 (physics.environment.RHO_MU / RHO_W)
 float env_rho_dt_mean(sampler2D rho_tex, SpecParams sp) {
     return 0.2777778 * surface_rho_dt(rho_tex, 0.3357106, sp) + 0.4444444 * surface_rho_dt(rho_tex, 0.7071068, sp)
-         + 0.2777778 * surface_rho_dt(rho_tex, 0.9419018, sp);
+         + 0.2777778 * surface_rho_dt(rho_tex, 0.9419651, sp);
 }
 
 vec3 env_level(float level, vec2 uv) {

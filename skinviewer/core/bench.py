@@ -9,12 +9,14 @@ import json
 import math
 import statistics
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+import moderngl
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from skinviewer import techniques
 from skinviewer.core.files import atomic_write_text, save_exr, save_png
@@ -26,6 +28,10 @@ from skinviewer.physics.metrics import (
     tied,
     with_u,
 )
+
+if TYPE_CHECKING:
+    from skinviewer.core.reference import Reference
+    from skinviewer.core.renderer import Renderer
 
 RUNS = 3
 LAST_BENCH = "last_bench.txt"  # in cache_dir(): the results.json of the last bench (the viewer's chart)
@@ -74,7 +80,7 @@ class Result:
         """Mean relative RMS of a measured configuration (inf when it was not measured)."""
         return math.inf if self.rms is None else float(np.mean(self.rms))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         d = asdict(self)
         d["rms_mean"] = self.rms_mean
         d["rms_mean_u"] = self.rms_mean_u
@@ -86,23 +92,25 @@ def config_settings(base: Settings, technique: str, changes: dict[str, Any]) -> 
     return with_values(base, {"technique": technique, **changes})
 
 
-def linear_image(renderer, s: Settings) -> tuple[np.ndarray, np.ndarray]:
+def linear_image(renderer: Renderer, s: Settings) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """The technique's linear lit image (H, W, 3) and its coverage (alpha > 0.5), top row first."""
     lit = renderer.read(s, "lit")[::-1]
     return np.asarray(lit[..., :3], np.float64), lit[..., 3] > 0.5
 
 
-def compare_mask(ref_mask: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+def compare_mask(ref_mask: NDArray[np.bool_], coverage: NDArray[np.bool_]) -> NDArray[np.bool_]:
     """Pixels both cover, less a one-pixel rim (silhouette samples differ between ray and raster)."""
     from scipy.ndimage import binary_erosion
-    return binary_erosion(ref_mask & coverage, iterations=1)
+    out: NDArray[np.bool_] = binary_erosion(ref_mask & coverage, iterations=1)
+    return out
 
 
-def heat_rgb(err: np.ndarray, vmax: float = HEAT_MAX) -> np.ndarray:
+def heat_rgb(err: ArrayLike, vmax: float = HEAT_MAX) -> NDArray[np.uint8]:
     """Mean relative error over channels -> uint8 RGB (magma), 0 .. vmax."""
     from matplotlib import colormaps
     e = np.clip(np.asarray(err, np.float64).mean(-1) / vmax, 0.0, 1.0)
-    return (colormaps["magma"](e)[..., :3] * 255 + 0.5).astype(np.uint8)
+    out: NDArray[np.uint8] = (colormaps["magma"](e)[..., :3] * 255 + 0.5).astype(np.uint8)
+    return out
 
 
 def same_accuracy(a: Result, b: Result) -> bool:
@@ -145,7 +153,7 @@ def _nudge(s: Settings, k: int) -> Settings:
     return with_values(s, {"camera.yaw": s.camera.yaw + (0.25 if k % 2 == 0 else -0.25)})
 
 
-def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[float]]:
+def measure(renderer: Renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[float]]:
     """Sync-timed full frames (force: every pass re-runs) and camera-only frames."""
     full, cam = [], []
     for _ in range(runs):
@@ -156,7 +164,7 @@ def measure(renderer, s: Settings, runs: int = RUNS) -> tuple[list[float], list[
     return full, cam
 
 
-def environment_sweep(base: Settings, quick: bool, names: list[str] | None = None) -> list[tuple[str, str, dict]]:
+def environment_sweep(base: Settings, quick: bool, names: list[str] | None = None) -> list[tuple[str, str, dict[str, Any]]]:
     """With an environment light (issue 32): d'Eon with its diffuse visibility swept: the SH transfer
     vectors' order (2 against the default 4; 0: AO x SH irradiance at the bent normal), no occlusion,
     fewer and more rays per vertex in the bake."""
@@ -174,8 +182,9 @@ def environment_sweep(base: Settings, quick: bool, names: list[str] | None = Non
 
 
 def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] | None = None,
-              reference=None, runs: int = RUNS,
-              progress: Callable[[str, int, int], None] | None = None, ctx=None) -> dict:
+              reference: Reference | None = None, runs: int = RUNS,
+              progress: Callable[[str, int, int], None] | None = None,
+              ctx: moderngl.Context | None = None) -> dict[str, Any]:
     """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/.
     ``ctx``: a moderngl context to render with (default: a new headless one, released after)."""
     from skinviewer.core.gl import headless_context
@@ -186,8 +195,11 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
     configs = [(t.name, label, ch) for t in techniques.REGISTRY.values() if names is None or t.name in names
                for label, ch in t.sweep(quick)]
     configs += environment_sweep(base, quick, names)
+    if reference is None:
+        raise ValueError("run_bench needs the ground truth to compare with (core.reference.compute_reference)")
     ref = reference
     results: list[Result] = []
+
     own_ctx = ctx is None
     ctx = ctx or headless_context()
     r = Renderer(ctx)
@@ -263,7 +275,7 @@ def last_bench() -> str:
         return ""
 
 
-def load_results(path: str | Path) -> tuple[dict, list[Result]]:
+def load_results(path: str | Path) -> tuple[dict[str, Any], list[Result]]:
     """A bench's results.json: ValueError (one line) for anything that is not one (not JSON, not an
     object, results that are not records), OSError when it cannot be read (regular files only)."""
     from skinviewer.core.files import read_regular_file
@@ -278,11 +290,11 @@ def load_results(path: str | Path) -> tuple[dict, list[Result]]:
     return data, [Result(**{k: v for k, v in d.items() if k in keys}) for d in data.get("results", [])]
 
 
-def _pct(v, u=None) -> str:
+def _pct(v: Iterable[float] | None, u: Iterable[float] | None = None) -> str:
     return with_u(v, u) if v is not None else "-"
 
 
-def results_markdown(data: dict) -> str:
+def results_markdown(data: dict[str, Any]) -> str:
     _, results = None, [Result(**{k: v for k, v in d.items() if k in Result.__dataclass_fields__})
                         for d in data["results"]]
     ref = data["reference"]

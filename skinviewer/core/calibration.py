@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from skinviewer import techniques
 from skinviewer.core.files import atomic_write_text
@@ -30,13 +30,19 @@ from skinviewer.core.paths import cache_dir
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.techniques.preview import Rung, ladder
 
+if TYPE_CHECKING:
+    import moderngl
+
+    from skinviewer.core.renderer import Renderer
+
+
 VERSION = 1
 SIZE_CLASSES = ((20_000, "small"), (250_000, "medium"))  # triangles below -> class; above: "large"
 CALIBRATION_SIZE = (640, 640)  # the viewer's default render size: what the rungs are timed at
 ERRORS_TABLE = Path(__file__).resolve().parents[1] / "techniques" / "preview_errors.json"
 
 
-def renderer_name(ctx) -> str:
+def renderer_name(ctx: moderngl.Context) -> str:
     """The GL renderer string a calibration is cached under (GL_RENDERER: the device and driver)."""
     return str(ctx.info.get("GL_RENDERER", "unknown"))
 
@@ -86,14 +92,14 @@ class Calibration:
         key = rung_key(technique, rung)
         return next((e for e in self.entries.get(technique, []) if e.key == key), None)
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         return {"version": self.version, "renderer": self.renderer, "mesh_class": self.mesh_class,
                 "size": list(self.size), "created": self.created, "signature": self.signature,
                 "timing": "sync (glFinish + wall clock per pass), median of the runs",
                 "entries": {t: [asdict(e) for e in es] for t, es in self.entries.items()}}
 
     @classmethod
-    def from_json(cls, d: dict) -> Calibration:
+    def from_json(cls, d: dict[str, Any]) -> Calibration:
         entries = {t: [Entry(**e) for e in es] for t, es in d["entries"].items()}
         for es in entries.values():
             for e in es:
@@ -203,7 +209,7 @@ def rung_settings(s: Settings, rung: Rung) -> Settings:
     return with_values(s, changes) if changes else s
 
 
-def measure_rung(renderer, s: Settings, runs: int = 2) -> tuple[float, float]:
+def measure_rung(renderer: Renderer, s: Settings, runs: int = 2) -> tuple[float, float]:
     """(light-move ms, camera-move ms) of ``s``: medians of ``runs`` sync-timed frames each, after
     a warm-up frame (programs compiled, textures allocated, once-per-mesh maps made)."""
     renderer.render_settled(s, timing="sync")
@@ -213,7 +219,8 @@ def measure_rung(renderer, s: Settings, runs: int = 2) -> tuple[float, float]:
     return statistics.median(light), statistics.median(cam)
 
 
-def calibrate(renderer, base: Settings, names: list[str] | None = None, runs: int = 2,
+def calibrate(renderer: Renderer, base: Settings,
+ names: list[str] | None = None, runs: int = 2,
               progress: Callable[[str, int, int], None] | None = None,
               cancelled: Callable[[], bool] | None = None, into: Calibration | None = None) -> Calibration:
     """Time every rung of each technique's ladder (on ``base``'s scene, the default settings

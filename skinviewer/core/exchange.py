@@ -28,7 +28,7 @@ import uuid
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -42,6 +42,11 @@ from skinviewer.physics.profiles import (
     burley_scale,
     sum_of_gaussians,
 )
+
+if TYPE_CHECKING:
+    import MaterialX
+    import yaml
+
 
 MAX_IMPORT_BYTES = 4 << 20
 HDRP_SCRIPT_GUID = "b2686e09ec7aef44bad2843e4416f057"  # DiffusionProfileSettings (HDRP's own assets)
@@ -166,7 +171,7 @@ def hdrp_meta(asset_text: str) -> str:
             "  mainObjectFileID: 11400000\n  userData: \n  assetBundleName: \n  assetBundleVariant: \n")
 
 
-def unreal_values(skin: E.EngineSkin, world_unit_scale: float) -> dict:
+def unreal_values(skin: E.EngineSkin, world_unit_scale: float) -> dict[str, Any]:
     u = E.unreal_values(skin)
     return {"target": "unreal", "SurfaceAlbedo": list(u["surface_albedo"]),
             "MeanFreePathColor": list(u["mean_free_path_color"]),
@@ -229,14 +234,14 @@ print("skinviewer: material %s ready" % NAME)
 '''
 
 
-def blender_values(skin: E.EngineSkin) -> dict:
+def blender_values(skin: E.EngineSkin) -> dict[str, Any]:
     v = E.cb_values(skin)
     return {"target": "blender", "Base Color": list(v["subsurface_color"]), "Subsurface Weight": 1.0,
             "Subsurface Radius": list(v["radius_color"]), "Subsurface Scale (m)": v["radius_scale_mm"] / E.MM_PER_M,
             "Roughness": v["roughness"], "IOR": v["ior"], "subsurface_method": "BURLEY"}
 
 
-def _script(values: dict, body: str, name: str, note: str) -> str:
+def _script(values: dict[str, Any], body: str, name: str, note: str) -> str:
     head = "".join(f"# {line}\n" for line in note.splitlines())
     lit = "VALUES = {\n" + "".join(f"    {k!r}: {_py(v)},\n" for k, v in values.items()) + "}\n"
     return head + "# VALUES is read back by `skinviewer import` (never executed there).\n" + lit + body.format(name=name)
@@ -250,7 +255,7 @@ def _py(v: Any) -> str:
     return repr(v)
 
 
-def materialx_doc(skin: E.EngineSkin, name: str, kind: str):
+def materialx_doc(skin: E.EngineSkin, name: str, kind: str) -> MaterialX.Document:
     """A MaterialX document with one surface shader and its material; radius lengths in mm, marked
     with MaterialX's distance unit."""
     import MaterialX as mx
@@ -282,10 +287,10 @@ def materialx_doc(skin: E.EngineSkin, name: str, kind: str):
     return doc
 
 
-_LIB = None
+_LIB: MaterialX.Document | None = None
 
 
-def _library():
+def _library() -> MaterialX.Document:
     global _LIB
     if _LIB is None:
         import MaterialX as mx
@@ -299,7 +304,7 @@ def _has_openpbr() -> bool:
     return _library().getNodeDef("ND_open_pbr_surface_surfaceshader") is not None
 
 
-def validate_mtlx(doc) -> tuple[bool, str]:
+def validate_mtlx(doc: MaterialX.Document) -> tuple[bool, str]:
     """MaterialX's own validator, against the standard libraries."""
     import MaterialX as mx
     check = mx.createDocument()
@@ -323,7 +328,7 @@ def _note(fit: E.BurleyFit, description: str, extra: str = "") -> str:
 @dataclass
 class ExportResult:
     written: list[Path]
-    fields: dict  # what the target shows, for the table
+    fields: dict[str, Any]  # what the target shows, for the table
     skin: E.EngineSkin
     fit: E.BurleyFit
     description: str
@@ -440,19 +445,22 @@ def _skin(make: Callable[[], E.EngineSkin]) -> E.EngineSkin:
         raise ExchangeError(str(exc)) from None
 
 
-def _class_loader():
+def _class_loader() -> type[yaml.SafeLoader]:
     import yaml
 
     class Loader(yaml.SafeLoader):
         pass
 
-    def unity(loader, suffix, node):  # `--- !u!114 &11400000` documents: plain mappings
+    def unity(loader: yaml.SafeLoader, suffix: str, node: yaml.Node) -> dict[Any, Any]:  # `--- !u!114 &11400000` documents: plain mappings
+        if not isinstance(node, yaml.MappingNode):  # Unity's MonoBehaviour documents are mappings
+            raise yaml.constructor.ConstructorError(None, None, f"expected a mapping for {suffix}", node.start_mark)
         return loader.construct_mapping(node, deep=True)
+
     Loader.add_multi_constructor("tag:unity3d.com,2011:", unity)
     return Loader
 
 
-def parse_unity_yaml(text: str) -> list[dict]:
+def parse_unity_yaml(text: str) -> list[dict[str, Any]]:
     import yaml
     try:
         docs = [d for d in yaml.load_all(text, Loader=_class_loader()) if d is not None]
@@ -598,7 +606,7 @@ HDRP_USED = {"target", "scatteringdistance", "scatteringdistancemultiplier", "io
              "multiplier"}
 
 
-def skin_from_values(values: dict) -> Imported:
+def skin_from_values(values: dict[str, Any]) -> Imported:
     """The values an engine shows (JSON, or an exported script's VALUES), keyed by the engine's
     names in any spelling (``Mean Free Path Distance``, ``MeanFreePathDistance``, ``mean_free_path_distance``)."""
     if not isinstance(values, dict):
@@ -662,7 +670,7 @@ def skin_from_values(values: dict) -> Imported:
     return Imported(skin, target, skipped, notes, ws, has_roughness=has_rough)
 
 
-def _require(v: dict, keys: list[str], orig: dict, what: str) -> None:
+def _require(v: dict[str, Any], keys: list[str], orig: dict[str, Any], what: str) -> None:
     missing = [k for k in keys if k not in v]
     if missing:
         raise ExchangeError(f"{what} values lack {', '.join(missing)}")

@@ -2,16 +2,21 @@
 programs, and the graph's GL services (draws, textures bound by sampler name, strict uniforms)."""
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import moderngl
 
 from skinviewer.core.gpu import write_uniform
-from skinviewer.core.pass_api import GraphError, Pass, Reflection, SettingsView, TexSpec
+from skinviewer.core.pass_api import GraphError, Pass, Reflection, SettingsView, ShapeState, TexSpec
 from skinviewer.core.report import FrameInputs
 from skinviewer.core.settings import get_path
+
+if TYPE_CHECKING:
+    from skinviewer.core.graph import RenderGraph
+    from skinviewer.core.renderer import GpuScene
+    from skinviewer.scene.camera import View
 
 
 class ExecuteContext:
@@ -34,8 +39,8 @@ class ExecuteContext:
       variant) is skipped silently; ``optional=True`` also skips a name the source lacks.
     """
 
-    def __init__(self, graph, p: Pass, refl: Reflection, frame: FrameInputs,  # graph: the RenderGraph
-                 tile: tuple[int, int] = (0, 1), held: dict | None = None):
+    def __init__(self, graph: RenderGraph, p: Pass, refl: Reflection, frame: FrameInputs,
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None):
         self.graph = graph
         self.tile = tile  # (band, bands) of a tileable pass; (0, 1): the whole pass at once
         self._held = {} if held is None else held
@@ -50,16 +55,18 @@ class ExecuteContext:
         self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
 
     @property
-    def scene(self):
+    def scene(self) -> GpuScene:
         if not self.pass_.uses_scene:
             raise GraphError(f"pass {self.pass_.name} did not declare uses_scene")
-        return self._frame.scene
+        scene: GpuScene = self._frame.scene
+        return scene
 
     @property
-    def view(self):
+    def view(self) -> View:
         if not self.pass_.view_dependent:
             raise GraphError(f"pass {self.pass_.name} is view-independent: it may not read the camera")
-        return self._frame.view
+        view: View = self._frame.view
+        return view
 
     def setting(self, path: str) -> Any:
         if path not in self._refl.settings and not any(path.startswith(d + ".") for d in self._refl.settings):
@@ -71,7 +78,7 @@ class ExecuteContext:
         return get_path(self._frame.settings, path)
 
     @property
-    def state(self) -> dict:
+    def state(self) -> ShapeState:
         """The graph's memory for shape decisions (Reflection.state)."""
         return self.graph.shape_state
 
@@ -100,10 +107,10 @@ class ExecuteContext:
     def framebuffer(self, *resources: str) -> moderngl.Framebuffer:
         return self.graph._framebuffer(tuple(self._own(r) for r in resources))
 
-    def program(self, name: str, **defines) -> moderngl.Program:
+    def program(self, name: str, **defines: object) -> moderngl.Program:
         """A declared program. Without ``defines``: the one variant of ``name`` reflect() declared."""
         declared = [d for n, d in self._refl.programs if n == name]
-        key = tuple(sorted(defines.items()))
+        key: tuple[tuple[str, object], ...] = tuple(sorted(defines.items()))
         if not defines and len(declared) == 1:
             key = declared[0]
         elif key not in declared:
@@ -173,15 +180,15 @@ class ExecuteContext:
             write_uniform(prog[name], unit)
 
     # -- draws ---------------------------------------------------------------------------------
-    def _target(self, targets) -> moderngl.Framebuffer:
+    def _target(self, targets: tuple[str | moderngl.Texture, ...]) -> moderngl.Framebuffer:
         if not targets:
             raise GraphError(f"pass {self.pass_.name}: a draw needs a target")
         if all(isinstance(t, str) for t in targets):
-            return self.framebuffer(*targets)
+            return self.framebuffer(*(t for t in targets if isinstance(t, str)))
         held = list(self._held.values())
         if any(isinstance(t, str) or (t not in self._scratch and t not in held) for t in targets):
             raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
-        return self.graph._framebuffer_for(tuple(targets))
+        return self.graph._framebuffer_for(tuple(t for t in targets if not isinstance(t, str)))
 
     def draw_mesh(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
                   clear: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
@@ -217,7 +224,7 @@ class ExecuteContext:
         self.draws += 1
 
     def draw_fullscreen(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
-                        tiles: tuple | None = None) -> None:
+                        tiles: tuple[moderngl.Texture, int, float] | None = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
         ``targets`` (declared outputs or scratch textures), no depth test, no clear.
 
@@ -245,7 +252,7 @@ class ExecuteContext:
         changed (``more``), or says it has converged: the graph does not idle while any pass asks."""
         (self.graph.refining.add if more else self.graph.refining.discard)(self.pass_.name)
 
-    def note(self, text: str, **figures) -> None:
+    def note(self, text: str, **figures: Any) -> None:
         """A figure this run measured (e.g. samples counted on the GPU): shown with the pass in the
         frame report (``PassRecord.note`` / ``figures``), kept while the pass stays cached."""
         self.graph._notes[self.pass_.name] = (text, dict(figures))
@@ -282,7 +289,7 @@ class ExecuteContext:
         return None if n <= 1 else _rows(size, k, n)
 
     @contextmanager
-    def band(self, sub: int | None = None, subs: int | None = None):
+    def band(self, sub: int | None = None, subs: int | None = None) -> Iterator[None]:
         """Draws inside only write this band's rows of their targets (a scissor; each fragment is
         computed as without it, so the bands together are bit-identical to one whole draw).
         ``sub``/``subs``: band ``sub`` of ``subs`` instead of the pass's own (see ``units``)."""
@@ -302,7 +309,7 @@ class ExecuteContext:
         total = draws * per
         return [(u // per, u % per, per) for u in range((k * total) // n, ((k + 1) * total) // n)]
 
-    def _scissor(self, fbo: moderngl.Framebuffer):
+    def _scissor(self, fbo: moderngl.Framebuffer) -> tuple[int, int, int, int] | None:
         """Set the band's scissor on ``fbo`` before it is used (reset after the draw); None: none."""
         if self._banded is True:
             rect = self.band_rect(fbo.size)
@@ -316,7 +323,7 @@ class ExecuteContext:
             fbo.scissor = rect
         return rect
 
-    def _finish(self):
+    def _finish(self) -> None:
         for t in self._scratch:
             self.graph._pool_give(t)
         self._scratch.clear()

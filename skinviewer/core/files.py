@@ -29,7 +29,7 @@ class FileReadError(OSError):
     """A file that is not read: missing, not a regular file (FIFO, device, folder), or too large."""
 
 
-def read_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -> bytes:
+def read_regular_file(path: str | os.PathLike[str], limit: int, what: str = "file") -> bytes:
     """The bytes of a regular file of at most ``limit`` bytes. FIFOs, devices (/dev/zero) and folders
     are refused before any read (opened non-blocking, so a FIFO never hangs), and at most
     ``limit`` + 1 bytes are ever read (a file growing meanwhile is refused too)."""
@@ -65,31 +65,17 @@ def read_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -
         os.close(fd)
 
 
-def check_regular_file(path: str | os.PathLike, limit: int, what: str = "file") -> int:
-    """Size of ``path`` if it is a regular file within ``limit`` (for readers that take a path)."""
-    try:
-        st = os.stat(path)
-    except (OSError, ValueError) as exc:
-        raise FileReadError(f"cannot read {what}: {getattr(exc, 'strerror', None) or exc}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise FileReadError(f"cannot read {what}: not a regular file")
-    if st.st_size > limit:
-        raise FileReadError(f"cannot read {what}: {st.st_size / 2**20:.1f} MiB is over the "
-                            f"{limit / 2**20:.0f} MiB limit")
-    return st.st_size
-
-
 # our temporaries: ".<target name>.<pid>-<random>.tmp" (older builds: ".<target name>.<random>.tmp")
 _TMP = re.compile(r"^\.(?P<target>.+)\.(?:(?P<pid>\d+)-)?[A-Za-z0-9_]{6,12}\.tmp$")
 STALE_TMP_SECONDS = 600  # a temporary without a pid is stale after this long
 
 
-def is_temporary(path: str | os.PathLike) -> bool:
+def is_temporary(path: str | os.PathLike[str]) -> bool:
     """True for the temporaries atomic writes make (never a preset, never an image)."""
     return _TMP.match(Path(path).name) is not None
 
 
-def list_files(folder: str | os.PathLike, pattern: str = "*.json") -> list[Path]:
+def list_files(folder: str | os.PathLike[str], pattern: str = "*.json") -> list[Path]:
     """Regular files of ``folder`` matching ``pattern``, without hidden files and our temporaries."""
     return sorted(p for p in Path(folder).glob(pattern)
                   if not p.name.startswith(".") and not is_temporary(p) and p.is_file())
@@ -109,7 +95,7 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-def clean_stale_temporaries(target: str | os.PathLike) -> int:
+def clean_stale_temporaries(target: str | os.PathLike[str]) -> int:
     """Remove temporaries of ``target`` left by a killed save: those whose writer process is gone
     (or, without a pid in the name, older than STALE_TMP_SECONDS). Returns how many went."""
     p = Path(target)
@@ -137,7 +123,7 @@ def clean_stale_temporaries(target: str | os.PathLike) -> int:
 
 
 @contextmanager
-def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
+def atomic_path(path: str | os.PathLike[str], suffix: str = ".tmp") -> Iterator[Path]:
     """Yields a temporary path beside ``path``; on success it replaces ``path``, on error it goes.
     Temporaries of ``path`` left behind by a killed earlier save are removed first."""
     p = Path(path)
@@ -160,7 +146,7 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
         raise
 
 
-def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes) -> None:
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
             f.write(data)
@@ -168,11 +154,11 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
             os.fsync(f.fileno())
 
 
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     atomic_write_bytes(path, text.encode("utf-8"))
 
 
-def save_png(path: str | os.PathLike, img: np.ndarray) -> Path:
+def save_png(path: str | os.PathLike[str], img: np.ndarray) -> Path:
     """uint8 (H, W, 3|4) image, top row first."""
     from PIL import Image
     buf = io.BytesIO()
@@ -189,7 +175,7 @@ class OutputPathError(ValueError):
     """An output path refused before anything is computed (its extension, or what it would replace)."""
 
 
-def output_kind(path: str | os.PathLike, flag: str = "--out", linear: bool = True, display: bool = True) -> str:
+def output_kind(path: str | os.PathLike[str], flag: str = "--out", linear: bool = True, display: bool = True) -> str:
     """"exr" or the Pillow format an output's extension names; OutputPathError (one line) for any
     other extension, so that no file is ever written with bytes its name does not say."""
     suffix = Path(os.fspath(path)).suffix.lower()
@@ -202,12 +188,12 @@ def output_kind(path: str | os.PathLike, flag: str = "--out", linear: bool = Tru
                           f"this writes; use {', '.join(names[:-1]) + ' or ' if len(names) > 1 else ''}{names[-1]}")
 
 
-def _shown(path: str | os.PathLike) -> str:
+def _shown(path: str | os.PathLike[str]) -> str:
     return os.fspath(path).encode("utf-8", "backslashreplace").decode("utf-8") if isinstance(path, str) \
         else os.fsdecode(path).encode("utf-8", "backslashreplace").decode("utf-8")
 
 
-def save_image(path: str | os.PathLike, img: np.ndarray) -> Path:
+def save_image(path: str | os.PathLike[str], img: np.ndarray) -> Path:
     """uint8 (H, W, 3|4) display image (top row first) in the format the extension names (PNG, JPEG
     (quality 95, alpha dropped), TIFF, BMP); OutputPathError for any other extension."""
     from PIL import Image
@@ -221,14 +207,14 @@ def save_image(path: str | os.PathLike, img: np.ndarray) -> Path:
     return Path(path)
 
 
-def save_npy(path: str | os.PathLike, arr: np.ndarray) -> Path:
+def save_npy(path: str | os.PathLike[str], arr: np.ndarray) -> Path:
     buf = io.BytesIO()
     np.save(buf, np.ascontiguousarray(arr, dtype=np.float32))
     atomic_write_bytes(path, buf.getvalue())
     return Path(path)
 
 
-def save_exr(path: str | os.PathLike, img: np.ndarray, extra: dict[str, np.ndarray] | None = None) -> Path:
+def save_exr(path: str | os.PathLike[str], img: np.ndarray, extra: dict[str, np.ndarray] | None = None) -> Path:
     """Linear float image (H, W), (H, W, 1|3|4) as OpenEXR (float32, ZIP), top row first: what
     compositing and VFX tools read. OpenEXR encodes into memory (its own file writer takes only a
     UTF-8 name and reports a full disk as a bare RuntimeError); the bytes go to ``path`` through
@@ -263,7 +249,7 @@ def save_exr(path: str | os.PathLike, img: np.ndarray, extra: dict[str, np.ndarr
     return Path(path)
 
 
-def load_exr(path: str | os.PathLike) -> np.ndarray:
+def load_exr(path: str | os.PathLike[str]) -> np.ndarray:
     """The pixels of an EXR written by ``save_exr`` (float32, top row first)."""
     import OpenEXR
 

@@ -3,10 +3,14 @@ vertex arrays (full-screen triangle and scene mesh per program), 1x1 dummy textu
 samplers a draw does not bind, and uniform writes by value type."""
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import moderngl
 import numpy as np
+
+if TYPE_CHECKING:
+    from skinviewer.core.renderer import GpuScene
 
 # sampler uniform types (GL enums) -> (components, dtype) of the 1x1 dummy texture backing them
 _SAMPLER_KINDS = {
@@ -32,7 +36,8 @@ class GpuServices:
         self.binding_units = self.max_units - len(_SAMPLER_KINDS)  # the top units hold the dummies
 
     # -- vertex arrays -------------------------------------------------------------------------
-    def _vao(self, prog, owner, make, tag=None) -> moderngl.VertexArray:
+    def _vao(self, prog: moderngl.Program, owner: object, make: Callable[[], moderngl.VertexArray],
+             tag: int | None = None) -> moderngl.VertexArray:
         key = (id(prog), id(owner), tag)
         hit = self._vaos.get(key)
         if hit is not None and hit[0] is prog and hit[1] is owner:
@@ -47,11 +52,11 @@ class GpuServices:
         """A VAO without buffers: the vertex stage makes a full-screen triangle from gl_VertexID."""
         return self._vao(prog, None, lambda: self.ctx.vertex_array(prog, []))
 
-    def mesh_vao(self, prog: moderngl.Program, scene, lod: int = 0) -> moderngl.VertexArray:
+    def mesh_vao(self, prog: moderngl.Program, scene: GpuScene, lod: int = 0) -> moderngl.VertexArray:
         """The scene's mesh at level of detail ``lod`` (``scene.vertex_array(prog, lod)``) for ``prog``."""
         return self._vao(prog, scene, lambda: scene.vertex_array(prog, lod), lod)
 
-    def keep_scene(self, scene) -> None:
+    def keep_scene(self, scene: GpuScene | None) -> None:
         """Release the mesh VAOs of every scene but ``scene`` (a new scene replaced the old one)."""
         for key in [k for k, (_, owner, _) in self._vaos.items() if owner is not None and owner is not scene]:
             self._vaos.pop(key)[2].release()

@@ -11,12 +11,14 @@ Passes do no GL plumbing of their own: the ExecuteContext gives them draws (``dr
 (``bind``/``textures``; samplers left unbound read a 1x1 dummy), uniforms that fail loudly on a
 name the program's source does not declare (``set``/``uniforms``), and read-only views of the
 settings they declared (``section``). The graph owns the GL objects behind them (core/gpu.py).
+
+The pass API, the frame report and the texture pool are re-exported here (``import X as X``).
 """
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,20 +27,21 @@ import numpy as np
 
 from skinviewer.core.execute import ExecuteContext
 from skinviewer.core.gpu import GpuServices, write_uniform
-from skinviewer.core.pass_api import (  # noqa: F401
-    GraphError,
-    Pass,
-    Reflection,
-    ResourceLimitError,
-    SettingsView,
-    TexSpec,
-    _gb,
-)
+from skinviewer.core.pass_api import GraphError as GraphError
+from skinviewer.core.pass_api import Pass as Pass
+from skinviewer.core.pass_api import Reflection as Reflection
+from skinviewer.core.pass_api import ResourceLimitError as ResourceLimitError
+from skinviewer.core.pass_api import SettingsView as SettingsView
+from skinviewer.core.pass_api import ShapeState
+from skinviewer.core.pass_api import TexSpec as TexSpec
 from skinviewer.core.paths import shaders_dir
-from skinviewer.core.report import TIMING_NOTES, FrameInputs, FrameReport, PassRecord  # noqa: F401
+from skinviewer.core.report import TIMING_NOTES as TIMING_NOTES
+from skinviewer.core.report import FrameInputs as FrameInputs
+from skinviewer.core.report import FrameReport as FrameReport
+from skinviewer.core.report import PassRecord as PassRecord
 from skinviewer.core.settings import Settings, value_key
 from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
-from skinviewer.core.texture_pool import TexturePool  # noqa: F401
+from skinviewer.core.texture_pool import TexturePool as TexturePool
 
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
@@ -48,11 +51,11 @@ UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
 class TileProgress:
     """A tileable pass part-way through its bands (issue 27): resumed next frame while its cache key
     is unchanged, cancelled (held textures freed, outputs left unkeyed) as soon as it differs."""
-    key: dict
+    key: dict[str, Any]
     count: int
     done: int = 0
     ms: float = 0.0
-    held: dict = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
+    held: dict[str, Any] = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
 
 
 class RenderGraph:
@@ -72,28 +75,28 @@ class RenderGraph:
         self._textures: dict[str, moderngl.Texture] = {}
         self._specs: dict[str, TexSpec] = {}
         self._versions: dict[str, int] = {}
-        self._keys: dict[str, dict] = {}  # pass name -> last cache key parts
-        self._fbos: dict[tuple, moderngl.Framebuffer] = {}
+        self._keys: dict[str, dict[str, Any]] = {}  # pass name -> last cache key parts
+        self._fbos: dict[tuple[tuple[moderngl.Texture, ...], bool], moderngl.Framebuffer] = {}
         self._depth: dict[tuple[int, int], moderngl.Renderbuffer] = {}
         self.frame = 0
         self.last_report: FrameReport | None = None
         self.order: list[Pass] = []
         self._last_refl: dict[str, Reflection] = {}
-        self._idle: tuple | None = None  # what the last complete frame was made of (fast idle frames)
+        self._idle: tuple[object, ...] | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._last_px: dict[str, int] = {}  # the pixels of its largest output then (costs scale with them)
-        self._notes: dict[str, tuple[str, dict]] = {}  # pass name -> (text, figures) of its last run
+        self._notes: dict[str, tuple[str, dict[str, Any]]] = {}  # pass name -> (text, figures) of its last run
         self.refining: set[str] = set()  # passes that asked for another frame (progressive refinement)
         self._lod_notes: dict[str, str] = {}  # pass name -> the mesh LOD its last run drew at ("" = full)
         self._produced: dict[str, set[str]] = {}  # pass -> outputs it last declared (freed when pruned)
-        self.shape_state: dict = {}
+        self.shape_state: ShapeState = {}
         self._last_draws = 0  # memory of scene-driven rules (e.g. map-size hysteresis)
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
         # bytes of memory textures may take (None: no check); the Renderer sets it
-        self.memory_available: Any = None
-        self._checked_plan: tuple | None = None
+        self.memory_available: int | Callable[[], int] | None = None
+        self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
         self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
@@ -106,7 +109,7 @@ class RenderGraph:
         self._drop_fbos(tex)
         self.pool.give(tex)
 
-    def _drop_fbos(self, tex) -> None:
+    def _drop_fbos(self, tex: moderngl.Texture) -> None:
         for key in [k for k in self._fbos if tex in k[0]]:
             self._fbos.pop(key).release()
 
@@ -131,7 +134,7 @@ class RenderGraph:
         depth = any(self._specs[r].depth for r in resources)
         return self._framebuffer_for(texs, depth)
 
-    def _framebuffer_for(self, texs: tuple, depth: bool = False) -> moderngl.Framebuffer:
+    def _framebuffer_for(self, texs: tuple[moderngl.Texture, ...], depth: bool = False) -> moderngl.Framebuffer:
         key = (texs, depth)
         fbo = self._fbos.get(key)
         if fbo is None:
@@ -189,7 +192,7 @@ class RenderGraph:
         order: list[Pass] = []
         state: dict[str, int] = {}
 
-        def visit(p: Pass, chain: tuple[str, ...]):
+        def visit(p: Pass, chain: tuple[str, ...]) -> None:
             s = state.get(p.name, 0)
             if s == 2:
                 return
@@ -210,7 +213,7 @@ class RenderGraph:
             visit(producer[t], ())
         return order, live
 
-    def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict:
+    def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
         key = {
             "settings": {path: value_key(frame.settings, path) for path in r.settings},
             "inputs": {res: self._versions.get(res, 0) for res in r.inputs},
@@ -226,7 +229,7 @@ class RenderGraph:
         return key
 
     @staticmethod
-    def _why(old: dict | None, new: dict) -> str:
+    def _why(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
         if old is None:
             return "first run"
         parts = []
@@ -434,7 +437,7 @@ class RenderGraph:
         return {n: (pr.done, pr.count) for n, pr in self._progress.items()}
 
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
-                 tile: tuple[int, int] = (0, 1), held: dict | None = None) -> float | None:
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None) -> float | None:
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         try:
@@ -558,7 +561,7 @@ class RenderGraph:
         last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
         return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
 
-    def likely_programs(self) -> list[tuple[str, dict]]:
+    def likely_programs(self) -> list[tuple[str, dict[str, Any]]]:
         """Program variants one toggle away from the last frame's (passes that define
         ``likely_programs(reflection)``): what ShaderLibrary.warm compiles while the viewer idles."""
         out = []
@@ -607,7 +610,7 @@ class RenderGraph:
             self._check_lib.release()
             self._check_lib = None
 
-    def describe(self) -> list[dict]:
+    def describe(self) -> list[dict[str, Any]]:
         """The passes in execution order with their declared inputs/outputs and last status."""
         report = self.last_report
         out = report.to_json()["passes"] if report else []

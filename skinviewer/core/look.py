@@ -11,6 +11,7 @@ loads, re-derives and saves to the same bytes.
 """
 from __future__ import annotations
 
+from collections.abc import Collection, Iterable
 from typing import Any
 
 import numpy as np
@@ -42,7 +43,8 @@ def apply_look(s: Settings) -> Settings:
     return with_values(s, derived_values(s))
 
 
-def set_look(s: Settings, color=None, radius=None, **fields) -> Settings:
+def set_look(s: Settings, color: Iterable[float] | None = None, radius: Iterable[float] | None = None,
+             **fields: Any) -> Settings:
     """The look changed by the artist: it drives the profile from now on."""
     a: dict[str, Any] = {"look.source": "look"}
     if color is not None:
@@ -53,15 +55,15 @@ def set_look(s: Settings, color=None, radius=None, **fields) -> Settings:
     return apply_look(with_values(s, a))
 
 
-def touches_derived(assignments) -> bool:
+def touches_derived(assignments: Iterable[str]) -> bool:
     return any(k == d or k.startswith(d + ".") for k in assignments for d in DERIVED)
 
 
-def touches_look(assignments) -> bool:
+def touches_look(assignments: Iterable[str]) -> bool:
     return any(k == "look" or k.startswith("look.") for k in assignments)
 
 
-def resolve(s: Settings, assignments) -> Settings:
+def resolve(s: Settings, assignments: Collection[str]) -> Settings:
     """After ``assignments`` were applied to ``s``: a hand edit of a derived field (and none of the
     look) hands the profile to the table; an edit of the look (unless it sets ``look.source`` itself)
     makes the look drive and re-derives."""

@@ -5,9 +5,16 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from skinviewer.core.settings import Settings, get_path
+
+if TYPE_CHECKING:
+    from skinviewer.core.execute import ExecuteContext
+
+Defines = tuple[tuple[str, object], ...]  # a program's #defines, sorted: part of its cache key
+ShapeState = dict[object, Any]  # the graph's memory for shape decisions: each pass keys and types its own entries
+
 
 _DTYPES = {"f1": 1, "f2": 2, "f4": 4}
 
@@ -22,7 +29,7 @@ class TexSpec:
     filter: str = "linear"
     depth: bool = False
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if self.dtype not in _DTYPES or not 1 <= self.components <= 4:
             raise ValueError(f"bad texture spec {self}")
         if self.size[0] < 1 or self.size[1] < 1:
@@ -55,13 +62,13 @@ def _gb(n: int) -> str:
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
-    def __init__(self, settings: Settings, scene: Any = None, state: dict | None = None):
+    def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None):
         self._settings = settings
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self.settings: list[str] = []
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
-        self.programs: list[tuple[str, tuple]] = []
+        self.programs: list[tuple[str, Defines]] = []
         # scene-driven rules (core/rules.py): why this pass is skipped, why a consumer no longer
         # reads a resource (its producer is pruned with that reason), notes for the frame report
         self.skip_reason: str | None = None
@@ -107,10 +114,10 @@ class Reflection:
     def output(self, resource: str, spec: TexSpec) -> None:
         self.outputs[resource] = spec
 
-    def program(self, name: str, **defines) -> None:
+    def program(self, name: str, **defines: object) -> None:
         """Declare a program, compiled with these ``#define``s (a specialised variant; the defines
         are part of the cache key). ``ec.program(name)`` then returns it."""
-        key = (name, tuple(sorted(defines.items())))
+        key: tuple[str, Defines] = (name, tuple(sorted(defines.items())))
         if key not in self.programs:
             self.programs.append(key)
 
@@ -134,7 +141,7 @@ class SettingsView:
             raise AttributeError(f"settings view '{self._prefix}' has no field '{name}' "
                                  f"(declared: {sorted(self._values)})") from None
 
-    def __setattr__(self, name, value):
+    def __setattr__(self, name: str, value: object) -> None:
         raise AttributeError(f"settings view '{self._prefix}' is read-only")
 
     def __repr__(self) -> str:
@@ -155,7 +162,7 @@ class Pass:
     def reflect(self, r: Reflection) -> None:
         raise NotImplementedError
 
-    def execute(self, ec) -> None:  # ec: core.execute.ExecuteContext
+    def execute(self, ec: ExecuteContext) -> None:
         raise NotImplementedError
 
     def release(self) -> None:

@@ -33,16 +33,17 @@ import json
 import math
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from skinviewer.core.files import atomic_write_bytes
 from skinviewer.core.paths import cache_dir
-from skinviewer.core.settings import REGIONS, Settings
+from skinviewer.core.settings import REGIONS, LightSettings, Settings
 from skinviewer.passes.common import per_region_specular
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.passes.rules import environment_light
@@ -70,7 +71,9 @@ ENV_SAMPLER_WIDTH = 128     # the irradiance's environment, box-filtered (0.03 %
 # from a point's barycentrics to the linear interpolation weights of those three
 _ENV_B = np.array([[4.0, 1.0, 1.0], [1.0, 4.0, 1.0], [1.0, 1.0, 4.0]]) / 6.0
 _ENV_W = np.linalg.inv(_ENV_B)
+ProfileArrays = tuple[np.ndarray, np.ndarray]  # (variances (k,), weights (k, 3)) of a sum of Gaussians
 DEFAULT_H_MM = 0.5          # source element edge
+
 BEAM_RAYS = 64
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
 RHO_DT_SIZE = (32, 32)      # the table the techniques sample (passes/rho_dt.py)
@@ -87,7 +90,7 @@ class Reference:
     diffuse: np.ndarray
     specular: np.ndarray
     mask: np.ndarray
-    meta: dict = field(default_factory=dict)
+    meta: dict[str, Any] = field(default_factory=dict)
     position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
     uncertainty: np.ndarray | None = None  # (H, W, 3) of ``lit``: |M_h - M_2h| (see coarse_uncertainty)
 
@@ -163,7 +166,7 @@ class Surface:
             self.env_rays_used = 0.0
 
     # per-point attributes
-    def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict:
+    def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict[str, Any]:
         f = self.F[tri]
         P = np.einsum("nk,nkd->nd", bary, self.P[f])
         nv = np.einsum("nk,nkd->nd", bary, self.Nv[f])
@@ -182,7 +185,7 @@ class Surface:
         return {"P": P, "Ps": P + lift, "Ng": self.Ng[tri], "Nv": nv, "N": N, "uv": uv, "C": C, "m": m, "rho": rho,
                 "tri": tri, "bary": bary}
 
-    def _shading_normal(self, n, t, uv):
+    def _shading_normal(self, n: np.ndarray, t: np.ndarray, uv: np.ndarray) -> np.ndarray:
         """shaders/lib/surface.glsl surface_normal."""
         if self.normal_map is None:
             return n
@@ -197,7 +200,7 @@ class Surface:
         good = ok & (pl > 1e-6)
         return np.where(good[:, None], P / np.where(good, pl, 1.0)[:, None], n)
 
-    def _spec_params(self, uv):
+    def _spec_params(self, uv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """shaders/lib/specular_params.glsl: region parameters blended over 4 texels, rho_s x map."""
         h, w = self.region.shape[:2]
         st = uv * np.array([w, h]) - 0.5
@@ -217,13 +220,13 @@ class Surface:
         scale = np.where(np.isfinite(scale), np.clip(scale, 0, 10), 1.0)
         return m, rho * scale
 
-    def rho_dt(self, cos_theta, m, rho_s):
+    def rho_dt(self, cos_theta: ArrayLike, m: ArrayLike, rho_s: ArrayLike) -> np.ndarray:
         """surface_rho_dt: the table for specular.rho_s rescaled to the point's rho_s."""
         t = np.clip(sample_bilinear(self.rho_table, np.clip(cos_theta, 0, 1), np.clip(m, 0, 1)), 0, 1)
         r0 = self.s.specular.rho_s
         if not r0 > 0:
             return np.ones_like(t)
-        return np.clip(1.0 - (1.0 - t) * rho_s / r0, 0.0, 1.0)
+        return np.clip(1.0 - (1.0 - t) * np.asarray(rho_s, np.float64) / r0, 0.0, 1.0)
 
     def rho_dt_rows(self, m: np.ndarray) -> np.ndarray:
         """(N, n_cos) the rho_dt table interpolated to each point's m at the table's cos columns: with
@@ -245,16 +248,20 @@ class Surface:
         r0 = self.s.specular.rho_s
         if not r0 > 0:
             return np.ones_like(t)
-        return np.clip(1.0 - (1.0 - t) * np.asarray(rho_s)[:, None] / r0, 0.0, 1.0)
+        out: np.ndarray = np.clip(1.0 - (1.0 - t) * np.asarray(rho_s)[:, None] / r0, 0.0, 1.0)
+        return out
 
-    def light_dir(self, light, P):
+    def light_dir(self, light: LightSettings, P: np.ndarray) -> np.ndarray:
         if light.kind == "point":
             d = np.asarray(light.position, np.float64) - P
-            return d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+            unit: np.ndarray = d / np.maximum(np.linalg.norm(d, axis=1), 1e-300)[:, None]
+            return unit
         d = np.asarray(light.direction, np.float64)
-        return np.broadcast_to(d / np.linalg.norm(d), P.shape)
 
-    def visible(self, light, a: dict, L: np.ndarray) -> np.ndarray:
+        out: np.ndarray = np.broadcast_to(d / np.linalg.norm(d), P.shape)
+        return out
+
+    def visible(self, light: LightSettings, a: dict[str, Any], L: np.ndarray) -> np.ndarray:
         """Shadow ray from the lifted point towards the light (hard, exact)."""
         if not light.cast_shadow or len(L) == 0:
             return np.ones(len(L), bool)
@@ -267,9 +274,10 @@ class Surface:
             dh = np.linalg.norm(loc - o[idx_ray], axis=1)
             hit[idx_ray[dh < dl[idx_ray]]] = True
             return ~hit
-        return ~self.rays.intersects_any(o, np.ascontiguousarray(L))
+        out: np.ndarray = ~self.rays.intersects_any(o, np.ascontiguousarray(L))
+        return out
 
-    def irradiance(self, a: dict, mix: float, energy: bool) -> np.ndarray:
+    def irradiance(self, a: dict[str, Any], mix: float, energy: bool) -> np.ndarray:
         """E A (eq. 28, 32) from the directional and point lights (beams are point sources) and the
         environment (issue 32: its occluded irradiance, Monte Carlo)."""
         U, vis = self.irradiance_parts(a, mix, energy)
@@ -278,11 +286,11 @@ class Surface:
             E = E + self.env_irradiance(a["tri"], a["bary"], energy) * _safe_pow(a["C"], mix)
         return E
 
-    def shadow_lights(self) -> list:
+    def shadow_lights(self) -> list[LightSettings]:
         """The directional and point lights, in the order of irradiance_parts."""
         return [l for l in self.lights if l.kind != "beam"]
 
-    def irradiance_parts(self, a: dict, mix: float, energy: bool) -> tuple[np.ndarray, np.ndarray]:
+    def irradiance_parts(self, a: dict[str, Any], mix: float, energy: bool) -> tuple[np.ndarray, np.ndarray]:
         """Per light of shadow_lights(): the unshadowed E A, Lc (N.L)+ rho_dt(N.L) C^mix (L, N, 3), and
         the visibility (L, N) (True where N.L <= 0: nothing to shadow there), so E A = sum U vis."""
         lights = self.shadow_lights()
@@ -327,7 +335,7 @@ class Surface:
         if energy:
             rows, rho = self.rho_dt_rows(a["m"]), a["rho"]
 
-            def weight(mu, sl):
+            def weight(mu: np.ndarray, sl: slice | np.ndarray) -> np.ndarray:
                 return self.rho_dt_along(rows[sl], rho[sl], mu)
         est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, ENV_DIFFUSE_RAYS,
                                     self.env_rng, self.eps, weight=weight, batches=ENV_BATCHES)
@@ -341,7 +349,7 @@ class Surface:
                 break
             sub = {k: v[bad] for k, v in a.items()}
 
-            def w_sub(mu, sl, _bad=bad):
+            def w_sub(mu: np.ndarray, sl: slice, _bad: np.ndarray = bad) -> ArrayLike:
                 return weight(mu, _bad[sl]) if weight is not None else 1.0
             e2, s2 = mc_irradiance_cv(self.env_sampler, sub["Ps"], sub["N"], sub["Ng"], self.rays,
                                       ENV_DIFFUSE_RAYS * more, self.env_rng, self.eps,
@@ -362,15 +370,17 @@ class Surface:
         for s0 in range(0, len(todo), 20000):
             self._env_estimate(todo[s0:s0 + 20000], energy)
         w = bary @ _ENV_W
-        return np.einsum("nk,nkc->nc", w, self.env_tri[tri])
+        out: np.ndarray = np.einsum("nk,nkc->nc", w, self.env_tri[tri])
+        return out
 
     def env_relative_error(self, tri: np.ndarray) -> np.ndarray:
         """The standard error of the environment's irradiance at triangles ``tri`` relative to it."""
         v = self.env_tri[tri].sum(2).mean(1)
         e = np.sqrt((self.env_err[tri] ** 2).sum(2).mean(1))
-        return e / np.maximum(v, 1e-300)
+        out: np.ndarray = e / np.maximum(v, 1e-300)
+        return out
 
-    def env_specular(self, a: dict, V: np.ndarray) -> np.ndarray:
+    def env_specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
         """int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (seed 000 eq. 15-16):
         h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h)."""
         from skinviewer.physics.environment import sample_equirect, tangent_frames
@@ -450,7 +460,7 @@ class Surface:
             return gt.PointSources(np.zeros((0, 3)), np.zeros((0, 3)))
         return gt.PointSources(np.concatenate(pos), np.concatenate(power))
 
-    def specular(self, a: dict, V: np.ndarray) -> np.ndarray:
+    def specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
         """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35)."""
         out = np.zeros((len(V), 3))
         sp = self.s.specular
@@ -493,12 +503,14 @@ def _barycentric(tri: np.ndarray, p: np.ndarray) -> np.ndarray:
     v = (d11 * d20 - d01 * d21) / den
     w = (d00 * d21 - d01 * d20) / den
     bary = np.stack([1 - v - w, v, w], 1)
-    return np.clip(bary, 0, 1) / np.maximum(np.clip(bary, 0, 1).sum(1, keepdims=True), 1e-300)
+    out: np.ndarray = np.clip(bary, 0, 1) / np.maximum(np.clip(bary, 0, 1).sum(1, keepdims=True), 1e-300)
+    return out
 
 
 # -- the camera ------------------------------------------------------------------------------------
 
-def camera_hits(surf: Surface, s: Settings, grid: tuple[int, int] | None = None):
+def camera_hits(surf: Surface, s: Settings, grid: tuple[int, int] | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Ray through every pixel centre: (mask (H, W), triangle ids, barycentrics, eye) top row first.
     ``grid``: cast a coarser (W, H) grid over the same view instead (coverage estimates)."""
     W, H = s.render.width, s.render.height
@@ -545,7 +557,8 @@ def profile_of(s: Settings) -> tuple[np.ndarray, np.ndarray]:
 PROFILE_MODELS = ("gaussians", "dipole", "multipole", "burley")
 
 
-def model_profile(model: str, material: str | None = None, normalize: bool = True, n: int = 32):
+def model_profile(model: str, material: str | None = None, normalize: bool = True, n: int = 32
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A radial profile of the profile lab (skinviewer.physics.profiles) as (variances, weights (k, 3),
     fit error per channel): non-negative weights on ``n`` fixed log-spaced variances (1e-6 .. 400 mm^2,
     NNLS of physics.fitting on r R(r), eq. 3.1 error). The diffusion then integrates each Gaussian
@@ -581,7 +594,7 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
 TECHNIQUE_ONLY_LIGHT_FIELDS = ("sh_order", "occlusion", "ao_rays", "transfer_order")
 
 
-def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, uncertainty: bool = True) -> str:
+def cache_key(s: Settings, h_mm: float, profile: Any = None, split_edges: bool = True, uncertainty: bool = True) -> str:
     from skinviewer.core.renderer import Renderer
     d = s.model_dump(mode="json")
     # the environment's approximations (SH order, baked visibility) are the techniques', not the truth's
@@ -598,9 +611,9 @@ def cache_key(s: Settings, h_mm: float, profile=None, split_edges: bool = True, 
     return hashlib.sha1(json.dumps(parts, sort_keys=True).encode()).hexdigest()
 
 
-def _env_stamps(s: Settings) -> list:
+def _env_stamps(s: Settings) -> list[list[object]]:
     """Size and modification time of each environment file (a changed file is another reference)."""
-    out = []
+    out: list[list[object]] = []
     for light in s.lights:
         if light.kind == "environment":
             try:
@@ -618,7 +631,7 @@ def _cache_path(key: str) -> Path:
 MAX_CACHE_BYTES = 2**31  # a cached reference at the largest size (8192^2) is well under this
 
 
-def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, split_edges: bool = True,
+def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileArrays | None = None, split_edges: bool = True,
                 uncertainty: bool = True, notes: list[str] | None = None) -> Reference | None:
     """The cached reference of these inputs, or None. An entry that does not validate (truncated or
     not a zip, a missing or wrongly shaped array, a key or size that is not these settings', not a
@@ -691,9 +704,10 @@ def estimate_seconds(n_pixels: int, n_elements: int, uncertainty: bool = False) 
     return base * (1.35 if uncertainty else 1.0)  # default head 512^2: 77.9 vs 58.4 s CPU (cut included)
 
 
-def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances, weights, mix: float,
-                    energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
-                    report=None, check=None, split_edges: bool = True, beam_rays: int = BEAM_RAYS) -> gt.Diffusion:
+def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances: np.ndarray, weights: np.ndarray,
+                    mix: float, energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
+                    report: Callable[[str, float], None] | None = None, check: Callable[[], bool] | None = None,
+                    split_edges: bool = True, beam_rays: int = BEAM_RAYS) -> gt.Diffusion:
     """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
     the beams' point sources, and the Diffusion sum over them."""
     report = report or (lambda stage, f: None)
@@ -748,7 +762,9 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
 EDGE_BISECTIONS = 10  # shadow-edge crossings located to 2^-11 of an element edge (0.25 um at 0.5 mm)
 
 
-def split_shadow_edges(surf: Surface, vpar, vbary, vpos, elem, U, vis, check=None):
+def split_shadow_edges(surf: Surface, vpar: np.ndarray, vbary: np.ndarray, vpos: np.ndarray, elem: np.ndarray,
+                       U: np.ndarray, vis: np.ndarray, check: Callable[[], bool] | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Elements whose corners disagree on a light's visibility (a cast-shadow edge crosses them) are
     cut along the edge, found by bisecting the two element edges it crosses with shadow rays
     (EDGE_BISECTIONS each) and taken straight inside the element; each piece carries its own side's
@@ -825,8 +841,8 @@ UNCERTAINTY_NOTE = ("per pixel: 3 |M(h={h:g} mm) - M(h={h2:g} mm, half the beam 
 
 
 def coarse_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, M: np.ndarray,
-                       h_mm: float, variances, weights, mix: float, energy: bool, split_edges: bool = True,
-                       check=None) -> np.ndarray:
+                       h_mm: float, variances: np.ndarray, weights: np.ndarray, mix: float, energy: bool,
+                       split_edges: bool = True, check: Callable[[], bool] | None = None) -> np.ndarray:
     """The truth's own uncertainty at each receiver (N, 3), Roache's grid convergence index (1994):
     GCI_SAFETY |M_h - M_2h| / (2^p - 1) with p = 1 (the default head's residual halves per halving of
     h), the coarse level with elements UNCERTAINTY_COARSER times as large and half the beam rays, run
@@ -853,7 +869,8 @@ def coarse_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray, ea_her
         img = np.full((H, W, 3), -np.inf)
         img[rows[where], cols[where]] = vals
         img = maximum_filter(img, size=(3, 3, 1), mode="constant", cval=-np.inf)
-        return np.maximum(img[mask], 0.0)
+        out: np.ndarray = np.maximum(img[mask], 0.0)
+        return out
 
     u = max3(GCI_SAFETY * np.abs(M[sel] - M2), sel)
     # |grad M| between 4-neighbours (per mm of surface), over the pixel's 3 x 3 neighbourhood
@@ -873,10 +890,12 @@ def coarse_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray, ea_her
         grad[tuple(sl)] = np.maximum(grad[tuple(sl)], g)
     delta = 2.0 * surf.eps * surf.mm + 0.5 * h_mm * 2.0 ** -EDGE_BISECTIONS
     u += max3(grad[mask], np.ones(len(M), bool)) * delta
-    return u + TRUNCATE_LOSS * np.abs(M)
+    out: np.ndarray = u + TRUNCATE_LOSS * np.abs(M)
+    return out
 
 
-def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile=None, use_cache: bool = True,
+def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileArrays | None = None,
+                      use_cache: bool = True,
                       max_seconds: float | None = None, scene: tuple[MeshData, float] | None = None,
                       progress: Callable[[str, float], None] | None = None,
                       cancelled: Callable[[], bool] | None = None, split_edges: bool = True,
@@ -1031,7 +1050,7 @@ class TruthSession:
         self._sources: dict[str, tuple[gt.Elements, gt.PointSources]] = {}
         # per source set: the Diffusion structures over the whole surface (cluster levels, KD-tree,
         # edge frames, source grids: most of an orbit's time when rebuilt for every view; issue 34)
-        self._structures: dict[str, dict] = {}
+        self._structures: dict[str, dict[str, Any]] = {}
         self.recent: dict[str, Reference] = {}  # full key -> final truth, oldest first
         self.builds = 0  # whole-surface source sets built (tests: an orbit builds none)
 
@@ -1049,7 +1068,8 @@ class TruthSession:
             self._surface = (key, Surface(mesh, mm, s))
         return self._surface[1]
 
-    def _whole_sources(self, surf: Surface, s: Settings, report, check) -> tuple[gt.Elements, gt.PointSources]:
+    def _whole_sources(self, surf: Surface, s: Settings, report: Callable[[str, float], None],
+                       check: Callable[[], bool]) -> tuple[gt.Elements, gt.PointSources]:
         key = sources_key(s, self.h_mm)
         hit = self._sources.pop(key, None)
         if hit is None:
@@ -1091,7 +1111,7 @@ class TruthSession:
 
     # -- the truth ------------------------------------------------------------------------------------
     def progressive(self, s: Settings, progress: Callable[[str, float], None] | None = None,
-                    cancelled: Callable[[], bool] | None = None):
+                    cancelled: Callable[[], bool] | None = None) -> Iterator[Partial]:
         """Yield :class:`Partial` stages of the truth of ``s``, the last with ``final`` True."""
         report = progress or (lambda stage, f: None)
         check = cancelled or (lambda: False)
@@ -1166,7 +1186,8 @@ class TruthSession:
             yield part
 
 
-def sampled_rms(img: np.ndarray, ref: Reference, mask: np.ndarray, n_boot: int = 24, seed: int = 0):
+def sampled_rms(img: np.ndarray, ref: Reference, mask: np.ndarray, n_boot: int = 24, seed: int = 0
+                ) -> tuple[np.ndarray, np.ndarray]:
     """Relative RMS per channel (physics.metrics.rel_rms) over the pixels the truth has so far, and its
     standard error as an estimate of the whole image's (bootstrap over those pixels, times the finite-
     population factor sqrt(1 - done / visible)): (rms (3,), se (3,))."""

@@ -6,11 +6,14 @@ import functools
 import hashlib
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Protocol
 
 import moderngl
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from skinviewer import techniques
 from skinviewer.core.graph import FrameInputs, FrameReport, RenderGraph, TexturePool
@@ -18,9 +21,10 @@ from skinviewer.core.settings import Settings
 from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes import rules
 from skinviewer.passes.output import srgb_to_linear
+from skinviewer.physics.arrays import Float32Array
 from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
 from skinviewer.physics.penner import vertex_curvature
-from skinviewer.scene.camera import View, framed_view, light_space
+from skinviewer.scene.camera import LightSpace, View, framed_view, light_space
 from skinviewer.scene.environment import environment_image
 from skinviewer.scene.lod import decimate, level_targets
 from skinviewer.scene.mesh import (
@@ -42,6 +46,16 @@ from skinviewer.scene.scenes import build_scene
 DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)
 
 
+class LightPose(Protocol):
+    """What a light's shadow-map space depends on: a LightSettings or its pose section."""
+    @property
+    def kind(self) -> str: ...
+    @property
+    def direction(self) -> Sequence[float]: ...
+    @property
+    def position(self) -> Sequence[float]: ...
+
+
 class GpuScene:
     """Mesh buffers and texture maps on the GPU. Immutable: a changed scene is a new GpuScene."""
 
@@ -54,7 +68,7 @@ class GpuScene:
         self.frame = mesh.frame  # what the camera frames by default (the head of a bust)
         self.vbo = ctx.buffer(mesh.interleaved().tobytes())
         self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
-        self._lods: dict[int, tuple] = {}  # level of detail -> (vbo, ibo, triangles)
+        self._lods: dict[int, tuple[moderngl.Buffer, moderngl.Buffer, int]] = {}  # level of detail -> (vbo, ibo, triangles)
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
         self._env_vis: dict[tuple[int, int], moderngl.Buffer] = {}  # (level, rays) -> SH transfer vectors
@@ -84,9 +98,10 @@ class GpuScene:
         tex.filter = (moderngl.LINEAR_MIPMAP_LINEAR, moderngl.LINEAR)
         return tex
 
-    def light_space(self, light):
+    def light_space(self, light: LightPose) -> LightSpace:
         """The shadow map's / TSM's light space of ``light`` (a LightSettings or its pose section),
         fitted to this mesh (camera.light_space with its vertices), memoised per pose."""
+        memo: dict[tuple[str, tuple[float, ...], tuple[float, ...]], LightSpace]
         memo = self.__dict__.setdefault("_light_spaces", {})
         key = (light.kind, tuple(light.direction), tuple(light.position))
         if key not in memo:
@@ -146,8 +161,9 @@ class GpuScene:
 
     def mesh_bytes(self) -> int:
         """Bytes of the mesh buffers: the mesh and every level of detail built so far."""
-        return (self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
-                + sum(b.size for b in (*self._uv_cov.values(), *self._curvature.values(), *self._env_vis.values())))
+        n: int = (self.vbo.size + self.ibo.size + sum(v.size + i.size for v, i, _ in self._lods.values())
+                  + sum(b.size for b in (*self._uv_cov.values(), *self._curvature.values(), *self._env_vis.values())))
+        return n
 
     def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
@@ -198,7 +214,7 @@ class GpuScene:
             if vis.shape != (len(m.positions), TRANSFER_COUNT) or not np.all(np.isfinite(vis)):
                 raise ValueError("stale")
             self.env_bake_seconds[(level, rays)] = 0.0
-            return vis.astype(np.float32)
+            return np.asarray(vis, dtype=np.float32)
         except (OSError, ValueError):
             pass
         vis = bake_transfer(m.positions, m.normals, m.indices, rays=int(rays))
@@ -254,9 +270,9 @@ def _fmt(f: str, used: bool) -> str:
     return f if used else f"{int(f[:-1]) * 4}x"
 
 
-def _finite_map(a: np.ndarray) -> np.ndarray:
-    a = np.asarray(a, dtype=np.float32)
-    return np.nan_to_num(a, nan=0.0, posinf=1.0, neginf=0.0)
+def _finite_map(a: ArrayLike) -> Float32Array:
+    out: Float32Array = np.nan_to_num(np.asarray(a, dtype=np.float32), nan=0.0, posinf=1.0, neginf=0.0)
+    return out
 
 
 @dataclass
@@ -280,7 +296,7 @@ class Renderer:
         self.graphs: dict[str, RenderGraph] = {}
         self.scene: LoadedScene | None = None
         self.scene_version = 0
-        self._lod_state: dict = {}  # the mesh-LOD rule's hysteresis
+        self._lod_state: dict[str, Any] = {}  # the mesh-LOD rule's hysteresis
         self.last_view: View | None = None
         # bytes textures may use (None: what the system has, see available_memory); tests set it
         self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")
@@ -354,7 +370,7 @@ class Renderer:
     def held_bytes(self) -> int:
         """Bytes of textures held now: every graph's live textures, the pool's free ones, the scene's."""
         n = sum(spec.nbytes for g in self.graphs.values() for spec in g.resources().values())
-        n += sum(t.extra.nbytes for lst in self.pool._free.values() for t in lst)
+        n += sum(int(t.extra.nbytes) for lst in self.pool._free.values() for t in lst)
         return n
 
     def view(self, s: Settings) -> View:
@@ -391,7 +407,7 @@ class Renderer:
             self._software = software_renderer(self.ctx)
         return "sync" if self._software else "gpu"
 
-    def render_settled(self, s: Settings, max_frames: int = 65, **kw) -> tuple[FrameReport, int]:
+    def render_settled(self, s: Settings, max_frames: int = 65, **kw: Any) -> tuple[FrameReport, int]:
         """Render until no pass asks for another frame (progressive passes such as burley2.temporal
         refine a still view over several frames), at most ``max_frames``. Returns the last report and
         the number of frames rendered."""
@@ -402,11 +418,12 @@ class Renderer:
             n += 1
         return report, n
 
-    def image(self, s: Settings) -> np.ndarray:
+    def image(self, s: Settings) -> NDArray[np.uint8]:
         """The sRGB image of the last frame as uint8 (H, W, 3), top row first."""
         g = self.graph(s.technique)
         img = g.read("image")[..., :3]
-        return (np.clip(img, 0, 1) * 255.0 + 0.5).astype(np.uint8)[::-1]
+        out: NDArray[np.uint8] = (np.clip(img, 0, 1) * 255.0 + 0.5).astype(np.uint8)[::-1]
+        return out
 
     def read(self, s: Settings, resource: str) -> np.ndarray:
         return self.graph(s.technique).read(resource)

@@ -26,9 +26,9 @@ class PassRecord:
     ms: float | None = None
     reason: str = ""
     inputs: list[str] = field(default_factory=list)
-    outputs: dict[str, dict] = field(default_factory=dict)
+    outputs: dict[str, dict[str, Any]] = field(default_factory=dict)
     note: str = ""  # what the pass measured when it last ran (ExecuteContext.note)
-    figures: dict = field(default_factory=dict)
+    figures: dict[str, Any] = field(default_factory=dict)
     nonfinite: list[str] = field(default_factory=list)  # outputs holding NaN/Inf (render.check_finite)
     draws: int = 0  # draw calls the pass made when it ran
 
@@ -72,7 +72,7 @@ class FrameReport:
     def total_ms(self) -> float:
         return float(sum(p.ms or 0.0 for p in self.passes if p.status == "ran"))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         return {
             "frame": self.frame,
             "timing_mode": self.timing_mode,

@@ -19,7 +19,8 @@ from pydantic import (
     model_validator,
 )
 
-from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF, REGIONS
+from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF
+from skinviewer.core.constants import REGIONS as REGIONS  # re-exported: passes, scenes and the UI import it from here
 from skinviewer.core.files import FileReadError, atomic_write_text, read_regular_file
 
 SCHEMA_VERSION = 1
@@ -32,7 +33,7 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True)
 
 
-def _known_regions(v: dict) -> dict:
+def _known_regions(v: dict[str, Any]) -> dict[str, Any]:
     bad = [k for k in v if k not in REGIONS]
     if bad:
         raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
@@ -659,7 +660,7 @@ def validate(data: Any, source: str = "") -> Settings:
         raise SettingsError(_errors_of(exc), source) from None
 
 
-def to_dict(s: Settings) -> dict:
+def to_dict(s: Settings) -> dict[str, Any]:
     return s.model_dump(mode="json")
 
 
@@ -813,7 +814,7 @@ def _json_problem(exc: BaseException) -> str:
     return str(exc).split(";")[0]  # e.g. "Exceeds the limit (4300 digits) for integer string conversion"
 
 
-def load_preset(path: str | os.PathLike, base: Settings | None = None) -> Settings:
+def load_preset(path: str | os.PathLike[str], base: Settings | None = None) -> Settings:
     """Read a preset. A preset may be partial: its fields override ``base`` (default: defaults).
     Relative scene paths in it are resolved against the preset's folder."""
     p = Path(path)
@@ -872,7 +873,7 @@ def _relative_to(v: str | None, folder: Path) -> str | None:
         return v
 
 
-def _deep_merge(base: dict, over: dict) -> dict:
+def _deep_merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     out = dict(base)
     for k, v in over.items():
         if isinstance(v, dict) and isinstance(out.get(k), dict) and k not in ("regions", "per_region"):
@@ -882,7 +883,7 @@ def _deep_merge(base: dict, over: dict) -> dict:
     return out
 
 
-def save_preset(s: Settings, path: str | os.PathLike, data: dict | None = None) -> None:
+def save_preset(s: Settings, path: str | os.PathLike[str], data: dict[str, Any] | None = None) -> None:
     """Write ``s`` (or ``data``, a dict of it such as the viewer's trimmed payload) atomically; scene
     paths are written relative to the preset's folder."""
     data = to_dict(s) if data is None else dict(data)

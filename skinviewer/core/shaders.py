@@ -11,8 +11,10 @@ from __future__ import annotations
 import hashlib
 import re
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import moderngl
 
@@ -61,7 +63,7 @@ class _Entry:
     digest: str = ""
     errors: list[ShaderError] = field(default_factory=list)
     generation: int = 0  # bumps each time a new program replaces the old one
-    declared: frozenset = frozenset()  # uniform names declared in the running program's source
+    declared: frozenset[str] = frozenset()  # uniform names declared in the running program's source
 
 
 def declared_uniforms(source: str) -> set[str]:
@@ -82,7 +84,7 @@ class ShaderLibrary:
     """Programs by (name, defines). ``defines``: library-wide extra defines (e.g. ``{"GENERIC_SHADERS":
     1}`` compiles every program unspecialised, for tests and comparisons)."""
 
-    def __init__(self, ctx: moderngl.Context, root: Path | None = None, defines: dict | None = None,
+    def __init__(self, ctx: moderngl.Context, root: Path | None = None, defines: dict[str, Any] | None = None,
                  include_roots: tuple[Path, ...] = ()):
         self.ctx = ctx
         self.root = Path(root) if root else paths.shaders_dir()
@@ -90,9 +92,9 @@ class ShaderLibrary:
         # temporary folder including the product's lib/); nothing else is ever read
         self.include_roots = tuple(Path(r) for r in include_roots)
         self.defines = {**GLSL_DEFINES, **{str(k): str(v) for k, v in (defines or {}).items()}}
-        self._entries: dict[tuple, _Entry] = {}
+        self._entries: dict[tuple[str, tuple[tuple[str, str], ...]], _Entry] = {}
         self._by_program: dict[int, _Entry] = {}
-        self._release_hooks: list = []
+        self._release_hooks: list[Callable[[moderngl.Program], None]] = []
         self.revision = 0  # bumps whenever any program is replaced (a cheap "did any shader change?")
 
     # -- source assembly ---------------------------------------------------------------------
@@ -177,7 +179,8 @@ class ShaderLibrary:
                 found["vertex_shader"] = self.root / m.group(1)
         return found
 
-    def _assemble(self, name: str, defines: tuple[tuple[str, str], ...], watch: set[Path] | None = None):
+    def _assemble(self, name: str, defines: tuple[tuple[str, str], ...], watch: set[Path] | None = None
+                  ) -> tuple[dict[str, str], dict[str, list[Path]]]:
         if watch is not None:  # every stage file, present or not: a deleted one may come back
             root = self.root.resolve()  # the names themselves: a symlink out of the root is not followed
             watch.update(root / f"{name}{ext}" for ext in STAGES.values())
@@ -224,7 +227,8 @@ class ShaderLibrary:
             entry.errors = []
             return True
         try:
-            prog = self.ctx.program(**sources)
+            prog = self.ctx.program(vertex_shader=sources["vertex_shader"], fragment_shader=sources.get("fragment_shader"),
+                                    geometry_shader=sources.get("geometry_shader"))
         except Exception as exc:  # moderngl.Error
             entry.errors = self._parse_errors(str(exc), files_per_stage)
             return False
@@ -242,7 +246,7 @@ class ShaderLibrary:
         self.revision += 1
         return True
 
-    def _remember_files(self, entry: _Entry, files) -> None:
+    def _remember_files(self, entry: _Entry, files: Iterable[Path]) -> None:
         entry.mtimes = {}
         for p in files:
             try:
@@ -273,7 +277,7 @@ class ShaderLibrary:
         return errs or out
 
     # -- public ------------------------------------------------------------------------------
-    def _entry(self, name: str, defines: dict | None) -> _Entry:
+    def _entry(self, name: str, defines: dict[str, Any] | None) -> _Entry:
         key_defs = tuple(sorted((str(k), str(v)) for k, v in (defines or {}).items()))
         key = (name, key_defs)
         entry = self._entries.get(key)
@@ -282,14 +286,14 @@ class ShaderLibrary:
             self._compile(entry)
         return entry
 
-    def get(self, name: str, defines: dict | None = None) -> moderngl.Program:
+    def get(self, name: str, defines: dict[str, Any] | None = None) -> moderngl.Program:
         """The last good program; ShaderCompileError if it never compiled."""
         entry = self._entry(name, defines)
         if entry.program is None:
             raise ShaderCompileError(name, entry.errors)
         return entry.program
 
-    def warm(self, items, budget_ms: float | None = None) -> int:
+    def warm(self, items: Iterable[tuple[str, dict[str, Any] | None]], budget_ms: float | None = None) -> int:
         """Compile the variants ``items`` ((name, defines) pairs) not compiled yet, until
         ``budget_ms`` of wall time is spent (viewer idle frames, issue 14: a toggle then does not
         stall on a compile). Returns how many are still to compile. A driver that JIT-compiles at
@@ -305,23 +309,23 @@ class ShaderLibrary:
             done += 1
         return len(todo) - done
 
-    def version(self, name: str, defines: dict | None = None) -> str:
+    def version(self, name: str, defines: dict[str, Any] | None = None) -> str:
         """Digest of the assembled source of the running program (part of pass cache keys)."""
         entry = self._entry(name, defines)
         return f"{entry.digest}:{entry.generation}"
 
-    def describe(self, prog: moderngl.Program) -> tuple[str, frozenset]:
+    def describe(self, prog: moderngl.Program) -> tuple[str, frozenset[str]]:
         """(program name, uniform names declared in its GLSL source) of a program this library made."""
         entry = self._by_program.get(id(prog))
         if entry is None or entry.program is not prog:
             raise KeyError("program not made by this shader library")
         return entry.name, entry.declared
 
-    def on_release(self, hook) -> None:
+    def on_release(self, hook: Callable[[moderngl.Program], None]) -> None:
         """Call ``hook(program)`` just before a program is released (hot reload, release())."""
         self._release_hooks.append(hook)
 
-    def remove_hook(self, hook) -> None:
+    def remove_hook(self, hook: Callable[[moderngl.Program], None]) -> None:
         if hook in self._release_hooks:
             self._release_hooks.remove(hook)
 

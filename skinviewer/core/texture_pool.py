@@ -11,13 +11,13 @@ class TexturePool:
 
     def __init__(self, ctx: moderngl.Context):
         self.ctx = ctx
-        self._free: dict[tuple, list[moderngl.Texture]] = {}
+        self._free: dict[tuple[object, ...], list[moderngl.Texture]] = {}
         self.allocated = 0
         self.allocated_bytes = 0
         self.reused = 0
 
     @staticmethod
-    def _k(spec: TexSpec) -> tuple:
+    def _k(spec: TexSpec) -> tuple[object, ...]:
         return (spec.size, spec.components, spec.dtype, spec.filter)
 
     def take(self, spec: TexSpec) -> moderngl.Texture:

@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from skinviewer.core.constants import MAX_LIGHTS
+from skinviewer.core.settings import LightSettings
 from skinviewer.scene.camera import framed_view
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
@@ -38,7 +39,7 @@ def analytic_on(light) -> bool:
     return light_on(light) and light.kind != "environment"
 
 
-def environment_light(lights):
+def environment_light(lights: list[LightSettings]) -> tuple[int, LightSettings] | None:
     """(index, light) of the first environment light that adds radiance among the first MAX_LIGHTS,
     or None (issue 32: one environment at a time)."""
     for i, light in enumerate(lights[:MAX_LIGHTS]):

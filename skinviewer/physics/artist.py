@@ -35,7 +35,9 @@ import math
 from typing import cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from skinviewer.physics.arrays import FloatArray
 from skinviewer.physics.profiles import burley_cdf, burley_scale, sum_of_gaussians
 
 MEAN_RADIUS_PER_D = 2.5  # int_0^inf r (e^(-r/d) + e^(-r/3d)) / (4 d) dr = (d^2 + 9 d^2) / (4 d)
@@ -45,14 +47,15 @@ LADDER_LO, LADDER_HI = 0.12, 6.0
 _HARD = 1e4  # weight of the two equality rows in the constrained least squares
 
 
-def _vec3(x, name: str) -> np.ndarray:
-    a = np.broadcast_to(np.asarray(x, dtype=float), (3,)).copy()
+def _vec3(x: ArrayLike, name: str) -> FloatArray:
+    a = np.broadcast_to(np.asarray(x, dtype=np.float64), (3,)).copy()
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must be finite")
-    return a
+    out: FloatArray = a
+    return out
 
 
-def shape_distance(color, radius) -> np.ndarray:
+def shape_distance(color: ArrayLike, radius: ArrayLike) -> FloatArray:
     """d = l / s(A) per channel, mm (eq. 2.88)."""
     A = _vec3(color, "scatter colour")
     l = _vec3(radius, "scatter radius")
@@ -63,21 +66,21 @@ def shape_distance(color, radius) -> np.ndarray:
     return l / burley_scale(A, FIT)
 
 
-def burley_profile(r, color, radius) -> np.ndarray:
+def burley_profile(r: ArrayLike, color: ArrayLike, radius: ArrayLike) -> FloatArray:
     """R(r) of the look, eq. (2.84): A (e^(-r/d) + e^(-r/3d)) / (8 pi d r), shape np.shape(r) + (3,)."""
     from skinviewer.physics.profiles import burley_normalized
     d = shape_distance(color, radius)
-    return _vec3(color, "scatter colour") * burley_normalized(np.asarray(r, dtype=float)[..., None], d)
+    return _vec3(color, "scatter colour") * burley_normalized(np.asarray(r, dtype=np.float64)[..., None], d)
 
 
-def variance_ladder(d: np.ndarray, k: int) -> np.ndarray:
+def variance_ladder(d: FloatArray, k: int) -> FloatArray:
     """k variances (mm^2), sigma geometric from LADDER_LO min(d) to LADDER_HI max(d)."""
     lo, hi = LADDER_LO * float(np.min(d)), LADDER_HI * float(np.max(d))
     return np.geomspace(lo, hi, k) ** 2 if k > 1 else np.array([(MEAN_RADIUS_PER_D * float(np.max(d))) ** 2
                                                                  * 2.0 / math.pi])
 
 
-def gaussians(color, radius, k: int = 6, normalize: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def gaussians(color: ArrayLike, radius: ArrayLike, k: int = 6, normalize: bool = True) -> tuple[FloatArray, FloatArray]:
     """The sum of ``k`` Gaussians (shared variances, ascending) for the look: (variances (k,) mm^2,
     weights (k, 3)). Per channel the weights sum to A (``normalize``: to 1, d'Eon's convention where the
     albedo map carries the colour and A only shapes the profile) and the mean radius is 2.5 d."""
@@ -108,7 +111,7 @@ def gaussians(color, radius, k: int = 6, normalize: bool = True) -> tuple[np.nda
     return v, W
 
 
-def table(color, radius, k: int = 6, normalize: bool = True) -> list[tuple[float, tuple[float, float, float]]]:
+def table(color: ArrayLike, radius: ArrayLike, k: int = 6, normalize: bool = True) -> list[tuple[float, tuple[float, float, float]]]:
     """:func:`gaussians` as ``deon.gaussians`` rows: (variance, (w_r, w_g, w_b)), rounded to 7
     significant digits so that the JSON of a preset reads back to the same numbers."""
     v, W = gaussians(color, radius, k, normalize)
@@ -116,26 +119,26 @@ def table(color, radius, k: int = 6, normalize: bool = True) -> list[tuple[float
             for vi, w in zip(v, W)]
 
 
-def mean_radius(variances, weights) -> np.ndarray:
+def mean_radius(variances: ArrayLike, weights: ArrayLike) -> FloatArray:
     """Per-channel mean radius (mm) of a Gaussian table's radial energy: sum w sqrt(pi v/2) / sum w."""
-    v = np.asarray(variances, dtype=float)
-    W = np.asarray(weights, dtype=float).reshape(v.size, 3)
+    v = np.asarray(variances, dtype=np.float64)
+    W = np.asarray(weights, dtype=np.float64).reshape(v.size, 3)
     tot = W.sum(axis=0)
     m = np.sqrt(math.pi * np.maximum(v, 0.0) / 2.0) @ W
     return np.where(tot > 0, m / np.where(tot > 0, tot, 1.0), 0.0)
 
 
-def energy_radius(variances, weights, fraction: float = 0.5) -> np.ndarray:
+def energy_radius(variances: ArrayLike, weights: ArrayLike, fraction: float = 0.5) -> FloatArray:
     """Per channel, the radius (mm) inside which ``fraction`` of the table's diffuse energy lies."""
-    v = np.asarray(variances, dtype=float)
-    W = np.asarray(weights, dtype=float).reshape(v.size, 3)
+    v = np.asarray(variances, dtype=np.float64)
+    W = np.asarray(weights, dtype=np.float64).reshape(v.size, 3)
     r = np.geomspace(1e-4, 1e3, 4000)
     P = -np.expm1(-(r[:, None] ** 2) / (2.0 * np.maximum(v, 1e-30)[None, :])) @ W
     P = P / np.maximum(P[-1:], 1e-30)
     return np.array([r[min(int(np.searchsorted(P[:, c], fraction)), r.size - 1)] for c in range(3)])
 
 
-def estimate_radius(variances, weights, color) -> np.ndarray:
+def estimate_radius(variances: ArrayLike, weights: ArrayLike, color: ArrayLike) -> FloatArray:
     """The scatter radius (mm) per channel whose look has this table's mean radius: l = s(A) m / 2.5
     (the inverse of :func:`gaussians`; for any other table, the Burley look of the same mean reach)."""
     A = _vec3(color, "scatter colour")
@@ -143,25 +146,28 @@ def estimate_radius(variances, weights, color) -> np.ndarray:
     return np.maximum(m / MEAN_RADIUS_PER_D, 1e-6) * burley_scale(A, FIT)
 
 
-def estimate_color(weights, fallback) -> np.ndarray:
+def estimate_color(weights: ArrayLike, fallback: ArrayLike) -> FloatArray:
     """A table's total diffuse reflectance per channel (sum of weights), as a scatter colour; a
     normalised table (every channel ~1: the colour is in the albedo map) gives ``fallback``."""
-    tot = np.asarray(weights, dtype=float).reshape(-1, 3).sum(axis=0)
+    tot = np.asarray(weights, dtype=np.float64).reshape(-1, 3).sum(axis=0)
     if np.all(np.abs(tot - 1.0) < 1e-3):
         return _vec3(fallback, "scatter colour")
-    return np.clip(tot, 0.0, 1.0)
+    out: FloatArray = np.clip(tot, 0.0, 1.0)
+    return out
 
 
-def cdf_error(color, radius, k: int = 6) -> np.ndarray:
+def cdf_error(color: ArrayLike, radius: ArrayLike, k: int = 6) -> FloatArray:
     """Max |P_fit(r) - P_burley(r)| per channel over r: how well the table follows the look's radial
     energy (eq. 3.9)."""
     v, W = gaussians(color, radius, k, normalize=True)
     d = shape_distance(color, radius)
     r = np.geomspace(1e-3 * float(np.min(d)), 60.0 * float(np.max(d)), 2000)
     P = -np.expm1(-(r[:, None] ** 2) / (2.0 * v[None, :])) @ W
-    return np.max(np.abs(P - burley_cdf(r[:, None], d[None, :])), axis=0)
+    out: FloatArray = np.max(np.abs(P - burley_cdf(r[:, None], d[None, :])), axis=0)
+    return out
 
 
-def profile_of_table(r, variances, weights) -> np.ndarray:
+def profile_of_table(r: ArrayLike, variances: ArrayLike, weights: ArrayLike) -> FloatArray:
     """R(r) of a table (eq. 21), for plots beside :func:`burley_profile`."""
-    return sum_of_gaussians(r, np.asarray(variances, float), np.asarray(weights, float).reshape(-1, 3))
+    return sum_of_gaussians(np.asarray(r, np.float64), np.asarray(variances, np.float64),
+                            np.asarray(weights, np.float64).reshape(-1, 3))

@@ -19,9 +19,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from skinviewer.physics.arrays import BoolArray, Float32Array, FloatArray, IntArray
 from skinviewer.physics.profiles import (
     burley_cdf,
     burley_inverse_cdf,
@@ -40,26 +43,26 @@ S_MAX = float(2 ** 24)  # HDRP clamps S = 1/d to 2^24
 # ---------------------------------------------------------------------------------------------
 # profile, CDF, inverse
 
-def cdf(x) -> np.ndarray:
+def cdf(x: ArrayLike) -> FloatArray:
     """P(x) = 1 - e^-x/4 - 3 e^(-x/3)/4, seed 001 eq. 3.9 with x = s r."""
-    return burley_cdf(x, 1.0)
+    return burley_cdf(np.asarray(x, dtype=np.float64), 1.0)
 
 
-def inverse_cdf(p, printed: bool = False) -> np.ndarray:
+def inverse_cdf(p: ArrayLike, printed: bool = False) -> FloatArray:
     """x = s r with P(x) = p, eq. 3.12-3.13 (u = 1 - p). ``printed=True``: the seed's misprint (wrong)."""
-    return burley_inverse_cdf(1.0 - np.asarray(p, dtype=float), 1.0, printed=printed)
+    return burley_inverse_cdf(1.0 - np.asarray(p, dtype=np.float64), 1.0, printed=printed)
 
 
 FILTER_RADIUS_UNIT = float(inverse_cdf(FILTER_CDF))  # 16.5644 (x units: multiply by d for mm)
 
 
-def polar_pdf_unit(x) -> np.ndarray:
+def polar_pdf_unit(x: ArrayLike) -> FloatArray:
     """p(r, phi) d = (e^-x + e^-x/3) / (8 pi): the pdf of (r, phi) per unit r/d and radian."""
-    x = np.asarray(x, dtype=float)
-    return (np.exp(-x) + np.exp(-x / 3.0)) / (8.0 * math.pi)
+    xa = np.asarray(x, dtype=np.float64)
+    return (np.exp(-xa) + np.exp(-xa / 3.0)) / (8.0 * math.pi)
 
 
-def rcp_pdf_unit(x) -> np.ndarray:
+def rcp_pdf_unit(x: ArrayLike) -> FloatArray:
     """8 pi / (e^-x + e^-x/3): 1/pdf in polar measure divided by d (spec §5.3 step 4)."""
     return 1.0 / polar_pdf_unit(x)
 
@@ -71,30 +74,30 @@ def rcp_pdf_unit(x) -> np.ndarray:
 class SampleSet:
     """One stratified set of n Burley samples (x in units of d)."""
     n: int
-    x: np.ndarray  # (n,) radii r/d, ascending
-    rcp_pdf: np.ndarray  # (n,) rcpPdfUnit
-    phi: np.ndarray  # (n,) directions, radians
-    inner: np.ndarray  # (n,) bool: inner ring (spec §7.3)
+    x: FloatArray  # (n,) radii r/d, ascending
+    rcp_pdf: FloatArray  # (n,) rcpPdfUnit
+    phi: FloatArray  # (n,) directions, radians
+    inner: BoolArray  # (n,) inner ring (spec §7.3)
 
     @property
-    def cos_sin(self) -> np.ndarray:
+    def cos_sin(self) -> FloatArray:
         return np.stack([np.cos(self.phi), np.sin(self.phi)], axis=-1)
 
 
 SPLITS = ("half-radius", "area-third", "equal-count")
 
 
-def ring_flags(x: np.ndarray, split: str = "half-radius") -> np.ndarray:
+def ring_flags(x: ArrayLike, split: str = "half-radius") -> BoolArray:
     """Inner-ring flags of a base set (spec §7.3): ``half-radius`` r <= R/2 (thesis: inner:outer area 1:3),
     ``area-third`` r <= R/sqrt(3) (the other reading of 1:3), ``equal-count`` the first half of the samples
     by radius (a variant: the outer mean then rests on n/2 samples instead of 2)."""
-    x = np.asarray(x, dtype=float)
+    xa = np.asarray(x, dtype=np.float64)
     if split == "half-radius":
-        return x <= 0.5 * x.max()
+        return xa <= 0.5 * float(xa.max())
     if split == "area-third":
-        return x <= x.max() / math.sqrt(3.0)
+        return xa <= float(xa.max()) / math.sqrt(3.0)
     if split == "equal-count":
-        return np.arange(len(x)) < (len(x) + 1) // 2
+        return np.arange(len(xa)) < (len(xa) + 1) // 2
     raise ValueError(f"unknown ring split {split!r}; known: {', '.join(SPLITS)}")
 
 
@@ -118,7 +121,7 @@ def sample_set(n: int, phase: float = 0.0, split: str = "half-radius") -> Sample
     """Golubev's table of n samples: u_i = (i + 0.5)/n, x_i = P^-1(u_i), phi_i = 2 pi frac(i/golden) + phase."""
     if not 1 <= n <= 1024:
         raise ValueError(f"sample count must be in 1..1024 (got {n})")
-    i = np.arange(n, dtype=float)
+    i = np.arange(n, dtype=np.float64)
     u = (i + 0.5) / n
     x = inverse_cdf(u)
     phi = 2.0 * math.pi * np.mod(i / GOLDEN_RATIO, 1.0) + phase
@@ -131,25 +134,26 @@ def sample_set(n: int, phase: float = 0.0, split: str = "half-radius") -> Sample
 FITS = ("searchlight-dmfp", "searchlight-mfp", "diffuse-transmission", "direct")
 
 
-def shape_distance(albedo, mfp, fit: str = "searchlight-dmfp") -> np.ndarray:
+def shape_distance(albedo: ArrayLike, mfp: ArrayLike, fit: str = "searchlight-dmfp") -> FloatArray:
     """Per-channel shape distance d = l / s(A) in mm (eq. 2.84 with Christensen's fits 2.86 / 2.88 / 2.89);
     ``direct``: HDRP-new's scattering distance, d = mfp (the fit is bypassed)."""
-    A = np.asarray(albedo, dtype=float)
-    l = np.asarray(mfp, dtype=float)
+    A = np.asarray(albedo, dtype=np.float64)
+    l = np.asarray(mfp, dtype=np.float64)
     if np.any(l <= 0) or not np.all(np.isfinite(l)):
         raise ValueError("mean free path must be finite and > 0 mm")
     if fit == "direct":
-        return np.broadcast_to(l, np.broadcast_shapes(A.shape, l.shape)).copy()
+        out: FloatArray = np.broadcast_to(l, np.broadcast_shapes(A.shape, l.shape)).copy()
+        return out
     return l / burley_scale(A, fit)
 
 
 @dataclass(frozen=True)
 class Profile:
     """What the blur needs per profile: S_c = 1/d_c (1/mm), d = max d_c, the filter radius in mm."""
-    d_rgb: np.ndarray
+    d_rgb: FloatArray
 
     @property
-    def S(self) -> np.ndarray:
+    def S(self) -> FloatArray:
         return np.minimum(1.0 / np.maximum(self.d_rgb, 1.0 / S_MAX), S_MAX)
 
     @property
@@ -161,14 +165,14 @@ class Profile:
         return FILTER_RADIUS_UNIT * self.d
 
 
-def profile(albedo, mfp, fit: str = "searchlight-dmfp", scale: float = 1.0) -> Profile:
+def profile(albedo: ArrayLike, mfp: ArrayLike, fit: str = "searchlight-dmfp", scale: float = 1.0) -> Profile:
     return Profile(shape_distance(albedo, mfp, fit) * float(scale))
 
 
 PROFILE_FIELDS = ("albedo", "mfp", "fit", "scale")  # the fields of a `burley` settings section a profile needs
 
 
-def profile_of_section(b) -> Profile:
+def profile_of_section(b: Any) -> Profile:
     """The profile of a ``burley`` settings section (albedo, mfp, fit, scale)."""
     return profile(b.albedo, b.mfp, b.fit, b.scale)
 
@@ -176,17 +180,17 @@ def profile_of_section(b) -> Profile:
 # ---------------------------------------------------------------------------------------------
 # transmission (spec §5.4, HDRP ComputeTransmittanceDisney)
 
-def transmittance(t, S, A=1.0) -> np.ndarray:
+def transmittance(t: ArrayLike, S: ArrayLike, A: ArrayLike = 1.0) -> FloatArray:
     """T(t) = int 2 pi r A R(sqrt(r^2 + t^2)) dr = (A/4)(e^(-S t) + 3 e^(-S t/3)), t in mm, per channel."""
-    t = np.maximum(np.asarray(t, dtype=float), 0.0)
-    S = np.asarray(S, dtype=float)
-    return 0.25 * np.asarray(A, dtype=float) * (np.exp(-S * t) + 3.0 * np.exp(-S * t / 3.0))
+    ta = np.maximum(np.asarray(t, dtype=np.float64), 0.0)
+    Sa = np.asarray(S, dtype=np.float64)
+    return 0.25 * np.asarray(A, dtype=np.float64) * (np.exp(-Sa * ta) + 3.0 * np.exp(-Sa * ta / 3.0))
 
 
-def transmittance_thick(t_baked, t_shadow, S, A=1.0) -> np.ndarray:
+def transmittance_thick(t_baked: ArrayLike, t_shadow: ArrayLike, S: ArrayLike, A: ArrayLike = 1.0) -> FloatArray:
     """Thick ("regular") mode: T(t_baked) e^(-S dt/3), dt = max(0, t_shadow - t_baked) (spec §5.4)."""
-    dt = np.maximum(np.asarray(t_shadow, dtype=float) - np.asarray(t_baked, dtype=float), 0.0)
-    return transmittance(t_baked, S, A) * np.exp(-np.asarray(S, dtype=float) * dt / 3.0)
+    dt = np.maximum(np.asarray(t_shadow, dtype=np.float64) - np.asarray(t_baked, dtype=np.float64), 0.0)
+    return transmittance(t_baked, S, A) * np.exp(-np.asarray(S, dtype=np.float64) * dt / 3.0)
 
 
 def transmittance_numeric(t: float, S: float, A: float = 1.0) -> float:
@@ -194,29 +198,31 @@ def transmittance_numeric(t: float, S: float, A: float = 1.0) -> float:
     from scipy.integrate import quad
     d = 1.0 / S
     f = lambda r: 2.0 * math.pi * r * A * float(burley_normalized(math.hypot(r, t), d))
-    return quad(f, 0.0, np.inf, limit=400, epsabs=1e-12)[0]
+    return float(quad(f, 0.0, np.inf, limit=400, epsabs=1e-12)[0])
 
 
 # ---------------------------------------------------------------------------------------------
 # per-pixel rotation: the GLSL hash, bit-exact in uint32
 
-def pcg_hash(v: np.ndarray) -> np.ndarray:
+def pcg_hash(v: ArrayLike) -> NDArray[np.uint32]:
     """PCG-RXS-M-XS 32-bit hash (Jarzynski & Olano 2020), as in shaders/lib/burley.glsl."""
     with np.errstate(over="ignore"):
-        v = np.asarray(v, dtype=np.uint32)
-        state = v * np.uint32(747796405) + np.uint32(2891336453)
+        va = np.asarray(v, dtype=np.uint32)
+        state = va * np.uint32(747796405) + np.uint32(2891336453)
         word = ((state >> ((state >> np.uint32(28)) + np.uint32(4))) ^ state) * np.uint32(277803737)
-        return (word >> np.uint32(22)) ^ word
+        out: NDArray[np.uint32] = (word >> np.uint32(22)) ^ word
+        return out
 
 
-def rotation_phase(px: np.ndarray, py: np.ndarray, z: np.ndarray, seed: int = 0) -> np.ndarray:
+def rotation_phase(px: ArrayLike, py: ArrayLike, z: ArrayLike, seed: int = 0) -> Float32Array:
     """psi = 2 pi hash(x, y, bits of floor(linear depth, mm)) / 2^32, float32 like the GLSL (stable
     while the camera and scene are static, spec §5.3 step 4; whole mm, so that the depth's last bits,
     which differ between GPUs, do not re-roll the rotation)."""
     zb = np.floor(np.asarray(z, dtype=np.float32)).astype(np.float32).view(np.uint32)
     with np.errstate(over="ignore"):
         h = pcg_hash(np.asarray(px, np.uint32) + pcg_hash(np.asarray(py, np.uint32) + pcg_hash(zb + np.uint32(seed))))
-    return np.float32(6.2831855) * (h.astype(np.float32) * np.float32(2.3283064e-10))
+    out: Float32Array = np.float32(6.2831855) * (h.astype(np.float32) * np.float32(2.3283064e-10))
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -239,7 +245,7 @@ class Sampling:
       (floor(area/4) < 1 -> no blur) always applies.
     """
     levels: tuple[int, ...] = (22,)
-    cutoffs: tuple = ()
+    cutoffs: tuple[float | tuple[float, ...], ...] = ()  # each a scalar or an RGB triple
     split: str = "half-radius"
     contrast: str = "rings"
     budget: bool = False
@@ -248,7 +254,7 @@ class Sampling:
     wide_px: float = 1e30  # kernels at least this wide (filter radius, px) scale the cutoffs by wide_scale
     wide_scale: float = 1.0
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         if len(self.cutoffs) != len(self.levels) - 1:
             raise ValueError("one cutoff per extra level")
         if self.contrast not in CONTRASTS:
@@ -269,32 +275,32 @@ class Sampling:
 
 @dataclass
 class Result:
-    out: np.ndarray  # (H, W, 3) blurred irradiance (non-SSS and skipped pixels: the input)
-    count: np.ndarray  # (H, W) samples taken
-    level: np.ndarray  # (H, W) levels taken beyond the base (0: base only)
-    skipped: np.ndarray  # (H, W) SSS pixels under the pixel cutoff
-    contrast: np.ndarray | None = field(default=None)  # (H, W, 3) base contrast (nan where not computed)
+    out: FloatArray  # (H, W, 3) blurred irradiance (non-SSS and skipped pixels: the input)
+    count: IntArray  # (H, W) samples taken
+    level: IntArray  # (H, W) levels taken beyond the base (0: base only)
+    skipped: BoolArray  # (H, W) SSS pixels under the pixel cutoff
+    contrast: FloatArray | None = field(default=None)  # (H, W, 3) base contrast (nan where not computed)
 
 
-def pixel_scale(z_mm: np.ndarray, proj_scale: float) -> np.ndarray:
+def pixel_scale(z_mm: FloatArray, proj_scale: float) -> FloatArray:
     """Pixels per mm at linear depth z (mm): proj[1][1] * height / 2 / z (a pinhole camera)."""
     return proj_scale / np.maximum(z_mm, 1e-6)
 
 
-def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_scale: float,
+def blur(E: ArrayLike, z: FloatArray, mask: ArrayLike, prof: Profile, proj_scale: float,
          sampling: Sampling) -> Result:
     """The per-pixel algorithm on an image, row 0 at the bottom like a GL texture.
 
     E (H, W, 3) diffuse irradiance, z (H, W) linear depth in mm, mask (H, W) SSS tag (> 0.5).
     Float64 except the rotation phase and the tables (float32 like the GLSL)."""
-    E = np.asarray(E, dtype=np.float64)
+    Ea = np.asarray(E, dtype=np.float64)
     H, W = z.shape
     sss = np.asarray(mask) > 0.5
-    z = np.asarray(z, dtype=np.float32)
+    z32 = np.asarray(z, dtype=np.float32)
     ys, xs = np.mgrid[0:H, 0:W]
-    psi = rotation_phase(xs, ys, z, sampling.seed).astype(np.float64)
+    psi = rotation_phase(xs, ys, z32, sampling.seed).astype(np.float64)
     cpsi, spsi = np.cos(psi), np.sin(psi)
-    ppm = pixel_scale(z.astype(np.float64), proj_scale)
+    ppm = pixel_scale(z32.astype(np.float64), proj_scale)
     d = prof.d
     S = prof.S
     area = math.pi * (prof.filter_radius * ppm) ** 2
@@ -316,9 +322,9 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
         short = np.zeros_like(active)
         full = active
         multi = active if len(sets) > 1 else active & False
-    zc = z.astype(np.float64)
+    zc = z32.astype(np.float64)
 
-    def take(m, xk, rcp, cs, ring_in=None, ring_sum=None):
+    def take(m: BoolArray, xk: np.float64, rcp: np.float64, cs: FloatArray) -> tuple[BoolArray, FloatArray]:
         """One sample at every pixel of mask m; returns the validity mask and the sampled E."""
         r = xk * d
         dx = cs[..., 0] * cpsi - cs[..., 1] * spsi
@@ -329,10 +335,10 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
         inside = (sx >= 0) & (sx < W) & (sy >= 0) & (sy < H)
         sxc, syc = np.clip(sx, 0, W - 1), np.clip(sy, 0, H - 1)
         valid = m & inside & sss[syc, sxc]
-        Ei = E[syc, sxc]
+        Ei = Ea[syc, sxc]
         dz = zc[syc, sxc] - zc
         rp = np.sqrt(r * r + dz * dz)[..., None]
-        w = S / (8.0 * math.pi) * (np.exp(-S * rp) + np.exp(-S * rp / 3.0)) * (rcp * d)[..., None]
+        w = S / (8.0 * math.pi) * (np.exp(-S * rp) + np.exp(-S * rp / 3.0)) * np.asarray(rcp * d)[..., None]
         w = np.where(valid[..., None], w, 0.0)
         acc[...] += w * Ei
         wsum[...] += w
@@ -358,7 +364,7 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
         C = contrast_of(sampling.contrast, in_sum, out_sum, n_in, n_out, lo, hi)
         contrast = np.where(multi[..., None], C, np.nan)
         scale = np.where(prof.filter_radius * ppm >= sampling.wide_px, sampling.wide_scale, 1.0)[..., None]
-        go = multi & np.any(C > np.asarray(sampling.cutoffs[0], dtype=float) * scale, axis=-1)
+        go = multi & np.any(C > np.asarray(sampling.cutoffs[0], dtype=np.float64) * scale, axis=-1)
         for k, s in enumerate(sets[1:], start=1):
             for j in range(s.n):
                 valid, Ei = take(go, s.x[j], s.rcp_pdf[j], s.cos_sin[j])
@@ -370,7 +376,7 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
             if k < len(sets) - 1:
                 # a further level is decided from the min/max of every sample so far (rings: base only)
                 C2 = contrast_of(sampling.contrast, in_sum, out_sum, n_in, n_out, lo, hi)
-                go = go & np.any(C2 > np.asarray(sampling.cutoffs[k], dtype=float) * scale, axis=-1)
+                go = go & np.any(C2 > np.asarray(sampling.cutoffs[k], dtype=np.float64) * scale, axis=-1)
     # runtime sets (budget): n_avail samples evaluated per pixel
     if short.any():
         for n in np.unique(n_avail[short]).astype(int):
@@ -378,13 +384,14 @@ def blur(E: np.ndarray, z: np.ndarray, mask: np.ndarray, prof: Profile, proj_sca
             s = sample_set(n)
             for i in range(n):
                 take(m, s.x[i], s.rcp_pdf[i], s.cos_sin[i])
-    out = E.copy()
+    out = Ea.copy()
     blurred = acc / np.maximum(wsum, np.finfo(np.float32).tiny)
     out[active] = blurred[active]
     return Result(out, count, level, skipped, contrast)
 
 
-def contrast_of(kind, in_sum, out_sum, n_in, n_out, lo, hi) -> np.ndarray:
+def contrast_of(kind: str, in_sum: FloatArray, out_sum: FloatArray, n_in: FloatArray, n_out: FloatArray,
+                lo: FloatArray, hi: FloatArray) -> FloatArray:
     """Per-channel contrast (seed 001 eq. 4.1, spec §7.6 step 3; C = 0 for an empty ring)."""
     if kind == "rings":
         L_in = in_sum / np.maximum(n_in, 1)[..., None]
@@ -401,7 +408,7 @@ def contrast_of(kind, in_sum, out_sum, n_in, n_out, lo, hi) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 # analytic references (spec T4.3, T4.4)
 
-def edge_response(t) -> np.ndarray:
+def edge_response(t: ArrayLike) -> FloatArray:
     """Fraction of the profile's mass on the lit side of a straight edge at signed distance t (units of d,
     positive = inside the lit half-plane): 1/2 + int_0^t LSF, LSF(x) = (K0(|x|) + K0(|x|/3)) / (4 pi)
     (spec T4.3)."""
@@ -417,8 +424,8 @@ def edge_response(t) -> np.ndarray:
         v = I / (4.0 * math.pi)
         return 0.5 + math.copysign(v, tt)
 
-    t = np.asarray(t, dtype=float)
-    return np.vectorize(one)(t)
+    out: FloatArray = np.vectorize(one, otypes=[np.float64])(np.asarray(t, dtype=np.float64))
+    return out
 
 
 def samples_saved(total: float, golubev_total: float) -> float:

@@ -7,53 +7,69 @@ Units: variances in mm^2, distances in mm.
 """
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from skinviewer.physics.arrays import Float32Array, FloatArray, IndexArray
+
+
+@runtime_checkable
+class GaussianTerm(Protocol):
+    """One term of a sum of Gaussians as the settings hold it (``DeonSettings.gaussians``)."""
+    @property
+    def variance(self) -> float: ...
+    @property
+    def weights(self) -> Sequence[float]: ...
 
 # -- eq. (20), (21) ----------------------------------------------------------------------------
 
 
-def gaussian(v, r):
+def gaussian(v: ArrayLike, r: ArrayLike) -> FloatArray:
     """eq. (20): G(v, r) = exp(-r^2 / 2v) / (2 pi v), a 2D radial Gaussian of unit integral.
     v = 0 is a delta (returns 0 for r > 0; never NaN)."""
-    v = np.asarray(v, dtype=np.float64)
-    r = np.asarray(r, dtype=np.float64)
-    vv = np.maximum(v, 1e-300)
+    va = np.asarray(v, dtype=np.float64)
+    ra = np.asarray(r, dtype=np.float64)
+    vv = np.maximum(va, 1e-300)
     with np.errstate(under="ignore", over="ignore"):
-        g = np.exp(-(r * r) / (2.0 * vv)) / (2.0 * np.pi * vv)
-    return np.where(v > 0, g, 0.0)
+        g = np.exp(-(ra * ra) / (2.0 * vv)) / (2.0 * np.pi * vv)
+    return np.where(va > 0, g, 0.0)
 
 
-def profile(r, gaussians) -> np.ndarray:
+def profile(r: ArrayLike, gaussians: Iterable[GaussianTerm | Sequence[Any]]) -> FloatArray:
     """eq. (21): R(r) = sum_i w_i G(v_i, r), per channel: returns (..., 3)."""
-    r = np.asarray(r, dtype=np.float64)
-    out = np.zeros(r.shape + (3,))
+    ra = np.asarray(r, dtype=np.float64)
+    out = np.zeros(ra.shape + (3,))
     for g in gaussians:
         v, w = _vw(g)
-        out += gaussian(v, r)[..., None] * np.asarray(w, dtype=np.float64)
+        out += gaussian(v, ra)[..., None] * np.asarray(w, dtype=np.float64)
     return out
 
 
-def _vw(g):
-    if hasattr(g, "variance"):
+def _vw(g: GaussianTerm | Sequence[Any]) -> tuple[float, tuple[float, ...]]:
+    """(variance, weights) of a settings term or a (variance, weights) pair."""
+    if isinstance(g, GaussianTerm):
         return float(g.variance), tuple(g.weights)
+
     return float(g[0]), tuple(g[1])
 
 
 # -- the TSM identity behind eq. (33) ----------------------------------------------------------
 
 
-def tsm_factor(d, v, form: str = "exact"):
+def tsm_factor(d: ArrayLike, v: ArrayLike, form: str = "exact") -> FloatArray:
     """Attenuation of Gaussian v for a thickness d (mm): exact separability
     G(v, sqrt(r^2 + d^2)) = G(v, r) exp(-d^2 / 2v) gives exp(-d^2/(2v)) ("exact"); seed 000 prints
     exp(-d^2/v) ("printed"). v = 0: 1 at d = 0, else 0. Never NaN for finite input."""
-    d = np.asarray(d, dtype=np.float64)
-    v = np.asarray(v, dtype=np.float64)
-    denom = (2.0 if form == "exact" else 1.0) * np.maximum(v, 1e-300)
+    da = np.asarray(d, dtype=np.float64)
+    va = np.asarray(v, dtype=np.float64)
+    denom = (2.0 if form == "exact" else 1.0) * np.maximum(va, 1e-300)
     with np.errstate(under="ignore", over="ignore"):
-        f = np.exp(-(d * d) / denom)
-    return np.where(v > 0, f, (d == 0).astype(np.float64))
+        f = np.exp(-(da * da) / denom)
+    return np.where(va > 0, f, (da == 0).astype(np.float64))
 
 
 # -- the 7-tap kernel (eq. 25-26) --------------------------------------------------------------
@@ -67,12 +83,12 @@ def tsm_factor(d, v, form: str = "exact"):
 TAP_OFFSETS = np.arange(-3, 4, dtype=np.float64)
 
 
-def _kernel(s: float) -> np.ndarray:
+def _kernel(s: float) -> FloatArray:
     w = np.exp(-TAP_OFFSETS ** 2 / (2.0 * s * s))
-    return w / w.sum()
+    return w / float(w.sum())
 
 
-def _solve_kernel() -> np.ndarray:
+def _solve_kernel() -> FloatArray:
     lo, hi = 0.5, 2.0
     for _ in range(80):
         mid = 0.5 * (lo + hi)
@@ -119,7 +135,7 @@ def stretch_blur_resource(i: int) -> str:
     return f"stretch_blur_{i}"
 
 
-def blur_plan(variances, reuse_below: float, fold_below: float = 0.0) -> list[BlurStep]:
+def blur_plan(variances: Iterable[float], reuse_below: float, fold_below: float = 0.0) -> list[BlurStep]:
     """One step per Gaussian. blur_i = blur_(i-1) (x) G(v_i - var(blur_(i-1))) with the increment
     clamped to >= 0 (non-ascending variances: blur_i = blur_(i-1)); the first Gaussian reuses the
     irradiance itself (variance 0) when v_1 < reuse_below. The increment is measured from the
@@ -144,7 +160,7 @@ def blur_plan(variances, reuse_below: float, fold_below: float = 0.0) -> list[Bl
     return steps
 
 
-def blur_plan_texels(variances, reuse_below_texels: float, texel_mm: float,
+def blur_plan_texels(variances: Iterable[float], reuse_below_texels: float, texel_mm: float,
                      fold_below_texels: float = 0.0) -> list[BlurStep]:
     """blur_plan with the reuse threshold relative to the texel: blur_1 is the irradiance itself
     when sigma_1 < reuse_below_texels * texel_mm (a sub-texel blur would change nothing; a fixed
@@ -158,7 +174,7 @@ def texture_of(step: BlurStep) -> str:
     return step.source if step.reused else blur_resource(step.index)
 
 
-def uniform_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
+def uniform_uv_per_mm(positions: ArrayLike, uvs: ArrayLike, indices: IndexArray, mm_per_unit: float) -> float:
     """The stretch used when stretch correction is off: one isotropic scale, sqrt(UV area / world
     area in mm^2) over the whole mesh (so mm scaling stays right on average, distortion is not
     corrected)."""
@@ -176,7 +192,8 @@ def uniform_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
 MAX_UV_PER_MM = 10.0  # deon_stretch.frag's clamp (tiny or zero world area)
 
 
-def uv_jacobians(positions, uvs, indices, mm_per_unit: float):
+def uv_jacobians(positions: ArrayLike, uvs: ArrayLike, indices: IndexArray, mm_per_unit: float
+                 ) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
     """Per triangle, the UV -> surface Jacobian's columns dP/du, dP/dv (mm per UV unit; seed 000
     eq. 27) and whether the triangle has a UV area at all (``ok``): (pu, pv, ok)."""
     p = np.asarray(positions, dtype=np.float64)[indices] * float(mm_per_unit)
@@ -192,7 +209,7 @@ def uv_jacobians(positions, uvs, indices, mm_per_unit: float):
     return pu, pv, ok & np.isfinite(pu).all(1) & np.isfinite(pv).all(1)
 
 
-def max_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
+def max_uv_per_mm(positions: ArrayLike, uvs: ArrayLike, indices: IndexArray, mm_per_unit: float) -> float:
     """A bound on the stretch map (UV per mm, seed 000 eq. 27), known without reading it back: the
     largest per-axis UV standard deviation of a unit surface Gaussian, sqrt(S_uu), sqrt(S_vv) of
     S = (J^T J)^-1 per triangle (triangle_uv_covariance). It bounds deon_stretch.frag's per-triangle
@@ -204,7 +221,8 @@ def max_uv_per_mm(positions, uvs, indices, mm_per_unit: float) -> float:
     return float(np.clip(np.sqrt(S[ok][:, [0, 2]].max()), 1e-7, MAX_UV_PER_MM))
 
 
-def triangle_uv_covariance(positions, uvs, indices, mm_per_unit: float):
+def triangle_uv_covariance(positions: ArrayLike, uvs: ArrayLike, indices: IndexArray, mm_per_unit: float
+                           ) -> tuple[FloatArray, NDArray[np.bool_], FloatArray]:
     """Per triangle (S_uu, S_uv, S_vv) = (J^T J)^-1, UV^2 per mm^2, clamped like deon_stretch.frag
     (per axis at most MAX_UV_PER_MM^2; a triangle with no surface area gets the clamp), whether it
     has a UV area (ok: it is rasterised in texture space) and its surface area (mm^2; 0 if none)."""
@@ -221,7 +239,7 @@ def triangle_uv_covariance(positions, uvs, indices, mm_per_unit: float):
     return S, ok, np.where(surface & np.isfinite(area), area, 0.0)
 
 
-def max_shear_cos(positions, uvs, indices, mm_per_unit: float) -> float:
+def max_shear_cos(positions: ArrayLike, uvs: ArrayLike, indices: IndexArray, mm_per_unit: float) -> float:
     """The largest |cos| of the angle between dP/du and dP/dv over the mesh's triangles (0: the UV
     axes are orthogonal on the surface everywhere, so a shear-following blur is the per-axis one)."""
     pu, pv, ok = uv_jacobians(positions, uvs, indices, mm_per_unit)
@@ -233,7 +251,8 @@ def max_shear_cos(positions, uvs, indices, mm_per_unit: float) -> float:
     return float(np.nan_to_num(c, nan=0.0).max())
 
 
-def vertex_uv_covariance(positions, uvs, indices, mm_per_unit: float) -> np.ndarray:
+def vertex_uv_covariance(positions: ArrayLike, uvs: ArrayLike, indices: IndexArray, mm_per_unit: float
+                         ) -> Float32Array:
     """(N, 3) float32 per vertex: (S_uu, S_uv, S_vv), the UV covariance of a unit surface Gaussian,
     S = G^-1 with G = J^T J the metric of the UV -> surface Jacobian (seed 000 eq. 27 without
     dropping the shear; UV^2 per mm^2). A blur of sigma mm needs the UV covariance sigma^2 S.
@@ -247,7 +266,7 @@ def vertex_uv_covariance(positions, uvs, indices, mm_per_unit: float) -> np.ndar
     S, _, area = triangle_uv_covariance(positions, uvs, indices, mm_per_unit)
     area = area + 1e-300  # a vertex whose triangles have no surface area: the mean of their clamps
     lim = MAX_UV_PER_MM ** 2
-    n = len(positions)
+    n = len(np.asarray(positions))
     acc = np.zeros((n, 3))
     wsum = np.zeros(n)
     for k in range(3):
@@ -257,26 +276,27 @@ def vertex_uv_covariance(positions, uvs, indices, mm_per_unit: float) -> np.ndar
     return out.astype(np.float32)
 
 
-def stretch_from_uv_covariance(S) -> np.ndarray:
+def stretch_from_uv_covariance(S: ArrayLike) -> FloatArray:
     """(..., 3) stretch map texels (s_u, s_v, c) from UV covariances (S_uu, S_uv, S_vv), as
     deon_stretch.frag (VERTEX_METRIC) writes them: G = S^-1, s_u = 1/sqrt(G_uu), s_v = 1/sqrt(G_vv)
     (eq. 27's UV per mm along u and v), c = G_uv / sqrt(G_uu G_vv) (the shear, clamped to +-0.95)."""
-    S = np.asarray(S, np.float64)
-    det = S[..., 0] * S[..., 2] - S[..., 1] ** 2
-    ok = (det > 0) & (S[..., 0] > 0) & (S[..., 2] > 0)
+    Sa = np.asarray(S, np.float64)
+    det = Sa[..., 0] * Sa[..., 2] - Sa[..., 1] ** 2
+    ok = (det > 0) & (Sa[..., 0] > 0) & (Sa[..., 2] > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        su = np.sqrt(np.where(ok, det / S[..., 2], 1.0))
-        sv = np.sqrt(np.where(ok, det / S[..., 0], 1.0))
-        c = np.where(ok, -S[..., 1] / np.sqrt(S[..., 0] * S[..., 2]), 0.0)
+        su = np.sqrt(np.where(ok, det / Sa[..., 2], 1.0))
+        sv = np.sqrt(np.where(ok, det / Sa[..., 0], 1.0))
+        c = np.where(ok, -Sa[..., 1] / np.sqrt(Sa[..., 0] * Sa[..., 2]), 0.0)
     su = np.where(ok, np.clip(su, 1e-7, MAX_UV_PER_MM), MAX_UV_PER_MM)
     sv = np.where(ok, np.clip(sv, 1e-7, MAX_UV_PER_MM), MAX_UV_PER_MM)
     return np.stack([su, sv, np.clip(c, -0.95, 0.95)], -1)
 
 
-def _uv_area2(uvs, indices) -> np.ndarray:
+def _uv_area2(uvs: ArrayLike, indices: IndexArray) -> FloatArray:
     t = np.asarray(uvs, dtype=np.float64)[indices]
     t1, t2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
-    return t1[:, 0] * t2[:, 1] - t2[:, 0] * t1[:, 1]
+    out: FloatArray = t1[:, 0] * t2[:, 1] - t2[:, 0] * t1[:, 1]
+    return out
 
 
 def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int = 8) -> list[float]:
@@ -301,7 +321,7 @@ def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int
     return out
 
 
-def profile_variance(variances, weights) -> np.ndarray:
+def profile_variance(variances: ArrayLike, weights: ArrayLike) -> FloatArray:
     """Per-axis variance (mm^2) of sum_i w_i G(v_i, r) per channel: sum w_i v_i / sum w_i."""
     v = np.asarray(variances, dtype=np.float64)
     w = np.asarray(weights, dtype=np.float64).reshape(len(v), 3)

@@ -38,9 +38,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from skinviewer.physics.arrays import FloatArray
 from skinviewer.physics.profiles import burley_normalized, burley_scale
 
 TWO_PI = 2.0 * math.pi
@@ -75,8 +78,8 @@ def ior_to_f0(ior: float) -> float:
 # ---------------------------------------------------------------------------------------------
 # Burley's d in each target's terms
 
-def _rgb(x, name: str) -> np.ndarray:
-    a = np.asarray(x, dtype=float).reshape(-1)
+def _rgb(x: ArrayLike, name: str) -> FloatArray:
+    a = np.asarray(x, dtype=np.float64).reshape(-1)
     if a.size == 1:
         a = np.repeat(a, 3)
     if a.size != 3 or not np.all(np.isfinite(a)):
@@ -84,27 +87,29 @@ def _rgb(x, name: str) -> np.ndarray:
     return a
 
 
-def unreal_mfp_mm(A, d_mm) -> np.ndarray:
+def unreal_mfp_mm(A: ArrayLike, d_mm: ArrayLike) -> FloatArray:
     """Unreal's (UE5) mean free path in mm for Burley (A, d): l = 0.6 s_86(A) d."""
-    return UNREAL_DMFP_TO_MFP * burley_scale(np.clip(A, 0.0, 1.0), "searchlight-mfp") * np.asarray(d_mm, float)
+    out: FloatArray = UNREAL_DMFP_TO_MFP * burley_scale(np.clip(A, 0.0, 1.0), "searchlight-mfp") * np.asarray(d_mm, float)
+    return out
 
 
-def unreal_d_mm(A, mfp_mm) -> np.ndarray:
+def unreal_d_mm(A: ArrayLike, mfp_mm: ArrayLike) -> FloatArray:
     """d = DMFP / s_88(A) with DMFP = mfp s_88(A)/s_86(A) / 0.6 (SubsurfaceProfile.cpp,
     GetDiffuseMeanFreePathFromMeanFreePath): d = mfp / (0.6 s_86(A))."""
     return np.asarray(mfp_mm, float) / (UNREAL_DMFP_TO_MFP * burley_scale(np.clip(A, 0.0, 1.0), "searchlight-mfp"))
 
 
-def cb_mfp_mm(A, d_mm) -> np.ndarray:
+def cb_mfp_mm(A: ArrayLike, d_mm: ArrayLike) -> FloatArray:
     """Christensen-Burley radius (mean free path) for (A, d): l = s_89(A) d (eq. 2.89)."""
-    return burley_scale(np.clip(A, 0.0, 1.0), "diffuse-transmission") * np.asarray(d_mm, float)
+    out: FloatArray = burley_scale(np.clip(A, 0.0, 1.0), "diffuse-transmission") * np.asarray(d_mm, float)
+    return out
 
 
-def cb_d_mm(A, mfp_mm) -> np.ndarray:
+def cb_d_mm(A: ArrayLike, mfp_mm: ArrayLike) -> FloatArray:
     return np.asarray(mfp_mm, float) / burley_scale(np.clip(A, 0.0, 1.0), "diffuse-transmission")
 
 
-def split_colour(v) -> tuple[tuple[float, float, float], float]:
+def split_colour(v: ArrayLike) -> tuple[tuple[float, float, float], float]:
     """A per-channel length as (colour with max 1, multiplier): how every target stores it."""
     a = np.asarray(v, float)
     m = float(np.max(a))
@@ -120,21 +125,21 @@ def split_colour(v) -> tuple[tuple[float, float, float], float]:
 @dataclass(frozen=True)
 class BurleyFit:
     """Burley (A, d) per channel fitted to a profile, with what the fit loses."""
-    A: np.ndarray  # (3,) in [0, 1]
-    d: np.ndarray  # (3,) mm
-    error: np.ndarray  # (3,) relative L2 of r R(r)
-    rd_target: np.ndarray  # (3,) R_d of the fitted profile
-    rd_error: np.ndarray  # (3,) |A - R_d| / R_d
+    A: FloatArray  # (3,) in [0, 1]
+    d: FloatArray  # (3,) mm
+    error: FloatArray  # (3,) relative L2 of r R(r)
+    rd_target: FloatArray  # (3,) R_d of the fitted profile
+    rd_error: FloatArray  # (3,) |A - R_d| / R_d
 
-    def __call__(self, r) -> np.ndarray:
+    def __call__(self, r: ArrayLike) -> FloatArray:
         return burley_profile(r, self.A, self.d)
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return {"albedo": self.A.tolist(), "d_mm": self.d.tolist(), "error_rR": self.error.tolist(),
                 "rd_target": self.rd_target.tolist(), "rd_error": self.rd_error.tolist()}
 
 
-def burley_profile(r, A, d_mm) -> np.ndarray:
+def burley_profile(r: ArrayLike, A: ArrayLike, d_mm: ArrayLike) -> FloatArray:
     """Eq. (2.84) per channel: A burley_normalized(r, d), shape np.shape(r) + (3,)."""
     r = np.asarray(r, float)
     return np.asarray(A, float) * burley_normalized(r[..., None], np.asarray(d_mm, float))
@@ -143,14 +148,15 @@ def burley_profile(r, A, d_mm) -> np.ndarray:
 @dataclass(frozen=True)
 class RGrid:
     """Radii (mm) and weights q with sum_j q_j f(r_j)^2 ~ int_0^inf f(r)^2 dr (f = r R)."""
-    r: np.ndarray
-    q: np.ndarray
+    r: FloatArray
+    q: FloatArray
 
-    def norm(self, f: np.ndarray) -> np.ndarray:
-        return np.sqrt(self.q @ (np.asarray(f, float) ** 2))
+    def norm(self, f: FloatArray) -> FloatArray:
+        out: FloatArray = np.sqrt(self.q @ (np.asarray(f, float) ** 2))
+        return out
 
 
-def r_grid(profile: Callable[[np.ndarray], np.ndarray], n: int = 400, rel: float = 1e-9) -> RGrid:
+def r_grid(profile: Callable[[FloatArray], ArrayLike], n: int = 400, rel: float = 1e-9) -> RGrid:
     """A log-spaced grid holding all but ``rel`` of int (r R_c)^2 dr in every channel (probed over
     1e-5..1e4 mm), trapezoid in log r: int f^2 dr = int r f^2 dlog r."""
     probe = np.geomspace(1e-5, 1e4, 361)  # 40 a decade
@@ -173,8 +179,8 @@ def r_grid(profile: Callable[[np.ndarray], np.ndarray], n: int = 400, rel: float
     return RGrid(r, q)
 
 
-def _values(R) -> np.ndarray:
-    R = np.asarray(R, float)
+def _values(profile_values: ArrayLike) -> FloatArray:
+    R = np.asarray(profile_values, np.float64)
     if R.ndim == 1:
         R = np.repeat(R[:, None], 3, 1)
     if not np.all(np.isfinite(R)):
@@ -182,7 +188,8 @@ def _values(R) -> np.ndarray:
     return R
 
 
-def relative_error(target: Callable, fitted: Callable, grid: RGrid | None = None) -> np.ndarray:
+def relative_error(target: Callable[[FloatArray], ArrayLike], fitted: Callable[[FloatArray], ArrayLike],
+                   grid: RGrid | None = None) -> FloatArray:
     """||r (R - F)|| / ||r R|| per channel (0 where the target is 0)."""
     g = grid or r_grid(target)
     T = g.r[:, None] * _values(target(g.r))
@@ -191,16 +198,17 @@ def relative_error(target: Callable, fitted: Callable, grid: RGrid | None = None
     return np.where(den > 0, g.norm(T - F) / np.where(den > 0, den, 1.0), 0.0)
 
 
-def total_reflectance(profile: Callable, grid: RGrid | None = None) -> np.ndarray:
+def total_reflectance(profile: Callable[[FloatArray], ArrayLike], grid: RGrid | None = None) -> FloatArray:
     """R_d = 2 pi int r R dr (the model's own closed form when it has one)."""
     if hasattr(profile, "total_reflectance"):
         return np.asarray(profile.total_reflectance(), float)
     probe = np.geomspace(1e-6, 1e4, 4001)
-    return TWO_PI * np.trapezoid(probe[:, None] ** 2 * _values(profile(probe)), np.log(probe), axis=0)
+    return TWO_PI * np.asarray(np.trapezoid(probe[:, None] ** 2 * _values(profile(probe)), np.log(probe), axis=0))
 
 
-def fit_burley(profile: Callable[[np.ndarray], np.ndarray], grid: RGrid | None = None,
-               fixed_albedo=None) -> BurleyFit:
+def fit_burley(profile: Callable[[FloatArray], FloatArray], grid: RGrid | None = None,
+               fixed_albedo: ArrayLike | None = None) -> BurleyFit:
+
     """Burley's A and d per channel by least squares on r R(r). For a fixed d the best A is linear
     (clamped to [0, 1], still the constrained optimum of a 1-D quadratic); d is found by a log-spaced
     scan and refined by Brent's bounded method on log d. ``fixed_albedo`` (3,): only d is fitted (a
@@ -220,7 +228,7 @@ def fit_burley(profile: Callable[[np.ndarray], np.ndarray], grid: RGrid | None =
             A[c], d[c] = 0.0, 1.0
             continue
 
-        def cost(logd: float, c: int = c, t: np.ndarray = t) -> tuple[float, float]:
+        def cost(logd: float, c: int = c, t: FloatArray = t) -> tuple[float, float]:
             b = g.r * burley_normalized(g.r, math.exp(logd))
             bb = float(g.q @ (b * b))
             if fixed is not None:
@@ -252,8 +260,8 @@ class EngineSkin:
     """A profile and specular in engine-neutral terms: Burley A and d (mm) per channel, GGX
     perceptual roughness, IOR. ``albedo_in_profile`` is False for HDRP (its profile is normalised:
     the albedo is the material's base colour)."""
-    A: np.ndarray
-    d_mm: np.ndarray
+    A: FloatArray
+    d_mm: FloatArray
     roughness: float = 0.548
     ior: float = 1.4
     albedo_in_profile: bool = True
@@ -272,11 +280,11 @@ class EngineSkin:
         object.__setattr__(self, "A", A)
         object.__setattr__(self, "d_mm", d)
 
-    def __call__(self, r) -> np.ndarray:
+    def __call__(self, r: ArrayLike) -> FloatArray:
         return burley_profile(r, self.A, self.d_mm)
 
 
-def hdrp_values(skin: EngineSkin, metres_per_unit: float = 1.0) -> dict:
+def hdrp_values(skin: EngineSkin, metres_per_unit: float = 1.0) -> dict[str, Any]:
     """The DiffusionProfile fields (DiffusionProfileSettings.cs): distances in mm, worldScale = the
     size of one world unit in metres. The profile is normalised (albedo: the material's base colour)."""
     colour, mult = split_colour(skin.d_mm)
@@ -285,12 +293,12 @@ def hdrp_values(skin: EngineSkin, metres_per_unit: float = 1.0) -> dict:
             "smoothness": 1.0 - skin.roughness}
 
 
-def hdrp_skin(scattering_distance, multiplier: float, ior: float = 1.4, smoothness: float | None = None) -> EngineSkin:
+def hdrp_skin(scattering_distance: ArrayLike, multiplier: float, ior: float = 1.4, smoothness: float | None = None) -> EngineSkin:
     d = _rgb(scattering_distance, "scatteringDistance") * float(multiplier)
     return EngineSkin(np.ones(3), d, 0.548 if smoothness is None else 1.0 - smoothness, ior, albedo_in_profile=False)
 
 
-def unreal_values(skin: EngineSkin) -> dict:
+def unreal_values(skin: EngineSkin) -> dict[str, Any]:
     """FSubsurfaceProfileStruct (UE5, bEnableMeanFreePath): distances in cm (Unreal units)."""
     colour, dist_mm = split_colour(unreal_mfp_mm(skin.A, skin.d_mm))
     return {"surface_albedo": tuple(float(x) for x in skin.A), "mean_free_path_color": colour,
@@ -298,14 +306,14 @@ def unreal_values(skin: EngineSkin) -> dict:
             "roughness": float(skin.roughness)}
 
 
-def unreal_skin(surface_albedo, mfp_color, mfp_distance_cm: float, ior: float = 1.4,
+def unreal_skin(surface_albedo: ArrayLike, mfp_color: ArrayLike, mfp_distance_cm: float, ior: float = 1.4,
                 roughness: float = 0.548) -> EngineSkin:
     A = np.clip(_rgb(surface_albedo, "SurfaceAlbedo"), 0.0, 1.0)
     mfp = _rgb(mfp_color, "MeanFreePathColor") * float(mfp_distance_cm) * MM_PER_CM
     return EngineSkin(A, unreal_d_mm(A, mfp), roughness, ior)
 
 
-def cb_values(skin: EngineSkin) -> dict:
+def cb_values(skin: EngineSkin) -> dict[str, Any]:
     """Christensen-Burley radius (mean free path per channel, mm) as colour x scale (MaterialX,
     OpenPBR, Blender)."""
     colour, scale_mm = split_colour(cb_mfp_mm(skin.A, skin.d_mm))
@@ -313,7 +321,7 @@ def cb_values(skin: EngineSkin) -> dict:
             "radius_scale_mm": scale_mm, "roughness": float(skin.roughness), "ior": float(skin.ior)}
 
 
-def cb_skin(colour, radius_color, radius_scale_mm: float, roughness: float = 0.548, ior: float = 1.4) -> EngineSkin:
+def cb_skin(colour: ArrayLike, radius_color: ArrayLike, radius_scale_mm: float, roughness: float = 0.548, ior: float = 1.4) -> EngineSkin:
     A = np.clip(_rgb(colour, "subsurface colour"), 0.0, 1.0)
     mfp = _rgb(radius_color, "subsurface radius") * float(radius_scale_mm)
     return EngineSkin(A, cb_d_mm(A, mfp), roughness, ior)

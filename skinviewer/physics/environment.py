@@ -14,8 +14,22 @@ the radiance arriving from direction w is L(R_y(-yaw) w).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+from skinviewer.physics.arrays import BoolArray, Float32Array, FloatArray, IndexArray
+
+
+class RayCaster(Protocol):
+    """What the visibility bake and the truth need of a ray intersector (trimesh's Embree one)."""
+    def intersects_any(self, ray_origins: FloatArray, ray_directions: FloatArray) -> BoolArray: ...
+
+
+# weight(mu (n, T), rows) of the environment's terms (rho_dt for the truth; None: 1)
+EnvWeight = Callable[[FloatArray, slice], ArrayLike]
 
 # SH orders the irradiance supports (R&H 2001: order 2, 9 coefficients, is within 3 % of the
 # exact irradiance for any environment; A_3 = 0, so order 3 adds nothing)
@@ -37,7 +51,7 @@ RHO_W = tuple(float(w) for w in 0.5 * _GL_W)
 
 # -- directions ---------------------------------------------------------------------------------
 
-def equirect_directions(w: int, h: int) -> np.ndarray:
+def equirect_directions(w: int, h: int) -> FloatArray:
     """(h, w, 3) unit directions of the texel centres."""
     theta = (np.arange(h) + 0.5) / h * math.pi
     phi = (np.arange(w) + 0.5) / w * 2.0 * math.pi - math.pi
@@ -45,13 +59,14 @@ def equirect_directions(w: int, h: int) -> np.ndarray:
     return np.stack(np.broadcast_arrays(st * np.sin(phi)[None], ct, -st * np.cos(phi)[None]), -1)
 
 
-def equirect_solid_angles(w: int, h: int) -> np.ndarray:
+def equirect_solid_angles(w: int, h: int) -> FloatArray:
     """(h, w) exact solid angle of each texel: (2 pi / w)(cos theta_0 - cos theta_1); sums to 4 pi."""
     edges = np.cos(np.arange(h + 1) / h * math.pi)
-    return np.broadcast_to(((edges[:-1] - edges[1:]) * 2.0 * math.pi / w)[:, None], (h, w)).copy()
+    out: FloatArray = np.broadcast_to(((edges[:-1] - edges[1:]) * 2.0 * math.pi / w)[:, None], (h, w)).copy()
+    return out
 
 
-def rotate_yaw(d: np.ndarray, yaw_deg: float) -> np.ndarray:
+def rotate_yaw(d: FloatArray, yaw_deg: float) -> FloatArray:
     """Directions ``d`` (..., 3) turned by ``yaw_deg`` about +y (x towards -z for a positive yaw)."""
     a = math.radians(yaw_deg)
     c, s = math.cos(a), math.sin(a)
@@ -59,14 +74,14 @@ def rotate_yaw(d: np.ndarray, yaw_deg: float) -> np.ndarray:
     return np.stack([c * x + s * z, y, -s * x + c * z], -1)
 
 
-def direction_to_uv(d: np.ndarray) -> np.ndarray:
+def direction_to_uv(d: FloatArray) -> FloatArray:
     """(..., 2) equirect coordinates (u, v in [0, 1], v = 0 at the zenith) of unit directions."""
     phi = np.arctan2(d[..., 0], -d[..., 2])
     theta = np.arccos(np.clip(d[..., 1], -1.0, 1.0))
     return np.stack([(phi + math.pi) / (2.0 * math.pi), theta / math.pi], -1)
 
 
-def sample_equirect(img: np.ndarray, d: np.ndarray, yaw_deg: float = 0.0) -> np.ndarray:
+def sample_equirect(img: FloatArray, d: FloatArray, yaw_deg: float = 0.0) -> FloatArray:
     """Bilinear radiance of ``img`` (H, W, 3) arriving from directions ``d`` (N, 3) (wraps in u)."""
     h, w = img.shape[:2]
     uv = direction_to_uv(rotate_yaw(d, -yaw_deg))
@@ -76,11 +91,12 @@ def sample_equirect(img: np.ndarray, d: np.ndarray, yaw_deg: float = 0.0) -> np.
     fx, fy = (x - x0)[:, None], (y - y0)[:, None]
     x0 %= w
     x1, y1 = (x0 + 1) % w, np.minimum(y0 + 1, h - 1)
-    return ((img[y0, x0] * (1 - fx) + img[y0, x1] * fx) * (1 - fy)
-            + (img[y1, x0] * (1 - fx) + img[y1, x1] * fx) * fy)
+    out: FloatArray = ((img[y0, x0] * (1 - fx) + img[y0, x1] * fx) * (1 - fy)
+                       + (img[y1, x0] * (1 - fx) + img[y1, x1] * fx) * fy)
+    return out
 
 
-def downsample(img: np.ndarray, max_w: int) -> np.ndarray:
+def downsample(img: FloatArray, max_w: int) -> FloatArray:
     """Box-filter an equirect (H, W, C) by whole factors of 2 until W <= max_w (keeps the mean)."""
     img = np.asarray(img, np.float64)
     while img.shape[1] > max_w and img.shape[0] % 2 == 0 and img.shape[1] % 2 == 0:
@@ -90,8 +106,8 @@ def downsample(img: np.ndarray, max_w: int) -> np.ndarray:
 
 # -- built-in environments --------------------------------------------------------------------------
 
-def _smooth_box(d: np.ndarray, centre_az: float, centre_el: float, half_w: float, half_h: float,
-                soft: float) -> np.ndarray:
+def _smooth_box(d: FloatArray, centre_az: float, centre_el: float, half_w: float, half_h: float,
+                soft: float) -> FloatArray:
     """A soft-edged rectangle on the sphere (degrees; azimuth from +z, the face's front, towards +x):
     1 inside, a smoothstep edge ``soft`` wide."""
     az = np.degrees(np.arctan2(d[..., 0], d[..., 2]))
@@ -99,13 +115,13 @@ def _smooth_box(d: np.ndarray, centre_az: float, centre_el: float, half_w: float
     daz = np.abs((az - centre_az + 180.0) % 360.0 - 180.0)
     del_ = np.abs(el - centre_el)
 
-    def edge(x, half):
+    def edge(x: FloatArray, half: float) -> FloatArray:
         t = np.clip((half + soft * 0.5 - x) / soft, 0.0, 1.0)
         return t * t * (3.0 - 2.0 * t)
     return edge(daz, half_w) * edge(del_, half_h)
 
 
-def builtin_environment(name: str, size: tuple[int, int] = BUILTIN_SIZE) -> np.ndarray:
+def builtin_environment(name: str, size: tuple[int, int] = BUILTIN_SIZE) -> FloatArray:
     """One of BUILTIN_ENVIRONMENTS as linear radiance (H, W, 3) float32, made by this code:
 
     - ``studio``: a dark grey room, a large soft box high in front on the camera's left (the key side,
@@ -152,7 +168,7 @@ def builtin_environment(name: str, size: tuple[int, int] = BUILTIN_SIZE) -> np.n
 
 # -- spherical harmonics (Ramamoorthi & Hanrahan 2001) ---------------------------------------------
 
-def sh_basis(d: np.ndarray) -> np.ndarray:
+def sh_basis(d: FloatArray) -> FloatArray:
     """(..., 9) the real SH basis Y_lm (l <= 2) at unit directions (R&H 2001 eq. 3 constants),
     ordered (0,0), (1,-1), (1,0), (1,1), (2,-2), (2,-1), (2,0), (2,1), (2,2) with (x, y, z) = d."""
     x, y, z = d[..., 0], d[..., 1], d[..., 2]
@@ -193,13 +209,15 @@ def sh_project25(img: np.ndarray, yaw_deg: float = 0.0, max_w: int = 256) -> np.
     h, w = img.shape[:2]
     d = rotate_yaw(equirect_directions(w, h), yaw_deg)
     y = sh_basis25(d) * equirect_solid_angles(w, h)[..., None]
-    return np.einsum("hwk,hwc->kc", y, img)
+    out: np.ndarray = np.einsum("hwk,hwc->kc", y, img)
+    return out
 
 
 def transfer_unoccluded(n: np.ndarray) -> np.ndarray:
     """(N, 25) the transfer vector of an unoccluded point with normal n: the clamped cosine's
     coefficients A_l Y_lm(n) (R&H 2001 eq. 8 with A_3 = 0, A_4 = -pi/24)."""
-    return sh_basis25(n) * np.asarray(A_HAT_4)[TRANSFER_BAND]
+    out: np.ndarray = sh_basis25(n) * np.asarray(A_HAT_4)[TRANSFER_BAND]
+    return out
 
 
 def transfer_irradiance(T: np.ndarray, L_lm: np.ndarray, order: int = TRANSFER_ORDER) -> np.ndarray:
@@ -231,10 +249,11 @@ def sh_project(img: np.ndarray, yaw_deg: float = 0.0, max_w: int = 256) -> np.nd
     h, w = img.shape[:2]
     d = rotate_yaw(equirect_directions(w, h), yaw_deg)
     y = sh_basis(d) * equirect_solid_angles(w, h)[..., None]
-    return np.einsum("hwk,hwc->kc", y, img)
+    out: FloatArray = np.einsum("hwk,hwc->kc", y, img)
+    return out
 
 
-def sh_irradiance_coefficients(L_lm: np.ndarray, order: int = MAX_SH_ORDER) -> np.ndarray:
+def sh_irradiance_coefficients(L_lm: FloatArray, order: int = MAX_SH_ORDER) -> FloatArray:
     """(9, 3) A_l L_lm (R&H 2001 eq. 7): the irradiance's coefficients; bands above ``order`` zeroed."""
     out = np.array(L_lm, np.float64, copy=True)
     band = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
@@ -243,7 +262,7 @@ def sh_irradiance_coefficients(L_lm: np.ndarray, order: int = MAX_SH_ORDER) -> n
     return out
 
 
-def sh_irradiance(E_lm: np.ndarray, n: np.ndarray) -> np.ndarray:
+def sh_irradiance(E_lm: FloatArray, n: FloatArray) -> FloatArray:
     """(N, 3) irradiance E(n) = sum_lm A_l L_lm Y_lm(n) (R&H 2001 eq. 7) for irradiance
     coefficients ``E_lm`` (sh_irradiance_coefficients) at unit normals ``n`` (N, 3); clamped at 0
     (the truncated series rings below zero opposite a bright source)."""
@@ -257,7 +276,8 @@ def sh_irradiance_scattered(E_lm: np.ndarray, n: np.ndarray, w: np.ndarray) -> n
     Y = sh_basis(n)  # (N, 9)
     band = np.array([0, 1, 1, 1, 2, 2, 2, 2, 2])
     w = np.broadcast_to(np.asarray(w, np.float64), (len(Y), 3, 3))
-    return np.maximum(np.einsum("nk,kc,nkc->nc", Y, np.asarray(E_lm, np.float64), w[:, band]), 0.0)
+    out: np.ndarray = np.maximum(np.einsum("nk,kc,nkc->nc", Y, np.asarray(E_lm, np.float64), w[:, band]), 0.0)
+    return out
 
 
 def irradiance_exact(img: np.ndarray, n: np.ndarray, yaw_deg: float = 0.0, max_w: int = 128) -> np.ndarray:
@@ -267,12 +287,13 @@ def irradiance_exact(img: np.ndarray, n: np.ndarray, yaw_deg: float = 0.0, max_w
     h, w = img.shape[:2]
     d = rotate_yaw(equirect_directions(w, h), yaw_deg).reshape(-1, 3)
     rad = (img.reshape(-1, img.shape[2]) * equirect_solid_angles(w, h).reshape(-1, 1))
-    return np.maximum(np.asarray(n, np.float64) @ d.T, 0.0) @ rad
+    out: FloatArray = np.maximum(np.asarray(n, np.float64) @ d.T, 0.0) @ rad
+    return out
 
 
 # -- visibility: ambient occlusion and bent normals (baked per mesh) ---------------------------------
 
-def stratified_cosine_directions(n: int, rng: np.random.Generator) -> np.ndarray:
+def stratified_cosine_directions(n: int, rng: np.random.Generator) -> FloatArray:
     """(n, 3) cosine-weighted directions about +z, one per cell of a sqrt(n) x sqrt(n) grid
     (n rounded down to a square), jittered: stratified sampling of the projected disc."""
     k = max(math.isqrt(n), 1)
@@ -283,7 +304,7 @@ def stratified_cosine_directions(n: int, rng: np.random.Generator) -> np.ndarray
     return np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(1.0 - u1, 0.0))], -1)
 
 
-def tangent_frames(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def tangent_frames(n: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(t, b) unit tangents completing the unit normals ``n`` (N, 3) to right-handed frames."""
     a = np.where(np.abs(n[:, :1]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
     t = np.cross(n, a)
@@ -291,16 +312,17 @@ def tangent_frames(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t, np.cross(n, t)
 
 
-def ray_caster(positions: np.ndarray, indices: np.ndarray):
+def ray_caster(positions: FloatArray, indices: IndexArray) -> RayCaster:
     """An Embree intersector (trimesh + embreex) over the triangles."""
     import trimesh
     from trimesh.ray.ray_pyembree import RayMeshIntersector
-    return RayMeshIntersector(trimesh.Trimesh(np.asarray(positions, np.float64),
-                                              np.asarray(indices, np.int64), process=False))
+    caster: RayCaster = RayMeshIntersector(trimesh.Trimesh(np.asarray(positions, np.float64),
+                                                           np.asarray(indices, np.int64), process=False))
+    return caster
 
 
-def bake_visibility(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, rays: int = 64,
-                    seed: int = 0, caster=None, chunk: int = 2048) -> np.ndarray:
+def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexArray, rays: int = 64,
+                    seed: int = 0, caster: RayCaster | None = None, chunk: int = 2048) -> Float32Array:
     """(N, 4) float32 per vertex: the bent normal (xyz: the mean unoccluded direction, normalised;
     the vertex normal where every ray is blocked) and the ambient occlusion (w: the fraction of
     ``rays`` cosine-weighted, stratified rays that leave the mesh = the share of a uniform
@@ -341,7 +363,7 @@ def bake_visibility(positions: np.ndarray, normals: np.ndarray, indices: np.ndar
 
 
 def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, rays: int = 256,
-                  seed: int = 0, caster=None, chunk: int = 1024) -> np.ndarray:
+                  seed: int = 0, caster: Any = None, chunk: int = 1024) -> np.ndarray:
     """(N, 25) float32 per vertex: the shadowed diffuse transfer vector T_lm = int V(w) max(N.w, 0)
     Y_lm(w) dw, l <= 4 (Sloan et al. 2002 eq. 4's transfer, without interreflection), by ``rays``
     cosine-weighted stratified Embree rays (pdf cos / pi) with the unoccluded transfer as a control
@@ -388,7 +410,7 @@ def bent_shading_normal(N: np.ndarray, Nv: np.ndarray, bent: np.ndarray) -> np.n
     return np.where(vl > 1e-9, v / np.maximum(vl, 1e-300), N)
 
 
-def env_diffuse(E_lm: np.ndarray, N: np.ndarray, Nv: np.ndarray, vis: np.ndarray | None) -> np.ndarray:
+def env_diffuse(E_lm: FloatArray, N: FloatArray, Nv: FloatArray, vis: FloatArray | None) -> FloatArray:
     """(N, 3) the environment's irradiance at shading normals N: AO x E_SH(bent normal)
     (lib/environment.glsl env_irradiance); ``vis`` (N, 4) the baked bent normal + AO, None: unoccluded."""
     if vis is None:
@@ -417,18 +439,20 @@ def specular_occlusion(n_dot_v: np.ndarray, ao: np.ndarray, m: np.ndarray) -> np
     """Lagarde & de Rousiers 2014 (Moving Frostbite to PBR, eq. 9): the share of the specular
     environment a point with ambient occlusion ``ao`` sees, clamp((N.V + ao)^exp2(-16 m - 1) - 1 + ao)."""
     nv = np.clip(np.asarray(n_dot_v, np.float64), 0.0, 1.0)
-    return np.clip(np.power(nv + ao, np.exp2(-16.0 * np.asarray(m, np.float64) - 1.0)) - 1.0 + ao, 0.0, 1.0)
+    out: np.ndarray = np.clip(np.power(nv + ao, np.exp2(-16.0 * np.asarray(m, np.float64) - 1.0)) - 1.0 + ao, 0.0, 1.0)
+    return out
 
 
-def rho_dt_mean(rho_dt_of_mu) -> np.ndarray:
+def rho_dt_mean(rho_dt_of_mu: Callable[[float], ArrayLike]) -> FloatArray:
     """The cosine-weighted hemispherical mean of rho_dt (eq. 30-32 for an environment):
     sum_k w_k rho_dt(mu_k) on RHO_MU/RHO_W; ``rho_dt_of_mu(mu)`` -> array."""
-    return np.sum([w * np.asarray(rho_dt_of_mu(mu), np.float64) for mu, w in zip(RHO_MU, RHO_W)], axis=0)
+    out: FloatArray = np.sum([w * np.asarray(rho_dt_of_mu(mu), np.float64) for mu, w in zip(RHO_MU, RHO_W)], axis=0)
+    return out
 
 
 # -- the pre-filtered specular environment (split sum) ---------------------------------------------
 
-def beckmann_lobe(cos_angle: np.ndarray, m: float) -> np.ndarray:
+def beckmann_lobe(cos_angle: FloatArray, m: float) -> FloatArray:
     """Beckmann D of the half-vector between R and L for the split sum's N = V = R
     (the half-angle is half the angle between R and L), times N.L = R.L."""
     c = np.clip(cos_angle, -1.0, 1.0)
@@ -437,7 +461,8 @@ def beckmann_lobe(cos_angle: np.ndarray, m: float) -> np.ndarray:
     return np.where(c > 0.0, np.exp(-t2 / (m * m)) / (m * m * ch ** 4) * c, 0.0)
 
 
-def prefilter_specular(img: np.ndarray, levels_m=SPEC_LEVELS_M, size=SPEC_SIZE, src_w: int = 64) -> np.ndarray:
+def prefilter_specular(img: FloatArray, levels_m: Sequence[float] = SPEC_LEVELS_M,
+                       size: tuple[int, int] = SPEC_SIZE, src_w: int = 64) -> Float32Array:
     """(len(levels_m) * H, W, 3) float32: for each Beckmann m the radiance averaged over the lobe
     around each texel's direction R (split-sum first factor), levels stacked top to bottom
     (lib/environment.glsl env_prefiltered). Weights include each source texel's solid angle."""
@@ -457,14 +482,14 @@ def prefilter_specular(img: np.ndarray, levels_m=SPEC_LEVELS_M, size=SPEC_SIZE, 
     return np.ascontiguousarray(np.concatenate(out, 0), np.float32)
 
 
-def specular_level(m: np.ndarray, levels_m=SPEC_LEVELS_M) -> np.ndarray:
+def specular_level(m: ArrayLike, levels_m: Sequence[float] = SPEC_LEVELS_M) -> FloatArray:
     """The fractional level index of Beckmann ``m`` (linear between the levels' m, clamped)."""
     lv = np.asarray(levels_m, np.float64)
     return np.interp(np.asarray(m, np.float64), lv, np.arange(len(lv)))
 
 
-def sample_prefiltered(pre: np.ndarray, R: np.ndarray, m: np.ndarray, yaw_deg: float = 0.0,
-                       levels: int = len(SPEC_LEVELS_M)) -> np.ndarray:
+def sample_prefiltered(pre: FloatArray, R: FloatArray, m: FloatArray, yaw_deg: float = 0.0,
+                       levels: int = len(SPEC_LEVELS_M)) -> FloatArray:
     """(N, 3) the pre-filtered radiance at reflection directions R for Beckmann m (bilinear in each
     level, linear between levels) as lib/environment.glsl env_prefiltered reads it."""
     h = pre.shape[0] // levels
@@ -480,8 +505,8 @@ def sample_prefiltered(pre: np.ndarray, R: np.ndarray, m: np.ndarray, yaw_deg: f
     return out
 
 
-def env_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, m: np.ndarray, spec_albedo: np.ndarray,
-                 occlusion: np.ndarray | None = None, yaw_deg: float = 0.0) -> np.ndarray:
+def env_specular(pre: FloatArray, N: FloatArray, V: FloatArray, m: FloatArray, spec_albedo: FloatArray,
+                 occlusion: FloatArray | None = None, yaw_deg: float = 0.0) -> FloatArray:
     """(N, 3) split-sum specular: prefiltered(R, m) x the KS specular albedo (1 - rho_dt(N.V), eq. 30)
     x specular occlusion (lib/environment.glsl env_specular)."""
     R = 2.0 * (N * V).sum(1, keepdims=True) * N - V
@@ -501,8 +526,8 @@ def phong_env_albedo(shininess: float) -> float:
     before phong.specular), exactly: with c = cos theta_h, dw_L = 4 (V.H) dw_H and N.L = 2c^2 - 1,
     8 pi int_{1/sqrt2}^1 c^(n+1) (2c^2 - 1) dc (lib/environment.glsl env_phong_albedo)."""
     n = float(shininess)
-    return 8.0 * math.pi * (2.0 * (1.0 - 2.0 ** (-(n + 4.0) / 2.0)) / (n + 4.0)
-                            - (1.0 - 2.0 ** (-(n + 2.0) / 2.0)) / (n + 2.0))
+    return float(8.0 * math.pi * (2.0 * (1.0 - 2.0 ** (-(n + 4.0) / 2.0)) / (n + 4.0)
+                                  - (1.0 - 2.0 ** (-(n + 2.0) / 2.0)) / (n + 2.0)))
 
 
 def env_phong_specular(pre: np.ndarray, N: np.ndarray, V: np.ndarray, shininess: float, specular: float,
@@ -526,7 +551,7 @@ class EnvSampler:
     truth's irradiance: the exact unoccluded integral by summing texels, and directions drawn in
     proportion to each texel's luminance x solid angle (uniform in solid angle inside the texel)."""
 
-    def __init__(self, img: np.ndarray, yaw_deg: float = 0.0, width: int = 128):
+    def __init__(self, img: FloatArray, yaw_deg: float = 0.0, width: int = 128):
         self.img = downsample(img, width)
         self.h, self.w = self.img.shape[:2]
         self.yaw = float(yaw_deg)
@@ -539,7 +564,7 @@ class EnvSampler:
         self.cdf = np.cumsum(self.p)
         self.cos_edges = np.cos(np.arange(self.h + 1) / self.h * math.pi)
 
-    def lookup(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def lookup(self, d: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(radiance (N, C), texel index (N,)) of the texel holding each direction (nearest)."""
         uv = direction_to_uv(rotate_yaw(d, -self.yaw))
         x = np.clip((uv[:, 0] * self.w).astype(np.int64), 0, self.w - 1)
@@ -547,7 +572,7 @@ class EnvSampler:
         t = y * self.w + x
         return self.rad[t], t
 
-    def sample(self, u0: np.ndarray, u1: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    def sample(self, u0: FloatArray, u1: FloatArray, u2: FloatArray) -> FloatArray:
         """Directions (..., 3) for uniforms u0 (the texel), u1, u2 (the point inside it)."""
         t = np.minimum(np.searchsorted(self.cdf, u0), len(self.cdf) - 1)
         y, x = t // self.w, t % self.w
@@ -556,7 +581,7 @@ class EnvSampler:
         phi = (x + u2) / self.w * 2.0 * math.pi - math.pi
         return rotate_yaw(np.stack([s * np.sin(phi), c, -s * np.cos(phi)], -1), self.yaw)
 
-    def unoccluded(self, N: np.ndarray, weight=None, chunk: int = 2048) -> np.ndarray:
+    def unoccluded(self, N: FloatArray, weight: EnvWeight | None = None, chunk: int = 2048) -> FloatArray:
         """(N, C) sum_t L_t max(N.w_t, 0) weight(N.w_t) Omega_t: the piecewise-constant environment's
         irradiance without occlusion (weight(mu (n, T), sl): rho_dt, None: 1)."""
         out = np.zeros((len(N), self.rad.shape[1]))
@@ -570,9 +595,10 @@ class EnvSampler:
         return out
 
 
-def mc_irradiance_cv(sampler: EnvSampler, P: np.ndarray, N: np.ndarray, Ng: np.ndarray, caster, samples: int,
-                     rng: np.random.Generator, eps: float, weight=None, batches: int = 4,
-                     chunk: int = 2048) -> tuple[np.ndarray, np.ndarray]:
+def mc_irradiance_cv(sampler: EnvSampler, P: FloatArray, N: FloatArray, Ng: FloatArray, caster: RayCaster, samples: int,
+                     rng: np.random.Generator, eps: float, weight: EnvWeight | None = None, batches: int = 4,
+
+                     chunk: int = 2048) -> tuple[FloatArray, FloatArray]:
     """The occluded irradiance int L V max(N.w, 0) weight dw as E0 - O: E0 the exact unoccluded sum
     (EnvSampler.unoccluded, a control variate) and O = int L (1 - V) max(N.w, 0) weight dw the light
     the mesh blocks, by Monte Carlo with multiple importance sampling (balance heuristic, Veach 1997)

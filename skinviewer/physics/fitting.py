@@ -21,10 +21,12 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from skinviewer.physics.arrays import FloatArray
 from skinviewer.physics.profiles import sum_of_gaussians
 
 TWO_PI = 2.0 * math.pi
@@ -36,17 +38,17 @@ TWO_PI = 2.0 * math.pi
 @dataclass(frozen=True)
 class FitGrid:
     """Samples of the target and quadrature weights q with sum_j q_j f(r_j)^2 ~ int_0^inf r f(r)^2 dr."""
-    r: np.ndarray  # (n,) mm, ascending, > 0
-    q: np.ndarray  # (n,) quadrature weights (mm^2)
-    target: np.ndarray  # (n, 3) R(r_j) per channel, 1/mm^2
-    total: np.ndarray  # (3,) total diffuse reflectance R_d = 2 pi int r R dr of the target
+    r: FloatArray  # (n,) mm, ascending, > 0
+    q: FloatArray  # (n,) quadrature weights (mm^2)
+    target: FloatArray  # (n, 3) R(r_j) per channel, 1/mm^2
+    total: FloatArray  # (3,) total diffuse reflectance R_d = 2 pi int r R dr of the target
 
     @property
-    def norms(self) -> np.ndarray:
+    def norms(self) -> FloatArray:
         """sqrt(int r R_c^2 dr) per channel: the denominator of eq. (3.1)."""
         return np.sqrt(self.q @ (self.target**2))
 
-    def error(self, fitted: np.ndarray) -> np.ndarray:
+    def error(self, fitted: FloatArray) -> FloatArray:
         """Eq. (3.1) per channel for fitted values on this grid (n, 3); 0 where the target is 0."""
         num = np.sqrt(self.q @ ((self.target - fitted) ** 2))
         den = self.norms
@@ -57,8 +59,8 @@ class FitGrid:
     def from_samples(cls, r: npt.ArrayLike, R: npt.ArrayLike) -> FitGrid:
         """A grid from tabulated (e.g. measured) samples: r ascending (mm), R (n,) or (n, 3);
         trapezoid weights of int r f^2 dr over [r_0, r_n-1] (plus [0, r_0] at the first value)."""
-        r = np.asarray(r, dtype=float)
-        R = np.asarray(R, dtype=float)
+        r = np.asarray(r, dtype=np.float64)
+        R = np.asarray(R, dtype=np.float64)
         if R.ndim == 1:
             R = np.repeat(R[:, None], 3, axis=1)
         if r.ndim != 1 or r.size < 2 or R.shape != (r.size, 3):
@@ -75,7 +77,7 @@ class FitGrid:
         return cls(r[keep], q[keep], R[keep], total)
 
 
-def make_grid(profile: Callable[[np.ndarray], np.ndarray], n: int = 200, r_min: float | None = None,
+def make_grid(profile: Callable[[FloatArray], FloatArray], n: int = 200, r_min: float | None = None,
               r_max: float | None = None, rel: float = 1e-10) -> FitGrid:
     """A log-spaced grid covering where the integrand of eq. (3.1), r R(r)^2, matters.
 
@@ -110,14 +112,14 @@ def make_grid(profile: Callable[[np.ndarray], np.ndarray], n: int = 200, r_min: 
     q[1:] += 0.5 * dt * r[1:] ** 2
     q[0] += 0.5 * r[0] ** 2
     if hasattr(profile, "total_reflectance"):
-        total = np.asarray(profile.total_reflectance(), dtype=float)
+        total = np.asarray(profile.total_reflectance(), dtype=np.float64)
     else:
-        total = TWO_PI * np.trapezoid(probe[:, None] ** 2 * Rp, np.log(probe), axis=0)
+        total = TWO_PI * np.asarray(np.trapezoid(probe[:, None] ** 2 * Rp, np.log(probe), axis=0))
     return FitGrid(r, q, R, total)
 
 
-def _rgb_values(R: np.ndarray) -> np.ndarray:
-    R = np.asarray(R, dtype=float)
+def _rgb_values(R: FloatArray) -> FloatArray:
+    R = np.asarray(R, dtype=np.float64)
     if R.ndim == 1:
         R = np.repeat(R[:, None], 3, axis=1)
     if not np.all(np.isfinite(R)):
@@ -132,11 +134,11 @@ def _rgb_values(R: np.ndarray) -> np.ndarray:
 class FitResult:
     """Gaussians fitted to a profile. Shared: variances (k,), weights (k, 3). Per channel:
     variances (3, k), weights (3, k) (row c is channel c)."""
-    variances: np.ndarray
-    weights: np.ndarray
-    errors: np.ndarray  # (3,) eq. (3.1)
+    variances: FloatArray
+    weights: FloatArray
+    errors: FloatArray  # (3,) eq. (3.1)
     shared: bool
-    target_total: np.ndarray  # (3,) R_d of the target profile
+    target_total: FloatArray  # (3,) R_d of the target profile
     grid: FitGrid = field(repr=False)
     seconds: float = 0.0
     evaluations: int = 0
@@ -145,13 +147,14 @@ class FitResult:
     def k(self) -> int:
         return int(self.variances.shape[-1])
 
-    def __call__(self, r: np.ndarray) -> np.ndarray:
+    def __call__(self, r: FloatArray) -> FloatArray:
         return sum_of_gaussians(r, self.variances, self.weights)
 
     @property
-    def fitted_total(self) -> np.ndarray:
+    def fitted_total(self) -> FloatArray:
         """R_d of the Gaussian sum = sum of weights per channel (each G integrates to 1)."""
-        return self.weights.sum(axis=0) if self.shared else self.weights.sum(axis=1)
+        out: FloatArray = self.weights.sum(axis=0) if self.shared else self.weights.sum(axis=1)
+        return out
 
     def table(self, normalize: bool = False) -> list[tuple[float, tuple[float, float, float]]]:
         """(variance, (w_r, w_g, w_b)) rows, ascending variance, as in seed 000 Tabela 2. Per-channel
@@ -173,7 +176,7 @@ class FitResult:
             rows = [(v, w * scale) for v, w in rows]
         return [(v, (float(w[0]), float(w[1]), float(w[2]))) for v, w in rows]
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         ch = {}
         for c, name in enumerate("rgb"):
             v = self.variances if self.shared else self.variances[c]
@@ -198,7 +201,7 @@ class _Problem:
         self.B = (self.sw[:, None] * grid.target[:, list(channels)]) / self.scale  # unit-norm targets
         self.nfev = 0
 
-    def design(self, theta: np.ndarray):
+    def design(self, theta: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         v = np.exp(theta)
         with np.errstate(under="ignore"):
             G = np.exp(-self.r2[:, None] / (2.0 * v)) / (TWO_PI * v)
@@ -207,7 +210,7 @@ class _Problem:
         cn = np.where(cn > 0, cn, 1.0)
         return v, A, cn
 
-    def solve(self, theta: np.ndarray):
+    def solve(self, theta: FloatArray) -> tuple[float, FloatArray, FloatArray]:
         """Objective sum_c E_c^2, its gradient in theta, weights (k, m) for the unit-norm targets."""
         from scipy.optimize import nnls  # here, not at import: scipy costs the viewer's start (issue 34)
         self.nfev += 1
@@ -229,7 +232,7 @@ class _Problem:
         return f, grad, W
 
 
-def _starts(grid: FitGrid, k: int, lo: float, hi: float, init: np.ndarray | None) -> list[np.ndarray]:
+def _starts(grid: FitGrid, k: int, lo: float, hi: float, init: FloatArray | None) -> list[FloatArray]:
     """Deterministic log-variance starts from the profile's scales (5 %..95 % of int r R^2 dr)."""
     dens = grid.q[:, None] * grid.target**2
     tot = dens.sum(axis=0)
@@ -246,13 +249,13 @@ def _starts(grid: FitGrid, k: int, lo: float, hi: float, init: np.ndarray | None
                (a - 0.3 * span, b - 0.1 * span), (a + 0.1 * span, b + 0.3 * span)]
     out = []
     if init is not None:
-        out.append(_pad_init(np.log(np.asarray(init, dtype=float)), k, a, b))
+        out.append(_pad_init(np.log(np.asarray(init, dtype=np.float64)), k, a, b))
     for s, e in spreads:
         out.append(np.linspace(s, e, k) if k > 1 else np.array([0.5 * (s + e)]))
     return [np.clip(np.sort(x), lo, hi) for x in out]
 
 
-def _pad_init(theta: np.ndarray, k: int, a: float, b: float) -> np.ndarray:
+def _pad_init(theta: FloatArray, k: int, a: float, b: float) -> FloatArray:
     theta = np.sort(theta[np.isfinite(theta)])
     while theta.size > k:  # merge the closest pair
         i = int(np.argmin(np.diff(theta)))
@@ -265,7 +268,7 @@ def _pad_init(theta: np.ndarray, k: int, a: float, b: float) -> np.ndarray:
 
 
 def _fit_channels(grid: FitGrid, channels: Sequence[int], k: int, fixed: np.ndarray | None,
-                  init: np.ndarray | None, max_starts: int):
+                  init: np.ndarray | None, max_starts: int) -> Any:
     from scipy.optimize import minimize  # here, not at import: scipy costs the viewer's start (issue 34)
     prob = _Problem(grid, channels)
     lo = 2.0 * math.log(grid.r[0]) - math.log(16.0)
@@ -287,7 +290,7 @@ def _fit_channels(grid: FitGrid, channels: Sequence[int], k: int, fixed: np.ndar
     return np.exp(theta), W * prob.scale, prob.nfev
 
 
-def fit_gaussians(profile: Callable[[np.ndarray], np.ndarray] | FitGrid, k: int = 4, *, shared: bool = True,
+def fit_gaussians(profile: Callable[[FloatArray], FloatArray] | FitGrid, k: int = 4, *, shared: bool = True,
                   fixed_variances: npt.ArrayLike | None = None, init: Sequence[float] | None = None,
                   grid_points: int = 200, max_starts: int = 6) -> FitResult:
     """Fit ``k`` Gaussians (weights >= 0, variances ascending) to ``profile`` (a callable r -> (..., 3),
@@ -300,7 +303,7 @@ def fit_gaussians(profile: Callable[[np.ndarray], np.ndarray] | FitGrid, k: int 
     grid = profile if isinstance(profile, FitGrid) else make_grid(profile, n=grid_points)
     fixed = None
     if fixed_variances is not None:
-        fixed = np.sort(np.asarray(fixed_variances, dtype=float))
+        fixed = np.sort(np.asarray(fixed_variances, dtype=np.float64))
         if fixed.ndim != 1 or fixed.size < 1 or np.any(~np.isfinite(fixed)) or np.any(fixed <= 0):
             raise ValueError("fixed variances must be positive numbers")
         k = fixed.size
@@ -318,7 +321,7 @@ def fit_gaussians(profile: Callable[[np.ndarray], np.ndarray] | FitGrid, k: int 
         for c in range(3):
             ic = None
             if init is not None:
-                a = np.asarray(init, dtype=float)
+                a = np.asarray(init, dtype=np.float64)
                 ic = a[c] if a.ndim == 2 else a
             v, W, n = _fit_channels(grid, (c,), k, fixed, ic, max_starts)
             variances[c], weights[c] = v, W[:, 0]
@@ -329,10 +332,10 @@ def fit_gaussians(profile: Callable[[np.ndarray], np.ndarray] | FitGrid, k: int 
     return res
 
 
-def fit_error(profile_values: np.ndarray, fitted_values: np.ndarray, r: np.ndarray) -> np.ndarray:
+def fit_error(profile_values: FloatArray, fitted_values: FloatArray, r: FloatArray) -> FloatArray:
     """Eq. (3.1) for tabulated values on ascending radii (trapezoid in r): per channel (last axis)."""
     g = FitGrid.from_samples(r, profile_values)
-    f = np.asarray(fitted_values, dtype=float)
+    f = np.asarray(fitted_values, dtype=np.float64)
     if f.ndim == 1:
         f = np.repeat(f[:, None], 3, axis=1)
     keep = np.asarray(r) > 0

@@ -28,12 +28,16 @@ Everything is float64 numpy + scipy (KD-trees and cell blocks for the neighbours
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.special import owens_t
+
+from skinviewer.physics.arrays import FloatArray, IntArray
 
 CLUSTER_RATIO = 1.25  # a cluster level is used for a Gaussian when its voxel <= sigma / 1.25
 TRUNCATE = 4.5        # kernel support in standard deviations (weight beyond: exp(-10.1) = 4e-5)
@@ -41,14 +45,15 @@ TRUNCATE = 4.5        # kernel support in standard deviations (weight beyond: ex
 
 # -- the exact Gaussian integral over a triangle ----------------------------------------------
 
-def _wedge(h: np.ndarray, t: np.ndarray) -> np.ndarray:
+def _wedge(h: FloatArray, t: FloatArray) -> FloatArray:
     """Standard 2D normal mass of the right triangle (0, (h, 0), (h, t)), h > 0, signed by t:
     atan(t/h) / 2pi - T(h, t/h) (Owen's T: T(h, a) = P(X > h, 0 < Y < aX))."""
     a = t / h
-    return np.arctan(a) / (2.0 * np.pi) - owens_t(h, a)
+    out: FloatArray = np.arctan(a) / (2.0 * np.pi) - owens_t(h, a)
+    return out
 
 
-def gaussian_triangle_mass(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+def gaussian_triangle_mass(q0: FloatArray, q1: FloatArray, q2: FloatArray) -> FloatArray:
     """Mass of the standard 2D normal (sigma = 1, centred at the origin) inside triangles (q0, q1,
     q2) given as (..., 2) arrays in units of sigma; any orientation (the result is >= 0)."""
     q = [np.asarray(x, np.float64) for x in (q0, q1, q2)]
@@ -77,7 +82,7 @@ def gaussian_triangle_mass(q0: np.ndarray, q1: np.ndarray, q2: np.ndarray) -> np
 
 # -- source elements -----------------------------------------------------------------------------
 
-def subdivision_pattern(n: int) -> tuple[np.ndarray, np.ndarray]:
+def subdivision_pattern(n: int) -> tuple[FloatArray, FloatArray]:
     """The n x n regular subdivision of a triangle: barycentric grid vertices ((n+1)(n+2)/2, 3)
     and sub-triangles as vertex indices (n*n, 3), wound like the parent."""
     ij = [(i, j) for i in range(n + 1) for j in range(n + 1 - i)]
@@ -93,7 +98,8 @@ def subdivision_pattern(n: int) -> tuple[np.ndarray, np.ndarray]:
     return bary, np.asarray(tris, np.int64)
 
 
-def subdivide(tri_mm: np.ndarray, h: float, keep: np.ndarray | None = None):
+def subdivide(tri_mm: FloatArray, h: float, keep: NDArray[np.bool_] | None = None
+              ) -> tuple[IntArray, FloatArray, IntArray]:
     """Cut triangles (T, 3, 3) (mm) into sub-triangles of edge <= h. Returns (vertex parent (V,),
     vertex barycentrics in the parent (V, 3), element corners as vertex indices (E, 3))."""
     edges = np.linalg.norm(tri_mm[:, [1, 2, 0]] - tri_mm, axis=2).max(axis=1)
@@ -119,14 +125,14 @@ class Elements:
     """Flat source elements in mm: corners (E, 3, 3), ea (E, 3) = E A (mean over the element), and
     per element centroid, unit normal, area, s2 (in-plane per-axis variance of the uniform
     triangle: trace(cov) / 2 = sum |p_k - g|^2 / 24)."""
-    corners: np.ndarray
-    ea: np.ndarray
-    centroid: np.ndarray = field(init=False)
-    normal: np.ndarray = field(init=False)
-    area: np.ndarray = field(init=False)
-    s2: np.ndarray = field(init=False)
+    corners: FloatArray
+    ea: FloatArray
+    centroid: FloatArray = field(init=False)
+    normal: FloatArray = field(init=False)
+    area: FloatArray = field(init=False)
+    s2: FloatArray = field(init=False)
     radius: float = field(init=False)
-    split: np.ndarray | None = None  # (E,) bool: a piece of an element cut along a shadow edge
+    split: FloatArray | None = None  # (E,) bool: a piece of an element cut along a shadow edge
 
     def __post_init__(self) -> None:
         c = np.asarray(self.corners, np.float64)
@@ -146,7 +152,7 @@ class Elements:
 # A triangle (a, b, c) cut by a straight line through p = a + tp (b - a) and q = a + tq (c - a):
 # (a, p, q) on a's side, (p, b, c) and (p, c, q) on the other, each wound like the parent. Rows: the
 # weights of a, b, c at each piece's 3 corners.
-def cut_weights(tp: np.ndarray, tq: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def cut_weights(tp: FloatArray, tq: FloatArray) -> tuple[FloatArray, FloatArray]:
     """(W (M, 3 pieces, 3 corners, 3 weights of a, b, c), side (3,): 1 for a's side, 0 the other)."""
     m = len(tp)
     A = np.broadcast_to([1.0, 0.0, 0.0], (m, 3))
@@ -160,12 +166,12 @@ def cut_weights(tp: np.ndarray, tq: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 @dataclass
 class Clusters:
-    centroid: np.ndarray
-    area: np.ndarray
-    ea: np.ndarray      # area-weighted mean E A
-    s2: np.ndarray      # per-axis in-plane variance
+    centroid: FloatArray
+    area: FloatArray
+    ea: FloatArray      # area-weighted mean E A
+    s2: FloatArray      # per-axis in-plane variance
     size: float
-    normal: np.ndarray  # area-weighted mean unit normal
+    normal: FloatArray  # area-weighted mean unit normal
 
 
 def cluster(el: Elements, voxel: float) -> Clusters:
@@ -180,7 +186,7 @@ def cluster(el: Elements, voxel: float) -> Clusters:
     key = ((v[:, 0] * dims[1] + v[:, 1]) * dims[2] + v[:, 2]) * 8 + octant
     _, inv = np.unique(key, return_inverse=True)
     n = int(inv.max()) + 1 if len(inv) else 0
-    a = np.bincount(inv, el.area, n)
+    a = np.bincount(inv, el.area, n).astype(np.float64, copy=False)  # with weights: float64 already
     sa = np.maximum(a, 1e-300)
     ea = np.stack([np.bincount(inv, el.area * el.ea[:, k], n) for k in range(3)], 1) / sa[:, None]
     light = el.area * np.maximum(el.ea.sum(1), 0.0)
@@ -198,8 +204,8 @@ def cluster(el: Elements, voxel: float) -> Clusters:
 @dataclass
 class PointSources:
     """Infinitesimal sources (beam rays): positions (K, 3) mm and power (K, 3)."""
-    position: np.ndarray
-    power: np.ndarray
+    position: FloatArray
+    power: FloatArray
 
 
 MIN_CELL = 2.0     # mm: cell of the receiver/source grid (at least the search radius)
@@ -226,7 +232,8 @@ class SourceGrid:
         self.ssorted = skey[self.sorder]
 
     def key(self, k: np.ndarray) -> np.ndarray:
-        return (k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]
+        out: np.ndarray = (k[:, 0] * self.dims[1] + k[:, 1]) * self.dims[2] + k[:, 2]
+        return out
 
     def fits(self, x: np.ndarray) -> bool:
         """``blocks`` for receivers ``x`` makes the same cells: x is not below the sources' minimum
@@ -237,7 +244,7 @@ class SourceGrid:
 
 
 def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | None = None,
-           grid: SourceGrid | None = None):
+           grid: SourceGrid | None = None) -> Iterator[tuple[Any, ...]]:
     """Receivers and sources binned in cells of max(radius, MIN_CELL): yields, per occupied
     receiver cell, (receiver indices, source indices of the 27 cells around it, dense |x - s|^2)
     and, given source ``normals``, the dense heights (x - s).n over the sources' planes. ``grid``:
@@ -254,8 +261,9 @@ def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | 
         ks = np.floor((src - lo) / cell).astype(np.int64)
         dims = np.maximum(kx.max(0), ks.max(0)) + 2
 
-        def key(k):
-            return (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
+        def key(k: np.ndarray) -> np.ndarray:
+            out: np.ndarray = (k[:, 0] * dims[1] + k[:, 1]) * dims[2] + k[:, 2]
+            return out
 
         skey = key(ks)
         sorder = np.argsort(skey, kind="stable")
@@ -286,7 +294,7 @@ def blocks(x: np.ndarray, src: np.ndarray, radius: float, normals: np.ndarray | 
             yield ri, sj, d2, xr @ ns.T - (sr * ns).sum(1)[None]
 
 
-def _gauss(v, d2):
+def _gauss(v: float, d2: FloatArray) -> FloatArray:
     return np.exp(-d2 / (2.0 * v)) / (2.0 * np.pi * v)
 
 
@@ -298,8 +306,8 @@ class Diffusion:
     """M(x) for source elements and a sum-of-Gaussians profile (variances mm^2, weights (k, 3));
     ``h`` the element edge (mm). Receivers are surface points in mm."""
 
-    def __init__(self, el: Elements, variances, weights, h: float, points: PointSources | None = None,
-                 shared: dict | None = None):
+    def __init__(self, el: Elements, variances: Any, weights: Any, h: float, points: PointSources | None = None,
+                 shared: dict[str, Any] | None = None) -> None:
         self.el = el
         self.h = float(h)
         self.v = np.asarray(variances, np.float64).ravel()
@@ -325,9 +333,10 @@ class Diffusion:
         if g is None or g[0] is not src:
             g = grids[k] = (src, SourceGrid(src, k[1]))
             self._built("grid")
-        return g[1]
+        grid: SourceGrid = g[1]
+        return grid
 
-    def method(self, v: float):
+    def method(self, v: float) -> tuple[str, float | None]:
         """('delta', None) | ('exact', None) | ('elements', None) | ('clusters', voxel)."""
         if v < DELTA_V:
             return "delta", None
@@ -357,12 +366,13 @@ class Diffusion:
             elif kind == "elements":
                 out.append(f"v={v:g} mm^2: moment-matched elements ({len(self.el.area)})")
             else:
+                assert voxel is not None  # method(): "clusters" always comes with its voxel
                 out.append(f"v={v:g} mm^2: moment-matched clusters of {voxel:g} mm ({len(self.level(voxel).area)})")
         return out
 
-    def exitance(self, x: np.ndarray, ea_here: np.ndarray | None = None,
+    def exitance(self, x: FloatArray, ea_here: FloatArray | None = None,
                  progress: Callable[[float], None] | None = None,
-                 cancelled: Callable[[], bool] | None = None) -> np.ndarray:
+                 cancelled: Callable[[], bool] | None = None) -> FloatArray:
         """M(x) (N, 3) at receivers x (N, 3) mm. ``ea_here`` (N, 3): E A at x itself, used for the
         element under x (the nearest element centroid within an element radius)."""
         x = np.asarray(x, np.float64)
@@ -400,7 +410,13 @@ class Diffusion:
                     if cancelled is not None and cancelled():
                         raise InterruptedError("cancelled")
             else:
-                src = el if kind == "elements" else self.level(voxel)
+                src: Elements | Clusters
+                if kind == "elements":
+                    src = el
+
+                else:
+                    assert voxel is not None  # method(): "clusters" always comes with its voxel
+                    src = self.level(voxel)
                 reach = TRUNCATE * math.sqrt(v + float(src.s2.max())) + (voxel or self.h) * 1.8
                 for ri, sj, d2, z in blocks(x, src.centroid, reach, src.normal, self._grid(src.centroid, reach)):
                     # moment matching in the source's plane only; the height z over it enters
@@ -429,7 +445,7 @@ class Diffusion:
             self._built("tree")
         return self._shared["tree"]
 
-    def _tree_pairs(self, x: np.ndarray, radius: np.ndarray, chunk: int = 8192):
+    def _tree_pairs(self, x: FloatArray, radius: FloatArray, chunk: int = 8192) -> Iterator[tuple[IntArray, IntArray]]:
         """(receiver, element) pairs closer than the element's ``radius`` (KD-trees: for small radii)."""
         rmax = float(radius.max())
         for s0 in range(0, len(x), chunk):
@@ -437,15 +453,16 @@ class Diffusion:
             keep = sm["v"] < radius[sm["j"]]
             yield sm["i"][keep].astype(np.int64) + s0, sm["j"][keep].astype(np.int64)
 
-    def _el_radius(self) -> np.ndarray:
+    def _el_radius(self) -> FloatArray:
         """Per element: the largest corner distance from its centroid."""
         if "radius" not in self._shared:
             d = self.el.corners - self.el.centroid[:, None]
             self._shared["radius"] = np.sqrt((d * d).sum(2).max(1))
             self._built("radius")
-        return self._shared["radius"]
+        radius: FloatArray = self._shared["radius"]
+        return radius
 
-    def _edge_data(self):
+    def _edge_data(self) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Per element: 2D frame (e1, e2), corners in it (relative to corner 0), and per edge the
         unit direction u and right-hand normal (u_y, -u_x)."""
         if "edges" not in self._shared:
@@ -460,9 +477,10 @@ class Diffusion:
             u = d / ln[..., None]
             self._shared["edges"] = (e1, e2, q, u)
             self._built("edges")
-        return self._shared["edges"]
+        edges: tuple[FloatArray, FloatArray, FloatArray, FloatArray] = self._shared["edges"]
+        return edges
 
-    def _exact(self, x: np.ndarray, j: np.ndarray, v: float) -> np.ndarray:
+    def _exact(self, x: FloatArray, j: IntArray, v: float) -> FloatArray:
         """integral over element j of G(v, |x - y|) dA(y), exactly: Owen's T over the flat triangle
         (gaussian_triangle_mass, in units of sigma around x's foot point) times exp(-z^2 / 2v) for x's
         height z over its plane (eq. 20 is separable)."""
@@ -473,14 +491,15 @@ class Diffusion:
         p = np.stack([(d * e1[j]).sum(1), (d * e2[j]).sum(1)], 1)
         qj = q[j]
         mass = gaussian_triangle_mass((qj[:, 0] - p) / s, (qj[:, 1] - p) / s, (qj[:, 2] - p) / s)
-        return mass * np.exp(-z * z / (2.0 * v))
+        out: FloatArray = mass * np.exp(-z * z / (2.0 * v))
+        return out
 
 
-def _accumulate(i: np.ndarray, vals: np.ndarray, n: int) -> np.ndarray:
+def _accumulate(i: IntArray, vals: FloatArray, n: int) -> FloatArray:
     return np.stack([np.bincount(i, vals[:, c], n) for c in range(vals.shape[1])], 1)
 
 
-def gaussian_disc_convolution(r: np.ndarray, v: float, radius: float, n: int = 48) -> np.ndarray:
+def gaussian_disc_convolution(r: FloatArray, v: float, radius: float, n: int = 48) -> FloatArray:
     """(G(v) * disc)(r): the integral of G(v, |p - (r, 0)|) over the disc of ``radius`` at the
     origin (n x n polar Gauss-Legendre rule); the analytic reference of a laser beam."""
     t, wt = np.polynomial.legendre.leggauss(n)

@@ -15,17 +15,21 @@ pixels that count (skin pixels, or every covered pixel):
 """
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+from skinviewer.physics.arrays import BoolArray, FloatArray
 
 DSSIM_SETUP = ("SSIM (Wang et al. 2004, scikit-image): Gaussian window sigma 1.5 (11x11), population covariance, "
                "C1=(0.01L)^2, C2=(0.03L)^2, L=1, on sRGB-encoded [0,1] RGB per channel, mean over mask; "
                "DSSIM=(1-SSIM)/2 (seed 001 eq. 4.3)")
 
 
-def _mask(x: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
+def _mask(x: FloatArray, mask: ArrayLike | None) -> BoolArray:
     if mask is None:
         return np.ones(x.shape[:2], bool)
     m = np.asarray(mask).astype(bool)
@@ -34,7 +38,7 @@ def _mask(x: np.ndarray, mask: np.ndarray | None) -> np.ndarray:
     return m
 
 
-def _check(x: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _check(x: FloatArray, ref: FloatArray) -> tuple[FloatArray, FloatArray]:
     x = np.asarray(x, np.float64)[..., :3]
     ref = np.asarray(ref, np.float64)[..., :3]
     if x.shape != ref.shape:
@@ -44,16 +48,17 @@ def _check(x: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return x, ref
 
 
-def rel_rms(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+def rel_rms(x: FloatArray, ref: FloatArray, mask: ArrayLike | None = None) -> FloatArray:
     """Relative RMS error per channel over the mask (0 for a perfect image)."""
     x, ref = _check(x, ref)
     m = _mask(x, mask)
     d = ((x - ref)[m] ** 2).sum(axis=0)
     n = (ref[m] ** 2).sum(axis=0)
-    return np.sqrt(d / np.maximum(n, 1e-30))
+    out: FloatArray = np.sqrt(d / np.maximum(n, 1e-30))
+    return out
 
 
-def rel_error_map(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+def rel_error_map(x: FloatArray, ref: FloatArray, mask: ArrayLike | None = None) -> FloatArray:
     """Per-pixel relative error |x - ref| / max(ref, 1 % of the channel mean), per channel; 0 outside the mask."""
     x, ref = _check(x, ref)
     m = _mask(x, mask)
@@ -64,20 +69,20 @@ def rel_error_map(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None
     return e
 
 
-def p99_rel(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+def p99_rel(x: FloatArray, ref: FloatArray, mask: ArrayLike | None = None) -> FloatArray:
     """The 99th percentile of the per-pixel relative error, per channel, over the mask."""
     m = _mask(np.asarray(x), mask)
     e = rel_error_map(x, ref, m)
     return np.percentile(e[m], 99, axis=0) if m.any() else np.zeros(3)
 
 
-def display_encode(x: np.ndarray, exposure: float = 1.0) -> np.ndarray:
+def display_encode(x: FloatArray, exposure: float = 1.0) -> FloatArray:
     """Linear radiance -> the [0, 1] sRGB-encoded values a viewer sees (exposure, clamp, sRGB)."""
     c = np.clip(np.asarray(x, np.float64)[..., :3] * exposure, 0.0, 1.0)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
 
 
-def dssim_map(x: np.ndarray, ref: np.ndarray, exposure: float = 1.0) -> np.ndarray:
+def dssim_map(x: FloatArray, ref: FloatArray, exposure: float = 1.0) -> FloatArray:
     """Per-pixel DSSIM (1 - SSIM) / 2 (seed 001 eq. 4.3; setup ``DSSIM_SETUP``), the channel mean."""
     from skimage.metrics import structural_similarity
 
@@ -85,10 +90,11 @@ def dssim_map(x: np.ndarray, ref: np.ndarray, exposure: float = 1.0) -> np.ndarr
     a, b = display_encode(x, exposure), display_encode(ref, exposure)
     _, smap = structural_similarity(a, b, data_range=1.0, channel_axis=-1, gaussian_weights=True, sigma=1.5,
                                     use_sample_covariance=False, full=True)
-    return (1.0 - smap.mean(axis=-1)) / 2.0
+    out: FloatArray = (1.0 - smap.mean(axis=-1)) / 2.0
+    return out
 
 
-def dssim(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0) -> float:
+def dssim(x: FloatArray, ref: FloatArray, mask: ArrayLike | None = None, exposure: float = 1.0) -> float:
     """DSSIM = (1 - SSIM) / 2 (seed 001 eq. 4.3), with the setup in ``DSSIM_SETUP``: the mean of
     ``dssim_map`` over the mask."""
     x, ref = _check(x, ref)
@@ -112,25 +118,26 @@ class ImageError:
     def rms_mean(self) -> float:
         return float(np.mean(self.rms))
 
-    def to_json(self) -> dict:
+    def to_json(self) -> dict[str, Any]:
         return {**asdict(self), "dssim_setup": DSSIM_SETUP}
 
     def summary(self) -> str:
-        pct = lambda v: " / ".join(f"{100 * c:.2f}" for c in v)  # noqa: E731
+        def pct(v: Iterable[float]) -> str:
+            return " / ".join(f"{100 * c:.2f}" for c in v)
         if self.rms_u is None or self.p99_u is None or self.dssim_u is None:
             return f"RMS {pct(self.rms)} %  p99 {pct(self.p99)} %  DSSIM {self.dssim:.4f}"
         return (f"RMS {pct(self.rms)} ± {pct(self.rms_u)} %  p99 {pct(self.p99)} ± {pct(self.p99_u)} %  "
                 f"DSSIM {self.dssim:.4f} ± {self.dssim_u:.4f}")
 
 
-def with_u(values, u, digits: int = 1, scale: float = 100.0) -> str:
+def with_u(values: Iterable[float], u: Iterable[float] | None, digits: int = 1, scale: float = 100.0) -> str:
     """'4.2 / 3.1 / 2.0 ± 0.3 / 0.1 / 0.1' (percent by default); without ``u`` just the values."""
     v = " / ".join(f"{scale * c:.{digits}f}" for c in values)
     return v if u is None else v + " ± " + " / ".join(f"{scale * c:.{digits}f}" for c in u)
 
 
-def figure_uncertainty(x: np.ndarray, ref: np.ndarray, u: np.ndarray, mask: np.ndarray | None = None,
-                       exposure: float = 1.0) -> tuple[np.ndarray, np.ndarray, float]:
+def figure_uncertainty(x: FloatArray, ref: FloatArray, u: FloatArray, mask: ArrayLike | None = None,
+                       exposure: float = 1.0) -> tuple[FloatArray, FloatArray, float]:
     """How far each figure can move while the reference moves by at most its per-pixel uncertainty
     ``u`` (H, W, 3): RMS by the triangle inequality, |rms(x - r') - rms(x - r)| <= rms(r' - r) <=
     rms(u) (over the same norm); p99 between the p99 of (|x - ref| -/+ u)+ / max(ref, floor) (every
@@ -160,13 +167,13 @@ def tied(a: float, ua: float | None, b: float, ub: float | None) -> bool:
     return abs(a - b) <= (ua or 0.0) + (ub or 0.0)
 
 
-def _rgb(v) -> tuple[float, float, float]:
+def _rgb(v: Iterable[float]) -> tuple[float, float, float]:
     """A per-channel (R, G, B) array as the tuple of floats ImageError holds."""
     return cast("tuple[float, float, float]", tuple(float(c) for c in v))
 
 
-def image_error(x: np.ndarray, ref: np.ndarray, mask: np.ndarray | None = None, exposure: float = 1.0,
-                uncertainty: np.ndarray | None = None) -> ImageError:
+def image_error(x: FloatArray, ref: FloatArray, mask: ArrayLike | None = None, exposure: float = 1.0,
+                uncertainty: FloatArray | None = None) -> ImageError:
     """The figures; with the reference's per-pixel ``uncertainty`` (H, W, 3) each figure's too."""
     rms = _rgb(rel_rms(x, ref, mask))
     p99 = _rgb(p99_rel(x, ref, mask))

@@ -24,6 +24,7 @@ step blurs E 1_S itself: nothing past the border, as before.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
 def past_border_light(e_border: np.ndarray, mirror: np.ndarray) -> np.ndarray:
@@ -33,7 +34,7 @@ def past_border_light(e_border: np.ndarray, mirror: np.ndarray) -> np.ndarray:
     return np.clip(2.0 * half - np.asarray(mirror, np.float64), 0.0, half)
 
 
-def chain_on_segment(E: np.ndarray, dx: float, variances, inside: np.ndarray, reflect: bool = True) -> np.ndarray:
+def chain_on_segment(E: np.ndarray, dx: float, variances: ArrayLike, inside: np.ndarray, reflect: bool = True) -> np.ndarray:
     """The incremental chain (eq. 24) on a 1D line of samples ``dx`` mm apart, ``inside`` a contiguous
     run (the surface), E the light on it: blur_i for every variance, (len(variances), len(E)). Past
     the run's two ends: nothing before the first step; before every later step the odd reflection
@@ -46,8 +47,8 @@ def chain_on_segment(E: np.ndarray, dx: float, variances, inside: np.ndarray, re
     c_lo, c_hi = lo - 0.5, hi + 0.5  # the border lies half a sample past the last sample inside
     Ein = np.where(inside, E, 0.0)
     B = Ein.astype(np.float64)
-    prev, out = 0.0, []
-    for i, v in enumerate(variances):
+    prev, out = 0.0, []  # variances: mm^2, increasing
+    for i, v in enumerate(np.asarray(variances, np.float64).ravel().tolist()):
         src = np.where(inside, B, 0.0)
         if reflect and i > 0:
             for c, past, foot in ((c_lo, x < c_lo, lo), (c_hi, x > c_hi, hi)):

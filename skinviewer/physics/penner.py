@@ -16,17 +16,22 @@ change per unit length along the edge (a sphere of radius R gives 1/R everywhere
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+from skinviewer.physics.arrays import FloatArray
 
 N_RING = 257  # ring samples per Gaussian (trapezoid over the Gaussian's own support)
 
 
-def _gaussian_2d(v: float, d: np.ndarray) -> np.ndarray:
+def _gaussian_2d(v: float, d: FloatArray) -> FloatArray:
     return np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v)  # G(v, r), seed 000 eq. 21
 
 
-def _ring_terms(v: float, r: float, cos_theta: np.ndarray) -> tuple[np.ndarray, float]:
+def _ring_terms(v: float, r: float, cos_theta: FloatArray) -> tuple[FloatArray, float]:
     """For one Gaussian of variance ``v`` (mm^2) on a ring of radius ``r`` (mm): the numerator
     int max(cos(theta + x), 0) G(v, 2 r sin(x/2)) dx per theta, and the denominator int G dx."""
     sigma = math.sqrt(v)
@@ -42,7 +47,7 @@ def _ring_terms(v: float, r: float, cos_theta: np.ndarray) -> tuple[np.ndarray, 
 
 
 def ring_lut(gaussians: list[tuple[float, tuple[float, float, float]]], size: int,
-             max_curvature: float) -> np.ndarray:
+             max_curvature: float) -> FloatArray:
     """D(theta, r) as an RGB table (rows: curvature 1/r from 0 to ``max_curvature`` mm^-1 at texel
     centres, columns: N.L from -1 to 1 at texel centres). ``gaussians``: (variance mm^2, RGB weights)."""
     n = int(size)
@@ -81,10 +86,11 @@ def env_band_factors(ring: np.ndarray) -> np.ndarray:
     P = np.stack([np.ones_like(mu), mu, 0.5 * (3.0 * mu * mu - 1.0)])  # Legendre P_0..P_2
     lam = np.einsum("lj,rjc->rlc", P, ring)  # the common factor 2 pi (2 / n) cancels
     lam0 = P @ np.maximum(mu, 0.0)
-    return (lam / lam0[None, :, None]).astype(np.float32)
+    out: np.ndarray = (lam / lam0[None, :, None]).astype(np.float32)
+    return out
 
 
-def ring_integral(gaussians, theta: float, r: float, samples: int = 200001) -> np.ndarray:
+def ring_integral(gaussians: Any, theta: float, r: float, samples: int = 200001) -> np.ndarray:
     """The ring integral D(theta, r) by brute force over [-pi, pi] (the tests' independent answer)."""
     x = np.linspace(-math.pi, math.pi, samples)
     d = 2.0 * r * np.abs(np.sin(x / 2.0))
@@ -98,28 +104,30 @@ def ring_integral(gaussians, theta: float, r: float, samples: int = 200001) -> n
     return num / den
 
 
-def edge_profile(gaussians, x: np.ndarray) -> np.ndarray:
+def edge_profile(gaussians: Iterable[tuple[float, ArrayLike]], x: FloatArray) -> FloatArray:
     """A hard light edge at x = 0 (lit for x > 0) diffused by the profile, per channel:
     sum_i w_i Phi(x / sqrt(v_i)) / sum_i w_i (the step convolved with a_p, design/screen_space.md §3.3.2)."""
     x = np.asarray(x, np.float64)
     out = np.zeros(x.shape + (3,))
     total = np.zeros(3)
     for v, w in gaussians:
-        if v <= 0.0 or max(w) <= 0.0:
-            continue
         wv = np.asarray(w, np.float64)
+        if v <= 0.0 or float(wv.max()) <= 0.0:
+            continue
+
         phi = 0.5 * (1.0 + _erf(x / math.sqrt(2.0 * v)))
         out += phi[..., None] * wv
         total += wv
     return out / np.where(total > 0, total, 1.0)
 
 
-def _erf(x: np.ndarray) -> np.ndarray:
+def _erf(x: FloatArray) -> FloatArray:
     from scipy.special import erf
-    return erf(x)
+    out: FloatArray = erf(x)
+    return out
 
 
-def penumbra_lut(gaussians, size: int, max_width_mm: float) -> np.ndarray:
+def penumbra_lut(gaussians: Iterable[tuple[float, ArrayLike]], size: int, max_width_mm: float) -> FloatArray:
     """Shadow scattering (rows: the PCF penumbra's world width W from 0 to ``max_width_mm`` at texel
     centres; columns: the PCF shadow value s from 0 to 1 at texel centres), RGB. The filtered shadow is
     a linear ramp of width W across a hard edge; a point with value s sits at x = (s - 1/2) W and
@@ -137,8 +145,8 @@ def penumbra_lut(gaussians, size: int, max_width_mm: float) -> np.ndarray:
     return np.clip(out, 0.0, 1.0).astype(np.float32)
 
 
-def vertex_curvature(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, mm_per_unit: float,
-                     ids: np.ndarray | None = None) -> np.ndarray:
+def vertex_curvature(positions: FloatArray, normals: FloatArray, indices: FloatArray, mm_per_unit: float,
+                     ids: FloatArray | None = None) -> FloatArray:
     """Per vertex, the mean over its edges of |n_i - n_j| / |p_i - p_j| in mm^-1 (Penner's |dN| / |dP|,
     taken along the mesh's edges instead of screen derivatives): on a sphere of radius R both are
     2 sin(phi/2) apart (unit normals, chord 2 R sin(phi/2)), so exactly 1/R. ``ids``: one id per point

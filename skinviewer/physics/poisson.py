@@ -15,7 +15,9 @@ within radius 1 (nine on the rim, three inside). ``python -m skinviewer.physics.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from skinviewer.physics.arrays import FloatArray
 from skinviewer.physics.diffusion import profile_variance
 
 SEED = 2004  # Gosselin et al. 2004
@@ -38,21 +40,22 @@ POISSON_12: tuple[tuple[float, float], ...] = (
 )
 
 
-def _min_dist(p: np.ndarray) -> np.ndarray:
+def _min_dist(p: FloatArray) -> FloatArray:
     """Minimum pairwise distance of point sets p (..., n, 2)."""
     d = np.linalg.norm(p[..., :, None, :] - p[..., None, :, :], axis=-1)
     n = p.shape[-2]
     d[..., np.arange(n), np.arange(n)] = np.inf
-    return d.min(axis=(-2, -1))
+    out: FloatArray = d.min(axis=(-2, -1))
+    return out
 
 
-def _uniform_disk(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+def _uniform_disk(rng: np.random.Generator, shape: tuple[int, ...]) -> FloatArray:
     r = np.sqrt(rng.random(shape))
     a = 2.0 * np.pi * rng.random(shape)
     return np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
 
 
-def _best_candidate(rng: np.random.Generator, n: int, sets: int, darts: int) -> np.ndarray:
+def _best_candidate(rng: np.random.Generator, n: int, sets: int, darts: int) -> FloatArray:
     pts = _uniform_disk(rng, (sets, 1))
     rows = np.arange(sets)
     for _ in range(1, n):
@@ -62,7 +65,7 @@ def _best_candidate(rng: np.random.Generator, n: int, sets: int, darts: int) -> 
     return pts
 
 
-def _relax(p: np.ndarray, steps: int = 400, power: float = 24.0, lr: float = 0.02) -> np.ndarray:
+def _relax(p: FloatArray, steps: int = 400, power: float = 24.0, lr: float = 0.02) -> FloatArray:
     """Push points apart with forces ~ (d_min/d)^power / d (soft min-distance), centroid kept at 0."""
     n = len(p)
     eye = np.eye(n)
@@ -81,7 +84,7 @@ def _relax(p: np.ndarray, steps: int = 400, power: float = 24.0, lr: float = 0.0
 
 
 def generate_poisson_disk(n: int = 12, seed: int = SEED, sets: int = 256, darts: int = 32,
-                          relax: int = 8) -> np.ndarray:
+                          relax: int = 8) -> FloatArray:
     """(n, 2) float64 points in the unit disk, deterministic for (n, seed, sets, darts, relax)."""
     rng = np.random.default_rng(seed)
     pts = _best_candidate(rng, n, sets, darts)
@@ -94,15 +97,16 @@ def generate_poisson_disk(n: int = 12, seed: int = SEED, sets: int = 256, darts:
     assert best is not None, "relax >= 1"
     best = best - best.mean(axis=0)
     best = best / max(1.0, float(np.linalg.norm(best, axis=1).max()))
-    return np.trunc(best * 1e6) / 1e6 + 0.0  # 6 decimals towards 0: stays in the disk; no -0.0
+    out: FloatArray = np.trunc(best * 1e6) / 1e6 + 0.0  # 6 decimals towards 0: stays in the disk; no -0.0
+    return out
 
 
-def format_literal(points: np.ndarray) -> str:
-    rows = "\n".join(f"    ({x!r}, {y!r})," for x, y in np.asarray(points, dtype=float).tolist())
+def format_literal(points: FloatArray) -> str:
+    rows = "\n".join(f"    ({x!r}, {y!r})," for x, y in np.asarray(points, dtype=np.float64).tolist())
     return f"POISSON_12: tuple[tuple[float, float], ...] = (\n{rows}\n)"
 
 
-def stats(points) -> dict[str, float]:
+def stats(points: ArrayLike) -> dict[str, float]:
     p = np.asarray(points, dtype=np.float64)
     return {"min_distance": float(_min_dist(p)), "centroid": float(np.linalg.norm(p.mean(axis=0))),
             "max_radius": float(np.linalg.norm(p, axis=1).max())}
@@ -114,14 +118,14 @@ if __name__ == "__main__":
     print("#", stats(pts))
 
 
-def kernel_axis_moment(points=None) -> float:
+def kernel_axis_moment(points: ArrayLike | None = None) -> float:
     """Per-axis second moment of one Poisson blur (eq. 13: the centre and the 12 taps, equal
     weights), in units of the radius R squared: one iteration adds m R^2 of variance per axis."""
     p = np.asarray(POISSON_12 if points is None else points, dtype=np.float64)
     return float(np.sum(p ** 2) / 2.0 / (len(p) + 1))
 
 
-def radii_mm(variances, weights, iterations: int) -> np.ndarray:
+def radii_mm(variances: ArrayLike, weights: ArrayLike, iterations: int) -> FloatArray:
     """Per-channel Poisson radius (mm) whose ``iterations`` blurs have the sum-of-Gaussians
     profile's per-axis variance V_c = sum_i w_ic v_i / sum_i w_ic (seed 000 eq. 21: a 2D Gaussian of
     variance v spreads v per axis): iterations * m * R_c^2 = V_c (Gosselin's mm mode, issue 10)."""

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from skinviewer.physics.arrays import FloatArray
 from skinviewer.physics.diffusion import gaussian as _diffusion_gaussian
 
 FOUR_PI = 4.0 * math.pi
@@ -38,8 +39,8 @@ FOUR_PI = 4.0 * math.pi
 ArrayLike = float | Sequence[float] | np.ndarray
 
 
-def _rgb(x: ArrayLike, name: str) -> np.ndarray:
-    a = np.asarray(x, dtype=float)
+def _rgb(x: ArrayLike, name: str) -> FloatArray:
+    a = np.asarray(x, dtype=np.float64)
     if a.ndim == 0:
         a = np.full(3, float(a))
     if a.shape != (3,):
@@ -49,8 +50,8 @@ def _rgb(x: ArrayLike, name: str) -> np.ndarray:
     return a
 
 
-def _r(r: ArrayLike) -> np.ndarray:
-    return np.abs(np.asarray(r, dtype=float))[..., None]  # (..., 1) broadcasts against (3,)
+def _r(r: ArrayLike) -> FloatArray:
+    return np.abs(np.asarray(r, dtype=np.float64))[..., None]  # (..., 1) broadcasts against (3,)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -78,7 +79,7 @@ def boundary_A(eta: float) -> float:
 # exp(-s d)/d whose 2-D transform is 2 pi exp(-|z| q)/q, q = sqrt(s^2 + k^2). Hence
 #   F{f_z}(k) = 2 pi sign(z) exp(-|z| q).                     (exact, whole plane)
 
-def _dipole_term(r: np.ndarray, z: np.ndarray, s: np.ndarray) -> np.ndarray:
+def _dipole_term(r: FloatArray, z: FloatArray, s: FloatArray) -> FloatArray:
     # written as (z/d) ((1/d + s)/d) e^{-s d}: no overflow for huge r, exact 0 at r = inf
     d = np.hypot(r, z)
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
@@ -87,30 +88,30 @@ def _dipole_term(r: np.ndarray, z: np.ndarray, s: np.ndarray) -> np.ndarray:
     return np.where(d > 0, np.nan_to_num(out, nan=0.0), 0.0)
 
 
-def _dipole_term_hat(q: np.ndarray, z: np.ndarray) -> np.ndarray:
+def _dipole_term_hat(q: FloatArray, z: FloatArray) -> FloatArray:
     with np.errstate(under="ignore"):
         return 2.0 * math.pi * np.sign(z) * np.exp(-np.abs(z) * q)
 
 
 @dataclass(frozen=True)
 class _Coefficients:
-    sigma_s_prime: np.ndarray
-    sigma_a: np.ndarray
+    sigma_s_prime: FloatArray
+    sigma_a: FloatArray
 
     @property
-    def sigma_t_prime(self) -> np.ndarray:  # eq. (2.35)
+    def sigma_t_prime(self) -> FloatArray:  # eq. (2.35)
         return self.sigma_s_prime + self.sigma_a
 
     @property
-    def alpha_prime(self) -> np.ndarray:  # reduced albedo
+    def alpha_prime(self) -> FloatArray:  # reduced albedo
         return self.sigma_s_prime / self.sigma_t_prime
 
     @property
-    def D(self) -> np.ndarray:  # diffusion coefficient 1/(3 sigma_t')
+    def D(self) -> FloatArray:  # diffusion coefficient 1/(3 sigma_t')
         return 1.0 / (3.0 * self.sigma_t_prime)
 
     @property
-    def sigma_tr(self) -> np.ndarray:  # effective transport coefficient sqrt(3 sigma_a sigma_t')
+    def sigma_tr(self) -> FloatArray:  # effective transport coefficient sqrt(3 sigma_a sigma_t')
         return np.sqrt(3.0 * self.sigma_a * self.sigma_t_prime)
 
 
@@ -134,8 +135,8 @@ class Dipole:
     z_r = 1/sigma_t', z_v = z_r + 4 A D, d = sqrt(r^2 + z^2) (eq. 2.58), s = sigma_tr.
     Coefficients in 1/mm, eta = relative index of refraction of the medium.
     """
-    sigma_s_prime: np.ndarray
-    sigma_a: np.ndarray
+    sigma_s_prime: FloatArray
+    sigma_a: FloatArray
     eta: float = 1.3
 
     def __init__(self, sigma_s_prime: ArrayLike, sigma_a: ArrayLike, eta: float = 1.3):
@@ -154,32 +155,32 @@ class Dipole:
         return boundary_A(self.eta)
 
     @property
-    def z_r(self) -> np.ndarray:
+    def z_r(self) -> FloatArray:
         return 1.0 / self.c.sigma_t_prime
 
     @property
-    def z_v(self) -> np.ndarray:
+    def z_v(self) -> FloatArray:
         return self.z_r + 4.0 * self.A * self.c.D
 
-    def __call__(self, r: ArrayLike) -> np.ndarray:
+    def __call__(self, r: ArrayLike) -> FloatArray:
         c, rr = self.c, _r(r)
         s = c.sigma_tr
         return c.alpha_prime / FOUR_PI * (_dipole_term(rr, self.z_r, s) + _dipole_term(rr, self.z_v, s))
 
-    def hankel(self, k: ArrayLike) -> np.ndarray:
+    def hankel(self, k: ArrayLike) -> FloatArray:
         c = self.c
         q = np.sqrt(c.sigma_tr**2 + _r(k) ** 2)
         # the virtual source sits above the surface with negative charge: both terms positive
         return c.alpha_prime / FOUR_PI * (_dipole_term_hat(q, self.z_r) + _dipole_term_hat(q, self.z_v))
 
-    def total_reflectance(self) -> np.ndarray:
+    def total_reflectance(self) -> FloatArray:
         """Jensen 2001 closed form R_d = a'/2 (1 + exp(-4/3 A sqrt(3(1-a')))) exp(-sqrt(3(1-a')))."""
         a = self.c.alpha_prime
         t = np.sqrt(3.0 * (1.0 - a))
         return 0.5 * a * (1.0 + np.exp(-4.0 / 3.0 * self.A * t)) * np.exp(-t)
 
 
-def dipole(r: ArrayLike, sigma_s_prime: ArrayLike, sigma_a: ArrayLike, eta: float = 1.3) -> np.ndarray:
+def dipole(r: ArrayLike, sigma_s_prime: ArrayLike, sigma_a: ArrayLike, eta: float = 1.3) -> FloatArray:
     """Functional form of :class:`Dipole`: R(r), shape ``np.shape(r) + (3,)``."""
     return Dipole(sigma_s_prime, sigma_a, eta)(r)
 
@@ -187,20 +188,21 @@ def dipole(r: ArrayLike, sigma_s_prime: ArrayLike, sigma_a: ArrayLike, eta: floa
 # ---------------------------------------------------------------------------------------------
 # Donner & Jensen 2005 multipole (one slab)
 
-def _cosh_sinh_over_sinh(q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+def _cosh_sinh_over_sinh(q: FloatArray, a: FloatArray, b: FloatArray, c: FloatArray) -> FloatArray:
     """cosh(q a) sinh(q b) / sinh(q c) for q >= 0, 0 <= a, 0 <= b, a + b <= c, c > 0: finite for any q
     (exponential form, no overflow), b/c at q = 0 (the limit)."""
     x = q * c
     with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
-        e = lambda t: np.exp(np.minimum(t, 0.0))  # arguments are <= 0 up to rounding
+        def e(t: FloatArray) -> FloatArray:
+            return np.exp(np.minimum(t, 0.0))  # arguments are <= 0 up to rounding
         big = 0.5 * (e(q * (a + b - c)) + e(q * (b - a - c)) - e(q * (a - b - c)) - e(-q * (a + b + c)))
         big = big / -np.expm1(-2.0 * x)
         small = np.cosh(q * a) * np.sinh(q * b) / np.sinh(x)
     return np.where(x < 1e-6, b / c, np.where(x < 1.0, small, big))
 
 
-def _slab_hat_closed(c: _Coefficients, d: float, A_top: float, A_bot: float, q: np.ndarray,
-                     transmit: bool) -> np.ndarray:
+def _slab_hat_closed(c: _Coefficients, d: float, A_top: float, A_bot: float, q: FloatArray,
+                     transmit: bool) -> FloatArray:
     """The image series of eq. (2.65)/(2.67) transformed and summed over all i in closed form.
     sum_i over the images is the 1-D Green's function of g'' - q^2 g = -delta(z - l) with g = 0 at the
     extrapolated boundaries -2 A_top D and d + 2 A_bot D (distance P apart); the sums are its derivatives
@@ -220,13 +222,13 @@ def _slab_hat_closed(c: _Coefficients, d: float, A_top: float, A_bot: float, q: 
     return np.where(l <= d, below, above)
 
 
-def _slab_sources(c: _Coefficients, d: float, A_top: float, A_bot: float, n: int):
+def _slab_sources(c: _Coefficients, d: float, A_top: float, A_bot: float, n: int) -> tuple[FloatArray, FloatArray]:
     """Source heights below the top surface (z down into the slab), seed 001 eq. (2.60)-(2.63):
     z_r,i = 2 i P + l, z_v,i = 2 i P - l - 4 A_top D, P = d + 2 A_top D + 2 A_bot D, i = -n..n."""
     D = c.D
     l = 1.0 / c.sigma_t_prime
     P = d + 2.0 * A_top * D + 2.0 * A_bot * D
-    i = np.arange(-n, n + 1, dtype=float)[:, None]  # (2n+1, 1) against (3,)
+    i = np.arange(-n, n + 1, dtype=np.float64)[:, None]  # (2n+1, 1) against (3,)
     z_r = 2.0 * i * P + l
     z_v = 2.0 * i * P - l - 4.0 * A_top * D
     return z_r, z_v
@@ -250,8 +252,8 @@ class Multipole:
     ``reflectance``/``transmittance`` are R(r), T(r); ``hankel``/``hankel_transmittance`` their transforms;
     ``flipped()`` is the same slab lit from below (R^-, T^- of eq. 2.73-2.76).
     """
-    sigma_s_prime: np.ndarray
-    sigma_a: np.ndarray
+    sigma_s_prime: FloatArray
+    sigma_a: FloatArray
     thickness: float
     eta: float = 1.3
     eta_above: float = 1.0
@@ -296,7 +298,7 @@ class Multipole:
         return Multipole(self.sigma_s_prime, self.sigma_a, self.thickness, self.eta,
                          self.eta_below, self.eta_above, self.n_dipoles)
 
-    def _sources(self):
+    def _sources(self) -> tuple[FloatArray, FloatArray]:
         n = self.n_dipoles
         if n is None:
             n = _default_n_dipoles(self.c, self.thickness, self.A_top, self.A_bot)
@@ -305,7 +307,7 @@ class Multipole:
     def _as_dipole(self) -> Dipole:
         return Dipole(self.sigma_s_prime, self.sigma_a, self.eta / self.eta_above)
 
-    def reflectance(self, r: ArrayLike) -> np.ndarray:
+    def reflectance(self, r: ArrayLike) -> FloatArray:
         """Eq. (2.65) with (2.68): alpha'/(4pi) sum_i [f(z_r,i) - f(z_v,i)] in z-down coordinates."""
         if self.semi_infinite:
             return self._as_dipole()(r)
@@ -319,7 +321,7 @@ class Multipole:
 
     __call__ = reflectance
 
-    def transmittance(self, r: ArrayLike, form: str = "exact") -> np.ndarray:
+    def transmittance(self, r: ArrayLike, form: str = "exact") -> FloatArray:
         """Eq. (2.67) with (2.69): heights (d - z) of the sources above the bottom surface.
         ``form="printed"`` keeps the seed's numerator z_{r,i}, z_{v,i} (see the module notes)."""
         rr = _r(r)
@@ -342,7 +344,7 @@ class Multipole:
                 raise ValueError("form must be 'exact' or 'printed'")
         return c.alpha_prime / FOUR_PI * acc
 
-    def _hankel_sum(self, k: ArrayLike, transmit: bool) -> np.ndarray:
+    def _hankel_sum(self, k: ArrayLike, transmit: bool) -> FloatArray:
         """alpha'/(4pi) sum_i [F(z_r,i) - F(z_v,i)] (heights d - z for T). Image i is ~exp(-2|i| P q):
         each k only sums the images that are above e^-40 there (few at large k)."""
         c = self.c
@@ -378,20 +380,20 @@ class Multipole:
             out[slow] = _slab_hat_closed(c, d, self.A_top, self.A_bot, q[slow], transmit)
         return out.reshape(shape)
 
-    def hankel(self, k: ArrayLike) -> np.ndarray:
+    def hankel(self, k: ArrayLike) -> FloatArray:
         if self.semi_infinite:
             return self._as_dipole().hankel(k)
         return self._hankel_sum(k, transmit=False)
 
-    def hankel_transmittance(self, k: ArrayLike) -> np.ndarray:
+    def hankel_transmittance(self, k: ArrayLike) -> FloatArray:
         if self.semi_infinite:
             return np.zeros(np.shape(_r(k))[:-1] + (3,))
         return self._hankel_sum(k, transmit=True)
 
-    def total_reflectance(self) -> np.ndarray:
+    def total_reflectance(self) -> FloatArray:
         return self.hankel(0.0)
 
-    def total_transmittance(self) -> np.ndarray:
+    def total_transmittance(self) -> FloatArray:
         return self.hankel_transmittance(0.0)
 
 
@@ -408,7 +410,7 @@ class Layer:
     name: str = ""
 
 
-def _inverse_hankel(F: Callable[[np.ndarray], np.ndarray], r: np.ndarray) -> np.ndarray:
+def _inverse_hankel(F: Callable[[FloatArray], FloatArray], r: FloatArray) -> FloatArray:
     """f(r) = 1/(2pi) int_0^inf F(k) J0(k r) k dk for F smooth and decaying in k: composite 8-point
     Gauss-Legendre panels up to where F has decayed (no endpoint error at k = 0, unlike the trapezoid
     rule). Radii are processed by octaves so each group's panels are a quarter of its shortest J0 period."""
@@ -432,7 +434,7 @@ def _inverse_hankel(F: Callable[[np.ndarray], np.ndarray], r: np.ndarray) -> np.
         e *= 2.0
         edges.append(e)
     edges[-1] = top
-    cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    cache: dict[int, tuple[FloatArray, FloatArray]] = {}
     lo = 0
     for hi_r in edges:
         hi = int(np.searchsorted(flat[order], hi_r, side="right"))
@@ -488,7 +490,7 @@ class LayeredMultipole:
             out.append(Multipole(L.sigma_s_prime, L.sigma_a, L.thickness, L.eta, etas[i], etas[i + 2]))
         return out
 
-    def _combined(self, k: ArrayLike):
+    def _combined(self, k: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         slabs = self.slabs()
         s0 = slabs[0]
         Rp, Tp = s0.hankel(k), s0.hankel_transmittance(k)
@@ -503,16 +505,16 @@ class LayeredMultipole:
                               R2m + T2p * Rm * T2m * inv, T2m * Tm * inv)
         return Rp, Tp, Rm, Tm
 
-    def hankel(self, k: ArrayLike) -> np.ndarray:
+    def hankel(self, k: ArrayLike) -> FloatArray:
         return self._combined(k)[0]
 
-    def hankel_transmittance(self, k: ArrayLike) -> np.ndarray:
+    def hankel_transmittance(self, k: ArrayLike) -> FloatArray:
         return self._combined(k)[1]
 
-    def total_reflectance(self) -> np.ndarray:
+    def total_reflectance(self) -> FloatArray:
         return self.hankel(0.0)
 
-    def total_transmittance(self) -> np.ndarray:
+    def total_transmittance(self) -> FloatArray:
         return self.hankel_transmittance(0.0)
 
     def probe_range(self) -> tuple[float, float]:
@@ -521,8 +523,8 @@ class LayeredMultipole:
         s = min(float(np.min(L.c.sigma_tr)) for L in self.slabs())
         return 1e-5, (1e4 if s <= 0 else min(1e4, 60.0 / s))
 
-    def __call__(self, r: ArrayLike) -> np.ndarray:
-        rr = np.abs(np.asarray(r, dtype=float))
+    def __call__(self, r: ArrayLike) -> FloatArray:
+        rr = np.abs(np.asarray(r, dtype=np.float64))
         top = self.slabs()[0]
         direct = top.reflectance(rr)
         if len(self.layers) == 1:
@@ -555,10 +557,10 @@ def three_layer_skin() -> LayeredMultipole:
 BURLEY_CONFIGS = ("searchlight-mfp", "searchlight-dmfp", "diffuse-transmission")
 
 
-def burley_scale(albedo: ArrayLike, config: str = "searchlight-dmfp") -> np.ndarray:
+def burley_scale(albedo: ArrayLike, config: str = "searchlight-dmfp") -> FloatArray:
     """Christensen's fits s(A): eq. (2.86) searchlight + mean free path, (2.88) searchlight + diffuse
     mean free path, (2.89) diffuse surface transmission + mean free path."""
-    A = np.asarray(albedo, dtype=float)
+    A = np.asarray(albedo, dtype=np.float64)
     if config == "searchlight-mfp":
         return 1.85 - A + 7.0 * np.abs(A - 0.8) ** 3
     if config == "searchlight-dmfp":
@@ -571,13 +573,13 @@ def burley_scale(albedo: ArrayLike, config: str = "searchlight-dmfp") -> np.ndar
 R_FLOOR = 1e-12  # Burley's r floor, in units of d
 
 
-def burley_normalized(r: ArrayLike, d: ArrayLike) -> np.ndarray:
+def burley_normalized(r: ArrayLike, d: ArrayLike) -> FloatArray:
     """Eq. (2.83): R(r) = (e^(-r/d) + e^(-r/(3d))) / (8 pi d r); 2 pi int r R dr = 1.
     ``d`` broadcasts against r (e.g. shape (3,) for RGB with r[..., None]). The 1/r singularity at
     r = 0 is integrable but infinite: r is floored at R_FLOOR * d (1e-12 d: nothing a plot or a fit
     resolves), so the value stays finite."""
-    d = np.asarray(d, dtype=float)
-    r = np.asarray(np.maximum(np.abs(np.asarray(r, dtype=float)), R_FLOOR * np.where(np.isfinite(d), d, 0.0)))
+    d = np.asarray(d, dtype=np.float64)
+    r = np.asarray(np.maximum(np.abs(np.asarray(r, dtype=np.float64)), R_FLOOR * np.where(np.isfinite(d), d, 0.0)))
     with np.errstate(divide="ignore", under="ignore", invalid="ignore"):
         num = np.exp(-r / d) + np.exp(-r / (3.0 * d))
         out = num / (8.0 * math.pi * d * r)
@@ -585,7 +587,7 @@ def burley_normalized(r: ArrayLike, d: ArrayLike) -> np.ndarray:
     return np.where((d > 0) & np.isfinite(d), out, 0.0)  # d = inf (no absorption): spread to nothing
 
 
-def diffuse_mean_free_path(sigma_s_prime: ArrayLike, sigma_a: ArrayLike) -> np.ndarray:
+def diffuse_mean_free_path(sigma_s_prime: ArrayLike, sigma_a: ArrayLike) -> FloatArray:
     """l_d = 1/sigma_tr with D = (sigma_t + sigma_a)/(3 sigma_t^2), sigma_tr = sqrt(sigma_a / D), eq. (2.87).
     Infinite where sigma_a = 0."""
     c = _coeffs(sigma_s_prime, sigma_a)
@@ -600,8 +602,8 @@ class Burley:
     """Burley normalized diffusion, eq. (2.84): R(r) = A s (e^(-s r/l) + e^(-s r/(3l))) / (8 pi l r),
     i.e. albedo times eq. (2.83) with d = l/s. ``mfp`` in mm (the diffuse mean free path for
     ``searchlight-dmfp``, the mean free path otherwise)."""
-    albedo: np.ndarray
-    mfp: np.ndarray
+    albedo: FloatArray
+    mfp: FloatArray
     config: str = "searchlight-dmfp"
 
     def __init__(self, albedo: ArrayLike, mfp: ArrayLike, config: str = "searchlight-dmfp"):
@@ -616,58 +618,58 @@ class Burley:
         object.__setattr__(self, "config", config)
 
     @property
-    def s(self) -> np.ndarray:
+    def s(self) -> FloatArray:
         return burley_scale(self.albedo, self.config)
 
     @property
-    def d(self) -> np.ndarray:
+    def d(self) -> FloatArray:
         return self.mfp / self.s
 
-    def __call__(self, r: ArrayLike) -> np.ndarray:
+    def __call__(self, r: ArrayLike) -> FloatArray:
         return self.albedo * burley_normalized(_r(r), self.d)
 
-    def total_reflectance(self) -> np.ndarray:
-        return self.albedo.copy()
+    def total_reflectance(self) -> FloatArray:
+        return np.array(self.albedo, dtype=np.float64)
 
     def min_fit_radius(self) -> float:
         """r R^2 ~ 1/r is not integrable at 0 (eq. 2.83): fits and eq. (3.1) start at d/100
         (the profile holds ~0.5 % of its energy inside that radius, eq. 3.9)."""
         return float(np.min(self.d)) / 100.0
 
-    def cdf(self, r: ArrayLike) -> np.ndarray:
+    def cdf(self, r: ArrayLike) -> FloatArray:
         return burley_cdf(_r(r), self.d)
 
-    def sample_radius(self, u: ArrayLike) -> np.ndarray:
+    def sample_radius(self, u: ArrayLike) -> FloatArray:
         """Radii distributed like 2 pi r R(r) / A from uniform u in (0, 1), shape np.shape(u) + (3,)."""
-        return burley_inverse_cdf(np.asarray(u, dtype=float)[..., None], self.d)
+        return burley_inverse_cdf(np.asarray(u, dtype=np.float64)[..., None], self.d)
 
 
-def burley_cdf(r: ArrayLike, d: ArrayLike = 1.0) -> np.ndarray:
+def burley_cdf(r: ArrayLike, d: ArrayLike = 1.0) -> FloatArray:
     """Eq. (3.9) with s = 1/d: P(r) = 1 - e^(-r/d)/4 - 3 e^(-r/(3d))/4 (expm1 form, exact near 0)."""
-    x = np.abs(np.asarray(r, dtype=float)) / np.asarray(d, dtype=float)
+    x = np.abs(np.asarray(r, dtype=np.float64)) / np.asarray(d, dtype=np.float64)
     return -(0.25 * np.expm1(-x) + 0.75 * np.expm1(-x / 3.0))
 
 
-def burley_ccdf(r: ArrayLike, d: ArrayLike = 1.0) -> np.ndarray:
+def burley_ccdf(r: ArrayLike, d: ArrayLike = 1.0) -> FloatArray:
     """u = 1 - P(r) = e^(-r/d)/4 + 3 e^(-r/(3d))/4 (exact in the tail)."""
-    x = np.abs(np.asarray(r, dtype=float)) / np.asarray(d, dtype=float)
+    x = np.abs(np.asarray(r, dtype=np.float64)) / np.asarray(d, dtype=np.float64)
     with np.errstate(under="ignore"):
         return 0.25 * np.exp(-x) + 0.75 * np.exp(-x / 3.0)
 
 
-def burley_inverse_cdf(u: ArrayLike, d: ArrayLike = 1.0, printed: bool = False) -> np.ndarray:
+def burley_inverse_cdf(u: ArrayLike, d: ArrayLike = 1.0, printed: bool = False) -> FloatArray:
     """Analytic inverse, eq. (3.12)-(3.13): the radius r with 1 - P(r) = u (u uniform in (0, 1] gives
     samples of the profile; u and 1-u are equally uniform).
       G(u) = 1 + 4u (2u + sqrt(1 + 4u^2)),  r/d = 3 log((1 + G^(-1/3) + G^(1/3)) / (4u)).
     u is clamped to [tiny, 1]: u -> 0 gives a large finite radius (~2100 d), u = 1 gives 0.
     ``printed=True`` evaluates the seed's printed (1 + 2 G^(-1/3)) form, which is not an inverse."""
-    u = np.asarray(np.clip(np.asarray(u, dtype=float), np.finfo(float).tiny, 1.0))
+    u = np.asarray(np.clip(np.asarray(u, dtype=np.float64), np.finfo(float).tiny, 1.0))
     G = 1.0 + 4.0 * u * (2.0 * u + np.sqrt(1.0 + 4.0 * u * u))
     g = np.cbrt(G)
     num = 1.0 + (2.0 / g if printed else 1.0 / g + g)
     # log(num/(4u)) = log(num/4) - log(u): finite for tiny u
     x = 3.0 * (np.log(num / 4.0) - np.log(u))
-    return np.maximum(x, 0.0) * np.asarray(d, dtype=float)
+    return np.maximum(x, 0.0) * np.asarray(d, dtype=np.float64)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -721,31 +723,32 @@ DEON_SKIN_GAUSSIANS: tuple[tuple[float, tuple[float, float, float]], ...] = (
 )
 
 
-def gaussian(v: ArrayLike, r: ArrayLike) -> np.ndarray:
+def gaussian(v: ArrayLike, r: ArrayLike) -> FloatArray:
     """G(v, r) = exp(-r^2/(2v)) / (2 pi v), seed 000 eq. (20): unit integral over the plane.
     The one implementation is :func:`skinviewer.physics.diffusion.gaussian` (v <= 0 -> 0, never Inf)."""
     return _diffusion_gaussian(v, r)
 
 
-def sum_of_gaussians(r: ArrayLike, variances: ArrayLike, weights: ArrayLike) -> np.ndarray:
+def sum_of_gaussians(r: ArrayLike, variances: ArrayLike, weights: ArrayLike) -> FloatArray:
     """R(r) = sum_i w_i G(v_i, r), seed 000 eq. (21).
 
     ``variances`` (k,) shared with ``weights`` (k, 3) -> shape np.shape(r) + (3,);
     ``weights`` (k,) -> np.shape(r); per-channel ``variances`` (3, k) with ``weights`` (3, k) -> (..., 3).
     """
-    v = np.asarray(variances, dtype=float)
-    w = np.asarray(weights, dtype=float)
-    r = np.asarray(r, dtype=float)
+    v = np.asarray(variances, dtype=np.float64)
+    w = np.asarray(weights, dtype=np.float64)
+    r = np.asarray(r, dtype=np.float64)
     if v.ndim == 1 and w.ndim == 1:
         return np.tensordot(gaussian(v, r[..., None]), w, axes=([-1], [0]))
     if v.ndim == 1 and w.ndim == 2:
         return gaussian(v, r[..., None]) @ w
     if v.ndim == 2 and w.shape == v.shape:
-        return np.einsum("...ck,ck->...c", gaussian(v, r[..., None, None]), w)
+        out: FloatArray = np.einsum("...ck,ck->...c", gaussian(v, r[..., None, None]), w)
+        return out
     raise ValueError("variances (k,) with weights (k,) or (k, 3); or variances and weights both (3, k)")
 
 
-def deon_skin_profile(r: ArrayLike) -> np.ndarray:
+def deon_skin_profile(r: ArrayLike) -> FloatArray:
     """The d'Eon six-Gaussian skin profile as R(r), shape np.shape(r) + (3,)."""
     v = np.array([g[0] for g in DEON_SKIN_GAUSSIANS])
     w = np.array([g[1] for g in DEON_SKIN_GAUSSIANS])

@@ -39,8 +39,15 @@ By reciprocity the same table serves eq. 34's outgoing term with cos = N.V.
 from __future__ import annotations
 
 import functools
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+from skinviewer.physics.arrays import BoolArray, Float32Array, FloatArray
+
+if TYPE_CHECKING:
+    import moderngl
 
 M_MIN = 1e-3  # roughness clamp: m -> 0 is a delta distribution
 HH_EPS = 1e-6  # |L+V|^2 below this (L, V within 0.06 deg of opposite): H undefined -> 0 specular
@@ -56,11 +63,11 @@ LUT_512_REL_TOL_INTERIOR = 6e-4
 
 
 # -- vectors ----------------------------------------------------------------------------------
-def _f64(x) -> np.ndarray:
+def _f64(x: ArrayLike) -> FloatArray:
     return np.nan_to_num(np.asarray(x, dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
 
 
-def safe_normalize(v) -> np.ndarray:
+def safe_normalize(v: ArrayLike) -> FloatArray:
     """v/|v| along the last axis. Vectors with all |v_i| <= 1e-30 become 0 (as in GLSL); NaN/Inf
     components count as 0. Pre-scaled by max|v_i| so huge or tiny vectors neither overflow nor
     underflow."""
@@ -72,12 +79,13 @@ def safe_normalize(v) -> np.ndarray:
     return np.where(n > 0.0, v / np.where(n > 0.0, n, 1.0), 0.0)
 
 
-def _dot(a, b) -> np.ndarray:
-    return np.sum(a * b, axis=-1)
+def _dot(a: FloatArray, b: FloatArray) -> FloatArray:
+    out: FloatArray = np.sum(a * b, axis=-1)
+    return out
 
 
 # -- eq. 14-15 --------------------------------------------------------------------------------
-def schlick_fresnel(h_dot_v, f0) -> np.ndarray:
+def schlick_fresnel(h_dot_v: ArrayLike, f0: ArrayLike) -> FloatArray:
     """Eq. 14 / listing 14-1: (1 - H.V)^5 + f0 (1 - (1 - H.V)^5); base clamped to [0, 1]."""
     b = np.clip(_f64(h_dot_v), 0.0, None)
     b = np.clip(1.0 - b, 0.0, 1.0)
@@ -85,7 +93,7 @@ def schlick_fresnel(h_dot_v, f0) -> np.ndarray:
     return e + np.clip(_f64(f0), 0.0, 1.0) * (1.0 - e)
 
 
-def _beckmann_sc(c, s2, m) -> np.ndarray:
+def _beckmann_sc(c: ArrayLike, s2: ArrayLike, m: ArrayLike) -> FloatArray:
     """P_H from cos and sin^2 of the N-H angle: exp(-s2/(c^2 m^2)) / (m^2 c^4); 0 for c <= 0."""
     mm = np.maximum(_f64(m), M_MIN)
     m2 = mm * mm
@@ -96,7 +104,7 @@ def _beckmann_sc(c, s2, m) -> np.ndarray:
     return np.where(c > 0.0, val, 0.0)
 
 
-def beckmann(n_dot_h, m) -> np.ndarray:
+def beckmann(n_dot_h: ArrayLike, m: ArrayLike) -> FloatArray:
     """Eq. 15 / listing 14-2 PHBeckmann: exp(-tan^2(a)/m^2) / (m^2 cos^4 a), a = acos(N.H), with
     tan^2 = (1 - c^2)/c^2; N.H <= 0 -> 0; m clamped to M_MIN."""
     c = np.minimum(_f64(n_dot_h), 1.0)
@@ -104,7 +112,8 @@ def beckmann(n_dot_h, m) -> np.ndarray:
 
 
 # -- eq. 16 / listing 14-3 ---------------------------------------------------------------------
-def _half_terms(n, l, v):
+def _half_terms(n: ArrayLike, l: ArrayLike, v: ArrayLike) -> tuple[
+        FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, BoolArray, FloatArray, FloatArray, FloatArray]:
     """Normalised N, L, V; N.L; h.h; N.H; |N x H|^2; H.V (H = 0 where h.h < HH_EPS)."""
     n, l, v = safe_normalize(n), safe_normalize(l), safe_normalize(v)
     h = l + v
@@ -116,7 +125,7 @@ def _half_terms(n, l, v):
     return n, l, v, _dot(n, l), hh, ok, _dot(n, hn), _dot(x, x), _dot(hn, v)
 
 
-def ks_brdf(n, l, v, m, rho_s, f0=F0_SKIN) -> np.ndarray:
+def ks_brdf(n: ArrayLike, l: ArrayLike, v: ArrayLike, m: ArrayLike, rho_s: ArrayLike, f0: ArrayLike = F0_SKIN) -> FloatArray:
     """The BRDF f_r = rho_s * P_H * F / (h.h) (eq. 16), without any cosine; reciprocal in (l, v).
     n, l, v: (..., 3), any length; m, rho_s, f0 broadcast against (...). Always finite."""
     _, _, _, _, hh, ok, ndoth, s2, hdotv = _half_terms(n, l, v)
@@ -126,18 +135,18 @@ def ks_brdf(n, l, v, m, rho_s, f0=F0_SKIN) -> np.ndarray:
     return np.where(ok, fr * np.maximum(_f64(rho_s), 0.0), 0.0)
 
 
-def ks_specular(n, l, v, m, rho_s, f0=F0_SKIN) -> np.ndarray:
+def ks_specular(n: ArrayLike, l: ArrayLike, v: ArrayLike, m: ArrayLike, rho_s: ArrayLike, f0: ArrayLike = F0_SKIN) -> FloatArray:
     """Listing 14-3 (direct P_H): f_r * max(N.L, 0) -- what one unit light contributes."""
     nl = _dot(safe_normalize(n), safe_normalize(l))
     return np.where(nl > 0.0, ks_brdf(n, l, v, m, rho_s, f0) * np.maximum(nl, 0.0), 0.0)
 
 
 # -- listing 14-2: the Beckmann texture -------------------------------------------------------
-def texel_centres(size: int) -> np.ndarray:
+def texel_centres(size: int) -> FloatArray:
     return (np.arange(size, dtype=np.float64) + 0.5) / size
 
 
-def beckmann_lut(size: int = 512) -> np.ndarray:
+def beckmann_lut(size: int = 512) -> FloatArray:
     """float32 (size, size): [j, i] = 0.5 * PH(N.H = (i+0.5)/size, m = (j+0.5)/size) ** 0.1
     (listing 14-2: tex.x = N.H along columns, tex.y = m along rows; texel centres)."""
     x = texel_centres(size)
@@ -145,15 +154,16 @@ def beckmann_lut(size: int = 512) -> np.ndarray:
     return (0.5 * ph ** 0.1).astype(np.float32)
 
 
-def decode_beckmann(tex) -> np.ndarray:
+def decode_beckmann(tex: ArrayLike) -> FloatArray:
     """Inverse of the encoding (listing 14-3): PH = (2 tex)^10 (negative texels -> 0)."""
     x = np.maximum(2.0 * _f64(tex), 0.0)
     x2 = x * x
     x4 = x2 * x2
-    return x4 * x4 * x2
+    out: FloatArray = x4 * x4 * x2
+    return out
 
 
-def sample_bilinear(table, x, y) -> np.ndarray:
+def sample_bilinear(table: ArrayLike, x: ArrayLike, y: ArrayLike) -> FloatArray:
     """GPU-style lookup of a (height, width) table at normalised (x, y): GL_LINEAR with
     CLAMP_TO_EDGE, texel centres at (i + 0.5)/width. Full-precision weights (llvmpipe on float
     textures; hardware may quantise weights to 8 bits)."""
@@ -172,11 +182,12 @@ def sample_bilinear(table, x, y) -> np.ndarray:
     j1 = np.clip(j0 + 1, 0, hgt - 1)
     i0 = np.clip(i0, 0, wid - 1)
     j0 = np.clip(j0, 0, hgt - 1)
-    return ((1 - a) * (1 - b) * t[j0, i0] + a * (1 - b) * t[j0, i1]
-            + (1 - a) * b * t[j1, i0] + a * b * t[j1, i1])
+    out: FloatArray = ((1 - a) * (1 - b) * t[j0, i0] + a * (1 - b) * t[j0, i1]
+                       + (1 - a) * b * t[j1, i0] + a * b * t[j1, i1])
+    return out
 
 
-def ks_specular_lut(n, l, v, m, rho_s, f0, lut) -> np.ndarray:
+def ks_specular_lut(n: ArrayLike, l: ArrayLike, v: ArrayLike, m: ArrayLike, rho_s: ArrayLike, f0: ArrayLike, lut: ArrayLike) -> FloatArray:
     """Listing 14-3 exactly (P_H from the Beckmann texture ``lut``), with the direct mode's guards;
     numpy twin of GLSL ``ks_specular_lut``."""
     _, _, _, nl, hh, ok, ndoth, _, hdotv = _half_terms(n, l, v)
@@ -202,12 +213,13 @@ N_PHI = 24
 
 
 @functools.lru_cache(maxsize=4)
-def _gauss01(n: int):
+def _gauss01(n: int) -> tuple[FloatArray, FloatArray]:
     x, w = np.polynomial.legendre.leggauss(n)
     return 0.5 * (x + 1.0), 0.5 * w
 
 
-def _rho_integrals(cos_theta, m, n_s: int = N_S, n_phi: int = N_PHI):
+def _rho_integrals(cos_theta: ArrayLike, m: ArrayLike, n_s: int = N_S, n_phi: int = N_PHI
+                   ) -> tuple[FloatArray, FloatArray]:
     """(I_e, I_1) for arrays cos_theta, m of equal shape: int f_r/rho_s cos dw_o with F = e, 1."""
     mu = np.clip(_f64(cos_theta), 0.0, 1.0)[..., None, None]
     mm = np.maximum(_f64(m), M_MIN)[..., None, None]
@@ -232,17 +244,18 @@ def _rho_integrals(cos_theta, m, n_s: int = N_S, n_phi: int = N_PHI):
     return np.sum(g * e, axis=(-2, -1)), np.sum(g, axis=(-2, -1))
 
 
-def rho_dt(cos_theta, m, f0=F0_SKIN, rho_s=0.18) -> np.ndarray:
+def rho_dt(cos_theta: ArrayLike, m: ArrayLike, f0: ArrayLike = F0_SKIN, rho_s: ArrayLike = 0.18) -> FloatArray:
     """Eq. 30: 1 - int f_r(w_o, L) (w_o.N) dw_o for cos(theta) = N.L, clamped to [0, 1]; vectorised
     over cos_theta and m (broadcast)."""
     c, mm = np.broadcast_arrays(_f64(cos_theta), _f64(m))
     i_e, i_1 = _rho_integrals(c, mm)
     f0 = np.clip(_f64(f0), 0.0, 1.0)
-    return np.clip(1.0 - np.maximum(_f64(rho_s), 0.0) * ((1.0 - f0) * i_e + f0 * i_1), 0.0, 1.0)
+    out: FloatArray = np.clip(1.0 - np.maximum(_f64(rho_s), 0.0) * ((1.0 - f0) * i_e + f0 * i_1), 0.0, 1.0)
+    return out
 
 
 @functools.lru_cache(maxsize=8)
-def _rho_tables(n_cos: int, n_m: int):
+def _rho_tables(n_cos: int, n_m: int) -> tuple[FloatArray, FloatArray]:
     c = texel_centres(n_cos)[None, :]
     mm = texel_centres(n_m)[:, None]
     cos_b, m_b = np.broadcast_arrays(c, mm)
@@ -252,16 +265,17 @@ def _rho_tables(n_cos: int, n_m: int):
     return i_e, i_1
 
 
-def rho_dt_table(f0=F0_SKIN, rho_s=0.18, n_cos: int = 32, n_m: int = 32) -> np.ndarray:
+def rho_dt_table(f0: ArrayLike = F0_SKIN, rho_s: ArrayLike = 0.18, n_cos: int = 32, n_m: int = 32) -> Float32Array:
     """float32 (n_m, n_cos): [j, i] = rho_dt(cos = (i+0.5)/n_cos, m = (j+0.5)/n_m) (texel centres;
     rows = m, columns = cos theta; sample with texture(tex, vec2(cos_theta, m)))."""
     i_e, i_1 = _rho_tables(int(n_cos), int(n_m))
     f0 = float(np.clip(_f64(f0), 0.0, 1.0))
     rho_s = max(float(_f64(rho_s)), 0.0)
-    return np.clip(1.0 - rho_s * ((1.0 - f0) * i_e + f0 * i_1), 0.0, 1.0).astype(np.float32)
+    out: Float32Array = np.clip(1.0 - rho_s * ((1.0 - f0) * i_e + f0 * i_1), 0.0, 1.0).astype(np.float32)
+    return out
 
 
-def rho_dt_bruteforce(cos_theta: float, m: float, f0=F0_SKIN, rho_s=0.18,
+def rho_dt_bruteforce(cos_theta: float, m: float, f0: ArrayLike = F0_SKIN, rho_s: ArrayLike = 0.18,
                       n_theta: int = 1024, n_phi: int = 2048) -> float:
     """Reference for tests: eq. 31 literally, midpoint rule over w_o = (theta, phi) about N with
     ks_specular(N, w_o, L) = f_r (w_o.N), unclamped. Fine enough for m >= ~0.1."""
@@ -276,7 +290,7 @@ def rho_dt_bruteforce(cos_theta: float, m: float, f0=F0_SKIN, rho_s=0.18,
     return 1.0 - float(integral)
 
 
-def upload_table(ctx, table):
+def upload_table(ctx: moderngl.Context, table: ArrayLike) -> moderngl.Texture:
     """An R32F texture of a (height, width) table with the sampling the layouts above assume:
     LINEAR filtering, CLAMP_TO_EDGE (moderngl defaults to repeat)."""
     t = np.ascontiguousarray(table, dtype=np.float32)

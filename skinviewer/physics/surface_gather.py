@@ -25,7 +25,12 @@ along u and v and the shear cosine (deon_stretch).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from skinviewer.physics.arrays import FloatArray
 
 PAST_BORDER_SHARE = 0.5  # lib/gather_surface.glsl
 SHORTCUT_RATIO = 0.5  # a texel nearer than this x its offset along the surface: across air or a fold
@@ -42,14 +47,14 @@ def gather_blocks_for(sigma_texels: float) -> int:
     return int(min(GATHER_BLOCKS, max(2, int(np.ceil((reach - 2.0) / 2.0)))))
 
 
-def _light(E: np.ndarray, w: np.ndarray) -> np.ndarray:
+def _light(E: FloatArray, w: FloatArray) -> FloatArray:
     """E with its RGB scaled past a border (w < 0)."""
     out = np.array(E, np.float64)
     out[..., :3] *= np.where(w < 0, PAST_BORDER_SHARE, 1.0)[..., None]
     return out
 
 
-def gather_blocks(E, surface, zone):
+def gather_blocks(E: FloatArray, surface: ArrayLike, zone: ArrayLike) -> dict[str, FloatArray]:
     """deon_gather_blocks.frag: per 2 x 2 block (h = ceil(n / 2)): summed E A (4), the area's mean
     point, area and spread, the light's mean point and spread, and the zone (0: none or mixed)."""
     n = E.shape[0]
@@ -59,7 +64,7 @@ def gather_blocks(E, surface, zone):
     L = _light(np.asarray(E, np.float64), np.asarray(surface)[..., 3])[idx][:, idx]
     Z = np.asarray(zone, np.float64)[idx][:, idx]
 
-    def quads(x):  # (2h, 2h, ...) -> (h, h, 4, ...): the block's texels in order k = (k & 1, k >> 1)
+    def quads(x: FloatArray) -> FloatArray:  # (2h, 2h, ...) -> (h, h, 4, ...): the block's texels in order k = (k & 1, k >> 1)
         x = x.reshape(h, 2, h, 2, *x.shape[2:])
         return np.stack([x[:, 0, :, 0], x[:, 0, :, 1], x[:, 1, :, 0], x[:, 1, :, 1]], 2)
 
@@ -86,7 +91,7 @@ def gather_blocks(E, surface, zone):
             "lit_point": origin + lmean, "lit_spread": lspread, "zone": bz}
 
 
-def surface_gather(E, surface, zone, stretch, v: float, blocks: int = GATHER_BLOCKS) -> np.ndarray:
+def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: float, blocks: int = GATHER_BLOCKS) -> FloatArray:
     """deon_surface_gather.frag at every texel (n, n, 4); v the step's variance (mm^2)."""
     E = np.asarray(E, np.float64)
     st = np.asarray(stretch, np.float64)
@@ -103,7 +108,8 @@ def surface_gather(E, surface, zone, stretch, v: float, blocks: int = GATHER_BLO
     mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
     cs = np.clip(st[..., 2], -0.95, 0.95)
 
-    def sheet(d, ou, ov):  # 0 when nearer in 3D than SHORTCUT_RATIO x the offset along the surface
+    def sheet(d: FloatArray, ou: NDArray[np.number[Any]], ov: NDArray[np.number[Any]]) -> FloatArray:
+  # 0 when nearer in 3D than SHORTCUT_RATIO x the offset along the surface
         a, b = ou * mm_u, ov * mm_v
         return np.where((d * d).sum(-1) < SHORTCUT_RATIO ** 2 * (a * a + b * b + 2 * cs * a * b), 0.0, 1.0)
 

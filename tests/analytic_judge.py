@@ -1,5 +1,10 @@
-"""Accuracy measurements for ``benchmarks/bench_accuracy.py`` (plain numpy, no GL): how far a rendered
-texture-space result is from what the technique should produce.
+"""Analytic judges for the tests and ``benchmarks/bench_accuracy.py`` (plain numpy, no GL): how far a
+rendered texture-space result is from what the technique should produce.
+
+Not part of the package (it was ``skinviewer/physics/accuracy.py``, used only by tests and benchmarks):
+what it answers for a user -- how close a technique comes on the laser -- the product answers with
+``skinviewer bench --scene laser`` against the brute-force ground truth; here it stays the tests'
+closed-form oracle.
 
 Laser (GPU Gems 3 §14.4.1): a beam lights a few texels of a flat slab; the diffuse result D (d'Eon:
 sum_i w_i blur_i, Gosselin: the blurred light map), divided by the beam's power, is compared with the
