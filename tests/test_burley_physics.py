@@ -438,3 +438,72 @@ def test_blur_equals_a_scalar_reference_from_the_spec(kw):
     np.testing.assert_array_equal(r.out[mask <= 0.5], E[mask <= 0.5])
     if len(kw["levels"]) > 1:
         assert 0 < (ref_level > 0).sum() < (ref_count > 0).sum()
+
+
+def _pcg_py(v: int) -> int:
+    """PCG-RXS-M-XS 32 (Jarzynski & Olano 2020) in Python integers, masked to 32 bits."""
+    m = 0xFFFFFFFF
+    state = (v * 747796405 + 2891336453) & m
+    word = (((state >> ((state >> 28) + 4)) ^ state) * 277803737) & m
+    return ((word >> 22) ^ word) & m
+
+
+def test_edges_of_the_small_functions():
+    """The boundaries and defaults the mutation run found unpinned (notes/mutation.md): each line is an
+    independent value, not a re-run of the code."""
+    # the hash on plain Python integers equals the reference in Python integers
+    vs = [0, 1, 99, 12345, 2**31 - 1, 2**32 - 1]
+    np.testing.assert_array_equal(B.pcg_hash(vs), [_pcg_py(v) for v in vs])
+    # the rotation phase: float32 like the GLSL (the depth too: 100.99999999 mm is 101.0 in float32)
+    ph = B.rotation_phase(np.array([3]), np.array([4]), np.array([100.99999999]))
+    assert ph.dtype == np.float32
+    np.testing.assert_array_equal(ph, B.rotation_phase(np.array([3]), np.array([4]), np.array([101.0], np.float32)))
+    # pixels per mm below 1 mm of depth
+    assert B.pixel_scale(np.array([0.5]), 300.0)[0] == pytest.approx(600.0)
+    # ring splits are inclusive at the boundary: r = R/2 and r = R/sqrt(3) are inner
+    np.testing.assert_array_equal(B.ring_flags(np.array([1.0, 2.0])), [True, False])
+    np.testing.assert_array_equal(B.ring_flags(np.array([1.0, math.sqrt(3.0)]), "area-third"), [True, False])
+    with pytest.raises(ValueError, match="known: half-radius, area-third, equal-count"):
+        B.ring_flags(np.ones(2), "nope")
+    # the extra level of a nested pair has boolean (all False) ring flags, like every set
+    assert B.nested_sets(6, 30)[1].inner.dtype == bool
+    # 1..1024 samples, both ends included
+    assert B.sample_set(1).n == 1 and B.sample_set(1024).n == 1024
+    assert B.sample_set(1).x[0] == pytest.approx(B.inverse_cdf(0.5))
+    with pytest.raises(ValueError):
+        B.sample_set(1025)
+    # sample reduction with fractional totals (mean samples per pixel)
+    assert B.samples_saved(0.25, 0.5) == pytest.approx(0.5)
+    # the default fit is searchlight + diffuse mean free path, eq. 2.88: s = 3.5 + 100 (A - 0.33)^4
+    s_A = 3.5 + 100.0 * (0.6 - 0.33) ** 4
+    np.testing.assert_allclose(B.shape_distance([0.6] * 3, 2.0), 2.0 / s_A)
+    np.testing.assert_allclose(B.profile([0.6] * 3, [1.0, 2.0, 3.0]).d_rgb, np.array([1.0, 2.0, 3.0]) / s_A)
+    # direct: per-channel distances broadcast from one mfp, as floats
+    d = B.shape_distance([0.3, 0.4, 0.5], 2, "direct")
+    assert d.dtype == np.float64
+    np.testing.assert_array_equal(d, [2.0, 2.0, 2.0])
+    with pytest.raises(ValueError, match="finite and > 0 mm"):
+        B.shape_distance(0.5, float("nan"))
+    # the quadrature and the thick mode away from S = 1, A = 1 (where t and S, or A, could swap unseen)
+    assert B.transmittance_numeric(1.0, 2.0, 0.5) == pytest.approx(0.5 * 0.25 * (math.exp(-2) + 3 * math.exp(-2 / 3)),
+                                                                  rel=1e-6)
+    S = np.array([0.5, 2.0, 3.0])
+    np.testing.assert_allclose(B.transmittance_thick(0.7, 2.0, S, 0.4),
+                               0.1 * (np.exp(-0.7 * S) + 3 * np.exp(-0.7 * S / 3)) * np.exp(-1.3 * S / 3))
+    # the edge response at the edge itself is one half
+    assert B.edge_response(0.0) == 0.5
+    with pytest.raises(ValueError, match="one cutoff per extra level"):
+        B.Sampling(levels=(12, 10))
+    with pytest.raises(ValueError, match="nested sampling has exactly two levels"):
+        B.Sampling(levels=(4, 8, 12), cutoffs=(0.1, 0.2), nested=True).sets()
+
+
+def test_contrast_of_single_samples_and_dim_rings():
+    """eq. 4.1 with one valid sample in a ring (its mean is that sample) and with dim irradiance (the
+    1e-6 floor only guards 0/0)."""
+    in_sum = np.array([[0.02, 0.3, 0.001]])
+    out_sum = np.array([[0.06, 0.3, 0.004]])
+    C = B.contrast_of("rings", in_sum, out_sum, np.array([1]), np.array([1]), None, None)
+    np.testing.assert_allclose(C, [[0.5, 0.0, 0.6]], atol=1e-12)
+    C = B.contrast_of("rings", in_sum, out_sum * 2, np.array([1]), np.array([2]), None, None)
+    np.testing.assert_allclose(C, [[0.5, 0.0, 0.6]], atol=1e-12)
