@@ -451,3 +451,122 @@ def test_frames_count_by_one_and_cached_passes_keep_their_figures(gl_ctx, shader
         TexSpec((0, 8), 4, "f4")
     with pytest.raises(ValueError):
         TexSpec((8, 8), 4, "f8")
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 36, second round: the kernel's paths the seeded mutation sample found untested
+
+class Spec(Pass):
+    """Fills one output of a given TexSpec with u_value (a NaN/Inf-able uniform in one corner)."""
+    uses_scene = False
+
+    def __init__(self, name, out, spec, value=0.3, bad=None, uses_scene=False, depends=None, skip=None):
+        self.name, self.out, self.spec, self.value, self.bad = name, out, spec, value, bad
+        self.uses_scene, self.depends, self.skip = uses_scene, depends, skip
+
+    def reflect(self, r):
+        if self.skip:
+            r.skip(self.skip)
+            return
+        if self.depends is not None:
+            r.depends("frame index", self.depends)
+        r.program("corner")
+        r.output(self.out, self.spec)
+
+    def execute(self, ec):
+        prog = ec.program("corner")
+        w, h = self.spec.size
+        bad = self.bad if self.bad is not None else self.value
+        ec.uniforms(prog, u_value=self.value, u_bad=bad, u_corner=(w - 1.0, h - 1.0))
+        ec.draw_fullscreen(prog, self.out)
+
+    def likely_programs(self, r):
+        return [("corner", {"VARIANT": "1"})]
+
+
+@pytest.fixture
+def corner_dir(shader_dir):
+    (shader_dir / "corner.vert").write_text(FS_VERT)
+    (shader_dir / "corner.frag").write_text(
+        "#version 330 core\nuniform float u_value;\nuniform float u_bad;\nuniform vec2 u_corner;\nout vec4 f;\n"
+        "void main() { f = all(greaterThan(gl_FragCoord.xy, u_corner)) ? vec4(u_bad) : vec4(u_value); }\n")
+    return shader_dir
+
+
+@pytest.mark.parametrize("dtype,components,value,expect", [("f1", 1, 0.2, 51 / 255), ("f2", 2, 0.375, 0.375),
+                                                           ("f4", 3, 0.3, float(np.float32(0.3)))])
+def test_read_back_every_format_in_its_shape(gl_ctx, corner_dir, dtype, components, value, expect):
+    """read(): (h, w, components) float32 from 8-bit unorm (x / 255), half and float targets (values exact in
+    each format: a GPU's rounding to half or unorm is its own)."""
+    g, _ = make_graph(gl_ctx, corner_dir, [Spec("fill", "out", TexSpec((7, 5), components, dtype), value=value)],
+                      ["out"])
+    g.run(frame(Settings()))
+    got = g.read("out")
+    assert got.shape == (5, 7, components) and got.dtype == np.float32
+    np.testing.assert_array_equal(got, np.float32(expect))
+    g.release()
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")])
+def test_non_finite_scan_finds_one_texel_in_the_far_corner_of_a_large_target(gl_ctx, corner_dir, bad):
+    """render.check_finite: the scan folds a 300 x 200 target into at most 64 x 64 tiles; a single bad texel
+    in the last row and column is found; a clean target and an 8-bit one are not flagged."""
+    passes = [Spec("big", "big", TexSpec((300, 200), 4, "f4"), bad=bad),
+              Spec("clean", "clean", TexSpec((300, 200), 4, "f2")),
+              Spec("bytes", "bytes", TexSpec((70, 70), 4, "f1"), bad=bad)]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["big", "clean", "bytes"])
+    s = with_values(Settings(), {"render.check_finite": True})
+    rep = g.run(frame(s))
+    flags = {p.name: p.nonfinite for p in rep.passes}
+    assert flags == {"big": ["big"], "clean": [], "bytes": []}
+    assert not np.isfinite(g.read("big")[-1, -1]).all() and np.isfinite(g.read("big")[:-1]).all()
+    rep = g.run(frame(s))  # cached: the flag stays with the output
+    assert {p.name: p.nonfinite for p in rep.passes}["big"] == ["big"]
+    g.release()
+
+
+def test_scene_version_depends_values_skips_and_likely_programs(gl_ctx, corner_dir):
+    """A pass that uses the scene re-runs when the scene version changes (reason "scene"), one that does not
+    stays cached; a value declared with r.depends re-runs its pass; a skipped pass is pruned with its
+    reason; likely_programs gathers the passes' one-toggle-away variants."""
+    spec = TexSpec((8, 8), 4, "f4")
+    scene_pass = Spec("on_scene", "a", spec, uses_scene=True)
+    dep = Spec("progressive", "b", spec, depends=0)
+    passes = [scene_pass, dep, Spec("screen", "c", spec), Spec("never", "d", spec, skip="not needed here")]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["a", "b", "c"])
+    s = Settings()
+    g.run(FrameInputs(settings=s, scene=None, scene_version=1, view=None, view_key="cam0"))
+    rep = g.run(FrameInputs(settings=s, scene=None, scene_version=2, view=None, view_key="cam0"))
+    assert rep.ran == ["on_scene"]
+    assert next(p.reason for p in rep.passes if p.name == "on_scene") == "scene"
+    dep.depends = 1  # a new settings object of equal values: not the idle fast path
+    rep = g.run(FrameInputs(settings=Settings(), scene=None, scene_version=2, view=None, view_key="cam0"))
+    assert rep.ran == ["progressive"]
+    never = next(p for p in rep.passes if p.name == "never")
+    assert never.status == "pruned" and never.reason == "pruned: not needed here"
+    assert g.likely_programs() == [("corner", {"VARIANT": "1"})] * 3
+    g.release()
+
+
+def test_memory_plan_counts_outputs_depth_and_ping_pong(gl_ctx, corner_dir):
+    """plan_bytes: every live output, one depth buffer (4 bytes a texel) per size that needs one, and two
+    copies of the largest pass's outputs, with the outputs listed largest first; a frame that needs more
+    than is available is refused before anything is allocated, naming the largest."""
+    passes = [Spec("small", "s", TexSpec((16, 16), 4, "f1")),
+              Spec("large", "l", TexSpec((64, 32), 4, "f4", depth=True)),
+              Spec("middle", "m", TexSpec((32, 32), 2, "f2", depth=True))]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["s", "l", "m"])
+    refl = g._reflect_all(Settings())
+    order, _ = g._order(refl, ["s", "l", "m"])
+    total, per = g.plan_bytes(refl, order)
+    sizes = {"s": 16 * 16 * 4, "l": 64 * 32 * 16, "m": 32 * 32 * 4}
+    assert per == [("l", sizes["l"]), ("m", sizes["m"]), ("s", sizes["s"])]
+    assert total == sum(sizes.values()) + 4 * (64 * 32 + 32 * 32) + 2 * sizes["l"]
+    g.memory_available = total - 1
+    with pytest.raises(Exception, match=r"largest: l 0\.0 MB"):
+        g.run(frame(Settings()))
+    assert g.resources() == {}
+    g.memory_available = total
+    g.run(frame(Settings()))
+    assert set(g.resources()) == {"s", "l", "m"}
+    g.release()
