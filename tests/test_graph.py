@@ -570,3 +570,51 @@ def test_memory_plan_counts_outputs_depth_and_ping_pong(gl_ctx, corner_dir):
     g.run(frame(Settings()))
     assert set(g.resources()) == {"s", "l", "m"}
     g.release()
+
+
+class Rows(Fill):
+    """A tileable Fill: each band writes its rows (ec.band())."""
+    tileable = True
+
+    def execute(self, ec):
+        prog = ec.program("fill")
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        with ec.band():
+            ec.draw_fullscreen(prog, self.out)
+
+
+def test_a_tileable_pass_runs_in_bands_across_frames_and_restarts_when_its_key_changes(gl_ctx, shader_dir):
+    """Under a spent budget a never-timed tileable pass takes UNMEASURED_TILES (4) row bands, one a frame:
+    deferred with "band k/4 done" until the last, whose output is whole; a key change mid-way cancels it
+    and starts over; the band count then follows the measured cost: ceil(ms / (budget / 2)), 1..128."""
+    import skinviewer.core.graph as graph_mod
+    p = Rows("rows", "out", "render.exposure")
+    g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
+    s = with_values(Settings(), {"render.exposure": 2.0})
+    seen = []
+    for k in range(graph_mod.UNMEASURED_TILES):
+        rep = g.run(frame(with_values(s, {})), budget_ms=1e-9)
+        rec = rep.passes[0]
+        seen.append((rec.status, g.in_progress.get("rows")))
+        if k == 0:
+            assert rec.reason == "first run; band 1/4 done, resumed next frame"
+            got = g.read("out")[..., 0]
+            assert np.all(got[:2] == 2.0)  # rows 0-1 (band 1 of 4 of 8 rows) written, bottom first
+        elif k < 3:
+            assert rec.reason.startswith(f"resumed at band {k + 1}/4")
+    assert seen == [("deferred", (1, 4)), ("deferred", (2, 4)), ("deferred", (3, 4)), ("ran", None)]
+    assert rep.passes[0].reason.endswith("in 4 bands") and np.all(g.read("out") == 2.0)
+    # a change of key part-way: the bands already run are abandoned
+    # (now timed: any cost over half of a 1e-9 ms budget is the most bands, 128)
+    g.run(frame(with_values(s, {"render.exposure": 3.0})), budget_ms=1e-9)
+    assert g.in_progress == {"rows": (1, graph_mod.MAX_TILES)} and g.cancelled == []
+    g.run(frame(with_values(s, {"render.exposure": 4.0})), budget_ms=1e-9)
+    assert g.cancelled == ["rows"] and g.in_progress == {"rows": (1, graph_mod.MAX_TILES)}
+    g.release()
+    # the band count from the last measured cost
+    g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
+    assert g._tile_count(p, 2.0) == graph_mod.UNMEASURED_TILES
+    for ms, budget, bands in ((3.0, 2.0, 3), (2.5, 2.0, 3), (0.5, 2.0, 1), (0.0, 2.0, 1), (1e6, 2.0, 128)):
+        g._last_ms["rows"] = ms
+        assert g._tile_count(p, budget) == bands, (ms, budget)
+    g.release()
