@@ -397,19 +397,24 @@ def _ref_blur(E, z, mask, prof, ps, levels, cutoffs=(), split="half-radius", con
 
 
 def _ref_scene():
-    """10 x 12 px: noisy irradiance with an edge, a hole in the SSS mask, depth in four bands (kernel radius
-    6.6, 4.5, 3.3 and 2 px: 34, 16, 8 and 3 samples' worth: multi-level, base-only and budget-short pixels) with sub-mm noise (dz matters), and one row
-    too far for any sample (skipped)."""
+    """10 x 12 px: noisy irradiance with an edge (float32 values), a hole in the SSS mask and one pixel at
+    mask 0.5 (not SSS), rows 0-4 in four depth bands (kernel radius 6.6, 4.5, 3.3 and 2 px: 34, 16, 8 and 3
+    samples' worth), then one row per boundary case: exactly 22, 12, 6 and 1 samples' worth (the budget's
+    and the levels' edges), and a row too far for any sample (skipped). Sub-mm depth noise: dz matters."""
     rng = np.random.default_rng(36)
     H, W = 10, 12
     E = np.array([0.5, 0.4, 0.3]) * rng.uniform(0.8, 1.2, (H, W, 3))
     E[:, :4] *= 3.0  # a contrast edge
+    E = E.astype(np.float32).astype(np.float64)
     z = np.repeat(np.array([150.0] * 5 + [220.0] * 3 + [300.0] * 2 + [500.0] * 2)[None, :], H, axis=0)
+    # radius 993.9 / z px: floor(pi r^2 / 4) = 22, 12, 6, 1 samples at 186, 250, 345, 700 mm (+ 0.6 mm)
+    z[5:9] = np.array([186.0, 250.0, 345.0, 700.0])[:, None]
     z += rng.uniform(0.0, 0.6, (H, W))
     z[9] = 1500.0
     mask = np.ones((H, W))
     mask[3:5, 2:4] = 0.0
     mask[7, 10] = 0.0
+    mask[1, 1] = 0.5
     return E, z, mask
 
 
@@ -419,14 +424,17 @@ def _ref_scene():
     dict(levels=(6, 8, 16), cutoffs=(0.1, 0.3), contrast="minmax", split="area-third"),
     dict(levels=(6, 8, 16), cutoffs=(0.05, 0.15)),
     dict(levels=(6, 24), cutoffs=(0.15,), nested=True, split="equal-count"),
+    dict(levels=(6, 24), cutoffs=(0.15,), nested=True, budget=True),
     dict(levels=(12, 10), cutoffs=(0.3,), wide_px=5.0, wide_scale=0.5, seed=7),
     dict(levels=(22,), budget=True),
-], ids=["rings", "minmax-budget", "three-levels-minmax", "three-levels-rings", "nested", "wide-seed", "golubev"])
+], ids=["rings", "minmax-budget", "three-levels-minmax", "three-levels-rings", "nested", "nested-budget", "wide-seed",
+                                "golubev"])
 def test_blur_equals_a_scalar_reference_from_the_spec(kw):
     E, z, mask = _ref_scene()
     prof = B.profile([0.5] * 3, [0.2, 0.1, 0.05], "direct")
     ref_out, ref_count, ref_level, ref_skip, ref_C = _ref_blur(E, z, mask, prof, PS, **kw)
-    r = B.blur(E, z, mask, prof, PS, B.Sampling(**kw))
+    r = B.blur(E.astype(np.float32), z, mask, prof, PS, B.Sampling(**kw))  # float32 in, float64 out
+    assert r.out.dtype == np.float64 and r.count.dtype.kind == "i" and r.level.dtype.kind == "i"
     np.testing.assert_array_equal(r.skipped, ref_skip)
     np.testing.assert_array_equal(r.count, ref_count)
     np.testing.assert_array_equal(r.level, ref_level)
