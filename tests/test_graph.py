@@ -618,3 +618,39 @@ def test_a_tileable_pass_runs_in_bands_across_frames_and_restarts_when_its_key_c
         g._last_ms["rows"] = ms
         assert g._tile_count(p, budget) == bands, (ms, budget)
     g.release()
+
+
+class Dropper(Spec):
+    """A consumer that does not read ``source`` this frame, for a reason (r.drop)."""
+
+    def __init__(self, name, out, spec, source, why):
+        super().__init__(name, out, spec)
+        self.source, self.why = source, why
+
+    def reflect(self, r):
+        r.drop(self.source, self.why)
+        super().reflect(r)
+
+
+def test_dropped_inputs_name_why_their_producer_is_pruned_and_release_frees_shape_objects(gl_ctx, corner_dir):
+    """A producer whose only consumer dropped its output is reported "pruned: <the consumer's reason>";
+    likely_programs skips passes without the hook; release() releases the GL objects a pass kept in the
+    graph's shape state (texture_space.work_tiles' tile tables)."""
+    spec = TexSpec((8, 8), 4, "f4")
+    passes = [Spec("maker", "extra", spec), Dropper("user", "out", spec, "extra", "no ear in this scene"),
+              Fill("plain", "p", "render.exposure")]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["out", "p"])
+    rep = g.run(frame(Settings()))
+    maker = next(p for p in rep.passes if p.name == "maker")
+    assert maker.status == "pruned" and maker.reason == "pruned: no ear in this scene"
+    assert g.likely_programs() == [("corner", {"VARIANT": "1"})]  # "plain" has no likely_programs
+
+    class Held:
+        released = False
+
+        def release(self):
+            self.released = True
+    held = Held()
+    g.shape_state["gl_objects"] = {"work_tiles": (held, 3), "none": None}
+    g.release()
+    assert held.released and "gl_objects" not in g.shape_state
