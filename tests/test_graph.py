@@ -590,6 +590,8 @@ def test_a_tileable_pass_runs_in_bands_across_frames_and_restarts_when_its_key_c
     import skinviewer.core.graph as graph_mod
     p = Rows("rows", "out", "render.exposure")
     g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
+    g.run(frame(with_values(Settings(), {"render.exposure": 1.0})))  # whole, no budget: 1.0 everywhere
+    g._last_ms.pop("rows")  # as if never timed
     s = with_values(Settings(), {"render.exposure": 2.0})
     seen = []
     for k in range(graph_mod.UNMEASURED_TILES):
@@ -597,9 +599,10 @@ def test_a_tileable_pass_runs_in_bands_across_frames_and_restarts_when_its_key_c
         rec = rep.passes[0]
         seen.append((rec.status, g.in_progress.get("rows")))
         if k == 0:
-            assert rec.reason == "first run; band 1/4 done, resumed next frame"
+            assert rec.reason == "setting render.exposure; band 1/4 done, resumed next frame"
             got = g.read("out")[..., 0]
-            assert np.all(got[:2] == 2.0)  # rows 0-1 (band 1 of 4 of 8 rows) written, bottom first
+            # rows 0-1 (band 1 of 4 of 8 rows) written, bottom first; the others still hold the last frame
+            assert np.all(got[:2] == 2.0) and np.all(got[2:] == 1.0)
         elif k < 3:
             assert rec.reason.startswith(f"resumed at band {k + 1}/4")
     assert seen == [("deferred", (1, 4)), ("deferred", (2, 4)), ("deferred", (3, 4)), ("ran", None)]
@@ -654,3 +657,81 @@ def test_dropped_inputs_name_why_their_producer_is_pruned_and_release_frees_shap
     g.shape_state["gl_objects"] = {"work_tiles": (held, 3), "none": None}
     g.release()
     assert held.released and "gl_objects" not in g.shape_state
+
+
+class TwoHalves(Fill):
+    """Two draws, each into one half of the rows (ec.band(sub, subs)): the whole target in two draws."""
+
+    def execute(self, ec):
+        prog = ec.program("fill")
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        for k in range(2):
+            with ec.band(k, 2):
+                ec.draw_fullscreen(prog, self.out)
+
+
+class Sized(Fill):
+    """A Fill whose output size follows render.width (a resolution change reallocates it)."""
+
+    def reflect(self, r):
+        super().reflect(r)
+        r.output(self.out, TexSpec((int(r.setting("render.width")) // 80, 8), 4, "f4"))
+
+
+class Multi(Spec):
+    """Two outputs: an 8-bit one first (not scanned), then a float one with a NaN in a corner."""
+
+    def reflect(self, r):
+        r.program("corner")
+        r.output("bytes", TexSpec((8, 8), 4, "f1"))
+        r.output(self.out, self.spec)
+
+    def execute(self, ec):
+        prog = ec.program("corner")
+        w, h = self.spec.size
+        ec.uniforms(prog, u_value=0.5, u_bad=float("nan"), u_corner=(w - 1.0, h - 1.0))
+        ec.draw_fullscreen(prog, self.out)
+        ec.uniforms(prog, u_bad=0.5)
+        ec.draw_fullscreen(prog, "bytes")
+
+
+def test_kernel_bookkeeping_sub_bands_resizes_budgets_idle_frames_and_prune_chains(gl_ctx, corner_dir):
+    """Sub-band draws cover the target and are counted; a producer reallocated at a new size re-runs its
+    consumer; a spent budget defers the next pass with "frame time budget spent"; an idle frame reports the
+    passes' inputs; a pass whose consumer is pruned for a reason is pruned "(via consumer)"; an
+    unconsumed pass says so; a pass's later float output is scanned after an 8-bit one."""
+    spec = TexSpec((8, 8), 4, "f4")
+    g, _ = make_graph(gl_ctx, corner_dir, [TwoHalves("halves", "h", "render.exposure")], ["h"])
+    rep = g.run(frame(with_values(Settings(), {"render.exposure": 1.5})))
+    assert rep.passes[0].draws == 2 and np.all(g.read("h") == 1.5)
+    g.release()
+    # resize: the producer is reallocated and re-runs; its consumer (fixed size) re-runs with it
+    passes = [Sized("sized", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["out"])
+    g.run(frame(with_values(Settings(), {"render.width": 640})))
+    rep = g.run(frame(with_values(Settings(), {"render.width": 800})))
+    assert rep.ran == ["sized", "sum"]
+    # a spent budget: the first pass runs, the next is deferred and says why
+    rep = g.run(frame(with_values(Settings(), {"render.width": 800, "render.exposure": 5.0, "phong.ambient": 0.7})),
+                budget_ms=1e-9)
+    reasons = {p.name: (p.status, p.reason) for p in rep.passes}
+    assert reasons["sized"][0] == "ran" and reasons["fill_b"] == ("deferred", "frame time budget spent")
+    # an idle frame (the very same settings object) reports the same passes with their inputs
+    s = with_values(Settings(), {"render.width": 800})
+    g.run(frame(s))
+    last = {p.name: p.inputs for p in g.run(frame(s)).passes}
+    assert last == {"sized": [], "fill_b": [], "sum": ["a", "b"]}
+    g.release()
+    # prune chains: base -> mid -> (dropped by the target's pass); an unconsumed pass
+    passes = [Spec("base", "base_out", spec), Add("mid", "base_out", "base_out", "mid_out"),
+              Dropper("user", "out", spec, "mid_out", "no ear in this scene"), Spec("lonely", "nobody", spec)]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["out"])
+    rep = {p.name: p.reason for p in g.run(frame(Settings())).passes}
+    assert rep["mid"] == "pruned: no ear in this scene"
+    assert rep["base"] == "pruned: no ear in this scene (via mid)"
+    assert rep["lonely"] == "output not consumed"
+    g.release()
+    g, _ = make_graph(gl_ctx, corner_dir, [Multi("multi", "big", TexSpec((100, 70), 4, "f4"))], ["big", "bytes"])
+    rep = g.run(frame(with_values(Settings(), {"render.check_finite": True})))
+    assert rep.passes[0].nonfinite == ["big"]
+    g.release()
