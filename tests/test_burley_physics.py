@@ -422,7 +422,7 @@ def _ref_scene():
     dict(levels=(12, 10), cutoffs=(0.2,)),
     dict(levels=(12, 10), cutoffs=(0.2,), contrast="minmax", budget=True),
     dict(levels=(6, 8, 16), cutoffs=(0.1, 0.3), contrast="minmax", split="area-third"),
-    dict(levels=(6, 8, 16), cutoffs=(0.05, 0.15)),
+    dict(levels=(6, 8, 16), cutoffs=(0.05, 0.15), wide_px=5.0, wide_scale=0.5),
     dict(levels=(6, 24), cutoffs=(0.15,), nested=True, split="equal-count"),
     dict(levels=(6, 24), cutoffs=(0.15,), nested=True, budget=True),
     dict(levels=(12, 10), cutoffs=(0.3,), wide_px=5.0, wide_scale=0.5, seed=7),
