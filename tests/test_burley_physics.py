@@ -291,6 +291,7 @@ def test_pcg_hash_and_rotation_phase_equal_the_shader(gl_ctx):
 
 def _ref_table(n, phase=0.0):
     from scipy.optimize import brentq
+
     from skinviewer.physics.profiles import burley_cdf
     x = np.array([brentq(lambda t, p=(i + 0.5) / n: float(burley_cdf(t)) - p, 0.0, 200.0, xtol=1e-14, rtol=1e-15)
                   for i in range(n)])
@@ -315,6 +316,7 @@ def _ref_pdf_unit(x, h=1e-5):
 def _ref_blur(E, z, mask, prof, ps, levels, cutoffs=(), split="half-radius", contrast="rings", budget=False,
               nested=False, wide_px=1e30, wide_scale=1.0, seed=0):
     from scipy.optimize import brentq
+
     from skinviewer.physics.profiles import burley_cdf, burley_normalized
     H, W = z.shape
     z32 = np.asarray(z, np.float32)
@@ -361,7 +363,7 @@ def _ref_blur(E, z, mask, prof, ps, levels, cutoffs=(), split="half-radius", con
             psi = float(B.rotation_phase(np.array([px]), np.array([py]), np.array([zp], np.float32), seed)[0])
             acc, ws, vals = np.zeros(3), np.zeros(3), []
 
-            def take(x, phi, flag):
+            def take(x, phi, flag, px=px, py=py, ppm=ppm, psi=psi, zp=zp, acc=acc, ws=ws, vals=vals):
                 count[py, px] += 1
                 r = x * d
                 qx = px + math.floor(ppm * r * math.cos(phi + psi) + 0.5)

@@ -147,9 +147,10 @@ def test_reuse_pass_equals_its_formula_on_the_blur_passs_own_buffers(gl_ctx, R):
     u_reuse_dz (+ 1.5 x slope x offset; the uploaded slope is 0). The scene has a depth step, a mask hole
     and the image's border, so every rule of the neighbourhood is used."""
     from burley_gpu import UploadPass, view_for
+
     from skinviewer.core.graph import FrameInputs, RenderGraph
-    from skinviewer.core.shaders import ShaderLibrary
     from skinviewer.core.settings import Settings, with_values
+    from skinviewer.core.shaders import ShaderLibrary
     w, hgt = 24, 16
     rng = np.random.default_rng(2)
     E = rng.uniform(0.2, 1.0, (hgt, w, 3))

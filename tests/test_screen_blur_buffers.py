@@ -15,7 +15,8 @@ from skinviewer.core.graph import FrameInputs, RenderGraph
 from skinviewer.core.settings import Settings, with_values
 from skinviewer.core.shaders import ShaderLibrary
 from skinviewer.passes.screen_space.jimenez2009 import SsssBlurPass, blur_resource
-from skinviewer.passes.screen_space.separable import OUTPUT as SEPARABLE_OUT, SeparableBlurPass
+from skinviewer.passes.screen_space.separable import OUTPUT as SEPARABLE_OUT
+from skinviewer.passes.screen_space.separable import SeparableBlurPass
 
 W, H = 48, 24
 DARK, BRIGHT = 0.1, 1.0
