@@ -490,7 +490,7 @@ def test_edges_of_the_small_functions():
     np.testing.assert_allclose(B.profile([0.6] * 3, [1.0, 2.0, 3.0]).d_rgb, np.array([1.0, 2.0, 3.0]) / s_A)
     # direct: per-channel distances broadcast from one mfp, as floats
     d = B.shape_distance([0.3, 0.4, 0.5], 2, "direct")
-    assert d.dtype == np.float64
+    assert d.dtype == np.float64 and d.shape == (3,)
     np.testing.assert_array_equal(d, [2.0, 2.0, 2.0])
     with pytest.raises(ValueError, match="finite and > 0 mm"):
         B.shape_distance(0.5, float("nan"))
