@@ -5,6 +5,8 @@ files that match the module; a mutant that no test notices "survived". Not part 
     python benchmarks/mutation.py                       # every group below (long: see notes/mutation.md)
     python benchmarks/mutation.py --groups physics.metrics core.settings --max-children 2
     python benchmarks/mutation.py --list                # the groups and their test files
+    python benchmarks/mutation.py --groups physics.burley --json b0.json   # then, after adding tests:
+    python benchmarks/mutation.py --groups physics.burley --rerun b0.json  # only b0's survivors re-run
 
 Each group runs in its own scratch copy of the checkout (skinviewer/, tests/, shaders/, presets/,
 pyproject.toml with the group's [tool.mutmut]) so groups never share mutmut's cache; the checkout is
