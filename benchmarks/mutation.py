@@ -5,6 +5,8 @@ files that match the module; a mutant that no test notices "survived". Not part 
     python benchmarks/mutation.py                       # every group below (long: see notes/mutation.md)
     python benchmarks/mutation.py --groups physics.metrics core.settings --max-children 2
     python benchmarks/mutation.py --list                # the groups and their test files
+    python benchmarks/mutation.py --groups physics.burley --json b0.json   # then, after adding tests:
+    python benchmarks/mutation.py --groups physics.burley --rerun b0.json  # only b0's survivors re-run
 
 Each group runs in its own scratch copy of the checkout (skinviewer/, tests/, shaders/, presets/,
 pyproject.toml with the group's [tool.mutmut]) so groups never share mutmut's cache; the checkout is
@@ -41,8 +43,13 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                               ["tests/test_separable_physics.py"]),
     "physics.poisson": (["skinviewer/physics/poisson.py"], ["tests/test_poisson.py"]),
     "physics.penner": (["skinviewer/physics/penner.py"], ["tests/test_penner.py"]),
-    "physics.profiles": (["skinviewer/physics/profiles.py", "skinviewer/physics/fitting.py"],
-                         ["tests/test_profiles.py", "tests/test_fitting.py"]),
+    "physics.profiles": (["skinviewer/physics/profiles.py"], ["tests/test_profiles.py"]),
+    # test_fitting.py takes ~6 min on a loaded 2-core machine: a group of its own
+    "physics.fitting": (["skinviewer/physics/fitting.py"], ["tests/test_fitting.py"]),
+    "physics.diffusion": (["skinviewer/physics/diffusion.py"], ["tests/test_reference.py"]),
+    "physics.specular": (["skinviewer/physics/specular.py"], ["tests/test_specular.py"]),
+    "physics.environment": (["skinviewer/physics/environment.py"], ["tests/test_environment.py"]),
+    "physics.surface_gather": (["skinviewer/physics/surface_gather.py"], ["tests/test_tiles.py"]),
     "core.graph": (["skinviewer/core/graph.py", "skinviewer/core/execute.py", "skinviewer/core/pass_api.py"],
                    ["tests/test_graph.py"]),
     "core.settings": (["skinviewer/core/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py",
@@ -129,7 +136,7 @@ def start_xvfb():
 
 
 def run_group(name: str, only: list[str], tests: list[str], max_children: int, show: int, keep: Path | None,
-              tests_from: str | None = None, sample: int = 0, seed: int = 36):
+              tests_from: str | None = None, sample: int = 0, seed: int = 36, only_mutants: list[str] | None = None):
     work = Path(tempfile.mkdtemp(prefix=f"mutation-{name}-", dir=keep))
     if tests_from:
         tests = [t for t in tests if subprocess.run(["git", "-C", str(ROOT), "cat-file", "-e", f"{tests_from}:{t}"],
@@ -145,7 +152,10 @@ def run_group(name: str, only: list[str], tests: list[str], max_children: int, s
     t0 = time.perf_counter()
     mm = [sys.executable, "-m", "mutmut", "run", "--max-children", str(max_children)]
     chosen = None
-    if sample:
+    if only_mutants is not None:  # --rerun: just these (a previous run's survivors)
+        chosen = sorted(only_mutants)
+        mm += chosen or ["__no_such_mutant__"]
+    elif sample:
         # generate the mutants and the test mapping (a filter matching nothing stops mutmut right after),
         # then run a seeded random sample of them: the same sample before and after for a given seed
         subprocess.run(mm + ["__no_such_mutant__"], cwd=work, env=env, capture_output=True, text=True, check=False)
@@ -185,6 +195,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sample", type=int, default=0, metavar="N",
                     help="run a seeded random sample of N mutants per group (CPU-bound machines; say so)")
     ap.add_argument("--seed", type=int, default=36, help="the sample's seed (same seed: same mutants)")
+    ap.add_argument("--rerun", type=Path, metavar="JSON",
+                    help="a previous run's --json: run only its survivors and its no-tests mutants and add its killed "
+                    "(tests only added since: the quick 'after'; mutants are named alike while the source is unchanged)")
     ap.add_argument("--list", action="store_true", help="list the groups and exit")
     a = ap.parse_args(argv)
     if a.list:
@@ -201,7 +214,13 @@ def main(argv=None) -> int:
     print(f"{'module':<34} {'killed':>7} {'survived':>9} {'no tests':>9} {'timeout':>8} {'other':>6} {'killed %':>9}")
     for g in a.groups:
         only, tests = GROUPS[g]
-        per, diffs, elapsed, tests = run_group(g, only, tests, a.max_children, a.show, a.keep, a.tests_from, a.sample, a.seed)
+        prev = {m: v for m, v in json.loads(a.rerun.read_text()).items() if v.get("group") == g} if a.rerun else {}
+        again = [x for v in prev.values() for st in ("survived", "no tests") for x in v.get(st, [])] if a.rerun else None
+        per, diffs, elapsed, tests = run_group(g, only, tests, a.max_children, a.show, a.keep, a.tests_from, a.sample,
+                                               a.seed, again)
+        for mod, v in prev.items():  # the earlier run's killed (and timeouts) stand
+            for st in ("killed", "timeout"):
+                per.setdefault(mod, {}).setdefault(st, [])[:0] = v.get(st, [])
         for mod, by in sorted(per.items()):
             k, s = len(by.get("killed", [])), len(by.get("survived", []))
             nt, to = len(by.get("no tests", [])), len(by.get("timeout", []))

@@ -281,3 +281,239 @@ def test_pcg_hash_and_rotation_phase_equal_the_shader(gl_ctx):
     ph = glsl_eval(gl_ctx, "lib/burley.glsl", "vec4(burley_phase(ivec2(a.xy), a.z), 0.0, 0.0, 0.0)", pts,
                    preamble=BURLEY_PREAMBLE)[:, 0]
     np.testing.assert_allclose(ph, B.rotation_phase(xs, ys, z).ravel(), rtol=1e-6, atol=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 36, second round: blur() against a scalar per-pixel reference written from the spec (§5.3 steps
+# 3-4, §7.5-7.6), not from blur(): the radii by root-finding on eq. 3.9 (not the analytic inverse), the
+# pdf as the CDF's numerical derivative, the weight as R(r') r' / pdf with profiles.burley_normalized
+# (eq. 2.83), the direction as phi + psi (not a rotation matrix), one pixel and one sample at a time.
+
+def _ref_table(n, phase=0.0):
+    from scipy.optimize import brentq
+
+    from skinviewer.physics.profiles import burley_cdf
+    x = np.array([brentq(lambda t, p=(i + 0.5) / n: float(burley_cdf(t)) - p, 0.0, 200.0, xtol=1e-14, rtol=1e-15)
+                  for i in range(n)])
+    phi = np.array([2 * math.pi * math.modf(i / ((1 + math.sqrt(5)) / 2))[0] + phase for i in range(n)])
+    return x, phi
+
+
+def _ref_inner(x, split):
+    if split == "half-radius":
+        return x <= x.max() / 2
+    if split == "area-third":  # inner:outer area 1:3 -> R_in = R / sqrt(3)
+        return x <= x.max() / math.sqrt(3)
+    return np.arange(len(x)) < (len(x) + 1) // 2
+
+
+def _ref_pdf_unit(x, h=1e-5):
+    """p(r, phi) per unit x = r/d and radian: dP/dx / (2 pi), P of eq. 3.9, by central differences."""
+    from skinviewer.physics.profiles import burley_cdf
+    return float(burley_cdf(x + h) - burley_cdf(x - h)) / (2 * h) / (2 * math.pi)
+
+
+def _ref_blur(E, z, mask, prof, ps, levels, cutoffs=(), split="half-radius", contrast="rings", budget=False,
+              nested=False, wide_px=1e30, wide_scale=1.0, seed=0):
+    from scipy.optimize import brentq
+
+    from skinviewer.physics.profiles import burley_cdf, burley_normalized
+    H, W = z.shape
+    z32 = np.asarray(z, np.float32)
+    d, d_rgb = float(np.max(prof.d_rgb)), np.asarray(prof.d_rgb, float)
+    radius_unit = brentq(lambda t: float(burley_cdf(t)) - 0.997, 0.0, 200.0, xtol=1e-14)  # spec §5.3: P^-1(0.997)
+    if nested:  # one stratified set of levels[0] + levels[1]; the base is every m-th entry from (m-1)/2
+        xf, pf = _ref_table(sum(levels))
+        m = sum(levels) // levels[0]
+        pick = [m * k + (m - 1) // 2 for k in range(levels[0])]
+        rest = [i for i in range(sum(levels)) if i not in pick]
+        tables = [(xf[pick], pf[pick]), (xf[rest], pf[rest])]
+    else:  # level k turned by k half golden angles (spec §7.6)
+        golden_angle = math.pi * (3 - math.sqrt(5))
+        tables = [_ref_table(n, k * golden_angle / 2) for k, n in enumerate(levels)]
+    inner0 = _ref_inner(tables[0][0], split)
+    out, count = E.astype(float).copy(), np.zeros((H, W), int)
+    level, skipped, C_img = np.zeros((H, W), int), np.zeros((H, W), bool), np.full((H, W, 3), np.nan)
+
+    def contrast_now(vals):
+        if contrast == "rings":  # eq. 4.1 between the ring means of the valid base samples
+            ins = [e for e, f in vals if f is True]
+            outs = [e for e, f in vals if f is False]
+            if not ins or not outs:
+                return np.zeros(3)
+            a, b = np.mean(ins, axis=0), np.mean(outs, axis=0)
+            return np.abs(a - b) / np.maximum(a + b, 1e-6)
+        if not vals:
+            return np.zeros(3)
+        es = np.array([e for e, _ in vals])
+        lo, hi = es.min(axis=0), es.max(axis=0)
+        return (hi - lo) / np.maximum(hi + lo, 1e-6)
+
+    for py in range(H):
+        for px in range(W):
+            if mask[py, px] <= 0.5:
+                continue
+            zp = float(z32[py, px])
+            ppm = ps / zp
+            rad_px = radius_unit * d * ppm
+            n_avail = math.floor(math.pi * rad_px ** 2 / 4)  # one sample per 4 px of the kernel's area
+            if n_avail < 1:
+                skipped[py, px] = True
+                continue
+            psi = float(B.rotation_phase(np.array([px]), np.array([py]), np.array([zp], np.float32), seed)[0])
+            acc, ws, vals = np.zeros(3), np.zeros(3), []
+
+            def take(x, phi, flag, px=px, py=py, ppm=ppm, psi=psi, zp=zp, acc=acc, ws=ws, vals=vals):
+                count[py, px] += 1
+                r = x * d
+                qx = px + math.floor(ppm * r * math.cos(phi + psi) + 0.5)
+                qy = py + math.floor(ppm * r * math.sin(phi + psi) + 0.5)
+                if not (0 <= qx < W and 0 <= qy < H) or mask[qy, qx] <= 0.5:
+                    return
+                dz = float(z32[qy, qx]) - zp
+                rp = math.sqrt(r * r + dz * dz)
+                w = burley_normalized(rp, d_rgb) * rp * d / _ref_pdf_unit(x)
+                acc[:] += w * E[qy, qx]
+                ws[:] += w
+                vals.append((E[qy, qx], flag))
+
+            if budget and n_avail < levels[0]:
+                for x, phi in zip(*_ref_table(n_avail)):
+                    take(x, phi, None)
+            else:
+                for x, phi, f in zip(*tables[0], inner0):
+                    take(x, phi, bool(f))
+                if len(levels) > 1 and (not budget or n_avail >= sum(levels)):
+                    C = contrast_now(vals)
+                    C_img[py, px] = C
+                    s = wide_scale if rad_px >= wide_px else 1.0
+                    k = 1
+                    while k < len(levels) and np.any(C > cutoffs[k - 1] * s):
+                        for x, phi in zip(*tables[k]):
+                            take(x, phi, None)
+                        level[py, px] = k
+                        C = contrast_now([v for v in vals if v[1] is not None] if contrast == "rings" else vals)
+                        k += 1
+            out[py, px] = acc / np.maximum(ws, np.finfo(np.float32).tiny)
+    return out, count, level, skipped, C_img
+
+
+def _ref_scene():
+    """10 x 12 px: noisy irradiance with an edge (float32 values), a hole in the SSS mask and one pixel at
+    mask 0.5 (not SSS), rows 0-4 in four depth bands (kernel radius 6.6, 4.5, 3.3 and 2 px: 34, 16, 8 and 3
+    samples' worth), then one row per boundary case: exactly 22, 12, 6 and 1 samples' worth (the budget's
+    and the levels' edges), and a row too far for any sample (skipped). Sub-mm depth noise: dz matters."""
+    rng = np.random.default_rng(36)
+    H, W = 10, 12
+    E = np.array([0.5, 0.4, 0.3]) * rng.uniform(0.8, 1.2, (H, W, 3))
+    E[:, :4] *= 3.0  # a contrast edge
+    E = E.astype(np.float32).astype(np.float64)
+    z = np.repeat(np.array([150.0] * 5 + [220.0] * 3 + [300.0] * 2 + [500.0] * 2)[None, :], H, axis=0)
+    # radius 993.9 / z px: floor(pi r^2 / 4) = 22, 12, 6, 1 samples at 186, 250, 345, 700 mm (+ 0.6 mm)
+    z[5:9] = np.array([186.0, 250.0, 345.0, 700.0])[:, None]
+    z += rng.uniform(0.0, 0.6, (H, W))
+    z[9] = 1500.0
+    mask = np.ones((H, W))
+    mask[3:5, 2:4] = 0.0
+    mask[7, 10] = 0.0
+    mask[1, 1] = 0.5
+    return E, z, mask
+
+
+@pytest.mark.parametrize("kw", [
+    dict(levels=(12, 10), cutoffs=(0.2,)),
+    dict(levels=(12, 10), cutoffs=(0.2,), contrast="minmax", budget=True),
+    dict(levels=(6, 8, 16), cutoffs=(0.1, 0.3), contrast="minmax", split="area-third"),
+    dict(levels=(6, 8, 16), cutoffs=(0.05, 0.15), wide_px=5.0, wide_scale=0.5),
+    dict(levels=(6, 24), cutoffs=(0.15,), nested=True, split="equal-count"),
+    dict(levels=(6, 24), cutoffs=(0.15,), nested=True, budget=True),
+    dict(levels=(12, 10), cutoffs=(0.3,), wide_px=5.0, wide_scale=0.5, seed=7),
+    dict(levels=(22,), budget=True),
+], ids=["rings", "minmax-budget", "three-levels-minmax", "three-levels-rings", "nested", "nested-budget", "wide-seed",
+                                "golubev"])
+def test_blur_equals_a_scalar_reference_from_the_spec(kw):
+    E, z, mask = _ref_scene()
+    prof = B.profile([0.5] * 3, [0.2, 0.1, 0.05], "direct")
+    ref_out, ref_count, ref_level, ref_skip, ref_C = _ref_blur(E, z, mask, prof, PS, **kw)
+    r = B.blur(E.astype(np.float32), z, mask, prof, PS, B.Sampling(**kw))  # float32 in, float64 out
+    assert r.out.dtype == np.float64 and r.count.dtype.kind == "i" and r.level.dtype.kind == "i"
+    np.testing.assert_array_equal(r.skipped, ref_skip)
+    np.testing.assert_array_equal(r.count, ref_count)
+    np.testing.assert_array_equal(r.level, ref_level)
+    # tolerance: the reference's pdf is a central difference (~1e-10 relative); a wrong weight is >= 1e-3
+    np.testing.assert_allclose(r.out, ref_out, rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(r.contrast, ref_C, rtol=1e-9, atol=1e-12)  # nan (not computed) in the same places
+    # the scene exercises what it claims: skipped pixels, more than one level, untouched non-SSS pixels
+    assert ref_skip.any() and (ref_count > 0).any()
+    np.testing.assert_array_equal(r.out[mask <= 0.5], E[mask <= 0.5])
+    if len(kw["levels"]) > 1:
+        assert 0 < (ref_level > 0).sum() < (ref_count > 0).sum()
+
+
+def _pcg_py(v: int) -> int:
+    """PCG-RXS-M-XS 32 (Jarzynski & Olano 2020) in Python integers, masked to 32 bits."""
+    m = 0xFFFFFFFF
+    state = (v * 747796405 + 2891336453) & m
+    word = (((state >> ((state >> 28) + 4)) ^ state) * 277803737) & m
+    return ((word >> 22) ^ word) & m
+
+
+def test_edges_of_the_small_functions():
+    """The boundaries and defaults the mutation run found unpinned (notes/mutation.md): each line is an
+    independent value, not a re-run of the code."""
+    # the hash on plain Python integers equals the reference in Python integers
+    vs = [0, 1, 99, 12345, 2**31 - 1, 2**32 - 1]
+    np.testing.assert_array_equal(B.pcg_hash(vs), [_pcg_py(v) for v in vs])
+    # the rotation phase: float32 like the GLSL (the depth too: 100.99999999 mm is 101.0 in float32)
+    ph = B.rotation_phase(np.array([3]), np.array([4]), np.array([100.99999999]))
+    assert ph.dtype == np.float32
+    np.testing.assert_array_equal(ph, B.rotation_phase(np.array([3]), np.array([4]), np.array([101.0], np.float32)))
+    # pixels per mm below 1 mm of depth
+    assert B.pixel_scale(np.array([0.5]), 300.0)[0] == pytest.approx(600.0)
+    # ring splits are inclusive at the boundary: r = R/2 and r = R/sqrt(3) are inner
+    np.testing.assert_array_equal(B.ring_flags(np.array([1.0, 2.0])), [True, False])
+    np.testing.assert_array_equal(B.ring_flags(np.array([1.0, math.sqrt(3.0)]), "area-third"), [True, False])
+    with pytest.raises(ValueError, match="known: half-radius, area-third, equal-count"):
+        B.ring_flags(np.ones(2), "nope")
+    # the extra level of a nested pair has boolean (all False) ring flags, like every set
+    assert B.nested_sets(6, 30)[1].inner.dtype == bool
+    # 1..1024 samples, both ends included
+    assert B.sample_set(1).n == 1 and B.sample_set(1024).n == 1024
+    assert B.sample_set(1).x[0] == pytest.approx(B.inverse_cdf(0.5))
+    with pytest.raises(ValueError):
+        B.sample_set(1025)
+    # sample reduction with fractional totals (mean samples per pixel)
+    assert B.samples_saved(0.25, 0.5) == pytest.approx(0.5)
+    # the default fit is searchlight + diffuse mean free path, eq. 2.88: s = 3.5 + 100 (A - 0.33)^4
+    s_A = 3.5 + 100.0 * (0.6 - 0.33) ** 4
+    np.testing.assert_allclose(B.shape_distance([0.6] * 3, 2.0), 2.0 / s_A)
+    np.testing.assert_allclose(B.profile([0.6] * 3, [1.0, 2.0, 3.0]).d_rgb, np.array([1.0, 2.0, 3.0]) / s_A)
+    # direct: per-channel distances broadcast from one mfp, as floats
+    d = B.shape_distance([0.3, 0.4, 0.5], 2, "direct")
+    assert d.dtype == np.float64 and d.shape == (3,)
+    np.testing.assert_array_equal(d, [2.0, 2.0, 2.0])
+    with pytest.raises(ValueError, match="finite and > 0 mm"):
+        B.shape_distance(0.5, float("nan"))
+    # the quadrature and the thick mode away from S = 1, A = 1 (where t and S, or A, could swap unseen)
+    assert B.transmittance_numeric(1.0, 2.0, 0.5) == pytest.approx(0.5 * 0.25 * (math.exp(-2) + 3 * math.exp(-2 / 3)),
+                                                                  rel=1e-6)
+    S = np.array([0.5, 2.0, 3.0])
+    np.testing.assert_allclose(B.transmittance_thick(0.7, 2.0, S, 0.4),
+                               0.1 * (np.exp(-0.7 * S) + 3 * np.exp(-0.7 * S / 3)) * np.exp(-1.3 * S / 3))
+    # the edge response at the edge itself is one half
+    assert B.edge_response(0.0) == 0.5
+    with pytest.raises(ValueError, match="one cutoff per extra level"):
+        B.Sampling(levels=(12, 10))
+    with pytest.raises(ValueError, match="nested sampling has exactly two levels"):
+        B.Sampling(levels=(4, 8, 12), cutoffs=(0.1, 0.2), nested=True).sets()
+
+
+def test_contrast_of_single_samples_and_dim_rings():
+    """eq. 4.1 with one valid sample in a ring (its mean is that sample) and with dim irradiance (the
+    1e-6 floor only guards 0/0)."""
+    in_sum = np.array([[0.02, 0.3, 0.001]])
+    out_sum = np.array([[0.06, 0.3, 0.004]])
+    C = B.contrast_of("rings", in_sum, out_sum, np.array([1]), np.array([1]), None, None)
+    np.testing.assert_allclose(C, [[0.5, 0.0, 0.6]], atol=1e-12)
+    C = B.contrast_of("rings", in_sum, out_sum * 2, np.array([1]), np.array([2]), None, None)
+    np.testing.assert_allclose(C, [[0.5, 0.0, 0.6]], atol=1e-12)

@@ -137,3 +137,54 @@ def test_burley_transmission_through_a_slab(renderer, mode):
     assert got[:, 1].max() > 0.05  # Burley's green passes a thin flap (the Gaussian form's does not)
     _, _, gauss = backlit_flap_column(renderer, with_values(s, {"burley.transmission": "jimenez2010"}))
     assert not np.allclose(gauss, got, atol=1e-3)
+
+
+@pytest.mark.parametrize("R", [1, 2])
+def test_reuse_pass_equals_its_formula_on_the_blur_passs_own_buffers(gl_ctx, R):
+    """shaders/burley_reuse.frag against a numpy evaluation of its formula on the very buffers the blur
+    pass wrote (near/far weighted sums and weights): (near + tent-mean far) / (near w + tent-mean far w),
+    tent weight (R + 1 - |dx|)(R + 1 - |dy|) over blurred neighbours on the image whose depth is within
+    u_reuse_dz (+ 1.5 x slope x offset; the uploaded slope is 0). The scene has a depth step, a mask hole
+    and the image's border, so every rule of the neighbourhood is used."""
+    from burley_gpu import UploadPass, view_for
+
+    from skinviewer.core.graph import FrameInputs, RenderGraph
+    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.core.shaders import ShaderLibrary
+    w, hgt = 24, 16
+    rng = np.random.default_rng(2)
+    E = rng.uniform(0.2, 1.0, (hgt, w, 3))
+    z = np.full((hgt, w), 60.0)
+    z[:, 15:] = 61.5  # beyond the tolerance (0.05 x filter radius ~ 0.83 mm)
+    z[10:, :6] += 0.3  # within it
+    mask = np.ones((hgt, w))
+    mask[5:7, 8:11] = 0.0
+    plan = PB.Plan((8,), reuse=R, reuse_split=1.0)
+    names = [PB.PARTIAL, PB.NEAR_W, PB.FAR, PB.FAR_W, PB.BLURRED]
+    g = RenderGraph(gl_ctx, ShaderLibrary(gl_ctx), [UploadPass(E, z, mask), PB.BurleyBlurPass("golubev", plan),
+                                                   PB.BurleyReusePass(plan)], names)
+    try:
+        s = with_values(Settings(), {"render.width": w, "render.height": hgt, "burley.fit": "direct",
+                                     "burley.budget": False, "burley.mfp": [1.0, 0.5, 0.25]})
+        v = view_for(w, hgt)
+        g.run(FrameInputs(settings=s, scene=None, scene_version=0, view=v, view_key=v.key()), force=True)
+        part, nw, far, fw, got = (g.read(n).astype(np.float64) for n in names)
+    finally:
+        g.release()
+    tol = plan.reuse_dz * B.profile_of_section(s.burley).filter_radius
+    blurred = nw[..., 3] >= 0.5
+    assert blurred.sum() == mask.sum() and far[..., :3].max() > 0
+    expect = part.copy()
+    for y, x in zip(*np.nonzero(blurred)):
+        acc, wt, gs = np.zeros(3), np.zeros(3), 0.0
+        for dy in range(-R, R + 1):
+            for dx in range(-R, R + 1):
+                qy, qx = y + dy, x + dx
+                if not (0 <= qy < hgt and 0 <= qx < w) or not blurred[qy, qx] or abs(z[qy, qx] - z[y, x]) > tol:
+                    continue
+                gw = (R + 1 - abs(dx)) * (R + 1 - abs(dy))
+                acc += gw * far[qy, qx, :3]
+                wt += gw * fw[qy, qx, :3]
+                gs += gw
+        expect[y, x, :3] = (part[y, x, :3] + acc / gs) / (nw[y, x, :3] + wt / gs)
+    np.testing.assert_allclose(got, expect, rtol=2e-5, atol=1e-6)  # float32 sums in the shader

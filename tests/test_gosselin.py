@@ -253,3 +253,30 @@ def test_mm_mode_blurs_the_laser_like_the_profile_at_any_size(renderer):
     assert abs(v256[0] - v512[0]) < 0.02 * V[0]  # the same on the surface at another map size
     printed, _ = _laser_spread(renderer, 512, "printed")
     assert np.all(printed < 0.05 * V[0])  # eq. 12's texels: ~15x too narrow in red on this slab
+
+
+@pytest.mark.parametrize("iterations,scale_x", [(1, 24.0), (2, 24.0), (1, 48.0)])
+def test_printed_radius_blur_adds_the_kernels_variance(renderer, iterations, scale_x):
+    """Eq. 12-13 in texels (radius_mode printed) on the laser slab: each iteration adds m R^2 of variance
+    per axis (m = kernel_axis_moment(), the centre and 12 taps at R times the Poisson points), plus at
+    most 1/4 texel^2 from the bilinear fetches (f (1 - f) <= 1/4 per tap), and keeps the power. R from the
+    radius map the pass reads (scale_x / 4 texels at a 256 map)."""
+    from skinviewer.physics.poisson import kernel_axis_moment
+    size = 256
+    s = small_settings("laser", "gosselin", 48, **{"gosselin.light_map_size": size, "gosselin.radius_mode": "printed",
+                                                   "gosselin.iterations": iterations, "gosselin.scale_x": scale_x})
+    renderer.render(s)
+    L = renderer.read(s, G.LIGHT_MAP)[..., 0].astype(np.float64)
+    B = renderer.read(s, G.BLURRED)[..., 0].astype(np.float64)
+    R = renderer.read(s, G.RADIUS_MAP)[..., 0]
+    np.testing.assert_array_equal(R, scale_x * size / 1024)
+    y, x = np.mgrid[0:size, 0:size].astype(np.float64)
+
+    def axis_var(img):
+        t = img.sum()
+        cx, cy = (img * x).sum() / t, (img * y).sum() / t
+        return ((img * ((x - cx) ** 2 + (y - cy) ** 2)).sum() / t) / 2.0, t
+    (vb, tb), (vl, tl) = axis_var(B), axis_var(L)
+    pred = iterations * kernel_axis_moment() * float(R[0, 0]) ** 2
+    assert pred - 1e-3 * pred <= vb - vl <= pred + 0.25 * iterations  # measured pred + 0.15 per iteration
+    assert tb / tl == pytest.approx(1.0, abs=1e-5)

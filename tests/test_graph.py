@@ -501,3 +501,288 @@ def test_auto_timing_is_sync_on_a_software_rasterizer_and_timer_queries_on_a_gpu
     assert renderer.timing_mode("sync") == "sync" and renderer.timing_mode("gpu") == "gpu"
     rep = renderer.render(small_settings("shadow-edge", "phong", size=32))
     assert rep.timing_mode == want
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 36, second round: the kernel's paths the seeded mutation sample found untested
+
+class Spec(Pass):
+    """Fills one output of a given TexSpec with u_value (a NaN/Inf-able uniform in one corner)."""
+    uses_scene = False
+
+    def __init__(self, name, out, spec, value=0.3, bad=None, uses_scene=False, depends=None, skip=None):
+        self.name, self.out, self.spec, self.value, self.bad = name, out, spec, value, bad
+        self.uses_scene, self.depends, self.skip = uses_scene, depends, skip
+
+    def reflect(self, r):
+        if self.skip:
+            r.skip(self.skip)
+            return
+        if self.depends is not None:
+            r.depends("frame index", self.depends)
+        r.program("corner")
+        r.output(self.out, self.spec)
+
+    def execute(self, ec):
+        prog = ec.program("corner")
+        w, h = self.spec.size
+        bad = self.bad if self.bad is not None else self.value
+        ec.uniforms(prog, u_value=self.value, u_bad=bad, u_corner=(w - 1.0, h - 1.0))
+        ec.draw_fullscreen(prog, self.out)
+
+    def likely_programs(self, r):
+        return [("corner", {"VARIANT": "1"})]
+
+
+@pytest.fixture
+def corner_dir(shader_dir):
+    (shader_dir / "corner.vert").write_text(FS_VERT)
+    (shader_dir / "corner.frag").write_text(
+        "#version 330 core\nuniform float u_value;\nuniform float u_bad;\nuniform vec2 u_corner;\nout vec4 f;\n"
+        "void main() { f = all(greaterThan(gl_FragCoord.xy, u_corner)) ? vec4(u_bad) : vec4(u_value); }\n")
+    return shader_dir
+
+
+@pytest.mark.parametrize("dtype,components,value,expect", [("f1", 1, 0.2, 51 / 255), ("f2", 2, 0.375, 0.375),
+                                                           ("f4", 3, 0.3, float(np.float32(0.3)))])
+def test_read_back_every_format_in_its_shape(gl_ctx, corner_dir, dtype, components, value, expect):
+    """read(): (h, w, components) float32 from 8-bit unorm (x / 255), half and float targets (values exact in
+    each format: a GPU's rounding to half or unorm is its own)."""
+    g, _ = make_graph(gl_ctx, corner_dir, [Spec("fill", "out", TexSpec((7, 5), components, dtype), value=value)],
+                      ["out"])
+    g.run(frame(Settings()))
+    got = g.read("out")
+    assert got.shape == (5, 7, components) and got.dtype == np.float32
+    np.testing.assert_array_equal(got, np.float32(expect))
+    g.release()
+
+
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")])
+def test_non_finite_scan_finds_one_texel_in_the_far_corner_of_a_large_target(gl_ctx, corner_dir, bad):
+    """render.check_finite: the scan folds a 300 x 200 target into at most 64 x 64 tiles; a single bad texel
+    in the last row and column is found; a clean target and an 8-bit one are not flagged."""
+    passes = [Spec("big", "big", TexSpec((300, 200), 4, "f4"), bad=bad),
+              Spec("clean", "clean", TexSpec((300, 200), 4, "f2")),
+              Spec("bytes", "bytes", TexSpec((70, 70), 4, "f1"), bad=bad)]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["big", "clean", "bytes"])
+    s = with_values(Settings(), {"render.check_finite": True})
+    rep = g.run(frame(s))
+    flags = {p.name: p.nonfinite for p in rep.passes}
+    assert flags == {"big": ["big"], "clean": [], "bytes": []}
+    assert not np.isfinite(g.read("big")[-1, -1]).all() and np.isfinite(g.read("big")[:-1]).all()
+    rep = g.run(frame(s))  # cached: the flag stays with the output
+    assert {p.name: p.nonfinite for p in rep.passes}["big"] == ["big"]
+    g.release()
+
+
+def test_scene_version_depends_values_skips_and_likely_programs(gl_ctx, corner_dir):
+    """A pass that uses the scene re-runs when the scene version changes (reason "scene"), one that does not
+    stays cached; a value declared with r.depends re-runs its pass; a skipped pass is pruned with its
+    reason; likely_programs gathers the passes' one-toggle-away variants."""
+    spec = TexSpec((8, 8), 4, "f4")
+    scene_pass = Spec("on_scene", "a", spec, uses_scene=True)
+    dep = Spec("progressive", "b", spec, depends=0)
+    passes = [scene_pass, dep, Spec("screen", "c", spec), Spec("never", "d", spec, skip="not needed here")]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["a", "b", "c"])
+    s = Settings()
+    g.run(FrameInputs(settings=s, scene=None, scene_version=1, view=None, view_key="cam0"))
+    rep = g.run(FrameInputs(settings=s, scene=None, scene_version=2, view=None, view_key="cam0"))
+    assert rep.ran == ["on_scene"]
+    assert next(p.reason for p in rep.passes if p.name == "on_scene") == "scene"
+    dep.depends = 1  # a new settings object of equal values: not the idle fast path
+    rep = g.run(FrameInputs(settings=Settings(), scene=None, scene_version=2, view=None, view_key="cam0"))
+    assert rep.ran == ["progressive"]
+    never = next(p for p in rep.passes if p.name == "never")
+    assert never.status == "pruned" and never.reason == "pruned: not needed here"
+    assert g.likely_programs() == [("corner", {"VARIANT": "1"})] * 3
+    g.release()
+
+
+def test_memory_plan_counts_outputs_depth_and_ping_pong(gl_ctx, corner_dir):
+    """plan_bytes: every live output, one depth buffer (4 bytes a texel) per size that needs one, and two
+    copies of the largest pass's outputs, with the outputs listed largest first; a frame that needs more
+    than is available is refused before anything is allocated, naming the largest."""
+    passes = [Spec("small", "s", TexSpec((16, 16), 4, "f1")),
+              Spec("large", "l", TexSpec((64, 32), 4, "f4", depth=True)),
+              Spec("middle", "m", TexSpec((32, 32), 2, "f2", depth=True))]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["s", "l", "m"])
+    refl = g._reflect_all(Settings())
+    order, _ = g._order(refl, ["s", "l", "m"])
+    total, per = g.plan_bytes(refl, order)
+    sizes = {"s": 16 * 16 * 4, "l": 64 * 32 * 16, "m": 32 * 32 * 4}
+    assert per == [("l", sizes["l"]), ("m", sizes["m"]), ("s", sizes["s"])]
+    assert total == sum(sizes.values()) + 4 * (64 * 32 + 32 * 32) + 2 * sizes["l"]
+    g.memory_available = total - 1
+    with pytest.raises(Exception, match=r"largest: l 0\.0 MB"):
+        g.run(frame(Settings()))
+    assert g.resources() == {}
+    g.memory_available = total
+    g.run(frame(Settings()))
+    assert set(g.resources()) == {"s", "l", "m"}
+    g.release()
+
+
+class Rows(Fill):
+    """A tileable Fill: each band writes its rows (ec.band())."""
+    tileable = True
+
+    def execute(self, ec):
+        prog = ec.program("fill")
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        with ec.band():
+            ec.draw_fullscreen(prog, self.out)
+
+
+def test_a_tileable_pass_runs_in_bands_across_frames_and_restarts_when_its_key_changes(gl_ctx, shader_dir):
+    """Under a spent budget a never-timed tileable pass takes UNMEASURED_TILES (4) row bands, one a frame:
+    deferred with "band k/4 done" until the last, whose output is whole; a key change mid-way cancels it
+    and starts over; the band count then follows the measured cost: ceil(ms / (budget / 2)), 1..128."""
+    import skinviewer.core.graph as graph_mod
+    p = Rows("rows", "out", "render.exposure")
+    g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
+    g.run(frame(with_values(Settings(), {"render.exposure": 1.0})))  # whole, no budget: 1.0 everywhere
+    g._last_ms.pop("rows")  # as if never timed
+    s = with_values(Settings(), {"render.exposure": 2.0})
+    seen = []
+    for k in range(graph_mod.UNMEASURED_TILES):
+        rep = g.run(frame(with_values(s, {})), budget_ms=1e-9)
+        rec = rep.passes[0]
+        seen.append((rec.status, g.in_progress.get("rows")))
+        if k == 0:
+            assert rec.reason == "setting render.exposure; band 1/4 done, resumed next frame"
+            got = g.read("out")[..., 0]
+            # rows 0-1 (band 1 of 4 of 8 rows) written, bottom first; the others still hold the last frame
+            assert np.all(got[:2] == 2.0) and np.all(got[2:] == 1.0)
+        elif k < 3:
+            assert rec.reason.startswith(f"resumed at band {k + 1}/4")
+    assert seen == [("deferred", (1, 4)), ("deferred", (2, 4)), ("deferred", (3, 4)), ("ran", None)]
+    assert rep.passes[0].reason.endswith("in 4 bands") and np.all(g.read("out") == 2.0)
+    # a change of key part-way: the bands already run are abandoned
+    # (now timed: any cost over half of a 1e-9 ms budget is the most bands, 128)
+    g.run(frame(with_values(s, {"render.exposure": 3.0})), budget_ms=1e-9)
+    assert g.in_progress == {"rows": (1, graph_mod.MAX_TILES)} and g.cancelled == []
+    g.run(frame(with_values(s, {"render.exposure": 4.0})), budget_ms=1e-9)
+    assert g.cancelled == ["rows"] and g.in_progress == {"rows": (1, graph_mod.MAX_TILES)}
+    g.release()
+    # the band count from the last measured cost
+    g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
+    r = g._reflect_all(Settings(), None)["rows"]
+    assert g._tile_count(p, r, 2.0) == graph_mod.UNMEASURED_TILES
+    for ms, budget, bands in ((3.0, 2.0, 3), (2.5, 2.0, 3), (0.5, 2.0, 1), (0.0, 2.0, 1), (1e6, 2.0, 128)):
+        g._last_ms["rows"] = ms
+        assert g._tile_count(p, r, budget) == bands, (ms, budget)
+    g.release()
+
+
+class Dropper(Spec):
+    """A consumer that does not read ``source`` this frame, for a reason (r.drop)."""
+
+    def __init__(self, name, out, spec, source, why):
+        super().__init__(name, out, spec)
+        self.source, self.why = source, why
+
+    def reflect(self, r):
+        r.drop(self.source, self.why)
+        super().reflect(r)
+
+
+def test_dropped_inputs_name_why_their_producer_is_pruned_and_release_frees_shape_objects(gl_ctx, corner_dir):
+    """A producer whose only consumer dropped its output is reported "pruned: <the consumer's reason>";
+    likely_programs skips passes without the hook; release() releases the GL objects a pass kept in the
+    graph's shape state (texture_space.work_tiles' tile tables)."""
+    spec = TexSpec((8, 8), 4, "f4")
+    passes = [Spec("maker", "extra", spec), Dropper("user", "out", spec, "extra", "no ear in this scene"),
+              Fill("plain", "p", "render.exposure")]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["out", "p"])
+    rep = g.run(frame(Settings()))
+    maker = next(p for p in rep.passes if p.name == "maker")
+    assert maker.status == "pruned" and maker.reason == "pruned: no ear in this scene"
+    assert g.likely_programs() == [("corner", {"VARIANT": "1"})]  # "plain" has no likely_programs
+
+    class Held:
+        released = False
+
+        def release(self):
+            self.released = True
+    held = Held()
+    g.shape_state["gl_objects"] = {"work_tiles": (held, 3), "none": None}
+    g.release()
+    assert held.released and "gl_objects" not in g.shape_state
+
+
+class TwoHalves(Fill):
+    """Two draws, each into one half of the rows (ec.band(sub, subs)): the whole target in two draws."""
+
+    def execute(self, ec):
+        prog = ec.program("fill")
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        for k in range(2):
+            with ec.band(k, 2):
+                ec.draw_fullscreen(prog, self.out)
+
+
+class Sized(Fill):
+    """A Fill whose output size follows render.width (a resolution change reallocates it)."""
+
+    def reflect(self, r):
+        super().reflect(r)
+        r.output(self.out, TexSpec((int(r.setting("render.width")) // 80, 8), 4, "f4"))
+
+
+class Multi(Spec):
+    """Two outputs: an 8-bit one first (not scanned), then a float one with a NaN in a corner."""
+
+    def reflect(self, r):
+        r.program("corner")
+        r.output("bytes", TexSpec((8, 8), 4, "f1"))
+        r.output(self.out, self.spec)
+
+    def execute(self, ec):
+        prog = ec.program("corner")
+        w, h = self.spec.size
+        ec.uniforms(prog, u_value=0.5, u_bad=float("nan"), u_corner=(w - 1.0, h - 1.0))
+        ec.draw_fullscreen(prog, self.out)
+        ec.uniforms(prog, u_bad=0.5)
+        ec.draw_fullscreen(prog, "bytes")
+
+
+def test_kernel_bookkeeping_sub_bands_resizes_budgets_idle_frames_and_prune_chains(gl_ctx, corner_dir):
+    """Sub-band draws cover the target and are counted; a producer reallocated at a new size re-runs its
+    consumer; a spent budget defers the next pass with "frame time budget spent"; an idle frame reports the
+    passes' inputs; a pass whose consumer is pruned for a reason is pruned "(via consumer)"; an
+    unconsumed pass says so; a pass's later float output is scanned after an 8-bit one."""
+    spec = TexSpec((8, 8), 4, "f4")
+    g, _ = make_graph(gl_ctx, corner_dir, [TwoHalves("halves", "h", "render.exposure")], ["h"])
+    rep = g.run(frame(with_values(Settings(), {"render.exposure": 1.5})))
+    assert rep.passes[0].draws == 2 and np.all(g.read("h") == 1.5)
+    g.release()
+    # resize: the producer is reallocated and re-runs; its consumer (fixed size) re-runs with it
+    passes = [Sized("sized", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["out"])
+    g.run(frame(with_values(Settings(), {"render.width": 640})))
+    rep = g.run(frame(with_values(Settings(), {"render.width": 800})))
+    assert rep.ran == ["sized", "sum"]
+    # a spent budget: the first pass runs, the next is deferred and says why
+    rep = g.run(frame(with_values(Settings(), {"render.width": 800, "render.exposure": 5.0, "phong.ambient": 0.7})),
+                budget_ms=1e-9)
+    reasons = {p.name: (p.status, p.reason) for p in rep.passes}
+    assert reasons["sized"][0] == "ran" and reasons["fill_b"] == ("deferred", "frame time budget spent")
+    # an idle frame (the very same settings object) reports the same passes with their inputs
+    s = with_values(Settings(), {"render.width": 800})
+    g.run(frame(s))
+    last = {p.name: p.inputs for p in g.run(frame(s)).passes}
+    assert last == {"sized": [], "fill_b": [], "sum": ["a", "b"]}
+    g.release()
+    # prune chains: base -> mid -> (dropped by the target's pass); an unconsumed pass
+    passes = [Spec("base", "base_out", spec), Add("mid", "base_out", "base_out", "mid_out"),
+              Dropper("user", "out", spec, "mid_out", "no ear in this scene"), Spec("lonely", "nobody", spec)]
+    g, _ = make_graph(gl_ctx, corner_dir, passes, ["out"])
+    rep = {p.name: p.reason for p in g.run(frame(Settings())).passes}
+    assert rep["mid"] == "pruned: no ear in this scene"
+    assert rep["base"] == "pruned: no ear in this scene (via mid)"
+    assert rep["lonely"] == "output not consumed"
+    g.release()
+    g, _ = make_graph(gl_ctx, corner_dir, [Multi("multi", "big", TexSpec((100, 70), 4, "f4"))], ["big", "bytes"])
+    rep = g.run(frame(with_values(Settings(), {"render.check_finite": True})))
+    assert rep.passes[0].nonfinite == ["big"]
+    g.release()

@@ -104,3 +104,39 @@ def test_technique_renders_the_head_finite_and_softer_than_phong(renderer):
     assert np.isfinite(img).all() and img[..., :3].max() > 0.05
     again = renderer.render(with_values(s, {"camera.yaw": 20.0}))
     assert "penner_luts" not in again.ran  # the tables depend on the profile, not on the camera
+
+
+def test_shadow_factor_and_the_penumbra_table(renderer):
+    """The shadow term P of penner.frag on the shadow-edge scene (a blade's shadow on a plane), with a
+    coarse map and a wide PCF so the edge has a penumbra. The PCF value s of each pixel is read from
+    Phong's image of the same frame (its diffuse is C Lc s N.L: s = shadowed / unshadowed). Without the
+    penumbra table the diffuse is exactly s times the unshadowed one; with it, the umbra (s = 0) stays
+    black, the lit side (s = 1) is the unshadowed image, and the penumbra bleeds red furthest."""
+    a = {"shadow.map_size": 64, "shadow.pcf": 3, "specular.rho_s": 0.0, "phong.ambient": 0.0,
+         "phong.specular": 0.0, "deon.energy_conservation": False}
+    base = small_settings("shadow-edge", "phong", 64, **a)
+
+    def lit(s):
+        renderer.render(s)
+        return renderer.read(s, "lit")[..., :3].astype(np.float64)
+
+    def unshadowed(s):
+        return with_values(s, {"lights.0.cast_shadow": False})
+
+    ph_off = lit(unshadowed(base))
+    m = ph_off[..., 1] > 0.02
+    s = lit(base)[..., 1][m] / ph_off[..., 1][m]
+    umbra, lit_side, pen = s == 0.0, s > 0.999, (s > 0.05) & (s < 0.95)
+    assert umbra.sum() > 100 and lit_side.sum() > 100 and pen.sum() > 50
+    hard = with_values(base, {"technique": "penner", "penner.penumbra": False})
+    off = lit(unshadowed(hard))[m]
+    got = lit(hard)[m]
+    # f16 images of values below 0.8 (an ulp is 4.9e-4); measured 5.5e-4 at most
+    np.testing.assert_allclose(got, s[:, None] * off, atol=2e-3)
+    soft = lit(with_values(hard, {"penner.penumbra": True}))[m]
+    assert np.all(soft[umbra] == 0.0)
+    np.testing.assert_allclose(soft[lit_side], off[lit_side], atol=2e-3)
+    p = soft[pen] / np.maximum(off[pen], 1e-6)  # the table's P per channel
+    assert np.all(p >= -1e-3) and np.all(p <= 1.0 + 2e-3)
+    assert np.mean(p[:, 0] - p[:, 2]) > 0.02  # red scatters furthest into the shadow
+    assert np.abs(p[:, 0] - s[pen]).max() > 0.05  # the table, not s itself

@@ -261,3 +261,19 @@ def test_burley_is_finite_at_r_zero():
     from skinviewer.physics import profiles as P
     v = P.burley_normalized(np.array([0.0, 1e-300, 1e-9]), np.array([[0.5], [1.0], [2.0]]))
     assert np.all(np.isfinite(v)) and np.all(v > 0)
+
+
+def test_edges_the_mutation_sample_found_unpinned():
+    """Issue 36 (notes/mutation.md): eta = 0 is refused like any non-positive index; an unknown material
+    names the known ones; a semi-infinite slab transmits nothing, in the same shape as a finite slab's T."""
+    import re
+    with pytest.raises(ValueError, match="positive"):
+        P.fresnel_diffuse_reflectance(0.0)
+    with pytest.raises(KeyError, match=re.escape("known: " + ", ".join(P.MATERIALS))):
+        P.material("no such skin")
+    sig = ((10, 10, 10), (0.05, 0.1, 0.2))
+    thick, thin = P.Multipole(*sig, math.inf, eta=1.3), P.Multipole(*sig, 1.0, eta=1.3)
+    assert thick.semi_infinite and not thin.semi_infinite
+    for r in (1.0, [0.5, 1.0, 2.0]):
+        assert thick.transmittance(r).shape == thin.transmittance(r).shape
+        assert not thick.transmittance(r).any() and thin.transmittance(r).all()

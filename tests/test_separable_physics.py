@@ -207,3 +207,21 @@ def test_t5_2_backlit_wrap_and_distance_scale():
     assert np.all(T[3] == T[4])  # saturated
     assert abs(profile_distance(10.0, 0.83) - 8.25 * 0.17 / 3.0 * 10.0) < 1e-12
     assert profile_distance(10.0, 0.999) < profile_distance(10.0, 0.5)
+
+
+def test_edges_the_mutation_sample_found_unpinned():
+    """Issue 36 (notes/mutation.md): eq. 3.2 below 1 mm of depth; the bilinear-compensated step solves
+    step^2 + bilinear variance(step) = sigma^2 also for sub-pixel sigmas; a zero-variance Gaussian of
+    eq. 3.18 is a delta (transmits only at d = 0); backlit's default form."""
+    from skinviewer.physics import separable as SP
+    from skinviewer.physics.transmittance import transmittance as T
+    assert SP.stretch_px_per_mm(0.5, 0.0, 11.0, 0.0, 100.0) == pytest.approx(200.0)  # focal / d, d < 1 mm
+    x, w = SP.gaussian_taps(7)
+    for sigma in (0.9, 1.5, 3.0):
+        step = SP.bilinear_compensated_step(sigma, x, w)
+        # two fixed-point steps: measured residual 0.56 % of sigma^2 at most; a step of 1 px at sigma 0.9 is 23 % off
+        assert abs(step * step + SP.bilinear_variance(step, x, w) - sigma * sigma) < 0.01 * sigma * sigma
+    np.testing.assert_array_equal(T([0.0, 1.0], [(0.0, (0.2, 0.3, 0.5))]), [[0.2, 0.3, 0.5], [0.0, 0.0, 0.0]])
+    # backlit() defaults to the printed form (eq. 3.18 as [SEP] ships it): e^(-d^2 / v), wrap 0.3
+    from skinviewer.physics.transmittance import backlit
+    np.testing.assert_allclose(backlit([1.0], [(2.0, (1.0, 1.0, 1.0))], [0.2]), [[0.5 * math.exp(-0.5)] * 3])

@@ -372,3 +372,9 @@ def test_glsl_hard_cases_are_finite(gl, tmp_path):
     numpy_spec = S.ks_specular(n, l, v, m, 10.0, 1.0)
     both_regular = [0, 5, 6, 7, 8, 9, 10, 15, 16]
     np.testing.assert_allclose(out[both_regular, 0], numpy_spec[both_regular], rtol=2e-3, atol=1e-30)
+
+
+def test_non_finite_components_count_as_zero():
+    """safe_normalize's contract (issue 36's mutation sample): NaN, +Inf and -Inf components count as 0."""
+    got = S.safe_normalize(np.array([[np.nan, 0.0, 2.0], [np.inf, 3.0, 0.0], [-np.inf, 0.0, -4.0]]))
+    np.testing.assert_array_equal(got, [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
