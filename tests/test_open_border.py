@@ -68,8 +68,9 @@ def _box(u, sd, a=12.0):
 
 def _slab_figures(renderer, n: int, mode: str):
     """(power kept / the open square's (3,), level - analytic at 0, 0.5, 1 mm from the rim (3, 3))."""
-    from skinviewer.passes.deon import DIFFUSE
     import analytic_judge as A
+
+    from skinviewer.passes.deon import DIFFUSE
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
     m = build_scene("laser").mesh
