@@ -96,7 +96,7 @@ class Driver:
         while time.perf_counter() - start < limit_s:
             self.step()
             rep = fr.report
-            still = time.perf_counter() - fr.scheduler.changed_at >= fr.scheduler.rest_s
+            still = fr.input_stopped  # a release ends the input at once; an edit after the rest time
             if still and rep is not None and rep.complete and not fr.governor.refining \
                     and fr.governor_status == "" and not fr._partial_ran:
                 return (time.perf_counter() - start) * 1000.0

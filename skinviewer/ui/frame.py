@@ -209,10 +209,7 @@ class FrameController:
         if g.calibration is None or s.technique not in g.calibration.entries:
             return FINAL  # not measured here yet: today's behaviour (orbit resolution, deferred edits)
         self._governing = True
-        # input has stopped when a drag or a held widget was let go after the last change, or the
-        # last change (a key, a typed value) is older than the scheduler's rest
-        recent = time.perf_counter() - self.scheduler.changed_at < self.scheduler.rest_s
-        interacting = self._dragging or self._widget_active or (recent and not self._released)
+        interacting = not self.input_stopped
         self._interacting = interacting
         complete = self.report is None or self.report.complete
         g.set_overhead(self.overhead_ms)
@@ -221,6 +218,15 @@ class FrameController:
             self.state.say(g.message)
         self._gov_note = g.message
         return rung
+
+    @property
+    def input_stopped(self) -> bool:
+        """The user is not interacting: nothing is dragged or held, and a drag or a held widget was
+        let go after the last change, or the last change (a key, a typed value) is older than the
+        scheduler's rest."""
+        if self._dragging or self._widget_active:
+            return False
+        return self._released or time.perf_counter() - self.scheduler.changed_at >= self.scheduler.rest_s
 
     @property
     def governor_status(self) -> str:
