@@ -27,7 +27,11 @@ TINY = {"render.width": 24, "render.height": 24, "scene.head_detail": 0, "shadow
 # coordinates; the TSM stores light-space position and depth (seed 000 eq. 32); stretch maps hold the
 # shear cosine in B; the Burley statistics texture flags skipped pixels with -1
 SIGNED_PREFIXES = ("gutter", "seam", "deon_tsm", "deon_stretch", "stretch", "burley_stats", "texel_surface",
-                   "deon_gather_surface", "deon_gather_blocks", "deon_border")  # deon_border: signed distances
+                   "deon_gather_surface", "deon_gather_blocks", "deon_border",  # deon_border: signed distances
+                   # Penner's environment: the scattered lobe's SH band factors (lambda_l / lambda_0), signed
+                   # where a wide profile flattens the lobe (band 2 past zero); the irradiance made from
+                   # them is clamped at 0 (lib/environment.glsl env_irradiance_scattered)
+                   "penner_env_bands")
 # inputs and outputs of a blur that are not light (lookup tables, geometry, statistics)
 NOT_LIGHT_PREFIXES = SIGNED_PREFIXES + ("ss_depth", "rho_dt", "beckmann")
 
