@@ -14,7 +14,7 @@ the radiance arriving from direction w is L(R_y(-yaw) w).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, Protocol
 
 import numpy as np
@@ -321,22 +321,22 @@ def ray_caster(positions: FloatArray, indices: IndexArray) -> RayCaster:
     return caster
 
 
-def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexArray, rays: int = 64,
-                    seed: int = 0, caster: RayCaster | None = None, chunk: int = 2048) -> Float32Array:
-    """(N, 4) float32 per vertex: the bent normal (xyz: the mean unoccluded direction, normalised;
-    the vertex normal where every ray is blocked) and the ambient occlusion (w: the fraction of
-    ``rays`` cosine-weighted, stratified rays that leave the mesh = the share of a uniform
-    environment's irradiance that reaches the vertex). Rays start a hair above the vertex along
-    its normal; a vertex without a usable normal gets (normal, 1)."""
+def _unit_normals(positions: ArrayLike, normals: ArrayLike) -> tuple[FloatArray, FloatArray, BoolArray]:
+    """(P, N, good) float64: the normals made unit length, +z where a normal is unusable (``good`` False)."""
     P = np.asarray(positions, np.float64)
     N = np.asarray(normals, np.float64)
     nl = np.linalg.norm(N, axis=1)
     good = np.isfinite(nl) & (nl > 1e-12)
     N = np.where(good[:, None], N / np.where(good, nl, 1.0)[:, None], np.array([[0.0, 0.0, 1.0]]))
-    out = np.concatenate([N, np.ones((len(P), 1))], 1)
-    if len(P) == 0 or len(indices) == 0:
-        return out.astype(np.float32)
-    caster = caster or ray_caster(P, indices)
+    return P, N, good
+
+
+def _cosine_rays(P: FloatArray, N: FloatArray, good: BoolArray, indices: ArrayLike, rays: int, seed: int,
+                 caster: RayCaster | None, chunk: int) -> Iterator[tuple[IndexArray, FloatArray, BoolArray]]:
+    """The bakes' rays, chunk by chunk of the vertices with a usable normal: (vertices v, directions
+    d (len(v), rays, 3), hit (len(v), rays)) -- ``rays`` cosine-weighted stratified directions, one
+    pattern per chunk turned by a random angle per vertex, from a hair above the vertex along N."""
+    caster = caster or ray_caster(P, np.asarray(indices))
     extent = float(np.ptp(P, axis=0).max())
     eps = 1e-4 * extent + 1e-9
     rng = np.random.default_rng(seed)
@@ -352,6 +352,21 @@ def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexAr
         d = (local[None, :, :1] * t[:, None] + local[None, :, 1:2] * b[:, None] + local[None, :, 2:] * N[v][:, None])
         o = np.repeat(P[v] + N[v] * eps, k, axis=0)
         hit = caster.intersects_any(o, np.ascontiguousarray(d.reshape(-1, 3))).reshape(len(v), k)
+        yield v, d, hit
+
+
+def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexArray, rays: int = 64,
+                    seed: int = 0, caster: RayCaster | None = None, chunk: int = 2048) -> Float32Array:
+    """(N, 4) float32 per vertex: the bent normal (xyz: the mean unoccluded direction, normalised;
+    the vertex normal where every ray is blocked) and the ambient occlusion (w: the fraction of
+    ``rays`` cosine-weighted, stratified rays that leave the mesh = the share of a uniform
+    environment's irradiance that reaches the vertex). Rays start a hair above the vertex along
+    its normal; a vertex without a usable normal gets (normal, 1)."""
+    P, N, good = _unit_normals(positions, normals)
+    out = np.concatenate([N, np.ones((len(P), 1))], 1)
+    if len(P) == 0 or len(indices) == 0:
+        return out.astype(np.float32)
+    for v, d, hit in _cosine_rays(P, N, good, indices, rays, seed, caster, chunk):
         free = ~hit
         ao = free.mean(1)
         bent = (d * free[..., None]).sum(1)
@@ -371,30 +386,12 @@ def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarra
     T_00 / (pi Y_00) is the ambient occlusion and (T_11, T_1-1, T_10) the bent normal's direction
     (transfer_ao, transfer_bent_normal). Rays start a hair above the vertex along its normal; a
     vertex without a usable normal gets the unoccluded transfer of +z."""
-    P = np.asarray(positions, np.float64)
-    N = np.asarray(normals, np.float64)
-    nl = np.linalg.norm(N, axis=1)
-    good = np.isfinite(nl) & (nl > 1e-12)
-    N = np.where(good[:, None], N / np.where(good, nl, 1.0)[:, None], np.array([[0.0, 0.0, 1.0]]))
+    P, N, good = _unit_normals(positions, normals)
     out = transfer_unoccluded(N)
     if len(P) == 0 or len(indices) == 0:
         return out.astype(np.float32)
-    caster = caster or ray_caster(P, indices)
-    extent = float(np.ptp(P, axis=0).max())
-    eps = 1e-4 * extent + 1e-9
-    rng = np.random.default_rng(seed)
-    idx = np.nonzero(good)[0]
-    for s0 in range(0, len(idx), chunk):
-        v = idx[s0:s0 + chunk]
-        local = stratified_cosine_directions(rays, rng)
-        k = len(local)
-        t, b = tangent_frames(N[v])
-        ang = rng.random(len(v)) * 2.0 * math.pi
-        c, s = np.cos(ang)[:, None], np.sin(ang)[:, None]
-        t, b = c * t + s * b, -s * t + c * b
-        d = (local[None, :, :1] * t[:, None] + local[None, :, 1:2] * b[:, None] + local[None, :, 2:] * N[v][:, None])
-        o = np.repeat(P[v] + N[v] * eps, k, axis=0)
-        hit = caster.intersects_any(o, np.ascontiguousarray(d.reshape(-1, 3))).reshape(len(v), k)
+    for v, d, hit in _cosine_rays(P, N, good, indices, rays, seed, caster, chunk):
+        k = hit.shape[1]
         # the unoccluded transfer exactly, less the blocked rays' share: a control variate, unbiased
         # (E[pi/n sum Y(w_i)] = A_l Y_lm(N)), exact where nothing blocks and noisy only in the blocked part
         out[v] -= math.pi / k * np.einsum("vr,vrk->vk", hit.astype(np.float64), sh_basis25(d))
