@@ -201,6 +201,19 @@ def _view_dirs(s, renderer, size):
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
+def _sphere_hits(s, renderer, size, radius=50.0):
+    """Per pixel of the rendered view of a sphere of ``radius`` at the origin: (view direction, the
+    normal where the ray meets the sphere, pixels well inside its disc (N.V > 0.3))."""
+    from skinviewer.scene.camera import framed_view
+    d = _view_dirs(s, renderer, size)
+    view = framed_view(s.camera, renderer.scene.gpu, (size, size))
+    b = d @ view.eye
+    disc = b * b - (view.eye @ view.eye - radius ** 2)
+    t = -b - np.sqrt(np.maximum(disc, 0))
+    n = (view.eye + t[:, None] * d) / radius
+    return d, n, (disc > 0) & ((n * -d).sum(1) > 0.3)
+
+
 def test_background_shows_the_environment_through_each_pixel(renderer):
     from skinviewer.core.settings import with_values
     from skinviewer.passes.output import tone_map
@@ -253,7 +266,6 @@ def test_phong_sphere_adds_the_pre_filtered_environment_specular(renderer, tmp_p
     from skinviewer.core.reference import DEFAULT_SKIN_SRGB
     from skinviewer.core.settings import with_values
     from skinviewer.passes.output import srgb_to_linear
-    from skinviewer.scene.camera import framed_view
     from skinviewer.scene.environment import environment_image
     from tests.helpers import small_settings
     from tests.test_environment import _env_lights, _sphere_obj
@@ -266,13 +278,7 @@ def test_phong_sphere_adds_the_pre_filtered_environment_specular(renderer, tmp_p
                                                            intensity=1.0)})
     renderer.render(s)
     lit = renderer.graph("phong").read("lit")[..., :3].astype(np.float64).reshape(-1, 3)
-    d = _view_dirs(s, renderer, size)
-    view = framed_view(s.camera, renderer.scene.gpu, (size, size))
-    b = d @ view.eye
-    disc = b * b - (view.eye @ view.eye - 50.0 ** 2)
-    t = -b - np.sqrt(np.maximum(disc, 0))
-    n = (view.eye + t[:, None] * d) / 50.0
-    inner = (disc > 0) & ((n * -d).sum(1) > 0.3)
+    d, n, inner = _sphere_hits(s, renderer, size)
     img = environment_image("studio")
     E_lm = env.sh_irradiance_coefficients(env.sh_project(img, 40.0))
     diffuse = srgb_to_linear(np.array(DEFAULT_SKIN_SRGB)) * env.sh_irradiance(E_lm, n[inner])
@@ -329,7 +335,6 @@ def test_penner_sphere_scatters_the_environment_as_numpy_does(renderer, tmp_path
     from skinviewer.passes.output import srgb_to_linear
     from skinviewer.passes.penner import profile
     from skinviewer.physics import penner
-    from skinviewer.scene.camera import framed_view
     from tests.helpers import small_settings
     from tests.test_environment import _sphere_obj
     path = tmp_path / "band.exr"
@@ -343,13 +348,7 @@ def test_penner_sphere_scatters_the_environment_as_numpy_does(renderer, tmp_path
                                                         "occlusion": False, "intensity": 1.0, "cast_shadow": False}]})
     renderer.render(s)
     lit = renderer.graph("penner").read("lit")[..., :3].astype(np.float64).reshape(-1, 3)
-    d = _view_dirs(s, renderer, size)
-    view = framed_view(s.camera, renderer.scene.gpu, (size, size))
-    b = d @ view.eye
-    disc = b * b - (view.eye @ view.eye - 50.0 ** 2)
-    t = -b - np.sqrt(np.maximum(disc, 0))
-    n = (view.eye + t[:, None] * d) / 50.0
-    inner = (disc > 0) & ((n * -d).sum(1) > 0.3)
+    d, n, inner = _sphere_hits(s, renderer, size)
     k = (1.0 / (50.0 * 0.04)) * s.penner.curvature_scale / s.penner.max_curvature  # 0.5 mm^-1, normalised
     ring = penner.ring_lut(list(profile(s.deon.gaussians)), s.penner.lut_size, s.penner.max_curvature)
     bands = penner.env_band_factors(ring)
