@@ -199,3 +199,31 @@ def test_a_pass_s_expected_cost_follows_its_output_pixels(renderer):
     r = g._reflect_all(big, renderer.scene.gpu)["phong"]
     assert g._expected_ms(p, r) == pytest.approx(4.0 * ms)
     assert g._tile_count(p, r, budget_ms=ms) == min(8, 128)  # 4 ms-units of work in bands of half a budget
+
+
+def test_a_band_draws_only_the_triangles_that_reach_its_rows(renderer, monkeypatch):
+    """A view pass in n bands does not transform the whole mesh n times: each band draws the
+    triangles whose window rows reach it (GpuServices.band_vao), so over all bands the mesh is
+    drawn little more than once (triangles straddling a band edge are drawn in both)."""
+    from skinviewer.core.gpu import GpuServices
+    s = small_settings("head", "phong", size=64)
+    renderer.render(s)
+    counts: list[tuple[int, int]] = []
+    real = GpuServices.band_vao
+
+    def spy(self, prog, scene, lod, space, matrix, rows, band):
+        vao, n = real(self, prog, scene, lod, space, matrix, rows, band)
+        counts.append((n, scene.lod_mesh(lod).indices.size))
+        return vao, n
+    monkeypatch.setattr(GpuServices, "band_vao", spy)
+    settle(renderer, with_values(s, {"lights.0.direction": [0.3, 0.2, 1.0]}))
+    assert len(counts) >= 4, "the view pass was not drawn band by band through band_vao"
+    assert all(n < total for n, total in counts)
+    # 8 bands of a 256-row view: the mesh is drawn about once over them
+    from skinviewer.core.gpu import band_rows
+    scene = renderer.scene.gpu
+    vp = renderer.view(with_values(s, {"render.width": 256, "render.height": 256})).view_proj
+    ys = band_rows(scene, 0, "camera", vp, 256, {})
+    kept = [int(((ys[:, 1] >= k * 32 - 2) & (ys[:, 0] <= (k + 1) * 32 + 2)).sum()) for k in range(8)]
+    tris = len(scene.lod_mesh(0).indices)
+    assert max(kept) < tris and sum(kept) < 1.3 * tris, (kept, tris)

@@ -32,6 +32,9 @@ class GpuServices:
         self._vaos: dict[tuple[int, int, Any], tuple[moderngl.Program, object, moderngl.VertexArray]] = {}
         self._samplers: dict[int, tuple[moderngl.Program, dict[str, int]]] = {}
         self._dummies: dict[int, tuple[moderngl.Texture, int]] = {}
+        # banded mesh draws: (scene, lod, space, matrix, rows) -> per triangle (min, max) window row
+        self._band_rows: dict[tuple[Any, ...], np.ndarray] = {}
+        self._band_ibos: dict[tuple[int, int], tuple[object, moderngl.Buffer]] = {}  # (scene, lod) -> index buffer
         self.max_units = int(ctx.info.get("GL_MAX_TEXTURE_IMAGE_UNITS", 16))
         self.binding_units = self.max_units - len(_SAMPLER_KINDS)  # the top units hold the dummies
 
@@ -60,6 +63,36 @@ class GpuServices:
         """Release the mesh VAOs of every scene but ``scene`` (a new scene replaced the old one)."""
         for key in [k for k, (_, owner, _) in self._vaos.items() if owner is not None and owner is not scene]:
             self._vaos.pop(key)[2].release()
+        for bkey in [k for k, (owner, _) in self._band_ibos.items() if owner is not scene]:
+            self._band_ibos.pop(bkey)[1].release()
+        for rkey in [k for k in self._band_rows if k[0] != id(scene)]:
+            del self._band_rows[rkey]
+
+    def band_vao(self, prog: moderngl.Program, scene: GpuScene, lod: int, space: str,
+                 matrix: np.ndarray | None, rows: int, band: tuple[int, int]) -> tuple[moderngl.VertexArray, int]:
+        """The mesh for one row band ``band`` = (y0, y1) of a target ``rows`` high (issue 27): a VAO
+        whose index buffer holds, in their order, only the triangles whose window rows reach the
+        band (so a pass in n bands does not transform the whole mesh n times), and its index count.
+        ``space``: "camera" (clip = ``matrix`` x position, the view-mesh passes) or "uv" (the
+        texture-space unwrap, y = v). Conservative: a triangle with a vertex behind the eye, or
+        within BAND_MARGIN rows of the band, is drawn; the others have no fragment in the band,
+        so the band's pixels are those of the whole draw, bit for bit."""
+        ys = band_rows(scene, lod, space, matrix, rows, self._band_rows)
+        y0, y1 = band
+        tris = scene.lod_mesh(lod).indices
+        keep = (ys[:, 1] >= y0 - BAND_MARGIN) & (ys[:, 0] <= y1 + BAND_MARGIN)
+        data = np.ascontiguousarray(tris[keep], np.uint32)
+        hit = self._band_ibos.get((id(scene), lod))
+        if hit is None or hit[0] is not scene:
+            if hit is not None:
+                hit[1].release()
+            hit = self._band_ibos[(id(scene), lod)] = (scene, self.ctx.buffer(reserve=max(tris.size * 4, 4)))
+        buf = hit[1]
+        buf.orphan()  # a new store: no wait for the draws still reading the last band's
+        if data.size:
+            buf.write(data.tobytes())
+        vao = self._vao(prog, scene, lambda: scene.vertex_array(prog, lod, index_buffer=buf), ("band", lod))
+        return vao, int(data.size)
 
     def forget_program(self, prog: moderngl.Program) -> None:
         """Release what was made for ``prog`` (called before the library releases it)."""
@@ -103,6 +136,37 @@ class GpuServices:
         for tex, _ in self._dummies.values():
             tex.release()
         self._dummies.clear()
+
+
+BAND_MARGIN = 2.0  # rows: a triangle this close to a band is drawn in it (float rounding of the projection)
+
+
+def band_rows(scene: GpuScene, lod: int, space: str, matrix: np.ndarray | None, rows: int,
+              cache: dict[tuple[Any, ...], np.ndarray]) -> np.ndarray:
+    """(T, 2) the lowest and highest window row each triangle of ``scene``'s mesh at ``lod`` covers
+    in a target ``rows`` high (-inf/inf: a vertex behind the eye, it may cover any row)."""
+    key = (id(scene), lod, space, None if matrix is None else np.asarray(matrix, np.float32).tobytes(), rows)
+    hit = cache.get(key)
+    if hit is not None:
+        return hit
+    m = scene.lod_mesh(lod)
+    if space == "uv":
+        y = np.asarray(m.uvs, np.float64)[:, 1] * rows  # unwrap.vert: gl_Position.y = 2 v - 1
+        ok = np.ones(len(y), bool)
+    else:
+        p = np.asarray(m.positions, np.float64)
+        clip = p @ np.asarray(matrix, np.float64)[:3, :3].T + np.asarray(matrix, np.float64)[:3, 3]
+        w = p @ np.asarray(matrix, np.float64)[3, :3] + float(np.asarray(matrix, np.float64)[3, 3])
+        ok = w > 1e-6
+        y = (clip[:, 1] / np.where(ok, w, 1.0) * 0.5 + 0.5) * rows
+    t = np.asarray(m.indices)
+    ty = y[t]
+    out = np.stack([ty.min(axis=1), ty.max(axis=1)], axis=1)
+    out[~ok[t].all(axis=1)] = (-np.inf, np.inf)
+    if len(cache) > 16:
+        cache.clear()
+    cache[key] = out
+    return out
 
 
 def write_uniform(u: Any, value: Any) -> None:

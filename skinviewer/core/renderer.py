@@ -165,10 +165,13 @@ class GpuScene:
                   + sum(b.size for b in (*self._uv_cov.values(), *self._curvature.values(), *self._env_vis.values())))
         return n
 
-    def vertex_array(self, prog: moderngl.Program, lod: int = 0) -> moderngl.VertexArray:
+    def vertex_array(self, prog: moderngl.Program, lod: int = 0,
+                     index_buffer: moderngl.Buffer | None = None) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
-        caches it per program)."""
+        caches it per program); ``index_buffer``: another index buffer over the same vertices (a
+        band's triangles, GpuServices.band_vao)."""
         vbo, ibo, _ = self.lod_buffers(lod)
+        ibo = ibo if index_buffer is None else index_buffer
         attrs = [a for a in VERTEX_ATTRS if a in prog]
         fmt = " ".join(_fmt(f, a in prog) for f, a in zip(VERTEX_FORMAT.split(), VERTEX_ATTRS))
         content = [(vbo, fmt, *attrs)]

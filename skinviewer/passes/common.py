@@ -108,7 +108,7 @@ def draw_view_mesh(ec, prog, *targets) -> None:
     normal of a back face: gl_FrontFacing)."""
     cull = culls_back_faces(ec.setting("scene.back_faces"), ec.scene.closed)
     with ec.band():  # a tileable pass (issue 27): this band's rows (depth cleared and tested per band)
-        ec.draw_mesh(prog, *targets, cull_back=cull)
+        ec.draw_mesh(prog, *targets, cull_back=cull, space="camera")
 
 
 def set_camera(ec, prog) -> None:

@@ -309,7 +309,7 @@ def unwrap_dilated(ec, prog, size: int, resource: str, *more: str) -> None:
     rasterised into a scratch of its own format and dilated the same way."""
     raws = _raws(ec, size, more)
     with ec.band():  # a tileable pass (issue 27): this band's rows; the dilation once all are drawn
-        ec.draw_mesh(prog, *raws, depth_test=False)
+        ec.draw_mesh(prog, *raws, depth_test=False, space="uv")
     if ec.last_tile:
         for raw, res in zip(raws, (resource,) + more):
             dilate(ec, raw, gutter_resource(size), res)
