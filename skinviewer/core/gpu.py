@@ -40,7 +40,7 @@ class GpuServices:
 
     # -- vertex arrays -------------------------------------------------------------------------
     def _vao(self, prog: moderngl.Program, owner: object, make: Callable[[], moderngl.VertexArray],
-             tag: int | None = None) -> moderngl.VertexArray:
+             tag: int | tuple[str, int] | None = None) -> moderngl.VertexArray:
         key = (id(prog), id(owner), tag)
         hit = self._vaos.get(key)
         if hit is not None and hit[0] is prog and hit[1] is owner:
