@@ -92,7 +92,7 @@ class Driver:
         return [(b - a) * 1000.0 for a, b in zip(times, times[1:])]
 
     def until_final(self, limit_s: float = 120.0) -> float:
-        """ms from now (input released) to the complete image at the user's settings."""
+        """ms from now (input released) to the complete image at the user's settings, on screen."""
         fr = self.app.frame
         start = time.perf_counter()
         while time.perf_counter() - start < limit_s:
@@ -100,7 +100,7 @@ class Driver:
             rep = fr.report
             still = fr.input_stopped  # a release ends the input at once; an edit after the rest time
             if still and rep is not None and rep.complete and not fr.governor.refining \
-                    and fr.governor_status == "" and not fr._partial_ran:
+                    and fr.governor_status == "" and not fr._partial_ran and fr.presented:
                 return (time.perf_counter() - start) * 1000.0
         return float("nan")
 

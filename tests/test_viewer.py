@@ -1075,6 +1075,11 @@ def test_a_still_frame_spread_over_several_renders_without_presenting_until_comp
         assert app.frame.report.complete
         assert False in presented, "no frame skipped presenting"
         assert presented[0] is True  # the change's first frame shows the UI's own edit at once
+        # the frame that completed used up its budget: the UI and presenting on top would stall
+        # the loop past it, so the next frame shows it (rendering nothing more)
+        assert not app.frame.presented
+        app.step(1)
+        assert app.frame.presented and app.frame.report.complete and not app.frame.report.ran
         # input while a spread frame runs: the next frame presents
         app.state.apply({"lights.0.direction": [0.3, 0.5, 0.8]}, "test light move")
         app.step(1)

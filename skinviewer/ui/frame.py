@@ -289,6 +289,11 @@ class FrameController:
         v = self.state.view
         return compute_layout(self._window[0], self._window[1], v.show_ui, v.panel_width, v.panel_side)
 
+    @property
+    def presented(self) -> bool:
+        """The last frame drew the screen (its image, complete or the last complete one, is shown)."""
+        return self._last_presented
+
     def can_skip_present(self, input_events: int) -> bool:
         """This frame may only render (no UI, no view, no buffer swap): a frame spread over several
         is in progress, no input arrived since the last presented frame, no widget is held, no
@@ -328,6 +333,12 @@ class FrameController:
             self.view.keep(g, bool(self.report.ran))  # the view shows the last complete image
         if not present:
             if self.report is None or not self.report.complete:
+                self._last_presented = False
+                return False
+            spent = (time.perf_counter() - now) * 1000.0
+            if self.frame_budget_ms is not None and spent + (self.overhead_ms or 0.0) > self.frame_budget_ms:
+                # complete, but the UI and presenting on top would take this frame past the budget:
+                # it is shown next frame (can_skip_present is False once the frame is complete)
                 self._last_presented = False
                 return False
             if ui is not None and self.state.view.show_ui:  # complete: shown now, with the UI
