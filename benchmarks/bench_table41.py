@@ -51,7 +51,7 @@ from skinviewer.passes.burley import (
     Plan,
 )
 from skinviewer.passes.common import LIT
-from skinviewer.passes.screen_space import DIFFUSE, CombinePass, ScreenLightingPass
+from skinviewer.passes.screen_space import DIFFUSE, CombinePass, screen_lighting
 from skinviewer.physics.metrics import DSSIM_SETUP, dssim, dssim_map
 from skinviewer.scene.camera import orbit_view
 from skinviewer.scene.mesh import framing_distance
@@ -124,7 +124,7 @@ class EqualRow:
 
 def make_graph(r: Renderer, plan: Plan) -> tuple[RenderGraph, BurleyCountPass]:
     count = BurleyCountPass()
-    passes = shadow_passes() + [ScreenLightingPass(), BurleyBlurPass("golubev", plan), count,
+    passes = shadow_passes() + [*screen_lighting(), BurleyBlurPass("golubev", plan), count,
                                 CombinePass(TEMPORAL if plan.temporal else BLURRED)]
     if plan.reuse:
         passes.append(BurleyReusePass(plan))

@@ -1,9 +1,13 @@
 #version 330 core
 // Screen-space lighting (seed 001 §3.1-3.2, §3.5-3.6; spec §2, §6), four targets:
-//   0 ss_diffuse  rgb = sum_lights Lc (N.L) fac_shadow x albedo^f (+ transmittance), a = SSS mask
+//   0 ss_diffuse  rgb = sum_lights Lc (N.L) fac_shadow x albedo^f, a = SSS mask (with TR_TARGETS > 0:
+//                 ss_diffuse_direct, and ss_transmittance.frag adds the transmittance into ss_diffuse)
 //   1 ss_specular rgb = sum_lights KS(N, L, V) Lc fac_shadow (seed 000 eq. 35), a = coverage 1
 //   2 ss_depth    r = linear view depth mm, gb = |ddx|, |ddy| of it, a = coverage 1
 //   3 ss_albedo   rgb = albedo^(1-f) (the combine pass's post-scatter factor), a = 1
+//   4.. ss_transmitted_k (TR_TARGETS of them, one per shadow-casting light k): rgb = mask albedo^f Lc
+//                 back (n/9), a = the thickness in mm -- all the transmittance but its profile T(d),
+//                 which ss_transmittance.frag applies (a profile edit does not re-run this pass)
 // f: 0 post-scatter, 1 pre-scatter, mix pre-and-post (seed 001 §3.6).
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
@@ -21,36 +25,31 @@ uniform float u_mix;                  // f
 uniform float u_region_sss[N_REGIONS];  // 1 skin, 0 not
 uniform int u_has_regions;
 uniform float u_mm_per_unit;
-// Jimenez 2010 transmittance (seed 001 eq. 3.18, spec §6.2)
+// Jimenez 2010 transmittance (seed 001 eq. 3.18, spec §6.2): the thickness and weights here, T(d) in
+// ss_transmittance.frag
+#ifndef TR_TARGETS
+#define TR_TARGETS 0
+#endif
 uniform int u_tr;
-uniform float u_tr_scale;            // profile distance per mm of thickness
-uniform float u_tr_div;              // 1: exp(-d^2/v) printed, 2: exact
 uniform float u_tr_wrap;
-uniform int u_tr_count;
-uniform vec3 u_tr_w[MAX_GAUSSIANS];
-uniform float u_tr_v[MAX_GAUSSIANS];
-uniform int u_tr_model;              // 0: the Gaussians above; 1: Burley closed form; 2: Burley thick (spec §5.4)
-uniform vec3 u_tr_S;                 // Burley: S = 1/d per channel (1/mm)
 uniform mat4 u_light_matrix_inv[MAX_LIGHTS];
 uniform int u_shadow_map_size;
 layout(location = 0) out vec4 o_diffuse;
 layout(location = 1) out vec4 o_specular;
 layout(location = 2) out vec4 o_depth;
 layout(location = 3) out vec4 o_albedo;
-
-vec3 transmittance_profile(float d) {  // T(d) = sum_i w_i exp(-d^2 / (div v_i)), T(0) = sum w_i
-    // Burley (spec §5.4, HDRP): int 2 pi r R(sqrt(r^2 + d^2)) dr = (e^(-S d) + 3 e^(-S d / 3)) / 4,
-    // T(0) = 1; thick ("regular") mode without a baked thickness: e^(-S d / 3)
-    if (u_tr_model == 1) return 0.25 * (exp(-u_tr_S * d) + 3.0 * exp(-u_tr_S * d / 3.0));
-    if (u_tr_model == 2) return exp(-u_tr_S * d / 3.0);
-    vec3 t = vec3(0.0);
-    for (int i = 0; i < MAX_GAUSSIANS; ++i) {
-        if (i >= u_tr_count) break;
-        float v = u_tr_v[i];
-        t += u_tr_w[i] * (v > 0.0 ? exp(-d * d / (u_tr_div * v)) : (d > 0.0 ? 0.0 : 1.0));
-    }
-    return t;
-}
+#if TR_TARGETS > 0
+layout(location = 4) out vec4 o_tr0;
+#endif
+#if TR_TARGETS > 1
+layout(location = 5) out vec4 o_tr1;
+#endif
+#if TR_TARGETS > 2
+layout(location = 6) out vec4 o_tr2;
+#endif
+#if TR_TARGETS > 3
+layout(location = 7) out vec4 o_tr3;
+#endif
 
 float shadow_sample(int i, vec2 c) {
     if (i == 0) return texture(shadow_map0, c).r;
@@ -59,16 +58,17 @@ float shadow_sample(int i, vec2 c) {
     return texture(shadow_map3, c).r;
 }
 
-// T(thickness) from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
+// The thickness from light i's shadow map (seed 001 §3.5, Green's s = z_out - z_in): the shadow
 // map's nearest surface A unprojected, its distance (mm) to the point shrunk by a shadow texel along
 // the normal (spec §6.2 steps 2-4). The thickness is averaged over 3x3 shadow texels: the thickness of nearly lit
 // points is a texel-quantised few tenths of a mm, which would print the shadow map's grid as moire.
-vec3 transmitted(int i, vec3 P, vec3 Ng) {
+// Returns (n / 9, thickness mm): T = (n / 9) T(thickness x scale) (ss_transmittance.frag).
+vec2 transmitted(int i, vec3 P, vec3 Ng) {
     vec3 Ps = P - Ng * u_shadow_texel[i];
     vec4 p = u_light_matrix[i] * vec4(Ps, 1.0);
-    if ((isnan(p.w) || p.w <= 0.0)) return vec3(0.0);
+    if ((isnan(p.w) || p.w <= 0.0)) return vec2(0.0);
     vec3 c = p.xyz / p.w * 0.5 + 0.5;
-    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return vec3(0.0);
+    if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return vec2(0.0);
     vec2 texel = 1.0 / vec2(u_shadow_map_size);
     vec3 Lv = (u_light_kind[i] == LIGHT_POINT) ? normalize(u_light_pos[i] - Ps) : u_light_dir[i];
     // a lit point's own depth differs from the texel-centre depth by up to tan(N, L) / 2 texels:
@@ -88,8 +88,8 @@ vec3 transmitted(int i, vec3 P, vec3 Ng) {
         d_sum += max(abs(dot(a.xyz / a.w - Ps, Lv)) * u_mm_per_unit - tol_mm, 0.0);
         n += 1.0;
     }
-    if (n < 0.5) return vec3(0.0);
-    return (n / 9.0) * transmittance_profile(d_sum / n * u_tr_scale);
+    if (n < 0.5) return vec2(0.0);
+    return vec2(n / 9.0, d_sum / n);
 }
 
 void main() {
@@ -100,7 +100,9 @@ void main() {
     if (!gl_FrontFacing) { N = -N; Ng = -Ng; }  // the back of an open sheet (scene.back_faces: show)
     vec3 A = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
     SpecParams sp = specular_params(v_uv);
-    vec3 E = vec3(0.0), spec = vec3(0.0), T = vec3(0.0);
+    vec3 E = vec3(0.0), spec = vec3(0.0);
+    vec4 tr[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));  // per shadow-casting light: weight, thickness
+    int k = 0;
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;
         vec3 Lc = light_incident(i, v_position, L);
@@ -110,10 +112,12 @@ void main() {
             E += Lc * (ndl * s);
             spec += Lc * (surface_ks(N, L, V, sp) * s);
         }
-        if (u_tr != 0 && u_light_shadowed[i] != 0) {
+        if (u_tr != 0 && u_light_shadowed[i] != 0 && k < 4) {
             // eq. 3.15 with [SEP]'s wrap: back-side irradiance through the inverted vertex normal
             float back = clamp(u_tr_wrap + dot(L, -Ng), 0.0, 1.0);
-            if (back > 0.0) T += Lc * back * transmitted(i, v_position, Ng);
+            vec2 t = back > 0.0 ? transmitted(i, v_position, Ng) : vec2(0.0);
+            tr[k] = vec4(Lc * back * t.x, t.y);
+            k += 1;
         }
     }
 #if ENV_LIGHT
@@ -123,9 +127,21 @@ void main() {
 #endif
     float mask = 1.0;
     if (u_has_regions != 0) mask = u_region_sss[region_at(ivec2(v_uv * vec2(textureSize(region_map, 0))))];
+    vec3 Af = safe_pow(A, u_mix);
+    o_diffuse = finite4_f32(vec4(E * Af, mask));
     // non-skin pixels scatter nothing: the transmittance belongs to skin
-    vec3 diffuse = (E + mask * T) * safe_pow(A, u_mix);
-    o_diffuse = finite4_f32(vec4(diffuse, mask));
+#if TR_TARGETS > 0
+    o_tr0 = finite4_f32(vec4(mask * Af * tr[0].rgb, tr[0].a));
+#endif
+#if TR_TARGETS > 1
+    o_tr1 = finite4_f32(vec4(mask * Af * tr[1].rgb, tr[1].a));
+#endif
+#if TR_TARGETS > 2
+    o_tr2 = finite4_f32(vec4(mask * Af * tr[2].rgb, tr[2].a));
+#endif
+#if TR_TARGETS > 3
+    o_tr3 = finite4_f32(vec4(mask * Af * tr[3].rgb, tr[3].a));
+#endif
     o_specular = finite4(vec4(spec, 1.0), HALF_MAX);  // a half-float target
     float d = v_depth_mm;
     o_depth = finite4_f32(vec4(d, abs(dFdx(d)), abs(dFdy(d)), 1.0));

@@ -263,9 +263,11 @@ def test_transmittance_through_a_slab(renderer):
 def test_caching_rules(renderer):
     s = small_settings("head", "ssss", 48)
     renderer.render(s)
-    # the weights feed the transmittance profile (lighting pass) and the sum
+    # the weights feed the transmittance profile (its own full-screen pass, issue 27: not the
+    # lighting) and the sum
     r = renderer.render(with_values(s, {"deon.gaussians.3.weights": [0.2, 0.0, 0.0]}))
-    assert r.ran[0] == "ss_lighting" and not any(n.startswith("shadow_map") for n in r.ran)
+    assert r.ran[0] == "ss_transmittance" and "ss_lighting" not in r.ran
+    assert not any(n.startswith("shadow_map") for n in r.ran)
     s = small_settings("head", "ssss", 48, **{"transmittance.enabled": False})
     renderer.render(s)
     r = renderer.render(with_values(s, {"deon.gaussians.3.weights": [0.2, 0.0, 0.0]}))

@@ -356,11 +356,13 @@ class RenderGraph:
                 rec.reason = "; ".join(x for x in (rec.reason, self._lod_notes[p.name]) if x)
             records[p.name] = rec
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
+        # (not a resource another pass writes now: ss_diffuse is ss_transmittance's or ss_lighting's)
+        written = {res for p in order for res in refl[p.name].outputs}
         for p in self.passes:
             if p.name not in live:
                 records[p.name] = PassRecord(p.name, "pruned", reason=_prune_reason(p.name, refl, live),
                                              inputs=list(refl[p.name].inputs))
-                for res in set(refl[p.name].outputs) | self._produced.pop(p.name, set()):
+                for res in (set(refl[p.name].outputs) | self._produced.pop(p.name, set())) - written:
                     if res in self._textures:
                         self._free(res)
                 self._keys.pop(p.name, None)

@@ -1,5 +1,5 @@
 """Jimenez et al. 2010 translucency (seed 001 §3.5, eq. 3.14-3.18; spec §6), numpy reference of
-the transmittance the screen-space lighting pass adds (shaders/ss_lighting.frag)."""
+the transmittance the screen-space transmittance pass adds (shaders/ss_transmittance.frag)."""
 from __future__ import annotations
 
 from collections.abc import Iterable

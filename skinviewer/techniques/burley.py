@@ -13,12 +13,12 @@ from skinviewer.passes.burley import (
     BurleyViewPass,
 )
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
-from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
+from skinviewer.passes.screen_space import CombinePass, screen_lighting
 from skinviewer.techniques.base import Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(burley=True), BurleyBlurPass("golubev"), BurleyCountPass(), CombinePass(BLURRED),
+    return shadow_passes() + [BeckmannLutPass(), *screen_lighting(burley=True), BurleyBlurPass("golubev"), BurleyCountPass(), CombinePass(BLURRED),
                               BurleyViewPass(), BurleyOutputPass("lit")]
 
 

@@ -16,12 +16,12 @@ from skinviewer.passes.burley import (
     BurleyViewPass,
 )
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
-from skinviewer.passes.screen_space import ScreenLightingPass
+from skinviewer.passes.screen_space import screen_lighting
 from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(burley=True), BurleyBlurPass("two_level"), BurleyReusePass(), BurleyTemporalPass(),
+    return shadow_passes() + [BeckmannLutPass(), *screen_lighting(burley=True), BurleyBlurPass("two_level"), BurleyReusePass(), BurleyTemporalPass(),
                               BurleyCountPass(), BurleyCombinePass(BLURRED), BurleyViewPass(), BurleyOutputPass("lit")]
 
 

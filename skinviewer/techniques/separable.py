@@ -5,13 +5,13 @@ from __future__ import annotations
 
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.output import OutputPass
-from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
+from skinviewer.passes.screen_space import CombinePass, screen_lighting
 from skinviewer.passes.screen_space.separable import OUTPUT, SeparableBlurPass
 from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
-    return shadow_passes() + [BeckmannLutPass(), ScreenLightingPass(), SeparableBlurPass(), CombinePass(OUTPUT), OutputPass("lit")]
+    return shadow_passes() + [BeckmannLutPass(), *screen_lighting(), SeparableBlurPass(), CombinePass(OUTPUT), OutputPass("lit")]
 
 
 def sweep(quick: bool) -> list[Config]:

@@ -8,7 +8,7 @@ import functools
 from skinviewer.core.settings import Settings
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.output import OutputPass
-from skinviewer.passes.screen_space import CombinePass, ScreenLightingPass
+from skinviewer.passes.screen_space import CombinePass, screen_lighting
 from skinviewer.passes.screen_space.jimenez2009 import (
     MAX_GAUSSIANS,
     SUM,
@@ -21,7 +21,7 @@ from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 
 def build():
-    return (shadow_passes() + [BeckmannLutPass(), ScreenLightingPass()] + [SsssBlurPass(i) for i in range(MAX_GAUSSIANS)]
+    return (shadow_passes() + [BeckmannLutPass(), *screen_lighting()] + [SsssBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [SsssSumPass(), CombinePass(SUM), OutputPass("lit")])
 
 

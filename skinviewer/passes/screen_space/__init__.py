@@ -2,16 +2,20 @@
 shared passes every screen-space technique builds on (Jimenez 2009 ``ssss``, Jimenez 2015
 ``separable``, Golubev/Burley ...). A screen-space technique is
 
-    shadow_passes() + [ScreenLightingPass(), <its blur passes>, CombinePass(<blurred resource>), OutputPass()]
+    shadow_passes() + [*screen_lighting(), <its blur passes>, CombinePass(<blurred resource>), OutputPass()]
 
 Contract (resource names, formats and meanings are stable; all textures are render size,
 float, linear HDR, GL order row 0 at the bottom):
 
     ss_lighting (ScreenLightingPass, view-dependent; lights, shadow maps, specular, screen.*,
-                 transmittance.*, the transmittance profile) writes
+                 transmittance.enabled/wrap) writes
       "ss_diffuse"   RGBA f4  rgb: diffuse irradiance  sum_lights Lc (N.L) fac_shadow  times albedo^f
                               (f = 0 post-scatter, 1 pre-scatter, screen.mix pre-and-post; seed 001 §3.6),
-                              plus the Jimenez 2010 transmittance when transmittance.enabled (skin only).
+                              plus the Jimenez 2010 transmittance when transmittance.enabled (skin only):
+                              then ss_lighting writes this sum less the transmittance to
+                              "ss_diffuse_direct" and per shadow-casting light k "ss_transmitted_k"
+                              (rgb: weight, a: thickness mm), and ss_transmittance
+                              (ScreenTransmittancePass; the profile, translucency, form) adds it.
                               a: the SSS mask: 1 on skin, 0 on the background and on non-skin pixels
                               (regions listed in screen.non_skin_regions; no region map = all skin).
       "ss_specular"  RGBA f2  rgb: specular (Kelemen/Szirmay-Kalos, shaders/lib/specular_params.glsl),
@@ -41,8 +45,11 @@ from skinviewer.passes.screen_space.lighting import (
     DIFFUSE,
     SPECULAR,
     ScreenLightingPass,
+    ScreenTransmittancePass,
     focal_px,
+    screen_lighting,
     screen_size,
 )
 
-__all__ = ["ALBEDO", "DEPTH", "DIFFUSE", "SPECULAR", "CombinePass", "ScreenLightingPass", "focal_px", "screen_size"]
+__all__ = ["ALBEDO", "DEPTH", "DIFFUSE", "SPECULAR", "CombinePass", "ScreenLightingPass", "ScreenTransmittancePass",
+           "focal_px", "screen_lighting", "screen_size"]

@@ -26,6 +26,20 @@ DIFFUSE = "ss_diffuse"
 SPECULAR = "ss_specular"
 DEPTH = "ss_depth"
 ALBEDO = "ss_albedo"
+DIRECT = "ss_diffuse_direct"  # the lighting's diffuse without the transmittance (when it is on)
+
+
+def transmitted_resource(k: int) -> str:
+    """The k-th shadow-casting light's transmittance weight and thickness (ss_lighting.frag)."""
+    return f"ss_transmitted_{k}"
+
+
+def transmittance_slots(r) -> int:
+    """The shadow-casting lights whose transmittance the lighting pass measures (declares
+    transmittance.enabled and the lights); 0: the transmittance is off or no light casts a shadow."""
+    if not r.setting("transmittance.enabled"):
+        return 0
+    return sum(1 for l in r.setting("lights")[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
 
 
 def screen_size(r) -> tuple[int, int]:
@@ -39,10 +53,10 @@ def texturing_exponent(texturing: str, mix: float) -> float:
 
 
 class ScreenLightingPass(Pass):
-    """Diffuse (x albedo^f, + transmittance), specular, linear depth + gradient, SSS mask and
-    the post-scatter albedo, from the camera. ``transmittance_profile`` is the settings path of a
-    list of Gaussians (variance mm^2, RGB weights) whose T(d) the transmittance uses; a technique
-    with another profile overrides ``transmittance_gaussians``."""
+    """Diffuse (x albedo^f), specular, linear depth + gradient, SSS mask and the post-scatter
+    albedo, from the camera; with the transmittance on, per shadow-casting light its thickness and
+    weight, and the diffuse goes to ss_diffuse_direct (ScreenTransmittancePass adds T(d) into
+    ss_diffuse). ``transmittance_profile``/``burley``: ScreenTransmittancePass's (kept alike)."""
     name = "ss_lighting"
     view_dependent = True
     tileable = True  # one view-mesh draw (four targets): in row bands under a frame budget (issue 27)
@@ -51,35 +65,25 @@ class ScreenLightingPass(Pass):
         self.transmittance_profile = transmittance_profile
         self.burley = burley  # the Burley techniques: burley.transmission picks Burley's T(t) (spec §5.4)
 
-    def _burley_model(self, r) -> int:
-        """0: Jimenez 2010's Gaussian T(d); 1: Burley closed form; 2: Burley thick (HDRP)."""
-        if not self.burley:
-            return 0
-        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.setting("burley.transmission")]
-
     def reflect(self, r: Reflection) -> None:
         defines = {**declare_lighting(r), **declare_environment(r)}
         declare_specular(r)
         r.section("screen", ("texturing", "mix", "non_skin_regions"))
-        if r.setting("transmittance.enabled"):
-            r.section("transmittance", ("translucency", "form", "wrap"))
-            if self._burley_model(r):
-                r.section("burley", B.PROFILE_FIELDS)
-            else:
-                r.setting(self.transmittance_profile)
+        k = transmittance_slots(r)
+        if k:  # the thickness and weights here; the profile in ScreenTransmittancePass
+            r.setting("transmittance.wrap")
         size = screen_size(r)
-        r.program("ss_lighting", **defines)
+        r.program("ss_lighting", TR_TARGETS=k, **defines)
         declare_view_mesh(r)
-        r.output(DIFFUSE, TexSpec(size, 4, "f4", depth=True))
+        r.output(DIRECT if k else DIFFUSE, TexSpec(size, 4, "f4", depth=True))
         r.output(SPECULAR, TexSpec(size, 4, "f2"))
         # linear: the separable blur's follow-surface test reads the depth where its tap reads the
         # (bilinear) colour; nearest gave a sub-pixel tap the centre's own depth, so it gathered its
         # neighbour's colour across any depth step (every other reader uses texelFetch)
         r.output(DEPTH, TexSpec(size, 4, "f4"))
         r.output(ALBEDO, TexSpec(size, 4, "f2"))
-
-    def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
-        return [(float(g.variance), tuple(g.weights)) for g in ec.setting(self.transmittance_profile)]
+        for j in range(k):
+            r.output(transmitted_resource(j), TexSpec(size, 4, "f4"))
 
     def execute(self, ec) -> None:
         prog = ec.program("ss_lighting")
@@ -95,33 +99,81 @@ class ScreenLightingPass(Pass):
         ec.uniforms(prog, u_view=gl_bytes(ec.view.view), u_mm_per_unit=float(scene.mm_per_unit),
                     u_mix=float(texturing_exponent(sc.texturing, sc.mix)), u_region_sss=sss,
                     u_has_regions=bool(scene.has_region_map and non_skin))
-        self._transmittance(ec, prog)
-        draw_view_mesh(ec, prog, DIFFUSE, SPECULAR, DEPTH, ALBEDO)
+        k = transmittance_slots(ec)
+        ec.set(prog, "u_tr", k > 0)
+        if k:
+            inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
+            active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if analytic_on(l)]  # the slots of set_lighting
+            for slot, l in enumerate(active):
+                inv[slot] = np.linalg.inv(scene.light_space(l).gl_matrix).T  # column-major
+            ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
+                        u_shadow_map_size=int(ec.setting("shadow.map_size")))
+        draw_view_mesh(ec, prog, DIRECT if k else DIFFUSE, SPECULAR, DEPTH, ALBEDO,
+                       *(transmitted_resource(j) for j in range(k)))
 
-    def _transmittance(self, ec, prog) -> None:
-        on = bool(ec.setting("transmittance.enabled"))
-        ec.set(prog, "u_tr", on)
-        if not on:
+
+class ScreenTransmittancePass(Pass):
+    """Jimenez 2010's transmittance profile applied to the lighting pass's thickness and weights
+    (seed 001 eq. 3.18, spec §6.2; Burley's T(t) for the Burley techniques, spec §5.4): ss_diffuse =
+    the direct diffuse + sum_k weight_k T(thickness_k x scale). A profile, translucency or form edit
+    re-runs this full-screen pass only, not the lighting (issue 27). ``transmittance_profile``: the
+    settings path of the Gaussians (variance mm^2, RGB weights) whose T(d) it uses."""
+    name = "ss_transmittance"
+    tileable = True  # one full-screen draw: in row bands under a frame budget
+
+    def __init__(self, transmittance_profile: str = "deon.gaussians", burley: bool = False):
+        self.transmittance_profile = transmittance_profile
+        self.burley = burley  # the Burley techniques: burley.transmission picks Burley's T(t) (spec §5.4)
+
+    def _burley_model(self, r) -> int:
+        """0: Jimenez 2010's Gaussian T(d); 1: Burley closed form; 2: Burley thick (HDRP)."""
+        if not self.burley:
+            return 0
+        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.setting("burley.transmission")]
+
+    def reflect(self, r: Reflection) -> None:
+        k = transmittance_slots(r)
+        if not k:
+            r.skip("no transmittance (transmittance.enabled off, or no light casts a shadow)")
             return
-        tr = ec.section("transmittance", ("translucency", "form", "wrap"))
-        gs = [] if self._burley_model(ec) else self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
+        r.section("transmittance", ("translucency", "form"))
+        if self._burley_model(r):
+            r.section("burley", B.PROFILE_FIELDS)
+        else:
+            r.setting(self.transmittance_profile)
+        r.program("ss_transmittance", TR_TARGETS=k)
+        r.input(DIRECT)
+        for j in range(k):
+            r.input(transmitted_resource(j))
+        r.output(DIFFUSE, TexSpec(screen_size(r), 4, "f4"))
+
+    def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
+        return [(float(g.variance), tuple(g.weights)) for g in ec.setting(self.transmittance_profile)]
+
+    def execute(self, ec) -> None:
+        prog = ec.program("ss_transmittance")
+        k = transmittance_slots(ec)
+        ec.bind(prog, "direct", DIRECT)
+        for j in range(k):
+            ec.bind(prog, f"transmitted{j}", transmitted_resource(j))
+        tr = ec.section("transmittance", ("translucency", "form"))
+        model = self._burley_model(ec)
+        gs = [] if model else self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
         w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         v = np.zeros(MAX_GAUSSIANS, np.float32)
         for i, (var, wt) in enumerate(gs):
             w[i], v[i] = wt, var
-        scene = ec.scene
-        inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-        active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if analytic_on(l)]  # the slots of set_lighting
-        for slot, l in enumerate(active):
-            inv[slot] = np.linalg.inv(scene.light_space(l).gl_matrix).T  # column-major
-        model = self._burley_model(ec)
         if model:  # Burley: the shadow-map thickness in mm, S = 1/d per channel (spec §5.4)
             S = B.profile_of_section(ec.section("burley", B.PROFILE_FIELDS)).S
             ec.uniforms(prog, u_tr_model=model, u_tr_S=tuple(float(x) for x in S), u_tr_scale=1.0)
-        else:
-            ec.set(prog, "u_tr_model", 0)
-        # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
-        ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs),
-                    **({} if model else {"u_tr_scale": float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM)}),
-                    u_tr_div=1.0 if tr.form == "printed" else 2.0, u_tr_wrap=float(tr.wrap),
-                    u_light_matrix_inv=inv, u_shadow_map_size=int(ec.setting("shadow.map_size")))
+        else:  # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
+            ec.uniforms(prog, u_tr_model=0, u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM))
+        ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs), u_tr_div=1.0 if tr.form == "printed" else 2.0)
+        with ec.band():
+            ec.draw_fullscreen(prog, DIFFUSE)
+
+
+def screen_lighting(transmittance_profile: str = "deon.gaussians", burley: bool = False) -> list[Pass]:
+    """The screen-space techniques' lighting: ScreenLightingPass and, when the transmittance is on,
+    ScreenTransmittancePass (which writes ss_diffuse then)."""
+    return [ScreenLightingPass(transmittance_profile, burley), ScreenTransmittancePass(transmittance_profile, burley)]
