@@ -3,6 +3,7 @@ governor's status line and the Accuracy window: writes the shipped table
 skinviewer/techniques/preview_errors.json (``core/calibration.attach_errors`` reads it).
 
     python benchmarks/bench_governor_errors.py [--size 160] [--out skinviewer/techniques/preview_errors.json]
+    python benchmarks/bench_governor_errors.py --techniques deon   # one technique's rows (the others kept)
 
 The default head, the default settings (1024² maps) but the image size; the truth is
 ``skinviewer reference`` of the same settings (core/reference, its cache). A rung on a smaller view
@@ -74,6 +75,15 @@ def main() -> None:
             print(f"{name:<10} {rung.label:<50} {err:8.2%} ± {uncertainty.get(rung_key(name, rung), float('nan')):.2%}",
                   flush=True)
         r.trim()
+    measured = set(args.techniques.split(","))
+    try:  # the techniques not measured now keep their figures (--techniques deon: d'Eon's rows only)
+        old = json.loads(Path(args.out).read_text(encoding="utf-8"))
+        if old.get("size") == [args.size, args.size]:
+            keep = {k for k in old.get("errors", {}) if json.loads(k)[0] not in measured}
+            errors = {**{k: old["errors"][k] for k in keep}, **errors}
+            uncertainty = {**{k: v for k, v in old.get("uncertainty", {}).items() if k in keep}, **uncertainty}
+    except (OSError, ValueError, KeyError):
+        pass  # no table yet (or unreadable): this run's rows alone
     data = {"what": "mean relative RMS against the ground truth of each preview rung (benchmarks/bench_governor_errors.py)",
             "scene": "head (default settings, 1024² maps)", "size": [args.size, args.size],
             "renderer": describe(ctx), "date": time.strftime("%Y-%m-%d"), "errors": errors,
