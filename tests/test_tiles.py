@@ -227,3 +227,37 @@ def test_a_band_draws_only_the_triangles_that_reach_its_rows(renderer, monkeypat
     kept = [int(((ys[:, 1] >= k * 32 - 2) & (ys[:, 0] <= (k + 1) * 32 + 2)).sum()) for k in range(8)]
     tris = len(scene.lod_mesh(0).indices)
     assert max(kept) < tris and sum(kept) < 1.3 * tris, (kept, tris)
+
+
+def test_band_shares_follow_the_cost_over_the_rows():
+    from skinviewer.core.graph import band_shares
+    assert np.allclose(band_shares(None, 4), 0.25)
+    # all the cost in the middle half of the rows (a face between background rows)
+    prof = np.array([0.0, 0.0, 0.5, 1.0, 1.0])
+    assert np.allclose(band_shares(prof, 4), [0.0, 0.5, 0.5, 0.0])
+    assert np.allclose(band_shares(prof, 8), [0, 0, 0.25, 0.25, 0.25, 0.25, 0, 0])
+    assert band_shares(prof, 3).sum() == pytest.approx(1.0)
+
+
+def test_a_banded_pass_predicts_its_next_band_from_its_cost_over_the_rows(renderer):
+    """The bands of a view pass over a head cost more on the face than on the background: the
+    graph keeps each banded pass's cost over its rows and predicts the next band by its share
+    (so a frame stops before an expensive band instead of overshooting its budget), and sizes the
+    bands so the costliest fits half the budget."""
+    from skinviewer.core.graph import TileProgress
+    s = small_settings("head", "phong", size=64)
+    renderer.render(s)
+    settle(renderer, with_values(s, {"lights.0.direction": [0.3, 0.2, 1.0]}), budget_ms=1e-6)
+    g = renderer.graph("phong")
+    prof = g._band_profile["phong"]
+    assert prof[0] == 0.0 and prof[-1] == pytest.approx(1.0) and np.all(np.diff(prof) >= 0)
+    p = next(p for p in g.passes if p.name == "phong")
+    r = g._reflect_all(s, renderer.scene.gpu)["phong"]
+    # a made-up profile: every cost in the second quarter of the rows
+    g._band_profile["phong"] = np.array([0.0, 0.0, 1.0, 1.0, 1.0])
+    g._last_ms["phong"], g._last_px["phong"] = 100.0, 64 * 64
+    assert g._tile_count(p, r, 100.0) >= 8  # the costly quarter's band at most half the budget
+    pr = TileProgress({}, 4)
+    assert g._band_next_ms(p, r, pr) == pytest.approx(0.0)  # band 0: background
+    pr.done, pr.ms, pr.band_ms = 1, 0.5, [0.5]
+    assert g._band_next_ms(p, r, pr) == pytest.approx(100.0)  # band 1 holds the whole cost

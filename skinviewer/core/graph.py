@@ -56,6 +56,17 @@ class TileProgress:
     done: int = 0
     ms: float = 0.0
     held: dict[str, Any] = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
+    band_ms: list[float] = field(default_factory=list)  # what each band done so far cost
+
+
+def band_shares(profile: np.ndarray | None, count: int) -> np.ndarray:
+    """The share of a pass's cost in each of ``count`` equal row bands, from ``profile``: its cost
+    over the rows at its last run, as a cumulative distribution at equal row steps (0 ... 1);
+    None: cost even over the rows. Bands of a face cost more than bands of background."""
+    edges = np.linspace(0.0, 1.0, count + 1)
+    if profile is None or len(profile) < 2:
+        return np.diff(edges)
+    return np.diff(np.interp(edges, np.linspace(0.0, 1.0, len(profile)), profile))
 
 
 class RenderGraph:
@@ -85,6 +96,7 @@ class RenderGraph:
         self._idle: tuple[object, ...] | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._last_px: dict[str, int] = {}  # the pixels of its largest output then (costs scale with them)
+        self._band_profile: dict[str, np.ndarray] = {}  # a banded pass's cost over its rows (band_shares)
         self._notes: dict[str, tuple[str, dict[str, Any]]] = {}  # pass name -> (text, figures) of its last run
         self.refining: set[str] = set()  # passes that asked for another frame (progressive refinement)
         self._lod_notes: dict[str, str] = {}  # pass name -> the mesh LOD its last run drew at ("" = full)
@@ -388,38 +400,61 @@ class RenderGraph:
         return ms * now / then if then > 0 and now > 0 else ms
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
-        """Bands for a tileable pass: its expected cost over half the budget (so a band leaves room
-        for the rest of the frame), UNMEASURED_TILES before it was ever timed."""
+        """Bands for a tileable pass: as many as make its costliest band (by its cost over the rows
+        last time) at most half the budget, so a band leaves room for the rest of the frame;
+        UNMEASURED_TILES before it was ever timed."""
         ms = self._expected_ms(p, r)
         if ms is None:
             return UNMEASURED_TILES
-        return max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
+        n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
+        prof = self._band_profile.get(p.name)
+        while prof is not None and n < MAX_TILES and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
+            n = min(MAX_TILES, n + max(1, n // 4))
+        return n
+
+    def _band_next_ms(self, p: Pass, r: Reflection | None, progress: TileProgress) -> float:
+        """What the next band of ``p`` costs: its share of the pass by the cost profile over the
+        rows, times the pass's cost (from the bands done so far, else as last measured)."""
+        shares = band_shares(self._band_profile.get(p.name), progress.count)
+        k = progress.done
+        if k >= progress.count:
+            return 0.0
+        done_share = float(shares[:k].sum())
+        expected = self._expected_ms(p, r) if r is not None else None
+        if k > 0 and done_share > 0.05:  # the bands done say how this run compares with the last
+            total = progress.ms / done_share
+        elif expected is not None:
+            total = expected
+        else:
+            total = progress.ms / k * progress.count if k > 0 else 0.0
+        return total * float(shares[k])
 
     def _next_ms(self, p: Pass, r: Reflection, progress: TileProgress | None, budget_ms: float) -> float:
         """What running ``p`` next costs, as last measured (scaled to its outputs' pixels now): its
-        next band for a tileable pass (the mean of its bands so far, else its expected cost over
-        its bands), else its whole run; 0 when never measured."""
+        next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured."""
         last = self._expected_ms(p, r) or 0.0
         if not p.tileable:
             return last
-        if progress is not None and progress.done > 0:
-            return progress.ms / progress.done
-        count = progress.count if progress is not None else self._tile_count(p, r, budget_ms)
-        return last / max(count, 1)
+        if progress is None:
+            progress = TileProgress({}, self._tile_count(p, r, budget_ms))
+        return self._band_next_ms(p, r, progress)
 
     def _run_bands(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str, progress: TileProgress,
                    t_start: float, budget_ms: float) -> float | None:
         """Run bands of ``p`` from where ``progress`` stopped until all are done or the next band
-        (at its mean cost so far) would take the frame past the budget; at least one band per call.
-        Returns the ms of the bands run now."""
+        (its share of the pass by the cost profile) would take the frame past the budget; at least
+        one band per call. Returns the ms of the bands run now; the profile is kept when all are done."""
         ms_now = 0.0
         while progress.done < progress.count:
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
-            if (time.perf_counter() - t_start) * 1000.0 + progress.ms / progress.done > budget_ms:
+            progress.band_ms.append(ms or 0.0)
+            if (time.perf_counter() - t_start) * 1000.0 + self._band_next_ms(p, r, progress) > budget_ms:
                 break
+        if progress.done == progress.count and progress.count > 1 and progress.ms > 0:
+            self._band_profile[p.name] = np.concatenate([[0.0], np.cumsum(progress.band_ms) / progress.ms])
         return ms_now
 
     def _finish_bands(self, name: str) -> None:
