@@ -8,12 +8,13 @@
           uncertainty, in one process; how far the truth moved; its uncertainty (median / p99 / as RMS).
   unc     the stated uncertainty against the true error on the analytic scenes (zoomed edge, lit slab, laser).
   rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square,
-          deon.open_border absorb (before issue 30 item 5) and reflect (the default).
+          deon.open_border absorb (before issue 30 item 5) and reflect (the default), at 512^2 (the first step
+          summed over the surface, its rim texel counted by its share) and 1024^2 (every step separable).
 
   truth   d'Eon, open border absorb and reflect, against the ground truth on the scenes with open borders.
   cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head] [--size 512] [--edge-size 32]
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head] [--size 512] [--edge-size 32] [--rim-size 512,1024]
 """
 from __future__ import annotations
 
@@ -225,7 +226,7 @@ def main() -> int:
     ap.add_argument("--parts", default="edge,unc,rim")
     ap.add_argument("--size", type=int, default=512, help="head size")
     ap.add_argument("--edge-size", type=int, default=32)
-    ap.add_argument("--rim-size", type=int, default=1024, help="d'Eon's map on the slab")
+    ap.add_argument("--rim-size", default="512,1024", help="d'Eon's map sizes on the slab (512: its first step is summed)")
     ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
     a = ap.parse_args()
     if "edge" in a.parts:
@@ -233,12 +234,13 @@ def main() -> int:
     if "unc" in a.parts:
         part_unc()
     if "rim" in a.parts:
-        for mode in a.rim_modes.split(","):
-            part_rim(a.rim_size, mode)
+        for n in (int(x) for x in a.rim_size.split(",")):
+            for mode in a.rim_modes.split(","):
+                part_rim(n, mode)
     if "truth" in a.parts:
         part_rim_truth()
     if "cost" in a.parts:
-        part_rim_cost(a.rim_size)
+        part_rim_cost(int(a.rim_size.split(",")[-1]))
     if "head" in a.parts:
         part_head(a.size)
     return 0
