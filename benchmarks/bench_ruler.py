@@ -8,17 +8,23 @@
           uncertainty, in one process; how far the truth moved; its uncertainty (median / p99 / as RMS).
   unc     the stated uncertainty against the true error on the analytic scenes (zoomed edge, lit slab, laser).
   rim     d'Eon on the uniformly lit 24 mm slab: power kept and the rim profile against the analytic open square,
-          deon.open_border absorb (before issue 30 item 5) and reflect (the default).
+          deon.open_border absorb (before issue 30 item 5) and reflect (the default), at 512^2 (the first step
+          summed over the surface, its rim texel counted by its share) and 1024^2 (every step separable).
 
   truth   d'Eon, open border absorb and reflect, against the ground truth on the scenes with open borders.
   cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
+  samples deon.texel_samples 1 / 4 (issue 30 item 4) x shadow.pcf default / 0 x irr512 / irr1024 against the
+          ground truth on the default head and the scan (--size, default 512; the notes' table: 192).
+  samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4, at the defaults (1024^2 maps,
+          640^2 view), head and scan, sync timing, 3 interleaved repeats.
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head] [--size 512] [--edge-size 32]
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
 """
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -220,12 +226,79 @@ def part_rim_truth(size: int = 128) -> None:
     ctx.release()
 
 
+# ../shared beside the checkout, or SKINVIEWER_SHARED (as tests/conftest.py)
+SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")
+SCAN = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
+SCAN_VALUES = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}
+
+
+def part_samples(size: int) -> None:
+    """deon.texel_samples against the ground truth (the judge that shares neither the shadow map nor the
+    texel grid): head and scan, irr512 / irr1024, the default PCF and PCF off."""
+    from skinviewer.core.bench import compare_mask, linear_image
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    from skinviewer.physics.metrics import image_error
+    ctx = headless_context()
+    r = Renderer(ctx)
+    for name, extra in (("head", {}), ("scan", SCAN_VALUES)):
+        s0 = with_values(Settings(), {"render.width": size, "render.height": size, **extra})
+        ref = compute_reference(s0)
+        print(f"## {name} {size}^2: d'Eon against the ground truth", flush=True)
+        for irr in (512, 1024):
+            for pcf in (None, 0):
+                for k in (1, 4):
+                    v = {"technique": "deon", "deon.irradiance_size": irr, "deon.texel_samples": k}
+                    if pcf is not None:
+                        v["shadow.pcf"] = pcf
+                    s = with_values(s0, v)
+                    r.render_settled(s)
+                    img, cov = linear_image(r, s)
+                    e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=s.render.exposure,
+                                    uncertainty=ref.uncertainty)
+                    print(f"  irr{irr} pcf {'default' if pcf is None else pcf} texel_samples {k}: {e.summary()}",
+                          flush=True)
+    r.release()
+    ctx.release()
+
+
+def part_samples_cost(repeats: int = 3) -> None:
+    """texel_samples 1 vs 4 at the defaults (1024^2 maps, 640^2 view): the irradiance pass and the whole
+    forced frame, sync timing (glFinish + wall clock), interleaved, medians."""
+    import statistics
+
+    from skinviewer.core.gl import headless_context
+    from skinviewer.core.renderer import Renderer
+    ctx = headless_context()
+    r = Renderer(ctx)
+    for name, extra in (("head", {}), ("scan", SCAN_VALUES)):
+        base = with_values(Settings(), {"technique": "deon", "render.timing": "sync", **extra})
+        v = {k: with_values(base, {"deon.texel_samples": k}) for k in (1, 4)}
+        for s in v.values():
+            r.render(s, force=True)
+        irr: dict[int, list[float]] = {k: [] for k in v}
+        frame: dict[int, list[float]] = {k: [] for k in v}
+        for _ in range(repeats):
+            for k, s in v.items():
+                rep = r.render(s, force=True)
+                ran = [p for p in rep.passes if p.status == "ran"]
+                irr[k].append(sum(p.ms or 0.0 for p in ran if p.name.startswith("deon_irradiance")))
+                frame[k].append(sum(p.ms or 0.0 for p in ran))
+        a, b = (statistics.median(irr[k]) for k in (1, 4))
+        fa, fb = (statistics.median(frame[k]) for k in (1, 4))
+        print(f"## {name}, {base.render.width}x{base.render.height}, {base.deon.irradiance_size}^2 maps: irradiance "
+              f"pass {a:.0f} -> {b:.0f} ms ({b / a:.2f}x), forced frame {fa:.0f} -> {fb:.0f} ms ({fb / fa:.2f}x)",
+              flush=True)
+    r.release()
+    ctx.release()
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--parts", default="edge,unc,rim")
     ap.add_argument("--size", type=int, default=512, help="head size")
     ap.add_argument("--edge-size", type=int, default=32)
-    ap.add_argument("--rim-size", type=int, default=1024, help="d'Eon's map on the slab")
+    ap.add_argument("--rim-size", default="512,1024", help="d'Eon's map sizes on the slab (512: its first step is summed)")
     ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
     a = ap.parse_args()
     if "edge" in a.parts:
@@ -233,14 +306,19 @@ def main() -> int:
     if "unc" in a.parts:
         part_unc()
     if "rim" in a.parts:
-        for mode in a.rim_modes.split(","):
-            part_rim(a.rim_size, mode)
+        for n in (int(x) for x in a.rim_size.split(",")):
+            for mode in a.rim_modes.split(","):
+                part_rim(n, mode)
     if "truth" in a.parts:
         part_rim_truth()
     if "cost" in a.parts:
-        part_rim_cost(a.rim_size)
+        part_rim_cost(int(a.rim_size.split(",")[-1]))
     if "head" in a.parts:
         part_head(a.size)
+    if "samples-cost" in a.parts:
+        part_samples_cost()
+    if "samples" in a.parts.replace("samples-cost", ""):
+        part_samples(a.size)
     return 0
 
 

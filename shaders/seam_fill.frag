@@ -14,6 +14,11 @@ uniform int u_past_border_dark;  // 1 for light; 0 for a metric (the stretch cha
 // a blur of E (not E itself): past the border the odd reflection of the light (lib/open_border.glsl)
 #include "lib/open_border.glsl"
 uniform int u_reflect;
+// the direct gather's input (deon_surface_gather.frag, a point per texel with its whole area): an island
+// texel the border line crosses carries its share on the surface, c = 1/2 + s / (2 h) for its centre s
+// texels in and h its half extent along the normal (numpy twin: physics/open_border.rim_share), as the separable
+// blur's whole-texel taps count it; the rest of its area lies past the border and holds no light. Its
+// own variant (RIM_SHARE), not a uniform: the separable blurs use the OPEN_BORDER program too
 #endif
 out vec4 f_color;
 void main() {
@@ -27,6 +32,13 @@ void main() {
         f_color = past_border_light(source, uv, bf.r, bf.gb, border_half_e(uv, bf.r, bf.gb));
         return;
     }
+#ifdef RIM_SHARE
+    float h = 0.5 * (abs(bf.g) + abs(bf.b));
+    if (s.b < 0.5 && bf.a > 0.5 && bf.r >= 0.0 && bf.r < h) {
+        f_color = vec4((0.5 + 0.5 * bf.r / h) * here.rgb, here.a);
+        return;
+    }
+#endif
 #endif
     f_color = (s.b > 1.5 && u_past_border_dark != 0) ? vec4(here.rgb * s.a, here.a)
             : (s.b > 0.5 && s.b < 1.5) ? texture(source, (s.rg + 0.5) / vec2(textureSize(source, 0))) : here;

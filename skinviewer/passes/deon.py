@@ -459,7 +459,11 @@ class GaussianBlurPass(Pass):
             r.input(STRETCH)
         if seam:
             r.input(seam_resource(n))
-            r.program("seam_fill")
+            border = self._open_border(r)
+            if border:  # the rim texels' share on the surface (seam_fill's RIM_SHARE)
+                r.input(border_resource(n))
+                r.input(IRRADIANCE)
+            r.program("seam_fill", **border, **({"RIM_SHARE": 1} if border else {}))
         r.program("deon_gather_blocks")
         r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n))
         r.output(self._output(), self._spec(n))
@@ -470,9 +474,13 @@ class GaussianBlurPass(Pass):
         if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
             filled, fresh = ec.held("filled", self._spec(n))
             if fresh:
-                fill = ec.program("seam_fill")
+                border = self._open_border(ec)
+                fill = ec.program("seam_fill", **border, **({"RIM_SHARE": 1} if border else {}))
                 ec.textures(fill, source=source, seam_map=seam_resource(n))
                 ec.set(fill, "u_past_border_dark", True)
+                if border:  # a texel the border crosses counts its share on the surface; no reflection
+                    ec.textures(fill, border_map=border_resource(n), irradiance_map=IRRADIANCE)
+                    ec.set(fill, "u_reflect", 0)
                 ec.draw_fullscreen(fill, filled)
             source = filled
         h = (n + 1) // 2

@@ -59,3 +59,22 @@ def chain_on_segment(E: np.ndarray, dx: float, variances: ArrayLike, inside: np.
         B = gaussian_filter1d(src, sd, mode="constant", truncate=6.0) if sd > 0 else src
         out.append(B.copy())
     return np.array(out)
+
+
+def rim_share(E: ArrayLike, frame: ArrayLike, seam_b: ArrayLike) -> np.ndarray:
+    """The direct gather's input at an open border (shaders/seam_fill.frag, RIM_SHARE; issue 30): the
+    gather sums a point per texel with the texel's whole area (physics/surface_gather.py), so an island
+    texel the border line crosses would carry light over all of it and put the border at the texel's
+    outer edge (the slab's rim texel read 2.5 / 5.0 / 6.9 % bright at 512^2). It carries its share on
+    the surface instead, c = 1/2 + s / (2 h), s its centre's distance into the surface and h its half
+    extent along the border's normal (texels), as the separable blur's whole-texel taps count it; the
+    normalisation keeps the whole area, so the part past the border holds no light. ``frame``: the
+    border frame (scene/texels.border_frame: R s, GB the normal, A 1 where known); ``seam_b``: the seam
+    map's B (0 on island texels). RGB scaled, A (thickness) kept."""
+    out = np.array(E, np.float64)
+    f = np.asarray(frame, np.float64)
+    h = 0.5 * (np.abs(f[..., 1]) + np.abs(f[..., 2]))
+    cut = (np.asarray(seam_b) < 0.5) & (f[..., 3] > 0.5) & (f[..., 0] >= 0.0) & (f[..., 0] < h)
+    c = 0.5 + 0.5 * f[..., 0] / np.maximum(h, 1e-30)
+    out[cut, :3] *= c[cut, None]
+    return out
