@@ -442,6 +442,24 @@ def test_the_error_table_s_uncertainty_reaches_the_calibration(tmp_path, monkeyp
     assert Calibration.from_json(d).entries["deon"][0].uncertainty is None
 
 
+def test_a_cached_calibration_takes_the_error_table_s_newest_figures(cache, monkeypatch):
+    """The costs in the cache are this machine's; the errors come from the table at load, so a rung
+    whose figure was measured after the calibration (d'Eon's cheapest) shows it."""
+    s = with_values(Settings(), {"technique": "deon"})
+    cal = fake_calibration("deon", s, errors=False)
+    cal.renderer = "GPU X"
+    calibration.save(cal)
+    keys = [e.key for e in cal.entries["deon"]]
+    table = cache / "errors.json"
+    table.write_text(json.dumps({"errors": {keys[0]: 0.177}, "uncertainty": {keys[0]: 0.019}}))
+    monkeypatch.setattr(calibration, "ERRORS_TABLE", table)
+    monkeypatch.setattr(calibration, "_bench_errors", lambda path: {})
+    got, msg = calibration.load("GPU X", "small")
+    assert got is not None and msg == ""
+    assert got.entries["deon"][0].error == 0.177 and got.entries["deon"][0].uncertainty == 0.019
+    assert all(e.error is None for e in got.entries["deon"][1:])
+
+
 def test_set_render_governor_off_on_the_command_line():
     """`--set render.governor=off` (the parser reads off / on as false / true) means what it says."""
     from skinviewer.core.settings import parse_value

@@ -174,6 +174,9 @@ def load(renderer: str, mclass: str) -> tuple[Calibration | None, str]:
         return None, f"calibration {path} unreadable ({type(exc).__name__}: {exc}): rebuilding it"
     if cal.version != VERSION or cal.renderer != renderer or cal.mesh_class != mclass:
         return None, f"calibration {path} is of another version or machine: rebuilding it"
+    # the costs are this machine's; the error figures are the newest bench's or shipped table's
+    # (a rung added since, or a table measured again, is not left without its figure)
+    attach_errors(cal)
     stale = drop_stale(cal)
     if not cal.entries:
         return None, f"calibration {path} was made for other preview ladders: rebuilding it"
