@@ -86,13 +86,24 @@ def run(scene: str, size: int, yaw: float, technique: str, orbit_only: bool = Fa
     return out
 
 
-def _orbit(s: Settings, s2: Settings, img2: np.ndarray, cover2: np.ndarray, field_h: float | None) -> dict:
-    """One session: the first truth of ``s`` (all stages), then the orbit to ``s2``; the orbit's time,
-    what it evaluated, and d'Eon's figure against the orbit's truth."""
+def _orbit(s: Settings, s2: Settings, img2: np.ndarray, cover2: np.ndarray, field_h: float | None,
+           img: np.ndarray | None = None, cover: np.ndarray | None = None) -> dict:
+    """One session: the first truth of ``s`` (all stages: each stage's time and, given ``img``, the
+    technique's figure with its standard error), then the orbit to ``s2``; the orbit's time, what it
+    evaluated, and the technique's figure against the orbit's truth."""
     ses = R.TruthSession(field_ratio=field_h)
     t = time.perf_counter()
-    *_, first = ses.progressive(s)
-    out: dict = {"field_ratio": field_h, "first_view_s": round(time.perf_counter() - t, 2)}
+    first_stages, within = [], None
+    for part in ses.progressive(s):
+        row = {"stage": part.stage, "s": round(time.perf_counter() - t, 2), "pixels": round(part.fraction, 3)}
+        if img is not None and cover is not None:
+            rms, se = R.sampled_rms(img, part.reference, cover)
+            row.update(rms_pct=[round(100 * x, 3) for x in rms], se_pct=[round(100 * x, 3) for x in se])
+            if within is None and "coarse" not in part.stage and np.all(100 * se <= 0.5):
+                within = row["s"]
+        first_stages.append(row)
+    out: dict = {"field_ratio": field_h, "first_view_s": round(time.perf_counter() - t, 2),
+                 "first_view_stages": first_stages, "first_view_to_within_0.5pct_s": within}
     n0 = ses.fields_evaluated(s)
     t = time.perf_counter()
     stages = []
@@ -117,9 +128,10 @@ def run_orbits(scene: str, size: int, yaw: float, technique: str, field_hs: list
                                  "render.height": size, "technique": technique})
     s2 = with_values(s, {"camera.yaw": s.camera.yaw + yaw})
     img2, cover2 = _render_lit(s2)
+    img, cover = _render_lit(s)
     rows = []
     for h in field_hs:
-        r = _orbit(s, s2, img2, cover2, h)
+        r = _orbit(s, s2, img2, cover2, h, img, cover)
         rows.append(r)
         print({k: v for k, v in r.items() if not k.startswith("_")}, flush=True)
     ref0 = rows[0]["_ref"]

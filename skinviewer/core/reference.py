@@ -1107,9 +1107,9 @@ class TruthSession:
         spacing ``field_ratio`` x sigma: kept with the source set's structures (dropped with them),
         shared by every profile that has this variance (a weight edit re-uses it)."""
         fields = shared.setdefault("fields", {})
-        h = float(self.field_ratio) * math.sqrt(variance)
+        h = float(self.field_ratio or 1.0) * math.sqrt(variance)
         key = (round(float(variance), 12), round(h, 12))
-        f = fields.pop(key, None)
+        f: gt.SurfaceField | None = fields.pop(key, None)
         if f is None:
             f = gt.SurfaceField(surf.P[surf.F] * surf.mm, h)
         fields[key] = f  # most recent last
@@ -1135,7 +1135,7 @@ class TruthSession:
         # the surface) is gathered per pixel too: its lattice cells would hold one pixel each, so
         # another view would share none of them (and each pixel would cost three lattice points)
         wide = [(k, v) for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
-                and self.field_ratio * math.sqrt(v) >= footprint_mm]
+                and (self.field_ratio or 0.0) * math.sqrt(v) >= footprint_mm]
         per_pixel = {k for k in range(len(diff.v)) if k not in {k for k, _ in wide}}
         M = diff.exitance(x_mm, ea_here, cancelled=check, only=per_pixel)
         for n, (k, v) in enumerate(wide):

@@ -274,7 +274,7 @@ def prepare_gpu_arrays(mesh: MeshData) -> dict[str, Any]:
     (linear albedo, finite values, float16), and the default framing. Kept on the mesh: the viewer's
     start makes them in a worker thread while its window ticks (numpy, no GL), the GpuScene on the GL
     thread then only uploads."""
-    memo = mesh.__dict__.get("_gpu_arrays")
+    memo: dict[str, Any] | None = mesh.__dict__.get("_gpu_arrays")
     if memo is not None:
         return memo
     albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)

@@ -204,7 +204,8 @@ class SurfaceField:
         c = self.canon[ids]
         if not np.all(self.known[c]):
             raise ValueError("SurfaceField.interpolate: lattice vertices not evaluated (store them first)")
-        return np.einsum("nk,nkc->nc", w, self.values[c])
+        out: FloatArray = np.einsum("nk,nkc->nc", w, self.values[c])
+        return out
 
 
 @dataclass
