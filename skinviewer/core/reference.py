@@ -1237,8 +1237,9 @@ class TruthSession:
                 if not self.field_ratio:
                     M[sel] = diff.exitance(x_mm[sel], ea_here[sel], progress=step, cancelled=check)
                 else:
+                    # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that
                     M[sel] = self._field_exitance(diff, surf, shared, tri[sel], bary[sel], x_mm[sel], ea_here[sel],
-                                                  footprint, step, check)
+                                                  footprint * stride, step, check)
             done |= sel
             final = stride == 1
             part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final)
