@@ -76,3 +76,32 @@ def test_a_first_frame_is_spread_over_several_under_a_budget(renderer):
     assert renderer.render(with_values(s, {})).ran == []  # all cached now
     renderer.render(s, force=True)  # every pass in one frame
     assert np.array_equal(spread, renderer.read(s, "image"))
+
+
+def test_the_viewer_start_warms_in_a_worker_and_the_first_render_waits_for_it():
+    """create_app with its start-up screen starts the worker (app.warm); the panel frames run while it
+    works; the first render joins it (never both on the scene's caches at once)."""
+    import os
+
+    import pytest
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui.app import WindowUnavailableError, create_app, destroy_app
+    s = with_values(small_settings("shadow-edge", "deon", size=64), {**scene_overrides("shadow-edge")})
+    try:
+        app = create_app(s, size=(320, 240), vsync=False, splash=True)
+    except WindowUnavailableError as exc:
+        pytest.skip(f"cannot open a window: {exc}")
+    try:
+        assert app.warm is not None
+        app.ui_frame()  # the panel, while the worker may still run
+        assert app.frame.report is None
+        app.frame.set_frame_budget(None)
+        app.step(1)
+        assert app.warm is None and app.frame.report is not None and app.frame.report.complete
+        gpu = app.renderer.scene.gpu
+        assert "_rules_cache" in gpu.__dict__ or "_texel_tables" in gpu.__dict__  # the worker's caches
+    finally:
+        destroy_app(app)
