@@ -77,6 +77,11 @@ class ViewerApp(mglw.WindowConfig):
                 self._poll_events()
             self._note_stall(t0)
 
+    def start_warm(self) -> None:
+        """The first frame's CPU work on the scene in a worker (ui/warm.py); ``step`` joins it."""
+        from skinviewer.ui.warm import start_warm
+        self.warm = start_warm(self.renderer, self.state.settings)
+
     def ui_frame(self) -> None:
         """One frame of the panel and the view's start-up screen without rendering: the start shows
         the panel before the first image (whose shaders and tables take seconds on a first frame)."""
@@ -229,8 +234,7 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
     app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
                     options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer())
     if sp is not None:  # the first frame's CPU work in a worker from now (ui/warm.py; run_viewer joins it)
-        from skinviewer.ui.warm import start_warm
-        app.warm = start_warm(app.renderer, app.state.settings)
+        app.start_warm()
     if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
         sp.hand_over(f"the first image of {app.state.settings.technique}: shaders and tables",
                      "the panel works; the image appears here when its first frame is complete")
