@@ -27,6 +27,9 @@ import time
 from pathlib import Path
 
 EVENTS = ("window", "ui", "image")
+# besides the events: "frozen", the longest frame (s) between the panel and the first image -- the
+# longest the panel did not answer input (older trees do not report it: "-")
+FIGURES = EVENTS + ("frozen",)
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -42,6 +45,8 @@ def read_trace(path: Path) -> dict[str, float]:
         except ValueError:
             continue  # a line being written
         out.setdefault(d["event"], float(d["t"]))
+        if d["event"] == "image" and "longest_frame_ms" in d:  # the longest frame from the panel to the image
+            out.setdefault("frozen", float(d["longest_frame_ms"]) / 1000.0)
     return out
 
 
@@ -81,7 +86,10 @@ def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | 
         marks = read_trace(trace)
         if "image" not in marks:
             print(f"run did not reach the first image (exit {proc.returncode}): {err.strip()[-400:]}", file=sys.stderr)
-        return {e: marks[e] - t0 for e in EVENTS if e in marks}
+        out = {e: marks[e] - t0 for e in EVENTS if e in marks}
+        if "frozen" in marks:
+            out["frozen"] = marks["frozen"]
+        return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -115,14 +123,14 @@ def main(argv: list[str] | None = None) -> int:
                 tag = "" if root == ROOT else "-compared"
                 r = one_run(viewer, run_env, a.timeout, a.shots if k == 0 else None, shot_at, root, tag)
             rows[name].append(r)
-            print(f"run {k + 1} {name}: " + "  ".join(f"{e} {r[e]:.2f} s" if e in r else f"{e} -" for e in EVENTS),
+            print(f"run {k + 1} {name}: " + "  ".join(f"{e} {r[e]:.2f} s" if e in r else f"{e} -" for e in FIGURES),
                   flush=True)
     load = os.getloadavg()[0]
     for name, root in trees:
         print(f"\nviewer start, {name} ({root}; {a.technique}, {a.size}, "
               f"{'empty cache' if a.first_start else 'cache as is'}; {os.cpu_count()} CPUs, load {load:.1f}): "
               f"median of {a.runs}")
-        for e in EVENTS:
+        for e in FIGURES:
             xs = [r[e] for r in rows[name] if e in r]
             print(f"  to {e:6s} {statistics.median(xs):6.2f} s  (runs: {', '.join(f'{x:.2f}' for x in xs)})" if xs
                   else f"  to {e:6s}   not reached")

@@ -3,7 +3,10 @@ each refinement, to a relative-RMS figure within +-0.5 % (bootstrap standard err
 core.reference.sampled_rms, of a d'Eon render of the same view), an orbit that re-uses the sources,
 and the one-shot compute_reference of the same view, side by side in one run.
 
-    python3 -m benchmarks.bench_truth [--scene head] [--size 256] [--yaw 20] [--orbit-only]
+    python3 -m benchmarks.bench_truth [--scene head] [--size 256] [--yaw 20] [--orbit-only [--field none,1,0.5]]
+
+--orbit-only: one session per lattice spacing (x sigma) of --field (none: every pixel gathers the whole diffusion,
+as before the lattice), each the first truth of the view and then the orbit, side by side in one run.
 """
 from __future__ import annotations
 
@@ -83,6 +86,63 @@ def run(scene: str, size: int, yaw: float, technique: str, orbit_only: bool = Fa
     return out
 
 
+def _orbit(s: Settings, s2: Settings, img2: np.ndarray, cover2: np.ndarray, field_h: float | None,
+           img: np.ndarray | None = None, cover: np.ndarray | None = None) -> dict:
+    """One session: the first truth of ``s`` (all stages: each stage's time and, given ``img``, the
+    technique's figure with its standard error), then the orbit to ``s2``; the orbit's time, what it
+    evaluated, and the technique's figure against the orbit's truth."""
+    ses = R.TruthSession(field_ratio=field_h)
+    t = time.perf_counter()
+    first_stages, within = [], None
+    for part in ses.progressive(s):
+        row = {"stage": part.stage, "s": round(time.perf_counter() - t, 2), "pixels": round(part.fraction, 3)}
+        if img is not None and cover is not None:
+            rms, se = R.sampled_rms(img, part.reference, cover)
+            row.update(rms_pct=[round(100 * x, 3) for x in rms], se_pct=[round(100 * x, 3) for x in se])
+            if within is None and "coarse" not in part.stage and np.all(100 * se <= 0.5):
+                within = row["s"]
+        first_stages.append(row)
+    out: dict = {"field_ratio": field_h, "first_view_s": round(time.perf_counter() - t, 2),
+                 "first_view_stages": first_stages, "first_view_to_within_0.5pct_s": within}
+    n0 = ses.fields_evaluated(s)
+    t = time.perf_counter()
+    stages = []
+    for q in ses.progressive(s2):
+        stages.append((q.stage, round(time.perf_counter() - t, 2)))
+    out["orbit_s"] = round(time.perf_counter() - t, 2)
+    out["orbit_stages_s"] = stages
+    out["lattice_points_first_view"] = n0
+    out["lattice_points_orbit"] = ses.fields_evaluated(s2) - n0
+    out["orbit_pixels"] = int(q.reference.mask.sum())
+    rms, _ = R.sampled_rms(img2, q.reference, cover2)
+    out["deon_rms_pct_orbit_view"] = [round(100 * x, 3) for x in rms]
+    out["_ref"] = q.reference
+    return out
+
+
+def run_orbits(scene: str, size: int, yaw: float, technique: str, field_hs: list[float | None]) -> dict:
+    """The orbit with each lattice spacing in ``field_hs`` (None: every pixel gathers the whole
+    diffusion, as before issue 34's lattice), side by side in one run: times, lattice points
+    evaluated, d'Eon's figure against each truth of the orbit's view, and each truth against the first."""
+    s = with_values(Settings(), {"scene.name": scene, **scene_overrides(scene), "render.width": size,
+                                 "render.height": size, "technique": technique})
+    s2 = with_values(s, {"camera.yaw": s.camera.yaw + yaw})
+    img2, cover2 = _render_lit(s2)
+    img, cover = _render_lit(s)
+    rows = []
+    for h in field_hs:
+        r = _orbit(s, s2, img2, cover2, h, img, cover)
+        rows.append(r)
+        print({k: v for k, v in r.items() if not k.startswith("_")}, flush=True)
+    ref0 = rows[0]["_ref"]
+    for r in rows:
+        m = ref0.mask & r["_ref"].mask
+        d = np.sqrt(((r["_ref"].lit - ref0.lit)[m] ** 2).sum(0) / np.maximum((ref0.lit[m] ** 2).sum(0), 1e-30))
+        r["truth_vs_first_row_rel_rms_pct"] = [round(100 * x, 3) for x in d]
+        del r["_ref"]
+    return {"scene": scene, "size": size, "yaw": yaw, "technique": technique, "rows": rows}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--scene", default="head")
@@ -91,7 +151,14 @@ def main(argv=None) -> int:
     ap.add_argument("--technique", default="deon")
     ap.add_argument("--orbit-only", action="store_true", help="stop after the orbit (no fresh session, no "
                     "compute_reference of the first view)")
+    ap.add_argument("--field", default="none,1", metavar="H,...",
+                    help="with --orbit-only: the truth session's lattice spacings (over sigma) to compare, 'none' = every "
+                         "pixel gathers the whole diffusion (before issue 34's lattices); default none,1")
     a = ap.parse_args(argv)
+    if a.orbit_only:
+        hs = [None if x.strip().lower() == "none" else float(x) for x in a.field.split(",") if x.strip()]
+        print(json.dumps(run_orbits(a.scene, a.size, a.yaw, a.technique, hs), indent=1))
+        return 0
     print(json.dumps(run(a.scene, a.size, a.yaw, a.technique, a.orbit_only), indent=1))
     return 0
 

@@ -1,6 +1,7 @@
 """The viewer's progressive ground truth (core.reference.TruthSession): stages that refine, the
 view-independent sources kept across an orbit (identical figures, no rebuild) and a profile change,
-rebuilt for a light change, recent truths kept."""
+rebuilt for a light change, the wide Gaussians' diffusion kept on surface lattices across views
+(issue 34), recent truths kept."""
 from __future__ import annotations
 
 import numpy as np
@@ -42,13 +43,17 @@ def test_stages_refine_to_the_whole_view(session_and_first):
 
 
 def test_final_stage_agrees_with_compute_reference(base, session_and_first):
+    """Gathered per pixel (no lattice), the session's truth is compute_reference's integral (only the
+    whole-surface clustering differs); with the wide Gaussians on their lattices (the default) it is
+    within the interpolation's error, under 1 % per channel."""
     _, parts = session_and_first
-    final = parts[-1].reference
     one = R.compute_reference(base, use_cache=False)
-    assert np.array_equal(final.mask, one.mask)
+    per_pixel = list(R.TruthSession(field_ratio=None).progressive(base))[-1].reference
     m = one.mask
-    rel = np.sqrt(((final.lit - one.lit)[m] ** 2).sum(0) / (one.lit[m] ** 2).sum(0))
-    assert np.all(rel < 2e-3), rel  # the same integral; only the whole-surface clustering differs
+    for final, tol in ((per_pixel, 2e-3), (parts[-1].reference, 1e-2)):
+        assert np.array_equal(final.mask, one.mask)
+        rel = np.sqrt(((final.lit - one.lit)[m] ** 2).sum(0) / (one.lit[m] ** 2).sum(0))
+        assert np.all(rel < tol), rel
 
 
 def test_an_orbit_reuses_the_diffusion_sources(base, session_and_first):
@@ -60,7 +65,8 @@ def test_an_orbit_reuses_the_diffusion_sources(base, session_and_first):
     fresh = R.TruthSession()
     again = list(fresh.progressive(orbit))
     assert fresh.builds == 1
-    assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)  # identical figures
+    # the same figures (the lattice points evaluated in other batches: the sums' order differs)
+    assert np.allclose(parts[-1].reference.lit, again[-1].reference.lit, rtol=1e-6, atol=1e-12)
 
 
 def test_an_orbit_rebuilds_none_of_the_diffusion_structures(base, session_and_first):
@@ -79,7 +85,40 @@ def test_an_orbit_rebuilds_none_of_the_diffusion_structures(base, session_and_fi
     fresh = R.TruthSession()
     again = list(fresh.progressive(orbit))
     assert fresh.structures_built(orbit) == built  # a fresh session builds the same, once
-    assert np.array_equal(parts[-1].reference.lit, again[-1].reference.lit)
+    assert np.allclose(parts[-1].reference.lit, again[-1].reference.lit, rtol=1e-6, atol=1e-12)
+
+
+def test_an_orbit_interpolates_the_kept_diffusion_and_matches_a_fresh_truth(base):
+    """Issue 34: the diffused surface radiance does not depend on the camera. Each wide Gaussian's
+    exitance is kept on a surface lattice: an orbit evaluates it only where it sees new surface (a
+    fraction of what a fresh truth of that view evaluates), coming back to a view evaluates nothing and
+    gives its figures again bit for bit, and the orbit's truth matches a truth gathered per pixel for
+    that view within the lattice's error (< 1 %; a technique's figure moves by far less than 10 %)."""
+    ses = R.TruthSession()
+    a = list(ses.progressive(base))[-1].reference
+    n_first = ses.fields_evaluated(base)
+    assert n_first > 0
+    orbit = with_values(base, {"camera.yaw": base.camera.yaw + 10.0})
+    b = list(ses.progressive(orbit))[-1].reference
+    n_orbit = ses.fields_evaluated(orbit) - n_first
+    fresh = R.TruthSession()
+    list(fresh.progressive(orbit))
+    assert n_orbit < 0.8 * fresh.fields_evaluated(orbit)  # the surface seen before is not evaluated again
+    ses.recent.clear()
+    again = list(ses.progressive(base))[-1].reference
+    assert ses.fields_evaluated(base) == n_first + n_orbit  # nothing new
+    assert np.array_equal(again.lit, a.lit)  # the pixels coincide: identical figures
+    per_pixel = list(R.TruthSession(field_ratio=None).progressive(orbit))[-1].reference
+    m = per_pixel.mask
+    assert np.array_equal(b.mask, m)
+    rel = np.sqrt(((b.lit - per_pixel.lit)[m] ** 2).sum(0) / (per_pixel.lit[m] ** 2).sum(0))
+    assert np.all(rel < 1e-2), rel
+    # a technique's figure (a render 5 % off in a pattern) against either truth: the same to < 10 %
+    yy, xx = np.mgrid[0:SIZE, 0:SIZE]
+    img = per_pixel.lit * (1.0 + 0.05 * np.sin(xx / 3.0) * np.cos(yy / 4.0))[..., None]
+    fig_lattice, _ = R.sampled_rms(img, b, m)
+    fig_pixel, _ = R.sampled_rms(img, per_pixel, m)
+    assert np.all(np.abs(fig_lattice - fig_pixel) < 0.1 * fig_pixel), (fig_lattice, fig_pixel)
 
 
 def test_a_profile_change_reuses_a_light_change_rebuilds(base, session_and_first):

@@ -313,13 +313,14 @@ class RenderGraph:
                 self._cancel(p.name)  # what its bands were computing is no longer wanted
                 progress = None
             if force or realloc or old != key:
-                # a freshly (re)allocated output holds garbage: that pass always runs (unless an
-                # input is part-way through its bands: it runs once that is complete)
+                # a freshly (re)allocated output holds garbage under no key (popped above): deferred,
+                # it runs next frame like any other pass (its consumers wait) -- a first frame is spread
+                # over several under the budget instead of freezing the viewer for all its passes
                 waits = partial & set(r.inputs)
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
                 spent = budget_ms is not None and \
                     (time.perf_counter() - t_start) * 1000.0 + self._next_ms(p, r, progress, budget_ms) > budget_ms
-                if waits or (any_ran and spent and (not realloc or p.tileable)):
+                if waits or (any_ran and spent):
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
                     rec.nonfinite = list(self._nonfinite.get(p.name, []))

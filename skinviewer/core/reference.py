@@ -1015,6 +1015,10 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
 # clusters of the widest Gaussians grouped differently (figures within a few 0.01 %).
 
 COARSE_H_MM = 2.0
+# the truth session's lattices for the diffusion's wide Gaussians (TruthSession.field; issue 34): the
+# spacing over sigma, chosen by the convergence check in notes/artist.md (the figure moves < 10 % of
+# itself when it is halved)
+FIELD_RATIO = 1.0
 STRIDES = (4, 2, 1)
 
 
@@ -1042,8 +1046,11 @@ class TruthSession:
     view-independent sources kept across camera and profile changes, the last ``capacity`` truths kept."""
 
     def __init__(self, h_mm: float = DEFAULT_H_MM, coarse_h_mm: float = COARSE_H_MM, capacity: int = 6,
-                 source_sets: int = 2):
+                 source_sets: int = 2, field_ratio: float | None = FIELD_RATIO):
         self.h_mm, self.coarse_h_mm = float(h_mm), float(coarse_h_mm)
+        # each wide Gaussian of the diffusion on a surface lattice of spacing field_ratio x sigma, kept
+        # across views (an orbit interpolates it at its new hit points); None: every pixel gathers it
+        self.field_ratio = None if not field_ratio else float(field_ratio)
         self.capacity, self.source_sets = int(capacity), int(source_sets)
         self._scene: tuple[str, tuple[MeshData, float]] | None = None
         self._surface: tuple[str, Surface] | None = None
@@ -1095,6 +1102,55 @@ class TruthSession:
             self._structures.pop(old, None)
         return hit
 
+    def field(self, surf: Surface, shared: dict[str, Any], variance: float) -> gt.SurfaceField:
+        """The exitance of one wide Gaussian (unit weights) of the source set on its surface lattice,
+        spacing ``field_ratio`` x sigma: kept with the source set's structures (dropped with them),
+        shared by every profile that has this variance (a weight edit re-uses it)."""
+        fields = shared.setdefault("fields", {})
+        h = float(self.field_ratio or 1.0) * math.sqrt(variance)
+        key = (round(float(variance), 12), round(h, 12))
+        f: gt.SurfaceField | None = fields.pop(key, None)
+        if f is None:
+            f = gt.SurfaceField(surf.P[surf.F] * surf.mm, h)
+        fields[key] = f  # most recent last
+        while len(fields) > 16:
+            fields.pop(next(iter(fields)))
+        return f
+
+    def fields_evaluated(self, s: Settings) -> int:
+        """Lattice points whose wide Gaussians were evaluated, over the source set of ``s`` (tests: an
+        orbit evaluates only those its new pixels need)."""
+        fields = self._structures.get(sources_key(s, self.h_mm), {}).get("fields", {})
+        return sum(f.evaluated for f in fields.values())
+
+    def _field_exitance(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], tri: np.ndarray,
+                        bary: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, footprint_mm: float,
+                        progress: Callable[[float], None], check: Callable[[], bool]) -> np.ndarray:
+        """M at pixels (eq. 20's sum over the profile's Gaussians): the local ones (narrower than the
+        elements: the light at the pixel itself, Diffusion.is_local) gathered per pixel; each wide one
+        (sigma >= the elements: smooth over sigma) interpolated linearly from its surface lattice
+        (spacing ``field_ratio`` sigma), evaluated first at the lattice points not yet done -- an
+        orbit evaluates only the surface it has not seen before."""
+        # a Gaussian whose lattice would be finer than the pixels (ratio sigma < the pixels' spacing on
+        # the surface) is gathered per pixel too: its lattice cells would hold one pixel each, so
+        # another view would share none of them (and each pixel would cost three lattice points)
+        wide = [(k, v) for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
+                and (self.field_ratio or 0.0) * math.sqrt(v) >= footprint_mm]
+        per_pixel = {k for k in range(len(diff.v)) if k not in {k for k, _ in wide}}
+        M = diff.exitance(x_mm, ea_here, cancelled=check, only=per_pixel)
+        for n, (k, v) in enumerate(wide):
+            f = self.field(surf, shared, float(v))
+            ids, w = f.locate(tri, bary)
+            need = f.missing(ids)
+            if len(need):
+                vt, vb = f.vertex_points(need)
+                xv = surf.attributes(vt, vb)["P"] * surf.mm
+                one = gt.Diffusion(diff.el, [v], np.ones((1, 3)), diff.h, diff.points, shared=shared)
+                f.store(need, one.exitance(xv, None, cancelled=check))
+            M += diff.w[k] * f.interpolate(ids, w)
+            progress((n + 1) / len(wide))
+        return M
+
     def structures_built(self, s: Settings) -> dict[str, int]:
         """What the diffusion over ``s``'s source set has built so far, by kind (cluster levels, KD-tree,
         edge frames, radii, source grids): an orbit or a profile edit re-using the set adds nothing."""
@@ -1116,7 +1172,7 @@ class TruthSession:
         report = progress or (lambda stage, f: None)
         check = cancelled or (lambda: False)
         t0 = time.perf_counter()
-        key = cache_key(s, self.h_mm) + "-session"
+        key = cache_key(s, self.h_mm) + "-session" + (f"-field{self.field_ratio:g}" if self.field_ratio else "")
         if key in self.recent:
             ref = self.recent.pop(key)
             self.recent[key] = ref
@@ -1155,7 +1211,7 @@ class TruthSession:
             sec = time.perf_counter() - t0
             meta = {"key": key, "version": VERSION, "h_mm": h_mm, "pixels": int(done.sum()), "stage": stage,
                     "fraction": float(done.sum() / n), "seconds": {"total": sec}, "cached": False,
-                    "mm_per_unit": surf.mm, "session": True, "visible_mask": mask}
+                    "mm_per_unit": surf.mm, "session": True, "visible_mask": mask, "field_ratio": self.field_ratio}
             return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3]), stage,
                            float(done.sum() / n), final, sec)
 
@@ -1169,21 +1225,38 @@ class TruthSession:
             yield image(M, first, f"coarse ({self.coarse_h_mm:g} mm elements, 1/{STRIDES[0] ** 2} of the pixels)",
                         self.coarse_h_mm, False)
         el, pts = self._whole_sources(surf, s, report, check)
-        diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=self._structures[sources_key(s, self.h_mm)])
+        shared = self._structures[sources_key(s, self.h_mm)]
+        diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
+        footprint = pixel_footprint_mm(pix, W, x_mm)
         M = np.zeros((len(pix), 3))
         done = np.zeros(len(pix), bool)
         for stride in STRIDES:
             sel = (rows % stride == 0) & (cols % stride == 0) & ~done
             if sel.any():
-                M[sel] = diff.exitance(x_mm[sel], ea_here[sel],
-                                       progress=functools.partial(report, f"diffusion 1/{stride * stride}"),
-                                       cancelled=check)
+                step = functools.partial(report, f"diffusion 1/{stride * stride}")
+                if not self.field_ratio:
+                    M[sel] = diff.exitance(x_mm[sel], ea_here[sel], progress=step, cancelled=check)
+                else:
+                    # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that
+                    M[sel] = self._field_exitance(diff, surf, shared, tri[sel], bary[sel], x_mm[sel], ea_here[sel],
+                                                  footprint * stride, step, check)
             done |= sel
             final = stride == 1
             part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final)
             if final:
                 self._remember(key, part.reference)
             yield part
+
+
+def pixel_footprint_mm(pix: np.ndarray, width: int, x_mm: np.ndarray) -> float:
+    """The view's pixel spacing on the surface (mm): the median distance between the hit points of
+    horizontally adjacent pixels (``pix``: flat indices of the hit pixels, ``x_mm`` their points)."""
+    pos = np.searchsorted(pix, pix + 1)
+    ok = (pos < len(pix)) & ((pix + 1) % width != 0)
+    ok[ok] &= pix[pos[ok]] == pix[ok] + 1
+    if not ok.any():
+        return math.inf
+    return float(np.median(np.linalg.norm(x_mm[pos[ok]] - x_mm[ok], axis=1)))
 
 
 def sampled_rms(img: np.ndarray, ref: Reference, mask: np.ndarray, n_boot: int = 24, seed: int = 0

@@ -66,8 +66,9 @@ class GpuScene:
         self.center = mesh.center.astype(np.float64)
         self.radius = mesh.radius
         self.frame = mesh.frame  # what the camera frames by default (the head of a bust)
-        self.vbo = ctx.buffer(mesh.interleaved().tobytes())
-        self.ibo = ctx.buffer(mesh.indices.astype(np.uint32).tobytes())
+        arrays = prepare_gpu_arrays(mesh)  # made by the start's worker already (ui/app.create_app), or now
+        self.vbo = ctx.buffer(arrays["vertices"])
+        self.ibo = ctx.buffer(arrays["indices"])
         self._lods: dict[int, tuple[moderngl.Buffer, moderngl.Buffer, int]] = {}  # level of detail -> (vbo, ibo, triangles)
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
@@ -75,13 +76,11 @@ class GpuScene:
         self.env_rays = 256  # the bake the vertex arrays bind (set by passes/environment.set_environment)
         self.env_bake_seconds: dict[tuple[int, int], float] = {}  # (level, rays) -> seconds (0: from the cache)
         self._lod_meshes: dict[int, MeshData] = {}
-        albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)
-        self.albedo = self._texture(srgb_to_linear(_finite_map(albedo)).astype(np.float32), "f2")
+        self.albedo = self._texture(arrays["albedo"], "f2")
         self.has_normal_map = mesh.normal_map is not None
-        nm = mesh.normal_map if mesh.normal_map is not None else np.array([[[0.5, 0.5, 1.0]]], np.float32)
-        self.normal_map = self._texture(_finite_map(nm), "f2")
-        sm = mesh.specular_map if mesh.specular_map is not None else np.ones((1, 1, 1), np.float32)
-        self.specular_map = self._texture(_finite_map(sm), "f2")
+        self.normal_map = self._texture(arrays["normal_map"], "f2")
+        self.specular_map = self._texture(arrays["specular_map"], "f2")
+        mesh.__dict__.pop("_gpu_arrays", None)  # uploaded: the copies are not kept
         self.has_region_map = mesh.region_map is not None
         rm = mesh.region_map if mesh.region_map is not None else np.zeros((1, 1), np.uint8)
         self.region_map = ctx.texture((rm.shape[1], rm.shape[0]), 1, np.ascontiguousarray(rm).tobytes(),
@@ -271,6 +270,26 @@ class GpuScene:
 def _fmt(f: str, used: bool) -> str:
     # "3f" -> "3f" when the attribute is used, "12x" (skip 12 bytes) when the compiler dropped it
     return f if used else f"{int(f[:-1]) * 4}x"
+
+
+def prepare_gpu_arrays(mesh: MeshData) -> dict[str, Any]:
+    """The CPU side of a GpuScene: the vertex and index bytes, the maps as the textures take them
+    (linear albedo, finite values, float16), and the default framing. Kept on the mesh: the viewer's
+    start makes them in a worker thread while its window ticks (numpy, no GL), the GpuScene on the GL
+    thread then only uploads."""
+    memo: dict[str, Any] | None = mesh.__dict__.get("_gpu_arrays")
+    if memo is not None:
+        return memo
+    albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)
+    nm = mesh.normal_map if mesh.normal_map is not None else np.array([[[0.5, 0.5, 1.0]]], np.float32)
+    sm = mesh.specular_map if mesh.specular_map is not None else np.ones((1, 1, 1), np.float32)
+    memo = {"vertices": mesh.interleaved().tobytes(), "indices": mesh.indices.astype(np.uint32).tobytes(),
+            "albedo": np.ascontiguousarray(srgb_to_linear(_finite_map(albedo)).astype(np.float32), dtype=np.float16),
+            "normal_map": np.ascontiguousarray(_finite_map(nm), dtype=np.float16),
+            "specular_map": np.ascontiguousarray(_finite_map(sm), dtype=np.float16)}
+    mesh.frame  # noqa: B018  (memoised on the mesh)
+    mesh.__dict__["_gpu_arrays"] = memo
+    return memo
 
 
 def _finite_map(a: ArrayLike) -> Float32Array:

@@ -120,6 +120,94 @@ def subdivide(tri_mm: FloatArray, h: float, keep: NDArray[np.bool_] | None = Non
     return np.concatenate(vpar), np.concatenate(vbary), np.concatenate(elems)
 
 
+class SurfaceField:
+    """A field on a triangle mesh sampled on each triangle's regular n x n lattice (n = ceil(longest
+    edge / h), ``subdivision_pattern``), evaluated where asked and kept: ``locate`` gives the lattice
+    vertices around surface points (triangle, barycentrics) and their linear weights; ``missing`` the
+    ones not evaluated yet, ``vertex_points`` where they are, ``store`` their values, ``interpolate``
+    the field at the points. Lattice vertices are per triangle (those on a shared edge sit at the same
+    place in both triangles, so the interpolant is continuous across edges). The truth session keeps
+    the diffusion's wide part in one (issue 34): an orbit evaluates it at new lattice vertices only."""
+
+    def __init__(self, tri_mm: FloatArray, h: float, channels: int = 3) -> None:
+        tri_mm = np.asarray(tri_mm, np.float64)
+        edges = np.linalg.norm(tri_mm[:, [1, 2, 0]] - tri_mm, axis=2).max(axis=1) if len(tri_mm) else np.zeros(0)
+        self.h = float(h)
+        self.n = np.maximum(np.ceil(edges / max(self.h, 1e-9)), 1).astype(np.int64)
+        counts = (self.n + 1) * (self.n + 2) // 2
+        self.offset = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        # a vertex on an edge or corner shared by triangles is one point: welded (positions equal to
+        # 1e-6 of the lattice spacing), evaluated once; ``canon`` maps a lattice id to its point
+        tri_id, bary = self.vertex_points(np.arange(int(self.offset[-1])))
+        pos = np.einsum("nk,nkd->nd", bary, tri_mm[tri_id]) if len(tri_id) else np.zeros((0, 3))
+        q = np.round(pos / max(self.h * 1e-6, 1e-12)).astype(np.int64)
+        _, first, canon = np.unique(q, axis=0, return_index=True, return_inverse=True)
+        self.canon = first[canon.ravel()].astype(np.int64)
+        self.values = np.zeros((int(self.offset[-1]), channels))
+        self.known = np.zeros(int(self.offset[-1]), bool)
+        self.evaluated = 0  # points evaluated so far (welded: a shared vertex counts once)
+
+    def __len__(self) -> int:
+        return len(self.known)
+
+    def _index(self, tri: IntArray, i: IntArray, j: IntArray) -> IntArray:
+        n = self.n[tri]  # subdivision_pattern's order: (i, j) for i in 0..n, j in 0..n-i
+        return self.offset[tri] + i * (n + 1) - i * (i - 1) // 2 + j
+
+    def locate(self, tri: IntArray, bary: FloatArray) -> tuple[IntArray, FloatArray]:
+        """Lattice vertex ids (N, 3) of the lattice triangle holding each point, and the point's
+        barycentrics in it (N, 3): the linear interpolant's weights."""
+        tri = np.asarray(tri, np.int64)
+        b = np.clip(np.asarray(bary, np.float64), 0.0, None)
+        b = b / np.maximum(b.sum(1, keepdims=True), 1e-300)
+        n = self.n[tri]
+        u, v = b[:, 1] * n, b[:, 2] * n
+        i0 = np.minimum(np.floor(u), n - 1).astype(np.int64)
+        j0 = np.clip(np.floor(v).astype(np.int64), 0, n - 1 - i0)
+        fu, fv = u - i0, v - j0
+        upper = fu + fv > 1.0
+        ids = np.stack([self._index(tri, i0, j0), self._index(tri, i0 + 1, j0), self._index(tri, i0, j0 + 1)], 1)
+        w = np.stack([1.0 - fu - fv, fu, fv], 1)
+        if upper.any():  # the lattice triangle (i0+1, j0), (i0+1, j0+1), (i0, j0+1)
+            t, a, c, e, f = tri[upper], i0[upper], j0[upper], fu[upper], fv[upper]
+            ids[upper] = np.stack([self._index(t, a + 1, c), self._index(t, a + 1, c + 1), self._index(t, a, c + 1)], 1)
+            w[upper] = np.stack([1.0 - f, e + f - 1.0, 1.0 - e], 1)
+        return ids, np.clip(w, 0.0, 1.0)
+
+    def missing(self, ids: IntArray) -> IntArray:
+        """The points (welded lattice ids) under ``ids`` not evaluated yet."""
+        u = np.unique(self.canon[np.asarray(ids).ravel()])
+        return u[~self.known[u]]
+
+    def vertex_points(self, ids: IntArray) -> tuple[IntArray, FloatArray]:
+        """(triangle, barycentrics) of lattice vertices ``ids``."""
+        ids = np.asarray(ids, np.int64)
+        tri = np.searchsorted(self.offset, ids, side="right") - 1
+        n, k = self.n[tri], ids - self.offset[tri]
+        # invert k = i (n + 1) - i (i - 1) / 2 + j, 0 <= j <= n - i: the largest i with start(i) <= k
+        i = np.zeros_like(k)
+        for step in range(int(self.n.max(initial=1)).bit_length(), -1, -1):
+            cand = i + (1 << step)
+            ok = (cand <= n) & (cand * (n + 1) - cand * (cand - 1) // 2 <= k)
+            i = np.where(ok, cand, i)
+        j = k - (i * (n + 1) - i * (i - 1) // 2)
+        g = np.stack([i, j], 1) / n[:, None]
+        return tri, np.stack([1.0 - g[:, 0] - g[:, 1], g[:, 0], g[:, 1]], 1)
+
+    def store(self, ids: IntArray, values: FloatArray) -> None:
+        ids = np.asarray(ids, np.int64)
+        self.values[ids] = values
+        self.known[ids] = True
+        self.evaluated += len(ids)
+
+    def interpolate(self, ids: IntArray, w: FloatArray) -> FloatArray:
+        c = self.canon[ids]
+        if not np.all(self.known[c]):
+            raise ValueError("SurfaceField.interpolate: lattice vertices not evaluated (store them first)")
+        out: FloatArray = np.einsum("nk,nkc->nc", w, self.values[c])
+        return out
+
+
 @dataclass
 class Elements:
     """Flat source elements in mm: corners (E, 3, 3), ea (E, 3) = E A (mean over the element), and
@@ -370,11 +458,19 @@ class Diffusion:
                 out.append(f"v={v:g} mm^2: moment-matched clusters of {voxel:g} mm ({len(self.level(voxel).area)})")
         return out
 
+    def is_local(self, v: float) -> bool:
+        """A Gaussian narrower than the elements ('delta', 'exact'): what it gives at x follows the
+        light at x itself (E A at x, the element under x); the wider ones ('elements', 'clusters')
+        blur the surface over sigma >= the element size (smooth there)."""
+        return self.method(v)[0] in ("delta", "exact")
+
     def exitance(self, x: FloatArray, ea_here: FloatArray | None = None,
                  progress: Callable[[float], None] | None = None,
-                 cancelled: Callable[[], bool] | None = None) -> FloatArray:
+                 cancelled: Callable[[], bool] | None = None, only: Any = None) -> FloatArray:
         """M(x) (N, 3) at receivers x (N, 3) mm. ``ea_here`` (N, 3): E A at x itself, used for the
-        element under x (the nearest element centroid within an element radius)."""
+        element under x (the nearest element centroid within an element radius). ``only``: "local"
+        or "wide" (``is_local``), or a collection of Gaussian indices: the sum over those Gaussians
+        only (the parts of a partition add up to M)."""
         x = np.asarray(x, np.float64)
         out = np.zeros((len(x), 3))
         el = self.el
@@ -385,7 +481,13 @@ class Diffusion:
             # not a piece cut along a shadow edge: x's own value would spread to the other side
             assert el.split is not None  # Elements.__post_init__ sets it
             own = np.where((d <= el.radius * 1.01) & ~el.split[own], own, -1)
-        todo = [(v, w) for v, w in zip(self.v, self.w) if np.any(w > 0)]
+        def wanted(k: int, v: float) -> bool:
+            if only is None:
+                return True
+            if isinstance(only, str):
+                return self.is_local(v) == (only == "local")
+            return k in only
+        todo = [(v, w) for k, (v, w) in enumerate(zip(self.v, self.w)) if np.any(w > 0) and wanted(k, v)]
         cost = {"delta": 0.02, "exact": 1.0, "elements": 0.5, "clusters": 0.5}
         total = sum(cost[self.method(v)[0]] for v, _ in todo) or 1.0
         done = 0.0

@@ -75,8 +75,7 @@ class AccuracyWindow:
         self.reference: Any = None
         self.ref_key = ""
         self.max_seconds = 180.0  # bench / CLI references; the window's truth is progressive (no limit)
-        from skinviewer.core.reference import TruthSession
-        self.session = TruthSession()  # sources kept across camera and profile changes, recent truths
+        self._session: Any = None  # core.reference.TruthSession, made on first use (scipy: not at start)
         self.follow = False  # once asked, a truth follows the view (restarts on a change, reusing sources)
         self.partial = None  # the stage shown (core.reference.Partial)
         self.rms_se = None  # (rms (3,), standard error (3,)) of the figures while the truth refines
@@ -91,6 +90,15 @@ class AccuracyWindow:
         self.results_msg = ""
         if self.results_path:
             self.load_results(self.results_path, quiet=True)
+
+    @property
+    def session(self):
+        """The truth session (sources kept across camera and profile changes, recent truths); made
+        when a truth is first asked for: importing core.reference loads scipy, ~1 s of the start."""
+        if self._session is None:
+            from skinviewer.core.reference import TruthSession
+            self._session = TruthSession()
+        return self._session
 
     # -- ground truth ---------------------------------------------------------------------------
     def start(self) -> None:

@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from pathlib import Path
+from typing import Any
 
 import moderngl_window as mglw
 from moderngl_window.timers.clock import Timer
@@ -54,22 +56,36 @@ class ViewerApp(mglw.WindowConfig):
         self._title = ""
         self._events = 0  # input events since the last presented frame (FrameController.can_skip_present)
         self._marked: set[str] = set()
+        self._stall_ms = 0.0  # the longest frame between the panel and the first image (_note_stall)
+        self._step_t0 = time.perf_counter()
+        self.warm: Any = None  # the start's worker (ui/warm.py), joined before the first render
 
     # -- frames --------------------------------------------------------------------------------
     def step(self, n: int = 1) -> None:
         """Run ``n`` frames (render, UI, swap -- or, while a still view's frame is spread over
         several and no input came, render only and poll events): the viewer's loop, tests, --frames."""
+        if self.warm is not None:  # the start's worker fills the caches the render reads: never both at once
+            self.warm.join()
+            self.warm = None
         for _ in range(n):
+            t0 = self._step_t0 = time.perf_counter()
             self.wnd.use()
             if self.render_frame(1 / 60):
                 self._events = 0
                 self.wnd.swap_buffers()
             else:
                 self._poll_events()
+            self._note_stall(t0)
+
+    def start_warm(self) -> None:
+        """The first frame's CPU work on the scene in a worker (ui/warm.py); ``step`` joins it."""
+        from skinviewer.ui.warm import start_warm
+        self.warm = start_warm(self.renderer, self.state.settings)
 
     def ui_frame(self) -> None:
         """One frame of the panel and the view's start-up screen without rendering: the start shows
         the panel before the first image (whose shaders and tables take seconds on a first frame)."""
+        t0 = time.perf_counter()
         self.wnd.use()
         ctx, layout = self.ctx, self.frame.layout
         built = self.state.view.show_ui and self.ui.build(1 / 60, layout)
@@ -82,9 +98,16 @@ class ViewerApp(mglw.WindowConfig):
                 break
         if built:
             self.ui.present()
-            self._marked.add("ui")
-            startup.mark("ui")
+            if "ui" not in self._marked:
+                self._marked.add("ui")
+                startup.mark("ui")
         self.wnd.swap_buffers()
+        self._note_stall(t0)
+
+    def _note_stall(self, t0: float) -> None:
+        """The start's longest frame (input waits that long) from the panel to the first image."""
+        if "ui" in self._marked and "image" not in self._marked:
+            self._stall_ms = max(self._stall_ms, (time.perf_counter() - t0) * 1000.0)
 
     def on_render(self, t: float, frametime: float) -> None:
         self.render_frame(frametime)
@@ -113,8 +136,9 @@ class ViewerApp(mglw.WindowConfig):
             startup.mark("ui")
         rep = self.frame.report
         if "image" not in self._marked and rep is not None and rep.complete:
+            self._note_stall(self._step_t0)  # this frame so far
             self._marked.add("image")
-            startup.mark("image", technique=self.state.settings.technique)
+            startup.mark("image", technique=self.state.settings.technique, longest_frame_ms=round(self._stall_ms, 1))
 
     def _follow_vsync(self) -> None:
         want = self.state.view.vsync
@@ -199,15 +223,18 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
     if sp is not None:
         s0 = settings or Settings()
         if not s0.scene.mesh and s0.scene.name == "head":
+            from skinviewer.core.renderer import prepare_gpu_arrays
             from skinviewer.scene.scenes import prefetch_scene
             try:  # generated once, then read from the cache: here in a worker while the screen ticks
                 sp.run("the default head: generating it (first start only) or reading it from the cache",
-                       lambda: prefetch_scene("head", s0.scene.head_detail))
+                       lambda: prepare_gpu_arrays(prefetch_scene("head", s0.scene.head_detail).mesh))
             except Exception:
                 pass  # the viewer's own load below reports it
         sp.show("loading the scene onto the GPU, the shader library")
     app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
                     options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer())
+    if sp is not None:  # the first frame's CPU work in a worker from now (ui/warm.py; run_viewer joins it)
+        app.start_warm()
     if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
         sp.hand_over(f"the first image of {app.state.settings.technique}: shaders and tables",
                      "the panel works; the image appears here when its first frame is complete")
@@ -226,6 +253,10 @@ def destroy_app(app: ViewerApp) -> None:
         wnd.destroy()
     except Exception:
         pass
+
+
+def wnd_closing(app: ViewerApp) -> bool:
+    return bool(getattr(app.wnd, "is_closing", False))
 
 
 SETTLE_FRAMES = 600  # a batch screenshot waits at most this many frames more for a complete image
@@ -251,6 +282,12 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
     if not frames:
         app.ui_frame()  # the panel first (two frames: plots fit their axes on their second), then the image
         app.ui_frame()
+        # the first frame's numpy work on the mesh (border edges, rays to the lights, rho_dt table) runs
+        # in a worker (create_app) while the panel keeps drawing: the panel is not frozen by it
+        warm = app.warm
+        while warm is not None and warm.is_alive() and not wnd_closing(app):
+            app.ui_frame()
+            warm.join(0.1)  # ~8 panel frames a second: most of the GIL stays with the worker
         # the first image is the quality governor's (issue 27): the start counts as an edit, so a
         # calibrated technique shows the most accurate preview that fits the budget, then refines
         # to the user's settings as after any edit (no calibration yet: the settings themselves)

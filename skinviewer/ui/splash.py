@@ -31,6 +31,7 @@ void main() { color = texture(tex, uv); }
 BG = (20, 20, 24)
 FG = (225, 225, 230)
 DIM = (150, 150, 160)
+TEXT_W = 960  # the text block's width (pixels)
 
 
 def _font(size: int):
@@ -62,9 +63,11 @@ class Splash:
         return time.perf_counter() - self.t0
 
     def _image(self, busy: str = "", size: tuple[int, int] | None = None) -> np.ndarray:
+        """The text block (at most ``size``: the rest of the screen is cleared to BG, not drawn): a
+        whole 1280x800 image cost ~80 ms a redraw here, GIL time taken from the start's worker."""
         from PIL import Image, ImageDraw
         w, h = size or self.wnd.buffer_size
-        w, h = max(int(w), 16), max(int(h), 16)
+        w, h = max(min(int(w), TEXT_W), 16), max(min(int(h), 124 + 24 * len(self.lines) + 16), 16)
         img = Image.new("RGB", (w, h), BG)
         d = ImageDraw.Draw(img)
         big, small = _font(28), _font(16)
@@ -92,8 +95,7 @@ class Splash:
         x0, y0, vw, vh = (int(v) for v in viewport)
         now = time.perf_counter()
         # the text is drawn again at most every ``interval`` (the viewer's frames come faster than that)
-        if force or self._tex is None or self._tex.size != (max(vw, 16), max(vh, 16)) \
-                or now - self._drawn_at >= self.interval:
+        if force or self._tex is None or now - self._drawn_at >= self.interval:
             img = np.ascontiguousarray(self._image(busy, (vw, vh)))
             h, w = img.shape[:2]
             if self._tex is None or self._tex.size != (w, h):
@@ -105,7 +107,8 @@ class Splash:
             self._drawn_at = now
         w, h = self._tex.size
         self.ctx.screen.use()
-        self.ctx.viewport = (x0, y0, w, h)
+        self.ctx.clear(*(c / 255.0 for c in BG), 1.0, viewport=(x0, y0, vw, vh))
+        self.ctx.viewport = (x0, y0 + max(vh - h, 0), w, h)  # the text block at the top left
         self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND)
         self._tex.use(0)
         self._prog["tex"].value = 0
