@@ -465,3 +465,23 @@ def test_set_render_governor_off_on_the_command_line():
     from skinviewer.core.settings import parse_value
     for text, want in (("off", "off"), ("on", "interactive"), ("fixed-budget", "fixed-budget")):
         assert with_values(Settings(), {"render.governor": parse_value(text)}).render.governor == want
+
+
+def test_closing_the_viewer_stops_and_joins_a_background_calibration():
+    """A calibration still measuring in its thread (its own GL context) when the window closes is
+    cancelled and joined before the renderer goes: a thread left running GL at exit aborted the
+    process ("terminate called without an active exception")."""
+    import threading
+    from types import SimpleNamespace
+
+    from skinviewer.ui.frame import FrameController
+    stop = threading.Event()
+    worker = threading.Thread(target=lambda: stop.wait(30.0), daemon=True)
+    worker.start()
+    cal = SimpleNamespace(thread=worker, cancel=stop.set)
+    cal.running = True
+    order: list[str] = []
+    stub = SimpleNamespace(calibrating=cal, view=SimpleNamespace(release=lambda: order.append("view")),
+                           renderer=SimpleNamespace(release=lambda: order.append(f"renderer {worker.is_alive()}")))
+    FrameController.release(stub)
+    assert not worker.is_alive() and order == ["view", "renderer False"]

@@ -515,5 +515,9 @@ class FrameController:
         return g.read("lit" if "lit" in g.resources() else "image")[::-1]
 
     def release(self) -> None:
+        c = self.calibrating
+        if c is not None and c.running:  # stopped between rungs and joined: a thread left running its
+            c.cancel()                   # own GL context at exit aborts the process ("terminate called")
+            c.thread.join(timeout=60.0)
         self.view.release()
         self.renderer.release()
