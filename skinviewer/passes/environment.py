@@ -102,10 +102,18 @@ def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
     if i is None:
         return {}
     e = r.section(f"lights.{i}", ENV_FIELDS)
+    depend_on_bake(r, e)
     if specular:
         r.input(ENV_PREFILTERED)
         r.input(ENV_RHO_DT)
     return _defines(e)
+
+
+def depend_on_bake(r, light) -> None:
+    """The lit output depends on which transfer vectors the vertex arrays hold: the unoccluded
+    stand-in while the viewer's background bake runs, then the bake (GpuScene.env_generation)."""
+    if light.occlusion and hasattr(r, "depends") and r.scene is not None:
+        r.depends("env_visibility", getattr(r.scene, "env_generation", 0))
 
 
 def _defines(light) -> dict[str, int]:

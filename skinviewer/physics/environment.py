@@ -378,19 +378,25 @@ def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexAr
 
 
 def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, rays: int = 256,
-                  seed: int = 0, caster: Any = None, chunk: int = 1024) -> np.ndarray:
+                  seed: int = 0, caster: Any = None, chunk: int = 1024,
+                  progress: Callable[[float], None] | None = None) -> np.ndarray:
     """(N, 25) float32 per vertex: the shadowed diffuse transfer vector T_lm = int V(w) max(N.w, 0)
     Y_lm(w) dw, l <= 4 (Sloan et al. 2002 eq. 4's transfer, without interreflection), by ``rays``
     cosine-weighted stratified Embree rays (pdf cos / pi) with the unoccluded transfer as a control
     variate: T_lm = A_l Y_lm(N) - pi / n sum_i (1 - V(w_i)) Y_lm(w_i).
     T_00 / (pi Y_00) is the ambient occlusion and (T_11, T_1-1, T_10) the bent normal's direction
     (transfer_ao, transfer_bent_normal). Rays start a hair above the vertex along its normal; a
-    vertex without a usable normal gets the unoccluded transfer of +z."""
+    vertex without a usable normal gets the unoccluded transfer of +z. ``progress(fraction)`` is
+    called after each chunk (a background bake's status line; it may raise to cancel the bake)."""
     P, N, good = _unit_normals(positions, normals)
     out = transfer_unoccluded(N)
     if len(P) == 0 or len(indices) == 0:
         return out.astype(np.float32)
+    n_good, done = max(int(good.sum()), 1), 0
     for v, d, hit in _cosine_rays(P, N, good, indices, rays, seed, caster, chunk):
+        if progress is not None:
+            progress(done / n_good)
+        done += len(v)
         k = hit.shape[1]
         # the unoccluded transfer exactly, less the blocked rays' share: a control variate, unbiased
         # (E[pi/n sum Y(w_i)] = A_l Y_lm(N)), exact where nothing blocks and noisy only in the blocked part

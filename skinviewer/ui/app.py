@@ -45,6 +45,7 @@ class ViewerApp(mglw.WindowConfig):
         super().__init__(**kwargs)
         self.shaders = ShaderLibrary(self.ctx, root=Path(shaders_root) if shaders_root else None)
         self.renderer = Renderer(self.ctx, self.shaders)
+        self.renderer.env_bake_background = True  # the window does not wait for the environment's bake
         self._vsync = bool(getattr(self.wnd, "vsync", True))
         self.state = ViewerState(settings, self.renderer.ensure_scene, preset_path, notices, options, vsync=self._vsync)
         self.frame = FrameController(self.ctx, self.state, self.renderer, self.shaders,
