@@ -193,9 +193,6 @@ def scene_luminance(settings, samples: int = 256) -> float:
 def exposure_from_luminance(settings, reference_exposure: float = 0.9) -> float:
     """render.exposure for ``settings`` so its camera-facing luminance shows as the three-light rig's
     does at the default exposure (0.9): reference_exposure x L(three-light rig) / L(scene)."""
-    from skinviewer.core.settings import LightSettings
-    rig = settings.model_copy(update={"lights": [
-        LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
-        LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
-        LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False)]})
+    from skinviewer.core.settings import three_light_rig
+    rig = settings.model_copy(update={"lights": three_light_rig()})
     return reference_exposure * scene_luminance(rig) / max(scene_luminance(settings), 1e-9)
