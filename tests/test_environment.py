@@ -436,3 +436,23 @@ def test_ground_truth_rho_dt_rows_equal_the_bilinear_table():
     m, rho, mu = rng.random(50) * 0.6 + 0.1, rng.random(50) * 0.3, rng.random((50, 40)) * 1.2 - 0.1
     want = surf.rho_dt(mu, np.broadcast_to(m[:, None], mu.shape), np.broadcast_to(rho[:, None], mu.shape))
     np.testing.assert_allclose(surf.rho_dt_along(surf.rho_dt_rows(m), rho, mu), want, atol=1e-12)
+
+
+def test_gosselin_specular_attenuation_counts_the_occluded_environment(renderer):
+    """Gosselin's E0 (eq. 18's attenuation, att = LUM.blurred / LUM.E0) holds the environment as the
+    light map does, occluded: without blur and key shadows the key light's share of the image is then
+    the same with and without the environment (linearity). With the unoccluded environment in E0 a
+    crease's env shadow dimmed the key's specular (30 % of the peak on the head)."""
+    base = small_settings(technique="gosselin", size=64, **{"gosselin.iterations": 0, "render.tone_map": "linear",
+                                                             "render.exposure": 0.5})
+    key = dict(base.lights[0].model_dump(), cast_shadow=False)
+    env_l = {"kind": "environment", "environment": "studio", "ao_rays": 16, "cast_shadow": False}
+
+    def lit(k, e):
+        s = with_values(base, {"lights": [dict(key, intensity=k), dict(env_l, intensity=e)]})
+        renderer.render(s)
+        return renderer.read(s, "lit")[..., :3].astype(np.float64)
+
+    both, env_only, key_only = lit(1.0, 1.0), lit(0.0, 1.0), lit(1.0, 0.0)
+    assert key_only.max() > 0.05
+    assert np.abs(both - env_only - key_only).max() < 0.01 * key_only.max()
