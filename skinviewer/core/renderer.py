@@ -200,50 +200,51 @@ class GpuScene:
         return hit
 
     def env_visibility(self, level: int = 0, rays: int = 256) -> np.ndarray:
-        """(N, 25) per vertex of level ``level``: the SH transfer vector of the environment light
+        """(N, 26) per vertex of level ``level``: the SH transfer vector of the environment light
         (physics/environment.bake_transfer with Embree: the ambient occlusion and bent normal are its
-        first four coefficients), baked once per mesh and ray count and cached on disk
+        first four coefficients), baked once per mesh and ray count, and the thickness along -N
+        (bake_thickness, mesh units: the environment's translucency), both cached on disk
         (``cache_dir()/envvis``, by a hash of the vertices, normals and triangles)."""
         import time
 
-        from skinviewer.core.files import atomic_write_bytes
-        from skinviewer.core.paths import cache_dir
-        from skinviewer.physics.environment import TRANSFER_COUNT, bake_transfer, transfer_unoccluded
+        from skinviewer.physics.environment import (
+            THICK_MISS,
+            TRANSFER_COUNT,
+            bake_thickness,
+            bake_transfer,
+            transfer_unoccluded,
+        )
         m = self.lod_mesh(level)
-        h = hashlib.sha1(b"envtransfer2")
-        for a in (m.positions, m.normals, m.indices):
-            h.update(np.ascontiguousarray(a).tobytes())
-        h.update(str(int(rays)).encode())
-        path = cache_dir() / "envvis" / f"{h.hexdigest()}.npy"
-        try:
-            vis = np.load(path, allow_pickle=False)
-            if vis.shape != (len(m.positions), TRANSFER_COUNT) or not np.all(np.isfinite(vis)):
-                raise ValueError("stale")
+        n = len(m.positions)
+        t_path = _env_cache_path(m, b"envtransfer2", str(int(rays)))
+        k_path = _env_cache_path(m, b"envthick1", "")
+        vis, thick = _load_cached(t_path, (n, TRANSFER_COUNT)), _load_cached(k_path, (n,))
+        if vis is not None:
             self.env_bake_seconds[(level, rays)] = 0.0
-            return np.asarray(vis, dtype=np.float32)
-        except (OSError, ValueError):
-            pass
+            if thick is not None:
+                return np.concatenate([vis, thick[:, None]], 1)
 
         def bake(progress: Any = None) -> np.ndarray:
-            t0 = time.perf_counter()
-            vis = bake_transfer(m.positions, m.normals, m.indices, rays=int(rays), progress=progress)
-            self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
-            import io
-            buf = io.BytesIO()
-            np.save(buf, vis)
-            try:
-                atomic_write_bytes(path, buf.getvalue())
-            except OSError:
-                pass  # a read-only cache folder: bake again next time
-            return vis
+            t, k = vis, thick
+            if t is None:
+                t0 = time.perf_counter()
+                t = bake_transfer(m.positions, m.normals, m.indices, rays=int(rays), progress=progress)
+                self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
+                _save_cached(t_path, t)
+            if k is None:
+                k = bake_thickness(m.positions, m.normals, m.indices)
+                _save_cached(k_path, k)
+            return np.concatenate([t, k[:, None]], 1).astype(np.float32)
 
         if not self.env_bake_async:
             return bake()
         key = (level, int(rays))
         if key not in self._env_jobs:
             self._env_jobs[key] = _EnvBakeJob(bake)
-        # meanwhile: the unoccluded transfer A_l Y_lm(N) (R&H 2001 eq. 8), i.e. no occlusion at all
-        return transfer_unoccluded(m.normals).astype(np.float32)
+        # meanwhile: the unoccluded transfer A_l Y_lm(N) (R&H 2001 eq. 8), i.e. no occlusion at all,
+        # and no translucency from the environment
+        standin = vis if vis is not None else transfer_unoccluded(m.normals)
+        return np.concatenate([standin, np.full((n, 1), THICK_MISS)], 1).astype(np.float32)
 
     def env_poll(self) -> bool:
         """Swap finished background bakes into their vertex buffers (on the GL thread; the buffers are
@@ -319,8 +320,42 @@ class GpuScene:
         self._lod_meshes.clear()
 
 
+def _env_cache_path(m: MeshData, tag: bytes, extra: str) -> Path:
+    """The disk cache file of an environment bake of mesh ``m`` (``tag``: what and which version)."""
+    from skinviewer.core.paths import cache_dir
+    h = hashlib.sha1(tag)
+    for a in (m.positions, m.normals, m.indices):
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(extra.encode())
+    return cache_dir() / "envvis" / f"{h.hexdigest()}.npy"
+
+
+def _load_cached(path: Path, shape: tuple[int, ...]) -> np.ndarray | None:
+    """A cached bake of ``shape``, finite; None when missing, unreadable or stale."""
+    try:
+        a = np.load(path, allow_pickle=False)
+    except (OSError, ValueError):
+        return None
+    if a.shape != shape or not np.all(np.isfinite(a)):
+        return None
+    return np.asarray(a, dtype=np.float32)
+
+
+def _save_cached(path: Path, a: np.ndarray) -> None:
+    import io
+
+    from skinviewer.core.files import atomic_write_bytes
+    buf = io.BytesIO()
+    np.save(buf, a)
+    try:
+        atomic_write_bytes(path, buf.getvalue())
+    except OSError:
+        pass  # a read-only cache folder: bake again next time
+
+
 def _pad_transfer(vis: np.ndarray) -> np.ndarray:
-    """(N, 25) transfer vectors padded to the vertex stage's 7 vec4 a vertex (float32)."""
+    """(N, 26) transfer vectors + thickness padded to the vertex stage's 7 vec4 a vertex (float32;
+    the thickness is float 25, in_env_t6.y)."""
     pad = np.zeros((len(vis), 4 * len(ENV_VIS_ATTRS)), np.float32)
     pad[:, :vis.shape[1]] = vis
     return pad

@@ -38,6 +38,7 @@ SH_COUNT = 9
 # R&H 2001 eq. 8: the clamped-cosine kernel's coefficients A_l
 A_HAT = (math.pi, 2.0 * math.pi / 3.0, math.pi / 4.0)
 BUILTIN_ENVIRONMENTS = ("studio", "overcast", "window")
+THICK_MISS = 1e6  # bake_thickness where -N meets no surface: far beyond any profile (no transmission)
 BUILTIN_SIZE = (256, 128)  # (W, H) of the generated environments
 # the pre-filtered specular environment: Beckmann m of each level, one equirect level each, stacked
 SPEC_LEVELS_M = (0.08, 0.15, 0.25, 0.35, 0.5, 0.7, 1.0)
@@ -402,6 +403,38 @@ def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarra
         # (E[pi/n sum Y(w_i)] = A_l Y_lm(N)), exact where nothing blocks and noisy only in the blocked part
         out[v] -= math.pi / k * np.einsum("vr,vrk->vk", hit.astype(np.float64), sh_basis25(d))
     return out.astype(np.float32)
+
+
+def bake_thickness(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """(N,) float32 per vertex: the distance (mesh units) from the vertex along -N to the next surface,
+    the thickness light crosses to reach it from behind (issue 32's translucency from the environment;
+    one Embree ray from a hair inside the surface). No surface within reach (an open sheet's edge, a
+    flipped normal): THICK_MISS, i.e. no transmission."""
+    P, N, good = _unit_normals(positions, normals)
+    out = np.full(len(P), THICK_MISS, np.float64)
+    idx = np.nonzero(good)[0]
+    if len(idx) == 0 or len(indices) == 0:
+        return out.astype(np.float32)
+    import trimesh
+    from trimesh.ray.ray_pyembree import RayMeshIntersector
+    mesh = trimesh.Trimesh(np.asarray(P, np.float64), np.asarray(indices, np.int64), process=False)
+    eps = 1e-4 * float(np.ptp(P, axis=0).max()) + 1e-9
+    o = P[idx] - N[idx] * eps
+    tri, ray, loc = RayMeshIntersector(mesh).intersects_id(o, -N[idx], multiple_hits=False, return_locations=True)
+    out[idx[ray]] = np.linalg.norm(loc - o[ray], axis=1) + eps
+    return out.astype(np.float32)
+
+
+def env_transmitted(E_lm: np.ndarray, Ng: np.ndarray, thickness_mm: np.ndarray,
+                    profile: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """(N, 3) translucency from the environment (issue 32; lib/environment.glsl env_back_irradiance and
+    ss_lighting.frag / tsm_transmit.glsl): the irradiance the back side receives, the unoccluded SH
+    irradiance at -Ng, times the transmittance profile T(d) (N, 3) at the thickness along -N. The
+    approximation: all of the back's light crosses the one thickness along -N (seed 001 eq. 3.15-3.18
+    with the environment's back irradiance for E(-N) and the baked thickness for the shadow map's)."""
+    d = np.asarray(thickness_mm, np.float64)
+    out: np.ndarray = sh_irradiance(E_lm, -np.asarray(Ng, np.float64)) * np.asarray(profile(d), np.float64)
+    return out
 
 
 def bent_shading_normal(N: np.ndarray, Nv: np.ndarray, bent: np.ndarray) -> np.ndarray:
