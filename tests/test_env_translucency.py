@@ -37,7 +37,7 @@ def test_env_transmitted_is_the_back_irradiance_times_the_profile():
     np.testing.assert_allclose(got, np.pi * profile(np.array([0.0, 2.0])), rtol=5e-3)
 
 
-@pytest.mark.parametrize("technique", ["ssss", "burley"])
+@pytest.mark.parametrize("technique", ["ssss", "burley", "deon"])
 def test_a_backlit_flap_glows_from_the_environment(renderer, technique):
     """Studio environment turned so the soft box is behind the flap: with transmittance on, the
     flap's front gains light that falls with the thickness (1.5 mm at the top, 6 mm at the bottom);
@@ -45,10 +45,11 @@ def test_a_backlit_flap_glows_from_the_environment(renderer, technique):
     from skinviewer.passes.environment import sh_uniform, transfer_uniform
     lights = [{"kind": "environment", "environment": "studio", "yaw": 180.0, "cast_shadow": False}]
     out = {}
+    toggle, resource = ("deon.tsm", "lit") if technique == "deon" else ("transmittance.enabled", "ss_diffuse")
     for on in (False, True):
-        s = small_settings("backlit-ear", technique, 64, **{"lights": lights, "transmittance.enabled": on})
+        s = small_settings("backlit-ear", technique, 64, **{"lights": lights, toggle: on, "render.tone_map": "linear"})
         renderer.render(s)
-        out[on] = renderer.read(s, "ss_diffuse")[..., :3].astype(np.float64)
+        out[on] = renderer.read(s, resource)[..., :3].astype(np.float64)
     gain = out[True] - out[False]
     h = gain.shape[0]
     col = gain[:, gain.shape[1] // 2, 0]  # red, down the middle column (row 0 at the bottom)
