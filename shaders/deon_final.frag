@@ -85,7 +85,7 @@ void main() {
     // irradiance E_SH(-Ng) through eq. 33's profile sum_i w_i exp(-d^2 / 2 v_i) at the thickness d baked
     // along -N, times the pre-scatter albedo as the irradiance map's light is (deon.tsm gates it)
     if (u_env_tr != 0) {
-        float d = ENV_THICK() * u_mm_per_unit;
+        float d = ENV_THICK().x * u_mm_per_unit;
         vec3 t = vec3(0.0);
         for (int i = 0; i < MAX_GAUSSIANS; ++i) {
             if (u_env_tr_v[i] > 0.0) t += u_env_tr_w[i] * exp(-d * d / (2.0 * u_env_tr_v[i]));

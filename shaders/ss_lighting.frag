@@ -123,7 +123,7 @@ void main() {
 #if ENV_RAYS > 0
     // translucency from the environment (issue 32): the back side's irradiance E_SH(-Ng) through the
     // transmittance profile at the baked thickness along -N (a documented approximation: notes/envlight.md)
-    if (u_tr != 0) T += env_back_irradiance(Ng) * transmittance_profile(ENV_THICK() * u_mm_per_unit * u_tr_scale);
+    if (u_tr != 0) T += env_back_irradiance(Ng) * transmittance_profile(ENV_THICK().x * u_mm_per_unit * u_tr_scale);
 #endif
 #endif
     float mask = 1.0;

@@ -19,6 +19,18 @@ def test_thickness_bake_measures_the_flap():
     want = _flap_thickness(P[inner, 1]) / np.abs(N[inner, 2])  # along -N across the slanted flap
     np.testing.assert_allclose(th[inner], want, rtol=0.03)
     assert np.all(np.isfinite(th))
+    # with the transfer: the back point's AO, 1 behind an open flap, lower where the back faces a wall
+    T = env.bake_transfer(m.positions, m.normals, m.indices, rays=16)
+    both = env.bake_thickness(m.positions, m.normals, m.indices, transfer=T)
+    np.testing.assert_array_equal(both[:, 0], th)
+    np.testing.assert_allclose(both[inner, 1], 1.0, atol=1e-6)
+    wall = np.array([[-40, -40, -6], [40, -40, -6], [-40, 40, -6], [40, 40, -6]], np.float64)  # 2 mm behind
+    P2 = np.concatenate([m.positions, wall])
+    idx2 = np.concatenate([m.indices, len(m.positions) + np.array([[0, 2, 1], [1, 2, 3]])])
+    N2 = np.concatenate([m.normals, np.tile([0.0, 0.0, 1.0], (4, 1))])
+    T2 = env.bake_transfer(P2, N2, idx2, rays=16)
+    walled = env.bake_thickness(P2, N2, idx2, transfer=T2)[: len(m.positions)]
+    assert np.median(walled[inner, 1]) < 0.6  # the flap's back now faces the wall
 
 
 def test_thickness_of_a_lone_sheet_is_a_miss():

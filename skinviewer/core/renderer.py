@@ -200,10 +200,10 @@ class GpuScene:
         return hit
 
     def env_visibility(self, level: int = 0, rays: int = 256) -> np.ndarray:
-        """(N, 26) per vertex of level ``level``: the SH transfer vector of the environment light
+        """(N, 27) per vertex of level ``level``: the SH transfer vector of the environment light
         (physics/environment.bake_transfer with Embree: the ambient occlusion and bent normal are its
-        first four coefficients), baked once per mesh and ray count, and the thickness along -N
-        (bake_thickness, mesh units: the environment's translucency), both cached on disk
+        first four coefficients), baked once per mesh and ray count, the thickness along -N and the
+        back point's AO (bake_thickness, mesh units: the environment's translucency), cached on disk
         (``cache_dir()/envvis``, by a hash of the vertices, normals and triangles)."""
         import time
 
@@ -217,12 +217,12 @@ class GpuScene:
         m = self.lod_mesh(level)
         n = len(m.positions)
         t_path = _env_cache_path(m, b"envtransfer2", str(int(rays)))
-        k_path = _env_cache_path(m, b"envthick1", "")
-        vis, thick = _load_cached(t_path, (n, TRANSFER_COUNT)), _load_cached(k_path, (n,))
+        k_path = _env_cache_path(m, b"envthick2", str(int(rays)))  # thickness, back AO (of this bake)
+        vis, thick = _load_cached(t_path, (n, TRANSFER_COUNT)), _load_cached(k_path, (n, 2))
         if vis is not None:
             self.env_bake_seconds[(level, rays)] = 0.0
             if thick is not None:
-                return np.concatenate([vis, thick[:, None]], 1)
+                return np.concatenate([vis, thick], 1)
 
         def bake(progress: Any = None) -> np.ndarray:
             t, k = vis, thick
@@ -232,9 +232,9 @@ class GpuScene:
                 self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
                 _save_cached(t_path, t)
             if k is None:
-                k = bake_thickness(m.positions, m.normals, m.indices)
+                k = bake_thickness(m.positions, m.normals, m.indices, transfer=t)
                 _save_cached(k_path, k)
-            return np.concatenate([t, k[:, None]], 1).astype(np.float32)
+            return np.concatenate([t, k], 1).astype(np.float32)
 
         if not self.env_bake_async:
             return bake()
@@ -244,7 +244,7 @@ class GpuScene:
         # meanwhile: the unoccluded transfer A_l Y_lm(N) (R&H 2001 eq. 8), i.e. no occlusion at all,
         # and no translucency from the environment
         standin = vis if vis is not None else transfer_unoccluded(m.normals)
-        return np.concatenate([standin, np.full((n, 1), THICK_MISS)], 1).astype(np.float32)
+        return np.concatenate([standin, np.full((n, 1), THICK_MISS), np.zeros((n, 1))], 1).astype(np.float32)
 
     def env_poll(self) -> bool:
         """Swap finished background bakes into their vertex buffers (on the GL thread; the buffers are
@@ -354,8 +354,8 @@ def _save_cached(path: Path, a: np.ndarray) -> None:
 
 
 def _pad_transfer(vis: np.ndarray) -> np.ndarray:
-    """(N, 26) transfer vectors + thickness padded to the vertex stage's 7 vec4 a vertex (float32;
-    the thickness is float 25, in_env_t6.y)."""
+    """(N, 27) transfer vectors + thickness + back AO padded to the vertex stage's 7 vec4 a vertex
+    (float32; the thickness is float 25, in_env_t6.y, the back AO float 26, in_env_t6.z)."""
     pad = np.zeros((len(vis), 4 * len(ENV_VIS_ATTRS)), np.float32)
     pad[:, :vis.shape[1]] = vis
     return pad

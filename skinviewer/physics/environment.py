@@ -405,35 +405,48 @@ def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarra
     return out.astype(np.float32)
 
 
-def bake_thickness(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray) -> np.ndarray:
+def bake_thickness(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray,
+                   transfer: np.ndarray | None = None) -> np.ndarray:
     """(N,) float32 per vertex: the distance (mesh units) from the vertex along -N to the next surface,
     the thickness light crosses to reach it from behind (issue 32's translucency from the environment;
     one Embree ray from a hair inside the surface). No surface within reach (an open sheet's edge, a
-    flipped normal): THICK_MISS, i.e. no transmission."""
+    flipped normal): THICK_MISS, i.e. no transmission. With ``transfer`` (N, 25, bake_transfer):
+    (N, 2), the thickness and the back point's ambient occlusion (transfer_ao of the hit triangle's
+    vertices, barycentric), which shadows the back side's light (an ear's back faces the skull)."""
     P, N, good = _unit_normals(positions, normals)
     out = np.full(len(P), THICK_MISS, np.float64)
+    back_ao = np.ones(len(P))
     idx = np.nonzero(good)[0]
-    if len(idx) == 0 or len(indices) == 0:
+    if len(idx) and len(indices):
+        import trimesh
+        from trimesh.ray.ray_pyembree import RayMeshIntersector
+        tris = np.asarray(indices, np.int64)
+        mesh = trimesh.Trimesh(np.asarray(P, np.float64), tris, process=False)
+        eps = 1e-4 * float(np.ptp(P, axis=0).max()) + 1e-9
+        o = P[idx] - N[idx] * eps
+        tri, ray, loc = RayMeshIntersector(mesh).intersects_id(o, -N[idx], multiple_hits=False,
+                                                               return_locations=True)
+        out[idx[ray]] = np.linalg.norm(loc - o[ray], axis=1) + eps
+        if transfer is not None and len(tri):
+            bary = trimesh.triangles.points_to_barycentric(P[tris[tri]], loc)
+            ao = transfer_ao(transfer)
+            back_ao[idx[ray]] = np.clip((np.clip(bary, 0.0, 1.0) * ao[tris[tri]]).sum(1), 0.0, 1.0)
+    if transfer is None:
         return out.astype(np.float32)
-    import trimesh
-    from trimesh.ray.ray_pyembree import RayMeshIntersector
-    mesh = trimesh.Trimesh(np.asarray(P, np.float64), np.asarray(indices, np.int64), process=False)
-    eps = 1e-4 * float(np.ptp(P, axis=0).max()) + 1e-9
-    o = P[idx] - N[idx] * eps
-    tri, ray, loc = RayMeshIntersector(mesh).intersects_id(o, -N[idx], multiple_hits=False, return_locations=True)
-    out[idx[ray]] = np.linalg.norm(loc - o[ray], axis=1) + eps
-    return out.astype(np.float32)
+    return np.stack([out, back_ao], 1).astype(np.float32)
 
 
 def env_transmitted(E_lm: np.ndarray, Ng: np.ndarray, thickness_mm: np.ndarray,
-                    profile: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+                    profile: Callable[[np.ndarray], np.ndarray], back_ao: np.ndarray | None = None) -> np.ndarray:
     """(N, 3) translucency from the environment (issue 32; lib/environment.glsl env_back_irradiance and
     ss_lighting.frag / tsm_transmit.glsl): the irradiance the back side receives, the unoccluded SH
-    irradiance at -Ng, times the transmittance profile T(d) (N, 3) at the thickness along -N. The
-    approximation: all of the back's light crosses the one thickness along -N (seed 001 eq. 3.15-3.18
+    irradiance at -Ng x the back point's ambient occlusion ``back_ao`` (bake_thickness), times the
+    transmittance profile T(d) (N, 3) at the thickness along -N. The approximation: all of the back's light crosses the one thickness along -N (seed 001 eq. 3.15-3.18
     with the environment's back irradiance for E(-N) and the baked thickness for the shadow map's)."""
     d = np.asarray(thickness_mm, np.float64)
     out: np.ndarray = sh_irradiance(E_lm, -np.asarray(Ng, np.float64)) * np.asarray(profile(d), np.float64)
+    if back_ao is not None:
+        out = out * np.asarray(back_ao, np.float64).reshape(-1, 1)
     return out
 
 
