@@ -90,3 +90,23 @@ def test_the_viewer_starts_without_waiting_for_the_bake(gl_ctx, monkeypatch, tmp
         assert np.array_equal(r.image(shown), got)
     finally:
         r.release()
+
+
+def test_the_prefiltered_environment_comes_from_the_disk_cache(monkeypatch, tmp_path):
+    """The default rig's first frame does not pre-filter the studio again at every start (seconds)."""
+    from skinviewer.passes import environment as penv
+    from skinviewer.physics import environment as env
+    monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))
+    penv._prefiltered.cache_clear()
+    first = penv._prefiltered("studio", "auto")
+    from skinviewer.scene.environment import environment_image
+    assert np.array_equal(first[..., :3], env.prefilter_specular(environment_image("studio", "auto")))
+    penv._prefiltered.cache_clear()
+
+    def no(*a, **kw):
+        raise AssertionError("pre-filtered again")
+
+    monkeypatch.setattr(env, "prefilter_specular", no)
+    again = penv._prefiltered("studio", "auto")
+    assert np.array_equal(first, again)
+    penv._prefiltered.cache_clear()

@@ -33,9 +33,34 @@ def env_index(r) -> int | None:
 
 @functools.lru_cache(maxsize=4)
 def _prefiltered(spec: str, layout: str) -> np.ndarray:
-    pre = env.prefilter_specular(environment_image(spec, layout))
-    rgba = np.concatenate([pre, np.ones(pre.shape[:2] + (1,), np.float32)], 2)
-    return np.ascontiguousarray(rgba, np.float32)
+    """The pre-filtered levels as RGBA, cached on disk by the image's content (the pre-filter takes
+    seconds: the default rig's first frame would wait for it at every start)."""
+    import hashlib
+    import io
+
+    from skinviewer.core.files import atomic_write_bytes
+    from skinviewer.core.paths import cache_dir
+    img = environment_image(spec, layout)
+    h = hashlib.sha1(b"envprefilter1")
+    h.update(repr((img.shape, env.SPEC_SIZE, tuple(env.SPEC_LEVELS_M))).encode())
+    h.update(np.ascontiguousarray(img, np.float32).tobytes())
+    path = cache_dir() / "envprefilter" / f"{h.hexdigest()}.npy"
+    w, hh = env.SPEC_SIZE
+    try:
+        rgba = np.load(path, allow_pickle=False)
+        if rgba.shape[1:] == (w, 4) and rgba.shape[0] == hh * len(env.SPEC_LEVELS_M) and np.all(np.isfinite(rgba)):
+            return np.ascontiguousarray(rgba, np.float32)
+    except (OSError, ValueError):
+        pass
+    pre = env.prefilter_specular(img)
+    rgba = np.ascontiguousarray(np.concatenate([pre, np.ones(pre.shape[:2] + (1,), np.float32)], 2), np.float32)
+    buf = io.BytesIO()
+    np.save(buf, rgba)
+    try:
+        atomic_write_bytes(path, buf.getvalue())
+    except OSError:
+        pass  # a read-only cache: pre-filter again next time
+    return rgba
 
 
 @functools.lru_cache(maxsize=16)
