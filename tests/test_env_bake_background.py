@@ -30,8 +30,7 @@ def test_background_bake_does_not_block_and_swaps_in_the_same_image(gl_ctx, monk
 
     monkeypatch.setattr(env, "bake_transfer", gated)
     s = _env_settings()
-    r = Renderer(gl_ctx)
-    r.env_bake_background = True
+    r = Renderer(gl_ctx, env_bake_background=True)
     try:
         r.render(s)  # returns while the bake is held
         gpu = r.scene.gpu
@@ -80,8 +79,7 @@ def test_a_failed_background_bake_is_one_line_and_keeps_the_stand_in(gl_ctx, mon
 
     monkeypatch.setattr(env, "bake_transfer", broken)
     s = _env_settings("phong")
-    r = Renderer(gl_ctx)
-    r.env_bake_background = True
+    r = Renderer(gl_ctx, env_bake_background=True)
     try:
         r.render(s)
         gpu = r.scene.gpu

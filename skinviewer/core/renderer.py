@@ -421,7 +421,7 @@ class Renderer:
     """Renders Settings through the technique's graph. Scenes are loaded when their settings change;
     each technique's graph persists (with its cache) while others run."""
 
-    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None):
+    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None, env_bake_background: bool = False):
         self.ctx = ctx
         self._own_shaders = shaders is None  # a library we made is ours to release
         self._software: bool | None = None  # a software rasterizer (render.timing = auto), asked once
@@ -436,7 +436,7 @@ class Renderer:
         self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")
         # the viewer's: an environment visibility bake not in the disk cache runs in the background
         # (GpuScene.env_bake_async); off, a render waits for it (the CLI's images are deterministic)
-        self.env_bake_background = False
+        self.env_bake_background = env_bake_background
 
     # -- scene -------------------------------------------------------------------------------
     @staticmethod
