@@ -4,8 +4,8 @@ the bake in; the swapped-in image equals a render that waited for the bake (the 
 import threading
 
 import numpy as np
-
 from helpers import small_settings
+
 from skinviewer.core.renderer import Renderer
 from skinviewer.core.settings import with_values
 from skinviewer.physics import environment as env

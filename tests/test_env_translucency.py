@@ -3,9 +3,8 @@ transmittance profile at the baked thickness along -N (physics/environment.env_t
 the screen-space lighting pass (ssss, separable, burley, burley2) where its lights' transmittance is."""
 import numpy as np
 import pytest
-
 from helpers import small_settings
-from skinviewer.core.settings import with_values
+
 from skinviewer.physics import environment as env
 from skinviewer.physics.transmittance import profile_distance, transmittance
 from skinviewer.scene.scenes import _flap_thickness, build_scene
