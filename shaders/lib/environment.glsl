@@ -23,6 +23,7 @@ in vec2 v_env_thick;  // lib/mesh_vs.glsl: the thickness along -N (mesh units), 
 #endif
 #else
 #define ENV_VIS_IN()
+#define ENV_THICK() vec2(1e6, 0.0)
 #endif
 #ifndef SKINVIEWER_ENVIRONMENT_GLSL
 #define SKINVIEWER_ENVIRONMENT_GLSL
