@@ -110,3 +110,27 @@ def test_the_prefiltered_environment_comes_from_the_disk_cache(monkeypatch, tmp_
     again = penv._prefiltered("studio", "auto")
     assert np.array_equal(first, again)
     penv._prefiltered.cache_clear()
+
+
+def test_a_light_orbit_turns_the_default_environment_with_the_key():
+    """skinviewer turntable --light-orbit: the environment's yaw turns in the key light's sense (the
+    brightest SH irradiance direction follows the key's rotation)."""
+    import math
+
+    from skinviewer.cli import turntable as tt
+    from skinviewer.physics import environment as env
+    from skinviewer.scene.environment import environment_image
+    s = Settings()
+    frames = tt.orbit(s, 4, light_orbit=True)
+    assert [f.lights[1].yaw - s.lights[1].yaw for f in frames] == [0, 90, 180, 270]
+    n = np.random.default_rng(0).normal(size=(4000, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    img = environment_image("studio", "auto")
+
+    def brightest(yaw):
+        E = env.sh_irradiance(env.sh_irradiance_coefficients(env.sh_project(img, yaw)), n).mean(1)
+        return n[np.argmax(E)]
+
+    x, y, z = brightest(0.0)
+    c, sn = math.cos(math.radians(90)), math.sin(math.radians(90))
+    assert np.dot(brightest(90.0), [c * x + sn * z, y, -sn * x + c * z]) > 0.99
