@@ -20,6 +20,9 @@ uniform float u_mix;
 uniform int u_energy;
 uniform sampler2D rho_dt_tex;
 uniform int u_tsm;
+uniform int u_env_tr;            // deon.tsm: the environment's translucency too (ENV_RAYS > 0)
+uniform vec3 u_env_tr_w[MAX_GAUSSIANS];   // deon.gaussians' weights and variances (mm^2), all of them
+uniform float u_env_tr_v[MAX_GAUSSIANS];  // (u_w is zero where the sum comes from deon_combine)
 uniform sampler2D diffuse_sum;   // sum_i w_i blur_i (+ transmitted) in texture space (deon_combine.frag)
 uniform int u_combined;          // generic shaders: read diffuse_sum instead of the blurs
 #ifndef DEON_TEXTURE_SHADOWS
@@ -77,6 +80,19 @@ void main() {
     if (u_tsm != 0) diffuse += tsm_transmitted(v_position, v_normal, v_uv);  // eq. 33 (lib/tsm_transmit.glsl)
 #endif
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
+#if ENV_LIGHT && ENV_RAYS > 0
+    // translucency from the environment (issue 32; physics/environment.env_transmitted): the back side's
+    // irradiance E_SH(-Ng) through eq. 33's profile sum_i w_i exp(-d^2 / 2 v_i) at the thickness d baked
+    // along -N, times the pre-scatter albedo as the irradiance map's light is (deon.tsm gates it)
+    if (u_env_tr != 0) {
+        float d = ENV_THICK().x * u_mm_per_unit;
+        vec3 t = vec3(0.0);
+        for (int i = 0; i < MAX_GAUSSIANS; ++i) {
+            if (u_env_tr_v[i] > 0.0) t += u_env_tr_w[i] * exp(-d * d / (2.0 * u_env_tr_v[i]));
+        }
+        diffuse += env_back_irradiance(normalize(v_normal)) * t * safe_pow(C, u_mix);
+    }
+#endif
     SpecParams sp = specular_params(v_uv);
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
     diffuse *= safe_pow(C, 1.0 - u_mix) * rho_v;

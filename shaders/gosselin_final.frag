@@ -7,6 +7,7 @@
 // KS_i is listing 14-3 (includes N.L_i). att, the shadow attenuation of eq. (18), comes from the
 // blurred light map. u_spec_shadow == 0 ("visibility", default):
 //   att = clamp(LUM.blurred / LUM.E0, 0, 1),  E0 = sum_i Lc_i max(N.L_i, 0) (unshadowed irradiance)
+//   + the environment's occluded irradiance (what the light map holds of it)
 // a soft, dimensionless visibility in [0, 1] (specular never exceeds the unshadowed KS).
 // u_spec_shadow == 1 ("printed"): eq. (18) as printed, BRDF (KS / N.L) * Lc * (LUM.blurred), where
 // LUM.blurred stands for N.L * shadow; it scales with Lc^2 (dimensionally an irradiance too many).
@@ -52,7 +53,9 @@ void main() {
     }
 #if ENV_LIGHT
     ENV_VIS_IN();
-    E0 += env_sh_irradiance(N);  // the environment's unoccluded irradiance is in the light map too
+    // the environment's irradiance as it enters the light map: occluded by the baked transfer (issue 32),
+    // so att is the analytic lights' visibility alone and a crease's env shadow does not dim their specular
+    E0 += env_irradiance(N, v_normal);
 #endif
     float att;
     if (u_spec_shadow == 1) {

@@ -124,6 +124,11 @@ void main() {
     ENV_VIS_IN();
     E += env_irradiance(N, v_normal);             // before the screen blur, like the lights
     spec += env_specular(N, V, v_normal, sp);
+#if ENV_RAYS > 0
+    // translucency from the environment (issue 32): the back side's irradiance E_SH(-Ng) through the
+    // transmittance profile at the baked thickness along -N (a documented approximation: notes/envlight.md)
+    if (u_tr != 0) T += env_back_irradiance(Ng) * transmittance_profile(ENV_THICK().x * u_mm_per_unit * u_tr_scale);
+#endif
 #endif
     float mask = 1.0;
     if (u_has_regions != 0) mask = u_region_sss[region_at(ivec2(v_uv * vec2(textureSize(region_map, 0))))];

@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.core.settings import Settings, three_light_rig, with_values
 from skinviewer.scene.scenes import scene_overrides
 
 
 def small_settings(scene: str = "head", technique: str = "phong", size: int = 96, **assign) -> Settings:
-    """Settings for a quick render: a built-in scene with its own lights/camera, small maps."""
-    values = {"scene.name": scene, **scene_overrides(scene), "technique": technique,
+    """Settings for a quick render: a built-in scene with its own lights/camera, small maps. A scene
+    without lights of its own (the head) gets the three-light rig these tests were written for (the
+    default rig's environment is tested in test_env_default.py and test_environment.py)."""
+    values = {"scene.name": scene, "lights": [light.model_dump() for light in three_light_rig()],
+              **scene_overrides(scene), "technique": technique,
               "render.width": size, "render.height": size, "scene.head_detail": 0,
               "shadow.map_size": 256, "gosselin.light_map_size": 256, "deon.irradiance_size": 256,
               "deon.tsm_size": 256}

@@ -14,12 +14,16 @@
 #if defined(ENV_LIGHT) && ENV_LIGHT && defined(ENV_RAYS) && ENV_RAYS > 0
 #if defined(ENV_TEXELS) && ENV_TEXELS
 #define ENV_VIS_IN() env_vis = texelFetch(surface_v, ivec2(gl_FragCoord.xy), 0)
+#define ENV_THICK() vec2(1e6, 0.0)
 #else
 in vec4 v_env_vis;
+in vec2 v_env_thick;  // lib/mesh_vs.glsl: the thickness along -N (mesh units), the back point's AO
 #define ENV_VIS_IN() env_vis = v_env_vis
+#define ENV_THICK() v_env_thick
 #endif
 #else
 #define ENV_VIS_IN()
+#define ENV_THICK() vec2(1e6, 0.0)
 #endif
 #ifndef SKINVIEWER_ENVIRONMENT_GLSL
 #define SKINVIEWER_ENVIRONMENT_GLSL
@@ -49,6 +53,14 @@ vec3 env_irradiance(vec3 N, vec3 Nv) {
 #else
     return env_sh_irradiance(N);
 #endif
+}
+
+// translucency from the environment (issue 32; physics/environment.env_transmitted): the irradiance the
+// back side receives, the SH irradiance at -Ng x the back point's AO (ENV_THICK().y); the caller weights
+// it with its transmittance profile at the baked thickness along -N (ENV_THICK().x, mesh units), as its
+// lights' back irradiance
+vec3 env_back_irradiance(vec3 Ng) {
+    return env_sh_irradiance(-Ng) * ENV_THICK().y;
 }
 
 // pre-integrated skin's environment term (Penner): the SH irradiance with band l scaled by w_l, the ring

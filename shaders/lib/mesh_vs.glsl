@@ -23,6 +23,7 @@ in vec4 in_env_t4;
 in vec4 in_env_t5;
 in vec4 in_env_t6;
 out vec4 v_env_vis;
+out vec2 v_env_thick;  // the thickness along -N (mesh units) and the back point's AO (bake_thickness)
 vec4 env_vertex_light(vec3 Nv) {
     float T[28] = float[28](in_env_t0.x, in_env_t0.y, in_env_t0.z, in_env_t0.w, in_env_t1.x, in_env_t1.y,
         in_env_t1.z, in_env_t1.w, in_env_t2.x, in_env_t2.y, in_env_t2.z, in_env_t2.w, in_env_t3.x, in_env_t3.y,
@@ -41,7 +42,7 @@ vec4 env_vertex_light(vec3 Nv) {
     return vec4(ao * env_sh_irradiance(l > 1e-9 ? b / l : normalize(Nv)), ao);
 #endif
 }
-#define ENV_VIS_OUT() v_env_vis = env_vertex_light(in_normal)
+#define ENV_VIS_OUT() v_env_vis = env_vertex_light(in_normal); v_env_thick = in_env_t6.yz
 #else
 #define ENV_VIS_OUT()
 #endif

@@ -29,7 +29,7 @@ class Cancelled(Exception):
 
 def orbit(s: Settings, frames: int, light_orbit: bool = False, degrees: float = 360.0) -> list[Settings]:
     """``frames`` settings evenly around the orbit: the camera's yaw, or every light turned about +Y
-    (directions; point/beam positions about the Y axis through the origin)."""
+    (directions; point/beam positions about the Y axis through the origin; an environment's yaw)."""
     out = []
     for i in range(frames):
         a = degrees * i / frames
@@ -43,6 +43,8 @@ def orbit(s: Settings, frames: int, light_orbit: bool = False, degrees: float = 
             vals[f"lights.{j}.direction"] = [c * x + sn * z, y, -sn * x + c * z]
             x, y, z = L.position
             vals[f"lights.{j}.position"] = [c * x + sn * z, y, -sn * x + c * z]
+            if L.kind == "environment":  # the environment turns with the lights (its yaw: the same sense)
+                vals[f"lights.{j}.yaw"] = L.yaw + a
         out.append(with_values(s, vals))
     return out
 

@@ -269,7 +269,9 @@ class RenderGraph:
         mid-way is never found cached, whatever the settings return to."""
         # an idle frame: the very same settings object, scene, camera, targets and shaders as the last
         # complete frame -> nothing can re-run; skip reflecting every pass and building cache keys
-        idle = (frame.settings, (frame.scene_version, frame.mesh_lod), frame.view_key, tuple(targets or self.targets),
+        # (env_generation: the viewer's background environment bake swapped in, passes/environment)
+        idle = (frame.settings, (frame.scene_version, frame.mesh_lod, getattr(frame.scene, "env_generation", 0)),
+                frame.view_key, tuple(targets or self.targets),
                 self.shaders.revision, timing)
         last = self.last_report
         if not force and self._idle is not None and last is not None and last.complete and not self.refining \

@@ -75,6 +75,13 @@ class GpuScene:
         self._env_vis: dict[tuple[int, int], moderngl.Buffer] = {}  # (level, rays) -> SH transfer vectors
         self.env_rays = 256  # the bake the vertex arrays bind (set by passes/environment.set_environment)
         self.env_bake_seconds: dict[tuple[int, int], float] = {}  # (level, rays) -> seconds (0: from the cache)
+        # the viewer's background bake (Renderer.env_bake_background): a bake not in the disk cache runs
+        # in a thread while the vertex arrays hold the unoccluded transfer; env_poll swaps it in
+        self.env_bake_async = False
+        self.env_generation = 0  # +1 at each swap: the lit passes' cache key (passes/environment)
+        self._env_jobs: dict[tuple[int, int], _EnvBakeJob] = {}
+        self._env_provisional: set[tuple[int, int]] = set()  # buffers holding the unoccluded stand-in
+        self.env_bake_error = ""
         self._lod_meshes: dict[int, MeshData] = {}
         self.albedo = self._texture(arrays["albedo"], "f2")
         self.has_normal_map = mesh.normal_map is not None
@@ -195,40 +202,86 @@ class GpuScene:
         return hit
 
     def env_visibility(self, level: int = 0, rays: int = 256) -> np.ndarray:
-        """(N, 25) per vertex of level ``level``: the SH transfer vector of the environment light
+        """(N, 27) per vertex of level ``level``: the SH transfer vector of the environment light
         (physics/environment.bake_transfer with Embree: the ambient occlusion and bent normal are its
-        first four coefficients), baked once per mesh and ray count and cached on disk
+        first four coefficients), baked once per mesh and ray count, the thickness along -N and the
+        back point's AO (bake_thickness, mesh units: the environment's translucency), cached on disk
         (``cache_dir()/envvis``, by a hash of the vertices, normals and triangles)."""
         import time
 
-        from skinviewer.core.files import atomic_write_bytes
-        from skinviewer.core.paths import cache_dir
-        from skinviewer.physics.environment import TRANSFER_COUNT, bake_transfer
+        from skinviewer.physics.environment import (
+            THICK_MISS,
+            TRANSFER_COUNT,
+            bake_thickness,
+            bake_transfer,
+            transfer_unoccluded,
+        )
         m = self.lod_mesh(level)
-        h = hashlib.sha1(b"envtransfer2")
-        for a in (m.positions, m.normals, m.indices):
-            h.update(np.ascontiguousarray(a).tobytes())
-        h.update(str(int(rays)).encode())
-        path = cache_dir() / "envvis" / f"{h.hexdigest()}.npy"
-        t0 = time.perf_counter()
-        try:
-            vis = np.load(path, allow_pickle=False)
-            if vis.shape != (len(m.positions), TRANSFER_COUNT) or not np.all(np.isfinite(vis)):
-                raise ValueError("stale")
+        n = len(m.positions)
+        t_path = _env_cache_path(m, b"envtransfer2", str(int(rays)))
+        k_path = _env_cache_path(m, b"envthick2", str(int(rays)))  # thickness, back AO (of this bake)
+        vis, thick = _load_cached(t_path, (n, TRANSFER_COUNT)), _load_cached(k_path, (n, 2))
+        if vis is not None:
             self.env_bake_seconds[(level, rays)] = 0.0
-            return np.asarray(vis, dtype=np.float32)
-        except (OSError, ValueError):
-            pass
-        vis = bake_transfer(m.positions, m.normals, m.indices, rays=int(rays))
-        self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
-        import io
-        buf = io.BytesIO()
-        np.save(buf, vis)
-        try:
-            atomic_write_bytes(path, buf.getvalue())
-        except OSError:
-            pass  # a read-only cache folder: bake again next time
-        return vis
+            if thick is not None:
+                return np.concatenate([vis, thick], 1)
+
+        def bake(progress: Any = None) -> np.ndarray:
+            t, k = vis, thick
+            if t is None:
+                t0 = time.perf_counter()
+                t = bake_transfer(m.positions, m.normals, m.indices, rays=int(rays), progress=progress)
+                self.env_bake_seconds[(level, rays)] = time.perf_counter() - t0
+                _save_cached(t_path, t)
+            if k is None:
+                k = bake_thickness(m.positions, m.normals, m.indices, transfer=t)
+                _save_cached(k_path, k)
+            return np.concatenate([t, k], 1).astype(np.float32)
+
+        if not self.env_bake_async:
+            return bake()
+        key = (level, int(rays))
+        if key not in self._env_jobs:
+            self._env_jobs[key] = _EnvBakeJob(bake)
+        # meanwhile: the unoccluded transfer A_l Y_lm(N) (R&H 2001 eq. 8), i.e. no occlusion at all,
+        # and no translucency from the environment
+        standin = vis if vis is not None else transfer_unoccluded(m.normals)
+        return np.concatenate([standin, np.full((n, 1), THICK_MISS), np.zeros((n, 1))], 1).astype(np.float32)
+
+    def env_poll(self) -> bool:
+        """Swap finished background bakes into their vertex buffers (on the GL thread; the buffers are
+        rewritten in place, so the vertex arrays stay). True when one was swapped in (env_generation
+        changed: the lit passes re-run)."""
+        swapped = False
+        for key in sorted(self._env_provisional):
+            job = self._env_jobs.get(key)
+            if job is None or not job.done.is_set():
+                continue
+            self._env_provisional.discard(key)
+            if job.error:  # keeps the unoccluded stand-in; one line in the status bar
+                self.env_bake_error = f"environment visibility bake failed: {job.error}"
+                continue
+            assert job.result is not None
+            self._env_vis[key].write(_pad_transfer(job.result).tobytes())
+            self.env_generation += 1
+            swapped = True
+        return swapped
+
+    def env_bake_status(self) -> str:
+        """The status bar's words while a background bake runs ("" when none does)."""
+        pending = [self._env_jobs[k] for k in self._env_provisional if k in self._env_jobs]
+        if not pending:
+            return self.env_bake_error
+        pct = 100.0 * float(np.mean([j.progress for j in pending]))
+        return f"baking environment visibility... {pct:.0f} % (unoccluded meanwhile)"
+
+    def env_wait(self, timeout: float | None = None) -> bool:
+        """Wait for the background bakes to finish and swap them in; False on timeout."""
+        for job in list(self._env_jobs.values()):
+            if not job.done.wait(timeout):
+                return False
+        self.env_poll()
+        return True
 
     def env_visibility_buffer(self, level: int = 0, rays: int = 256) -> moderngl.Buffer:
         """env_visibility on the GPU, padded to 28 floats (7 vec4) a vertex (one buffer per level of
@@ -237,9 +290,9 @@ class GpuScene:
         hit = self._env_vis.get(key)
         if hit is None:
             vis = self.env_visibility(key[0], key[1])
-            pad = np.zeros((len(vis), 4 * len(ENV_VIS_ATTRS)), np.float32)
-            pad[:, :vis.shape[1]] = vis
-            hit = self._env_vis[key] = self.ctx.buffer(pad.tobytes())
+            hit = self._env_vis[key] = self.ctx.buffer(_pad_transfer(vis).tobytes())
+            if key in self._env_jobs:  # env_visibility gave the stand-in: a background bake runs
+                self._env_provisional.add(key)
         return hit
 
     def curvature_buffer(self, level: int = 0) -> moderngl.Buffer:
@@ -253,6 +306,8 @@ class GpuScene:
         return hit
 
     def release(self) -> None:
+        for job in self._env_jobs.values():
+            job.cancel()
         for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
             obj.release()
         for vbo, ibo, _ in self._lods.values():
@@ -265,6 +320,85 @@ class GpuScene:
         self._curvature.clear()
         self._env_vis.clear()
         self._lod_meshes.clear()
+
+
+def _env_cache_path(m: MeshData, tag: bytes, extra: str) -> Path:
+    """The disk cache file of an environment bake of mesh ``m`` (``tag``: what and which version)."""
+    from skinviewer.core.paths import cache_dir
+    h = hashlib.sha1(tag)
+    for a in (m.positions, m.normals, m.indices):
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(extra.encode())
+    return cache_dir() / "envvis" / f"{h.hexdigest()}.npy"
+
+
+def _load_cached(path: Path, shape: tuple[int, ...]) -> np.ndarray | None:
+    """A cached bake of ``shape``, finite; None when missing, unreadable or stale."""
+    try:
+        a = np.load(path, allow_pickle=False)
+    except (OSError, ValueError):
+        return None
+    if a.shape != shape or not np.all(np.isfinite(a)):
+        return None
+    return np.asarray(a, dtype=np.float32)
+
+
+def _save_cached(path: Path, a: np.ndarray) -> None:
+    import io
+
+    from skinviewer.core.files import atomic_write_bytes
+    buf = io.BytesIO()
+    np.save(buf, a)
+    try:
+        atomic_write_bytes(path, buf.getvalue())
+    except OSError:
+        pass  # a read-only cache folder: bake again next time
+
+
+def _pad_transfer(vis: np.ndarray) -> np.ndarray:
+    """(N, 27) transfer vectors + thickness + back AO padded to the vertex stage's 7 vec4 a vertex
+    (float32; the thickness is float 25, in_env_t6.y, the back AO float 26, in_env_t6.z)."""
+    pad = np.zeros((len(vis), 4 * len(ENV_VIS_ATTRS)), np.float32)
+    pad[:, :vis.shape[1]] = vis
+    return pad
+
+
+class _BakeCancelled(Exception):
+    pass
+
+
+class _EnvBakeJob:
+    """One background transfer bake (GpuScene.env_visibility with env_bake_async): a daemon thread
+    running ``bake(progress)`` (Embree's ray queries release the GIL), its progress, result or error.
+    ``cancel()`` stops it at the next chunk (a released scene)."""
+
+    def __init__(self, bake: Any):
+        import threading
+        self.progress = 0.0
+        self.result: np.ndarray | None = None
+        self.error = ""
+        self.cancelled = False
+        self.done = threading.Event()
+        self._thread = threading.Thread(target=self._run, args=(bake,), name="env-bake", daemon=True)
+        self._thread.start()
+
+    def _run(self, bake: Any) -> None:
+        def progress(f: float) -> None:
+            if self.cancelled:
+                raise _BakeCancelled
+            self.progress = float(f)
+        try:
+            self.result = bake(progress)
+            self.progress = 1.0
+        except _BakeCancelled:
+            self.error = "cancelled"
+        except Exception as exc:  # shown as one line; the unoccluded stand-in stays
+            self.error = f"{type(exc).__name__}: {exc}"
+        finally:
+            self.done.set()
+
+    def cancel(self) -> None:
+        self.cancelled = True
 
 
 def _fmt(f: str, used: bool) -> str:
@@ -309,7 +443,7 @@ class Renderer:
     """Renders Settings through the technique's graph. Scenes are loaded when their settings change;
     each technique's graph persists (with its cache) while others run."""
 
-    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None):
+    def __init__(self, ctx: moderngl.Context, shaders: ShaderLibrary | None = None, env_bake_background: bool = False):
         self.ctx = ctx
         self._own_shaders = shaders is None  # a library we made is ours to release
         self._software: bool | None = None  # a software rasterizer (render.timing = auto), asked once
@@ -322,6 +456,9 @@ class Renderer:
         self.last_view: View | None = None
         # bytes textures may use (None: what the system has, see available_memory); tests set it
         self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")
+        # the viewer's: an environment visibility bake not in the disk cache runs in the background
+        # (GpuScene.env_bake_async); off, a render waits for it (the CLI's images are deterministic)
+        self.env_bake_background = env_bake_background
 
     # -- scene -------------------------------------------------------------------------------
     @staticmethod
@@ -361,6 +498,7 @@ class Renderer:
         mesh.check_renderable()
         mesh = load_texture_maps(mesh, sc.albedo_map, sc.normal_map, sc.specular_map, sc.region_map)
         gpu = GpuScene(self.ctx, mesh, mm)
+        gpu.env_bake_async = self.env_bake_background
         if self.scene is not None:
             self.scene.gpu.release()
         self.scene = LoadedScene(key, gpu, desc, notes)
@@ -405,6 +543,7 @@ class Renderer:
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run); ``variant``: the
         graph to run it in (Renderer.graph)."""
         scene = self.ensure_scene(s)
+        scene.gpu.env_poll()  # a finished background bake: swapped in, the lit passes re-run
         env = rules.environment_light(s.lights)
         if env is not None:  # a bad environment file: one clear error before any pass runs
             environment_image(env[1].environment, env[1].layout)

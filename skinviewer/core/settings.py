@@ -594,6 +594,25 @@ class LookSettings(_Model):
         return v
 
 
+def three_light_rig() -> list[LightSettings]:
+    """The default rig before issue 32 (presets/studio-three-lights.json): a warm key high on the left
+    of the face, a cool rim behind the right ear (deon.tsm_light = 1: it makes the ears glow), a soft
+    unshadowed fill from the camera side."""
+    return [LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
+            LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
+            LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False)]
+
+
+def default_rig() -> list[LightSettings]:
+    """The default lights (issue 32): the warm key of the three-light rig and the built-in studio
+    environment (two soft boxes, occluded by the mesh), as presets/studio-environment.json, with both
+    intensities scaled by 0.61 so that the default exposure 0.9 is the one the scene's luminance calls
+    for (passes/environment.exposure_from_luminance; the preset's own exposure is 0.55 at 1.2 / 1.0).
+    The key is light 0, so deon.tsm_light = 1 (the environment) falls back to it."""
+    return [LightSettings(direction=(-0.45, 0.55, 0.75), intensity=0.73, color=(1.0, 0.95, 0.88)),
+            LightSettings(kind="environment", environment="studio", intensity=0.61, cast_shadow=False)]
+
+
 class Settings(_Model):
     schema_version: StrictInt = SCHEMA_VERSION  # strict: JSON `true` is not version 1
     technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2", "penner"] = "deon"
@@ -601,13 +620,7 @@ class Settings(_Model):
     camera: CameraSettings = Field(default_factory=CameraSettings)
     render: RenderSettings = Field(default_factory=RenderSettings)
     lights: list[LightSettings] = Field(
-        default_factory=lambda: [
-            # a portrait rig: a warm key high on the left of the face, a cool rim behind the right ear
-            # (deon.tsm_light = 1: it makes the ears glow), a soft unshadowed fill from the camera side
-            LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
-            LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
-            LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False),
-        ],
+        default_factory=lambda: default_rig(),
         min_length=1, max_length=MAX_LIGHTS)
     shadow: ShadowSettings = Field(default_factory=ShadowSettings)
     phong: PhongSettings = Field(default_factory=PhongSettings)

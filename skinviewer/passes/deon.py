@@ -859,4 +859,14 @@ class DeonFinalPass(Pass):
         if has(VISIBILITY):
             ec.bind(prog, "visibility", VISIBILITY)
         set_environment(ec, prog)
+        ec.set(prog, "u_env_tr", bool(ec.setting("deon.tsm")), optional=True)
+        if "u_env_tr" in prog:
+            gs = ec.setting("deon.gaussians")[:MAX_GAUSSIANS]  # the environment's translucency profile
+            w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+            v = np.zeros(MAX_GAUSSIANS, np.float32)
+            for i, g in enumerate(gs):
+                w[i], v[i] = g.weights, g.variance
+            ec.set(prog, "u_env_tr_w", w, optional=True)
+            ec.set(prog, "u_env_tr_v", v, optional=True)
+            ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit), optional=True)  # the thickness in mm
         draw_view_mesh(ec, prog, LIT)

@@ -33,9 +33,34 @@ def env_index(r) -> int | None:
 
 @functools.lru_cache(maxsize=4)
 def _prefiltered(spec: str, layout: str) -> np.ndarray:
-    pre = env.prefilter_specular(environment_image(spec, layout))
-    rgba = np.concatenate([pre, np.ones(pre.shape[:2] + (1,), np.float32)], 2)
-    return np.ascontiguousarray(rgba, np.float32)
+    """The pre-filtered levels as RGBA, cached on disk by the image's content (the pre-filter takes
+    seconds: the default rig's first frame would wait for it at every start)."""
+    import hashlib
+    import io
+
+    from skinviewer.core.files import atomic_write_bytes
+    from skinviewer.core.paths import cache_dir
+    img = environment_image(spec, layout)
+    h = hashlib.sha1(b"envprefilter1")
+    h.update(repr((img.shape, env.SPEC_SIZE, tuple(env.SPEC_LEVELS_M))).encode())
+    h.update(np.ascontiguousarray(img, np.float32).tobytes())
+    path = cache_dir() / "envprefilter" / f"{h.hexdigest()}.npy"
+    w, hh = env.SPEC_SIZE
+    try:
+        rgba = np.load(path, allow_pickle=False)
+        if rgba.shape[1:] == (w, 4) and rgba.shape[0] == hh * len(env.SPEC_LEVELS_M) and np.all(np.isfinite(rgba)):
+            return np.ascontiguousarray(rgba, np.float32)
+    except (OSError, ValueError):
+        pass
+    pre = env.prefilter_specular(img)
+    rgba = np.ascontiguousarray(np.concatenate([pre, np.ones(pre.shape[:2] + (1,), np.float32)], 2), np.float32)
+    buf = io.BytesIO()
+    np.save(buf, rgba)
+    try:
+        atomic_write_bytes(path, buf.getvalue())
+    except OSError:
+        pass  # a read-only cache: pre-filter again next time
+    return rgba
 
 
 @functools.lru_cache(maxsize=16)
@@ -102,10 +127,18 @@ def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
     if i is None:
         return {}
     e = r.section(f"lights.{i}", ENV_FIELDS)
+    depend_on_bake(r, e)
     if specular:
         r.input(ENV_PREFILTERED)
         r.input(ENV_RHO_DT)
     return _defines(e)
+
+
+def depend_on_bake(r, light) -> None:
+    """The lit output depends on which transfer vectors the vertex arrays hold: the unoccluded
+    stand-in while the viewer's background bake runs, then the bake (GpuScene.env_generation)."""
+    if light.occlusion and hasattr(r, "depends") and r.scene is not None:
+        r.depends("env_visibility", getattr(r.scene, "env_generation", 0))
 
 
 def _defines(light) -> dict[str, int]:
@@ -185,9 +218,6 @@ def scene_luminance(settings, samples: int = 256) -> float:
 def exposure_from_luminance(settings, reference_exposure: float = 0.9) -> float:
     """render.exposure for ``settings`` so its camera-facing luminance shows as the three-light rig's
     does at the default exposure (0.9): reference_exposure x L(three-light rig) / L(scene)."""
-    from skinviewer.core.settings import LightSettings
-    rig = settings.model_copy(update={"lights": [
-        LightSettings(direction=(-0.45, 0.55, 0.75), intensity=1.8, color=(1.0, 0.95, 0.88)),
-        LightSettings(direction=(0.55, 0.35, -0.9), intensity=1.6, color=(0.9, 0.93, 1.0)),
-        LightSettings(direction=(0.9, 0.05, 0.45), intensity=0.3, color=(0.85, 0.9, 1.0), cast_shadow=False)]})
+    from skinviewer.core.settings import three_light_rig
+    rig = settings.model_copy(update={"lights": three_light_rig()})
     return reference_exposure * scene_luminance(rig) / max(scene_luminance(settings), 1e-9)

@@ -242,8 +242,10 @@ class TexelSurfacePass(Pass):
 
 def _env_vis_defines(r) -> dict[str, int]:
     """The environment light's defines when its baked visibility is used (ENV_RAYS > 0), else {}."""
-    from skinviewer.passes.environment import env_defines
+    from skinviewer.passes.environment import depend_on_bake, env_defines, env_index
     d = env_defines(r)
+    if d.get("ENV_RAYS", 0) > 0:
+        depend_on_bake(r, r.peek(f"lights.{env_index(r)}"))
     return d if d.get("ENV_RAYS", 0) > 0 else {}
 
 

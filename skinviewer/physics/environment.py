@@ -38,6 +38,7 @@ SH_COUNT = 9
 # R&H 2001 eq. 8: the clamped-cosine kernel's coefficients A_l
 A_HAT = (math.pi, 2.0 * math.pi / 3.0, math.pi / 4.0)
 BUILTIN_ENVIRONMENTS = ("studio", "overcast", "window")
+THICK_MISS = 1e6  # bake_thickness where -N meets no surface: far beyond any profile (no transmission)
 BUILTIN_SIZE = (256, 128)  # (W, H) of the generated environments
 # the pre-filtered specular environment: Beckmann m of each level, one equirect level each, stacked
 SPEC_LEVELS_M = (0.08, 0.15, 0.25, 0.35, 0.5, 0.7, 1.0)
@@ -378,24 +379,75 @@ def bake_visibility(positions: FloatArray, normals: FloatArray, indices: IndexAr
 
 
 def bake_transfer(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray, rays: int = 256,
-                  seed: int = 0, caster: Any = None, chunk: int = 1024) -> np.ndarray:
+                  seed: int = 0, caster: Any = None, chunk: int = 1024,
+                  progress: Callable[[float], None] | None = None) -> np.ndarray:
     """(N, 25) float32 per vertex: the shadowed diffuse transfer vector T_lm = int V(w) max(N.w, 0)
     Y_lm(w) dw, l <= 4 (Sloan et al. 2002 eq. 4's transfer, without interreflection), by ``rays``
     cosine-weighted stratified Embree rays (pdf cos / pi) with the unoccluded transfer as a control
     variate: T_lm = A_l Y_lm(N) - pi / n sum_i (1 - V(w_i)) Y_lm(w_i).
     T_00 / (pi Y_00) is the ambient occlusion and (T_11, T_1-1, T_10) the bent normal's direction
     (transfer_ao, transfer_bent_normal). Rays start a hair above the vertex along its normal; a
-    vertex without a usable normal gets the unoccluded transfer of +z."""
+    vertex without a usable normal gets the unoccluded transfer of +z. ``progress(fraction)`` is
+    called after each chunk (a background bake's status line; it may raise to cancel the bake)."""
     P, N, good = _unit_normals(positions, normals)
     out = transfer_unoccluded(N)
     if len(P) == 0 or len(indices) == 0:
         return out.astype(np.float32)
+    n_good, done = max(int(good.sum()), 1), 0
     for v, d, hit in _cosine_rays(P, N, good, indices, rays, seed, caster, chunk):
+        if progress is not None:
+            progress(done / n_good)
+        done += len(v)
         k = hit.shape[1]
         # the unoccluded transfer exactly, less the blocked rays' share: a control variate, unbiased
         # (E[pi/n sum Y(w_i)] = A_l Y_lm(N)), exact where nothing blocks and noisy only in the blocked part
         out[v] -= math.pi / k * np.einsum("vr,vrk->vk", hit.astype(np.float64), sh_basis25(d))
     return out.astype(np.float32)
+
+
+def bake_thickness(positions: np.ndarray, normals: np.ndarray, indices: np.ndarray,
+                   transfer: np.ndarray | None = None) -> np.ndarray:
+    """(N,) float32 per vertex: the distance (mesh units) from the vertex along -N to the next surface,
+    the thickness light crosses to reach it from behind (issue 32's translucency from the environment;
+    one Embree ray from a hair inside the surface). No surface within reach (an open sheet's edge, a
+    flipped normal): THICK_MISS, i.e. no transmission. With ``transfer`` (N, 25, bake_transfer):
+    (N, 2), the thickness and the back point's ambient occlusion (transfer_ao of the hit triangle's
+    vertices, barycentric), which shadows the back side's light (an ear's back faces the skull)."""
+    P, N, good = _unit_normals(positions, normals)
+    out = np.full(len(P), THICK_MISS, np.float64)
+    back_ao = np.ones(len(P))
+    idx = np.nonzero(good)[0]
+    if len(idx) and len(indices):
+        import trimesh
+        from trimesh.ray.ray_pyembree import RayMeshIntersector
+        tris = np.asarray(indices, np.int64)
+        mesh = trimesh.Trimesh(np.asarray(P, np.float64), tris, process=False)
+        eps = 1e-4 * float(np.ptp(P, axis=0).max()) + 1e-9
+        o = P[idx] - N[idx] * eps
+        tri, ray, loc = RayMeshIntersector(mesh).intersects_id(o, -N[idx], multiple_hits=False,
+                                                               return_locations=True)
+        out[idx[ray]] = np.linalg.norm(loc - o[ray], axis=1) + eps
+        if transfer is not None and len(tri):
+            bary = trimesh.triangles.points_to_barycentric(P[tris[tri]], loc)
+            ao = transfer_ao(transfer)
+            back_ao[idx[ray]] = np.clip((np.clip(bary, 0.0, 1.0) * ao[tris[tri]]).sum(1), 0.0, 1.0)
+    if transfer is None:
+        return out.astype(np.float32)
+    return np.stack([out, back_ao], 1).astype(np.float32)
+
+
+def env_transmitted(E_lm: np.ndarray, Ng: np.ndarray, thickness_mm: np.ndarray,
+                    profile: Callable[[np.ndarray], np.ndarray], back_ao: np.ndarray | None = None) -> np.ndarray:
+    """(N, 3) translucency from the environment (issue 32; lib/environment.glsl env_back_irradiance and
+    ss_lighting.frag / tsm_transmit.glsl): the irradiance the back side receives, the unoccluded SH
+    irradiance at -Ng x the back point's ambient occlusion ``back_ao`` (bake_thickness), times the
+    transmittance profile T(d) (N, 3) at the thickness along -N. The approximation: all of the back's light crosses the one thickness along -N (seed 001 eq. 3.15-3.18
+    with the environment's back irradiance for E(-N) and the baked thickness for the shadow map's)."""
+    d = np.asarray(thickness_mm, np.float64)
+    out: np.ndarray = sh_irradiance(E_lm, -np.asarray(Ng, np.float64)) * np.asarray(profile(d), np.float64)
+    if back_ao is not None:
+        out = out * np.asarray(back_ao, np.float64).reshape(-1, 1)
+    return out
 
 
 def bent_shading_normal(N: np.ndarray, Nv: np.ndarray, bent: np.ndarray) -> np.ndarray:

@@ -46,7 +46,8 @@ class ViewerApp(mglw.WindowConfig):
                  options: ViewerOptions | None = None, **kwargs):
         super().__init__(**kwargs)
         self.shaders = ShaderLibrary(self.ctx, root=Path(shaders_root) if shaders_root else None)
-        self.renderer = Renderer(self.ctx, self.shaders)
+        # env_bake_background: the window does not wait for the environment's visibility bake (issue 32)
+        self.renderer = Renderer(self.ctx, self.shaders, env_bake_background=True)
         self._vsync = bool(getattr(self.wnd, "vsync", True))
         self.state = ViewerState(settings, self.renderer.ensure_scene, preset_path, notices, options, vsync=self._vsync)
         self.frame = FrameController(self.ctx, self.state, self.renderer, self.shaders,

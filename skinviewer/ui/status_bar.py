@@ -50,6 +50,9 @@ class StatusBar:
             out.append((gov, WARN))
         if fr.render_deferred:
             out.append(("preview paused while dragging", WARN))
+        bake = st.scene.gpu.env_bake_status() if st.scene is not None and hasattr(st.scene, "gpu") else ""
+        if bake:  # the environment's visibility, baked in the background (issue 32)
+            out.append((bake, ERR if "failed" in bake else WARN))
         if fr.report is not None and not fr.report.complete:
             out.append((f"rendering: {len(fr.report.deferred)} passes to go", WARN))
         if st.presets.dirty(s):
