@@ -5,8 +5,8 @@
 //   1 ss_specular rgb = sum_lights KS(N, L, V) Lc fac_shadow (seed 000 eq. 35), a = coverage 1
 //   2 ss_depth    r = linear view depth mm, gb = |ddx|, |ddy| of it, a = coverage 1
 //   3 ss_albedo   rgb = albedo^(1-f) (the combine pass's post-scatter factor), a = 1
-//   4.. ss_transmitted_k (TR_TARGETS of them, one per shadow-casting light k): rgb = mask albedo^f Lc
-//                 back (n/9), a = the thickness in mm -- all the transmittance but its profile T(d),
+//   4.. ss_transmitted_k (TR_TARGETS of them, one per shadow-casting light k, then the environment's):
+//                 rgb = mask albedo^f Lc back (n/9), a = the thickness in mm -- all the transmittance but its profile T(d),
 //                 which ss_transmittance.frag applies (a profile edit does not re-run this pass)
 // f: 0 post-scatter, 1 pre-scatter, mix pre-and-post (seed 001 §3.6).
 #include "lib/color.glsl"
@@ -125,9 +125,13 @@ void main() {
     E += env_irradiance(N, v_normal);             // before the screen blur, like the lights
     spec += env_specular(N, V, v_normal, sp);
 #if ENV_RAYS > 0
-    // translucency from the environment (issue 32): the back side's irradiance E_SH(-Ng) through the
-    // transmittance profile at the baked thickness along -N (a documented approximation: notes/envlight.md)
-    if (u_tr != 0) T += env_back_irradiance(Ng) * transmittance_profile(ENV_THICK().x * u_mm_per_unit * u_tr_scale);
+    // translucency from the environment (issue 32): the back side's irradiance E_SH(-Ng), through the
+    // transmittance profile (ss_transmittance.frag) at the baked thickness along -N, in mm (a
+    // documented approximation: notes/envlight.md); the last transmitted slot, after the lights'
+    if (u_tr != 0 && k < 4) {
+        tr[k] = vec4(env_back_irradiance(Ng), ENV_THICK().x * u_mm_per_unit);
+        k += 1;
+    }
 #endif
 #endif
     float mask = 1.0;

@@ -15,7 +15,7 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
-from skinviewer.passes.environment import declare_environment, set_environment
+from skinviewer.passes.environment import declare_environment, env_defines, set_environment
 from skinviewer.passes.rules import analytic_on
 from skinviewer.physics import burley as B
 from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
@@ -34,12 +34,20 @@ def transmitted_resource(k: int) -> str:
     return f"ss_transmitted_{k}"
 
 
+TR_SLOTS = 4  # ss_transmitted_k targets at most (ss_lighting's four targets + these <= 8 draw buffers)
+
+
 def transmittance_slots(r) -> int:
-    """The shadow-casting lights whose transmittance the lighting pass measures (declares
-    transmittance.enabled and the lights); 0: the transmittance is off or no light casts a shadow."""
+    """The transmittance terms the lighting pass measures, one per shadow-casting light and, last,
+    the environment's translucency (issue 32: its back-side irradiance at the baked thickness; when
+    the environment has its visibility bake), at most TR_SLOTS (declares transmittance.enabled and
+    the lights); 0: the transmittance is off or nothing comes through."""
     if not r.setting("transmittance.enabled"):
         return 0
-    return sum(1 for l in r.setting("lights")[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
+    n = sum(1 for l in r.setting("lights")[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
+    if env_defines(r).get("ENV_RAYS", 0) > 0:
+        n += 1
+    return min(n, TR_SLOTS)
 
 
 def screen_size(r) -> tuple[int, int]:
