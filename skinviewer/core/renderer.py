@@ -308,6 +308,8 @@ class GpuScene:
     def release(self) -> None:
         for job in self._env_jobs.values():
             job.cancel()
+        for job in self._env_jobs.values():  # stopped at its next chunk: no thread left in Embree at exit
+            job.done.wait(timeout=30.0)
         for obj in (self.vbo, self.ibo, self.albedo, self.normal_map, self.specular_map, self.region_map):
             obj.release()
         for vbo, ibo, _ in self._lods.values():
