@@ -451,7 +451,7 @@ class GaussianBlurPass(Pass):
         tiled = {"TILED": 1} if skip_gutters else {}
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
         border = self._open_border(r)
-        dilate_fill = {"DILATE": 1} if island_tiles(r, self.chain, border) else {}
+        dilate_fill = {"DILATE": 1, **tiled} if island_tiles(r, self.chain, border) else {}
         if border:
             r.input(border_resource(n))
             r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
@@ -565,7 +565,7 @@ class GaussianBlurPass(Pass):
         seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
         filled = ec.held("filled", spec)[0] if seam else None
         dilate_fill = bool(seam) and island_tiles(ec, self.chain, border)
-        fill = ec.program("seam_fill", **({"DILATE": 1} if dilate_fill else {})) if seam else None
+        fill = ec.program("seam_fill", **({"DILATE": 1, **tiled} if dilate_fill else {})) if seam else None
         if dilate_fill:
             ec.bind(fill, "gutter", gutter_resource(n))
         if border:
@@ -581,8 +581,10 @@ class GaussianBlurPass(Pass):
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
-        ring = DILATE_RING if dilate_fill else blur_ring(ec, n, stretch, self.i)
-        tiles = work_tiles(ec, n, ring) if ec.setting("deon.skip_gutters") else None
+        reach = blur_ring(ec, n, stretch, self.i)
+        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if ec.setting("deon.skip_gutters") else None
+        # a dilating fill: over the texels this blur's taps reach (the islands' tiles and reach)
+        fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
         draws: list[tuple[Any, dict[str, Any], Any, Any]] = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
@@ -600,8 +602,8 @@ class GaussianBlurPass(Pass):
             for name, value in values.items():
                 ec.set(program, name, value)
             ec.bind(program, "source", source)
-            with ec.band(sub, subs):  # a dilating seam fill covers the whole map: the blur's taps read it
-                ec.draw_fullscreen(program, target, tiles=None if (program is fill and dilate_fill) else tiles)
+            with ec.band(sub, subs):
+                ec.draw_fullscreen(program, target, tiles=fill_tiles if program is fill else tiles)
 
 
 def texture_shadows(r) -> bool:
