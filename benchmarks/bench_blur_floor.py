@@ -98,6 +98,11 @@ def main() -> None:
             copies.append(copy_draw_ms(r, maps, 3))
         med = {c: {k: statistics.median(v) for k, v in d.items() if v} for c, d in m.items()}
         copy = statistics.median(copies)
+        if maps == 1024 or maps == args.maps[-1]:
+            rep = light_frame(r, s["after"], args.repeats)[1]
+            print(f"# {maps}^2 maps, after, one light-move frame per pass (plain copies of {copy:.2f} ms): "
+                  + ", ".join(f"{p.name} {p.ms / copy:.1f}" for p in rep.passes if p.status == "ran" and p.ms),
+                  flush=True)
         rows[maps] = (med, copy, dirs)
         r.release()
         r.shaders.release()
