@@ -111,7 +111,7 @@ def main() -> None:
            f"{'summed ms':>10} {'/ copy':>7} {'copy ms':>8} {'phong ms':>9}")
     print(hdr)
     print("-" * len(hdr))
-    for maps, (med, copy, dirs) in rows.items():
+    for maps, (med, copy, _dirs) in rows.items():
         ph = med["phong"]["light"]
         for c in CONFIGS:
             x = med[c]

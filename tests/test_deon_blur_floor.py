@@ -4,13 +4,12 @@ whole-map draws (up to the denormal noise two identical renders show), and the l
 final image are bit-identical."""
 import numpy as np
 import pytest
+from helpers import small_settings
 
 from skinviewer.core.settings import with_values
 from skinviewer.passes.deon import DILATE_RING
 from skinviewer.passes.texture_space import read_gutter
 from skinviewer.physics.diffusion import blur_resource
-
-from helpers import small_settings
 
 
 @pytest.mark.parametrize("gather", [2.0, 0.0], ids=["summed-step", "all-separable"])
