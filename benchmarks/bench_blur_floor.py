@@ -53,7 +53,7 @@ def blur_figures(rep) -> tuple[float, float, int]:
             summed += p.ms
         else:
             sep += p.ms
-            dirs += p.draws // 2  # H and V per sub-step, each after its seam fill
+            dirs += p.figures.get("directions", p.draws // 2)  # H and V per sub-step (the pass notes it)
     return (sep / dirs if dirs else float("nan")), summed, dirs
 
 

@@ -458,6 +458,8 @@ class GaussianBlurPass(Pass):
         r.program("deon_blur", **tiled, **zones, **border, **self._narrow(r, step, stretch, n))
         if seam:
             r.program("seam_fill", **(dilate_fill or tiled), **border)
+            if dilate_fill:  # the island tiles hold every value already: a plain fill there
+                r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -473,7 +475,7 @@ class GaussianBlurPass(Pass):
         tiles = island_tiles(r, self.chain, self._open_border(r))
         if seam:
             r.input(seam_resource(n))
-            r.program("seam_fill", **({"DILATE": 1} if tiles else {}))
+            r.program("seam_fill", **({"DILATE": 1} if tiles and step.source != IRRADIANCE else {}))
         r.program("deon_gather_blocks")
         r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 1} if tiles else {}))
         r.output(self._output(), self._spec(n))
@@ -485,9 +487,10 @@ class GaussianBlurPass(Pass):
         if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
             filled, fresh = ec.held("filled", self._spec(n))
             if fresh:
-                fill = ec.program("seam_fill", **({"DILATE": 1} if tiled else {}))
+                dilating = tiled and source != IRRADIANCE  # the irradiance is whole: dilated already
+                fill = ec.program("seam_fill", **({"DILATE": 1} if dilating else {}))
                 ec.textures(fill, source=source, seam_map=seam_resource(n))
-                if tiled:
+                if dilating:
                     ec.bind(fill, "gutter", gutter_resource(n))
                 ec.set(fill, "u_past_border_dark", True)
                 ec.draw_fullscreen(fill, filled)
@@ -566,6 +569,9 @@ class GaussianBlurPass(Pass):
         filled = ec.held("filled", spec)[0] if seam else None
         dilate_fill = bool(seam) and island_tiles(ec, self.chain, border)
         fill = ec.program("seam_fill", **({"DILATE": 1, **tiled} if dilate_fill else {})) if seam else None
+        # on the island tiles (and DILATE_RING) a blur's output is whole: the plain fill, cheaper by
+        # one dependent fetch; the dilating one only on the tiles between them and the taps' reach
+        fill_in = ec.program("seam_fill", **tiled) if dilate_fill else None
         if dilate_fill:
             ec.bind(fill, "gutter", gutter_resource(n))
         if border:
@@ -574,8 +580,9 @@ class GaussianBlurPass(Pass):
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
-            ec.bind(fill, "seam_map", seam)
-            ec.set(fill, "u_past_border_dark", light)
+            for f in (fill, fill_in) if fill_in is not None else (fill,):
+                ec.bind(f, "seam_map", seam)
+                ec.set(f, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
@@ -583,9 +590,10 @@ class GaussianBlurPass(Pass):
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
         reach = blur_ring(ec, n, stretch, self.i)
         tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if ec.setting("deon.skip_gutters") else None
-        # a dilating fill: over the texels this blur's taps reach (the islands' tiles and reach)
-        fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
-        draws: list[tuple[Any, dict[str, Any], Any, Any]] = []  # (program, uniforms, source, target), in order: H then V per sub-step (eq. 25-26)
+        # a dilating fill: over the texels this blur's taps reach beyond the island tiles
+        fill_tiles = work_tiles(ec, n, reach, inside=DILATE_RING) if dilate_fill else tiles
+        # (program, uniforms, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
+        draws: list[tuple[Any, dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
             # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
@@ -593,17 +601,21 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, self._output() if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    draws.append((fill, refl, source, filled))
+                    if fill_in is not None:
+                        draws.append((fill_in, refl, source, filled, tiles))
+                    if fill_in is None or fill_tiles is not None:
+                        draws.append((fill, refl, source, filled, fill_tiles))
                     source = filled
-                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target))  # spacing = sigma (eq. 25)
+                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target, tiles))  # spacing = sigma (eq. 25)
             src = tmp2
+        ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))
         for d, sub, subs in ec.units(len(draws)):
-            program, values, source, target = draws[d]
+            program, values, source, target, where = draws[d]
             for name, value in values.items():
                 ec.set(program, name, value)
             ec.bind(program, "source", source)
             with ec.band(sub, subs):
-                ec.draw_fullscreen(program, target, tiles=fill_tiles if program is fill else tiles)
+                ec.draw_fullscreen(program, target, tiles=where)
 
 
 def texture_shadows(r) -> bool:
