@@ -458,8 +458,6 @@ class GaussianBlurPass(Pass):
         r.program("deon_blur", **tiled, **zones, **border, **self._narrow(r, step, stretch, n))
         if seam:
             r.program("seam_fill", **(dilate_fill or tiled), **border)
-            if dilate_fill:  # the island tiles hold every value already: a plain fill there
-                r.program("seam_fill", **tiled)
         r.output(self._output(), self._spec(n))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -569,9 +567,6 @@ class GaussianBlurPass(Pass):
         filled = ec.held("filled", spec)[0] if seam else None
         dilate_fill = bool(seam) and island_tiles(ec, self.chain, border)
         fill = ec.program("seam_fill", **({"DILATE": 1, **tiled} if dilate_fill else {})) if seam else None
-        # on the island tiles (and DILATE_RING) a blur's output is whole: the plain fill, cheaper by
-        # one dependent fetch; the dilating one only on the tiles between them and the taps' reach
-        fill_in = ec.program("seam_fill", **tiled) if dilate_fill else None
         if dilate_fill:
             ec.bind(fill, "gutter", gutter_resource(n))
         if border:
@@ -580,9 +575,8 @@ class GaussianBlurPass(Pass):
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
-            for f in (fill, fill_in) if fill_in is not None else (fill,):
-                ec.bind(f, "seam_map", seam)
-                ec.set(f, "u_past_border_dark", light)
+            ec.bind(fill, "seam_map", seam)
+            ec.set(fill, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
         src = step.source if self.chain == "irradiance" else stretch_of(step.source)
@@ -590,8 +584,9 @@ class GaussianBlurPass(Pass):
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
         reach = blur_ring(ec, n, stretch, self.i)
         tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if ec.setting("deon.skip_gutters") else None
-        # a dilating fill: over the texels this blur's taps reach beyond the island tiles
-        fill_tiles = work_tiles(ec, n, reach, inside=DILATE_RING) if dilate_fill else tiles
+        # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
+        # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
+        fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
         # (program, uniforms, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
         draws: list[tuple[Any, dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
@@ -601,10 +596,7 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, self._output() if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    if fill_in is not None:
-                        draws.append((fill_in, refl, source, filled, tiles))
-                    if fill_in is None or fill_tiles is not None:
-                        draws.append((fill, refl, source, filled, fill_tiles))
+                    draws.append((fill, refl, source, filled, fill_tiles))
                     source = filled
                 draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target, tiles))  # spacing = sigma (eq. 25)
             src = tmp2

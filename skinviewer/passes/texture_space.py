@@ -150,14 +150,13 @@ def read_gutter(tex: moderngl.Texture) -> np.ndarray:
 TILE = 16  # texels per tile edge of work_tiles
 
 
-def work_tiles(ec, size: int, ring: int, inside: int | None = None) -> tuple | None:
+def work_tiles(ec, size: int, ring: int) -> tuple | None:
     """The tiles (TILE x TILE texels) holding a texel covered by a UV island or within ``ring``
     texels of one: (RG32F 1-row texture of tile origins, count, TILE) for ``ec.draw_fullscreen(...,
     tiles=)`` with a program compiled with TILED=1. Once per mesh, size and ring; one tile of the
-    whole target when they are (nearly) every tile. ``inside``: only those not among the tiles of
-    ``work_tiles(ec, size, inside)`` (never the whole target; None when there are none)."""
+    whole target when they are (nearly) every tile."""
     objs = ec.state.setdefault("gl_objects", {})
-    key = ("work_tiles", id(ec.scene), size, int(ring)) + (() if inside is None else (int(inside),))
+    key = ("work_tiles", id(ec.scene), size, int(ring))
     if key in objs:
         return objs[key]
     for k in [k for k in objs if k[0] == "work_tiles" and k[1] != id(ec.scene)]:
@@ -166,24 +165,11 @@ def work_tiles(ec, size: int, ring: int, inside: int | None = None) -> tuple | N
             old[0].release()
     g = read_gutter(ec.input(gutter_resource(size)))
     y, x = np.mgrid[0:size, 0:size]
-    dist = np.hypot(g[..., 0] - x, g[..., 1] - y)
+    near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
     nt = -(-size // TILE)
-
-    def tiles_of(r: int) -> np.ndarray:
-        pad = np.zeros((nt * TILE, nt * TILE), bool)
-        pad[:size, :size] = dist <= r
-        return pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))
-    any_t = tiles_of(ring)
-    if inside is not None:
-        ty, tx = np.nonzero(any_t & ~tiles_of(inside))
-        if len(tx) == 0:
-            objs[key] = None
-            return None
-        origins = np.stack([tx * TILE, ty * TILE], axis=1).astype(np.float32)
-        tex = ec.gl.texture((len(tx), 1), 2, origins.tobytes(), dtype="f4")
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        objs[key] = (tex, len(tx), TILE)
-        return objs[key]
+    pad = np.zeros((nt * TILE, nt * TILE), bool)
+    pad[:size, :size] = near
+    any_t = pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))
     ty, tx = np.nonzero(any_t)
     edge = TILE
     if len(tx) == 0 or len(tx) > 0.9 * nt * nt or len(tx) > 16384:
