@@ -354,8 +354,8 @@ class DeonSettings(_Model):
                     "issue 10 item 1, notes/fidelity.md)")
     skip_gutters: bool = Field(
         True, description="blurs shade only the tiles of the UV islands (and the ring a reader reaches); with the "
-                          "seam fill, the fill dilates the gutters (images identical; the summed step -23 %, a blur "
-                          "draw -15 % at 1024^2 on llvmpipe, issue 27, notes/blur_floor.md)")
+                          "seam fill, the fill dilates the gutters (images identical; the summed step -14 to -18 % "
+                          "at 1024^2 on llvmpipe, issue 27, notes/perf.md)")
     tsm_auto: bool = Field(
         True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
     subpixel_kernel_px: float = Field(
