@@ -106,7 +106,7 @@ def blur_draw_ms(report, name: str, seam_fill: bool) -> tuple[float | None, int]
     rec = {p.name: p for p in report.passes}.get(name)
     if rec is None or rec.ms is None or not rec.draws:
         return None, 0
-    directions = rec.draws // 2 if seam_fill else rec.draws
+    directions = rec.figures.get("directions") or (rec.draws // 2 if seam_fill else rec.draws)
     return rec.ms / max(directions, 1), directions
 
 

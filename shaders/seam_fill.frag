@@ -10,6 +10,11 @@ uniform sampler2D source;
 // value that puts the bilinear ramp's edge where the border is; A (thickness) keeps the edge's value.
 uniform sampler2D seam_map;  // RG: texel coordinate across the UV seam, B: 1 there, 2 past a border
 uniform int u_past_border_dark;  // 1 for light; 0 for a metric (the stretch chain): the edge's value
+#ifdef DILATE
+// the source was drawn on the island tiles only (deon.skip_gutters, issue 27): every texel reads its
+// value at the island texel the gutter map names, as the blur computed it there; the fill also dilates
+uniform sampler2D gutter;  // RG: the nearest island texel
+#endif
 #ifdef OPEN_BORDER
 // a blur of E (not E itself): past the border the odd reflection of the light (lib/open_border.glsl)
 #include "lib/open_border.glsl"
@@ -24,7 +29,11 @@ out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 s = texelFetch(seam_map, p, 0);
+#ifdef DILATE
+    vec4 here = texelFetch(source, ivec2(texelFetch(gutter, p, 0).rg + 0.5), 0);
+#else
     vec4 here = texelFetch(source, p, 0);
+#endif
 #ifdef OPEN_BORDER
     vec4 bf = texelFetch(border_map, p, 0);
     if (u_reflect != 0 && u_past_border_dark != 0 && s.b > 1.5 && bf.a > 0.5 && bf.r < 0.0) {

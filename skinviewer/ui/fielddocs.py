@@ -111,8 +111,8 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "deon.open_border": ("", "reflect: past an open mesh border each blur after the first reads the light "
                          "reflected about the border, so the rim keeps the light the surface keeps (issue 30); "
                          "absorb: no light there (the rim loses light)"),
-    "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a blur can read "
-                          "(images identical; pays off on GPUs)"),
+    "deon.skip_gutters": ("", "blurs draw only the tiles of the UV islands and the ring a reader can reach "
+                          "(images identical; the summed blur step ~15 % cheaper at 1024^2 maps)"),
     "render.texel_surface": ("", "texture-space maps are shaded once per texel from a per-mesh map of the surface "
                              "instead of rasterising the mesh each time (same image, much faster; more memory)"),
     "deon.tsm_auto": ("", "skip the translucent shadow map when no light is behind a thin part that is in view"),
