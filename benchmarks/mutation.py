@@ -48,7 +48,9 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.profiles": (["skinviewer/physics/profiles.py"], ["tests/test_profiles.py"]),
     # test_fitting.py takes ~6 min on a loaded 2-core machine: a group of its own
     "physics.fitting": (["skinviewer/physics/fitting.py"], ["tests/test_fitting.py"]),
-    "physics.diffusion": (["skinviewer/physics/diffusion.py"], ["tests/test_reference.py"]),
+    # d'Eon's numpy maths; its GL tests (test_deon, test_rules, test_fidelity: minutes each) are left out
+    "physics.diffusion": (["skinviewer/physics/diffusion.py"],
+                          ["tests/test_diffusion_physics.py", "tests/test_separable_physics.py"]),
     "physics.specular": (["skinviewer/physics/specular.py"], ["tests/test_specular.py"]),
     "physics.environment": (["skinviewer/physics/environment.py"], ["tests/test_environment.py"]),
     "physics.surface_gather": (["skinviewer/physics/surface_gather.py"], ["tests/test_tiles.py"]),
