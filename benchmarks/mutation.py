@@ -52,7 +52,12 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.diffusion": (["skinviewer/physics/diffusion.py"],
                           ["tests/test_diffusion_physics.py", "tests/test_separable_physics.py"]),
     "physics.specular": (["skinviewer/physics/specular.py"], ["tests/test_specular.py"]),
-    "physics.environment": (["skinviewer/physics/environment.py"], ["tests/test_environment.py"]),
+    # the numpy tests of the three environment files (their renders, the viewer and the bench are left out)
+    "physics.environment": (["skinviewer/physics/environment.py"],
+                            ["tests/test_environment.py", "tests/test_env_twins.py", "tests/test_env_transfer.py",
+                             "-k", "not (sphere_shading or every_technique or occlusion_darkens or right_drag or "
+                             "bench_sweeps or viewer_refuses or cli_refuses or vertex_stage or background_shows or "
+                             "phong_sphere or penner_sphere or texel_path or twins and limits_and_the_shader)"]),
     "physics.surface_gather": (["skinviewer/physics/surface_gather.py"], ["tests/test_tiles.py"]),
     # without its 46 s GL test (the renderer's view; it checks the camera, not the integration)
     "physics.ground_truth": (["skinviewer/physics/ground_truth.py"],
