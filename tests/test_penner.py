@@ -159,3 +159,13 @@ def test_env_band_factors_by_funk_hecke_on_closed_form_rows():
     np.testing.assert_allclose(w[:, :, 0], want, atol=2e-5)
     np.testing.assert_allclose(w[:, :, 1], want, atol=2e-5)
     np.testing.assert_allclose(w[:, :, 2], want * 0.5, atol=2e-5)
+
+
+def test_vertex_curvature_of_one_bent_triangle_by_hand():
+    """|n_i - n_j| / |p_i - p_j| on each of the three edges, averaged per vertex (a sphere cannot tell
+    a missing edge: every edge gives 1/R there)."""
+    p = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    nrm = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 0.0, 1.0]])
+    k01, k12, k02 = math.sqrt(0.4), math.sqrt(0.4) / math.sqrt(2.0), 0.0
+    got = penner.vertex_curvature(p, nrm, np.array([[0, 1, 2]]), 2.0)  # 2 mm per unit: halves every k
+    np.testing.assert_allclose(got, [(k01 + k02) / 4, (k01 + k12) / 4, (k12 + k02) / 4], rtol=1e-6)
