@@ -55,6 +55,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     # the numpy tests of the three environment files (their renders, the viewer and the bench are left out)
     "physics.environment": (["skinviewer/physics/environment.py"],
                             ["tests/test_environment.py", "tests/test_env_twins.py", "tests/test_env_transfer.py",
+                             "tests/test_env_numpy_pins.py",
                              "-k", "not (sphere_shading or every_technique or occlusion_darkens or right_drag or "
                              "bench_sweeps or viewer_refuses or cli_refuses or vertex_stage or background_shows or "
                              "phong_sphere or penner_sphere or texel_path or twins and limits_and_the_shader)"]),
