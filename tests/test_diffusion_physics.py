@@ -61,6 +61,8 @@ def test_seven_tap_kernel_has_unit_variance_and_listing_14_5_does_not():
     np.testing.assert_allclose(k, np.exp(-np.arange(-3, 4) ** 2 / (2 * s * s)) / np.exp(-np.arange(-3, 4) ** 2 / (2 * s * s)).sum(),
                                rtol=1e-12)
     assert float(np.sum(D.GPU_GEMS_KERNEL7 * np.arange(-3, 4) ** 2)) == pytest.approx(1.08, abs=0.005)
+    # the solver itself (KERNEL7 is computed once, at import): the same kernel when called again
+    np.testing.assert_allclose(D._solve_kernel(), k, rtol=1e-12)
 
 
 def test_blur_plan_chain_reuse_fold_and_texels():
@@ -172,6 +174,7 @@ def test_vertex_covariance_weights_by_surface_area_and_degenerate_meshes_get_the
     assert D.stretch_from_uv_covariance([1.0, 0.99, 1.0])[2] == -0.95
     # s_u, s_v clamped into [1e-7, MAX_UV_PER_MM]
     np.testing.assert_allclose(D.stretch_from_uv_covariance([1e6, 0.0, 1e-20])[:2], [D.MAX_UV_PER_MM, 1e-7])
+    np.testing.assert_allclose(D.stretch_from_uv_covariance([1e-20, 0.0, 1e6])[:2], [1e-7, D.MAX_UV_PER_MM])
 
 
 def test_sub_steps_add_up_and_keep_each_blur_smooth():
