@@ -62,7 +62,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.surface_gather": (["skinviewer/physics/surface_gather.py"], ["tests/test_tiles.py"]),
     # without its 46 s GL test (the renderer's view; it checks the camera, not the integration)
     "physics.ground_truth": (["skinviewer/physics/ground_truth.py"],
-                             ["tests/test_reference.py",
+                             ["tests/test_reference.py", "tests/test_ground_truth_pins.py",
                               "--deselect=tests/test_reference.py::test_truth_sees_the_view_the_renderer_draws"]),
     "physics.artist": (["skinviewer/physics/artist.py"], ["tests/test_artist.py"]),
     "physics.engines": (["skinviewer/physics/engines.py"], ["tests/test_exchange.py"]),
