@@ -66,3 +66,10 @@ def test_a_cancel_stops_the_exitance_and_progress_reaches_one():
     assert seen[-1] == pytest.approx(1.0) and seen == sorted(seen)
     with pytest.raises(InterruptedError, match="^cancelled$"):
         d.exitance(np.zeros((2, 3)), cancelled=lambda: True)
+
+
+def test_triangle_mass_of_float32_corners_is_computed_in_float64():
+    """Mesh positions are often float32: the element integral of the same corners is the float64 one."""
+    q = np.float32([[0.3, -0.2], [1.7, 0.4], [-0.6, 1.1]])
+    want = gt.gaussian_triangle_mass(*q.astype(np.float64))
+    assert gt.gaussian_triangle_mass(*q) == pytest.approx(want, rel=1e-13)
