@@ -74,3 +74,16 @@ def test_transfer_of_an_empty_mesh_is_the_unoccluded_one_in_float32():
     assert T.dtype == np.float32 and T.shape == (2, 25)
     np.testing.assert_allclose(T, env.transfer_unoccluded(N), rtol=1e-6, atol=1e-7)
     assert env.transfer_ao(T) == pytest.approx([1.0, 1.0], rel=1e-6)
+
+
+def test_transfer_and_occlusion_come_out_in_their_documented_precision():
+    """bake_transfer returns float32 (the vertex attribute it becomes) for a real mesh too; specular_occlusion
+    computes in float64 whatever the precision of N.V (a float32 G-buffer read-back)."""
+    P = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    N = np.tile([0.0, 0.0, 1.0], (3, 1))
+    T = env.bake_transfer(P, N, np.array([[0, 1, 2]]), rays=4)
+    assert T.dtype == np.float32 and T.shape == (3, 25)
+    np.testing.assert_allclose(T, env.transfer_unoccluded(N), rtol=1e-6, atol=1e-6)  # nothing above a lone triangle
+    nv = np.float32([0.3, 0.71])
+    want = env.specular_occlusion(nv.astype(np.float64), 0.2, np.array([0.25, 0.1]))
+    np.testing.assert_allclose(env.specular_occlusion(nv, 0.2, np.array([0.25, 0.1])), want, rtol=1e-14, atol=0)
