@@ -170,10 +170,10 @@ def test_messages_one_gaussian_the_look_profile_and_edges():
     assert quad(lambda r: r * g(r), 0, np.inf)[0] == pytest.approx(2.5 * float(d.max()), rel=1e-9)
     # ... and 2.5 d is the mean radius of Burley's eq. 2.84 profile itself, R(r) of the look (energy A)
     for c in range(3):
-        R = lambda r: artist.burley_profile(r, color, radius)[c]  # noqa: E731
-        energy = quad(lambda r: 2 * math.pi * r * R(r), 0, np.inf, limit=200)[0]
+        R = lambda r, c=c: artist.burley_profile(r, color, radius)[c]  # noqa: E731
+        energy = quad(lambda r, R=R: 2 * math.pi * r * R(r), 0, np.inf, limit=200)[0]
         assert energy == pytest.approx(color[c], rel=1e-8)
-        assert quad(lambda r: 2 * math.pi * r * r * R(r), 0, np.inf, limit=200)[0] / energy == pytest.approx(
+        assert quad(lambda r, R=R: 2 * math.pi * r * r * R(r), 0, np.inf, limit=200)[0] / energy == pytest.approx(
             2.5 * d[c], rel=1e-8)
         r0 = 0.7
         assert R(r0) == pytest.approx(color[c] * (math.exp(-r0 / d[c]) + math.exp(-r0 / (3 * d[c])))

@@ -16,7 +16,7 @@ from skinviewer.physics import diffusion as D
 def test_gaussian_and_profile_eq_20_21():
     for v in (0.01, 0.3, 4.0):
         # eq. 20 has unit integral over the plane; its peak is 1 / (2 pi v)
-        assert quad(lambda r: 2 * math.pi * r * float(D.gaussian(v, r)), 0, np.inf)[0] == pytest.approx(1.0, rel=1e-9)
+        assert quad(lambda r, v=v: 2 * math.pi * r * float(D.gaussian(v, r)), 0, np.inf)[0] == pytest.approx(1.0, rel=1e-9)
         assert float(D.gaussian(v, 0.0)) == pytest.approx(1.0 / (2 * math.pi * v), rel=1e-14)
         assert float(D.gaussian(v, 1.3)) == pytest.approx(math.exp(-1.69 / (2 * v)) / (2 * math.pi * v), rel=1e-14)
     # v = 0: a delta, 0 away from the centre, never NaN, also far out (no overflow, no warning)
@@ -204,7 +204,7 @@ def test_profile_variance_is_the_profiles_second_moment_by_quadrature():
     weights = [(0.5, 0.2, 0.0), (0.3, 0.5, 0.0), (0.2, 0.3, 0.0)]
     got = D.profile_variance(variances, weights)
     for c in range(2):
-        def prof(r, p=0):
+        def prof(r, p=0, c=c):
             return sum(w[c] * math.exp(-r * r / (2 * v)) / (2 * math.pi * v) for v, w in zip(variances, weights)) * r ** p
         mass = quad(lambda r: 2 * math.pi * r * prof(r), 0, np.inf)[0]
         assert got[c] == pytest.approx(quad(lambda r: 2 * math.pi * r * prof(r, 2), 0, np.inf)[0] / mass / 2, rel=1e-9)

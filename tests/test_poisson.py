@@ -50,7 +50,7 @@ def test_radii_give_the_profiles_variance_after_the_iterated_blur():
     weights = [(0.5, 0.2, 0.1), (0.3, 0.5, 0.2), (0.2, 0.3, 0.0)]
     kernel = np.vstack([[0.0, 0.0], np.array(poisson.POISSON_12)])
     for c in range(3):
-        def prof(r, p=0):
+        def prof(r, p=0, c=c):
             return sum(w[c] * np.exp(-r * r / (2 * v)) / (2 * np.pi * v) * r ** p for v, w in zip(variances, weights))
         mass = quad(lambda r: 2 * np.pi * r * prof(r), 0, 60, limit=200)[0]
         per_axis = quad(lambda r: 2 * np.pi * r * prof(r, 2), 0, 60, limit=200)[0] / mass / 2.0

@@ -260,7 +260,7 @@ def test_second_mutation_round_separable_pins():
     falloff = (1.0, 0.37, 0.30)
     for c in range(3):
         f = 0.001 + falloff[c]
-        got = quad(lambda r: 2.0 * math.pi * r * SP.sep_profile(r, falloff)[c], 0.0, 40.0, limit=200)[0]
+        got = quad(lambda r, c=c: 2.0 * math.pi * r * SP.sep_profile(r, falloff)[c], 0.0, 40.0, limit=200)[0]
         assert got == pytest.approx(sum(wk for wk, _ in SP.SEP_PROFILE) * f * f * math.pi / 3.14, rel=1e-8)
     with pytest.raises(ValueError, match="odd and >= 3"):
         kernel_offsets(4)
