@@ -276,3 +276,12 @@ def test_second_mutation_round_separable_pins():
     t = rotated_taps(np.float32([-0.3, 0.1, 0.3]), 0.5, 0.7)
     np.testing.assert_allclose(t[1], [math.cos(0.7) * float(np.float32(0.1)), math.sin(0.7) * float(np.float32(0.1))],
                                rtol=1e-14, atol=0)
+    # eq. 3.2 from a float32 depth buffer and its float32 derivative: the float64 stretch of the same values
+    d32, g32 = np.float32([0.7, 313.3]), np.float32([0.013, 1.7])
+    want = [(8.0 / 11.0) * 1234.5 / (float(d) + 0.37 * float(g)) for d, g in zip(d32, g32)]
+    np.testing.assert_allclose(stretch_px_per_mm(d32, g32, 8.0, 0.37, 1234.5), want, rtol=1e-14, atol=0)
+    # strength clamped to [0, 1]: a negative strength is 0 (the centre tap only), above 1 is 1
+    k0, _ = separable_kernel(11, strength=(-0.5, 0.0, 1.7))
+    np.testing.assert_array_equal(k0[:, 0], np.eye(11)[0])
+    np.testing.assert_array_equal(k0[:, 0], k0[:, 1])
+    np.testing.assert_allclose(k0[:, 2], separable_kernel(11, strength=(1.0, 1.0, 1.0))[0][:, 2], rtol=1e-15)
