@@ -59,7 +59,8 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                              "-k", "not (sphere_shading or every_technique or occlusion_darkens or right_drag or "
                              "bench_sweeps or viewer_refuses or cli_refuses or vertex_stage or background_shows or "
                              "phong_sphere or penner_sphere or texel_path or twins and limits_and_the_shader)"]),
-    "physics.surface_gather": (["skinviewer/physics/surface_gather.py"], ["tests/test_tiles.py"]),
+    "physics.surface_gather": (["skinviewer/physics/surface_gather.py"],
+                               ["tests/test_tiles.py", "tests/test_surface_gather_physics.py"]),
     # without its 46 s GL test (the renderer's view; it checks the camera, not the integration)
     "physics.ground_truth": (["skinviewer/physics/ground_truth.py"],
                              ["tests/test_reference.py", "tests/test_ground_truth_pins.py",
