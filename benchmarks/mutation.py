@@ -47,7 +47,7 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.penner": (["skinviewer/physics/penner.py"], ["tests/test_penner.py"]),
     "physics.profiles": (["skinviewer/physics/profiles.py"], ["tests/test_profiles.py"]),
     # test_fitting.py takes ~6 min on a loaded 2-core machine: a group of its own
-    "physics.fitting": (["skinviewer/physics/fitting.py"], ["tests/test_fitting.py"]),
+    "physics.fitting": (["skinviewer/physics/fitting.py"], ["tests/test_fitting.py", "tests/test_fitting_grid.py"]),
     # d'Eon's numpy maths; its GL tests (test_deon, test_rules, test_fidelity: minutes each) are left out
     "physics.diffusion": (["skinviewer/physics/diffusion.py"],
                           ["tests/test_diffusion_physics.py", "tests/test_separable_physics.py"]),
