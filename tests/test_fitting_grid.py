@@ -43,3 +43,9 @@ def test_grid_from_one_channel_of_samples_and_the_fit_report():
     assert d["k"] == 2 and d["shared_variances"] is True and list(d["channels"]) == ["r", "g", "b"]
     assert d["channels"]["g"]["weights"] == [0.3, 0.7] and d["channels"]["b"]["variances"] == [0.1, 1.0]
     assert d["channels"]["b"]["error"] == 0.3 and d["channels"]["r"]["target_total"] == 1.0
+
+
+def test_fixed_variances_that_are_not_positive_numbers_are_refused():
+    for bad in ([0.1, math.nan], [0.2, math.inf], [0.1, 0.0], [], [[0.1, 0.2]]):
+        with pytest.raises(ValueError, match="^fixed variances must be positive numbers$"):
+            F.fit_gaussians(_gauss(0.5), fixed_variances=bad)
