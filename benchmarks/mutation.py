@@ -41,15 +41,33 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
                             "tests/test_burley_gpu.py::test_depth_bilateral_t47"]),
     "physics.transmittance": (["skinviewer/physics/transmittance.py", "skinviewer/physics/separable.py"],
                               ["tests/test_separable_physics.py"]),
+    # separable.py alone (physics.transmittance samples both modules: 24 of its 30 were separable's)
+    "physics.separable": (["skinviewer/physics/separable.py"], ["tests/test_separable_physics.py"]),
     "physics.poisson": (["skinviewer/physics/poisson.py"], ["tests/test_poisson.py"]),
     "physics.penner": (["skinviewer/physics/penner.py"], ["tests/test_penner.py"]),
     "physics.profiles": (["skinviewer/physics/profiles.py"], ["tests/test_profiles.py"]),
     # test_fitting.py takes ~6 min on a loaded 2-core machine: a group of its own
-    "physics.fitting": (["skinviewer/physics/fitting.py"], ["tests/test_fitting.py"]),
-    "physics.diffusion": (["skinviewer/physics/diffusion.py"], ["tests/test_reference.py"]),
+    "physics.fitting": (["skinviewer/physics/fitting.py"], ["tests/test_fitting.py", "tests/test_fitting_grid.py"]),
+    # d'Eon's numpy maths; its GL tests (test_deon, test_rules, test_fidelity: minutes each) are left out
+    "physics.diffusion": (["skinviewer/physics/diffusion.py"],
+                          ["tests/test_diffusion_physics.py", "tests/test_separable_physics.py"]),
     "physics.specular": (["skinviewer/physics/specular.py"], ["tests/test_specular.py"]),
-    "physics.environment": (["skinviewer/physics/environment.py"], ["tests/test_environment.py"]),
-    "physics.surface_gather": (["skinviewer/physics/surface_gather.py"], ["tests/test_tiles.py"]),
+    # the numpy tests of the three environment files (their renders, the viewer and the bench are left out)
+    "physics.environment": (["skinviewer/physics/environment.py"],
+                            ["tests/test_environment.py", "tests/test_env_twins.py", "tests/test_env_transfer.py",
+                             "tests/test_env_numpy_pins.py",
+                             "-k", "not (sphere_shading or every_technique or occlusion_darkens or right_drag or "
+                             "bench_sweeps or viewer_refuses or cli_refuses or vertex_stage or background_shows or "
+                             "phong_sphere or penner_sphere or texel_path or twins and limits_and_the_shader)"]),
+    "physics.surface_gather": (["skinviewer/physics/surface_gather.py"],
+                               ["tests/test_tiles.py", "tests/test_surface_gather_physics.py"]),
+    # without its 46 s GL test (the renderer's view; it checks the camera, not the integration)
+    "physics.ground_truth": (["skinviewer/physics/ground_truth.py"],
+                             ["tests/test_reference.py", "tests/test_ground_truth_pins.py",
+                              "--deselect=tests/test_reference.py::test_truth_sees_the_view_the_renderer_draws"]),
+    "physics.artist": (["skinviewer/physics/artist.py"], ["tests/test_artist.py"]),
+    "physics.engines": (["skinviewer/physics/engines.py"], ["tests/test_exchange.py"]),
+    "physics.open_border": (["skinviewer/physics/open_border.py"], ["tests/test_open_border.py"]),
     "core.graph": (["skinviewer/core/graph.py", "skinviewer/core/execute.py", "skinviewer/core/pass_api.py"],
                    ["tests/test_graph.py"]),
     "core.settings": (["skinviewer/core/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py",

@@ -141,3 +141,42 @@ def test_cli_set_look_rederives(tmp_path):
     v = np.array([g.variance for g in s.deon.gaussians])
     w = np.array([g.weights for g in s.deon.gaussians])
     np.testing.assert_allclose(artist.estimate_radius(v, w, s.look.scatter_color), (2.0, 1.0, 0.5), rtol=1e-5)
+
+
+def test_messages_one_gaussian_the_look_profile_and_edges():
+    """Issue 36's mutation sample of artist.py. The user reads these messages whole (one clear line); a
+    one-Gaussian table keeps the look's mean radius 2.5 d of the widest channel (quadrature of the 2-D
+    Gaussian's radial energy, and of Burley's own profile for the 2.5 d); the look's profile is eq. 2.84
+    and carries the colour A as its energy (quadrature); a channel with no energy has no half-energy
+    radius inside the grid (its far end, 1 m)."""
+    from scipy.integrate import quad
+    for bad, msg in ((((1.2, 0.5, 0.5), (1, 1, 1)), r"scatter colour components must be in \[0, 1\]"),
+                     (((0.5, 0.5, 0.5), (1, 0, 1)), r"scatter radius components must be > 0 mm")):
+        with pytest.raises(ValueError, match=f"^{msg}$"):
+            artist.gaussians(*bad)
+    for k in (0, 65):
+        with pytest.raises(ValueError, match="^the number of Gaussians must be between 1 and 64$"):
+            artist.gaussians(*SKIN1, k=k)
+    normalised = np.full((6, 3), 1.0 / 6.0)
+    with pytest.raises(ValueError, match="^scatter colour must be finite$"):
+        artist.estimate_color(normalised, (math.nan, 0.5, 0.5))
+    # one Gaussian: its radial energy 2 pi r G(r) has the mean radius 2.5 d of the widest channel
+    color, radius = SKIN1
+    d = artist.shape_distance(color, radius)
+    v, W = artist.gaussians(color, radius, k=1)
+    assert v.shape == (1,) and W.shape == (1, 3)
+    np.testing.assert_allclose(W, 1.0)
+    g = lambda r: r * math.exp(-r * r / (2 * v[0])) / v[0]  # noqa: E731  (2 pi r G, G = e^(-r^2/2v) / (2 pi v))
+    assert quad(lambda r: r * g(r), 0, np.inf)[0] == pytest.approx(2.5 * float(d.max()), rel=1e-9)
+    # ... and 2.5 d is the mean radius of Burley's eq. 2.84 profile itself, R(r) of the look (energy A)
+    for c in range(3):
+        R = lambda r, c=c: artist.burley_profile(r, color, radius)[c]  # noqa: E731
+        energy = quad(lambda r, R=R: 2 * math.pi * r * R(r), 0, np.inf, limit=200)[0]
+        assert energy == pytest.approx(color[c], rel=1e-8)
+        assert quad(lambda r, R=R: 2 * math.pi * r * r * R(r), 0, np.inf, limit=200)[0] / energy == pytest.approx(
+            2.5 * d[c], rel=1e-8)
+        r0 = 0.7
+        assert R(r0) == pytest.approx(color[c] * (math.exp(-r0 / d[c]) + math.exp(-r0 / (3 * d[c])))
+                                      / (8 * math.pi * d[c] * r0), rel=1e-12)
+    # no energy in blue: no radius inside which half of it lies; the grid's far end (1e3 mm), not its last but one
+    np.testing.assert_array_equal(artist.energy_radius([1.0, 4.0], [(0.5, 0.5, 0.0), (0.5, 0.5, 0.0)])[2], 1e3)

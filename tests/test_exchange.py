@@ -67,6 +67,33 @@ def test_specular_and_unit_conversions():
     assert cb.d_mm == pytest.approx([2.0, 1.0, 0.5])
 
 
+def test_fit_edges_grid_quadrature_and_what_hdrp_and_the_skin_refuse():
+    """Issue 36's mutation sample of engines.py. The grid's quadrature of int (r R)^2 dr against closed
+    forms; a black channel fits A = 0 with a finite error; rd_error is relative (A fixed at 0.4 against a
+    Burley profile of R_d = 0.5, eq. 2.84 integrating to A: |0.4 - 0.5| / 0.5 = 0.2); the fit's dict; HDRP's
+    profile carries no albedo; a roughness outside [0, 1] and a bad HDRP distance are refused by name."""
+    # r R = e^(-r) (R = e^(-r) / r): int_0^inf e^(-2r) dr = 1/2; r R = r e^(-r^2): int r^2 e^(-2 r^2) dr = sqrt(pi/2) / 8
+    for prof, want in ((lambda r: np.exp(-r) / r, 0.5), (lambda r: np.exp(-r * r), math.sqrt(math.pi / 2) / 8)):
+        g = E.r_grid(prof)
+        f = g.r * prof(g.r)
+        assert float(g.norm(f)) ** 2 == pytest.approx(want, rel=1e-4)
+    A, d = np.array([0.6, 0.3, 0.0]), np.array([1.0, 0.5, 0.2])
+    fit = E.fit_burley(lambda r: E.burley_profile(r, A, d))
+    assert fit.A[2] == 0.0 and fit.d[2] == 1.0 and fit.error[2] == 0.0 and fit.rd_error[2] == 0.0
+    assert fit.to_dict() == {"albedo": fit.A.tolist(), "d_mm": fit.d.tolist(), "error_rR": fit.error.tolist(),
+                             "rd_target": fit.rd_target.tolist(), "rd_error": fit.rd_error.tolist()}
+    half = E.fit_burley(lambda r: E.burley_profile(r, [0.5] * 3, [1.0] * 3), fixed_albedo=[0.4] * 3)
+    np.testing.assert_allclose(half.rd_target, 0.5, rtol=1e-4)
+    np.testing.assert_allclose(half.rd_error, 0.2, rtol=1e-3)
+    hd = E.hdrp_skin((1.0, 0.5, 0.25), 2.0)
+    assert hd.albedo_in_profile is False and E.unreal_skin([0.5] * 3, [1, 1, 1], 0.1).albedo_in_profile is True
+    for r in (1.5, -0.1, math.nan):
+        with pytest.raises(ValueError, match="^roughness must be in \\[0, 1\\]"):
+            E.EngineSkin(np.full(3, 0.5), np.ones(3), roughness=r)
+    with pytest.raises(ValueError, match="^scatteringDistance: expected 3 finite numbers"):
+        E.hdrp_skin((1.0, math.nan, 1.0), 2.0)
+
+
 @pytest.mark.parametrize("target", ["hdrp", "unreal", "cb"])
 def test_parametrisations_invert(target):
     skin = E.EngineSkin([0.7, 0.4, 0.25], [0.9, 0.35, 0.2], 0.5, 1.38, albedo_in_profile=target != "hdrp")

@@ -786,3 +786,82 @@ def test_kernel_bookkeeping_sub_bands_resizes_budgets_idle_frames_and_prune_chai
     rep = g.run(frame(with_values(Settings(), {"render.check_finite": True})))
     assert rep.passes[0].nonfinite == ["big"]
     g.release()
+
+
+MESH_VERT = """#version 330 core
+in vec2 in_pos;
+void main() { gl_Position = vec4(in_pos, 0.0, 1.0); }
+"""
+
+
+class OneTriangle:
+    """A stand-in for the GPU scene: a mesh of one triangle that covers the whole target (the kernel only
+    asks the scene for ``vertex_array(prog, lod)``)."""
+
+    def __init__(self, ctx):
+        self.buf = ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], "f4").tobytes())
+        self.ctx = ctx
+
+    def vertex_array(self, prog, lod=0):
+        return self.ctx.vertex_array(prog, [(self.buf, "2f", "in_pos")])
+
+
+class MeshRows(Fill):
+    """A tileable pass that rasterises the scene's mesh (ec.draw_mesh, which clears first) in row bands."""
+    uses_scene = True
+    tileable = True
+
+    def reflect(self, r):
+        r.setting(self.setting_path)
+        r.program("meshfill")
+        r.output(self.out, TexSpec((8, 8), 4, "f4"))
+
+    def execute(self, ec):
+        prog = ec.program("meshfill")
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        with ec.band():
+            ec.draw_mesh(prog, self.out)
+
+
+class MeshHalves(MeshRows):
+    """Two mesh draws in one run, each into one half of the rows (ec.band(sub, subs)), each clearing."""
+    tileable = False
+
+    def execute(self, ec):
+        prog = ec.program("meshfill")
+        ec.set(prog, "u_value", float(ec.setting(self.setting_path)))
+        for k in range(2):
+            with ec.band(k, 2):
+                ec.draw_mesh(prog, self.out)
+
+
+def test_a_banded_mesh_pass_clears_only_its_own_rows(gl_ctx, shader_dir):
+    """draw_mesh clears colour and depth before it draws; in a band that clear must stay inside the band's
+    rows (fbo.clear(viewport=rect)): a band that cleared its whole target would wipe the rows the earlier
+    bands (or the last frame) wrote. Band by band across frames, then two sub-bands in one run."""
+    import skinviewer.core.graph as graph_mod
+    (shader_dir / "meshfill.vert").write_text(MESH_VERT)
+    (shader_dir / "meshfill.frag").write_text((shader_dir / "fill.frag").read_text())
+    scene = OneTriangle(gl_ctx)
+
+    def mesh_frame(value, version=1):
+        s = with_values(Settings(), {"render.exposure": value})
+        return FrameInputs(settings=s, scene=scene, scene_version=version, view=None, view_key="cam0")
+
+    g, _ = make_graph(gl_ctx, shader_dir, [MeshRows("rows", "out", "render.exposure")], ["out"])
+    g.run(mesh_frame(1.0))  # whole, no budget
+    assert np.all(g.read("out")[..., 0] == 1.0)
+    g._last_ms.pop("rows")  # as if never timed: UNMEASURED_TILES (4) bands of 2 rows, one a frame
+    for k in range(graph_mod.UNMEASURED_TILES):
+        g.run(mesh_frame(2.0), budget_ms=1e-9)
+        got = g.read("out")[..., 0]
+        rows = 2 * (k + 1)
+        # bands 1..k+1 drawn (bottom first); the rows above still hold the last frame's 1.0, not the clear's 0
+        assert np.all(got[:rows] == 2.0) and np.all(got[rows:] == 1.0), (k, got[:, 0])
+    assert g.in_progress == {}
+    g.release()
+    g, _ = make_graph(gl_ctx, shader_dir, [MeshHalves("halves", "h", "render.exposure")], ["h"])
+    rep = g.run(mesh_frame(1.5))
+    assert rep.passes[0].draws == 2 and np.all(g.read("h")[..., 0] == 1.5)
+    g.release()
+    scene.buf.release()

@@ -140,3 +140,32 @@ def test_shadow_factor_and_the_penumbra_table(renderer):
     assert np.all(p >= -1e-3) and np.all(p <= 1.0 + 2e-3)
     assert np.mean(p[:, 0] - p[:, 2]) > 0.02  # red scatters furthest into the shadow
     assert np.abs(p[:, 0] - s[pen]).max() > 0.05  # the table, not s itself
+
+
+def test_env_band_factors_by_funk_hecke_on_closed_form_rows():
+    """Issue 36 (penner's mutation group had no numpy test of env_band_factors). Funk-Hecke on rows whose
+    band weights are known in closed form, against the clamped cosine's (lambda_0 = 1/2, lambda_1 = 1/3,
+    lambda_2 = 1/8 of int_-1^1 P_l(mu) max(mu, 0) dmu): the flat row max(mu, 0) gives 1, 1, 1; wrap lighting
+    (1 + mu) / 2 gives 1 / (1/2) = 2, (1/3) / (1/3) = 1, 0 / (1/8) = 0; a constant 1/2 gives 2, 0, 0.
+    Midpoint rule over 512 columns: O(1/n^2), measured < 1e-5."""
+    n = 512
+    mu = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    rows = np.stack([np.maximum(mu, 0.0), 0.5 * (1.0 + mu), np.full(n, 0.5)])  # (3 rows, n)
+    ring = np.repeat(rows[:, :, None], 3, axis=2)
+    ring[:, :, 2] *= 0.5  # blue at half: the factors are ratios of the same rule, unchanged
+    w = penner.env_band_factors(ring)
+    assert w.shape == (3, 3, 3) and w.dtype == np.float32
+    want = np.array([[1.0, 1.0, 1.0], [2.0, 1.0, 0.0], [2.0, 0.0, 0.0]])
+    np.testing.assert_allclose(w[:, :, 0], want, atol=2e-5)
+    np.testing.assert_allclose(w[:, :, 1], want, atol=2e-5)
+    np.testing.assert_allclose(w[:, :, 2], want * 0.5, atol=2e-5)
+
+
+def test_vertex_curvature_of_one_bent_triangle_by_hand():
+    """|n_i - n_j| / |p_i - p_j| on each of the three edges, averaged per vertex (a sphere cannot tell
+    a missing edge: every edge gives 1/R there)."""
+    p = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    nrm = np.array([[0.0, 0.0, 1.0], [0.6, 0.0, 0.8], [0.0, 0.0, 1.0]])
+    k01, k12, k02 = math.sqrt(0.4), math.sqrt(0.4) / math.sqrt(2.0), 0.0
+    got = penner.vertex_curvature(p, nrm, np.array([[0, 1, 2]]), 2.0)  # 2 mm per unit: halves every k
+    np.testing.assert_allclose(got, [(k01 + k02) / 4, (k01 + k12) / 4, (k12 + k02) / 4], rtol=1e-6)

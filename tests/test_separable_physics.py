@@ -225,3 +225,63 @@ def test_edges_the_mutation_sample_found_unpinned():
     # backlit() defaults to the printed form (eq. 3.18 as [SEP] ships it): e^(-d^2 / v), wrap 0.3
     from skinviewer.physics.transmittance import backlit
     np.testing.assert_allclose(backlit([1.0], [(2.0, (1.0, 1.0, 1.0))], [0.2]), [[0.5 * math.exp(-0.5)] * 3])
+
+
+def _fetched_variance(step_px, offsets, weights):
+    """Brute force: the discrete kernel a bilinear fetch really applies -- each tap at x step px splits its
+    weight onto the two pixels around it, (1 - f, f) -- and that kernel's variance about 0 (px^2)."""
+    acc = {}
+    for x, w in zip(np.asarray(offsets, np.float64) * step_px, weights):
+        i = math.floor(x)
+        f = x - i
+        acc[i] = acc.get(i, 0.0) + w * (1.0 - f)
+        acc[i + 1] = acc.get(i + 1, 0.0) + w * f
+    return sum(w * i * i for i, w in acc.items())
+
+
+def test_second_mutation_round_separable_pins():
+    """Issue 36, the second sample of separable.py: the compensated step is the GLSL's *two* fixed-point
+    steps (ss_gauss_blur.frag: `it < 2`) of step^2 = sigma^2 - (bilinear variance), the bilinear variance
+    taken from the kernel a fetch really applies; [SEP]'s profile integrates to sum(w) f^2 pi / 3.14 (its
+    3.14 for pi, eq. in spec §4.2 step 4); a bad tap count names the rule; float32 inputs give the float64
+    answer (offsets read back from GL buffers are float32)."""
+    from scipy.integrate import quad
+
+    from skinviewer.physics import separable as SP
+    x, w = gaussian_taps(7)
+    assert sum(wi * xi * xi for xi, wi in zip(x, w)) == pytest.approx(1.0, abs=1e-12)  # unit variance taps
+    sigma = 0.8  # sub-pixel: two and three fixed-point steps differ by 4e-4 px here
+    s = sigma
+    for _ in range(2):
+        s = math.sqrt(max(sigma * sigma - (_fetched_variance(s, x, w) - s * s), 0.0))
+    assert SP.bilinear_compensated_step(sigma, x, w) == pytest.approx(s, rel=1e-12)
+    assert SP.bilinear_variance(s, x, w) == pytest.approx(_fetched_variance(s, x, w) - s * s, abs=1e-12)
+    # the profile's integral over the plane, by quadrature of 2 pi r P(r): each term integrates to w f^2 (pi / 3.14)
+    falloff = (1.0, 0.37, 0.30)
+    for c in range(3):
+        f = 0.001 + falloff[c]
+        got = quad(lambda r, c=c: 2.0 * math.pi * r * SP.sep_profile(r, falloff)[c], 0.0, 40.0, limit=200)[0]
+        assert got == pytest.approx(sum(wk for wk, _ in SP.SEP_PROFILE) * f * f * math.pi / 3.14, rel=1e-8)
+    with pytest.raises(ValueError, match="odd and >= 3"):
+        kernel_offsets(4)
+    # float32 inputs: computed in float64 (a float32 product is 1e-7 off)
+    x32 = np.float32([0.1, 0.7, 1.3])
+    w32 = np.float32([0.2, 0.5, 0.3])
+    xd, wd = x32.astype(np.float64), w32.astype(np.float64)
+    fd = np.mod(xd * 3.0, 1.0)
+    assert SP.bilinear_variance(3.0, x32, w32) == pytest.approx(float(np.sum(wd * fd * (1.0 - fd))), rel=1e-12, abs=0)
+    want = sum(float(w32[0]) * math.exp(-float(v) ** 2 / (2.0 * 0.3)) / math.sqrt(2.0 * math.pi * 0.3) for v in x32)
+    got = preintegrated_gaussians(x32, [(0.3, (float(w32[0]),) * 3)])
+    np.testing.assert_allclose(got.sum(axis=0), [want] * 3, rtol=1e-13, atol=0)
+    t = rotated_taps(np.float32([-0.3, 0.1, 0.3]), 0.5, 0.7)
+    np.testing.assert_allclose(t[1], [math.cos(0.7) * float(np.float32(0.1)), math.sin(0.7) * float(np.float32(0.1))],
+                               rtol=1e-14, atol=0)
+    # eq. 3.2 from a float32 depth buffer and its float32 derivative: the float64 stretch of the same values
+    d32, g32 = np.float32([0.7, 313.3]), np.float32([0.013, 1.7])
+    want = [(8.0 / 11.0) * 1234.5 / (float(d) + 0.37 * float(g)) for d, g in zip(d32, g32)]
+    np.testing.assert_allclose(stretch_px_per_mm(d32, g32, 8.0, 0.37, 1234.5), want, rtol=1e-14, atol=0)
+    # strength clamped to [0, 1]: a negative strength is 0 (the centre tap only), above 1 is 1
+    k0, _ = separable_kernel(11, strength=(-0.5, 0.0, 1.7))
+    np.testing.assert_array_equal(k0[:, 0], np.eye(11)[0])
+    np.testing.assert_array_equal(k0[:, 0], k0[:, 1])
+    np.testing.assert_allclose(k0[:, 2], separable_kernel(11, strength=(1.0, 1.0, 1.0))[0][:, 2], rtol=1e-15)

@@ -378,3 +378,26 @@ def test_non_finite_components_count_as_zero():
     """safe_normalize's contract (issue 36's mutation sample): NaN, +Inf and -Inf components count as 0."""
     got = S.safe_normalize(np.array([[np.nan, 0.0, 2.0], [np.inf, 3.0, 0.0], [-np.inf, 0.0, -4.0]]))
     np.testing.assert_array_equal(got, [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]])
+
+
+def test_clamps_of_the_lookup_and_fresnel_and_a_float64_table_uploads(gl):
+    """Issue 36's second specular sample: f0 is clamped to [0, 1] (f0 = 1 is a perfect mirror, F = 1
+    everywhere; 1.5 is no brighter); sample_bilinear is CLAMP_TO_EDGE -- a lookup left of the first texel
+    centre reads column 0, right of the last reads the last (no wrap-around, no IndexError), as the GPU's
+    sampler does; upload_table takes a float64 table (stored as R32F, read back exactly as float32)."""
+    for hv in (0.0, 0.3, 1.0):
+        assert S.schlick_fresnel(hv, 1.5) == pytest.approx(1.0, abs=1e-15)
+        assert S.schlick_fresnel(hv, 1.0) == pytest.approx(1.0, abs=1e-15)
+    t = np.array([[1.0, 2.0, 3.0, 4.0], [10.0, 20.0, 30.0, 40.0]])  # (height 2, width 4)
+    # x < 0.5/4: column 0, x > 3.5/4: column 3, whatever y (rows interpolate: y = 0.5 is between the centres)
+    for x, col in ((-0.5, 0), (-1.0, 0), (0.05, 0), (0.95, 3), (1.2, 3), (2.0, 3)):
+        assert S.sample_bilinear(t, x, 0.25) == pytest.approx(t[0, col]), x
+        assert S.sample_bilinear(t, x, 0.5) == pytest.approx(0.5 * (t[0, col] + t[1, col])), x
+    table = np.linspace(0.0, 1.0, 12, dtype=np.float64).reshape(3, 4) + 1e-9  # not float32-exact
+    tex = S.upload_table(gl, table)
+    try:
+        assert tex.size == (4, 3) and tex.dtype == "f4"
+        got = np.frombuffer(tex.read(), np.float32).reshape(3, 4)
+        np.testing.assert_array_equal(got, table.astype(np.float32))
+    finally:
+        tex.release()

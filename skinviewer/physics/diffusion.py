@@ -77,7 +77,7 @@ def tsm_factor(d: ArrayLike, v: ArrayLike, form: str = "exact") -> FloatArray:
 # (eq. 25: radius = texel size * stretch * sigma). Weights: the unit Gaussian sampled at the
 # integers, exp(-k^2 / 2s^2), with s solved so that the discrete kernel's variance is exactly 1
 # (in tap units): the blur adds exactly v_i - v_(i-1) of variance, so the hierarchical chain's
-# variances add up as eq. (24) says. s = 1.0008; weights 0.0044, 0.0540, 0.2420, 0.3991, ...
+# variances add up as eq. (24) says. s = 1.0021; weights 0.0045, 0.0543, 0.2420, 0.3982, ...
 # GPU Gems 3 listing 14-5 prints {0.006, 0.061, 0.242, 0.382, ...}: its variance is 1.08 (8 % too
 # wide per blur, compounding down the chain), so it is not used.
 TAP_OFFSETS = np.arange(-3, 4, dtype=np.float64)
