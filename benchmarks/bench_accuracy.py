@@ -42,15 +42,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analyt
 
 import analytic_judge as A  # noqa: E402
 
-from skinviewer.core.gl import describe, headless_context  # noqa: E402
-from skinviewer.core.graph import TIMING_NOTES  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import (  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import (  # noqa: E402
     DeonSettings,
     GosselinSettings,
     Settings,
     with_values,
 )
+from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
+from skinviewer.kernel.graph import TIMING_NOTES  # noqa: E402
 from skinviewer.physics.diffusion import (  # noqa: E402
     IRRADIANCE,
     blur_plan_texels,

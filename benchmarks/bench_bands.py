@@ -13,10 +13,10 @@ import argparse
 import statistics
 import time
 
-from skinviewer.core import gpu as G
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel import gpu as G
+from skinviewer.kernel.gl import describe, headless_context
 
 
 def main() -> int:

@@ -23,9 +23,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from bench_frames import copy_draw_ms, settings_for  # noqa: E402
 
-from skinviewer.core.gl import describe, headless_context  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import with_values  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import with_values  # noqa: E402
+from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 
 CONFIGS = {"before": {"deon.skip_gutters": False}, "after": {"deon.skip_gutters": True}}
 

@@ -4,7 +4,7 @@ dark (where a black pair is a perfect SSIM window).
 
     python3 benchmarks/bench_env_dssim.py [--size 96] [--scan]
 
-The truths are skinviewer.core.reference's (cached on disk; the environment's takes 5-15 min at 96x96 here).
+The truths are skinviewer.engine.reference's (cached on disk; the environment's takes 5-15 min at 96x96 here).
 """
 from __future__ import annotations
 
@@ -18,11 +18,11 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_envlight import key_only  # noqa: E402
 
-from skinviewer.core.bench import compare_mask, linear_image  # noqa: E402
-from skinviewer.core.gl import headless_context  # noqa: E402
-from skinviewer.core.reference import compute_reference  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import load_preset, with_values  # noqa: E402
+from skinviewer.engine.bench import compare_mask, linear_image  # noqa: E402
+from skinviewer.engine.reference import compute_reference  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import load_preset, with_values  # noqa: E402
+from skinviewer.kernel.gl import headless_context  # noqa: E402
 from skinviewer.physics.metrics import dssim_map, image_error  # noqa: E402
 
 

@@ -4,7 +4,7 @@ no other light; each technique with its environment translucency off and on.
 
     python3 benchmarks/bench_env_translucency.py [--size 64] [--yaw 180] [--techniques deon,ssss] [--form printed]
 
-Off: deon.tsm=false / transmittance.enabled=false. The truth (skinviewer.core.reference, cached on disk)
+Off: deon.tsm=false / transmittance.enabled=false. The truth (skinviewer.engine.reference, cached on disk)
 takes ~4 min at 64x64 on a loaded 2-core VM. Never asserted: a measurement.
 """
 from __future__ import annotations
@@ -22,10 +22,10 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from helpers import small_settings  # noqa: E402
 
-from skinviewer.core.bench import compare_mask, linear_image  # noqa: E402
-from skinviewer.core.gl import headless_context  # noqa: E402
-from skinviewer.core.reference import compute_reference  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
+from skinviewer.engine.bench import compare_mask, linear_image  # noqa: E402
+from skinviewer.engine.reference import compute_reference  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.kernel.gl import headless_context  # noqa: E402
 from skinviewer.physics.metrics import image_error  # noqa: E402
 
 

@@ -6,7 +6,7 @@ vectors of order 4 / 2, AO x SH at the bent normal, none), the bake's rays and t
     python benchmarks/bench_envlight.py [--size 192] [--scan PATH] [--runs 3] [--out DIR] [--techniques a,b]
                                         [--no-head] [--no-scan]
 
-Both references (key alone, environment + key) come from skinviewer.core.reference (Embree, brute-force
+Both references (key alone, environment + key) come from skinviewer.engine.reference (Embree, brute-force
 diffusion; the environment by the control-variate Monte Carlo, its standard error printed). Frame times are
 sync-timed (glFinish + wall clock), the median of ``--runs`` forced frames, env and key-only runs
 interleaved in one process. Never asserted anywhere: machine-dependent.
@@ -23,11 +23,11 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from skinviewer import techniques
-from skinviewer.core.bench import compare_mask, linear_image
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.reference import compute_reference
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import load_preset, with_values
+from skinviewer.engine.bench import compare_mask, linear_image
+from skinviewer.engine.reference import compute_reference
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import load_preset, with_values
+from skinviewer.kernel.gl import describe, headless_context
 from skinviewer.physics.metrics import image_error
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -18,8 +18,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from skinviewer.core import exchange as X  # noqa: E402
-from skinviewer.core.settings import Settings  # noqa: E402
+from skinviewer.engine import exchange as X  # noqa: E402
+from skinviewer.ground.settings import Settings  # noqa: E402
 from skinviewer.physics import engines as E  # noqa: E402
 from skinviewer.physics.profiles import deon_skin_profile  # noqa: E402
 

@@ -28,9 +28,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analyt
 
 import analytic_judge as A  # noqa: E402
 
-from skinviewer.core.gl import describe, headless_context  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import DeonSettings, Settings, with_values  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import DeonSettings, Settings, with_values  # noqa: E402
+from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 from skinviewer.passes.deon import DIFFUSE as DEON_DIFFUSE  # noqa: E402
 from skinviewer.physics.diffusion import IRRADIANCE  # noqa: E402
 from skinviewer.scene.scenes import build_scene, scene_overrides  # noqa: E402

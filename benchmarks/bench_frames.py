@@ -16,7 +16,7 @@ Two states, both printed and named:
 * "fresh": each technique in its own new Renderer and ShaderLibrary, nothing else run before it.
 
 Memory ("tex MiB", fresh state) is everything a renderer holds after that technique's frames alone
-(core/memory.py: graph outputs, free pooled scratch, depth buffers, scene maps with mips, mesh
+(engine/memory.py: graph outputs, free pooled scratch, depth buffers, scene maps with mips, mesh
 buffers), not only declared outputs; the sequence renderer's total is printed below the ratios.
 """
 from __future__ import annotations
@@ -28,10 +28,10 @@ import time
 import moderngl
 
 from skinviewer import techniques
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.memory import renderer_memory
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.memory import renderer_memory
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe, headless_context
 from skinviewer.scene.scenes import scene_overrides
 
 
@@ -110,7 +110,7 @@ def blur_draw_ms(report, name: str, seam_fill: bool) -> tuple[float | None, int]
     return rec.ms / max(directions, 1), directions
 
 
-DEFAULTS = (640, 1024)  # what a user gets: a 640^2 view, 1024^2 maps (core/settings.py)
+DEFAULTS = (640, 1024)  # what a user gets: a 640^2 view, 1024^2 maps (ground/settings.py)
 
 
 def main() -> None:

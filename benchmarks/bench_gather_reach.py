@@ -1,7 +1,7 @@
 """The summed d'Eon step's reach following sigma (issue 27): physics/surface_gather.gather_blocks_for
 against the fixed reach of 5 blocks it replaced, side by side in one run — the summed step's cost
 (sync timing: glFinish + wall clock, forced frames, medians), the whole image's difference and each
-image's error against the ground truth (skinviewer reference, core/bench's metrics).
+image's error against the ground truth (skinviewer reference, engine/bench's metrics).
 
     python benchmarks/bench_gather_reach.py [--size 256] [--maps 1024] [--repeats 3] [--scan]
 
@@ -15,11 +15,11 @@ from unittest import mock
 
 import numpy as np
 
-from skinviewer.core.bench import compare_mask, linear_image
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.reference import compute_reference
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.bench import compare_mask, linear_image
+from skinviewer.engine.reference import compute_reference
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe, headless_context
 from skinviewer.passes import deon
 from skinviewer.physics.metrics import image_error
 

@@ -1,17 +1,17 @@
 """The error against the ground truth of every preview rung (techniques/preview.py), for the
 governor's status line and the Accuracy window: writes the shipped table
-skinviewer/techniques/preview_errors.json (``core/calibration.attach_errors`` reads it).
+skinviewer/techniques/preview_errors.json (``engine/calibration.attach_errors`` reads it).
 
     python benchmarks/bench_governor_errors.py [--size 160] [--out skinviewer/techniques/preview_errors.json]
     python benchmarks/bench_governor_errors.py --techniques deon   # one technique's rows (the others kept)
 
 The default head, the default settings (1024² maps) but the image size; the truth is
-``skinviewer reference`` of the same settings (core/reference, its cache). A rung on a smaller view
+``skinviewer reference`` of the same settings (engine/reference, its cache). A rung on a smaller view
 is rendered at its size and enlarged bilinearly to the truth's (what the viewer shows stretched).
 Error: the mean over channels of the relative RMS (physics/metrics.image_error). Beside it, under
 the key ``uncertainty`` (same rung keys), the ruler's uncertainty of that figure: the mean over
 channels of ``ImageError.rms_u``, how far the figure can move while the truth moves within its
-per-pixel uncertainty (core/reference.coarse_uncertainty, issue 30), so a status line can read
+per-pixel uncertainty (engine/reference.coarse_uncertainty, issue 30), so a status line can read
 "6.1 % ± 0.4"."""
 from __future__ import annotations
 
@@ -24,13 +24,13 @@ import numpy as np
 from scipy.ndimage import zoom
 
 from skinviewer import techniques
-from skinviewer.core.bench import compare_mask, linear_image
-from skinviewer.core.calibration import rung_key, rung_settings
-from skinviewer.core.files import atomic_write_text
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.reference import compute_reference
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.bench import compare_mask, linear_image
+from skinviewer.engine.calibration import rung_key, rung_settings
+from skinviewer.engine.reference import compute_reference
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.files import atomic_write_text
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe, headless_context
 from skinviewer.physics.metrics import image_error
 from skinviewer.techniques.preview import ladder
 

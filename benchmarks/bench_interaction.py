@@ -30,9 +30,9 @@ import time
 
 import numpy as np
 
-from skinviewer.core import calibration
-from skinviewer.core.gl import describe
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine import calibration
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe
 
 WINDOW = (1040, 700)
 
@@ -119,7 +119,7 @@ def full_frame_alone(app) -> float:
 
 
 def run_one(app, technique: str, mode: str, seconds: float, n_edits: int) -> dict:
-    from skinviewer.core.settings import validate
+    from skinviewer.ground.settings import validate
     st = app.state
     st.set_settings(validate({**st.settings.model_dump(mode="json"), "technique": technique}), "technique")
     st.apply({"render.governor": mode})

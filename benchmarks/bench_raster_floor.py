@@ -29,7 +29,7 @@ import time
 import moderngl
 import numpy as np
 
-from skinviewer.core.gl import describe, headless_context
+from skinviewer.kernel.gl import describe, headless_context
 
 VS = """#version 330 core
 void main() { vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }"""

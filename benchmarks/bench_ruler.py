@@ -37,8 +37,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # analyt
 
 import analytic_judge as A
 
-from skinviewer.core.reference import compute_reference
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.reference import compute_reference
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics import ground_truth as gt
 from skinviewer.scene.scenes import scene_overrides
 
@@ -137,8 +137,8 @@ def part_head(size: int) -> None:
 
 
 def part_rim(n: int = 1024, mode: str = "reflect") -> None:
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     from skinviewer.passes.deon import DIFFUSE
     from skinviewer.physics.diffusion import IRRADIANCE
     from skinviewer.scene.scenes import build_scene
@@ -177,8 +177,8 @@ def part_rim_cost(n: int, repeats: int = 3) -> None:
     (glFinish + wall clock), medians of the blur passes' sum; and the border frame, once per mesh and size."""
     import statistics
 
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     ctx = headless_context()
     r = Renderer(ctx)
     base = scene("shadow-edge", 160, **{"technique": "deon", "deon.irradiance_size": n, "render.timing": "sync"})
@@ -202,9 +202,9 @@ def part_rim_cost(n: int, repeats: int = 3) -> None:
 def part_rim_truth(size: int = 128) -> None:
     """d'Eon with deon.open_border absorb and reflect against the ground truth on the scenes with open
     borders: the laser slab under a uniform light (tests/test_bench.py's plane), backlit-ear, shadow-edge."""
-    from skinviewer.core.bench import compare_mask, linear_image
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     from skinviewer.physics.metrics import image_error
     ctx = headless_context()
     r = Renderer(ctx)
@@ -235,9 +235,9 @@ SCAN_VALUES = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}
 def part_samples(size: int) -> None:
     """deon.texel_samples against the ground truth (the judge that shares neither the shadow map nor the
     texel grid): head and scan, irr512 / irr1024, the default PCF and PCF off."""
-    from skinviewer.core.bench import compare_mask, linear_image
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     from skinviewer.physics.metrics import image_error
     ctx = headless_context()
     r = Renderer(ctx)
@@ -267,8 +267,8 @@ def part_samples_cost(repeats: int = 3) -> None:
     forced frame, sync timing (glFinish + wall clock), interleaved, medians."""
     import statistics
 
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     ctx = headless_context()
     r = Renderer(ctx)
     for name, extra in (("head", {}), ("scan", SCAN_VALUES)):

@@ -14,10 +14,10 @@ import argparse
 import statistics
 
 from skinviewer import techniques
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe, headless_context
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.scene.scenes import scene_overrides
 
 LIT_PASSES = ("phong", "gosselin_light_map", "gosselin_final", "deon_irradiance", "deon_final")

@@ -16,9 +16,9 @@ import statistics
 
 from bench_tsm_gather import scenes
 
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe, headless_context
 from skinviewer.passes.deon import GATHER_SURFACE
 
 

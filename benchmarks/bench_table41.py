@@ -34,10 +34,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.graph import FrameInputs, RenderGraph
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, parse_assignments, with_values
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, parse_assignments, with_values
+from skinviewer.kernel.gl import describe, headless_context
+from skinviewer.kernel.graph import FrameInputs, RenderGraph
 from skinviewer.passes.burley import (
     BEYOND_PLAN,
     BLURRED,

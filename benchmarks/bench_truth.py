@@ -1,6 +1,6 @@
-"""The viewer's progressive ground truth (core.reference.TruthSession): time to the first figure, to
+"""The viewer's progressive ground truth (engine.reference.TruthSession): time to the first figure, to
 each refinement, to a relative-RMS figure within +-0.5 % (bootstrap standard error of the pixels done,
-core.reference.sampled_rms, of a d'Eon render of the same view), an orbit that re-uses the sources,
+engine.reference.sampled_rms, of a d'Eon render of the same view), an orbit that re-uses the sources,
 and the one-shot compute_reference of the same view, side by side in one run.
 
     python3 -m benchmarks.bench_truth [--scene head] [--size 256] [--yaw 20] [--orbit-only [--field none,1,0.5]]
@@ -17,14 +17,14 @@ import time
 
 import numpy as np
 
-from skinviewer.core import reference as R
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine import reference as R
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.scene.scenes import scene_overrides
 
 
 def _render_lit(s: Settings) -> np.ndarray:
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     r = Renderer(headless_context())
     r.render_settled(s)
     lit = r.read(s, "lit")[::-1]

@@ -15,9 +15,9 @@ import os
 import statistics
 from pathlib import Path
 
-from skinviewer.core.gl import describe, headless_context
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import describe, headless_context
 
 # ../shared beside the checkout, or SKINVIEWER_SHARED (as tests/conftest.py)
 SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")

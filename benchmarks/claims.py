@@ -7,7 +7,7 @@ now and the drift. A figure's measuring code is the tests' own where a test guar
     python benchmarks/claims.py --json out.json
 
 Exit status 0 always (a report, not a test); a claim whose drift exceeds its stated tolerance is marked
-DRIFT. Memory is counted by skinviewer.core.memory (everything a renderer holds), as bench_frames.py
+DRIFT. Memory is counted by skinviewer.engine.memory (everything a renderer holds), as bench_frames.py
 does in its "fresh" state: one technique alone in a new renderer after its first full frame and a
 camera move."""
 from __future__ import annotations
@@ -24,8 +24,8 @@ sys.path.insert(0, str(ROOT / "tests"))  # the tests' own measuring helpers
 
 
 def _renderer():
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     ctx = headless_context()
     return ctx, Renderer(ctx)
 
@@ -61,9 +61,9 @@ def claim_laser(ctx, r):
 
 def claim_memory(ctx, r):
     """README: memory held (256^2 image, head): Phong / Gosselin / d'Eon at 512^2 maps; d'Eon at 1024^2."""
-    from skinviewer.core.memory import renderer_memory
-    from skinviewer.core.renderer import Renderer
-    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.engine.memory import renderer_memory
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.ground.settings import Settings, with_values
     from skinviewer.scene.scenes import scene_overrides
 
     def held(tech, maps):
@@ -89,9 +89,9 @@ def claim_lit_plane(ctx, r):
     """README: d'Eon agrees within 1 % inside a lit plane (test_bench's comparison: 48^2, 512^2 maps)."""
     from test_bench import _plane
 
-    from skinviewer.core.bench import compare_mask, linear_image
-    from skinviewer.core.reference import compute_reference
-    from skinviewer.core.settings import with_values
+    from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.reference import compute_reference
+    from skinviewer.ground.settings import with_values
     from skinviewer.physics.metrics import rel_rms
     s = with_values(_plane(48), {"deon.irradiance_size": 512})
     ref = compute_reference(s)
@@ -126,7 +126,7 @@ def main(argv=None) -> int:
     if bad:
         print(f"unknown claim(s): {', '.join(bad)}; --list shows them", file=sys.stderr)
         return 2
-    from skinviewer.core.gl import describe
+    from skinviewer.kernel.gl import describe
     ctx, r = _renderer()
     print(f"# README claims re-measured on {describe(ctx)}")
     print(f"{'claim':<48} {'README':>8} {'now':>9} {'drift':>8}  status")

@@ -3,7 +3,7 @@
 files that match the module; a mutant that no test notices "survived". Not part of CI's time budget.
 
     python benchmarks/mutation.py                       # every group below (long: see notes/mutation.md)
-    python benchmarks/mutation.py --groups physics.metrics core.settings --max-children 2
+    python benchmarks/mutation.py --groups physics.metrics ground.settings --max-children 2
     python benchmarks/mutation.py --list                # the groups and their test files
     python benchmarks/mutation.py --groups physics.burley --json b0.json   # then, after adding tests:
     python benchmarks/mutation.py --groups physics.burley --rerun b0.json  # only b0's survivors re-run
@@ -68,9 +68,9 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.artist": (["skinviewer/physics/artist.py"], ["tests/test_artist.py"]),
     "physics.engines": (["skinviewer/physics/engines.py"], ["tests/test_exchange.py"]),
     "physics.open_border": (["skinviewer/physics/open_border.py"], ["tests/test_open_border.py"]),
-    "core.graph": (["skinviewer/core/graph.py", "skinviewer/core/execute.py", "skinviewer/core/pass_api.py"],
+    "kernel.graph": (["skinviewer/kernel/graph.py", "skinviewer/kernel/execute.py", "skinviewer/kernel/pass_api.py"],
                    ["tests/test_graph.py"]),
-    "core.settings": (["skinviewer/core/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py",
+    "ground.settings": (["skinviewer/ground/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py",
                                                         "tests/test_settings_io.py"]),
 }
 
@@ -124,7 +124,7 @@ def read_results(work: Path, only_names: list[str] | None = None) -> dict[str, d
 
 
 def module_of(mutant: str) -> str:
-    # skinviewer.physics.metrics.x_rel_rms__mutmut_3 / skinviewer.core.graph.xǁRenderGraphǁrun__mutmut_1
+    # skinviewer.physics.metrics.x_rel_rms__mutmut_3 / skinviewer.kernel.graph.xǁRenderGraphǁrun__mutmut_1
     head = mutant.split("__mutmut_")[0]
     parts = head.split(".")
     return ".".join(p for p in parts[:-1]) if len(parts) > 1 else head

@@ -25,9 +25,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import moderngl  # noqa: E402
 
 from skinviewer import techniques  # noqa: E402
-from skinviewer.core.gl import headless_context  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import Settings, with_values  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import Settings, with_values  # noqa: E402
+from skinviewer.kernel.gl import headless_context  # noqa: E402
 
 _GL_TYPES = (moderngl.Texture, moderngl.Framebuffer, moderngl.Buffer, moderngl.VertexArray, moderngl.Program,
              moderngl.Renderbuffer, moderngl.Query)

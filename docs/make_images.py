@@ -60,7 +60,7 @@ def gallery(tmp: Path) -> None:
 
 VIEWER_SNIPPET = """
 import sys
-from skinviewer.core.settings import Settings
+from skinviewer.ground.settings import Settings
 from skinviewer.ui.app import create_app, destroy_app
 app = create_app(Settings(), size=(1280, 800), vsync=False)
 try:

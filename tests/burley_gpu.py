@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 
-from skinviewer.core.graph import FrameInputs, Pass, RenderGraph, TexSpec
-from skinviewer.core.settings import Settings, with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.graph import FrameInputs, Pass, RenderGraph, TexSpec
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.passes import burley as PB
 from skinviewer.scene.camera import View
 

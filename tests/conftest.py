@@ -76,7 +76,7 @@ def _cache_dir(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def gl_ctx():
-    from skinviewer.core.gl import GLUnavailableError, headless_context
+    from skinviewer.kernel.gl import GLUnavailableError, headless_context
     try:
         ctx = headless_context(backend="x11" if os.environ.get("DISPLAY") else None)
     except GLUnavailableError as exc:
@@ -96,7 +96,7 @@ def _current_gl(request):
 
 @pytest.fixture
 def renderer(gl_ctx):
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     r = Renderer(gl_ctx)
     yield r
     r.release()
@@ -106,8 +106,8 @@ def renderer(gl_ctx):
 def generic(gl_ctx):
     """A renderer whose shaders are the generic, uniform-driven ones (GENERIC_SHADERS): what every
     specialised variant must equal."""
-    from skinviewer.core.renderer import Renderer
-    from skinviewer.core.shaders import ShaderLibrary
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.shaders import ShaderLibrary
     r = Renderer(gl_ctx, ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}))
     yield r
     r.release()

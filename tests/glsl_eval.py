@@ -10,8 +10,8 @@ from pathlib import Path
 import moderngl
 import numpy as np
 
-from skinviewer.core import paths
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.ground import paths
+from skinviewer.kernel.shaders import ShaderLibrary
 
 _FRAG = """#version 330 core
 #pragma vertex_stage "{root}/vs/fullscreen.vert"

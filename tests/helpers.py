@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.core.settings import Settings, three_light_rig, with_values
+from skinviewer.ground.settings import Settings, three_light_rig, with_values
 from skinviewer.scene.scenes import scene_overrides
 
 
@@ -44,7 +44,7 @@ def settings_fields():
     section of the model (new techniques' included) and the first light."""
     from pydantic import BaseModel
 
-    from skinviewer.core.settings import Settings
+    from skinviewer.ground.settings import Settings
     from skinviewer.ui.widgets import classify
     out = []
 

@@ -8,7 +8,7 @@ import analytic_judge as A
 import numpy as np
 import pytest
 
-from skinviewer.core.settings import DeonSettings
+from skinviewer.ground.settings import DeonSettings
 from skinviewer.physics.poisson import POISSON_12
 from skinviewer.physics.profiles import sum_of_gaussians
 from skinviewer.scene.scenes import laser_scene

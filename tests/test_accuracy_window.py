@@ -19,7 +19,7 @@ def app(tmp_path_factory):
     pytest.importorskip("imgui_bundle")
     old = os.environ.get("SKINVIEWER_CACHE")
     os.environ["SKINVIEWER_CACHE"] = str(tmp_path_factory.mktemp("cache"))
-    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.ground.settings import Settings, with_values
     from skinviewer.scene.scenes import scene_overrides
     from skinviewer.ui.app import create_app, destroy_app
     s = with_values(Settings(), {"scene.name": "laser", **scene_overrides("laser"), "technique": "deon",
@@ -66,7 +66,7 @@ def test_ground_truth_in_a_worker_then_error_figures_and_heat_map(app):
     assert e is not None and all(np.isfinite(e.rms)) and 0.0 <= e.dssim <= 1.0
     # the figures are image_error of the image on screen (the lit target) against the truth, computed
     # here on the same images; and they are not the truth against itself (all zero)
-    from skinviewer.core.bench import compare_mask
+    from skinviewer.engine.bench import compare_mask
     from skinviewer.physics.metrics import image_error
     st = app.state.settings
     lit = app.frame.renderer.read(st, "lit")[::-1]
@@ -130,7 +130,7 @@ def test_the_truth_follows_the_view_refining_and_reusing_its_sources(app):
 
 
 def test_pareto_point_applies_its_configuration(app, tmp_path):
-    from skinviewer.core.bench import Result
+    from skinviewer.engine.bench import Result
     rows = [Result("deon", "irr512", {"deon.irradiance_size": 512}, full_ms=50.0, rms=[0.02] * 3, p99=[0.1] * 3,
                    dssim=0.01).to_json(),
             Result("gosselin", "map512 it2", {"gosselin.light_map_size": 512, "gosselin.iterations": 2},

@@ -65,9 +65,9 @@ def test_no_relative_imports():
 
 def test_type_only_imports_are_told_apart():
     """The pass API names the execute context for its annotations only: a layer edge, not a cycle."""
-    assert "skinviewer.core.execute" in _imports()["skinviewer.core.pass_api"]
-    assert "skinviewer.core.execute" not in _imports(runtime_only=True)["skinviewer.core.pass_api"]
-    assert "skinviewer.core.pass_api" in _imports(runtime_only=True)["skinviewer.core.execute"]
+    assert "skinviewer.kernel.execute" in _imports()["skinviewer.kernel.pass_api"]
+    assert "skinviewer.kernel.execute" not in _imports(runtime_only=True)["skinviewer.kernel.pass_api"]
+    assert "skinviewer.kernel.pass_api" in _imports(runtime_only=True)["skinviewer.kernel.execute"]
 
 
 def test_no_import_cycles():
@@ -115,8 +115,8 @@ def test_viewer_programs_come_from_the_shader_library():
 
 
 def test_passes_and_techniques_use_the_pass_api_not_the_graph():
-    """A pass module sees the pass API (core/pass_api.py: Pass, Reflection, TexSpec), never the graph
+    """A pass module sees the pass API (kernel/pass_api.py: Pass, Reflection, TexSpec), never the graph
     that runs it (issue 28): what a pass may rely on is the API, not the executor's internals."""
     offenders = sorted(m for m, deps in _imports().items()
-                       if m.split(".")[1:2] in (["passes"], ["techniques"]) and "skinviewer.core.graph" in deps)
+                       if m.split(".")[1:2] in (["passes"], ["techniques"]) and "skinviewer.kernel.graph" in deps)
     assert not offenders, offenders

@@ -1,4 +1,4 @@
-"""The artist model (physics/artist.py, core/look.py): scatter colour and radius per channel mapped to
+"""The artist model (physics/artist.py, engine/look.py): scatter colour and radius per channel mapped to
 the techniques' own parameters."""
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from skinviewer.core import look
-from skinviewer.core.settings import (
+from skinviewer.engine import look
+from skinviewer.ground.settings import (
     Settings,
     SettingsError,
     to_dict,
@@ -94,7 +94,7 @@ def test_settings_look_drives_every_technique_and_a_preset_round_trips_without_d
     w = np.array([g.weights for g in s.deon.gaussians])
     np.testing.assert_allclose(artist.estimate_radius(v, w, (0.5, 0.3, 0.2)), (3.0, 1.2, 0.6), rtol=1e-5)
     # save -> load -> re-derive -> save: the same bytes, ten times over
-    from skinviewer.core.settings import load_preset, save_preset
+    from skinviewer.ground.settings import load_preset, save_preset
     p = tmp_path / "look.json"
     save_preset(s, p)
     first = p.read_text()

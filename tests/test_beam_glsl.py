@@ -11,7 +11,7 @@ import math
 import moderngl
 import numpy as np
 
-from skinviewer.core.paths import shaders_dir
+from skinviewer.ground.paths import shaders_dir
 
 FRAG = """#version 330 core
 #include_beam

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from skinviewer import techniques
-from skinviewer.core.bench import (
+from skinviewer.engine.bench import (
     Result,
     best_within,
     load_results,
@@ -20,8 +20,8 @@ from skinviewer.core.bench import (
     run_bench,
     ties_of,
 )
-from skinviewer.core.reference import compute_reference
-from skinviewer.core.settings import Settings, load_preset, with_values
+from skinviewer.engine.reference import compute_reference
+from skinviewer.ground.settings import Settings, load_preset, with_values
 from skinviewer.scene.scenes import scene_overrides
 from skinviewer.techniques.base import Technique
 
@@ -121,7 +121,7 @@ def test_deon_on_a_lit_plane_is_close_to_the_truth(renderer):
     """The same equations on both sides: d'Eon's texture-space diffusion on a uniformly lit plane
     (exact away from the rim) agrees with the truth; Phong (no diffusion, its own lighting model)
     does not. Compared by the bench's own code."""
-    from skinviewer.core.bench import compare_mask, linear_image
+    from skinviewer.engine.bench import compare_mask, linear_image
     from skinviewer.physics.metrics import rel_rms
     s = with_values(_plane(48), {"deon.irradiance_size": 512})
     ref = compute_reference(s)

@@ -70,7 +70,7 @@ def test_glsl_matches_the_numpy_reference(harness, variant, plan, assign):
     h = harness(variant, plan)
     a = {**DIRECT, **_mfp(D_RGB), **assign}
     out, stats, cnt = h.run(E, z, mask, **a)
-    from skinviewer.core.settings import Settings, get_path, with_values
+    from skinviewer.ground.settings import Settings, get_path, with_values
     s = with_values(Settings(), a)
     get = lambda p: get_path(s, p)
     pl = PB.golubev_plan(get) if variant == "golubev" else PB.two_level_plan(get)
@@ -261,7 +261,7 @@ def test_extra_samples_iff_contrast_above_the_default_threshold_on_the_gpu(harne
     level iff the base contrast the pass writes (stats.a = max_c C_c, eq. 4.1) exceeds 0.25, the thesis's
     cutoff (seed 001 §4.3; spec §7.4: C > 0.25 under either reading of the offset). Pixels on both sides of
     0.25 and between 0.25 and 0.5 are present, so a changed default or comparison fails."""
-    from skinviewer.core.settings import Settings
+    from skinviewer.ground.settings import Settings
     assert Settings().burley2.threshold == 0.25 and Settings().burley2.channel_scale == (1.0, 1.0, 1.0)
     E, z, mask = _scene()
     h = harness("two_level")

@@ -253,7 +253,7 @@ def test_contrast_of_rings_and_minmax_values():
 
 
 def test_profile_of_a_settings_section_and_its_scale():
-    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.ground.settings import Settings, with_values
     b = with_values(Settings(), {"burley.fit": "direct", "burley.mfp": [1.0, 2.0, 4.0], "burley.scale": 0.5}).burley
     p = B.profile_of_section(b)
     np.testing.assert_allclose(p.d_rgb, [0.5, 1.0, 2.0])

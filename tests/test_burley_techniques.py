@@ -7,7 +7,7 @@ import pytest
 from burley_gpu import Harness, plane
 from helpers import assert_all_finite, backlit_flap_column, small_settings
 
-from skinviewer.core.settings import SettingsError, with_values
+from skinviewer.ground.settings import SettingsError, with_values
 from skinviewer.passes import burley as PB
 from skinviewer.physics import burley as B
 
@@ -148,9 +148,9 @@ def test_reuse_pass_equals_its_formula_on_the_blur_passs_own_buffers(gl_ctx, R):
     and the image's border, so every rule of the neighbourhood is used."""
     from burley_gpu import UploadPass, view_for
 
-    from skinviewer.core.graph import FrameInputs, RenderGraph
-    from skinviewer.core.settings import Settings, with_values
-    from skinviewer.core.shaders import ShaderLibrary
+    from skinviewer.ground.settings import Settings, with_values
+    from skinviewer.kernel.graph import FrameInputs, RenderGraph
+    from skinviewer.kernel.shaders import ShaderLibrary
     w, hgt = 24, 16
     rng = np.random.default_rng(2)
     E = rng.uniform(0.2, 1.0, (hgt, w, 3))

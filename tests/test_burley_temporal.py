@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.passes import burley as PB
 
 N = 8
@@ -60,7 +60,7 @@ def test_still_view_refines_n_frames_then_idles_and_converges(renderer, gl_ctx, 
     # against a converged image of the same frame (64 samples x 32 frames, no reuse): the mean of N frames
     # is closer than one frame (independent seeds: the noise falls; it ends on the own samples' mean,
     # without the pooling's bias)
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     ref_r = Renderer(gl_ctx)
     ref_s = with_values(s, {"burley2.mode": "thesis", "burley2.base": 64, "burley2.threshold": 1.0,
                             "burley2.temporal": 32})

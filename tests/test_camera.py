@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from skinviewer.core.settings import CameraSettings
+from skinviewer.ground.settings import CameraSettings
 from skinviewer.scene.camera import (
     light_basis,
     light_projection_rowvec,

@@ -7,7 +7,7 @@ import pytest
 from analytic_judge import plane_coords
 from helpers import assert_all_finite, small_settings
 
-from skinviewer.core.settings import (
+from skinviewer.ground.settings import (
     DeonSettings,
     Gaussian,
     profile_warnings,
@@ -258,7 +258,7 @@ def test_backlit_ear_transmission_falls_off_with_thickness(renderer):
 
 
 def test_rho_dt_texture_on_gpu(renderer, gl_ctx):
-    from skinviewer.core import paths
+    from skinviewer.ground import paths
     from skinviewer.physics import specular
     s = _deon("laser", **{"deon.irradiance_size": 256, "specular.f0": 0.05, "specular.rho_s": 0.4})
     renderer.render(s)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.passes.deon import DILATE_RING
 from skinviewer.passes.texture_space import read_gutter
 from skinviewer.physics.diffusion import blur_resource

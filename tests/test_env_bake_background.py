@@ -6,8 +6,8 @@ import threading
 import numpy as np
 from helpers import small_settings
 
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import with_values
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import with_values
 from skinviewer.physics import environment as env
 
 

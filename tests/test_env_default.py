@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinviewer.core.settings import Settings, load_preset, three_light_rig, with_values
+from skinviewer.ground.settings import Settings, load_preset, three_light_rig, with_values
 from skinviewer.passes.rules import environment_light
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,7 +49,7 @@ def test_the_viewer_starts_without_waiting_for_the_bake(gl_ctx, monkeypatch, tmp
     """The bake is held until the first frames are drawn: a viewer that waited would hang here.
     The status bar says so; once the bake is in, the view is the waited render's image."""
     pytest.importorskip("imgui_bundle")
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     from skinviewer.physics import environment as env
     from skinviewer.ui.app import WindowUnavailableError, create_app, destroy_app
     from skinviewer.ui.status_bar import StatusBar

@@ -9,7 +9,7 @@ import moderngl
 import numpy as np
 import pytest
 
-from skinviewer.core.paths import shaders_dir
+from skinviewer.ground.paths import shaders_dir
 from skinviewer.physics import environment as env
 
 
@@ -215,7 +215,7 @@ def _sphere_hits(s, renderer, size, radius=50.0):
 
 
 def test_background_shows_the_environment_through_each_pixel(renderer):
-    from skinviewer.core.settings import with_values
+    from skinviewer.ground.settings import with_values
     from skinviewer.passes.output import tone_map
     from tests.helpers import small_settings
     n = 64
@@ -263,8 +263,8 @@ def test_phong_lobe_albedo_is_the_integral_of_the_lobe(n):
 def test_phong_sphere_adds_the_pre_filtered_environment_specular(renderer, tmp_path):
     """Phong (ambient 0) on a convex sphere: C x E_SH(n) + phong.specular x the lobe's albedo x the
     radiance pre-filtered at R — the GLSL against physics/environment.env_phong_specular per pixel."""
-    from skinviewer.core.reference import DEFAULT_SKIN_SRGB
-    from skinviewer.core.settings import with_values
+    from skinviewer.engine.reference import DEFAULT_SKIN_SRGB
+    from skinviewer.ground.settings import with_values
     from skinviewer.passes.output import srgb_to_linear
     from skinviewer.scene.environment import environment_image
     from tests.helpers import small_settings
@@ -303,7 +303,7 @@ def _band_limited_environment(w=128, h=64):
 def test_penner_band_factors_scatter_the_environment_as_the_ring_table_does():
     """int L(w) D(N.w, k) dw by summing texels, with D read from the ring table's row, against the SH
     irradiance with each band scaled by env_band_factors (Funk-Hecke)."""
-    from skinviewer.core.settings import Settings
+    from skinviewer.ground.settings import Settings
     from skinviewer.passes.penner import profile
     from skinviewer.physics import penner
     s = Settings()
@@ -329,9 +329,9 @@ def test_penner_band_factors_scatter_the_environment_as_the_ring_table_does():
 
 
 def test_penner_sphere_scatters_the_environment_as_numpy_does(renderer, tmp_path):
-    from skinviewer.core.files import save_exr
-    from skinviewer.core.reference import DEFAULT_SKIN_SRGB
-    from skinviewer.core.settings import with_values
+    from skinviewer.engine.reference import DEFAULT_SKIN_SRGB
+    from skinviewer.ground.files import save_exr
+    from skinviewer.ground.settings import with_values
     from skinviewer.passes.output import srgb_to_linear
     from skinviewer.passes.penner import profile
     from skinviewer.physics import penner
@@ -367,7 +367,7 @@ def test_penner_sphere_scatters_the_environment_as_numpy_does(renderer, tmp_path
 def test_texel_path_follows_the_environment_as_the_unwrapped_path_does(renderer):
     """d'Eon's irradiance from the texel surface map (whose v map holds the vertex's shadowed environment
     irradiance) equals the unwrapped raster's after the environment turns: the texel surface pass re-runs."""
-    from skinviewer.core.settings import with_values
+    from skinviewer.ground.settings import with_values
     from tests.helpers import small_settings
     base = small_settings(technique="deon", size=48)
     d = base.model_dump()

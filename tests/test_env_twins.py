@@ -9,7 +9,7 @@ import re
 import numpy as np
 from glsl_eval import glsl_eval
 
-from skinviewer.core import paths
+from skinviewer.ground import paths
 from skinviewer.physics import environment as env
 
 

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.physics import environment as env
 from skinviewer.scene.environment import (
     EnvironmentMapError,
@@ -130,8 +130,8 @@ def test_ao_inside_a_closed_box_is_zero():
 
 
 def test_concha_and_nostrils_are_darker_than_the_cheek():
-    from skinviewer.core.constants import REGIONS
-    from skinviewer.core.reference import _tex
+    from skinviewer.engine.reference import _tex
+    from skinviewer.ground.constants import REGIONS
     from skinviewer.scene.scenes import build_scene
     m = build_scene("head", 1).mesh
     P, N = m.positions, m.normals
@@ -156,7 +156,7 @@ def _hdr(path, img):
 
 
 def test_hdr_and_exr_files_load(tmp_path):
-    from skinviewer.core.files import save_exr
+    from skinviewer.ground.files import save_exr
     img = env.builtin_environment("window", (64, 32))
     a = load_environment_file(_hdr(tmp_path / "w.hdr", img))
     np.testing.assert_allclose(a, img, rtol=0.02, atol=1e-3)  # RGBE: 8-bit mantissas
@@ -165,7 +165,7 @@ def test_hdr_and_exr_files_load(tmp_path):
 
 
 def test_cube_cross_resamples_to_the_equirect(tmp_path):
-    from skinviewer.core.files import save_exr
+    from skinviewer.ground.files import save_exr
 
     def radiance(d):  # smooth, different along every axis
         return np.stack([1.5 + d[..., 0], 1.5 + 0.8 * d[..., 1], 1.5 - 0.6 * d[..., 2]], -1)
@@ -250,7 +250,7 @@ def _sphere_obj(path, n_lat=48, n_lon=96, r=50.0):
 def test_sphere_shading_matches_the_analytic_sh(renderer, tmp_path):
     """Phong with ambient 0 and no specular shows C x E_SH(n): the GLSL SH against the numpy twin
     at the exact sphere normal of each pixel (occlusion off: a convex sphere sees the whole sky)."""
-    from skinviewer.core.reference import DEFAULT_SKIN_SRGB
+    from skinviewer.engine.reference import DEFAULT_SKIN_SRGB
     from skinviewer.passes.output import srgb_to_linear
     from skinviewer.scene.camera import framed_view
     mesh = _sphere_obj(tmp_path / "sphere.obj")
@@ -351,7 +351,7 @@ def test_monte_carlo_irradiance_at_the_foot_of_a_wall_is_half():
 def test_exposure_from_the_scene_luminance():
     from pathlib import Path
 
-    from skinviewer.core.settings import Settings, load_preset
+    from skinviewer.ground.settings import Settings, load_preset
     from skinviewer.passes.environment import exposure_from_luminance
     # the default rig (key + studio, issue 32): its intensities are set so the default 0.9 is its exposure
     assert exposure_from_luminance(Settings()) == pytest.approx(0.9, rel=0.01)
@@ -374,9 +374,9 @@ def test_right_drag_turns_an_environment():
 def test_ground_truth_environment_specular_and_irradiance_on_an_open_plane():
     """Under a white environment an open plane's specular is the KS albedo 1 - rho_dt(N.V) (eq. 30, the
     split sum's second factor) and its irradiance pi: the ground truth's Beckmann-sampled specular and
-    Monte Carlo irradiance (core/reference.py), independent of the shaders' tables."""
-    from skinviewer.core import reference as R
-    from skinviewer.core.settings import Settings
+    Monte Carlo irradiance (engine/reference.py), independent of the shaders' tables."""
+    from skinviewer.engine import reference as R
+    from skinviewer.ground.settings import Settings
     from skinviewer.physics.specular import rho_dt
     from skinviewer.scene.mesh import MeshData
     P = np.array([[-50, -50, 0], [50, -50, 0], [50, 50, 0], [-50, 50, 0]], np.float32)
@@ -397,15 +397,15 @@ def test_ground_truth_environment_specular_and_irradiance_on_an_open_plane():
 
 
 def test_bench_sweeps_the_sh_order_and_the_ao_bake_with_an_environment():
-    from skinviewer.core.bench import environment_sweep
-    from skinviewer.core.settings import Settings
+    from skinviewer.engine.bench import environment_sweep
+    from skinviewer.ground.settings import Settings
     s = Settings.model_validate({**Settings().model_dump(), **_env_lights()})
     labels = {label: ch for _, label, ch in environment_sweep(s, quick=False)}
     assert labels["env transfer order 2"] == {"lights.0.transfer_order": 2}
     assert labels["env AO x SH"] == {"lights.0.transfer_order": 0}
     assert labels["env no occlusion"] == {"lights.0.occlusion": False}
     assert labels["env 64 rays"] == {"lights.0.ao_rays": 64} and "env 1024 rays" in labels
-    from skinviewer.core.settings import three_light_rig
+    from skinviewer.ground.settings import three_light_rig
     no_env = Settings.model_validate({**Settings().model_dump(), "lights": [x.model_dump() for x in three_light_rig()]})
     assert environment_sweep(no_env, quick=False) == []  # no environment: nothing added
 
@@ -415,7 +415,7 @@ def test_viewer_refuses_a_bad_environment_and_keeps_the_last_good_one(tmp_path):
 
     from PIL import Image
 
-    from skinviewer.core.settings import Settings
+    from skinviewer.ground.settings import Settings
     from skinviewer.ui.state import ViewerState
     png = tmp_path / "sky.png"
     Image.fromarray(np.zeros((16, 32, 3), np.uint8)).save(png)
@@ -428,8 +428,8 @@ def test_viewer_refuses_a_bad_environment_and_keeps_the_last_good_one(tmp_path):
 
 
 def test_ground_truth_rho_dt_rows_equal_the_bilinear_table():
-    from skinviewer.core import reference as R
-    from skinviewer.core.settings import Settings
+    from skinviewer.engine import reference as R
+    from skinviewer.ground.settings import Settings
     from skinviewer.scene.scenes import build_scene
     surf = R.Surface(build_scene("head", 0).mesh, 1.0, Settings())
     rng = np.random.default_rng(0)

@@ -14,8 +14,8 @@ import yaml
 from scipy.integrate import quad
 
 from skinviewer.cli import main
-from skinviewer.core import exchange as X
-from skinviewer.core.settings import Settings, load_preset, with_values
+from skinviewer.engine import exchange as X
+from skinviewer.ground.settings import Settings, load_preset, with_values
 from skinviewer.physics import engines as E
 from skinviewer.physics.profiles import deon_skin_profile
 

@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.ui import exchange as ux
 
 TINY = {"render.width": 48, "render.height": 48, "deon.irradiance_size": 256, "deon.tsm_size": 256,

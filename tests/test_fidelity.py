@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.scene.scenes import build_scene
 
 # ---------------------------------------------------------------------------------------------
@@ -200,7 +200,7 @@ def test_backlit_flap_transmits_alike_at_both_sides(renderer):
 def test_no_transmission_through_the_head(renderer):
     """Light from behind the default head, seen from the front: the face (~150 mm of head behind
     it) gets no transmitted light; the thin ears do. Before: red contours along every terminator."""
-    from skinviewer.core.settings import with_values
+    from skinviewer.ground.settings import with_values
     n = 160
     s = small_settings("head", "deon", n, **{"camera.yaw": 0.0, "camera.pitch": 5.0, "deon.irradiance_size": 512,
                                              "deon.tsm_size": 512, "shadow.map_size": 1024,
@@ -733,7 +733,7 @@ def test_the_supersampled_judge_is_converged_on_its_own_terms():
     plane's 40^2 map (1 mm texels, not along the grid). One level finer (JUDGE_LEVEL + 2) changes the
     figure it gives a texel-centre sum (the old judge's discretisation, as a technique's) by < 10 % of
     itself, while that figure itself is far from 0: the texel-centre sum is not a judge."""
-    from skinviewer.core.settings import Settings
+    from skinviewer.ground.settings import Settings
     from skinviewer.physics import metrics
     from skinviewer.scene.scenes import grid
     from skinviewer.scene.texels import (

@@ -8,7 +8,7 @@ import pytest
 from helpers import assert_all_finite, small_settings
 
 from skinviewer import techniques
-from skinviewer.core.settings import REGIONS, SettingsError
+from skinviewer.ground.settings import REGIONS, SettingsError
 from skinviewer.scene.scenes import SCENES
 
 CASES_PER_TECHNIQUE = 10

@@ -7,7 +7,7 @@ import pytest
 from analytic_judge import profile_variance, width_10_90
 from helpers import assert_all_finite, small_settings
 
-from skinviewer.core.settings import REGIONS, GosselinSettings, with_values
+from skinviewer.ground.settings import REGIONS, GosselinSettings, with_values
 from skinviewer.passes import gosselin as G
 from skinviewer.scene import scenes
 from skinviewer.scene.mesh import MeshData
@@ -200,7 +200,7 @@ def test_nan_maps_and_normals(renderer, monkeypatch):
     mesh = MeshData(base.positions, normals, base.uvs, base.indices, albedo=albedo, normal_map=nm,
                     specular_map=spec, region_map=region, name="nan-maps")
     sdef = scenes.SceneDef("laser", mesh, {}, "NaN maps")
-    monkeypatch.setattr("skinviewer.core.renderer.build_scene", lambda name, detail=1: sdef)
+    monkeypatch.setattr("skinviewer.engine.renderer.build_scene", lambda name, detail=1: sdef)
     s = _settings("laser", lights=[{"kind": "directional", "direction": [0.3, 0.2, 1.0], "intensity": 2.0}],
                   **{"specular.per_region": {"nose": {"m": 0.05}}})
     tex = assert_all_finite(renderer, s)

@@ -9,9 +9,9 @@ import random
 import numpy as np
 import pytest
 
-from skinviewer.core import calibration
-from skinviewer.core.calibration import Calibration, Entry, rung_key, signature
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine import calibration
+from skinviewer.engine.calibration import Calibration, Entry, rung_key, signature
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.techniques.preview import FINAL, ladder
 from skinviewer.ui.governor import Governor
 from tests.helpers import small_settings
@@ -229,7 +229,7 @@ def test_a_shipped_gpu_calibration_is_used_for_its_renderer_until_the_machine_ha
 
 
 def test_calibrate_measures_every_rung_and_rebuilds_a_corrupt_file(cache, gl_ctx):
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     base = small_settings("shadow-edge", "phong")
     r = Renderer(gl_ctx)
     try:
@@ -251,8 +251,8 @@ def test_calibrate_measures_every_rung_and_rebuilds_a_corrupt_file(cache, gl_ctx
 def test_governed_refinement_converges_to_exactly_the_ungoverned_image(renderer):
     """Previews of the rungs, then the refinement's last step (the user's settings): the image is
     the one a fresh renderer makes of the user's settings, bit for bit."""
-    from skinviewer.core.calibration import rung_settings
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.calibration import rung_settings
+    from skinviewer.engine.renderer import Renderer
     s = small_settings("head", "deon", size=64)
     g = Governor("interactive", 1e9, fake_calibration("deon", s, seed=5))
     for rung in ladder(s)[:-1]:
@@ -462,7 +462,7 @@ def test_a_cached_calibration_takes_the_error_table_s_newest_figures(cache, monk
 
 def test_set_render_governor_off_on_the_command_line():
     """`--set render.governor=off` (the parser reads off / on as false / true) means what it says."""
-    from skinviewer.core.settings import parse_value
+    from skinviewer.ground.settings import parse_value
     for text, want in (("off", "off"), ("on", "interactive"), ("fixed-budget", "fixed-budget")):
         assert with_values(Settings(), {"render.governor": parse_value(text)}).render.governor == want
 

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.graph import (
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.graph import (
     FrameInputs,
     GraphError,
     Pass,
@@ -15,8 +16,7 @@ from skinviewer.core.graph import (
     RenderGraph,
     TexSpec,
 )
-from skinviewer.core.settings import Settings, with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.kernel.shaders import ShaderLibrary
 
 FS_VERT = """#version 330 core
 out vec2 v_uv;
@@ -489,7 +489,7 @@ def test_auto_timing_is_sync_on_a_software_rasterizer_and_timer_queries_on_a_gpu
     queries there), sync on llvmpipe & co., whose timer queries are far too low."""
     from types import SimpleNamespace
 
-    from skinviewer.core.gl import software_renderer
+    from skinviewer.kernel.gl import software_renderer
     assert Settings().render.timing == "auto"
     for name, soft in (("llvmpipe (LLVM 15.0.6, 256 bits)", True), ("softpipe", True),
                        ("Google SwiftShader", True), ("NVIDIA H100 80GB HBM3/PCIe/SSE2", False),
@@ -637,7 +637,7 @@ def test_a_tileable_pass_runs_in_bands_across_frames_and_restarts_when_its_key_c
     """Under a spent budget a never-timed tileable pass takes UNMEASURED_TILES (4) row bands, one a frame:
     deferred with "band k/4 done" until the last, whose output is whole; a key change mid-way cancels it
     and starts over; the band count then follows the measured cost: ceil(ms / (budget / 2)), 1..128."""
-    import skinviewer.core.graph as graph_mod
+    import skinviewer.kernel.graph as graph_mod
     p = Rows("rows", "out", "render.exposure")
     g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
     g.run(frame(with_values(Settings(), {"render.exposure": 1.0})))  # whole, no budget: 1.0 everywhere
@@ -839,7 +839,7 @@ def test_a_banded_mesh_pass_clears_only_its_own_rows(gl_ctx, shader_dir):
     """draw_mesh clears colour and depth before it draws; in a band that clear must stay inside the band's
     rows (fbo.clear(viewport=rect)): a band that cleared its whole target would wipe the rows the earlier
     bands (or the last frame) wrote. Band by band across frames, then two sub-bands in one run."""
-    import skinviewer.core.graph as graph_mod
+    import skinviewer.kernel.graph as graph_mod
     (shader_dir / "meshfill.vert").write_text(MESH_VERT)
     (shader_dir / "meshfill.frag").write_text((shader_dir / "fill.frag").read_text())
     scene = OneTriangle(gl_ctx)

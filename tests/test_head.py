@@ -5,7 +5,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from skinviewer.core.settings import REGIONS
+from skinviewer.ground.settings import REGIONS
 from skinviewer.scene import head as head_mod
 from skinviewer.scene.head import GENERATOR_VERSION, default_head
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.passes import rules
 from skinviewer.scene.head import default_head
 from skinviewer.scene.lod import decimate, level_targets, surviving_vertex

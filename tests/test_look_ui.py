@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from skinviewer import techniques
-from skinviewer.core.settings import LightSettings, Settings, with_values
+from skinviewer.ground.settings import LightSettings, Settings, with_values
 
 
 def test_light_fields_follow_the_kind():

@@ -119,7 +119,7 @@ def test_lee_perry_smith_loads():
 def test_lee_perry_smith_renders(renderer):
     from helpers import assert_all_finite
 
-    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.ground.settings import Settings, with_values
     s = with_values(Settings(), {"scene.mesh": str(LPS_GLB), "scene.mm_per_unit": 48.0, "technique": "phong",
                                  "render.width": 96, "render.height": 96, "shadow.map_size": 256})
     renderer.render(s)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.special import ndtr
 
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics.open_border import chain_on_segment, past_border_light
 from skinviewer.scene.scenes import scene_overrides
 

@@ -2,9 +2,9 @@
 import numpy as np
 import pytest
 
-from skinviewer.core.graph import FrameInputs, Pass, RenderGraph, TexSpec
-from skinviewer.core.settings import Settings, with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.graph import FrameInputs, Pass, RenderGraph, TexSpec
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.passes.output import OutputPass, tone_map
 from skinviewer.physics.metrics import display_encode
 

@@ -61,7 +61,7 @@ def test_a_shipped_preset_is_found_by_name_outside_the_checkout(tmp_path, monkey
     README's `--preset presets/burley2_beyond.json` still find the shipped one; a local file wins."""
     from skinviewer.cli import build_parser
     from skinviewer.cli.args import settings_from_args
-    from skinviewer.core.paths import presets_dir
+    from skinviewer.ground.paths import presets_dir
     monkeypatch.chdir(tmp_path)
     for given in ("burley2_beyond", "presets/burley2_beyond.json"):
         args = build_parser().parse_args(["render", "--preset", given, "--out", "x.png"])

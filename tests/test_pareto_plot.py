@@ -6,7 +6,7 @@ import numpy as np
 from PIL import Image
 
 from skinviewer import techniques
-from skinviewer.core import bench
+from skinviewer.engine import bench
 
 
 def test_every_technique_has_its_own_colour_and_marker():

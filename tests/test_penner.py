@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics import penner
 
 GS = [(g.variance, tuple(g.weights)) for g in Settings().deon.gaussians]

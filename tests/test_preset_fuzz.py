@@ -9,7 +9,7 @@ import math
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from skinviewer.core.settings import (
+from skinviewer.ground.settings import (
     Settings,
     SettingsError,
     load_preset,

@@ -1,11 +1,11 @@
-"""`skinviewer profile`: JSON structure, preset round trip through skinviewer.core.settings, errors."""
+"""`skinviewer profile`: JSON structure, preset round trip through skinviewer.ground.settings, errors."""
 import argparse
 import json
 
 import pytest
 
 from skinviewer.cli import profile as profile_cli
-from skinviewer.core.settings import load_preset, profile_warnings
+from skinviewer.ground.settings import load_preset, profile_warnings
 
 
 def run(argv, capsys):

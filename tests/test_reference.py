@@ -1,4 +1,4 @@
-"""The ground truth (skinviewer.physics.ground_truth, skinviewer.core.reference) against analytic
+"""The ground truth (skinviewer.physics.ground_truth, skinviewer.engine.reference) against analytic
 convolutions, itself at two source resolutions, energy balance and rotation invariance. Small
 sizes: the whole file runs in well under 30 s."""
 from __future__ import annotations
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from scipy.special import ndtr
 
-from skinviewer.core.reference import Surface, build_diffusion, compute_reference
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine.reference import Surface, build_diffusion, compute_reference
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics import ground_truth as gt
 from skinviewer.physics.metrics import rel_rms
 from skinviewer.scene.mesh import MeshData, vertex_normals
@@ -220,7 +220,7 @@ def test_power_in_equals_power_out_and_rotation_invariance():
 
 
 def test_estimate_refuses_huge_requests():
-    from skinviewer.core.reference import ReferenceTooSlow
+    from skinviewer.engine.reference import ReferenceTooSlow
     s = _settings("laser", 64)
     with pytest.raises(ReferenceTooSlow, match="would take about"):
         compute_reference(s, use_cache=False, max_seconds=1e-6)
@@ -241,7 +241,7 @@ def test_cache_roundtrip(tmp_path, monkeypatch):
 def test_a_dipole_truth_follows_the_dipole():
     """--profile dipole: the laser's exitance follows the normalised Jensen 2001 dipole R(r) / R_d
     (32 fixed-variance Gaussians fitted to r R(r), each integrated exactly)."""
-    from skinviewer.core.reference import model_profile
+    from skinviewer.engine.reference import model_profile
     from skinviewer.physics import profiles as P
     v, w, err = model_profile("dipole", "Skin1")
     assert err.max() < 1e-3
@@ -259,8 +259,8 @@ def test_a_dipole_truth_follows_the_dipole():
 def test_truth_sees_the_view_the_renderer_draws(renderer):
     """The truth's camera is the renderer's (same framing of a bust on its head): its pixel mask
     matches the technique's coverage on the default head."""
-    from skinviewer.core.bench import linear_image
-    from skinviewer.core.reference import Surface, camera_hits, load_scene
+    from skinviewer.engine.bench import linear_image
+    from skinviewer.engine.reference import Surface, camera_hits, load_scene
     s = with_values(Settings(), {"technique": "phong", "render.width": 64, "render.height": 64,
                                  "shadow.map_size": 256})
     mesh, mm = load_scene(s)
@@ -296,7 +296,7 @@ def test_the_shipped_preview_errors_carry_the_rulers_uncertainty():
     bound, mean over channels) for every rung, so the status line can read "6.1 % ± 0.4"."""
     import json
 
-    from skinviewer.core.calibration import ERRORS_TABLE
+    from skinviewer.engine.calibration import ERRORS_TABLE
     data = json.loads(ERRORS_TABLE.read_text(encoding="utf-8"))
     errors, unc = data["errors"], data["uncertainty"]
     assert errors and set(unc) == set(errors)

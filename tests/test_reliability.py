@@ -17,16 +17,8 @@ import pytest
 from helpers import quad_gltf, small_settings
 
 from skinviewer.cli import main as cli_main
-from skinviewer.core import files
-from skinviewer.core.graph import (
-    FrameInputs,
-    Pass,
-    Reflection,
-    RenderGraph,
-    ResourceLimitError,
-    TexSpec,
-)
-from skinviewer.core.settings import (
+from skinviewer.ground import files
+from skinviewer.ground.settings import (
     Settings,
     SettingsError,
     get_path,
@@ -37,7 +29,15 @@ from skinviewer.core.settings import (
     validate,
     with_values,
 )
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.kernel.graph import (
+    FrameInputs,
+    Pass,
+    Reflection,
+    RenderGraph,
+    ResourceLimitError,
+    TexSpec,
+)
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.scene.camera import light_space, orbit_view
 from skinviewer.scene.mesh import MeshData, MeshError, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import grid
@@ -87,7 +87,7 @@ def test_preset_from_a_device_fifo_or_folder_is_refused_without_reading(tmp_path
     fifo = tmp_path / "fifo.json"
     os.mkfifo(fifo)
     targets = [fifo, tmp_path] + ([Path("/dev/zero")] if Path("/dev/zero").exists() else [])
-    code = ("import sys\nfrom skinviewer.core.settings import load_preset, SettingsError\n"
+    code = ("import sys\nfrom skinviewer.ground.settings import load_preset, SettingsError\n"
             "try:\n    load_preset(sys.argv[1])\nexcept SettingsError as e:\n    print(e)\n")
     for target in targets:
         r = _in_child(code, str(target))
@@ -152,7 +152,7 @@ def test_set_values_that_json_cannot_hold_are_settings_errors():
 def test_surrogate_path_from_a_non_utf8_file_name_is_accepted():
     # argv decodes the byte 0xff of a real file name to U+DCFF (surrogateescape): a usable path
     s = with_values(Settings(), {"scene.mesh": os.fsdecode(b"/tmp/\xffhead.glb")})
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     assert Renderer.scene_key(s)
 
 
@@ -222,7 +222,7 @@ def test_stale_temporaries_of_killed_saves_are_cleaned_and_never_listed(tmp_path
 
 def test_killed_saves_leave_nothing_after_the_next_save(tmp_path):
     target = tmp_path / "p.json"
-    code = ("import os,sys\nfrom skinviewer.core import files\n"
+    code = ("import os,sys\nfrom skinviewer.ground import files\n"
             "with files.atomic_path(sys.argv[1]) as t:\n    open(t,'w').write('x')\n    os._exit(9)\n")
     for _ in range(3):  # killed mid-save: its temporary stays behind until the next save
         subprocess.run([sys.executable, "-c", code, str(target)], cwd=ROOT, check=False)
@@ -384,7 +384,7 @@ def test_reload_recovers_after_a_deleted_stage_file_is_restored(gl_ctx, shader_r
 # -- renderer: release, memory ------------------------------------------------------------------------
 
 def test_release_frees_the_full_screen_vaos(gl_ctx):
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     r = Renderer(gl_ctx)
     s = small_settings("laser", "phong", size=16)
     r.render(s)
@@ -401,7 +401,7 @@ LARGEST = {"render.width": 8192, "render.height": 8192, "shadow.map_size": 8192,
 
 
 def test_configuration_that_does_not_fit_is_refused_before_allocating(gl_ctx):
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     r = Renderer(gl_ctx)
     r.memory_limit = 2 * 10**9
     try:
@@ -707,7 +707,7 @@ def no_work(monkeypatch):
     import skinviewer.cli.profile as profile_cli
     import skinviewer.cli.render as render_cli
     import skinviewer.cli.turntable as turntable_cli
-    from skinviewer.core import bench, reference
+    from skinviewer.engine import bench, reference
 
     def started(*a, **k):
         raise AssertionError("work started before the arguments were checked")
@@ -833,7 +833,7 @@ def test_schema_version_true_is_not_version_1(tmp_path):
 # -- Ctrl-C and EXR writer failures: one line, nothing half-written --------------------------------
 
 def test_ctrl_c_during_a_render_exits_130_with_one_line(tmp_path, capsys, monkeypatch):
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
 
     def interrupted(self, *a, **k):
         raise KeyboardInterrupt
@@ -857,7 +857,7 @@ def test_ctrl_c_while_writing_leaves_nothing(tmp_path, monkeypatch):
 
 def test_exr_writer_on_a_full_disk_is_one_line_and_leaves_nothing(tmp_path):
     """RLIMIT_FSIZE makes every write past 4 KB fail with EFBIG, as a full disk fails with ENOSPC."""
-    code = ("import resource, signal, sys, numpy as np\nfrom skinviewer.core import files\n"
+    code = ("import resource, signal, sys, numpy as np\nfrom skinviewer.ground import files\n"
             "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
             "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))\n"
             "try:\n    files.save_exr(sys.argv[1], np.random.default_rng(0).random((256, 256, 3)))\n"
@@ -878,7 +878,7 @@ def test_exr_to_a_non_utf8_path_is_written(tmp_path):
 # -- caches: an entry that does not validate is discarded and rebuilt, with a note -----------------
 
 def _tiny_reference(**kw):
-    from skinviewer.core.reference import compute_reference
+    from skinviewer.engine.reference import compute_reference
     s = small_settings("stretch-plane", "deon", size=16)
     return s, compute_reference(s, h_mm=2.0, **kw)
 
@@ -933,7 +933,7 @@ def test_cache_variable_naming_a_file_says_so(tmp_path, monkeypatch, capsys):
 
 @pytest.mark.parametrize("case", ["relative", "absolute", "symlink", "vertex_stage", "symlinked_stage"])
 def test_shaders_never_read_outside_their_root(gl_ctx, tmp_path, case):
-    from skinviewer.core.shaders import ShaderCompileError
+    from skinviewer.kernel.shaders import ShaderCompileError
     root = tmp_path / "shaders"
     (root / "lib").mkdir(parents=True)
     (root / "lib" / "a.glsl").write_text(LIB_A)
@@ -972,7 +972,7 @@ def test_a_fifo_among_the_shaders_does_not_hang(tmp_path):
     os.mkfifo(root / "lib" / "a.glsl")
     (root / "p.vert").write_text(VERT)
     (root / "p.frag").write_text(FRAG)
-    code = ("import sys\nfrom skinviewer.core.gl import headless_context\nfrom skinviewer.core.shaders import "
+    code = ("import sys\nfrom skinviewer.kernel.gl import headless_context\nfrom skinviewer.kernel.shaders import "
             "ShaderLibrary, ShaderCompileError\nlib = ShaderLibrary(headless_context(), sys.argv[1])\n"
             "try:\n    lib.get('p')\nexcept ShaderCompileError as e:\n    print(e)\n")
     r = _in_child(code, str(root))
@@ -987,8 +987,8 @@ def test_nan_from_an_edited_texture_space_shader_is_flagged(tmp_path, monkeypatc
     gutter fill replaced it by 0 (the skin darkened) and no pass was flagged."""
     import shutil
 
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     root = tmp_path / "shaders"
     shutil.copytree(ROOT / "shaders", root)
     p = root / "lib" / lib
@@ -1025,7 +1025,7 @@ def test_memory_limit_variable_that_is_not_a_size_is_one_line(monkeypatch, capsy
 
 
 def test_memory_limit_units_include_a_trailing_b(monkeypatch):
-    from skinviewer.core.renderer import _env_bytes
+    from skinviewer.engine.renderer import _env_bytes
     monkeypatch.setenv("SKINVIEWER_MEMORY_LIMIT", "2GB")
     assert _env_bytes("SKINVIEWER_MEMORY_LIMIT") == 2 * 2**30  # was 2 bytes
 
@@ -1043,7 +1043,7 @@ def test_last_bench_pointer_and_results_that_are_special_files_do_not_hang(tmp_p
     os.mkfifo(tmp_path / "cache" / "last_bench.txt")
     os.mkfifo(tmp_path / "results.json")
     code = ("import os, sys\nos.environ['SKINVIEWER_CACHE'] = sys.argv[1]\n"
-            "from skinviewer.core.bench import last_bench, load_results\nprint(repr(last_bench()))\n"
+            "from skinviewer.engine.bench import last_bench, load_results\nprint(repr(last_bench()))\n"
             "try:\n    load_results(sys.argv[2])\nexcept OSError as e:\n    print(e)\n")
     r = _in_child(code, str(tmp_path / "cache"), str(tmp_path / "results.json"))
     assert r.returncode == 0 and r.stdout.startswith("''") and "FIFO" in r.stdout, (r.stdout, r.stderr[-500:])
@@ -1051,7 +1051,7 @@ def test_last_bench_pointer_and_results_that_are_special_files_do_not_hang(tmp_p
 
 @pytest.mark.parametrize("text", ["[1, 2]", '{"results": 5}', '{"results": [1]}', "[" * 100000, '"x"'])
 def test_bench_results_that_are_not_results_are_a_value_error(tmp_path, text):
-    from skinviewer.core.bench import load_results
+    from skinviewer.engine.bench import load_results
     p = tmp_path / "results.json"
     p.write_text(text)
     with pytest.raises(ValueError):
@@ -1133,8 +1133,8 @@ def test_a_damaged_head_cache_is_regenerated_with_a_note(tmp_path, damage):
 def test_a_shader_library_reads_its_include_roots_and_nothing_beyond(gl_ctx, tmp_path):
     # a test's programs in a temporary folder may include the product's lib/ (include_roots); the
     # confinement still holds for anything else
-    from skinviewer.core import paths
-    from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
+    from skinviewer.ground import paths
+    from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
     (tmp_path / "a.frag").write_text('#version 330 core\n#pragma vertex_stage "vs/fullscreen.vert"\n'
                                     '#include "lib/color.glsl"\nout vec4 f;\nvoid main() { f = vec4(0.0); }\n')
     (tmp_path / "vs").symlink_to(paths.shaders_dir() / "vs", target_is_directory=True)

@@ -12,7 +12,7 @@ from helpers import assert_all_finite, small_settings
 
 from skinviewer import techniques
 from skinviewer.cli import main
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.scene.scenes import SCENES
 
 
@@ -66,7 +66,7 @@ def test_cli_render_dump_and_timings(tmp_path):
 
 
 def test_cli_render_verbose_prints_the_pass_table_and_the_memory_held(tmp_path, capsys):
-    from skinviewer.core.memory import texture_bytes
+    from skinviewer.engine.memory import texture_bytes
     out = tmp_path / "x.png"
     assert main(["render", "--scene", "shadow-edge", "--technique", "phong", "--size", "64x48", "--out", str(out),
                  "--set", "shadow.map_size=256", "-v"]) == 0
@@ -100,7 +100,7 @@ def test_cli_errors_are_one_clear_line(tmp_path, argv, msg):
 def test_headless_context_failure_says_what_to_install(monkeypatch):
     import moderngl
 
-    from skinviewer.core import gl
+    from skinviewer.kernel import gl
 
     def refuse(*a, **k):
         raise Exception("eglInitialize failed")
@@ -115,7 +115,7 @@ def test_package_data_globs_cover_shaders_and_presets():
     read as setuptools reads it (recursive glob: `**/` matches zero or more folders)."""
     import tomllib
 
-    from skinviewer.core import paths
+    from skinviewer.ground import paths
     cfg = tomllib.loads((paths.shaders_dir().parent / "pyproject.toml").read_text())["tool"]["setuptools"]
     for pkg, folder in (("skinviewer.shaders", paths.shaders_dir()), ("skinviewer.presets", paths.presets_dir())):
         covered = {p for g in cfg["package-data"][pkg] for p in folder.glob(g)}
@@ -141,7 +141,7 @@ def test_negative_camera_yaw_on_the_command_line(tmp_path):
 
 def test_render_writes_linear_exr(tmp_path):
     """`render --exr`: the linear HDR image (before exposure and tone map) for compositing tools."""
-    from skinviewer.core.files import load_exr
+    from skinviewer.ground.files import load_exr
     out, exr = tmp_path / "x.png", tmp_path / "x.exr"
     p = subprocess.run([sys.executable, "-m", "skinviewer", "render", "--scene", "laser", "--technique", "phong",
                         "--size", "32x32", "--set", "render.exposure=4", "--out", str(out), "--exr", str(exr)],
@@ -200,10 +200,10 @@ def test_front_faces_keep_their_normal_near_the_silhouette(renderer, monkeypatch
     Reversing it there ("two-sided" by N.V) shaded lit skin with the far side's normal: black pixels
     along lit contours (the ear's rim). Only a back face (gl_FrontFacing) reverses it now. On a
     coarse sphere lit from the side, the diffuse per unit N.L is the same where N.V < 0 as elsewhere."""
-    from skinviewer.core.reference import Surface, camera_hits
+    from skinviewer.engine.reference import Surface, camera_hits
     from skinviewer.scene import scenes
     sdef = scenes.SceneDef("laser", _coarse_sphere(), {}, "coarse sphere")
-    monkeypatch.setattr("skinviewer.core.renderer.build_scene", lambda name, detail=1: sdef)
+    monkeypatch.setattr("skinviewer.engine.renderer.build_scene", lambda name, detail=1: sdef)
     light = [{"kind": "directional", "direction": [1.0, 0.2, -0.3], "intensity": 1.0, "cast_shadow": False}]
     s = small_settings("laser", technique, 160, lights=light, **{"camera.yaw": 0.0, "camera.pitch": 0.0,
                                                                  "phong.specular": 0.0, "phong.ambient": 0.0})
@@ -227,10 +227,10 @@ def test_back_faces_culled_on_a_closed_mesh_shown_on_an_open_one(renderer, monke
     visible from outside, so a back face the camera meets has won a depth fight with the near side
     or comes from a self-intersection); `show` draws it. An open sheet seen from behind stays visible,
     lit through its reversed normal. The ground truth's camera does the same."""
-    from skinviewer.core.reference import Surface, camera_hits
+    from skinviewer.engine.reference import Surface, camera_hits
     from skinviewer.scene import scenes
     sdef = scenes.SceneDef("laser", _coarse_sphere(), {}, "coarse sphere")
-    monkeypatch.setattr("skinviewer.core.renderer.build_scene", lambda name, detail=1: sdef)
+    monkeypatch.setattr("skinviewer.engine.renderer.build_scene", lambda name, detail=1: sdef)
     inside = {"camera.distance": 5.0, "camera.target": [0.0, 0.0, 0.0]}
     light = [{"kind": "directional", "direction": [0.0, 0.0, 1.0], "intensity": 1.0, "cast_shadow": False}]
     seen = {}

@@ -8,9 +8,9 @@ import pytest
 from conftest import LPS_GLB, NEEDS_SCAN
 from helpers import small_settings
 
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import with_values
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.passes import rules
 from skinviewer.passes.deon import likely_final_variants
 
@@ -139,7 +139,7 @@ def test_auto_map_size_follows_coverage_with_hysteresis(renderer):
         scene = g
         def __init__(self, st): self.state = st
         def setting(self, p):
-            from skinviewer.core.settings import get_path
+            from skinviewer.ground.settings import get_path
             return get_path(self._settings, p)
 
     r = R(state)

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from burley_gpu import UploadPass, view_for
 
-from skinviewer.core.graph import FrameInputs, RenderGraph
-from skinviewer.core.settings import Settings, with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.graph import FrameInputs, RenderGraph
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.passes.screen_space.jimenez2009 import SsssBlurPass, blur_resource
 from skinviewer.passes.screen_space.separable import OUTPUT as SEPARABLE_OUT
 from skinviewer.passes.screen_space.separable import SeparableBlurPass

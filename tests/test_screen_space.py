@@ -7,7 +7,7 @@ import math
 import numpy as np
 from helpers import assert_all_finite, small_settings
 
-from skinviewer.core.settings import REGIONS
+from skinviewer.ground.settings import REGIONS
 from skinviewer.passes.screen_space import ALBEDO, DEPTH, DIFFUSE, SPECULAR
 
 

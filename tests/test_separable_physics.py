@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy.signal import fftconvolve
 
-from skinviewer.core.settings import Settings
+from skinviewer.ground.settings import Settings
 from skinviewer.physics.separable import (
     focal_px,
     follow_surface,

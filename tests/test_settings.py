@@ -6,8 +6,8 @@ import os
 
 import pytest
 
-from skinviewer.core import paths
-from skinviewer.core.settings import (
+from skinviewer.ground import paths
+from skinviewer.ground.settings import (
     Settings,
     SettingsError,
     load_preset,

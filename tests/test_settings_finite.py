@@ -11,7 +11,7 @@ import typing
 import pytest
 from pydantic import BaseModel
 
-from skinviewer.core.settings import Settings, SettingsError, to_dict, validate
+from skinviewer.ground.settings import Settings, SettingsError, to_dict, validate
 
 
 def _has_float(ann) -> bool:

@@ -1,6 +1,6 @@
-"""Settings paths, assignments and preset files (skinviewer/core/settings.py): the exact messages and
+"""Settings paths, assignments and preset files (skinviewer/ground/settings.py): the exact messages and
 rules the CLI, the viewer and presets rely on. Written against the survivors of the mutation run
-(benchmarks/mutation.py core.settings, notes/mutation.md)."""
+(benchmarks/mutation.py ground.settings, notes/mutation.md)."""
 from __future__ import annotations
 
 import json
@@ -9,8 +9,8 @@ import os
 import pytest
 from conftest import SHARED
 
-from skinviewer.core import settings as S
-from skinviewer.core.settings import (
+from skinviewer.ground import settings as S
+from skinviewer.ground.settings import (
     Settings,
     SettingsError,
     load_preset,

@@ -5,7 +5,7 @@ import subprocess
 import sys
 
 from skinviewer.cli.settings_list import rows
-from skinviewer.core.settings import Settings, get_path, parse_assignments, with_values
+from skinviewer.ground.settings import Settings, get_path, parse_assignments, with_values
 
 
 def test_every_listed_key_is_settable_with_its_default():

@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
+from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
 
 VERT = '#version 330 core\n#include "lib/common.glsl"\nin vec2 in_pos;\nvoid main() { gl_Position = vec4(in_pos, 0.0, 1.0); }\n'
 FRAG = '#version 330 core\n#include "lib/common.glsl"\nout vec4 f;\nvoid main() { f = vec4(twice(0.5)); }\n'
@@ -81,7 +81,7 @@ def test_defines_and_versions(gl_ctx, lib_dir):
 def test_project_shaders_all_compile(gl_ctx):
     """Every program in shaders/ compiles, generic and specialised to several light setups
     (catches a broken edit before the viewer does)."""
-    from skinviewer.core import paths
+    from skinviewer.ground import paths
     lib = ShaderLibrary(gl_ctx)
     names = sorted({p.stem for p in paths.shaders_dir().glob("*.frag")})
     assert names
@@ -126,7 +126,7 @@ def test_shared_vertex_stage_named_by_pragma_and_hot_reloaded(gl_ctx, lib_dir):
 
 
 def test_shared_constants_are_injected_and_declared_uniforms_known(gl_ctx, lib_dir):
-    from skinviewer.core.constants import MAX_GAUSSIANS
+    from skinviewer.ground.constants import MAX_GAUSSIANS
     (lib_dir / "c.frag").write_text('#version 330 core\n#pragma vertex_stage "prog.vert"\n'
                                     "uniform float u_w[MAX_GAUSSIANS];\nuniform int u_k, u_unused[MAX_LIGHTS];\n"
                                     "out vec4 f;\nvoid main() { f = vec4(float(MAX_LIGHTS) + u_w[MAX_GAUSSIANS - 1]"
@@ -140,11 +140,11 @@ def test_shared_constants_are_injected_and_declared_uniforms_known(gl_ctx, lib_d
 
 def test_project_shaders_are_consolidated():
     """Shared vertex stages (no two .vert files with one body), include guards in every lib
-    snippet, and no copy of a constant that skinviewer.core.constants injects."""
+    snippet, and no copy of a constant that skinviewer.ground.constants injects."""
     import re
 
-    from skinviewer.core import paths
-    from skinviewer.core.constants import GLSL_DEFINES
+    from skinviewer.ground import paths
+    from skinviewer.ground.constants import GLSL_DEFINES
     root = paths.shaders_dir()
     bodies = {}
     for v in root.rglob("*.vert"):

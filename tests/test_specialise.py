@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.kernel.shaders import ShaderLibrary
 
 # default lights (two, both shadowed, PCF 1); then three lights of every kind with an unshadowed
 # one in the middle slot, a disabled one before it, and a wider PCF

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skinviewer.core import paths
+from skinviewer.ground import paths
 from skinviewer.physics import specular as S
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -271,7 +271,7 @@ def _program(ctx, tmp_path):
     (tmp_path / "kelemen_test.vert").write_text(_VERT)
     (tmp_path / "kelemen_test.frag").write_text(_FRAG)
     try:
-        from skinviewer.core.shaders import ShaderLibrary
+        from skinviewer.kernel.shaders import ShaderLibrary
     except ImportError:  # no shader library yet: splice the include by hand
         return ctx.program(vertex_shader=_VERT,
                            fragment_shader=_FRAG.replace('#include "lib/kelemen.glsl"', KELEMEN.read_text()))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 
 
 def _lit_halves(renderer, s):
@@ -52,7 +52,7 @@ def test_rho_dt_follows_the_region_rho_s(renderer):
     region = renderer.scene.gpu.region_ids
     n = irr0.shape[0]
     ids = region[(np.arange(n) * region.shape[0] // n)][:, (np.arange(n) * region.shape[1] // n)]
-    from skinviewer.core.settings import REGIONS
+    from skinviewer.ground.settings import REGIONS
     ears, cheeks = ids == REGIONS.index("ears"), ids == REGIONS.index("cheeks")
     ratio = irr1[..., 0][ears].mean() / irr0[..., 0][ears].mean()
     assert ratio > 1.01  # energy the specular no longer takes goes to the diffuse

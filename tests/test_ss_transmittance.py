@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.passes.screen_space.lighting import DIFFUSE, DIRECT, transmitted_resource
 from skinviewer.physics import burley as B
 from skinviewer.physics.transmittance import profile_distance, transmittance

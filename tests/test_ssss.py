@@ -9,7 +9,7 @@ import pytest
 from helpers import assert_all_finite, backlit_flap_column, small_settings
 from scipy.signal import fftconvolve
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from skinviewer.passes.screen_space import DEPTH, DIFFUSE
 from skinviewer.physics.separable import focal_px, separable_kernel
 from skinviewer.physics.transmittance import profile_distance, transmittance

@@ -71,7 +71,7 @@ def test_the_window_opens_before_the_viewer_loads():
             "sp = startup.open_early((320, 200))\n"
             "assert sp is not None and sp.frames >= 1 and startup.MARKS[0][0] == 'window'\n")
     mods = _modules_after(code)
-    early = [m for m in ("skinviewer.core.settings", "skinviewer.techniques", "skinviewer.cli", "imgui_bundle",
+    early = [m for m in ("skinviewer.ground.settings", "skinviewer.techniques", "skinviewer.cli", "imgui_bundle",
                          "pydantic", "scipy") if m in mods]
     assert not early, f"loaded before the window: {early}"
 
@@ -92,7 +92,7 @@ def test_the_panel_comes_before_the_first_image(tmp_path):
     if not os.environ.get("DISPLAY"):
         pytest.skip("no DISPLAY")
     pytest.importorskip("imgui_bundle")
-    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.ground.settings import Settings, with_values
     from skinviewer.scene.scenes import scene_overrides
     from skinviewer.ui import startup
     from skinviewer.ui.app import create_app, destroy_app

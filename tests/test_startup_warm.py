@@ -1,13 +1,13 @@
 """Issue 34: the start's CPU work off the main thread (ui/warm.py), the scene's arrays made before its
-upload (core/renderer.prepare_gpu_arrays), and a first frame spread over several under the frame
-budget (core/graph: a freshly allocated pass may be deferred). Structure, not timing: the times are
+upload (kernel/gpu_scene.prepare_gpu_arrays), and a first frame spread over several under the frame
+budget (kernel/graph: a freshly allocated pass may be deferred). Structure, not timing: the times are
 benchmarks/bench_startup.py's."""
 from __future__ import annotations
 
 import numpy as np
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 
 
 def test_the_start_worker_makes_what_the_first_frame_would_and_the_frame_reuses_it(renderer, monkeypatch):
@@ -20,7 +20,7 @@ def test_the_start_worker_makes_what_the_first_frame_would_and_the_frame_reuses_
     cold = renderer.render(s)
     assert cold.complete
     image_cold = renderer.read(s, "image").copy()
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     fresh = Renderer(renderer.ctx)  # a new scene object: its caches empty
     fresh.ensure_scene(s)
     specular._rho_tables.cache_clear()
@@ -45,7 +45,7 @@ def test_the_start_worker_makes_what_the_first_frame_would_and_the_frame_reuses_
 def test_the_scene_arrays_made_ahead_are_the_ones_uploaded(renderer):
     """prepare_gpu_arrays (the start's worker) gives the bytes the GpuScene uploads, and the copies go
     once uploaded."""
-    from skinviewer.core.renderer import prepare_gpu_arrays
+    from skinviewer.kernel.gpu_scene import prepare_gpu_arrays
     from skinviewer.scene.scenes import build_scene
     mesh = build_scene("shadow-edge").mesh
     arrays = prepare_gpu_arrays(mesh)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 
 MAPS = ("deon_irradiance", "deon_visibility", "deon_stretch", "deon_transmitted", "deon_diffuse", "lit")
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skinviewer.core.settings import with_values
+from skinviewer.ground.settings import with_values
 from tests.helpers import small_settings
 
 GATHER = "deon_blur_5"  # at 256^2 maps on the head the last blur step is summed over the surface (tileable)
@@ -205,7 +205,7 @@ def test_a_band_draws_only_the_triangles_that_reach_its_rows(renderer, monkeypat
     """A view pass in n bands does not transform the whole mesh n times: each band draws the
     triangles whose window rows reach it (GpuServices.band_vao), so over all bands the mesh is
     drawn little more than once (triangles straddling a band edge are drawn in both)."""
-    from skinviewer.core.gpu import GpuServices
+    from skinviewer.kernel.gpu import GpuServices
     s = small_settings("head", "phong", size=64)
     renderer.render(s)
     counts: list[tuple[int, int]] = []
@@ -220,7 +220,7 @@ def test_a_band_draws_only_the_triangles_that_reach_its_rows(renderer, monkeypat
     assert len(counts) >= 4, "the view pass was not drawn band by band through band_vao"
     assert all(n < total for n, total in counts)
     # 8 bands of a 256-row view: the mesh is drawn about once over them
-    from skinviewer.core.gpu import band_rows
+    from skinviewer.kernel.gpu import band_rows
     scene = renderer.scene.gpu
     vp = renderer.view(with_values(s, {"render.width": 256, "render.height": 256})).view_proj
     ys = band_rows(scene, 0, "camera", vp, 256, {})
@@ -230,7 +230,7 @@ def test_a_band_draws_only_the_triangles_that_reach_its_rows(renderer, monkeypat
 
 
 def test_band_shares_follow_the_cost_over_the_rows():
-    from skinviewer.core.graph import band_shares
+    from skinviewer.kernel.graph import band_shares
     assert np.allclose(band_shares(None, 4), 0.25)
     # all the cost in the middle half of the rows (a face between background rows)
     prof = np.array([0.0, 0.0, 0.5, 1.0, 1.0])
@@ -244,7 +244,7 @@ def test_a_banded_pass_predicts_its_next_band_from_its_cost_over_the_rows(render
     graph keeps each banded pass's cost over its rows and predicts the next band by its share
     (so a frame stops before an expensive band instead of overshooting its budget), and sizes the
     bands so the costliest fits half the budget."""
-    from skinviewer.core.graph import TileProgress
+    from skinviewer.kernel.graph import TileProgress
     s = small_settings("head", "phong", size=64)
     renderer.render(s)
     settle(renderer, with_values(s, {"lights.0.direction": [0.3, 0.2, 1.0]}), budget_ms=1e-6)

@@ -1,4 +1,4 @@
-"""The viewer's progressive ground truth (core.reference.TruthSession): stages that refine, the
+"""The viewer's progressive ground truth (engine.reference.TruthSession): stages that refine, the
 view-independent sources kept across an orbit (identical figures, no rebuild) and a profile change,
 rebuilt for a light change, the wide Gaussians' diffusion kept on surface lattices across views
 (issue 34), recent truths kept."""
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skinviewer.core import reference as R
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.engine import reference as R
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.scene.scenes import scene_overrides
 
 SIZE = 40

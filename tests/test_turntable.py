@@ -9,7 +9,7 @@ from PIL import Image
 from skinviewer.cli import main
 from skinviewer.cli import sheet as sheet_cli
 from skinviewer.cli import turntable as tt
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.settings import Settings, with_values
 
 TINY = ["--size", "48x48", "--set", "deon.irradiance_size=256", "--set", "deon.tsm_size=256"]
 
@@ -120,7 +120,7 @@ def test_sheet_rejects_unknown_names(tmp_path, capsys):
 def test_sheet_labels_the_error_against_a_cached_truth(tmp_path, capsys, monkeypatch):
     """With a cached ground truth of the view the tile says its RMS error (here a stand-in truth of
     uniform grey radiance: the figure is the plumbing's, not a judgement of the technique)."""
-    from skinviewer.core import reference
+    from skinviewer.engine import reference
     calls = []
 
     def cached(s, *a, **k):
@@ -137,7 +137,7 @@ def test_sheet_labels_the_error_against_a_cached_truth(tmp_path, capsys, monkeyp
 
 
 def test_import_preview_renders_the_imported_profile(tmp_path, capsys):
-    from skinviewer.core import exchange as X
+    from skinviewer.engine import exchange as X
     asset = tmp_path / "skin.asset"
     X.export(Settings(), "hdrp", asset)
     png = tmp_path / "preview.png"

@@ -30,7 +30,7 @@ def display():
 
 @pytest.fixture(scope="module")
 def shader_dir(tmp_path_factory):
-    from skinviewer.core import paths
+    from skinviewer.ground import paths
     src = paths.shaders_dir()
     dst = tmp_path_factory.mktemp("shaders") / "shaders"
     shutil.copytree(src, dst)
@@ -59,7 +59,7 @@ def user_presets(tmp_path_factory):
 @pytest.fixture(scope="module")
 def app(display, shader_dir, user_presets):
     pytest.importorskip("imgui_bundle")
-    from skinviewer.core.settings import Settings, with_values
+    from skinviewer.ground.settings import Settings, with_values
     from skinviewer.scene.scenes import scene_overrides
     from skinviewer.ui.app import create_app, destroy_app
     s = with_values(Settings(), {"scene.name": SCENE, **scene_overrides(SCENE), "shadow.map_size": 256,
@@ -213,7 +213,7 @@ def test_switch_technique_changes_image(app):
 
 
 def test_broken_preset_refused_state_kept(app, tmp_path):
-    from skinviewer.core.settings import to_dict
+    from skinviewer.ground.settings import to_dict
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"schema_version": 1, "lights": [{"intensity": -3}], "render": {"exposure": 0},
                                "nonsense": 1}))
@@ -281,7 +281,7 @@ def test_screenshots_written_where_asked(app, tmp_path):
     assert img.shape == (*_view_hw(app), 3) and img.std() > 10  # the 3D view region, no panel
     lin = np.load(p.with_suffix(".npy"))
     assert lin.dtype == np.float32 and lin.shape[:2] == _view_hw(app)
-    from skinviewer.core.files import load_exr
+    from skinviewer.ground.files import load_exr
     assert np.array_equal(load_exr(p.with_suffix(".exr")), lin)  # the same linear image, as OpenEXR
     app.state.set_screenshot_options(save_linear_npy=False, save_linear_exr=False)
     n = len(list((tmp_path / "shots").glob("*.png")))
@@ -544,7 +544,7 @@ def test_expensive_change_waits_for_release(app):
         app.frame.set_widget_active(False)
         app.frame.set_schedule(mode="adaptive")
         app.state.set_show_ui(True)
-        from skinviewer.core.settings import validate
+        from skinviewer.ground.settings import validate
         app.state.set_settings(validate(old))
         app.step(1)
 
@@ -658,7 +658,7 @@ def test_preset_refused_after_loading_keeps_the_current_preset(app, tmp_path):
     """A preset that parses but cannot be shown (its mesh does not load) leaves the current preset
     file, its saved baseline and the state alone: Ctrl+S must not write the current state over the
     file that was refused."""
-    from skinviewer.core.settings import to_dict
+    from skinviewer.ground.settings import to_dict
     current = tmp_path / "current.json"
     assert app.state.presets.save(app.state.settings, str(current))
     bad = tmp_path / "missing_mesh.json"
@@ -914,7 +914,7 @@ def test_every_label_fits_the_label_column(app):
 def test_ctrl_s_on_a_shipped_preset_saves_a_copy(app, tmp_path, monkeypatch, user_presets):
     """Ctrl+S used to overwrite the shipped presets/deon.json (with the window size and float noise):
     shipped presets are read-only, Ctrl+S writes a copy into the user folder."""
-    from skinviewer.core import paths
+    from skinviewer.ground import paths
     shipped = tmp_path / "shipped"
     shutil.copytree(paths.presets_dir(), shipped)
     monkeypatch.setenv("SKINVIEWER_PRESETS", str(shipped))
@@ -981,7 +981,7 @@ def test_loading_over_unsaved_changes_asks_first(app, tmp_path):
 
 
 def with_exposure(app, v):
-    from skinviewer.core.settings import with_values
+    from skinviewer.ground.settings import with_values
     return with_values(app.state.settings, {"render.exposure": v})
 
 

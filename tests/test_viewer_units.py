@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from helpers import settings_fields
 
-from skinviewer.core.settings import Settings, load_preset, to_dict, with_values
+from skinviewer.ground.settings import Settings, load_preset, to_dict, with_values
 
 UI = Path(__file__).resolve().parents[1] / "skinviewer" / "ui"
 # modules that draw windows: they may assign only to their own fields (self.x)

@@ -22,9 +22,9 @@ sys.path.insert(0, str(HERE.parents[1] / "tests"))
 
 from helpers import small_settings  # noqa: E402
 
-from skinviewer.core.gl import headless_context  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import with_values  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import with_values  # noqa: E402
+from skinviewer.kernel.gl import headless_context  # noqa: E402
 
 
 def texel_surface(r: Renderer, say) -> None:

@@ -16,7 +16,7 @@ sizes, which its output then names), so the GPU's minutes go to measuring, not d
 * frames: each technique's full, light-move and camera-only frame with the defaults and with 2048^2
   maps, in sync timing (glFinish + wall clock) and with GL timer queries (render.timing = gpu), side
   by side; the "simulate only what the scene calls for" ratios; one d'Eon blur direction vs a plain
-  copy; d'Eon's surface-sum step; memory each technique holds (core/memory.py) and what the driver
+  copy; d'Eon's surface-sum step; memory each technique holds (engine/memory.py) and what the driver
   reports (GL_NVX_gpu_memory_info).
 """
 from __future__ import annotations
@@ -38,10 +38,10 @@ sys.path.insert(0, str(HERE.parents[1]))  # the checkout's skinviewer before any
 sys.path.insert(0, str(HERE.parent))      # benchmarks/ (bench_frames' helpers)
 
 from skinviewer import techniques  # noqa: E402
-from skinviewer.core.gl import headless_context  # noqa: E402
-from skinviewer.core.memory import renderer_memory  # noqa: E402
-from skinviewer.core.renderer import Renderer  # noqa: E402
-from skinviewer.core.settings import Settings, with_values  # noqa: E402
+from skinviewer.engine.memory import renderer_memory  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import Settings, with_values  # noqa: E402
+from skinviewer.kernel.gl import headless_context  # noqa: E402
 from skinviewer.scene.scenes import scene_overrides  # noqa: E402
 
 GOAL_RMS = 0.005  # relative RMS per channel, GPU vs llvmpipe (issue 31)

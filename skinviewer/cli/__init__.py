@@ -16,7 +16,7 @@ from skinviewer.cli.args import (
     settings_from_args,
 )
 from skinviewer.cli.render import cmd_render
-from skinviewer.core.settings import SettingsError
+from skinviewer.ground.settings import SettingsError
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -161,10 +161,10 @@ def main(argv: list[str] | None = None) -> int:
     except KeyError as exc:
         print(f"skinviewer: {exc.args[0] if exc.args else exc}", file=sys.stderr)
     except Exception as exc:  # a clear line, not a traceback, for anything the user can cause
-        from skinviewer.core.files import OutputPathError
-        from skinviewer.core.gl import GLUnavailableError
-        from skinviewer.core.graph import ResourceLimitError
-        from skinviewer.core.shaders import ShaderCompileError
+        from skinviewer.ground.files import OutputPathError
+        from skinviewer.kernel.gl import GLUnavailableError
+        from skinviewer.kernel.graph import ResourceLimitError
+        from skinviewer.kernel.shaders import ShaderCompileError
         from skinviewer.scene.mesh import MeshError
         if isinstance(exc, (GLUnavailableError, MeshError, ShaderCompileError, OSError, ResourceLimitError,
                             OutputPathError)):

@@ -6,9 +6,9 @@ import math
 import os
 
 from skinviewer import techniques
-from skinviewer.core.look import apply_look
-from skinviewer.core.look import resolve as resolve_look
-from skinviewer.core.settings import (
+from skinviewer.engine.look import apply_look
+from skinviewer.engine.look import resolve as resolve_look
+from skinviewer.ground.settings import (
     Settings,
     load_preset,
     parse_assignments,
@@ -27,7 +27,7 @@ def _preset(text: str) -> str:
     A name that is neither stays as given, for load_preset's one-line error."""
     if os.path.exists(text):
         return text
-    from skinviewer.core.paths import presets_dir
+    from skinviewer.ground.paths import presets_dir
     try:
         shipped = presets_dir()
     except FileNotFoundError:
@@ -96,7 +96,7 @@ def check_outputs(outputs: dict[str, str | os.PathLike | None], inputs: dict[str
     """CliError (one line, before anything is computed) when an output would replace one of the
     command's inputs (its preset, mesh, maps, or a file another output writes), or is a folder.
     ``settings``: its scene.mesh and maps count as inputs too."""
-    from skinviewer.core.settings import PATH_FIELDS
+    from skinviewer.ground.settings import PATH_FIELDS
     ins = {k: v for k, v in inputs.items() if v}
     if settings is not None:
         for f in PATH_FIELDS:
@@ -122,7 +122,7 @@ def _shown(p: str | os.PathLike) -> str:
 
 def image_output(path: str | os.PathLike | None, flag: str, linear: bool = True, display: bool = True) -> None:
     """CliError unless ``path``'s extension names a format this writes (files.output_kind)."""
-    from skinviewer.core.files import OutputPathError, output_kind
+    from skinviewer.ground.files import OutputPathError, output_kind
     if path:
         try:
             output_kind(path, flag, linear=linear, display=display)
@@ -180,7 +180,7 @@ def settings_from_args(args) -> Settings:
         if len(args.camera) == 3:
             direct["camera.distance"] = args.camera[2]
     direct.update(parse_assignments(args.assign))
-    # the artist model (core/look.py): --set look.* re-derives the profile, a hand edit of a derived table
+    # the artist model (engine/look.py): --set look.* re-derives the profile, a hand edit of a derived table
     # hands it back to the table
     return resolve_look(with_values(s, direct), direct) if direct else apply_look(s)
 

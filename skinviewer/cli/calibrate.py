@@ -1,5 +1,5 @@
 """``skinviewer calibrate``: time every technique's preview ladder on this machine for the viewer's
-quality governor (core/calibration.py), cached per GL renderer string and mesh size class."""
+quality governor (engine/calibration.py), cached per GL renderer string and mesh size class."""
 from __future__ import annotations
 
 import sys
@@ -18,9 +18,9 @@ def add_parser(sub) -> None:
 
 
 def cmd_calibrate(args) -> int:
-    from skinviewer.core import calibration
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine import calibration
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     s = settings_from_args(args)
     names = [n.strip() for n in args.techniques.split(",")] if args.techniques else None
     bad = [n for n in names or [] if n not in techniques.names()]

@@ -1,5 +1,5 @@
 """``skinviewer export --to hdrp|unreal|materialx|openpbr|blender --out PATH``: the current profile,
-fitted with Burley's normalized diffusion, in the file the target reads (see core/exchange.py)."""
+fitted with Burley's normalized diffusion, in the file the target reads (see engine/exchange.py)."""
 from __future__ import annotations
 
 import argparse
@@ -11,7 +11,7 @@ from skinviewer.cli.args import (
     number,
     settings_from_args,
 )
-from skinviewer.core.exchange import ExchangeError, ExportResult, export
+from skinviewer.engine.exchange import ExchangeError, ExportResult, export
 from skinviewer.physics.engines import TARGETS
 
 

@@ -7,8 +7,8 @@ import argparse
 import sys
 
 from skinviewer.cli.args import _size, check_outputs, image_output
-from skinviewer.core.exchange import ExchangeError, Imported, read_any, settings_with
-from skinviewer.core.settings import Settings, SettingsError, load_preset, save_preset
+from skinviewer.engine.exchange import ExchangeError, Imported, read_any, settings_with
+from skinviewer.ground.settings import Settings, SettingsError, load_preset, save_preset
 from skinviewer.physics import engines as E
 
 
@@ -69,14 +69,14 @@ def cmd_import(args) -> int:
         print(f"wrote {args.preset_out}")
     if args.preview:
         from skinviewer.cli.turntable import render_frames
-        from skinviewer.core.settings import with_values
+        from skinviewer.ground.settings import with_values
         w, h = args.size
         vals = {"render.width": w, "render.height": h}
         if args.technique:
             vals["technique"] = args.technique
         ps = with_values(s, vals)
         (img, ms), = render_frames(ps, [ps])
-        from skinviewer.core.files import save_image
+        from skinviewer.ground.files import save_image
         save_image(args.preview, img)
         print(f"wrote {args.preview} ({ps.technique}, {w}x{h}, {ms:.0f} ms)")
     return 0

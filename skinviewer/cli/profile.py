@@ -175,7 +175,7 @@ def _fit(a, model) -> FitResult:
 
 
 def _preset(a, fit: FitResult):
-    from skinviewer.core.settings import (
+    from skinviewer.ground.settings import (
         Settings,
         SettingsError,
         load_preset,

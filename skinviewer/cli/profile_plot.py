@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from skinviewer.core.files import atomic_path
+from skinviewer.ground.files import atomic_path
 from skinviewer.physics.fitting import FitResult
 
 CHANNELS = (("red", "#d62728"), ("green", "#2ca02c"), ("blue", "#1f77b4"))

@@ -1,5 +1,5 @@
-"""``skinviewer reference``: the ground-truth image of the current settings (core.reference), and
-``skinviewer bench``: every technique over its quality knobs against it (core.bench)."""
+"""``skinviewer reference``: the ground-truth image of the current settings (engine.reference), and
+``skinviewer bench``: every technique over its quality knobs against it (engine.bench)."""
 from __future__ import annotations
 
 import argparse
@@ -17,8 +17,8 @@ from skinviewer.cli.args import (
     number,
     settings_from_args,
 )
-from skinviewer.core.files import save_exr, save_image, save_npy
-from skinviewer.core.settings import Settings, save_preset
+from skinviewer.ground.files import save_exr, save_image, save_npy
+from skinviewer.ground.settings import Settings, save_preset
 
 
 def add_parsers(sub) -> None:
@@ -65,7 +65,7 @@ def _progress():
 
 
 def reference_with_progress(s: Settings, args):
-    from skinviewer.core.reference import (
+    from skinviewer.engine.reference import (
         DEFAULT_H_MM,
         ReferenceTooSlow,
         compute_reference,
@@ -90,7 +90,7 @@ def reference_with_progress(s: Settings, args):
 
 
 def _profile(args):
-    from skinviewer.core.reference import PROFILE_MODELS, model_profile
+    from skinviewer.engine.reference import PROFILE_MODELS, model_profile
     spec = (args.profile or "gaussians").strip()
     model, _, material = spec.partition(":")
     if model not in PROFILE_MODELS:
@@ -162,7 +162,7 @@ def uncertainty_path(npy: str) -> str:
 
 def cmd_bench(args) -> int:
     from skinviewer import techniques
-    from skinviewer.core.bench import (
+    from skinviewer.engine.bench import (
         best_within,
         config_settings,
         load_results,
@@ -172,7 +172,7 @@ def cmd_bench(args) -> int:
 
     s = settings_from_args(args)
     if args.size is None:
-        from skinviewer.core.settings import with_values
+        from skinviewer.ground.settings import with_values
         s = with_values(s, {"render.width": 256, "render.height": 256})
     if args.runs < 3:
         raise CliError("--runs must be at least 3 (the median of >= 3 frames)")

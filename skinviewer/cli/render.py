@@ -8,16 +8,16 @@ from pathlib import Path
 import numpy as np
 
 from skinviewer.cli.args import check_outputs, image_output, settings_from_args
-from skinviewer.core.files import (
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.files import (
     atomic_write_text,
     save_exr,
     save_image,
     save_npy,
     save_png,
 )
-from skinviewer.core.gl import headless_context
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings
+from skinviewer.ground.settings import Settings
+from skinviewer.kernel.gl import headless_context
 
 
 def _preview(arr: np.ndarray) -> np.ndarray:
@@ -63,7 +63,7 @@ def cmd_render(args) -> int:
             print(f"dumped {len(r.graph(s.technique).resources())} textures to {args.dump_passes}")
         if args.verbose:
             print(report.table())
-            from skinviewer.core.memory import renderer_memory
+            from skinviewer.engine.memory import renderer_memory
             held = renderer_memory(r)  # what the renderer holds on the GPU, counted from each object's format
             print(f"GPU memory held: {sum(held.values()) / 2**20:.1f} MiB ("
                   + ", ".join(f"{k} {v / 2**20:.1f}" for k, v in held.items()) + ")")

@@ -7,7 +7,7 @@ import typing
 
 from pydantic import BaseModel
 
-from skinviewer.core.settings import REGIONS, Settings
+from skinviewer.ground.settings import REGIONS, Settings
 from skinviewer.ui.fielddocs import FIELD_DOCS
 
 CONVENTIONS = (

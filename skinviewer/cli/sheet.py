@@ -12,8 +12,8 @@ import numpy as np
 
 from skinviewer import techniques
 from skinviewer.cli.args import add_scene_args, check_outputs, settings_from_args
-from skinviewer.core.files import atomic_write_bytes
-from skinviewer.core.settings import Settings, to_dict, with_values
+from skinviewer.ground.files import atomic_write_bytes
+from skinviewer.ground.settings import Settings, to_dict, with_values
 
 VIEWS = {"front": 0.0, "34": 45.0, "side": 90.0, "back": 180.0}  # camera yaw, degrees about +Y
 VIEW_LABEL = {"front": "front", "34": "3/4", "side": "side", "back": "back"}
@@ -56,10 +56,10 @@ def render_sheet(s: Settings, names: list[str], views: list[str], truth: bool = 
     """The sheet image (uint8 RGB) and one record per tile (technique, view, ms, error)."""
     from PIL import Image, ImageDraw
 
-    from skinviewer.core.bench import compare_mask, linear_image
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.reference import load_cached
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.reference import load_cached
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     from skinviewer.physics.metrics import image_error
     W, H = s.render.width, s.render.height
     label_h = max(40, H // 5)

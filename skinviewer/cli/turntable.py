@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from skinviewer.cli.args import add_scene_args, check_outputs, settings_from_args
-from skinviewer.core.files import atomic_path, atomic_write_bytes, save_png
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.files import atomic_path, atomic_write_bytes, save_png
+from skinviewer.ground.settings import Settings, with_values
 
 MAX_FRAMES = 3600
 
@@ -54,8 +54,8 @@ def render_frames(first: Settings, settings: Iterable[Settings],
                   cancel: Callable[[], bool] | None = None) -> Iterator[tuple[np.ndarray, float]]:
     """Rendered sRGB frames (uint8, top row first) with each frame's wall-clock ms (sync timing:
     GL timer queries are not trusted on llvmpipe)."""
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
     ctx = headless_context()
     r = Renderer(ctx)
     try:

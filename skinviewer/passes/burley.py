@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.screen_space import DEPTH, DIFFUSE, CombinePass
 from skinviewer.physics import burley as B

@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.core.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
-from skinviewer.core.pass_api import Reflection, TexSpec
+from skinviewer.ground.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
+from skinviewer.kernel.pass_api import Reflection, TexSpec
 from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
 from skinviewer.scene.camera import gl_bytes

@@ -27,8 +27,8 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.core.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     LIGHT_POSE_FIELDS,
     LIT,

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.rules import environment_light
 from skinviewer.physics import environment as env
 from skinviewer.scene.environment import environment_image
@@ -38,8 +38,8 @@ def _prefiltered(spec: str, layout: str) -> np.ndarray:
     import hashlib
     import io
 
-    from skinviewer.core.files import atomic_write_bytes
-    from skinviewer.core.paths import cache_dir
+    from skinviewer.ground.files import atomic_write_bytes
+    from skinviewer.ground.paths import cache_dir
     img = environment_image(spec, layout)
     h = hashlib.sha1(b"envprefilter1")
     h.update(repr((img.shape, env.SPEC_SIZE, tuple(env.SPEC_LEVELS_M))).encode())
@@ -218,6 +218,6 @@ def scene_luminance(settings, samples: int = 256) -> float:
 def exposure_from_luminance(settings, reference_exposure: float = 0.9) -> float:
     """render.exposure for ``settings`` so its camera-facing luminance shows as the three-light rig's
     does at the default exposure (0.9): reference_exposure x L(three-light rig) / L(scene)."""
-    from skinviewer.core.settings import three_light_rig
+    from skinviewer.ground.settings import three_light_rig
     rig = settings.model_copy(update={"lights": three_light_rig()})
     return reference_exposure * scene_luminance(rig) / max(scene_luminance(settings), 1e-9)

@@ -37,8 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
-from skinviewer.core.settings import REGIONS, RegionKernel
+from skinviewer.ground.settings import REGIONS, RegionKernel
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     LIT,
     bind_specular,

@@ -11,7 +11,7 @@ import functools
 
 import numpy as np
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     LIT,
     bind_specular,

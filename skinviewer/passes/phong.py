@@ -1,7 +1,7 @@
 """Phong/Lambert baseline (shadow map -> lit image), linear space."""
 from __future__ import annotations
 
-from skinviewer.core.pass_api import Pass, Reflection
+from skinviewer.kernel.pass_api import Pass, Reflection
 from skinviewer.passes.common import (
     LIT,
     bind_surface,

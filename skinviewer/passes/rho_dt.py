@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 
 RHO_DT_RESOURCE = "rho_dt_lut"
 RHO_DT_SIZE = (32, 32)  # (n_cos, n_m)

@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from skinviewer.core.constants import MAX_LIGHTS
-from skinviewer.core.settings import LightSettings
+from skinviewer.ground.constants import MAX_LIGHTS
+from skinviewer.ground.settings import LightSettings
 from skinviewer.scene.camera import framed_view
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn

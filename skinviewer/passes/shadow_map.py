@@ -1,7 +1,7 @@
 """Shadow map per light (seed 000 §4.1.1, eq. 1-6): light-space z/w of the nearest surface."""
 from __future__ import annotations
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import LIGHT_POSE_FIELDS, shadow_resource
 from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
 from skinviewer.scene.camera import gl_bytes

@@ -8,8 +8,8 @@ import os
 import moderngl
 import numpy as np
 
-from skinviewer.core.constants import FLOAT_MAX, HALF_MAX
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.ground.constants import FLOAT_MAX, HALF_MAX
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.rules import light_on
 from skinviewer.scene.texels import border_gutters, seam_indirection
 
@@ -104,7 +104,7 @@ def stored_table(what: list, inputs, like: tuple, compute) -> np.ndarray:
         h.update(repr((a.dtype.str, a.shape)).encode())
         h.update(a.tobytes())
     try:
-        from skinviewer.core.paths import cache_dir
+        from skinviewer.ground.paths import cache_dir
         folder = cache_dir() / "texel-tables"
     except OSError:
         return compute()

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skinviewer.core.files import FileReadError, read_regular_file
+from skinviewer.ground.files import FileReadError, read_regular_file
 from skinviewer.physics.environment import (
     BUILTIN_ENVIRONMENTS,
     builtin_environment,

@@ -259,7 +259,7 @@ def _read_image(path: str | Path, mode: str) -> np.ndarray:
 
     from PIL import Image, UnidentifiedImageError
 
-    from skinviewer.core.files import FileReadError, read_regular_file
+    from skinviewer.ground.files import FileReadError, read_regular_file
     try:
         data = read_regular_file(path, MAX_IMAGE_BYTES, what=f"image {path}")
     except FileReadError as exc:
@@ -357,7 +357,7 @@ def load_mesh(path: str | Path, auto_uv: bool = True) -> MeshData:
 
     import trimesh
 
-    from skinviewer.core.files import FileReadError, read_regular_file
+    from skinviewer.ground.files import FileReadError, read_regular_file
     p = Path(path)
     try:
         data = read_regular_file(p, MAX_MESH_BYTES, what=f"mesh {p}")
@@ -510,7 +510,7 @@ class _Resolver:
         return path
 
     def get(self, name: str) -> bytes:
-        from skinviewer.core.files import FileReadError, read_regular_file
+        from skinviewer.ground.files import FileReadError, read_regular_file
         image = name not in self.non_images
         what = f"{'texture' if image else 'file'} {name!r} referenced by {self.mesh.name}"
         try:

@@ -2,7 +2,7 @@
 description (``base.Technique``); adding one means adding a module here and one line below."""
 from __future__ import annotations
 
-from skinviewer.core.pass_api import Pass
+from skinviewer.kernel.pass_api import Pass
 from skinviewer.techniques import (
     burley,
     burley2,

@@ -8,8 +8,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from skinviewer.core.constants import MAX_LIGHTS
-from skinviewer.core.pass_api import Pass
+from skinviewer.ground.constants import MAX_LIGHTS
+from skinviewer.kernel.pass_api import Pass
 from skinviewer.passes.environment import EnvironmentPass
 from skinviewer.passes.shadow_map import ShadowMapPass
 

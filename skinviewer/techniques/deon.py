@@ -2,7 +2,7 @@
 space, hierarchical separable blurs with stretch correction, rho_dt energy conservation, TSM."""
 from __future__ import annotations
 
-from skinviewer.core.constants import MAX_GAUSSIANS
+from skinviewer.ground.constants import MAX_GAUSSIANS
 from skinviewer.passes.deon import (
     SIZE,
     BorderFramePass,
@@ -39,7 +39,7 @@ def build():
 def fewer_gaussians(k: int) -> list[dict]:
     """The default six-Gaussian skin profile refitted with k Gaussians (seed 000 eq. 21; the
     sweep's Gaussian-count knob): what dropping blurs costs against the six-Gaussian truth."""
-    from skinviewer.core.settings import Settings
+    from skinviewer.ground.settings import Settings
     from skinviewer.physics.diffusion import profile
     from skinviewer.physics.fitting import fit_gaussians
     g = Settings().deon.gaussians

@@ -5,14 +5,14 @@ and steps up, when input stops, to the user's settings themselves (the last rung
 A rung caps the technique's own knobs at a value (never raises one the user set lower) and may
 scale the view (``scale``: the render size's fraction, as the orbit resolution does). A rung that
 changes nothing is left out. The governor times the rungs on the machine at hand
-(core/calibration.py) and picks among them; this module only says what they are."""
+(engine/calibration.py) and picks among them; this module only says what they are."""
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from skinviewer.core.settings import Settings, get_path
+from skinviewer.ground.settings import Settings, get_path
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import functools
 
-from skinviewer.core.settings import Settings
+from skinviewer.ground.settings import Settings
 from skinviewer.passes.luts import BeckmannLutPass  # specular.mode = beckmann_lut (pruned otherwise)
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.screen_space import CombinePass, screen_lighting

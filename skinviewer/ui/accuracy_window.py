@@ -1,4 +1,4 @@
-"""The Accuracy window: the ground truth of the current view (core.reference) computed in a worker
+"""The Accuracy window: the ground truth of the current view (engine.reference) computed in a worker
 thread with a progress bar (cancellable; a view that would take too long says so first), the
 current image's error against it (physics.metrics: relative RMS, p99, DSSIM — the bench's code),
 an error heat-map view mode (full view, or split image | heat map), and the Pareto chart of a bench
@@ -14,14 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.core.bench import (
+from skinviewer.engine.bench import (
     compare_mask,
     heat_rgb,
     last_bench,
     load_results,
     pareto_front,
 )
-from skinviewer.core.settings import Settings, value_key, with_values
+from skinviewer.ground.settings import Settings, value_key, with_values
 from skinviewer.physics.metrics import image_error, rel_error_map, with_u
 from skinviewer.ui.widgets import show_tooltip, wrapped
 
@@ -33,7 +33,7 @@ def reference_key(s: Settings) -> str:
 
 
 class _Job:
-    """A progressive truth in a worker thread (core.reference.TruthSession): each finished stage is
+    """A progressive truth in a worker thread (engine.reference.TruthSession): each finished stage is
     handed over through ``partial`` (one assignment), picked up by the window on the UI thread."""
 
     def __init__(self, s: Settings, session):
@@ -41,7 +41,7 @@ class _Job:
         self.key = reference_key(s)
         self.stage = "starting"
         self.fraction = 0.0
-        self.partial: Any = None  # the last finished stage (core.reference.Partial)
+        self.partial: Any = None  # the last finished stage (engine.reference.Partial)
         self.result: Any = None  # the final Reference
         self.error = ""
         self.cancel = threading.Event()
@@ -75,9 +75,9 @@ class AccuracyWindow:
         self.reference: Any = None
         self.ref_key = ""
         self.max_seconds = 180.0  # bench / CLI references; the window's truth is progressive (no limit)
-        self._session: Any = None  # core.reference.TruthSession, made on first use (scipy: not at start)
+        self._session: Any = None  # engine.reference.TruthSession, made on first use (scipy: not at start)
         self.follow = False  # once asked, a truth follows the view (restarts on a change, reusing sources)
-        self.partial = None  # the stage shown (core.reference.Partial)
+        self.partial = None  # the stage shown (engine.reference.Partial)
         self.rms_se = None  # (rms (3,), standard error (3,)) of the figures while the truth refines
         self.view_mode = 0
         self.error = None        # ImageError of the image on screen
@@ -94,9 +94,9 @@ class AccuracyWindow:
     @property
     def session(self):
         """The truth session (sources kept across camera and profile changes, recent truths); made
-        when a truth is first asked for: importing core.reference loads scipy, ~1 s of the start."""
+        when a truth is first asked for: importing engine.reference loads scipy, ~1 s of the start."""
         if self._session is None:
-            from skinviewer.core.reference import TruthSession
+            from skinviewer.engine.reference import TruthSession
             self._session = TruthSession()
         return self._session
 
@@ -162,7 +162,7 @@ class AccuracyWindow:
         m = compare_mask(visible, lit[..., 3] > 0.5) & ref.mask
         self.error = image_error(img, ref.lit, m, exposure=st.settings.render.exposure,
                                  uncertainty=getattr(ref, "uncertainty", None))
-        from skinviewer.core.reference import sampled_rms
+        from skinviewer.engine.reference import sampled_rms
         self.rms_se = sampled_rms(img, ref, m)
         self._upload_heat(rel_error_map(img, ref.lit, m))
 

@@ -22,9 +22,9 @@ from typing import Any
 import moderngl_window as mglw
 from moderngl_window.timers.clock import Timer
 
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, with_values
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.ui import startup
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.input import InputController
@@ -224,7 +224,7 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
     if sp is not None:
         s0 = settings or Settings()
         if not s0.scene.mesh and s0.scene.name == "head":
-            from skinviewer.core.renderer import prepare_gpu_arrays
+            from skinviewer.kernel.gpu_scene import prepare_gpu_arrays
             from skinviewer.scene.scenes import prefetch_scene
             try:  # generated once, then read from the cache: here in a worker while the screen ticks
                 sp.run("the default head: generating it (first start only) or reading it from the cache",

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from skinviewer.core.settings import Settings
+from skinviewer.ground.settings import Settings
 from skinviewer.scene.camera import orbit_eye
 from skinviewer.scene.mesh import framing_distance
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from skinviewer.core.settings import Settings, SettingsError, load_preset, with_values
+from skinviewer.ground.settings import Settings, SettingsError, load_preset, with_values
 
 MODES = ("off", "split", "toggle", "difference")
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import moderngl
 
-from skinviewer.core.gpu import write_uniform
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.kernel.gpu import write_uniform
+from skinviewer.kernel.shaders import ShaderLibrary
 
 CHANNELS = ("RGB", "R", "G", "B", "A")
 MODES = {"show": 0, "inspect": 1, "split": 2, "difference": 3}  # shaders/display.frag's DISPLAY_MODE

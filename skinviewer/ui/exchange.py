@@ -1,7 +1,7 @@
 """Presets > Export... / Import... / Turntable in the viewer (issue 33).
 
 Export and import call the same code as ``skinviewer export`` / ``skinviewer import``
-(:mod:`skinviewer.core.exchange`). The turntable runs ``skinviewer turntable`` as a child process (its
+(:mod:`skinviewer.engine.exchange`). The turntable runs ``skinviewer turntable`` as a child process (its
 own headless GL context, so the viewer's frame loop is untouched); its progress lines are read on a
 thread, and cancel sends it SIGINT, on which it removes its temporary output: nothing half-written."""
 from __future__ import annotations
@@ -15,14 +15,14 @@ import tempfile
 import threading
 from pathlib import Path
 
-from skinviewer.core.exchange import (
+from skinviewer.engine.exchange import (
     SUFFIX,
     ExchangeError,
     export,
     read_any,
     settings_with,
 )
-from skinviewer.core.settings import Settings, SettingsError, to_dict
+from skinviewer.ground.settings import Settings, SettingsError, to_dict
 from skinviewer.physics.engines import TARGETS
 
 

@@ -19,11 +19,11 @@ from pathlib import Path
 from typing import Protocol
 
 from skinviewer import techniques
-from skinviewer.core.files import save_exr, save_image, save_npy
-from skinviewer.core.graph import FrameReport
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.files import save_exr, save_image, save_npy
+from skinviewer.ground.settings import Settings
+from skinviewer.kernel.graph import FrameReport
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.techniques.preview import FINAL, Rung
 from skinviewer.ui.governor import BackgroundCalibration, Governor
 from skinviewer.ui.hot_reload import ShaderWatcher
@@ -162,7 +162,7 @@ class FrameController:
         """The cached calibration for this GL renderer and mesh class; with ``auto`` the techniques
         it lacks are measured in the background when first governed (missing, stale or unreadable:
         rebuilt, never trusted). Returns the one-line message, if any."""
-        from skinviewer.core import calibration
+        from skinviewer.engine import calibration
         scene = self.renderer.scene
         tris = int(len(scene.gpu.mesh.indices)) if scene is not None else 0
         cal, why = calibration.load(calibration.renderer_name(self.ctx), calibration.mesh_class(tris))

@@ -1,6 +1,6 @@
 """The quality governor (issue 27): while the user drags or edits, each technique shows the most
 accurate rung of its own preview ladder (techniques/preview.py) whose measured cost on this machine
-(core/calibration.py) fits the interaction budget; when input stops it refines, step by step, up
+(engine/calibration.py) fits the interaction budget; when input stops it refines, step by step, up
 to the user's own settings, never going back down while the view is still. The last step renders
 the user's settings themselves, so the final image is the ungoverned render, bit for bit.
 
@@ -22,8 +22,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from skinviewer.core.calibration import Calibration, Entry, rung_settings
-from skinviewer.core.settings import Settings
+from skinviewer.engine.calibration import Calibration, Entry, rung_settings
+from skinviewer.ground.settings import Settings
 from skinviewer.techniques.preview import FINAL, Rung, ladder
 
 MODES = ("off", "interactive", "fixed-budget")
@@ -249,7 +249,7 @@ class Governor:
 
 
 class BackgroundCalibration:
-    """``core.calibration.calibrate`` in a worker thread with its own headless context (the
+    """``engine.calibration.calibrate`` in a worker thread with its own headless context (the
     viewer's first start, or when the cached one is missing, stale or unreadable): the viewer stays
     live meanwhile (at the user's settings); ``result`` is set when it is done, ``error`` (one line)
     if it failed. ``cancel()`` stops it between rungs."""
@@ -279,9 +279,9 @@ class BackgroundCalibration:
         return self.thread.is_alive()
 
     def _run(self) -> None:
-        from skinviewer.core import calibration
-        from skinviewer.core.gl import headless_context
-        from skinviewer.core.renderer import Renderer
+        from skinviewer.engine import calibration
+        from skinviewer.engine.renderer import Renderer
+        from skinviewer.kernel.gl import headless_context
         try:
             ctx = headless_context()
         except Exception as exc:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import time
 
-from skinviewer.core.shaders import ShaderError, ShaderLibrary
+from skinviewer.kernel.shaders import ShaderError, ShaderLibrary
 
 
 class ShaderWatcher:

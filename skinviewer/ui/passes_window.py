@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from imgui_bundle import imgui
 
-from skinviewer.core.graph import TIMING_NOTES
+from skinviewer.kernel.graph import TIMING_NOTES
 from skinviewer.ui.display import CHANNELS
 from skinviewer.ui.widgets import ERR, UiContext, tooltip
 

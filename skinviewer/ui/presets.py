@@ -13,9 +13,9 @@ import os
 from pathlib import Path
 from typing import Any
 
-from skinviewer.core import paths
-from skinviewer.core.files import list_files
-from skinviewer.core.settings import (
+from skinviewer.ground import paths
+from skinviewer.ground.files import list_files
+from skinviewer.ground.settings import (
     Settings,
     SettingsError,
     load_preset,

@@ -13,10 +13,10 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from skinviewer import techniques
-from skinviewer.core.look import apply_look
-from skinviewer.core.look import resolve as resolve_look
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.settings import Settings, SettingsError, with_values
+from skinviewer.engine.look import apply_look
+from skinviewer.engine.look import resolve as resolve_look
+from skinviewer.engine.renderer import Renderer
+from skinviewer.ground.settings import Settings, SettingsError, with_values
 from skinviewer.scene.environment import environment_problems
 from skinviewer.scene.scenes import scene_overrides
 from skinviewer.ui.compare import CompareState

@@ -3,8 +3,8 @@ compare (split, toggle, difference) -- each compare slot rendered by its own Ren
 use and sharing the GL context and the shader library (ui/compare.py says what that costs)."""
 from __future__ import annotations
 
-from skinviewer.core.renderer import Renderer
-from skinviewer.core.shaders import ShaderLibrary
+from skinviewer.engine.renderer import Renderer
+from skinviewer.kernel.shaders import ShaderLibrary
 from skinviewer.ui.display import Display
 from skinviewer.ui.layout import Layout
 from skinviewer.ui.state import ViewerState

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import threading
 
-from skinviewer.core.pass_api import Reflection
+from skinviewer.kernel.pass_api import Reflection
 
 
 def warm_scene(renderer, settings) -> list[str]:

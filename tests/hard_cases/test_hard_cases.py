@@ -16,7 +16,7 @@ from cases import CASES, DIFFUSE_ONLY  # noqa: E402
 from meshes import make  # noqa: E402
 
 from skinviewer import techniques  # noqa: E402
-from skinviewer.core.settings import Settings, with_values  # noqa: E402
+from skinviewer.ground.settings import Settings, with_values  # noqa: E402
 from skinviewer.scene.scenes import scene_overrides  # noqa: E402
 
 TINY = {"render.width": 24, "render.height": 24, "scene.head_detail": 0, "shadow.map_size": 64,

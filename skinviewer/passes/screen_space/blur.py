@@ -4,7 +4,7 @@ and set their uniforms (``set_uniforms``); the program reads ``source``, ``depth
 ``u_dir``."""
 from __future__ import annotations
 
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.screen_space.lighting import DEPTH, screen_size
 
 

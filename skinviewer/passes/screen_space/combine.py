@@ -1,7 +1,7 @@
 """The screen-space combine pass: lit = blurred diffuse x albedo^(1-f) + specular (seed 001 §3.6)."""
 from __future__ import annotations
 
-from skinviewer.core.pass_api import Pass, Reflection
+from skinviewer.kernel.pass_api import Pass, Reflection
 from skinviewer.passes.common import LIT, declare_lit
 from skinviewer.passes.screen_space.lighting import ALBEDO, DIFFUSE, SPECULAR
 

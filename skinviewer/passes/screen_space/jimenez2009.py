@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.core.constants import MAX_GAUSSIANS
-from skinviewer.core.pass_api import Pass, Reflection
+from skinviewer.ground.constants import MAX_GAUSSIANS
+from skinviewer.kernel.pass_api import Pass, Reflection
 from skinviewer.passes.screen_space.blur import SeparableScreenBlur, blur_spec
 from skinviewer.passes.screen_space.lighting import DIFFUSE, screen_size
 from skinviewer.physics.separable import focal_px, gaussian_taps, incremental_sigmas, limit_gaussians

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
-from skinviewer.core.pass_api import Pass, Reflection, TexSpec
+from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     bind_specular,
     bind_surface,

@@ -81,7 +81,7 @@ def _load_cache(path: Path) -> dict[str, np.ndarray] | None:
     if not path.is_file():
         return None
     try:
-        from skinviewer.core.files import read_regular_file
+        from skinviewer.ground.files import read_regular_file
         data = read_regular_file(path, 2**31, what=f"cache entry {path}")  # never blocks, never unbounded
         with np.load(io.BytesIO(data), allow_pickle=False) as z:
             arrays = {k: z[k] for k in _ARRAY_KEYS}

@@ -1,5 +1,5 @@
 """The look-first top of the panel: *Look* (the technique, the skin in an artist's terms -- scatter
-colour and radius, core/look.py -- specular, translucency) and *Quality & cost* (the active
+colour and radius, engine/look.py -- specular, translucency) and *Quality & cost* (the active
 technique's map sizes and sample counts). Engine internals stay in the technique sections under
 *Advanced*. One name per technique everywhere (the registry's key); the paper is in the tooltip."""
 from __future__ import annotations
@@ -8,7 +8,7 @@ import numpy as np
 from imgui_bundle import imgui
 
 from skinviewer import techniques
-from skinviewer.core.look import BURLEY_TECHNIQUES, shown_look
+from skinviewer.engine.look import BURLEY_TECHNIQUES, shown_look
 from skinviewer.physics import artist
 from skinviewer.ui import profile_plot
 from skinviewer.ui.frame import FrameController

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from imgui_bundle import imgui
 
-from skinviewer.core.settings import REGIONS
+from skinviewer.ground.settings import REGIONS
 from skinviewer.ui.frame import FrameController
 from skinviewer.ui.sections.common import change_line
 from skinviewer.ui.state import ViewerState

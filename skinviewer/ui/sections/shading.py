@@ -10,7 +10,7 @@ import numpy as np
 from imgui_bundle import imgui
 
 from skinviewer import techniques
-from skinviewer.core.settings import REGIONS, Settings, profile_warnings
+from skinviewer.ground.settings import REGIONS, Settings, profile_warnings
 from skinviewer.ui import profile_plot
 from skinviewer.ui.fielddocs import doc
 from skinviewer.ui.frame import FrameController

@@ -122,7 +122,7 @@ class TechniqueSection:
         imgui.text(f"this frame: {now_tex + now_view:.1f} ms")
         imgui.same_line()
         imgui.text_disabled(f"({len(rep.ran)} of {len(live)} passes ran, {rep.timing_mode} timing)")
-        from skinviewer.core.graph import TIMING_NOTES
+        from skinviewer.kernel.graph import TIMING_NOTES
         tooltip(TIMING_NOTES.get(rep.timing_mode, ""))
         total = full_tex + full_view
         imgui.text("full frame:")

@@ -10,7 +10,7 @@ import moderngl
 import numpy as np
 
 if TYPE_CHECKING:
-    from skinviewer.core.renderer import GpuScene
+    from skinviewer.kernel.gpu_scene import GpuScene
 
 # sampler uniform types (GL enums) -> (components, dtype) of the 1x1 dummy texture backing them
 _SAMPLER_KINDS = {

@@ -1,6 +1,6 @@
 """What accuracy costs in time: every technique of the registry over its quality knobs
 (``Technique.sweep``), each configuration timed (sync timing, median of >= 3 frames, full frame and
-camera-only frame) and compared with the ground truth (core.reference) by the metrics of
+camera-only frame) and compared with the ground truth (engine.reference) by the metrics of
 physics.metrics (relative RMS, p99 relative error, DSSIM). Used by ``skinviewer bench`` and the
 viewer's Accuracy window (results.json, Pareto front, configurations as settings)."""
 from __future__ import annotations
@@ -19,8 +19,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from skinviewer import techniques
-from skinviewer.core.files import atomic_write_text, save_exr, save_png
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.files import atomic_write_text, save_exr, save_png
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics.metrics import (
     DSSIM_SETUP,
     image_error,
@@ -30,8 +30,8 @@ from skinviewer.physics.metrics import (
 )
 
 if TYPE_CHECKING:
-    from skinviewer.core.reference import Reference
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.reference import Reference
+    from skinviewer.engine.renderer import Renderer
 
 RUNS = 3
 LAST_BENCH = "last_bench.txt"  # in cache_dir(): the results.json of the last bench (the viewer's chart)
@@ -187,8 +187,8 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
               ctx: moderngl.Context | None = None) -> dict[str, Any]:
     """Sweep, measure, compare; write results.json, results.md, pareto.png and heatmaps/.
     ``ctx``: a moderngl context to render with (default: a new headless one, released after)."""
-    from skinviewer.core.gl import headless_context
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
 
     out = Path(out)
     (out / "heatmaps").mkdir(parents=True, exist_ok=True)
@@ -196,7 +196,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
                for label, ch in t.sweep(quick)]
     configs += environment_sweep(base, quick, names)
     if reference is None:
-        raise ValueError("run_bench needs the ground truth to compare with (core.reference.compute_reference)")
+        raise ValueError("run_bench needs the ground truth to compare with (engine.reference.compute_reference)")
     ref = reference
     results: list[Result] = []
 
@@ -257,7 +257,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
 
 
 def remember_bench(results_json: Path) -> None:
-    from skinviewer.core.paths import cache_dir
+    from skinviewer.ground.paths import cache_dir
     atomic_write_text(cache_dir() / LAST_BENCH, str(Path(results_json).resolve()) + "\n")
 
 
@@ -267,8 +267,8 @@ MAX_RESULTS_BYTES = 256 * 2**20
 def last_bench() -> str:
     """The results.json of the last bench, or "" (a damaged or special file there: "" too; it is
     read through read_regular_file, so a FIFO never blocks the viewer's start)."""
-    from skinviewer.core.files import read_regular_file
-    from skinviewer.core.paths import cache_dir
+    from skinviewer.ground.files import read_regular_file
+    from skinviewer.ground.paths import cache_dir
     try:
         return read_regular_file(cache_dir() / LAST_BENCH, 64 * 2**10).decode("utf-8").strip()
     except (OSError, UnicodeDecodeError):
@@ -278,7 +278,7 @@ def last_bench() -> str:
 def load_results(path: str | Path) -> tuple[dict[str, Any], list[Result]]:
     """A bench's results.json: ValueError (one line) for anything that is not one (not JSON, not an
     object, results that are not records), OSError when it cannot be read (regular files only)."""
-    from skinviewer.core.files import read_regular_file
+    from skinviewer.ground.files import read_regular_file
     try:
         data = json.loads(read_regular_file(path, MAX_RESULTS_BYTES, what=f"bench results {path}").decode("utf-8"))
     except (UnicodeDecodeError, RecursionError) as exc:
@@ -410,5 +410,5 @@ def pareto_plot(results: list[Result], path: Path, title: str = "") -> None:
     buf = BytesIO()
     fig.savefig(buf, format="png")
     plt.close(fig)
-    from skinviewer.core.files import atomic_write_bytes
+    from skinviewer.ground.files import atomic_write_bytes
     atomic_write_bytes(path, buf.getvalue())

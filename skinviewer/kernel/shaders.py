@@ -4,7 +4,7 @@ as (file, line, message) records; the last good program keeps running.
 
 A program ``name`` is ``name.frag`` plus a vertex stage: ``name.vert``, or the shared stage its
 fragment file names with ``#pragma vertex_stage "vs/fullscreen.vert"`` (paths relative to the root).
-Every program gets the shared constants (``skinviewer.core.constants.GLSL_DEFINES``), then the
+Every program gets the shared constants (``skinviewer.ground.constants.GLSL_DEFINES``), then the
 library's own defines, then the program's defines, as ``#define`` lines after ``#version``."""
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ from typing import Any
 
 import moderngl
 
-from skinviewer.core import paths
-from skinviewer.core.constants import GLSL_DEFINES
-from skinviewer.core.files import FileReadError, read_regular_file
+from skinviewer.ground import paths
+from skinviewer.ground.constants import GLSL_DEFINES
+from skinviewer.ground.files import FileReadError, read_regular_file
 
 MAX_SHADER_BYTES = 4 * 2**20  # one GLSL file; a FIFO or device among the shaders is refused, never read
 

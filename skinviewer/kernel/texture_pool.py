@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import moderngl
 
-from skinviewer.core.pass_api import TexSpec
+from skinviewer.kernel.pass_api import TexSpec
 
 
 class TexturePool:

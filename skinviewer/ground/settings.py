@@ -19,9 +19,9 @@ from pydantic import (
     model_validator,
 )
 
-from skinviewer.core.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF
-from skinviewer.core.constants import REGIONS as REGIONS  # re-exported: passes, scenes and the UI import it from here
-from skinviewer.core.files import FileReadError, atomic_write_text, read_regular_file
+from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF
+from skinviewer.ground.constants import REGIONS as REGIONS  # re-exported: passes, scenes and the UI import it from here
+from skinviewer.ground.files import FileReadError, atomic_write_text, read_regular_file
 
 SCHEMA_VERSION = 1
 

@@ -8,14 +8,14 @@ from typing import TYPE_CHECKING, Any
 
 import moderngl
 
-from skinviewer.core.gpu import write_uniform
-from skinviewer.core.pass_api import GraphError, Pass, Reflection, SettingsView, ShapeState, TexSpec
-from skinviewer.core.report import FrameInputs
-from skinviewer.core.settings import get_path
+from skinviewer.ground.settings import get_path
+from skinviewer.kernel.gpu import write_uniform
+from skinviewer.kernel.pass_api import GraphError, Pass, Reflection, SettingsView, ShapeState, TexSpec
+from skinviewer.kernel.report import FrameInputs
 
 if TYPE_CHECKING:
-    from skinviewer.core.graph import RenderGraph
-    from skinviewer.core.renderer import GpuScene
+    from skinviewer.kernel.gpu_scene import GpuScene
+    from skinviewer.kernel.graph import RenderGraph
     from skinviewer.scene.camera import View
 
 

@@ -41,9 +41,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skinviewer.core.files import atomic_write_bytes
-from skinviewer.core.paths import cache_dir
-from skinviewer.core.settings import REGIONS, LightSettings, Settings
+from skinviewer.ground.files import atomic_write_bytes
+from skinviewer.ground.paths import cache_dir
+from skinviewer.ground.settings import REGIONS, LightSettings, Settings
 from skinviewer.passes.common import per_region_specular
 from skinviewer.passes.output import srgb_to_linear
 from skinviewer.passes.rules import environment_light
@@ -75,7 +75,7 @@ ProfileArrays = tuple[np.ndarray, np.ndarray]  # (variances (k,), weights (k, 3)
 DEFAULT_H_MM = 0.5          # source element edge
 
 BEAM_RAYS = 64
-DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as core.renderer: a mesh without an albedo map
+DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as engine.renderer: a mesh without an albedo map
 RHO_DT_SIZE = (32, 32)      # the table the techniques sample (passes/rho_dt.py)
 
 
@@ -595,7 +595,7 @@ TECHNIQUE_ONLY_LIGHT_FIELDS = ("sh_order", "occlusion", "ao_rays", "transfer_ord
 
 
 def cache_key(s: Settings, h_mm: float, profile: Any = None, split_edges: bool = True, uncertainty: bool = True) -> str:
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     d = s.model_dump(mode="json")
     # the environment's approximations (SH order, baked visibility) are the techniques', not the truth's
     lights = [{k: v for k, v in light.items() if k not in TECHNIQUE_ONLY_LIGHT_FIELDS} for light in d["lights"]]
@@ -655,7 +655,7 @@ def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileArrays 
 
 
 def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
-    from skinviewer.core.files import read_regular_file
+    from skinviewer.ground.files import read_regular_file
     data = read_regular_file(p, MAX_CACHE_BYTES, what=f"cache entry {p}")
     with np.load(io.BytesIO(data), allow_pickle=False) as z:
         arrays = {k: np.array(z[k]) for k in ("lit", "diffuse", "specular", "mask", "position", "meta")}
@@ -1024,7 +1024,7 @@ STRIDES = (4, 2, 1)
 
 def sources_key(s: Settings, h_mm: float) -> str:
     """What the source elements' E A depend on: not the camera, the render size or the profile."""
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
     d = s.model_dump(mode="json")
     parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "lights": d["lights"],
              "specular": d["specular"], "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm}
@@ -1063,7 +1063,7 @@ class TruthSession:
 
     # -- what is kept -----------------------------------------------------------------------------
     def surface(self, s: Settings) -> Surface:
-        from skinviewer.core.renderer import Renderer
+        from skinviewer.engine.renderer import Renderer
         skey = json.dumps(Renderer.scene_key(s), sort_keys=True, default=str)
         if self._scene is None or self._scene[0] != skey:
             self._scene = (skey, load_scene(s))

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from skinviewer.core.settings import Settings
+from skinviewer.ground.settings import Settings
 
 
 @dataclass

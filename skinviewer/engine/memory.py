@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import moderngl
 
 if TYPE_CHECKING:
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
 
 _BYTES = {"f1": 1, "f2": 2, "f4": 4, "i1": 1, "u1": 1, "i2": 2, "u2": 2, "i4": 4, "u4": 4}
 DEPTH_BYTES = 4  # a depth renderbuffer: 24-bit depth padded (or D24S8) per texel

@@ -32,8 +32,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from skinviewer.core.files import FileReadError, atomic_write_text, read_regular_file
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.files import FileReadError, atomic_write_text, read_regular_file
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics import engines as E
 from skinviewer.physics.burley import shape_distance
 from skinviewer.physics.profiles import (

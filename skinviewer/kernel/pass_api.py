@@ -7,10 +7,10 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from skinviewer.core.settings import Settings, get_path
+from skinviewer.ground.settings import Settings, get_path
 
 if TYPE_CHECKING:
-    from skinviewer.core.execute import ExecuteContext
+    from skinviewer.kernel.execute import ExecuteContext
 
 Defines = tuple[tuple[str, object], ...]  # a program's #defines, sorted: part of its cache key
 ShapeState = dict[object, Any]  # the graph's memory for shape decisions: each pass keys and types its own entries

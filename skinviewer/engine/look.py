@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics import artist
 
 # settings the look writes: an edit of one of these by hand hands the profile back to the table

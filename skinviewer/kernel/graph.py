@@ -10,7 +10,7 @@ Passes do no GL plumbing of their own: the ExecuteContext gives them draws (``dr
 ``draw_fullscreen``), textures bound by sampler name with units allocated per execute
 (``bind``/``textures``; samplers left unbound read a 1x1 dummy), uniforms that fail loudly on a
 name the program's source does not declare (``set``/``uniforms``), and read-only views of the
-settings they declared (``section``). The graph owns the GL objects behind them (core/gpu.py).
+settings they declared (``section``). The graph owns the GL objects behind them (kernel/gpu.py).
 
 The pass API, the frame report and the texture pool are re-exported here (``import X as X``).
 """
@@ -25,23 +25,23 @@ from typing import Any
 import moderngl
 import numpy as np
 
-from skinviewer.core.execute import ExecuteContext
-from skinviewer.core.gpu import GpuServices, write_uniform
-from skinviewer.core.pass_api import GraphError as GraphError
-from skinviewer.core.pass_api import Pass as Pass
-from skinviewer.core.pass_api import Reflection as Reflection
-from skinviewer.core.pass_api import ResourceLimitError as ResourceLimitError
-from skinviewer.core.pass_api import SettingsView as SettingsView
-from skinviewer.core.pass_api import ShapeState
-from skinviewer.core.pass_api import TexSpec as TexSpec
-from skinviewer.core.paths import shaders_dir
-from skinviewer.core.report import TIMING_NOTES as TIMING_NOTES
-from skinviewer.core.report import FrameInputs as FrameInputs
-from skinviewer.core.report import FrameReport as FrameReport
-from skinviewer.core.report import PassRecord as PassRecord
-from skinviewer.core.settings import Settings, value_key
-from skinviewer.core.shaders import ShaderCompileError, ShaderLibrary
-from skinviewer.core.texture_pool import TexturePool as TexturePool
+from skinviewer.ground.paths import shaders_dir
+from skinviewer.ground.settings import Settings, value_key
+from skinviewer.kernel.execute import ExecuteContext
+from skinviewer.kernel.gpu import GpuServices, write_uniform
+from skinviewer.kernel.pass_api import GraphError as GraphError
+from skinviewer.kernel.pass_api import Pass as Pass
+from skinviewer.kernel.pass_api import Reflection as Reflection
+from skinviewer.kernel.pass_api import ResourceLimitError as ResourceLimitError
+from skinviewer.kernel.pass_api import SettingsView as SettingsView
+from skinviewer.kernel.pass_api import ShapeState
+from skinviewer.kernel.pass_api import TexSpec as TexSpec
+from skinviewer.kernel.report import TIMING_NOTES as TIMING_NOTES
+from skinviewer.kernel.report import FrameInputs as FrameInputs
+from skinviewer.kernel.report import FrameReport as FrameReport
+from skinviewer.kernel.report import PassRecord as PassRecord
+from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
+from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget

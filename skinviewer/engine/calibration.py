@@ -25,15 +25,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from skinviewer import techniques
-from skinviewer.core.files import atomic_write_text
-from skinviewer.core.paths import cache_dir
-from skinviewer.core.settings import Settings, with_values
+from skinviewer.ground.files import atomic_write_text
+from skinviewer.ground.paths import cache_dir
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.techniques.preview import Rung, ladder
 
 if TYPE_CHECKING:
     import moderngl
 
-    from skinviewer.core.renderer import Renderer
+    from skinviewer.engine.renderer import Renderer
 
 
 VERSION = 1
@@ -278,7 +278,7 @@ def attach_errors(cal: Calibration, bench_results: str | Path | None = None) -> 
 
 
 def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, float | None, str]]:
-    from skinviewer.core.bench import last_bench, load_results
+    from skinviewer.engine.bench import last_bench, load_results
     path = path or last_bench()
     if not path:
         return {}
