@@ -87,7 +87,7 @@ def backlit_ear_deviation(renderer, n: int = 160) -> dict[float, np.ndarray]:
     through the flap along the light, A where that ray enters the back). Shared by test_fidelity.py and
     benchmarks/claims.py."""
     from skinviewer.passes.deon import mean_texel_mm
-    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.physics.color import srgb_to_linear
     from skinviewer.physics.diffusion import blur_plan_texels, texture_of
     from skinviewer.scene.camera import orbit_view
     from skinviewer.scene.scenes import _flap_thickness

@@ -265,7 +265,7 @@ def test_phong_sphere_adds_the_pre_filtered_environment_specular(renderer, tmp_p
     radiance pre-filtered at R — the GLSL against physics/environment.env_phong_specular per pixel."""
     from skinviewer.engine.reference import DEFAULT_SKIN_SRGB
     from skinviewer.ground.settings import with_values
-    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.physics.color import srgb_to_linear
     from skinviewer.scene.environment import environment_image
     from tests.helpers import small_settings
     from tests.test_environment import _env_lights, _sphere_obj
@@ -332,9 +332,9 @@ def test_penner_sphere_scatters_the_environment_as_numpy_does(renderer, tmp_path
     from skinviewer.engine.reference import DEFAULT_SKIN_SRGB
     from skinviewer.ground.files import save_exr
     from skinviewer.ground.settings import with_values
-    from skinviewer.passes.output import srgb_to_linear
     from skinviewer.passes.penner import profile
     from skinviewer.physics import penner
+    from skinviewer.physics.color import srgb_to_linear
     from tests.helpers import small_settings
     from tests.test_environment import _sphere_obj
     path = tmp_path / "band.exr"

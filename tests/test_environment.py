@@ -251,7 +251,7 @@ def test_sphere_shading_matches_the_analytic_sh(renderer, tmp_path):
     """Phong with ambient 0 and no specular shows C x E_SH(n): the GLSL SH against the numpy twin
     at the exact sphere normal of each pixel (occlusion off: a convex sphere sees the whole sky)."""
     from skinviewer.engine.reference import DEFAULT_SKIN_SRGB
-    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.physics.color import srgb_to_linear
     from skinviewer.scene.camera import framed_view
     mesh = _sphere_obj(tmp_path / "sphere.obj")
     s = with_values(small_settings(technique="phong", size=96), {

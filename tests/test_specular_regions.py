@@ -57,3 +57,22 @@ def test_rho_dt_follows_the_region_rho_s(renderer):
     ratio = irr1[..., 0][ears].mean() / irr0[..., 0][ears].mean()
     assert ratio > 1.01  # energy the specular no longer takes goes to the diffuse
     assert np.allclose(irr1[..., 0][cheeks], irr0[..., 0][cheeks], rtol=1e-5)
+
+
+def test_per_region_tables_override_only_the_regions_that_set_a_value():
+    """physics/specular.per_region_specular: the (m, rho_s) tables the lit passes upload and the ground
+    truth indexes by region ID. A region that sets only m keeps the global rho_s, a region that sets
+    nothing keeps both, and the IDs follow ground.constants.REGIONS."""
+    from skinviewer.ground.constants import REGIONS
+    from skinviewer.ground.settings import Settings
+    from skinviewer.physics.specular import per_region_specular
+    sp = with_values(Settings(), {"specular.m": 0.4, "specular.rho_s": 0.1,
+                                  "specular.per_region": {"nose": {"m": 0.2}, "lips": {"rho_s": 0.3}}}).specular
+    m, rho = per_region_specular(sp)
+    assert m.dtype == rho.dtype == np.float32 and m.shape == rho.shape == (len(REGIONS),)
+    want_m = np.full(len(REGIONS), 0.4)
+    want_m[REGIONS.index("nose")] = 0.2
+    want_rho = np.full(len(REGIONS), 0.1)
+    want_rho[REGIONS.index("lips")] = 0.3
+    np.testing.assert_allclose(m, want_m, rtol=1e-6)
+    np.testing.assert_allclose(rho, want_rho, rtol=1e-6)

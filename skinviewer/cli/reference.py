@@ -108,7 +108,7 @@ def _profile(args):
 
 def display_png(s: Settings, lit: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """As the output pass: exposure, background where nothing was hit, sRGB, 8 bits."""
-    from skinviewer.passes.output import srgb_to_linear
+    from skinviewer.physics.color import srgb_to_linear
     from skinviewer.physics.metrics import display_encode
     bg = np.asarray(srgb_to_linear(np.asarray(s.render.background, np.float64)))
     img = np.where(mask[..., None], lit * s.render.exposure, bg[None, None, :])

@@ -44,15 +44,15 @@ from numpy.typing import ArrayLike
 from skinviewer.ground.files import atomic_write_bytes
 from skinviewer.ground.paths import cache_dir
 from skinviewer.ground.settings import REGIONS, LightSettings, Settings
-from skinviewer.passes.common import per_region_specular
-from skinviewer.passes.output import srgb_to_linear
 from skinviewer.passes.rules import environment_light
 from skinviewer.physics import ground_truth as gt
+from skinviewer.physics.color import srgb_to_linear
 from skinviewer.physics.environment import EnvSampler
 from skinviewer.physics.specular import (
     beckmann_lut,
     ks_specular,
     ks_specular_lut,
+    per_region_specular,
     rho_dt_table,
     sample_bilinear,
 )

@@ -13,8 +13,8 @@ import moderngl
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skinviewer.passes.output import srgb_to_linear
 from skinviewer.physics.arrays import Float32Array
+from skinviewer.physics.color import srgb_to_linear
 from skinviewer.physics.diffusion import max_shear_cos, max_uv_per_mm, uniform_uv_per_mm, vertex_uv_covariance
 from skinviewer.physics.penner import vertex_curvature
 from skinviewer.scene.camera import LightSpace, light_space

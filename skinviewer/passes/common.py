@@ -7,10 +7,11 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.ground.constants import LIGHT_KINDS, MAX_LIGHTS, REGIONS
+from skinviewer.ground.constants import LIGHT_KINDS, MAX_LIGHTS
 from skinviewer.kernel.pass_api import Reflection, TexSpec
 from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
+from skinviewer.physics.specular import per_region_specular
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.mesh import culls_back_faces
 
@@ -116,20 +117,6 @@ def set_camera(ec, prog) -> None:
     view = ec.view
     ec.set(prog, "u_view_proj", gl_bytes(view.view_proj))
     ec.set(prog, "u_eye", tuple(float(x) for x in view.eye))
-
-
-def per_region_specular(sp) -> tuple[np.ndarray, np.ndarray]:
-    """(m, rho_s) float32 arrays indexed by region ID: ``specular.per_region`` overrides (None
-    fields keep the global value)."""
-    m = np.full(len(REGIONS), sp.m, np.float32)
-    rho = np.full(len(REGIONS), sp.rho_s, np.float32)
-    for name, rs in sp.per_region.items():
-        k = REGIONS.index(name)
-        if rs.m is not None:
-            m[k] = rs.m
-        if rs.rho_s is not None:
-            rho[k] = rs.rho_s
-    return m, rho
 
 
 SPECULAR_FIELDS = ("m", "rho_s", "f0", "per_region")

@@ -2,9 +2,9 @@
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
 
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.physics.color import srgb_to_linear
 
 TONE_MAPS = {"linear": 0, "filmic": 1}
 
@@ -17,11 +17,6 @@ def tone_map(x, mode: str = "filmic"):
     if mode == "linear":
         return np.clip(x, 0.0, 1.0)
     return np.clip(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
-
-
-def srgb_to_linear(c: ArrayLike) -> NDArray[np.float64]:
-    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
 BACKGROUND_MODES = {"off": 0, "sharp": 1, "blurred": 2}

@@ -39,11 +39,13 @@ By reciprocity the same table serves eq. 34's outgoing term with cos = N.V.
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from skinviewer.ground.constants import REGIONS
 from skinviewer.physics.arrays import BoolArray, Float32Array, FloatArray
 
 if TYPE_CHECKING:
@@ -301,3 +303,37 @@ def upload_table(ctx: moderngl.Context, table: ArrayLike) -> moderngl.Texture:
 
     tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
     return tex
+
+
+class RegionSpecular(Protocol):
+    """One facial region's overrides (None: keep the global value)."""
+    @property
+    def m(self) -> float | None: ...
+    @property
+    def rho_s(self) -> float | None: ...
+
+
+class RegionalSpecular(Protocol):
+    """The global roughness and intensity with per-region overrides (the settings' ``specular``)."""
+    @property
+    def m(self) -> float: ...
+    @property
+    def rho_s(self) -> float: ...
+    @property
+    def per_region(self) -> Mapping[str, RegionSpecular]: ...
+
+
+def per_region_specular(sp: RegionalSpecular) -> tuple[Float32Array, Float32Array]:
+    """(m, rho_s) float32 arrays indexed by region ID (ground.constants.REGIONS): Weyrich et al.'s
+    per-region values (seed 002 §14.3) from ``sp.per_region``, the global ``sp.m`` / ``sp.rho_s`` where
+    a region sets none. The lit passes upload both tables (lib/specular_params.glsl); the ground
+    truth indexes them by the mesh's region map."""
+    m: Float32Array = np.full(len(REGIONS), sp.m, np.float32)
+    rho: Float32Array = np.full(len(REGIONS), sp.rho_s, np.float32)
+    for name, rs in sp.per_region.items():
+        k = REGIONS.index(name)
+        if rs.m is not None:
+            m[k] = rs.m
+        if rs.rho_s is not None:
+            rho[k] = rs.rho_s
+    return m, rho
