@@ -1,24 +1,43 @@
 """The layout is the architecture: no import cycles between modules (not even through imports
-inside functions), and the layers only import downwards (core and physics never import the UI).
-Imports under ``if TYPE_CHECKING:`` (annotations only, never run) count for the layers but not as
-cycles: ``Pass.execute(ec: ExecuteContext)`` names the context the graph hands it."""
+inside functions), and the layers only import downwards: a module may import its own layer and the
+layers below it, never one above, with no exception. Imports under ``if TYPE_CHECKING:`` (annotations
+only, never run) count for the layers but not as cycles: ``Pass.execute(ec: ExecuteContext)`` names the
+context the graph hands it."""
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
-PKG = Path(__file__).resolve().parents[1] / "skinviewer"
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "skinviewer"
 
-# layer -> the layers it may import (besides itself)
-ALLOWED = {
-    "core": {"core", "physics", "scene", "techniques", "passes"},  # the renderer builds technique graphs
-    "physics": {"physics"},
-    "scene": {"scene", "core", "physics"},
-    "passes": {"passes", "core", "physics", "scene"},
-    "techniques": {"techniques", "passes", "core", "physics", "scene"},
-    "ui": {"ui", "core", "physics", "scene", "passes", "techniques"},  # the command line parses; the viewer gets Settings
-    "cli": {"cli", "core", "physics", "scene", "passes", "techniques", "ui"},
-}
+# the layers, bottom first (issue 28). Each folder skinviewer/<layer>/ may import the layers before it
+# in this list and nothing after it. README.md's layer line and docs/dev/architecture.md's diagram are
+# checked against this list (test_the_documented_layers_are_the_checked_ones).
+LAYERS = [
+    "ground",      # settings model, files, paths, constants shared with GLSL
+    "physics",     # plain numpy: profiles, fitting, diffusion, specular, colour, metrics, ground truth
+    "scene",       # meshes, the generated head, built-in scenes, camera
+    "kernel",      # the graph kernel: pass API, graph, execute context, GL services, shaders, GpuScene
+    "passes",      # one module per pass
+    "techniques",  # a technique = passes + targets + bench sweep
+    "engine",      # renderer, ground-truth reference, bench, memory, calibration, exchange, look
+    "ui",          # the viewer
+    "cli",         # the command line (opens the viewer)
+]
+# the package root holds only __version__ (below everything); the launcher and ``python -m`` start the
+# command line or the viewer (above everything)
+BOTTOM = {"skinviewer"}
+TOP = {"skinviewer.launch", "skinviewer.__main__"}
+
+
+def _rank(mod: str) -> int:
+    if mod in BOTTOM:
+        return -1
+    if mod in TOP:
+        return len(LAYERS)
+    return LAYERS.index(mod.split(".")[1])
 
 
 def _module_name(path: Path) -> str:
@@ -91,15 +110,49 @@ def test_no_import_cycles():
         visit(m, [])
 
 
+def test_every_module_is_in_a_layer():
+    """A new folder under skinviewer/ must be placed in LAYERS before it can import anything."""
+    loose = sorted(m for m in _imports() if m not in BOTTOM | TOP and (len(m.split(".")) < 2
+                                                                     or m.split(".")[1] not in LAYERS))
+    assert not loose, f"modules in no layer (add their folder to LAYERS): {loose}"
+
+
+def _backward_arrows(graph: dict[str, set[str]]) -> list[str]:
+    return sorted(f"{m} -> {d}" for m, deps in graph.items() for d in deps if _rank(d) > _rank(m))
+
+
 def test_layers_import_downwards():
-    for mod, deps in _imports().items():
-        parts = mod.split(".")
-        if len(parts) < 2 or parts[1] not in ALLOWED:
-            continue
-        for d in deps:
-            dl = d.split(".")
-            if len(dl) >= 2 and dl[1] in ALLOWED:
-                assert dl[1] in ALLOWED[parts[1]], f"{mod} imports {d}: layer {parts[1]} may not import {dl[1]}"
+    """Every import, type-only ones included, goes to the module's own layer or one below it."""
+    bad = _backward_arrows(_imports())
+    assert not bad, "imports that go up a layer:\n" + "\n".join(bad)
+
+
+def test_an_upward_import_is_caught():
+    """The check above sees a kernel module importing the engine, even under TYPE_CHECKING, and a pass
+    importing a technique (the arrows issue 28 removed: core -> passes/techniques, scene -> core, ui -> cli)."""
+    graph = {"skinviewer.kernel.execute": {"skinviewer.engine.renderer"}, "skinviewer.passes.output": {"skinviewer.techniques.deon"},
+             "skinviewer.scene.mesh": {"skinviewer.ground.files"}, "skinviewer.ui.app": {"skinviewer.cli.args"}}
+    assert _backward_arrows(graph) == ["skinviewer.kernel.execute -> skinviewer.engine.renderer",
+                                       "skinviewer.passes.output -> skinviewer.techniques.deon",
+                                       "skinviewer.ui.app -> skinviewer.cli.args"]
+
+
+def _documented_layers(text: str) -> list[str]:
+    return re.findall(r"`(\w+)`", text)
+
+
+def test_the_documented_layers_are_the_checked_ones():
+    """README.md's layer line (bottom first) and docs/dev/architecture.md's diagram (top first) name the
+    layers of LAYERS in the same order: the diagram is what this file checks."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    line = re.search(r"The layers \((.*?)\) only import", readme, re.S)
+    assert line, "README.md: no 'The layers (...) only import' sentence"
+    assert _documented_layers(line.group(1)) == LAYERS
+    doc = (ROOT / "docs" / "dev" / "architecture.md").read_text(encoding="utf-8")
+    diagram = re.search(r"```\n(.*?)```", doc, re.S)
+    assert diagram, "docs/dev/architecture.md: no diagram"
+    drawn = [m for m in re.findall(r"skinviewer/(\w+)/", diagram.group(1)) if m in LAYERS or m == "core"]
+    assert list(reversed(drawn)) == LAYERS
 
 
 def test_viewer_programs_come_from_the_shader_library():
