@@ -1,5 +1,5 @@
 """Package discovery, the one thing pyproject.toml cannot say: the Python packages are found under
-skinviewer/ (``find_namespace_packages``: core/, physics/ and scene/ have no ``__init__.py``), and
+skinviewer/ (``find_namespace_packages``: ground/, kernel/, engine/, physics/ and scene/ have no ``__init__.py``), and
 the GLSL and presets, which live at the top of the checkout so they can be edited live, are found
 recursively under shaders/ and presets/ (``find_namespace_packages``) and shipped as ``skinviewer.shaders`` / ``skinviewer.presets``
 (the mapping is ``[tool.setuptools.package-dir]`` in pyproject.toml). Everything else is there."""

@@ -80,8 +80,8 @@ def test_a_failing_command_fails_the_group(tmp_path, monkeypatch):
     assert rc.main(["checkout"]) == 0
 
 
-STRICT = ["skinviewer.physics.profiles", "skinviewer.physics.ground_truth", "skinviewer.kernel.graph",
-          "skinviewer.engine.reference"]
+STRICT = ["skinviewer.physics.profiles", "skinviewer.physics.ground_truth", "skinviewer.ground.settings",
+          "skinviewer.kernel.graph", "skinviewer.engine.reference"]
 
 
 @pytest.mark.parametrize("module", STRICT)

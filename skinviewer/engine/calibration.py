@@ -227,7 +227,7 @@ def calibrate(renderer: Renderer, base: Settings,
               progress: Callable[[str, int, int], None] | None = None,
               cancelled: Callable[[], bool] | None = None, into: Calibration | None = None) -> Calibration:
     """Time every rung of each technique's ladder (on ``base``'s scene, the default settings
-    otherwise, CALIBRATION_SIZE) with ``renderer`` (a core Renderer); error figures attached.
+    otherwise, CALIBRATION_SIZE) with ``renderer`` (an engine Renderer); error figures attached.
     ``into``: a calibration of the same renderer and mesh class to add these techniques to."""
     defaults = with_values(Settings(), {"scene": base.scene.model_dump(mode="json"),
                                         "render.width": CALIBRATION_SIZE[0], "render.height": CALIBRATION_SIZE[1]})

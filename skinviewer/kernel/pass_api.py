@@ -69,7 +69,7 @@ class Reflection:
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
         self.programs: list[tuple[str, Defines]] = []
-        # scene-driven rules (core/rules.py): why this pass is skipped, why a consumer no longer
+        # scene-driven rules (passes/rules.py): why this pass is skipped, why a consumer no longer
         # reads a resource (its producer is pruned with that reason), notes for the frame report
         self.skip_reason: str | None = None
         self.dropped: dict[str, str] = {}

@@ -1,4 +1,4 @@
-"""The numerics' array types, for mypy's strict mode on ``core/`` and ``physics/``: an array's dtype is
+"""The numerics' array types, for mypy's strict mode on ``ground/``, ``kernel/``, ``engine/`` and ``physics/``: an array's dtype is
 part of its type, so arithmetic on float64 arrays stays typed instead of falling back to ``Any``."""
 from __future__ import annotations
 
