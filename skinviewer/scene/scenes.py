@@ -155,7 +155,7 @@ def regions_plane_scene() -> SceneDef:
     the edge hangs higher than the edge (its lower edge at y = 11.25 mm, 25 mm above the plane);
     the camera looks up at the plane from below, under the blade, so the edge is in plain view;
     the lit side (intensity 0.8 at 24° incidence) stays below white."""
-    from skinviewer.ground.settings import REGIONS
+    from skinviewer.ground.constants import REGIONS
     light = np.array([0.0, 0.45, 1.0])
     height = 25.0
     y_edge = height * light[1] / light[2]     # blade edge that casts the plane's edge at y = 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from skinviewer.ground.settings import REGIONS
+from skinviewer.ground.constants import REGIONS
 from skinviewer.scene.head.atlas import (
     ISLAND_CAP,
     ISLAND_EAR,
