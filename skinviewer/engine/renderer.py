@@ -1,5 +1,6 @@
-"""The render core: a scene on the GPU and one pass graph per technique, driven by Settings.
-It takes a moderngl context from its caller (a window's, or ``gl.headless_context()``)."""
+"""The render engine: loads the scene onto the GPU (kernel/gpu_scene.GpuScene) and runs one pass graph per
+technique, driven by Settings. It takes a moderngl context from its caller (a window's, or
+``gl.headless_context()``)."""
 from __future__ import annotations
 
 import hashlib
