@@ -75,7 +75,7 @@ ProfileArrays = tuple[np.ndarray, np.ndarray]  # (variances (k,), weights (k, 3)
 DEFAULT_H_MM = 0.5          # source element edge
 
 BEAM_RAYS = 64
-DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as engine.renderer: a mesh without an albedo map
+DEFAULT_SKIN_SRGB = (0.80, 0.62, 0.53)  # as kernel.gpu_scene: a mesh without an albedo map
 RHO_DT_SIZE = (32, 32)      # the table the techniques sample (passes/rho_dt.py)
 
 
