@@ -37,7 +37,7 @@ def orbit(s: Settings, frames: int, light_orbit: bool = False, degrees: float = 
             out.append(with_values(s, {"camera.yaw": s.camera.yaw + a}))
             continue
         c, sn = math.cos(math.radians(a)), math.sin(math.radians(a))
-        vals = {}
+        vals: dict[str, float | list[float]] = {}
         for j, L in enumerate(s.lights):
             x, y, z = L.direction
             vals[f"lights.{j}.direction"] = [c * x + sn * z, y, -sn * x + c * z]
