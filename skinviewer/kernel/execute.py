@@ -272,6 +272,16 @@ class ExecuteContext:
         self._scratch.append(tex)
         return tex
 
+    def clear_unwritten(self, resource: str, key: object) -> None:
+        """Clear output ``resource`` to zero unless it was cleared for ``key`` since it was (re)allocated:
+        a pass that draws only part of its output (texture-space tiles) leaves no pooled texture's, other
+        scene's or other tile set's values in the rest (hard cases, the texture inspector, check_finite)."""
+        g = self.graph
+        tag = (g._versions.get(resource), key)
+        if g._cleared.get(resource) != tag:
+            g._framebuffer((resource,)).clear(0.0, 0.0, 0.0, 0.0)
+            g._cleared[resource] = tag
+
     # -- tiles (Pass.tileable): the same pass in row bands, across frames ----------------------
     @property
     def first_tile(self) -> bool:

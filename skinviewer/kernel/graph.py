@@ -97,6 +97,7 @@ class RenderGraph:
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._last_px: dict[str, int] = {}  # the pixels of its largest output then (costs scale with them)
         self._band_profile: dict[str, np.ndarray] = {}  # a banded pass's cost over its rows (band_shares)
+        self._cleared: dict[str, tuple[int | None, object]] = {}  # resource -> (version, key) of its last clear
         self._notes: dict[str, tuple[str, dict[str, Any]]] = {}  # pass name -> (text, figures) of its last run
         self.refining: set[str] = set()  # passes that asked for another frame (progressive refinement)
         self._lod_notes: dict[str, str] = {}  # pass name -> the mesh LOD its last run drew at ("" = full)

@@ -520,6 +520,8 @@ class GaussianBlurPass(Pass):
         ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
         if stretch:
             ec.bind(prog, "stretch_map", STRETCH)
+        if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
+            ec.clear_unwritten(self._output(), (id(ec.scene), n, DILATE_RING))
         with ec.band():
             ec.draw_fullscreen(prog, self._output(), tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
 
@@ -611,6 +613,8 @@ class GaussianBlurPass(Pass):
                 draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target, tiles))  # spacing = sigma (eq. 25)
             src = tmp2
         ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))
+        if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
+            ec.clear_unwritten(self._output(), (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
         for d, sub, subs in ec.units(len(draws)):
             program, values, source, target, where = draws[d]
             for name, value in values.items():
