@@ -86,6 +86,8 @@ NOT_DECISIONS = {"setting", "section", "program", "len", "int", "float", "range"
 # the pass modules converted to plan once: none of their passes may call a helper in both reflect and
 # execute. This list only grows.
 CONVERTED = [
+    "screen_space/blur.py", "screen_space/jimenez2009.py", "screen_space/lighting.py", "screen_space/separable.py",
+    "screen_space/combine.py",
 ]
 # the calls in both reflect and execute over every pass module (python3 /work/prompts/s3/twice.py's
 # count: 38 names before issue 28's plan): may only shrink
