@@ -222,22 +222,22 @@ class TexelSurfacePass(Pass):
             return
         n = self.size_of(r)
         env = _env_vis_defines(r)
+        from skinviewer.passes.environment import ENV_FIELDS, env_index
         if env:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
-            from skinviewer.passes.environment import ENV_FIELDS, env_index
             r.section(f"lights.{env_index(r)}", ENV_FIELDS)
         r.program("texel_surface", **env)
-        for res in texel_surface_resources(n, self.maps + ("v" if env else "")):
+        maps = texel_surface_resources(n, self.maps + ("v" if env else ""))
+        r.plan(environment=env_index(r) if env else None, maps=maps)
+        for res in maps:
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         # a fragment output without an attachment is discarded: the program is the same for any maps
-        env = _env_vis_defines(ec)
         prog = ec.program("texel_surface")
-        if env:
+        if ec.plan.environment is not None:
             from skinviewer.passes.environment import set_environment
             set_environment(ec, prog, specular=False)  # the transfer vectors' radiance (and env_rays)
-        ec.draw_mesh(prog,
-                     *texel_surface_resources(self.size_of(ec), self.maps + ("v" if env else "")), depth_test=False)
+        ec.draw_mesh(prog, *ec.plan.maps, depth_test=False)
 
 
 def _env_vis_defines(r) -> dict[str, int]:
