@@ -37,31 +37,33 @@ class GutterMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         size = self._n(r)
-        seam = r.setting("scene.seam_aware")
-        if texel_shading(r):
-            r.input(texel_surface_resources(size, "p")[0])
+        seam = seam_resource(size) if r.setting("scene.seam_aware") else None
+        # the coverage from the texel surface map's positions (render.texel_surface), or rasterised
+        surface = texel_surface_resources(size, "p")[0] if texel_shading(r) else None
+        r.plan(size=size, surface=surface, gutter=gutter_resource(size), gutter_spec=gutter_spec(size), seam=seam,
+               cover=TexSpec((size, size), 1, "f1", filter="nearest"))
+        if surface:
+            r.input(surface)
             r.program("texel_coverage")
         else:
             r.program("uv_coverage")
             if seam:
                 r.program("uv_position")
-        r.output(gutter_resource(size), gutter_spec(size))
+        r.output(r.planned.gutter, r.planned.gutter_spec)
         if seam:
-            r.output(seam_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
+            r.output(seam, TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        size = self._n(ec)
-        texels = texel_shading(ec)
-        if texels:
-            surface = texel_surface_resources(size, "p")[0]
+        plan = ec.plan
+        size, surface, spec = plan.size, plan.surface, plan.gutter_spec
+        if surface:
             prog = ec.program("texel_coverage")
             ec.bind(prog, "surface_p", surface)
-            cover = ec.scratch(TexSpec((size, size), 1, "f1", filter="nearest"))
+            cover = ec.scratch(plan.cover)
             ec.draw_fullscreen(prog, cover)
         else:
             cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
-        spec = gutter_spec(size)
         # the CPU tables depend on the mesh and the coverage only: kept on the scene, so a forced
         # re-run or a second technique at the same size only uploads them
         cache = ec.scene.__dict__.setdefault("_texel_tables", {})
@@ -71,11 +73,11 @@ class GutterMapPass(Pass):
             cache[("gutter",) + key] = stored_table(
                 ["gutter", spec.components], covered, ((size, size, spec.components), dtype),
                 lambda: gutter_table(covered)[..., :spec.components].astype(dtype)).tobytes()
-        ec.output(gutter_resource(size)).write(cache[("gutter",) + key])
+        ec.output(plan.gutter).write(cache[("gutter",) + key])
 
-        if ec.setting("scene.seam_aware"):
+        if plan.seam:
             if ("seam",) + key not in cache:
-                pos = ec.input(surface) if texels else rasterize_unwrapped(ec, ec.program("uv_position"), size)
+                pos = ec.input(surface) if surface else rasterize_unwrapped(ec, ec.program("uv_position"), size)
                 pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
                 sc = ec.scene
                 m = sc.mesh
@@ -83,7 +85,7 @@ class GutterMapPass(Pass):
                     ["seam", SEAM_REACH_TEXELS, float(sc.mm_per_unit), float(sc.mean_uv_per_mm)],
                     (covered, pos, m.positions, m.uvs, m.indices), ((size, size, 4), np.float32),
                     lambda: seam_map(covered, sc, pos)).tobytes()
-            ec.output(seam_resource(size)).write(cache[("seam",) + key])
+            ec.output(plan.seam).write(cache[("seam",) + key])
 
 
 TABLES_VERSION = 1  # bump when gutter_table or seam_map change what they compute
