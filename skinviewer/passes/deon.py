@@ -60,7 +60,6 @@ from skinviewer.passes.texture_space import (
     rasterize_unwrapped,
     seam_resource,
     shade_dilated,
-    shading_program,
     unwrap_dilated,
     work_tiles,
 )
@@ -160,14 +159,14 @@ class StretchPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = self.size_of(r)
+        r.plan(size=n)
         declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"),  # RG stretch, B shear
                           **stretch_defines(r))
 
     def execute(self, ec) -> None:
-        n = self.size_of(ec)
-        prog = ec.program("deon_stretch", **stretch_defines(ec))
+        prog = ec.program("deon_stretch")  # the variant reflect declared (stretch_defines)
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        unwrap_dilated(ec, prog, n, self.resource)
+        unwrap_dilated(ec, prog, ec.plan.size, self.resource)
 
 
 class GatherSurfacePass(Pass):
@@ -181,10 +180,12 @@ class GatherSurfacePass(Pass):
         if not gather_used(r):
             return
         n = map_size(r)
-        r.input(gutter_resource(n))
-        seam = r.setting("scene.seam_aware")
+        seam = seam_resource(n) if r.setting("scene.seam_aware") else None
+        r.plan(size=n, gutter=gutter_resource(n), seam=seam, position=TexSpec((n, n), 4, "f4"),
+               metric=TexSpec((n, n), 4, "f4", filter="nearest"))
+        r.input(r.planned.gutter)
         if seam:
-            r.input(seam_resource(n))
+            r.input(seam)
         r.program("uv_position")
         r.program("deon_stretch")  # per triangle (eq. 27): a texel's area is its own triangle's
         r.program("dilate")
@@ -196,22 +197,21 @@ class GatherSurfacePass(Pass):
         r.output(GATHER_BLOCKS_ZONE, TexSpec((h, h), 2, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
-        gutter = gutter_resource(n)
-        pos = ec.scratch(TexSpec((n, n), 4, "f4"))  # dilated, so bilinear reads across seams stay on the surface
+        plan = ec.plan
+        n, gutter, seam = plan.size, plan.gutter, plan.seam
+        pos = ec.scratch(plan.position)  # dilated, so bilinear reads across seams stay on the surface
         dilate(ec, rasterize_unwrapped(ec, ec.program("uv_position"), n), gutter, pos)
         # the areas from each texel's own triangle, not the vertex metric the separable taps use (smooth
         # across triangles, so it spreads a jump in texel size over several texels: wrong weights there)
         metric = ec.program("deon_stretch")
         ec.set(metric, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        stretch = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
+        stretch = ec.scratch(plan.metric)
         dilate(ec, rasterize_unwrapped(ec, metric, n), gutter, stretch)
-        seam = ec.has_input(seam_resource(n))
-        prog = ec.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
+        prog = ec.program("deon_gather_surface")  # SEAM when reflect planned a seam map
         ec.set(prog, "u_mm", float(ec.scene.mm_per_unit))
         ec.textures(prog, positions=pos, gutter=gutter, stretch_map=stretch)
         if seam:
-            ec.bind(prog, "seam_map", seam_resource(n))
+            ec.bind(prog, "seam_map", seam)
         ec.draw_fullscreen(prog, GATHER_SURFACE)
         blocks = ec.program("deon_gather_blocks", BLOCK_SURFACE=1)
         ec.textures(blocks, surface=ec.output(GATHER_SURFACE), gutter=gutter)
@@ -249,13 +249,14 @@ class BorderFramePass(Pass):
         if not open_border(r):
             return
         n = map_size(r)
-        r.input(gutter_resource(n))
-        r.output(border_resource(n), TexSpec((n, n), 4, "f4", filter="nearest"))
+        r.plan(size=n, gutter=gutter_resource(n), border=border_resource(n))
+        r.input(r.planned.gutter)
+        r.output(r.planned.border, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         from skinviewer.passes.texture_space import read_gutter
-        n = map_size(ec)
-        g = read_gutter(ec.input(gutter_resource(n)))
+        n = ec.plan.size
+        g = read_gutter(ec.input(ec.plan.gutter))
         iy, ix = np.mgrid[0:n, 0:n]
         covered = (g[..., 0] == ix) & (g[..., 1] == iy)
         cache = ec.scene.__dict__.setdefault("_texel_tables", {})
@@ -264,7 +265,7 @@ class BorderFramePass(Pass):
             m = ec.scene.mesh
             reach = min(float(n), BORDER_REACH_MM * ec.scene.max_uv_per_mm * n)
             cache[key] = border_frame(m.positions, m.uvs, m.indices, covered, reach).tobytes()
-        ec.output(border_resource(n)).write(cache[key])
+        ec.output(ec.plan.border).write(cache[key])
 
 
 def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:
@@ -305,13 +306,14 @@ class TsmPass(Pass):
                 r.skip(r.dropped[TSM])
             return
         r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
+        r.plan(tsm_light=j)
         n = light_map_size(r, "deon.tsm_size", "deon.irradiance_size_mode")
         r.program("deon_tsm")
         r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_tsm")
-        set_tsm_uniforms(ec, prog, tsm_light_index(ec), matrix="u_light_matrix")
+        set_tsm_uniforms(ec, prog, ec.plan.tsm_light, matrix="u_light_matrix")
         ec.draw_mesh(prog, TSM, clear=(0.0, 0.0, 0.0, -1.0))  # A < 0: no surface
 
 
@@ -329,17 +331,19 @@ class IrradiancePass(Pass):
         if r.setting("deon.energy_conservation"):
             declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
-        if tsm_light_index(r) is not None:
+        j = tsm_light_index(r)
+        if j is not None:
             r.input(TSM)
         vis = texture_shadows(r)
+        r.plan(tsm_light=j, visibility=vis)  # the TSM's light; each light's fac_shadow kept per texel
         declare_shaded(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
                        steps=over_texel, DEON_VISIBILITY=int(vis))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
-        prog = ec.program(shading_program(ec, "deon_irradiance"))
+        n = ec.plan.shading.size
+        prog = ec.program(ec.plan.shading.program)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         set_environment(ec, prog, specular=False)
@@ -349,13 +353,13 @@ class IrradiancePass(Pass):
         if energy:
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
             bind_specular(ec, prog)
-        use_tsm = ec.has_input(TSM)
+        use_tsm = ec.plan.tsm_light is not None
         ec.uniforms(prog, u_tsm=use_tsm, u_max_thickness=MAX_THICKNESS_MM)
         if use_tsm:
             ec.bind(prog, "tsm_map", TSM)
-            set_tsm_uniforms(ec, prog, tsm_light_index(ec))
+            set_tsm_uniforms(ec, prog, ec.plan.tsm_light)
         # with texture shadows the same draw also writes each light's fac_shadow (location 1)
-        shade_dilated(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
+        shade_dilated(ec, prog, IRRADIANCE, *((VISIBILITY,) if ec.plan.visibility else ()))
 
 
 def mean_texel_mm(scene, n: int) -> float:
@@ -643,9 +647,16 @@ def combined(r) -> bool:
         light_on(l) for l in r.peek("lights")[:MAX_LIGHTS])  # shape only: the blurs exist
 
 
+def plan_blurs(r, chain: list) -> None:
+    """Plan ``blurs``: per Gaussian, its blurred texture and the variance it has (what bind_blur_slots binds)."""
+    r.plan(blurs=tuple((texture_of(step), float(step.variance)) for step in chain))
+
+
 def declare_blurs(r, mask: int) -> None:
-    """The blurred textures of the used Gaussians (bit i of ``mask``) as inputs."""
-    for i, step in enumerate(_plan(r)):
+    """The blurred textures of the used Gaussians (bit i of ``mask``) as inputs (and plan_blurs)."""
+    chain = _plan(r)
+    plan_blurs(r, chain)
+    for i, step in enumerate(chain):
         if (mask >> i) & 1:
             r.input(texture_of(step))
 
@@ -656,9 +667,8 @@ def bind_blur_slots(ec, prog) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
     var = np.zeros(MAX_GAUSSIANS, np.float32)
     used = np.zeros(MAX_GAUSSIANS, np.int32)
-    for i, (g, step) in enumerate(zip(ec.setting("deon.gaussians"), _plan(ec))):
-        res = texture_of(step)
-        var[i] = step.variance
+    for i, (g, (res, variance)) in enumerate(zip(ec.setting("deon.gaussians"), ec.plan.blurs)):
+        var[i] = variance
         if ec.has_input(res):
             ws[i] = g.weights
             used[i] = 1 if any(w > 0 for w in g.weights) else 0
@@ -676,9 +686,10 @@ def declare_tsm_read(r) -> dict[str, Any]:
     """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
     (island zones), the stretch map, and for the gather the irradiance; returns its defines."""
     r.setting("deon.tsm_form")
-    r.section(f"lights.{tsm_light_index(r)}", LIGHT_POSE_FIELDS)  # its light space
+    r.plan(tsm_light=tsm_light_index(r), zone_map=gutter_resource(map_size(r)))  # for bind_tsm_read
+    r.section(f"lights.{r.planned.tsm_light}", LIGHT_POSE_FIELDS)  # its light space
     r.input(TSM)
-    r.input(gutter_resource(map_size(r)))  # island zones: whether the blur already carries A's light
+    r.input(r.planned.zone_map)  # island zones: whether the blur already carries A's light
     if r.setting("deon.stretch"):
         r.input(STRETCH)
     if r.setting("deon.tsm_gather"):
@@ -689,10 +700,10 @@ def declare_tsm_read(r) -> dict[str, Any]:
 def bind_tsm_read(ec, prog) -> None:
     """lib/tsm_transmit.glsl's TSM, stretch and gate uniforms (declare_tsm_read)."""
     ec.bind(prog, "tsm_map", TSM)
-    ec.bind(prog, "zone_map", gutter_resource(map_size(ec)))
+    ec.bind(prog, "zone_map", ec.plan.zone_map)
     if ec.has_input(STRETCH):
         ec.bind(prog, "stretch_map", STRETCH)
-    ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
+    ls = set_tsm_uniforms(ec, prog, ec.plan.tsm_light)
     # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
     texel_mm = ls.texel_world(ec.input(TSM).size[0]) * ec.scene.mm_per_unit
     ec.set(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
@@ -727,10 +738,10 @@ class TransmittedPass(Pass):
                        **tsm_defines)
 
     def execute(self, ec) -> None:
-        prog = ec.program(shading_program(ec, "deon_transmitted"))
+        prog = ec.program(ec.plan.shading.program)
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        shade_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
+        shade_dilated(ec, prog, TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):
@@ -746,6 +757,7 @@ class DiffuseSumPass(Pass):
         if tsm_light_index(r) is not None:
             r.input(TRANSMITTED)
         n = map_size(r)
+        r.plan(size=n)
         r.program("deon_combine", GAUSSIAN_MASK=mask)
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
 
@@ -757,7 +769,7 @@ class DiffuseSumPass(Pass):
     def execute(self, ec) -> None:
         prog = ec.program("deon_combine")
         ws, _, _ = bind_blur_slots(ec, prog)
-        n = map_size(ec)
+        n = ec.plan.size
         ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED), u_size=(float(n), float(n)))
         if ec.has_input(TRANSMITTED):
             ec.bind(prog, "transmitted", TRANSMITTED)
@@ -828,6 +840,8 @@ class DeonFinalPass(Pass):
         lighting = declare_lighting(r, shadow_maps=not vis)  # texture shadows: no shadow map is read
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
+        r.plan(dark=not any(light_on(l) for l in r.setting("lights")[:MAX_LIGHTS]))  # no analytic light on
+        plan_blurs(r, plan)
         if lighting["LIGHT_COUNT"] == 0 and env_index(r) is None:  # every light off: black (no irradiance, no specular)
             for step in plan:
                 r.drop(texture_of(step), "every light is off or at zero intensity")
@@ -864,14 +878,10 @@ class DeonFinalPass(Pass):
         return [("deon_final", v) for n, d in r.programs if n == "deon_final"
                 for v in likely_final_variants(dict(d), r.peek("deon.tsm_gather"))]
 
-    @staticmethod
-    def dark(ec) -> bool:
-        return not any(light_on(l) for l in ec.setting("lights")[:MAX_LIGHTS])
-
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
         set_camera(ec, prog)
-        if self.dark(ec):
+        if ec.plan.dark:
             draw_view_mesh(ec, prog, LIT)
             return
         bind_surface(ec, prog)

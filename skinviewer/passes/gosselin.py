@@ -59,7 +59,6 @@ from skinviewer.passes.texture_space import (
     read_gutter,
     seam_resource,
     shade_dilated,
-    shading_program,
 )
 from skinviewer.physics.poisson import POISSON_12, radii_mm
 
@@ -88,12 +87,11 @@ class GosselinLightMapPass(Pass):
         declare_shaded(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
-        size = ec.setting(SIZE)
-        prog = ec.program(shading_program(ec, "light_map"))
+        prog = ec.program(ec.plan.shading.program)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         set_environment(ec, prog, specular=False)
-        shade_dilated(ec, prog, size, LIGHT_MAP)
+        shade_dilated(ec, prog, LIGHT_MAP)
 
 
 def region_radii(g, size: int) -> np.ndarray:

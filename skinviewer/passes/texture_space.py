@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from dataclasses import dataclass
 
 import moderngl
 import numpy as np
@@ -263,13 +264,25 @@ def shading_program(r, base: str) -> str:
     return f"{base}_texels" if texel_shading(r) else base
 
 
+@dataclass(frozen=True)
+class Shading:
+    """How a texture-space shading pass shades this frame: declare_shaded decides it (planned as
+    ``shading``), execute reads ``ec.plan.shading`` (its program) and shade_dilated the rest."""
+    program: str  # shading_program(r, base)
+    size: int  # the map's side in texels
+    texels: bool  # over the texel surface map (texel_shading), else the mesh unwrapped
+    maps: str = ""  # the texel surface maps the program reads (TEXEL_SURFACE_MAPS, + "v": the environment's)
+
+
 def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: TexSpec,
                    maps: str = TEXEL_SURFACE_MAPS, steps: bool = False, **defines: object) -> None:
     """Declare a texture-space shading pass writing ``resource`` with its gutters filled, whichever
     way it shades (shading_program): declare_unwrapped, plus for the texel path the maps ``maps``
     it reads, TILED and TEXEL_STEPS (the position's change per texel, which only beam footprints
-    need, from the neighbouring texels when a beam light is on, or ``steps``: samples over the texel)."""
+    need, from the neighbouring texels when a beam light is on, or ``steps``: samples over the texel).
+    Plans ``shading`` (a Shading) for execute and shade_dilated."""
     if not texel_shading(r):
+        r.plan(shading=Shading(base, size, False))
         declare_unwrapped(r, base, size, resource, spec, **defines)
         return
     if defines.get("ENV_LIGHT") and int(defines.get("ENV_RAYS", 0)) > 0:  # type: ignore[call-overload]  # the environment's AO per texel
@@ -278,18 +291,19 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
     for res in texel_surface_resources(size, maps):
         r.input(res)
     steps = steps or any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
+    r.plan(shading=Shading(shading_program(r, base), size, True, maps))
     declare_unwrapped(r, shading_program(r, base), size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
 
 
-def shade_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TEXEL_SURFACE_MAPS) -> None:
-    """Run a pass declared with declare_shaded: unwrap_dilated, or one full-screen draw of ``prog``
-    over the texel surface map (samplers surface_p / surface_n for ``maps``) on the tiles holding
-    island texels, then the same dilation of the gutters."""
-    if not texel_shading(ec):
+def shade_dilated(ec, prog, resource: str, *more: str) -> None:
+    """Run a pass declared with declare_shaded, as it planned (``ec.plan.shading``): unwrap_dilated, or
+    one full-screen draw of ``prog`` over the texel surface map (samplers surface_p / surface_n / surface_v
+    for its maps) on the tiles holding island texels, then the same dilation of the gutters."""
+    shading = ec.plan.shading
+    size, maps = shading.size, shading.maps
+    if not shading.texels:
         unwrap_dilated(ec, prog, size, resource, *more)
         return
-    if ec.has_input(texel_surface_resources(size, "v")[0]):
-        maps += "v"
     for k, res in zip(maps, texel_surface_resources(size, maps)):
         ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
     raws = _raws(ec, size, more)
