@@ -87,7 +87,7 @@ NOT_DECISIONS = {"setting", "section", "program", "len", "int", "float", "range"
 # execute. This list only grows.
 CONVERTED = [
     "screen_space/blur.py", "screen_space/jimenez2009.py", "screen_space/lighting.py", "screen_space/separable.py",
-    "screen_space/combine.py", "burley.py", "gosselin.py", "shadow_map.py", "output.py", "environment.py", "luts.py", "rho_dt.py", "penner.py", "texture_space.py",
+    "screen_space/combine.py", "burley.py", "gosselin.py", "shadow_map.py", "output.py", "environment.py", "luts.py", "rho_dt.py", "penner.py", "texture_space.py", "deon.py",
 ]
 # the helpers called in both reflect and execute over every pass module (twice.py's reading less the
 # kernel API's own calls on r / ec; 38 names by twice.py before issue 28's plan): may only shrink

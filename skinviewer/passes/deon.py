@@ -438,28 +438,37 @@ class GaussianBlurPass(Pass):
                    f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
             return
         n = map_size(r)
-        if self.chain == "irradiance" and gathered(r, step):
+        gather = self.chain == "irradiance" and gathered(r, step)
+        border = self._open_border(r)
+        seam = seam_resource(n) if r.setting("scene.seam_aware") else None
+        # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
+        r.plan(step=step, size=n, gather=gather, output=self._output(), spec=self._spec(n), gutter=gutter_resource(n),
+               seam=seam, border=border_resource(n) if border else None,
+               island_tiles=island_tiles(r, self.chain, border))
+        if gather:
             self._reflect_gather(r, step, n)
             return
         stretch = self._stretch_input(r, step)
         if stretch:
             r.setting("deon.stretch_shear")
-        seam = r.setting("scene.seam_aware")
         skip_gutters = r.setting("deon.skip_gutters")
         if seam:
-            r.input(seam_resource(n))
-        r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
+            r.input(seam)
+        source = step.source if self.chain == "irradiance" else stretch_of(step.source)
+        r.input(source)
         r.input(gutter_resource(n))
         if stretch:
             r.input(stretch)
         tiled = {"TILED": 1} if skip_gutters else {}
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
-        border = self._open_border(r)
-        dilate_fill = {"DILATE": 1, **tiled} if island_tiles(r, self.chain, border) else {}
+        dilate_fill = {"DILATE": 1, **tiled} if r.planned.island_tiles else {}
         if border:
             r.input(border_resource(n))
             r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
-        r.program("deon_blur", **tiled, **zones, **border, **self._narrow(r, step, stretch, n))
+        narrow = self._narrow(r, step, stretch, n)
+        r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
+               ring_sigma=ring_sigma(r, self.i))
+        r.program("deon_blur", **tiled, **zones, **border, **narrow)
         if seam:
             r.program("seam_fill", **(dilate_fill or tiled), **border)
         r.output(self._output(), self._spec(n))
@@ -474,7 +483,9 @@ class GaussianBlurPass(Pass):
             r.input(res)
         if r.setting("deon.stretch"):
             r.input(STRETCH)
-        tiles = island_tiles(r, self.chain, self._open_border(r))
+        tiles = r.planned.island_tiles
+        h = (n + 1) // 2
+        r.plan(blocks=TexSpec((h, h), 4, "f4", filter="nearest"))  # the 2 x 2 block sums, kept across bands
         if seam:
             r.input(seam_resource(n))
             border = self._open_border(r)
@@ -487,34 +498,33 @@ class GaussianBlurPass(Pass):
         r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 1} if tiles else {}))
         r.output(self._output(), self._spec(n))
 
-    def _execute_gather(self, ec, step, n: int) -> None:
+    def _execute_gather(self, ec) -> None:
+        plan = ec.plan
+        step, n, gutter = plan.step, plan.size, plan.gutter
         source = step.source
-        tiled = island_tiles(ec, self.chain, self._open_border(ec))
+        tiled = plan.island_tiles
         # the seam fill and the block sums are made once (first band) and kept across the bands
-        if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
-            filled, fresh = ec.held("filled", self._spec(n))
+        if plan.seam:  # gutters across seams hold the surface there
+            filled, fresh = ec.held("filled", plan.spec)
             if fresh:
-                border = self._open_border(ec)
                 dilating = tiled and source != IRRADIANCE  # the irradiance is whole: dilated already
-                fill = ec.program("seam_fill", **({"DILATE": 1} if dilating else {}), **border,
-                                  **({"RIM_SHARE": 1} if border else {}))
-                ec.textures(fill, source=source, seam_map=seam_resource(n))
+                fill = ec.program("seam_fill")  # the variant reflect declared (DILATE, OPEN_BORDER, RIM_SHARE)
+                ec.textures(fill, source=source, seam_map=plan.seam)
                 if dilating:
-                    ec.bind(fill, "gutter", gutter_resource(n))
+                    ec.bind(fill, "gutter", gutter)
                 ec.set(fill, "u_past_border_dark", True)
-                if border:  # a texel the border crosses counts its share on the surface; no reflection
-                    ec.textures(fill, border_map=border_resource(n), irradiance_map=IRRADIANCE)
+                if plan.border:  # a texel the border crosses counts its share on the surface; no reflection
+                    ec.textures(fill, border_map=plan.border, irradiance_map=IRRADIANCE)
                     ec.set(fill, "u_reflect", 0)
                 ec.draw_fullscreen(fill, filled)
             source = filled
-        h = (n + 1) // 2
-        (light, fresh), (lit, _) = (ec.held(k, TexSpec((h, h), 4, "f4", filter="nearest")) for k in ("light", "lit"))
+        (light, fresh), (lit, _) = (ec.held(k, plan.blocks) for k in ("light", "lit"))
         if fresh:
             prog = ec.program("deon_gather_blocks")
             ec.textures(prog, source=source, surface=GATHER_SURFACE)
             ec.draw_fullscreen(prog, light, lit)
-        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(ec, step, n), **({"TILED": 1} if tiled else {}))
-        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n), blocks_e=light,
+        prog = ec.program("deon_surface_gather")  # GATHER_BLOCKS (gather_reach) and TILED as reflect declared
+        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light,
                     blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
         ec.set(prog, "u_var", float(step.increment))
         texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
@@ -525,7 +535,7 @@ class GaussianBlurPass(Pass):
         if stretch:
             ec.bind(prog, "stretch_map", STRETCH)
         with ec.band():
-            ec.draw_fullscreen(prog, self._output(), tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
+            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -551,17 +561,12 @@ class GaussianBlurPass(Pass):
         return {"NARROW_TAPS": narrow_taps(widest)}
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
-        step = self._step(ec)
-        if self.chain == "irradiance" and gathered(ec, step):
-            self._execute_gather(ec, step, n)
+        plan = ec.plan
+        if plan.gather:
+            self._execute_gather(ec)
             return
-        stretch = self._stretch_input(ec, step)
-        tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
-        narrow = self._narrow(ec, step, stretch, n)
-        zones = {"ISLAND_ZONES": 1} if ec.setting("scene.seam_aware") else {}
-        border = self._open_border(ec)
-        prog = ec.program("deon_blur", **tiled, **zones, **border, **narrow)
+        step, n, stretch, narrow, border = plan.step, plan.size, plan.stretch, plan.narrow, plan.border
+        prog = ec.program("deon_blur")  # the variant reflect declared (TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
@@ -569,23 +574,23 @@ class GaussianBlurPass(Pass):
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = ([np.sqrt(step.increment)] if narrow else
                   sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm))
-        ec.bind(prog, "gutter", gutter_resource(n))
+        ec.bind(prog, "gutter", plan.gutter)
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
-        spec = self._spec(n)
+        spec = plan.spec
         # scratch kept across the pass's bands (ExecuteContext.held): a blur runs in row bands
         # under the viewer's frame budget, each draw complete before the next one's first band
         tmp = ec.held("tmp", spec)[0]
         tmp2 = ec.held("tmp2", spec)[0] if len(sigmas) > 1 else None
-        seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
+        seam = plan.seam
         filled = ec.held("filled", spec)[0] if seam else None
-        dilate_fill = bool(seam) and island_tiles(ec, self.chain, border)
-        fill = ec.program("seam_fill", **({"DILATE": 1, **tiled} if dilate_fill else {})) if seam else None
+        dilate_fill = bool(seam) and plan.island_tiles
+        fill = ec.program("seam_fill") if seam else None  # the variant reflect declared
         if dilate_fill:
-            ec.bind(fill, "gutter", gutter_resource(n))
+            ec.bind(fill, "gutter", plan.gutter)
         if border:
             for p_ in (prog, fill):
-                ec.bind(p_, "border_map", border_resource(n))
+                ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
@@ -593,11 +598,11 @@ class GaussianBlurPass(Pass):
             ec.set(fill, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
-        src = step.source if self.chain == "irradiance" else stretch_of(step.source)
+        src = plan.source
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
-        reach = blur_ring(ec, n, stretch, self.i)
-        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if ec.setting("deon.skip_gutters") else None
+        reach = blur_ring(ec, n, stretch, plan.ring_sigma)
+        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if plan.skip_gutters else None
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
         fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
@@ -608,7 +613,7 @@ class GaussianBlurPass(Pass):
             # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
             refl = {"u_reflect": int(not (k == 0 and step.source == IRRADIANCE))} if border else {}
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
-                                              ((0.0, 1.0), tmp, self._output() if last else tmp2)):
+                                              ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
                     draws.append((fill, refl, source, filled, fill_tiles))
                     source = filled
@@ -817,15 +822,19 @@ def narrow_taps(sigma_texels: float) -> int:
     return next(t for t in NARROW_TAPS if t >= 3.0 * sigma_texels)
 
 
-def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
-    """Texels beyond the islands that readers of blur_i can reach (seed 000 eq. 25: taps at k * s *
-    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n for this blur's own V taps on its
-    H output and the next blur's taps on its output (sigma <= sqrt(increment); i None: the whole
-    chain), plus one for bilinear taps and one for the final pass's bilinear lookups."""
-    s_max = max_stretch(ec, stretch)
-    plan = plan_of([g.variance for g in ec.peek("deon.gaussians")], ec)  # the whole chain's widest step
+def ring_sigma(r, i: int | None = None) -> float:
+    """The widest sigma (mm) whose taps reach past blur_i: this blur's own V taps on its H output and the
+    next blur's taps on its output (sigma <= sqrt(increment); i None: the whole chain). Shape only (peeked)."""
+    plan = plan_of([g.variance for g in r.peek("deon.gaussians")], r)  # the whole chain's widest step
     near = plan if i is None else plan[i:i + 2]
-    sigma = max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0)
+    return float(max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0))
+
+
+def blur_ring(ec, n: int, stretch: str | None, sigma: float) -> int:
+    """Texels beyond the islands that readers of a blur can reach (seed 000 eq. 25: taps at k * s *
+    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n (sigma: ring_sigma, planned in
+    reflect), plus one for bilinear taps and one for the final pass's bilinear lookups."""
+    s_max = max_stretch(ec, stretch)
     return int(np.ceil(3.0 * s_max * sigma * n)) + 2
 
 
