@@ -113,9 +113,9 @@ class ScreenLightingPass(Pass):
         ec.set(prog, "u_tr", len(transmitted) > 0)
         if transmitted:
             inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-            active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if analytic_on(l)]  # the slots of set_lighting
-            for slot, l in enumerate(active):
-                inv[slot] = np.linalg.inv(scene.light_space(l).gl_matrix).T  # column-major
+            lights = ec.setting("lights")
+            for slot, i in enumerate(ec.plan.light_slots):  # the slots of set_lighting (declare_lighting)
+                inv[slot] = np.linalg.inv(scene.light_space(lights[i]).gl_matrix).T  # column-major
             ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
                         u_shadow_map_size=int(ec.setting("shadow.map_size")))
         draw_view_mesh(ec, prog, DIRECT if transmitted else DIFFUSE, SPECULAR, DEPTH, ALBEDO, *transmitted)
