@@ -96,10 +96,10 @@ def map_size(r) -> int:
 
 # -- which light casts the TSM --------------------------------------------------------------------
 
-def tsm_light_index(r) -> int | None:
+def tsm_light_index(r: Reflection) -> int | None:
     """Declare (and return) the light the TSM is rendered from: deon.tsm_light when it names an
     enabled shadow-casting light, else the first such light; None when deon.tsm is off or no light
-    casts shadows."""
+    casts shadows. Reflect only: the passes plan it (``tsm_light``) for execute."""
     if not r.setting("deon.tsm"):
         return None
     n = min(r.setting("lights.#"), MAX_LIGHTS)
@@ -109,16 +109,13 @@ def tsm_light_index(r) -> int | None:
     j = want if want is not None and want in usable else (usable[0] if usable else None)
     subpixel = kernel_under_pixel(r) if j is not None else None
     if subpixel:  # transmission is part of the diffusion
-        if hasattr(r, "drop"):
-            r.drop(TSM, subpixel)
+        r.drop(TSM, subpixel)
         return None
     if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
-        s = r._settings if hasattr(r, "_settings") else r._frame.settings
-        need, why = tsm_needed(s, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
+        need, why = tsm_needed(r._settings, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
         if not need:
-            if hasattr(r, "drop"):
-                r.drop(TSM, why)
+            r.drop(TSM, why)
             return None
     return j
 
