@@ -10,7 +10,7 @@ import moderngl
 
 from skinviewer.ground.settings import get_path
 from skinviewer.kernel.gpu import write_uniform
-from skinviewer.kernel.pass_api import GraphError, Pass, Reflection, SettingsView, ShapeState, TexSpec
+from skinviewer.kernel.pass_api import GraphError, Pass, Plan, Reflection, SettingsView, ShapeState, TexSpec
 from skinviewer.kernel.report import FrameInputs
 
 if TYPE_CHECKING:
@@ -53,6 +53,11 @@ class ExecuteContext:
         self._scratch: list[moderngl.Texture] = []
         self.draws = 0
         self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
+
+    @property
+    def plan(self) -> Plan:
+        """What this pass's reflect decided this frame (``Reflection.plan``), read-only."""
+        return self._refl.planned
 
     @property
     def scene(self) -> GpuScene:

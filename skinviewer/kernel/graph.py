@@ -186,7 +186,7 @@ class RenderGraph:
             r = Reflection(settings, scene if p.uses_scene else None, self.shape_state)
             p.reflect(r)
             if r.skip_reason is not None:  # a skipped pass declares nothing
-                r.inputs, r.outputs, r.programs = [], {}, []
+                r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
             elif r.outputs:
                 for res in self._produced.get(p.name, set()) - set(r.outputs):
                     self._free(res)  # e.g. a gutter map of a map size no longer used
@@ -235,6 +235,8 @@ class RenderGraph:
         }
         if r.depends_on:
             key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
+        if r._plan:  # what reflect decided for execute (Reflection.plan)
+            key["plan"] = {k: repr(v) for k, v in r._plan.items()}
         if p.uses_scene:
             key["scene"] = (frame.scene_version, frame.mesh_lod)
         if p.view_dependent:
@@ -250,7 +252,7 @@ class RenderGraph:
             if old.get(group) != new.get(group):
                 parts.append(group)
         for group, label in (("settings", "setting"), ("inputs", "input"), ("programs", "shader"),
-                             ("outputs", "output")):
+                             ("outputs", "output"), ("plan", "plan")):
             o, n = old.get(group, {}), new.get(group, {})
             changed = [k for k in n if o.get(k) != n[k]] + [k for k in o if k not in n]
             parts += [f"{label} {k}" for k in changed]

@@ -1,10 +1,11 @@
 """What a render pass is and declares: ``Pass`` (reflect / execute), the ``Reflection`` it fills in
-reflect (settings, inputs, outputs with their ``TexSpec``, programs), read-only ``SettingsView``s
-and the errors of the graph."""
+reflect (settings, inputs, outputs with their ``TexSpec``, programs, and the ``Plan`` it hands to
+execute), read-only ``SettingsView``s and the errors of the graph."""
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
 from skinviewer.ground.settings import Settings, get_path
@@ -59,6 +60,38 @@ def _gb(n: int) -> str:
     return f"{n / 1e9:.2f} GB" if n >= 1e8 else f"{n / 1e6:.1f} MB"
 
 
+class Plan(Mapping[str, Any]):
+    """What a pass's ``reflect`` decided for this frame (``Reflection.plan``), handed to its
+    ``execute`` as ``ec.plan``: read-only, by attribute (``ec.plan.k``) or item. Execute reads its
+    decisions here instead of taking them again (Filament's ``addPass<Data>(setup, execute)``)."""
+    __slots__ = ("_values",)
+    _values: Mapping[str, Any]
+
+    def __init__(self, values: Mapping[str, Any] | None = None):
+        object.__setattr__(self, "_values", MappingProxyType(dict(values or {})))
+
+    def __getitem__(self, name: str) -> Any:
+        return self._values[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(f"the plan has no '{name}' (reflect planned: {sorted(self._values)})") from None
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("a plan is read-only: reflect decides it (Reflection.plan)")
+
+    def __repr__(self) -> str:
+        return f"Plan({dict(self._values)!r})"
+
+
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
@@ -76,6 +109,7 @@ class Reflection:
         self.notes: list[str] = []
         self.state = state if state is not None else {}  # the graph's memory for shape decisions
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
+        self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
 
     def skip(self, reason: str) -> None:
         """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
@@ -90,6 +124,22 @@ class Reflection:
         """A scene-driven choice shown with the pass in the frame report (e.g. a map size)."""
         if text not in self.notes:
             self.notes.append(text)
+
+    def plan(self, **values: Any) -> None:
+        """Record what this reflect decided (sizes, resource names, counts, defines...) for execute to
+        read as ``ec.plan.name``, so it is decided once. Part of the pass's cache key (by ``repr``):
+        keep values small and immutable (numbers, strings, tuples, TexSpecs). A name planned twice
+        must get the same value."""
+        for name, value in values.items():
+            if name in self._plan and self._plan[name] != value:
+                raise GraphError(f"plan '{name}' decided twice with different values "
+                                 f"({self._plan[name]!r}, {value!r})")
+            self._plan[name] = value
+
+    @property
+    def planned(self) -> Plan:
+        """The plan recorded so far (what ``ec.plan`` will be)."""
+        return Plan(self._plan)
 
     def setting(self, path: str) -> Any:
         """Declare a setting (dotted path) and return its current value."""

@@ -169,6 +169,7 @@ class BurleyBlurPass(Pass):
         for res in (IRRADIANCE, DEPTH):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
+        r.plan(sampling=plan, height=h)
         r.output(PARTIAL if plan.reuse else BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
         r.output(STATS, TexSpec((w, h), 4, "f2", filter="nearest"))
         if plan.reuse:
@@ -176,12 +177,11 @@ class BurleyBlurPass(Pass):
                 r.output(res, TexSpec((w, h), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        budget = bool(ec.setting("burley.budget"))
-        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
-        prog = ec.program("burley_blur", **table_defines(plan, budget))
+        plan = ec.plan.sampling
+        prog = ec.program("burley_blur")  # the variant reflect declared (table_defines)
         prof = profile_of(ec.setting)
         view = ec.view
-        h = ec.setting("render.height")
+        h = ec.plan.height
         cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
         ec.uniforms(prog, u_proj_scale=float(view.proj[1, 1]) * h / 2.0, u_filter_radius=prof.filter_radius,
                     u_S=tuple(float(v) for v in prof.S), u_d=prof.d, u_seed=seed_of(plan, ec.state))
@@ -223,14 +223,15 @@ class BurleyReusePass(Pass):
         for f in PROFILE_FIELDS:
             r.setting(f"burley.{f}")
         r.program("burley_reuse", **self._defines(plan))
+        r.plan(sampling=plan)
         for res in (PARTIAL, NEAR_W, FAR, FAR_W, DEPTH):
             r.input(res)
         w, h = r.setting("render.width"), r.setting("render.height")
         r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
 
     def execute(self, ec) -> None:
-        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
-        prog = ec.program("burley_reuse", **self._defines(plan))
+        plan = ec.plan.sampling
+        prog = ec.program("burley_reuse")
         prof = profile_of(ec.setting)
         ec.uniforms(prog, u_reuse_dz=plan.reuse_dz * prof.filter_radius)
         ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W, lin_depth=DEPTH)
@@ -265,6 +266,7 @@ class BurleyTemporalPass(Pass):
         plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
         r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
         r.program("burley_temporal", **self._defines(plan))
+        r.plan(sampling=plan)
         for f in PROFILE_FIELDS + ("budget",):
             r.setting(f"burley.{f}")
         # the lighting pass's outputs: a new version (camera, lights, scene, size...) restarts the mean
@@ -280,7 +282,7 @@ class BurleyTemporalPass(Pass):
         return {"TEMPORAL_REUSE": "1" if plan.reuse else "0"}
 
     def execute(self, ec) -> None:
-        plan = self._plan(ec.setting if self.fixed_plan is None else lambda p: None)
+        plan = ec.plan.sampling
         # the mean holds while the lighting pass's outputs (their versions), the profile and the plan are
         # the ones it was taken of: only the blur's seed changed
         taken_of = (ec.input_version(IRRADIANCE), ec.input_version(DEPTH), plan,
@@ -288,7 +290,7 @@ class BurleyTemporalPass(Pass):
         last = self._last
         reset = last is None or last[0] != taken_of
         write = 0 if last is None else 1 - last[1]
-        prog = ec.program("burley_temporal", **self._defines(plan))
+        prog = ec.program("burley_temporal")
         ec.uniforms(prog, u_max_n=float(plan.temporal), u_reset=int(reset))
         ec.textures(prog, current=BLURRED, history=ec.output(HISTORY[1 - write]))
         targets: tuple[str, ...] = (TEMPORAL, HISTORY[write])
@@ -354,15 +356,14 @@ class BurleyCountPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         r.input(STATS)
-        r.setting("render.height")
         r.setting("render.width")
+        r.plan(rows=TexSpec((1, r.setting("render.height")), 4, "f4", filter="nearest"))  # stage 1's row sums
         r.program("burley_count", STAGE="1")
         r.program("burley_count", STAGE="2")
         r.output(COUNT, TexSpec((2, 1), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        h = ec.setting("render.height")
-        rows = ec.scratch(TexSpec((1, h), 4, "f4", filter="nearest"))
+        rows = ec.scratch(ec.plan.rows)
         p1 = ec.program("burley_count", STAGE="1")
         ec.bind(p1, "stats", STATS)
         ec.draw_fullscreen(p1, rows)

@@ -26,13 +26,14 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
     """Declare what a lit pass reads: every light, the shadow test settings, and the shadow maps
     of shadow-casting lights (not with ``shadow_maps=False``: a pass that reads the shadow test's
     result from elsewhere). Returns the defines that specialise shaders/lib/lights.glsl to this
-    frame's lights (declare the lit program with them: ``r.program(name, **defines)``)."""
+    frame's lights (declare the lit program with them: ``r.program(name, **defines)``). Plans
+    ``light_slots`` (the settings index of each slot's light) and ``shadow_map_size`` for set_lighting."""
     lights = r.setting("lights")
     r.setting("shadow.tol")
     pcf = r.setting("shadow.pcf")
     bilinear = r.setting("shadow.pcf_filter") == "bilinear"
-    shadow_map_size(r)
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if analytic_on(l)]
+    r.plan(light_slots=tuple(i for i, _ in active), shadow_map_size=shadow_map_size(r))
     for i, l in enumerate(lights[:MAX_LIGHTS]):
         if not analytic_on(l) and l.cast_shadow:
             r.drop(shadow_resource(i), light_off_reason(i, l))
@@ -47,11 +48,11 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
 
 def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     """Set the uniforms and shadow maps of shaders/lib/lights.glsl (slot k = k-th enabled light);
-    ``shadow_maps=False``: the uniforms only (see declare_lighting)."""
+    ``shadow_maps=False``: the uniforms only (see declare_lighting, which planned the slots and map size)."""
     scene = ec.scene
     lights = ec.setting("lights")
-    active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if analytic_on(l)]
-    map_size = shadow_map_size(ec)
+    active = [(i, lights[i]) for i in ec.plan.light_slots]
+    map_size = ec.plan.shadow_map_size
     kind = np.zeros(MAX_LIGHTS, np.int32)
     radiance = np.zeros((MAX_LIGHTS, 3), np.float32)
     dirs = np.tile(np.array([0.0, 0.0, 1.0], np.float32), (MAX_LIGHTS, 1))

@@ -60,7 +60,6 @@ from skinviewer.passes.texture_space import (
     rasterize_unwrapped,
     seam_resource,
     shade_dilated,
-    shading_program,
     unwrap_dilated,
     work_tiles,
 )
@@ -97,10 +96,10 @@ def map_size(r) -> int:
 
 # -- which light casts the TSM --------------------------------------------------------------------
 
-def tsm_light_index(r) -> int | None:
+def tsm_light_index(r: Reflection) -> int | None:
     """Declare (and return) the light the TSM is rendered from: deon.tsm_light when it names an
     enabled shadow-casting light, else the first such light; None when deon.tsm is off or no light
-    casts shadows."""
+    casts shadows. Reflect only: the passes plan it (``tsm_light``) for execute."""
     if not r.setting("deon.tsm"):
         return None
     n = min(r.setting("lights.#"), MAX_LIGHTS)
@@ -110,16 +109,13 @@ def tsm_light_index(r) -> int | None:
     j = want if want is not None and want in usable else (usable[0] if usable else None)
     subpixel = kernel_under_pixel(r) if j is not None else None
     if subpixel:  # transmission is part of the diffusion
-        if hasattr(r, "drop"):
-            r.drop(TSM, subpixel)
+        r.drop(TSM, subpixel)
         return None
     if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
-        s = r._settings if hasattr(r, "_settings") else r._frame.settings
-        need, why = tsm_needed(s, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
+        need, why = tsm_needed(r._settings, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
         if not need:
-            if hasattr(r, "drop"):
-                r.drop(TSM, why)
+            r.drop(TSM, why)
             return None
     return j
 
@@ -160,14 +156,14 @@ class StretchPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = self.size_of(r)
+        r.plan(size=n)
         declare_unwrapped(r, "deon_stretch", n, self.resource, TexSpec((n, n), 3, "f4"),  # RG stretch, B shear
                           **stretch_defines(r))
 
     def execute(self, ec) -> None:
-        n = self.size_of(ec)
-        prog = ec.program("deon_stretch", **stretch_defines(ec))
+        prog = ec.program("deon_stretch")  # the variant reflect declared (stretch_defines)
         ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        unwrap_dilated(ec, prog, n, self.resource)
+        unwrap_dilated(ec, prog, ec.plan.size, self.resource)
 
 
 class GatherSurfacePass(Pass):
@@ -181,10 +177,12 @@ class GatherSurfacePass(Pass):
         if not gather_used(r):
             return
         n = map_size(r)
-        r.input(gutter_resource(n))
-        seam = r.setting("scene.seam_aware")
+        seam = seam_resource(n) if r.setting("scene.seam_aware") else None
+        r.plan(size=n, gutter=gutter_resource(n), seam=seam, position=TexSpec((n, n), 4, "f4"),
+               metric=TexSpec((n, n), 4, "f4", filter="nearest"))
+        r.input(r.planned.gutter)
         if seam:
-            r.input(seam_resource(n))
+            r.input(seam)
         r.program("uv_position")
         r.program("deon_stretch")  # per triangle (eq. 27): a texel's area is its own triangle's
         r.program("dilate")
@@ -196,22 +194,21 @@ class GatherSurfacePass(Pass):
         r.output(GATHER_BLOCKS_ZONE, TexSpec((h, h), 2, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
-        gutter = gutter_resource(n)
-        pos = ec.scratch(TexSpec((n, n), 4, "f4"))  # dilated, so bilinear reads across seams stay on the surface
+        plan = ec.plan
+        n, gutter, seam = plan.size, plan.gutter, plan.seam
+        pos = ec.scratch(plan.position)  # dilated, so bilinear reads across seams stay on the surface
         dilate(ec, rasterize_unwrapped(ec, ec.program("uv_position"), n), gutter, pos)
         # the areas from each texel's own triangle, not the vertex metric the separable taps use (smooth
         # across triangles, so it spreads a jump in texel size over several texels: wrong weights there)
         metric = ec.program("deon_stretch")
         ec.set(metric, "u_mm_per_unit", float(ec.scene.mm_per_unit))
-        stretch = ec.scratch(TexSpec((n, n), 4, "f4", filter="nearest"))
+        stretch = ec.scratch(plan.metric)
         dilate(ec, rasterize_unwrapped(ec, metric, n), gutter, stretch)
-        seam = ec.has_input(seam_resource(n))
-        prog = ec.program("deon_gather_surface", **({"SEAM": 1} if seam else {}))
+        prog = ec.program("deon_gather_surface")  # SEAM when reflect planned a seam map
         ec.set(prog, "u_mm", float(ec.scene.mm_per_unit))
         ec.textures(prog, positions=pos, gutter=gutter, stretch_map=stretch)
         if seam:
-            ec.bind(prog, "seam_map", seam_resource(n))
+            ec.bind(prog, "seam_map", seam)
         ec.draw_fullscreen(prog, GATHER_SURFACE)
         blocks = ec.program("deon_gather_blocks", BLOCK_SURFACE=1)
         ec.textures(blocks, surface=ec.output(GATHER_SURFACE), gutter=gutter)
@@ -249,13 +246,14 @@ class BorderFramePass(Pass):
         if not open_border(r):
             return
         n = map_size(r)
-        r.input(gutter_resource(n))
-        r.output(border_resource(n), TexSpec((n, n), 4, "f4", filter="nearest"))
+        r.plan(size=n, gutter=gutter_resource(n), border=border_resource(n))
+        r.input(r.planned.gutter)
+        r.output(r.planned.border, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         from skinviewer.passes.texture_space import read_gutter
-        n = map_size(ec)
-        g = read_gutter(ec.input(gutter_resource(n)))
+        n = ec.plan.size
+        g = read_gutter(ec.input(ec.plan.gutter))
         iy, ix = np.mgrid[0:n, 0:n]
         covered = (g[..., 0] == ix) & (g[..., 1] == iy)
         cache = ec.scene.__dict__.setdefault("_texel_tables", {})
@@ -264,7 +262,7 @@ class BorderFramePass(Pass):
             m = ec.scene.mesh
             reach = min(float(n), BORDER_REACH_MM * ec.scene.max_uv_per_mm * n)
             cache[key] = border_frame(m.positions, m.uvs, m.indices, covered, reach).tobytes()
-        ec.output(border_resource(n)).write(cache[key])
+        ec.output(ec.plan.border).write(cache[key])
 
 
 def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:
@@ -305,13 +303,14 @@ class TsmPass(Pass):
                 r.skip(r.dropped[TSM])
             return
         r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
+        r.plan(tsm_light=j)
         n = light_map_size(r, "deon.tsm_size", "deon.irradiance_size_mode")
         r.program("deon_tsm")
         r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_tsm")
-        set_tsm_uniforms(ec, prog, tsm_light_index(ec), matrix="u_light_matrix")
+        set_tsm_uniforms(ec, prog, ec.plan.tsm_light, matrix="u_light_matrix")
         ec.draw_mesh(prog, TSM, clear=(0.0, 0.0, 0.0, -1.0))  # A < 0: no surface
 
 
@@ -329,17 +328,19 @@ class IrradiancePass(Pass):
         if r.setting("deon.energy_conservation"):
             declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
-        if tsm_light_index(r) is not None:
+        j = tsm_light_index(r)
+        if j is not None:
             r.input(TSM)
         vis = texture_shadows(r)
+        r.plan(tsm_light=j, visibility=vis)  # the TSM's light; each light's fac_shadow kept per texel
         declare_shaded(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
                        steps=over_texel, DEON_VISIBILITY=int(vis))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
-        prog = ec.program(shading_program(ec, "deon_irradiance"))
+        n = ec.plan.shading.size
+        prog = ec.program(ec.plan.shading.program)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         set_environment(ec, prog, specular=False)
@@ -349,13 +350,13 @@ class IrradiancePass(Pass):
         if energy:
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
             bind_specular(ec, prog)
-        use_tsm = ec.has_input(TSM)
+        use_tsm = ec.plan.tsm_light is not None
         ec.uniforms(prog, u_tsm=use_tsm, u_max_thickness=MAX_THICKNESS_MM)
         if use_tsm:
             ec.bind(prog, "tsm_map", TSM)
-            set_tsm_uniforms(ec, prog, tsm_light_index(ec))
+            set_tsm_uniforms(ec, prog, ec.plan.tsm_light)
         # with texture shadows the same draw also writes each light's fac_shadow (location 1)
-        shade_dilated(ec, prog, n, IRRADIANCE, *((VISIBILITY,) if texture_shadows(ec) else ()))
+        shade_dilated(ec, prog, IRRADIANCE, *((VISIBILITY,) if ec.plan.visibility else ()))
 
 
 def mean_texel_mm(scene, n: int) -> float:
@@ -434,28 +435,37 @@ class GaussianBlurPass(Pass):
                    f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
             return
         n = map_size(r)
-        if self.chain == "irradiance" and gathered(r, step):
+        gather = self.chain == "irradiance" and gathered(r, step)
+        border = self._open_border(r)
+        seam = seam_resource(n) if r.setting("scene.seam_aware") else None
+        # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
+        r.plan(step=step, size=n, gather=gather, output=self._output(), spec=self._spec(n), gutter=gutter_resource(n),
+               seam=seam, border=border_resource(n) if border else None,
+               island_tiles=island_tiles(r, self.chain, border))
+        if gather:
             self._reflect_gather(r, step, n)
             return
         stretch = self._stretch_input(r, step)
         if stretch:
             r.setting("deon.stretch_shear")
-        seam = r.setting("scene.seam_aware")
         skip_gutters = r.setting("deon.skip_gutters")
         if seam:
-            r.input(seam_resource(n))
-        r.input(step.source if self.chain == "irradiance" else stretch_of(step.source))
+            r.input(seam)
+        source = step.source if self.chain == "irradiance" else stretch_of(step.source)
+        r.input(source)
         r.input(gutter_resource(n))
         if stretch:
             r.input(stretch)
         tiled = {"TILED": 1} if skip_gutters else {}
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
-        border = self._open_border(r)
-        dilate_fill = {"DILATE": 1, **tiled} if island_tiles(r, self.chain, border) else {}
+        dilate_fill = {"DILATE": 1, **tiled} if r.planned.island_tiles else {}
         if border:
             r.input(border_resource(n))
             r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
-        r.program("deon_blur", **tiled, **zones, **border, **self._narrow(r, step, stretch, n))
+        narrow = self._narrow(r, step, stretch, n)
+        r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
+               ring_sigma=ring_sigma(r, self.i))
+        r.program("deon_blur", **tiled, **zones, **border, **narrow)
         if seam:
             r.program("seam_fill", **(dilate_fill or tiled), **border)
         r.output(self._output(), self._spec(n))
@@ -470,7 +480,9 @@ class GaussianBlurPass(Pass):
             r.input(res)
         if r.setting("deon.stretch"):
             r.input(STRETCH)
-        tiles = island_tiles(r, self.chain, self._open_border(r))
+        tiles = r.planned.island_tiles
+        h = (n + 1) // 2
+        r.plan(blocks=TexSpec((h, h), 4, "f4", filter="nearest"))  # the 2 x 2 block sums, kept across bands
         if seam:
             r.input(seam_resource(n))
             border = self._open_border(r)
@@ -483,34 +495,33 @@ class GaussianBlurPass(Pass):
         r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 1} if tiles else {}))
         r.output(self._output(), self._spec(n))
 
-    def _execute_gather(self, ec, step, n: int) -> None:
+    def _execute_gather(self, ec) -> None:
+        plan = ec.plan
+        step, n, gutter = plan.step, plan.size, plan.gutter
         source = step.source
-        tiled = island_tiles(ec, self.chain, self._open_border(ec))
+        tiled = plan.island_tiles
         # the seam fill and the block sums are made once (first band) and kept across the bands
-        if ec.has_input(seam_resource(n)):  # gutters across seams hold the surface there
-            filled, fresh = ec.held("filled", self._spec(n))
+        if plan.seam:  # gutters across seams hold the surface there
+            filled, fresh = ec.held("filled", plan.spec)
             if fresh:
-                border = self._open_border(ec)
                 dilating = tiled and source != IRRADIANCE  # the irradiance is whole: dilated already
-                fill = ec.program("seam_fill", **({"DILATE": 1} if dilating else {}), **border,
-                                  **({"RIM_SHARE": 1} if border else {}))
-                ec.textures(fill, source=source, seam_map=seam_resource(n))
+                fill = ec.program("seam_fill")  # the variant reflect declared (DILATE, OPEN_BORDER, RIM_SHARE)
+                ec.textures(fill, source=source, seam_map=plan.seam)
                 if dilating:
-                    ec.bind(fill, "gutter", gutter_resource(n))
+                    ec.bind(fill, "gutter", gutter)
                 ec.set(fill, "u_past_border_dark", True)
-                if border:  # a texel the border crosses counts its share on the surface; no reflection
-                    ec.textures(fill, border_map=border_resource(n), irradiance_map=IRRADIANCE)
+                if plan.border:  # a texel the border crosses counts its share on the surface; no reflection
+                    ec.textures(fill, border_map=plan.border, irradiance_map=IRRADIANCE)
                     ec.set(fill, "u_reflect", 0)
                 ec.draw_fullscreen(fill, filled)
             source = filled
-        h = (n + 1) // 2
-        (light, fresh), (lit, _) = (ec.held(k, TexSpec((h, h), 4, "f4", filter="nearest")) for k in ("light", "lit"))
+        (light, fresh), (lit, _) = (ec.held(k, plan.blocks) for k in ("light", "lit"))
         if fresh:
             prog = ec.program("deon_gather_blocks")
             ec.textures(prog, source=source, surface=GATHER_SURFACE)
             ec.draw_fullscreen(prog, light, lit)
-        prog = ec.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(ec, step, n), **({"TILED": 1} if tiled else {}))
-        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter_resource(n), blocks_e=light,
+        prog = ec.program("deon_surface_gather")  # GATHER_BLOCKS (gather_reach) and TILED as reflect declared
+        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light,
                     blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
         ec.set(prog, "u_var", float(step.increment))
         texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
@@ -523,7 +534,7 @@ class GaussianBlurPass(Pass):
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(self._output(), (id(ec.scene), n, DILATE_RING))
         with ec.band():
-            ec.draw_fullscreen(prog, self._output(), tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
+            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -549,17 +560,12 @@ class GaussianBlurPass(Pass):
         return {"NARROW_TAPS": narrow_taps(widest)}
 
     def execute(self, ec) -> None:
-        n = map_size(ec)
-        step = self._step(ec)
-        if self.chain == "irradiance" and gathered(ec, step):
-            self._execute_gather(ec, step, n)
+        plan = ec.plan
+        if plan.gather:
+            self._execute_gather(ec)
             return
-        stretch = self._stretch_input(ec, step)
-        tiled = {"TILED": 1} if ec.setting("deon.skip_gutters") else {}
-        narrow = self._narrow(ec, step, stretch, n)
-        zones = {"ISLAND_ZONES": 1} if ec.setting("scene.seam_aware") else {}
-        border = self._open_border(ec)
-        prog = ec.program("deon_blur", **tiled, **zones, **border, **narrow)
+        step, n, stretch, narrow, border = plan.step, plan.size, plan.stretch, plan.narrow, plan.border
+        prog = ec.program("deon_blur")  # the variant reflect declared (TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
@@ -567,23 +573,23 @@ class GaussianBlurPass(Pass):
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = ([np.sqrt(step.increment)] if narrow else
                   sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm))
-        ec.bind(prog, "gutter", gutter_resource(n))
+        ec.bind(prog, "gutter", plan.gutter)
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
-        spec = self._spec(n)
+        spec = plan.spec
         # scratch kept across the pass's bands (ExecuteContext.held): a blur runs in row bands
         # under the viewer's frame budget, each draw complete before the next one's first band
         tmp = ec.held("tmp", spec)[0]
         tmp2 = ec.held("tmp2", spec)[0] if len(sigmas) > 1 else None
-        seam = seam_resource(n) if ec.has_input(seam_resource(n)) else None
+        seam = plan.seam
         filled = ec.held("filled", spec)[0] if seam else None
-        dilate_fill = bool(seam) and island_tiles(ec, self.chain, border)
-        fill = ec.program("seam_fill", **({"DILATE": 1, **tiled} if dilate_fill else {})) if seam else None
+        dilate_fill = bool(seam) and plan.island_tiles
+        fill = ec.program("seam_fill") if seam else None  # the variant reflect declared
         if dilate_fill:
-            ec.bind(fill, "gutter", gutter_resource(n))
+            ec.bind(fill, "gutter", plan.gutter)
         if border:
             for p_ in (prog, fill):
-                ec.bind(p_, "border_map", border_resource(n))
+                ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
@@ -591,11 +597,11 @@ class GaussianBlurPass(Pass):
             ec.set(fill, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
-        src = step.source if self.chain == "irradiance" else stretch_of(step.source)
+        src = plan.source
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
-        reach = blur_ring(ec, n, stretch, self.i)
-        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if ec.setting("deon.skip_gutters") else None
+        reach = blur_ring(ec, n, stretch, plan.ring_sigma)
+        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if plan.skip_gutters else None
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
         fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
@@ -606,7 +612,7 @@ class GaussianBlurPass(Pass):
             # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
             refl = {"u_reflect": int(not (k == 0 and step.source == IRRADIANCE))} if border else {}
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
-                                              ((0.0, 1.0), tmp, self._output() if last else tmp2)):
+                                              ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
                     draws.append((fill, refl, source, filled, fill_tiles))
                     source = filled
@@ -647,9 +653,16 @@ def combined(r) -> bool:
         light_on(l) for l in r.peek("lights")[:MAX_LIGHTS])  # shape only: the blurs exist
 
 
+def plan_blurs(r, chain: list) -> None:
+    """Plan ``blurs``: per Gaussian, its blurred texture and the variance it has (what bind_blur_slots binds)."""
+    r.plan(blurs=tuple((texture_of(step), float(step.variance)) for step in chain))
+
+
 def declare_blurs(r, mask: int) -> None:
-    """The blurred textures of the used Gaussians (bit i of ``mask``) as inputs."""
-    for i, step in enumerate(_plan(r)):
+    """The blurred textures of the used Gaussians (bit i of ``mask``) as inputs (and plan_blurs)."""
+    chain = _plan(r)
+    plan_blurs(r, chain)
+    for i, step in enumerate(chain):
         if (mask >> i) & 1:
             r.input(texture_of(step))
 
@@ -660,9 +673,8 @@ def bind_blur_slots(ec, prog) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
     var = np.zeros(MAX_GAUSSIANS, np.float32)
     used = np.zeros(MAX_GAUSSIANS, np.int32)
-    for i, (g, step) in enumerate(zip(ec.setting("deon.gaussians"), _plan(ec))):
-        res = texture_of(step)
-        var[i] = step.variance
+    for i, (g, (res, variance)) in enumerate(zip(ec.setting("deon.gaussians"), ec.plan.blurs)):
+        var[i] = variance
         if ec.has_input(res):
             ws[i] = g.weights
             used[i] = 1 if any(w > 0 for w in g.weights) else 0
@@ -680,9 +692,10 @@ def declare_tsm_read(r) -> dict[str, Any]:
     """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
     (island zones), the stretch map, and for the gather the irradiance; returns its defines."""
     r.setting("deon.tsm_form")
-    r.section(f"lights.{tsm_light_index(r)}", LIGHT_POSE_FIELDS)  # its light space
+    r.plan(tsm_light=tsm_light_index(r), zone_map=gutter_resource(map_size(r)))  # for bind_tsm_read
+    r.section(f"lights.{r.planned.tsm_light}", LIGHT_POSE_FIELDS)  # its light space
     r.input(TSM)
-    r.input(gutter_resource(map_size(r)))  # island zones: whether the blur already carries A's light
+    r.input(r.planned.zone_map)  # island zones: whether the blur already carries A's light
     if r.setting("deon.stretch"):
         r.input(STRETCH)
     if r.setting("deon.tsm_gather"):
@@ -693,10 +706,10 @@ def declare_tsm_read(r) -> dict[str, Any]:
 def bind_tsm_read(ec, prog) -> None:
     """lib/tsm_transmit.glsl's TSM, stretch and gate uniforms (declare_tsm_read)."""
     ec.bind(prog, "tsm_map", TSM)
-    ec.bind(prog, "zone_map", gutter_resource(map_size(ec)))
+    ec.bind(prog, "zone_map", ec.plan.zone_map)
     if ec.has_input(STRETCH):
         ec.bind(prog, "stretch_map", STRETCH)
-    ls = set_tsm_uniforms(ec, prog, tsm_light_index(ec))
+    ls = set_tsm_uniforms(ec, prog, ec.plan.tsm_light)
     # thickness below ~2 TSM texels is the point's own surface (it is lit): no transmission
     texel_mm = ls.texel_world(ec.input(TSM).size[0]) * ec.scene.mm_per_unit
     ec.set(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
@@ -731,10 +744,10 @@ class TransmittedPass(Pass):
                        **tsm_defines)
 
     def execute(self, ec) -> None:
-        prog = ec.program(shading_program(ec, "deon_transmitted"))
+        prog = ec.program(ec.plan.shading.program)
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
-        shade_dilated(ec, prog, transmitted_size(ec), TRANSMITTED)
+        shade_dilated(ec, prog, TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):
@@ -750,6 +763,7 @@ class DiffuseSumPass(Pass):
         if tsm_light_index(r) is not None:
             r.input(TRANSMITTED)
         n = map_size(r)
+        r.plan(size=n)
         r.program("deon_combine", GAUSSIAN_MASK=mask)
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
 
@@ -761,7 +775,7 @@ class DiffuseSumPass(Pass):
     def execute(self, ec) -> None:
         prog = ec.program("deon_combine")
         ws, _, _ = bind_blur_slots(ec, prog)
-        n = map_size(ec)
+        n = ec.plan.size
         ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED), u_size=(float(n), float(n)))
         if ec.has_input(TRANSMITTED):
             ec.bind(prog, "transmitted", TRANSMITTED)
@@ -809,15 +823,19 @@ def narrow_taps(sigma_texels: float) -> int:
     return next(t for t in NARROW_TAPS if t >= 3.0 * sigma_texels)
 
 
-def blur_ring(ec, n: int, stretch: str | None, i: int | None = None) -> int:
-    """Texels beyond the islands that readers of blur_i can reach (seed 000 eq. 25: taps at k * s *
-    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n for this blur's own V taps on its
-    H output and the next blur's taps on its output (sigma <= sqrt(increment); i None: the whole
-    chain), plus one for bilinear taps and one for the final pass's bilinear lookups."""
-    s_max = max_stretch(ec, stretch)
-    plan = plan_of([g.variance for g in ec.peek("deon.gaussians")], ec)  # the whole chain's widest step
+def ring_sigma(r, i: int | None = None) -> float:
+    """The widest sigma (mm) whose taps reach past blur_i: this blur's own V taps on its H output and the
+    next blur's taps on its output (sigma <= sqrt(increment); i None: the whole chain). Shape only (peeked)."""
+    plan = plan_of([g.variance for g in r.peek("deon.gaussians")], r)  # the whole chain's widest step
     near = plan if i is None else plan[i:i + 2]
-    sigma = max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0)
+    return float(max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0))
+
+
+def blur_ring(ec, n: int, stretch: str | None, sigma: float) -> int:
+    """Texels beyond the islands that readers of a blur can reach (seed 000 eq. 25: taps at k * s *
+    sigma, |k| <= 3, s in UV per mm): 3 * max stretch * sigma * n (sigma: ring_sigma, planned in
+    reflect), plus one for bilinear taps and one for the final pass's bilinear lookups."""
+    s_max = max_stretch(ec, stretch)
     return int(np.ceil(3.0 * s_max * sigma * n)) + 2
 
 
@@ -832,6 +850,8 @@ class DeonFinalPass(Pass):
         lighting = declare_lighting(r, shadow_maps=not vis)  # texture shadows: no shadow map is read
         gs = r.setting("deon.gaussians")
         plan = _plan(r)
+        r.plan(dark=not any(light_on(l) for l in r.setting("lights")[:MAX_LIGHTS]))  # no analytic light on
+        plan_blurs(r, plan)
         if lighting["LIGHT_COUNT"] == 0 and env_index(r) is None:  # every light off: black (no irradiance, no specular)
             for step in plan:
                 r.drop(texture_of(step), "every light is off or at zero intensity")
@@ -868,14 +888,10 @@ class DeonFinalPass(Pass):
         return [("deon_final", v) for n, d in r.programs if n == "deon_final"
                 for v in likely_final_variants(dict(d), r.peek("deon.tsm_gather"))]
 
-    @staticmethod
-    def dark(ec) -> bool:
-        return not any(light_on(l) for l in ec.setting("lights")[:MAX_LIGHTS])
-
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
         set_camera(ec, prog)
-        if self.dark(ec):
+        if ec.plan.dark:
             draw_view_mesh(ec, prog, LIT)
             return
         bind_surface(ec, prog)

@@ -104,26 +104,29 @@ class EnvironmentPass(Pass):
         r.setting("specular.rho_s")
         r.output(ENV_PREFILTERED, prefiltered_spec())
         r.output(ENV_RHO_DT, TexSpec((32, 32), 1, "f4", filter="linear"))
-        if r.setting("render.background_environment") == "sharp":
+        sharp = r.setting("render.background_environment") == "sharp"
+        r.plan(environment=i, background=sharp)  # the light, and whether the sharp background is made
+        if sharp:
             r.output(ENV_BACKGROUND, TexSpec(BACKGROUND_SIZE, 4, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
         from skinviewer.physics.specular import rho_dt_table
-        i = env_index(ec)
-        e = ec.section(f"lights.{i}", ENV_IMAGE_FIELDS)
+        e = ec.section(f"lights.{ec.plan.environment}", ENV_IMAGE_FIELDS)
         ec.output(ENV_PREFILTERED).write(_prefiltered(e.environment, e.layout).tobytes())
         table = rho_dt_table(ec.setting("specular.f0"), ec.setting("specular.rho_s"), n_cos=32, n_m=32)
         table = np.nan_to_num(np.clip(table, 0.0, 1.0), nan=1.0).astype(np.float32)
         ec.output(ENV_RHO_DT).write(np.ascontiguousarray(table).tobytes())
-        if ec.setting("render.background_environment") == "sharp":
+        if ec.plan.background:
             ec.output(ENV_BACKGROUND).write(_background(e.environment, e.layout).tobytes())
 
 
 def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
     """Declare what shaders/lib/environment.glsl reads for a lit program; returns its defines
     (ENV_LIGHT = 1 and ENV_RAYS, the bake's ray count, so another count is another vertex array),
-    or {} without an environment light. ``specular``: the program adds the split-sum specular."""
+    or {} without an environment light. ``specular``: the program adds the split-sum specular.
+    Plans ``environment``: the light's index or None (what ``set_environment`` reads)."""
     i = env_index(r)
+    r.plan(environment=i)
     if i is None:
         return {}
     e = r.section(f"lights.{i}", ENV_FIELDS)
@@ -171,8 +174,9 @@ def transfer_uniform(light) -> np.ndarray:
 
 
 def set_environment(ec, prog, specular: bool = True) -> None:
-    """Set the uniforms and textures of shaders/lib/environment.glsl (no-op without an environment)."""
-    i = env_index(ec)
+    """Set the uniforms and textures of shaders/lib/environment.glsl (no-op without an environment): the
+    light reflect planned (``declare_environment``, or ``environment=`` planned by the pass)."""
+    i = ec.plan.environment
     if i is None:
         return
     e = ec.section(f"lights.{i}", ENV_FIELDS)

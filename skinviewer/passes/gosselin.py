@@ -59,7 +59,6 @@ from skinviewer.passes.texture_space import (
     read_gutter,
     seam_resource,
     shade_dilated,
-    shading_program,
 )
 from skinviewer.physics.poisson import POISSON_12, radii_mm
 
@@ -88,12 +87,11 @@ class GosselinLightMapPass(Pass):
         declare_shaded(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
-        size = ec.setting(SIZE)
-        prog = ec.program(shading_program(ec, "light_map"))
+        prog = ec.program(ec.plan.shading.program)
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         set_environment(ec, prog, specular=False)
-        shade_dilated(ec, prog, size, LIGHT_MAP)
+        shade_dilated(ec, prog, LIGHT_MAP)
 
 
 def region_radii(g, size: int) -> np.ndarray:
@@ -145,13 +143,14 @@ class GosselinRadiusMapPass(Pass):
     def reflect(self, r: Reflection) -> None:
         size = r.setting(SIZE)
         r.section("gosselin", KERNEL_FIELDS)
-        r.input(gutter_resource(size))
+        r.plan(size=size, gutter=gutter_resource(size))
+        r.input(r.planned.gutter)
         r.output(RADIUS_MAP, TexSpec((size, size), 1, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        size = ec.setting(SIZE)
+        size = ec.plan.size
         radii = region_radii(ec.section("gosselin", KERNEL_FIELDS), size)
-        gtex = ec.input(gutter_resource(size))
+        gtex = ec.input(ec.plan.gutter)
         gutter = read_gutter(gtex)
         rad = radius_map(ec.scene.region_ids, radii, size, gutter)
         ec.output(RADIUS_MAP).write(np.ascontiguousarray(rad).tobytes())
@@ -173,20 +172,22 @@ class PoissonBlurPass(Pass):
             r.input(STRETCH)
         else:
             r.input(RADIUS_MAP)
-        r.input(gutter_resource(size))
-        if r.setting("scene.seam_aware"):
-            r.input(seam_resource(size))
-        zones = {"ISLAND_ZONES": 1} if r.setting("scene.seam_aware") else {}  # no tap on another island
+        seam = seam_resource(size) if r.setting("scene.seam_aware") else None
+        r.plan(iterations=int(r.setting("gosselin.iterations")), gutter=gutter_resource(size), seam=seam,
+               radius_mm=mm, spec=_map_spec(size))
+        r.input(r.planned.gutter)
+        if seam:
+            r.input(seam)
+        zones = {"ISLAND_ZONES": 1} if seam else {}  # no tap on another island
         r.program("poisson_blur", **({"RADIUS_MM": 1} if mm else {}), **zones)
-        if r.setting("scene.seam_aware"):
+        if seam:
             r.program("seam_fill")
         r.program("dilate")
-        r.output(BLURRED, _map_spec(size))
+        r.output(BLURRED, r.planned.spec)
 
     def execute(self, ec) -> None:
-        size = ec.setting(SIZE)
-        n = ec.setting("gosselin.iterations")
-        gutter = gutter_resource(size)
+        plan = ec.plan
+        n, gutter, seam, spec = plan.iterations, plan.gutter, plan.seam, plan.spec
         if n <= 0:
             for _d, sub, subs in ec.units(1):
                 with ec.band(sub, subs):
@@ -195,14 +196,13 @@ class PoissonBlurPass(Pass):
         prog = ec.program("poisson_blur")
         ec.set(prog, "u_poisson", np.asarray(POISSON_12, dtype=np.float32))
         ec.bind(prog, "gutter", gutter)
-        seam = seam_resource(size) if ec.has_input(seam_resource(size)) else None
         if seam:  # taps that leave their island read the surface across the seam (seam_fill.frag)
             fill = ec.program("seam_fill")
             ec.bind(fill, "seam_map", seam)
             ec.set(fill, "u_past_border_dark", True)
             ec.bind(prog, "seam_map", seam)
-            filled = ec.held("filled", _map_spec(size))[0]
-        if ec.has_input(STRETCH):
+            filled = ec.held("filled", spec)[0]
+        if plan.radius_mm:
             gs = ec.setting("deon.gaussians")
             radii = radii_mm([g.variance for g in gs], [g.weights for g in gs], n)
             ec.set(prog, "u_radius_mm", tuple(float(x) for x in radii))
@@ -211,8 +211,8 @@ class PoissonBlurPass(Pass):
             ec.bind(prog, "radius_map", RADIUS_MAP)
         # scratch kept across the pass's bands (issue 27): under the viewer's frame budget each draw
         # (seam fill, blur, dilation per iteration) runs in row bands, complete before the next starts
-        tmp = ec.held("tmp", _map_spec(size))[0]
-        ping = ec.held("ping", _map_spec(size))[0] if n > 1 else None
+        tmp = ec.held("tmp", spec)[0]
+        ping = ec.held("ping", spec)[0] if n > 1 else None
         draws: list[tuple[str, Any, Any]] = []  # (what, source, target) in order
         cur: Any = LIGHT_MAP  # the light map's name, then the scratch texture
         for k in range(n):

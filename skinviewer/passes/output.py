@@ -47,9 +47,10 @@ class OutputPass(Pass):
         r.setting("render.background_environment")
         w, h = r.setting("render.width"), r.setting("render.height")
         i, bg = _background_env(r)
+        r.plan(env=i, background=ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED if bg else None)
         if bg:
             r.section(f"lights.{i}", BACKGROUND_FIELDS)
-            r.input(ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED)
+            r.input(r.planned.background)
         r.program("output", TONE_MAP=TONE_MAPS[r.setting("render.tone_map")], BG_ENV=bg,
                   BG_LEVEL=BACKGROUND_BLUR_LEVEL)
         r.output("image", TexSpec((w, h), 4, "f1"))
@@ -57,19 +58,17 @@ class OutputPass(Pass):
     def execute(self, ec) -> None:
         import math
 
-        from skinviewer.passes.environment import BACKGROUND_BLUR_LEVEL, ENV_BACKGROUND, ENV_PREFILTERED
         from skinviewer.scene.camera import gl_bytes
-        i, bg = _background_env(ec)
-        prog = ec.program("output", TONE_MAP=TONE_MAPS[ec.setting("render.tone_map")], BG_ENV=bg,
-                          BG_LEVEL=BACKGROUND_BLUR_LEVEL)
+        i, background = ec.plan.env, ec.plan.background  # the environment light and its background texture
+        prog = ec.program("output")  # the variant reflect declared (tone map, BG_ENV)
         ec.bind(prog, "lit", self.source)
         ec.uniforms(prog, u_exposure=ec.setting("render.exposure"),
                     u_background=tuple(srgb_to_linear(ec.setting("render.background"))))
-        if bg:  # the environment seen through each pixel: R_y(-yaw) of the view ray (physics rotate_yaw)
+        if background:  # the environment seen through each pixel: R_y(-yaw) of the view ray (physics rotate_yaw)
             e = ec.section(f"lights.{i}", BACKGROUND_FIELDS)
             view = ec.view
             yaw = math.radians(float(e.yaw))
-            ec.bind(prog, "env_background", ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED)
+            ec.bind(prog, "env_background", background)
             ec.uniforms(prog, u_inv_view_proj=gl_bytes(np.linalg.inv(view.view_proj)),
                         u_eye=tuple(float(x) for x in view.eye), u_env_yaw=(math.cos(yaw), math.sin(yaw)),
                         u_env_scale=tuple(float(x) for x in np.asarray(e.color, np.float64) * float(e.intensity)))

@@ -12,12 +12,16 @@ graph's shape from the scene and the settings, and says why in the frame report
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from skinviewer.ground.constants import MAX_LIGHTS
 from skinviewer.ground.settings import LightSettings
 from skinviewer.scene.camera import framed_view
+
+if TYPE_CHECKING:
+    from skinviewer.kernel.pass_api import Reflection
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
 MAX_RAYS = 4096     # rays cast per light pose for the TSM rule (Embree via trimesh)
@@ -78,14 +82,14 @@ def wanted_map_size(settings, scene) -> float:
     return px_per_mm / max(scene.mean_uv_per_mm, 1e-12)
 
 
-def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
+def coverage_size(r: Reflection, path: str, mode_path: str, wanted_fn=None) -> int:
     """The map size for setting ``path`` (the user's size, the maximum): the setting itself in
     "fixed" mode; in "auto" the power of two from the screen coverage, changed only when the wanted
-    size leaves the hysteresis band. ``r``: a Reflection or ExecuteContext of a scene pass."""
+    size leaves the hysteresis band. ``r``: a scene pass's Reflection (the passes plan the size for execute)."""
     user = int(r.setting(path))
     if r.setting(mode_path) != "auto":
         return user
-    s = r._settings if hasattr(r, "_settings") else r._frame.settings
+    s = r._settings
     scene = r.scene
     wanted = (wanted_fn or wanted_map_size)(s, scene)
     key = (path, id(scene))
@@ -94,7 +98,7 @@ def coverage_size(r, path: str, mode_path: str, wanted_fn=None) -> int:
         pow2 = 2 ** math.ceil(math.log2(min(max(wanted, MIN_AUTO_SIZE), 1 << 20)))
         cur = int(min(pow2, user))
     r.state[key] = cur
-    if hasattr(r, "notes") and cur != user:  # reflect only (an ExecuteContext note would outlive the frame)
+    if cur != user:
         r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
     return cur
 
@@ -135,7 +139,7 @@ def kernel_px(settings, scene) -> float:
     return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
 
 
-def kernel_under_pixel(r) -> str | None:
+def kernel_under_pixel(r: Reflection) -> str | None:
     """The screen-space rule of the Burley techniques (kernel under a pixel: no blur) for d'Eon:
     when the widest Gaussian spans under deon.subpixel_kernel_px pixels on screen, diffusion cannot
     show, so the blurs, stretch and TSM are skipped and the final pass reads the irradiance. With
@@ -147,8 +151,7 @@ def kernel_under_pixel(r) -> str | None:
     if not limit > 0.0:
         r.state[key] = False
         return None
-    s = r._settings if hasattr(r, "_settings") else r._frame.settings
-    px = kernel_px(s, r.scene)
+    px = kernel_px(r._settings, r.scene)
     on = px < limit * (HYSTERESIS if r.state.get(key, False) else 1.0)
     r.state[key] = on
     return f"kernel under a pixel (widest Gaussian sigma {px:.2f} px on screen)" if on else None

@@ -24,7 +24,8 @@ class ShadowMapPass(Pass):
         r.section(f"lights.{i}", LIGHT_POSE_FIELDS)
         size = shadow_map_size(r)
         r.program("shadow_map")
-        r.output(shadow_resource(i), TexSpec((size, size), 1, "f4", filter="nearest", depth=True))
+        r.plan(map=shadow_resource(i))
+        r.output(r.planned.map, TexSpec((size, size), 1, "f4", filter="nearest", depth=True))
 
     def execute(self, ec) -> None:
         i = self.light_index
@@ -32,4 +33,4 @@ class ShadowMapPass(Pass):
         ls = scene.light_space(ec.section(f"lights.{i}", LIGHT_POSE_FIELDS))
         prog = ec.program("shadow_map")
         ec.set(prog, "u_light_matrix", gl_bytes(ls.gl_matrix))
-        ec.draw_mesh(prog, shadow_resource(i), clear=(1.0, 1.0, 1.0, 1.0))
+        ec.draw_mesh(prog, ec.plan.map, clear=(1.0, 1.0, 1.0, 1.0))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+from dataclasses import dataclass
 
 import moderngl
 import numpy as np
@@ -37,31 +38,33 @@ class GutterMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         size = self._n(r)
-        seam = r.setting("scene.seam_aware")
-        if texel_shading(r):
-            r.input(texel_surface_resources(size, "p")[0])
+        seam = seam_resource(size) if r.setting("scene.seam_aware") else None
+        # the coverage from the texel surface map's positions (render.texel_surface), or rasterised
+        surface = texel_surface_resources(size, "p")[0] if texel_shading(r) else None
+        r.plan(size=size, surface=surface, gutter=gutter_resource(size), gutter_spec=gutter_spec(size), seam=seam,
+               cover=TexSpec((size, size), 1, "f1", filter="nearest"))
+        if surface:
+            r.input(surface)
             r.program("texel_coverage")
         else:
             r.program("uv_coverage")
             if seam:
                 r.program("uv_position")
-        r.output(gutter_resource(size), gutter_spec(size))
+        r.output(r.planned.gutter, r.planned.gutter_spec)
         if seam:
-            r.output(seam_resource(size), TexSpec((size, size), 4, "f4", filter="nearest"))
+            r.output(seam, TexSpec((size, size), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        size = self._n(ec)
-        texels = texel_shading(ec)
-        if texels:
-            surface = texel_surface_resources(size, "p")[0]
+        plan = ec.plan
+        size, surface, spec = plan.size, plan.surface, plan.gutter_spec
+        if surface:
             prog = ec.program("texel_coverage")
             ec.bind(prog, "surface_p", surface)
-            cover = ec.scratch(TexSpec((size, size), 1, "f1", filter="nearest"))
+            cover = ec.scratch(plan.cover)
             ec.draw_fullscreen(prog, cover)
         else:
             cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
-        spec = gutter_spec(size)
         # the CPU tables depend on the mesh and the coverage only: kept on the scene, so a forced
         # re-run or a second technique at the same size only uploads them
         cache = ec.scene.__dict__.setdefault("_texel_tables", {})
@@ -71,11 +74,11 @@ class GutterMapPass(Pass):
             cache[("gutter",) + key] = stored_table(
                 ["gutter", spec.components], covered, ((size, size, spec.components), dtype),
                 lambda: gutter_table(covered)[..., :spec.components].astype(dtype)).tobytes()
-        ec.output(gutter_resource(size)).write(cache[("gutter",) + key])
+        ec.output(plan.gutter).write(cache[("gutter",) + key])
 
-        if ec.setting("scene.seam_aware"):
+        if plan.seam:
             if ("seam",) + key not in cache:
-                pos = ec.input(surface) if texels else rasterize_unwrapped(ec, ec.program("uv_position"), size)
+                pos = ec.input(surface) if surface else rasterize_unwrapped(ec, ec.program("uv_position"), size)
                 pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
                 sc = ec.scene
                 m = sc.mesh
@@ -83,7 +86,7 @@ class GutterMapPass(Pass):
                     ["seam", SEAM_REACH_TEXELS, float(sc.mm_per_unit), float(sc.mean_uv_per_mm)],
                     (covered, pos, m.positions, m.uvs, m.indices), ((size, size, 4), np.float32),
                     lambda: seam_map(covered, sc, pos)).tobytes()
-            ec.output(seam_resource(size)).write(cache[("seam",) + key])
+            ec.output(plan.seam).write(cache[("seam",) + key])
 
 
 TABLES_VERSION = 1  # bump when gutter_table or seam_map change what they compute
@@ -222,22 +225,22 @@ class TexelSurfacePass(Pass):
             return
         n = self.size_of(r)
         env = _env_vis_defines(r)
+        from skinviewer.passes.environment import ENV_FIELDS, env_index
         if env:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
-            from skinviewer.passes.environment import ENV_FIELDS, env_index
             r.section(f"lights.{env_index(r)}", ENV_FIELDS)
         r.program("texel_surface", **env)
-        for res in texel_surface_resources(n, self.maps + ("v" if env else "")):
+        maps = texel_surface_resources(n, self.maps + ("v" if env else ""))
+        r.plan(environment=env_index(r) if env else None, maps=maps)
+        for res in maps:
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         # a fragment output without an attachment is discarded: the program is the same for any maps
-        env = _env_vis_defines(ec)
         prog = ec.program("texel_surface")
-        if env:
+        if ec.plan.environment is not None:
             from skinviewer.passes.environment import set_environment
             set_environment(ec, prog, specular=False)  # the transfer vectors' radiance (and env_rays)
-        ec.draw_mesh(prog,
-                     *texel_surface_resources(self.size_of(ec), self.maps + ("v" if env else "")), depth_test=False)
+        ec.draw_mesh(prog, *ec.plan.maps, depth_test=False)
 
 
 def _env_vis_defines(r) -> dict[str, int]:
@@ -261,13 +264,25 @@ def shading_program(r, base: str) -> str:
     return f"{base}_texels" if texel_shading(r) else base
 
 
+@dataclass(frozen=True)
+class Shading:
+    """How a texture-space shading pass shades this frame: declare_shaded decides it (planned as
+    ``shading``), execute reads ``ec.plan.shading`` (its program) and shade_dilated the rest."""
+    program: str  # shading_program(r, base)
+    size: int  # the map's side in texels
+    texels: bool  # over the texel surface map (texel_shading), else the mesh unwrapped
+    maps: str = ""  # the texel surface maps the program reads (TEXEL_SURFACE_MAPS, + "v": the environment's)
+
+
 def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: TexSpec,
                    maps: str = TEXEL_SURFACE_MAPS, steps: bool = False, **defines: object) -> None:
     """Declare a texture-space shading pass writing ``resource`` with its gutters filled, whichever
     way it shades (shading_program): declare_unwrapped, plus for the texel path the maps ``maps``
     it reads, TILED and TEXEL_STEPS (the position's change per texel, which only beam footprints
-    need, from the neighbouring texels when a beam light is on, or ``steps``: samples over the texel)."""
+    need, from the neighbouring texels when a beam light is on, or ``steps``: samples over the texel).
+    Plans ``shading`` (a Shading) for execute and shade_dilated."""
     if not texel_shading(r):
+        r.plan(shading=Shading(base, size, False))
         declare_unwrapped(r, base, size, resource, spec, **defines)
         return
     if defines.get("ENV_LIGHT") and int(defines.get("ENV_RAYS", 0)) > 0:  # type: ignore[call-overload]  # the environment's AO per texel
@@ -276,18 +291,19 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
     for res in texel_surface_resources(size, maps):
         r.input(res)
     steps = steps or any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
+    r.plan(shading=Shading(shading_program(r, base), size, True, maps))
     declare_unwrapped(r, shading_program(r, base), size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
 
 
-def shade_dilated(ec, prog, size: int, resource: str, *more: str, maps: str = TEXEL_SURFACE_MAPS) -> None:
-    """Run a pass declared with declare_shaded: unwrap_dilated, or one full-screen draw of ``prog``
-    over the texel surface map (samplers surface_p / surface_n for ``maps``) on the tiles holding
-    island texels, then the same dilation of the gutters."""
-    if not texel_shading(ec):
+def shade_dilated(ec, prog, resource: str, *more: str) -> None:
+    """Run a pass declared with declare_shaded, as it planned (``ec.plan.shading``): unwrap_dilated, or
+    one full-screen draw of ``prog`` over the texel surface map (samplers surface_p / surface_n / surface_v
+    for its maps) on the tiles holding island texels, then the same dilation of the gutters."""
+    shading = ec.plan.shading
+    size, maps = shading.size, shading.maps
+    if not shading.texels:
         unwrap_dilated(ec, prog, size, resource, *more)
         return
-    if ec.has_input(texel_surface_resources(size, "v")[0]):
-        maps += "v"
     for k, res in zip(maps, texel_surface_resources(size, maps)):
         ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
     raws = _raws(ec, size, more)

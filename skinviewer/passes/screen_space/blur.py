@@ -37,14 +37,16 @@ class SeparableScreenBlur(Pass):
             return
         r.input(self.source)
         r.input(DEPTH)
-        r.output(self.output, blur_spec(r))
+        spec = blur_spec(r)
+        r.plan(spec=spec)  # the output's and the held horizontal result's
+        r.output(self.output, spec)
 
     def execute(self, ec) -> None:
         prog = self.program(ec)
         self.set_uniforms(ec, prog)
         # the horizontal result is kept across the pass's bands (issue 27): under the viewer's frame
         # budget each draw runs in row bands, the horizontal one complete before the vertical starts
-        tmp = ec.held("tmp", blur_spec(ec))[0]
+        tmp = ec.held("tmp", ec.plan.spec)[0]
         ec.bind(prog, "depth_tex", DEPTH)
         for d, sub, subs in ec.units(2):
             ec.bind(prog, "source", self.source if d == 0 else tmp)

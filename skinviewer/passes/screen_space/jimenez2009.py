@@ -40,24 +40,23 @@ class SsssBlurPass(SeparableScreenBlur):
         if gaussian_count(r) <= self.i:
             return False
         r.setting("ssss.gaussians")
-        for k in range(self.i + 1):
-            r.setting(f"deon.gaussians.{k}.variance")
+        vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
         r.section("ssss", ("alpha", "beta"))
-        r.setting("camera.fov_y")
-        screen_size(r)
-        r.program("ss_gauss_blur", TAPS=int(r.setting("ssss.taps")))
+        taps = int(r.setting("ssss.taps"))
+        # this step's increment sqrt(v_i - v_(i-1)) (seed 000 eq. 24); the focal length in pixels (eq. 3.2)
+        r.plan(taps=taps, sigma_mm=float(incremental_sigmas(vs)[self.i]),
+               focal=float(focal_px(r.setting("camera.fov_y"), screen_size(r)[1])))
+        r.program("ss_gauss_blur", TAPS=taps)
         return True
 
     def program(self, ec):
         return ec.program("ss_gauss_blur")
 
     def set_uniforms(self, ec, prog) -> None:
-        vs = [ec.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
-        x, w = gaussian_taps(int(ec.setting("ssss.taps")))
+        x, w = gaussian_taps(ec.plan.taps)
         p = ec.section("ssss", ("alpha", "beta"))
-        ec.uniforms(prog, u_x=x, u_w=w, u_sigma_mm=float(incremental_sigmas(vs)[self.i]),
-                    u_alpha=float(p.alpha), u_beta=float(p.beta),
-                    u_focal=float(focal_px(ec.setting("camera.fov_y"), ec.setting("render.height"))))
+        ec.uniforms(prog, u_x=x, u_w=w, u_sigma_mm=ec.plan.sigma_mm, u_alpha=float(p.alpha), u_beta=float(p.beta),
+                    u_focal=ec.plan.focal)
 
 
 class SsssSumPass(Pass):
@@ -72,8 +71,10 @@ class SsssSumPass(Pass):
         r.setting("deon.gaussians")
         r.setting("ssss.gaussians")
         r.input(DIFFUSE)
-        for i in range(n):
-            r.input(blur_resource(i))
+        blurs = tuple(blur_resource(i) for i in range(n))
+        for res in blurs:
+            r.input(res)
+        r.plan(blurs=blurs)
         r.program("ss_gauss_sum")
         r.output(SUM, blur_spec(r))
 
@@ -86,7 +87,7 @@ class SsssSumPass(Pass):
             w[i] = wt
         ec.uniforms(prog, u_w=w, u_count=len(kept))
         ec.bind(prog, "diffuse", DIFFUSE)
-        for i in range(len(kept)):
-            ec.bind(prog, f"blur{i}", blur_resource(i))
+        for i, res in enumerate(ec.plan.blurs[:len(kept)]):
+            ec.bind(prog, f"blur{i}", res)
         with ec.band():
             ec.draw_fullscreen(prog, SUM)

@@ -90,8 +90,10 @@ class ScreenLightingPass(Pass):
         # neighbour's colour across any depth step (every other reader uses texelFetch)
         r.output(DEPTH, TexSpec(size, 4, "f4"))
         r.output(ALBEDO, TexSpec(size, 4, "f2"))
-        for j in range(k):
-            r.output(transmitted_resource(j), TexSpec(size, 4, "f4"))
+        transmitted = tuple(transmitted_resource(j) for j in range(k))
+        for res in transmitted:
+            r.output(res, TexSpec(size, 4, "f4"))
+        r.plan(transmitted=transmitted)  # k = len: the transmittance terms this frame
 
     def execute(self, ec) -> None:
         prog = ec.program("ss_lighting")
@@ -107,17 +109,16 @@ class ScreenLightingPass(Pass):
         ec.uniforms(prog, u_view=gl_bytes(ec.view.view), u_mm_per_unit=float(scene.mm_per_unit),
                     u_mix=float(texturing_exponent(sc.texturing, sc.mix)), u_region_sss=sss,
                     u_has_regions=bool(scene.has_region_map and non_skin))
-        k = transmittance_slots(ec)
-        ec.set(prog, "u_tr", k > 0)
-        if k:
+        transmitted = ec.plan.transmitted
+        ec.set(prog, "u_tr", len(transmitted) > 0)
+        if transmitted:
             inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-            active = [l for l in ec.setting("lights")[:MAX_LIGHTS] if analytic_on(l)]  # the slots of set_lighting
-            for slot, l in enumerate(active):
-                inv[slot] = np.linalg.inv(scene.light_space(l).gl_matrix).T  # column-major
+            lights = ec.setting("lights")
+            for slot, i in enumerate(ec.plan.light_slots):  # the slots of set_lighting (declare_lighting)
+                inv[slot] = np.linalg.inv(scene.light_space(lights[i]).gl_matrix).T  # column-major
             ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
                         u_shadow_map_size=int(ec.setting("shadow.map_size")))
-        draw_view_mesh(ec, prog, DIRECT if k else DIFFUSE, SPECULAR, DEPTH, ALBEDO,
-                       *(transmitted_resource(j) for j in range(k)))
+        draw_view_mesh(ec, prog, DIRECT if transmitted else DIFFUSE, SPECULAR, DEPTH, ALBEDO, *transmitted)
 
 
 class ScreenTransmittancePass(Pass):
@@ -145,14 +146,17 @@ class ScreenTransmittancePass(Pass):
             r.skip("no transmittance (transmittance.enabled off, or no light casts a shadow)")
             return
         r.section("transmittance", ("translucency", "form"))
-        if self._burley_model(r):
+        model = self._burley_model(r)
+        if model:
             r.section("burley", B.PROFILE_FIELDS)
         else:
             r.setting(self.transmittance_profile)
         r.program("ss_transmittance", TR_TARGETS=k)
         r.input(DIRECT)
-        for j in range(k):
-            r.input(transmitted_resource(j))
+        transmitted = tuple(transmitted_resource(j) for j in range(k))
+        for res in transmitted:
+            r.input(res)
+        r.plan(model=model, transmitted=transmitted)
         r.output(DIFFUSE, TexSpec(screen_size(r), 4, "f4"))
 
     def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
@@ -160,12 +164,11 @@ class ScreenTransmittancePass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("ss_transmittance")
-        k = transmittance_slots(ec)
         ec.bind(prog, "direct", DIRECT)
-        for j in range(k):
-            ec.bind(prog, f"transmitted{j}", transmitted_resource(j))
+        for j, res in enumerate(ec.plan.transmitted):
+            ec.bind(prog, f"transmitted{j}", res)
         tr = ec.section("transmittance", ("translucency", "form"))
-        model = self._burley_model(ec)
+        model = ec.plan.model
         gs = [] if model else self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
         w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         v = np.zeros(MAX_GAUSSIANS, np.float32)

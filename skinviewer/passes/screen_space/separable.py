@@ -25,8 +25,8 @@ class SeparableBlurPass(SeparableScreenBlur):
 
     def declare(self, r) -> bool:
         sp = r.section("separable", FIELDS)
-        r.setting("camera.fov_y")
-        screen_size(r)
+        # the tap spacing's focal length in pixels (eq. 3.2's stretch)
+        r.plan(focal=float(focal_px(r.setting("camera.fov_y"), screen_size(r)[1])), taps=int(sp.taps))
         r.program("ss_separable_blur", TAPS=int(sp.taps))
         return True
 
@@ -35,9 +35,9 @@ class SeparableBlurPass(SeparableScreenBlur):
 
     def set_uniforms(self, ec, prog) -> None:
         sp = ec.section("separable", FIELDS)
-        k, x = separable_kernel(int(sp.taps), sp.strength, sp.falloff)
+        k, x = separable_kernel(ec.plan.taps, sp.strength, sp.falloff)
         ec.uniforms(prog, u_k=k, u_x=x, u_width_mm=float(sp.width_mm),
-                    u_focal=float(focal_px(ec.setting("camera.fov_y"), ec.setting("render.height"))),
+                    u_focal=ec.plan.focal,
                     u_follow=bool(sp.follow_surface), u_follow_mm=float(sp.follow_surface_mm),
                     u_rotate=bool(sp.rotation and sp.rotation_fraction > 0),
                     u_rot_fraction=float(sp.rotation_fraction))
