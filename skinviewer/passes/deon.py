@@ -532,7 +532,7 @@ class GaussianBlurPass(Pass):
         if stretch:
             ec.bind(prog, "stretch_map", STRETCH)
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
-            ec.clear_unwritten(self._output(), (id(ec.scene), n, DILATE_RING))
+            ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():
             ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
 
@@ -620,7 +620,7 @@ class GaussianBlurPass(Pass):
             src = tmp2
         ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
-            ec.clear_unwritten(self._output(), (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
+            ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
         for d, sub, subs in ec.units(len(draws)):
             program, values, source, target, where = draws[d]
             for name, value in values.items():

@@ -117,7 +117,7 @@ class ScreenLightingPass(Pass):
             for slot, i in enumerate(ec.plan.light_slots):  # the slots of set_lighting (declare_lighting)
                 inv[slot] = np.linalg.inv(scene.light_space(lights[i]).gl_matrix).T  # column-major
             ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
-                        u_shadow_map_size=int(ec.setting("shadow.map_size")))
+                        u_shadow_map_size=int(ec.plan.shadow_map_size))  # the map as made (shadow.map_size_mode auto)
         draw_view_mesh(ec, prog, DIRECT if transmitted else DIFFUSE, SPECULAR, DEPTH, ALBEDO, *transmitted)
 
 
