@@ -21,6 +21,20 @@ def small_settings(scene: str = "head", technique: str = "phong", size: int = 96
     return with_values(Settings(), values)
 
 
+def flat_grid(n: int = 12, half: float = 10.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A flat n x n vertex grid in z = 0 over [-half, half]^2 (x fastest), normals +z, two
+    counter-clockwise triangles per cell: positions, normals, triangle indices."""
+    xs = np.linspace(-half, half, n)
+    x, y = np.meshgrid(xs, xs)
+    P = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], 1)
+    idx = []
+    for j in range(n - 1):
+        for i in range(n - 1):
+            a = j * n + i
+            idx += [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]
+    return P, np.tile([0.0, 0.0, 1.0], (n * n, 1)), np.array(idx)
+
+
 def assert_all_finite(renderer, settings: Settings, report=None) -> dict[str, np.ndarray]:
     """Render (unless a report is given) and check every texture the graph holds is finite.
     Returns the textures by name for further checks."""

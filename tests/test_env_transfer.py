@@ -11,17 +11,11 @@ import pytest
 
 from skinviewer.ground.paths import shaders_dir
 from skinviewer.physics import environment as env
+from tests.helpers import flat_grid
 
 
 def _grid(n=12, size=20.0):
-    xs = np.linspace(-size / 2, size / 2, n)
-    P = np.array([(x, y, 0.0) for y in xs for x in xs])
-    idx = []
-    for j in range(n - 1):
-        for i in range(n - 1):
-            a = j * n + i
-            idx += [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]
-    return P, np.tile([0.0, 0.0, 1.0], (n * n, 1)), np.array(idx)
+    return flat_grid(n, size / 2.0)  # a flat grid size wide (tests/helpers.py)
 
 
 def _hemisphere_quadrature(visible, n_theta=400, n_phi=800):

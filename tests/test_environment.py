@@ -18,7 +18,7 @@ from skinviewer.scene.environment import (
     environment_image,
     load_environment_file,
 )
-from tests.helpers import small_settings
+from tests.helpers import flat_grid, small_settings
 
 RNG = np.random.default_rng(7)
 
@@ -102,14 +102,7 @@ def test_prefiltered_specular_keeps_a_white_environment_and_blurs_with_m():
 # -- ambient occlusion ---------------------------------------------------------------------------
 
 def _grid(n=12, size=10.0):
-    x, y = np.meshgrid(np.linspace(-size, size, n), np.linspace(-size, size, n))
-    P = np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], 1)
-    idx = []
-    for j in range(n - 1):
-        for i in range(n - 1):
-            a = j * n + i
-            idx += [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]
-    return P, np.tile([0.0, 0.0, 1.0], (n * n, 1)), np.array(idx)
+    return flat_grid(n, size)  # a flat grid over [-size, size]^2 (tests/helpers.py)
 
 
 def test_ao_of_a_plane_is_one():
