@@ -35,6 +35,22 @@ def flat_grid(n: int = 12, half: float = 10.0) -> tuple[np.ndarray, np.ndarray, 
     return P, np.tile([0.0, 0.0, 1.0], (n * n, 1)), np.array(idx)
 
 
+def first_gathered_step(renderer, s: Settings, n: int):
+    """Render ``s`` (d'Eon, irradiance maps of ``n``^2) and return its graph, the mean texel (mm) and
+    the first blur step that is not reused: it must be summed over the surface straight from the
+    irradiance (deon.surface_gather_below_texels), which the callers check against numpy."""
+    from skinviewer.passes.deon import mean_texel_mm
+    from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels
+    renderer.render(s)
+    g = renderer.graph("deon")
+    texel = mean_texel_mm(renderer.scene.gpu, n)
+    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels, texel,
+                            s.deon.fold_below_texels)
+    step = next(st for st in plan if not st.reused)
+    assert step.source == IRRADIANCE and np.sqrt(step.increment) <= s.deon.surface_gather_below_texels * texel
+    return g, texel, step
+
+
 def assert_all_finite(renderer, settings: Settings, report=None) -> dict[str, np.ndarray]:
     """Render (unless a report is given) and check every texture the graph holds is finite.
     Returns the textures by name for further checks."""

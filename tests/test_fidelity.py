@@ -6,7 +6,7 @@ import math
 import analytic_judge as A
 import numpy as np
 import pytest
-from helpers import small_settings
+from helpers import first_gathered_step, small_settings
 
 from skinviewer.ground.settings import with_values
 from skinviewer.scene.scenes import build_scene
@@ -668,19 +668,13 @@ def test_surface_gather_shader_agrees_with_its_numpy_twin(renderer):
     """deon_gather_blocks.frag + deon_surface_gather.frag against physics/surface_gather.py on the
     default head at 256^2 (seams, folds, lips and ears; the first blur, straight from the
     irradiance): the island texels agree within 1e-4 of the largest (measured: 2e-6)."""
-    from skinviewer.passes.deon import GATHER_SURFACE, STRETCH, mean_texel_mm
+    from skinviewer.passes.deon import GATHER_SURFACE, STRETCH
     from skinviewer.passes.texture_space import gutter_resource, seam_resource
-    from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels, blur_resource
+    from skinviewer.physics.diffusion import IRRADIANCE, blur_resource
     from skinviewer.physics.surface_gather import gather_blocks_for, surface_gather
     n = 256
     s = small_settings("head", "deon", 32, **{"deon.irradiance_size": n, "deon.tsm": False, "deon.subpixel_kernel_px": 0.0})
-    renderer.render(s)
-    g = renderer.graph("deon")
-    texel = mean_texel_mm(renderer.scene.gpu, n)
-    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels, texel,
-                            s.deon.fold_below_texels)
-    step = next(st for st in plan if not st.reused)
-    assert step.source == IRRADIANCE and np.sqrt(step.increment) <= s.deon.surface_gather_below_texels * texel
+    g, texel, step = first_gathered_step(renderer, s, n)
     gut = g.read(gutter_resource(n)).astype(np.float64)
     E = _seam_filled(g.read(IRRADIANCE).astype(np.float64), g.read(seam_resource(n)).astype(np.float64))
     got = g.read(blur_resource(step.index)).astype(np.float64)

@@ -13,6 +13,7 @@ from scipy.special import ndtr
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics.open_border import chain_on_segment, past_border_light
 from skinviewer.scene.scenes import scene_overrides
+from tests.helpers import first_gathered_step
 
 G = Settings().deon.gaussians
 V = np.array([g.variance for g in G])
@@ -175,20 +176,14 @@ def test_the_summed_steps_rim_share_agrees_with_its_numpy_twin(renderer):
     reads 5.8 % of the lit level too bright)."""
     from scipy.ndimage import map_coordinates
 
-    from skinviewer.passes.deon import GATHER_SURFACE, STRETCH, border_resource, mean_texel_mm
+    from skinviewer.passes.deon import GATHER_SURFACE, STRETCH, border_resource
     from skinviewer.passes.texture_space import gutter_resource, seam_resource
-    from skinviewer.physics.diffusion import IRRADIANCE, blur_plan_texels, blur_resource
+    from skinviewer.physics.diffusion import IRRADIANCE, blur_resource
     from skinviewer.physics.open_border import rim_share
     from skinviewer.physics.surface_gather import gather_blocks_for, surface_gather
     n = 512
     s = _slab(n, "reflect")
-    renderer.render(s)
-    g = renderer.graph("deon")
-    texel = mean_texel_mm(renderer.scene.gpu, n)
-    plan = blur_plan_texels([x.variance for x in s.deon.gaussians], s.deon.reuse_irradiance_below_texels, texel,
-                            s.deon.fold_below_texels)
-    step = next(st for st in plan if not st.reused)
-    assert step.source == IRRADIANCE and np.sqrt(step.increment) <= s.deon.surface_gather_below_texels * texel
+    g, texel, step = first_gathered_step(renderer, s, n)
     E = g.read(IRRADIANCE).astype(np.float64)
     seam = g.read(seam_resource(n)).astype(np.float64)
     filled = np.array(E)  # seam_fill.frag (light): across a seam the value there, past a border the edge's share
