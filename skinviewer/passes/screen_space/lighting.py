@@ -64,14 +64,10 @@ class ScreenLightingPass(Pass):
     """Diffuse (x albedo^f), specular, linear depth + gradient, SSS mask and the post-scatter
     albedo, from the camera; with the transmittance on, per shadow-casting light its thickness and
     weight, and the diffuse goes to ss_diffuse_direct (ScreenTransmittancePass adds T(d) into
-    ss_diffuse). ``transmittance_profile``/``burley``: ScreenTransmittancePass's (kept alike)."""
+    ss_diffuse); the profile is ScreenTransmittancePass's alone."""
     name = "ss_lighting"
     view_dependent = True
     tileable = True  # one view-mesh draw (four targets): in row bands under a frame budget (issue 27)
-
-    def __init__(self, transmittance_profile: str = "deon.gaussians", burley: bool = False):
-        self.transmittance_profile = transmittance_profile
-        self.burley = burley  # the Burley techniques: burley.transmission picks Burley's T(t) (spec §5.4)
 
     def reflect(self, r: Reflection) -> None:
         defines = {**declare_lighting(r), **declare_environment(r)}
@@ -187,4 +183,4 @@ class ScreenTransmittancePass(Pass):
 def screen_lighting(transmittance_profile: str = "deon.gaussians", burley: bool = False) -> list[Pass]:
     """The screen-space techniques' lighting: ScreenLightingPass and, when the transmittance is on,
     ScreenTransmittancePass (which writes ss_diffuse then)."""
-    return [ScreenLightingPass(transmittance_profile, burley), ScreenTransmittancePass(transmittance_profile, burley)]
+    return [ScreenLightingPass(), ScreenTransmittancePass(transmittance_profile, burley)]
