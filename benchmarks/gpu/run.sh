@@ -19,7 +19,7 @@ OUT=$(cd "$OUT" && pwd)
 exec > >(tee -a "$OUT/run.log") 2>&1
 T0=$(date +%s)
 # STEPS: which of renders, frames, suite, truth, calibrate, diag to run (default all but diag)
-STEPS=${STEPS:-renders frames suite truth calibrate}
+STEPS=${STEPS:-renders frames calibrate suite truth}
 want() { [[ " $STEPS " == *" $1 "* ]]; }
 stamp() { echo "== $(( $(date +%s) - T0 )) s: $*"; }
 # the whole run fits in RUN_SECONDS (default 520: a 10-minute call with the machine's start): each
@@ -62,6 +62,12 @@ if [ "$LIGHT" = "--light" ]; then SIZE=128; W=320; H=180; REPS=2; TSIZE=96x96; F
 want renders && stamp "renders and parity" && timeout "$(cap 120)" python3 benchmarks/gpu/gpu_check.py renders --out "$OUT" --size $SIZE $( [ "$SIZE" = 256 ] && echo --ref .gpuref/renders.npz )
 
 want frames && stamp "frames, ratios, memory" && timeout "$(cap 240)" python3 benchmarks/gpu/gpu_check.py frames --out "$OUT" --width $W --height $H --repeats $REPS "${FRAMES_EXTRA[@]}"
+
+if want calibrate; then
+    # the quality governor's calibration of this GPU (issue 27): shipped for exactly this renderer
+    stamp "governor calibration"
+    timeout "$(cap 120)" python3 -m skinviewer calibrate --runs 3 && cp "$SKINVIEWER_CACHE"/calibration/*.json "$OUT/calibration.json"
+fi
 
 if want suite; then
 stamp "headless test suite"
@@ -111,11 +117,6 @@ s0=$(date +%s.%N)
 
 fi
 
-if want calibrate; then
-    # the quality governor's calibration of this GPU (issue 27): shipped for exactly this renderer
-    stamp "governor calibration"
-    timeout "$(cap 120)" python3 -m skinviewer calibrate --runs 3 && cp "$SKINVIEWER_CACHE"/calibration/*.json "$OUT/calibration.json"
-fi
 
 if want diag; then
     stamp "diagnostics"
