@@ -169,3 +169,30 @@ def test_vertex_curvature_of_one_bent_triangle_by_hand():
     k01, k12, k02 = math.sqrt(0.4), math.sqrt(0.4) / math.sqrt(2.0), 0.0
     got = penner.vertex_curvature(p, nrm, np.array([[0, 1, 2]]), 2.0)  # 2 mm per unit: halves every k
     np.testing.assert_allclose(got, [(k01 + k02) / 4, (k01 + k12) / 4, (k12 + k02) / 4], rtol=1e-6)
+
+
+def _lit_and_ss_diffuse(renderer, technique: str, scene: str, **assign):
+    s = small_settings(scene, technique, 96, **{"deon.energy_conservation": False, "screen.texturing": "pre",
+                                                 **assign})
+    renderer.render(s)
+    g = renderer.graph(technique)
+    return g.read("lit" if technique == "penner" else "ss_diffuse").astype(np.float64)[..., :3]
+
+
+@pytest.mark.parametrize("translucency", [0.0, 0.5])
+def test_transmittance_through_the_ear_is_the_screen_space_techniques_own(renderer, translucency):
+    """A back-lit ear glows in pre-integrated skin (it was black): Jimenez 2010's transmittance through
+    the same lib/tr_thickness.glsl and lib/tr_profile.glsl as ssss, so what the transmittance adds to
+    Penner's image equals what it adds to ssss's pre-blur diffuse (pre-scatter texturing, no rho_dt:
+    both are albedo x the transmitted light)."""
+    def added(t):
+        on = _lit_and_ss_diffuse(renderer, t, "backlit-ear", **{"transmittance.translucency": translucency})
+        off = _lit_and_ss_diffuse(renderer, t, "backlit-ear", **{"transmittance.enabled": False})
+        return on - off
+    pen, ss = added("penner"), added("ssss")
+    lit = ss.max(axis=-1) > 1e-3
+    assert lit.sum() > 500  # the ear transmits over many pixels
+    assert np.isfinite(pen).all() and pen.min() > -1e-3
+    # penner's lit is half-float: 2^-11 relative, plus its rounding of the 'off' image
+    assert np.abs(pen - ss)[lit].max() <= 2e-3 * ss.max() + 1e-3 * np.abs(ss)[lit].max()
+    assert (pen[~lit] < 1e-3).all()  # no light from nowhere where ssss transmits none

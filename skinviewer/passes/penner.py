@@ -3,7 +3,8 @@ profile in use (physics/penner.py), and one pass that shades the mesh from the c
 
     penner_luts   ring_lut, penumbra_lut,  deon.gaussians, penner.*      (no scene, no camera)
                   penner_env_bands
-    penner        lit                      lights, shadow maps, LUTs, specular, rho_dt
+    penner        lit                      lights, shadow maps, LUTs, specular, rho_dt, and with
+                                           transmittance.enabled Jimenez 2010's transmittance
 """
 from __future__ import annotations
 
@@ -26,12 +27,25 @@ from skinviewer.passes.common import (
 )
 from skinviewer.passes.environment import declare_environment, set_environment
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
+from skinviewer.passes.rules import analytic_on
+from skinviewer.passes.transmittance import declare_profile, set_profile_uniforms, set_thickness_uniforms
 from skinviewer.physics import penner
 
 RING_LUT = "ring_lut"
 PENUMBRA_LUT = "penumbra_lut"
 ENV_BANDS_LUT = "penner_env_bands"  # the environment's SH band weights per curvature (physics/penner.env_band_factors)
 LUT_FIELDS = ("lut_size", "max_curvature", "penumbra_max_mm")
+PROFILE = "deon.gaussians"  # the profile in use: the tables' and the transmittance's
+
+
+def transmits(r, env: dict[str, int]) -> bool:
+    """Whether the transmittance has something to carry: transmittance.enabled and a shadow-casting
+    light (the thickness is its shadow map's) or an environment with its visibility bake (the baked
+    thickness along -N)."""
+    if not r.setting("transmittance.enabled"):
+        return False
+    return (any(analytic_on(l) and l.cast_shadow for l in r.setting("lights"))
+            or env.get("ENV_RAYS", 0) > 0)
 
 
 def profile(gaussians) -> tuple[tuple[float, tuple[float, float, float]], ...]:
@@ -88,7 +102,12 @@ class PennerPass(Pass):
         env = declare_environment(r)
         if env:
             r.input(ENV_BANDS_LUT)
-        declare_lit(r, "penner", **lighting, **env)
+        tr = transmits(r, env)
+        if tr:  # Jimenez 2010 through thin parts, the profile in use (as ssss and separable)
+            r.setting("transmittance.wrap")
+            declare_profile(r, PROFILE, 0)
+        r.plan(transmittance=tr)
+        declare_lit(r, "penner", **lighting, **env, PENNER_TR=int(tr))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
@@ -113,4 +132,7 @@ class PennerPass(Pass):
                     u_curvature_scale=float(p.curvature_scale) / float(p.max_curvature),
                     u_penumbra_scale=float(ec.scene.mm_per_unit) / float(p.penumbra_max_mm),
                     u_penumbra_texels=float(2 * pcf + 1))
+        if ec.plan.transmittance:
+            set_thickness_uniforms(ec, prog)
+            set_profile_uniforms(ec, prog, PROFILE, 0)
         draw_view_mesh(ec, prog, LIT)

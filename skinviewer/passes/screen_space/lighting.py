@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
+from skinviewer.ground.constants import MAX_LIGHTS, REGIONS
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
 from skinviewer.passes.common import (
     bind_specular,
@@ -17,9 +17,8 @@ from skinviewer.passes.common import (
 )
 from skinviewer.passes.environment import declare_environment, env_defines, set_environment
 from skinviewer.passes.rules import analytic_on
-from skinviewer.physics import burley as B
+from skinviewer.passes.transmittance import declare_profile, set_profile_uniforms, set_thickness_uniforms
 from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
-from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
 from skinviewer.scene.camera import gl_bytes
 
 DIFFUSE = "ss_diffuse"
@@ -108,12 +107,7 @@ class ScreenLightingPass(Pass):
         transmitted = ec.plan.transmitted
         ec.set(prog, "u_tr", len(transmitted) > 0)
         if transmitted:
-            inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-            lights = ec.setting("lights")
-            for slot, i in enumerate(ec.plan.light_slots):  # the slots of set_lighting (declare_lighting)
-                inv[slot] = np.linalg.inv(scene.light_space(lights[i]).gl_matrix).T  # column-major
-            ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
-                        u_shadow_map_size=int(ec.plan.shadow_map_size))  # the map as made (shadow.map_size_mode auto)
+            set_thickness_uniforms(ec, prog)
         draw_view_mesh(ec, prog, DIRECT if transmitted else DIFFUSE, SPECULAR, DEPTH, ALBEDO, *transmitted)
 
 
@@ -141,12 +135,8 @@ class ScreenTransmittancePass(Pass):
         if not k:
             r.skip("no transmittance (transmittance.enabled off, or no light casts a shadow)")
             return
-        r.section("transmittance", ("translucency", "form"))
         model = self._burley_model(r)
-        if model:
-            r.section("burley", B.PROFILE_FIELDS)
-        else:
-            r.setting(self.transmittance_profile)
+        declare_profile(r, self.transmittance_profile, model)
         r.program("ss_transmittance", TR_TARGETS=k)
         r.input(DIRECT)
         transmitted = tuple(transmitted_resource(j) for j in range(k))
@@ -155,27 +145,12 @@ class ScreenTransmittancePass(Pass):
         r.plan(model=model, transmitted=transmitted)
         r.output(DIFFUSE, TexSpec(screen_size(r), 4, "f4"))
 
-    def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
-        return [(float(g.variance), tuple(g.weights)) for g in ec.setting(self.transmittance_profile)]
-
     def execute(self, ec) -> None:
         prog = ec.program("ss_transmittance")
         ec.bind(prog, "direct", DIRECT)
         for j, res in enumerate(ec.plan.transmitted):
             ec.bind(prog, f"transmitted{j}", res)
-        tr = ec.section("transmittance", ("translucency", "form"))
-        model = ec.plan.model
-        gs = [] if model else self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
-        w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
-        v = np.zeros(MAX_GAUSSIANS, np.float32)
-        for i, (var, wt) in enumerate(gs):
-            w[i], v[i] = wt, var
-        if model:  # Burley: the shadow-map thickness in mm, S = 1/d per channel (spec §5.4)
-            S = B.profile_of_section(ec.section("burley", B.PROFILE_FIELDS)).S
-            ec.uniforms(prog, u_tr_model=model, u_tr_S=tuple(float(x) for x in S), u_tr_scale=1.0)
-        else:  # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
-            ec.uniforms(prog, u_tr_model=0, u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM))
-        ec.uniforms(prog, u_tr_w=w, u_tr_v=v, u_tr_count=len(gs), u_tr_div=1.0 if tr.form == "printed" else 2.0)
+        set_profile_uniforms(ec, prog, self.transmittance_profile, ec.plan.model)
         with ec.band():
             ec.draw_fullscreen(prog, DIFFUSE)
 
