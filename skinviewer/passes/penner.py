@@ -11,7 +11,7 @@ import functools
 
 import numpy as np
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     LIT,
     bind_specular,
@@ -31,7 +31,6 @@ from skinviewer.physics import penner
 RING_LUT = "ring_lut"
 PENUMBRA_LUT = "penumbra_lut"
 ENV_BANDS_LUT = "penner_env_bands"  # the environment's SH band weights per curvature (physics/penner.env_band_factors)
-LUT_FIELDS = ("lut_size", "max_curvature", "penumbra_max_mm")
 
 
 def profile(gaussians) -> tuple[tuple[float, tuple[float, float, float]], ...]:
@@ -54,15 +53,17 @@ class PennerLutPass(Pass):
     uses_scene = False
 
     def reflect(self, r: Reflection) -> None:
-        r.setting("deon.gaussians")
-        n = r.section("penner", LUT_FIELDS).lut_size
+        declare(r.settings.deon.gaussians)
+        p = r.settings.penner
+        n = p.lut_size
+        declare(p.max_curvature, p.penumbra_max_mm)
         r.output(RING_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
         r.output(PENUMBRA_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
         r.output(ENV_BANDS_LUT, TexSpec((3, n), 3, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
-        p = ec.section("penner", LUT_FIELDS)
-        ring, pen, bands = _tables(profile(ec.setting("deon.gaussians")), int(p.lut_size), float(p.max_curvature),
+        p = ec.settings.penner
+        ring, pen, bands = _tables(profile(whole(ec.settings.deon.gaussians)), int(p.lut_size), float(p.max_curvature),
                                    float(p.penumbra_max_mm))
         for name, data in ((RING_LUT, ring), (PENUMBRA_LUT, pen), (ENV_BANDS_LUT, bands)):
             tex = ec.output(name)
@@ -79,11 +80,12 @@ class PennerPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         declare_specular(r)
-        r.section("penner", ("max_curvature", "curvature_scale", "penumbra", "penumbra_max_mm"))
+        p = r.settings.penner
+        declare(p.max_curvature, p.curvature_scale, p.penumbra, p.penumbra_max_mm)
         r.input(RING_LUT)
-        if r.setting("penner.penumbra"):
+        if p.penumbra:
             r.input(PENUMBRA_LUT)
-        if r.setting("deon.energy_conservation"):
+        if r.settings.deon.energy_conservation:
             r.input(RHO_DT_RESOURCE)
         env = declare_environment(r)
         if env:
@@ -93,7 +95,7 @@ class PennerPass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("penner")
-        p = ec.section("penner", ("max_curvature", "curvature_scale", "penumbra", "penumbra_max_mm"))
+        p = ec.settings.penner
         set_camera(ec, prog)
         bind_surface(ec, prog)
         bind_specular(ec, prog)
@@ -108,7 +110,7 @@ class PennerPass(Pass):
         energy = ec.has_input(RHO_DT_RESOURCE)
         if energy:
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-        pcf = int(ec.setting("shadow.pcf"))
+        pcf = int(ec.settings.shadow.pcf)
         ec.uniforms(prog, u_energy=energy, u_penumbra=penumbra,
                     u_curvature_scale=float(p.curvature_scale) / float(p.max_curvature),
                     u_penumbra_scale=float(ec.scene.mm_per_unit) / float(p.penumbra_max_mm),

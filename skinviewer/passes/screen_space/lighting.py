@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS, REGIONS
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     bind_specular,
     bind_surface,
@@ -42,17 +42,22 @@ def transmittance_slots(r) -> int:
     the environment's translucency (issue 32: its back-side irradiance at the baked thickness; when
     the environment has its visibility bake), at most TR_SLOTS (declares transmittance.enabled and
     the lights); 0: the transmittance is off or nothing comes through."""
-    if not r.setting("transmittance.enabled"):
+    if not r.settings.transmittance.enabled:
         return 0
-    n = sum(1 for l in r.setting("lights")[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
+    n = sum(1 for l in whole(r.settings.lights)[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
     if env_defines(r).get("ENV_RAYS", 0) > 0:
         n += 1
     return min(n, TR_SLOTS)
 
 
+def deon_gaussians(settings):
+    """The profile the screen-space transmittance uses by default: ``deon.gaussians``."""
+    return settings.deon.gaussians
+
+
 def screen_size(r) -> tuple[int, int]:
     """The render size (declares render.width/height)."""
-    return int(r.setting("render.width")), int(r.setting("render.height"))
+    return int(r.settings.render.width), int(r.settings.render.height)
 
 
 def texturing_exponent(texturing: str, mix: float) -> float:
@@ -72,10 +77,11 @@ class ScreenLightingPass(Pass):
     def reflect(self, r: Reflection) -> None:
         defines = {**declare_lighting(r), **declare_environment(r)}
         declare_specular(r)
-        r.section("screen", ("texturing", "mix", "non_skin_regions"))
+        sc = r.settings.screen
+        declare(sc.texturing, sc.mix, sc.non_skin_regions)
         k = transmittance_slots(r)
         if k:  # the thickness and weights here; the profile in ScreenTransmittancePass
-            r.setting("transmittance.wrap")
+            declare(r.settings.transmittance.wrap)
         size = screen_size(r)
         r.program("ss_lighting", TR_TARGETS=k, **defines)
         declare_view_mesh(r)
@@ -99,7 +105,7 @@ class ScreenLightingPass(Pass):
         set_lighting(ec, prog)
         set_environment(ec, prog)
         bind_specular(ec, prog)
-        sc = ec.section("screen", ("texturing", "mix", "non_skin_regions"))
+        sc = ec.settings.screen
         non_skin = set(sc.non_skin_regions)
         sss = np.array([0.0 if name in non_skin else 1.0 for name in REGIONS], np.float32)
         ec.uniforms(prog, u_view=gl_bytes(ec.view.view), u_mm_per_unit=float(scene.mm_per_unit),
@@ -109,10 +115,10 @@ class ScreenLightingPass(Pass):
         ec.set(prog, "u_tr", len(transmitted) > 0)
         if transmitted:
             inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-            lights = ec.setting("lights")
+            lights = whole(ec.settings.lights)
             for slot, i in enumerate(ec.plan.light_slots):  # the slots of set_lighting (declare_lighting)
                 inv[slot] = np.linalg.inv(scene.light_space(lights[i]).gl_matrix).T  # column-major
-            ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
+            ec.uniforms(prog, u_tr_wrap=float(ec.settings.transmittance.wrap), u_light_matrix_inv=inv,
                         u_shadow_map_size=int(ec.plan.shadow_map_size))  # the map as made (shadow.map_size_mode auto)
         draw_view_mesh(ec, prog, DIRECT if transmitted else DIFFUSE, SPECULAR, DEPTH, ALBEDO, *transmitted)
 
@@ -121,12 +127,12 @@ class ScreenTransmittancePass(Pass):
     """Jimenez 2010's transmittance profile applied to the lighting pass's thickness and weights
     (seed 001 eq. 3.18, spec §6.2; Burley's T(t) for the Burley techniques, spec §5.4): ss_diffuse =
     the direct diffuse + sum_k weight_k T(thickness_k x scale). A profile, translucency or form edit
-    re-runs this full-screen pass only, not the lighting (issue 27). ``transmittance_profile``: the
-    settings path of the Gaussians (variance mm^2, RGB weights) whose T(d) it uses."""
+    re-runs this full-screen pass only, not the lighting (issue 27). ``transmittance_profile(settings)``:
+    the Gaussians (variance mm^2, RGB weights) whose T(d) it uses, from ``r.settings``/``ec.settings``."""
     name = "ss_transmittance"
     tileable = True  # one full-screen draw: in row bands under a frame budget
 
-    def __init__(self, transmittance_profile: str = "deon.gaussians", burley: bool = False):
+    def __init__(self, transmittance_profile=deon_gaussians, burley: bool = False):
         self.transmittance_profile = transmittance_profile
         self.burley = burley  # the Burley techniques: burley.transmission picks Burley's T(t) (spec §5.4)
 
@@ -134,19 +140,21 @@ class ScreenTransmittancePass(Pass):
         """0: Jimenez 2010's Gaussian T(d); 1: Burley closed form; 2: Burley thick (HDRP)."""
         if not self.burley:
             return 0
-        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.setting("burley.transmission")]
+        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.settings.burley.transmission]
 
     def reflect(self, r: Reflection) -> None:
         k = transmittance_slots(r)
         if not k:
             r.skip("no transmittance (transmittance.enabled off, or no light casts a shadow)")
             return
-        r.section("transmittance", ("translucency", "form"))
+        tr = r.settings.transmittance
+        declare(tr.translucency, tr.form)
         model = self._burley_model(r)
         if model:
-            r.section("burley", B.PROFILE_FIELDS)
+            b = r.settings.burley
+            declare(b.albedo, b.mfp, b.fit, b.scale)  # physics.burley.profile_of_section
         else:
-            r.setting(self.transmittance_profile)
+            declare(self.transmittance_profile(r.settings))
         r.program("ss_transmittance", TR_TARGETS=k)
         r.input(DIRECT)
         transmitted = tuple(transmitted_resource(j) for j in range(k))
@@ -156,14 +164,14 @@ class ScreenTransmittancePass(Pass):
         r.output(DIFFUSE, TexSpec(screen_size(r), 4, "f4"))
 
     def transmittance_gaussians(self, ec) -> list[tuple[float, tuple[float, float, float]]]:
-        return [(float(g.variance), tuple(g.weights)) for g in ec.setting(self.transmittance_profile)]
+        return [(float(g.variance), tuple(g.weights)) for g in whole(self.transmittance_profile(ec.settings))]
 
     def execute(self, ec) -> None:
         prog = ec.program("ss_transmittance")
         ec.bind(prog, "direct", DIRECT)
         for j, res in enumerate(ec.plan.transmitted):
             ec.bind(prog, f"transmitted{j}", res)
-        tr = ec.section("transmittance", ("translucency", "form"))
+        tr = ec.settings.transmittance
         model = ec.plan.model
         gs = [] if model else self.transmittance_gaussians(ec)[:MAX_GAUSSIANS]
         w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
@@ -171,7 +179,7 @@ class ScreenTransmittancePass(Pass):
         for i, (var, wt) in enumerate(gs):
             w[i], v[i] = wt, var
         if model:  # Burley: the shadow-map thickness in mm, S = 1/d per channel (spec §5.4)
-            S = B.profile_of_section(ec.section("burley", B.PROFILE_FIELDS)).S
+            S = B.profile_of_section(ec.settings.burley).S
             ec.uniforms(prog, u_tr_model=model, u_tr_S=tuple(float(x) for x in S), u_tr_scale=1.0)
         else:  # [SEP] SSSSTransmittance: profile distance = 8.25 (1 - translucency) / sssWidth x thickness
             ec.uniforms(prog, u_tr_model=0, u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM))
@@ -180,7 +188,7 @@ class ScreenTransmittancePass(Pass):
             ec.draw_fullscreen(prog, DIFFUSE)
 
 
-def screen_lighting(transmittance_profile: str = "deon.gaussians", burley: bool = False) -> list[Pass]:
+def screen_lighting(transmittance_profile=deon_gaussians, burley: bool = False) -> list[Pass]:
     """The screen-space techniques' lighting: ScreenLightingPass and, when the transmittance is on,
     ScreenTransmittancePass (which writes ss_diffuse then)."""
     return [ScreenLightingPass(), ScreenTransmittancePass(transmittance_profile, burley)]
