@@ -46,7 +46,7 @@ class OutputPass(Pass):
         w, h = rs.width, rs.height
         i, bg = _background_env(r)
         r.plan(env=i, background=ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED if bg else None)
-        if bg:
+        if bg and i is not None:
             e = r.settings.lights[i]
             declare(e.environment, e.layout, e.yaw, e.color, e.intensity)
             r.input(r.planned.background)

@@ -225,11 +225,12 @@ class TexelSurfacePass(Pass):
         n = self.size_of(r)
         env = _env_vis_defines(r)
         from skinviewer.passes.environment import declare_env_fields, env_index
-        if env:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
-            declare_env_fields(r.settings.lights[env_index(r)])
+        i = env_index(r) if env else None
+        if i is not None:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
+            declare_env_fields(r.settings.lights[i])
         r.program("texel_surface", **env)
         maps = texel_surface_resources(n, self.maps + ("v" if env else ""))
-        r.plan(environment=env_index(r) if env else None, maps=maps)
+        r.plan(environment=i, maps=maps)
         for res in maps:
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
