@@ -43,10 +43,6 @@ def _type_name(ann) -> str:
     return getattr(ann, "__name__", str(ann))
 
 
-def _doc_key(path: str) -> str:
-    return ".".join("*" if p.isdigit() else p for p in path.split("."))
-
-
 def rows(model: BaseModel | None = None, prefix: str = "") -> list[dict]:
     """One row per leaf setting of ``model`` (default: the defaults), in declaration order."""
     model = model if model is not None else Settings()

@@ -63,6 +63,7 @@ class ExecuteContext:
         self._scratch: list[moderngl.Texture] = []
         self.draws = 0
         self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
+        self._reads: SettingsNode | None = None  # ec.settings, made on first use
 
     @property
     def plan(self) -> Plan:
@@ -92,7 +93,9 @@ class ExecuteContext:
     def settings(self) -> Settings:
         """The settings, read by attribute (``ec.settings.deon.mix``); each read must have been
         declared in reflect (a ``GraphError`` otherwise)."""
-        return cast("Settings", SettingsNode(self._frame.settings, "", self._check_declared))
+        if self._reads is None:
+            self._reads = SettingsNode(self._frame.settings, "", self._check_declared)
+        return cast("Settings", self._reads)
 
     @property
     def peeked(self) -> Settings:

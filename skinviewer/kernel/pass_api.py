@@ -97,10 +97,30 @@ class Plan(Mapping[str, Any]):
 _T = TypeVar("_T")
 
 
+_FIELDS: dict[type, frozenset[str]] = {}  # a section's field names (model_fields costs ~1 us a read)
+
+
+def _fields(model: type) -> frozenset[str]:
+    names = _FIELDS.get(model)
+    if names is None:
+        names = _FIELDS[model] = frozenset(model.model_fields)  # type: ignore[attr-defined]
+    return names
+
+
+_MODEL: dict[type, bool] = {}  # whether a type is a section (isinstance on pydantic's ABC metaclass is slow)
+
+
+def _is_model(t: type) -> bool:
+    m = _MODEL.get(t)
+    if m is None:
+        m = _MODEL[t] = issubclass(t, BaseModel)
+    return m
+
+
 def _composite(value: Any) -> bool:
     """A settings value read field by field (a section, or a list of sections such as ``lights``)."""
-    return isinstance(value, BaseModel) or (
-        isinstance(value, list) and bool(value) and all(isinstance(v, BaseModel) for v in value))
+    t = type(value)
+    return _is_model(t) or (t is list and bool(value) and _is_model(type(value[0])))
 
 
 class SettingsNode:
@@ -112,17 +132,26 @@ class SettingsNode:
     (``lights.1``). A section (or list of sections) is returned as another node, a field's value as
     itself. The graph keys a pass's cache on what was declared, so passes never name a path in a
     string. Type checkers see ``Settings`` (``Reflection.settings``), so a misspelt field fails there."""
-    __slots__ = ("_value", "_path", "_on_read")
+    __slots__ = ("_value", "_path", "_on_read", "_kids")
+    _value: Any
+    _path: str
+    _on_read: Any
+    _kids: dict[str, SettingsNode]
 
     def __init__(self, value: Any, path: str, on_read: Any):
         object.__setattr__(self, "_value", value)
         object.__setattr__(self, "_path", path)
         object.__setattr__(self, "_on_read", on_read)
+        object.__setattr__(self, "_kids", {})  # the sections under it, made once (the settings are immutable here)
 
     def _child(self, value: Any, part: str) -> Any:
+        kid = self._kids.get(part)
+        if kid is not None:
+            return kid
         path = f"{self._path}.{part}" if self._path else part
         if _composite(value):
-            return SettingsNode(value, path, self._on_read)
+            kid = self._kids[part] = SettingsNode(value, path, self._on_read)
+            return kid
         if self._on_read is not None:
             self._on_read(path)
         return value
@@ -134,19 +163,19 @@ class SettingsNode:
 
     def __getattr__(self, name: str) -> Any:
         v = self._value
-        if name.startswith("_") or not isinstance(v, BaseModel) or name not in type(v).model_fields:
+        if name[0] == "_" or not _is_model(type(v)) or name not in _fields(type(v)):
             raise AttributeError(f"settings '{self._path or '<root>'}' have no field '{name}'")
         return self._child(getattr(v, name), name)
 
     def __getitem__(self, key: int | slice) -> Any:
         v = self._value
-        if not isinstance(v, list):
+        if type(v) is not list:
             raise TypeError(f"settings '{self._path}' are not a list")
+        if type(key) is int and 0 <= key < len(v):
+            return self._child(v[key], str(key))
         if isinstance(key, slice):
             return self._whole()[key]
-        if isinstance(key, bool) or not isinstance(key, int) or not 0 <= key < len(v):
-            raise IndexError(f"settings '{self._path}' have no item {key!r}")
-        return self._child(v[key], str(key))
+        raise IndexError(f"settings '{self._path}' have no item {key!r}")
 
     def __len__(self) -> int:
         if not isinstance(self._value, list):
@@ -209,6 +238,8 @@ class Reflection:
         self.state = state if state is not None else {}  # the graph's memory for shape decisions
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
+        self._reads = SettingsNode(settings, "", self._declare)  # r.settings
+        self._peeks = SettingsNode(settings, "", None)  # r.peeked
 
     def skip(self, reason: str) -> None:
         """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
@@ -248,12 +279,12 @@ class Reflection:
     def settings(self) -> Settings:
         """The settings, read by attribute; every read is declared (``SettingsNode``):
         ``r.settings.deon.mix``, ``r.settings.lights[i].enabled``, ``whole(r.settings.lights[i])``."""
-        return cast(Settings, SettingsNode(self._settings, "", self._declare))
+        return cast(Settings, self._reads)
 
     @property
     def peeked(self) -> Settings:
         """The settings read without declaring them (as ``peek``): only for the graph's shape."""
-        return cast(Settings, SettingsNode(self._settings, "", None))
+        return cast(Settings, self._peeks)
 
     def setting(self, path: str) -> Any:
         """Declare a setting (dotted path) and return its current value (tests and tools; passes
