@@ -69,9 +69,11 @@ GROUPS: dict[str, tuple[list[str], list[str]]] = {
     "physics.engines": (["skinviewer/physics/engines.py"], ["tests/test_exchange.py"]),
     "physics.open_border": (["skinviewer/physics/open_border.py"], ["tests/test_open_border.py"]),
     "kernel.graph": (["skinviewer/kernel/graph.py", "skinviewer/kernel/execute.py", "skinviewer/kernel/pass_api.py"],
-                   ["tests/test_graph.py"]),
-    "ground.settings": (["skinviewer/ground/settings.py"], ["tests/test_settings.py", "tests/test_settings_finite.py",
-                                                        "tests/test_settings_io.py"]),
+                   ["tests/test_graph.py", "tests/test_settings_reads.py"]),
+    # the techniques' sections (their validators) moved to ground/sections/ (issue 28)
+    "ground.settings": (["skinviewer/ground/settings.py", "skinviewer/ground/sections/*.py"],
+                        ["tests/test_settings.py", "tests/test_settings_finite.py", "tests/test_settings_io.py",
+                         "tests/test_sections.py"]),
 }
 
 _SECTION = re.compile(r"^\[tool\.mutmut\]\n(?:(?!\[).*\n?)*", re.MULTILINE)

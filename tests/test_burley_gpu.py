@@ -70,10 +70,9 @@ def test_glsl_matches_the_numpy_reference(harness, variant, plan, assign):
     h = harness(variant, plan)
     a = {**DIRECT, **_mfp(D_RGB), **assign}
     out, stats, cnt = h.run(E, z, mask, **a)
-    from skinviewer.ground.settings import Settings, get_path, with_values
+    from skinviewer.ground.settings import Settings, with_values
     s = with_values(Settings(), a)
-    get = lambda p: get_path(s, p)
-    pl = PB.golubev_plan(get) if variant == "golubev" else PB.two_level_plan(get)
+    pl = PB.golubev_plan(s.burley) if variant == "golubev" else PB.two_level_plan(s.burley2)
     ref = B.blur(E, z, mask, _profile(D_RGB), proj_scale(z.shape[0]), pl.sampling(s.burley.budget))
     agree = np.all(np.abs(out - ref.out) <= 2e-4 * np.maximum(1.0, np.abs(ref.out)), axis=-1)
     assert agree.mean() > 0.995, f"{(~agree).sum()} pixels differ"

@@ -79,7 +79,7 @@ def test_a_plan_is_read_only_and_decided_once():
 
 # -- plan once: no decision taken in both reflect and execute -------------------------------------
 # names that are not planning decisions (builtins, and the settings reads each side declares/reads)
-NOT_DECISIONS = {"setting", "section", "program", "len", "int", "float", "range", "tuple", "get", "enumerate",
+NOT_DECISIONS = {"setting", "section", "whole", "declare", "program", "len", "int", "float", "range", "tuple", "get", "enumerate",
                  "max", "min", "bool", "set", "list", "str", "isinstance", "zip", "sum", "any", "all", "sorted",
                  "dict", "abs", "round"}
 # pass modules still allowed to take a decision in both reflect and execute: module -> {pass class:

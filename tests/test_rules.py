@@ -143,12 +143,12 @@ def test_auto_map_size_follows_coverage_with_hysteresis(renderer):
             return get_path(self._settings, p)
 
     r = R(state)
-    n0 = rules.coverage_size(r, "deon.irradiance_size", "deon.irradiance_size_mode")
+    n0 = rules.coverage_size(r, near.deon.irradiance_size, near.deon.irradiance_size_mode, "irradiance")
     wanted = rules.wanted_map_size(near, g)
     assert n0 >= wanted / rules.HYSTERESIS
     key = next(iter(state))
     state[key] = n0 * 2 if n0 * 2 <= 512 else n0  # as if it was larger: stays inside the band
-    assert rules.coverage_size(r, "deon.irradiance_size", "deon.irradiance_size_mode") == state[key]
+    assert rules.coverage_size(r, near.deon.irradiance_size, near.deon.irradiance_size_mode, "irradiance") == state[key]
 
 
 def test_warm_compiles_the_likely_final_variants(gl_ctx):

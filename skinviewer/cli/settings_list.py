@@ -8,7 +8,7 @@ import typing
 from pydantic import BaseModel
 
 from skinviewer.ground.settings import REGIONS, Settings
-from skinviewer.ui.fielddocs import FIELD_DOCS
+from skinviewer.ui.fielddocs import doc as field_doc
 
 CONVENTIONS = (
     "Conventions: lengths of built-in scenes are millimetres, other meshes are in mesh units "
@@ -43,10 +43,6 @@ def _type_name(ann) -> str:
     return getattr(ann, "__name__", str(ann))
 
 
-def _doc_key(path: str) -> str:
-    return ".".join("*" if p.isdigit() else p for p in path.split("."))
-
-
 def rows(model: BaseModel | None = None, prefix: str = "") -> list[dict]:
     """One row per leaf setting of ``model`` (default: the defaults), in declaration order."""
     model = model if model is not None else Settings()
@@ -61,7 +57,7 @@ def rows(model: BaseModel | None = None, prefix: str = "") -> list[dict]:
             for i, item in enumerate(value):
                 out += rows(item, f"{path}.{i}.")
             continue
-        unit, doc = FIELD_DOCS.get(_doc_key(path), ("", ""))
+        unit, doc = field_doc(path)
         out.append({"key": path, "type": _type_name(info.annotation), "default": value,
                     "range": _bounds(info), "unit": unit, "doc": doc or (info.description or "")})
     return out

@@ -7,11 +7,10 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import (
     BaseModel,
-    ConfigDict,
     Field,
     StrictInt,
     ValidationError,
@@ -22,35 +21,29 @@ from pydantic import (
 from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS, MAX_PCF
 from skinviewer.ground.constants import REGIONS as REGIONS  # re-exported: passes, scenes and the UI import it from here
 from skinviewer.ground.files import FileReadError, atomic_write_text, read_regular_file
+from skinviewer.ground.sections import TECHNIQUE_NAMES, TechniqueSections
+from skinviewer.ground.sections.base import Section as _Model
+from skinviewer.ground.sections.base import Vec3, finite, finite_vec, known_regions
+from skinviewer.ground.sections.burley import BurleySettings as BurleySettings
+from skinviewer.ground.sections.burley2 import Burley2Settings as Burley2Settings
+from skinviewer.ground.sections.deon import DeonSettings as DeonSettings
+from skinviewer.ground.sections.deon import Gaussian as Gaussian
+from skinviewer.ground.sections.deon import profile_warnings as profile_warnings
+from skinviewer.ground.sections.gosselin import GosselinSettings as GosselinSettings
+from skinviewer.ground.sections.gosselin import RegionKernel as RegionKernel
+from skinviewer.ground.sections.penner import PennerSettings as PennerSettings
+from skinviewer.ground.sections.phong import PhongSettings as PhongSettings
+from skinviewer.ground.sections.screen_space import ScreenSettings, TransmittanceSettings
+from skinviewer.ground.sections.separable import SeparableSettings as SeparableSettings
+from skinviewer.ground.sections.ssss import SsssSettings as SsssSettings
 
 SCHEMA_VERSION = 1
 
-Vec3 = tuple[float, float, float]
-
-
-
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", validate_assignment=True)
-
-
-def _known_regions(v: dict[str, Any]) -> dict[str, Any]:
-    bad = [k for k in v if k not in REGIONS]
-    if bad:
-        raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
-    return v
-
-
-def _finite(v: float) -> float:
-    if not math.isfinite(v):
-        raise ValueError("must be a finite number")
-    return v
-
-
-def _finite_vec(v: Vec3 | None) -> Vec3 | None:
-    if v is not None and any(not math.isfinite(c) for c in v):
-        raise ValueError("components must be finite numbers")
-    return v
-
+# the section base and validators (ground/sections/base.py); the techniques' sections live in
+# ground/sections/<technique>.py and are re-exported here (passes, the UI and tests import them from here)
+_known_regions = known_regions
+_finite = finite
+_finite_vec = finite_vec
 
 def _file_path(v: str | None) -> str | None:
     """A path the OS can open: no NUL byte, encodable (a lone surrogate from JSON is not)."""
@@ -226,12 +219,6 @@ class RenderSettings(_Model):
         return {False: "off", True: "interactive"}.get(v, v) if isinstance(v, bool) else v
 
 
-class PhongSettings(_Model):
-    ambient: float = Field(0.03, ge=0.0, le=10.0)
-    specular: float = Field(0.25, ge=0.0, le=100.0)
-    shininess: float = Field(32.0, ge=1.0, le=4096.0)
-
-
 class RegionSpecular(_Model):
     m: float | None = Field(None, ge=0.0, le=1.0)
     rho_s: float | None = Field(None, ge=0.0, le=10.0)
@@ -255,310 +242,6 @@ class SpecularSettings(_Model):
     per_region: dict[str, RegionSpecular] = Field(default_factory=lambda: _default_region_specular())
 
     _regions = field_validator("per_region")(_known_regions)
-
-
-class RegionKernel(_Model):
-    kernel_size: float = Field(1.0, ge=0.0, le=1000.0)
-    scale_x: float = Field(1.0, ge=0.0, le=1000.0)
-    scale_y: float = Field(0.0, ge=0.0, le=1000.0)
-
-
-def _default_gosselin_regions() -> dict[str, RegionKernel]:
-    # seed 000 after eq. (13): ears and nose scatter more, cheeks less
-    ks = {"other": 1.0, "forehead": 1.0, "nose": 1.6, "cheeks": 0.7, "lips": 1.0, "chin": 1.0,
-          "ears": 2.0, "neck": 1.2, "scalp": 1.0}
-    return {k: RegionKernel(kernel_size=v) for k, v in ks.items()}
-
-
-class GosselinSettings(_Model):
-    """Gosselin et al. 2004 (seed 000 §4.1, eq. 8-19)."""
-    light_map_size: int = Field(1024, ge=256, le=4096)
-    iterations: int = Field(4, ge=0, le=64)
-    # seed 000 eq. (12): radius = size * (kernel_size * scale_x + scale_y), global scales multiply per-region ones;
-    # size = 1/1024 (radii are texels at a 1024 map, rescaled to light_map_size: the look is size-independent).
-    # 2.0: ~1.2 mm effective sigma after 4 iterations on the default head (0.57 mm/texel at 1024)
-    scale_x: float = Field(2.0, ge=0.0, le=1000.0)
-    scale_y: float = Field(0.0, ge=0.0, le=1000.0)
-    regions: dict[str, RegionKernel] = Field(default_factory=_default_gosselin_regions)
-    radius_mode: Literal["printed", "mm"] = Field(
-        "printed", description="printed: eq. (12) radii in texels at a 1024 map (region kernels); mm: per-channel "
-        "radii in mm from the d'Eon profile's variance (deon.gaussians: iterations x the kernel's second moment "
-        "= sum w v / sum w), through the stretch map, so the blur matches the profile at any map size")
-    specular_shadow: Literal["visibility", "printed"] = Field(
-        "visibility", description="eq. (18) attenuation: visibility = LUM(blurred)/LUM(unshadowed irradiance) "
-        "in [0, 1] (default); printed = LUM(blurred) as printed (scales with Lc^2)")
-
-    _regions = field_validator("regions")(_known_regions)
-
-
-class Gaussian(_Model):
-    variance: float = Field(..., ge=0.0, le=1e4, description="mm^2")
-    weights: Vec3 = Field(..., description="RGB weights")
-
-    @field_validator("weights")
-    @classmethod
-    def _w(cls, v: Vec3) -> Vec3:
-        if any((not math.isfinite(c)) or c < 0 for c in v):
-            raise ValueError("weights must be finite and >= 0")
-        return v
-
-
-def _default_gaussians() -> list[Gaussian]:
-    # d'Eon & Luebke 2007 six-Gaussian skin profile (seed 000 Tabela 2, seed 002, ../shared/reference)
-    table = [(0.0064, (0.233, 0.455, 0.649)), (0.0484, (0.100, 0.336, 0.344)), (0.187, (0.118, 0.198, 0.0)),
-             (0.567, (0.113, 0.007, 0.007)), (1.99, (0.358, 0.004, 0.0)), (7.41, (0.078, 0.0, 0.0))]
-    return [Gaussian(variance=v, weights=w) for v, w in table]
-
-
-class DeonSettings(_Model):
-    """d'Eon & Luebke 2007 (seed 000 §4.2, eq. 20-35; seed 002 §14.4)."""
-    # variances need not ascend (the blur chain clamps a negative increment to 0) and weights need not
-    # sum to 1: profile_warnings() says so, never an error
-    gaussians: list[Gaussian] = Field(default_factory=_default_gaussians, min_length=1, max_length=MAX_GAUSSIANS)
-    mix: float = Field(0.5, ge=0.0, le=1.0, description="pre/post-scatter texturing, eq. (28), (34)")
-    stretch: bool = True
-    stretch_per_gaussian: bool = False
-    stretch_shear: bool = Field(True, description="blur along the full UV->surface Jacobian (the second pass follows "
-                                "the texels' shear, covariance sigma^2 (J^T J)^-1) instead of eq. 27's per-axis lengths "
-                                "(issue 10 item 2: exact on sheared planes; on the scan red p99 lower over four "
-                                "lights, notes/fidelity.md)")
-    tsm: bool = True
-    tsm_size: int = Field(1024, ge=64, le=8192)
-    tsm_light: int | None = Field(
-        1, ge=0, le=MAX_LIGHTS - 1, description="light the TSM is rendered from (None: the first shadow-casting light)")
-    tsm_form: Literal["exact", "printed"] = Field(
-        "exact", description="exact: exp(-d^2/(2 v_i)); printed: exp(-d^2/v_i) as in seed 000 eq. (33)")
-    tsm_gather: int = Field(
-        16, ge=0, le=64,
-        description="light-space samples per Gaussian wider than two TSM texels: the lit surfaces around the light "
-                    "ray are integrated, each sample at its own 3D distance, instead of eq. (33)'s one lit point on "
-                    "the ray, so an ear's folds lit from behind glow as in the ground truth (0: eq. 33 on the ray; "
-                    "issue 10 item 4, notes/fidelity.md)")
-    energy_conservation: bool = True
-    irradiance_size: int = Field(1024, ge=256, le=4096)
-    irradiance_size_mode: Literal["fixed", "auto"] = Field(
-        "fixed", description="auto: the irradiance map (and its blurs) sized from the head's screen coverage, "
-                             "irradiance_size at most, with hysteresis (issue 14)")
-    fold_below_texels: float = Field(
-        1.0, ge=0.0, le=8.0,
-        description="a later blur whose sigma increment is under this many (mean) texels is folded: blur_i = "
-                    "blur_(i-1), the next blur adds its variance exactly (0: off). 1 by the truth bench: lower "
-                    "RMS, p99 and DSSIM than 0 at 256-1024^2 maps, and fewer blurs (notes/perf.md)")
-    surface_gather_below_texels: float = Field(
-        2.0, ge=0.0, le=3.0,
-        description="a blur step whose sigma is at most this many (mean) texels is a direct sum over the surface "
-                    "with 3D distances (eq. 21 at texel resolution: the texels around it, then 2 x 2 blocks out to 12 "
-                    "texels) instead of separable taps that assume the surface flat and the stretch constant over "
-                    "the kernel: closer to the truth where the atlas is coarse or uneven, ~130 ms more per step and "
-                    "light change at 512^2 on llvmpipe (0: every step separable; 3: also the next, wider step; "
-                    "issue 10 item 1, notes/fidelity.md)")
-    skip_gutters: bool = Field(
-        True, description="blurs shade only the tiles of the UV islands (and the ring a reader reaches); with the "
-                          "seam fill, the fill dilates the gutters (images identical; the summed step -14 to -18 % "
-                          "at 1024^2 on llvmpipe, issue 27, notes/perf.md)")
-    tsm_auto: bool = Field(
-        True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view")
-    subpixel_kernel_px: float = Field(
-        0.3, ge=0.0, le=4.0,
-        description="when the widest Gaussian's sigma spans under this many pixels on screen, diffusion cannot "
-                    "show: blurs, stretch and TSM are skipped and the final pass reads the irradiance (0: never)")
-    combine_blurs: bool = Field(
-        True, description="sum the weighted blurs (eq. 34) once in texture space, so a camera move reads one "
-                          "texture instead of one per Gaussian (issue 14; equal up to float rounding)")
-    specular_shadows: Literal["texture", "pixel"] = Field(
-        "texture", description="where the specular's shadow test (eq. 10) is evaluated: texture: once per texel "
-        "by the irradiance pass (the same PCF, kept per light), so a camera move does no shadow-map lookups; "
-        "pixel: per pixel in the final pass")
-    reuse_irradiance_below_texels: float = Field(
-        0.5, ge=0.0, le=8.0,
-        description="blur 1 reuses the irradiance itself when its sigma is under this many (mean) texels: "
-                    "a sub-texel 7-tap blur changes nothing")
-    texel_samples: Literal[1, 4] = Field(
-        1, description="irradiance samples per texel: 4 averages the shadow test and N.L over a rotated 2 x 2 "
-                       "grid of the texel's surface patch, so a texel a shadow edge crosses carries its lit "
-                       "fraction (issue 30 item 4; 4x the shadow lookups of the irradiance pass, 2.3-2.7x its time; "
-                       "against the ground truth no gain on the head or the scan: notes/truth.md)")
-    open_border: Literal["reflect", "absorb"] = Field(
-        "reflect", description="past an open mesh border (with scene.seam_aware): reflect: each blur after the first "
-        "reads the odd reflection of the light about the border, so the light earlier steps carried past it comes "
-        "back as in one blur of E over the surface (issue 30 item 5); absorb: no light there before every step "
-        "(loses light at the rim)")
-
-
-class BurleySettings(_Model):
-    """Burley normalized diffusion in screen space, Golubev 2018 / Unity HDRP (seed 001 §3.4, eq. 2.83-2.89,
-    3.9-3.13; spec §5). Profile per channel: d = mfp / s(A) (Christensen's fits), S = 1/d."""
-    # Jensen et al. 2001 Skin1 (sigma_s' = 0.74/0.88/1.01, sigma_a = 0.032/0.17/0.48 per mm): dipole total
-    # reflectance and diffuse mean free path (eq. 2.87); with eq. 2.88: d = 1.07 / 0.42 / 0.21 mm
-    albedo: Vec3 = Field((0.436, 0.227, 0.131), description="surface albedo A per channel (picks s(A), eq. 2.86-2.89)")
-    mfp: Vec3 = Field((3.749, 1.473, 0.785), description="mean free path per channel, mm (diffuse mfp for the dmfp fit)")
-    fit: Literal["searchlight-dmfp", "searchlight-mfp", "diffuse-transmission", "direct"] = Field(
-        "searchlight-dmfp", description="s(A): eq. 2.88 (dmfp), 2.86 (mfp), 2.89 (DST); direct: d = mfp (HDRP-new)")
-    scale: float = Field(1.0, gt=0.0, le=100.0, description="multiplies d (HDRP's distance multiplier)")
-    samples: int = Field(22, ge=1, le=64, description="Golubev's samples per pixel (thesis: 22; spec §5.2)")
-    budget: bool = Field(
-        True, description="HDRP adaptive count: n <= floor(kernel area / 4 px) (spec §5.3 step 3); the pixel "
-                          "cutoff (kernel under ~1 px: no blur) applies either way")
-    view: Literal["image", "extra", "samples"] = Field(
-        "image", description="extra: tint pixels that took extra samples (and skipped ones blue); samples: heat map")
-    transmission: Literal["closed-form", "thick", "jimenez2010"] = Field(
-        "closed-form", description="through thin parts, from the shadow-map thickness t (spec §5.4, HDRP): closed-form "
-        "T(t) = (e^(-S t) + 3 e^(-S t/3)) / 4, the Burley profile integrated over the plane at depth t (thin mode); "
-        "thick: e^(-S t/3) (HDRP's regular mode, no baked thickness); jimenez2010: the Gaussian T(d) of the "
-        "`transmittance` section")
-
-    @field_validator("albedo")
-    @classmethod
-    def _albedo(cls, v: Vec3) -> Vec3:
-        if any((not math.isfinite(c)) or c < 0 or c > 1 for c in v):
-            raise ValueError("albedo components must be in [0, 1]")
-        return v
-
-    @field_validator("mfp")
-    @classmethod
-    def _mfp(cls, v: Vec3) -> Vec3:
-        if any((not math.isfinite(c)) or c <= 0 or c > 1000 for c in v):
-            raise ValueError("mean free path components must be in (0, 1000] mm")
-        return v
-
-
-class PennerSettings(_Model):
-    """Pre-integrated skin (Penner & Borshukov, GPU Pro 2, 2011): the profile in use (deon.gaussians)
-    integrated around rings of every curvature, and across shadow penumbrae, into lookup tables."""
-    lut_size: int = Field(64, ge=8, le=512, description="texels per side of the ring and penumbra tables")
-    max_curvature: float = Field(
-        2.0, gt=0.0, le=50.0, description="the ring table's curvature range, 1/r in mm^-1 (2: down to r = 0.5 mm)")
-    curvature_scale: float = Field(
-        1.0, ge=0.0, le=20.0, description="multiplies the mesh's curvature (0: flat skin, N.L only)")
-    penumbra: bool = Field(True, description="shadow scattering: the PCF penumbra diffused by the profile")
-    penumbra_max_mm: float = Field(
-        10.0, gt=0.0, le=1000.0, description="the penumbra table's range of penumbra widths, mm")
-
-
-class Burley2Settings(_Model):
-    """The thesis's contrast-driven two-level sampling, "Golubev Plus" (seed 001 ch. 4, Algorithm 1,
-    eq. 4.1-4.2; spec §7). Profile and cutoff/budget from ``burley``."""
-    mode: Literal["thesis", "three-level", "nested", "beyond"] = Field(
-        "thesis", description="thesis: base + extra (Algorithm 1); three-level: a third set when the contrast "
-                              "exceeds threshold2 too; nested: the base set is a subset of one (base + extra)-sample "
-                              "Golubev set and the extra level completes it ((base+extra)/base odd); beyond: the "
-                              "fixed variant that beat Table 4.1's target (9 + 11, equal-count rings, reuse; "
-                              "the other fields are ignored)")
-    base: int = Field(12, ge=1, le=64, description="base samples (thesis: 12)")
-    extra: int = Field(10, ge=1, le=64, description="extra samples where the contrast triggers (thesis: 10)")
-    third: int = Field(0, ge=0, le=64, description="three-level mode: samples of the third set")
-    threshold: float = Field(
-        0.25, ge=-1.0, le=1.0, description="contrast cutoff: extra samples iff C > threshold in any channel "
-        "(eq. 4.2; the thesis's 0.25 under either reading, spec §7.4); 1: never, < 0: always")
-    threshold2: float = Field(0.5, ge=-1.0, le=1.0, description="three-level mode: cutoff of the third set")
-    channel_scale: Vec3 = Field((1.0, 1.0, 1.0), description="per-channel multiplier of the cutoffs")
-    split: Literal["half-radius", "area-third", "equal-count"] = Field(
-        "half-radius", description="inner/outer ring of the base samples: r <= R/2 (thesis), r <= R/sqrt(3), "
-                                   "or the nearer half of the samples")
-    contrast: Literal["rings", "minmax"] = Field(
-        "rings", description="rings: eq. 4.1 between ring means; minmax: (max-min)/(max+min) of the samples")
-    reuse: int = Field(0, ge=0, le=2, description="neighbourhood reuse radius, px (0 off): pool the far samples' "
-                                                  "sums of the (2R+1)^2 pixels around (each rotated its disk differently)")
-    reuse_split: float = Field(3.0, ge=0.0, le=1000.0,
-                               description="reuse: samples at least this many px from the centre are pooled; nearer "
-                                           "ones (where a 1-px shift would blur the peaked profile) stay the pixel's own")
-
-    wide_px: float = Field(1e6, gt=0.0, le=1e6, description="kernels at least this wide (filter radius, px) scale "
-                                                              "the contrast cutoffs by wide_scale (a footprint LOD)")
-    wide_scale: float = Field(1.0, ge=0.0, le=100.0, description="cutoff multiplier for wide kernels")
-    temporal: int = Field(0, ge=0, le=64, description="temporal reuse on a still view: frames in each pixel's "
-                          "running mean (0 off). Each frame turns the sample disks by a new seed; any change, the "
-                          "camera included, restarts the mean; the image refines for this many frames, then stops")
-
-    @field_validator("channel_scale")
-    @classmethod
-    def _scale(cls, v: Vec3) -> Vec3:
-        if any((not math.isfinite(c)) or c < 0 for c in v):
-            raise ValueError("channel scales must be finite and >= 0")
-        return v
-
-    @model_validator(mode="after")
-    def _nested(self) -> Burley2Settings:
-        total = self.base + self.extra
-        if self.mode == "nested" and (total % self.base or (total // self.base) % 2 == 0):
-            raise ValueError(f"nested mode needs (base + extra) / base odd, e.g. 6 + 24 or 10 + 20 (got {self.base} + "
-                             f"{self.extra})")
-        return self
-
-
-class ScreenSettings(_Model):
-    """The shared screen-space framework (seed 001 §3.1, §3.6; spec §2): what the lighting pass writes."""
-    texturing: Literal["post", "pre", "pre-post"] = Field(
-        "pre-post", description="seed 001 §3.6: post = blur E then x albedo; pre = blur E x albedo; "
-                                "pre-post = x albedo^mix before the blur and x albedo^(1-mix) after")
-    mix: float = Field(0.5, ge=0.0, le=1.0, description="pre-post texturing: the albedo exponent f applied before the blur")
-    non_skin_regions: list[str] = Field(
-        default_factory=lambda: ["other"],
-        description="regions (names in REGIONS) the SSS mask excludes: no blur there and no bleeding into them "
-                    "(the default head paints its eyeballs 'other', every skin point a named region); a mesh "
-                    "without a region map is all skin")
-
-    @field_validator("non_skin_regions")
-    @classmethod
-    def _regions(cls, v: list[str]) -> list[str]:
-        bad = [k for k in v if k not in REGIONS]
-        if bad:
-            raise ValueError(f"unknown region(s) {bad}; known: {list(REGIONS)}")
-        return v
-
-
-class TransmittanceSettings(_Model):
-    """Jimenez et al. 2010 translucency from shadow-map thickness (seed 001 §3.5, eq. 3.14-3.18; spec §6):
-    added to the diffuse irradiance of every screen-space technique before its blur."""
-    enabled: bool = True
-    translucency: float = Field(
-        0.83, ge=0.0, le=0.999, description="[SEP] translucency: profile distance = 2.75 (1 - t) x thickness (mm)")
-    form: Literal["printed", "exact"] = Field(
-        "printed", description="printed: exp(-d^2/v_i) (eq. 3.18, [SEP]); exact: exp(-d^2/(2 v_i))")
-    wrap: float = Field(0.0, ge=0.0, le=1.0, description="T(d) x saturate(wrap + L.(-N)): 0 = eq. 3.15; [SEP] uses 0.3 "
-                        "(a wrap-lighting glow along the terminator)")
-
-
-def _odd(v: int) -> int:
-    if v % 2 == 0:
-        raise ValueError("must be odd (a centre tap)")
-    return v
-
-
-class SsssSettings(_Model):
-    """Jimenez et al. 2009 screen-space Gaussians (seed 001 §3.2, eq. 3.2; spec §3): one separable blur per
-    Gaussian of ``deon.gaussians``, incremental, width s = alpha / (d + beta |grad d|)."""
-    alpha: float = Field(11.0, gt=0.0, le=1000.0, description="global SSS level (eq. 3.2); 11 = the true projection")
-    beta: float = Field(800.0, ge=0.0, le=1e5, description="how strongly the depth gradient shrinks the kernel (eq. 3.2)")
-    taps: int = Field(7, ge=3, le=63, description="taps per 1-D pass over +-3 sigma (7: d'Eon's kernel)")
-    gaussians: int = Field(8, ge=1, le=8, description="blur at most this many Gaussians (the rest: a 1-Gaussian refit is "
-                                                       "not done; their weight goes to the widest one kept)")
-
-    _odd_taps = field_validator("taps")(_odd)
-
-
-class SeparableSettings(_Model):
-    """Jimenez et al. 2015 separable SSS (seed 001 §3.3; spec §4, [SEP] calculateKernel/SSSSBlurPS)."""
-    taps: int = Field(17, ge=3, le=63, description="kernel samples (presets 11/17/25)")
-    strength: Vec3 = Field((0.48, 0.41, 0.28), description="per-channel lerp identity -> blur ([SEP] demo)")
-    falloff: Vec3 = Field((1.0, 0.37, 0.30), description="per-channel profile width ([SEP] demo)")
-    width_mm: float = Field(3.0, gt=0.0, le=100.0, description="sssWidth in mm: the kernel's +-3 profile mm span this "
-                                                                "(3: the d'Eon profile at its true size)")
-    follow_surface: bool = True
-    follow_surface_mm: float = Field(
-        4.0, gt=0.0, le=1000.0, description="depth difference (mm) at which a tap is fully replaced by the centre colour")
-    rotation: bool = Field(True, description="per-pixel random rotation of the inner taps (seed 001 §3.3.4)")
-    rotation_fraction: float = Field(
-        0.1, ge=0.0, le=1.0, description="rotate taps within this fraction of the kernel width (0.1; 0.3 close-ups)")
-
-    _odd_taps = field_validator("taps")(_odd)
-
-    @field_validator("strength", "falloff")
-    @classmethod
-    def _unit(cls, v: Vec3) -> Vec3:
-        if any((not math.isfinite(c)) or c < 0 or c > 10 for c in v):
-            raise ValueError("components must be finite and in [0, 10]")
-        return v
 
 
 class LookSettings(_Model):
@@ -614,9 +297,15 @@ def default_rig() -> list[LightSettings]:
             LightSettings(kind="environment", environment="studio", intensity=0.61, cast_shadow=False)]
 
 
-class Settings(_Model):
+if TYPE_CHECKING:
+    TechniqueName = str
+else:  # the techniques' names: the registry's sections (ground/sections/__init__.py)
+    TechniqueName = Literal[TECHNIQUE_NAMES]
+
+
+class _SharedSections(_Model):
     schema_version: StrictInt = SCHEMA_VERSION  # strict: JSON `true` is not version 1
-    technique: Literal["phong", "gosselin", "deon", "ssss", "separable", "burley", "burley2", "penner"] = "deon"
+    technique: TechniqueName = "deon"
     scene: SceneSettings = Field(default_factory=SceneSettings)
     camera: CameraSettings = Field(default_factory=CameraSettings)
     render: RenderSettings = Field(default_factory=RenderSettings)
@@ -624,17 +313,14 @@ class Settings(_Model):
         default_factory=lambda: default_rig(),
         min_length=1, max_length=MAX_LIGHTS)
     shadow: ShadowSettings = Field(default_factory=ShadowSettings)
-    phong: PhongSettings = Field(default_factory=PhongSettings)
     specular: SpecularSettings = Field(default_factory=SpecularSettings)
-    gosselin: GosselinSettings = Field(default_factory=GosselinSettings)
-    deon: DeonSettings = Field(default_factory=DeonSettings)
     screen: ScreenSettings = Field(default_factory=ScreenSettings)
     transmittance: TransmittanceSettings = Field(default_factory=TransmittanceSettings)
-    ssss: SsssSettings = Field(default_factory=SsssSettings)
-    separable: SeparableSettings = Field(default_factory=SeparableSettings)
-    burley: BurleySettings = Field(default_factory=BurleySettings)
-    burley2: Burley2Settings = Field(default_factory=Burley2Settings)
-    penner: PennerSettings = Field(default_factory=PennerSettings)
+
+
+# the whole model: the shared sections, then each technique's (TechniqueSections), then the look (no
+# docstring: it would enter the JSON schema)
+class Settings(TechniqueSections, _SharedSections):
     look: LookSettings = Field(default_factory=LookSettings)
 
     @model_validator(mode="after")
@@ -908,17 +594,3 @@ def save_preset(s: Settings, path: str | os.PathLike[str], data: dict[str, Any] 
     atomic_write_text(path, json.dumps(data, indent=2) + "\n")
 
 
-def profile_warnings(d: DeonSettings) -> list[str]:
-    """Non-fatal problems of a Gaussian table (seed 000 eq. 21): order and per-channel energy."""
-    out = []
-    vs = [g.variance for g in d.gaussians]
-    if any(b <= a for a, b in zip(vs, vs[1:])):
-        out.append("variances are not strictly ascending: the hierarchical blur clamps v_i - v_(i-1) to 0")
-    if any(v <= 0 for v in vs):
-        out.append("a variance is 0: that Gaussian is the irradiance itself")
-    for c, name in enumerate("RGB"):
-        total = sum(g.weights[c] for g in d.gaussians)
-        if abs(total - 1.0) > 0.02:
-            verb = "gains" if total > 1 else "loses"
-            out.append(f"channel {name} weights sum to {total:.3f}: the profile {verb} energy")
-    return out

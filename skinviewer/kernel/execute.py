@@ -4,16 +4,26 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import moderngl
 
 from skinviewer.ground.settings import get_path
 from skinviewer.kernel.gpu import write_uniform
-from skinviewer.kernel.pass_api import GraphError, Pass, Plan, Reflection, SettingsView, ShapeState, TexSpec
+from skinviewer.kernel.pass_api import (
+    GraphError,
+    Pass,
+    Plan,
+    Reflection,
+    SettingsNode,
+    SettingsView,
+    ShapeState,
+    TexSpec,
+)
 from skinviewer.kernel.report import FrameInputs
 
 if TYPE_CHECKING:
+    from skinviewer.ground.settings import Settings
     from skinviewer.kernel.gpu_scene import GpuScene
     from skinviewer.kernel.graph import RenderGraph
     from skinviewer.scene.camera import View
@@ -53,6 +63,7 @@ class ExecuteContext:
         self._scratch: list[moderngl.Texture] = []
         self.draws = 0
         self._bound: dict[int, dict[str, tuple[int, moderngl.Texture]]] = {}  # id(prog) -> sampler -> (unit, tex)
+        self._reads: SettingsNode | None = None  # ec.settings, made on first use
 
     @property
     def plan(self) -> Plan:
@@ -73,9 +84,26 @@ class ExecuteContext:
         view: View = self._frame.view
         return view
 
-    def setting(self, path: str) -> Any:
-        if path not in self._refl.settings and not any(path.startswith(d + ".") for d in self._refl.settings):
+    def _check_declared(self, path: str) -> None:
+        declared = self._refl.declared
+        if path not in declared and not any(path.startswith(d + ".") for d in declared):
             raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")
+
+    @property
+    def settings(self) -> Settings:
+        """The settings, read by attribute (``ec.settings.deon.mix``); each read must have been
+        declared in reflect (a ``GraphError`` otherwise)."""
+        if self._reads is None:
+            self._reads = SettingsNode(self._frame.settings, "", self._check_declared)
+        return cast("Settings", self._reads)
+
+    @property
+    def peeked(self) -> Settings:
+        """The settings read for the graph's shape only (as ``Reflection.peeked``), not checked."""
+        return cast("Settings", SettingsNode(self._frame.settings, "", None))
+
+    def setting(self, path: str) -> Any:
+        self._check_declared(path)
         return get_path(self._frame.settings, path)
 
     def peek(self, path: str) -> Any:

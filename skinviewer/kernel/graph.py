@@ -228,7 +228,7 @@ class RenderGraph:
 
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
         key = {
-            "settings": {path: value_key(frame.settings, path) for path in r.settings},
+            "settings": {path: value_key(frame.settings, path) for path in r.declared},
             "inputs": {res: self._versions.get(res, 0) for res in r.inputs},
             "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
             "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
@@ -593,7 +593,7 @@ class RenderGraph:
             r = refl.get(p.name)
             if r is None:
                 continue
-            if (camera and p.view_dependent) or any(touches(d) for d in r.settings) \
+            if (camera and p.view_dependent) or any(touches(d) for d in r.declared) \
                     or any(res in dirty for res in r.inputs):
                 dirty.update(r.outputs)
                 dirty.add("pass:" + p.name)

@@ -6,7 +6,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar, cast
+
+from pydantic import BaseModel
 
 from skinviewer.ground.settings import Settings, get_path
 
@@ -92,13 +94,139 @@ class Plan(Mapping[str, Any]):
         return f"Plan({dict(self._values)!r})"
 
 
+_T = TypeVar("_T")
+
+
+_FIELDS: dict[type, frozenset[str]] = {}  # a section's field names (model_fields costs ~1 us a read)
+
+
+def _fields(model: type) -> frozenset[str]:
+    names = _FIELDS.get(model)
+    if names is None:
+        names = _FIELDS[model] = frozenset(model.model_fields)  # type: ignore[attr-defined]
+    return names
+
+
+_MODEL: dict[type, bool] = {}  # whether a type is a section (isinstance on pydantic's ABC metaclass is slow)
+
+
+def _is_model(t: type) -> bool:
+    m = _MODEL.get(t)
+    if m is None:
+        m = _MODEL[t] = issubclass(t, BaseModel)
+    return m
+
+
+def _composite(value: Any) -> bool:
+    """A settings value read field by field (a section, or a list of sections such as ``lights``)."""
+    t = type(value)
+    return _is_model(t) or (t is list and bool(value) and _is_model(type(value[0])))
+
+
+class SettingsNode:
+    """Typed attribute access to the settings that declares each read by its dotted path, exactly as
+    ``Reflection.setting(path)`` does (issue 28): ``r.settings.deon.mix`` declares ``deon.mix`` and
+    returns its value; ``r.settings.lights[1].enabled`` declares ``lights.1.enabled``;
+    ``len(r.settings.lights)`` declares ``lights.#``; iterating or slicing a list declares the whole
+    list (``lights``); ``whole(r.settings.lights[1])`` declares and returns a whole section
+    (``lights.1``). A section (or list of sections) is returned as another node, a field's value as
+    itself. The graph keys a pass's cache on what was declared, so passes never name a path in a
+    string. Type checkers see ``Settings`` (``Reflection.settings``), so a misspelt field fails there."""
+    __slots__ = ("_value", "_path", "_on_read", "_kids")
+    _value: Any
+    _path: str
+    _on_read: Any
+    _kids: dict[str, SettingsNode]
+
+    def __init__(self, value: Any, path: str, on_read: Any):
+        object.__setattr__(self, "_value", value)
+        object.__setattr__(self, "_path", path)
+        object.__setattr__(self, "_on_read", on_read)
+        object.__setattr__(self, "_kids", {})  # the sections under it, made once (the settings are immutable here)
+
+    def _child(self, value: Any, part: str) -> Any:
+        kid = self._kids.get(part)
+        if kid is not None:
+            return kid
+        path = f"{self._path}.{part}" if self._path else part
+        if _composite(value):
+            kid = self._kids[part] = SettingsNode(value, path, self._on_read)
+            return kid
+        if self._on_read is not None:
+            self._on_read(path)
+        return value
+
+    def _whole(self) -> Any:
+        if self._on_read is not None:
+            self._on_read(self._path)
+        return self._value
+
+    def __getattr__(self, name: str) -> Any:
+        v = self._value
+        if name[0] == "_" or not _is_model(type(v)) or name not in _fields(type(v)):
+            raise AttributeError(f"settings '{self._path or '<root>'}' have no field '{name}'")
+        return self._child(getattr(v, name), name)
+
+    def __getitem__(self, key: int | slice) -> Any:
+        v = self._value
+        if type(v) is not list:
+            raise TypeError(f"settings '{self._path}' are not a list")
+        if type(key) is int and 0 <= key < len(v):
+            return self._child(v[key], str(key))
+        if isinstance(key, slice):
+            return self._whole()[key]
+        raise IndexError(f"settings '{self._path}' have no item {key!r}")
+
+    def __len__(self) -> int:
+        if not isinstance(self._value, list):
+            raise TypeError(f"settings '{self._path}' are not a list")
+        if self._on_read is not None:
+            self._on_read(f"{self._path}.#")
+        return len(self._value)
+
+    def __iter__(self) -> Iterator[Any]:
+        if not isinstance(self._value, list):
+            raise TypeError(f"settings '{self._path}' are a section: read its fields, or whole() it")
+        return iter(self._whole())
+
+    def __bool__(self) -> bool:
+        raise TypeError(f"settings '{self._path}' are a section: read a field, or whole() it")
+
+    def __eq__(self, other: object) -> bool:
+        raise TypeError(f"settings '{self._path}' are a section: read a field, or whole() it")
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError("settings are read-only in a pass")
+
+    def __repr__(self) -> str:
+        return f"SettingsNode({self._path!r})"
+
+
+def whole(value: _T) -> _T:
+    """A whole section or list read through ``r.settings`` / ``ec.settings`` (``whole(r.settings.lights[i])``):
+    declares its path (``lights.i``) and returns the settings object itself; a field's value as is."""
+    if isinstance(value, SettingsNode):
+        return cast(_T, value._whole())
+    return value
+
+
+def declare(*values: object) -> None:
+    """Reflect reads what execute will read, so the graph keys the cache on it:
+    ``declare(ph.ambient, ph.specular)`` (the reads through ``r.settings`` declared them; a section
+    or list, ``declare(r.settings.deon.gaussians)``, is declared whole)."""
+    for v in values:
+        whole(v)
+
+
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
     def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None):
         self._settings = settings
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
-        self.settings: list[str] = []
+        self.declared: list[str] = []  # the settings read, by dotted path: the cache keys on them
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
         self.programs: list[tuple[str, Defines]] = []
@@ -110,6 +238,8 @@ class Reflection:
         self.state = state if state is not None else {}  # the graph's memory for shape decisions
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
+        self._reads = SettingsNode(settings, "", self._declare)  # r.settings
+        self._peeks = SettingsNode(settings, "", None)  # r.peeked
 
     def skip(self, reason: str) -> None:
         """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
@@ -141,10 +271,25 @@ class Reflection:
         """The plan recorded so far (what ``ec.plan`` will be)."""
         return Plan(self._plan)
 
+    def _declare(self, path: str) -> None:
+        if path not in self.declared:
+            self.declared.append(path)
+
+    @property
+    def settings(self) -> Settings:
+        """The settings, read by attribute; every read is declared (``SettingsNode``):
+        ``r.settings.deon.mix``, ``r.settings.lights[i].enabled``, ``whole(r.settings.lights[i])``."""
+        return cast(Settings, self._reads)
+
+    @property
+    def peeked(self) -> Settings:
+        """The settings read without declaring them (as ``peek``): only for the graph's shape."""
+        return cast(Settings, self._peeks)
+
     def setting(self, path: str) -> Any:
-        """Declare a setting (dotted path) and return its current value."""
-        if path not in self.settings:
-            self.settings.append(path)
+        """Declare a setting (dotted path) and return its current value (tests and tools; passes
+        read ``r.settings``)."""
+        self._declare(path)
         return get_path(self._settings, path)
 
     def peek(self, path: str) -> Any:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare
 from skinviewer.passes.output import OutputPass
 from skinviewer.passes.screen_space import DEPTH, DIFFUSE, CombinePass
 from skinviewer.physics import burley as B
@@ -40,12 +40,11 @@ SEED_STEP = 7919  # u_seed step per accumulated frame (any change decorrelates t
 COUNT = "burley_count"
 VIEW = "burley_view"
 
-PROFILE_FIELDS = B.PROFILE_FIELDS
 
-
-def profile_of(get) -> B.Profile:
-    """The Burley profile from the ``burley`` settings (``get(path)`` reads a declared setting)."""
-    return B.profile(get("burley.albedo"), get("burley.mfp"), get("burley.fit"), get("burley.scale"))
+def declare_profile(r: Reflection) -> None:
+    """Declare the ``burley`` fields the profile reads (physics.burley.profile_of_section)."""
+    b = r.settings.burley
+    declare(b.albedo, b.mfp, b.fit, b.scale)
 
 
 @dataclass(frozen=True)
@@ -109,28 +108,30 @@ BEYOND_PLAN = Plan((9, 11), ((0.35, 0.35, 0.35),), split="equal-count", reuse=1,
                    wide_scale=2.0)
 
 
-def golubev_plan(get) -> Plan:
-    return Plan((int(get("burley.samples")),))
+def golubev_plan(b) -> Plan:
+    """The ``burley`` section (``r.settings.burley`` or a BurleySettings) -> Golubev's one level."""
+    return Plan((int(b.samples),))
 
 
-def two_level_plan(get) -> Plan:
-    """burley2 settings -> levels. ``thesis``: Algorithm 1 (base, extra, cutoff on the ring contrast);
-    ``three-level``: a third level and a second cutoff on top of it."""
-    mode = get("burley2.mode")
+def two_level_plan(b2) -> Plan:
+    """The ``burley2`` section (``r.settings.burley2`` or a Burley2Settings) -> levels. ``thesis``:
+    Algorithm 1 (base, extra, cutoff on the ring contrast); ``three-level``: a third level and a
+    second cutoff on top of it."""
+    mode = b2.mode
     if mode == "beyond":
-        return replace(BEYOND_PLAN, temporal=int(get("burley2.temporal")))
-    t = get("burley2.threshold")
-    c1 = tuple(float(t) * float(s) for s in get("burley2.channel_scale"))
-    levels: tuple[int, ...] = (int(get("burley2.base")), int(get("burley2.extra")))
+        return replace(BEYOND_PLAN, temporal=int(b2.temporal))
+    t = b2.threshold
+    c1 = tuple(float(t) * float(s) for s in b2.channel_scale)
+    levels: tuple[int, ...] = (int(b2.base), int(b2.extra))
     cutoffs: tuple[tuple[float, ...], ...] = (c1,)
-    if mode == "three-level" and int(get("burley2.third")) > 0:
-        t2 = float(get("burley2.threshold2"))
-        levels += (int(get("burley2.third")),)
-        cutoffs += (tuple(t2 * float(s) for s in get("burley2.channel_scale")),)
-    return Plan(levels, cutoffs, get("burley2.split"), get("burley2.contrast"), nested=mode == "nested",
-                reuse=int(get("burley2.reuse")), reuse_split=float(get("burley2.reuse_split")),
-                wide_px=float(get("burley2.wide_px")), wide_scale=float(get("burley2.wide_scale")),
-                temporal=int(get("burley2.temporal")))
+    if mode == "three-level" and int(b2.third) > 0:
+        t2 = float(b2.threshold2)
+        levels += (int(b2.third),)
+        cutoffs += (tuple(t2 * float(s) for s in b2.channel_scale),)
+    return Plan(levels, cutoffs, b2.split, b2.contrast, nested=mode == "nested",
+                reuse=int(b2.reuse), reuse_split=float(b2.reuse_split),
+                wide_px=float(b2.wide_px), wide_scale=float(b2.wide_scale),
+                temporal=int(b2.temporal))
 
 
 class BurleyBlurPass(Pass):
@@ -148,27 +149,26 @@ class BurleyBlurPass(Pass):
         self.fixed_plan = plan
         self.name = name
 
-    def _plan(self, get) -> Plan:
+    def _plan(self, r: Reflection) -> Plan:
         if self.fixed_plan is not None:
             return self.fixed_plan
-        return golubev_plan(get) if self.variant == "golubev" else two_level_plan(get)
+        return golubev_plan(r.settings.burley) if self.variant == "golubev" else two_level_plan(r.settings.burley2)
 
     def reflect(self, r: Reflection) -> None:
-        for f in PROFILE_FIELDS:
-            r.setting(f"burley.{f}")
-        budget = bool(r.setting("burley.budget"))
+        declare_profile(r)
+        budget = bool(r.settings.burley.budget)
         if self.fixed_plan is None:
             if self.variant == "golubev":
-                r.setting("burley.samples")
+                declare(r.settings.burley.samples)
             else:
-                r.setting("burley2")
-        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
+                declare(r.settings.burley2)
+        plan = self._plan(r)
         r.program("burley_blur", **table_defines(plan, budget))
         if plan.temporal:
             r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
         for res in (IRRADIANCE, DEPTH):
             r.input(res)
-        w, h = r.setting("render.width"), r.setting("render.height")
+        w, h = r.settings.render.width, r.settings.render.height
         r.plan(sampling=plan, height=h)
         r.output(PARTIAL if plan.reuse else BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
         r.output(STATS, TexSpec((w, h), 4, "f2", filter="nearest"))
@@ -179,7 +179,7 @@ class BurleyBlurPass(Pass):
     def execute(self, ec) -> None:
         plan = ec.plan.sampling
         prog = ec.program("burley_blur")  # the variant reflect declared (table_defines)
-        prof = profile_of(ec.setting)
+        prof = B.profile_of_section(ec.settings.burley)
         view = ec.view
         h = ec.plan.height
         cut = plan.cutoffs + ((1e30,) * 3,) * (2 - len(plan.cutoffs))
@@ -207,8 +207,8 @@ class BurleyReusePass(Pass):
     def __init__(self, plan: Plan | None = None):
         self.fixed_plan = plan
 
-    def _plan(self, get) -> Plan:
-        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(get)
+    def _plan(self, r: Reflection) -> Plan:
+        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(r.settings.burley2)
 
     @staticmethod
     def _defines(plan: Plan) -> dict[str, str]:
@@ -216,23 +216,22 @@ class BurleyReusePass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         if self.fixed_plan is None:
-            if r.peek("burley2.reuse") == 0 and r.peek("burley2.mode") != "beyond":
+            if r.peeked.burley2.reuse == 0 and r.peeked.burley2.mode != "beyond":
                 return
-            r.setting("burley2")
-        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
-        for f in PROFILE_FIELDS:
-            r.setting(f"burley.{f}")
+            declare(r.settings.burley2)
+        plan = self._plan(r)
+        declare_profile(r)
         r.program("burley_reuse", **self._defines(plan))
         r.plan(sampling=plan)
         for res in (PARTIAL, NEAR_W, FAR, FAR_W, DEPTH):
             r.input(res)
-        w, h = r.setting("render.width"), r.setting("render.height")
+        w, h = r.settings.render.width, r.settings.render.height
         r.output(BLURRED, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
 
     def execute(self, ec) -> None:
         plan = ec.plan.sampling
         prog = ec.program("burley_reuse")
-        prof = profile_of(ec.setting)
+        prof = B.profile_of_section(ec.settings.burley)
         ec.uniforms(prog, u_reuse_dz=plan.reuse_dz * prof.filter_radius)
         ec.textures(prog, partial=PARTIAL, near_w=NEAR_W, far=FAR, far_w=FAR_W, lin_depth=DEPTH)
         ec.draw_fullscreen(prog, BLURRED)
@@ -255,24 +254,24 @@ class BurleyTemporalPass(Pass):
         self.fixed_plan = plan
         self._last: tuple | None = None  # (what the mean was taken of, history index written)
 
-    def _plan(self, get) -> Plan:
-        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(get)
+    def _plan(self, r: Reflection) -> Plan:
+        return self.fixed_plan if self.fixed_plan is not None else two_level_plan(r.settings.burley2)
 
     def reflect(self, r: Reflection) -> None:
         if self.fixed_plan is None:
-            if r.peek("burley2.temporal") == 0:
+            if r.peeked.burley2.temporal == 0:
                 return
-            r.setting("burley2")
-        plan = self._plan(r.setting if self.fixed_plan is None else r.peek)
+            declare(r.settings.burley2)
+        plan = self._plan(r)
         r.depends("temporal_frame", r.state.get(TEMPORAL_FRAME, 0))
         r.program("burley_temporal", **self._defines(plan))
         r.plan(sampling=plan)
-        for f in PROFILE_FIELDS + ("budget",):
-            r.setting(f"burley.{f}")
+        declare_profile(r)
+        declare(r.settings.burley.budget)
         # the lighting pass's outputs: a new version (camera, lights, scene, size...) restarts the mean
         for res in (BLURRED, IRRADIANCE, DEPTH) + ((PARTIAL, NEAR_W, FAR, FAR_W) if plan.reuse else ()):
             r.input(res)
-        w, h = r.setting("render.width"), r.setting("render.height")
+        w, h = r.settings.render.width, r.settings.render.height
         r.output(TEMPORAL, TexSpec((w, h), 4, IRRADIANCE_DTYPE, filter="nearest"))
         for res in HISTORY + (HISTORY_OWN if plan.reuse else ()):
             r.output(res, TexSpec((w, h), 4, "f4", filter="nearest"))
@@ -285,8 +284,9 @@ class BurleyTemporalPass(Pass):
         plan = ec.plan.sampling
         # the mean holds while the lighting pass's outputs (their versions), the profile and the plan are
         # the ones it was taken of: only the blur's seed changed
+        b = ec.settings.burley
         taken_of = (ec.input_version(IRRADIANCE), ec.input_version(DEPTH), plan,
-                    tuple(repr(ec.setting(f"burley.{f}")) for f in PROFILE_FIELDS + ("budget",)))
+                    tuple(repr(v) for v in (b.albedo, b.mfp, b.fit, b.scale, b.budget)))
         last = self._last
         reset = last is None or last[0] != taken_of
         write = 0 if last is None else 1 - last[1]
@@ -318,7 +318,7 @@ class BurleyCombinePass(CombinePass):
     """The framework's combine pass reading the accumulated estimate when ``burley2.temporal`` is on."""
 
     def reflect(self, r: Reflection) -> None:
-        self.source = TEMPORAL if r.peek("burley2.temporal") > 0 else BLURRED
+        self.source = TEMPORAL if r.peeked.burley2.temporal > 0 else BLURRED
         super().reflect(r)
 
 
@@ -356,8 +356,8 @@ class BurleyCountPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         r.input(STATS)
-        r.setting("render.width")
-        r.plan(rows=TexSpec((1, r.setting("render.height")), 4, "f4", filter="nearest"))  # stage 1's row sums
+        declare(r.settings.render.width)
+        r.plan(rows=TexSpec((1, r.settings.render.height), 4, "f4", filter="nearest"))  # stage 1's row sums
         r.program("burley_count", STAGE="1")
         r.program("burley_count", STAGE="2")
         r.output(COUNT, TexSpec((2, 1), 4, "f4", filter="nearest"))
@@ -390,15 +390,15 @@ class BurleyViewPass(Pass):
     def reflect(self, r: Reflection) -> None:
         r.input("lit")
         r.input(STATS)
-        r.setting("burley.view")
-        w, h = r.setting("render.width"), r.setting("render.height")
+        declare(r.settings.burley.view)
+        w, h = r.settings.render.width, r.settings.render.height
         r.program("burley_view")
         r.output(VIEW, TexSpec((w, h), 4, "f2"))
 
     def execute(self, ec) -> None:
         prog = ec.program("burley_view")
         ec.textures(prog, lit="lit", stats=STATS)
-        ec.uniforms(prog, u_mode=VIEW_MODES.index(ec.setting("burley.view")), u_max_samples=32.0)
+        ec.uniforms(prog, u_mode=VIEW_MODES.index(ec.settings.burley.view), u_max_samples=32.0)
         ec.draw_fullscreen(prog, VIEW)
 
 
@@ -406,6 +406,6 @@ class BurleyOutputPass(OutputPass):
     """The output pass, fed by the view pass when ``burley.view`` is not ``image``."""
 
     def reflect(self, r: Reflection) -> None:
-        self.source = "lit" if r.setting("burley.view") == "image" else VIEW
+        self.source = "lit" if r.settings.burley.view == "image" else VIEW
         super().reflect(r)
 

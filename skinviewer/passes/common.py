@@ -8,14 +8,19 @@ from typing import Any
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_LIGHTS
-from skinviewer.kernel.pass_api import Reflection, TexSpec
+from skinviewer.kernel.pass_api import Reflection, TexSpec, declare, whole
 from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
 from skinviewer.physics.specular import per_region_specular
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.mesh import culls_back_faces
 
-LIGHT_POSE_FIELDS = ("kind", "direction", "position", "beam_radius", "cast_shadow", "enabled")
+
+def declare_pose(light: Any) -> Any:
+    """Declare a light's pose (what its shadow map and light space depend on: not its colour) read
+    through ``r.settings.lights[i]``; returns the light for ``GpuScene.light_space``."""
+    declare(light.kind, light.direction, light.position, light.beam_radius, light.cast_shadow, light.enabled)
+    return light
 
 
 def shadow_resource(i: int) -> str:
@@ -28,10 +33,10 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
     result from elsewhere). Returns the defines that specialise shaders/lib/lights.glsl to this
     frame's lights (declare the lit program with them: ``r.program(name, **defines)``). Plans
     ``light_slots`` (the settings index of each slot's light) and ``shadow_map_size`` for set_lighting."""
-    lights = r.setting("lights")
-    r.setting("shadow.tol")
-    pcf = r.setting("shadow.pcf")
-    bilinear = r.setting("shadow.pcf_filter") == "bilinear"
+    lights = whole(r.settings.lights)
+    declare(r.settings.shadow.tol)
+    pcf = r.settings.shadow.pcf
+    bilinear = r.settings.shadow.pcf_filter == "bilinear"
     active = [(i, l) for i, l in enumerate(lights[:MAX_LIGHTS]) if analytic_on(l)]
     r.plan(light_slots=tuple(i for i, _ in active), shadow_map_size=shadow_map_size(r))
     for i, l in enumerate(lights[:MAX_LIGHTS]):
@@ -50,7 +55,7 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     """Set the uniforms and shadow maps of shaders/lib/lights.glsl (slot k = k-th enabled light);
     ``shadow_maps=False``: the uniforms only (see declare_lighting, which planned the slots and map size)."""
     scene = ec.scene
-    lights = ec.setting("lights")
+    lights = whole(ec.settings.lights)
     active = [(i, lights[i]) for i in ec.plan.light_slots]
     map_size = ec.plan.shadow_map_size
     kind = np.zeros(MAX_LIGHTS, np.int32)
@@ -77,8 +82,8 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
     ec.uniforms(prog, u_light_count=len(active), u_light_kind=kind, u_light_radiance=radiance,
                 u_light_dir=dirs, u_light_pos=poss, u_beam_radius=radii, u_light_shadowed=shadowed,
                 u_light_matrix=mats, u_shadow_texel=texels,
-                u_shadow_tol=ec.setting("shadow.tol"), u_shadow_pcf=ec.setting("shadow.pcf"),
-                u_shadow_bilinear=ec.setting("shadow.pcf_filter") == "bilinear")
+                u_shadow_tol=ec.settings.shadow.tol, u_shadow_pcf=ec.settings.shadow.pcf,
+                u_shadow_bilinear=ec.settings.shadow.pcf_filter == "bilinear")
 
 
 def bind_surface(ec, prog) -> None:
@@ -94,21 +99,21 @@ LIT = "lit"  # every technique's linear image, read by the output pass
 def declare_lit(r: Reflection, program: str, **defines) -> None:
     """A view-dependent final pass: its program (with ``defines``) and the render-size linear image
     it writes."""
-    w, h = r.setting("render.width"), r.setting("render.height")
+    w, h = r.settings.render.width, r.settings.render.height
     r.program(program, **defines)
     r.output(LIT, TexSpec((w, h), 4, "f2", depth=True))
 
 
 def declare_view_mesh(r: Reflection) -> None:
     """A pass that draws the mesh from the camera (draw_view_mesh): it reads ``scene.back_faces``."""
-    r.setting("scene.back_faces")
+    declare(r.settings.scene.back_faces)
 
 
 def draw_view_mesh(ec, prog, *targets) -> None:
     """Draw the mesh from the camera into ``targets``: back faces culled when ``scene.back_faces``
     resolves to cull for this mesh (auto: a closed mesh), else both sides (the shaders reverse the
     normal of a back face: gl_FrontFacing)."""
-    cull = culls_back_faces(ec.setting("scene.back_faces"), ec.scene.closed)
+    cull = culls_back_faces(ec.settings.scene.back_faces, ec.scene.closed)
     with ec.band():  # a tileable pass (issue 27): this band's rows (depth cleared and tested per band)
         ec.draw_mesh(prog, *targets, cull_back=cull, space="camera")
 
@@ -120,20 +125,18 @@ def set_camera(ec, prog) -> None:
     ec.set(prog, "u_eye", tuple(float(x) for x in view.eye))
 
 
-SPECULAR_FIELDS = ("m", "rho_s", "f0", "per_region")
-
-
 def declare_specular(r: Reflection, lut: bool = True) -> None:
     """Declare what shaders/lib/specular_params.glsl reads; the Beckmann LUT only in its mode."""
-    r.section("specular", SPECULAR_FIELDS)
-    if lut and r.setting("specular.mode") == "beckmann_lut":
+    sp = r.settings.specular
+    declare(sp.m, sp.rho_s, sp.f0, sp.per_region)
+    if lut and r.settings.specular.mode == "beckmann_lut":
         r.input(BECKMANN_LUT)
 
 
 def bind_specular(ec, prog) -> None:
     """Set the uniforms and maps of shaders/lib/specular_params.glsl."""
     scene = ec.scene
-    sp = ec.section("specular", SPECULAR_FIELDS)
+    sp = ec.settings.specular
     m, rho = per_region_specular(sp)
     ec.uniforms(prog, u_spec_m=m, u_spec_rho_s=rho, u_spec_rho_s_table=float(sp.rho_s), u_f0=float(sp.f0),
                 u_spec_lut=ec.has_input(BECKMANN_LUT))

@@ -28,14 +28,14 @@ from typing import Any
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
-    LIGHT_POSE_FIELDS,
     LIT,
     bind_specular,
     bind_surface,
     declare_lighting,
     declare_lit,
+    declare_pose,
     declare_specular,
     declare_view_mesh,
     draw_view_mesh,
@@ -83,7 +83,6 @@ DIFFUSE = "deon_diffuse"  # sum_i w_i blur_i + transmitted (DiffuseSumPass)
 TRANSMITTED = "deon_transmitted"  # eq. 33 in texture space (TransmittedPass)
 VISIBILITY = "deon_visibility"  # fac_shadow (eq. 10) per light slot and texel (deon.specular_shadows)
 MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
-SIZE = "deon.irradiance_size"
 GATHER_SURFACE = "deon_gather_surface"  # per texel: point on the surface (mm), area (mm^2)
 GATHER_BLOCKS_POINT = "deon_gather_blocks_point"  # per 2 x 2 block: mean point, area
 GATHER_BLOCKS_ZONE = "deon_gather_blocks_zone"  # per 2 x 2 block: zone, spread
@@ -91,7 +90,8 @@ GATHER_BLOCKS_ZONE = "deon_gather_blocks_zone"  # per 2 x 2 block: zone, spread
 
 def map_size(r) -> int:
     """The irradiance-map size: deon.irradiance_size, or from the screen coverage (rules.py)."""
-    return coverage_size(r, SIZE, "deon.irradiance_size_mode")
+    d = r.settings.deon
+    return coverage_size(r, d.irradiance_size, d.irradiance_size_mode, "deon_irradiance")
 
 
 # -- which light casts the TSM --------------------------------------------------------------------
@@ -100,20 +100,20 @@ def tsm_light_index(r: Reflection) -> int | None:
     """Declare (and return) the light the TSM is rendered from: deon.tsm_light when it names an
     enabled shadow-casting light, else the first such light; None when deon.tsm is off or no light
     casts shadows. Reflect only: the passes plan it (``tsm_light``) for execute."""
-    if not r.setting("deon.tsm"):
+    if not r.settings.deon.tsm:
         return None
-    n = min(r.setting("lights.#"), MAX_LIGHTS)
-    usable = [j for j in range(n) if r.setting(f"lights.{j}.enabled") and r.setting(f"lights.{j}.cast_shadow")
-              and analytic_on(r.peek(f"lights.{j}"))]
-    want = r.setting("deon.tsm_light")
+    n = min(len(r.settings.lights), MAX_LIGHTS)
+    usable = [j for j in range(n) if r.settings.lights[j].enabled and r.settings.lights[j].cast_shadow
+              and analytic_on(whole(r.peeked.lights[j]))]
+    want = r.settings.deon.tsm_light
     j = want if want is not None and want in usable else (usable[0] if usable else None)
     subpixel = kernel_under_pixel(r) if j is not None else None
     if subpixel:  # transmission is part of the diffusion
         r.drop(TSM, subpixel)
         return None
-    if j is not None and r.setting("deon.tsm_auto") and r.scene is not None:
+    if j is not None and r.settings.deon.tsm_auto and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
-        need, why = tsm_needed(r._settings, r.scene, r.peek(f"lights.{j}"), r.peek("deon.gaussians"))
+        need, why = tsm_needed(r._settings, r.scene, whole(r.peeked.lights[j]), whole(r.peeked.deon.gaussians))
         if not need:
             r.drop(TSM, why)
             return None
@@ -125,7 +125,7 @@ def set_tsm_uniforms(ec, prog, j: int | None, matrix: str = "u_tsm_matrix"):
     ``prog``). Returns its LightSpace. Only called by passes that read the TSM, so a light is named."""
     assert j is not None, "a TSM pass runs only when tsm_light_index names a light"
     scene = ec.scene
-    pose = ec.section(f"lights.{j}", LIGHT_POSE_FIELDS)
+    pose = ec.settings.lights[j]
     ls = scene.light_space(pose)
     d = np.asarray(pose.direction, dtype=np.float64)
     d = d / np.linalg.norm(d)
@@ -141,7 +141,7 @@ SHEAR_COS_NONE = 1e-4  # a mesh whose UV axes are this close to orthogonal every
 
 
 def stretch_defines(r) -> dict:
-    return {"VERTEX_METRIC": 1} if r.setting("scene.stretch_metric") == "vertex" else {}
+    return {"VERTEX_METRIC": 1} if r.settings.scene.stretch_metric == "vertex" else {}
 
 
 class StretchPass(Pass):
@@ -177,7 +177,7 @@ class GatherSurfacePass(Pass):
         if not gather_used(r):
             return
         n = map_size(r)
-        seam = seam_resource(n) if r.setting("scene.seam_aware") else None
+        seam = seam_resource(n) if r.settings.scene.seam_aware else None
         r.plan(size=n, gutter=gutter_resource(n), seam=seam, position=TexSpec((n, n), 4, "f4"),
                metric=TexSpec((n, n), 4, "f4", filter="nearest"))
         r.input(r.planned.gutter)
@@ -225,7 +225,7 @@ BORDER_REACH_MM = 10.0  # the border frame reaches this far: 3.5 sigma of the wi
 def open_border(r) -> bool:
     """deon.open_border = reflect with scene.seam_aware (which knows where the mesh borders are), on a
     mesh that has an open border (peeked: a closed mesh, such as the default head, pays nothing)."""
-    if r.scene is None or not r.peek("scene.seam_aware") or r.peek("deon.open_border") != "reflect":
+    if r.scene is None or not r.peeked.scene.seam_aware or r.peeked.deon.open_border != "reflect":
         return False
     cache = r.scene.__dict__.setdefault("_texel_tables", {})
     if "has_border" not in cache:
@@ -233,7 +233,7 @@ def open_border(r) -> bool:
         cache["has_border"] = len(border_half_edges(r.scene.mesh.positions, r.scene.mesh.indices)) > 0
     if not cache["has_border"]:
         return False
-    return bool(r.setting("scene.seam_aware")) and r.setting("deon.open_border") == "reflect"
+    return bool(r.settings.scene.seam_aware) and r.settings.deon.open_border == "reflect"
 
 
 class BorderFramePass(Pass):
@@ -277,18 +277,18 @@ def gather_reach(r, step: BlurStep, n: int) -> int:
 def gathered(r, step: BlurStep) -> bool:
     """Whether blur step ``step`` is a direct sum over the surface (deon_surface_gather.frag): its
     sigma is at most deon.surface_gather_below_texels mean texels (issue 10 item 1)."""
-    return _gathers(step, r.setting("deon.surface_gather_below_texels"), mean_texel_mm(r.scene, map_size(r)))
+    return _gathers(step, r.settings.deon.surface_gather_below_texels, mean_texel_mm(r.scene, map_size(r)))
 
 
 def gather_used(r) -> bool:
     """Some blur step gathers (gathered(); peeked: whether the gather surface exists is shape, its
     content depends on the mesh, the size, the stretch and the seams only)."""
-    limit = r.peek("deon.surface_gather_below_texels")  # shape only: the map's content depends on neither
+    limit = r.peeked.deon.surface_gather_below_texels  # shape only: the map's content depends on neither
     if limit <= 0.0 or r.scene is None:
         return False
     texel = mean_texel_mm(r.scene, map_size(r))
-    variances = [r.peek(f"deon.gaussians.{k}.variance") for k in range(r.peek("deon.gaussians.#"))]
-    plan = blur_plan_texels(variances, r.peek("deon.reuse_irradiance_below_texels"), texel, r.peek("deon.fold_below_texels"))
+    variances = [r.peeked.deon.gaussians[k].variance for k in range(len(r.peeked.deon.gaussians))]
+    plan = blur_plan_texels(variances, r.peeked.deon.reuse_irradiance_below_texels, texel, r.peeked.deon.fold_below_texels)
     return any(_gathers(st, limit, texel) for st in plan)
 
 
@@ -302,9 +302,9 @@ class TsmPass(Pass):
             if TSM in r.dropped:  # the rule's reason (rules.tsm_needed)
                 r.skip(r.dropped[TSM])
             return
-        r.section(f"lights.{j}", LIGHT_POSE_FIELDS)
+        declare_pose(r.settings.lights[j])
         r.plan(tsm_light=j)
-        n = light_map_size(r, "deon.tsm_size", "deon.irradiance_size_mode")
+        n = light_map_size(r, r.settings.deon.tsm_size, r.settings.deon.irradiance_size_mode, "deon_tsm")
         r.program("deon_tsm")
         r.output(TSM, TexSpec((n, n), 4, "f4", filter="nearest", depth=True))
 
@@ -323,9 +323,9 @@ class IrradiancePass(Pass):
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
         lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
-        r.setting("deon.mix")
-        over_texel = r.setting("deon.texel_samples") > 1  # the texel's extent (TEXEL_STEPS) for its samples
-        if r.setting("deon.energy_conservation"):
+        declare(r.settings.deon.mix)
+        over_texel = r.settings.deon.texel_samples > 1  # the texel's extent (TEXEL_STEPS) for its samples
+        if r.settings.deon.energy_conservation:
             declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
             r.input(RHO_DT_RESOURCE)
         j = tsm_light_index(r)
@@ -344,9 +344,9 @@ class IrradiancePass(Pass):
         bind_surface(ec, prog)
         set_lighting(ec, prog)
         set_environment(ec, prog, specular=False)
-        energy = bool(ec.setting("deon.energy_conservation"))
-        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.setting("deon.mix")),
-                    u_texel_samples=int(ec.setting("deon.texel_samples")), u_texel_uv=(1.0 / n, 1.0 / n))
+        energy = bool(ec.settings.deon.energy_conservation)
+        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.settings.deon.mix),
+                    u_texel_samples=int(ec.settings.deon.texel_samples), u_texel_uv=(1.0 / n, 1.0 / n))
         if energy:
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
             bind_specular(ec, prog)
@@ -369,12 +369,12 @@ def plan_of(variances, r) -> list:
     blur is the irradiance itself when the kernel is under a pixel on screen (rules.py)."""
     if kernel_under_pixel(r):
         return [BlurStep(i, IRRADIANCE, 0.0, 0.0, True) for i in range(len(variances))]
-    return blur_plan_texels(variances, r.setting("deon.reuse_irradiance_below_texels"),
-                            mean_texel_mm(r.scene, map_size(r)), r.setting("deon.fold_below_texels"))
+    return blur_plan_texels(variances, r.settings.deon.reuse_irradiance_below_texels,
+                            mean_texel_mm(r.scene, map_size(r)), r.settings.deon.fold_below_texels)
 
 
 def _plan(r):
-    return plan_of([g.variance for g in r.setting("deon.gaussians")], r)
+    return plan_of([g.variance for g in whole(r.settings.deon.gaussians)], r)
 
 
 
@@ -387,7 +387,7 @@ def island_tiles(r, chain: str, border: dict) -> bool:
     within DILATE_RING texels of an island, and its seam fill reads every texel at the island texel
     the gutter map names (seam_fill.frag DILATE), which is where the blur computes a gutter texel
     anyway: the texels readers reach are bit-identical, ~30 % fewer texels shaded at 1024^2."""
-    return bool(r.setting("deon.skip_gutters") and r.setting("scene.seam_aware") and chain == "irradiance"
+    return bool(r.settings.deon.skip_gutters and r.settings.scene.seam_aware and chain == "irradiance"
                 and not border)
 
 
@@ -416,14 +416,14 @@ class GaussianBlurPass(Pass):
         return blur_resource(self.i) if self.chain == "irradiance" else stretch_blur_resource(self.i)
 
     def _stretch_input(self, r, step) -> str | None:
-        if not r.setting("deon.stretch"):
+        if not r.settings.deon.stretch:
             return None
-        return stretch_of(step.source) if r.setting("deon.stretch_per_gaussian") else STRETCH
+        return stretch_of(step.source) if r.settings.deon.stretch_per_gaussian else STRETCH
 
     def reflect(self, r: Reflection) -> None:
-        if r.peek("deon.gaussians.#") <= self.i:
+        if len(r.peeked.deon.gaussians) <= self.i:
             return
-        if self.chain == "stretch" and not (r.peek("deon.stretch") and r.peek("deon.stretch_per_gaussian")):
+        if self.chain == "stretch" and not (r.peeked.deon.stretch and r.peeked.deon.stretch_per_gaussian):
             return
         step = self._step(r)
         if step.reused:  # blur_i is its source: the final pass reads that, this pass is pruned
@@ -431,13 +431,14 @@ class GaussianBlurPass(Pass):
             if subpixel:
                 r.skip(subpixel)
                 return
-            r.skip(f"kernel under {r.setting('deon.fold_below_texels' if self.i else 'deon.reuse_irradiance_below_texels')}"
+            d = r.settings.deon
+            r.skip(f"kernel under {d.fold_below_texels if self.i else d.reuse_irradiance_below_texels}"
                    f" texel: {'folded into the next blur' if self.i else 'the irradiance itself'}")
             return
         n = map_size(r)
         gather = self.chain == "irradiance" and gathered(r, step)
         border = self._open_border(r)
-        seam = seam_resource(n) if r.setting("scene.seam_aware") else None
+        seam = seam_resource(n) if r.settings.scene.seam_aware else None
         # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
         r.plan(step=step, size=n, gather=gather, output=self._output(), spec=self._spec(n), gutter=gutter_resource(n),
                seam=seam, border=border_resource(n) if border else None,
@@ -447,8 +448,8 @@ class GaussianBlurPass(Pass):
             return
         stretch = self._stretch_input(r, step)
         if stretch:
-            r.setting("deon.stretch_shear")
-        skip_gutters = r.setting("deon.skip_gutters")
+            declare(r.settings.deon.stretch_shear)
+        skip_gutters = r.settings.deon.skip_gutters
         if seam:
             r.input(seam)
         source = step.source if self.chain == "irradiance" else stretch_of(step.source)
@@ -473,12 +474,12 @@ class GaussianBlurPass(Pass):
     def _reflect_gather(self, r, step, n: int) -> None:
         """A narrow step as a direct sum over the surface: the gather surface, the step's input
         (seam-filled first with scene.seam_aware) and the island zones."""
-        seam = r.setting("scene.seam_aware")
+        seam = r.settings.scene.seam_aware
         r.input(step.source)
         r.input(gutter_resource(n))
         for res in (GATHER_SURFACE, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE):
             r.input(res)
-        if r.setting("deon.stretch"):
+        if r.settings.deon.stretch:
             r.input(STRETCH)
         tiles = r.planned.island_tiles
         h = (n + 1) // 2
@@ -544,7 +545,7 @@ class GaussianBlurPass(Pass):
         return {"OPEN_BORDER": 1} if self.chain == "irradiance" and open_border(r) else {}
 
     def _step(self, r):
-        vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
+        vs = [r.settings.deon.gaussians[k].variance for k in range(self.i + 1)]
         return plan_of(vs, r)[self.i]
 
     @staticmethod
@@ -554,7 +555,7 @@ class GaussianBlurPass(Pass):
         texel the bilinear 7 taps' own smoothing is closer to the texel integral. {} or the define."""
         sigma = np.sqrt(step.increment)
         widest = sigma * (r.scene.max_uv_per_mm if stretch else r.scene.mean_uv_per_mm) * n
-        sheared = stretch and r.setting("deon.stretch_shear") and r.scene.max_shear_cos > SHEAR_COS_NONE
+        sheared = stretch and r.settings.deon.stretch_shear and r.scene.max_shear_cos > SHEAR_COS_NONE
         if sigma < mean_texel_mm(r.scene, n) or widest > NARROW_TEXELS or sheared:
             return {}
         return {"NARROW_TAPS": narrow_taps(widest)}
@@ -569,7 +570,7 @@ class GaussianBlurPass(Pass):
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                     u_weights=np.asarray(KERNEL7, np.float32),
-                    u_shear=bool(stretch) and bool(ec.setting("deon.stretch_shear")))
+                    u_shear=bool(stretch) and bool(ec.settings.deon.stretch_shear))
         texel_mm = mean_texel_mm(ec.scene, n)
         sigmas = ([np.sqrt(step.increment)] if narrow else
                   sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm))
@@ -633,7 +634,7 @@ class GaussianBlurPass(Pass):
 def texture_shadows(r) -> bool:
     """deon.specular_shadows = texture: the irradiance pass keeps each light's fac_shadow per texel
     (VISIBILITY) and the final pass's specular reads it: a camera move does no shadow-map lookups."""
-    return r.setting("deon.specular_shadows") == "texture"
+    return r.settings.deon.specular_shadows == "texture"
 
 
 def final_defines(mask: int, tsm: bool, combined: bool = False) -> dict[str, int]:
@@ -644,13 +645,13 @@ def final_defines(mask: int, tsm: bool, combined: bool = False) -> dict[str, int
 
 def used_mask(r) -> int:
     """Bit i: Gaussian i has weight in some channel (its blur is read; eq. 34)."""
-    return sum(1 << i for i, g in enumerate(r.setting("deon.gaussians")) if any(w > 0 for w in g.weights))
+    return sum(1 << i for i, g in enumerate(whole(r.settings.deon.gaussians)) if any(w > 0 for w in g.weights))
 
 
 def combined(r) -> bool:
     """Whether deon_final reads the texture-space sum (deon.combine_blurs, some Gaussian used, a light on)."""
-    return bool(r.setting("deon.combine_blurs")) and used_mask(r) != 0 and any(
-        light_on(l) for l in r.peek("lights")[:MAX_LIGHTS])  # shape only: the blurs exist
+    return bool(r.settings.deon.combine_blurs) and used_mask(r) != 0 and any(
+        light_on(l) for l in whole(r.peeked.lights)[:MAX_LIGHTS])  # shape only: the blurs exist
 
 
 def plan_blurs(r, chain: list) -> None:
@@ -673,7 +674,7 @@ def bind_blur_slots(ec, prog) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ws = np.zeros((MAX_GAUSSIANS, 3), np.float32)
     var = np.zeros(MAX_GAUSSIANS, np.float32)
     used = np.zeros(MAX_GAUSSIANS, np.int32)
-    for i, (g, (res, variance)) in enumerate(zip(ec.setting("deon.gaussians"), ec.plan.blurs)):
+    for i, (g, (res, variance)) in enumerate(zip(whole(ec.settings.deon.gaussians), ec.plan.blurs)):
         var[i] = variance
         if ec.has_input(res):
             ws[i] = g.weights
@@ -685,22 +686,22 @@ def bind_blur_slots(ec, prog) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def bind_blurs(ec, prog) -> None:
     """lib/deon_blurs.glsl's blur samplers and per-Gaussian uniforms."""
     ws, var, used = bind_blur_slots(ec, prog)
-    ec.uniforms(prog, u_count=len(ec.setting("deon.gaussians")), u_w=ws, u_var=var, u_used=used)
+    ec.uniforms(prog, u_count=len(whole(ec.settings.deon.gaussians)), u_w=ws, u_var=var, u_used=used)
 
 
 def declare_tsm_read(r) -> dict[str, Any]:
     """What lib/tsm_transmit.glsl reads besides the blurs: the TSM, its form, the blurs' gutter map
     (island zones), the stretch map, and for the gather the irradiance; returns its defines."""
-    r.setting("deon.tsm_form")
+    declare(r.settings.deon.tsm_form)
     r.plan(tsm_light=tsm_light_index(r), zone_map=gutter_resource(map_size(r)))  # for bind_tsm_read
-    r.section(f"lights.{r.planned.tsm_light}", LIGHT_POSE_FIELDS)  # its light space
+    declare_pose(r.settings.lights[r.planned.tsm_light])  # its light space
     r.input(TSM)
     r.input(r.planned.zone_map)  # island zones: whether the blur already carries A's light
-    if r.setting("deon.stretch"):
+    if r.settings.deon.stretch:
         r.input(STRETCH)
-    if r.setting("deon.tsm_gather"):
+    if r.settings.deon.tsm_gather:
         r.input(IRRADIANCE)  # E of the lit points around the ray
-    return {"TSM_GATHER_N": int(r.setting("deon.tsm_gather"))}
+    return {"TSM_GATHER_N": int(r.settings.deon.tsm_gather)}
 
 
 def bind_tsm_read(ec, prog) -> None:
@@ -714,9 +715,9 @@ def bind_tsm_read(ec, prog) -> None:
     texel_mm = ls.texel_world(ec.input(TSM).size[0]) * ec.scene.mm_per_unit
     ec.set(prog, "u_tsm_gate_mm", float(max(2.0 * texel_mm, 0.25)))
     s = ec.scene.mean_uv_per_mm
-    ec.uniforms(prog, u_tsm_printed=ec.setting("deon.tsm_form") == "printed",
+    ec.uniforms(prog, u_tsm_printed=ec.settings.deon.tsm_form == "printed",
                 u_use_stretch=ec.has_input(STRETCH), u_uniform_stretch=(s, s))
-    if ec.setting("deon.tsm_gather"):
+    if ec.settings.deon.tsm_gather:
         ec.set(prog, "u_tsm_map_mm", float(ls.extent * ec.scene.mm_per_unit))
         ec.bind(prog, "irradiance_map", IRRADIANCE)
 
@@ -807,7 +808,7 @@ def max_stretch(ec, stretch: str | None) -> float:
     if s_max is None:
         tex = ec.input(stretch)
         a = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components).astype(np.float64)
-        if a.shape[1] >= 3 and ec.setting("deon.stretch_shear"):  # the sheared pass's step (deon_blur shear_step)
+        if a.shape[1] >= 3 and ec.settings.deon.stretch_shear:  # the sheared pass's step (deon_blur shear_step)
             c = np.clip(np.nan_to_num(a[:, 2]), -0.95, 0.95)
             a = np.column_stack([a[:, 0], np.sqrt((c * c * a[:, 0] ** 2 + a[:, 1] ** 2) / (1.0 - c * c))])
         a = a[:, :2][np.isfinite(a[:, :2])]  # RG: UV per mm (B: shear)
@@ -826,7 +827,7 @@ def narrow_taps(sigma_texels: float) -> int:
 def ring_sigma(r, i: int | None = None) -> float:
     """The widest sigma (mm) whose taps reach past blur_i: this blur's own V taps on its H output and the
     next blur's taps on its output (sigma <= sqrt(increment); i None: the whole chain). Shape only (peeked)."""
-    plan = plan_of([g.variance for g in r.peek("deon.gaussians")], r)  # the whole chain's widest step
+    plan = plan_of([g.variance for g in whole(r.peeked.deon.gaussians)], r)  # the whole chain's widest step
     near = plan if i is None else plan[i:i + 2]
     return float(max((np.sqrt(step.increment) for step in near if not step.reused), default=0.0))
 
@@ -848,9 +849,9 @@ class DeonFinalPass(Pass):
     def reflect(self, r: Reflection) -> None:
         vis = texture_shadows(r)
         lighting = declare_lighting(r, shadow_maps=not vis)  # texture shadows: no shadow map is read
-        gs = r.setting("deon.gaussians")
+        gs = whole(r.settings.deon.gaussians)
         plan = _plan(r)
-        r.plan(dark=not any(light_on(l) for l in r.setting("lights")[:MAX_LIGHTS]))  # no analytic light on
+        r.plan(dark=not any(light_on(l) for l in whole(r.settings.lights)[:MAX_LIGHTS]))  # no analytic light on
         plan_blurs(r, plan)
         if lighting["LIGHT_COUNT"] == 0 and env_index(r) is None:  # every light off: black (no irradiance, no specular)
             for step in plan:
@@ -858,9 +859,9 @@ class DeonFinalPass(Pass):
             declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
             declare_view_mesh(r)
             return
-        r.setting("deon.mix")
+        declare(r.settings.deon.mix)
         declare_specular(r)
-        if r.setting("deon.energy_conservation"):
+        if r.settings.deon.energy_conservation:
             r.input(RHO_DT_RESOURCE)
         summed = combined(r)
         tsm = tsm_light_index(r) is not None and not summed  # summed: deon_transmitted has it
@@ -886,7 +887,7 @@ class DeonFinalPass(Pass):
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
         return [("deon_final", v) for n, d in r.programs if n == "deon_final"
-                for v in likely_final_variants(dict(d), r.peek("deon.tsm_gather"))]
+                for v in likely_final_variants(dict(d), r.peeked.deon.tsm_gather)]
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
@@ -898,7 +899,7 @@ class DeonFinalPass(Pass):
         has = ec.has_input
         set_lighting(ec, prog, shadow_maps=not has(VISIBILITY))
         bind_blurs(ec, prog)  # unbound blur slots read the graph's dummy texture
-        ec.uniforms(prog, u_mix=float(ec.setting("deon.mix")), u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM),
+        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM),
                     u_combined=has(DIFFUSE))
         if has(DIFFUSE):
             ec.bind(prog, "diffuse_sum", DIFFUSE)
@@ -910,9 +911,9 @@ class DeonFinalPass(Pass):
         if has(VISIBILITY):
             ec.bind(prog, "visibility", VISIBILITY)
         set_environment(ec, prog)
-        ec.set(prog, "u_env_tr", bool(ec.setting("deon.tsm")), optional=True)
+        ec.set(prog, "u_env_tr", bool(ec.settings.deon.tsm), optional=True)
         if "u_env_tr" in prog:
-            gs = ec.setting("deon.gaussians")[:MAX_GAUSSIANS]  # the environment's translucency profile
+            gs = whole(ec.settings.deon.gaussians)[:MAX_GAUSSIANS]  # the environment's translucency profile
             w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
             v = np.zeros(MAX_GAUSSIANS, np.float32)
             for i, g in enumerate(gs):

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.rules import environment_light
 from skinviewer.physics import environment as env
 from skinviewer.scene.environment import environment_image
@@ -20,14 +20,19 @@ ENV_RHO_DT = "env_rho_dt"
 ENV_BACKGROUND = "env_background"  # the environment at BACKGROUND_SIZE for render.background_environment = sharp
 BACKGROUND_SIZE = (1024, 512)
 BACKGROUND_BLUR_LEVEL = 1  # the pre-filtered level (m = 0.15) render.background_environment = blurred shows
-ENV_FIELDS = ("kind", "environment", "layout", "yaw", "sh_order", "occlusion", "ao_rays", "transfer_order", "color",
-              "intensity", "enabled")
-ENV_IMAGE_FIELDS = ("environment", "layout")
+
+
+def declare_env_fields(e):
+    """Declare every field of the environment light ``e`` (``r.settings.lights[i]``) that
+    shaders/lib/environment.glsl and the bake read; returns ``e``."""
+    declare(e.kind, e.environment, e.layout, e.yaw, e.sh_order, e.occlusion, e.ao_rays, e.transfer_order, e.color,
+            e.intensity, e.enabled)
+    return e
 
 
 def env_index(r) -> int | None:
     """The settings index of the environment light in use (peeked: the graph's shape), or None."""
-    hit = environment_light(r.peek("lights"))
+    hit = environment_light(whole(r.peeked.lights))
     return None if hit is None else hit[0]
 
 
@@ -99,21 +104,20 @@ class EnvironmentPass(Pass):
         if i is None:
             r.skip("no environment light")
             return
-        r.section(f"lights.{i}", ENV_IMAGE_FIELDS)
-        r.setting("specular.f0")
-        r.setting("specular.rho_s")
+        e = r.settings.lights[i]
+        declare(e.environment, e.layout, r.settings.specular.f0, r.settings.specular.rho_s)
         r.output(ENV_PREFILTERED, prefiltered_spec())
         r.output(ENV_RHO_DT, TexSpec((32, 32), 1, "f4", filter="linear"))
-        sharp = r.setting("render.background_environment") == "sharp"
+        sharp = r.settings.render.background_environment == "sharp"
         r.plan(environment=i, background=sharp)  # the light, and whether the sharp background is made
         if sharp:
             r.output(ENV_BACKGROUND, TexSpec(BACKGROUND_SIZE, 4, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
         from skinviewer.physics.specular import rho_dt_table
-        e = ec.section(f"lights.{ec.plan.environment}", ENV_IMAGE_FIELDS)
+        e = ec.settings.lights[ec.plan.environment]
         ec.output(ENV_PREFILTERED).write(_prefiltered(e.environment, e.layout).tobytes())
-        table = rho_dt_table(ec.setting("specular.f0"), ec.setting("specular.rho_s"), n_cos=32, n_m=32)
+        table = rho_dt_table(ec.settings.specular.f0, ec.settings.specular.rho_s, n_cos=32, n_m=32)
         table = np.nan_to_num(np.clip(table, 0.0, 1.0), nan=1.0).astype(np.float32)
         ec.output(ENV_RHO_DT).write(np.ascontiguousarray(table).tobytes())
         if ec.plan.background:
@@ -129,7 +133,7 @@ def declare_environment(r: Reflection, specular: bool = True) -> dict[str, int]:
     r.plan(environment=i)
     if i is None:
         return {}
-    e = r.section(f"lights.{i}", ENV_FIELDS)
+    e = declare_env_fields(r.settings.lights[i])
     depend_on_bake(r, e)
     if specular:
         r.input(ENV_PREFILTERED)
@@ -155,7 +159,7 @@ def env_defines(r) -> dict[str, int]:
     i = env_index(r)
     if i is None:
         return {}
-    return _defines(r.peek(f"lights.{i}"))
+    return _defines(whole(r.peeked.lights[i]))
 
 
 def sh_uniform(light) -> np.ndarray:
@@ -179,7 +183,7 @@ def set_environment(ec, prog, specular: bool = True) -> None:
     i = ec.plan.environment
     if i is None:
         return
-    e = ec.section(f"lights.{i}", ENV_FIELDS)
+    e = ec.settings.lights[i]
     ec.scene.env_rays = int(e.ao_rays)  # the vertex arrays' visibility buffer (GpuScene.env_visibility_buffer)
     scale = np.asarray(e.color, np.float64) * float(e.intensity)
     yaw = math.radians(float(e.yaw))

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from skinviewer.ground.settings import REGIONS, RegionKernel
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     LIT,
     bind_specular,
@@ -66,10 +66,14 @@ LIGHT_MAP = "gosselin_light_map"
 RADIUS_MAP = "gosselin_radius"
 BLURRED = "gosselin_blurred"
 STRETCH = "gosselin_stretch"  # UV per mm at the light-map size (seed 000 eq. 27; radius_mode "mm")
-SIZE = "gosselin.light_map_size"
+
+
+def light_map_size(r) -> int:
+    """gosselin.light_map_size, declared (the light map, its blurs, gutter and stretch maps)."""
+    return int(r.settings.gosselin.light_map_size)
+
 REFERENCE_SIZE = 1024  # eq. 12's size = 1/1024: radii are "texels at 1024"
 MAX_SMOOTH_SIGMA = 24.0
-KERNEL_FIELDS = ("regions", "scale_x", "scale_y")  # what region_radii reads
 
 
 def _map_spec(size: int) -> TexSpec:
@@ -83,7 +87,7 @@ class GosselinLightMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
-        size = r.setting(SIZE)
+        size = light_map_size(r)
         declare_shaded(r, "light_map", size, LIGHT_MAP, _map_spec(size), **lighting)
 
     def execute(self, ec) -> None:
@@ -141,15 +145,16 @@ class GosselinRadiusMapPass(Pass):
     name = "gosselin_radius"
 
     def reflect(self, r: Reflection) -> None:
-        size = r.setting(SIZE)
-        r.section("gosselin", KERNEL_FIELDS)
+        size = light_map_size(r)
+        g = r.settings.gosselin
+        declare(g.regions, g.scale_x, g.scale_y)  # what region_radii reads
         r.plan(size=size, gutter=gutter_resource(size))
         r.input(r.planned.gutter)
         r.output(RADIUS_MAP, TexSpec((size, size), 1, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
         size = ec.plan.size
-        radii = region_radii(ec.section("gosselin", KERNEL_FIELDS), size)
+        radii = region_radii(ec.settings.gosselin, size)
         gtex = ec.input(ec.plan.gutter)
         gutter = read_gutter(gtex)
         rad = radius_map(ec.scene.region_ids, radii, size, gutter)
@@ -163,17 +168,17 @@ class PoissonBlurPass(Pass):
     tileable = True  # each draw in row bands under a frame budget, in order (issue 27)
 
     def reflect(self, r: Reflection) -> None:
-        size = r.setting(SIZE)
-        r.setting("gosselin.iterations")
+        size = light_map_size(r)
+        declare(r.settings.gosselin.iterations)
         r.input(LIGHT_MAP)
-        mm = r.setting("gosselin.radius_mode") == "mm"
+        mm = r.settings.gosselin.radius_mode == "mm"
         if mm:  # per-channel radii (mm) from the d'Eon profile, through the stretch map
-            r.setting("deon.gaussians")
+            declare(r.settings.deon.gaussians)
             r.input(STRETCH)
         else:
             r.input(RADIUS_MAP)
-        seam = seam_resource(size) if r.setting("scene.seam_aware") else None
-        r.plan(iterations=int(r.setting("gosselin.iterations")), gutter=gutter_resource(size), seam=seam,
+        seam = seam_resource(size) if r.settings.scene.seam_aware else None
+        r.plan(iterations=int(r.settings.gosselin.iterations), gutter=gutter_resource(size), seam=seam,
                radius_mm=mm, spec=_map_spec(size))
         r.input(r.planned.gutter)
         if seam:
@@ -203,7 +208,7 @@ class PoissonBlurPass(Pass):
             ec.bind(prog, "seam_map", seam)
             filled = ec.held("filled", spec)[0]
         if plan.radius_mm:
-            gs = ec.setting("deon.gaussians")
+            gs = whole(ec.settings.deon.gaussians)
             radii = radii_mm([g.variance for g in gs], [g.weights for g in gs], n)
             ec.set(prog, "u_radius_mm", tuple(float(x) for x in radii))
             ec.bind(prog, "stretch_map", STRETCH)
@@ -244,7 +249,7 @@ class GosselinFinalPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         declare_specular(r)
-        r.setting("gosselin.specular_shadow")
+        declare(r.settings.gosselin.specular_shadow)
         r.input(BLURRED)
         declare_lit(r, "gosselin_final", **lighting, **declare_environment(r))
         declare_view_mesh(r)
@@ -252,7 +257,7 @@ class GosselinFinalPass(Pass):
     def execute(self, ec) -> None:
         prog = ec.program("gosselin_final")
         set_camera(ec, prog)
-        ec.set(prog, "u_spec_shadow", ec.setting("gosselin.specular_shadow") == "printed")
+        ec.set(prog, "u_spec_shadow", ec.settings.gosselin.specular_shadow == "printed")
         bind_surface(ec, prog)
         ec.bind(prog, "blurred", BLURRED)
         bind_specular(ec, prog)

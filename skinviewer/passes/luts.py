@@ -29,11 +29,11 @@ class BeckmannLutPass(Pass):
     uses_scene = False
 
     def reflect(self, r: Reflection) -> None:
-        n = r.setting("specular.lut_size")
+        n = r.settings.specular.lut_size
         r.output(BECKMANN_LUT, TexSpec((n, n), 1, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
-        n = ec.setting("specular.lut_size")
+        n = ec.settings.specular.lut_size
         tex = ec.output(BECKMANN_LUT)
         tex.repeat_x = tex.repeat_y = False
         tex.write(_beckmann_table(int(n)))

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare
 from skinviewer.physics.color import srgb_to_linear
 
 TONE_MAPS = {"linear": 0, "filmic": 1}
@@ -20,14 +20,13 @@ def tone_map(x, mode: str = "filmic"):
 
 
 BACKGROUND_MODES = {"off": 0, "sharp": 1, "blurred": 2}
-BACKGROUND_FIELDS = ("environment", "layout", "yaw", "color", "intensity")
 
 
 def _background_env(r) -> tuple[int | None, int]:
     """(the environment light's index, BG_ENV: 0 off, 1 sharp, 2 blurred) of render.background_environment."""
     from skinviewer.passes.environment import env_index
     i = env_index(r)
-    mode = BACKGROUND_MODES[r.peek("render.background_environment")]
+    mode = BACKGROUND_MODES[r.peeked.render.background_environment]
     return (i, mode) if i is not None and mode else (None, 0)
 
 
@@ -42,16 +41,16 @@ class OutputPass(Pass):
     def reflect(self, r: Reflection) -> None:
         from skinviewer.passes.environment import BACKGROUND_BLUR_LEVEL, ENV_BACKGROUND, ENV_PREFILTERED
         r.input(self.source)
-        r.setting("render.exposure")
-        r.setting("render.background")
-        r.setting("render.background_environment")
-        w, h = r.setting("render.width"), r.setting("render.height")
+        rs = r.settings.render
+        declare(rs.exposure, rs.background, rs.background_environment)
+        w, h = rs.width, rs.height
         i, bg = _background_env(r)
         r.plan(env=i, background=ENV_BACKGROUND if bg == 1 else ENV_PREFILTERED if bg else None)
-        if bg:
-            r.section(f"lights.{i}", BACKGROUND_FIELDS)
+        if bg and i is not None:
+            e = r.settings.lights[i]
+            declare(e.environment, e.layout, e.yaw, e.color, e.intensity)
             r.input(r.planned.background)
-        r.program("output", TONE_MAP=TONE_MAPS[r.setting("render.tone_map")], BG_ENV=bg,
+        r.program("output", TONE_MAP=TONE_MAPS[rs.tone_map], BG_ENV=bg,
                   BG_LEVEL=BACKGROUND_BLUR_LEVEL)
         r.output("image", TexSpec((w, h), 4, "f1"))
 
@@ -62,10 +61,10 @@ class OutputPass(Pass):
         i, background = ec.plan.env, ec.plan.background  # the environment light and its background texture
         prog = ec.program("output")  # the variant reflect declared (tone map, BG_ENV)
         ec.bind(prog, "lit", self.source)
-        ec.uniforms(prog, u_exposure=ec.setting("render.exposure"),
-                    u_background=tuple(srgb_to_linear(ec.setting("render.background"))))
+        ec.uniforms(prog, u_exposure=ec.settings.render.exposure,
+                    u_background=tuple(srgb_to_linear(ec.settings.render.background)))
         if background:  # the environment seen through each pixel: R_y(-yaw) of the view ray (physics rotate_yaw)
-            e = ec.section(f"lights.{i}", BACKGROUND_FIELDS)
+            e = ec.settings.lights[i]
             view = ec.view
             yaw = math.radians(float(e.yaw))
             ec.bind(prog, "env_background", background)

@@ -12,7 +12,8 @@ import functools
 
 import numpy as np
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.ground.constants import MAX_LIGHTS
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     LIT,
     bind_specular,
@@ -34,18 +35,6 @@ from skinviewer.physics import penner
 RING_LUT = "ring_lut"
 PENUMBRA_LUT = "penumbra_lut"
 ENV_BANDS_LUT = "penner_env_bands"  # the environment's SH band weights per curvature (physics/penner.env_band_factors)
-LUT_FIELDS = ("lut_size", "max_curvature", "penumbra_max_mm")
-PROFILE = "deon.gaussians"  # the profile in use: the tables' and the transmittance's
-
-
-def transmits(r, env: dict[str, int]) -> bool:
-    """Whether the transmittance has something to carry: transmittance.enabled and a shadow-casting
-    light (the thickness is its shadow map's) or an environment with its visibility bake (the baked
-    thickness along -N)."""
-    if not r.setting("transmittance.enabled"):
-        return False
-    return (any(analytic_on(l) and l.cast_shadow for l in r.setting("lights"))
-            or env.get("ENV_RAYS", 0) > 0)
 
 
 def profile(gaussians) -> tuple[tuple[float, tuple[float, float, float]], ...]:
@@ -62,21 +51,38 @@ def _tables(gs, size: int, max_curvature: float, max_width: float) -> tuple[byte
     return tuple(np.ascontiguousarray(a, np.float32).tobytes() for a in (ring, pen, bands))  # type: ignore[return-value]
 
 
+def profile_gaussians(settings):
+    """The profile in use, the tables' and the transmittance's: deon.gaussians."""
+    return settings.deon.gaussians
+
+
+def transmits(r, env: dict[str, int]) -> bool:
+    """Whether the transmittance has something to carry: transmittance.enabled and a shadow-casting
+    light (the thickness is its shadow map's) or an environment with its visibility bake (the baked
+    thickness along -N)."""
+    if not r.settings.transmittance.enabled:
+        return False
+    return (any(analytic_on(l) and l.cast_shadow for l in whole(r.settings.lights)[:MAX_LIGHTS])
+            or env.get("ENV_RAYS", 0) > 0)
+
+
 class PennerLutPass(Pass):
     """The ring table D(N.L, curvature) and the penumbra table P(s, W), RGB f4, from deon.gaussians."""
     name = "penner_luts"
     uses_scene = False
 
     def reflect(self, r: Reflection) -> None:
-        r.setting("deon.gaussians")
-        n = r.section("penner", LUT_FIELDS).lut_size
+        declare(r.settings.deon.gaussians)
+        p = r.settings.penner
+        n = p.lut_size
+        declare(p.max_curvature, p.penumbra_max_mm)
         r.output(RING_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
         r.output(PENUMBRA_LUT, TexSpec((n, n), 3, "f4", filter="linear"))
         r.output(ENV_BANDS_LUT, TexSpec((3, n), 3, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
-        p = ec.section("penner", LUT_FIELDS)
-        ring, pen, bands = _tables(profile(ec.setting("deon.gaussians")), int(p.lut_size), float(p.max_curvature),
+        p = ec.settings.penner
+        ring, pen, bands = _tables(profile(whole(ec.settings.deon.gaussians)), int(p.lut_size), float(p.max_curvature),
                                    float(p.penumbra_max_mm))
         for name, data in ((RING_LUT, ring), (PENUMBRA_LUT, pen), (ENV_BANDS_LUT, bands)):
             tex = ec.output(name)
@@ -93,26 +99,27 @@ class PennerPass(Pass):
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
         declare_specular(r)
-        r.section("penner", ("max_curvature", "curvature_scale", "penumbra", "penumbra_max_mm"))
+        p = r.settings.penner
+        declare(p.max_curvature, p.curvature_scale, p.penumbra, p.penumbra_max_mm)
         r.input(RING_LUT)
-        if r.setting("penner.penumbra"):
+        if p.penumbra:
             r.input(PENUMBRA_LUT)
-        if r.setting("deon.energy_conservation"):
+        if r.settings.deon.energy_conservation:
             r.input(RHO_DT_RESOURCE)
         env = declare_environment(r)
         if env:
             r.input(ENV_BANDS_LUT)
         tr = transmits(r, env)
         if tr:  # Jimenez 2010 through thin parts, the profile in use (as ssss and separable)
-            r.setting("transmittance.wrap")
-            declare_profile(r, PROFILE, 0)
+            declare(r.settings.transmittance.wrap)
+            declare_profile(r, profile_gaussians, 0)
         r.plan(transmittance=tr)
         declare_lit(r, "penner", **lighting, **env, PENNER_TR=int(tr))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
         prog = ec.program("penner")
-        p = ec.section("penner", ("max_curvature", "curvature_scale", "penumbra", "penumbra_max_mm"))
+        p = ec.settings.penner
         set_camera(ec, prog)
         bind_surface(ec, prog)
         bind_specular(ec, prog)
@@ -127,12 +134,12 @@ class PennerPass(Pass):
         energy = ec.has_input(RHO_DT_RESOURCE)
         if energy:
             ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-        pcf = int(ec.setting("shadow.pcf"))
+        pcf = int(ec.settings.shadow.pcf)
         ec.uniforms(prog, u_energy=energy, u_penumbra=penumbra,
                     u_curvature_scale=float(p.curvature_scale) / float(p.max_curvature),
                     u_penumbra_scale=float(ec.scene.mm_per_unit) / float(p.penumbra_max_mm),
                     u_penumbra_texels=float(2 * pcf + 1))
         if ec.plan.transmittance:
             set_thickness_uniforms(ec, prog)
-            set_profile_uniforms(ec, prog, PROFILE, 0)
+            set_profile_uniforms(ec, prog, profile_gaussians, 0)
         draw_view_mesh(ec, prog, LIT)

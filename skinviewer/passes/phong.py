@@ -1,7 +1,7 @@
 """Phong/Lambert baseline (shadow map -> lit image), linear space."""
 from __future__ import annotations
 
-from skinviewer.kernel.pass_api import Pass, Reflection
+from skinviewer.kernel.pass_api import Pass, Reflection, declare
 from skinviewer.passes.common import (
     LIT,
     bind_surface,
@@ -22,14 +22,15 @@ class PhongPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         lighting = declare_lighting(r)
-        r.section("phong", ("ambient", "specular", "shininess"))
+        ph = r.settings.phong
+        declare(ph.ambient, ph.specular, ph.shininess)
         declare_lit(r, "phong", **lighting, **declare_environment(r))
         declare_view_mesh(r)
 
     def execute(self, ec) -> None:
         prog = ec.program("phong")
         set_camera(ec, prog)
-        ph = ec.section("phong", ("ambient", "specular", "shininess"))
+        ph = ec.settings.phong
         ec.uniforms(prog, u_ambient=ph.ambient, u_specular=ph.specular, u_shininess=ph.shininess)
         bind_surface(ec, prog)
         set_lighting(ec, prog)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare
 
 RHO_DT_RESOURCE = "rho_dt_lut"
 RHO_DT_SIZE = (32, 32)  # (n_cos, n_m)
@@ -19,13 +19,13 @@ class RhoDtLutPass(Pass):
         self.size = (int(size[0]), int(size[1]))
 
     def reflect(self, r: Reflection) -> None:
-        r.setting("specular.f0")
-        r.setting("specular.rho_s")
+        declare(r.settings.specular.f0)
+        declare(r.settings.specular.rho_s)
         r.output(RHO_DT_RESOURCE, TexSpec(self.size, 1, "f4", filter="linear"))
 
     def execute(self, ec) -> None:
         from skinviewer.physics.specular import rho_dt_table
         n_cos, n_m = self.size
-        table = rho_dt_table(ec.setting("specular.f0"), ec.setting("specular.rho_s"), n_cos=n_cos, n_m=n_m)
+        table = rho_dt_table(ec.settings.specular.f0, ec.settings.specular.rho_s, n_cos=n_cos, n_m=n_m)
         table = np.nan_to_num(np.clip(table, 0.0, 1.0), nan=1.0).astype(np.float32)
         ec.output(RHO_DT_RESOURCE).write(np.ascontiguousarray(table).tobytes())

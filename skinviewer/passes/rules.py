@@ -82,22 +82,24 @@ def wanted_map_size(settings, scene) -> float:
     return px_per_mm / max(scene.mean_uv_per_mm, 1e-12)
 
 
-def coverage_size(r: Reflection, path: str, mode_path: str, wanted_fn=None) -> int:
-    """The map size for setting ``path`` (the user's size, the maximum): the setting itself in
+def coverage_size(r: Reflection, user: int, mode: str, key: str, wanted_fn=None) -> int:
+    """The map size for a size setting whose value is ``user`` (the maximum) and whose mode setting
+    is ``mode`` (both read, so declared, by the caller through ``r.settings``): ``user`` itself in
     "fixed" mode; in "auto" the power of two from the screen coverage, changed only when the wanted
-    size leaves the hysteresis band. ``r``: a scene pass's Reflection (the passes plan the size for execute)."""
-    user = int(r.setting(path))
-    if r.setting(mode_path) != "auto":
+    size leaves the hysteresis band (``key`` names the map's memory in ``r.state``). ``r``: a scene
+    pass's Reflection (the passes plan the size for execute)."""
+    user = int(user)
+    if mode != "auto":
         return user
     s = r._settings
     scene = r.scene
     wanted = (wanted_fn or wanted_map_size)(s, scene)
-    key = (path, id(scene))
-    cur = min(r.state.get(key, user), user)
+    memo = (key, id(scene))
+    cur = min(r.state.get(memo, user), user)
     if not (cur / 2.0 / HYSTERESIS <= wanted <= cur * HYSTERESIS):
         pow2 = 2 ** math.ceil(math.log2(min(max(wanted, MIN_AUTO_SIZE), 1 << 20)))
         cur = int(min(pow2, user))
-    r.state[key] = cur
+    r.state[memo] = cur
     if cur != user:
         r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
     return cur
@@ -144,7 +146,7 @@ def kernel_under_pixel(r: Reflection) -> str | None:
     when the widest Gaussian spans under deon.subpixel_kernel_px pixels on screen, diffusion cannot
     show, so the blurs, stretch and TSM are skipped and the final pass reads the irradiance. With
     hysteresis (on below the limit, off above HYSTERESIS x it). Returns the reason, or None."""
-    limit = float(r.setting("deon.subpixel_kernel_px"))
+    limit = float(r.settings.deon.subpixel_kernel_px)
     if r.scene is None:
         return None
     key = ("subpixel_kernel", id(r.scene))
@@ -157,14 +159,15 @@ def kernel_under_pixel(r: Reflection) -> str | None:
     return f"kernel under a pixel (widest Gaussian sigma {px:.2f} px on screen)" if on else None
 
 
-def light_map_size(r, path: str, mode_path: str) -> int:
+def light_map_size(r, user: int, mode: str, key: str) -> int:
     """A map seen from a light that frames the bounding sphere (shadow maps, the TSM): about one
-    texel per pixel of the scene's screen diameter."""
-    return coverage_size(r, path, mode_path, screen_diameter_px)
+    texel per pixel of the scene's screen diameter (``coverage_size``'s arguments)."""
+    return coverage_size(r, user, mode, key, screen_diameter_px)
 
 
 def shadow_map_size(r) -> int:
-    return light_map_size(r, "shadow.map_size", "shadow.map_size_mode")
+    sh = r.settings.shadow
+    return light_map_size(r, sh.map_size, sh.map_size_mode, "shadow_map")
 
 
 # -- translucent shadow map ----------------------------------------------------------------------

@@ -1,8 +1,8 @@
 """Shadow map per light (seed 000 §4.1.1, eq. 1-6): light-space z/w of the nearest surface."""
 from __future__ import annotations
 
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
-from skinviewer.passes.common import LIGHT_POSE_FIELDS, shadow_resource
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, whole
+from skinviewer.passes.common import declare_pose, shadow_resource
 from skinviewer.passes.rules import analytic_on, light_off_reason, shadow_map_size
 from skinviewer.scene.camera import gl_bytes
 
@@ -16,12 +16,12 @@ class ShadowMapPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         i = self.light_index
-        if r.peek("lights.#") <= i or not r.peek(f"lights.{i}.enabled"):
+        if len(r.peeked.lights) <= i or not r.peeked.lights[i].enabled:
             return
-        if not analytic_on(r.peek(f"lights.{i}")):  # peeked: the map does not depend on the colour
-            r.skip(light_off_reason(i, r.peek(f"lights.{i}")))
+        if not analytic_on(whole(r.peeked.lights[i])):  # peeked: the map does not depend on the colour
+            r.skip(light_off_reason(i, whole(r.peeked.lights[i])))
             return
-        r.section(f"lights.{i}", LIGHT_POSE_FIELDS)
+        declare_pose(r.settings.lights[i])
         size = shadow_map_size(r)
         r.program("shadow_map")
         r.plan(map=shadow_resource(i))
@@ -30,7 +30,7 @@ class ShadowMapPass(Pass):
     def execute(self, ec) -> None:
         i = self.light_index
         scene = ec.scene
-        ls = scene.light_space(ec.section(f"lights.{i}", LIGHT_POSE_FIELDS))
+        ls = scene.light_space(ec.settings.lights[i])
         prog = ec.program("shadow_map")
         ec.set(prog, "u_light_matrix", gl_bytes(ls.gl_matrix))
         ec.draw_mesh(prog, ec.plan.map, clear=(1.0, 1.0, 1.0, 1.0))

@@ -10,7 +10,7 @@ import moderngl
 import numpy as np
 
 from skinviewer.ground.constants import FLOAT_MAX, HALF_MAX
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, whole
 from skinviewer.passes.rules import light_on
 from skinviewer.scene.texels import border_gutters, seam_indirection
 
@@ -26,19 +26,18 @@ class GutterMapPass(Pass):
     on the mesh and the texture size only, so it runs once per scene/size. With render.texel_surface
     the coverage and the texel positions come from the texel surface map of the same size (its
     TexelSurfacePass is in every graph that has this pass) instead of two more rasters of the mesh.
-    ``size_setting`` is the dotted path of the texture size it serves (e.g. gosselin.light_map_size)."""
+    ``size_of(r)``: the texture size it serves (reads e.g. ``r.settings.gosselin.light_map_size``)."""
 
-    def __init__(self, size_setting: str, name: str | None = None, size_of=None):
-        self.size_setting = size_setting
-        self.name = name or f"gutter_map[{size_setting}]"
-        self.size_of = size_of  # optional: size from a rule (e.g. screen coverage), given r
+    def __init__(self, name: str, size_of):
+        self.name = name
+        self.size_of = size_of
 
     def _n(self, r) -> int:
-        return self.size_of(r) if self.size_of is not None else r.setting(self.size_setting)
+        return int(self.size_of(r))
 
     def reflect(self, r: Reflection) -> None:
         size = self._n(r)
-        seam = seam_resource(size) if r.setting("scene.seam_aware") else None
+        seam = seam_resource(size) if r.settings.scene.seam_aware else None
         # the coverage from the texel surface map's positions (render.texel_surface), or rasterised
         surface = texel_surface_resources(size, "p")[0] if texel_shading(r) else None
         r.plan(size=size, surface=surface, gutter=gutter_resource(size), gutter_spec=gutter_spec(size), seam=seam,
@@ -221,16 +220,17 @@ class TexelSurfacePass(Pass):
         self.name, self.size_of, self.maps = name, size_of, maps
 
     def reflect(self, r: Reflection) -> None:
-        if not r.peek("render.texel_surface"):  # shape only: the map's content does not depend on it
+        if not r.peeked.render.texel_surface:  # shape only: the map's content does not depend on it
             return
         n = self.size_of(r)
         env = _env_vis_defines(r)
-        from skinviewer.passes.environment import ENV_FIELDS, env_index
-        if env:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
-            r.section(f"lights.{env_index(r)}", ENV_FIELDS)
+        from skinviewer.passes.environment import declare_env_fields, env_index
+        i = env_index(r) if env else None
+        if i is not None:  # the v map holds the vertex's shadowed irradiance (lib/mesh_vs.glsl): it follows the light
+            declare_env_fields(r.settings.lights[i])
         r.program("texel_surface", **env)
         maps = texel_surface_resources(n, self.maps + ("v" if env else ""))
-        r.plan(environment=env_index(r) if env else None, maps=maps)
+        r.plan(environment=i, maps=maps)
         for res in maps:
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
@@ -248,14 +248,14 @@ def _env_vis_defines(r) -> dict[str, int]:
     from skinviewer.passes.environment import depend_on_bake, env_defines, env_index
     d = env_defines(r)
     if d.get("ENV_RAYS", 0) > 0:
-        depend_on_bake(r, r.peek(f"lights.{env_index(r)}"))
+        depend_on_bake(r, whole(r.peeked.lights[env_index(r)]))
     return d if d.get("ENV_RAYS", 0) > 0 else {}
 
 
 def texel_shading(r) -> bool:
     """render.texel_surface: texture-space shading reads the texel surface map (one fragment per
     texel) instead of rasterising the mesh unwrapped; r: a Reflection or ExecuteContext."""
-    return bool(r.setting("render.texel_surface"))
+    return bool(r.settings.render.texel_surface)
 
 
 def shading_program(r, base: str) -> str:
@@ -290,7 +290,7 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
         defines = {**defines, "ENV_TEXELS": 1}
     for res in texel_surface_resources(size, maps):
         r.input(res)
-    steps = steps or any(light_on(light) and light.kind == "beam" for light in r.setting("lights"))
+    steps = steps or any(light_on(light) and light.kind == "beam" for light in whole(r.settings.lights))
     r.plan(shading=Shading(shading_program(r, base), size, True, maps))
     declare_unwrapped(r, shading_program(r, base), size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
 

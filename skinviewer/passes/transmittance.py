@@ -1,53 +1,54 @@
 """Jimenez 2010's transmittance (seed 001 §3.5, eq. 3.18; spec §6.2) for the passes that shade it: the
 uniforms of shaders/lib/tr_thickness.glsl (the thickness from the shadow maps) and lib/tr_profile.glsl
 (the profile T(d)). Used by the screen-space lighting and transmittance passes and by pre-integrated
-skin (passes/penner.py)."""
+skin (passes/penner.py). ``profile(settings)``: the Gaussians (variance mm^2, RGB weights) of T(d)."""
 from __future__ import annotations
 
 import numpy as np
 
 from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS
+from skinviewer.kernel.pass_api import declare, whole
 from skinviewer.physics import burley as B
 from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
-
-TR_FIELDS = ("translucency", "form")
 
 
 def set_thickness_uniforms(ec, prog) -> None:
     """lib/tr_thickness.glsl: each lit slot's inverse light matrix, the shadow maps' planned size (the
-    maps as made: shadow.map_size_mode auto), the wrap and mm per mesh unit. Needs the pass to have
-    declared the lighting (declare_lighting) and transmittance.wrap."""
+    maps as made: shadow.map_size_mode auto), the wrap and mm per mesh unit. The pass has declared the
+    lighting (declare_lighting) and transmittance.wrap."""
     scene = ec.scene
     inv = np.tile(np.eye(4, dtype=np.float32), (MAX_LIGHTS, 1, 1))
-    lights = ec.setting("lights")
+    lights = whole(ec.settings.lights)
     for slot, i in enumerate(ec.plan.light_slots):  # the slots of set_lighting (declare_lighting)
         inv[slot] = np.linalg.inv(scene.light_space(lights[i]).gl_matrix).T  # column-major
-    ec.uniforms(prog, u_tr_wrap=float(ec.setting("transmittance.wrap")), u_light_matrix_inv=inv,
+    ec.uniforms(prog, u_tr_wrap=float(ec.settings.transmittance.wrap), u_light_matrix_inv=inv,
                 u_shadow_map_size=int(ec.plan.shadow_map_size), u_mm_per_unit=float(scene.mm_per_unit))
 
 
-def declare_profile(r, profile: str, model: int) -> None:
-    """Declare what set_profile_uniforms reads: the transmittance section and the profile (the sum of
-    Gaussians at ``profile``, or Burley's section for model 1 or 2)."""
-    r.section("transmittance", TR_FIELDS)
+def declare_profile(r, profile, model: int) -> None:
+    """Declare what set_profile_uniforms reads: translucency and form, and the profile (the sum of
+    Gaussians ``profile(settings)``, or Burley's section for model 1 or 2)."""
+    tr = r.settings.transmittance
+    declare(tr.translucency, tr.form)
     if model:
-        r.section("burley", B.PROFILE_FIELDS)
+        b = r.settings.burley
+        declare(b.albedo, b.mfp, b.fit, b.scale)  # physics.burley.profile_of_section
     else:
-        r.setting(profile)
+        declare(profile(r.settings))
 
 
-def set_profile_uniforms(ec, prog, profile: str, model: int) -> None:
-    """lib/tr_profile.glsl: model 0, Jimenez 2010's sum of Gaussians at ``profile`` with [SEP]'s profile
-    distance per mm of thickness, 8.25 (1 - translucency) / sssWidth; 1 or 2, Burley's T(t) with
-    S = 1/d per channel (spec §5.4)."""
-    tr = ec.section("transmittance", TR_FIELDS)
-    gs = [] if model else [(float(g.variance), tuple(g.weights)) for g in ec.setting(profile)][:MAX_GAUSSIANS]
+def set_profile_uniforms(ec, prog, profile, model: int) -> None:
+    """lib/tr_profile.glsl: model 0, Jimenez 2010's sum of Gaussians with [SEP]'s profile distance per mm
+    of thickness, 8.25 (1 - translucency) / sssWidth; 1 or 2, Burley's T(t), S = 1/d per channel
+    (spec §5.4)."""
+    tr = ec.settings.transmittance
+    gs = [] if model else [(float(g.variance), tuple(g.weights)) for g in whole(profile(ec.settings))][:MAX_GAUSSIANS]
     w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
     v = np.zeros(MAX_GAUSSIANS, np.float32)
     for i, (var, wt) in enumerate(gs):
         w[i], v[i] = wt, var
     if model:
-        S = B.profile_of_section(ec.section("burley", B.PROFILE_FIELDS)).S
+        S = B.profile_of_section(ec.settings.burley).S
         ec.uniforms(prog, u_tr_model=model, u_tr_S=tuple(float(x) for x in S), u_tr_scale=1.0)
     else:
         ec.uniforms(prog, u_tr_model=0, u_tr_scale=float(SEP_SCALE * (1.0 - tr.translucency) / SEP_WIDTH_MM))

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from skinviewer.ground.constants import MAX_GAUSSIANS
 from skinviewer.passes.deon import (
-    SIZE,
     BorderFramePass,
     DeonFinalPass,
     DiffuseSumPass,
@@ -26,8 +25,8 @@ from skinviewer.techniques.base import Config, Technique, shadow_passes
 
 def build():
     return (shadow_passes()
-            + [GutterMapPass(SIZE, name="deon_gutter", size_of=map_size),
-               GutterMapPass(SIZE, name="deon_gutter_half", size_of=transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
+            + [GutterMapPass("deon_gutter", map_size),
+               GutterMapPass("deon_gutter_half", transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TexelSurfacePass("deon_texel_surface", map_size),
                TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass(), GatherSurfacePass(),
                BorderFramePass()]

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from skinviewer.passes.deon import StretchPass
 from skinviewer.passes.gosselin import (
-    SIZE,
     STRETCH,
     GosselinFinalPass,
     GosselinLightMapPass,
     GosselinRadiusMapPass,
     PoissonBlurPass,
+    light_map_size,
 )
 from skinviewer.passes.luts import BeckmannLutPass
 from skinviewer.passes.output import OutputPass
@@ -19,9 +19,9 @@ from skinviewer.techniques.base import Technique, shadow_passes
 
 def build():
     return shadow_passes() + [
-        GutterMapPass(SIZE), TexelSurfacePass("gosselin_texel_surface", lambda r: r.setting(SIZE)),
+        GutterMapPass("gosselin_gutter", light_map_size), TexelSurfacePass("gosselin_texel_surface", light_map_size),
         GosselinLightMapPass(), GosselinRadiusMapPass(),
-        StretchPass("gosselin_stretch", STRETCH, lambda r: r.setting(SIZE)), PoissonBlurPass(),
+        StretchPass("gosselin_stretch", STRETCH, light_map_size), PoissonBlurPass(),
         BeckmannLutPass(), GosselinFinalPass(), OutputPass("lit"),
     ]
 

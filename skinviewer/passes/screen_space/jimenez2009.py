@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinviewer.ground.constants import MAX_GAUSSIANS
-from skinviewer.kernel.pass_api import Pass, Reflection
+from skinviewer.kernel.pass_api import Pass, Reflection, declare, whole
 from skinviewer.passes.screen_space.blur import SeparableScreenBlur, blur_spec
 from skinviewer.passes.screen_space.lighting import DIFFUSE, screen_size
 from skinviewer.physics.separable import focal_px, gaussian_taps, incremental_sigmas, limit_gaussians
@@ -26,7 +26,7 @@ def blur_resource(i: int) -> str:
 
 
 def gaussian_count(r) -> int:
-    return min(r.peek("deon.gaussians.#"), r.peek("ssss.gaussians"), MAX_GAUSSIANS)
+    return min(len(r.peeked.deon.gaussians), r.peeked.ssss.gaussians, MAX_GAUSSIANS)
 
 
 class SsssBlurPass(SeparableScreenBlur):
@@ -39,13 +39,14 @@ class SsssBlurPass(SeparableScreenBlur):
     def declare(self, r: Reflection) -> bool:
         if gaussian_count(r) <= self.i:
             return False
-        r.setting("ssss.gaussians")
-        vs = [r.setting(f"deon.gaussians.{k}.variance") for k in range(self.i + 1)]
-        r.section("ssss", ("alpha", "beta"))
-        taps = int(r.setting("ssss.taps"))
+        declare(r.settings.ssss.gaussians)
+        vs = [r.settings.deon.gaussians[k].variance for k in range(self.i + 1)]
+        p = r.settings.ssss
+        declare(p.alpha, p.beta)
+        taps = int(p.taps)
         # this step's increment sqrt(v_i - v_(i-1)) (seed 000 eq. 24); the focal length in pixels (eq. 3.2)
         r.plan(taps=taps, sigma_mm=float(incremental_sigmas(vs)[self.i]),
-               focal=float(focal_px(r.setting("camera.fov_y"), screen_size(r)[1])))
+               focal=float(focal_px(r.settings.camera.fov_y, screen_size(r)[1])))
         r.program("ss_gauss_blur", TAPS=taps)
         return True
 
@@ -54,7 +55,7 @@ class SsssBlurPass(SeparableScreenBlur):
 
     def set_uniforms(self, ec, prog) -> None:
         x, w = gaussian_taps(ec.plan.taps)
-        p = ec.section("ssss", ("alpha", "beta"))
+        p = ec.settings.ssss
         ec.uniforms(prog, u_x=x, u_w=w, u_sigma_mm=ec.plan.sigma_mm, u_alpha=float(p.alpha), u_beta=float(p.beta),
                     u_focal=ec.plan.focal)
 
@@ -68,8 +69,8 @@ class SsssSumPass(Pass):
 
     def reflect(self, r: Reflection) -> None:
         n = gaussian_count(r)
-        r.setting("deon.gaussians")
-        r.setting("ssss.gaussians")
+        declare(r.settings.deon.gaussians)
+        declare(r.settings.ssss.gaussians)
         r.input(DIFFUSE)
         blurs = tuple(blur_resource(i) for i in range(n))
         for res in blurs:
@@ -80,8 +81,8 @@ class SsssSumPass(Pass):
 
     def execute(self, ec) -> None:
         prog = ec.program("ss_gauss_sum")
-        gs = [(g.variance, g.weights) for g in ec.setting("deon.gaussians")]
-        kept = limit_gaussians(gs, int(ec.setting("ssss.gaussians")))[:MAX_GAUSSIANS]
+        gs = [(g.variance, g.weights) for g in whole(ec.settings.deon.gaussians)]
+        kept = limit_gaussians(gs, int(ec.settings.ssss.gaussians))[:MAX_GAUSSIANS]
         w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
         for i, (_, wt) in enumerate(kept):
             w[i] = wt

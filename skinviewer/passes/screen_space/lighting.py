@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinviewer.ground.constants import MAX_LIGHTS, REGIONS
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     bind_specular,
     bind_surface,
@@ -41,17 +41,22 @@ def transmittance_slots(r) -> int:
     the environment's translucency (issue 32: its back-side irradiance at the baked thickness; when
     the environment has its visibility bake), at most TR_SLOTS (declares transmittance.enabled and
     the lights); 0: the transmittance is off or nothing comes through."""
-    if not r.setting("transmittance.enabled"):
+    if not r.settings.transmittance.enabled:
         return 0
-    n = sum(1 for l in r.setting("lights")[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
+    n = sum(1 for l in whole(r.settings.lights)[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
     if env_defines(r).get("ENV_RAYS", 0) > 0:
         n += 1
     return min(n, TR_SLOTS)
 
 
+def deon_gaussians(settings):
+    """The profile the screen-space transmittance uses by default: ``deon.gaussians``."""
+    return settings.deon.gaussians
+
+
 def screen_size(r) -> tuple[int, int]:
     """The render size (declares render.width/height)."""
-    return int(r.setting("render.width")), int(r.setting("render.height"))
+    return int(r.settings.render.width), int(r.settings.render.height)
 
 
 def texturing_exponent(texturing: str, mix: float) -> float:
@@ -71,10 +76,11 @@ class ScreenLightingPass(Pass):
     def reflect(self, r: Reflection) -> None:
         defines = {**declare_lighting(r), **declare_environment(r)}
         declare_specular(r)
-        r.section("screen", ("texturing", "mix", "non_skin_regions"))
+        sc = r.settings.screen
+        declare(sc.texturing, sc.mix, sc.non_skin_regions)
         k = transmittance_slots(r)
         if k:  # the thickness and weights here; the profile in ScreenTransmittancePass
-            r.setting("transmittance.wrap")
+            declare(r.settings.transmittance.wrap)
         size = screen_size(r)
         r.program("ss_lighting", TR_TARGETS=k, **defines)
         declare_view_mesh(r)
@@ -98,7 +104,7 @@ class ScreenLightingPass(Pass):
         set_lighting(ec, prog)
         set_environment(ec, prog)
         bind_specular(ec, prog)
-        sc = ec.section("screen", ("texturing", "mix", "non_skin_regions"))
+        sc = ec.settings.screen
         non_skin = set(sc.non_skin_regions)
         sss = np.array([0.0 if name in non_skin else 1.0 for name in REGIONS], np.float32)
         ec.uniforms(prog, u_view=gl_bytes(ec.view.view), u_mm_per_unit=float(scene.mm_per_unit),
@@ -115,12 +121,12 @@ class ScreenTransmittancePass(Pass):
     """Jimenez 2010's transmittance profile applied to the lighting pass's thickness and weights
     (seed 001 eq. 3.18, spec §6.2; Burley's T(t) for the Burley techniques, spec §5.4): ss_diffuse =
     the direct diffuse + sum_k weight_k T(thickness_k x scale). A profile, translucency or form edit
-    re-runs this full-screen pass only, not the lighting (issue 27). ``transmittance_profile``: the
-    settings path of the Gaussians (variance mm^2, RGB weights) whose T(d) it uses."""
+    re-runs this full-screen pass only, not the lighting (issue 27). ``transmittance_profile(settings)``:
+    the Gaussians (variance mm^2, RGB weights) whose T(d) it uses, from ``r.settings``/``ec.settings``."""
     name = "ss_transmittance"
     tileable = True  # one full-screen draw: in row bands under a frame budget
 
-    def __init__(self, transmittance_profile: str = "deon.gaussians", burley: bool = False):
+    def __init__(self, transmittance_profile=deon_gaussians, burley: bool = False):
         self.transmittance_profile = transmittance_profile
         self.burley = burley  # the Burley techniques: burley.transmission picks Burley's T(t) (spec §5.4)
 
@@ -128,7 +134,7 @@ class ScreenTransmittancePass(Pass):
         """0: Jimenez 2010's Gaussian T(d); 1: Burley closed form; 2: Burley thick (HDRP)."""
         if not self.burley:
             return 0
-        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.setting("burley.transmission")]
+        return {"jimenez2010": 0, "closed-form": 1, "thick": 2}[r.settings.burley.transmission]
 
     def reflect(self, r: Reflection) -> None:
         k = transmittance_slots(r)
@@ -155,7 +161,7 @@ class ScreenTransmittancePass(Pass):
             ec.draw_fullscreen(prog, DIFFUSE)
 
 
-def screen_lighting(transmittance_profile: str = "deon.gaussians", burley: bool = False) -> list[Pass]:
+def screen_lighting(transmittance_profile=deon_gaussians, burley: bool = False) -> list[Pass]:
     """The screen-space techniques' lighting: ScreenLightingPass and, when the transmittance is on,
     ScreenTransmittancePass (which writes ss_diffuse then)."""
     return [ScreenLightingPass(), ScreenTransmittancePass(transmittance_profile, burley)]

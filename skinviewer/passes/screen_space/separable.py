@@ -9,13 +9,12 @@ per-pixel rotation of the inner taps (seed 001 §3.3.4).
 """
 from __future__ import annotations
 
+from skinviewer.kernel.pass_api import declare
 from skinviewer.passes.screen_space.blur import SeparableScreenBlur
 from skinviewer.passes.screen_space.lighting import DIFFUSE, screen_size
 from skinviewer.physics.separable import focal_px, separable_kernel
 
 OUTPUT = "separable_diffuse"
-FIELDS = ("taps", "strength", "falloff", "width_mm", "follow_surface", "follow_surface_mm", "rotation",
-          "rotation_fraction")
 
 
 class SeparableBlurPass(SeparableScreenBlur):
@@ -24,9 +23,11 @@ class SeparableBlurPass(SeparableScreenBlur):
         super().__init__("separable_blur", DIFFUSE, OUTPUT)
 
     def declare(self, r) -> bool:
-        sp = r.section("separable", FIELDS)
+        sp = r.settings.separable
+        declare(sp.taps, sp.strength, sp.falloff, sp.width_mm, sp.follow_surface, sp.follow_surface_mm, sp.rotation,
+                sp.rotation_fraction)
         # the tap spacing's focal length in pixels (eq. 3.2's stretch)
-        r.plan(focal=float(focal_px(r.setting("camera.fov_y"), screen_size(r)[1])), taps=int(sp.taps))
+        r.plan(focal=float(focal_px(r.settings.camera.fov_y, screen_size(r)[1])), taps=int(sp.taps))
         r.program("ss_separable_blur", TAPS=int(sp.taps))
         return True
 
@@ -34,7 +35,7 @@ class SeparableBlurPass(SeparableScreenBlur):
         return ec.program("ss_separable_blur")
 
     def set_uniforms(self, ec, prog) -> None:
-        sp = ec.section("separable", FIELDS)
+        sp = ec.settings.separable
         k, x = separable_kernel(ec.plan.taps, sp.strength, sp.falloff)
         ec.uniforms(prog, u_k=k, u_x=x, u_width_mm=float(sp.width_mm),
                     u_focal=ec.plan.focal,
