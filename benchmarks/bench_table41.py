@@ -36,6 +36,7 @@ import numpy as np
 
 from skinviewer.engine.renderer import Renderer
 from skinviewer.ground.settings import Settings, parse_assignments, with_values
+from skinviewer.kernel.frame_view import FrameView
 from skinviewer.kernel.gl import describe, headless_context
 from skinviewer.kernel.graph import FrameInputs, RenderGraph
 from skinviewer.passes.burley import (
@@ -140,10 +141,13 @@ def run_frame(r: Renderer, g: RenderGraph, s: Settings):
     for p in g.passes:
         if isinstance(p, BurleyTemporalPass):
             p.release()  # each measurement starts its running mean afresh (no history from another framing)
+    # this table's own camera: aimed at the whole mesh's centre (its framings are fractions of the distance
+    # that frames the whole mesh), and the frame's view the passes and rules read (kernel/frame_view)
     view = orbit_view(s.camera, scene.gpu.center, scene.gpu.radius, (s.render.width, s.render.height))
+    fv = FrameView(view, scene.gpu, float(s.camera.fov_y))
     for _ in range(65):  # burley2.temporal <= 64
-        g.run(FrameInputs(settings=s, scene=scene.gpu, scene_version=r.scene_version, view=view, view_key=view.key()),
-              timing="sync")
+        g.run(FrameInputs(settings=s, scene=scene.gpu, scene_version=r.scene_version, view=fv.camera, view_key=fv.key,
+                          frame_view=fv), timing="sync")
         if not g.refining:
             break
     ms = sum(p.ms or 0.0 for p in g.last_report.passes if p.name in ("burley_blur", "burley_reuse", "burley_temporal"))

@@ -56,24 +56,27 @@ def test_rule_picks_a_level_from_coverage_with_hysteresis(renderer):
     renderer.render(s)
     gpu = renderer.scene.gpu
     d0 = float(np.linalg.norm(renderer.view(s).eye - gpu.center))
+
+    def lod(x, st):  # the rule on the frame's view the renderer builds for x
+        return rules.mesh_lod(x, renderer.frame_view(x), st)
     state: dict = {}
-    assert rules.mesh_lod(s, gpu, state) == (0, "")  # a close-up keeps every triangle
+    assert lod(s, state) == (0, "")  # a close-up keeps every triangle
     far = with_values(s, {"camera.distance": d0 * 12})
-    level, why = rules.mesh_lod(far, gpu, {})
+    level, why = lod(far, {})
     assert level == len(gpu.lod_triangles) - 1 and "from screen coverage" in why
-    assert rules.mesh_lod(with_values(far, {"render.mesh_lod": "full"}), gpu, {}) == (0, "")
+    assert lod(with_values(far, {"render.mesh_lod": "full"}), {}) == (0, "")
     # find the distance where level 1 begins, then step just across it and back: no flip-flop
     lo, hi = 1.0, 12.0
     for _ in range(30):
         mid = 0.5 * (lo + hi)
-        if rules.mesh_lod(with_values(s, {"camera.distance": d0 * mid}), gpu, {})[0] >= 1:
+        if lod(with_values(s, {"camera.distance": d0 * mid}), {})[0] >= 1:
             hi = mid
         else:
             lo = mid
     state = {}
-    assert rules.mesh_lod(with_values(s, {"camera.distance": d0 * hi * 1.02}), gpu, state)[0] == 1
-    assert rules.mesh_lod(with_values(s, {"camera.distance": d0 * lo * 0.98}), gpu, state)[0] == 1  # held
-    assert rules.mesh_lod(with_values(s, {"camera.distance": d0 * lo * 0.6}), gpu, state)[0] == 0
+    assert lod(with_values(s, {"camera.distance": d0 * hi * 1.02}), state)[0] == 1
+    assert lod(with_values(s, {"camera.distance": d0 * lo * 0.98}), state)[0] == 1  # held
+    assert lod(with_values(s, {"camera.distance": d0 * lo * 0.6}), state)[0] == 0
 
 
 @pytest.mark.parametrize("technique", ["phong", "deon"])

@@ -137,6 +137,7 @@ def test_auto_map_size_follows_coverage_with_hysteresis(renderer):
     class R:  # a minimal reflection
         _settings = near
         scene = g
+        view = renderer.frame_view(near)
         def __init__(self, st): self.state = st
         def setting(self, p):
             from skinviewer.ground.settings import get_path
@@ -144,7 +145,7 @@ def test_auto_map_size_follows_coverage_with_hysteresis(renderer):
 
     r = R(state)
     n0 = rules.coverage_size(r, near.deon.irradiance_size, near.deon.irradiance_size_mode, "irradiance")
-    wanted = rules.wanted_map_size(near, g)
+    wanted = rules.wanted_map_size(renderer.frame_view(near))
     assert n0 >= wanted / rules.HYSTERESIS
     key = next(iter(state))
     state[key] = n0 * 2 if n0 * 2 <= 512 else n0  # as if it was larger: stays inside the band
@@ -266,8 +267,7 @@ def test_kernel_under_a_pixel_skips_the_diffusion_chain(renderer):
     full = with_values(s, {"deon.subpixel_kernel_px": 0.0})
     renderer.render(full)
     ref = renderer.read(full, "lit")
-    scene = renderer.scene.gpu
-    px = kernel_px(s, scene)
+    px = kernel_px(s, renderer.frame_view(s))
     assert 0.05 < px < s.deon.subpixel_kernel_px
     rep = renderer.render(s)
     for name in ("deon_blur_3", "deon_tsm"):
@@ -349,4 +349,4 @@ def test_rules_see_the_rendered_camera_on_a_bust(renderer):
     # pixels per mm at the framed centre, from the rendered projection (pinhole, small angle)
     px_per_mm = s.render.height / (2.0 * d * math.tan(math.radians(s.camera.fov_y) / 2)) / 48.0
     v = max(g.variance for g in s.deon.gaussians if max(g.weights) > 0)
-    assert rules.kernel_px(s, gpu) == pytest.approx(math.sqrt(v) * px_per_mm, rel=0.05)
+    assert rules.kernel_px(s, renderer.frame_view(s)) == pytest.approx(math.sqrt(v) * px_per_mm, rel=0.05)

@@ -26,8 +26,8 @@ def test_the_start_worker_makes_what_the_first_frame_would_and_the_frame_reuses_
     specular._rho_tables.cache_clear()
     assert warm_scene(fresh, s) == []
     gpu = fresh.scene.gpu
-    assert "has_border" in gpu.__dict__.get("_texel_tables", {})
-    assert any(isinstance(k, tuple) and k[0] == "thick" for k in gpu.__dict__.get("_rules_cache", {}))
+    assert "has_open_border" in vars(gpu)  # the open-border test, made (a cached property)
+    assert any(isinstance(k, tuple) and k[0] == "thick" for k in gpu.caches.rules)
     assert specular._rho_tables.cache_info().currsize >= 1
     calls = []
     real_border = mesh_mod.border_half_edges
@@ -45,7 +45,7 @@ def test_the_start_worker_makes_what_the_first_frame_would_and_the_frame_reuses_
 def test_the_scene_arrays_made_ahead_are_the_ones_uploaded(renderer):
     """prepare_gpu_arrays (the start's worker) gives the bytes the GpuScene uploads, and the copies go
     once uploaded."""
-    from skinviewer.kernel.gpu_scene import prepare_gpu_arrays
+    from skinviewer.kernel.gpu_scene import prepare_gpu_arrays, prepared_gpu_arrays
     from skinviewer.scene.scenes import build_scene
     mesh = build_scene("shadow-edge").mesh
     arrays = prepare_gpu_arrays(mesh)
@@ -55,7 +55,7 @@ def test_the_scene_arrays_made_ahead_are_the_ones_uploaded(renderer):
     s = small_settings("shadow-edge", "phong", size=32)
     gpu = renderer.ensure_scene(s).gpu
     assert gpu.vbo.read() == gpu.mesh.interleaved().tobytes()
-    assert "_gpu_arrays" not in gpu.mesh.__dict__
+    assert prepared_gpu_arrays(gpu.mesh) is None  # uploaded: the copies are gone
 
 
 def test_a_first_frame_is_spread_over_several_under_a_budget(renderer):
@@ -102,6 +102,6 @@ def test_the_viewer_start_warms_in_a_worker_and_the_first_render_waits_for_it():
         app.step(1)
         assert app.warm is None and app.frame.report is not None and app.frame.report.complete
         gpu = app.renderer.scene.gpu
-        assert "_rules_cache" in gpu.__dict__ or "_texel_tables" in gpu.__dict__  # the worker's caches
+        assert gpu.caches.rules or "has_open_border" in vars(gpu)  # the worker's caches
     finally:
         destroy_app(app)

@@ -78,7 +78,7 @@ def test_gutter_and_seam_maps_from_the_texel_surface(renderer, technique):
     for on in (False, True):
         s = with_values(base, {"render.texel_surface": on})
         renderer.render(s)
-        renderer.scene.__dict__.pop("_texel_tables", None)  # the CPU tables are rebuilt, not reused
+        renderer.scene.gpu.caches.texel_tables.clear()  # the CPU tables are rebuilt, not reused
         renderer.render(s, force=True)
         g = renderer.graph(technique)
         out[on] = {k: g.read(k) for k in g.resources() if k.startswith(("gutter_", "seam_"))}

@@ -211,8 +211,8 @@ def test_a_band_draws_only_the_triangles_that_reach_its_rows(renderer, monkeypat
     counts: list[tuple[int, int]] = []
     real = GpuServices.band_vao
 
-    def spy(self, prog, scene, lod, space, matrix, rows, band):
-        vao, n = real(self, prog, scene, lod, space, matrix, rows, band)
+    def spy(self, prog, scene, lod, space, matrix, rows, band, **kw):
+        vao, n = real(self, prog, scene, lod, space, matrix, rows, band, **kw)
         counts.append((n, scene.lod_mesh(lod).indices.size))
         return vao, n
     monkeypatch.setattr(GpuServices, "band_vao", spy)

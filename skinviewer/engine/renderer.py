@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from skinviewer import techniques
 from skinviewer.ground.settings import Settings
+from skinviewer.kernel.frame_view import FrameView
 from skinviewer.kernel.gpu_scene import GpuScene
 from skinviewer.kernel.graph import FrameInputs, FrameReport, RenderGraph, TexturePool
 from skinviewer.kernel.shaders import ShaderLibrary
@@ -52,7 +53,8 @@ class Renderer:
         self.scene: LoadedScene | None = None
         self.scene_version = 0
         self._lod_state: dict[str, Any] = {}  # the mesh-LOD rule's hysteresis
-        self.last_view: View | None = None
+        self.last_view: View | None = None  # the last frame's camera (last_frame_view.camera)
+        self.last_frame_view: FrameView | None = None
         # bytes textures may use (None: what the system has, see available_memory); tests set it
         self.memory_limit: int | None = _env_bytes("SKINVIEWER_MEMORY_LIMIT")
         # the viewer's: an environment visibility bake not in the disk cache runs in the background
@@ -96,8 +98,7 @@ class Renderer:
             desc = sdef.description
         mesh.check_renderable()
         mesh = load_texture_maps(mesh, sc.albedo_map, sc.normal_map, sc.specular_map, sc.region_map)
-        gpu = GpuScene(self.ctx, mesh, mm)
-        gpu.env_bake_async = self.env_bake_background
+        gpu = GpuScene(self.ctx, mesh, mm, env_bake_async=self.env_bake_background)
         if self.scene is not None:
             self.scene.gpu.release()
         self.scene = LoadedScene(key, gpu, desc, notes)
@@ -132,9 +133,20 @@ class Renderer:
         n += sum(int(t.extra.nbytes) for lst in self.pool._free.values() for t in lst)
         return n
 
+    def frame_view(self, s: Settings) -> FrameView:
+        """The frame's view of the scene and camera for ``s`` (kernel/frame_view.FrameView): the one
+        place the rendered camera is built from settings (scene/camera.framed_view: the head of a bust
+        framed). ``render`` builds one a frame and hands it to the passes and the scene rules alike."""
+        return self.build_frame_view(s, self.ensure_scene(s).gpu)
+
+    @staticmethod
+    def build_frame_view(s: Settings, gpu: GpuScene) -> FrameView:
+        """``frame_view`` on a loaded scene (no GL: the start's worker, ui/warm.py, calls it too)."""
+        return FrameView(framed_view(s.camera, gpu, (s.render.width, s.render.height)), gpu, float(s.camera.fov_y))
+
     def view(self, s: Settings) -> View:
-        gpu = self.ensure_scene(s).gpu
-        return framed_view(s.camera, gpu, (s.render.width, s.render.height))
+        """The camera ``render`` draws ``s`` with (frame_view's)."""
+        return self.frame_view(s).camera
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
                force: bool = False, budget_ms: float | None = None, variant: str = "") -> FrameReport:
@@ -146,12 +158,12 @@ class Renderer:
         env = rules.environment_light(s.lights)
         if env is not None:  # a bad environment file: one clear error before any pass runs
             environment_image(env[1].environment, env[1].layout)
-        view = framed_view(s.camera, scene.gpu, (s.render.width, s.render.height))
-        self.last_view = view
+        fv = self.build_frame_view(s, scene.gpu)  # once a frame: the passes' camera and the rules' view
+        self.last_view, self.last_frame_view = fv.camera, fv
         g = self.graph(s.technique, variant)
-        lod, lod_note = rules.mesh_lod(s, scene.gpu, self._lod_state)
-        frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
-                            view_key=view.key(), mesh_lod=lod, lod_note=lod_note)
+        lod, lod_note = rules.mesh_lod(s, fv, self._lod_state)
+        frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=fv.camera,
+                            view_key=fv.key, mesh_lod=lod, lod_note=lod_note, frame_view=fv)
         report = g.run(frame, targets=targets, timing=self.timing_mode(timing or s.render.timing), force=force,
                        budget_ms=budget_ms)
         self.ctx.screen.use() if self.ctx.screen is not None else None

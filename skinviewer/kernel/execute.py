@@ -250,14 +250,17 @@ class ExecuteContext:
             self.gl.disable(moderngl.CULL_FACE)
         self._apply(prog)
         lod = self._frame.mesh_lod
+        # the environment bake the vertex arrays bind: the program's own ENV_RAYS (lib/mesh_vs.glsl reads
+        # the transfer vectors only when ENV_RAYS > 0), so no pass sets it on the scene
+        env_rays = int(self.graph.shaders.program_defines(prog).get("ENV_RAYS", 0))
         if rect is not None and space is not None:
             matrix = self.view.view_proj if space == "camera" else None
             vao, count = self.graph.gpu.band_vao(prog, scene, lod, space, matrix, fbo.size[1],
-                                                 (rect[1], rect[1] + rect[3]))
+                                                 (rect[1], rect[1] + rect[3]), env_rays=env_rays)
             if count:
                 vao.render(vertices=count)
         else:
-            self.graph.gpu.mesh_vao(prog, scene, lod).render()
+            self.graph.gpu.mesh_vao(prog, scene, lod, env_rays).render()
         self.gl.disable(moderngl.CULL_FACE)
         if rect is not None:
             fbo.scissor = None  # type: ignore[assignment]  # moderngl's stub omits None (documented: scissor off)

@@ -55,8 +55,11 @@ class GpuServices:
         """A VAO without buffers: the vertex stage makes a full-screen triangle from gl_VertexID."""
         return self._vao(prog, None, lambda: self.ctx.vertex_array(prog, []))
 
-    def mesh_vao(self, prog: moderngl.Program, scene: GpuScene, lod: int = 0) -> moderngl.VertexArray:
-        """The scene's mesh at level of detail ``lod`` (``scene.vertex_array(prog, lod)``) for ``prog``."""
+    def mesh_vao(self, prog: moderngl.Program, scene: GpuScene, lod: int = 0, env_rays: int = 0) -> moderngl.VertexArray:
+        """The scene's mesh at level of detail ``lod`` (``scene.vertex_array(prog, lod)``) for ``prog``;
+        ``env_rays``: the environment bake it binds (the program's ENV_RAYS, 0: none; one per program)."""
+        if env_rays:
+            return self._vao(prog, scene, lambda: scene.vertex_array(prog, lod, env_rays=env_rays), lod)
         return self._vao(prog, scene, lambda: scene.vertex_array(prog, lod), lod)
 
     def keep_scene(self, scene: GpuScene | None) -> None:
@@ -69,7 +72,8 @@ class GpuServices:
             del self._band_rows[rkey]
 
     def band_vao(self, prog: moderngl.Program, scene: GpuScene, lod: int, space: str,
-                 matrix: np.ndarray | None, rows: int, band: tuple[int, int]) -> tuple[moderngl.VertexArray, int]:
+                 matrix: np.ndarray | None, rows: int, band: tuple[int, int],
+                 env_rays: int = 0) -> tuple[moderngl.VertexArray, int]:
         """The mesh for one row band ``band`` = (y0, y1) of a target ``rows`` high (issue 27): a VAO
         whose index buffer holds, in their order, only the triangles whose window rows reach the
         band (so a pass in n bands does not transform the whole mesh n times), and its index count.
@@ -91,7 +95,11 @@ class GpuServices:
         buf.orphan()  # a new store: no wait for the draws still reading the last band's
         if data.size:
             buf.write(data.tobytes())
-        vao = self._vao(prog, scene, lambda: scene.vertex_array(prog, lod, index_buffer=buf), ("band", lod))
+        if env_rays:
+            vao = self._vao(prog, scene, lambda: scene.vertex_array(prog, lod, index_buffer=buf, env_rays=env_rays),
+                            ("band", lod))
+        else:
+            vao = self._vao(prog, scene, lambda: scene.vertex_array(prog, lod, index_buffer=buf), ("band", lod))
         return vao, int(data.size)
 
     def forget_program(self, prog: moderngl.Program) -> None:

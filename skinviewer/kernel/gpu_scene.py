@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import functools
 import hashlib
-from collections.abc import Sequence
+import threading
+import weakref
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -44,10 +47,34 @@ class LightPose(Protocol):
     def position(self) -> Sequence[float]: ...
 
 
-class GpuScene:
-    """Mesh buffers and texture maps on the GPU. Immutable: a changed scene is a new GpuScene."""
+@dataclass
+class SceneCaches:
+    """What the passes and the scene rules compute from a scene's mesh and keep for the scene's life
+    (the mesh is fixed for it): their explicit home, owned by the GpuScene (``GpuScene.caches``), so
+    that nothing outside the GpuScene sets an attribute on it (issue 28). Each table is keyed and
+    bounded by its owner."""
+    # texture-space CPU tables, by (kind, size, coverage digest): the gutter table and seam map
+    # (passes/texture_space), d'Eon's border frame (passes/deon); GpuScene.texel_table fills it
+    texel_tables: dict[tuple[Any, ...], bytes] = field(default_factory=dict)
+    # the scene rules' memory (passes/rules.py): the Embree scene and face normals, rays and lit
+    # pairs per light pose, vertex areas
+    rules: dict[Any, Any] = field(default_factory=dict)
+    # passes/rules.tsm_needed's answers per light pose, profile and view
+    tsm_needed: dict[tuple[Any, ...], tuple[bool, str]] = field(default_factory=dict)
 
-    def __init__(self, ctx: moderngl.Context, mesh: MeshData, mm_per_unit: float):
+
+@dataclass
+class _EnvState:
+    """The background environment bake's swap count and last error (GpuScene.env_poll writes them)."""
+    generation: int = 0
+    error: str = ""
+
+
+class GpuScene:
+    """Mesh buffers and texture maps on the GPU. Immutable: a changed scene is a new GpuScene, and no
+    attribute can be set once it is made (what passes keep for the scene's life goes in ``caches``)."""
+
+    def __init__(self, ctx: moderngl.Context, mesh: MeshData, mm_per_unit: float, env_bake_async: bool = False):
         self.ctx = ctx
         self.mesh = mesh
         self.mm_per_unit = float(mm_per_unit)
@@ -61,27 +88,43 @@ class GpuScene:
         self._uv_cov: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex UV covariance
         self._curvature: dict[int, moderngl.Buffer] = {}  # level of detail -> per-vertex curvature (mm^-1)
         self._env_vis: dict[tuple[int, int], moderngl.Buffer] = {}  # (level, rays) -> SH transfer vectors
-        self.env_rays = 256  # the bake the vertex arrays bind (set by passes/environment.set_environment)
         self.env_bake_seconds: dict[tuple[int, int], float] = {}  # (level, rays) -> seconds (0: from the cache)
         # the viewer's background bake (Renderer.env_bake_background): a bake not in the disk cache runs
         # in a thread while the vertex arrays hold the unoccluded transfer; env_poll swaps it in
-        self.env_bake_async = False
-        self.env_generation = 0  # +1 at each swap: the lit passes' cache key (passes/environment)
+        self.env_bake_async = bool(env_bake_async)
+        self._env = _EnvState()
         self._env_jobs: dict[tuple[int, int], _EnvBakeJob] = {}
         self._env_provisional: set[tuple[int, int]] = set()  # buffers holding the unoccluded stand-in
-        self.env_bake_error = ""
         self._lod_meshes: dict[int, MeshData] = {}
         self.albedo = self._texture(arrays["albedo"], "f2")
         self.has_normal_map = mesh.normal_map is not None
         self.normal_map = self._texture(arrays["normal_map"], "f2")
         self.specular_map = self._texture(arrays["specular_map"], "f2")
-        mesh.__dict__.pop("_gpu_arrays", None)  # uploaded: the copies are not kept
+        _forget_prepared(mesh)  # uploaded: the copies are not kept
         self.has_region_map = mesh.region_map is not None
         rm = mesh.region_map if mesh.region_map is not None else np.zeros((1, 1), np.uint8)
         self.region_map = ctx.texture((rm.shape[1], rm.shape[0]), 1, np.ascontiguousarray(rm).tobytes(),
                                       dtype="f1", alignment=1)
         self.region_map.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.region_ids = np.ascontiguousarray(rm)
+        self._light_spaces: dict[tuple[str, tuple[float, ...], tuple[float, ...]], LightSpace] = {}
+        self.caches = SceneCaches()
+        object.__setattr__(self, "_sealed", True)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if self.__dict__.get("_sealed", False):
+            raise AttributeError(f"GpuScene is immutable: cannot set '{name}' (what a pass keeps for the "
+                                 "scene's life goes in GpuScene.caches)")
+        object.__setattr__(self, name, value)
+
+    @property
+    def env_generation(self) -> int:
+        """+1 at each swap of a background bake: the lit passes' cache key (passes/environment)."""
+        return self._env.generation
+
+    @property
+    def env_bake_error(self) -> str:
+        return self._env.error
 
     def _texture(self, arr: np.ndarray, dtype: str) -> moderngl.Texture:
         arr = np.ascontiguousarray(arr, dtype=np.float16 if dtype == "f2" else np.float32)
@@ -95,14 +138,29 @@ class GpuScene:
     def light_space(self, light: LightPose) -> LightSpace:
         """The shadow map's / TSM's light space of ``light`` (a LightSettings or its pose section),
         fitted to this mesh (camera.light_space with its vertices), memoised per pose."""
-        memo: dict[tuple[str, tuple[float, ...], tuple[float, ...]], LightSpace]
-        memo = self.__dict__.setdefault("_light_spaces", {})
+        memo = self._light_spaces
         key = (light.kind, tuple(light.direction), tuple(light.position))
         if key not in memo:
             if len(memo) > 32:
                 memo.clear()
             memo[key] = light_space(light, self.center, self.radius, self.mesh.positions)
         return memo[key]
+
+    def texel_table(self, key: tuple[Any, ...], make: Callable[[], bytes]) -> bytes:
+        """A texture-space CPU table of this scene (``caches.texel_tables``): the one made before under
+        ``key`` (kind, size, coverage digest...), else ``make()``, kept. Its content depends on the mesh
+        and the key only, so a forced re-run or a second technique at the same size only uploads it."""
+        hit = self.caches.texel_tables.get(key)
+        if hit is None:
+            hit = self.caches.texel_tables[key] = make()
+        return hit
+
+    @functools.cached_property
+    def has_open_border(self) -> bool:
+        """The mesh has a border edge (scene/mesh.border_half_edges): d'Eon's open-border reflection
+        has work to do (a closed mesh, such as the default head, pays nothing)."""
+        from skinviewer.scene.mesh import border_half_edges
+        return len(border_half_edges(self.mesh.positions, self.mesh.indices)) > 0
 
     @functools.cached_property
     def mean_uv_per_mm(self) -> float:
@@ -160,10 +218,11 @@ class GpuScene:
         return n
 
     def vertex_array(self, prog: moderngl.Program, lod: int = 0,
-                     index_buffer: moderngl.Buffer | None = None) -> moderngl.VertexArray:
+                     index_buffer: moderngl.Buffer | None = None, env_rays: int = 0) -> moderngl.VertexArray:
         """A new VAO of the mesh (at level of detail ``lod``) for ``prog`` (the graph's GpuServices
         caches it per program); ``index_buffer``: another index buffer over the same vertices (a
-        band's triangles, GpuServices.band_vao)."""
+        band's triangles, GpuServices.band_vao); ``env_rays``: the environment bake whose transfer
+        vectors it binds (the program's ENV_RAYS define, lib/mesh_vs.glsl), when it reads them."""
         vbo, ibo, _ = self.lod_buffers(lod)
         ibo = ibo if index_buffer is None else index_buffer
         attrs = [a for a in VERTEX_ATTRS if a in prog]
@@ -175,8 +234,11 @@ class GpuScene:
             content.append((self.curvature_buffer(lod), "1f", CURVATURE_ATTR))
         env_attrs = [a for a in ENV_VIS_ATTRS if a in prog]
         if env_attrs:  # the environment light's transfer vectors (lib/mesh_vs.glsl), those the compiler kept
+            if env_rays <= 0:
+                raise ValueError("a program that reads the environment's transfer vectors needs its bake's "
+                                 "ray count (its ENV_RAYS define)")
             fmt = " ".join(_fmt("4f", a in prog) for a in ENV_VIS_ATTRS)
-            content.append((self.env_visibility_buffer(lod, self.env_rays), fmt, *env_attrs))
+            content.append((self.env_visibility_buffer(lod, env_rays), fmt, *env_attrs))
         return self.ctx.vertex_array(prog, content, index_buffer=ibo, index_element_size=4)
 
     def uv_covariance_buffer(self, level: int = 0) -> moderngl.Buffer:
@@ -247,11 +309,11 @@ class GpuScene:
                 continue
             self._env_provisional.discard(key)
             if job.error:  # keeps the unoccluded stand-in; one line in the status bar
-                self.env_bake_error = f"environment visibility bake failed: {job.error}"
+                self._env.error = f"environment visibility bake failed: {job.error}"
                 continue
             assert job.result is not None
             self._env_vis[key].write(_pad_transfer(job.result).tobytes())
-            self.env_generation += 1
+            self._env.generation += 1
             swapped = True
         return swapped
 
@@ -400,8 +462,8 @@ def prepare_gpu_arrays(mesh: MeshData) -> dict[str, Any]:
     """The CPU side of a GpuScene: the vertex and index bytes, the maps as the textures take them
     (linear albedo, finite values, float16), and the default framing. Kept on the mesh: the viewer's
     start makes them in a worker thread while its window ticks (numpy, no GL), the GpuScene on the GL
-    thread then only uploads."""
-    memo: dict[str, Any] | None = mesh.__dict__.get("_gpu_arrays")
+    thread then only uploads. Kept beside the mesh (``_prepared``, by identity, while it lives), not on it."""
+    memo = prepared_gpu_arrays(mesh)
     if memo is not None:
         return memo
     albedo = mesh.albedo if mesh.albedo is not None else np.ones((1, 1, 3), np.float32) * np.asarray(DEFAULT_SKIN_SRGB, np.float32)
@@ -412,8 +474,35 @@ def prepare_gpu_arrays(mesh: MeshData) -> dict[str, Any]:
             "normal_map": np.ascontiguousarray(_finite_map(nm), dtype=np.float16),
             "specular_map": np.ascontiguousarray(_finite_map(sm), dtype=np.float16)}
     mesh.frame  # noqa: B018  (memoised on the mesh)
-    mesh.__dict__["_gpu_arrays"] = memo
+    key = id(mesh)
+
+    def gone(ref: weakref.ReferenceType[MeshData]) -> None:  # the mesh was collected: its arrays go too
+        with _prepared_lock:
+            if key in _prepared and _prepared[key][0] is ref:
+                del _prepared[key]
+
+    with _prepared_lock:
+        _prepared[key] = (weakref.ref(mesh, gone), memo)
     return memo
+
+
+# prepare_gpu_arrays' results until the GpuScene uploads them: id(mesh) -> (weak reference, arrays)
+_prepared: dict[int, tuple[weakref.ReferenceType[MeshData], dict[str, Any]]] = {}
+_prepared_lock = threading.Lock()
+
+
+def prepared_gpu_arrays(mesh: MeshData) -> dict[str, Any] | None:
+    """The arrays prepare_gpu_arrays made for ``mesh`` and the GpuScene has not uploaded yet, or None."""
+    with _prepared_lock:
+        hit = _prepared.get(id(mesh))
+    return hit[1] if hit is not None and hit[0]() is mesh else None
+
+
+def _forget_prepared(mesh: MeshData) -> None:
+    with _prepared_lock:
+        hit = _prepared.get(id(mesh))
+        if hit is not None and hit[0]() is mesh:
+            del _prepared[id(mesh)]
 
 
 def _finite_map(a: ArrayLike) -> Float32Array:

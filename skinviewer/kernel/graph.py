@@ -180,10 +180,11 @@ class RenderGraph:
         return raw.reshape(h, w, spec.components)
 
     # -- the frame ---------------------------------------------------------------------------
-    def _reflect_all(self, settings: Settings, scene: Any = None) -> dict[str, Reflection]:
+    def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None) -> dict[str, Reflection]:
         refl = {}
         for p in self.passes:
-            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state)
+            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
+                           view=view if p.uses_scene else None)
             p.reflect(r)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
@@ -292,7 +293,7 @@ class RenderGraph:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
         self.gpu.keep_scene(frame.scene)
-        refl = self._reflect_all(frame.settings, frame.scene)
+        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view)
         order, live = self._order(refl, list(targets or self.targets))
         self._check_memory(refl, order)
         self.order = order

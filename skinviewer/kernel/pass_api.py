@@ -14,6 +14,7 @@ from skinviewer.ground.settings import Settings, get_path
 
 if TYPE_CHECKING:
     from skinviewer.kernel.execute import ExecuteContext
+    from skinviewer.kernel.frame_view import FrameView
 
 Defines = tuple[tuple[str, object], ...]  # a program's #defines, sorted: part of its cache key
 ShapeState = dict[object, Any]  # the graph's memory for shape decisions: each pass keys and types its own entries
@@ -223,9 +224,11 @@ def declare(*values: object) -> None:
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
-    def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None):
+    def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None,
+                 view: FrameView | None = None):
         self._settings = settings
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
+        self._view = view  # the frame's view of the scene and camera (Reflection.view)
         self.declared: list[str] = []  # the settings read, by dotted path: the cache keys on them
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
@@ -240,6 +243,16 @@ class Reflection:
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
         self._reads = SettingsNode(settings, "", self._declare)  # r.settings
         self._peeks = SettingsNode(settings, "", None)  # r.peeked
+
+    @property
+    def view(self) -> FrameView:
+        """The frame's view of the scene and camera (kernel/frame_view.FrameView, built once a frame by
+        the renderer; ``ec.view`` is its camera): what the scene rules (passes/rules.py) measure --
+        the screen coverage, the camera a thin part must be in view of. Passes that use the scene get it."""
+        if self._view is None:
+            raise GraphError("this reflection has no frame view (FrameInputs.frame_view: the renderer builds "
+                             "one a frame; a scene rule needs it)")
+        return self._view
 
     def skip(self, reason: str) -> None:
         """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""

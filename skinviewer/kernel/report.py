@@ -17,6 +17,16 @@ class FrameInputs:
     view_key: str
     mesh_lod: int = 0  # the mesh's level of detail this frame (passes/rules.mesh_lod)
     lod_note: str = ""  # why, for the frame report of passes that draw the mesh
+    # the frame's view of the scene and camera (kernel/frame_view.FrameView, built once by the renderer):
+    # ``view`` is its camera; the scene rules read it in reflect (Reflection.view)
+    frame_view: Any = None
+
+    def __post_init__(self) -> None:
+        if self.frame_view is not None:
+            if self.view is None:
+                self.view = self.frame_view.camera
+            elif self.view is not self.frame_view.camera:
+                raise ValueError("FrameInputs.view must be frame_view.camera (one camera per frame)")
 
 
 @dataclass

@@ -321,6 +321,11 @@ class ShaderLibrary:
             raise KeyError("program not made by this shader library")
         return entry.name, entry.declared
 
+    def program_defines(self, prog: moderngl.Program) -> dict[str, str]:
+        """The ``#define``s (as strings) a program this library made was compiled with; {} for another."""
+        entry = self._by_program.get(id(prog))
+        return dict(entry.defines) if entry is not None and entry.program is prog else {}
+
     def on_release(self, hook: Callable[[moderngl.Program], None]) -> None:
         """Call ``hook(program)`` just before a program is released (hot reload, release())."""
         self._release_hooks.append(hook)

@@ -113,7 +113,7 @@ def tsm_light_index(r: Reflection) -> int | None:
         return None
     if j is not None and r.settings.deon.tsm_auto and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
-        need, why = tsm_needed(r._settings, r.scene, whole(r.peeked.lights[j]), whole(r.peeked.deon.gaussians))
+        need, why = tsm_needed(r._settings, r.scene, whole(r.peeked.lights[j]), whole(r.peeked.deon.gaussians), r.view)
         if not need:
             r.drop(TSM, why)
             return None
@@ -227,11 +227,7 @@ def open_border(r) -> bool:
     mesh that has an open border (peeked: a closed mesh, such as the default head, pays nothing)."""
     if r.scene is None or not r.peeked.scene.seam_aware or r.peeked.deon.open_border != "reflect":
         return False
-    cache = r.scene.__dict__.setdefault("_texel_tables", {})
-    if "has_border" not in cache:
-        from skinviewer.scene.mesh import border_half_edges
-        cache["has_border"] = len(border_half_edges(r.scene.mesh.positions, r.scene.mesh.indices)) > 0
-    if not cache["has_border"]:
+    if not r.scene.has_open_border:
         return False
     return bool(r.settings.scene.seam_aware) and r.settings.deon.open_border == "reflect"
 
@@ -256,13 +252,10 @@ class BorderFramePass(Pass):
         g = read_gutter(ec.input(ec.plan.gutter))
         iy, ix = np.mgrid[0:n, 0:n]
         covered = (g[..., 0] == ix) & (g[..., 1] == iy)
-        cache = ec.scene.__dict__.setdefault("_texel_tables", {})
-        key = ("border", n, hash(covered.tobytes()))
-        if key not in cache:
-            m = ec.scene.mesh
-            reach = min(float(n), BORDER_REACH_MM * ec.scene.max_uv_per_mm * n)
-            cache[key] = border_frame(m.positions, m.uvs, m.indices, covered, reach).tobytes()
-        ec.output(ec.plan.border).write(cache[key])
+        m = ec.scene.mesh
+        reach = min(float(n), BORDER_REACH_MM * ec.scene.max_uv_per_mm * n)
+        ec.output(ec.plan.border).write(ec.scene.texel_table(
+            ("border", n, hash(covered.tobytes())), lambda: border_frame(m.positions, m.uvs, m.indices, covered, reach).tobytes()))
 
 
 def _gathers(step: BlurStep, limit: float, texel_mm: float) -> bool:

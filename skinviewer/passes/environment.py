@@ -184,7 +184,6 @@ def set_environment(ec, prog, specular: bool = True) -> None:
     if i is None:
         return
     e = ec.settings.lights[i]
-    ec.scene.env_rays = int(e.ao_rays)  # the vertex arrays' visibility buffer (GpuScene.env_visibility_buffer)
     scale = np.asarray(e.color, np.float64) * float(e.intensity)
     yaw = math.radians(float(e.yaw))
     ec.set(prog, "u_env_sh", sh_uniform(e), optional=True)  # optional: a texel surface program without occlusion

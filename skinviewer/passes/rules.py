@@ -18,9 +18,9 @@ import numpy as np
 
 from skinviewer.ground.constants import MAX_LIGHTS
 from skinviewer.ground.settings import LightSettings
-from skinviewer.scene.camera import framed_view
 
 if TYPE_CHECKING:
+    from skinviewer.kernel.frame_view import FrameView
     from skinviewer.kernel.pass_api import Reflection
 
 TSM_EPS = 5e-3      # transmitted radiance / light radiance under which the TSM term is not drawn
@@ -60,26 +60,18 @@ def light_off_reason(i: int, light) -> str:
 
 # -- screen coverage -------------------------------------------------------------------------------
 
-def screen_diameter_px(settings, scene) -> float:
-    """The projected diameter (pixels, along the image height) of the scene's bounding sphere."""
-    w, h = settings.render.width, settings.render.height
-    view = framed_view(settings.camera, scene, (w, h))
-    f_center, f_radius = scene.frame  # what the camera frames: the head of a bust, not its shoulders
-    d = float(np.linalg.norm(np.asarray(view.eye, np.float64) - f_center))
-    if d <= f_radius:
-        return float("inf")
-    half = math.asin(min(f_radius / d, 1.0))
-    return h * math.tan(half) / math.tan(math.radians(settings.camera.fov_y) / 2.0)
+def screen_diameter_px(view: FrameView) -> float:
+    """The projected diameter (pixels, along the image height) of what the rendered camera frames
+    (the head of a bust, not its shoulders): the frame's view's (kernel/frame_view.FrameView)."""
+    return view.screen_diameter_px
 
 
-def wanted_map_size(settings, scene) -> float:
+def wanted_map_size(view: FrameView) -> float:
     """Map size (texels) at which the atlas has one texel per pixel of the head on screen, on
     average: pixels per mm at the head = D_px / (2 r mm); texels per mm = n * mean UV per mm."""
-    d_px = screen_diameter_px(settings, scene)
-    if not math.isfinite(d_px):
+    if not math.isfinite(view.screen_diameter_px):
         return float("inf")
-    px_per_mm = d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
-    return px_per_mm / max(scene.mean_uv_per_mm, 1e-12)
+    return view.px_per_mm / max(view.scene.mean_uv_per_mm, 1e-12)
 
 
 def coverage_size(r: Reflection, user: int, mode: str, key: str, wanted_fn=None) -> int:
@@ -91,9 +83,8 @@ def coverage_size(r: Reflection, user: int, mode: str, key: str, wanted_fn=None)
     user = int(user)
     if mode != "auto":
         return user
-    s = r._settings
     scene = r.scene
-    wanted = (wanted_fn or wanted_map_size)(s, scene)
+    wanted = (wanted_fn or wanted_map_size)(r.view)
     memo = (key, id(scene))
     cur = min(r.state.get(memo, user), user)
     if not (cur / 2.0 / HYSTERESIS <= wanted <= cur * HYSTERESIS):
@@ -101,21 +92,23 @@ def coverage_size(r: Reflection, user: int, mode: str, key: str, wanted_fn=None)
         cur = int(min(pow2, user))
     r.state[memo] = cur
     if cur != user:
-        r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(s, scene):.0f} px)")
+        r.note(f"map {cur}\u00b2 from screen coverage (head {screen_diameter_px(r.view):.0f} px)")
     return cur
 
 
-def mesh_lod(settings, scene, state: dict) -> tuple[int, str]:
+def mesh_lod(settings, view: FrameView, state: dict) -> tuple[int, str]:
     """The mesh's level of detail for this frame (render.mesh_lod = "auto"): the coarsest level
     (scene/lod.py, 1/4 of the triangles per level) that still has LOD_TRIANGLES_PER_PX triangles per
     pixel of the head (half the triangles face the camera, over the disc of the bounding sphere on
-    screen), so silhouettes and shading stay sub-pixel; with hysteresis. Returns (level, reason)."""
+    screen), so silhouettes and shading stay sub-pixel; with hysteresis. ``view``: the frame's view
+    (its scene, camera and coverage). Returns (level, reason)."""
+    scene = view.scene
     key = ("mesh_lod", id(scene))
     levels = scene.lod_triangles
     if settings.render.mesh_lod != "auto" or len(levels) < 2:
         state[key] = 0
         return 0, ""
-    d_px = screen_diameter_px(settings, scene)
+    d_px = screen_diameter_px(view)
     area = math.pi / 4.0 * d_px * d_px
     if not area > 0.0 or not math.isfinite(area):
         state[key] = 0
@@ -133,11 +126,12 @@ def mesh_lod(settings, scene, state: dict) -> tuple[int, str]:
                  f"(head {d_px:.0f} px)")
 
 
-def kernel_px(settings, scene) -> float:
+def kernel_px(settings, view: FrameView) -> float:
     """The widest used Gaussian's standard deviation (seed 000 eq. 21) in screen pixels at the
-    head: sqrt(v_max) mm * pixels per mm of the framed part (the head) on screen."""
+    head: sqrt(v_max) mm * pixels per mm of the framed part (the head) on screen (``view``: the frame's)."""
     v = max((g.variance for g in settings.deon.gaussians if max(g.weights) > 0), default=0.0)
-    d_px = screen_diameter_px(settings, scene)
+    scene = view.scene
+    d_px = screen_diameter_px(view)
     return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
 
 
@@ -153,7 +147,7 @@ def kernel_under_pixel(r: Reflection) -> str | None:
     if not limit > 0.0:
         r.state[key] = False
         return None
-    px = kernel_px(r._settings, r.scene)
+    px = kernel_px(r._settings, r.view)
     on = px < limit * (HYSTERESIS if r.state.get(key, False) else 1.0)
     r.state[key] = on
     return f"kernel under a pixel (widest Gaussian sigma {px:.2f} px on screen)" if on else None
@@ -175,7 +169,7 @@ def shadow_map_size(r) -> int:
 def _mesh_rays(scene):
     """Embree (embreex, 0.2 s to import; trimesh's wrapper costs 2-3 s of start-up) over the mesh,
     with its face normals; cached on the scene."""
-    cache = scene.__dict__.setdefault("_rules_cache", {})
+    cache = scene.caches.rules
     if "ray" not in cache:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
@@ -269,24 +263,25 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     return out
 
 
-def tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
+def tsm_needed(settings, scene, pose, gaussians, frame: FrameView) -> tuple[bool, str]:
     """Whether the TSM term can show: a vertex in view whose normal faces away from the light
     while the light enters the mesh within a thickness that transmits, estimated as in
     lib/tsm_transmit.glsl: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS;
     with deon.tsm_gather also sum_i w_i G(v_i, d) A cos over tissue of another sheet lit beside the ray.
-    Memoised per light pose, profile and view (several passes ask every frame)."""
-    memo = scene.__dict__.setdefault("_tsm_needed", {})
+    Memoised per light pose, profile and view (several passes ask every frame). ``frame``: the
+    frame's view (Reflection.view), whose camera the thin part must be in view of."""
+    memo = scene.caches.tsm_needed
     key = (pose.kind, tuple(pose.direction), tuple(pose.position),
            tuple((g.variance, tuple(g.weights)) for g in gaussians),
            settings.camera.model_dump_json(), settings.render.width, settings.render.height, settings.deon.tsm_gather)
     if key not in memo:
         if len(memo) > 16:
             memo.clear()
-        memo[key] = _tsm_needed(settings, scene, pose, gaussians)
+        memo[key] = _tsm_needed(settings, scene, pose, gaussians, frame)
     return memo[key]
 
 
-def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
+def _tsm_needed(settings, scene, pose, gaussians, frame: FrameView) -> tuple[bool, str]:
     try:
         idx, t, cos_a = thickness_toward(scene, pose)
     except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
@@ -311,8 +306,7 @@ def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
             cand = np.union1d(cand, back[a2 > TSM_EPS])
     if len(cand) == 0:
         return False, "no light behind a thin part"
-    w, h = settings.render.width, settings.render.height
-    view = framed_view(settings.camera, scene, (w, h))
+    view = frame.camera  # the rendered camera (the frame's view)
     p = scene.mesh.positions[cand].astype(np.float64)
     facing = np.einsum("ij,ij->i", scene.mesh.normals[cand].astype(np.float64), view.eye - p) > 0
     ph = np.hstack([p, np.ones((len(p), 1))]) @ view.view_proj.T

@@ -64,28 +64,25 @@ class GutterMapPass(Pass):
         else:
             cover = rasterize_unwrapped(ec, ec.program("uv_coverage"), size, components=1, dtype="f1")
         covered = np.frombuffer(cover.read(alignment=1), dtype=np.uint8).reshape(size, size) > 0
-        # the CPU tables depend on the mesh and the coverage only: kept on the scene, so a forced
-        # re-run or a second technique at the same size only uploads them
-        cache = ec.scene.__dict__.setdefault("_texel_tables", {})
+        # the CPU tables depend on the mesh and the coverage only: kept by the scene (GpuScene.texel_table),
+        # so a forced re-run or a second technique at the same size only uploads them
         key = (size, hashlib.blake2b(covered.tobytes(), digest_size=16).digest())
-        if ("gutter",) + key not in cache:
-            dtype = np.float16 if spec.dtype == "f2" else np.float32
-            cache[("gutter",) + key] = stored_table(
-                ["gutter", spec.components], covered, ((size, size, spec.components), dtype),
-                lambda: gutter_table(covered)[..., :spec.components].astype(dtype)).tobytes()
-        ec.output(plan.gutter).write(cache[("gutter",) + key])
+        dtype = np.float16 if spec.dtype == "f2" else np.float32
+        ec.output(plan.gutter).write(ec.scene.texel_table(("gutter",) + key, lambda: stored_table(
+            ["gutter", spec.components], covered, ((size, size, spec.components), dtype),
+            lambda: gutter_table(covered)[..., :spec.components].astype(dtype)).tobytes()))
 
         if plan.seam:
-            if ("seam",) + key not in cache:
+            def seam() -> bytes:
                 pos = ec.input(surface) if surface else rasterize_unwrapped(ec, ec.program("uv_position"), size)
                 pos = np.frombuffer(pos.read(), dtype=np.float32).reshape(size, size, 4)[..., :3]
                 sc = ec.scene
                 m = sc.mesh
-                cache[("seam",) + key] = stored_table(
+                return stored_table(
                     ["seam", SEAM_REACH_TEXELS, float(sc.mm_per_unit), float(sc.mean_uv_per_mm)],
                     (covered, pos, m.positions, m.uvs, m.indices), ((size, size, 4), np.float32),
                     lambda: seam_map(covered, sc, pos)).tobytes()
-            ec.output(plan.seam).write(cache[("seam",) + key])
+            ec.output(plan.seam).write(ec.scene.texel_table(("seam",) + key, seam))
 
 
 TABLES_VERSION = 1  # bump when gutter_table or seam_map change what they compute
@@ -239,7 +236,7 @@ class TexelSurfacePass(Pass):
         prog = ec.program("texel_surface")
         if ec.plan.environment is not None:
             from skinviewer.passes.environment import set_environment
-            set_environment(ec, prog, specular=False)  # the transfer vectors' radiance (and env_rays)
+            set_environment(ec, prog, specular=False)  # the transfer vectors' radiance
         ec.draw_mesh(prog, *ec.plan.maps, depth_test=False)
 
 

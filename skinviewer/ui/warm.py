@@ -38,9 +38,11 @@ def warm_scene(renderer, settings) -> list[str]:
         passes, _ = techniques.build(settings.technique)
     except Exception:
         return failed + ["build"]
+    view = renderer.build_frame_view(settings, loaded.gpu)  # the camera the render will draw
     for p in passes:
         try:
-            p.reflect(Reflection(settings, loaded.gpu if p.uses_scene else None, {}))
+            p.reflect(Reflection(settings, loaded.gpu if p.uses_scene else None, {},
+                                 view=view if p.uses_scene else None))
         except Exception:
             failed.append(p.name)
     return failed
