@@ -17,8 +17,8 @@ except to look up the surface's own maps.
 - An environment light (issue 32): its irradiance int L(w) V(w) (N.w) rho_dt(N.w) dw as the exact
   unoccluded sum over the environment's texels less the blocked light, estimated by Monte Carlo with
   multiple importance sampling (cosine and environment directions, stratified) and Embree visibility
-  (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at three points inside each source triangle, linear
-  between them; its
+  (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at the mesh's vertices, linear over each triangle
+  (version 7; version 6 took three points inside each triangle: 6x the points); its
   specular int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (ENV_SPEC_RAYS per
   pixel). meta["env"] holds the standard errors (from independent batches).
 
@@ -61,16 +61,16 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 6                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments
+VERSION = 7                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment at the vertices
 ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
 ENV_SPEC_RAYS = 64          # per pixel
 ENV_BATCHES = 4
 ENV_TARGET = 0.004          # adaptive sampling's goal: standard error / max(irradiance, its median)
 ENV_SAMPLER_WIDTH = 128     # the irradiance's environment, box-filtered (0.03 % from the full image's irradiance)
-# the three points of a source triangle the environment's irradiance is estimated at, and the map
-# from a point's barycentrics to the linear interpolation weights of those three
-_ENV_B = np.array([[4.0, 1.0, 1.0], [1.0, 4.0, 1.0], [1.0, 1.0, 4.0]]) / 6.0
-_ENV_W = np.linalg.inv(_ENV_B)
+ENV_COARSE_RAYS = 32        # per vertex for the progressive truth's first figure (no adaptive rays)
+ENV_LEVELS = ("full", "coarse")
+ENV_COARSE_SAMPLER_WIDTH = 64  # the coarse level's environment, box-filtered: its exact unoccluded sum 4-6x cheaper (p99 1 % off)
+ENV_BLOCK = 512             # vertex ids estimated together, with a seed of their own
 ProfileArrays = tuple[np.ndarray, np.ndarray]  # (variances (k,), weights (k, 3)) of a sum of Gaussians
 DEFAULT_H_MM = 0.5          # source element edge
 
@@ -159,11 +159,31 @@ class Surface:
                 (np.asarray(e.color, np.float64) * e.intensity)[None, None]
             self.env_rng = np.random.default_rng(12345)
             self.env_sampler = EnvSampler(self.env_img, e.yaw, ENV_SAMPLER_WIDTH)
-            self.env_tri = np.zeros((len(self.F), 3, 3))  # per triangle: E at its three _ENV_B points
-            self.env_err = np.zeros((len(self.F), 3, 3))
-            self.env_done = np.zeros(len(self.F), bool)
+            self.env_sampler_coarse = EnvSampler(self.env_img, e.yaw, ENV_COARSE_SAMPLER_WIDTH)
+            # the environment's irradiance at the mesh vertices, linear over each triangle (issue 34: a
+            # vertex is shared by ~6 triangles, so 6x fewer Monte Carlo points than 3 per triangle), per
+            # level: "full" (ENV_DIFFUSE_RAYS, adaptive) and "coarse" (ENV_COARSE_RAYS: the first figure)
+            V = len(self.P)
+            self.env_vert = {lv: np.zeros((V, 3)) for lv in ENV_LEVELS}
+            self.env_verr = {lv: np.zeros((V, 3)) for lv in ENV_LEVELS}
+            self.env_vdone = {lv: np.zeros(V, bool) for lv in ENV_LEVELS}
+            # a vertex's point: one triangle holding it and its corner; shadow rays leave along the
+            # area-weighted face normal there (both sides of a ridge see the same origin)
+            vt = np.full(V, -1, np.int64)
+            vc = np.zeros(V, np.int64)
+            for k in (2, 1, 0):
+                vt[self.F[:, k]] = np.arange(len(self.F))
+                vc[self.F[:, k]] = k
+            used = vt >= 0
+            self.env_used = used
+            self.env_vt, self.env_vc = np.where(used, vt, 0), vc
+            ngv = np.zeros((V, 3))
+            for k in range(3):
+                np.add.at(ngv, self.F[:, k], fn)
+            self.env_ngv = ngv / np.maximum(np.linalg.norm(ngv, axis=1), 1e-300)[:, None]
             self.env_spec_err: np.ndarray | None = None
             self.env_rays_used = 0.0
+            self.env_points_done = 0
 
     # per-point attributes
     def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict[str, Any]:
@@ -239,12 +259,16 @@ class Surface:
     def rho_dt_along(self, rows: np.ndarray, rho_s: np.ndarray, cos_theta: np.ndarray) -> np.ndarray:
         """Surface.rho_dt at cos_theta (N, K) for the points of ``rows`` (rho_dt_rows) and their rho_s."""
         n_cos = rows.shape[1]
-        pos = np.clip(np.clip(cos_theta, 0.0, 1.0) * n_cos - 0.5, 0.0, n_cos - 1.0)
-        i0 = np.floor(pos).astype(np.int64)
-        i1 = np.minimum(i0 + 1, n_cos - 1)
+        # one clip does both of sample_bilinear's (cos in [0, 1], then the texel centres); the rows are
+        # in [0, 1] already (rho_table is clipped), so their interpolation is too
+        pos = np.clip(np.asarray(cos_theta, np.float64) * n_cos - 0.5, 0.0, n_cos - 1.0)
+        i0 = pos.astype(np.int64)
         f = pos - i0
-        r = np.arange(len(rows))[:, None]
-        t = np.clip(rows[r, i0] * (1.0 - f) + rows[r, i1] * f, 0.0, 1.0)
+        flat = np.ascontiguousarray(rows, np.float64).ravel()
+        i0 += (np.arange(len(rows)) * n_cos)[:, None]
+        lo = flat[i0]
+        hi = flat[np.minimum(i0 + 1, len(flat) - 1)]
+        t = lo + (hi - lo) * f  # f = 0 at the last column: hi (the next row's first entry) has no weight
         r0 = self.s.specular.rho_s
         if not r0 > 0:
             return np.ones_like(t)
@@ -277,13 +301,13 @@ class Surface:
         out: np.ndarray = ~self.rays.intersects_any(o, np.ascontiguousarray(L))
         return out
 
-    def irradiance(self, a: dict[str, Any], mix: float, energy: bool) -> np.ndarray:
+    def irradiance(self, a: dict[str, Any], mix: float, energy: bool, env_level: str = "full") -> np.ndarray:
         """E A (eq. 28, 32) from the directional and point lights (beams are point sources) and the
-        environment (issue 32: its occluded irradiance, Monte Carlo)."""
+        environment (issue 32: its occluded irradiance, Monte Carlo; ``env_level`` as env_irradiance)."""
         U, vis = self.irradiance_parts(a, mix, energy)
         E = (U * vis[..., None]).sum(0) if len(U) else np.zeros((len(a["P"]), 3))
         if self.env is not None:
-            E = E + self.env_irradiance(a["tri"], a["bary"], energy) * _safe_pow(a["C"], mix)
+            E = E + self.env_irradiance(a["tri"], a["bary"], energy, env_level) * _safe_pow(a["C"], mix)
         return E
 
     def shadow_lights(self) -> list[LightSettings]:
@@ -323,27 +347,31 @@ class Surface:
         return out
 
     # -- the environment light (issue 32) ------------------------------------------------------------
-    def _env_estimate(self, tris: np.ndarray, energy: bool) -> None:
-        """Monte Carlo irradiance at the three _ENV_B points of each triangle in ``tris``."""
+    def _env_estimate(self, verts: np.ndarray, energy: bool, level: str = "full") -> None:
+        """Monte Carlo irradiance at mesh vertices ``verts`` (level "full": ENV_DIFFUSE_RAYS, adaptive;
+        "coarse": ENV_COARSE_RAYS, for the first figure)."""
         from skinviewer.physics.environment import mc_irradiance_cv
-        if len(tris) == 0:
+        if len(verts) == 0:
             return
-        tri = np.repeat(tris, 3)
-        bary = np.tile(_ENV_B, (len(tris), 1))
-        a = self.attributes(tri, bary)
+        bary = np.zeros((len(verts), 3))
+        bary[np.arange(len(verts)), self.env_vc[verts]] = 1.0
+        a = self.attributes(self.env_vt[verts], bary)
+        a["Ng"] = self.env_ngv[verts]
         weight = None
         if energy:
             rows, rho = self.rho_dt_rows(a["m"]), a["rho"]
 
             def weight(mu: np.ndarray, sl: slice | np.ndarray) -> np.ndarray:
                 return self.rho_dt_along(rows[sl], rho[sl], mu)
-        est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, ENV_DIFFUSE_RAYS,
+        n_rays = ENV_DIFFUSE_RAYS if level == "full" else ENV_COARSE_RAYS
+        sampler = self.env_sampler if level == "full" else self.env_sampler_coarse
+        est, err = mc_irradiance_cv(sampler, a["Ps"], a["N"], a["Ng"], self.rays, n_rays,
                                     self.env_rng, self.eps, weight=weight, batches=ENV_BATCHES)
         # adaptive: points whose standard error exceeds ENV_TARGET of max(their irradiance, the median's)
         # (the occluded ones: folds, ears) get 4x the rays more, combined by ray count
-        rays = np.full(len(est), float(ENV_DIFFUSE_RAYS))
+        rays = np.full(len(est), float(n_rays))
         scale = max(float(np.median(est.sum(1))), 1e-300)
-        for more in (4,):
+        for more in ((4,) if level == "full" else ()):
             bad = np.nonzero(np.sqrt((err ** 2).sum(1)) > ENV_TARGET * np.maximum(est.sum(1), scale))[0]
             if len(bad) == 0:
                 break
@@ -358,31 +386,50 @@ class Surface:
             est[bad] = (n1 * est[bad] + n2 * e2) / (n1 + n2)
             err[bad] = np.sqrt(n1 ** 2 * err[bad] ** 2 + n2 ** 2 * s2 ** 2) / (n1 + n2)
             rays[bad] += n2
-        self.env_rays_used += float(rays.sum())
-        self.env_tri[tris] = est.reshape(len(tris), 3, -1)
-        self.env_err[tris] = err.reshape(len(tris), 3, -1)
-        self.env_done[tris] = True
+        if level == "full":
+            self.env_rays_used += float(rays.sum())
+            self.env_points_done += len(verts)
+        self.env_vert[level][verts] = est
+        self.env_verr[level][verts] = err
+        self.env_vdone[level][verts] = True
 
-    def env_irradiance(self, tri: np.ndarray, bary: np.ndarray, energy: bool) -> np.ndarray:
+    def env_irradiance(self, tri: np.ndarray, bary: np.ndarray, energy: bool, level: str = "full") -> np.ndarray:
         """The environment's occluded irradiance (x rho_dt with ``energy``) at points (tri, bary): linear
-        through the triangle's three Monte Carlo points."""
-        todo = np.unique(tri[~self.env_done[tri]])
-        for s0 in range(0, len(todo), 20000):
-            self._env_estimate(todo[s0:s0 + 20000], energy)
-        w = bary @ _ENV_W
-        out: np.ndarray = np.einsum("nk,nkc->nc", w, self.env_tri[tri])
+        between the Monte Carlo estimates at the triangle's vertices (``level``: "full" or "coarse")."""
+        if level == "coarse" and self.env_vdone["full"][self.F[tri]].all():
+            level = "full"  # the full estimate is there already
+        f = self.F[tri]
+        done = self.env_vdone[level]
+        # whole blocks of ENV_BLOCK vertex ids, each with its own seed: a vertex's estimate is the same
+        # whichever view or stage asked for it first (an orbit's truth equals a fresh session's)
+        blocks = np.unique(f[~done[f]] // ENV_BLOCK)
+        for b in blocks:
+            ids = np.arange(b * ENV_BLOCK, min((b + 1) * ENV_BLOCK, len(done)))
+            ids = ids[self.env_used[ids] & ~done[ids]]
+            self.env_rng = np.random.default_rng((12345, int(b), ENV_LEVELS.index(level)))
+            self._env_estimate(ids, energy, level)
+        out: np.ndarray = np.einsum("nk,nkc->nc", bary, self.env_vert[level][f])
         return out
 
     def env_relative_error(self, tri: np.ndarray) -> np.ndarray:
-        """The standard error of the environment's irradiance at triangles ``tri`` relative to it."""
-        v = self.env_tri[tri].sum(2).mean(1)
-        e = np.sqrt((self.env_err[tri] ** 2).sum(2).mean(1))
+        """The standard error of the environment's (full) irradiance at triangles ``tri`` relative to it."""
+        f = self.F[tri]
+        v = self.env_vert["full"][f].sum(2).mean(1)
+        e = np.sqrt((self.env_verr["full"][f] ** 2).sum(2).mean(1))
         out: np.ndarray = e / np.maximum(v, 1e-300)
         return out
 
-    def env_specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
+    def env_here(self, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(mean irradiance r+g+b, its standard error) of the full estimate over the vertices of ``tri``."""
+        f = self.F[tri]
+        return (self.env_vert["full"][f].sum(2).mean(1),
+                np.sqrt((self.env_verr["full"][f] ** 2).sum(2).mean(1)))
+
+    def env_specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
         """int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (seed 000 eq. 15-16):
-        h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h)."""
+        h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h). ``rng``: the samples'
+        generator (default: the surface's)."""
+        rng = self.env_rng if rng is None else rng
         from skinviewer.physics.environment import sample_equirect, tangent_frames
         from skinviewer.physics.specular import beckmann
         sp = self.s.specular
@@ -395,8 +442,8 @@ class Surface:
             N, Vs, m = a["N"][sl], V[sl], np.maximum(a["m"][sl], 1e-3)
             cnt = len(N)
             i, j = np.meshgrid(np.arange(k), np.arange(k))
-            u1 = (i.ravel()[None] + self.env_rng.random((cnt, k * k))) / k
-            u2 = (j.ravel()[None] + self.env_rng.random((cnt, k * k))) / k
+            u1 = (i.ravel()[None] + rng.random((cnt, k * k))) / k
+            u2 = (j.ravel()[None] + rng.random((cnt, k * k))) / k
             t2 = -(m[:, None] ** 2) * np.log1p(-np.minimum(u1, 1 - 1e-12))
             ch = 1.0 / np.sqrt(1.0 + t2)
             sh = np.sqrt(np.maximum(1.0 - ch * ch, 0.0))
@@ -460,8 +507,9 @@ class Surface:
             return gt.PointSources(np.zeros((0, 3)), np.zeros((0, 3)))
         return gt.PointSources(np.concatenate(pos), np.concatenate(power))
 
-    def specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
-        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35)."""
+    def specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
+        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35); ``rng``:
+        the environment's samples (env_specular)."""
         out = np.zeros((len(V), 3))
         sp = self.s.specular
         for light in self.lights:
@@ -482,7 +530,7 @@ class Surface:
             vis = self.visible(light, sub, L[on])
             out[on] += Lc[None] * (ks[on] * vis)[:, None]
         if self.env is not None:
-            out += self.env_specular(a, V)
+            out += self.env_specular(a, V, rng)
         return out
 
 
@@ -707,9 +755,10 @@ def estimate_seconds(n_pixels: int, n_elements: int, uncertainty: bool = False) 
 def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances: np.ndarray, weights: np.ndarray,
                     mix: float, energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
                     report: Callable[[str, float], None] | None = None, check: Callable[[], bool] | None = None,
-                    split_edges: bool = True, beam_rays: int = BEAM_RAYS) -> gt.Diffusion:
+                    split_edges: bool = True, beam_rays: int = BEAM_RAYS, env_level: str = "full") -> gt.Diffusion:
     """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
-    the beams' point sources, and the Diffusion sum over them."""
+    the beams' point sources, and the Diffusion sum over them (``env_level``: the environment's
+    estimate, Surface.env_irradiance)."""
     report = report or (lambda stage, f: None)
     check = check or (lambda: False)
     mm = surf.mm
@@ -745,7 +794,7 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
         a_sl = surf.attributes(vpar[sl], vbary[sl])
         U[:, sl], vis[:, sl] = surf.irradiance_parts(a_sl, mix, energy)
         if env_v is not None:  # the environment's occluded irradiance (issue 32): smooth, never cut
-            env_v[sl] = surf.env_irradiance(a_sl["tri"], a_sl["bary"], energy) * _safe_pow(a_sl["C"], mix)
+            env_v[sl] = surf.env_irradiance(a_sl["tri"], a_sl["bary"], energy, env_level) * _safe_pow(a_sl["C"], mix)
         report("irradiance", sl.stop / max(n_v, 1))
     if env_v is not None:  # one more "light", visible everywhere: the edge cut leaves it as the corners' mean
         U = np.concatenate([U, env_v[None]])
@@ -968,12 +1017,11 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     env_meta = {}
     if surf.env is not None:  # the Monte Carlo's standard errors (issue 32)
         rel = surf.env_relative_error(tri)
-        e_here = surf.env_tri[tri].sum(2).mean(1)
-        e_err = np.sqrt((surf.env_err[tri] ** 2).sum(2).mean(1))
+        e_here, e_err = surf.env_here(tri)
         lit_sum = np.maximum((diffuse + spec).sum(1), 1e-300)
         spec_rel = surf.env_spec_err / lit_sum
         env_meta = {"diffuse_rays": ENV_DIFFUSE_RAYS, "specular_rays": ENV_SPEC_RAYS,
-                    "diffuse_rays_mean": surf.env_rays_used / max(3 * int(surf.env_done.sum()), 1),
+                    "diffuse_rays_mean": surf.env_rays_used / max(surf.env_points_done, 1),
                     "irradiance_rms_stderr_over_mean": float(np.sqrt((e_err ** 2).mean()) / max(e_here.mean(), 1e-300)),
                     "irradiance_rel_stderr_p50": float(np.median(rel)), "irradiance_rel_stderr_p95": float(np.percentile(rel, 95)),
                     "specular_stderr_of_pixel_p50": float(np.median(spec_rel)),
@@ -1185,7 +1233,17 @@ class TruthSession:
         mask, tri, bary, eye = camera_hits(surf, s)
         a = surf.attributes(tri, bary)
         x_mm = a["P"] * surf.mm
-        ea_here = surf.irradiance(a, mix, energy)
+        # E A at the pixels themselves, per stage (the coarse stage with the coarse environment)
+        ea_here = np.zeros((len(x_mm), 3))
+        has_ea = np.zeros(len(x_mm), bool)
+
+        def ea_at(sel: np.ndarray) -> np.ndarray:
+            todo = sel & ~has_ea
+            if todo.any():
+                ea_here[todo] = surf.irradiance({k: v[todo] for k, v in a.items()}, mix, energy)
+                has_ea[todo] = True
+            out: np.ndarray = ea_here[sel]
+            return out
         # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
         V = eye[None] - a["P"]
         V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
@@ -1193,13 +1251,24 @@ class TruthSession:
         av = {**a, "N": N}
         rho_v = surf.rho_dt((N * V).sum(1), av["m"], av["rho"]) if energy else np.ones(len(V))
         post = _safe_pow(av["C"], 1.0 - mix) * rho_v[:, None]
-        spec = surf.specular(av, V)
+        # the specular per stage too (the environment's samples seeded by the stage: a fresh session and
+        # an orbit in an old one draw the same)
+        spec = np.zeros((len(V), 3))
+        has_spec = np.zeros(len(V), bool)
+
+        def spec_at(sel: np.ndarray, seed: int) -> None:
+            todo = sel & ~has_spec
+            if todo.any():
+                spec[todo] = surf.specular({k: v[todo] for k, v in av.items()}, V[todo],
+                                           np.random.default_rng((4242, seed)))
+                has_spec[todo] = True
         H, W = mask.shape
         pix = np.flatnonzero(mask.ravel())
         rows, cols = pix // W, pix % W
         n = max(len(pix), 1)
 
         def image(M: np.ndarray, done: np.ndarray, stage: str, h_mm: float, final: bool) -> Partial:
+            spec_at(done, int(done.sum()))
             diffuse = M * post
             imgs = []
             for arr in (diffuse + spec, diffuse, spec, a["P"]):
@@ -1218,10 +1287,12 @@ class TruthSession:
         first = np.zeros(len(pix), bool)
         first[(rows % STRIDES[0] == 0) & (cols % STRIDES[0] == 0)] = True
         if not self.has_sources(s):  # a first figure before the whole surface's sources exist
+            # the environment's coarse estimate (ENV_COARSE_RAYS per vertex) for the sources and pixels
             diff = build_diffusion(surf, x_mm[first], self.coarse_h_mm, variances, weights, mix, energy,
-                                   report=lambda st, f: report(f"coarse {st}", f), check=check)
+                                   report=lambda st, f: report(f"coarse {st}", f), check=check, env_level="coarse")
             M = np.zeros((len(pix), 3))
-            M[first] = diff.exitance(x_mm[first], ea_here[first], cancelled=check)
+            ea_c = surf.irradiance({k: v[first] for k, v in a.items()}, mix, energy, "coarse")
+            M[first] = diff.exitance(x_mm[first], ea_c, cancelled=check)
             yield image(M, first, f"coarse ({self.coarse_h_mm:g} mm elements, 1/{STRIDES[0] ** 2} of the pixels)",
                         self.coarse_h_mm, False)
         el, pts = self._whole_sources(surf, s, report, check)
@@ -1235,10 +1306,10 @@ class TruthSession:
             if sel.any():
                 step = functools.partial(report, f"diffusion 1/{stride * stride}")
                 if not self.field_ratio:
-                    M[sel] = diff.exitance(x_mm[sel], ea_here[sel], progress=step, cancelled=check)
+                    M[sel] = diff.exitance(x_mm[sel], ea_at(sel), progress=step, cancelled=check)
                 else:
                     # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that
-                    M[sel] = self._field_exitance(diff, surf, shared, tri[sel], bary[sel], x_mm[sel], ea_here[sel],
+                    M[sel] = self._field_exitance(diff, surf, shared, tri[sel], bary[sel], x_mm[sel], ea_at(sel),
                                                   footprint * stride, step, check)
             done |= sel
             final = stride == 1
