@@ -752,7 +752,7 @@ def estimate_seconds(n_pixels: int, n_elements: int, uncertainty: bool = False) 
     return base * (1.35 if uncertainty else 1.0)  # default head 512^2: 77.9 vs 58.4 s CPU (cut included)
 
 
-def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances: np.ndarray, weights: np.ndarray,
+def build_diffusion(surf: Surface, receivers_mm: np.ndarray | None, h_mm: float, variances: np.ndarray, weights: np.ndarray,
                     mix: float, energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
                     report: Callable[[str, float], None] | None = None, check: Callable[[], bool] | None = None,
                     split_edges: bool = True, beam_rays: int = BEAM_RAYS, env_level: str = "full") -> gt.Diffusion:
@@ -768,13 +768,15 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
     tc = tri_mm.mean(1)
     tr = np.linalg.norm(tri_mm - tc[:, None], axis=2).max(1)
     keep = np.zeros(len(tc), bool)
-    if len(receivers_mm):
+    if receivers_mm is None:  # the whole surface (the truth session's sources, kept across views)
+        keep[:] = True
+    elif len(receivers_mm):
         from scipy.spatial import cKDTree
         d, _ = cKDTree(receivers_mm).query(tc, distance_upper_bound=reach + tr.max())
         keep = d <= reach + tr
     vpar, vbary, elem = gt.subdivide(tri_mm, h_mm, keep)
     n_el, n_v = len(elem), len(vpar)
-    n_px = len(receivers_mm) if n_pixels is None else n_pixels
+    n_px = (0 if receivers_mm is None else len(receivers_mm)) if n_pixels is None else n_pixels
     est = estimate_seconds(n_px, n_el)
     if max_seconds is not None and est > max_seconds:
         raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU ({n_px} pixels, "
@@ -1067,6 +1069,13 @@ COARSE_H_MM = 2.0
 # spacing over sigma, chosen by the convergence check in notes/artist.md (the figure moves < 10 % of
 # itself when it is halved)
 FIELD_RATIO = 1.0
+LATTICE_SAFETY = 3.0  # the lattices' uncertainty: 3 x the curvature bound measured nearby (lattice_uncertainty)
+LATTICE_WINDOW = 7  # ... at the judge pixels (every 4th in x and y) of the pixel's 7 x 7 neighbourhood
+LATTICE_UNCERTAINTY_NOTE = ("per pixel: the surface lattices' interpolation error, measured where the first stage "
+                            "gathered every Gaussian exactly (every 4th pixel in x and y) and scaled to the pixel's "
+                            "whole lattice cell (error ~ curvature x sum_i l_i |x - x_i|^2; the largest curvature of "
+                            "the 7 x 7 neighbourhood's judges, x 3) + 5e-5 M (truncation), times C^(1-mix) "
+                            "rho_dt(N.V); not the element size's part (skinviewer reference states that)")
 STRIDES = (4, 2, 1)
 
 
@@ -1128,19 +1137,13 @@ class TruthSession:
         key = sources_key(s, self.h_mm)
         hit = self._sources.pop(key, None)
         if hit is None:
-            tri_mm = surf.P[surf.F] * surf.mm
-            vpar, vbary, elem = gt.subdivide(tri_mm, self.h_mm, None)
-            mix, energy = s.deon.mix, s.deon.energy_conservation
-            ea_v = np.zeros((len(vpar), 3))
-            step = 200_000
-            for s0 in range(0, len(vpar), step):
-                if check():
-                    raise InterruptedError("cancelled")
-                sl = slice(s0, min(len(vpar), s0 + step))
-                ea_v[sl] = surf.irradiance(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
-                report("surface irradiance", sl.stop / max(len(vpar), 1))
-            vpos = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])
-            hit = (gt.Elements(vpos[elem], ea_v[elem].mean(1)), surf.beam_sources(mix, energy))
+            # every element of the surface, cut along cast-shadow edges as compute_reference's (issue 34:
+            # the session's truth used to keep the corners' mean there, the version-4 truth)
+            whole = build_diffusion(surf, None, self.h_mm, np.ones(1), np.ones((1, 3)), s.deon.mix,
+                                    s.deon.energy_conservation, report=lambda st, f: report(f"surface {st}", f),
+                                    check=check)
+            assert whole.points is not None  # build_diffusion always gives the beams' point sources
+            hit = (whole.el, whole.points)
             self.builds += 1
         self._sources[key] = hit  # most recent last
         self._structures[key] = self._structures.pop(key, {})
@@ -1171,23 +1174,26 @@ class TruthSession:
         fields = self._structures.get(sources_key(s, self.h_mm), {}).get("fields", {})
         return sum(f.evaluated for f in fields.values())
 
-    def _field_exitance(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], tri: np.ndarray,
-                        bary: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, footprint_mm: float,
-                        progress: Callable[[float], None], check: Callable[[], bool]) -> np.ndarray:
-        """M at pixels (eq. 20's sum over the profile's Gaussians): the local ones (narrower than the
-        elements: the light at the pixel itself, Diffusion.is_local) gathered per pixel; each wide one
-        (sigma >= the elements: smooth over sigma) interpolated linearly from its surface lattice
-        (spacing ``field_ratio`` sigma), evaluated first at the lattice points not yet done -- an
-        orbit evaluates only the surface it has not seen before."""
-        # a Gaussian whose lattice would be finer than the pixels (ratio sigma < the pixels' spacing on
-        # the surface) is gathered per pixel too: its lattice cells would hold one pixel each, so
-        # another view would share none of them (and each pixel would cost three lattice points)
-        wide = [(k, v) for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
-                and (self.field_ratio or 0.0) * math.sqrt(v) >= footprint_mm]
-        per_pixel = {k for k in range(len(diff.v)) if k not in {k for k, _ in wide}}
-        M = diff.exitance(x_mm, ea_here, cancelled=check, only=per_pixel)
-        for n, (k, v) in enumerate(wide):
-            f = self.field(surf, shared, float(v))
+    def lattice_gaussians(self, diff: gt.Diffusion, footprint_mm: float) -> list[int]:
+        """The Gaussians kept on surface lattices for pixels ``footprint_mm`` apart on the surface: the
+        wide ones (Diffusion.is_local false: sigma above the elements, smooth over sigma) whose lattice
+        (spacing field_ratio x sigma) is no finer than the pixels -- a finer one would cost three lattice
+        points per pixel and another view would share none of its cells (measured: issue 34's notes)."""
+        if not self.field_ratio:
+            return []
+        return [k for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
+                and self.field_ratio * math.sqrt(v) >= footprint_mm]
+
+    def _lattice_exitance(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], ks: list[int],
+                          tri: np.ndarray, bary: np.ndarray, progress: Callable[[float], None] | None,
+                          check: Callable[[], bool]) -> np.ndarray:
+        """sum over Gaussians ``ks`` of w_k M_k at surface points (tri, bary), each M_k interpolated
+        linearly from its lattice after evaluating the lattice points not done yet: an orbit evaluates
+        only the surface it has not seen before."""
+        M = np.zeros((len(tri), 3))
+        for n, k in enumerate(ks):
+            v = float(diff.v[k])
+            f = self.field(surf, shared, v)
             ids, w = f.locate(tri, bary)
             need = f.missing(ids)
             if len(need):
@@ -1196,7 +1202,8 @@ class TruthSession:
                 one = gt.Diffusion(diff.el, [v], np.ones((1, 3)), diff.h, diff.points, shared=shared)
                 f.store(need, one.exitance(xv, None, cancelled=check))
             M += diff.w[k] * f.interpolate(ids, w)
-            progress((n + 1) / len(wide))
+            if progress is not None:
+                progress((n + 1) / len(ks))
         return M
 
     def structures_built(self, s: Settings) -> dict[str, int]:
@@ -1267,11 +1274,12 @@ class TruthSession:
         rows, cols = pix // W, pix % W
         n = max(len(pix), 1)
 
-        def image(M: np.ndarray, done: np.ndarray, stage: str, h_mm: float, final: bool) -> Partial:
+        def image(M: np.ndarray, done: np.ndarray, stage: str, h_mm: float, final: bool,
+                  u_M: np.ndarray | None = None) -> Partial:
             spec_at(done, int(done.sum()))
             diffuse = M * post
             imgs = []
-            for arr in (diffuse + spec, diffuse, spec, a["P"]):
+            for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * post,)):
                 img = np.zeros((H * W, 3))
                 img[pix[done]] = np.nan_to_num(arr[done], nan=0.0, posinf=0.0, neginf=0.0)
                 imgs.append(img.reshape(H, W, 3))
@@ -1281,8 +1289,10 @@ class TruthSession:
             meta = {"key": key, "version": VERSION, "h_mm": h_mm, "pixels": int(done.sum()), "stage": stage,
                     "fraction": float(done.sum() / n), "seconds": {"total": sec}, "cached": False,
                     "mm_per_unit": surf.mm, "session": True, "visible_mask": mask, "field_ratio": self.field_ratio}
-            return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3]), stage,
-                           float(done.sum() / n), final, sec)
+            if u_M is not None:
+                meta["uncertainty"] = LATTICE_UNCERTAINTY_NOTE
+            return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3],
+                                     imgs[4] if u_M is not None else None), stage, float(done.sum() / n), final, sec)
 
         first = np.zeros(len(pix), bool)
         first[(rows % STRIDES[0] == 0) & (cols % STRIDES[0] == 0)] = True
@@ -1300,23 +1310,86 @@ class TruthSession:
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
         footprint = pixel_footprint_mm(pix, W, x_mm)
         M = np.zeros((len(pix), 3))
+        # the final stage's lattice Gaussians, and their exact per-pixel sum at the first stage's pixels
+        # (every STRIDES[0]-th pixel): the final stage also interpolates them there, and the difference
+        # is the lattice's interpolation error, measured -- the uncertainty it states (lattice_uncertainty)
+        lat_final = self.lattice_gaussians(diff, footprint)
+        exact_lat = {k: np.zeros((len(pix), 3)) for k in lat_final}
         done = np.zeros(len(pix), bool)
+        U = np.zeros((len(pix), 3))
         for stride in STRIDES:
             sel = (rows % stride == 0) & (cols % stride == 0) & ~done
+            final = stride == 1
             if sel.any():
                 step = functools.partial(report, f"diffusion 1/{stride * stride}")
-                if not self.field_ratio:
-                    M[sel] = diff.exitance(x_mm[sel], ea_at(sel), progress=step, cancelled=check)
-                else:
-                    # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that
-                    M[sel] = self._field_exitance(diff, surf, shared, tri[sel], bary[sel], x_mm[sel], ea_at(sel),
-                                                  footprint * stride, step, check)
+                # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that;
+                # the first stage gathers every Gaussian per pixel (the lattices' judge)
+                lat = [] if stride == STRIDES[0] else self.lattice_gaussians(diff, footprint * stride)
+                per_pixel = [k for k in range(len(diff.v)) if k not in lat]
+                judged = [k for k in per_pixel if k in lat_final]
+                rest = [k for k in per_pixel if k not in judged]
+                ea_sel = ea_at(sel)
+                M[sel] = diff.exitance(x_mm[sel], ea_sel, progress=step, cancelled=check, only=rest)
+                for k in judged:
+                    exact_lat[k][sel] = diff.exitance(x_mm[sel], ea_sel, cancelled=check, only={k})
+                    M[sel] += exact_lat[k][sel]
+                if lat:
+                    M[sel] += self._lattice_exitance(diff, surf, shared, lat, tri[sel], bary[sel], step, check)
             done |= sel
-            final = stride == 1
-            part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final)
+            if final and lat_final:
+                U = self.lattice_uncertainty(diff, surf, shared, lat_final, tri, bary, first, exact_lat, mask,
+                                             rows, cols, ~first, check)
+            part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final,
+                         U + TRUNCATE_LOSS * np.abs(M))
             if final:
                 self._remember(key, part.reference)
             yield part
+
+    def lattice_uncertainty(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], ks: list[int],
+                            tri: np.ndarray, bary: np.ndarray, judge: np.ndarray, exact: dict[int, np.ndarray],
+                            mask: np.ndarray, rows: np.ndarray, cols: np.ndarray, interpolated: np.ndarray,
+                            check: Callable[[], bool]) -> np.ndarray:
+        """The lattices' interpolation uncertainty (N, 3) of M at the view's pixels. A linear interpolant's
+        error at x in a cell of vertices x_i is ~ 1/2 sum_i l_i (x - x_i)' H (x - x_i), i.e. c B(x) with
+        B(x) = sum_i l_i |x - x_i|^2 (0 at the vertices, largest near the centre) and c the field's
+        curvature there. At the ``judge`` pixels (every STRIDES[0]-th; Gaussian k gathered exactly there:
+        ``exact[k]``) the error of each lattice is measured and c estimated as error / max(B(x), B_c / 4)
+        (B_c: B at the cell's centroid, the floor keeps a judge next to a vertex from blowing it up); a
+        pixel the lattices gave (``interpolated``) takes LATTICE_SAFETY x sum_k w_k c_k B_c of its own cell,
+        c_k the largest of the judges of its LATTICE_WINDOW^2 neighbourhood (none there: the largest of
+        all) -- a bound for its whole cell, whatever the pixel's place in it (a judge's place in its cell
+        would otherwise alias with the lattice's period)."""
+        from scipy.ndimage import maximum_filter
+        H, W = mask.shape
+        u = np.zeros((len(tri), 3))
+        jt, jb = tri[judge], bary[judge]
+        for k in ks:
+            f = self.field(surf, shared, float(diff.v[k]))
+            err = np.abs(self._lattice_exitance(diff, surf, shared, [k], jt, jb, None, check) / diff.w[k].max()
+                         - exact[k][judge] / diff.w[k].max())  # unit weights: the Gaussian's own field
+            bj, bcj = self._bubble(f, surf, jt, jb)
+            curv = err / np.maximum(bj, 0.25 * bcj)[:, None]
+            img = np.full((H, W, 3), -1.0)
+            img[rows[judge], cols[judge]] = curv
+            near = maximum_filter(img, size=(LATTICE_WINDOW, LATTICE_WINDOW, 1), mode="constant", cval=-1.0)
+            c = near[rows, cols]
+            c = np.where(c < 0.0, (curv.max(0) if len(curv) else np.zeros(3))[None], c)
+            _, bc = self._bubble(f, surf, tri, bary)
+            u += diff.w[k].max() * c * bc[:, None]
+        out: np.ndarray = np.where(interpolated[:, None], LATTICE_SAFETY * u, 0.0)
+        return out
+
+    @staticmethod
+    def _bubble(f: gt.SurfaceField, surf: Surface, tri: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(B(x), B at the cell's centroid) for points (tri, bary) in lattice ``f`` (mm^2)."""
+        ids, w = f.locate(tri, bary)
+        vt, vb = f.vertex_points(ids.ravel())
+        xv = np.einsum("nk,nkd->nd", vb, surf.P[surf.F[vt]] * surf.mm).reshape(len(tri), 3, 3)
+        x = np.einsum("nk,nkd->nd", w, xv)
+        b = (w * ((xv - x[:, None]) ** 2).sum(2)).sum(1)
+        c = xv.mean(1)
+        bc = ((xv - c[:, None]) ** 2).sum(2).mean(1)
+        return b, bc
 
 
 def pixel_footprint_mm(pix: np.ndarray, width: int, x_mm: np.ndarray) -> float:
