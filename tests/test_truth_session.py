@@ -88,12 +88,14 @@ def test_an_orbit_rebuilds_none_of_the_diffusion_structures(base, session_and_fi
     assert np.allclose(parts[-1].reference.lit, again[-1].reference.lit, rtol=1e-6, atol=1e-12)
 
 
-def test_an_orbit_interpolates_the_kept_diffusion_and_matches_a_fresh_truth(base):
+def test_an_orbit_interpolates_the_kept_diffusion_and_matches_a_fresh_truth(base, monkeypatch):
     """Issue 34: the diffused surface radiance does not depend on the camera. Each wide Gaussian's
     exitance is kept on a surface lattice: an orbit evaluates it only where it sees new surface (a
     fraction of what a fresh truth of that view evaluates), coming back to a view evaluates nothing and
     gives its figures again bit for bit, and the orbit's truth matches a truth gathered per pixel for
-    that view within the lattice's error (< 1 %; a technique's figure moves by far less than 10 %)."""
+    that view within the lattice's error (< 1 %; a technique's figure moves by far less than 10 %).
+    (Lattices as fine as the pixels here, LATTICE_PAYS 1: at 40x40 the default keeps none.)"""
+    monkeypatch.setattr(R, "LATTICE_PAYS", 1.0)
     ses = R.TruthSession()
     a = list(ses.progressive(base))[-1].reference
     n_first = ses.fields_evaluated(base)
@@ -223,8 +225,9 @@ def test_the_lattices_state_their_interpolation_error(case):
     sources gathered per pixel by no more than its stated uncertainty at >= 99.5 % of the pixels (in RMS
     and at the worst pixel too), and differs from the analytic answer by no more than that plus the
     ruler's own (compute_reference's grid convergence index) at >= 99.5 %; the uncertainty is not
-    vacuous: its RMS under 1 % of the peak on the laser, under 2 % of the lit level at the edge (the
-    whole 5 mm view is a shadow step, where the lattices' error is largest: its own RMS is 1/3 of that)."""
+    vacuous: its RMS under 1 % of the peak on the laser, under 3 % of the lit level at the edge (the
+    whole 5 mm view is a shadow step, where the lattices' error is largest; a loose bound there: the
+    error's own RMS is about a fifth of it)."""
     name, s, analytic = _analytic_cases()[case]
     ses = R.TruthSession()
     lat = list(ses.progressive(s))[-1].reference
@@ -242,7 +245,7 @@ def test_the_lattices_state_their_interpolation_error(case):
     expect, scale = analytic(lat.position[m])
     err = np.abs(lat.diffuse[m] - expect)
     assert (err > u + ruler.uncertainty[m]).mean() <= 0.005, (err > u + ruler.uncertainty[m]).mean(0)
-    assert np.sqrt((u ** 2).mean(0)).max() < (0.02 if name == "edge" else 0.01) * scale
+    assert np.sqrt((u ** 2).mean(0)).max() < (0.03 if name == "edge" else 0.01) * scale
 
 
 def test_the_session_cuts_the_sources_along_shadow_edges():
@@ -266,9 +269,9 @@ def test_the_environment_coarse_first_then_full_and_an_orbit_equals_a_fresh_sess
     first = next(gen)
     surf = ses.surface(s)
     assert "coarse" in first.stage
-    assert surf.env_vdone["coarse"].sum() > 0 and surf.env_vdone["full"].sum() == 0  # no full estimate yet
+    assert surf.env_done["coarse"].sum() > 0 and surf.env_done["full"].sum() == 0  # no full estimate yet
     rest = list(gen)
-    assert rest[-1].final and surf.env_vdone["full"].sum() > 0
+    assert rest[-1].final and surf.env_done["full"].sum() > 0
     orbit = with_values(s, {"camera.yaw": s.camera.yaw + 25.0})
     a = list(ses.progressive(orbit))[-1].reference
     b = list(R.TruthSession().progressive(orbit))[-1].reference

@@ -17,8 +17,8 @@ except to look up the surface's own maps.
 - An environment light (issue 32): its irradiance int L(w) V(w) (N.w) rho_dt(N.w) dw as the exact
   unoccluded sum over the environment's texels less the blocked light, estimated by Monte Carlo with
   multiple importance sampling (cosine and environment directions, stratified) and Embree visibility
-  (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at the mesh's vertices, linear over each triangle
-  (version 7; version 6 took three points inside each triangle: 6x the points); its
+  (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at three points inside each source triangle, linear
+  between them (each block of points seeded by its ids, version 7); its
   specular int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (ENV_SPEC_RAYS per
   pixel). meta["env"] holds the standard errors (from independent batches).
 
@@ -61,16 +61,21 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 7                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment at the vertices
+VERSION = 7                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points
 ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
 ENV_SPEC_RAYS = 64          # per pixel
 ENV_BATCHES = 4
 ENV_TARGET = 0.004          # adaptive sampling's goal: standard error / max(irradiance, its median)
 ENV_SAMPLER_WIDTH = 128     # the irradiance's environment, box-filtered (0.03 % from the full image's irradiance)
 ENV_COARSE_RAYS = 32        # per vertex for the progressive truth's first figure (no adaptive rays)
+ENV_COARSE_SPEC_RAYS = 16   # per pixel, the first figure's environment specular
+# the three points of a source triangle the environment's (full) irradiance is estimated at, and the map
+# from a point's barycentrics to the linear interpolation weights of those three
+_ENV_B = np.array([[4.0, 1.0, 1.0], [1.0, 4.0, 1.0], [1.0, 1.0, 4.0]]) / 6.0
+_ENV_W = np.linalg.inv(_ENV_B)
 ENV_LEVELS = ("full", "coarse")
 ENV_COARSE_SAMPLER_WIDTH = 64  # the coarse level's environment, box-filtered: its exact unoccluded sum 4-6x cheaper (p99 1 % off)
-ENV_BLOCK = 512             # vertex ids estimated together, with a seed of their own
+ENV_BLOCK = 1536            # estimation point ids estimated together, with a seed of their own
 ProfileArrays = tuple[np.ndarray, np.ndarray]  # (variances (k,), weights (k, 3)) of a sum of Gaussians
 DEFAULT_H_MM = 0.5          # source element edge
 
@@ -160,23 +165,24 @@ class Surface:
             self.env_rng = np.random.default_rng(12345)
             self.env_sampler = EnvSampler(self.env_img, e.yaw, ENV_SAMPLER_WIDTH)
             self.env_sampler_coarse = EnvSampler(self.env_img, e.yaw, ENV_COARSE_SAMPLER_WIDTH)
-            # the environment's irradiance at the mesh vertices, linear over each triangle (issue 34: a
-            # vertex is shared by ~6 triangles, so 6x fewer Monte Carlo points than 3 per triangle), per
-            # level: "full" (ENV_DIFFUSE_RAYS, adaptive) and "coarse" (ENV_COARSE_RAYS: the first figure)
-            V = len(self.P)
-            self.env_vert = {lv: np.zeros((V, 3)) for lv in ENV_LEVELS}
-            self.env_verr = {lv: np.zeros((V, 3)) for lv in ENV_LEVELS}
-            self.env_vdone = {lv: np.zeros(V, bool) for lv in ENV_LEVELS}
+            # the environment's irradiance, Monte Carlo at points of the surface, linear between them, per
+            # level: "full" at three points inside each triangle (_ENV_B; ENV_DIFFUSE_RAYS, adaptive) and
+            # "coarse" at the mesh's vertices (a vertex is shared by ~6 triangles: 6x fewer points;
+            # ENV_COARSE_RAYS, the first figure's; issue 34)
+            V, T = len(self.P), len(self.F)
+            npts = {"full": 3 * T, "coarse": V}
+            self.env_val = {lv: np.zeros((npts[lv], 3)) for lv in ENV_LEVELS}
+            self.env_err = {lv: np.zeros((npts[lv], 3)) for lv in ENV_LEVELS}
+            self.env_done = {lv: np.zeros(npts[lv], bool) for lv in ENV_LEVELS}
             # a vertex's point: one triangle holding it and its corner; shadow rays leave along the
             # area-weighted face normal there (both sides of a ridge see the same origin)
             vt = np.full(V, -1, np.int64)
             vc = np.zeros(V, np.int64)
             for k in (2, 1, 0):
-                vt[self.F[:, k]] = np.arange(len(self.F))
+                vt[self.F[:, k]] = np.arange(T)
                 vc[self.F[:, k]] = k
-            used = vt >= 0
-            self.env_used = used
-            self.env_vt, self.env_vc = np.where(used, vt, 0), vc
+            self.env_used = {"full": np.ones(3 * T, bool), "coarse": vt >= 0}
+            self.env_vt, self.env_vc = np.where(vt >= 0, vt, 0), vc
             ngv = np.zeros((V, 3))
             for k in range(3):
                 np.add.at(ngv, self.F[:, k], fn)
@@ -347,16 +353,31 @@ class Surface:
         return out
 
     # -- the environment light (issue 32) ------------------------------------------------------------
-    def _env_estimate(self, verts: np.ndarray, energy: bool, level: str = "full") -> None:
-        """Monte Carlo irradiance at mesh vertices ``verts`` (level "full": ENV_DIFFUSE_RAYS, adaptive;
-        "coarse": ENV_COARSE_RAYS, for the first figure)."""
+    def _env_points(self, level: str, ids: np.ndarray) -> dict[str, Any]:
+        """The attributes of the environment's estimation points ``ids`` of ``level``."""
+        if level == "full":
+            t = ids // 3
+            a = self.attributes(t, _ENV_B[ids % 3])
+        else:
+            bary = np.zeros((len(ids), 3))
+            bary[np.arange(len(ids)), self.env_vc[ids]] = 1.0
+            a = self.attributes(self.env_vt[ids], bary)
+            a["Ng"] = self.env_ngv[ids]
+        return a
+
+    def _env_support(self, level: str, tri: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The estimation points (N, 3) around points (tri, bary) and their linear weights (N, 3)."""
+        if level == "full":
+            return 3 * tri[:, None] + np.arange(3)[None], bary @ _ENV_W
+        return self.F[tri], bary
+
+    def _env_estimate(self, ids: np.ndarray, energy: bool, level: str = "full") -> None:
+        """Monte Carlo irradiance at the estimation points ``ids`` of ``level`` ("full": ENV_DIFFUSE_RAYS,
+        adaptive; "coarse": ENV_COARSE_RAYS against a coarser environment, for the first figure)."""
         from skinviewer.physics.environment import mc_irradiance_cv
-        if len(verts) == 0:
+        if len(ids) == 0:
             return
-        bary = np.zeros((len(verts), 3))
-        bary[np.arange(len(verts)), self.env_vc[verts]] = 1.0
-        a = self.attributes(self.env_vt[verts], bary)
-        a["Ng"] = self.env_ngv[verts]
+        a = self._env_points(level, ids)
         weight = None
         if energy:
             rows, rho = self.rho_dt_rows(a["m"]), a["rho"]
@@ -388,44 +409,43 @@ class Surface:
             rays[bad] += n2
         if level == "full":
             self.env_rays_used += float(rays.sum())
-            self.env_points_done += len(verts)
-        self.env_vert[level][verts] = est
-        self.env_verr[level][verts] = err
-        self.env_vdone[level][verts] = True
+            self.env_points_done += len(ids)
+        self.env_val[level][ids] = est
+        self.env_err[level][ids] = err
+        self.env_done[level][ids] = True
 
     def env_irradiance(self, tri: np.ndarray, bary: np.ndarray, energy: bool, level: str = "full") -> np.ndarray:
         """The environment's occluded irradiance (x rho_dt with ``energy``) at points (tri, bary): linear
-        between the Monte Carlo estimates at the triangle's vertices (``level``: "full" or "coarse")."""
-        if level == "coarse" and self.env_vdone["full"][self.F[tri]].all():
-            level = "full"  # the full estimate is there already
-        f = self.F[tri]
-        done = self.env_vdone[level]
-        # whole blocks of ENV_BLOCK vertex ids, each with its own seed: a vertex's estimate is the same
+        between its Monte Carlo estimates (``level`` "full": three points inside the triangle; "coarse":
+        its vertices, unless the full estimate is there already)."""
+        if level == "coarse" and self.env_done["full"][3 * tri[:, None] + np.arange(3)[None]].all():
+            level = "full"
+        ids, w = self._env_support(level, tri, bary)
+        done = self.env_done[level]
+        # whole blocks of ENV_BLOCK point ids, each with a seed of its own: a point's estimate is the same
         # whichever view or stage asked for it first (an orbit's truth equals a fresh session's)
-        blocks = np.unique(f[~done[f]] // ENV_BLOCK)
-        for b in blocks:
-            ids = np.arange(b * ENV_BLOCK, min((b + 1) * ENV_BLOCK, len(done)))
-            ids = ids[self.env_used[ids] & ~done[ids]]
-            self.env_rng = np.random.default_rng((12345, int(b), ENV_LEVELS.index(level)))
-            self._env_estimate(ids, energy, level)
-        out: np.ndarray = np.einsum("nk,nkc->nc", bary, self.env_vert[level][f])
+        for blk in np.unique(ids[~done[ids]] // ENV_BLOCK):
+            todo = np.arange(blk * ENV_BLOCK, min((blk + 1) * ENV_BLOCK, len(done)))
+            todo = todo[self.env_used[level][todo] & ~done[todo]]
+            self.env_rng = np.random.default_rng((12345, int(blk), ENV_LEVELS.index(level)))
+            self._env_estimate(todo, energy, level)
+        out: np.ndarray = np.einsum("nk,nkc->nc", w, self.env_val[level][ids])
         return out
 
     def env_relative_error(self, tri: np.ndarray) -> np.ndarray:
         """The standard error of the environment's (full) irradiance at triangles ``tri`` relative to it."""
-        f = self.F[tri]
-        v = self.env_vert["full"][f].sum(2).mean(1)
-        e = np.sqrt((self.env_verr["full"][f] ** 2).sum(2).mean(1))
+        v, e = self.env_here(tri)
         out: np.ndarray = e / np.maximum(v, 1e-300)
         return out
 
     def env_here(self, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(mean irradiance r+g+b, its standard error) of the full estimate over the vertices of ``tri``."""
-        f = self.F[tri]
-        return (self.env_vert["full"][f].sum(2).mean(1),
-                np.sqrt((self.env_verr["full"][f] ** 2).sum(2).mean(1)))
+        """(mean irradiance r+g+b, its standard error) of the full estimate at the points of ``tri``."""
+        ids = 3 * tri[:, None] + np.arange(3)[None]
+        return (self.env_val["full"][ids].sum(2).mean(1),
+                np.sqrt((self.env_err["full"][ids] ** 2).sum(2).mean(1)))
 
-    def env_specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
+    def env_specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None,
+                     rays: int = ENV_SPEC_RAYS) -> np.ndarray:
         """int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (seed 000 eq. 15-16):
         h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h). ``rng``: the samples'
         generator (default: the surface's)."""
@@ -435,7 +455,7 @@ class Surface:
         sp = self.s.specular
         n_pts = len(V)
         out = np.zeros((n_pts, 3))
-        k = math.isqrt(ENV_SPEC_RAYS)
+        k = math.isqrt(rays)
         batches = []
         for s0 in range(0, n_pts, 4096):
             sl = slice(s0, min(n_pts, s0 + 4096))
@@ -507,9 +527,10 @@ class Surface:
             return gt.PointSources(np.zeros((0, 3)), np.zeros((0, 3)))
         return gt.PointSources(np.concatenate(pos), np.concatenate(power))
 
-    def specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
-        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35); ``rng``:
-        the environment's samples (env_specular)."""
+    def specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None,
+                 env_rays: int = ENV_SPEC_RAYS) -> np.ndarray:
+        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35); ``rng``,
+        ``env_rays``: the environment's samples (env_specular)."""
         out = np.zeros((len(V), 3))
         sp = self.s.specular
         for light in self.lights:
@@ -530,7 +551,7 @@ class Surface:
             vis = self.visible(light, sub, L[on])
             out[on] += Lc[None] * (ks[on] * vis)[:, None]
         if self.env is not None:
-            out += self.env_specular(a, V, rng)
+            out += self.env_specular(a, V, rng, env_rays)
         return out
 
 
@@ -1069,12 +1090,13 @@ COARSE_H_MM = 2.0
 # spacing over sigma, chosen by the convergence check in notes/artist.md (the figure moves < 10 % of
 # itself when it is halved)
 FIELD_RATIO = 1.0
-LATTICE_SAFETY = 3.0  # the lattices' uncertainty: 3 x the curvature bound measured nearby (lattice_uncertainty)
-LATTICE_WINDOW = 7  # ... at the judge pixels (every 4th in x and y) of the pixel's 7 x 7 neighbourhood
+LATTICE_PAYS = 2.0  # a lattice is used where its spacing is >= 2 x the pixels' (lattice_gaussians)
+LATTICE_SAFETY = 4.0  # the lattices' uncertainty: 4 x the curvature bound measured nearby (lattice_uncertainty)
+LATTICE_WINDOW = 9  # ... at the judge pixels (every 4th in x and y) of the pixel's 9 x 9 neighbourhood
 LATTICE_UNCERTAINTY_NOTE = ("per pixel: the surface lattices' interpolation error, measured where the first stage "
                             "gathered every Gaussian exactly (every 4th pixel in x and y) and scaled to the pixel's "
                             "whole lattice cell (error ~ curvature x sum_i l_i |x - x_i|^2; the largest curvature of "
-                            "the 7 x 7 neighbourhood's judges, x 3) + 5e-5 M (truncation), times C^(1-mix) "
+                            "the 9 x 9 neighbourhood's judges, x 4) + 5e-5 M (truncation), times C^(1-mix) "
                             "rho_dt(N.V); not the element size's part (skinviewer reference states that)")
 STRIDES = (4, 2, 1)
 
@@ -1177,12 +1199,14 @@ class TruthSession:
     def lattice_gaussians(self, diff: gt.Diffusion, footprint_mm: float) -> list[int]:
         """The Gaussians kept on surface lattices for pixels ``footprint_mm`` apart on the surface: the
         wide ones (Diffusion.is_local false: sigma above the elements, smooth over sigma) whose lattice
-        (spacing field_ratio x sigma) is no finer than the pixels -- a finer one would cost three lattice
-        points per pixel and another view would share none of its cells (measured: issue 34's notes)."""
+        (spacing field_ratio x sigma) is at least LATTICE_PAYS x as coarse as the pixels -- a finer one
+        costs more lattice points than pixels (a lattice is never coarser than the mesh's triangles, and
+        the judge's checks come on top), and another view shares few of its cells (measured: issue 34's
+        notes, 256x256: the two widest Gaussians on lattices made an orbit 2x slower than per pixel)."""
         if not self.field_ratio:
             return []
         return [k for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
-                and self.field_ratio * math.sqrt(v) >= footprint_mm]
+                and self.field_ratio * math.sqrt(v) >= LATTICE_PAYS * footprint_mm]
 
     def _lattice_exitance(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], ks: list[int],
                           tri: np.ndarray, bary: np.ndarray, progress: Callable[[float], None] | None,
@@ -1275,8 +1299,12 @@ class TruthSession:
         n = max(len(pix), 1)
 
         def image(M: np.ndarray, done: np.ndarray, stage: str, h_mm: float, final: bool,
-                  u_M: np.ndarray | None = None) -> Partial:
-            spec_at(done, int(done.sum()))
+                  u_M: np.ndarray | None = None, coarse: bool = False) -> Partial:
+            if coarse:  # the first figure: the environment's specular with ENV_COARSE_SPEC_RAYS, not kept
+                spec[done] = surf.specular({k: v[done] for k, v in av.items()}, V[done], np.random.default_rng(4241),
+                                           ENV_COARSE_SPEC_RAYS)
+            else:
+                spec_at(done, int(done.sum()))
             diffuse = M * post
             imgs = []
             for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * post,)):
@@ -1304,7 +1332,7 @@ class TruthSession:
             ea_c = surf.irradiance({k: v[first] for k, v in a.items()}, mix, energy, "coarse")
             M[first] = diff.exitance(x_mm[first], ea_c, cancelled=check)
             yield image(M, first, f"coarse ({self.coarse_h_mm:g} mm elements, 1/{STRIDES[0] ** 2} of the pixels)",
-                        self.coarse_h_mm, False)
+                        self.coarse_h_mm, False, coarse=True)
         el, pts = self._whole_sources(surf, s, report, check)
         shared = self._structures[sources_key(s, self.h_mm)]
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
