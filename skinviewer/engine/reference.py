@@ -1338,6 +1338,17 @@ class TruthSession:
             M[first] = diff.exitance(x_mm[first], ea_c, cancelled=check)
             yield image(M, first, f"coarse ({self.coarse_h_mm:g} mm elements, 1/{STRIDES[0] ** 2} of the pixels)",
                         self.coarse_h_mm, False, coarse=True)
+            # then the same pixels at full resolution from the sources that reach them only (as
+            # compute_reference's): the environment's estimates they need (most of a first truth's time)
+            # are the whole surface's, kept; the whole-surface stage below computes these pixels again
+            # (the same integral, clustered differently: a truth does not depend on the session's past)
+            diff_v = build_diffusion(surf, x_mm[first], self.h_mm, variances, weights, mix, energy,
+                                     report=lambda st, f: report(f"visible {st}", f), check=check)
+            M = np.zeros((len(pix), 3))
+            M[first] = diff_v.exitance(x_mm[first], ea_at(first), cancelled=check)
+            del diff_v
+            yield image(M, first, f"1/{STRIDES[0] ** 2} of the pixels (the sources that reach them)", self.h_mm, False,
+                        np.zeros((len(pix), 3)) + TRUNCATE_LOSS * np.abs(M))
         el, pts = self._whole_sources(surf, s, report, check)
         shared = self._structures[sources_key(s, self.h_mm)]
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
