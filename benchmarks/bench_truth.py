@@ -116,6 +116,11 @@ def _orbit(s: Settings, s2: Settings, img2: np.ndarray, cover2: np.ndarray, fiel
     out["orbit_pixels"] = int(q.reference.mask.sum())
     rms, _ = R.sampled_rms(img2, q.reference, cover2)
     out["deon_rms_pct_orbit_view"] = [round(100 * x, 3) for x in rms]
+    if q.reference.uncertainty is not None:  # the lattices' stated uncertainty of that figure (RMS: rms(u))
+        from skinviewer.physics.metrics import image_error
+        m = q.reference.mask & cover2
+        e = image_error(img2, q.reference.lit, m, uncertainty=q.reference.uncertainty)
+        out["deon_rms_u_pct_orbit_view"] = [round(100 * x, 3) for x in e.rms_u]
     out["_ref"] = q.reference
     return out
 

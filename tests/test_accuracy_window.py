@@ -75,8 +75,10 @@ def test_ground_truth_in_a_worker_then_error_figures_and_heat_map(app):
     assert img.shape == ref.lit.shape
     m = compare_mask(ref.mask, lit[..., 3] > 0.5)
     assert m.sum() > 100
-    want = image_error(img, ref.lit, m, exposure=st.render.exposure)
+    want = image_error(img, ref.lit, m, exposure=st.render.exposure, uncertainty=ref.uncertainty)
     assert e == want, (e, want)
+    # the session's truth states its surface lattices' interpolation error, and the figures carry it
+    assert ref.uncertainty is not None and e.rms_u is not None and all(np.isfinite(e.rms_u))
     assert min(e.rms) > 1e-3 and e.dssim > 1e-5, e  # d'Eon at 256^2 maps is not the truth
     assert not np.allclose(img[m], ref.lit[m])
     acc.view_mode = 1

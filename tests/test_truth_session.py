@@ -31,7 +31,10 @@ def test_stages_refine_to_the_whole_view(session_and_first):
     ses, parts = session_and_first
     assert "coarse" in parts[0].stage and not parts[0].final  # a first figure before the sources exist
     assert [p.final for p in parts] == [False] * (len(parts) - 1) + [True]
-    fine = [p for p in parts if "coarse" not in p.stage]
+    # the first two stages are previews: the coarse one, then the first pixels from the sources that
+    # reach them (the whole-surface stages compute them again)
+    assert "reach them" in parts[1].stage
+    fine = [p for p in parts[2:]]
     counts = [int(p.reference.mask.sum()) for p in fine]
     assert counts == sorted(counts) and counts[0] < counts[-1]
     for a, b in zip(fine, fine[1:]):
@@ -88,12 +91,14 @@ def test_an_orbit_rebuilds_none_of_the_diffusion_structures(base, session_and_fi
     assert np.allclose(parts[-1].reference.lit, again[-1].reference.lit, rtol=1e-6, atol=1e-12)
 
 
-def test_an_orbit_interpolates_the_kept_diffusion_and_matches_a_fresh_truth(base):
+def test_an_orbit_interpolates_the_kept_diffusion_and_matches_a_fresh_truth(base, monkeypatch):
     """Issue 34: the diffused surface radiance does not depend on the camera. Each wide Gaussian's
     exitance is kept on a surface lattice: an orbit evaluates it only where it sees new surface (a
     fraction of what a fresh truth of that view evaluates), coming back to a view evaluates nothing and
     gives its figures again bit for bit, and the orbit's truth matches a truth gathered per pixel for
-    that view within the lattice's error (< 1 %; a technique's figure moves by far less than 10 %)."""
+    that view within the lattice's error (< 1 %; a technique's figure moves by far less than 10 %).
+    (Lattices as fine as the pixels here, LATTICE_PAYS 1: at 40x40 the default keeps none.)"""
+    monkeypatch.setattr(R, "LATTICE_PAYS", 1.0)
     ses = R.TruthSession()
     a = list(ses.progressive(base))[-1].reference
     n_first = ses.fields_evaluated(base)
@@ -179,3 +184,126 @@ def test_a_kept_source_grid_gives_the_blocks_bit_for_bit():
             assert len(fresh) == len(kept) > 0
             for a, b in zip(fresh, kept):
                 assert all(np.array_equal(u, v) for u, v in zip(a, b))
+
+
+# -- issue 34: the lattices state their own interpolation error; the session cuts shadow edges; the
+# environment's coarse level gives the first figure, an orbit's environment equals a fresh session's ------
+
+def _analytic_cases():
+    """(settings, analytic diffuse exitance at surface points (N, 3) mm, scale): the zoomed shadow edge
+    (E sum_i w_i Phi((x - x_e) / sigma_i)) and the laser on the slab (Lc sum_i w_i (disc * G_i)(r))."""
+    import math
+
+    from scipy.special import ndtr
+
+    from skinviewer.physics import ground_truth as gt
+    g = Settings().deon.gaussians
+    V = np.array([x.variance for x in g])
+    Wt = np.array([x.weights for x in g])
+    xe = 21.0 * math.tan(math.radians(30.0))
+    edge = with_values(Settings(), {
+        "scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "render.width": 24, "render.height": 24,
+        "deon.energy_conservation": False, "specular.rho_s": 0.0,
+        "lights": [{"kind": "directional", "direction": [-0.5, 0.0, 0.866], "intensity": 0.8, "cast_shadow": True}],
+        "camera": {"yaw": 0.0, "pitch": 0.0, "distance": 100.0, "target": [xe, 0.0, 0.0], "fov_y": 3.0}})
+    lit = 0.8 * 0.866 / math.hypot(0.5, 0.866)
+
+    def edge_m(p):
+        return lit * (Wt[None] * ndtr((p[:, :1] - xe) / np.sqrt(V)[None])[..., None]).sum(1), lit
+    slab = with_values(Settings(), {"scene.name": "laser", **scene_overrides("laser"), "render.width": 48,
+                                    "render.height": 48, "deon.energy_conservation": False, "specular.rho_s": 0.0,
+                                    "lights": [{"kind": "directional", "direction": [0, 0, 1], "intensity": 2.0,
+                                                "cast_shadow": True}]})
+
+    def slab_m(p):  # the 24 mm square lit uniformly: E sum_i w_i (square * G_i), its open rim included
+        sd = np.sqrt(V)[None, :]
+
+        def box(u):
+            return ndtr((12.0 - u) / sd) - ndtr((-12.0 - u) / sd)
+        return 2.0 * (Wt[None] * (box(p[:, :1]) * box(p[:, 1:2]))[..., None]).sum(1), 2.0
+    laser = with_values(Settings(), {"scene.name": "laser", **scene_overrides("laser"), "render.width": 48,
+                                     "render.height": 48, "deon.energy_conservation": False, "specular.rho_s": 0.0})
+
+    def laser_m(p):
+        r = np.hypot(p[:, 0], p[:, 1])
+        m = 400.0 * sum(Wt[None, i] * gt.gaussian_disc_convolution(r, V[i], 0.02)[:, None] for i in range(len(V)))
+        return m, float(m.max())
+    return [("edge", edge, edge_m), ("slab", slab, slab_m), ("laser", laser, laser_m)]
+
+
+@pytest.mark.parametrize("case", [0, 1], ids=["zoomed-edge", "lit-slab"])
+def test_the_lattices_state_their_interpolation_error(case):
+    """The wide Gaussians' lattices are a surface cache: their interpolation error must lie inside the
+    truth's stated per-pixel uncertainty. On two analytic scenes (a cast shadow edge seen from 100 mm
+    with a 3 deg field, the 24 mm slab lit uniformly with its open rim), the session's truth with lattices differs from the same
+    sources gathered per pixel by no more than its stated uncertainty at >= 99.5 % of the pixels (in RMS
+    and at the worst pixel too), and differs from the analytic answer by no more than that plus the
+    ruler's own (compute_reference's grid convergence index) at >= 99.5 %; the uncertainty is not
+    vacuous: its RMS under 1 % of the lit level on the slab, under 3 % at the edge (the
+    whole 5 mm view is a shadow step, where the lattices' error is largest; a loose bound there: the
+    error's own RMS is about a fifth of it)."""
+    name, s, analytic = _analytic_cases()[case]
+    ses = R.TruthSession()
+    lat = list(ses.progressive(s))[-1].reference
+    assert ses.fields_evaluated(s) > 0  # the lattices were used
+    per_pixel = list(R.TruthSession(field_ratio=None).progressive(s))[-1].reference
+    ruler = R.compute_reference(s, use_cache=False)
+    m = lat.mask & per_pixel.mask & ruler.mask
+    assert np.array_equal(lat.mask, per_pixel.mask)
+    u = lat.uncertainty[m]
+    interp = np.abs(lat.diffuse - per_pixel.diffuse)[m]
+    assert interp.max() > 0  # some pixels were interpolated
+    assert (interp > u).mean() <= 0.005, (interp > u).mean(0)
+    assert np.all(np.sqrt((interp ** 2).mean(0)) <= np.sqrt((u ** 2).mean(0)))
+    assert np.all(interp.max(0) <= u.max(0))
+    expect, scale = analytic(lat.position[m])
+    err = np.abs(lat.diffuse[m] - expect)
+    assert (err > u + ruler.uncertainty[m]).mean() <= 0.005, (err > u + ruler.uncertainty[m]).mean(0)
+    assert np.sqrt((u ** 2).mean(0)).max() < (0.03 if name == "edge" else 0.01) * scale
+
+
+def test_a_beam_is_gathered_per_pixel_within_the_rulers_uncertainty():
+    """A beam's point sources make the wide Gaussians' fields peak at the sigma scale, where a lattice of
+    spacing sigma is off by ~1/8 of the peak: the session keeps no lattice for them, and its truth of the
+    laser is the analytic answer within the ruler's uncertainty at >= 99.5 % of the pixels."""
+    _, s, analytic = _analytic_cases()[2]
+    ses = R.TruthSession()
+    ref = list(ses.progressive(s))[-1].reference
+    assert ses.fields_evaluated(s) == 0
+    ruler = R.compute_reference(s, use_cache=False)
+    m = ref.mask & ruler.mask
+    expect, _ = analytic(ref.position[m])
+    r = np.hypot(ref.position[m][:, 0], ref.position[m][:, 1])
+    keep = (r > 0.15) & (r < 8.0)  # as the ruler's own laser test
+    err = np.abs(ref.diffuse[m] - expect)[keep]
+    assert (err > ruler.uncertainty[m][keep]).mean() <= 0.005
+
+
+def test_the_session_cuts_the_sources_along_shadow_edges():
+    """The session's whole-surface sources are cut along cast shadow edges as compute_reference's (they
+    used to carry their corners' mean: 9-20 % of the lit level off at a zoomed edge)."""
+    _, s, analytic = _analytic_cases()[0]
+    ref = list(R.TruthSession(field_ratio=None).progressive(s))[-1].reference
+    expect, lit = analytic(ref.position[ref.mask])
+    assert np.abs(ref.diffuse[ref.mask] - expect).max() < 0.01 * lit
+
+
+def test_the_environment_coarse_first_then_full_and_an_orbit_equals_a_fresh_session(base):
+    """With an environment light the first figure uses the coarse estimate of its irradiance (fewer
+    rays, at the vertices the coarse sources need), the later stages the full one; the estimate of a
+    vertex does not depend on which view asked for it first, so an orbit in a session gives a fresh
+    session's truth of that view."""
+    s = with_values(base, {"lights": [*[lt.model_dump() for lt in base.lights],
+                                      {"kind": "environment", "intensity": 0.5, "cast_shadow": False}]})
+    ses = R.TruthSession()
+    gen = ses.progressive(s)
+    first = next(gen)
+    surf = ses.surface(s)
+    assert "coarse" in first.stage
+    assert surf.env_done["coarse"].sum() > 0 and surf.env_done["full"].sum() == 0  # no full estimate yet
+    rest = list(gen)
+    assert rest[-1].final and surf.env_done["full"].sum() > 0
+    orbit = with_values(s, {"camera.yaw": s.camera.yaw + 25.0})
+    a = list(ses.progressive(orbit))[-1].reference
+    b = list(R.TruthSession().progressive(orbit))[-1].reference
+    assert np.allclose(a.lit, b.lit, rtol=1e-6, atol=1e-12)

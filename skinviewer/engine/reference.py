@@ -18,7 +18,7 @@ except to look up the surface's own maps.
   unoccluded sum over the environment's texels less the blocked light, estimated by Monte Carlo with
   multiple importance sampling (cosine and environment directions, stratified) and Embree visibility
   (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at three points inside each source triangle, linear
-  between them; its
+  between them (each block of points seeded by its ids, version 7); its
   specular int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (ENV_SPEC_RAYS per
   pixel). meta["env"] holds the standard errors (from independent batches).
 
@@ -61,16 +61,21 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 6                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments
+VERSION = 7                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points
 ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
 ENV_SPEC_RAYS = 64          # per pixel
 ENV_BATCHES = 4
 ENV_TARGET = 0.004          # adaptive sampling's goal: standard error / max(irradiance, its median)
 ENV_SAMPLER_WIDTH = 128     # the irradiance's environment, box-filtered (0.03 % from the full image's irradiance)
-# the three points of a source triangle the environment's irradiance is estimated at, and the map
+ENV_COARSE_RAYS = 32        # per vertex for the progressive truth's first figure (no adaptive rays)
+ENV_COARSE_SPEC_RAYS = 16   # per pixel, the first figure's environment specular
+# the three points of a source triangle the environment's (full) irradiance is estimated at, and the map
 # from a point's barycentrics to the linear interpolation weights of those three
 _ENV_B = np.array([[4.0, 1.0, 1.0], [1.0, 4.0, 1.0], [1.0, 1.0, 4.0]]) / 6.0
 _ENV_W = np.linalg.inv(_ENV_B)
+ENV_LEVELS = ("full", "coarse")
+ENV_COARSE_SAMPLER_WIDTH = 64  # the coarse level's environment, box-filtered: its exact unoccluded sum 4-6x cheaper (p99 1 % off)
+ENV_BLOCK = 1536            # estimation point ids estimated together, with a seed of their own
 ProfileArrays = tuple[np.ndarray, np.ndarray]  # (variances (k,), weights (k, 3)) of a sum of Gaussians
 DEFAULT_H_MM = 0.5          # source element edge
 
@@ -159,11 +164,32 @@ class Surface:
                 (np.asarray(e.color, np.float64) * e.intensity)[None, None]
             self.env_rng = np.random.default_rng(12345)
             self.env_sampler = EnvSampler(self.env_img, e.yaw, ENV_SAMPLER_WIDTH)
-            self.env_tri = np.zeros((len(self.F), 3, 3))  # per triangle: E at its three _ENV_B points
-            self.env_err = np.zeros((len(self.F), 3, 3))
-            self.env_done = np.zeros(len(self.F), bool)
+            self.env_sampler_coarse = EnvSampler(self.env_img, e.yaw, ENV_COARSE_SAMPLER_WIDTH)
+            # the environment's irradiance, Monte Carlo at points of the surface, linear between them, per
+            # level: "full" at three points inside each triangle (_ENV_B; ENV_DIFFUSE_RAYS, adaptive) and
+            # "coarse" at the mesh's vertices (a vertex is shared by ~6 triangles: 6x fewer points;
+            # ENV_COARSE_RAYS, the first figure's; issue 34)
+            V, T = len(self.P), len(self.F)
+            npts = {"full": 3 * T, "coarse": V}
+            self.env_val = {lv: np.zeros((npts[lv], 3)) for lv in ENV_LEVELS}
+            self.env_err = {lv: np.zeros((npts[lv], 3)) for lv in ENV_LEVELS}
+            self.env_done = {lv: np.zeros(npts[lv], bool) for lv in ENV_LEVELS}
+            # a vertex's point: one triangle holding it and its corner; shadow rays leave along the
+            # area-weighted face normal there (both sides of a ridge see the same origin)
+            vt = np.full(V, -1, np.int64)
+            vc = np.zeros(V, np.int64)
+            for k in (2, 1, 0):
+                vt[self.F[:, k]] = np.arange(T)
+                vc[self.F[:, k]] = k
+            self.env_used = {"full": np.ones(3 * T, bool), "coarse": vt >= 0}
+            self.env_vt, self.env_vc = np.where(vt >= 0, vt, 0), vc
+            ngv = np.zeros((V, 3))
+            for k in range(3):
+                np.add.at(ngv, self.F[:, k], fn)
+            self.env_ngv = ngv / np.maximum(np.linalg.norm(ngv, axis=1), 1e-300)[:, None]
             self.env_spec_err: np.ndarray | None = None
             self.env_rays_used = 0.0
+            self.env_points_done = 0
 
     # per-point attributes
     def attributes(self, tri: np.ndarray, bary: np.ndarray) -> dict[str, Any]:
@@ -239,12 +265,16 @@ class Surface:
     def rho_dt_along(self, rows: np.ndarray, rho_s: np.ndarray, cos_theta: np.ndarray) -> np.ndarray:
         """Surface.rho_dt at cos_theta (N, K) for the points of ``rows`` (rho_dt_rows) and their rho_s."""
         n_cos = rows.shape[1]
-        pos = np.clip(np.clip(cos_theta, 0.0, 1.0) * n_cos - 0.5, 0.0, n_cos - 1.0)
-        i0 = np.floor(pos).astype(np.int64)
-        i1 = np.minimum(i0 + 1, n_cos - 1)
+        # one clip does both of sample_bilinear's (cos in [0, 1], then the texel centres); the rows are
+        # in [0, 1] already (rho_table is clipped), so their interpolation is too
+        pos = np.clip(np.asarray(cos_theta, np.float64) * n_cos - 0.5, 0.0, n_cos - 1.0)
+        i0 = pos.astype(np.int64)
         f = pos - i0
-        r = np.arange(len(rows))[:, None]
-        t = np.clip(rows[r, i0] * (1.0 - f) + rows[r, i1] * f, 0.0, 1.0)
+        flat = np.ascontiguousarray(rows, np.float64).ravel()
+        i0 += (np.arange(len(rows)) * n_cos)[:, None]
+        lo = flat[i0]
+        hi = flat[np.minimum(i0 + 1, len(flat) - 1)]
+        t = lo + (hi - lo) * f  # f = 0 at the last column: hi (the next row's first entry) has no weight
         r0 = self.s.specular.rho_s
         if not r0 > 0:
             return np.ones_like(t)
@@ -277,13 +307,13 @@ class Surface:
         out: np.ndarray = ~self.rays.intersects_any(o, np.ascontiguousarray(L))
         return out
 
-    def irradiance(self, a: dict[str, Any], mix: float, energy: bool) -> np.ndarray:
+    def irradiance(self, a: dict[str, Any], mix: float, energy: bool, env_level: str = "full") -> np.ndarray:
         """E A (eq. 28, 32) from the directional and point lights (beams are point sources) and the
-        environment (issue 32: its occluded irradiance, Monte Carlo)."""
+        environment (issue 32: its occluded irradiance, Monte Carlo; ``env_level`` as env_irradiance)."""
         U, vis = self.irradiance_parts(a, mix, energy)
         E = (U * vis[..., None]).sum(0) if len(U) else np.zeros((len(a["P"]), 3))
         if self.env is not None:
-            E = E + self.env_irradiance(a["tri"], a["bary"], energy) * _safe_pow(a["C"], mix)
+            E = E + self.env_irradiance(a["tri"], a["bary"], energy, env_level) * _safe_pow(a["C"], mix)
         return E
 
     def shadow_lights(self) -> list[LightSettings]:
@@ -323,27 +353,46 @@ class Surface:
         return out
 
     # -- the environment light (issue 32) ------------------------------------------------------------
-    def _env_estimate(self, tris: np.ndarray, energy: bool) -> None:
-        """Monte Carlo irradiance at the three _ENV_B points of each triangle in ``tris``."""
+    def _env_points(self, level: str, ids: np.ndarray) -> dict[str, Any]:
+        """The attributes of the environment's estimation points ``ids`` of ``level``."""
+        if level == "full":
+            t = ids // 3
+            a = self.attributes(t, _ENV_B[ids % 3])
+        else:
+            bary = np.zeros((len(ids), 3))
+            bary[np.arange(len(ids)), self.env_vc[ids]] = 1.0
+            a = self.attributes(self.env_vt[ids], bary)
+            a["Ng"] = self.env_ngv[ids]
+        return a
+
+    def _env_support(self, level: str, tri: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The estimation points (N, 3) around points (tri, bary) and their linear weights (N, 3)."""
+        if level == "full":
+            return 3 * tri[:, None] + np.arange(3)[None], bary @ _ENV_W
+        return self.F[tri], bary
+
+    def _env_estimate(self, ids: np.ndarray, energy: bool, level: str = "full") -> None:
+        """Monte Carlo irradiance at the estimation points ``ids`` of ``level`` ("full": ENV_DIFFUSE_RAYS,
+        adaptive; "coarse": ENV_COARSE_RAYS against a coarser environment, for the first figure)."""
         from skinviewer.physics.environment import mc_irradiance_cv
-        if len(tris) == 0:
+        if len(ids) == 0:
             return
-        tri = np.repeat(tris, 3)
-        bary = np.tile(_ENV_B, (len(tris), 1))
-        a = self.attributes(tri, bary)
+        a = self._env_points(level, ids)
         weight = None
         if energy:
             rows, rho = self.rho_dt_rows(a["m"]), a["rho"]
 
             def weight(mu: np.ndarray, sl: slice | np.ndarray) -> np.ndarray:
                 return self.rho_dt_along(rows[sl], rho[sl], mu)
-        est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, ENV_DIFFUSE_RAYS,
+        n_rays = ENV_DIFFUSE_RAYS if level == "full" else ENV_COARSE_RAYS
+        sampler = self.env_sampler if level == "full" else self.env_sampler_coarse
+        est, err = mc_irradiance_cv(sampler, a["Ps"], a["N"], a["Ng"], self.rays, n_rays,
                                     self.env_rng, self.eps, weight=weight, batches=ENV_BATCHES)
         # adaptive: points whose standard error exceeds ENV_TARGET of max(their irradiance, the median's)
         # (the occluded ones: folds, ears) get 4x the rays more, combined by ray count
-        rays = np.full(len(est), float(ENV_DIFFUSE_RAYS))
+        rays = np.full(len(est), float(n_rays))
         scale = max(float(np.median(est.sum(1))), 1e-300)
-        for more in (4,):
+        for more in ((4,) if level == "full" else ()):
             bad = np.nonzero(np.sqrt((err ** 2).sum(1)) > ENV_TARGET * np.maximum(est.sum(1), scale))[0]
             if len(bad) == 0:
                 break
@@ -358,45 +407,63 @@ class Surface:
             est[bad] = (n1 * est[bad] + n2 * e2) / (n1 + n2)
             err[bad] = np.sqrt(n1 ** 2 * err[bad] ** 2 + n2 ** 2 * s2 ** 2) / (n1 + n2)
             rays[bad] += n2
-        self.env_rays_used += float(rays.sum())
-        self.env_tri[tris] = est.reshape(len(tris), 3, -1)
-        self.env_err[tris] = err.reshape(len(tris), 3, -1)
-        self.env_done[tris] = True
+        if level == "full":
+            self.env_rays_used += float(rays.sum())
+            self.env_points_done += len(ids)
+        self.env_val[level][ids] = est
+        self.env_err[level][ids] = err
+        self.env_done[level][ids] = True
 
-    def env_irradiance(self, tri: np.ndarray, bary: np.ndarray, energy: bool) -> np.ndarray:
+    def env_irradiance(self, tri: np.ndarray, bary: np.ndarray, energy: bool, level: str = "full") -> np.ndarray:
         """The environment's occluded irradiance (x rho_dt with ``energy``) at points (tri, bary): linear
-        through the triangle's three Monte Carlo points."""
-        todo = np.unique(tri[~self.env_done[tri]])
-        for s0 in range(0, len(todo), 20000):
-            self._env_estimate(todo[s0:s0 + 20000], energy)
-        w = bary @ _ENV_W
-        out: np.ndarray = np.einsum("nk,nkc->nc", w, self.env_tri[tri])
+        between its Monte Carlo estimates (``level`` "full": three points inside the triangle; "coarse":
+        its vertices, unless the full estimate is there already)."""
+        if level == "coarse" and self.env_done["full"][3 * tri[:, None] + np.arange(3)[None]].all():
+            level = "full"
+        ids, w = self._env_support(level, tri, bary)
+        done = self.env_done[level]
+        # whole blocks of ENV_BLOCK point ids, each with a seed of its own: a point's estimate is the same
+        # whichever view or stage asked for it first (an orbit's truth equals a fresh session's)
+        for blk in np.unique(ids[~done[ids]] // ENV_BLOCK):
+            todo = np.arange(blk * ENV_BLOCK, min((blk + 1) * ENV_BLOCK, len(done)))
+            todo = todo[self.env_used[level][todo] & ~done[todo]]
+            self.env_rng = np.random.default_rng((12345, int(blk), ENV_LEVELS.index(level)))
+            self._env_estimate(todo, energy, level)
+        out: np.ndarray = np.einsum("nk,nkc->nc", w, self.env_val[level][ids])
         return out
 
     def env_relative_error(self, tri: np.ndarray) -> np.ndarray:
-        """The standard error of the environment's irradiance at triangles ``tri`` relative to it."""
-        v = self.env_tri[tri].sum(2).mean(1)
-        e = np.sqrt((self.env_err[tri] ** 2).sum(2).mean(1))
+        """The standard error of the environment's (full) irradiance at triangles ``tri`` relative to it."""
+        v, e = self.env_here(tri)
         out: np.ndarray = e / np.maximum(v, 1e-300)
         return out
 
-    def env_specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
+    def env_here(self, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(mean irradiance r+g+b, its standard error) of the full estimate at the points of ``tri``."""
+        ids = 3 * tri[:, None] + np.arange(3)[None]
+        return (self.env_val["full"][ids].sum(2).mean(1),
+                np.sqrt((self.env_err["full"][ids] ** 2).sum(2).mean(1)))
+
+    def env_specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None,
+                     rays: int = ENV_SPEC_RAYS) -> np.ndarray:
         """int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (seed 000 eq. 15-16):
-        h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h)."""
+        h ~ P_H(h) cos / pi, w = reflect(-V, h), pdf(w) = P_H cos / (4 pi V.h). ``rng``: the samples'
+        generator (default: the surface's)."""
+        rng = self.env_rng if rng is None else rng
         from skinviewer.physics.environment import sample_equirect, tangent_frames
         from skinviewer.physics.specular import beckmann
         sp = self.s.specular
         n_pts = len(V)
         out = np.zeros((n_pts, 3))
-        k = math.isqrt(ENV_SPEC_RAYS)
+        k = math.isqrt(rays)
         batches = []
         for s0 in range(0, n_pts, 4096):
             sl = slice(s0, min(n_pts, s0 + 4096))
             N, Vs, m = a["N"][sl], V[sl], np.maximum(a["m"][sl], 1e-3)
             cnt = len(N)
             i, j = np.meshgrid(np.arange(k), np.arange(k))
-            u1 = (i.ravel()[None] + self.env_rng.random((cnt, k * k))) / k
-            u2 = (j.ravel()[None] + self.env_rng.random((cnt, k * k))) / k
+            u1 = (i.ravel()[None] + rng.random((cnt, k * k))) / k
+            u2 = (j.ravel()[None] + rng.random((cnt, k * k))) / k
             t2 = -(m[:, None] ** 2) * np.log1p(-np.minimum(u1, 1 - 1e-12))
             ch = 1.0 / np.sqrt(1.0 + t2)
             sh = np.sqrt(np.maximum(1.0 - ch * ch, 0.0))
@@ -460,8 +527,10 @@ class Surface:
             return gt.PointSources(np.zeros((0, 3)), np.zeros((0, 3)))
         return gt.PointSources(np.concatenate(pos), np.concatenate(power))
 
-    def specular(self, a: dict[str, Any], V: np.ndarray) -> np.ndarray:
-        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35)."""
+    def specular(self, a: dict[str, Any], V: np.ndarray, rng: np.random.Generator | None = None,
+                 env_rays: int = ENV_SPEC_RAYS) -> np.ndarray:
+        """deon_final.frag's specular: sum_lights Lc KS(N, L, V) vis (KS carries N.L, eq. 35); ``rng``,
+        ``env_rays``: the environment's samples (env_specular)."""
         out = np.zeros((len(V), 3))
         sp = self.s.specular
         for light in self.lights:
@@ -482,7 +551,7 @@ class Surface:
             vis = self.visible(light, sub, L[on])
             out[on] += Lc[None] * (ks[on] * vis)[:, None]
         if self.env is not None:
-            out += self.env_specular(a, V)
+            out += self.env_specular(a, V, rng, env_rays)
         return out
 
 
@@ -704,12 +773,13 @@ def estimate_seconds(n_pixels: int, n_elements: int, uncertainty: bool = False) 
     return base * (1.35 if uncertainty else 1.0)  # default head 512^2: 77.9 vs 58.4 s CPU (cut included)
 
 
-def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, variances: np.ndarray, weights: np.ndarray,
+def build_diffusion(surf: Surface, receivers_mm: np.ndarray | None, h_mm: float, variances: np.ndarray, weights: np.ndarray,
                     mix: float, energy: bool, max_seconds: float | None = None, n_pixels: int | None = None,
                     report: Callable[[str, float], None] | None = None, check: Callable[[], bool] | None = None,
-                    split_edges: bool = True, beam_rays: int = BEAM_RAYS) -> gt.Diffusion:
+                    split_edges: bool = True, beam_rays: int = BEAM_RAYS, env_level: str = "full") -> gt.Diffusion:
     """Source elements (edge <= h_mm) of every triangle that can reach a receiver, their E A,
-    the beams' point sources, and the Diffusion sum over them."""
+    the beams' point sources, and the Diffusion sum over them (``env_level``: the environment's
+    estimate, Surface.env_irradiance)."""
     report = report or (lambda stage, f: None)
     check = check or (lambda: False)
     mm = surf.mm
@@ -719,13 +789,15 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
     tc = tri_mm.mean(1)
     tr = np.linalg.norm(tri_mm - tc[:, None], axis=2).max(1)
     keep = np.zeros(len(tc), bool)
-    if len(receivers_mm):
+    if receivers_mm is None:  # the whole surface (the truth session's sources, kept across views)
+        keep[:] = True
+    elif len(receivers_mm):
         from scipy.spatial import cKDTree
         d, _ = cKDTree(receivers_mm).query(tc, distance_upper_bound=reach + tr.max())
         keep = d <= reach + tr
     vpar, vbary, elem = gt.subdivide(tri_mm, h_mm, keep)
     n_el, n_v = len(elem), len(vpar)
-    n_px = len(receivers_mm) if n_pixels is None else n_pixels
+    n_px = (0 if receivers_mm is None else len(receivers_mm)) if n_pixels is None else n_pixels
     est = estimate_seconds(n_px, n_el)
     if max_seconds is not None and est > max_seconds:
         raise ReferenceTooSlow(f"the reference would take about {est:.0f} s of CPU ({n_px} pixels, "
@@ -745,7 +817,7 @@ def build_diffusion(surf: Surface, receivers_mm: np.ndarray, h_mm: float, varian
         a_sl = surf.attributes(vpar[sl], vbary[sl])
         U[:, sl], vis[:, sl] = surf.irradiance_parts(a_sl, mix, energy)
         if env_v is not None:  # the environment's occluded irradiance (issue 32): smooth, never cut
-            env_v[sl] = surf.env_irradiance(a_sl["tri"], a_sl["bary"], energy) * _safe_pow(a_sl["C"], mix)
+            env_v[sl] = surf.env_irradiance(a_sl["tri"], a_sl["bary"], energy, env_level) * _safe_pow(a_sl["C"], mix)
         report("irradiance", sl.stop / max(n_v, 1))
     if env_v is not None:  # one more "light", visible everywhere: the edge cut leaves it as the corners' mean
         U = np.concatenate([U, env_v[None]])
@@ -968,12 +1040,11 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     env_meta = {}
     if surf.env is not None:  # the Monte Carlo's standard errors (issue 32)
         rel = surf.env_relative_error(tri)
-        e_here = surf.env_tri[tri].sum(2).mean(1)
-        e_err = np.sqrt((surf.env_err[tri] ** 2).sum(2).mean(1))
+        e_here, e_err = surf.env_here(tri)
         lit_sum = np.maximum((diffuse + spec).sum(1), 1e-300)
         spec_rel = surf.env_spec_err / lit_sum
         env_meta = {"diffuse_rays": ENV_DIFFUSE_RAYS, "specular_rays": ENV_SPEC_RAYS,
-                    "diffuse_rays_mean": surf.env_rays_used / max(3 * int(surf.env_done.sum()), 1),
+                    "diffuse_rays_mean": surf.env_rays_used / max(surf.env_points_done, 1),
                     "irradiance_rms_stderr_over_mean": float(np.sqrt((e_err ** 2).mean()) / max(e_here.mean(), 1e-300)),
                     "irradiance_rel_stderr_p50": float(np.median(rel)), "irradiance_rel_stderr_p95": float(np.percentile(rel, 95)),
                     "specular_stderr_of_pixel_p50": float(np.median(spec_rel)),
@@ -1019,6 +1090,14 @@ COARSE_H_MM = 2.0
 # spacing over sigma, chosen by the convergence check in notes/artist.md (the figure moves < 10 % of
 # itself when it is halved)
 FIELD_RATIO = 1.0
+LATTICE_PAYS = 2.0  # a lattice is used where its spacing is >= 2 x the pixels' (lattice_gaussians)
+LATTICE_SAFETY = 4.0  # the lattices' uncertainty: 4 x the curvature bound measured nearby (lattice_uncertainty)
+LATTICE_WINDOW = 9  # ... at the judge pixels (every 4th in x and y) of the pixel's 9 x 9 neighbourhood
+LATTICE_UNCERTAINTY_NOTE = ("per pixel: the surface lattices' interpolation error, measured where the first stage "
+                            "gathered every Gaussian exactly (every 4th pixel in x and y) and scaled to the pixel's "
+                            "whole lattice cell (error ~ curvature x sum_i l_i |x - x_i|^2; the largest curvature of "
+                            "the 9 x 9 neighbourhood's judges, x 4) + 5e-5 M (truncation), times C^(1-mix) "
+                            "rho_dt(N.V); not the element size's part (skinviewer reference states that)")
 STRIDES = (4, 2, 1)
 
 
@@ -1080,19 +1159,13 @@ class TruthSession:
         key = sources_key(s, self.h_mm)
         hit = self._sources.pop(key, None)
         if hit is None:
-            tri_mm = surf.P[surf.F] * surf.mm
-            vpar, vbary, elem = gt.subdivide(tri_mm, self.h_mm, None)
-            mix, energy = s.deon.mix, s.deon.energy_conservation
-            ea_v = np.zeros((len(vpar), 3))
-            step = 200_000
-            for s0 in range(0, len(vpar), step):
-                if check():
-                    raise InterruptedError("cancelled")
-                sl = slice(s0, min(len(vpar), s0 + step))
-                ea_v[sl] = surf.irradiance(surf.attributes(vpar[sl], vbary[sl]), mix, energy)
-                report("surface irradiance", sl.stop / max(len(vpar), 1))
-            vpos = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])
-            hit = (gt.Elements(vpos[elem], ea_v[elem].mean(1)), surf.beam_sources(mix, energy))
+            # every element of the surface, cut along cast-shadow edges as compute_reference's (issue 34:
+            # the session's truth used to keep the corners' mean there, the version-4 truth)
+            whole = build_diffusion(surf, None, self.h_mm, np.ones(1), np.ones((1, 3)), s.deon.mix,
+                                    s.deon.energy_conservation, report=lambda st, f: report(f"surface {st}", f),
+                                    check=check)
+            assert whole.points is not None  # build_diffusion always gives the beams' point sources
+            hit = (whole.el, whole.points)
             self.builds += 1
         self._sources[key] = hit  # most recent last
         self._structures[key] = self._structures.pop(key, {})
@@ -1123,23 +1196,33 @@ class TruthSession:
         fields = self._structures.get(sources_key(s, self.h_mm), {}).get("fields", {})
         return sum(f.evaluated for f in fields.values())
 
-    def _field_exitance(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], tri: np.ndarray,
-                        bary: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, footprint_mm: float,
-                        progress: Callable[[float], None], check: Callable[[], bool]) -> np.ndarray:
-        """M at pixels (eq. 20's sum over the profile's Gaussians): the local ones (narrower than the
-        elements: the light at the pixel itself, Diffusion.is_local) gathered per pixel; each wide one
-        (sigma >= the elements: smooth over sigma) interpolated linearly from its surface lattice
-        (spacing ``field_ratio`` sigma), evaluated first at the lattice points not yet done -- an
-        orbit evaluates only the surface it has not seen before."""
-        # a Gaussian whose lattice would be finer than the pixels (ratio sigma < the pixels' spacing on
-        # the surface) is gathered per pixel too: its lattice cells would hold one pixel each, so
-        # another view would share none of them (and each pixel would cost three lattice points)
-        wide = [(k, v) for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
-                and (self.field_ratio or 0.0) * math.sqrt(v) >= footprint_mm]
-        per_pixel = {k for k in range(len(diff.v)) if k not in {k for k, _ in wide}}
-        M = diff.exitance(x_mm, ea_here, cancelled=check, only=per_pixel)
-        for n, (k, v) in enumerate(wide):
-            f = self.field(surf, shared, float(v))
+    def lattice_gaussians(self, diff: gt.Diffusion, footprint_mm: float) -> list[int]:
+        """The Gaussians kept on surface lattices for pixels ``footprint_mm`` apart on the surface: the
+        wide ones (Diffusion.is_local false: sigma above the elements, smooth over sigma) whose lattice
+        (spacing field_ratio x sigma) is at least LATTICE_PAYS x as coarse as the pixels -- a finer one
+        costs more lattice points than pixels (a lattice is never coarser than the mesh's triangles, and
+        the judge's checks come on top), and another view shares few of its cells (measured: issue 34's
+        notes, 256x256: the two widest Gaussians on lattices made an orbit 2x slower than per pixel)."""
+        if not self.field_ratio:
+            return []
+        if diff.points is not None and len(diff.points.position):
+            # a beam's point sources make each wide Gaussian's field peak at the sigma scale, where a
+            # lattice of spacing sigma is off by ~1/8 of the peak (its stated error as large as a
+            # technique's figure, measured on the laser): such scenes are gathered per pixel
+            return []
+        return [k for k, v in enumerate(diff.v) if not diff.is_local(v) and np.any(diff.w[k] > 0)
+                and self.field_ratio * math.sqrt(v) >= LATTICE_PAYS * footprint_mm]
+
+    def _lattice_exitance(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], ks: list[int],
+                          tri: np.ndarray, bary: np.ndarray, progress: Callable[[float], None] | None,
+                          check: Callable[[], bool]) -> np.ndarray:
+        """sum over Gaussians ``ks`` of w_k M_k at surface points (tri, bary), each M_k interpolated
+        linearly from its lattice after evaluating the lattice points not done yet: an orbit evaluates
+        only the surface it has not seen before."""
+        M = np.zeros((len(tri), 3))
+        for n, k in enumerate(ks):
+            v = float(diff.v[k])
+            f = self.field(surf, shared, v)
             ids, w = f.locate(tri, bary)
             need = f.missing(ids)
             if len(need):
@@ -1148,7 +1231,8 @@ class TruthSession:
                 one = gt.Diffusion(diff.el, [v], np.ones((1, 3)), diff.h, diff.points, shared=shared)
                 f.store(need, one.exitance(xv, None, cancelled=check))
             M += diff.w[k] * f.interpolate(ids, w)
-            progress((n + 1) / len(wide))
+            if progress is not None:
+                progress((n + 1) / len(ks))
         return M
 
     def structures_built(self, s: Settings) -> dict[str, int]:
@@ -1185,7 +1269,17 @@ class TruthSession:
         mask, tri, bary, eye = camera_hits(surf, s)
         a = surf.attributes(tri, bary)
         x_mm = a["P"] * surf.mm
-        ea_here = surf.irradiance(a, mix, energy)
+        # E A at the pixels themselves, per stage (the coarse stage with the coarse environment)
+        ea_here = np.zeros((len(x_mm), 3))
+        has_ea = np.zeros(len(x_mm), bool)
+
+        def ea_at(sel: np.ndarray) -> np.ndarray:
+            todo = sel & ~has_ea
+            if todo.any():
+                ea_here[todo] = surf.irradiance({k: v[todo] for k, v in a.items()}, mix, energy)
+                has_ea[todo] = True
+            out: np.ndarray = ea_here[sel]
+            return out
         # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
         V = eye[None] - a["P"]
         V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
@@ -1193,16 +1287,32 @@ class TruthSession:
         av = {**a, "N": N}
         rho_v = surf.rho_dt((N * V).sum(1), av["m"], av["rho"]) if energy else np.ones(len(V))
         post = _safe_pow(av["C"], 1.0 - mix) * rho_v[:, None]
-        spec = surf.specular(av, V)
+        # the specular per stage too (the environment's samples seeded by the stage: a fresh session and
+        # an orbit in an old one draw the same)
+        spec = np.zeros((len(V), 3))
+        has_spec = np.zeros(len(V), bool)
+
+        def spec_at(sel: np.ndarray, seed: int) -> None:
+            todo = sel & ~has_spec
+            if todo.any():
+                spec[todo] = surf.specular({k: v[todo] for k, v in av.items()}, V[todo],
+                                           np.random.default_rng((4242, seed)))
+                has_spec[todo] = True
         H, W = mask.shape
         pix = np.flatnonzero(mask.ravel())
         rows, cols = pix // W, pix % W
         n = max(len(pix), 1)
 
-        def image(M: np.ndarray, done: np.ndarray, stage: str, h_mm: float, final: bool) -> Partial:
+        def image(M: np.ndarray, done: np.ndarray, stage: str, h_mm: float, final: bool,
+                  u_M: np.ndarray | None = None, coarse: bool = False) -> Partial:
+            if coarse:  # the first figure: the environment's specular with ENV_COARSE_SPEC_RAYS, not kept
+                spec[done] = surf.specular({k: v[done] for k, v in av.items()}, V[done], np.random.default_rng(4241),
+                                           ENV_COARSE_SPEC_RAYS)
+            else:
+                spec_at(done, int(done.sum()))
             diffuse = M * post
             imgs = []
-            for arr in (diffuse + spec, diffuse, spec, a["P"]):
+            for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * post,)):
                 img = np.zeros((H * W, 3))
                 img[pix[done]] = np.nan_to_num(arr[done], nan=0.0, posinf=0.0, neginf=0.0)
                 imgs.append(img.reshape(H, W, 3))
@@ -1212,40 +1322,118 @@ class TruthSession:
             meta = {"key": key, "version": VERSION, "h_mm": h_mm, "pixels": int(done.sum()), "stage": stage,
                     "fraction": float(done.sum() / n), "seconds": {"total": sec}, "cached": False,
                     "mm_per_unit": surf.mm, "session": True, "visible_mask": mask, "field_ratio": self.field_ratio}
-            return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3]), stage,
-                           float(done.sum() / n), final, sec)
+            if u_M is not None:
+                meta["uncertainty"] = LATTICE_UNCERTAINTY_NOTE
+            return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3],
+                                     imgs[4] if u_M is not None else None), stage, float(done.sum() / n), final, sec)
 
         first = np.zeros(len(pix), bool)
         first[(rows % STRIDES[0] == 0) & (cols % STRIDES[0] == 0)] = True
         if not self.has_sources(s):  # a first figure before the whole surface's sources exist
+            # the environment's coarse estimate (ENV_COARSE_RAYS per vertex) for the sources and pixels
             diff = build_diffusion(surf, x_mm[first], self.coarse_h_mm, variances, weights, mix, energy,
-                                   report=lambda st, f: report(f"coarse {st}", f), check=check)
+                                   report=lambda st, f: report(f"coarse {st}", f), check=check, env_level="coarse")
             M = np.zeros((len(pix), 3))
-            M[first] = diff.exitance(x_mm[first], ea_here[first], cancelled=check)
+            ea_c = surf.irradiance({k: v[first] for k, v in a.items()}, mix, energy, "coarse")
+            M[first] = diff.exitance(x_mm[first], ea_c, cancelled=check)
             yield image(M, first, f"coarse ({self.coarse_h_mm:g} mm elements, 1/{STRIDES[0] ** 2} of the pixels)",
-                        self.coarse_h_mm, False)
+                        self.coarse_h_mm, False, coarse=True)
+            # then the same pixels at full resolution from the sources that reach them only (as
+            # compute_reference's): the environment's estimates they need (most of a first truth's time)
+            # are the whole surface's, kept; the whole-surface stage below computes these pixels again
+            # (the same integral, clustered differently: a truth does not depend on the session's past)
+            diff_v = build_diffusion(surf, x_mm[first], self.h_mm, variances, weights, mix, energy,
+                                     report=lambda st, f: report(f"visible {st}", f), check=check)
+            M = np.zeros((len(pix), 3))
+            M[first] = diff_v.exitance(x_mm[first], ea_at(first), cancelled=check)
+            del diff_v
+            yield image(M, first, f"1/{STRIDES[0] ** 2} of the pixels (the sources that reach them)", self.h_mm, False,
+                        np.zeros((len(pix), 3)) + TRUNCATE_LOSS * np.abs(M))
         el, pts = self._whole_sources(surf, s, report, check)
         shared = self._structures[sources_key(s, self.h_mm)]
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
         footprint = pixel_footprint_mm(pix, W, x_mm)
         M = np.zeros((len(pix), 3))
+        # the final stage's lattice Gaussians, and their exact per-pixel sum at the first stage's pixels
+        # (every STRIDES[0]-th pixel): the final stage also interpolates them there, and the difference
+        # is the lattice's interpolation error, measured -- the uncertainty it states (lattice_uncertainty)
+        lat_final = self.lattice_gaussians(diff, footprint)
+        exact_lat = {k: np.zeros((len(pix), 3)) for k in lat_final}
         done = np.zeros(len(pix), bool)
+        U = np.zeros((len(pix), 3))
         for stride in STRIDES:
             sel = (rows % stride == 0) & (cols % stride == 0) & ~done
+            final = stride == 1
             if sel.any():
                 step = functools.partial(report, f"diffusion 1/{stride * stride}")
-                if not self.field_ratio:
-                    M[sel] = diff.exitance(x_mm[sel], ea_here[sel], progress=step, cancelled=check)
-                else:
-                    # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that
-                    M[sel] = self._field_exitance(diff, surf, shared, tri[sel], bary[sel], x_mm[sel], ea_here[sel],
-                                                  footprint * stride, step, check)
+                # this stage's pixels are ``stride`` pixels apart: a lattice pays only if coarser than that;
+                # the first stage gathers every Gaussian per pixel (the lattices' judge)
+                lat = [] if stride == STRIDES[0] else self.lattice_gaussians(diff, footprint * stride)
+                per_pixel = [k for k in range(len(diff.v)) if k not in lat]
+                judged = [k for k in per_pixel if k in lat_final]
+                rest = [k for k in per_pixel if k not in judged]
+                ea_sel = ea_at(sel)
+                M[sel] = diff.exitance(x_mm[sel], ea_sel, progress=step, cancelled=check, only=rest)
+                for k in judged:
+                    exact_lat[k][sel] = diff.exitance(x_mm[sel], ea_sel, cancelled=check, only={k})
+                    M[sel] += exact_lat[k][sel]
+                if lat:
+                    M[sel] += self._lattice_exitance(diff, surf, shared, lat, tri[sel], bary[sel], step, check)
             done |= sel
-            final = stride == 1
-            part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final)
+            if final and lat_final:
+                U = self.lattice_uncertainty(diff, surf, shared, lat_final, tri, bary, first, exact_lat, mask,
+                                             rows, cols, ~first, check)
+            part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final,
+                         U + TRUNCATE_LOSS * np.abs(M))
             if final:
                 self._remember(key, part.reference)
             yield part
+
+    def lattice_uncertainty(self, diff: gt.Diffusion, surf: Surface, shared: dict[str, Any], ks: list[int],
+                            tri: np.ndarray, bary: np.ndarray, judge: np.ndarray, exact: dict[int, np.ndarray],
+                            mask: np.ndarray, rows: np.ndarray, cols: np.ndarray, interpolated: np.ndarray,
+                            check: Callable[[], bool]) -> np.ndarray:
+        """The lattices' interpolation uncertainty (N, 3) of M at the view's pixels. A linear interpolant's
+        error at x in a cell of vertices x_i is ~ 1/2 sum_i l_i (x - x_i)' H (x - x_i), i.e. c B(x) with
+        B(x) = sum_i l_i |x - x_i|^2 (0 at the vertices, largest near the centre) and c the field's
+        curvature there. At the ``judge`` pixels (every STRIDES[0]-th; Gaussian k gathered exactly there:
+        ``exact[k]``) the error of each lattice is measured and c estimated as error / max(B(x), B_c / 4)
+        (B_c: B at the cell's centroid, the floor keeps a judge next to a vertex from blowing it up); a
+        pixel the lattices gave (``interpolated``) takes LATTICE_SAFETY x sum_k w_k c_k B_c of its own cell,
+        c_k the largest of the judges of its LATTICE_WINDOW^2 neighbourhood (none there: the largest of
+        all) -- a bound for its whole cell, whatever the pixel's place in it (a judge's place in its cell
+        would otherwise alias with the lattice's period)."""
+        from scipy.ndimage import maximum_filter
+        H, W = mask.shape
+        u = np.zeros((len(tri), 3))
+        jt, jb = tri[judge], bary[judge]
+        for k in ks:
+            f = self.field(surf, shared, float(diff.v[k]))
+            err = np.abs(self._lattice_exitance(diff, surf, shared, [k], jt, jb, None, check) / diff.w[k].max()
+                         - exact[k][judge] / diff.w[k].max())  # unit weights: the Gaussian's own field
+            bj, bcj = self._bubble(f, surf, jt, jb)
+            curv = err / np.maximum(bj, 0.25 * bcj)[:, None]
+            img = np.full((H, W, 3), -1.0)
+            img[rows[judge], cols[judge]] = curv
+            near = maximum_filter(img, size=(LATTICE_WINDOW, LATTICE_WINDOW, 1), mode="constant", cval=-1.0)
+            c = near[rows, cols]
+            c = np.where(c < 0.0, (curv.max(0) if len(curv) else np.zeros(3))[None], c)
+            _, bc = self._bubble(f, surf, tri, bary)
+            u += diff.w[k].max() * c * bc[:, None]
+        out: np.ndarray = np.where(interpolated[:, None], LATTICE_SAFETY * u, 0.0)
+        return out
+
+    @staticmethod
+    def _bubble(f: gt.SurfaceField, surf: Surface, tri: np.ndarray, bary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(B(x), B at the cell's centroid) for points (tri, bary) in lattice ``f`` (mm^2)."""
+        ids, w = f.locate(tri, bary)
+        vt, vb = f.vertex_points(ids.ravel())
+        xv = np.einsum("nk,nkd->nd", vb, surf.P[surf.F[vt]] * surf.mm).reshape(len(tri), 3, 3)
+        x = np.einsum("nk,nkd->nd", w, xv)
+        b = (w * ((xv - x[:, None]) ** 2).sum(2)).sum(1)
+        c = xv.mean(1)
+        bc = ((xv - c[:, None]) ** 2).sum(2).mean(1)
+        return b, bc
 
 
 def pixel_footprint_mm(pix: np.ndarray, width: int, x_mm: np.ndarray) -> float:

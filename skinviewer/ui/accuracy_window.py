@@ -268,6 +268,9 @@ class AccuracyWindow:
                 wrapped(f"(from {100 * frac:.0f} % of the pixels, +- one standard error)")
             else:
                 imgui.text(f"RMS  {with_u(e.rms, e.rms_u, 2)} %")  # ± the ground truth's own uncertainty
+                if self.reference.meta.get("session") and e.rms_u is not None:
+                    wrapped("(+- the surface lattices' interpolation error; the element size's part: "
+                            "skinviewer reference)")
             imgui.text(f"p99  {with_u(e.p99, e.p99_u)} %")
             if frac >= 1.0:
                 imgui.text(f"DSSIM {e.dssim:.4f}" + (f" ± {e.dssim_u:.4f}" if e.dssim_u is not None else ""))
