@@ -122,12 +122,12 @@ class ExecuteContext:
     def input_version(self, resource: str) -> int:
         """The version of a declared input (bumps whenever its producer re-ran)."""
         self.input(resource)
-        return self.graph.res.versions.get(resource, 0)
+        return self.graph._versions.get(resource, 0)
 
     def input(self, resource: str) -> moderngl.Texture:
         if resource not in self._refl.inputs:
             raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")
-        return self.graph.res.textures[resource]
+        return self.graph._textures[resource]
 
     def _own(self, resource: str) -> str:
         if resource not in self._refl.outputs:
@@ -135,10 +135,10 @@ class ExecuteContext:
         return resource
 
     def output(self, resource: str) -> moderngl.Texture:
-        return self.graph.res.textures[self._own(resource)]
+        return self.graph._textures[self._own(resource)]
 
     def framebuffer(self, *resources: str) -> moderngl.Framebuffer:
-        return self.graph.res.framebuffer(tuple(self._own(r) for r in resources))
+        return self.graph._framebuffer(tuple(self._own(r) for r in resources))
 
     def program(self, name: str, **defines: object) -> moderngl.Program:
         """A declared program. Without ``defines``: the one variant of ``name`` reflect() declared."""
@@ -221,7 +221,7 @@ class ExecuteContext:
         held = list(self._held.values())
         if any(isinstance(t, str) or (t not in self._scratch and t not in held) for t in targets):
             raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
-        return self.graph.res.framebuffer_for(tuple(t for t in targets if not isinstance(t, str)))
+        return self.graph._framebuffer_for(tuple(t for t in targets if not isinstance(t, str)))
 
     def draw_mesh(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
                   clear: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
@@ -304,7 +304,7 @@ class ExecuteContext:
 
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
         """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
-        tex = self.graph.res.take(spec)
+        tex = self.graph._pool_take(spec)
         self._scratch.append(tex)
         return tex
 
@@ -313,9 +313,9 @@ class ExecuteContext:
         a pass that draws only part of its output (texture-space tiles) leaves no pooled texture's, other
         scene's or other tile set's values in the rest (hard cases, the texture inspector, check_finite)."""
         g = self.graph
-        tag = (g.res.versions.get(resource), key)
+        tag = (g._versions.get(resource), key)
         if g._cleared.get(resource) != tag:
-            g.res.framebuffer((resource,)).clear(0.0, 0.0, 0.0, 0.0)
+            g._framebuffer((resource,)).clear(0.0, 0.0, 0.0, 0.0)
             g._cleared[resource] = tag
 
     # -- tiles (Pass.tileable): the same pass in row bands, across frames ----------------------
@@ -334,8 +334,8 @@ class ExecuteContext:
         if tex is not None and (tex.size, tex.components, tex.dtype) == (spec.size, spec.components, spec.dtype):
             return tex, False
         if tex is not None:
-            self.graph.res.give(tex)
-        tex = self._held[name] = self.graph.res.take(spec)
+            self.graph._pool_give(tex)
+        tex = self._held[name] = self.graph._pool_take(spec)
         return tex, True
 
     def band_rect(self, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
@@ -380,11 +380,11 @@ class ExecuteContext:
 
     def _finish(self) -> None:
         for t in self._scratch:
-            self.graph.res.give(t)
+            self.graph._pool_give(t)
         self._scratch.clear()
         if self._own_held:
             for t in self._held.values():
-                self.graph.res.give(t)
+                self.graph._pool_give(t)
             self._held.clear()
 
 

@@ -1,4 +1,4 @@
-"""The pass graph's executor: passes declare what they read and write in ``reflect`` and do GL work in
+"""The pass graph: passes declare what they read and write in ``reflect`` and do GL work in
 ``execute`` (the Falcor model). The graph orders them, allocates and reuses textures, prunes passes
 nobody consumes, caches outputs whose inputs did not change, and times every pass.
 
@@ -13,9 +13,6 @@ name the program's source does not declare (``set``/``uniforms``), and read-only
 settings they declared (``section``). The graph owns the GL objects behind them (kernel/gpu.py).
 
 The pass API, the frame report and the texture pool are re-exported here (``import X as X``).
-Its parts: kernel/compiler.py (order, pruning, why a key changed, what an edit re-runs),
-kernel/resources.py (textures, framebuffers, the memory check) and this executor (cache keys,
-running, bands under a budget, timing).
 """
 from __future__ import annotations
 
@@ -30,7 +27,6 @@ import numpy as np
 
 from skinviewer.ground.paths import shaders_dir
 from skinviewer.ground.settings import Settings, value_key
-from skinviewer.kernel.compiler import affected, order_passes, pixels, prune_reason, why
 from skinviewer.kernel.execute import ExecuteContext
 from skinviewer.kernel.gpu import GpuServices, write_uniform
 from skinviewer.kernel.pass_api import GraphError as GraphError
@@ -44,7 +40,6 @@ from skinviewer.kernel.report import TIMING_NOTES as TIMING_NOTES
 from skinviewer.kernel.report import FrameInputs as FrameInputs
 from skinviewer.kernel.report import FrameReport as FrameReport
 from skinviewer.kernel.report import PassRecord as PassRecord
-from skinviewer.kernel.resources import ResourceCache
 from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
 from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
@@ -88,8 +83,12 @@ class RenderGraph:
             raise GraphError(f"duplicate pass names in {names}")
         self.targets = list(targets)
         self.pool = pool or TexturePool(ctx)
-        self.res = ResourceCache(ctx, self.pool)  # textures, framebuffers, memory (kernel/resources.py)
+        self._textures: dict[str, moderngl.Texture] = {}
+        self._specs: dict[str, TexSpec] = {}
+        self._versions: dict[str, int] = {}
         self._keys: dict[str, dict[str, Any]] = {}  # pass name -> last cache key parts
+        self._fbos: dict[tuple[tuple[moderngl.Texture, ...], bool], moderngl.Framebuffer] = {}
+        self._depth: dict[tuple[int, int], moderngl.Renderbuffer] = {}
         self.frame = 0
         self.last_report: FrameReport | None = None
         self.order: list[Pass] = []
@@ -108,28 +107,77 @@ class RenderGraph:
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
+        # bytes of memory textures may take (None: no check); the Renderer sets it
+        self.memory_available: int | Callable[[], int] | None = None
+        self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
         self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
 
-    # -- the resource cache's (kernel/resources.py) ---------------------------------------------
-    @property
-    def memory_available(self) -> int | Callable[[], int] | None:
-        return self.res.memory_available
+    # -- texture management ------------------------------------------------------------------
+    def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
+        return self.pool.take(spec)
 
-    @memory_available.setter
-    def memory_available(self, value: int | Callable[[], int] | None) -> None:
-        self.res.memory_available = value
+    def _pool_give(self, tex: moderngl.Texture) -> None:
+        self._drop_fbos(tex)
+        self.pool.give(tex)
+
+    def _drop_fbos(self, tex: moderngl.Texture) -> None:
+        for key in [k for k in self._fbos if tex in k[0]]:
+            self._fbos.pop(key).release()
+
+    def _ensure(self, resource: str, spec: TexSpec) -> bool:
+        """Give ``resource`` a texture of ``spec``; True when it had to be (re)allocated."""
+        if self._specs.get(resource) == spec:
+            return False
+        self._free(resource)
+        self._textures[resource] = self.pool.take(spec)
+        self._specs[resource] = spec
+        self._versions[resource] = self._versions.get(resource, 0) + 1
+        return True
+
+    def _free(self, resource: str) -> None:
+        tex = self._textures.pop(resource, None)
+        if tex is not None:
+            self._pool_give(tex)
+        self._specs.pop(resource, None)
+
+    def _framebuffer(self, resources: tuple[str, ...]) -> moderngl.Framebuffer:
+        texs = tuple(self._textures[r] for r in resources)
+        depth = any(self._specs[r].depth for r in resources)
+        return self._framebuffer_for(texs, depth)
+
+    def _framebuffer_for(self, texs: tuple[moderngl.Texture, ...], depth: bool = False) -> moderngl.Framebuffer:
+        key = (texs, depth)
+        fbo = self._fbos.get(key)
+        if fbo is None:
+            size = texs[0].size
+            rb = None
+            if depth:
+                rb = self._depth.get(size)
+                if rb is None:
+                    rb = self._depth[size] = self.ctx.depth_renderbuffer(size)
+            fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=rb)
+        return fbo
 
     def texture(self, resource: str) -> moderngl.Texture:
-        return self.res.textures[resource]
+        return self._textures[resource]
 
     def resources(self) -> dict[str, TexSpec]:
-        return dict(self.res.specs)
+        return dict(self._specs)
 
     def read(self, resource: str) -> np.ndarray:
-        """A texture read back as float32 (H, W, C), row 0 at the bottom (GL order)."""
-        return self.res.read(resource)
+        """Read a texture back as float32 (H, W, C), row 0 at the bottom (GL order)."""
+        tex = self._textures[resource]
+        spec = self._specs[resource]
+        w, h = spec.size
+        if spec.dtype == "f1":
+            raw = np.frombuffer(tex.read(alignment=1), dtype=np.uint8).astype(np.float32) / 255.0
+        elif spec.dtype == "f2":
+            raw = np.frombuffer(tex.read(), dtype=np.float16).astype(np.float32)
+        else:
+            raw = np.frombuffer(tex.read(), dtype=np.float32).copy()
+        return raw.reshape(h, w, spec.components)
 
     # -- the frame ---------------------------------------------------------------------------
     def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None) -> dict[str, Reflection]:
@@ -142,15 +190,47 @@ class RenderGraph:
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
             elif r.outputs:
                 for res in self._produced.get(p.name, set()) - set(r.outputs):
-                    self.res.free(res)  # e.g. a gutter map of a map size no longer used
+                    self._free(res)  # e.g. a gutter map of a map size no longer used
                 self._produced[p.name] = set(r.outputs)
             refl[p.name] = r
         return refl
 
+    def _order(self, refl: dict[str, Reflection], targets: list[str]) -> tuple[list[Pass], set[str]]:
+        producer: dict[str, Pass] = {}
+        for p in self.passes:
+            for out in refl[p.name].outputs:
+                if out in producer:
+                    raise GraphError(f"'{out}' is written by both {producer[out].name} and {p.name}")
+                producer[out] = p
+        live: set[str] = set()
+        order: list[Pass] = []
+        state: dict[str, int] = {}
+
+        def visit(p: Pass, chain: tuple[str, ...]) -> None:
+            s = state.get(p.name, 0)
+            if s == 2:
+                return
+            if s == 1:
+                raise GraphError(f"cycle in the pass graph: {' -> '.join(chain + (p.name,))}")
+            state[p.name] = 1
+            for res in refl[p.name].inputs:
+                if res not in producer:
+                    raise GraphError(f"pass {p.name} reads '{res}', which no pass writes")
+                visit(producer[res], chain + (p.name,))
+            state[p.name] = 2
+            live.add(p.name)
+            order.append(p)
+
+        for t in targets:
+            if t not in producer:
+                raise GraphError(f"target '{t}' is written by no pass (have: {sorted(producer)})")
+            visit(producer[t], ())
+        return order, live
+
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
         key = {
             "settings": {path: value_key(frame.settings, path) for path in r.declared},
-            "inputs": {res: self.res.versions.get(res, 0) for res in r.inputs},
+            "inputs": {res: self._versions.get(res, 0) for res in r.inputs},
             "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
             "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
         }
@@ -163,6 +243,21 @@ class RenderGraph:
         if p.view_dependent:
             key["camera"] = frame.view_key
         return key
+
+    @staticmethod
+    def _why(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
+        if old is None:
+            return "first run"
+        parts = []
+        for group in ("scene", "camera"):
+            if old.get(group) != new.get(group):
+                parts.append(group)
+        for group, label in (("settings", "setting"), ("inputs", "input"), ("programs", "shader"),
+                             ("outputs", "output"), ("plan", "plan")):
+            o, n = old.get(group, {}), new.get(group, {})
+            changed = [k for k in n if o.get(k) != n[k]] + [k for k in o if k not in n]
+            parts += [f"{label} {k}" for k in changed]
+        return ", ".join(parts)
 
     def run(self, frame: FrameInputs, targets: list[str] | None = None, timing: str = "sync",
             force: bool = False, budget_ms: float | None = None) -> FrameReport:
@@ -199,8 +294,8 @@ class RenderGraph:
         self.frame += 1
         self.gpu.keep_scene(frame.scene)
         refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view)
-        order, live = order_passes(self.passes, refl, list(targets or self.targets))
-        self.res.check_memory(refl, order)
+        order, live = self._order(refl, list(targets or self.targets))
+        self._check_memory(refl, order)
         self.order = order
         self._last_refl = refl
         check_finite = bool(getattr(frame.settings.render, "check_finite", False))
@@ -211,7 +306,7 @@ class RenderGraph:
             r = refl[p.name]
             realloc = False
             for res, spec in r.outputs.items():
-                realloc |= self.res.ensure(res, spec)
+                realloc |= self._ensure(res, spec)
             key = self._key(p, r, frame)
             if realloc:  # garbage under any key: run before it may be found cached
                 self._keys.pop(p.name, None)
@@ -240,7 +335,7 @@ class RenderGraph:
                     continue
                 any_ran = True
                 rec.status = "ran"
-                rec.reason = "forced" if force else ("allocated" if realloc and old == key else why(old, key))
+                rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
                 if p.tileable and budget_ms is not None:
                     if progress is not None:
                         rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
@@ -266,9 +361,9 @@ class RenderGraph:
                     rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
                     self._last_ms[p.name] = rec.ms
-                    self._last_px[p.name] = pixels(r)
+                    self._last_px[p.name] = _pixels(r)
                 for res in r.outputs:
-                    self.res.versions[res] = self.res.versions.get(res, 0) + 1
+                    self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
                 self._nonfinite[p.name] = self._find_nonfinite(r.outputs) if check_finite else []
             rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
@@ -284,11 +379,11 @@ class RenderGraph:
         written = {res for p in order for res in refl[p.name].outputs}
         for p in self.passes:
             if p.name not in live:
-                records[p.name] = PassRecord(p.name, "pruned", reason=prune_reason(p.name, refl, live),
+                records[p.name] = PassRecord(p.name, "pruned", reason=_prune_reason(p.name, refl, live),
                                              inputs=list(refl[p.name].inputs))
                 for res in (set(refl[p.name].outputs) | self._produced.pop(p.name, set())) - written:
-                    if res in self.res.textures:
-                        self.res.free(res)
+                    if res in self._textures:
+                        self._free(res)
                 self._keys.pop(p.name, None)
                 self._nonfinite.pop(p.name, None)
                 self.refining.discard(p.name)
@@ -308,7 +403,7 @@ class RenderGraph:
         ms = self._last_ms.get(p.name)
         if ms is None:
             return None
-        then, now = self._last_px.get(p.name, 0), pixels(r)
+        then, now = self._last_px.get(p.name, 0), _pixels(r)
         return ms * now / then if then > 0 and now > 0 else ms
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
@@ -372,7 +467,7 @@ class RenderGraph:
     def _finish_bands(self, name: str) -> None:
         progress = self._progress.pop(name)
         for tex in progress.held.values():
-            self.res.give(tex)
+            self._pool_give(tex)
 
     def _cancel(self, name: str) -> None:
         """Abandon a pass's unfinished bands: held textures back to the pool, no key for its outputs."""
@@ -410,7 +505,35 @@ class RenderGraph:
 
     # -- reliability: memory needed before allocating, non-finite outputs after running ----------
     def plan_bytes(self, refl: dict[str, Reflection], order: list[Pass]) -> tuple[int, list[tuple[str, int]]]:
-        return self.res.plan_bytes(refl, order)
+        """Memory the frame's textures take: every live output, a depth buffer per size that needs
+        one, and ping-pong scratch (up to two copies of the largest pass's outputs)."""
+        per_res: list[tuple[str, int]] = []
+        depth_sizes: set[tuple[int, int]] = set()
+        biggest_pass = 0
+        for p in order:
+            outs = refl[p.name].outputs
+            biggest_pass = max(biggest_pass, sum(spec.nbytes for spec in outs.values()))
+            for res, spec in outs.items():
+                per_res.append((res, spec.nbytes))
+                if spec.depth:
+                    depth_sizes.add(spec.size)
+        total = sum(b for _, b in per_res) + sum(w * h * 4 for w, h in depth_sizes) + 2 * biggest_pass
+        return total, sorted(per_res, key=lambda x: -x[1])
+
+    def _check_memory(self, refl: dict[str, Reflection], order: list[Pass]) -> None:
+        """Refuse (ResourceLimitError) a frame whose textures will not fit, before allocating any."""
+        budget = self.memory_available
+        if budget is None:
+            return
+        plan = tuple((res, spec) for p in order for res, spec in refl[p.name].outputs.items())
+        if plan == self._checked_plan or all(self._specs.get(res) == spec for res, spec in plan):
+            return  # nothing new to allocate
+        needed, per_res = self.plan_bytes(refl, order)
+        held = sum(self._specs[r].nbytes for r in self._textures if r in self._specs)
+        available = int(budget() if callable(budget) else budget) + held
+        if needed > available:
+            raise ResourceLimitError(needed, available, per_res)
+        self._checked_plan = plan
 
     def _find_nonfinite(self, outputs: dict[str, TexSpec]) -> list[str]:
         """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back
@@ -418,7 +541,7 @@ class RenderGraph:
         vao_of = self.gpu.fullscreen_vao
         bad: list[str] = []
         for res, spec in outputs.items():
-            if spec.dtype == "f1" or res not in self.res.textures:
+            if spec.dtype == "f1" or res not in self._textures:
                 continue
             w, h = spec.size
             gw, gh = min(w, 64), min(h, 64)
@@ -428,9 +551,9 @@ class RenderGraph:
                 return bad
             flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
             try:
-                fbo = self.res.framebuffer_for((flags,))
+                fbo = self._framebuffer_for((flags,))
                 fbo.use()
-                self.res.textures[res].use(0)
+                self._textures[res].use(0)
                 write_uniform(prog["src"], 0)
                 write_uniform(prog["u_tile"], tile)
                 write_uniform(prog["u_size"], (w, h))
@@ -438,7 +561,7 @@ class RenderGraph:
                 if np.frombuffer(flags.read(alignment=1), dtype=np.uint8).any():
                     bad.append(res)
             finally:
-                self.res.give(flags)
+                self._pool_give(flags)
         return bad
 
     def _check_program(self) -> moderngl.Program | None:
@@ -455,10 +578,27 @@ class RenderGraph:
             return None
 
     def affected(self, paths: Iterable[str], camera: bool = False) -> list[str]:
-        """Passes (execution order of the last frame) that a change of these settings would re-run
-        (compiler.affected); based on the last frame's reflection: a change that alters the
-        graph's shape may re-run more."""
-        return affected(self.order, self._last_refl, paths, camera)
+        """Passes (execution order of the last frame) that a change of these settings would re-run:
+        those that declared a path equal to, inside or around one of ``paths``, those that are
+        view-dependent when ``camera``, and everything downstream of them. Based on the last
+        frame's reflection; a change that alters the graph's shape may re-run more."""
+        refl = self._last_refl
+        paths = list(paths)
+
+        def touches(declared: str) -> bool:
+            return any(d == p or d.startswith(p + ".") or p.startswith(d + ".")
+                       for p in paths for d in (declared.replace(".#", ""),))
+
+        dirty: set[str] = set()
+        for p in self.order:
+            r = refl.get(p.name)
+            if r is None:
+                continue
+            if (camera and p.view_dependent) or any(touches(d) for d in r.declared) \
+                    or any(res in dirty for res in r.inputs):
+                dirty.update(r.outputs)
+                dirty.add("pass:" + p.name)
+        return [p.name for p in self.order if "pass:" + p.name in dirty]
 
     def predicted_ms(self, passes: Iterable[str]) -> float:
         """The last measured cost of re-running these passes (0 for those never timed)."""
@@ -477,7 +617,9 @@ class RenderGraph:
 
     def trim(self) -> None:
         """Release depth buffers no cached framebuffer uses (one is made per render size)."""
-        self.res.trim()
+        used = {fbo.depth_attachment.glo for fbo in self._fbos.values() if fbo.depth_attachment is not None}
+        for size in [s for s, rb in self._depth.items() if rb.glo not in used]:
+            self._depth.pop(size).release()
 
     def invalidate(self, pass_name: str | None = None) -> None:
         """Forget cache keys (all, or one pass) so they re-run next frame."""
@@ -495,7 +637,14 @@ class RenderGraph:
             self._finish_bands(name)
         for p in self.passes:
             p.release()
-        self.res.release()
+        for res in list(self._textures):
+            self._free(res)
+        for fbo in self._fbos.values():
+            fbo.release()
+        self._fbos.clear()
+        for rb in self._depth.values():
+            rb.release()
+        self._depth.clear()
         for obj in self.shape_state.pop("gl_objects", {}).values():
             if obj is not None:
                 obj[0].release()  # texture_space.work_tiles
@@ -510,3 +659,29 @@ class RenderGraph:
         report = self.last_report
         out = report.to_json()["passes"] if report else []
         return out
+
+
+def _pixels(r: Reflection) -> int:
+    """The pixels of a pass's largest output (what its cost follows, to first order)."""
+    return max((int(spec.size[0]) * int(spec.size[1]) for spec in r.outputs.values()), default=0)
+
+
+def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth: int = 0) -> str:
+    """Why a pass is pruned: its own skip reason, a consumer's reason for dropping its output, or
+    the reason its only consumers are pruned."""
+    r = refl[name]
+    if r.skip_reason is not None:
+        return "pruned: " + r.skip_reason
+    outs = set(r.outputs)
+    for other in refl.values():
+        for res in outs & set(other.dropped):
+            return "pruned: " + other.dropped[res]
+    if depth < 8:
+        for n, other in refl.items():
+            if n not in live and n != name and outs & set(other.inputs):
+                why = _prune_reason(n, refl, live, depth + 1)
+                if why.startswith("pruned: "):
+                    return why if "(via " in why else why + f" (via {n})"
+    return "output not consumed"
+
+
