@@ -137,10 +137,11 @@ class Renderer:
         return framed_view(s.camera, gpu, (s.render.width, s.render.height))
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
-               force: bool = False, budget_ms: float | None = None, variant: str = "") -> FrameReport:
+               force: bool = False, budget_ms: float | None = None, variant: str = "",
+               interactive: bool = False) -> FrameReport:
         """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run); ``variant``: the
-        graph to run it in (Renderer.graph)."""
+        graph to run it in (Renderer.graph); ``interactive``: a governed preview (FrameInputs)."""
         scene = self.ensure_scene(s)
         scene.gpu.env_poll()  # a finished background bake: swapped in, the lit passes re-run
         env = rules.environment_light(s.lights)
@@ -151,7 +152,7 @@ class Renderer:
         g = self.graph(s.technique, variant)
         lod, lod_note = rules.mesh_lod(s, scene.gpu, self._lod_state)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=view,
-                            view_key=view.key(), mesh_lod=lod, lod_note=lod_note)
+                            view_key=view.key(), mesh_lod=lod, lod_note=lod_note, interactive=interactive)
         report = g.run(frame, targets=targets, timing=self.timing_mode(timing or s.render.timing), force=force,
                        budget_ms=budget_ms)
         self.ctx.screen.use() if self.ctx.screen is not None else None

@@ -107,6 +107,16 @@ class RenderGraph:
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
+        # passes that ran in a governed preview (FrameInputs.interactive: no NaN/Inf check then), checked
+        # by the first frame that is not a preview and finds them cached; what a pass's check last cost
+        self._unchecked: set[str] = set()
+        self._check_ms: dict[str, float] = {}
+        self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
+        self._value_keys: dict[str, str] = {}  # settings path -> value_key, within one run()
+        # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
+        # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
+        self.own_ms = 0.0
+        self._exec_s = 0.0
         # bytes of memory textures may take (None: no check); the Renderer sets it
         self.memory_available: int | Callable[[], int] | None = None
         self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
@@ -180,10 +190,10 @@ class RenderGraph:
         return raw.reshape(h, w, spec.components)
 
     # -- the frame ---------------------------------------------------------------------------
-    def _reflect_all(self, settings: Settings, scene: Any = None) -> dict[str, Reflection]:
+    def _reflect_all(self, settings: Settings, scene: Any = None, interactive: bool = False) -> dict[str, Reflection]:
         refl = {}
         for p in self.passes:
-            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state)
+            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state, interactive)
             p.reflect(r)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
@@ -227,8 +237,12 @@ class RenderGraph:
         return order, live
 
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
+        vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
+        for path in r.settings:
+            if path not in vk:
+                vk[path] = value_key(frame.settings, path)
         key = {
-            "settings": {path: value_key(frame.settings, path) for path in r.settings},
+            "settings": {path: vk[path] for path in r.settings},
             "inputs": {res: self._versions.get(res, 0) for res in r.inputs},
             "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
             "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
@@ -275,11 +289,12 @@ class RenderGraph:
         # (env_generation: the viewer's background environment bake swapped in, passes/environment)
         idle = (frame.settings, (frame.scene_version, frame.mesh_lod, getattr(frame.scene, "env_generation", 0)),
                 frame.view_key, tuple(targets or self.targets),
-                self.shaders.revision, timing)
+                self.shaders.revision, timing, frame.interactive)
         last = self.last_report
         if not force and self._idle is not None and last is not None and last.complete and not self.refining \
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
+            self.own_ms = 0.0
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
                            "" if p.status == "ran" else p.reason, p.inputs, p.outputs,
@@ -288,16 +303,22 @@ class RenderGraph:
             return self.last_report
         t_start = time.perf_counter()
         any_ran = False
+        self._exec_s = 0.0
+        self._value_keys = {}  # per frame: the settings may be another object (or edited) next frame
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
         self.gpu.keep_scene(frame.scene)
-        refl = self._reflect_all(frame.settings, frame.scene)
+        refl = self._reflect_all(frame.settings, frame.scene, frame.interactive)
         order, live = self._order(refl, list(targets or self.targets))
         self._check_memory(refl, order)
         self.order = order
         self._last_refl = refl
+        # render.check_finite: checked after each pass runs, but not in a governed preview (a frame of a
+        # drag): those passes are checked when a frame that is not a preview finds them cached, so the
+        # final image and every render/bench frame are checked as before
         check_finite = bool(getattr(frame.settings.render, "check_finite", False))
+        self._checking = check_finite and not frame.interactive
         records: dict[str, PassRecord] = {}
         partial: set[str] = set()  # outputs of passes part-way through their bands this frame
         self.cancelled = []
@@ -364,7 +385,16 @@ class RenderGraph:
                 for res in r.outputs:
                     self._versions[res] = self._versions.get(res, 0) + 1
                 self._keys[p.name] = key
-                self._nonfinite[p.name] = self._find_nonfinite(r.outputs) if check_finite else []
+                self._unchecked.discard(p.name)
+                if self._checking:
+                    self._check(p.name, r.outputs)
+                else:
+                    self._nonfinite[p.name] = []
+                    if check_finite:
+                        self._unchecked.add(p.name)
+            elif self._checking and p.name in self._unchecked and p.name not in self._progress:
+                self._unchecked.discard(p.name)  # ran in a preview; its outputs are as it left them
+                self._check(p.name, r.outputs)
             rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
             if p.name in self._notes:
                 rec.note, rec.figures = self._notes[p.name]
@@ -385,14 +415,16 @@ class RenderGraph:
                         self._free(res)
                 self._keys.pop(p.name, None)
                 self._nonfinite.pop(p.name, None)
+                self._unchecked.discard(p.name)
                 self.refining.discard(p.name)
                 if p.name in self._progress:
                     self._cancel(p.name)
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
+        self.own_ms = max((time.perf_counter() - t_start - self._exec_s) * 1000.0, 0.0)
         # programs first compiled during this frame bumped the revision: record it as it is now
-        self._idle = idle[:4] + (self.shaders.revision, timing) if report.complete else None
+        self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
 
     # -- tiles: a long pass in row bands, across frames --------------------------------------
@@ -437,13 +469,21 @@ class RenderGraph:
 
     def _next_ms(self, p: Pass, r: Reflection, progress: TileProgress | None, budget_ms: float) -> float:
         """What running ``p`` next costs, as last measured (scaled to its outputs' pixels now): its
-        next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured."""
+        next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured. With
+        the NaN/Inf check that follows the pass's last band, as it last cost (_check_after)."""
         last = self._expected_ms(p, r) or 0.0
         if not p.tileable:
-            return last
+            return last + self._check_after(p.name, None)
         if progress is None:
             progress = TileProgress({}, self._tile_count(p, r, budget_ms))
-        return self._band_next_ms(p, r, progress)
+        return self._band_next_ms(p, r, progress) + self._check_after(p.name, progress)
+
+    def _check_after(self, name: str, progress: TileProgress | None) -> float:
+        """What the NaN/Inf check after running ``name`` (its next band, when that is its last) costs
+        this frame, as last measured: the graph's own time the budget must leave room for."""
+        if not self._checking or (progress is not None and progress.done < progress.count - 1):
+            return 0.0
+        return self._check_ms.get(name, 0.0)
 
     def _run_bands(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str, progress: TileProgress,
                    t_start: float, budget_ms: float) -> float | None:
@@ -457,7 +497,8 @@ class RenderGraph:
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
             progress.band_ms.append(ms or 0.0)
-            if (time.perf_counter() - t_start) * 1000.0 + self._band_next_ms(p, r, progress) > budget_ms:
+            if (time.perf_counter() - t_start) * 1000.0 + self._band_next_ms(p, r, progress) \
+                    + self._check_after(p.name, progress) > budget_ms:
                 break
         if progress.done == progress.count and progress.count > 1 and progress.ms > 0:
             self._band_profile[p.name] = np.concatenate([[0.0], np.cumsum(progress.band_ms) / progress.ms])
@@ -483,6 +524,7 @@ class RenderGraph:
                  tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None) -> float | None:
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
+        t_enter = time.perf_counter()
         try:
             if timing == "sync":
                 self.ctx.finish()
@@ -501,6 +543,7 @@ class RenderGraph:
         finally:
             ec._finish()
             self._last_draws = ec.draws
+            self._exec_s += time.perf_counter() - t_enter
 
     # -- reliability: memory needed before allocating, non-finite outputs after running ----------
     def plan_bytes(self, refl: dict[str, Reflection], order: list[Pass]) -> tuple[int, list[tuple[str, int]]]:
@@ -533,6 +576,12 @@ class RenderGraph:
         if needed > available:
             raise ResourceLimitError(needed, available, per_res)
         self._checked_plan = plan
+
+    def _check(self, name: str, outputs: dict[str, TexSpec]) -> None:
+        """The NaN/Inf check of a pass's outputs, and what it cost (the budget's look-ahead counts it)."""
+        t0 = time.perf_counter()
+        self._nonfinite[name] = self._find_nonfinite(outputs)
+        self._check_ms[name] = (time.perf_counter() - t0) * 1000.0
 
     def _find_nonfinite(self, outputs: dict[str, TexSpec]) -> list[str]:
         """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back

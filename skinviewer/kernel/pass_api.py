@@ -95,8 +95,12 @@ class Plan(Mapping[str, Any]):
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
-    def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None):
+    def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None,
+                 interactive: bool = False):
         self._settings = settings
+        # a governed preview frame (FrameInputs.interactive): a scene rule may answer from a coarser,
+        # cached estimate (rules.tsm_needed); the final image's frames are never interactive
+        self.interactive = interactive
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self.settings: list[str] = []
         self.inputs: list[str] = []

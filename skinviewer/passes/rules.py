@@ -169,10 +169,29 @@ def shadow_map_size(r) -> int:
 
 # -- translucent shadow map ----------------------------------------------------------------------
 
+POSE_MEMORY = 48  # light poses whose rays and pairs the rule keeps per scene (a drag makes hundreds)
+TSM_BIN = 6  # governed previews: the light direction binned to round(TSM_BIN * d) (bins of ~10 degrees)
+
+
+def _rule_cache(scene) -> dict:
+    """The rule's memory on the scene (its mesh is fixed for the scene's life)."""
+    return scene.__dict__.setdefault("_rules_cache", {})
+
+
+def _remember(cache: dict, key, value):
+    """Keep ``value`` under a per-pose ``key``, forgetting the oldest beyond POSE_MEMORY."""
+    order = cache.setdefault("_pose_keys", [])
+    cache[key] = value
+    order.append(key)
+    while len(order) > POSE_MEMORY:
+        cache.pop(order.pop(0), None)
+    return value
+
+
 def _mesh_rays(scene):
     """Embree (embreex, 0.2 s to import; trimesh's wrapper costs 2-3 s of start-up) over the mesh,
     with its face normals; cached on the scene."""
-    cache = scene.__dict__.setdefault("_rules_cache", {})
+    cache = _rule_cache(scene)
     if "ray" not in cache:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
@@ -186,6 +205,10 @@ def _mesh_rays(scene):
     return cache
 
 
+def _pose_key(pose) -> tuple:
+    return (pose.kind, tuple(pose.direction), tuple(pose.position))
+
+
 def _toward_light(pose, p: np.ndarray) -> np.ndarray:
     """Unit directions from points ``p`` towards the light ``pose`` (LightSettings fields)."""
     if pose.kind == "point":
@@ -197,21 +220,30 @@ def _toward_light(pose, p: np.ndarray) -> np.ndarray:
 
 def _facing(scene, pose):
     """The mesh's positions, normals, directions to the light and N.L, and the vertices whose normal
-    faces away from the light (N.L < -0.05; a sample of MAX_RAYS: thin parts span many vertices)."""
-    p = scene.mesh.positions.astype(np.float64)
-    n = scene.mesh.normals.astype(np.float64)
+    faces away from the light (N.L < -0.05; a sample of MAX_RAYS: thin parts span many vertices).
+    The last pose's answer is kept (thickness_toward and lit_beside both ask)."""
+    cache = _rule_cache(scene)
+    key = ("facing",) + _pose_key(pose)
+    last = cache.get("facing")
+    if last is not None and last[0] == key:
+        return last[1]
+    if "vertex_arrays" not in cache:
+        cache["vertex_arrays"] = (scene.mesh.positions.astype(np.float64), scene.mesh.normals.astype(np.float64))
+    p, n = cache["vertex_arrays"]
     L = _toward_light(pose, p)
     nl = np.einsum("ij,ij->i", n, L)
     back = np.nonzero(nl < -0.05)[0]
-    return p, n, L, nl, back[::max(1, len(back) // MAX_RAYS)]
+    out = (p, n, L, nl, back[::max(1, len(back) // MAX_RAYS)])
+    cache["facing"] = (key, out)
+    return out
 
 
 def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For each vertex whose normal faces away from the light (``pose``: LightSettings fields):
     (vertex index, thickness in mm to the lit surface along the ray to the light, cos at that entry
-    point). Cached per scene and light pose."""
+    point). Cached per scene and light pose (the last POSE_MEMORY poses)."""
     cache = _mesh_rays(scene)
-    key = ("thick", pose.kind, tuple(pose.direction), tuple(pose.position))
+    key = ("thick",) + _pose_key(pose)
     if key in cache:
         return cache[key]
     sc, face_normals = cache["ray"]
@@ -227,8 +259,43 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             t = (np.asarray(hit["tfar"], np.float64)[ray_i] + eps) * scene.mm_per_unit
             cos_a = np.abs(np.einsum("ij,ij->i", face_normals[tri[ray_i]], L[back][ray_i]))
             out = (back[ray_i], t, cos_a)
-    cache[key] = out
-    return out
+    return _remember(cache, key, out)
+
+
+def _vertex_area(scene) -> np.ndarray:
+    """A third of each incident triangle's area per vertex, mm^2 (cached on the scene)."""
+    cache = _rule_cache(scene)
+    if "vertex_area" not in cache:
+        m = scene.mesh
+        p = m.positions.astype(np.float64)
+        tri = p[m.indices.reshape(-1, 3)] * scene.mm_per_unit
+        area = np.zeros(len(p))
+        np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
+            np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
+        cache["vertex_area"] = area
+    area: np.ndarray = cache["vertex_area"]
+    return area
+
+
+def sheet_pairs(scene, radius_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair (i, j), i < j, of the mesh's vertices within ``radius_mm`` whose normals are more
+    than 60 degrees apart (another sheet: the same sheet's light is the surface blur's, not the TSM's).
+    It does not depend on the light: made once per scene and radius (one KD-tree over the vertices),
+    so a light move only selects from it (lit_beside)."""
+    from scipy.spatial import cKDTree
+    cache = _rule_cache(scene)
+    key = ("sheet_pairs", round(radius_mm, 3))
+    if key not in cache:
+        p = scene.mesh.positions.astype(np.float64)
+        n = scene.mesh.normals.astype(np.float64)
+        ij = cKDTree(p).query_pairs(radius_mm / scene.mm_per_unit, output_type="ndarray").astype(np.int64)
+        other = np.einsum("ij,ij->i", n[ij[:, 0]], n[ij[:, 1]]) < 0.5
+        old = [k for k in cache if isinstance(k, tuple) and k[0] == "sheet_pairs"]
+        for k in old[:-2]:  # a profile edit changes the radius: keep the last few
+            cache.pop(k, None)
+        cache[key] = (np.ascontiguousarray(ij[other, 0]), np.ascontiguousarray(ij[other, 1]))
+    pairs: tuple[np.ndarray, np.ndarray] = cache[key]
+    return pairs
 
 
 def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -236,46 +303,83 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     whose normal faces away from the light, the vertices within ``radius_mm`` that face the light
     from another sheet (normals more than 60 degrees apart: the same sheet's light is the surface
     blur's, not the TSM's), as pairs (vertex index, pair's vertex k, distance in mm, lit area A cos
-    in mm^2). Shadows ignored (conservative). Cached per scene, light pose and radius."""
-    from scipy.spatial import cKDTree
-    cache = _mesh_rays(scene)
-    key = ("beside", pose.kind, tuple(pose.direction), tuple(pose.position), round(radius_mm, 3))
+    in mm^2). Shadows ignored (conservative). The pairs are the light-independent sheet_pairs,
+    selected by which end faces the light. Cached per scene, light pose and radius."""
+    cache = _rule_cache(scene)
+    key = ("beside",) + _pose_key(pose) + (round(radius_mm, 3),)
     if key in cache:
         return cache[key]
-    m = scene.mesh
     p, n, _, nl, back = _facing(scene, pose)
     lit = np.nonzero(nl > 0.05)[0]
     stride = max(1, len(lit) // MAX_LIT)  # a dense scan: a sample of the lit vertices, each for `stride`
     lit = lit[::stride]
     mm = scene.mm_per_unit
-    if "vertex_area" not in cache:  # a third of each incident triangle's area, mm^2
-        tri = p[m.indices.reshape(-1, 3)] * mm
-        area = np.zeros(len(p))
-        np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
-            np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
-        cache["vertex_area"] = area
-    area = cache["vertex_area"]
+    area = _vertex_area(scene)
     k = q = np.zeros(0, np.int64)
     if len(back) and len(lit):
-        pairs = cKDTree(p[back]).sparse_distance_matrix(cKDTree(p[lit]), radius_mm / mm, output_type="ndarray")
-        k, q = pairs["i"].astype(np.int64), lit[pairs["j"]]
-        other = np.einsum("ij,ij->i", n[q], n[back[k]]) < 0.5
-        k, q = k[other], q[other]
+        i, j = sheet_pairs(scene, radius_mm)
+        slot = np.full(len(p), -1, np.int64)  # vertex -> its place in `back` (-1: not a ray's vertex)
+        slot[back] = np.arange(len(back))
+        is_lit = np.zeros(len(p), bool)
+        is_lit[lit] = True
+        a = (slot[i] >= 0) & is_lit[j]  # i faces away, j is lit
+        b = (slot[j] >= 0) & is_lit[i]
+        k = np.concatenate([slot[i[a]], slot[j[b]]])
+        q = np.concatenate([j[a], i[b]])
     out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, stride * area[q] * nl[q])
-    cache[key] = out
-    return out
+    return _remember(cache, key, out)
 
 
-def tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
+def _profile_key(gaussians) -> tuple:
+    return tuple((g.variance, tuple(g.weights)) for g in gaussians)
+
+
+def _pose_bin(scene, pose) -> tuple:
+    """The light's coarse pose: its direction (a point light: its direction from the scene's centre
+    and its distance in scene radii, halved steps) rounded to 1 / TSM_BIN."""
+    if pose.kind == "point":
+        v = np.asarray(pose.position, np.float64) - np.asarray(scene.frame[0], np.float64)
+        dist = float(np.linalg.norm(v))
+        d = v / max(dist, 1e-12)
+        return ("point", tuple(np.round(d * TSM_BIN).astype(int)), round(2.0 * dist / max(scene.radius, 1e-12)))
+    d = np.asarray(pose.direction, np.float64)
+    d = d / max(float(np.linalg.norm(d)), 1e-12)
+    return (pose.kind, tuple(np.round(d * TSM_BIN).astype(int)))
+
+
+def tsm_needed(settings, scene, pose, gaussians, interactive: bool = False) -> tuple[bool, str]:
     """Whether the TSM term can show: a vertex in view whose normal faces away from the light
     while the light enters the mesh within a thickness that transmits, estimated as in
     lib/tsm_transmit.glsl: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS;
     with deon.tsm_gather also sum_i w_i G(v_i, d) A cos over tissue of another sheet lit beside the ray.
-    Memoised per light pose, profile and view (several passes ask every frame)."""
+    Memoised per light pose, profile and view (several passes ask every frame).
+
+    ``interactive`` (a governed preview while the user drags or edits, issue 27): the answer of the
+    light's coarse pose (_pose_bin, ~10 degrees): the union of the vertices the exact rule found for
+    every pose of that bin it was asked about, so a drag computes the rule once per bin, not once per
+    frame, and keeps the TSM wherever any pose of the bin needed it. The final image always asks
+    the exact rule (interactive False): the refined image is the ungoverned render."""
+    gather = settings.deon.tsm_gather
     memo = scene.__dict__.setdefault("_tsm_needed", {})
-    key = (pose.kind, tuple(pose.direction), tuple(pose.position),
-           tuple((g.variance, tuple(g.weights)) for g in gaussians),
-           settings.camera.model_dump_json(), settings.render.width, settings.render.height, settings.deon.tsm_gather)
+    view_key = (settings.camera.model_dump_json(), settings.render.width, settings.render.height)
+    if interactive:
+        bins = _rule_cache(scene).setdefault("tsm_bins", {})
+        if len(bins) > 512:  # profile edits: bins of old profiles
+            bins.clear()
+        bkey = (_pose_bin(scene, pose), _profile_key(gaussians), gather)
+        key = ("bin", bkey) + view_key
+        if key not in memo:
+            if bkey not in bins:
+                try:
+                    bins[bkey] = tsm_candidates(settings, scene, pose, gaussians)
+                except ImportError:
+                    bins[bkey] = None
+            if len(memo) > 16:
+                memo.clear()
+            need, why = _decide(settings, scene, bins[bkey])
+            memo[key] = (need, why + " (preview: the light's ~10\u00b0 direction bin)" if why else why)
+        return memo[key]
+    key = _pose_key(pose) + (_profile_key(gaussians), gather) + view_key
     if key not in memo:
         if len(memo) > 16:
             memo.clear()
@@ -283,11 +387,15 @@ def tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
     return memo[key]
 
 
-def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
-    try:
-        idx, t, cos_a = thickness_toward(scene, pose)
-    except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
-        return True, ""
+def tsm_candidates(settings, scene, pose, gaussians) -> np.ndarray:
+    """The exact rule's vertices through which the TSM term transmits more than TSM_EPS (in view
+    or not), cached per light pose, profile and gather (the last POSE_MEMORY). ImportError: no Embree.
+    A governed preview's bin (tsm_needed) takes the union of these."""
+    cache = _rule_cache(scene)
+    key = ("cand",) + _pose_key(pose) + (_profile_key(gaussians), settings.deon.tsm_gather)
+    if key in cache:
+        return cache[key]
+    idx, t, cos_a = thickness_toward(scene, pose)
     amp = np.zeros(len(idx))
     for i, g in enumerate(gaussians):
         if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
@@ -306,6 +414,27 @@ def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
             for v, w in wide:
                 np.add.at(a2, k, w * np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v) * acos)
             cand = np.union1d(cand, back[a2 > TSM_EPS])
+    bins = cache.get("tsm_bins")
+    if bins is not None:  # a bin the previews use keeps every pose's vertices asked exactly since
+        bkey = (_pose_bin(scene, pose), _profile_key(gaussians), settings.deon.tsm_gather)
+        if bins.get(bkey) is not None:
+            bins[bkey] = np.union1d(bins[bkey], cand)
+    return _remember(cache, key, cand)
+
+
+def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:
+    """The exact rule (tsm_needed without the memo)."""
+    try:
+        cand = tsm_candidates(settings, scene, pose, gaussians)
+    except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
+        return True, ""
+    return _decide(settings, scene, cand)
+
+
+def _decide(settings, scene, cand: np.ndarray | None) -> tuple[bool, str]:
+    """Whether any of the vertices ``cand`` faces the camera inside the view (None: unknown, keep)."""
+    if cand is None:
+        return True, ""
     if len(cand) == 0:
         return False, "no light behind a thin part"
     w, h = settings.render.width, settings.render.height

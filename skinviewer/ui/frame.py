@@ -86,6 +86,10 @@ class FrameController:
         # under Xvfb: tens of ms): the graph gets the frame budget less this, so a whole frame fits
         self._render_ms: float | None = None  # the last frame's graph time (wall clock)
         self.overhead_ms: float | None = None  # running mean of the rest of the frame
+        # the render graph's own time in a governed preview frame (reflect, scene rules, cache keys:
+        # RenderGraph.own_ms), a running mean: the governor's pick leaves room for it beside the
+        # passes' cost it observes (issue 27: 25-60 ms of a d'Eon preview frame was this)
+        self.graph_own_ms: float | None = None
         self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
         self._presented_at = 0.0
         self._last_presented = True
@@ -212,7 +216,7 @@ class FrameController:
         interacting = not self.input_stopped
         self._interacting = interacting
         complete = self.report is None or self.report.complete
-        g.set_overhead(self.overhead_ms)
+        g.set_overhead((self.overhead_ms or 0.0) + (self.graph_own_ms or 0.0))
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
@@ -394,8 +398,14 @@ class FrameController:
         try:
             t0 = time.perf_counter()
             budget = self.graph_budget_ms() if budget_ms is None else budget_ms
-            report = self.renderer.render(target, budget_ms=budget, variant=variant)
+            # a governed preview (not the user's settings): scene rules answer from coarser cached
+            # estimates and outputs are checked for NaN/Inf once a frame of the final image finds them
+            preview = self._governing and not rung.final
+            report = self.renderer.render(target, budget_ms=budget, variant=variant, interactive=preview)
             self._render_ms = (time.perf_counter() - t0) * 1000.0
+            if preview and report.ran:
+                own = self.renderer.graph(target.technique, variant).own_ms
+                self.graph_own_ms = own if self.graph_own_ms is None else 0.8 * self.graph_own_ms + 0.2 * own
             if not report.complete and self._governing and self._interacting:
                 self._inflight = (target, variant, rung)
             if report.complete:  # until then the view shows the last complete image, in its graph
