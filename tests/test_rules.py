@@ -359,11 +359,12 @@ def _fresh_rule(scene):
 
 
 @pytest.mark.parametrize("scene_name", ["head", "backlit-ear"])
-def test_the_previews_binned_tsm_rule_leaves_the_final_images_decision_exact(renderer, scene_name):
+def test_the_previews_binned_tsm_rule_leaves_the_final_images_decision_exact(renderer, scene_name, monkeypatch):
     """Issue 27: a governed preview asks the TSM rule per ~10 degree bin of the light direction (the
     union of the exact answers for the poses of the bin); the final image asks the exact rule. After a
     drag's previews have filled the bins, the final image's decision for every pose is the one a
     fresh, uncached exact rule gives, and a preview keeps the TSM wherever an exact pose of its bin did."""
+    monkeypatch.setattr(rules, "TSM_WORKER", False)  # each bin made at once (the worker: the next test)
     s = small_settings(scene_name, "deon", 96, **{"deon.tsm_gather": 0, "camera.yaw": 0.0})  # the ray's term only
     renderer.render(s)
     sc = renderer.scene.gpu
@@ -429,3 +430,19 @@ def test_lit_beside_selects_the_pairs_a_search_per_pose_finds(renderer):
     area = rules._vertex_area(sc)
     want_a = np.sort(stride * area[qq[other]] * nl[qq[other]])
     assert np.allclose(np.sort(acos), want_a, rtol=1e-12, atol=0)
+
+
+def test_a_previews_unknown_bin_keeps_the_tsm_while_a_worker_makes_it(renderer):
+    """In the viewer a preview never computes the rule on the main thread: a bin not known yet keeps
+    the TSM (nothing is dropped that was not ruled out) and a worker thread makes it; then the
+    preview answers from the bin, as the rule made at once would."""
+    s = small_settings("head", "deon", 96, **{"deon.tsm_gather": 0, "camera.yaw": 0.0})
+    renderer.render(s)
+    sc = renderer.scene.gpu
+    pose = s.lights[0].model_copy(update={"kind": "directional", "direction": (0.0, 0.2, 1.0)})
+    _fresh_rule(sc)
+    assert rules.tsm_needed(s, sc, pose, s.deon.gaussians, interactive=True) == (True, "")  # kept meanwhile
+    rules.bin_worker(sc).wait()
+    got = rules.tsm_needed(s, sc, pose, s.deon.gaussians, interactive=True)
+    assert got[0] is False and "direction bin" in got[1]  # the bin, as the exact rule at its first pose
+    assert rules.tsm_needed(s, sc, pose, s.deon.gaussians) == rules._tsm_needed(s, sc, pose, s.deon.gaussians)

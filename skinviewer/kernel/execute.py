@@ -197,13 +197,14 @@ class ExecuteContext:
 
     def draw_mesh(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
                   clear: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
-                  cull_back: bool = False, space: str | None = None) -> None:
+                  cull_back: bool = False, space: str | None = None, matrix: Any = None) -> None:
         """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
         depth buffer, or scratch textures): both faces unless ``cull_back`` (counter-clockwise is
         front), depth-tested unless ``depth_test=False`` (texture-space unwraps), after clearing
         colour to ``clear`` and depth to 1 (None: no clear). ``space``: where the vertex stage puts
-        the mesh, "camera" (``u_view_proj`` = the view's) or "uv" (the unwrap): in a band, only the
-        triangles that reach its rows are drawn (GpuServices.band_vao); None: the whole mesh."""
+        the mesh, "camera" (``u_view_proj`` = the view's), "light" (clip = ``matrix`` x position, a
+        column-vector GL matrix: the shadow maps) or "uv" (the unwrap): in a band, only the triangles
+        that reach its rows are drawn (GpuServices.band_vao); None: the whole mesh."""
         scene = self.scene
         fbo = self._target(targets)
         rect = self._scissor(fbo)
@@ -223,7 +224,10 @@ class ExecuteContext:
         self._apply(prog)
         lod = self._frame.mesh_lod
         if rect is not None and space is not None:
-            matrix = self.view.view_proj if space == "camera" else None
+            if space == "camera":
+                matrix = self.view.view_proj
+            elif space != "light":
+                matrix = None
             vao, count = self.graph.gpu.band_vao(prog, scene, lod, space, matrix, fbo.size[1],
                                                  (rect[1], rect[1] + rect[3]))
             if count:

@@ -43,6 +43,8 @@ from skinviewer.kernel.report import PassRecord as PassRecord
 from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
 from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
+PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
+PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
 
@@ -117,6 +119,10 @@ class RenderGraph:
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
         self._exec_s = 0.0
+        # how the passes' costs compare with what the look-ahead predicted from their last runs (a
+        # running mean of actual / predicted): a machine that got busier since then is >1, and the
+        # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
+        self.pace = 1.0
         # bytes of memory textures may take (None: no check); the Renderer sets it
         self.memory_available: int | Callable[[], int] | None = None
         self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
@@ -344,8 +350,8 @@ class RenderGraph:
                 # over several under the budget instead of freezing the viewer for all its passes
                 waits = partial & set(r.inputs)
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
-                spent = budget_ms is not None and \
-                    (time.perf_counter() - t_start) * 1000.0 + self._next_ms(p, r, progress, budget_ms) > budget_ms
+                spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 \
+                    + self._paced(self._next_ms(p, r, progress, budget_ms)) > budget_ms
                 if waits or (any_ran and spent):
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
@@ -375,7 +381,9 @@ class RenderGraph:
                     if progress.count > 1:
                         rec.reason += f"; in {progress.count} bands"
                 else:
+                    predicted = self._expected_ms(p, r)
                     rec.ms = self._execute(p, r, frame, timing)
+                    self._keep_pace(predicted, rec.ms)
                 rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
@@ -478,6 +486,17 @@ class RenderGraph:
             progress = TileProgress({}, self._tile_count(p, r, budget_ms))
         return self._band_next_ms(p, r, progress) + self._check_after(p.name, progress)
 
+    def _paced(self, ms: float) -> float:
+        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX)."""
+        return ms * min(max(self.pace, 1.0), PACE_MAX)
+
+    def _keep_pace(self, predicted: float | None, ms: float | None) -> None:
+        """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace."""
+        if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms):
+            return
+        ratio = min(max(ms / predicted, 0.25), 4.0)
+        self.pace = (1.0 - PACE_WEIGHT) * self.pace + PACE_WEIGHT * ratio
+
     def _check_after(self, name: str, progress: TileProgress | None) -> float:
         """What the NaN/Inf check after running ``name`` (its next band, when that is its last) costs
         this frame, as last measured: the graph's own time the budget must leave room for."""
@@ -492,12 +511,14 @@ class RenderGraph:
         one band per call. Returns the ms of the bands run now; the profile is kept when all are done."""
         ms_now = 0.0
         while progress.done < progress.count:
+            predicted = self._band_next_ms(p, r, progress) if p.name in self._last_ms else None
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
+            self._keep_pace(predicted, ms)
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
             progress.band_ms.append(ms or 0.0)
-            if (time.perf_counter() - t_start) * 1000.0 + self._band_next_ms(p, r, progress) \
+            if (time.perf_counter() - t_start) * 1000.0 + self._paced(self._band_next_ms(p, r, progress)) \
                     + self._check_after(p.name, progress) > budget_ms:
                 break
         if progress.done == progress.count and progress.count > 1 and progress.ms > 0:

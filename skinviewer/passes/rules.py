@@ -12,6 +12,7 @@ graph's shape from the scene and the settings, and says why in the frame report
 from __future__ import annotations
 
 import math
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -171,6 +172,68 @@ def shadow_map_size(r) -> int:
 
 POSE_MEMORY = 48  # light poses whose rays and pairs the rule keeps per scene (a drag makes hundreds)
 TSM_BIN = 6  # governed previews: the light direction binned to round(TSM_BIN * d) (bins of ~10 degrees)
+TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread (the TSM kept until then)
+
+
+def _lock(scene) -> threading.RLock:
+    """The rule's lock on ``scene``: its caches are filled by the main thread, the start's warm-up
+    thread (ui/warm.py) and the previews' worker (_BinWorker)."""
+    cache = _rule_cache(scene)
+    lock = cache.get("lock")
+    if lock is None:
+        lock = cache.setdefault("lock", threading.RLock())
+    return lock
+
+
+class _BinWorker:
+    """Makes the rule's answer for a light-direction bin a governed preview asked about, in a daemon
+    thread (the newest request wins; the thread ends when none is left), so a drag's frames never
+    compute the rule: until the bin is known the preview keeps the TSM."""
+
+    def __init__(self) -> None:
+        self._mutex = threading.Lock()
+        self._want: tuple | None = None
+        self._thread: threading.Thread | None = None
+
+    def request(self, bkey, args) -> None:
+        with self._mutex:
+            self._want = (bkey, args)
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="skinviewer-tsm-rule", daemon=True)
+                self._thread.start()
+
+    def _run(self) -> None:
+        while True:
+            with self._mutex:
+                job, self._want = self._want, None
+                if job is None:
+                    self._thread = None
+                    return
+            bkey, (settings, scene, pose, gaussians) = job
+            bins = _rule_cache(scene).setdefault("tsm_bins", {})
+            if bkey in bins:
+                continue
+            try:
+                cand = tsm_candidates(settings, scene, pose, gaussians)
+            except Exception:  # no Embree (ImportError), or anything else: unknown, the TSM is kept
+                cand = None
+            bins.setdefault(bkey, cand)
+
+    def wait(self, timeout: float = 60.0) -> None:
+        """Until no request is left (tests)."""
+        t = self._thread
+        while t is not None:
+            t.join(timeout)
+            with self._mutex:
+                t = self._thread
+
+
+def bin_worker(scene) -> _BinWorker:
+    cache = _rule_cache(scene)
+    w = cache.get("bin_worker")
+    if w is None:
+        w = cache.setdefault("bin_worker", _BinWorker())
+    return w
 
 
 def _rule_cache(scene) -> dict:
@@ -370,6 +433,9 @@ def tsm_needed(settings, scene, pose, gaussians, interactive: bool = False) -> t
         key = ("bin", bkey) + view_key
         if key not in memo:
             if bkey not in bins:
+                if TSM_WORKER:  # made in the background; until then keep the TSM (not memoised)
+                    bin_worker(scene).request(bkey, (settings, scene, pose, gaussians))
+                    return True, ""
                 try:
                     bins[bkey] = tsm_candidates(settings, scene, pose, gaussians)
                 except ImportError:
@@ -391,35 +457,36 @@ def tsm_candidates(settings, scene, pose, gaussians) -> np.ndarray:
     """The exact rule's vertices through which the TSM term transmits more than TSM_EPS (in view
     or not), cached per light pose, profile and gather (the last POSE_MEMORY). ImportError: no Embree.
     A governed preview's bin (tsm_needed) takes the union of these."""
-    cache = _rule_cache(scene)
-    key = ("cand",) + _pose_key(pose) + (_profile_key(gaussians), settings.deon.tsm_gather)
-    if key in cache:
-        return cache[key]
-    idx, t, cos_a = thickness_toward(scene, pose)
-    amp = np.zeros(len(idx))
-    for i, g in enumerate(gaussians):
-        if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
-            continue
-        sig = math.sqrt(g.variance)
-        amp = np.maximum(amp, max(g.weights) * np.exp(-t * t / (2.0 * g.variance)) * np.minimum(t / (3.0 * sig), 1.0))
-    amp *= cos_a
-    cand = idx[amp > TSM_EPS]
-    if settings.deon.tsm_gather:  # lit tissue of another sheet beside the ray (lib/tsm_transmit.glsl)
-        wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
-                if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
-        reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
-        if reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
-            back, k, d, acos = lit_beside(scene, pose, reach)
-            a2 = np.zeros(len(back))
-            for v, w in wide:
-                np.add.at(a2, k, w * np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v) * acos)
-            cand = np.union1d(cand, back[a2 > TSM_EPS])
-    bins = cache.get("tsm_bins")
-    if bins is not None:  # a bin the previews use keeps every pose's vertices asked exactly since
-        bkey = (_pose_bin(scene, pose), _profile_key(gaussians), settings.deon.tsm_gather)
-        if bins.get(bkey) is not None:
-            bins[bkey] = np.union1d(bins[bkey], cand)
-    return _remember(cache, key, cand)
+    with _lock(scene):
+        cache = _rule_cache(scene)
+        key = ("cand",) + _pose_key(pose) + (_profile_key(gaussians), settings.deon.tsm_gather)
+        if key in cache:
+            return cache[key]
+        idx, t, cos_a = thickness_toward(scene, pose)
+        amp = np.zeros(len(idx))
+        for i, g in enumerate(gaussians):
+            if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
+                continue
+            sig = math.sqrt(g.variance)
+            amp = np.maximum(amp, max(g.weights) * np.exp(-t * t / (2.0 * g.variance)) * np.minimum(t / (3.0 * sig), 1.0))
+        amp *= cos_a
+        cand = idx[amp > TSM_EPS]
+        if settings.deon.tsm_gather:  # lit tissue of another sheet beside the ray (lib/tsm_transmit.glsl)
+            wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
+                    if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
+            reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
+            if reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
+                back, k, d, acos = lit_beside(scene, pose, reach)
+                a2 = np.zeros(len(back))
+                for v, w in wide:
+                    np.add.at(a2, k, w * np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v) * acos)
+                cand = np.union1d(cand, back[a2 > TSM_EPS])
+        bins = cache.get("tsm_bins")
+        if bins is not None:  # a bin the previews use keeps every pose's vertices asked exactly since
+            bkey = (_pose_bin(scene, pose), _profile_key(gaussians), settings.deon.tsm_gather)
+            if bins.get(bkey) is not None:
+                bins[bkey] = np.union1d(bins[bkey], cand)
+        return _remember(cache, key, cand)
 
 
 def _tsm_needed(settings, scene, pose, gaussians) -> tuple[bool, str]:

@@ -36,6 +36,9 @@ from skinviewer.ui.view import ViewPresenter
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
 PRESENT_EVERY_S = 0.5  # a refinement rendering without presenting still refreshes the screen this often
+# the render graph's share of what is left of a frame's budget: its costs are predictions from the last
+# runs and the rest of the frame (UI, presenting) a running mean, both off by several ms a frame here
+GRAPH_SHARE = 0.9
 
 
 class UiLayer(Protocol):
@@ -122,12 +125,12 @@ class FrameController:
         self.frame_budget_ms = None if ms is None else max(float(ms), 1e-6)
 
     def graph_budget_ms(self) -> float | None:
-        """The render graph's share of the frame budget: the budget less what the rest of a frame
-        costs here (at least 30 % of it); None: no budget (one frame, however long)."""
+        """The render graph's share of the frame budget: GRAPH_SHARE of the budget less what the rest
+        of a frame costs here (at least 30 % of it); None: no budget (one frame, however long)."""
         fb = self.frame_budget_ms
         if fb is None:
             return None
-        return max(0.3 * fb, fb - (self.overhead_ms or 0.0))
+        return max(0.3 * fb, GRAPH_SHARE * (fb - (self.overhead_ms or 0.0)))
 
     def set_drag_resolution(self, mode: str) -> None:
         if mode in DRAG_RESOLUTIONS:
@@ -331,7 +334,8 @@ class FrameController:
             ui_built = ui.build(frametime, self.layout)
         self._rung = self._govern()
         self._sync_size()
-        self.report = self._render_main(None if present else self.frame_budget_ms)
+        quiet = None if self.frame_budget_ms is None else GRAPH_SHARE * self.frame_budget_ms
+        self.report = self._render_main(None if present else quiet)
         g = self.graph()
         if g is not None and self.report is not None and self.report.complete:
             self.view.keep(g, bool(self.report.ran))  # the view shows the last complete image
