@@ -275,3 +275,18 @@ def test_a_shadow_map_in_bands_is_the_whole_draw(renderer, kind):
     runs = [p for rep in reports for p in rep.passes if p.name == "shadow_map_0" and p.status in ("ran", "deferred")]
     assert len(runs) > 2 and any("band" in p.reason for p in runs)
     assert same(g.read("shadow_map_0"), whole)
+
+
+def test_a_preview_graph_budgets_its_first_frame_by_the_user_graph_s_costs(renderer):
+    """A governed preview renders in a graph of its own (Renderer.graph variant): its passes, never
+    run there, are budgeted by their cost in the user's graph scaled to their pixels (not as free,
+    which ran every pass of a preview's first frame at once: one long frame)."""
+    s = small_settings("head", "phong", size=64)
+    renderer.render(s)
+    base = renderer.graph("phong")
+    g = renderer.graph("phong", "preview test-variant")
+    p = next(p for p in g.passes if p.name == "phong")
+    half = with_values(s, {"render.width": 32, "render.height": 32})
+    r = g._reflect_all(half, renderer.scene.gpu)["phong"]
+    assert g._expected_ms(p, r) == pytest.approx(base._last_ms["phong"] / 4.0)
+    assert g._next_ms(p, r, None, budget_ms=1e9) > 0.0  # the look-ahead sees a cost before its first run

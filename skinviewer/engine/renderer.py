@@ -115,6 +115,8 @@ class Renderer:
             passes, targets = techniques.build(technique)
             g = RenderGraph(self.ctx, self.shaders, passes, targets, self.pool)
             g.memory_available = self.available_memory
+            if variant:  # a preview's first frame is budgeted by what its passes cost in the user's graph
+                g.share_costs(self.graph(technique))
             self.graphs[key] = g
         return g
 

@@ -435,6 +435,15 @@ class RenderGraph:
         self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
 
+    def share_costs(self, other: RenderGraph) -> None:
+        """Keep the passes' measured costs (and cost profiles over their rows) with ``other``, a graph
+        of the same technique (the governor's preview graphs and the user's): a pass never run in this
+        graph is budgeted by its cost there, scaled to its output pixels here (_expected_ms), instead
+        of as free -- the first frame of a preview no longer runs every pass at once."""
+        self._last_ms = other._last_ms
+        self._last_px = other._last_px
+        self._band_profile = other._band_profile
+
     # -- tiles: a long pass in row bands, across frames --------------------------------------
     def _expected_ms(self, p: Pass, r: Reflection) -> float | None:
         """``p``'s last measured cost scaled to the pixels of its outputs now (a governed preview
