@@ -181,7 +181,7 @@ def main() -> int:
     ap.add_argument("--edits", type=int)
     ap.add_argument("--frame-log", help="write one JSON line per frame here")
     args = ap.parse_args()
-    log = open(args.frame_log, "w") if args.frame_log else None
+    log = open(args.frame_log, "w") if args.frame_log else None  # noqa: SIM115 (closed at the end of main)
     from skinviewer import techniques
     names = args.techniques.split(",") if args.techniques else (["deon", "phong"] if args.quick else techniques.names())
     seconds = args.seconds or (1.5 if args.quick else 3.0)

@@ -332,10 +332,10 @@ def _vertex_area(scene) -> np.ndarray:
         m = scene.mesh
         p = m.positions.astype(np.float64)
         tri = p[m.indices.reshape(-1, 3)] * scene.mm_per_unit
-        area = np.zeros(len(p))
-        np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
+        made = np.zeros(len(p))
+        np.add.at(made, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
             np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
-        cache["vertex_area"] = area
+        cache["vertex_area"] = made
     area: np.ndarray = cache["vertex_area"]
     return area
 
