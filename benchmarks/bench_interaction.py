@@ -69,10 +69,9 @@ class Driver:
         if rep is not None and rep.complete and rep.ran:
             self.updates.append(t1)
         if self.log is not None:
-            g = fr.graph()
             self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
                                        "render_ms": round(fr._render_ms or 0.0, 2),
-                                       "graph_own_ms": round(g.own_ms, 2) if g is not None else None,
+                                       "graph_own_ms": round(fr.last_own_ms, 2),
                                        "presented": fr.presented, "rung": fr._rung.label,
                                        "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else []}) + "\n")
 
