@@ -123,6 +123,7 @@ class RenderGraph:
         # running mean of actual / predicted): a machine that got busier since then is >1, and the
         # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
         self.pace = 1.0
+        self._cost_fallback: RenderGraph | None = None  # share_costs
         # bytes of memory textures may take (None: no check); the Renderer sets it
         self.memory_available: int | Callable[[], int] | None = None
         self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
@@ -436,22 +437,24 @@ class RenderGraph:
         return report
 
     def share_costs(self, other: RenderGraph) -> None:
-        """Keep the passes' measured costs (and cost profiles over their rows) with ``other``, a graph
-        of the same technique (the governor's preview graphs and the user's): a pass never run in this
-        graph is budgeted by its cost there, scaled to its output pixels here (_expected_ms), instead
-        of as free -- the first frame of a preview no longer runs every pass at once."""
-        self._last_ms = other._last_ms
-        self._last_px = other._last_px
-        self._band_profile = other._band_profile
+        """Budget a pass never run in this graph by its cost in ``other``, a graph of the same technique
+        (a governor's preview graph by the user's), scaled to its output pixels here (_expected_ms),
+        instead of as free: the first frame of a preview no longer runs every pass at once. The
+        user's settings cost more than a preview's (more iterations, taps), so this errs long; once a
+        pass ran here its own cost is used."""
+        self._cost_fallback = other
 
     # -- tiles: a long pass in row bands, across frames --------------------------------------
     def _expected_ms(self, p: Pass, r: Reflection) -> float | None:
         """``p``'s last measured cost scaled to the pixels of its outputs now (a governed preview
         runs the same pass at a quarter of the view, then the whole view); None: never timed."""
-        ms = self._last_ms.get(p.name)
+        ms, then = self._last_ms.get(p.name), self._last_px.get(p.name, 0)
+        fb = self._cost_fallback
+        if ms is None and fb is not None:  # never run here: its cost in the user's graph (share_costs)
+            ms, then = fb._last_ms.get(p.name), fb._last_px.get(p.name, 0)
         if ms is None:
             return None
-        then, now = self._last_px.get(p.name, 0), _pixels(r)
+        now = _pixels(r)
         return ms * now / then if then > 0 and now > 0 else ms
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
