@@ -401,7 +401,7 @@ def test_the_previews_binned_tsm_rule_leaves_the_final_images_decision_exact(ren
     assert any("direction bin" in why for _, why in previews if why)  # the report says it is the preview's
 
 
-def test_lit_beside_selects_the_pairs_a_search_per_pose_finds(renderer):
+def test_lit_beside_selects_the_pairs_a_search_per_pose_finds(renderer, monkeypatch):
     """lit_beside selects from the light-independent sheet_pairs (one KD-tree per scene) instead of
     building two KD-trees per light pose: the same pairs, distances and lit areas as that search."""
     from scipy.spatial import cKDTree
@@ -430,6 +430,12 @@ def test_lit_beside_selects_the_pairs_a_search_per_pose_finds(renderer):
     area = rules._vertex_area(sc)
     want_a = np.sort(stride * area[qq[other]] * nl[qq[other]])
     assert np.allclose(np.sort(acos), want_a, rtol=1e-12, atol=0)
+    # a mesh too dense for every pair (rules.PAIRS_MAX_VERTICES) searches per pose: the same pairs
+    monkeypatch.setattr(rules, "PAIRS_MAX_VERTICES", 10)
+    _fresh_rule(sc)
+    b2, k2, d2, a2 = rules.lit_beside(sc, pose, radius)
+    o2 = np.lexsort((d2, k2))
+    assert np.array_equal(k2[o2], k[order]) and np.allclose(d2[o2], d[order], rtol=0, atol=1e-12)
 
 
 def test_a_previews_unknown_bin_keeps_the_tsm_while_a_worker_makes_it(renderer):

@@ -172,6 +172,7 @@ def shadow_map_size(r) -> int:
 
 POSE_MEMORY = 48  # light poses whose rays and pairs the rule keeps per scene (a drag makes hundreds)
 TSM_BIN = 6  # governed previews: the light direction binned to round(TSM_BIN * d) (bins of ~10 degrees)
+PAIRS_MAX_VERTICES = 200_000  # sheet_pairs once per mesh up to this many vertices; above, a search per pose
 TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread (the TSM kept until then)
 
 
@@ -379,7 +380,13 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     mm = scene.mm_per_unit
     area = _vertex_area(scene)
     k = q = np.zeros(0, np.int64)
-    if len(back) and len(lit):
+    if len(back) and len(lit) and len(p) > PAIRS_MAX_VERTICES:  # a dense scan: every pair would not fit
+        from scipy.spatial import cKDTree
+        pairs = cKDTree(p[back]).sparse_distance_matrix(cKDTree(p[lit]), radius_mm / mm, output_type="ndarray")
+        k, q = pairs["i"].astype(np.int64), lit[pairs["j"]]
+        other = np.einsum("ij,ij->i", n[q], n[back[k]]) < 0.5
+        k, q = k[other], q[other]
+    elif len(back) and len(lit):
         i, j = sheet_pairs(scene, radius_mm)
         slot = np.full(len(p), -1, np.int64)  # vertex -> its place in `back` (-1: not a ray's vertex)
         slot[back] = np.arange(len(back))
