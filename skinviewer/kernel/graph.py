@@ -46,7 +46,8 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
-UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
+UNMEASURED_TILES = 4
+MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
 
 
 @dataclass
@@ -465,9 +466,14 @@ class RenderGraph:
         if ms is None:
             return UNMEASURED_TILES
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
+        # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
+        # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
+        # costly band that does not shrink with the rows (ss_lighting's first) took the pass to 128 bands
+        # and the pass to 3x its whole cost (burley2's refinement)
+        most = max(n, min(MAX_TILES, int(ms / max(MIN_BAND_SHARE * budget_ms, 1e-3))))
         prof = self._band_profile.get(p.name)
-        while prof is not None and n < MAX_TILES and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
-            n = min(MAX_TILES, n + max(1, n // 4))
+        while prof is not None and n < most and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
+            n = min(most, n + max(1, n // 4))
         return n
 
     def _band_next_ms(self, p: Pass, r: Reflection | None, progress: TileProgress) -> float:
