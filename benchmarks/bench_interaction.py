@@ -71,7 +71,7 @@ class Driver:
         if self.log is not None:
             self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
                                        "render_ms": round(fr._render_ms or 0.0, 2),
-                                       "graph_own_ms": round(fr.last_own_ms, 2),
+                                       "graph_own_ms": round(getattr(fr, "last_own_ms", 0.0), 2),
                                        "presented": fr.presented, "rung": fr._rung.label,
                                        "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else []}) + "\n")
 
