@@ -5,13 +5,20 @@ technique: an orbit drag, a key-light drag, slider edits (the key light's intens
 frame), then a still view until the image is final.
 
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scan] [--seconds 3]
+        [--frame-log frames.jsonl]
+
+``--frame-log``: one JSON line per frame (technique, governor, phase, frame ms, the render graph's
+wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it presented, the rung,
+the passes that ran): where a long frame's time went.
 
 Per technique and governor mode it prints:
 - p95 of the interval between visible image updates while dragging (a frame that completed and ran
   passes puts a new image on screen); goal <= 150 ms;
 - release -> final: from the last input to the complete image at the user's settings; its ratio to
   that settings' light-move frame measured alone (sync timing, no budget); goal <= 1.5;
-- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms;
+- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms; beside
+  it how many frames took longer than 100 ms (of all the frames of the script) and the load average
+  of the machine while the row was measured (one minute, os.getloadavg);
 - the preview's error against the ground truth (the calibration's figure for the rung shown at
   the end of the light drag: techniques/preview_errors.json, measured at 160² on the default view),
   and whether the final image equals the ungoverned render of the same settings bit for bit.
@@ -23,6 +30,7 @@ head, 1.5 s phases and 6 slider edits (the same settings, a shorter script)."""
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import sys
@@ -44,8 +52,10 @@ def p95(xs: list[float]) -> float:
 class Driver:
     """The scripted user: mouse drags and edits into a ViewerApp, one frame per step, timed."""
 
-    def __init__(self, app):
+    def __init__(self, app, log=None, tag: dict | None = None):
         self.app = app
+        self.log = log  # an open text file: one JSON line per frame (--frame-log)
+        self.tag = dict(tag or {}, phase="settle")
         self.frame_ms: list[float] = []
         self.updates: list[float] = []  # perf_counter of frames that put a new, complete image on screen
 
@@ -54,13 +64,21 @@ class Driver:
         self.app.step(1)
         t1 = time.perf_counter()
         self.frame_ms.append((t1 - t0) * 1000.0)
-        rep = self.app.frame.report
+        fr = self.app.frame
+        rep = fr.report
         if rep is not None and rep.complete and rep.ran:
             self.updates.append(t1)
+        if self.log is not None:
+            self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
+                                       "render_ms": round(fr._render_ms or 0.0, 2),
+                                       "graph_own_ms": round(getattr(fr, "last_own_ms", 0.0), 2),
+                                       "presented": fr.presented, "rung": fr._rung.label,
+                                       "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else []}) + "\n")
 
     def drag(self, button, seconds: float, dx: float = 6.0, dy: float = 1.5) -> list[float]:
         """Drag in the view for ``seconds``; the intervals between visible updates meanwhile (ms)."""
         app = self.app
+        self.tag["phase"] = "orbit drag" if button == app.wnd.mouse.left else "light drag"
         vx, vy, vw, vh = app.frame.layout.view
         x, y = vx + vw * 0.5, vy + vh * 0.5
         app.on_mouse_position_event(x, y, 0, 0)
@@ -81,6 +99,7 @@ class Driver:
 
     def edits(self, n: int) -> list[float]:
         app = self.app
+        self.tag["phase"] = "edits"
         start, n0 = time.perf_counter(), len(self.updates)
         base = app.state.settings.lights[0].intensity
         for k in range(n):
@@ -94,6 +113,7 @@ class Driver:
     def until_final(self, limit_s: float = 120.0) -> float:
         """ms from now (input released) to the complete image at the user's settings, on screen."""
         fr = self.app.frame
+        self.tag["phase"] = "until final"
         start = time.perf_counter()
         while time.perf_counter() - start < limit_s:
             self.step()
@@ -118,14 +138,15 @@ def full_frame_alone(app) -> float:
     return statistics.median(ms)
 
 
-def run_one(app, technique: str, mode: str, seconds: float, n_edits: int) -> dict:
+def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=None) -> dict:
     from skinviewer.ground.settings import validate
     st = app.state
     st.set_settings(validate({**st.settings.model_dump(mode="json"), "technique": technique}), "technique")
     st.apply({"render.governor": mode})
-    d = Driver(app)
+    d = Driver(app, log, {"technique": technique, "governor": mode})
     d.until_final()
     d.frame_ms.clear()
+    load0 = os.getloadavg()[0]
     drag = d.drag(app.wnd.mouse.left, seconds)
     orbit_final = d.until_final()
     light = d.drag(app.wnd.mouse.right, seconds)
@@ -145,6 +166,8 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int) -> dic
     return {"technique": technique, "mode": mode, "p95_drag": p95(drag + light), "p95_orbit": p95(drag),
             "p95_light": p95(light), "p95_edits": p95(edits), "release_ms": release, "alone_ms": alone,
             "orbit_final_ms": orbit_final, "edit_final_ms": edit_final, "stall_ms": max(d.frame_ms),
+            "over_100": sum(ms > 100.0 for ms in d.frame_ms), "frames": len(d.frame_ms),
+            "load": 0.5 * (load0 + os.getloadavg()[0]),
             "preview": preview, "preview_err": preview_err, "identical": identical}
 
 
@@ -155,7 +178,9 @@ def main() -> int:
     ap.add_argument("--scan", action="store_true", help="also the shared head scan (../shared/assets/lee-perry-smith)")
     ap.add_argument("--seconds", type=float)
     ap.add_argument("--edits", type=int)
+    ap.add_argument("--frame-log", help="write one JSON line per frame here")
     args = ap.parse_args()
+    log = open(args.frame_log, "w") if args.frame_log else None  # noqa: SIM115 (closed at the end of main)
     from skinviewer import techniques
     names = args.techniques.split(",") if args.techniques else (["deon", "phong"] if args.quick else techniques.names())
     seconds = args.seconds or (1.5 if args.quick else 3.0)
@@ -187,19 +212,23 @@ def main() -> int:
                       f"default settings (1024² maps), governor budget {app.state.settings.render.governor_budget_ms:g} ms; "
                       f"{seconds:g} s drags, {n_edits} edits; sync timing for 'alone'")
                 print(f"{'scene':<6} {'technique':<9} {'governor':<11} {'p95 drag':>9} {'p95 edits':>9} "
-                      f"{'release→final':>13} {'alone':>8} {'ratio':>6} {'stall':>8} {'preview (end of light drag)':<48} "
+                      f"{'release→final':>13} {'alone':>8} {'ratio':>6} {'stall':>8} {'>100ms':>9} {'load':>5} "
+                      f"{'preview (end of light drag)':<48} "
                       f"{'error':>7} {'final = ungoverned':>18}", flush=True)
             for name in names:
                 for mode in ("off", "interactive"):
-                    row = run_one(app, name, mode, seconds, n_edits)
+                    row = run_one(app, name, mode, seconds, n_edits, log)
                     row["scene"] = scene_name
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
                     print(f"{scene_name:<6} {name:<9} {mode:<11} {row['p95_drag']:9.0f} {row['p95_edits']:9.0f} "
                           f"{row['release_ms']:13.0f} {row['alone_ms']:8.0f} {row['release_ms'] / row['alone_ms']:6.2f} "
-                          f"{row['stall_ms']:8.0f} {row['preview']:<48} {err:>7} {row['identical']!s:>18}", flush=True)
+                          f"{row['stall_ms']:8.0f} {row['over_100']:>4}/{row['frames']:<4} {row['load']:5.1f} "
+                          f"{row['preview']:<48} {err:>7} {row['identical']!s:>18}", flush=True)
         finally:
             destroy_app(app)
+    if log is not None:
+        log.close()
     return 0
 
 

@@ -255,8 +255,8 @@ def test_governed_refinement_converges_to_exactly_the_ungoverned_image(renderer)
     from skinviewer.engine.renderer import Renderer
     s = small_settings("head", "deon", size=64)
     g = Governor("interactive", 1e9, fake_calibration("deon", s, seed=5))
-    for rung in ladder(s)[:-1]:
-        renderer.render(rung_settings(s, rung))  # what the drag showed, in the same graphs and pool
+    for rung in ladder(s)[:-1]:  # what the drag showed, in the same graphs and pool, as the viewer renders
+        renderer.render(rung_settings(s, rung), interactive=True)  # a preview: binned TSM rule, no NaN check
     renderer.render(g.settings_for(s, FINAL))
     got = renderer.image(s)
     fresh = Renderer(renderer.ctx)

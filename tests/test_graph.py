@@ -8,6 +8,7 @@ import pytest
 from helpers import small_settings
 
 from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.compiler import order_passes
 from skinviewer.kernel.graph import (
     FrameInputs,
     GraphError,
@@ -272,9 +273,9 @@ def test_trim_releases_depth_buffers_of_old_sizes(renderer):
     renderer.render(s)
     renderer.render(with_values(s, {"render.width": 80}))
     g = renderer.graph("phong")
-    assert len(g._depth) >= 2  # the 64x64 lit image's depth buffer is no longer used...
+    assert len(g.res.depth) >= 2  # the 64x64 lit image's depth buffer is no longer used...
     renderer.trim()
-    assert (64, 64) not in g._depth and (80, 64) in g._depth  # ...and goes; the one in use stays
+    assert (64, 64) not in g.res.depth and (80, 64) in g.res.depth  # ...and goes; the one in use stays
     assert renderer.render(with_values(s, {"render.width": 80})).ran == []  # nothing cached was lost
 
 
@@ -607,7 +608,7 @@ def test_memory_plan_counts_outputs_depth_and_ping_pong(gl_ctx, corner_dir):
               Spec("middle", "m", TexSpec((32, 32), 2, "f2", depth=True))]
     g, _ = make_graph(gl_ctx, corner_dir, passes, ["s", "l", "m"])
     refl = g._reflect_all(Settings())
-    order, _ = g._order(refl, ["s", "l", "m"])
+    order, _ = order_passes(g.passes, refl, ["s", "l", "m"])
     total, per = g.plan_bytes(refl, order)
     sizes = {"s": 16 * 16 * 4, "l": 64 * 32 * 16, "m": 32 * 32 * 4}
     assert per == [("l", sizes["l"]), ("m", sizes["m"]), ("s", sizes["s"])]

@@ -472,6 +472,25 @@ def test_finite_outputs_and_the_off_switch_flag_nothing(gl_ctx, tmp_path):
     g.release()
 
 
+def test_a_preview_skips_the_check_and_the_final_image_checks_what_it_left(gl_ctx, tmp_path):
+    """A governed preview (FrameInputs.interactive, issue 27) does not scan its outputs; the first frame
+    that is not a preview and finds that pass cached scans it then, so the final image is checked."""
+    g = _poison_graph(gl_ctx, tmp_path, float("nan"))
+    s = Settings()
+    rep = g.run(FrameInputs(s, None, 0, None, "c", interactive=True))
+    assert rep.ran == ["poison"] and rep.nonfinite == {}  # not checked while the user drags
+    assert g._check_ms == {}
+    rep = g.run(FrameInputs(with_values(s, {"phong.ambient": 0.5}), None, 0, None, "c"))
+    assert rep.cached == ["poison"] and rep.nonfinite == {"poison": ["lit"]}  # checked when the image is final
+    assert g._check_ms["poison"] > 0.0  # the budget's look-ahead counts what the check costs
+    # a preview frame that re-runs it, then a final frame that re-runs it again: checked by that one
+    rep = g.run(FrameInputs(with_values(s, {"render.exposure": 2.0}), None, 0, None, "c", interactive=True))
+    assert rep.ran == ["poison"] and rep.nonfinite == {}
+    rep = g.run(FrameInputs(with_values(s, {"render.exposure": 3.0}), None, 0, None, "c"))
+    assert rep.ran == ["poison"] and rep.nonfinite == {"poison": ["lit"]}
+    g.release()
+
+
 def test_output_pass_keeps_the_screen_finite_over_a_poisoned_lit(renderer):
     s = small_settings("laser", "phong", size=16)
     renderer.render(s)

@@ -350,3 +350,107 @@ def test_rules_see_the_rendered_camera_on_a_bust(renderer):
     px_per_mm = s.render.height / (2.0 * d * math.tan(math.radians(s.camera.fov_y) / 2)) / 48.0
     v = max(g.variance for g in s.deon.gaussians if max(g.weights) > 0)
     assert rules.kernel_px(s, renderer.frame_view(s)) == pytest.approx(math.sqrt(v) * px_per_mm, rel=0.05)
+
+
+def _fresh_rule(scene):
+    """Forget every cached answer of the TSM rule on ``scene`` (rays, pairs, bins, memo)."""
+    scene.caches.rules.clear()
+    scene.caches.tsm_needed.clear()
+
+
+@pytest.mark.parametrize("scene_name", ["head", "backlit-ear"])
+def test_the_previews_binned_tsm_rule_leaves_the_final_images_decision_exact(renderer, scene_name, monkeypatch):
+    """Issue 27: a governed preview asks the TSM rule per ~10 degree bin of the light direction (the
+    union of the exact answers for the poses of the bin); the final image asks the exact rule. After a
+    drag's previews have filled the bins, the final image's decision for every pose is the one a
+    fresh, uncached exact rule gives, and a preview keeps the TSM wherever an exact pose of its bin did."""
+    monkeypatch.setattr(rules, "TSM_WORKER", False)  # each bin made at once (the worker: the next test)
+    s = small_settings(scene_name, "deon", 96, **{"deon.tsm_gather": 0, "camera.yaw": 0.0})  # the ray's term only
+    renderer.render(s)
+    sc = renderer.scene.gpu
+    fv = renderer.frame_view(s)
+    start = (0.0, 0.2, 1.0) if scene_name == "head" else (0.0, 0.15, -1.0)  # the rule prunes at / keeps
+    light = s.lights[0].model_copy(update={"kind": "directional", "direction": start})
+    rng = np.random.default_rng(7)
+    poses = []  # a drag: small moves about a pose the rule prunes at, then a random walk away from it
+    d0 = np.asarray(light.direction, np.float64)
+    steps = [d0 + rng.normal(size=3) * 0.03 for _ in range(10)]
+    d = d0
+    for _ in range(20):
+        d = d + rng.normal(size=3) * 0.3
+        steps.append(d)
+    for d in steps:
+        poses.append(light.model_copy(update={"direction": tuple(float(x) for x in d / np.linalg.norm(d))}))
+    exact = []
+    for pose in poses:
+        _fresh_rule(sc)
+        exact.append(rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv))
+    assert {need for need, _ in exact} == {True, False}  # the walk meets both answers
+    _fresh_rule(sc)
+    previews = [rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv, interactive=True) for pose in poses]
+    finals = [rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv) for pose in poses]
+    assert finals == exact
+    # after the final asks, each bin holds its exact poses' vertices: a preview keeps the TSM wherever
+    # an exact pose of its bin needed it
+    again = [rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv, interactive=True)[0] for pose in poses]
+    for i, pose in enumerate(poses):
+        same_bin = [j for j, q in enumerate(poses) if rules._pose_bin(sc, q) == rules._pose_bin(sc, pose)]
+        if any(exact[j][0] for j in same_bin):
+            assert again[i], (i, pose.direction)
+    # the bins are coarser than the exact rule (a pose kept for its bin's sake): what finals == exact guards
+    assert any(a != e[0] for a, e in zip(again, exact))
+    assert any("direction bin" in why for _, why in previews if why)  # the report says it is the preview's
+
+
+def test_lit_beside_selects_the_pairs_a_search_per_pose_finds(renderer, monkeypatch):
+    """lit_beside selects from the light-independent sheet_pairs (one KD-tree per scene) instead of
+    building two KD-trees per light pose: the same pairs, distances and lit areas as that search."""
+    from scipy.spatial import cKDTree
+    s = small_settings("head", "deon", 64)
+    renderer.render(s)
+    sc = renderer.scene.gpu
+    pose = s.lights[0].model_copy(update={"direction": (0.3, 0.2, -1.0)})
+    radius = 6.0
+    back, k, d, acos = rules.lit_beside(sc, pose, radius)
+    p = sc.mesh.positions.astype(np.float64)
+    n = sc.mesh.normals.astype(np.float64)
+    nl = n @ (np.asarray(pose.direction) / np.linalg.norm(pose.direction))
+    lit = np.nonzero(nl > 0.05)[0]
+    stride = max(1, len(lit) // rules.MAX_LIT)
+    lit = lit[::stride]
+    pairs = cKDTree(p[back]).sparse_distance_matrix(cKDTree(p[lit]), radius / sc.mm_per_unit, output_type="ndarray")
+    kk, qq = pairs["i"].astype(np.int64), lit[pairs["j"]]
+    other = np.einsum("ij,ij->i", n[qq], n[back[kk]]) < 0.5
+    want = sorted(zip(kk[other].tolist(), qq[other].tolist()))
+    assert len(want) > 100
+    assert len(k) == len(want)
+    order = np.lexsort((d, k))
+    want_d = np.array(sorted(((a, float(np.linalg.norm(p[b] - p[back[a]]) * sc.mm_per_unit)) for a, b in want)))
+    assert np.array_equal(k[order], want_d[:, 0].astype(np.int64))
+    assert np.allclose(d[order], want_d[:, 1], rtol=0, atol=1e-12)
+    area = rules._vertex_area(sc)
+    want_a = np.sort(stride * area[qq[other]] * nl[qq[other]])
+    assert np.allclose(np.sort(acos), want_a, rtol=1e-12, atol=0)
+    # a mesh too dense for every pair (rules.PAIRS_MAX_VERTICES) searches per pose: the same pairs
+    monkeypatch.setattr(rules, "PAIRS_MAX_VERTICES", 10)
+    _fresh_rule(sc)
+    b2, k2, d2, a2 = rules.lit_beside(sc, pose, radius)
+    o2 = np.lexsort((d2, k2))
+    assert np.array_equal(k2[o2], k[order]) and np.allclose(d2[o2], d[order], rtol=0, atol=1e-12)
+
+
+def test_a_previews_unknown_bin_keeps_the_tsm_while_a_worker_makes_it(renderer):
+    """In the viewer a preview never computes the rule on the main thread: a bin not known yet keeps
+    the TSM (nothing is dropped that was not ruled out) and a worker thread makes it; then the
+    preview answers from the bin, as the rule made at once would."""
+    s = small_settings("head", "deon", 96, **{"deon.tsm_gather": 0, "camera.yaw": 0.0})
+    renderer.render(s)
+    sc = renderer.scene.gpu
+    fv = renderer.frame_view(s)
+    pose = s.lights[0].model_copy(update={"kind": "directional", "direction": (0.0, 0.2, 1.0)})
+    _fresh_rule(sc)
+    assert rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv, interactive=True) == (True, "")  # kept meanwhile
+    rules.bin_worker(sc).wait()
+    got = rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv, interactive=True)
+    assert got[0] is False and "direction bin" in got[1]  # the bin, as the exact rule at its first pose
+    assert rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv) == rules._tsm_needed(s, sc, pose, s.deon.gaussians, fv)

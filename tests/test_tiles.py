@@ -153,10 +153,6 @@ def test_the_summed_steps_reach_follows_sigma():
 # Passes that re-run on a light move and are not split into bands, with why each is short on any
 # machine (a pass missing here and not tileable fails the next test: a new long pass must be banded).
 UNSPLIT = {
-    "shadow_map_0": "depth only, one draw at shadow.map_size",
-    "shadow_map_1": "depth only, one draw at shadow.map_size",
-    "shadow_map_2": "depth only, one draw at shadow.map_size",
-    "shadow_map_3": "depth only, one draw at shadow.map_size",
     "deon_tsm": "one texture-space draw writing a few floats per texel",
     "deon_combine": "a per-texel weighted sum of the blurs (a few fetches)",
     "output": "the tone map: one fetch per pixel",
@@ -261,3 +257,36 @@ def test_a_banded_pass_predicts_its_next_band_from_its_cost_over_the_rows(render
     assert g._band_next_ms(p, r, pr) == pytest.approx(0.0)  # band 0: background
     pr.done, pr.ms, pr.band_ms = 1, 0.5, [0.5]
     assert g._band_next_ms(p, r, pr) == pytest.approx(100.0)  # band 1 holds the whole cost
+
+
+@pytest.mark.parametrize("kind", ["directional", "point"])
+def test_a_shadow_map_in_bands_is_the_whole_draw(renderer, kind):
+    """The shadow maps are split into row bands of the map (issue 27: 20-70 ms at 1024² on llvmpipe, the
+    first pass of every light-move frame), each band drawing the triangles that reach its rows in the
+    light's clip space: the map is the whole draw's, bit for bit, for a directional and a point light."""
+    light = {"kind": kind, "direction": (0.4, 0.3, 1.0), "position": (40.0, 30.0, 120.0)}
+    s = small_settings("head", "phong", size=64, **{f"lights.0.{k}": v for k, v in light.items()})
+    renderer.render(s)
+    g = renderer.graph("phong")
+    whole = g.read("shadow_map_0").copy()
+    s2 = with_values(s, {"lights.0.intensity": 0.0})  # the map is pruned, then made again in bands
+    renderer.render(s2)
+    reports = settle(renderer, s)
+    runs = [p for rep in reports for p in rep.passes if p.name == "shadow_map_0" and p.status in ("ran", "deferred")]
+    assert len(runs) > 2 and any("band" in p.reason for p in runs)
+    assert same(g.read("shadow_map_0"), whole)
+
+
+def test_a_preview_graph_budgets_its_first_frame_by_the_user_graph_s_costs(renderer):
+    """A governed preview renders in a graph of its own (Renderer.graph variant): its passes, never
+    run there, are budgeted by their cost in the user's graph scaled to their pixels (not as free,
+    which ran every pass of a preview's first frame at once: one long frame)."""
+    s = small_settings("head", "phong", size=64)
+    renderer.render(s)
+    base = renderer.graph("phong")
+    g = renderer.graph("phong", "preview test-variant")
+    p = next(p for p in g.passes if p.name == "phong")
+    half = with_values(s, {"render.width": 32, "render.height": 32})
+    r = g._reflect_all(half, renderer.scene.gpu)["phong"]
+    assert g._expected_ms(p, r) == pytest.approx(base._last_ms["phong"] / 4.0)
+    assert g._next_ms(p, r, None, budget_ms=1e9) > 0.0  # the look-ahead sees a cost before its first run

@@ -26,8 +26,8 @@ def renderer_memory(renderer: Renderer) -> dict[str, int]:
            "mesh buffers": 0}
     depth = {}
     for g in renderer.graphs.values():
-        out["graph outputs"] += sum(texture_bytes(t) for t in g._textures.values())
-        for size, rb in g._depth.items():
+        out["graph outputs"] += sum(texture_bytes(t) for t in g.res.textures.values())
+        for size, rb in g.res.depth.items():
             depth[rb.glo] = size[0] * size[1] * DEPTH_BYTES
     out["depth buffers"] = sum(depth.values())
     for lst in renderer.pool._free.values():

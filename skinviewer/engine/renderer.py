@@ -116,6 +116,8 @@ class Renderer:
             passes, targets = techniques.build(technique)
             g = RenderGraph(self.ctx, self.shaders, passes, targets, self.pool)
             g.memory_available = self.available_memory
+            if variant:  # a preview's first frame is budgeted by what its passes cost in the user's graph
+                g.share_costs(self.graph(technique))
             self.graphs[key] = g
         return g
 
@@ -149,10 +151,11 @@ class Renderer:
         return self.frame_view(s).camera
 
     def render(self, s: Settings, targets: list[str] | None = None, timing: str | None = None,
-               force: bool = False, budget_ms: float | None = None, variant: str = "") -> FrameReport:
+               force: bool = False, budget_ms: float | None = None, variant: str = "",
+               interactive: bool = False) -> FrameReport:
         """Run one frame of ``s.technique``; returns the frame report (ran / cached / pruned, ms).
         ``budget_ms`` spreads a long frame over several calls (RenderGraph.run); ``variant``: the
-        graph to run it in (Renderer.graph)."""
+        graph to run it in (Renderer.graph); ``interactive``: a governed preview (FrameInputs)."""
         scene = self.ensure_scene(s)
         scene.gpu.env_poll()  # a finished background bake: swapped in, the lit passes re-run
         env = rules.environment_light(s.lights)
@@ -163,7 +166,8 @@ class Renderer:
         g = self.graph(s.technique, variant)
         lod, lod_note = rules.mesh_lod(s, fv, self._lod_state)
         frame = FrameInputs(settings=s, scene=scene.gpu, scene_version=self.scene_version, view=fv.camera,
-                            view_key=fv.key, mesh_lod=lod, lod_note=lod_note, frame_view=fv)
+                            view_key=fv.key, mesh_lod=lod, lod_note=lod_note, frame_view=fv,
+                            interactive=interactive)
         report = g.run(frame, targets=targets, timing=self.timing_mode(timing or s.render.timing), force=force,
                        budget_ms=budget_ms)
         self.ctx.screen.use() if self.ctx.screen is not None else None

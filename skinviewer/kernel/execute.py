@@ -122,12 +122,12 @@ class ExecuteContext:
     def input_version(self, resource: str) -> int:
         """The version of a declared input (bumps whenever its producer re-ran)."""
         self.input(resource)
-        return self.graph._versions.get(resource, 0)
+        return self.graph.res.versions.get(resource, 0)
 
     def input(self, resource: str) -> moderngl.Texture:
         if resource not in self._refl.inputs:
             raise GraphError(f"pass {self.pass_.name} reads '{resource}' it did not declare")
-        return self.graph._textures[resource]
+        return self.graph.res.textures[resource]
 
     def _own(self, resource: str) -> str:
         if resource not in self._refl.outputs:
@@ -135,10 +135,10 @@ class ExecuteContext:
         return resource
 
     def output(self, resource: str) -> moderngl.Texture:
-        return self.graph._textures[self._own(resource)]
+        return self.graph.res.textures[self._own(resource)]
 
     def framebuffer(self, *resources: str) -> moderngl.Framebuffer:
-        return self.graph._framebuffer(tuple(self._own(r) for r in resources))
+        return self.graph.res.framebuffer(tuple(self._own(r) for r in resources))
 
     def program(self, name: str, **defines: object) -> moderngl.Program:
         """A declared program. Without ``defines``: the one variant of ``name`` reflect() declared."""
@@ -221,17 +221,18 @@ class ExecuteContext:
         held = list(self._held.values())
         if any(isinstance(t, str) or (t not in self._scratch and t not in held) for t in targets):
             raise GraphError(f"pass {self.pass_.name}: draw targets are declared outputs or scratch textures")
-        return self.graph._framebuffer_for(tuple(t for t in targets if not isinstance(t, str)))
+        return self.graph.res.framebuffer_for(tuple(t for t in targets if not isinstance(t, str)))
 
     def draw_mesh(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
                   clear: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0), depth_test: bool = True,
-                  cull_back: bool = False, space: str | None = None) -> None:
+                  cull_back: bool = False, space: str | None = None, matrix: Any = None) -> None:
         """Rasterise the scene's mesh with ``prog`` into ``targets`` (declared outputs, with their
         depth buffer, or scratch textures): both faces unless ``cull_back`` (counter-clockwise is
         front), depth-tested unless ``depth_test=False`` (texture-space unwraps), after clearing
         colour to ``clear`` and depth to 1 (None: no clear). ``space``: where the vertex stage puts
-        the mesh, "camera" (``u_view_proj`` = the view's) or "uv" (the unwrap): in a band, only the
-        triangles that reach its rows are drawn (GpuServices.band_vao); None: the whole mesh."""
+        the mesh, "camera" (``u_view_proj`` = the view's), "light" (clip = ``matrix`` x position, a
+        column-vector GL matrix: the shadow maps) or "uv" (the unwrap): in a band, only the triangles
+        that reach its rows are drawn (GpuServices.band_vao); None: the whole mesh."""
         scene = self.scene
         fbo = self._target(targets)
         rect = self._scissor(fbo)
@@ -254,7 +255,10 @@ class ExecuteContext:
         # the transfer vectors only when ENV_RAYS > 0), so no pass sets it on the scene
         env_rays = int(self.graph.shaders.program_defines(prog).get("ENV_RAYS", 0))
         if rect is not None and space is not None:
-            matrix = self.view.view_proj if space == "camera" else None
+            if space == "camera":
+                matrix = self.view.view_proj
+            elif space != "light":
+                matrix = None
             vao, count = self.graph.gpu.band_vao(prog, scene, lod, space, matrix, fbo.size[1],
                                                  (rect[1], rect[1] + rect[3]), env_rays=env_rays)
             if count:
@@ -304,7 +308,7 @@ class ExecuteContext:
 
     def scratch(self, spec: TexSpec) -> moderngl.Texture:
         """A temporary texture from the pool, returned when execute ends (ping-pong targets)."""
-        tex = self.graph._pool_take(spec)
+        tex = self.graph.res.take(spec)
         self._scratch.append(tex)
         return tex
 
@@ -313,9 +317,9 @@ class ExecuteContext:
         a pass that draws only part of its output (texture-space tiles) leaves no pooled texture's, other
         scene's or other tile set's values in the rest (hard cases, the texture inspector, check_finite)."""
         g = self.graph
-        tag = (g._versions.get(resource), key)
+        tag = (g.res.versions.get(resource), key)
         if g._cleared.get(resource) != tag:
-            g._framebuffer((resource,)).clear(0.0, 0.0, 0.0, 0.0)
+            g.res.framebuffer((resource,)).clear(0.0, 0.0, 0.0, 0.0)
             g._cleared[resource] = tag
 
     # -- tiles (Pass.tileable): the same pass in row bands, across frames ----------------------
@@ -334,8 +338,8 @@ class ExecuteContext:
         if tex is not None and (tex.size, tex.components, tex.dtype) == (spec.size, spec.components, spec.dtype):
             return tex, False
         if tex is not None:
-            self.graph._pool_give(tex)
-        tex = self._held[name] = self.graph._pool_take(spec)
+            self.graph.res.give(tex)
+        tex = self._held[name] = self.graph.res.take(spec)
         return tex, True
 
     def band_rect(self, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
@@ -380,11 +384,11 @@ class ExecuteContext:
 
     def _finish(self) -> None:
         for t in self._scratch:
-            self.graph._pool_give(t)
+            self.graph.res.give(t)
         self._scratch.clear()
         if self._own_held:
             for t in self._held.values():
-                self.graph._pool_give(t)
+                self.graph.res.give(t)
             self._held.clear()
 
 

@@ -1,4 +1,4 @@
-"""The pass graph: passes declare what they read and write in ``reflect`` and do GL work in
+"""The pass graph's executor: passes declare what they read and write in ``reflect`` and do GL work in
 ``execute`` (the Falcor model). The graph orders them, allocates and reuses textures, prunes passes
 nobody consumes, caches outputs whose inputs did not change, and times every pass.
 
@@ -13,6 +13,9 @@ name the program's source does not declare (``set``/``uniforms``), and read-only
 settings they declared (``section``). The graph owns the GL objects behind them (kernel/gpu.py).
 
 The pass API, the frame report and the texture pool are re-exported here (``import X as X``).
+Its parts: kernel/compiler.py (order, pruning, why a key changed, what an edit re-runs),
+kernel/resources.py (textures, framebuffers, the memory check) and this executor (cache keys,
+running, bands under a budget, timing).
 """
 from __future__ import annotations
 
@@ -27,6 +30,7 @@ import numpy as np
 
 from skinviewer.ground.paths import shaders_dir
 from skinviewer.ground.settings import Settings, value_key
+from skinviewer.kernel.compiler import affected, order_passes, pixels, prune_reason, why
 from skinviewer.kernel.execute import ExecuteContext
 from skinviewer.kernel.gpu import GpuServices, write_uniform
 from skinviewer.kernel.pass_api import GraphError as GraphError
@@ -40,11 +44,15 @@ from skinviewer.kernel.report import TIMING_NOTES as TIMING_NOTES
 from skinviewer.kernel.report import FrameInputs as FrameInputs
 from skinviewer.kernel.report import FrameReport as FrameReport
 from skinviewer.kernel.report import PassRecord as PassRecord
+from skinviewer.kernel.resources import ResourceCache
 from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
 from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
+PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
+PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
-UNMEASURED_TILES = 4  # bands of a tileable pass never timed yet, under a budget
+UNMEASURED_TILES = 4
+MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
 
 
 @dataclass
@@ -83,12 +91,8 @@ class RenderGraph:
             raise GraphError(f"duplicate pass names in {names}")
         self.targets = list(targets)
         self.pool = pool or TexturePool(ctx)
-        self._textures: dict[str, moderngl.Texture] = {}
-        self._specs: dict[str, TexSpec] = {}
-        self._versions: dict[str, int] = {}
+        self.res = ResourceCache(ctx, self.pool)  # textures, framebuffers, memory (kernel/resources.py)
         self._keys: dict[str, dict[str, Any]] = {}  # pass name -> last cache key parts
-        self._fbos: dict[tuple[tuple[moderngl.Texture, ...], bool], moderngl.Framebuffer] = {}
-        self._depth: dict[tuple[int, int], moderngl.Renderbuffer] = {}
         self.frame = 0
         self.last_report: FrameReport | None = None
         self.order: list[Pass] = []
@@ -107,130 +111,69 @@ class RenderGraph:
         self.gpu = GpuServices(ctx)  # VAOs, dummy textures: released with the graph
         shaders.on_release(self.gpu.forget_program)
         self._nonfinite: dict[str, list[str]] = {}  # pass -> outputs found non-finite when it last ran
-        # bytes of memory textures may take (None: no check); the Renderer sets it
-        self.memory_available: int | Callable[[], int] | None = None
-        self._checked_plan: tuple[tuple[str, TexSpec], ...] | None = None
+        # passes that ran in a governed preview (FrameInputs.interactive: no NaN/Inf check then), checked
+        # by the first frame that is not a preview and finds them cached; what a pass's check last cost
+        self._unchecked: set[str] = set()
+        self._check_ms: dict[str, float] = {}
+        self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
+        self._value_keys: dict[str, str] = {}  # settings path -> value_key, within one run()
+        # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
+        # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
+        self.own_ms = 0.0
+        self._exec_s = 0.0
+        # how the passes' costs compare with what the look-ahead predicted from their last runs (a
+        # running mean of actual / predicted): a machine that got busier since then is >1, and the
+        # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
+        self.pace = 1.0
+        self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
         self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
 
-    # -- texture management ------------------------------------------------------------------
-    def _pool_take(self, spec: TexSpec) -> moderngl.Texture:
-        return self.pool.take(spec)
+    # -- the resource cache's (kernel/resources.py) ---------------------------------------------
+    @property
+    def memory_available(self) -> int | Callable[[], int] | None:
+        return self.res.memory_available
 
-    def _pool_give(self, tex: moderngl.Texture) -> None:
-        self._drop_fbos(tex)
-        self.pool.give(tex)
-
-    def _drop_fbos(self, tex: moderngl.Texture) -> None:
-        for key in [k for k in self._fbos if tex in k[0]]:
-            self._fbos.pop(key).release()
-
-    def _ensure(self, resource: str, spec: TexSpec) -> bool:
-        """Give ``resource`` a texture of ``spec``; True when it had to be (re)allocated."""
-        if self._specs.get(resource) == spec:
-            return False
-        self._free(resource)
-        self._textures[resource] = self.pool.take(spec)
-        self._specs[resource] = spec
-        self._versions[resource] = self._versions.get(resource, 0) + 1
-        return True
-
-    def _free(self, resource: str) -> None:
-        tex = self._textures.pop(resource, None)
-        if tex is not None:
-            self._pool_give(tex)
-        self._specs.pop(resource, None)
-
-    def _framebuffer(self, resources: tuple[str, ...]) -> moderngl.Framebuffer:
-        texs = tuple(self._textures[r] for r in resources)
-        depth = any(self._specs[r].depth for r in resources)
-        return self._framebuffer_for(texs, depth)
-
-    def _framebuffer_for(self, texs: tuple[moderngl.Texture, ...], depth: bool = False) -> moderngl.Framebuffer:
-        key = (texs, depth)
-        fbo = self._fbos.get(key)
-        if fbo is None:
-            size = texs[0].size
-            rb = None
-            if depth:
-                rb = self._depth.get(size)
-                if rb is None:
-                    rb = self._depth[size] = self.ctx.depth_renderbuffer(size)
-            fbo = self._fbos[key] = self.ctx.framebuffer(color_attachments=list(texs), depth_attachment=rb)
-        return fbo
+    @memory_available.setter
+    def memory_available(self, value: int | Callable[[], int] | None) -> None:
+        self.res.memory_available = value
 
     def texture(self, resource: str) -> moderngl.Texture:
-        return self._textures[resource]
+        return self.res.textures[resource]
 
     def resources(self) -> dict[str, TexSpec]:
-        return dict(self._specs)
+        return dict(self.res.specs)
 
     def read(self, resource: str) -> np.ndarray:
-        """Read a texture back as float32 (H, W, C), row 0 at the bottom (GL order)."""
-        tex = self._textures[resource]
-        spec = self._specs[resource]
-        w, h = spec.size
-        if spec.dtype == "f1":
-            raw = np.frombuffer(tex.read(alignment=1), dtype=np.uint8).astype(np.float32) / 255.0
-        elif spec.dtype == "f2":
-            raw = np.frombuffer(tex.read(), dtype=np.float16).astype(np.float32)
-        else:
-            raw = np.frombuffer(tex.read(), dtype=np.float32).copy()
-        return raw.reshape(h, w, spec.components)
+        """A texture read back as float32 (H, W, C), row 0 at the bottom (GL order)."""
+        return self.res.read(resource)
 
     # -- the frame ---------------------------------------------------------------------------
-    def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None) -> dict[str, Reflection]:
+    def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None,
+                     interactive: bool = False) -> dict[str, Reflection]:
         refl = {}
         for p in self.passes:
             r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
-                           view=view if p.uses_scene else None)
+                           view=view if p.uses_scene else None, interactive=interactive)
             p.reflect(r)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
             elif r.outputs:
                 for res in self._produced.get(p.name, set()) - set(r.outputs):
-                    self._free(res)  # e.g. a gutter map of a map size no longer used
+                    self.res.free(res)  # e.g. a gutter map of a map size no longer used
                 self._produced[p.name] = set(r.outputs)
             refl[p.name] = r
         return refl
 
-    def _order(self, refl: dict[str, Reflection], targets: list[str]) -> tuple[list[Pass], set[str]]:
-        producer: dict[str, Pass] = {}
-        for p in self.passes:
-            for out in refl[p.name].outputs:
-                if out in producer:
-                    raise GraphError(f"'{out}' is written by both {producer[out].name} and {p.name}")
-                producer[out] = p
-        live: set[str] = set()
-        order: list[Pass] = []
-        state: dict[str, int] = {}
-
-        def visit(p: Pass, chain: tuple[str, ...]) -> None:
-            s = state.get(p.name, 0)
-            if s == 2:
-                return
-            if s == 1:
-                raise GraphError(f"cycle in the pass graph: {' -> '.join(chain + (p.name,))}")
-            state[p.name] = 1
-            for res in refl[p.name].inputs:
-                if res not in producer:
-                    raise GraphError(f"pass {p.name} reads '{res}', which no pass writes")
-                visit(producer[res], chain + (p.name,))
-            state[p.name] = 2
-            live.add(p.name)
-            order.append(p)
-
-        for t in targets:
-            if t not in producer:
-                raise GraphError(f"target '{t}' is written by no pass (have: {sorted(producer)})")
-            visit(producer[t], ())
-        return order, live
-
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
+        vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
+        for path in r.declared:
+            if path not in vk:
+                vk[path] = value_key(frame.settings, path)
         key = {
-            "settings": {path: value_key(frame.settings, path) for path in r.declared},
-            "inputs": {res: self._versions.get(res, 0) for res in r.inputs},
+            "settings": {path: vk[path] for path in r.declared},
+            "inputs": {res: self.res.versions.get(res, 0) for res in r.inputs},
             "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
             "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
         }
@@ -243,21 +186,6 @@ class RenderGraph:
         if p.view_dependent:
             key["camera"] = frame.view_key
         return key
-
-    @staticmethod
-    def _why(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
-        if old is None:
-            return "first run"
-        parts = []
-        for group in ("scene", "camera"):
-            if old.get(group) != new.get(group):
-                parts.append(group)
-        for group, label in (("settings", "setting"), ("inputs", "input"), ("programs", "shader"),
-                             ("outputs", "output"), ("plan", "plan")):
-            o, n = old.get(group, {}), new.get(group, {})
-            changed = [k for k in n if o.get(k) != n[k]] + [k for k in o if k not in n]
-            parts += [f"{label} {k}" for k in changed]
-        return ", ".join(parts)
 
     def run(self, frame: FrameInputs, targets: list[str] | None = None, timing: str = "sync",
             force: bool = False, budget_ms: float | None = None) -> FrameReport:
@@ -276,11 +204,12 @@ class RenderGraph:
         # (env_generation: the viewer's background environment bake swapped in, passes/environment)
         idle = (frame.settings, (frame.scene_version, frame.mesh_lod, getattr(frame.scene, "env_generation", 0)),
                 frame.view_key, tuple(targets or self.targets),
-                self.shaders.revision, timing)
+                self.shaders.revision, timing, frame.interactive)
         last = self.last_report
         if not force and self._idle is not None and last is not None and last.complete and not self.refining \
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
+            self.own_ms = 0.0
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
                            "" if p.status == "ran" else p.reason, p.inputs, p.outputs,
@@ -289,16 +218,22 @@ class RenderGraph:
             return self.last_report
         t_start = time.perf_counter()
         any_ran = False
+        self._exec_s = 0.0
+        self._value_keys = {}  # per frame: the settings may be another object (or edited) next frame
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
         self.gpu.keep_scene(frame.scene)
-        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view)
-        order, live = self._order(refl, list(targets or self.targets))
-        self._check_memory(refl, order)
+        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive)
+        order, live = order_passes(self.passes, refl, list(targets or self.targets))
+        self.res.check_memory(refl, order)
         self.order = order
         self._last_refl = refl
+        # render.check_finite: checked after each pass runs, but not in a governed preview (a frame of a
+        # drag): those passes are checked when a frame that is not a preview finds them cached, so the
+        # final image and every render/bench frame are checked as before
         check_finite = bool(getattr(frame.settings.render, "check_finite", False))
+        self._checking = check_finite and not frame.interactive
         records: dict[str, PassRecord] = {}
         partial: set[str] = set()  # outputs of passes part-way through their bands this frame
         self.cancelled = []
@@ -306,7 +241,7 @@ class RenderGraph:
             r = refl[p.name]
             realloc = False
             for res, spec in r.outputs.items():
-                realloc |= self._ensure(res, spec)
+                realloc |= self.res.ensure(res, spec)
             key = self._key(p, r, frame)
             if realloc:  # garbage under any key: run before it may be found cached
                 self._keys.pop(p.name, None)
@@ -324,8 +259,8 @@ class RenderGraph:
                 # over several under the budget instead of freezing the viewer for all its passes
                 waits = partial & set(r.inputs)
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
-                spent = budget_ms is not None and \
-                    (time.perf_counter() - t_start) * 1000.0 + self._next_ms(p, r, progress, budget_ms) > budget_ms
+                spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 \
+                    + self._paced(self._next_ms(p, r, progress, budget_ms)) > budget_ms
                 if waits or (any_ran and spent):
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
@@ -335,7 +270,7 @@ class RenderGraph:
                     continue
                 any_ran = True
                 rec.status = "ran"
-                rec.reason = "forced" if force else ("allocated" if realloc and old == key else self._why(old, key))
+                rec.reason = "forced" if force else ("allocated" if realloc and old == key else why(old, key))
                 if p.tileable and budget_ms is not None:
                     if progress is not None:
                         rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
@@ -355,17 +290,28 @@ class RenderGraph:
                     if progress.count > 1:
                         rec.reason += f"; in {progress.count} bands"
                 else:
+                    predicted = self._expected_ms(p, r)
                     rec.ms = self._execute(p, r, frame, timing)
+                    self._keep_pace(predicted, rec.ms)
                 rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
                     self._last_ms[p.name] = rec.ms
-                    self._last_px[p.name] = _pixels(r)
+                    self._last_px[p.name] = pixels(r)
                 for res in r.outputs:
-                    self._versions[res] = self._versions.get(res, 0) + 1
+                    self.res.versions[res] = self.res.versions.get(res, 0) + 1
                 self._keys[p.name] = key
-                self._nonfinite[p.name] = self._find_nonfinite(r.outputs) if check_finite else []
+                self._unchecked.discard(p.name)
+                if self._checking:
+                    self._check(p.name, r.outputs)
+                else:
+                    self._nonfinite[p.name] = []
+                    if check_finite:
+                        self._unchecked.add(p.name)
+            elif self._checking and p.name in self._unchecked and p.name not in self._progress:
+                self._unchecked.discard(p.name)  # ran in a preview; its outputs are as it left them
+                self._check(p.name, r.outputs)
             rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
             if p.name in self._notes:
                 rec.note, rec.figures = self._notes[p.name]
@@ -379,31 +325,44 @@ class RenderGraph:
         written = {res for p in order for res in refl[p.name].outputs}
         for p in self.passes:
             if p.name not in live:
-                records[p.name] = PassRecord(p.name, "pruned", reason=_prune_reason(p.name, refl, live),
+                records[p.name] = PassRecord(p.name, "pruned", reason=prune_reason(p.name, refl, live),
                                              inputs=list(refl[p.name].inputs))
                 for res in (set(refl[p.name].outputs) | self._produced.pop(p.name, set())) - written:
-                    if res in self._textures:
-                        self._free(res)
+                    if res in self.res.textures:
+                        self.res.free(res)
                 self._keys.pop(p.name, None)
                 self._nonfinite.pop(p.name, None)
+                self._unchecked.discard(p.name)
                 self.refining.discard(p.name)
                 if p.name in self._progress:
                     self._cancel(p.name)
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
+        self.own_ms = max((time.perf_counter() - t_start - self._exec_s) * 1000.0, 0.0)
         # programs first compiled during this frame bumped the revision: record it as it is now
-        self._idle = idle[:4] + (self.shaders.revision, timing) if report.complete else None
+        self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
+
+    def share_costs(self, other: RenderGraph) -> None:
+        """Budget a pass never run in this graph by its cost in ``other``, a graph of the same technique
+        (a governor's preview graph by the user's), scaled to its output pixels here (_expected_ms),
+        instead of as free: the first frame of a preview no longer runs every pass at once. The
+        user's settings cost more than a preview's (more iterations, taps), so this errs long; once a
+        pass ran here its own cost is used."""
+        self._cost_fallback = other
 
     # -- tiles: a long pass in row bands, across frames --------------------------------------
     def _expected_ms(self, p: Pass, r: Reflection) -> float | None:
         """``p``'s last measured cost scaled to the pixels of its outputs now (a governed preview
         runs the same pass at a quarter of the view, then the whole view); None: never timed."""
-        ms = self._last_ms.get(p.name)
+        ms, then = self._last_ms.get(p.name), self._last_px.get(p.name, 0)
+        fb = self._cost_fallback
+        if ms is None and fb is not None:  # never run here: its cost in the user's graph (share_costs)
+            ms, then = fb._last_ms.get(p.name), fb._last_px.get(p.name, 0)
         if ms is None:
             return None
-        then, now = self._last_px.get(p.name, 0), _pixels(r)
+        now = pixels(r)
         return ms * now / then if then > 0 and now > 0 else ms
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
@@ -414,9 +373,14 @@ class RenderGraph:
         if ms is None:
             return UNMEASURED_TILES
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
+        # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
+        # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
+        # costly band that does not shrink with the rows (ss_lighting's first) took the pass to 128 bands
+        # and the pass to 3x its whole cost (burley2's refinement)
+        most = max(n, min(MAX_TILES, int(ms / max(MIN_BAND_SHARE * budget_ms, 1e-3))))
         prof = self._band_profile.get(p.name)
-        while prof is not None and n < MAX_TILES and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
-            n = min(MAX_TILES, n + max(1, n // 4))
+        while prof is not None and n < most and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
+            n = min(most, n + max(1, n // 4))
         return n
 
     def _band_next_ms(self, p: Pass, r: Reflection | None, progress: TileProgress) -> float:
@@ -438,13 +402,32 @@ class RenderGraph:
 
     def _next_ms(self, p: Pass, r: Reflection, progress: TileProgress | None, budget_ms: float) -> float:
         """What running ``p`` next costs, as last measured (scaled to its outputs' pixels now): its
-        next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured."""
+        next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured. With
+        the NaN/Inf check that follows the pass's last band, as it last cost (_check_after)."""
         last = self._expected_ms(p, r) or 0.0
         if not p.tileable:
-            return last
+            return last + self._check_after(p.name, None)
         if progress is None:
             progress = TileProgress({}, self._tile_count(p, r, budget_ms))
-        return self._band_next_ms(p, r, progress)
+        return self._band_next_ms(p, r, progress) + self._check_after(p.name, progress)
+
+    def _paced(self, ms: float) -> float:
+        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX)."""
+        return ms * min(max(self.pace, 1.0), PACE_MAX)
+
+    def _keep_pace(self, predicted: float | None, ms: float | None) -> None:
+        """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace."""
+        if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms):
+            return
+        ratio = min(max(ms / predicted, 0.25), 4.0)
+        self.pace = (1.0 - PACE_WEIGHT) * self.pace + PACE_WEIGHT * ratio
+
+    def _check_after(self, name: str, progress: TileProgress | None) -> float:
+        """What the NaN/Inf check after running ``name`` (its next band, when that is its last) costs
+        this frame, as last measured: the graph's own time the budget must leave room for."""
+        if not self._checking or (progress is not None and progress.done < progress.count - 1):
+            return 0.0
+        return self._check_ms.get(name, 0.0)
 
     def _run_bands(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str, progress: TileProgress,
                    t_start: float, budget_ms: float) -> float | None:
@@ -453,12 +436,15 @@ class RenderGraph:
         one band per call. Returns the ms of the bands run now; the profile is kept when all are done."""
         ms_now = 0.0
         while progress.done < progress.count:
+            predicted = self._band_next_ms(p, r, progress) if p.name in self._last_ms else None
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
+            self._keep_pace(predicted, ms)
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
             progress.band_ms.append(ms or 0.0)
-            if (time.perf_counter() - t_start) * 1000.0 + self._band_next_ms(p, r, progress) > budget_ms:
+            if (time.perf_counter() - t_start) * 1000.0 + self._paced(self._band_next_ms(p, r, progress)) \
+                    + self._check_after(p.name, progress) > budget_ms:
                 break
         if progress.done == progress.count and progress.count > 1 and progress.ms > 0:
             self._band_profile[p.name] = np.concatenate([[0.0], np.cumsum(progress.band_ms) / progress.ms])
@@ -467,7 +453,7 @@ class RenderGraph:
     def _finish_bands(self, name: str) -> None:
         progress = self._progress.pop(name)
         for tex in progress.held.values():
-            self._pool_give(tex)
+            self.res.give(tex)
 
     def _cancel(self, name: str) -> None:
         """Abandon a pass's unfinished bands: held textures back to the pool, no key for its outputs."""
@@ -484,6 +470,7 @@ class RenderGraph:
                  tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None) -> float | None:
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
+        t_enter = time.perf_counter()
         try:
             if timing == "sync":
                 self.ctx.finish()
@@ -502,38 +489,17 @@ class RenderGraph:
         finally:
             ec._finish()
             self._last_draws = ec.draws
+            self._exec_s += time.perf_counter() - t_enter
 
     # -- reliability: memory needed before allocating, non-finite outputs after running ----------
     def plan_bytes(self, refl: dict[str, Reflection], order: list[Pass]) -> tuple[int, list[tuple[str, int]]]:
-        """Memory the frame's textures take: every live output, a depth buffer per size that needs
-        one, and ping-pong scratch (up to two copies of the largest pass's outputs)."""
-        per_res: list[tuple[str, int]] = []
-        depth_sizes: set[tuple[int, int]] = set()
-        biggest_pass = 0
-        for p in order:
-            outs = refl[p.name].outputs
-            biggest_pass = max(biggest_pass, sum(spec.nbytes for spec in outs.values()))
-            for res, spec in outs.items():
-                per_res.append((res, spec.nbytes))
-                if spec.depth:
-                    depth_sizes.add(spec.size)
-        total = sum(b for _, b in per_res) + sum(w * h * 4 for w, h in depth_sizes) + 2 * biggest_pass
-        return total, sorted(per_res, key=lambda x: -x[1])
+        return self.res.plan_bytes(refl, order)
 
-    def _check_memory(self, refl: dict[str, Reflection], order: list[Pass]) -> None:
-        """Refuse (ResourceLimitError) a frame whose textures will not fit, before allocating any."""
-        budget = self.memory_available
-        if budget is None:
-            return
-        plan = tuple((res, spec) for p in order for res, spec in refl[p.name].outputs.items())
-        if plan == self._checked_plan or all(self._specs.get(res) == spec for res, spec in plan):
-            return  # nothing new to allocate
-        needed, per_res = self.plan_bytes(refl, order)
-        held = sum(self._specs[r].nbytes for r in self._textures if r in self._specs)
-        available = int(budget() if callable(budget) else budget) + held
-        if needed > available:
-            raise ResourceLimitError(needed, available, per_res)
-        self._checked_plan = plan
+    def _check(self, name: str, outputs: dict[str, TexSpec]) -> None:
+        """The NaN/Inf check of a pass's outputs, and what it cost (the budget's look-ahead counts it)."""
+        t0 = time.perf_counter()
+        self._nonfinite[name] = self._find_nonfinite(outputs)
+        self._check_ms[name] = (time.perf_counter() - t0) * 1000.0
 
     def _find_nonfinite(self, outputs: dict[str, TexSpec]) -> list[str]:
         """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back
@@ -541,7 +507,7 @@ class RenderGraph:
         vao_of = self.gpu.fullscreen_vao
         bad: list[str] = []
         for res, spec in outputs.items():
-            if spec.dtype == "f1" or res not in self._textures:
+            if spec.dtype == "f1" or res not in self.res.textures:
                 continue
             w, h = spec.size
             gw, gh = min(w, 64), min(h, 64)
@@ -551,9 +517,9 @@ class RenderGraph:
                 return bad
             flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
             try:
-                fbo = self._framebuffer_for((flags,))
+                fbo = self.res.framebuffer_for((flags,))
                 fbo.use()
-                self._textures[res].use(0)
+                self.res.textures[res].use(0)
                 write_uniform(prog["src"], 0)
                 write_uniform(prog["u_tile"], tile)
                 write_uniform(prog["u_size"], (w, h))
@@ -561,7 +527,7 @@ class RenderGraph:
                 if np.frombuffer(flags.read(alignment=1), dtype=np.uint8).any():
                     bad.append(res)
             finally:
-                self._pool_give(flags)
+                self.res.give(flags)
         return bad
 
     def _check_program(self) -> moderngl.Program | None:
@@ -578,27 +544,10 @@ class RenderGraph:
             return None
 
     def affected(self, paths: Iterable[str], camera: bool = False) -> list[str]:
-        """Passes (execution order of the last frame) that a change of these settings would re-run:
-        those that declared a path equal to, inside or around one of ``paths``, those that are
-        view-dependent when ``camera``, and everything downstream of them. Based on the last
-        frame's reflection; a change that alters the graph's shape may re-run more."""
-        refl = self._last_refl
-        paths = list(paths)
-
-        def touches(declared: str) -> bool:
-            return any(d == p or d.startswith(p + ".") or p.startswith(d + ".")
-                       for p in paths for d in (declared.replace(".#", ""),))
-
-        dirty: set[str] = set()
-        for p in self.order:
-            r = refl.get(p.name)
-            if r is None:
-                continue
-            if (camera and p.view_dependent) or any(touches(d) for d in r.declared) \
-                    or any(res in dirty for res in r.inputs):
-                dirty.update(r.outputs)
-                dirty.add("pass:" + p.name)
-        return [p.name for p in self.order if "pass:" + p.name in dirty]
+        """Passes (execution order of the last frame) that a change of these settings would re-run
+        (compiler.affected); based on the last frame's reflection: a change that alters the
+        graph's shape may re-run more."""
+        return affected(self.order, self._last_refl, paths, camera)
 
     def predicted_ms(self, passes: Iterable[str]) -> float:
         """The last measured cost of re-running these passes (0 for those never timed)."""
@@ -617,9 +566,7 @@ class RenderGraph:
 
     def trim(self) -> None:
         """Release depth buffers no cached framebuffer uses (one is made per render size)."""
-        used = {fbo.depth_attachment.glo for fbo in self._fbos.values() if fbo.depth_attachment is not None}
-        for size in [s for s, rb in self._depth.items() if rb.glo not in used]:
-            self._depth.pop(size).release()
+        self.res.trim()
 
     def invalidate(self, pass_name: str | None = None) -> None:
         """Forget cache keys (all, or one pass) so they re-run next frame."""
@@ -637,14 +584,7 @@ class RenderGraph:
             self._finish_bands(name)
         for p in self.passes:
             p.release()
-        for res in list(self._textures):
-            self._free(res)
-        for fbo in self._fbos.values():
-            fbo.release()
-        self._fbos.clear()
-        for rb in self._depth.values():
-            rb.release()
-        self._depth.clear()
+        self.res.release()
         for obj in self.shape_state.pop("gl_objects", {}).values():
             if obj is not None:
                 obj[0].release()  # texture_space.work_tiles
@@ -659,29 +599,3 @@ class RenderGraph:
         report = self.last_report
         out = report.to_json()["passes"] if report else []
         return out
-
-
-def _pixels(r: Reflection) -> int:
-    """The pixels of a pass's largest output (what its cost follows, to first order)."""
-    return max((int(spec.size[0]) * int(spec.size[1]) for spec in r.outputs.values()), default=0)
-
-
-def _prune_reason(name: str, refl: dict[str, Reflection], live: set[str], depth: int = 0) -> str:
-    """Why a pass is pruned: its own skip reason, a consumer's reason for dropping its output, or
-    the reason its only consumers are pruned."""
-    r = refl[name]
-    if r.skip_reason is not None:
-        return "pruned: " + r.skip_reason
-    outs = set(r.outputs)
-    for other in refl.values():
-        for res in outs & set(other.dropped):
-            return "pruned: " + other.dropped[res]
-    if depth < 8:
-        for n, other in refl.items():
-            if n not in live and n != name and outs & set(other.inputs):
-                why = _prune_reason(n, refl, live, depth + 1)
-                if why.startswith("pruned: "):
-                    return why if "(via " in why else why + f" (via {n})"
-    return "output not consumed"
-
-

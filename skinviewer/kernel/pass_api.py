@@ -225,8 +225,11 @@ class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
     def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None,
-                 view: FrameView | None = None):
+                 view: FrameView | None = None, interactive: bool = False):
         self._settings = settings
+        # a governed preview frame (FrameInputs.interactive): a scene rule may answer from a coarser,
+        # cached estimate (rules.tsm_needed); the final image's frames are never interactive
+        self.interactive = interactive
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self._view = view  # the frame's view of the scene and camera (Reflection.view)
         self.declared: list[str] = []  # the settings read, by dotted path: the cache keys on them

@@ -17,6 +17,10 @@ class FrameInputs:
     view_key: str
     mesh_lod: int = 0  # the mesh's level of detail this frame (passes/rules.mesh_lod)
     lod_note: str = ""  # why, for the frame report of passes that draw the mesh
+    # a governed preview while the user drags or edits (issue 27): scene rules may answer from a
+    # coarser, cached estimate (Reflection.interactive) and outputs are not checked for NaN/Inf
+    # until a frame that is not a preview finds them cached (RenderGraph.run)
+    interactive: bool = False
     # the frame's view of the scene and camera (kernel/frame_view.FrameView, built once by the renderer):
     # ``view`` is its camera; the scene rules read it in reflect (Reflection.view)
     frame_view: Any = None

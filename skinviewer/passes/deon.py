@@ -113,7 +113,8 @@ def tsm_light_index(r: Reflection) -> int | None:
         return None
     if j is not None and r.settings.deon.tsm_auto and r.scene is not None:
         # issue 14: only when the light is behind a thin part in view (peeked: shape only)
-        need, why = tsm_needed(r._settings, r.scene, whole(r.peeked.lights[j]), whole(r.peeked.deon.gaussians), r.view)
+        need, why = tsm_needed(r._settings, r.scene, whole(r.peeked.lights[j]), whole(r.peeked.deon.gaussians), r.view,
+                               interactive=r.interactive)
         if not need:
             r.drop(TSM, why)
             return None

@@ -12,6 +12,7 @@ graph's shape from the scene and the settings, and says why in the frame report
 from __future__ import annotations
 
 import math
+import threading
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -166,10 +167,92 @@ def shadow_map_size(r) -> int:
 
 # -- translucent shadow map ----------------------------------------------------------------------
 
+POSE_MEMORY = 48  # light poses whose rays and pairs the rule keeps per scene (a drag makes hundreds)
+TSM_BIN = 6  # governed previews: the light direction binned to round(TSM_BIN * d) (bins of ~10 degrees)
+PAIRS_MAX_VERTICES = 200_000  # sheet_pairs once per mesh up to this many vertices; above, a search per pose
+TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread (the TSM kept until then)
+
+
+def _lock(scene) -> threading.RLock:
+    """The rule's lock on ``scene``: its caches are filled by the main thread, the start's warm-up
+    thread (ui/warm.py) and the previews' worker (_BinWorker)."""
+    cache = _rule_cache(scene)
+    lock = cache.get("lock")
+    if lock is None:
+        lock = cache.setdefault("lock", threading.RLock())
+    return lock
+
+
+class _BinWorker:
+    """Makes the rule's answer for a light-direction bin a governed preview asked about, in a daemon
+    thread (the newest request wins; the thread ends when none is left), so a drag's frames never
+    compute the rule: until the bin is known the preview keeps the TSM."""
+
+    def __init__(self) -> None:
+        self._mutex = threading.Lock()
+        self._want: tuple | None = None
+        self._thread: threading.Thread | None = None
+
+    def request(self, bkey, args) -> None:
+        with self._mutex:
+            self._want = (bkey, args)
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="skinviewer-tsm-rule", daemon=True)
+                self._thread.start()
+
+    def _run(self) -> None:
+        while True:
+            with self._mutex:
+                job, self._want = self._want, None
+                if job is None:
+                    self._thread = None
+                    return
+            bkey, (settings, scene, pose, gaussians) = job
+            bins = _rule_cache(scene).setdefault("tsm_bins", {})
+            if bkey in bins:
+                continue
+            try:
+                cand = tsm_candidates(settings, scene, pose, gaussians)
+            except Exception:  # no Embree (ImportError), or anything else: unknown, the TSM is kept
+                cand = None
+            bins.setdefault(bkey, cand)
+
+    def wait(self, timeout: float = 60.0) -> None:
+        """Until no request is left (tests)."""
+        t = self._thread
+        while t is not None:
+            t.join(timeout)
+            with self._mutex:
+                t = self._thread
+
+
+def bin_worker(scene) -> _BinWorker:
+    cache = _rule_cache(scene)
+    w = cache.get("bin_worker")
+    if w is None:
+        w = cache.setdefault("bin_worker", _BinWorker())
+    return w
+
+
+def _rule_cache(scene) -> dict:
+    """The rule's memory on the scene (its mesh is fixed for the scene's life)."""
+    return scene.caches.rules
+
+
+def _remember(cache: dict, key, value):
+    """Keep ``value`` under a per-pose ``key``, forgetting the oldest beyond POSE_MEMORY."""
+    order = cache.setdefault("_pose_keys", [])
+    cache[key] = value
+    order.append(key)
+    while len(order) > POSE_MEMORY:
+        cache.pop(order.pop(0), None)
+    return value
+
+
 def _mesh_rays(scene):
     """Embree (embreex, 0.2 s to import; trimesh's wrapper costs 2-3 s of start-up) over the mesh,
     with its face normals; cached on the scene."""
-    cache = scene.caches.rules
+    cache = _rule_cache(scene)
     if "ray" not in cache:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
@@ -183,6 +266,10 @@ def _mesh_rays(scene):
     return cache
 
 
+def _pose_key(pose) -> tuple:
+    return (pose.kind, tuple(pose.direction), tuple(pose.position))
+
+
 def _toward_light(pose, p: np.ndarray) -> np.ndarray:
     """Unit directions from points ``p`` towards the light ``pose`` (LightSettings fields)."""
     if pose.kind == "point":
@@ -194,21 +281,30 @@ def _toward_light(pose, p: np.ndarray) -> np.ndarray:
 
 def _facing(scene, pose):
     """The mesh's positions, normals, directions to the light and N.L, and the vertices whose normal
-    faces away from the light (N.L < -0.05; a sample of MAX_RAYS: thin parts span many vertices)."""
-    p = scene.mesh.positions.astype(np.float64)
-    n = scene.mesh.normals.astype(np.float64)
+    faces away from the light (N.L < -0.05; a sample of MAX_RAYS: thin parts span many vertices).
+    The last pose's answer is kept (thickness_toward and lit_beside both ask)."""
+    cache = _rule_cache(scene)
+    key = ("facing",) + _pose_key(pose)
+    last = cache.get("facing")
+    if last is not None and last[0] == key:
+        return last[1]
+    if "vertex_arrays" not in cache:
+        cache["vertex_arrays"] = (scene.mesh.positions.astype(np.float64), scene.mesh.normals.astype(np.float64))
+    p, n = cache["vertex_arrays"]
     L = _toward_light(pose, p)
     nl = np.einsum("ij,ij->i", n, L)
     back = np.nonzero(nl < -0.05)[0]
-    return p, n, L, nl, back[::max(1, len(back) // MAX_RAYS)]
+    out = (p, n, L, nl, back[::max(1, len(back) // MAX_RAYS)])
+    cache["facing"] = (key, out)
+    return out
 
 
 def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For each vertex whose normal faces away from the light (``pose``: LightSettings fields):
     (vertex index, thickness in mm to the lit surface along the ray to the light, cos at that entry
-    point). Cached per scene and light pose."""
+    point). Cached per scene and light pose (the last POSE_MEMORY poses)."""
     cache = _mesh_rays(scene)
-    key = ("thick", pose.kind, tuple(pose.direction), tuple(pose.position))
+    key = ("thick",) + _pose_key(pose)
     if key in cache:
         return cache[key]
     sc, face_normals = cache["ray"]
@@ -224,8 +320,43 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             t = (np.asarray(hit["tfar"], np.float64)[ray_i] + eps) * scene.mm_per_unit
             cos_a = np.abs(np.einsum("ij,ij->i", face_normals[tri[ray_i]], L[back][ray_i]))
             out = (back[ray_i], t, cos_a)
-    cache[key] = out
-    return out
+    return _remember(cache, key, out)
+
+
+def _vertex_area(scene) -> np.ndarray:
+    """A third of each incident triangle's area per vertex, mm^2 (cached on the scene)."""
+    cache = _rule_cache(scene)
+    if "vertex_area" not in cache:
+        m = scene.mesh
+        p = m.positions.astype(np.float64)
+        tri = p[m.indices.reshape(-1, 3)] * scene.mm_per_unit
+        made = np.zeros(len(p))
+        np.add.at(made, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
+            np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
+        cache["vertex_area"] = made
+    area: np.ndarray = cache["vertex_area"]
+    return area
+
+
+def sheet_pairs(scene, radius_mm: float) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair (i, j), i < j, of the mesh's vertices within ``radius_mm`` whose normals are more
+    than 60 degrees apart (another sheet: the same sheet's light is the surface blur's, not the TSM's).
+    It does not depend on the light: made once per scene and radius (one KD-tree over the vertices),
+    so a light move only selects from it (lit_beside)."""
+    from scipy.spatial import cKDTree
+    cache = _rule_cache(scene)
+    key = ("sheet_pairs", round(radius_mm, 3))
+    if key not in cache:
+        p = scene.mesh.positions.astype(np.float64)
+        n = scene.mesh.normals.astype(np.float64)
+        ij = cKDTree(p).query_pairs(radius_mm / scene.mm_per_unit, output_type="ndarray").astype(np.int64)
+        other = np.einsum("ij,ij->i", n[ij[:, 0]], n[ij[:, 1]]) < 0.5
+        old = [k for k in cache if isinstance(k, tuple) and k[0] == "sheet_pairs"]
+        for k in old[:-2]:  # a profile edit changes the radius: keep the last few
+            cache.pop(k, None)
+        cache[key] = (np.ascontiguousarray(ij[other, 0]), np.ascontiguousarray(ij[other, 1]))
+    pairs: tuple[np.ndarray, np.ndarray] = cache[key]
+    return pairs
 
 
 def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -233,47 +364,93 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
     whose normal faces away from the light, the vertices within ``radius_mm`` that face the light
     from another sheet (normals more than 60 degrees apart: the same sheet's light is the surface
     blur's, not the TSM's), as pairs (vertex index, pair's vertex k, distance in mm, lit area A cos
-    in mm^2). Shadows ignored (conservative). Cached per scene, light pose and radius."""
-    from scipy.spatial import cKDTree
-    cache = _mesh_rays(scene)
-    key = ("beside", pose.kind, tuple(pose.direction), tuple(pose.position), round(radius_mm, 3))
+    in mm^2). Shadows ignored (conservative). The pairs are the light-independent sheet_pairs,
+    selected by which end faces the light. Cached per scene, light pose and radius."""
+    cache = _rule_cache(scene)
+    key = ("beside",) + _pose_key(pose) + (round(radius_mm, 3),)
     if key in cache:
         return cache[key]
-    m = scene.mesh
     p, n, _, nl, back = _facing(scene, pose)
     lit = np.nonzero(nl > 0.05)[0]
     stride = max(1, len(lit) // MAX_LIT)  # a dense scan: a sample of the lit vertices, each for `stride`
     lit = lit[::stride]
     mm = scene.mm_per_unit
-    if "vertex_area" not in cache:  # a third of each incident triangle's area, mm^2
-        tri = p[m.indices.reshape(-1, 3)] * mm
-        area = np.zeros(len(p))
-        np.add.at(area, m.indices.reshape(-1, 3), (0.5 / 3.0) * np.linalg.norm(
-            np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)[:, None])
-        cache["vertex_area"] = area
-    area = cache["vertex_area"]
+    area = _vertex_area(scene)
     k = q = np.zeros(0, np.int64)
-    if len(back) and len(lit):
+    if len(back) and len(lit) and len(p) > PAIRS_MAX_VERTICES:  # a dense scan: every pair would not fit
+        from scipy.spatial import cKDTree
         pairs = cKDTree(p[back]).sparse_distance_matrix(cKDTree(p[lit]), radius_mm / mm, output_type="ndarray")
         k, q = pairs["i"].astype(np.int64), lit[pairs["j"]]
         other = np.einsum("ij,ij->i", n[q], n[back[k]]) < 0.5
         k, q = k[other], q[other]
+    elif len(back) and len(lit):
+        i, j = sheet_pairs(scene, radius_mm)
+        slot = np.full(len(p), -1, np.int64)  # vertex -> its place in `back` (-1: not a ray's vertex)
+        slot[back] = np.arange(len(back))
+        is_lit = np.zeros(len(p), bool)
+        is_lit[lit] = True
+        a = (slot[i] >= 0) & is_lit[j]  # i faces away, j is lit
+        b = (slot[j] >= 0) & is_lit[i]
+        k = np.concatenate([slot[i[a]], slot[j[b]]])
+        q = np.concatenate([j[a], i[b]])
     out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, stride * area[q] * nl[q])
-    cache[key] = out
-    return out
+    return _remember(cache, key, out)
 
 
-def tsm_needed(settings, scene, pose, gaussians, frame: FrameView) -> tuple[bool, str]:
+def _profile_key(gaussians) -> tuple:
+    return tuple((g.variance, tuple(g.weights)) for g in gaussians)
+
+
+def _pose_bin(scene, pose) -> tuple:
+    """The light's coarse pose: its direction (a point light: its direction from the scene's centre
+    and its distance in scene radii, halved steps) rounded to 1 / TSM_BIN."""
+    if pose.kind == "point":
+        v = np.asarray(pose.position, np.float64) - np.asarray(scene.frame[0], np.float64)
+        dist = float(np.linalg.norm(v))
+        d = v / max(dist, 1e-12)
+        return ("point", tuple(np.round(d * TSM_BIN).astype(int)), round(2.0 * dist / max(scene.radius, 1e-12)))
+    d = np.asarray(pose.direction, np.float64)
+    d = d / max(float(np.linalg.norm(d)), 1e-12)
+    return (pose.kind, tuple(np.round(d * TSM_BIN).astype(int)))
+
+
+def tsm_needed(settings, scene, pose, gaussians, frame: FrameView, interactive: bool = False) -> tuple[bool, str]:
     """Whether the TSM term can show: a vertex in view whose normal faces away from the light
     while the light enters the mesh within a thickness that transmits, estimated as in
     lib/tsm_transmit.glsl: w_i exp(-d^2 / 2 v_i) min(r / 3 sigma_i, 1) cos_A (r ~ d), above TSM_EPS;
     with deon.tsm_gather also sum_i w_i G(v_i, d) A cos over tissue of another sheet lit beside the ray.
     Memoised per light pose, profile and view (several passes ask every frame). ``frame``: the
-    frame's view (Reflection.view), whose camera the thin part must be in view of."""
+    frame's view (Reflection.view), whose camera the thin part must be in view of.
+
+    ``interactive`` (a governed preview while the user drags or edits, issue 27): the answer of the
+    light's coarse pose (_pose_bin, ~10 degrees): the union of the vertices the exact rule found for
+    every pose of that bin it was asked about, so a drag computes the rule once per bin, not once per
+    frame, and keeps the TSM wherever any pose of the bin needed it. The final image always asks
+    the exact rule (interactive False): the refined image is the ungoverned render."""
+    gather = settings.deon.tsm_gather
     memo = scene.caches.tsm_needed
-    key = (pose.kind, tuple(pose.direction), tuple(pose.position),
-           tuple((g.variance, tuple(g.weights)) for g in gaussians),
-           settings.camera.model_dump_json(), settings.render.width, settings.render.height, settings.deon.tsm_gather)
+    view_key = (settings.camera.model_dump_json(), settings.render.width, settings.render.height)
+    if interactive:
+        bins = _rule_cache(scene).setdefault("tsm_bins", {})
+        if len(bins) > 512:  # profile edits: bins of old profiles
+            bins.clear()
+        bkey = (_pose_bin(scene, pose), _profile_key(gaussians), gather)
+        key = ("bin", bkey) + view_key
+        if key not in memo:
+            if bkey not in bins:
+                if TSM_WORKER:  # made in the background; until then keep the TSM (not memoised)
+                    bin_worker(scene).request(bkey, (settings, scene, pose, gaussians))
+                    return True, ""
+                try:
+                    bins[bkey] = tsm_candidates(settings, scene, pose, gaussians)
+                except ImportError:
+                    bins[bkey] = None
+            if len(memo) > 16:
+                memo.clear()
+            need, why = _decide(settings, scene, bins[bkey], frame)
+            memo[key] = (need, why + " (preview: the light's ~10\u00b0 direction bin)" if why else why)
+        return memo[key]
+    key = _pose_key(pose) + (_profile_key(gaussians), gather) + view_key
     if key not in memo:
         if len(memo) > 16:
             memo.clear()
@@ -281,29 +458,55 @@ def tsm_needed(settings, scene, pose, gaussians, frame: FrameView) -> tuple[bool
     return memo[key]
 
 
-def _tsm_needed(settings, scene, pose, gaussians, frame: FrameView) -> tuple[bool, str]:
-    try:
+def tsm_candidates(settings, scene, pose, gaussians) -> np.ndarray:
+    """The exact rule's vertices through which the TSM term transmits more than TSM_EPS (in view
+    or not), cached per light pose, profile and gather (the last POSE_MEMORY). ImportError: no Embree.
+    A governed preview's bin (tsm_needed) takes the union of these."""
+    with _lock(scene):
+        cache = _rule_cache(scene)
+        key = ("cand",) + _pose_key(pose) + (_profile_key(gaussians), settings.deon.tsm_gather)
+        if key in cache:
+            return cache[key]
         idx, t, cos_a = thickness_toward(scene, pose)
+        amp = np.zeros(len(idx))
+        for i, g in enumerate(gaussians):
+            if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
+                continue
+            sig = math.sqrt(g.variance)
+            amp = np.maximum(amp, max(g.weights) * np.exp(-t * t / (2.0 * g.variance)) * np.minimum(t / (3.0 * sig), 1.0))
+        amp *= cos_a
+        cand = idx[amp > TSM_EPS]
+        if settings.deon.tsm_gather:  # lit tissue of another sheet beside the ray (lib/tsm_transmit.glsl)
+            wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
+                    if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
+            reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
+            if reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
+                back, k, d, acos = lit_beside(scene, pose, reach)
+                a2 = np.zeros(len(back))
+                for v, w in wide:
+                    np.add.at(a2, k, w * np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v) * acos)
+                cand = np.union1d(cand, back[a2 > TSM_EPS])
+        bins = cache.get("tsm_bins")
+        if bins is not None:  # a bin the previews use keeps every pose's vertices asked exactly since
+            bkey = (_pose_bin(scene, pose), _profile_key(gaussians), settings.deon.tsm_gather)
+            if bins.get(bkey) is not None:
+                bins[bkey] = np.union1d(bins[bkey], cand)
+        return _remember(cache, key, cand)
+
+
+def _tsm_needed(settings, scene, pose, gaussians, frame: FrameView) -> tuple[bool, str]:
+    """The exact rule (tsm_needed without the memo)."""
+    try:
+        cand = tsm_candidates(settings, scene, pose, gaussians)
     except ImportError:  # no Embree: keep the TSM (never drop an effect we cannot rule out)
         return True, ""
-    amp = np.zeros(len(idx))
-    for i, g in enumerate(gaussians):
-        if i == 0 or not (g.variance > 0) or max(g.weights) <= 0:
-            continue
-        sig = math.sqrt(g.variance)
-        amp = np.maximum(amp, max(g.weights) * np.exp(-t * t / (2.0 * g.variance)) * np.minimum(t / (3.0 * sig), 1.0))
-    amp *= cos_a
-    cand = idx[amp > TSM_EPS]
-    if settings.deon.tsm_gather:  # lit tissue of another sheet beside the ray (lib/tsm_transmit.glsl)
-        wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
-                if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
-        reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
-        if reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
-            back, k, d, acos = lit_beside(scene, pose, reach)
-            a2 = np.zeros(len(back))
-            for v, w in wide:
-                np.add.at(a2, k, w * np.exp(-d * d / (2.0 * v)) / (2.0 * math.pi * v) * acos)
-            cand = np.union1d(cand, back[a2 > TSM_EPS])
+    return _decide(settings, scene, cand, frame)
+
+
+def _decide(settings, scene, cand: np.ndarray | None, frame: FrameView) -> tuple[bool, str]:
+    """Whether any of the vertices ``cand`` faces the camera inside the view (None: unknown, keep)."""
+    if cand is None:
+        return True, ""
     if len(cand) == 0:
         return False, "no light behind a thin part"
     view = frame.camera  # the rendered camera (the frame's view)

@@ -10,6 +10,11 @@ from skinviewer.scene.camera import gl_bytes
 class ShadowMapPass(Pass):
     """Re-runs on the mesh, this light's pose and the map size only (not its colour)."""
 
+    # one mesh draw, but 20-70 ms at 1024² on llvmpipe (the first pass of every light-move frame):
+    # in row bands of the map under the viewer's frame budget (issue 27), each band drawing only the
+    # triangles that reach its rows in light space; bit-identical to the whole draw
+    tileable = True
+
     def __init__(self, light_index: int):
         self.light_index = light_index
         self.name = f"shadow_map_{light_index}"
@@ -33,4 +38,5 @@ class ShadowMapPass(Pass):
         ls = scene.light_space(ec.settings.lights[i])
         prog = ec.program("shadow_map")
         ec.set(prog, "u_light_matrix", gl_bytes(ls.gl_matrix))
-        ec.draw_mesh(prog, ec.plan.map, clear=(1.0, 1.0, 1.0, 1.0))
+        with ec.band():
+            ec.draw_mesh(prog, ec.plan.map, clear=(1.0, 1.0, 1.0, 1.0), space="light", matrix=ls.gl_matrix)

@@ -36,6 +36,9 @@ from skinviewer.ui.view import ViewPresenter
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
 PRESENT_EVERY_S = 0.5  # a refinement rendering without presenting still refreshes the screen this often
+# the render graph's share of what is left of a frame's budget: its costs are predictions from the last
+# runs and the rest of the frame (UI, presenting) a running mean, both off by several ms a frame here
+GRAPH_SHARE = 0.9
 
 
 class UiLayer(Protocol):
@@ -86,6 +89,11 @@ class FrameController:
         # under Xvfb: tens of ms): the graph gets the frame budget less this, so a whole frame fits
         self._render_ms: float | None = None  # the last frame's graph time (wall clock)
         self.overhead_ms: float | None = None  # running mean of the rest of the frame
+        # the render graph's own time in a governed preview frame (reflect, scene rules, cache keys:
+        # RenderGraph.own_ms), a running mean: the governor's pick leaves room for it beside the
+        # passes' cost it observes (issue 27: 25-60 ms of a d'Eon preview frame was this)
+        self.graph_own_ms: float | None = None
+        self.last_own_ms = 0.0  # the graph's own time in the last frame's render (any frame)
         self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
         self._presented_at = 0.0
         self._last_presented = True
@@ -118,12 +126,12 @@ class FrameController:
         self.frame_budget_ms = None if ms is None else max(float(ms), 1e-6)
 
     def graph_budget_ms(self) -> float | None:
-        """The render graph's share of the frame budget: the budget less what the rest of a frame
-        costs here (at least 30 % of it); None: no budget (one frame, however long)."""
+        """The render graph's share of the frame budget: GRAPH_SHARE of the budget less what the rest
+        of a frame costs here (at least 30 % of it); None: no budget (one frame, however long)."""
         fb = self.frame_budget_ms
         if fb is None:
             return None
-        return max(0.3 * fb, fb - (self.overhead_ms or 0.0))
+        return max(0.3 * fb, GRAPH_SHARE * (fb - (self.overhead_ms or 0.0)))
 
     def set_drag_resolution(self, mode: str) -> None:
         if mode in DRAG_RESOLUTIONS:
@@ -212,7 +220,7 @@ class FrameController:
         interacting = not self.input_stopped
         self._interacting = interacting
         complete = self.report is None or self.report.complete
-        g.set_overhead(self.overhead_ms)
+        g.set_overhead((self.overhead_ms or 0.0) + (self.graph_own_ms or 0.0))
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
@@ -327,7 +335,8 @@ class FrameController:
             ui_built = ui.build(frametime, self.layout)
         self._rung = self._govern()
         self._sync_size()
-        self.report = self._render_main(None if present else self.frame_budget_ms)
+        quiet = None if self.frame_budget_ms is None else GRAPH_SHARE * self.frame_budget_ms
+        self.report = self._render_main(None if present else quiet)
         g = self.graph()
         if g is not None and self.report is not None and self.report.complete:
             self.view.keep(g, bool(self.report.ran))  # the view shows the last complete image
@@ -394,8 +403,14 @@ class FrameController:
         try:
             t0 = time.perf_counter()
             budget = self.graph_budget_ms() if budget_ms is None else budget_ms
-            report = self.renderer.render(target, budget_ms=budget, variant=variant)
+            # a governed preview (not the user's settings): scene rules answer from coarser cached
+            # estimates and outputs are checked for NaN/Inf once a frame of the final image finds them
+            preview = self._governing and not rung.final
+            report = self.renderer.render(target, budget_ms=budget, variant=variant, interactive=preview)
             self._render_ms = (time.perf_counter() - t0) * 1000.0
+            own = self.last_own_ms = self.renderer.graph(target.technique, variant).own_ms
+            if preview and report.ran:
+                self.graph_own_ms = own if self.graph_own_ms is None else 0.8 * self.graph_own_ms + 0.2 * own
             if not report.complete and self._governing and self._interacting:
                 self._inflight = (target, variant, rung)
             if report.complete:  # until then the view shows the last complete image, in its graph
