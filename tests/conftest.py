@@ -112,3 +112,10 @@ def generic(gl_ctx):
     yield r
     r.release()
     r.shaders.release()
+
+
+@pytest.fixture
+def shader_dir(tmp_path):
+    """A shader folder with the graph tests' fill and add programs (helpers.graph_test_shaders)."""
+    from helpers import graph_test_shaders
+    return graph_test_shaders(tmp_path)

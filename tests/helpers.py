@@ -175,3 +175,21 @@ def quad_gltf(uv: np.ndarray, uri: str | None = None) -> tuple[dict, bytes]:
                        {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
                        {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}]}
     return d, buf
+
+
+# a full-screen triangle (gl_VertexID 0..2) with v_uv: the graph tests' vertex stage
+FS_VERT = """#version 330 core
+out vec2 v_uv;
+void main() { vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2); v_uv = p; gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }
+"""
+
+
+def graph_test_shaders(folder):
+    """The graph tests' shaders in ``folder``: fill (f = u_value) and add (texture a + texture b)."""
+    (folder / "fill.vert").write_text(FS_VERT)
+    (folder / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\n"
+                                      "void main() { f = vec4(u_value); }\n")
+    (folder / "add.vert").write_text(FS_VERT)
+    (folder / "add.frag").write_text("#version 330 core\nin vec2 v_uv;\nuniform sampler2D a;\nuniform sampler2D b;\n"
+                                     "out vec4 f;\nvoid main() { f = texture(a, v_uv) + texture(b, v_uv); }\n")
+    return folder

@@ -5,7 +5,7 @@ import time
 
 import numpy as np
 import pytest
-from helpers import small_settings
+from helpers import FS_VERT, small_settings
 
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.kernel.compiler import order_passes
@@ -18,22 +18,6 @@ from skinviewer.kernel.graph import (
     TexSpec,
 )
 from skinviewer.kernel.shaders import ShaderLibrary
-
-FS_VERT = """#version 330 core
-out vec2 v_uv;
-void main() { vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2); v_uv = p; gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }
-"""
-
-
-@pytest.fixture
-def shader_dir(tmp_path):
-    (tmp_path / "fill.vert").write_text(FS_VERT)
-    (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\n"
-                                        "void main() { f = vec4(u_value); }\n")
-    (tmp_path / "add.vert").write_text(FS_VERT)
-    (tmp_path / "add.frag").write_text("#version 330 core\nin vec2 v_uv;\nuniform sampler2D a;\nuniform sampler2D b;\n"
-                                       "out vec4 f;\nvoid main() { f = texture(a, v_uv) + texture(b, v_uv); }\n")
-    return tmp_path
 
 
 class Fill(Pass):

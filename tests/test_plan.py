@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_graph import FS_VERT, frame  # noqa: F401  (the fixtures' shaders)
+from test_graph import frame
 
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.kernel.graph import GraphError, Pass, Reflection, RenderGraph, TexSpec
@@ -16,14 +16,6 @@ from skinviewer.kernel.pass_api import Plan
 from skinviewer.kernel.shaders import ShaderLibrary
 
 PASSES = Path(__file__).resolve().parents[1] / "skinviewer" / "passes"
-
-
-@pytest.fixture
-def shader_dir(tmp_path):
-    (tmp_path / "fill.vert").write_text(FS_VERT)
-    (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\n"
-                                        "void main() { f = vec4(u_value); }\n")
-    return tmp_path
 
 
 class Planned(Pass):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_graph import FS_VERT, frame  # noqa: F401  (the fixtures' shaders)
+from test_graph import frame
 
 from skinviewer.ground.settings import Settings, get_path, with_values
 from skinviewer.kernel.graph import GraphError, Pass, Reflection, RenderGraph, TexSpec
@@ -109,14 +109,6 @@ def test_peeked_reads_declare_nothing_and_sections_are_not_values():
     with pytest.raises(AttributeError, match="read-only"):
         r.settings.deon.mix = 1.0  # type: ignore[misc]
     assert r.declared == []
-
-
-@pytest.fixture
-def shader_dir(tmp_path):
-    (tmp_path / "fill.vert").write_text(FS_VERT)
-    (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\n"
-                                        "void main() { f = vec4(u_value); }\n")
-    return tmp_path
 
 
 class Typed(Pass):
