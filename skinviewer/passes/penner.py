@@ -12,7 +12,6 @@ import functools
 
 import numpy as np
 
-from skinviewer.ground.constants import MAX_LIGHTS
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     LIT,
@@ -28,8 +27,13 @@ from skinviewer.passes.common import (
 )
 from skinviewer.passes.environment import declare_environment, set_environment
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
-from skinviewer.passes.rules import analytic_on
-from skinviewer.passes.transmittance import declare_profile, set_profile_uniforms, set_thickness_uniforms
+from skinviewer.passes.transmittance import (
+    declare_profile,
+    deon_gaussians,
+    set_profile_uniforms,
+    set_thickness_uniforms,
+    transmittance_slots,
+)
 from skinviewer.physics import penner
 
 RING_LUT = "ring_lut"
@@ -49,21 +53,6 @@ def _tables(gs, size: int, max_curvature: float, max_width: float) -> tuple[byte
     pen = penner.penumbra_lut(list(gs), size, max_width)
     bands = penner.env_band_factors(ring).reshape(size, 3, 3)  # rows: curvature, columns: band, RGB
     return tuple(np.ascontiguousarray(a, np.float32).tobytes() for a in (ring, pen, bands))  # type: ignore[return-value]
-
-
-def profile_gaussians(settings):
-    """The profile in use, the tables' and the transmittance's: deon.gaussians."""
-    return settings.deon.gaussians
-
-
-def transmits(r, env: dict[str, int]) -> bool:
-    """Whether the transmittance has something to carry: transmittance.enabled and a shadow-casting
-    light (the thickness is its shadow map's) or an environment with its visibility bake (the baked
-    thickness along -N)."""
-    if not r.settings.transmittance.enabled:
-        return False
-    return (any(analytic_on(l) and l.cast_shadow for l in whole(r.settings.lights)[:MAX_LIGHTS])
-            or env.get("ENV_RAYS", 0) > 0)
 
 
 class PennerLutPass(Pass):
@@ -109,10 +98,10 @@ class PennerPass(Pass):
         env = declare_environment(r)
         if env:
             r.input(ENV_BANDS_LUT)
-        tr = transmits(r, env)
+        tr = transmittance_slots(r) > 0  # a shadow-casting light or the environment's bake
         if tr:  # Jimenez 2010 through thin parts, the profile in use (as ssss and separable)
             declare(r.settings.transmittance.wrap)
-            declare_profile(r, profile_gaussians, 0)
+            declare_profile(r, deon_gaussians, 0)
         r.plan(transmittance=tr)
         declare_lit(r, "penner", **lighting, **env, PENNER_TR=int(tr))
         declare_view_mesh(r)
@@ -141,5 +130,5 @@ class PennerPass(Pass):
                     u_penumbra_texels=float(2 * pcf + 1))
         if ec.plan.transmittance:
             set_thickness_uniforms(ec, prog)
-            set_profile_uniforms(ec, prog, profile_gaussians, 0)
+            set_profile_uniforms(ec, prog, deon_gaussians, 0)
         draw_view_mesh(ec, prog, LIT)

@@ -8,8 +8,30 @@ import numpy as np
 
 from skinviewer.ground.constants import MAX_GAUSSIANS, MAX_LIGHTS
 from skinviewer.kernel.pass_api import declare, whole
+from skinviewer.passes.environment import env_defines
+from skinviewer.passes.rules import analytic_on
 from skinviewer.physics import burley as B
 from skinviewer.physics.transmittance import SEP_SCALE, SEP_WIDTH_MM
+
+TR_SLOTS = 4  # ss_transmitted_k targets at most (ss_lighting's four targets + these <= 8 draw buffers)
+
+
+def transmittance_slots(r) -> int:
+    """The transmittance terms the lighting pass measures, one per shadow-casting light and, last,
+    the environment's translucency (issue 32: its back-side irradiance at the baked thickness; when
+    the environment has its visibility bake), at most TR_SLOTS (declares transmittance.enabled and
+    the lights); 0: the transmittance is off or nothing comes through."""
+    if not r.settings.transmittance.enabled:
+        return 0
+    n = sum(1 for l in whole(r.settings.lights)[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
+    if env_defines(r).get("ENV_RAYS", 0) > 0:
+        n += 1
+    return min(n, TR_SLOTS)
+
+
+def deon_gaussians(settings):
+    """The profile the screen-space transmittance uses by default: ``deon.gaussians``."""
+    return settings.deon.gaussians
 
 
 def set_thickness_uniforms(ec, prog) -> None:

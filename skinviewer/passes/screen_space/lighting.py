@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skinviewer.ground.constants import MAX_LIGHTS, REGIONS
-from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
+from skinviewer.ground.constants import REGIONS
+from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare
 from skinviewer.passes.common import (
     bind_specular,
     bind_surface,
@@ -15,9 +15,15 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
-from skinviewer.passes.environment import declare_environment, env_defines, set_environment
-from skinviewer.passes.rules import analytic_on
-from skinviewer.passes.transmittance import declare_profile, set_profile_uniforms, set_thickness_uniforms
+from skinviewer.passes.environment import declare_environment, set_environment
+from skinviewer.passes.transmittance import (  # noqa: F401  (TR_SLOTS: part of the package API)
+    TR_SLOTS,
+    declare_profile,
+    deon_gaussians,
+    set_profile_uniforms,
+    set_thickness_uniforms,
+    transmittance_slots,
+)
 from skinviewer.physics.separable import focal_px  # noqa: F401  (part of the framework's API)
 from skinviewer.scene.camera import gl_bytes
 
@@ -31,27 +37,6 @@ DIRECT = "ss_diffuse_direct"  # the lighting's diffuse without the transmittance
 def transmitted_resource(k: int) -> str:
     """The k-th shadow-casting light's transmittance weight and thickness (ss_lighting.frag)."""
     return f"ss_transmitted_{k}"
-
-
-TR_SLOTS = 4  # ss_transmitted_k targets at most (ss_lighting's four targets + these <= 8 draw buffers)
-
-
-def transmittance_slots(r) -> int:
-    """The transmittance terms the lighting pass measures, one per shadow-casting light and, last,
-    the environment's translucency (issue 32: its back-side irradiance at the baked thickness; when
-    the environment has its visibility bake), at most TR_SLOTS (declares transmittance.enabled and
-    the lights); 0: the transmittance is off or nothing comes through."""
-    if not r.settings.transmittance.enabled:
-        return 0
-    n = sum(1 for l in whole(r.settings.lights)[:MAX_LIGHTS] if analytic_on(l) and l.cast_shadow)
-    if env_defines(r).get("ENV_RAYS", 0) > 0:
-        n += 1
-    return min(n, TR_SLOTS)
-
-
-def deon_gaussians(settings):
-    """The profile the screen-space transmittance uses by default: ``deon.gaussians``."""
-    return settings.deon.gaussians
 
 
 def screen_size(r) -> tuple[int, int]:
