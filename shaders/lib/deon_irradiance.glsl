@@ -42,8 +42,9 @@ const vec2 TEXEL_SAMPLE[4] = vec2[4](vec2(-0.375, -0.125), vec2(0.125, -0.375), 
 
 void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, vec3 dPdx, vec3 dPdy) {
     set_light_footprint(dPdx, dPdy);  // beam lights: area coverage
+    g_surface_footprint = u_texel_uv;  // one texel of this map: the same mip level on either path
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
-    vec3 C = safe_pow(texture(albedo_map, v_uv).rgb, u_mix);
+    vec3 C = safe_pow(surface_map(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
     vec4 vis = vec4(0.0);

@@ -4,6 +4,7 @@
 #ifndef SKINVIEWER_SPECULAR_PARAMS_GLSL
 #define SKINVIEWER_SPECULAR_PARAMS_GLSL
 #include "kelemen.glsl"
+#include "surface.glsl"
 uniform sampler2D region_map;      // R8, nearest: id = index in settings.REGIONS
 uniform sampler2D specular_map;    // rho_s scale
 uniform float u_spec_m[N_REGIONS];
@@ -35,7 +36,7 @@ SpecParams specular_params(vec2 uv) {
         m += w * u_spec_m[id];
         rho += w * u_spec_rho_s[id];
     }
-    float scale = texture(specular_map, uv).r;
+    float scale = surface_map(specular_map, uv).r;
     scale = (isnan(scale) || isinf(scale)) ? 1.0 : clamp(scale, 0.0, 10.0);
     return SpecParams(m, rho * scale);
 }
