@@ -99,6 +99,48 @@ def test_bench_records_failures_and_writes_everything(tmp_path, monkeypatch, gl_
         if r.error is None:
             assert len(r.rms_u) == 3 and len(r.p99_u) == 3 and r.dssim_u is not None and min(r.rms_u) > 0
     assert " ± " in md and "tied with" in md
+    # the pairwise ranking names only real configurations, never both ways, and is kept in results.json
+    names = {r.name for r in rs}
+    for r in rs:
+        assert set(r.more_accurate_than) <= names and r.name not in r.more_accurate_than
+        for o in rs:
+            assert not (o.name in r.more_accurate_than and r.name in o.more_accurate_than)
+
+
+def test_the_pairwise_test_ranks_what_the_figures_bounds_call_a_tie():
+    """5.0 vs 5.2 % +- 0.15 % is a tie by the figures' bounds; when the images themselves show the
+    more accurate one is so under every truth within the uncertainty (bench.rank_pairwise), it is
+    ranked: the slower, more accurate configuration is back on the Pareto front and is the budget's
+    pick, and results.md no longer lists the pair as tied."""
+    from skinviewer.engine.bench import rank_pairwise
+    rng = np.random.default_rng(1)
+    ref = rng.uniform(0.2, 1.0, (16, 16, 3))
+    u, m = 0.0015 * ref, np.ones((16, 16), bool)
+    fast = Result("a", "fast", {}, full_ms=10, rms=[0.052] * 3, rms_u=[0.0015] * 3)
+    slow = Result("a", "slow", {}, full_ms=20, rms=[0.050] * 3, rms_u=[0.0015] * 3)
+    other = Result("b", "other", {}, full_ms=30, rms=[0.051] * 3, rms_u=[0.0015] * 3)
+    noise = rng.choice([-1.0, 1.0], ref.shape)
+    imgs = {"fast": ref * (1 + 0.052 * noise), "slow": ref * (1 + 0.050 * noise),
+            "other": ref * (1 + 0.051 * rng.choice([-1.0, 1.0], ref.shape))}
+    m2 = m.copy()
+    m2[0, 0] = False
+    n = rank_pairwise([(fast, imgs["fast"], m), (slow, imgs["slow"], m), (other, imgs["other"], m2)], ref, u)
+    assert n >= 1 and slow.more_accurate_than == ["a fast"] and not fast.more_accurate_than
+    assert not other.more_accurate_than  # other pixels (a different mask): not compared pairwise
+    rs = [fast, slow]
+    pareto_front(rs)
+    assert all(r.pareto for r in rs) and best_within(rs, 30) is slow and ties_of(fast, rs) == []
+    _, back = load_results_from([r.to_json() for r in rs])
+    assert back[1].more_accurate_than == ["a fast"]
+
+
+def load_results_from(records):
+    import tempfile
+    from pathlib import Path
+    with tempfile.TemporaryDirectory() as d:
+        f = Path(d) / "results.json"
+        f.write_text(json.dumps({"results": records}))
+        return load_results(f)
 
 
 def test_bench_cli_budget_preset(tmp_path):

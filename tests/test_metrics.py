@@ -184,3 +184,28 @@ def test_integer_images_are_compared_as_numbers():
     b = rng.integers(0, 256, (16, 16, 3)).astype(np.uint8)
     np.testing.assert_allclose(M.rel_rms(a, b), M.rel_rms(a.astype(float), b.astype(float)), rtol=1e-12)
     np.testing.assert_allclose(M.p99_rel(a, b), M.p99_rel(a.astype(float), b.astype(float)), rtol=1e-12)
+
+
+def test_the_pairwise_order_holds_for_every_truth_within_the_uncertainty_and_only_then():
+    """metrics.certainly_better is exact: where it says a is more accurate than b, a's relative RMS is
+    below b's for random truths and for the worst truth within u; where it does not, the worst truth
+    (d = -u sign(a - b)) reverses or ties the order. Errors a and b share cancel: 3 % vs 5 % too bright
+    with a +-2 % truth is ordered pairwise, while the figures' own bounds (0.03 +- 0.02 vs 0.05 +- 0.02)
+    overlap (a tie by `tied`)."""
+    rng = np.random.default_rng(3)
+    ref = rng.uniform(0.2, 1.0, (24, 24, 3))
+    u = 0.02 * ref
+    a, b = ref * 1.03, ref * 1.05
+    assert M.certainly_better(a, b, ref, u).all() and not M.certainly_better(b, a, ref, u).any()
+    ua, ub = M.figure_uncertainty(a, ref, u)[0], M.figure_uncertainty(b, ref, u)[0]
+    assert M.tied(float(M.rel_rms(a, ref).mean()), float(ua.mean()), float(M.rel_rms(b, ref).mean()), float(ub.mean()))
+    for _ in range(50):  # any truth within u keeps the order
+        t = ref + rng.uniform(-1, 1, ref.shape) * u
+        assert (M.rel_rms(a, t) < M.rel_rms(b, t)).all()
+    # noisy images whose order depends on the truth in some channels: the test says so exactly
+    for k in range(30):
+        a = ref * (1 + rng.normal(0, 0.03, ref.shape))
+        b = ref * (1 + rng.normal(0, 0.03 + 0.002 * k, ref.shape))
+        got = M.certainly_better(a, b, ref, u)
+        worst = ref - u * np.sign(a - b)  # the truth that favours b most
+        assert np.array_equal(got, M.rel_rms(a, worst) < M.rel_rms(b, worst))

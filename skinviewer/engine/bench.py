@@ -23,6 +23,7 @@ from skinviewer.ground.files import atomic_write_text, save_exr, save_png
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.physics.metrics import (
     DSSIM_SETUP,
+    certainly_better,
     image_error,
     rel_error_map,
     tied,
@@ -56,6 +57,9 @@ class Result:
     error: str | None = None
     full_runs: list[float] = field(default_factory=list)
     camera_runs: list[float] = field(default_factory=list)
+    # the configurations this one is more accurate than in every channel under every truth within the
+    # ruler's uncertainty (metrics.certainly_better, the images compared pairwise): ranked, never a tie
+    more_accurate_than: list[str] = field(default_factory=list)
 
     @property
     def rms_mean(self) -> float | None:
@@ -114,8 +118,34 @@ def heat_rgb(err: ArrayLike, vmax: float = HEAT_MAX) -> NDArray[np.uint8]:
 
 
 def same_accuracy(a: Result, b: Result) -> bool:
-    """Mean relative RMS within the ground truth's uncertainty of either: a tie, never ranked."""
+    """A tie, never ranked: neither is more accurate than the other under every truth within the
+    ruler's uncertainty by the pairwise test (``more_accurate_than``), and their mean relative RMS are
+    within the sum of their figures' uncertainties."""
+    if b.name in a.more_accurate_than or a.name in b.more_accurate_than:
+        return False
     return tied(a.err, a.rms_mean_u, b.err, b.rms_mean_u)
+
+
+def rank_pairwise(kept: list[tuple[Result, NDArray[np.float64], NDArray[np.bool_]]], ref_lit: ArrayLike,
+                  u: ArrayLike | None) -> int:
+    """Fill ``more_accurate_than`` of each result from the images themselves: a is more accurate than
+    b when metrics.certainly_better holds in every channel (so the mean RMS is lower under every truth
+    within u). Only pairs compared over the same pixels (equal masks) are tested. Returns how many
+    ordered pairs were certified."""
+    if u is None:
+        return 0
+    n = 0
+    for i, (ra, ia, ma) in enumerate(kept):
+        for rb, ib, mb in kept[i + 1:]:
+            if not np.array_equal(ma, mb):
+                continue
+            if certainly_better(ia, ib, np.asarray(ref_lit), np.asarray(u), ma).all():
+                ra.more_accurate_than.append(rb.name)
+                n += 1
+            elif certainly_better(ib, ia, np.asarray(ref_lit), np.asarray(u), ma).all():
+                rb.more_accurate_than.append(ra.name)
+                n += 1
+    return n
 
 
 def pareto_front(results: list[Result]) -> None:
@@ -199,6 +229,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
         raise ValueError("run_bench needs the ground truth to compare with (engine.reference.compute_reference)")
     ref = reference
     results: list[Result] = []
+    kept: list[tuple[Result, NDArray[np.float64], NDArray[np.bool_]]] = []  # images for the pairwise ranking
 
     own_ctx = ctx is None
     ctx = ctx or headless_context()
@@ -226,6 +257,7 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
                 save_png(out / "heatmaps" / f"{stem}.png", heat_rgb(emap))
                 save_exr(out / "heatmaps" / f"{stem}.exr", emap.astype(np.float32))
                 res.heatmap = f"heatmaps/{stem}.png"
+                kept.append((res, img, m))  # the exact image its figures were taken of
             except Exception as exc:  # one failing configuration is recorded; the sweep goes on
                 res.error = f"{type(exc).__name__}: {exc}"
             results.append(res)
@@ -234,6 +266,8 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
         r.release()
         if own_ctx:
             ctx.release()
+    rank_pairwise(kept, ref.lit, getattr(ref, "uncertainty", None))
+    del kept
     pareto_front(results)
     data = {
         "scene": base.scene.mesh or base.scene.name,
@@ -243,7 +277,9 @@ def run_bench(base: Settings, out: Path, quick: bool = False, names: list[str] |
         "metrics": {"rms": "relative RMS per channel over compared pixels", "p99": "99th percentile of the "
                     "per-pixel relative error per channel", "dssim": DSSIM_SETUP,
                     "uncertainty": "*_u: how far the figure moves within the ground truth's per-pixel uncertainty "
-                                   "(metrics.figure_uncertainty); mean RMS within either's uncertainty: a tie"},
+                                   "(metrics.figure_uncertainty); a tie when neither image is more accurate in every "
+                                   "channel under every truth within it (more_accurate_than, metrics.certainly_better) "
+                                   "and the mean RMS are within the sum of the two figures' uncertainties"},
         "reference": ref.meta,
         "base_settings": base.model_dump(mode="json"),
         "date": time.strftime("%Y-%m-%d %H:%M:%S"),
@@ -306,7 +342,9 @@ def results_markdown(data: dict[str, Any]) -> str:
              "RMS and p99 relative error per channel (R / G / B, %), DSSIM (" + data["metrics"]["dssim"] + "). "
              "± u: how far the figure moves within the ground truth's own uncertainty (" +
              str(ref.get("uncertainty", "not computed")) + "); configurations whose mean RMS differ by less "
-             "than that are ties (column 'tied with'), not ranked.", "",
+             "than that are ties (column 'tied with'), not ranked, unless one image is more accurate than the "
+             "other in every channel under every truth within the uncertainty (the images compared pairwise: "
+             "errors both share cancel).", "",
              "| | technique | configuration | full ms | camera-only ms | RMS % | p99 % | DSSIM | tied with |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     order = sorted(results, key=lambda r: (r.technique, r.full_ms if r.full_ms is not None else 1e30))

@@ -167,6 +167,26 @@ def tied(a: float, ua: float | None, b: float, ub: float | None) -> bool:
     return abs(a - b) <= (ua or 0.0) + (ub or 0.0)
 
 
+def certainly_better(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArray,
+                     mask: ArrayLike | None = None) -> BoolArray:
+    """Per channel: is image ``a``'s relative RMS below ``b``'s for every truth r + d with |d| <= u at
+    every pixel (the ruler's own uncertainty)? Both figures share the denominator sum (r + d)^2, so the
+    order is the sign of sum (a - r - d)^2 - (b - r - d)^2 = D0 - 2 sum d (a - b), D0 the difference
+    at d = 0, whose largest value over the box is D0 + 2 sum u |a - b|, reached at d = -u sign(a - b).
+    So this test is exact (the order holds for every admissible truth iff it returns True), and errors
+    the two images share cancel in it, which the per-figure bound (figure_uncertainty, tied) cannot
+    see: two configurations of one technique are often ordered by it while their figures' bounds
+    overlap."""
+    a, ref = _check(a, ref)
+    b, _ = _check(b, ref)
+    m = _mask(a, mask)
+    ua = np.abs(np.asarray(u, np.float64)[..., :3])[m]
+    ea, eb = (a - ref)[m], (b - ref)[m]
+    d0 = (ea ** 2 - eb ** 2).sum(axis=0)
+    out: BoolArray = d0 + 2.0 * (ua * np.abs(a[m] - b[m])).sum(axis=0) < 0.0
+    return out
+
+
 def _rgb(v: Iterable[float]) -> tuple[float, float, float]:
     """A per-channel (R, G, B) array as the tuple of floats ImageError holds."""
     return cast("tuple[float, float, float]", tuple(float(c) for c in v))
