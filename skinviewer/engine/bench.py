@@ -426,6 +426,10 @@ def pareto_plot(results: list[Result], path: Path, title: str = "") -> None:
         ax.step([r.ms for r in front], [min(100 * r.err, top) for r in front], where="post", color="k",
                 lw=1.2, ls="--", label="Pareto front", zorder=2)
     ax.set_xscale("log")
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))  # 100 200 500 (not 3x10^2 colliding)
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_ylim(0.0, top)
     ax.set_xlabel("full frame ms (sync timing, median)")
     ax.set_ylabel("relative RMS error vs ground truth, mean of R/G/B (%)")
