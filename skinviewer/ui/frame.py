@@ -323,7 +323,8 @@ class FrameController:
         completes (then the view and UI are drawn as usual). Returns whether it drew the screen."""
         drew = self._frame(frametime, window_size, buffer_size, ui, present)
         r = self.report
-        busy = (not self.input_stopped or r is None or not r.complete or self.governor.refining
+        # (no report: the render failed and says so; nothing is in progress)
+        busy = (not self.input_stopped or (r is not None and not r.complete) or self.governor.refining
                 or self.scheduler.deferred)
         scene = self.renderer.scene
         self.collector.frame(busy, scene.key if scene is not None else None)
