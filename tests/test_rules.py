@@ -458,8 +458,9 @@ def test_a_previews_unknown_bin_keeps_the_tsm_while_a_worker_makes_it(renderer):
 
 def test_the_rule_s_worker_pauses_between_chunks_and_finds_the_same_vertices(renderer, monkeypatch):
     """Issue 27: the previews' worker casts its rays and selects its sheet pairs in chunks, pausing
-    between them (time.sleep releases the GIL: one call over every ray held it ~15 ms, and the frame
-    loop waited); the main thread never pauses, and the chunks find exactly what one call finds."""
+    between them (time.sleep gives the GIL and the CPU to the frame loop: on 2 cores the worker's CPU
+    share, not only its GIL holds, slowed a drag's frames); the main thread never pauses, and the
+    chunks find exactly what one call finds."""
     import threading
     s = small_settings("head", "deon", 96, **{"camera.yaw": 0.0})  # tsm_gather on: the pairs too
     renderer.render(s)

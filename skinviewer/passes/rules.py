@@ -172,11 +172,12 @@ POSE_MEMORY = 48  # light poses whose rays and pairs the rule keeps per scene (a
 TSM_BIN = 6  # governed previews: the light direction binned to round(TSM_BIN * d) (bins of ~10 degrees)
 PAIRS_MAX_VERTICES = 200_000  # sheet_pairs once per mesh up to this many vertices; above, a search per pose
 TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread (the TSM kept until then)
-# the rule's work in chunks, with a pause between them off the main thread: one Embree call or one
-# numpy selection holds the GIL whole (4096 rays: ~15 ms here), and the frame loop waited for it
-RAY_CHUNK = 512     # rays per Embree call (~2 ms on llvmpipe's 2-core machine)
-PAIR_CHUNK = 16384  # sheet pairs selected per step (lit_beside)
-WORKER_PAUSE_S = 0.001  # the pause: the main thread takes the GIL meanwhile
+# the rule's work in chunks, with a pause between them off the main thread: a numpy call holds the GIL
+# (the selection over every sheet pair: 1.8 ms CPU) and the worker competes with the frame loop and
+# llvmpipe for the cores (2 here); chunked and paused it takes about a tenth of a core
+RAY_CHUNK = 512     # rays per Embree call (0.14 ms CPU; embreex releases the GIL while casting)
+PAIR_CHUNK = 16384  # sheet pairs selected per step (lit_beside; 0.15 ms CPU)
+WORKER_PAUSE_S = 0.001  # the pause: the GIL and the CPU go to the main thread meanwhile
 
 
 def _pause() -> None:
