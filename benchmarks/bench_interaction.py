@@ -4,12 +4,17 @@ run: the real viewer's frame loop (a window: run it under Xvfb, `xvfb-run -a -s 
 technique: an orbit drag, a key-light drag, slider edits (the key light's intensity, one edit a
 frame), then a still view until the image is final.
 
-    python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scan] [--seconds 3]
-        [--frame-log frames.jsonl]
+    python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
+        [--seconds 3] [--frame-log frames.jsonl]
+
+``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
+both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
+scene and technique the governor off and on side by side, the load beside each row).
 
 ``--frame-log``: one JSON line per frame (technique, governor, phase, frame ms, the render graph's
-wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it presented, the rung,
-the passes that ran): where a long frame's time went.
+wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it presented, its buffer
+swap's ms -- presenting under Xvfb, timed apart --, Python's collections in it (ms, generations), the
+rung, the passes that ran): where a long frame's time went.
 
 Per technique and governor mode it prints:
 - p95 of the interval between visible image updates while dragging (a frame that completed and ran
@@ -17,7 +22,8 @@ Per technique and governor mode it prints:
 - release -> final: from the last input to the complete image at the user's settings; its ratio to
   that settings' light-move frame measured alone (sync timing, no budget); goal <= 1.5;
 - the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms; beside
-  it how many frames took longer than 100 ms (of all the frames of the script) and the load average
+  it that frame less its buffer swap (our work), the longest swap, the longest collection, how many
+  frames took longer than 100 ms (of all the frames of the script) and the load average
   of the machine while the row was measured (one minute, os.getloadavg);
 - the preview's error against the ground truth (the calibration's figure for the rung shown at
   the end of the light drag: techniques/preview_errors.json, measured at 160² on the default view),
