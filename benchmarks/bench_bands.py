@@ -29,7 +29,7 @@ def main() -> int:
     r = Renderer(ctx)
     culled = G.GpuServices.band_vao
 
-    def whole_mesh(self, prog, scene, lod, space, matrix, rows, band):
+    def whole_mesh(self, prog, scene, lod, *args, **kwargs):  # band_vao's signature, every triangle
         return self.mesh_vao(prog, scene, lod), len(scene.lod_mesh(lod).indices) * 3
 
     print(f"# bench_bands — {describe(ctx)}; 640x676, default settings, budget {a.budget:g} ms a call, sync timing")

@@ -4,12 +4,17 @@ run: the real viewer's frame loop (a window: run it under Xvfb, `xvfb-run -a -s 
 technique: an orbit drag, a key-light drag, slider edits (the key light's intensity, one edit a
 frame), then a still view until the image is final.
 
-    python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scan] [--seconds 3]
-        [--frame-log frames.jsonl]
+    python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
+        [--seconds 3] [--frame-log frames.jsonl]
+
+``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
+both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
+scene and technique the governor off and on side by side, the load beside each row).
 
 ``--frame-log``: one JSON line per frame (technique, governor, phase, frame ms, the render graph's
-wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it presented, the rung,
-the passes that ran): where a long frame's time went.
+wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it presented, its buffer
+swap's ms -- presenting under Xvfb, timed apart --, Python's collections in it (ms, generations), the
+rung, the passes that ran): where a long frame's time went.
 
 Per technique and governor mode it prints:
 - p95 of the interval between visible image updates while dragging (a frame that completed and ran
@@ -17,7 +22,8 @@ Per technique and governor mode it prints:
 - release -> final: from the last input to the complete image at the user's settings; its ratio to
   that settings' light-move frame measured alone (sync timing, no budget); goal <= 1.5;
 - the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms; beside
-  it how many frames took longer than 100 ms (of all the frames of the script) and the load average
+  it that frame less its buffer swap (our work), the longest swap, the longest collection, how many
+  frames took longer than 100 ms (of all the frames of the script) and the load average
   of the machine while the row was measured (one minute, os.getloadavg);
 - the preview's error against the ground truth (the calibration's figure for the rung shown at
   the end of the light drag: techniques/preview_errors.json, measured at 160² on the default view),
@@ -30,6 +36,7 @@ head, 1.5 s phases and 6 slider edits (the same settings, a shorter script)."""
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
 import statistics
@@ -49,6 +56,31 @@ def p95(xs: list[float]) -> float:
     return float(np.percentile(xs, 95)) if xs else float("nan")
 
 
+class GcTimer:
+    """Python's garbage collections during a frame (gc.callbacks): ms and generations."""
+
+    def __init__(self):
+        self.ms = 0.0
+        self.gens: list[int] = []
+        self._t0 = 0.0
+        gc.callbacks.append(self._cb)
+
+    def _cb(self, phase, info):
+        if phase == "start":
+            self._t0 = time.perf_counter()
+        else:
+            self.ms += (time.perf_counter() - self._t0) * 1000.0
+            self.gens.append(int(info["generation"]))
+
+    def take(self) -> tuple[float, list[int]]:
+        out = (self.ms, self.gens)
+        self.ms, self.gens = 0.0, []
+        return out
+
+
+GC = GcTimer()
+
+
 class Driver:
     """The scripted user: mouse drags and edits into a ViewerApp, one frame per step, timed."""
 
@@ -57,13 +89,22 @@ class Driver:
         self.log = log  # an open text file: one JSON line per frame (--frame-log)
         self.tag = dict(tag or {}, phase="settle")
         self.frame_ms: list[float] = []
+        self.swap_ms: list[float] = []  # each frame's buffer swap (presenting under Xvfb), timed apart
+        self.gc_ms: list[float] = []
+        self.full_gcs = 0  # generation-2 collections during the script
         self.updates: list[float] = []  # perf_counter of frames that put a new, complete image on screen
 
     def step(self) -> None:
+        GC.take()
         t0 = time.perf_counter()
         self.app.step(1)
         t1 = time.perf_counter()
+        gc_ms, gens = GC.take()
+        swap = getattr(self.app, "swap_ms", 0.0)
         self.frame_ms.append((t1 - t0) * 1000.0)
+        self.swap_ms.append(swap)
+        self.gc_ms.append(gc_ms)
+        self.full_gcs += gens.count(2)
         fr = self.app.frame
         rep = fr.report
         if rep is not None and rep.complete and rep.ran:
@@ -72,7 +113,8 @@ class Driver:
             self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
                                        "render_ms": round(fr._render_ms or 0.0, 2),
                                        "graph_own_ms": round(getattr(fr, "last_own_ms", 0.0), 2),
-                                       "presented": fr.presented, "rung": fr._rung.label,
+                                       "presented": fr.presented, "swap_ms": round(swap, 2),
+                                       "gc_ms": round(gc_ms, 2), "gc_generations": gens, "rung": fr._rung.label,
                                        "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else []}) + "\n")
 
     def drag(self, button, seconds: float, dx: float = 6.0, dy: float = 1.5) -> list[float]:
@@ -146,6 +188,9 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
     d = Driver(app, log, {"technique": technique, "governor": mode})
     d.until_final()
     d.frame_ms.clear()
+    d.swap_ms.clear()
+    d.gc_ms.clear()
+    d.full_gcs = 0
     load0 = os.getloadavg()[0]
     drag = d.drag(app.wnd.mouse.left, seconds)
     orbit_final = d.until_final()
@@ -166,16 +211,48 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
     return {"technique": technique, "mode": mode, "p95_drag": p95(drag + light), "p95_orbit": p95(drag),
             "p95_light": p95(light), "p95_edits": p95(edits), "release_ms": release, "alone_ms": alone,
             "orbit_final_ms": orbit_final, "edit_final_ms": edit_final, "stall_ms": max(d.frame_ms),
+            # our own work: the longest frame less its buffer swap (presenting under Xvfb, apart)
+            "work_stall_ms": max(f - w for f, w in zip(d.frame_ms, d.swap_ms)), "swap_max_ms": max(d.swap_ms),
+            "gc_max_ms": max(d.gc_ms), "full_gcs": d.full_gcs,
             "over_100": sum(ms > 100.0 for ms in d.frame_ms), "frames": len(d.frame_ms),
             "load": 0.5 * (load0 + os.getloadavg()[0]),
             "preview": preview, "preview_err": preview_err, "identical": identical}
 
 
+def markdown(rows: list[dict], head: str) -> str:
+    """The table ready to paste (notes/governor.md, the README): per scene and technique, the governor
+    off and on side by side (one run), the load beside each row."""
+    out = [head, "",
+           "| scene | technique | p95 drags: off → on | p95 edits: off → on | release → final, on (× alone) "
+           "| longest frame: off → on | on: its work / swap | on: frames > 100 ms | on: full GCs | load |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    by = {(r["scene"], r["technique"], r["mode"]): r for r in rows}
+    for (scene, t, mode), on in by.items():
+        if mode == "off":
+            continue
+        off = by.get((scene, t, "off"))
+        b = (lambda x: f"**{x:,.0f}**")
+        p_off = f"{off['p95_drag']:,.0f}" if off else "-"
+        e_off = f"{off['p95_edits']:,.0f}" if off else "-"
+        s_off = f"{off['stall_ms']:,.0f}" if off else "-"
+        ratio = on["release_ms"] / on["alone_ms"]
+        load = f"{off['load']:.1f} / {on['load']:.1f}" if off else f"{on['load']:.1f}"
+        out.append(f"| {scene} | {t} | {p_off} → {b(on['p95_drag'])} ms | {e_off} → {b(on['p95_edits'])} ms "
+                   f"| {on['release_ms']:,.0f} ms ({ratio:.2f}×) | {s_off} → {b(on['stall_ms'])} ms "
+                   f"| {on['work_stall_ms']:,.0f} / {on['swap_max_ms']:,.0f} ms | {on['over_100']} / {on['frames']} "
+                   f"| {on['full_gcs']} | {load} |")
+    same = all(r["identical"] for r in rows)
+    out += ["", f"Every final image equals the ungoverned render bit for bit: {'yes' if same else 'NO'} "
+            f"({sum(r['identical'] for r in rows)} / {len(rows)} rows)."]
+    return "\n".join(out)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--techniques")
+    ap.add_argument("--techniques", help="a subset, comma-separated (default: all 8)")
     ap.add_argument("--scan", action="store_true", help="also the shared head scan (../shared/assets/lee-perry-smith)")
+    ap.add_argument("--scenes", help="head, scan or head,scan (--scan: head,scan)")
     ap.add_argument("--seconds", type=float)
     ap.add_argument("--edits", type=int)
     ap.add_argument("--frame-log", help="write one JSON line per frame here")
@@ -185,11 +262,15 @@ def main() -> int:
     names = args.techniques.split(",") if args.techniques else (["deon", "phong"] if args.quick else techniques.names())
     seconds = args.seconds or (1.5 if args.quick else 3.0)
     n_edits = args.edits or (6 if args.quick else 20)
-    scenes = {"head": {}}
-    if args.scan:
+    want = args.scenes.split(",") if args.scenes else (["head", "scan"] if args.scan else ["head"])
+    scenes = {}
+    if "head" in want:
+        scenes["head"] = {}
+    if any(w != "head" for w in want):
         sys.path.insert(0, os.path.dirname(__file__))
         from bench_tsm_gather import scenes as shared
-        scenes.update({k: v for k, v in shared().items() if k != "head"})
+        scenes.update({k: v for k, v in shared().items() if k != "head" and k in want})
+    t_start = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
     os.environ.setdefault("SKINVIEWER_CALIBRATE", "0")
     from skinviewer.ui.app import create_app, destroy_app
     rows = []
@@ -206,13 +287,13 @@ def main() -> int:
                 cal = calibration.calibrate(app.renderer, app.state.settings, missing, runs=2, into=cal)
                 calibration.save(cal)
                 fr.governor.set_calibration(cal)
-            if scene_name == "head":
+            if not rows:
                 w, h = app.state.settings.render.width, app.state.settings.render.height
                 print(f"# bench_interaction — {describe(app.ctx)}; window {WINDOW[0]}x{WINDOW[1]} (view {w}x{h}), "
                       f"default settings (1024² maps), governor budget {app.state.settings.render.governor_budget_ms:g} ms; "
                       f"{seconds:g} s drags, {n_edits} edits; sync timing for 'alone'")
                 print(f"{'scene':<6} {'technique':<9} {'governor':<11} {'p95 drag':>9} {'p95 edits':>9} "
-                      f"{'release→final':>13} {'alone':>8} {'ratio':>6} {'stall':>8} {'>100ms':>9} {'load':>5} "
+                      f"{'release→final':>13} {'alone':>8} {'ratio':>6} {'stall':>8} {'work':>6} {'swap':>6} {'gc':>5} {'>100ms':>9} {'load':>5} "
                       f"{'preview (end of light drag)':<48} "
                       f"{'error':>7} {'final = ungoverned':>18}", flush=True)
             for name in names:
@@ -223,12 +304,17 @@ def main() -> int:
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
                     print(f"{scene_name:<6} {name:<9} {mode:<11} {row['p95_drag']:9.0f} {row['p95_edits']:9.0f} "
                           f"{row['release_ms']:13.0f} {row['alone_ms']:8.0f} {row['release_ms'] / row['alone_ms']:6.2f} "
-                          f"{row['stall_ms']:8.0f} {row['over_100']:>4}/{row['frames']:<4} {row['load']:5.1f} "
+                          f"{row['stall_ms']:8.0f} {row['work_stall_ms']:6.0f} {row['swap_max_ms']:6.0f} {row['gc_max_ms']:5.0f} "
+                          f"{row['over_100']:>4}/{row['frames']:<4} {row['load']:5.1f} "
                           f"{row['preview']:<48} {err:>7} {row['identical']!s:>18}", flush=True)
         finally:
             destroy_app(app)
     if log is not None:
         log.close()
+    up = "load average: " + ", ".join(f"{x:.2f}" for x in os.getloadavg())  # as `uptime` prints it
+    print()
+    print(markdown(rows, f"`{' '.join(sys.argv)}` ({t_start}–{time.strftime('%H:%M', time.gmtime())} UTC; "
+                         f"uptime at the end: {up}; governor off and on side by side per row, sync timing)"))
     return 0
 
 

@@ -454,3 +454,37 @@ def test_a_previews_unknown_bin_keeps_the_tsm_while_a_worker_makes_it(renderer):
     got = rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv, interactive=True)
     assert got[0] is False and "direction bin" in got[1]  # the bin, as the exact rule at its first pose
     assert rules.tsm_needed(s, sc, pose, s.deon.gaussians, fv) == rules._tsm_needed(s, sc, pose, s.deon.gaussians, fv)
+
+
+def test_the_rule_s_worker_pauses_between_chunks_and_finds_the_same_vertices(renderer, monkeypatch):
+    """Issue 27: the previews' worker casts its rays and selects its sheet pairs in chunks, pausing
+    between them (time.sleep gives the GIL and the CPU to the frame loop: on 2 cores the worker's CPU
+    share, not only its GIL holds, slowed a drag's frames); the main thread never pauses, and the
+    chunks find exactly what one call finds."""
+    import threading
+    s = small_settings("head", "deon", 96, **{"camera.yaw": 0.0})  # tsm_gather on: the pairs too
+    renderer.render(s)
+    sc = renderer.scene.gpu
+    pose = s.lights[0].model_copy(update={"kind": "directional", "direction": (0.1, 0.25, -1.0)})
+    gauss = s.deon.gaussians
+    monkeypatch.setattr(rules, "RAY_CHUNK", 1 << 30)
+    monkeypatch.setattr(rules, "PAIR_CHUNK", 1 << 30)
+    _fresh_rule(sc)
+    whole = rules.tsm_candidates(s, sc, pose, gauss)
+    pauses: list[str] = []
+    real = rules._pause
+    monkeypatch.setattr(rules, "_pause", lambda: (pauses.append(threading.current_thread().name), real())[1])
+    monkeypatch.setattr(rules, "RAY_CHUNK", 64)
+    monkeypatch.setattr(rules, "PAIR_CHUNK", 2048)
+    _fresh_rule(sc)
+    rules.tsm_needed(s, sc, pose, gauss, renderer.frame_view(s), interactive=True)
+    rules.bin_worker(sc).wait()
+    n_rays = len(rules._facing(sc, pose)[4])
+    assert n_rays > 2 * 64  # several chunks of rays
+    assert pauses.count("skinviewer-tsm-rule") >= n_rays // 64 - 1, (len(pauses), n_rays)
+    bins = rules._rule_cache(sc)["tsm_bins"]
+    assert len(bins) == 1 and np.array_equal(next(iter(bins.values())), whole)  # the same vertices
+    pauses.clear()
+    _fresh_rule(sc)
+    assert np.array_equal(rules.tsm_candidates(s, sc, pose, gauss), whole)  # the main thread: chunked, no pause
+    assert pauses and set(pauses) == {"MainThread"}  # asked there too; rules._pause sleeps only off it

@@ -212,13 +212,19 @@ def rung_settings(s: Settings, rung: Rung) -> Settings:
     return with_values(s, changes) if changes else s
 
 
-def measure_rung(renderer: Renderer, s: Settings, runs: int = 2) -> tuple[float, float]:
+def measure_rung(renderer: Renderer, s: Settings, runs: int = 2,
+                 cancelled: Callable[[], bool] | None = None) -> tuple[float, float]:
     """(light-move ms, camera-move ms) of ``s``: medians of ``runs`` sync-timed frames each, after
-    a warm-up frame (programs compiled, textures allocated, once-per-mesh maps made)."""
+    a warm-up frame (programs compiled, textures allocated, once-per-mesh maps made). ``cancelled``
+    is asked between frames (InterruptedError): closing the viewer waits one frame, not a rung."""
+    def ms(settings: Settings) -> float:
+        if cancelled is not None and cancelled():
+            raise InterruptedError("calibration cancelled")
+        return renderer.render(settings, timing="sync").total_ms
     renderer.render_settled(s, timing="sync")
-    light = [renderer.render(_nudge_light(s, k), timing="sync").total_ms for k in range(runs)]
-    renderer.render(s, timing="sync")
-    cam = [renderer.render(_nudge_camera(s, k), timing="sync").total_ms for k in range(runs)]
+    light = [ms(_nudge_light(s, k)) for k in range(runs)]
+    ms(s)
+    cam = [ms(_nudge_camera(s, k)) for k in range(runs)]
     return statistics.median(light), statistics.median(cam)
 
 
@@ -247,7 +253,7 @@ def calibrate(renderer: Renderer, base: Settings,
         if progress is not None:
             progress(f"{name}: {rung.label}", n, len(todo))
         s = rung_settings(with_values(defaults, {"technique": name}), rung)
-        light, cam = measure_rung(renderer, s, runs)
+        light, cam = measure_rung(renderer, s, runs, cancelled)
         cal.entries.setdefault(name, []).append(Entry(name, rung.label, dict(rung.changes), rung.scale, light, cam))
         renderer.trim()
     cal.signature = signature(sorted(cal.entries))

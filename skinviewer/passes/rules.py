@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -171,6 +172,19 @@ POSE_MEMORY = 48  # light poses whose rays and pairs the rule keeps per scene (a
 TSM_BIN = 6  # governed previews: the light direction binned to round(TSM_BIN * d) (bins of ~10 degrees)
 PAIRS_MAX_VERTICES = 200_000  # sheet_pairs once per mesh up to this many vertices; above, a search per pose
 TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread (the TSM kept until then)
+# the rule's work in chunks, with a pause between them off the main thread: a numpy call holds the GIL
+# (the selection over every sheet pair: 1.8 ms CPU) and the worker competes with the frame loop and
+# llvmpipe for the cores (2 here); chunked and paused it takes about a tenth of a core
+RAY_CHUNK = 512     # rays per Embree call (0.14 ms CPU; embreex releases the GIL while casting)
+PAIR_CHUNK = 16384  # sheet pairs selected per step (lit_beside; 0.15 ms CPU)
+WORKER_PAUSE_S = 0.001  # the pause: the GIL and the CPU go to the main thread meanwhile
+
+
+def _pause() -> None:
+    """Between two chunks of the rule's work: off the main thread (the previews' worker, the start's
+    warm-up) the frame loop gets the GIL (time.sleep releases it); on the main thread, nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        time.sleep(WORKER_PAUSE_S)
 
 
 def _lock(scene) -> threading.RLock:
@@ -313,11 +327,18 @@ def thickness_toward(scene, pose) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if len(back):
         eps = 1e-4 * scene.radius
         origins = p[back] + L[back] * eps
-        hit = sc.run(origins.astype(np.float32), np.ascontiguousarray(L[back], np.float32), output=1)
-        tri = np.asarray(hit["primID"])
+        o32, d32 = origins.astype(np.float32), np.ascontiguousarray(L[back], np.float32)
+        tri_c, tfar_c = [], []
+        for c in range(0, len(back), RAY_CHUNK):  # each ray is independent: chunks give the same hits
+            if c:
+                _pause()
+            hit = sc.run(np.ascontiguousarray(o32[c:c + RAY_CHUNK]), np.ascontiguousarray(d32[c:c + RAY_CHUNK]), output=1)
+            tri_c.append(np.asarray(hit["primID"]))
+            tfar_c.append(np.asarray(hit["tfar"], np.float64))
+        tri, tfar = np.concatenate(tri_c), np.concatenate(tfar_c)
         ray_i = np.nonzero(tri >= 0)[0]
         if len(ray_i):
-            t = (np.asarray(hit["tfar"], np.float64)[ray_i] + eps) * scene.mm_per_unit
+            t = (tfar[ray_i] + eps) * scene.mm_per_unit
             cos_a = np.abs(np.einsum("ij,ij->i", face_normals[tri[ray_i]], L[back][ray_i]))
             out = (back[ray_i], t, cos_a)
     return _remember(cache, key, out)
@@ -389,10 +410,19 @@ def lit_beside(scene, pose, radius_mm: float) -> tuple[np.ndarray, np.ndarray, n
         slot[back] = np.arange(len(back))
         is_lit = np.zeros(len(p), bool)
         is_lit[lit] = True
-        a = (slot[i] >= 0) & is_lit[j]  # i faces away, j is lit
-        b = (slot[j] >= 0) & is_lit[i]
-        k = np.concatenate([slot[i[a]], slot[j[b]]])
-        q = np.concatenate([j[a], i[b]])
+        ka, qa, kb, qb = [], [], [], []
+        for c in range(0, len(i), PAIR_CHUNK):  # in chunks (_pause), the pairs' order kept
+            if c:
+                _pause()
+            ic, jc = i[c:c + PAIR_CHUNK], j[c:c + PAIR_CHUNK]
+            a = (slot[ic] >= 0) & is_lit[jc]  # i faces away, j is lit
+            b = (slot[jc] >= 0) & is_lit[ic]
+            ka.append(slot[ic[a]])
+            qa.append(jc[a])
+            kb.append(slot[jc[b]])
+            qb.append(ic[b])
+        k = np.concatenate(ka + kb) if ka else k
+        q = np.concatenate(qa + qb) if qa else q
     out = (back, k, np.linalg.norm(p[q] - p[back[k]], axis=1) * mm, stride * area[q] * nl[q])
     return _remember(cache, key, out)
 

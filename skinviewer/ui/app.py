@@ -59,6 +59,7 @@ class ViewerApp(mglw.WindowConfig):
         self._marked: set[str] = set()
         self._stall_ms = 0.0  # the longest frame between the panel and the first image (_note_stall)
         self._step_t0 = time.perf_counter()
+        self.swap_ms = 0.0  # the last step's buffer swap (0: it only rendered)
         self.warm: Any = None  # the start's worker (ui/warm.py), joined before the first render
 
     # -- frames --------------------------------------------------------------------------------
@@ -73,8 +74,11 @@ class ViewerApp(mglw.WindowConfig):
             self.wnd.use()
             if self.render_frame(1 / 60):
                 self._events = 0
-                self.wnd.swap_buffers()
+                t1 = time.perf_counter()
+                self.wnd.swap_buffers()  # presenting, timed apart from the frame's work (Xvfb: it spikes under load)
+                self.swap_ms = (time.perf_counter() - t1) * 1000.0
             else:
+                self.swap_ms = 0.0
                 self._poll_events()
             self._note_stall(t0)
 

@@ -50,6 +50,7 @@ class Governor:
         self._steps = 0  # refinement steps in the current plan (for "refining 2/4")
         self._pick: Pick | None = None
         self._memo: tuple | None = None  # (user settings, rung, rendered settings)
+        self._was_interacting = False  # the last rung_for was an interaction's (the next still one releases)
         self.message = ""  # one line: why the pick is what it is (budget, nothing fits, calibrating)
         # what a displayed frame costs here besides rendering (UI, presenting): a rung fits when its
         # render cost plus this is within the budget (the frame controller keeps it up to date)
@@ -187,18 +188,24 @@ class Governor:
         """The rung to render this frame. ``interacting``: the user drags or edits (a camera-only
         drag when ``camera``); ``last_complete``: the last frame finished (its rung is on screen)."""
         if not self.active:
-            self.shown, self._plan, self.message = FINAL, [], ""
+            self.shown, self._plan, self.message, self._was_interacting = FINAL, [], "", False
             return FINAL
         if interacting or self.mode == "fixed-budget":
+            self._was_interacting = interacting
             p = self.pick(s, camera and interacting)
             self._pick, self.message = p, p.note
             self.shown = p.rung
             self._plan = [] if self.mode == "fixed-budget" else self._refinement(s, p.rung)
             self._steps = len(self._plan)
             return self.shown
-        # still: once the frame on screen is complete, step up (never down) towards FINAL
-        if self._plan and last_complete:
+        # still: once the frame on screen is complete, step up (never down) towards FINAL; the first
+        # still frame steps up at once: a preview frame the drag left part-way is abandoned, not
+        # finished (the refinement redoes its work; finishing it cost separable, burley2 and Penner
+        # a preview frame, 12-15 % of their release -> final). A refinement step's own frame is
+        # never left unfinished while still.
+        if self._plan and (last_complete or self._was_interacting):
             self.shown = self._plan.pop(0)
+        self._was_interacting = False
         return self.shown
 
     def _refinement(self, s: Settings, start: Rung) -> list[Rung]:
