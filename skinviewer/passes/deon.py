@@ -451,7 +451,7 @@ class GaussianBlurPass(Pass):
         r.input(gutter_resource(n))
         if stretch:
             r.input(stretch)
-        tiled = {"TILED": 1} if skip_gutters else {}
+        tiled = {"TILED": 2} if skip_gutters else {}  # the tiles as rectangles (work_tiles rects)
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
         dilate_fill = {"DILATE": 1, **tiled} if r.planned.island_tiles else {}
         if border:
@@ -487,7 +487,7 @@ class GaussianBlurPass(Pass):
             dilate = {"DILATE": 1} if tiles and step.source != IRRADIANCE else {}  # never with a border
             r.program("seam_fill", **dilate, **border, **({"RIM_SHARE": 1} if border else {}))
         r.program("deon_gather_blocks")
-        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 1} if tiles else {}))
+        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 2} if tiles else {}))
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec) -> None:
@@ -529,7 +529,7 @@ class GaussianBlurPass(Pass):
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():
-            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
+            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING, rects=True) if tiled else None)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -596,10 +596,10 @@ class GaussianBlurPass(Pass):
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
         reach = blur_ring(ec, n, stretch, plan.ring_sigma)
-        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if plan.skip_gutters else None
+        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach, rects=True) if plan.skip_gutters else None
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
-        fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
+        fill_tiles = work_tiles(ec, n, reach, rects=True) if dilate_fill else tiles
         # (program, uniforms, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
         draws: list[tuple[Any, dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
