@@ -391,6 +391,39 @@ def stretch_of(source: str) -> str:
     return STRETCH if source == IRRADIANCE else stretch_blur_resource(int(source.rsplit("_", 1)[1]))
 
 
+HALF_MIN = 64  # no half-size blurs under a 128^2 map
+
+
+def half_size(r, i: int) -> bool:
+    """deon.half_res_above_texels (issue 27): whether blur_i is made on a map of half the side
+    (transmitted_size: the half-size gutter and seam maps already exist): a separable light blur whose
+    sigma increment is at least that many mean texels, or whose input is half size already. The
+    summed step, an open-border reflection (its border frame is full size) and the per-Gaussian
+    stretch chain stay full size. r: a Reflection or ExecuteContext."""
+    limit = r.settings.deon.half_res_above_texels
+    if limit <= 0.0 or r.scene is None or open_border(r) or r.settings.deon.stretch_per_gaussian:
+        return False
+    n = map_size(r)
+    if n // 2 < HALF_MIN or transmitted_size(r) != n // 2:
+        return False
+    plan = _plan(r)
+    if i >= len(plan):
+        return False
+    step = plan[i]
+    if step.reused or gathered(r, step):
+        return False
+    if np.sqrt(step.increment) >= limit * mean_texel_mm(r.scene, n):
+        return True
+    return step.source != IRRADIANCE and half_size(r, int(step.source.rsplit("_", 1)[1]))
+
+
+def texture_size(r, resource: str) -> int:
+    """The side of a light blur chain's texture: the irradiance map's, or half of it for a half-size blur."""
+    if resource == IRRADIANCE:
+        return map_size(r)
+    return transmitted_size(r) if half_size(r, int(resource.rsplit("_", 1)[1])) else map_size(r)
+
+
 class GaussianBlurPass(Pass):
     """blur_i = blur_(i-1) (x) G(v_i - v_(i-1)) (eq. 24), H then V (7 taps, eq. 25-26). Declares the
     variances up to v_i (not the weights), the stretch toggles, its input and the stretch map.
@@ -432,10 +465,15 @@ class GaussianBlurPass(Pass):
         n = map_size(r)
         gather = self.chain == "irradiance" and gathered(r, step)
         border = self._open_border(r)
-        seam = seam_resource(n) if r.settings.scene.seam_aware else None
+        half = self.chain == "irradiance" and half_size(r, self.i)
+        m = transmitted_size(r) if half else n  # this blur's map (deon.half_res_above_texels)
+        # the input's map: the irradiance's, or a blur's (half size when that blur is)
+        n_in = texture_size(r, step.source) if self.chain == "irradiance" else n
+        seam = seam_resource(m) if r.settings.scene.seam_aware else None
         # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
-        r.plan(step=step, size=n, gather=gather, output=self._output(), spec=self._spec(n), gutter=gutter_resource(n),
-               seam=seam, border=border_resource(n) if border else None,
+        r.plan(step=step, size=m, size_in=n_in, gather=gather, output=self._output(), spec=self._spec(m),
+               gutter=gutter_resource(m), seam=seam, gutter_in=gutter_resource(n_in),
+               seam_in=seam_resource(n_in) if seam else None, border=border_resource(n) if border else None,
                island_tiles=island_tiles(r, self.chain, border))
         if gather:
             self._reflect_gather(r, step, n)
@@ -446,9 +484,11 @@ class GaussianBlurPass(Pass):
         skip_gutters = r.settings.deon.skip_gutters
         if seam:
             r.input(seam)
+            r.input(r.planned.seam_in)
         source = step.source if self.chain == "irradiance" else stretch_of(step.source)
         r.input(source)
-        r.input(gutter_resource(n))
+        r.input(gutter_resource(m))
+        r.input(r.planned.gutter_in)
         if stretch:
             r.input(stretch)
         tiled = {"TILED": 2} if skip_gutters else {}  # the tiles as rectangles (work_tiles rects)
@@ -457,13 +497,13 @@ class GaussianBlurPass(Pass):
         if border:
             r.input(border_resource(n))
             r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
-        narrow = self._narrow(r, step, stretch, n)
+        narrow = {} if half else self._narrow(r, step, stretch, n)
         r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
                ring_sigma=ring_sigma(r, self.i))
         r.program("deon_blur", **tiled, **zones, **border, **narrow)
         if seam:
             r.program("seam_fill", **(dilate_fill or tiled), **border)
-        r.output(self._output(), self._spec(n))
+        r.output(self._output(), self._spec(m))
 
     def _reflect_gather(self, r, step, n: int) -> None:
         """A narrow step as a direct sum over the surface: the gather surface, the step's input
@@ -577,18 +617,19 @@ class GaussianBlurPass(Pass):
         tmp = ec.held("tmp", spec)[0]
         tmp2 = ec.held("tmp2", spec)[0] if len(sigmas) > 1 else None
         seam = plan.seam
+        # a half-size blur's first pass reads its full-size input: that is seam-filled at its own size
+        n_in = plan.size_in
+        spec_in = TexSpec((n_in, n_in), spec.components, spec.dtype, filter=spec.filter)
         filled = ec.held("filled", spec)[0] if seam else None
+        filled_in = (ec.held("filled_in", spec_in)[0] if n_in != n else filled) if seam else None
         dilate_fill = bool(seam) and plan.island_tiles
         fill = ec.program("seam_fill") if seam else None  # the variant reflect declared
-        if dilate_fill:
-            ec.bind(fill, "gutter", plan.gutter)
         if border:
             for p_ in (prog, fill):
                 ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
-            ec.bind(fill, "seam_map", seam)
             ec.set(fill, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
@@ -600,8 +641,14 @@ class GaussianBlurPass(Pass):
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
         fill_tiles = work_tiles(ec, n, reach, rects=True) if dilate_fill else tiles
-        # (program, uniforms, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
-        draws: list[tuple[Any, dict[str, Any], Any, Any, Any]] = []
+        # the fill of a full-size input (half-size blur): its own maps, and the ring its taps reach there
+        fills = {n: (filled, {"seam_map": seam, "gutter": plan.gutter}, fill_tiles)}
+        if seam and n_in != n:
+            reach_in = blur_ring(ec, n_in, stretch, plan.ring_sigma)
+            fills[n_in] = (filled_in, {"seam_map": plan.seam_in, "gutter": plan.gutter_in},
+                           work_tiles(ec, n_in, reach_in, rects=True) if plan.skip_gutters else None)
+        # (program, uniforms, textures, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
+        draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
             # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
@@ -609,17 +656,22 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    draws.append((fill, refl, source, filled, fill_tiles))
-                    source = filled
-                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target, tiles))  # spacing = sigma (eq. 25)
+                    into, maps, where = fills[n_in if source is plan.source else n]
+                    if not dilate_fill:
+                        maps = {"seam_map": maps["seam_map"]}
+                    draws.append((fill, refl, maps, source, into, where))
+                    source = into
+                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, tiles))  # spacing = sigma (eq. 25)
             src = tmp2
         ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
         for d, sub, subs in ec.units(len(draws)):
-            program, values, source, target, where = draws[d]
+            program, values, maps, source, target, where = draws[d]
             for name, value in values.items():
                 ec.set(program, name, value)
+            for name, tex in maps.items():
+                ec.bind(program, name, tex)
             ec.bind(program, "source", source)
             with ec.band(sub, subs):
                 ec.draw_fullscreen(program, target, tiles=where)
@@ -759,7 +811,9 @@ class DiffuseSumPass(Pass):
             r.input(TRANSMITTED)
         n = map_size(r)
         r.plan(size=n)
-        r.program("deon_combine", GAUSSIAN_MASK=mask)
+        # the blurs made at half size (deon.half_res_above_texels): filtered up, not fetched per texel
+        half = sum(1 << i for i, step in enumerate(_plan(r)) if (mask >> i) & 1 and texture_size(r, texture_of(step)) != n)
+        r.program("deon_combine", GAUSSIAN_MASK=mask, **({"HALF_MASK": half} if half else {}))
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
