@@ -373,7 +373,16 @@ def _plan(r):
 
 
 
+# the blurs' island tiles as merged rectangles (texture_space.tile_rects, TILED=2); False: one quad per 16^2
+# tile as before (TILED=1), what benchmarks/bench_blur_floor.py's "before" sets to compare in one run
+TILE_RECTS = True
+
 DILATE_RING = 3  # texels past the islands a bilinear reader of a blur reaches (seam fill <= 1.42, deon_final)
+
+
+def tiled_define() -> int:
+    """The TILED define of vs/fullscreen.vert for the blurs' tile lists (TILE_RECTS)."""
+    return 2 if TILE_RECTS else 1
 
 
 def island_tiles(r, chain: str, border: dict) -> bool:
@@ -491,7 +500,7 @@ class GaussianBlurPass(Pass):
         r.input(r.planned.gutter_in)
         if stretch:
             r.input(stretch)
-        tiled = {"TILED": 2} if skip_gutters else {}  # the tiles as rectangles (work_tiles rects)
+        tiled = {"TILED": tiled_define()} if skip_gutters else {}
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
         dilate_fill = {"DILATE": 1, **tiled} if r.planned.island_tiles else {}
         if border:
@@ -527,7 +536,7 @@ class GaussianBlurPass(Pass):
             dilate = {"DILATE": 1} if tiles and step.source != IRRADIANCE else {}  # never with a border
             r.program("seam_fill", **dilate, **border, **({"RIM_SHARE": 1} if border else {}))
         r.program("deon_gather_blocks")
-        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 2} if tiles else {}))
+        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": tiled_define()} if tiles else {}))
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec) -> None:
@@ -569,7 +578,7 @@ class GaussianBlurPass(Pass):
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():
-            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING, rects=True) if tiled else None)
+            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if tiled else None)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -637,16 +646,16 @@ class GaussianBlurPass(Pass):
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
         reach = blur_ring(ec, n, stretch, plan.ring_sigma)
-        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach, rects=True) if plan.skip_gutters else None
+        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach, rects=TILE_RECTS) if plan.skip_gutters else None
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
-        fill_tiles = work_tiles(ec, n, reach, rects=True) if dilate_fill else tiles
+        fill_tiles = work_tiles(ec, n, reach, rects=TILE_RECTS) if dilate_fill else tiles
         # the fill of a full-size input (half-size blur): its own maps, and the ring its taps reach there
         fills = {n: (filled, {"seam_map": seam, "gutter": plan.gutter}, fill_tiles)}
         if seam and n_in != n:
             reach_in = blur_ring(ec, n_in, stretch, plan.ring_sigma)
             fills[n_in] = (filled_in, {"seam_map": plan.seam_in, "gutter": plan.gutter_in},
-                           work_tiles(ec, n_in, reach_in, rects=True) if plan.skip_gutters else None)
+                           work_tiles(ec, n_in, reach_in, rects=TILE_RECTS) if plan.skip_gutters else None)
         # (program, uniforms, textures, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
         draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
