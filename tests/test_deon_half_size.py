@@ -68,3 +68,22 @@ def test_open_border_keeps_full_size_blurs(renderer):
     assert ran
     for name in ran:
         assert renderer.read(s, "blur_" + name.rsplit("_", 1)[1]).shape[:2] == (512, 512)
+
+
+def test_half_size_increment_keeps_the_variance_readers_see():
+    """physics.diffusion.half_size_increment: the coarser grid's interpolation variance comes off the
+    step's own (the first half-size step also carries the readers' filtering up for the chain)."""
+    from skinviewer.physics.diffusion import (
+        HALF_DOWN_EXTRA,
+        HALF_PASS_EXTRA,
+        HALF_READ_EXTRA,
+        half_size_increment,
+    )
+    t = 0.44
+    assert half_size_increment(5.42, t, first=False) == pytest.approx(5.42 - HALF_PASS_EXTRA * t * t)
+    first = half_size_increment(1.42, t, first=True)
+    assert first == pytest.approx(1.42 - (HALF_PASS_EXTRA + HALF_READ_EXTRA + HALF_DOWN_EXTRA) * t * t)
+    assert half_size_increment(0.01, t, first=True) == 0.0  # never negative
+    # a tent filter read at quarter offsets: 3/16 of a coarse texel^2 = 0.75 fine texel^2 (the constant's source)
+    f = 0.25
+    assert HALF_READ_EXTRA == pytest.approx(f * (1 - f) * 4)

@@ -69,6 +69,7 @@ from skinviewer.physics.diffusion import (
     BlurStep,
     blur_plan_texels,
     blur_resource,
+    half_size_increment,
     stretch_blur_resource,
     sub_steps,
     texture_of,
@@ -480,7 +481,7 @@ class GaussianBlurPass(Pass):
         n_in = texture_size(r, step.source) if self.chain == "irradiance" else n
         seam = seam_resource(m) if r.settings.scene.seam_aware else None
         # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
-        r.plan(step=step, size=m, size_in=n_in, gather=gather, output=self._output(), spec=self._spec(m),
+        r.plan(step=step, size=m, size_in=n_in, half=half, full=n, gather=gather, output=self._output(), spec=self._spec(m),
                gutter=gutter_resource(m), seam=seam, gutter_in=gutter_resource(n_in),
                seam_in=seam_resource(n_in) if seam else None, border=border_resource(n) if border else None,
                island_tiles=island_tiles(r, self.chain, border))
@@ -615,8 +616,11 @@ class GaussianBlurPass(Pass):
                     u_weights=np.asarray(KERNEL7, np.float32),
                     u_shear=bool(stretch) and bool(ec.settings.deon.stretch_shear))
         texel_mm = mean_texel_mm(ec.scene, n)
+        increment = step.increment
+        if plan.half:  # the coarser grid's interpolation is part of the variance (half_size_increment)
+            increment = half_size_increment(increment, mean_texel_mm(ec.scene, plan.full), plan.size_in != n)
         sigmas = ([np.sqrt(step.increment)] if narrow else
-                  sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm))
+                  sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), increment, texel_mm))
         ec.bind(prog, "gutter", plan.gutter)
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
