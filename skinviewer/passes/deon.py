@@ -482,8 +482,7 @@ class GaussianBlurPass(Pass):
         seam = seam_resource(m) if r.settings.scene.seam_aware else None
         # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
         r.plan(step=step, size=m, size_in=n_in, half=half, full=n, gather=gather, output=self._output(), spec=self._spec(m),
-               gutter=gutter_resource(m), seam=seam, gutter_in=gutter_resource(n_in),
-               seam_in=seam_resource(n_in) if seam else None, border=border_resource(n) if border else None,
+               gutter=gutter_resource(m), seam=seam, border=border_resource(n) if border else None,
                island_tiles=island_tiles(r, self.chain, border))
         if gather:
             self._reflect_gather(r, step, n)
@@ -494,11 +493,9 @@ class GaussianBlurPass(Pass):
         skip_gutters = r.settings.deon.skip_gutters
         if seam:
             r.input(seam)
-            r.input(r.planned.seam_in)
         source = step.source if self.chain == "irradiance" else stretch_of(step.source)
         r.input(source)
         r.input(gutter_resource(m))
-        r.input(r.planned.gutter_in)
         if stretch:
             r.input(stretch)
         tiled = {"TILED": tiled_define()} if skip_gutters else {}
@@ -512,7 +509,11 @@ class GaussianBlurPass(Pass):
                ring_sigma=ring_sigma(r, self.i))
         r.program("deon_blur", **tiled, **zones, **border, **narrow)
         if seam:
-            r.program("seam_fill", **(dilate_fill or tiled), **border)
+            fill_defines = {**(dilate_fill or tiled), **border}
+            r.plan(fill_defines=fill_defines)
+            r.program("seam_fill", **fill_defines)
+            if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
+                r.program("seam_fill", DOWN=1, **fill_defines)
         r.output(self._output(), self._spec(m))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -632,18 +633,19 @@ class GaussianBlurPass(Pass):
         seam = plan.seam
         # a half-size blur's first pass reads its full-size input: that is seam-filled at its own size
         n_in = plan.size_in
-        spec_in = TexSpec((n_in, n_in), spec.components, spec.dtype, filter=spec.filter)
         filled = ec.held("filled", spec)[0] if seam else None
-        filled_in = (ec.held("filled_in", spec_in)[0] if n_in != n else filled) if seam else None
         dilate_fill = bool(seam) and plan.island_tiles
-        fill = ec.program("seam_fill") if seam else None  # the variant reflect declared
+        fill = ec.program("seam_fill", **plan.fill_defines) if seam else None  # the variant reflect declared
+        # a half-size blur's full-size input: filled at half size, each texel the 2 x 2 it covers (DOWN)
+        down = ec.program("seam_fill", DOWN=1, **plan.fill_defines) if seam and n_in != n else None
         if border:
-            for p_ in (prog, fill):
+            for p_ in (prog, fill):  # never half size: no DOWN fill
                 ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
-            ec.set(fill, "u_past_border_dark", light)
+            for p_ in (fill, down) if down else (fill,):
+                ec.set(p_, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
         src = plan.source
@@ -654,12 +656,6 @@ class GaussianBlurPass(Pass):
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
         fill_tiles = work_tiles(ec, n, reach, rects=TILE_RECTS) if dilate_fill else tiles
-        # the fill of a full-size input (half-size blur): its own maps, and the ring its taps reach there
-        fills = {n: (filled, {"seam_map": seam, "gutter": plan.gutter}, fill_tiles)}
-        if seam and n_in != n:
-            reach_in = blur_ring(ec, n_in, stretch, plan.ring_sigma)
-            fills[n_in] = (filled_in, {"seam_map": plan.seam_in, "gutter": plan.gutter_in},
-                           work_tiles(ec, n_in, reach_in, rects=TILE_RECTS) if plan.skip_gutters else None)
         # (program, uniforms, textures, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
         draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
@@ -669,11 +665,10 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    into, maps, where = fills[n_in if source is plan.source else n]
-                    if not dilate_fill:
-                        maps = {"seam_map": maps["seam_map"]}
-                    draws.append((fill, refl, maps, source, into, where))
-                    source = into
+                    prog_fill = down if down and source is plan.source else fill
+                    maps = {"seam_map": seam, **({"gutter": plan.gutter} if dilate_fill or prog_fill is down else {})}
+                    draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
+                    source = filled
                 draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, tiles))  # spacing = sigma (eq. 25)
             src = tmp2
         ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))

@@ -303,8 +303,8 @@ def _uv_area2(uvs: ArrayLike, indices: IndexArray) -> FloatArray:
 # average for taps at arbitrary offsets, 3/16 for a map read at the centres of one of twice its side.
 HALF_PASS_EXTRA = 0.5  # full-size texel^2: a half-size pass's taps, 1/6 of (2 t)^2 instead of 1/6 of t^2
 HALF_READ_EXTRA = 0.75  # full-size texel^2: readers at full-size texels filter a half-size map up, 3/16 (2 t)^2
-HALF_DOWN_EXTRA = 0.125  # full-size texel^2, per axis on average: the first half-size pass reads its
-#                          full-size input at texel corners across its direction (1/4 on one axis of two)
+HALF_DOWN_EXTRA = 0.25  # full-size texel^2 per axis: the first half-size pass reads its full-size input
+#                         filtered at the half-size texel centres, the 2 x 2 texels around (seam_fill DOWN)
 
 
 def half_size_increment(increment: float, texel_mm: float, first: bool) -> float:
