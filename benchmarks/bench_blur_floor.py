@@ -24,11 +24,10 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from bench_frames import copy_draw_ms, settings_for  # noqa: E402
 
+import skinviewer.passes.deon as deon_passes  # noqa: E402
 from skinviewer.engine.renderer import Renderer  # noqa: E402
 from skinviewer.ground.settings import with_values  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
-
-import skinviewer.passes.deon as deon_passes  # noqa: E402
 
 CONFIGS = {"before": {"deon.half_res_above_texels": 0.0}, "after": {}}
 RECTS = {"before": False, "after": True}  # passes.deon.TILE_RECTS per configuration
