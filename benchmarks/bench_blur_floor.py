@@ -5,10 +5,11 @@ size and format, d'Eon's light-move frame in Phong's, and both at 512^2 / 1024^2
     python benchmarks/bench_blur_floor.py [--maps 512 1024 2048] [--size 640] [--repeats 3]
                                           [--set deon.skip_gutters=false ...]
 
-Each row runs "before" (deon.skip_gutters off: every blur and its fill over the whole map) and
-"after" (on: the blurs and the summed step shade the island tiles, the seam fill dilates),
-interleaved with Phong and with a plain full-screen copy (shaders/copy.frag, RGBA32F, the map size),
-so that load on the machine hits all alike. Sync timing (glFinish + wall clock: llvmpipe's timer
+Each row runs "before" (every blur step at the map's size, deon.half_res_above_texels = 0, and the
+island tiles drawn one 16^2 quad each: passes.deon.TILE_RECTS off, the code before this change) and
+"after" (the defaults: wide steps on a half-size map, the tiles merged into rectangles),
+interleaved with Phong and with plain full-screen copies (shaders/copy.frag, RGBA32F, the map size
+and half of it), so that load on the machine hits all alike. Sync timing (glFinish + wall clock: llvmpipe's timer
 queries are not trustworthy), medians over --repeats. A light move re-runs the light's shadow map
 and everything after it; mesh-only passes stay cached (bench_frames.light_ms).
 """
@@ -23,11 +24,13 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 from bench_frames import copy_draw_ms, settings_for  # noqa: E402
 
+import skinviewer.passes.deon as deon_passes  # noqa: E402
 from skinviewer.engine.renderer import Renderer  # noqa: E402
 from skinviewer.ground.settings import with_values  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 
-CONFIGS = {"before": {"deon.skip_gutters": False}, "after": {"deon.skip_gutters": True}}
+CONFIGS = {"before": {"deon.half_res_above_texels": 0.0}, "after": {}}
+RECTS = {"before": False, "after": True}  # passes.deon.TILE_RECTS per configuration
 
 
 def light_frame(r: Renderer, s, k: int):
@@ -43,8 +46,9 @@ def light_frame(r: Renderer, s, k: int):
     return (time.perf_counter() - t0) * 1000.0, rep
 
 
-def blur_figures(rep) -> tuple[float, float, int]:
-    """(ms per separable blur direction with its seam fill, summed-step ms, directions) of a report."""
+def blur_figures(rep) -> tuple[float, float, int, float]:
+    """(ms per separable blur direction with its seam fill, summed-step ms, directions, separable ms) of a
+    report."""
     sep, dirs, summed = 0.0, 0, 0.0
     for p in rep.passes:
         if not p.name.startswith("deon_blur_") or p.status != "ran" or not p.ms:
@@ -54,7 +58,7 @@ def blur_figures(rep) -> tuple[float, float, int]:
         else:
             sep += p.ms
             dirs += p.figures.get("directions", p.draws // 2)  # H and V per sub-step (the pass notes it)
-    return (sep / dirs if dirs else float("nan")), summed, dirs
+    return (sep / dirs if dirs else float("nan")), summed, dirs, sep
 
 
 def main() -> None:
@@ -77,46 +81,58 @@ def main() -> None:
     ctx = headless_context()
     print(f"# d'Eon blur floor — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
     print(f"# scene={args.scene} image={args.size}^2 repeats={args.repeats}; sync timing, medians; "
-          f"before = deon.skip_gutters off, after = on; {extra or 'defaults otherwise'}")
+          f"before = full-size blurs, one quad per tile; after = the defaults; {extra or 'defaults otherwise'}")
     rows = {}
     for maps in args.maps:
         r = Renderer(ctx)
         s = {c: settings_for("deon", args.scene, args.size, maps, **extra, **v) for c, v in CONFIGS.items()}
         phong = settings_for("phong", args.scene, args.size, maps)
-        for x in (*s.values(), phong):
+        for c, x in (*s.items(), ("phong", phong)):
+            deon_passes.TILE_RECTS = RECTS.get(c, True)
             r.render(x, force=True)
-        m = {c: {"light": [], "dir": [], "summed": []} for c in (*CONFIGS, "phong")}
-        copies, dirs = [], {}
+        m = {c: {"light": [], "dir": [], "summed": [], "sep": []} for c in (*CONFIGS, "phong")}
+        copies, halves, dirs = [], [], {}
         for k in range(args.repeats):
             for c in CONFIGS:
+                deon_passes.TILE_RECTS = RECTS[c]
                 ms, rep = light_frame(r, s[c], k)
-                d, summed, dirs[c] = blur_figures(rep)
+                d, summed, dirs[c], sep = blur_figures(rep)
                 m[c]["light"].append(ms)
                 m[c]["dir"].append(d)
                 m[c]["summed"].append(summed)
+                m[c]["sep"].append(sep)
+            deon_passes.TILE_RECTS = True
             m["phong"]["light"].append(light_frame(r, phong, k)[0])
             copies.append(copy_draw_ms(r, maps, 3))
+            halves.append(copy_draw_ms(r, maps // 2, 3))
         med = {c: {k: statistics.median(v) for k, v in d.items() if v} for c, d in m.items()}
         copy = statistics.median(copies)
         if maps == 1024 or maps == args.maps[-1]:
-            rep = light_frame(r, s["after"], args.repeats)[1]
-            print(f"# {maps}^2 maps, after, one light-move frame per pass (plain copies of {copy:.2f} ms): "
-                  + ", ".join(f"{p.name} {p.ms / copy:.1f}" for p in rep.passes if p.status == "ran" and p.ms),
-                  flush=True)
-        rows[maps] = (med, copy, dirs)
+            for c in CONFIGS:
+                deon_passes.TILE_RECTS = RECTS[c]
+                rep = light_frame(r, s[c], args.repeats)[1]
+                print(f"# {maps}^2 maps, {c}, one light-move frame per pass (plain copies of {copy:.2f} ms): "
+                      + ", ".join(f"{p.name} {p.ms / copy:.1f}" for p in rep.passes if p.status == "ran" and p.ms),
+                      flush=True)
+            deon_passes.TILE_RECTS = True
+        rows[maps] = (med, copy, dirs, statistics.median(halves))
         r.release()
         r.shaders.release()
     print(f"# load {os.getloadavg()[0]:.1f} at the end")
+    print("# blur dir: one separable direction with its seam fill, in plain copies of the full map's size "
+          "(the figure the goal names) and, after, of the half size its wide steps run at; sep: all separable "
+          "blur passes of the frame")
     hdr = (f"{'maps':>5} {'config':<7} {'light ms':>9} {'x phong':>8} {'blur dir ms':>12} {'/ copy':>7} "
-           f"{'summed ms':>10} {'/ copy':>7} {'copy ms':>8} {'phong ms':>9}")
+           f"{'/ half':>7} {'sep ms':>8} {'summed ms':>10} {'/ copy':>7} {'copy ms':>8} {'half ms':>8} {'phong ms':>9}")
     print(hdr)
     print("-" * len(hdr))
-    for maps, (med, copy, _dirs) in rows.items():
+    for maps, (med, copy, _dirs, half) in rows.items():
         ph = med["phong"]["light"]
         for c in CONFIGS:
             x = med[c]
             print(f"{maps:>5} {c:<7} {x['light']:9.1f} {x['light'] / ph:8.2f} {x['dir']:12.2f} {x['dir'] / copy:7.2f} "
-                  f"{x['summed']:10.1f} {x['summed'] / copy:7.1f} {copy:8.2f} {ph:9.1f}")
+                  f"{x['dir'] / half:7.2f} {x['sep']:8.1f} {x['summed']:10.1f} {x['summed'] / copy:7.1f} {copy:8.2f} "
+                  f"{half:8.2f} {ph:9.1f}")
     sizes = sorted(rows)
     for a, b in zip(sizes, sizes[1:]):
         for c in CONFIGS:

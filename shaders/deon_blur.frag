@@ -4,7 +4,9 @@
 //   out(x) = sum_k w_k in(x + k * step(x) * sigma),  k = -3..3, step = shear_step (u, then skewed v)
 // stretch in UV per mm (stretch texture, or one uniform scale when stretch correction is off),
 // sigma = sqrt(v_i - v_(i-1)) in mm. Each texel is computed at the island texel the gutter map
-// names, so the output's gutters come out dilated. RGB irradiance and A thickness are blurred alike.
+// names, so the output's gutters come out dilated. The output has the gutter map's size, which may
+// be half the source's (deon.half_res_above_texels: the first pass of a half-size blur reads its
+// full-size input by UV; taps are in UV, so only the texel grid of the output changes). RGB irradiance and A thickness are blurred alike.
 // With scene.seam_aware, `source` is the seam-filled copy (seam_fill.frag): taps that leave their
 // island read the surface across the seam, past a mesh border no light, and never another island
 // (ISLAND_ZONES below).
@@ -68,8 +70,11 @@ void main() {
     // kept (RGB); the thickness (A) is renormalised over the taps kept
     float absorb = PAST_BORDER;
     float wl = 0.0;
-    vec2 uv = (vec2(src) + 0.5) / vec2(textureSize(source, 0));
-    vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0) : vec4(u_uniform_stretch, 0.0, 1.0);
+    ivec2 out_size = textureSize(gutter, 0);  // this pass's texel grid
+    vec2 uv = (vec2(src) + 0.5) / vec2(out_size);
+    // the stretch map is the irradiance map's size: a half-size grid reads every other texel
+    vec4 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src * textureSize(stretch_map, 0) / out_size, 0)
+                                   : vec4(u_uniform_stretch, 0.0, 1.0);
     vec2 step_uv = shear_step(st.rg, (u_shear != 0) ? st.b : 0.0, u_dir) * u_sigma_mm;
     step_uv = vec2(finite_f32(step_uv.x), finite_f32(step_uv.y));
     vec4 acc = vec4(0.0);
@@ -135,7 +140,7 @@ void main() {
     }
     acc /= vec4(vec3(max(wl, 1e-30)), max(wsum, 1e-30));
 #else
-    vec2 ts = vec2(textureSize(source, 0));
+    vec2 ts = vec2(out_size);  // the zones' texels (the gutter map's)
     bool check = ISLAND_CHECK(3.0 * length(step_uv * ts) + 1.5);  // farthest tap, bilinear footprint
     float wsum = 0.0;
     for (int k = 0; k < 7; ++k) {

@@ -10,7 +10,16 @@ uniform sampler2D source;
 // value that puts the bilinear ramp's edge where the border is; A (thickness) keeps the edge's value.
 uniform sampler2D seam_map;  // RG: texel coordinate across the UV seam, B: 1 there, 2 past a border
 uniform int u_past_border_dark;  // 1 for light; 0 for a metric (the stretch chain): the edge's value
-#ifdef DILATE
+// DOWN (deon.half_res_above_texels): this fill is half the source's size, the input of a half-size blur:
+// each texel reads the source filtered at its centre (the 2 x 2 full-size texels around it); the seam
+// map and the gutter map are this fill's size. It always reads at the island texel the gutter map names
+// (as DILATE), so the half-size gutters hold the half-size islands' values with and without skip_gutters.
+#ifdef DOWN
+#define AT_TEXEL(t) texture(source, (vec2(t) + 0.5) / vec2(textureSize(seam_map, 0)))
+#else
+#define AT_TEXEL(t) texelFetch(source, t, 0)
+#endif
+#if defined(DILATE) || defined(DOWN)
 // the source was drawn on the island tiles only (deon.skip_gutters, issue 27): every texel reads its
 // value at the island texel the gutter map names, as the blur computed it there; the fill also dilates
 uniform sampler2D gutter;  // RG: the nearest island texel
@@ -29,10 +38,10 @@ out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 s = texelFetch(seam_map, p, 0);
-#ifdef DILATE
-    vec4 here = texelFetch(source, ivec2(texelFetch(gutter, p, 0).rg + 0.5), 0);
+#if defined(DILATE) || defined(DOWN)
+    vec4 here = AT_TEXEL(ivec2(texelFetch(gutter, p, 0).rg + 0.5));
 #else
-    vec4 here = texelFetch(source, p, 0);
+    vec4 here = AT_TEXEL(p);
 #endif
 #ifdef OPEN_BORDER
     vec4 bf = texelFetch(border_map, p, 0);
@@ -50,5 +59,5 @@ void main() {
 #endif
 #endif
     f_color = (s.b > 1.5 && u_past_border_dark != 0) ? vec4(here.rgb * s.a, here.a)
-            : (s.b > 0.5 && s.b < 1.5) ? texture(source, (s.rg + 0.5) / vec2(textureSize(source, 0))) : here;
+            : (s.b > 0.5 && s.b < 1.5) ? texture(source, (s.rg + 0.5) / vec2(textureSize(seam_map, 0))) : here;
 }

@@ -371,6 +371,7 @@ def _diffused(renderer, mesh, seam_aware=True, n=256, beam=(2.5, 2.0), **extra):
         "scene.mesh": mesh, "scene.mm_per_unit": 1.0, "scene.seam_aware": seam_aware, "deon.irradiance_size": n,
         "deon.tsm": False, "deon.energy_conservation": False, "deon.gaussians": prof,
         "deon.reuse_irradiance_below_texels": 0.0, "camera.target": None, "camera.distance": None,
+        "deon.half_res_above_texels": 0.0,  # every blur at n^2: the sum below reads them texel by texel
         "lights": [{"kind": "beam", "direction": [0.0, 0.0, 1.0], "position": [beam[0], 0.0, 0.0], "beam_radius": beam[1],
                     "intensity": 1.0, "cast_shadow": False}], **extra})
     renderer.render(s)

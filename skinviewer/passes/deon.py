@@ -69,6 +69,7 @@ from skinviewer.physics.diffusion import (
     BlurStep,
     blur_plan_texels,
     blur_resource,
+    half_size_increment,
     stretch_blur_resource,
     sub_steps,
     texture_of,
@@ -373,7 +374,16 @@ def _plan(r):
 
 
 
+# the blurs' island tiles as merged rectangles (texture_space.tile_rects, TILED=2); False: one quad per 16^2
+# tile as before (TILED=1), what benchmarks/bench_blur_floor.py's "before" sets to compare in one run
+TILE_RECTS = True
+
 DILATE_RING = 3  # texels past the islands a bilinear reader of a blur reaches (seam fill <= 1.42, deon_final)
+
+
+def tiled_define() -> int:
+    """The TILED define of vs/fullscreen.vert for the blurs' tile lists (TILE_RECTS)."""
+    return 2 if TILE_RECTS else 1
 
 
 def island_tiles(r, chain: str, border: dict) -> bool:
@@ -389,6 +399,39 @@ def stretch_of(source: str) -> str:
     """The stretch map that goes with a blur input: the raw one for the irradiance, else the stretch
     convolved like that input (deon.stretch_per_gaussian)."""
     return STRETCH if source == IRRADIANCE else stretch_blur_resource(int(source.rsplit("_", 1)[1]))
+
+
+HALF_MIN = 64  # no half-size blurs under a 128^2 map
+
+
+def half_size(r, i: int) -> bool:
+    """deon.half_res_above_texels (issue 27): whether blur_i is made on a map of half the side
+    (transmitted_size: the half-size gutter and seam maps already exist): a separable light blur whose
+    sigma increment is at least that many mean texels, or whose input is half size already. The
+    summed step, an open-border reflection (its border frame is full size) and the per-Gaussian
+    stretch chain stay full size. r: a Reflection or ExecuteContext."""
+    limit = r.settings.deon.half_res_above_texels
+    if limit <= 0.0 or r.scene is None or open_border(r) or r.settings.deon.stretch_per_gaussian:
+        return False
+    n = map_size(r)
+    if n // 2 < HALF_MIN or transmitted_size(r) != n // 2:
+        return False
+    plan = _plan(r)
+    if i >= len(plan):
+        return False
+    step = plan[i]
+    if step.reused or gathered(r, step):
+        return False
+    if np.sqrt(step.increment) >= limit * mean_texel_mm(r.scene, n):
+        return True
+    return step.source != IRRADIANCE and half_size(r, int(step.source.rsplit("_", 1)[1]))
+
+
+def texture_size(r, resource: str) -> int:
+    """The side of a light blur chain's texture: the irradiance map's, or half of it for a half-size blur."""
+    if resource == IRRADIANCE:
+        return map_size(r)
+    return transmitted_size(r) if half_size(r, int(resource.rsplit("_", 1)[1])) else map_size(r)
 
 
 class GaussianBlurPass(Pass):
@@ -432,10 +475,14 @@ class GaussianBlurPass(Pass):
         n = map_size(r)
         gather = self.chain == "irradiance" and gathered(r, step)
         border = self._open_border(r)
-        seam = seam_resource(n) if r.settings.scene.seam_aware else None
+        half = self.chain == "irradiance" and half_size(r, self.i)
+        m = transmitted_size(r) if half else n  # this blur's map (deon.half_res_above_texels)
+        # the input's map: the irradiance's, or a blur's (half size when that blur is)
+        n_in = texture_size(r, step.source) if self.chain == "irradiance" else n
+        seam = seam_resource(m) if r.settings.scene.seam_aware else None
         # what execute reads (ec.plan): the step, the map, its resources and which draws it makes
-        r.plan(step=step, size=n, gather=gather, output=self._output(), spec=self._spec(n), gutter=gutter_resource(n),
-               seam=seam, border=border_resource(n) if border else None,
+        r.plan(step=step, size=m, size_in=n_in, half=half, full=n, gather=gather, output=self._output(), spec=self._spec(m),
+               gutter=gutter_resource(m), seam=seam, border=border_resource(n) if border else None,
                island_tiles=island_tiles(r, self.chain, border))
         if gather:
             self._reflect_gather(r, step, n)
@@ -448,22 +495,26 @@ class GaussianBlurPass(Pass):
             r.input(seam)
         source = step.source if self.chain == "irradiance" else stretch_of(step.source)
         r.input(source)
-        r.input(gutter_resource(n))
+        r.input(gutter_resource(m))
         if stretch:
             r.input(stretch)
-        tiled = {"TILED": 1} if skip_gutters else {}
+        tiled = {"TILED": tiled_define()} if skip_gutters else {}
         zones = {"ISLAND_ZONES": 1} if seam else {}  # taps never land on another UV island
         dilate_fill = {"DILATE": 1, **tiled} if r.planned.island_tiles else {}
         if border:
             r.input(border_resource(n))
             r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
-        narrow = self._narrow(r, step, stretch, n)
+        narrow = {} if half else self._narrow(r, step, stretch, n)
         r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
                ring_sigma=ring_sigma(r, self.i))
         r.program("deon_blur", **tiled, **zones, **border, **narrow)
         if seam:
-            r.program("seam_fill", **(dilate_fill or tiled), **border)
-        r.output(self._output(), self._spec(n))
+            fill_defines = {**(dilate_fill or tiled), **border}
+            r.plan(fill_defines=fill_defines)
+            r.program("seam_fill", **fill_defines)
+            if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
+                r.program("seam_fill", DOWN=1, **fill_defines)
+        r.output(self._output(), self._spec(m))
 
     def _reflect_gather(self, r, step, n: int) -> None:
         """A narrow step as a direct sum over the surface: the gather surface, the step's input
@@ -487,7 +538,7 @@ class GaussianBlurPass(Pass):
             dilate = {"DILATE": 1} if tiles and step.source != IRRADIANCE else {}  # never with a border
             r.program("seam_fill", **dilate, **border, **({"RIM_SHARE": 1} if border else {}))
         r.program("deon_gather_blocks")
-        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": 1} if tiles else {}))
+        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": tiled_define()} if tiles else {}))
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec) -> None:
@@ -529,7 +580,7 @@ class GaussianBlurPass(Pass):
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():
-            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING) if tiled else None)
+            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if tiled else None)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -566,8 +617,11 @@ class GaussianBlurPass(Pass):
                     u_weights=np.asarray(KERNEL7, np.float32),
                     u_shear=bool(stretch) and bool(ec.settings.deon.stretch_shear))
         texel_mm = mean_texel_mm(ec.scene, n)
+        increment = step.increment
+        if plan.half:  # the coarser grid's interpolation is part of the variance (half_size_increment)
+            increment = half_size_increment(increment, mean_texel_mm(ec.scene, plan.full), plan.size_in != n)
         sigmas = ([np.sqrt(step.increment)] if narrow else
-                  sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), step.increment, texel_mm))
+                  sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), increment, texel_mm))
         ec.bind(prog, "gutter", plan.gutter)
         if stretch:
             ec.bind(prog, "stretch_map", stretch)
@@ -577,31 +631,33 @@ class GaussianBlurPass(Pass):
         tmp = ec.held("tmp", spec)[0]
         tmp2 = ec.held("tmp2", spec)[0] if len(sigmas) > 1 else None
         seam = plan.seam
+        # a half-size blur's first pass reads its full-size input: that is seam-filled at its own size
+        n_in = plan.size_in
         filled = ec.held("filled", spec)[0] if seam else None
         dilate_fill = bool(seam) and plan.island_tiles
-        fill = ec.program("seam_fill") if seam else None  # the variant reflect declared
-        if dilate_fill:
-            ec.bind(fill, "gutter", plan.gutter)
+        fill = ec.program("seam_fill", **plan.fill_defines) if seam else None  # the variant reflect declared
+        # a half-size blur's full-size input: filled at half size, each texel the 2 x 2 it covers (DOWN)
+        down = ec.program("seam_fill", DOWN=1, **plan.fill_defines) if seam and n_in != n else None
         if border:
-            for p_ in (prog, fill):
+            for p_ in (prog, fill):  # never half size: no DOWN fill
                 ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         if seam:
             light = self.chain == "irradiance"
-            ec.bind(fill, "seam_map", seam)
-            ec.set(fill, "u_past_border_dark", light)
+            for p_ in (fill, down) if down else (fill,):
+                ec.set(p_, "u_past_border_dark", light)
             ec.bind(prog, "seam_map", seam)
             ec.set(prog, "u_absorb", light)
         src = plan.source
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
         reach = blur_ring(ec, n, stretch, plan.ring_sigma)
-        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach) if plan.skip_gutters else None
+        tiles = work_tiles(ec, n, DILATE_RING if dilate_fill else reach, rects=TILE_RECTS) if plan.skip_gutters else None
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
-        fill_tiles = work_tiles(ec, n, reach) if dilate_fill else tiles
-        # (program, uniforms, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
-        draws: list[tuple[Any, dict[str, Any], Any, Any, Any]] = []
+        fill_tiles = work_tiles(ec, n, reach, rects=TILE_RECTS) if dilate_fill else tiles
+        # (program, uniforms, textures, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
+        draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
             # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
@@ -609,17 +665,21 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    draws.append((fill, refl, source, filled, fill_tiles))
+                    prog_fill = down if down and source is plan.source else fill
+                    maps = {"seam_map": seam, **({"gutter": plan.gutter} if dilate_fill or prog_fill is down else {})}
+                    draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
                     source = filled
-                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, source, target, tiles))  # spacing = sigma (eq. 25)
+                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, tiles))  # spacing = sigma (eq. 25)
             src = tmp2
         ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
         for d, sub, subs in ec.units(len(draws)):
-            program, values, source, target, where = draws[d]
+            program, values, maps, source, target, where = draws[d]
             for name, value in values.items():
                 ec.set(program, name, value)
+            for name, tex in maps.items():
+                ec.bind(program, name, tex)
             ec.bind(program, "source", source)
             with ec.band(sub, subs):
                 ec.draw_fullscreen(program, target, tiles=where)
@@ -759,7 +819,9 @@ class DiffuseSumPass(Pass):
             r.input(TRANSMITTED)
         n = map_size(r)
         r.plan(size=n)
-        r.program("deon_combine", GAUSSIAN_MASK=mask)
+        # the blurs made at half size (deon.half_res_above_texels): filtered up, not fetched per texel
+        half = sum(1 << i for i, step in enumerate(_plan(r)) if (mask >> i) & 1 and texture_size(r, texture_of(step)) != n)
+        r.program("deon_combine", GAUSSIAN_MASK=mask, **({"HALF_MASK": half} if half else {}))
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:

@@ -299,6 +299,24 @@ def _uv_area2(uvs: ArrayLike, indices: IndexArray) -> FloatArray:
     return out
 
 
+# Bilinear sampling at a fraction f of a texel adds the variance f (1 - f) texel^2 along that axis: 1/6 on
+# average for taps at arbitrary offsets, 3/16 for a map read at the centres of one of twice its side.
+HALF_PASS_EXTRA = 0.5  # full-size texel^2: a half-size pass's taps, 1/6 of (2 t)^2 instead of 1/6 of t^2
+HALF_READ_EXTRA = 0.75  # full-size texel^2: readers at full-size texels filter a half-size map up, 3/16 (2 t)^2
+HALF_DOWN_EXTRA = 0.25  # full-size texel^2 per axis: the first half-size pass reads its full-size input
+#                         filtered at the half-size texel centres, the 2 x 2 texels around (seam_fill DOWN)
+
+
+def half_size_increment(increment: float, texel_mm: float, first: bool) -> float:
+    """The variance (mm^2) a half-size blur step (deon.half_res_above_texels) blurs with, so that its
+    result, as its readers see it, has the variance of the full-size step (eq. 24, variances add): the
+    increment less what the coarser grid adds by interpolation (HALF_PASS_EXTRA for its own passes;
+    for the first half-size step of a chain also HALF_READ_EXTRA, as every later half-size texture
+    inherits it, and HALF_DOWN_EXTRA), in full-size texels ``texel_mm``; never below 0."""
+    extra = HALF_PASS_EXTRA + ((HALF_READ_EXTRA + HALF_DOWN_EXTRA) if first else 0.0)
+    return max(float(increment) - extra * float(texel_mm) ** 2, 0.0)
+
+
 def sub_steps(sigma_in: float, increment: float, texel_mm: float, max_steps: int = 8) -> list[float]:
     """Split one blur increment (variance, mm^2) into 7-tap sub-blurs (standard deviations, mm)
     whose tap spacing never exceeds the smoothness of what they blur: sigma_k <= s_k / SMOOTH_RATIO

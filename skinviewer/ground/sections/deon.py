@@ -124,6 +124,17 @@ class DeonSettings(Section):
                           "at 1024^2 on llvmpipe, issue 27, notes/perf.md)",
         tip=("blurs draw only the tiles of the UV islands and the ring a reader can reach (images identical; "
              "the summed blur step ~15 % cheaper at 1024^2 maps)"))
+    half_res_above_texels: float = field(
+        2.0, ge=0.0, le=64.0,
+        description="a separable blur step whose sigma is at least this many (mean) texels, and every step after "
+                    "it, runs on a map of half the side (the irradiance map's half-size gutter and seam maps; "
+                    "its readers filter it up): a quarter of the texels for a kernel that spans >= 4 of them "
+                    "there, and a cost that grows with the texels as the map grows (issue 27; 0: every step at "
+                    "full size; notes/perf.md)",
+        label="wide blurs at half size",
+        unit="texels",
+        tip=("a blur at least this many texels wide (and every wider one) runs on a half-size map: about a "
+             "quarter of its time; 0: every blur at full size"))
     tsm_auto: bool = field(
         True, description="skip the TSM when no light is behind a part thin enough to transmit that is in view",
         tip="skip the translucent shadow map when no light is behind a thin part that is in view")
