@@ -173,20 +173,47 @@ class StartupView:
     def __init__(self, splash: Splash, frame):
         self.splash: Splash | None = splash
         self.frame = frame
+        self._phase = ""
 
     def draw(self, ui) -> None:
         pass
+
+    def phase(self) -> tuple[str, str]:
+        """What the start is doing now (a progress line) and how far (its tail): the first frame's
+        CPU work in a worker (ui/warm.py) before anything renders, then the first image -- the
+        governor's preview where there is one -- with its passes done so far (a pass's first run
+        compiles its shaders)."""
+        f = self.frame
+        if f.frames == 0:
+            return "preparing the first frame: the mesh's tables (border edges, rays to the lights, rho_dt)", ""
+        rung = getattr(f, "_rung", None)
+        what = (f"the first preview ({rung.label}): compiling shaders, rendering"
+                if getattr(f, "_governing", False) and rung is not None and not rung.final
+                else "the first image at your settings: compiling shaders, rendering")
+        rep = f.report
+        if rep is None:
+            return what, ""
+        done = len(rep.ran) + len(rep.cached)
+        return what, f", {done}/{done + len(rep.deferred)} passes"
 
     def draw_view(self, viewport) -> bool:
         sp = self.splash
         if sp is None:
             return False
         rep = self.frame.report
-        if (rep is not None and rep.complete) or self.frame.render_error:
+        # a complete image exists (the view keeps the last one: the first preview while the user's
+        # settings are made, issue 34), or the first render failed
+        kept = getattr(getattr(self.frame, "view", None), "_kept", None) is not None
+        if (rep is not None and rep.complete) or kept or self.frame.render_error:
             self.release()
             return False
         try:
-            sp.draw_into(viewport)
+            line, tail = self.phase()
+            force = line != self._phase
+            if force:
+                self._phase = line
+                sp.lines.append((sp.elapsed(), line))
+            sp.draw_into(viewport, tail, force=force)
         except Exception:  # never in the way of the viewer
             self.release()
             return False
