@@ -441,13 +441,16 @@ class Surface:
         exceeds ENV_TARGET as the surface's own estimates; seeded by ``seed``."""
         from skinviewer.physics.environment import mc_irradiance_cv
         rng = np.random.default_rng((777, int(seed)))
-        rows, rho = (self.rho_dt_rows(a["m"]), a["rho"]) if energy else (None, None)
+        rows = self.rho_dt_rows(a["m"]) if energy else None
+        rho: np.ndarray = np.asarray(a["rho"])
 
         def run(idx: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
             w = None
             if rows is not None:
+                r_idx, rho_idx = rows[idx], rho[idx]
+
                 def w(mu: np.ndarray, sl: slice | np.ndarray) -> np.ndarray:
-                    return self.rho_dt_along(rows[idx][sl], rho[idx][sl], mu)
+                    return self.rho_dt_along(r_idx[sl], rho_idx[sl], mu)
             return mc_irradiance_cv(self.env_sampler, a["Ps"][idx], a["N"][idx], a["Ng"][idx], self.rays, n,
                                     rng, self.eps, weight=w, batches=ENV_BATCHES)
         everything = np.arange(len(a["Ps"]))
