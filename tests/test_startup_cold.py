@@ -78,6 +78,10 @@ def test_a_cold_start_without_calibration_shows_the_cheapest_preview_first(tmp_p
         app.step(1)  # (a frame complete past the budget is presented the next frame)
         assert view.splash is None and f._variant.startswith("preview")  # the preview has the view
         assert any(t.startswith("the first preview (view ¼") for _, t in sp.lines)  # the screen said so
+        from skinviewer.ui.splash import TEXT_W, plain
+        assert plain(view.phase()[0]).isascii()  # what the screen's font can draw (it drew boxes for ¼ and ²)
+        img = sp._image(size=(TEXT_W, 2000))
+        assert img.shape[1] <= TEXT_W and img.shape[0] > 124 + 24 * len(sp.lines)  # the long line wrapped
         for _ in range(200):
             app.step(1)
             if f.report.complete and not f._variant:

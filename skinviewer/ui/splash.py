@@ -42,6 +42,30 @@ def _font(size: int):
         return ImageFont.load_default()
 
 
+# Pillow's built-in font has no glyph for these (the preview ladder's labels use them): a box was drawn
+_PLAIN = str.maketrans({"¼": "1/4", "½": "1/2", "²": "^2", "±": "+-", "·": "-"})
+
+
+def plain(text: str) -> str:
+    return text.translate(_PLAIN)
+
+
+def _wrap(d, text: str, font, width: float) -> list[str]:
+    """``text`` in lines at most ``width`` pixels wide, broken after ", " or at a space."""
+    out: list[str] = []
+    while text and d.textlength(text, font=font) > width:
+        k = len(text)
+        while k > 1 and d.textlength(text[:k], font=font) > width:
+            k -= 1
+        cut = text.rfind(", ", 0, k)
+        cut = cut + 1 if cut > 0 else text.rfind(" ", 0, k)
+        if cut <= 0:
+            cut = k
+        out.append(text[:cut].rstrip())
+        text = text[cut:].lstrip()
+    return out + ([text] if text else [])
+
+
 class Splash:
     """``show(line)`` adds a progress line and redraws; ``run(line, fn)`` runs ``fn`` in a thread while
     the line's elapsed time ticks; ``release()`` frees the GL objects. ``lines``: (seconds, text)."""
@@ -67,19 +91,26 @@ class Splash:
         whole 1280x800 image cost ~80 ms a redraw here, GIL time taken from the start's worker."""
         from PIL import Image, ImageDraw
         w, h = size or self.wnd.buffer_size
-        w, h = max(min(int(w), TEXT_W), 16), max(min(int(h), 124 + 24 * len(self.lines) + 16), 16)
-        img = Image.new("RGB", (w, h), BG)
-        d = ImageDraw.Draw(img)
+        w = max(min(int(w), TEXT_W), 16)
         big, small = _font(28), _font(16)
-        x, y = 40, 40
-        d.text((x, y), "skinviewer", fill=FG, font=big)
-        y += 50
-        d.text((x, y), self.headline, fill=DIM, font=small)
-        y += 34
+        x = 40
+        measure = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+        rows: list[tuple[str, tuple[int, int, int]]] = []  # the lines, wrapped to the block's width
         for k, (t, text) in enumerate(self.lines):
             last = k == len(self.lines) - 1
             tail = f"  ({self.elapsed() - t:.1f} s){busy}" if last else ""
-            d.text((x, y), f"{t:5.1f} s   {text}{tail}", fill=FG if last else DIM, font=small)
+            for i, part in enumerate(_wrap(measure, plain(f"{text}{tail}"), small, w - x - 16 - 64)):
+                rows.append(((f"{t:5.1f} s   " if i == 0 else " " * 12) + part, FG if last else DIM))
+        h = max(min(int(h), 124 + 24 * len(rows) + 16), 16)
+        img = Image.new("RGB", (w, h), BG)
+        d = ImageDraw.Draw(img)
+        y = 40
+        d.text((x, y), "skinviewer", fill=FG, font=big)
+        y += 50
+        d.text((x, y), plain(self.headline), fill=DIM, font=small)
+        y += 34
+        for line, colour in rows:
+            d.text((x, y), line, fill=colour, font=small)
             y += 24
         return np.asarray(img, np.uint8)
 
