@@ -9,8 +9,10 @@ is started to the viewer's own marks (``SKINVIEWER_STARTUP_TRACE``, ui/startup.p
         [--technique deon] [--size 1280x800] [--first-start] [--shots DIR --shot-at 1,2] [--compare TREE]
 
 ``--first-start``: an empty cache folder for every run (the default head is generated, no governor
-calibration: what a fresh install meets); otherwise the cache folder in use (``SKINVIEWER_CACHE`` or
-~/.cache/skinviewer), so the head is read from it. ``--shots DIR``: grab the X screen at each
+calibration: what a fresh install meets); ``--no-calibration``: the cache folder in use without its
+governor calibration (links to everything else: the head, texel tables and environment are read from
+it; the cold start's first image without a calibration, issue 34); otherwise the cache folder in use
+(``SKINVIEWER_CACHE`` or ~/.cache/skinviewer), so the head is read from it. ``--shots DIR``: grab the X screen at each
 ``--shot-at`` second of the first run (``DIR/startup-<s>s.png``).
 
 Wall clock on a shared machine: compare figures of one run of this script, not across runs."""
@@ -26,7 +28,7 @@ import tempfile
 import time
 from pathlib import Path
 
-EVENTS = ("window", "ui", "image")
+EVENTS = ("window", "ui", "image", "final")  # final: the first image at the user's own settings
 # besides the events: "frozen", the longest frame (s) between the panel and the first image -- the
 # longest the panel did not answer input (older trees do not report it: "-")
 FIGURES = EVENTS + ("frozen",)
@@ -45,6 +47,8 @@ def read_trace(path: Path) -> dict[str, float]:
         except ValueError:
             continue  # a line being written
         out.setdefault(d["event"], float(d["t"]))
+        if d["event"] == "image" and "preview" not in d:
+            out.setdefault("old", 1.0)  # a tree that does not say whether its first image is a preview
         if d["event"] == "image" and "longest_frame_ms" in d:  # the longest frame from the panel to the image
             out.setdefault("frozen", float(d["longest_frame_ms"]) / 1000.0)
     return out
@@ -70,7 +74,7 @@ def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | 
                         ImageGrab.grab(xdisplay=os.environ.get("DISPLAY")).save(shots / f"startup{tag}-{s:g}s.png")
                     except Exception as exc:  # no X screen to grab: the figures still count
                         print(f"screen grab at {s:g} s failed: {exc}", file=sys.stderr)
-                if "image" in marks and not pending:
+                if ("final" in marks or ("image" in marks and "old" in marks)) and not pending:
                     break
                 if proc.poll() is not None:
                     break
@@ -92,12 +96,23 @@ def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | 
         return out
 
 
+def link_cache(into: Path) -> None:
+    """``into``: links to every entry of the cache folder in use but its calibration."""
+    src = Path(os.environ.get("SKINVIEWER_CACHE") or Path.home() / ".cache" / "skinviewer")
+    if src.is_dir():
+        for entry in src.iterdir():
+            if entry.name != "calibration":
+                (into / entry.name).symlink_to(entry.resolve())
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--technique", default="deon")
     ap.add_argument("--size", default="1280x800")
     ap.add_argument("--first-start", action="store_true", help="an empty cache folder for every run")
+    ap.add_argument("--no-calibration", action="store_true",
+                    help="the cache folder in use without its governor calibration (a cold start's first image)")
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--shots", type=Path, help="grab the X screen into this folder (first run)")
     ap.add_argument("--shot-at", default="1,2", help="seconds after the start of the grabs, e.g. 0.5,1,2")
@@ -119,7 +134,9 @@ def main(argv: list[str] | None = None) -> int:
     for k in range(a.runs):
         for name, root in trees:
             with tempfile.TemporaryDirectory(prefix="sv-cache-") as cache:
-                run_env = {**env, "SKINVIEWER_CACHE": cache} if a.first_start else env
+                if a.no_calibration and not a.first_start:
+                    link_cache(Path(cache))
+                run_env = {**env, "SKINVIEWER_CACHE": cache} if a.first_start or a.no_calibration else env
                 tag = "" if root == ROOT else "-compared"
                 r = one_run(viewer, run_env, a.timeout, a.shots if k == 0 else None, shot_at, root, tag)
             rows[name].append(r)
@@ -128,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
     load = os.getloadavg()[0]
     for name, root in trees:
         print(f"\nviewer start, {name} ({root}; {a.technique}, {a.size}, "
-              f"{'empty cache' if a.first_start else 'cache as is'}; {os.cpu_count()} CPUs, load {load:.1f}): "
+              f"{'empty cache' if a.first_start else 'no calibration' if a.no_calibration else 'cache as is'}; "
+              f"{os.cpu_count()} CPUs, load {load:.1f}): "
               f"median of {a.runs}")
         for e in FIGURES:
             xs = [r[e] for r in rows[name] if e in r]

@@ -141,3 +141,18 @@ def ladder(s: Settings) -> list[Rung]:
         seen.add(key)
         out.append(Rung(describe(ch, scale), ch, scale))
     return out + [FINAL]
+
+
+def cheapest(s: Settings) -> Rung:
+    """The cheapest rung of ``s``'s ladder as declared (the technique's first rung, capped to what
+    lowers ``s``), without a calibration: the viewer's first image at a cold start, before this
+    machine has timed any rung (issue 34). FINAL when the technique has no ladder or its first rung
+    changes nothing."""
+    declared = LADDERS.get(s.technique, lambda s: [])(s)
+    if not declared:
+        return FINAL
+    _label, caps, scale = declared[0]
+    ch = _cap(s, caps)
+    if not ch and scale == 1.0:
+        return FINAL
+    return Rung(describe(ch, scale), ch, scale)

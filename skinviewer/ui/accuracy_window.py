@@ -67,6 +67,15 @@ class _Job:
         return not self.thread.is_alive()
 
 
+def uncertainty_words(meta: dict) -> str:
+    """What the session truth's +- covers (engine.reference: LATTICE_ and ENV_UNCERTAINTY_NOTE)."""
+    if "environment" in str(meta.get("uncertainty", "")):
+        return ("(+- the surface lattices' interpolation error and the environment's Monte Carlo error at the "
+                "pixels; not the environment interpolated at the source elements, nor the element size's "
+                "part: skinviewer reference)")
+    return "(+- the surface lattices' interpolation error; the element size's part: skinviewer reference)"
+
+
 class AccuracyWindow:
     def __init__(self, state, frame):
         self.state, self.frame = state, frame  # ui.state.ViewerState, ui.frame.FrameController
@@ -269,8 +278,7 @@ class AccuracyWindow:
             else:
                 imgui.text(f"RMS  {with_u(e.rms, e.rms_u, 2)} %")  # ± the ground truth's own uncertainty
                 if self.reference.meta.get("session") and e.rms_u is not None:
-                    wrapped("(+- the surface lattices' interpolation error; the element size's part: "
-                            "skinviewer reference)")
+                    wrapped(uncertainty_words(self.reference.meta))
             imgui.text(f"p99  {with_u(e.p99, e.p99_u)} %")
             if frac >= 1.0:
                 imgui.text(f"DSSIM {e.dssim:.4f}" + (f" ± {e.dssim_u:.4f}" if e.dssim_u is not None else ""))

@@ -143,7 +143,11 @@ class ViewerApp(mglw.WindowConfig):
         if "image" not in self._marked and rep is not None and rep.complete:
             self._note_stall(self._step_t0)  # this frame so far
             self._marked.add("image")
-            startup.mark("image", technique=self.state.settings.technique, longest_frame_ms=round(self._stall_ms, 1))
+            startup.mark("image", technique=self.state.settings.technique, longest_frame_ms=round(self._stall_ms, 1),
+                         preview=bool(self.frame._variant))
+        if "final" not in self._marked and rep is not None and rep.complete and not self.frame._variant:
+            self._marked.add("final")  # the first complete image at the user's own settings
+            startup.mark("final", technique=self.state.settings.technique)
 
     def _follow_vsync(self) -> None:
         want = self.state.view.vsync
@@ -241,8 +245,8 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
     if sp is not None:  # the first frame's CPU work in a worker from now (ui/warm.py; run_viewer joins it)
         app.start_warm()
     if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
-        sp.hand_over(f"the first image of {app.state.settings.technique}: shaders and tables",
-                     "the panel works; the image appears here when its first frame is complete")
+        sp.hand_over(f"the viewer is built; the first image of {app.state.settings.technique} comes next",
+                     "the panel works; a first preview appears here, then your settings")
         from skinviewer.ui.splash import StartupView
         app.ui.add_window(lambda state, frame: StartupView(sp, frame))
     else:
@@ -297,6 +301,9 @@ def run_viewer(s: Settings, *, technique_given: bool = False, frames: int = 0, s
         # calibrated technique shows the most accurate preview that fits the budget, then refines
         # to the user's settings as after any edit (no calibration yet: the settings themselves)
         app.frame.scheduler.note_change()
+        # issue 34: without a calibration (a cold first start) the first image is the technique's
+        # cheapest preview rung as declared, then the user's settings (ui/frame.start_with_preview)
+        app.frame.start_with_preview()
     wnd, frame = app.wnd, app.frame
     try:
         app.timer.start()

@@ -122,6 +122,10 @@ class FrameController:
         # (ui/collector.py; a full collection took 33 ms of a drag's frame)
         self.collector = Collector()
         self._gov_note = ""
+        # issue 34, the cold start: the technique whose first image is the ladder's declared cheapest
+        # rung even without a calibration (start_with_preview), and that rung once picked
+        self._cold_start: str | None = None
+        self._cold_rung: Rung | None = None
         self.layout: Layout = self._compute_layout()
         state.set_render_size(*self.layout.view_fb[2:])
         state.subscribe(self._on_change)
@@ -218,8 +222,11 @@ class FrameController:
         if not g.active:
             g.rung_for(s, False, False, True)  # forgets any preview
             return FINAL
-        self._calibrate_missing(s.technique)
+        if self._cold_start is None:  # a cold start's calibration waits for its first image (issue 34)
+            self._calibrate_missing(s.technique)
         if g.calibration is None or s.technique not in g.calibration.entries:
+            if self._cold_start == s.technique:
+                return self._govern_cold(s)
             return FINAL  # not measured here yet: today's behaviour (orbit resolution, deferred edits)
         self._governing = True
         interacting = not self.input_stopped
@@ -230,6 +237,29 @@ class FrameController:
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
         self._gov_note = g.message
+        return rung
+
+    def start_with_preview(self) -> None:
+        """Issue 34, the cold start: the first image is the technique's cheapest preview rung
+        (``techniques.preview.cheapest``, as declared: no calibration is needed), then the user's
+        settings, as the governor refines after an edit. With a calibration the governor's own
+        pick comes first instead (the start counts as an edit: ``scheduler.note_change``)."""
+        self._cold_start, self._cold_rung = self.state.settings.technique, None
+
+    def _govern_cold(self, s: Settings) -> Rung:
+        """The cold start's rung, uncalibrated: the cheapest rung on the first frame, the user's
+        settings once its frame is complete; then the usual path (a technique switch ends it too)."""
+        from skinviewer.techniques.preview import cheapest
+        g = self.governor
+        self._governing, self._interacting = True, False
+        if self._cold_rung is None:
+            self._cold_rung = cheapest(s)
+            g.start_at(self._cold_rung)
+            rung = g.shown
+        else:
+            rung = g.rung_for(s, False, False, self.report is None or self.report.complete)
+        if rung.final:
+            self._cold_start = None
         return rung
 
     @property

@@ -78,6 +78,14 @@ class Governor:
         that is what is shown, whatever this frame's pick was."""
         self.shown = rung
 
+    def start_at(self, rung: Rung) -> None:
+        """Show ``rung`` now, then the user's settings once its frame is complete (issue 34: the cold
+        start's first image, the ladder's declared cheapest rung, before any calibration exists)."""
+        self.shown = rung
+        self._plan = [] if rung.final else [FINAL]
+        self._steps = len(self._plan)
+        self.message = ""
+
     def set_calibration(self, cal: Calibration | None) -> None:
         """The calibration to pick on (None: none; the viewer renders the user's settings)."""
         self.calibration = cal

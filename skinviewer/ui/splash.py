@@ -42,6 +42,30 @@ def _font(size: int):
         return ImageFont.load_default()
 
 
+# Pillow's built-in font has no glyph for these (the preview ladder's labels use them): a box was drawn
+_PLAIN = str.maketrans({"¼": "1/4", "½": "1/2", "²": "^2", "±": "+-", "·": "-"})
+
+
+def plain(text: str) -> str:
+    return text.translate(_PLAIN)
+
+
+def _wrap(d, text: str, font, width: float) -> list[str]:
+    """``text`` in lines at most ``width`` pixels wide, broken after ", " or at a space."""
+    out: list[str] = []
+    while text and d.textlength(text, font=font) > width:
+        k = len(text)
+        while k > 1 and d.textlength(text[:k], font=font) > width:
+            k -= 1
+        cut = text.rfind(", ", 0, k)
+        cut = cut + 1 if cut > 0 else text.rfind(" ", 0, k)
+        if cut <= 0:
+            cut = k
+        out.append(text[:cut].rstrip())
+        text = text[cut:].lstrip()
+    return out + ([text] if text else [])
+
+
 class Splash:
     """``show(line)`` adds a progress line and redraws; ``run(line, fn)`` runs ``fn`` in a thread while
     the line's elapsed time ticks; ``release()`` frees the GL objects. ``lines``: (seconds, text)."""
@@ -67,19 +91,26 @@ class Splash:
         whole 1280x800 image cost ~80 ms a redraw here, GIL time taken from the start's worker."""
         from PIL import Image, ImageDraw
         w, h = size or self.wnd.buffer_size
-        w, h = max(min(int(w), TEXT_W), 16), max(min(int(h), 124 + 24 * len(self.lines) + 16), 16)
-        img = Image.new("RGB", (w, h), BG)
-        d = ImageDraw.Draw(img)
+        w = max(min(int(w), TEXT_W), 16)
         big, small = _font(28), _font(16)
-        x, y = 40, 40
-        d.text((x, y), "skinviewer", fill=FG, font=big)
-        y += 50
-        d.text((x, y), self.headline, fill=DIM, font=small)
-        y += 34
+        x = 40
+        measure = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+        rows: list[tuple[str, tuple[int, int, int]]] = []  # the lines, wrapped to the block's width
         for k, (t, text) in enumerate(self.lines):
             last = k == len(self.lines) - 1
             tail = f"  ({self.elapsed() - t:.1f} s){busy}" if last else ""
-            d.text((x, y), f"{t:5.1f} s   {text}{tail}", fill=FG if last else DIM, font=small)
+            for i, part in enumerate(_wrap(measure, plain(f"{text}{tail}"), small, w - x - 16 - 64)):
+                rows.append(((f"{t:5.1f} s   " if i == 0 else " " * 12) + part, FG if last else DIM))
+        h = max(min(int(h), 124 + 24 * len(rows) + 16), 16)
+        img = Image.new("RGB", (w, h), BG)
+        d = ImageDraw.Draw(img)
+        y = 40
+        d.text((x, y), "skinviewer", fill=FG, font=big)
+        y += 50
+        d.text((x, y), plain(self.headline), fill=DIM, font=small)
+        y += 34
+        for line, colour in rows:
+            d.text((x, y), line, fill=colour, font=small)
             y += 24
         return np.asarray(img, np.uint8)
 
@@ -173,20 +204,47 @@ class StartupView:
     def __init__(self, splash: Splash, frame):
         self.splash: Splash | None = splash
         self.frame = frame
+        self._phase = ""
 
     def draw(self, ui) -> None:
         pass
+
+    def phase(self) -> tuple[str, str]:
+        """What the start is doing now (a progress line) and how far (its tail): the first frame's
+        CPU work in a worker (ui/warm.py) before anything renders, then the first image -- the
+        governor's preview where there is one -- with its passes done so far (a pass's first run
+        compiles its shaders)."""
+        f = self.frame
+        if f.frames == 0:
+            return "preparing the first frame: the mesh's tables (border edges, rays to the lights, rho_dt)", ""
+        rung = getattr(f, "_rung", None)
+        what = (f"the first preview ({rung.label}): compiling shaders, rendering"
+                if getattr(f, "_governing", False) and rung is not None and not rung.final
+                else "the first image at your settings: compiling shaders, rendering")
+        rep = f.report
+        if rep is None:
+            return what, ""
+        done = len(rep.ran) + len(rep.cached)
+        return what, f", {done}/{done + len(rep.deferred)} passes"
 
     def draw_view(self, viewport) -> bool:
         sp = self.splash
         if sp is None:
             return False
         rep = self.frame.report
-        if (rep is not None and rep.complete) or self.frame.render_error:
+        # a complete image exists (the view keeps the last one: the first preview while the user's
+        # settings are made, issue 34), or the first render failed
+        kept = getattr(getattr(self.frame, "view", None), "_kept", None) is not None
+        if (rep is not None and rep.complete) or kept or self.frame.render_error:
             self.release()
             return False
         try:
-            sp.draw_into(viewport)
+            line, tail = self.phase()
+            force = line != self._phase
+            if force:
+                self._phase = line
+                sp.lines.append((sp.elapsed(), line))
+            sp.draw_into(viewport, tail, force=force)
         except Exception:  # never in the way of the viewer
             self.release()
             return False

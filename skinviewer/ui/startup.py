@@ -3,8 +3,9 @@
 With ``SKINVIEWER_STARTUP_TRACE=FILE`` each mark is appended to FILE as one JSON line
 ``{"event": ..., "t": <unix time>}`` (``benchmarks/bench_startup.py`` reads them against the time it
 started the process). Events: ``window`` (the window shows the start-up screen), ``ui`` (the first
-frame with the panel), ``image`` (the first complete image in the view). Standard library only: this
-module is imported before anything heavy."""
+frame with the panel), ``image`` (the first complete image in the view: the governor's preview where
+there is one, ``preview`` says which), ``final`` (the first complete image at the user's own settings).
+Standard library only: this module is imported before anything heavy."""
 from __future__ import annotations
 
 import json

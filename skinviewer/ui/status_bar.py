@@ -74,11 +74,17 @@ class StatusBar:
                 imgui.same_line()
                 imgui.text_colored(DIM, "|")
                 imgui.same_line()
+            full = text
+            avail = imgui.get_content_region_avail().x
+            if imgui.calc_text_size(text).x > avail > 0:  # cut at the window's edge: say so ("..."), in full in the tooltip
+                while len(text) > 4 and imgui.calc_text_size(text + "...").x > avail:
+                    text = text[:max(4, int(len(text) * 0.9))]
+                text += "..."
             imgui.text_colored(col, text)
             if i == 0:
                 sc = self.state.scene
                 tooltip(sc.description if sc else "no scene")
-            elif text == self.state.message[0] and len(text) > 40:
-                tooltip(text)  # a long message is cut at the window edge: in full here
+            elif full != text or (full == self.state.message[0] and len(full) > 40):
+                tooltip(full)  # a long field is cut at the window edge: in full here
         imgui.end()
         ui.claim(r)
