@@ -131,7 +131,7 @@ class DeonSettings(Section):
                     "its readers filter it up): a quarter of the texels for a kernel that spans >= 4 of them "
                     "there, and a cost that grows with the texels as the map grows (issue 27; 0: every step at "
                     "full size; notes/perf.md)",
-        label="wide blurs at half size",
+        label="half-size blurs from",
         unit="texels",
         tip=("a blur at least this many texels wide (and every wider one) runs on a half-size map: about a "
              "quarter of its time; 0: every blur at full size"))
