@@ -228,7 +228,15 @@ def uv_locate(uvs, indices, n: int, py: np.ndarray, px: np.ndarray) -> tuple[np.
     return tri.reshape(shape), bary.reshape(shape + (3,))
 
 
-RAY_LEVEL = 3   # RayCastIrradiance's level: unshadowed E every 1 / RAY_LEVEL texel, visibility every 1 / (4 RAY_LEVEL)
+RAY_LEVEL = 4   # RayCastIrradiance's level (ray_resolution): visibility every 3 sigma_min / RAY_LEVEL, nodes twice that
+
+
+def ray_resolution(level: int, texel_mm: float, sigma_mm: float) -> tuple[int, int]:
+    """(k_u, k_v) of RayCastIrradiance, samples per texel side: the visibility in the band every
+    3 sigma / level (sigma the narrowest Gaussian's: its edge is what the judge must resolve), the nodes
+    (unshadowed E, and the visibility that finds the band) every 6 sigma / level, at least ``level``."""
+    kv = max(2 * level, int(math.ceil(level * texel_mm / (3.0 * sigma_mm))))
+    return max(level, int(math.ceil(kv / 2))), kv
 
 
 class RayCastIrradiance:
@@ -238,17 +246,19 @@ class RayCastIrradiance:
     both from the caller's ``parts(tri, bary) -> (U (L, N, 3), V (L, N) bool)`` and ``visible(tri, bary)
     -> V (L, N)`` (engine.reference.Surface: Embree). Nothing is read from the technique's maps.
 
-    Rays where visibility can change only: U and V at ``level`` points per texel side (the nodes;
-    U bilinear between them over the nodes on the surface); a texel whose nodes or their neighbours
-    disagree on V (a shadow boundary passes), and ``band`` texels around it, gets V at 4 ``level``
-    points per side (bilinear between them), every other texel the value its nodes agree on. Converged
-    when one level finer moves the judge's figures by < 10 % of themselves (tests/test_fidelity.py,
+    Rays where visibility can change only: U and V at k_u points per texel side (the nodes; U bilinear
+    between them over the nodes on the surface); a texel whose nodes or their neighbours disagree on V
+    (a shadow boundary passes), and ``band`` texels around it, gets V at k_v points per side (bilinear
+    between them), every other texel the value its nodes agree on. (k_u, k_v) = ray_resolution(level,
+    texel_mm, sigma_mm): set by the narrowest Gaussian, not by the map. Converged when one level finer
+    moves the judge's figures by < 10 % of themselves (tests/test_fidelity.py,
     benchmarks/bench_fidelity.py --parts seams --seams-ray-cast)."""
 
-    def __init__(self, uvs, indices, n: int, covered: np.ndarray, parts, visible, level: int = RAY_LEVEL,
-                 band: int = 1, chunk: int = 262144):
+    def __init__(self, uvs, indices, n: int, covered: np.ndarray, parts, visible, texel_mm: float,
+                 sigma_mm: float, level: int = RAY_LEVEL, band: int = 1, chunk: int = 262144):
         from scipy import ndimage  # here, not at import: scipy costs the viewer's start (issue 34)
-        self.n, self.ku, self.kv = n, int(level), 4 * int(level)
+        self.n = n
+        self.ku, self.kv = ray_resolution(level, texel_mm, sigma_mm)
         ku, kv = self.ku, self.kv
         m = n * ku
         near_cov = ndimage.binary_dilation(covered, iterations=2)
