@@ -212,9 +212,11 @@ def seams(r: Renderer, n: int = 512, scan: Path = SCAN, extra: dict | None = Non
 
 
 def print_seams(tag: str, e: dict) -> None:
+    where = "" if "worst_near_edge" not in e else \
+        (f"   worst 1 % (red) within 2.5 texels of an island edge: {100 * e['worst_near_edge']:.0f} % "
+         f"(lit texels there: {100 * e['lit_near_edge']:.0f} %)")
     print(f"{tag:<28} RMS % R G B {' '.join(f'{100 * x:5.2f}' for x in e['rms'])}   p99 % "
-          f"{' '.join(f'{100 * x:5.1f}' for x in e['p99'])}   worst 1 % (red) within 2.5 texels of an island edge: "
-          f"{100 * e['worst_near_edge']:.0f} % (lit texels there: {100 * e['lit_near_edge']:.0f} %)")
+          f"{' '.join(f'{100 * x:5.1f}' for x in e['p99'])}{where}")
 
 
 SEAM_LIGHTS = ([0.55, 0.35, 1.0], [-0.7, 0.2, 0.7], [0.1, 1.0, 0.35], [1.0, 0.05, -0.3])  # key, other side, top, behind
@@ -227,14 +229,18 @@ TEXEL_ROWS = (("defaults (1 sample, PCF 1 bilinear)", {}),
               ("texel_samples 4, shadow.pcf 0", {"deon.texel_samples": 4, "shadow.pcf": 0}))
 
 
-def seams_ray_cast(r: Renderer, n: int, share: float, rows=TEXEL_ROWS) -> None:
-    """The seams figures against the judge that shares no shadow: its convergence (judge and ray
-    levels one finer), then every configuration of ``rows`` over the same texels (those the surface lights)."""
+def seams_ray_cast(r: Renderer, n: int, share: float, rows=TEXEL_ROWS, ideal: bool = True) -> None:
+    """The seams figures against the judge that shares no shadow: every configuration of ``rows`` over
+    the same texels (those the surface lights); with ``ideal``, two irradiance maps the judge itself
+    makes, diffused by the texel-centre sum (surface_diffusion_reference; no GPU blur): E at the texel
+    centres and E averaged over the texel (8 x 8 points: a perfect lit fraction, what any footprint
+    filter of the shadow test tends to); last, the judge's convergence (judge and ray levels one finer)."""
     import time
 
-    from skinviewer.scene.texels import JUDGE_LEVEL, RAY_LEVEL
+    from skinviewer.physics.diffusion import IRRADIANCE
+    from skinviewer.scene.texels import JUDGE_LEVEL, RAY_LEVEL, surface_diffusion_reference, texel_surface
     print(f"## seams against the ray-cast judge (shares no shadow: E = unshadowed x Embree visibility at every judge "
-          f"sample), the scan at {n}^2, judge level {JUDGE_LEVEL}, ray level {RAY_LEVEL}")
+          f"sample), the scan at {n}^2, judge level {JUDGE_LEVEL}, ray level {RAY_LEVEL}", flush=True)
     if share < 1.0:
         print(f"   (figures over a fixed random {100 * share:.0f} % of the texels the surface lights)")
     t0 = time.perf_counter()
@@ -243,7 +249,35 @@ def seams_ray_cast(r: Renderer, n: int, share: float, rows=TEXEL_ROWS) -> None:
     irr = next(iter(_RAY_IRRADIANCE.values()))
     print(f"   {irr.rays:,} shadow rays (k_u {irr.ku}, k_v {irr.kv} per texel side; {irr.band.sum():,} band texels of "
           f"{int(e0['lit'].sum() / max(share, 1e-9)):,} lit: {irr.rays / (irr.kv ** 2 * e0['lit'].sum() / max(share, 1e-9)):.2f} "
-          f"of a dense k_v sampling of the lit texels); judge {t1 - t0:.0f} s")
+          f"of a dense k_v sampling of the lit texels); judge {t1 - t0:.0f} s", flush=True)
+    for tag, extra in rows:
+        print_seams(tag, seams(r, n=n, share=share, extra=extra, ray_level=RAY_LEVEL))
+        sys.stdout.flush()
+    if ideal:
+        from skinviewer.physics import metrics
+        m = r.scene.gpu.mesh
+        tri, pos, area = texel_surface(m.positions, m.uvs, m.indices, n, r.scene.gpu.mm_per_unit)
+        cov = tri >= 0
+        V, W = [x.variance for x in DeonSettings().gaussians], [x.weights for x in DeonSettings().gaussians]
+        cy, cx = np.nonzero(cov)
+        Ec = np.zeros((n, n, 3))
+        Ec[cy, cx] = irr.at(cy.astype(np.float64), cx.astype(np.float64))[0]
+        Em, cnt = np.zeros((n, n, 3)), np.zeros((n, n))
+        o = (np.arange(8) + 0.5) / 8 - 0.5
+        for a in o:
+            for b in o:
+                v, near = irr.at(cy + a, cx + b)
+                Em[cy, cx] += v * near[:, None]
+                cnt[cy, cx] += near
+        Em /= np.maximum(cnt, 1)[..., None]
+        lit, ref = e0["lit"], e0["ref"]
+        seams(r, n=n, share=share, ray_level=RAY_LEVEL)  # the defaults' irradiance map, through the same sum
+        Eg = r.graph("deon").read(IRRADIANCE)[..., :3].astype(np.float64)
+        for tag, E in (("ideal E at texel centres, centre sum", Ec), ("ideal texel-mean E, centre sum", Em),
+                       ("defaults' E, centre sum", Eg)):
+            D = surface_diffusion_reference(E, pos, area, cov, V, W)
+            print_seams(tag, {"rms": metrics.rel_rms(D, ref, lit), "p99": metrics.p99_rel(D, ref, lit)})
+            sys.stdout.flush()
     e1 = seams(r, n=n, share=share, ray_level=RAY_LEVEL + 1, level=JUDGE_LEVEL + 1)
     print_seams(f"defaults, levels {JUDGE_LEVEL}/{RAY_LEVEL}", e0)
     print_seams(f"defaults, levels {JUDGE_LEVEL + 1}/{RAY_LEVEL + 1}", e1)
@@ -251,9 +285,6 @@ def seams_ray_cast(r: Renderer, n: int, share: float, rows=TEXEL_ROWS) -> None:
                                                           list(e1["rms"]) + list(e1["p99"]))]
     print(f"   one level finer changes the figures by at most {100 * max(ch):.1f} % of themselves "
           f"({'converged' if max(ch) < 0.1 else 'NOT converged'}: < 10 %)")
-    # the finer judge's E held now: back to the default level for the rows
-    for tag, extra in rows:
-        print_seams(tag, seams(r, n=n, share=share, extra=extra, ray_level=RAY_LEVEL))
 
 
 def seams_over_lights(r: Renderer) -> None:
