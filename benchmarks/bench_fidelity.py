@@ -9,9 +9,13 @@
   lights  the stretch choices on the scan over four light directions, against the 3D and surface-path references.
 
 Run: python3 benchmarks/bench_fidelity.py [--parts laser,seams,lights] [--sizes 256,512,1024,2048] [--seams-quick]
+     python3 benchmarks/bench_fidelity.py --parts seams --seams-ray-cast [--seams-size 512] [--seams-share 0.25]
 
 The seams judge is the converged, supersampled one (issue 30): its level and one level finer are
-printed with how much the figures move between them.
+printed with how much the figures move between them. ``--seams-ray-cast`` (issue 30 item 4): against
+the judge that shares no shadow with the technique (scene/texels.RayCastIrradiance: the unshadowed
+irradiance x Embree visibility at every judge sample), the texel-irradiance configurations, two
+irradiance maps the judge makes itself, and its own convergence.
 """
 from __future__ import annotations
 
