@@ -307,23 +307,24 @@ def main() -> int:
     ap.add_argument("--rim-size", default="512,1024", help="d'Eon's map sizes on the slab (512: its first step is summed)")
     ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
     a = ap.parse_args()
-    if "edge" in a.parts:
+    parts = set(a.parts.split(","))
+    if "edge" in parts:
         part_edge(a.edge_size)
-    if "unc" in a.parts:
+    if "unc" in parts:
         part_unc()
-    if "rim" in a.parts:
+    if "rim" in parts:
         for n in (int(x) for x in a.rim_size.split(",")):
             for mode in a.rim_modes.split(","):
                 part_rim(n, mode)
-    if "truth" in a.parts:
+    if "truth" in parts:
         part_rim_truth()
-    if "cost" in a.parts:
+    if "cost" in parts:
         part_rim_cost(int(a.rim_size.split(",")[-1]))
-    if "head" in a.parts:
+    if "head" in parts:
         part_head(a.size)
-    if "samples-cost" in a.parts:
+    if "samples-cost" in parts:
         part_samples_cost()
-    if "samples" in a.parts.replace("samples-cost", ""):
+    if "samples" in parts:
         part_samples(a.size)
     return 0
 
