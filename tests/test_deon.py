@@ -465,7 +465,7 @@ def test_a_texel_a_shadow_edge_crosses_carries_its_lit_fraction(renderer, texel_
 def test_the_four_texel_samples_take_the_hard_shadow_test_not_the_pcf(renderer):
     """deon.texel_samples = 4 averages four hard eq. (7) tests over the texel's patch: with the PCF on,
     the irradiance map equals the one with shadow.pcf 0 (a PCF under the four samples filtered the shadow
-    twice: against the judge that shares no shadow, green / blue p99 6.1 / 4.7 % against 4.5 / 2.3 %,
+    twice: against the judge that shares no shadow, green / blue p99 5.2 / 3.6 % against 3.7 / 1.7 %,
     notes/truth.md item 4), and one sample still takes the PCF (its map differs with shadow.pcf 0)."""
     from skinviewer.physics.diffusion import IRRADIANCE
     got = {}

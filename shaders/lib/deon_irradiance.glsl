@@ -36,7 +36,7 @@ layout(location = 1) out vec4 f_visibility;
 // the sample's uv), so a texel a shadow edge crosses carries its lit fraction as the ground truth's
 // integral over the surface does, instead of all or nothing at its centre. Each sample is the hard eq. (7)
 // test: the PCF on top widened the penumbra past the texel (against the judge that shares no shadow, the
-// scan at 512^2: green / blue p99 6.1 / 4.7 % with the PCF, 4.5 / 2.3 % without; notes/truth.md item 4).
+// scan at 512^2: green / blue p99 5.2 / 3.6 % with the PCF, 3.7 / 1.7 % without; notes/truth.md item 4).
 uniform int u_texel_samples;
 uniform vec2 u_texel_uv;          // 1 / the irradiance map's size
 const vec2 TEXEL_SAMPLE[4] = vec2[4](vec2(-0.375, -0.125), vec2(0.125, -0.375), vec2(0.375, 0.125),

@@ -228,7 +228,7 @@ def uv_locate(uvs, indices, n: int, py: np.ndarray, px: np.ndarray) -> tuple[np.
     return tri.reshape(shape), bary.reshape(shape + (3,))
 
 
-RAY_LEVEL = 4   # RayCastIrradiance's level (ray_resolution): visibility every 3 sigma_min / RAY_LEVEL, nodes twice that
+RAY_LEVEL = 5   # RayCastIrradiance's level (ray_resolution): visibility every 3 sigma_min / RAY_LEVEL, nodes twice that
 
 
 def ray_resolution(level: int, texel_mm: float, sigma_mm: float) -> tuple[int, int]:
