@@ -15,7 +15,7 @@
   cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
   samples deon.texel_samples 1 / 4 (issue 30 item 4) x shadow.pcf default / 0 x irr512 / irr1024 against the
           ground truth on the default head and the scan (--size, default 512; the notes' table: 192).
-  samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4, at the defaults (1024^2 maps,
+  samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4 x PCF default vs 0, at the defaults (1024^2 maps,
           640^2 view), head and scan, sync timing, 3 interleaved repeats.
 
 Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
@@ -262,9 +262,14 @@ def part_samples(size: int) -> None:
     ctx.release()
 
 
+SAMPLE_CONFIGS = {"1 sample, PCF default": {}, "4 samples": {"deon.texel_samples": 4},
+                  "1 sample, PCF 0": {"shadow.pcf": 0}, "4 samples, PCF 0": {"deon.texel_samples": 4, "shadow.pcf": 0}}
+
+
 def part_samples_cost(repeats: int = 3) -> None:
-    """texel_samples 1 vs 4 at the defaults (1024^2 maps, 640^2 view): the irradiance pass and the whole
-    forced frame, sync timing (glFinish + wall clock), interleaved, medians."""
+    """deon.texel_samples 1 vs 4 x shadow.pcf default vs 0 at the defaults (1024^2 maps, 640^2 view): the
+    irradiance pass and the whole forced frame, sync timing (glFinish + wall clock), interleaved, medians,
+    as ratios to the defaults."""
     import statistics
 
     from skinviewer.engine.renderer import Renderer
@@ -273,22 +278,23 @@ def part_samples_cost(repeats: int = 3) -> None:
     r = Renderer(ctx)
     for name, extra in (("head", {}), ("scan", SCAN_VALUES)):
         base = with_values(Settings(), {"technique": "deon", "render.timing": "sync", **extra})
-        v = {k: with_values(base, {"deon.texel_samples": k}) for k in (1, 4)}
+        v = {k: with_values(base, c) for k, c in SAMPLE_CONFIGS.items()}
         for s in v.values():
             r.render(s, force=True)
-        irr: dict[int, list[float]] = {k: [] for k in v}
-        frame: dict[int, list[float]] = {k: [] for k in v}
+        irr: dict[str, list[float]] = {k: [] for k in v}
+        frame: dict[str, list[float]] = {k: [] for k in v}
         for _ in range(repeats):
             for k, s in v.items():
                 rep = r.render(s, force=True)
                 ran = [p for p in rep.passes if p.status == "ran"]
                 irr[k].append(sum(p.ms or 0.0 for p in ran if p.name.startswith("deon_irradiance")))
                 frame[k].append(sum(p.ms or 0.0 for p in ran))
-        a, b = (statistics.median(irr[k]) for k in (1, 4))
-        fa, fb = (statistics.median(frame[k]) for k in (1, 4))
-        print(f"## {name}, {base.render.width}x{base.render.height}, {base.deon.irradiance_size}^2 maps: irradiance "
-              f"pass {a:.0f} -> {b:.0f} ms ({b / a:.2f}x), forced frame {fa:.0f} -> {fb:.0f} ms ({fb / fa:.2f}x)",
-              flush=True)
+        a0, f0 = statistics.median(irr[next(iter(v))]), statistics.median(frame[next(iter(v))])
+        print(f"## {name}, {base.render.width}x{base.render.height}, {base.deon.irradiance_size}^2 maps", flush=True)
+        for k in v:
+            a, f = statistics.median(irr[k]), statistics.median(frame[k])
+            print(f"  {k:<24} irradiance pass {a:6.0f} ms ({a / a0:.2f}x), forced frame {f:6.0f} ms ({f / f0:.2f}x)",
+                  flush=True)
     r.release()
     ctx.release()
 
@@ -301,23 +307,24 @@ def main() -> int:
     ap.add_argument("--rim-size", default="512,1024", help="d'Eon's map sizes on the slab (512: its first step is summed)")
     ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
     a = ap.parse_args()
-    if "edge" in a.parts:
+    parts = set(a.parts.split(","))
+    if "edge" in parts:
         part_edge(a.edge_size)
-    if "unc" in a.parts:
+    if "unc" in parts:
         part_unc()
-    if "rim" in a.parts:
+    if "rim" in parts:
         for n in (int(x) for x in a.rim_size.split(",")):
             for mode in a.rim_modes.split(","):
                 part_rim(n, mode)
-    if "truth" in a.parts:
+    if "truth" in parts:
         part_rim_truth()
-    if "cost" in a.parts:
+    if "cost" in parts:
         part_rim_cost(int(a.rim_size.split(",")[-1]))
-    if "head" in a.parts:
+    if "head" in parts:
         part_head(a.size)
-    if "samples-cost" in a.parts:
+    if "samples-cost" in parts:
         part_samples_cost()
-    if "samples" in a.parts.replace("samples-cost", ""):
+    if "samples" in parts:
         part_samples(a.size)
     return 0
 

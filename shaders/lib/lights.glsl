@@ -123,7 +123,14 @@ float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
 // tap compares the map with the receiver's tangent plane at that tap (receiver-plane depth bias):
 // together they remove self-shadowing acne without the large offset that slid grazing lookups
 // sideways past an occluder's silhouette (light in creases).
-float shadow_factor(int i, vec3 P, vec3 Ng) {
+// eq. (7) printed: the hard test at one texel (shadow.pcf 0), whatever the PCF radius
+float shadow_hard(sampler2D sm, vec3 c) {
+    return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+}
+
+// hard: the eq. (7) hard test instead of the PCF (deon.texel_samples 4 averages four of them over the
+// texel's patch: a PCF on top would filter the shadow twice, issue 30 item 4)
+float shadow_factor_test(int i, vec3 P, vec3 Ng, bool hard) {
 #ifdef LIGHTS_SPECIALISED
     if (((SHADOW_MASK >> i) & 1) == 0) return 1.0;
 #else
@@ -153,23 +160,27 @@ float shadow_factor(int i, vec3 P, vec3 Ng) {
     if (gl > MAX_RECEIVER_SLOPE * z_per_uv) g *= MAX_RECEIVER_SLOPE * z_per_uv / gl;
 #ifdef LIGHTS_SPECIALISED
 #if (SHADOW_MASK & 1) != 0
-    if (i == 0) return shadow_compare(shadow_map0, c, g);
+    if (i == 0) return hard ? shadow_hard(shadow_map0, c) : shadow_compare(shadow_map0, c, g);
 #endif
 #if (SHADOW_MASK & 2) != 0
-    if (i == 1) return shadow_compare(shadow_map1, c, g);
+    if (i == 1) return hard ? shadow_hard(shadow_map1, c) : shadow_compare(shadow_map1, c, g);
 #endif
 #if (SHADOW_MASK & 4) != 0
-    if (i == 2) return shadow_compare(shadow_map2, c, g);
+    if (i == 2) return hard ? shadow_hard(shadow_map2, c) : shadow_compare(shadow_map2, c, g);
 #endif
 #if (SHADOW_MASK & 8) != 0
-    if (i == 3) return shadow_compare(shadow_map3, c, g);
+    if (i == 3) return hard ? shadow_hard(shadow_map3, c) : shadow_compare(shadow_map3, c, g);
 #endif
     return 1.0;
 #else
-    if (i == 0) return shadow_compare(shadow_map0, c, g);
-    if (i == 1) return shadow_compare(shadow_map1, c, g);
-    if (i == 2) return shadow_compare(shadow_map2, c, g);
-    return shadow_compare(shadow_map3, c, g);
+    if (i == 0) return hard ? shadow_hard(shadow_map0, c) : shadow_compare(shadow_map0, c, g);
+    if (i == 1) return hard ? shadow_hard(shadow_map1, c) : shadow_compare(shadow_map1, c, g);
+    if (i == 2) return hard ? shadow_hard(shadow_map2, c) : shadow_compare(shadow_map2, c, g);
+    return hard ? shadow_hard(shadow_map3, c) : shadow_compare(shadow_map3, c, g);
 #endif
+}
+
+float shadow_factor(int i, vec3 P, vec3 Ng) {
+    return shadow_factor_test(i, P, Ng, false);
 }
 #endif
