@@ -408,10 +408,11 @@ def half_size(r, i: int) -> bool:
     """deon.half_res_above_texels (issue 27): whether blur_i is made on a map of half the side
     (transmitted_size: the half-size gutter and seam maps already exist): a separable light blur whose
     sigma increment is at least that many mean texels, or whose input is half size already. The
-    summed step, an open-border reflection (its border frame is full size) and the per-Gaussian
-    stretch chain stay full size. r: a Reflection or ExecuteContext."""
+    summed step, a mesh with an open border (the reflection's border frame is full size; with
+    deon.open_border = absorb the half-size fill would carry light past the rim that absorb drops)
+    and the per-Gaussian stretch chain stay full size. r: a Reflection or ExecuteContext."""
     limit = r.settings.deon.half_res_above_texels
-    if limit <= 0.0 or r.scene is None or open_border(r) or r.settings.deon.stretch_per_gaussian:
+    if limit <= 0.0 or r.scene is None or r.scene.has_open_border or r.settings.deon.stretch_per_gaussian:
         return False
     n = map_size(r)
     if n // 2 < HALF_MIN or transmitted_size(r) != n // 2:
