@@ -170,7 +170,7 @@ def work_tiles(ec, size: int, ring: int, rects: bool = False) -> tuple | None:
     nt = -(-size // TILE)
     pad = np.zeros((nt * TILE, nt * TILE), bool)
     pad[:size, :size] = near
-    any_t = pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))
+    any_t: np.ndarray = np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3)))
     ty, tx = np.nonzero(any_t)
     edge = TILE
     if len(tx) == 0 or len(tx) > 0.9 * nt * nt or len(tx) > 16384:
