@@ -11,6 +11,8 @@ import pytest
 from skinviewer import techniques
 from skinviewer.ground.settings import LightSettings, Settings, with_values
 
+imgui_bundle = pytest.importorskip("imgui_bundle")  # the panel's modules import the viewer's imgui
+
 
 def test_light_fields_follow_the_kind():
     from skinviewer.ui.sections.scene import LIGHT_SKIP

@@ -362,14 +362,20 @@ def test_the_pixels_environment_is_estimated_at_their_points_within_its_stated_u
 def test_the_sessions_uncertainty_covers_the_pixels_environment():
     """On a scene with an environment, the session's truth differs from the same truth with the pixels'
     environment estimated independently with 4x the rays by no more than the stated uncertainty (the
-    two truths' together) at >= 99 % of the pixels, and the window's words say what it covers."""
-    from skinviewer.ui.accuracy_window import uncertainty_words
+    two truths' together) at >= 99 % of the pixels, and the window's words say what it covers (where the
+    viewer's packages are installed: the GPU check carries none)."""
     s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "render.width": 24,
                                  "render.height": 24})
     s = with_values(s, {"lights": [*[lt.model_dump() for lt in s.lights], {"kind": "environment", "intensity": 0.6}]})
     ses = R.TruthSession()
     ref = list(ses.progressive(s))[-1].reference
-    assert "environment" in ref.meta["uncertainty"] and "environment" in uncertainty_words(ref.meta)
+    assert "environment" in ref.meta["uncertainty"]
+    try:
+        from skinviewer.ui.accuracy_window import uncertainty_words
+    except ModuleNotFoundError as exc:  # the viewer's imgui is an optional extra
+        assert exc.name == "imgui_bundle", exc
+    else:
+        assert "environment" in uncertainty_words(ref.meta)
     real = R.Surface.env_direct
     try:
         R.Surface.env_direct = lambda self, a, energy, rays=R.ENV_DIFFUSE_RAYS, seed=0: real(
