@@ -393,15 +393,20 @@ def test_letting_go_of_a_drag_starts_the_refinement_at_once(viewer):
     _still(app)
 
 
+def _deon_preview_governed(app):
+    """d'Eon governed by a fake calibration under a 950 ms budget, the view still: a preview is picked
+    from the calibration's costs (none seen yet)."""
+    app.frame.governor.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
+    assert app.state.apply({"render.governor_budget_ms": 950.0})
+    _still(app)
+    app.frame.governor._seen.clear()
+
+
 def test_a_drag_finishes_each_preview_frame_instead_of_cancelling_it(viewer):
     """A preview that takes several frames (under a small frame budget) is finished before the newest
     drag position is taken: a drag changing the light every frame still gets complete images."""
     app = viewer
-    cal = fake_calibration("deon", app.state.settings, seed=2)
-    app.frame.governor.set_calibration(cal)
-    assert app.state.apply({"render.governor_budget_ms": 950.0})
-    _still(app)
-    app.frame.governor._seen.clear()  # the fake calibration's costs decide: a preview is picked
+    _deon_preview_governed(app)
     app.frame.set_frame_budget(40.0)  # the preview's passes in row bands, a few frames each
     try:
         app.frame.set_dragging(True)
@@ -536,11 +541,7 @@ def test_a_released_drag_s_part_way_preview_leaves_no_stale_image(viewer):
     refinement starts at once, the preview's passes are not reported as the final frame's, and the
     refined image is the ungoverned render of the same settings bit for bit."""
     app = viewer
-    cal = fake_calibration("deon", app.state.settings, seed=2)
-    app.frame.governor.set_calibration(cal)
-    assert app.state.apply({"render.governor_budget_ms": 950.0})
-    _still(app)
-    app.frame.governor._seen.clear()  # the fake calibration's costs decide: a preview is picked
+    _deon_preview_governed(app)
     app.frame.set_frame_budget(40.0)
     try:
         app.frame.set_dragging(True)
