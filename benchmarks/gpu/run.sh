@@ -18,7 +18,7 @@ mkdir -p "$OUT"
 OUT=$(cd "$OUT" && pwd)
 exec > >(tee -a "$OUT/run.log") 2>&1
 T0=$(date +%s)
-# STEPS: which of renders, frames, suite, truth, calibrate, diag to run (default all but diag)
+# STEPS: which of renders, frames, suite, truth, calibrate, perf, diag to run (default all but perf, diag)
 STEPS=${STEPS:-renders frames calibrate suite truth}
 want() { [[ " $STEPS " == *" $1 "* ]]; }
 stamp() { echo "== $(( $(date +%s) - T0 )) s: $*"; }
@@ -117,6 +117,18 @@ s0=$(date +%s.%N)
 
 fi
 
+
+if want perf; then
+    # issue 27's open questions on this GL: is a compute sliding window faster than the fragment blur
+    # here, and what the graph's own CPU work costs per frame (tiny view and maps)
+    stamp "perf: compute vs fragment blur, CPU overhead"
+    for m in 1024 2048; do
+        timeout "$(cap 60)" python3 benchmarks/bench_compute_blur.py --maps $m --repeats 9 >> "$OUT/perf.md" 2>&1
+    done
+    if [ -f benchmarks/bench_cpu_overhead.py ]; then
+        timeout "$(cap 120)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
+    fi
+fi
 
 if want diag; then
     stamp "diagnostics"
