@@ -723,12 +723,25 @@ def test_a_jump_in_texel_size_diffuses_like_the_surface(renderer, tmp_path, gath
     assert err < 0.06 if gather else err > 0.10, err
 
 
+def _default_table():
+    """The default d'Eon Gaussians as arrays: variances (mm^2) and RGB weights."""
+    from skinviewer.ground.settings import Settings
+    g = Settings().deon.gaussians
+    return np.array([x.variance for x in g]), np.array([x.weights for x in g])
+
+
+def _step(X: np.ndarray, cov: np.ndarray, offset: float) -> np.ndarray:
+    """U = 1 where x + 0.37 y > offset on the covered texels (point-sampled at X, as a technique)."""
+    E = np.zeros(X.shape[:2] + (3,))
+    E[(X[..., 0] + 0.37 * X[..., 1] > offset) & cov] = 1.0
+    return E
+
+
 def test_the_supersampled_judge_is_converged_on_its_own_terms():
     """scene.texels.supersampled_diffusion_reference (the seam bench's judge): a shadow step across a
     plane's 40^2 map (1 mm texels, not along the grid). One level finer (JUDGE_LEVEL + 2) changes the
     figure it gives a texel-centre sum (the old judge's discretisation, as a technique's) by < 10 % of
     itself, while that figure itself is far from 0: the texel-centre sum is not a judge."""
-    from skinviewer.ground.settings import Settings
     from skinviewer.physics import metrics
     from skinviewer.scene.scenes import grid
     from skinviewer.scene.texels import (
@@ -737,14 +750,12 @@ def test_the_supersampled_judge_is_converged_on_its_own_terms():
         surface_diffusion_reference,
         texel_surface,
     )
-    g = Settings().deon.gaussians
-    v, w = np.array([x.variance for x in g]), np.array([x.weights for x in g])
+    v, w = _default_table()
     pos, _, uv, idx = grid(8, 8, 40.0, 40.0)
     n = 40
     tri, P, area = texel_surface(pos, uv, idx, n, 1.0)
     cov = tri >= 0
-    E = np.zeros((n, n, 3))
-    E[(P[..., 0] + 0.37 * P[..., 1] > 0.3) & cov] = 1.0
+    E = _step(P, cov, 0.3)
     lit = cov & (E.max(-1) > 0)
     centres = surface_diffusion_reference(E, P, area, cov, v, w)
     figs = [metrics.p99_rel(centres, supersampled_diffusion_reference(E, cov, pos, uv, idx, n, 1.0, v, w, level=L), lit)
@@ -778,7 +789,6 @@ def test_the_ray_cast_judge_is_converged_on_its_own_terms_and_casts_rays_only_ne
     texels), one level finer (RAY_LEVEL + 1) changes the p99 it gives a texel-centre sum by < 10 % of
     itself while that p99 is far from 0, and it casts under half the rays a dense sampling would
     (the fine visibility only in the band where the nodes disagree)."""
-    from skinviewer.ground.settings import Settings
     from skinviewer.physics import metrics
     from skinviewer.scene.texels import (
         RAY_LEVEL,
@@ -786,13 +796,11 @@ def test_the_ray_cast_judge_is_converged_on_its_own_terms_and_casts_rays_only_ne
         supersampled_diffusion_reference,
         surface_diffusion_reference,
     )
-    g = Settings().deon.gaussians
-    v, w = np.array([x.variance for x in g]), np.array([x.weights for x in g])
+    v, w = _default_table()
     n = 64
     (pos, uv, idx), (tri, X, area), parts, visible = _slanted_shadow_plane(n)
     cov = tri >= 0
-    E = np.zeros((n, n, 3))
-    E[(X[..., 0] + 0.37 * X[..., 1] > 0.3) & cov] = 1.0  # point-sampled at texel centres, as a technique
+    E = _step(X, cov, 0.3)  # point-sampled at texel centres, as a technique
     lit = cov & (E.max(-1) > 0)
     centres = surface_diffusion_reference(E, X, area, cov, v, w)
     figs, rays = [], []
@@ -810,16 +818,13 @@ def test_the_ray_cast_judge_shares_no_shadow_with_the_technique():
     """A technique whose shadow edge is 2 mm off: the map judge blurs the technique's own map and
     scores it about as well as a right one (RMS ~1-2 %); the ray-cast judge sees the edge where the
     surface has it and scores it > 5x worse. Its E comes from the surface, not from the map."""
-    from skinviewer.ground.settings import Settings
     from skinviewer.physics import metrics
     from skinviewer.scene.texels import RayCastIrradiance, supersampled_diffusion_reference, surface_diffusion_reference
-    g = Settings().deon.gaussians
-    v, w = np.array([x.variance for x in g]), np.array([x.weights for x in g])
+    v, w = _default_table()
     n = 48
     (pos, uv, idx), (tri, X, area), parts, visible = _slanted_shadow_plane(n)
     cov = tri >= 0
-    E = np.zeros((n, n, 3))
-    E[(X[..., 0] + 0.37 * X[..., 1] > 2.3) & cov] = 1.0  # the edge 2 mm off
+    E = _step(X, cov, 2.3)  # the edge 2 mm off
     lit = cov & (X[..., 0] + 0.37 * X[..., 1] > 0.3)  # where the surface is lit
     technique = surface_diffusion_reference(E, X, area, cov, v, w)
     own = supersampled_diffusion_reference(E, cov, pos, uv, idx, n, 1.0, v, w)
