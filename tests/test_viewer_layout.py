@@ -152,3 +152,12 @@ def test_with_calibration_off_the_status_bar_says_so(app960):
     texts = [t for t, _ in app960.ui.window(StatusBar).fields()]
     assert msg and msg.startswith("calibration off") and msg in texts, texts
     assert not any("measuring" in t or "rebuilding" in t for t in texts), texts
+
+
+def test_the_start_up_headline_promises_a_preview_only_when_the_governor_makes_one():
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.ground.settings import Settings, with_values
+    from skinviewer.ui.app import startup_headline
+    off = startup_headline(with_values(Settings(), {"render.governor": "off"}))
+    assert "preview appears" not in off and "your settings" in off
+    assert "preview" in startup_headline(Settings())

@@ -215,6 +215,15 @@ class ViewerApp(mglw.WindowConfig):
         self.shaders.release()
 
 
+def startup_headline(s: Settings) -> str:
+    """The start-up screen's headline once the panel works (issue 34: what it says must hold): with the
+    governor on, a cheaper preview comes first (the cold start's cheapest rung, or the calibrated pick);
+    with it off, the first image is at the user's settings."""
+    if s.render.governor == "off":
+        return "the panel works; the image at your settings appears here (the governor is off: no preview first)"
+    return "the panel works; a first preview appears here where a cheaper one exists, then your settings"
+
+
 def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True,
                vsync: bool = True, preset_path: str | None = None, shaders_root=None,
                notices: list[str] | None = None, options: ViewerOptions | None = None,
@@ -246,7 +255,7 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
         app.start_warm()
     if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
         sp.hand_over(f"the viewer is built; the first image of {app.state.settings.technique} comes next",
-                     "the panel works; a first preview appears here, then your settings")
+                     startup_headline(app.state.settings))
         from skinviewer.ui.splash import StartupView
         app.ui.add_window(lambda state, frame: StartupView(sp, frame))
     else:

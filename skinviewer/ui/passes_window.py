@@ -79,9 +79,12 @@ class PassesWindow:
         flags = (imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value
                  | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)
         if imgui.begin_table("passes", 4, flags):
+            # the name and the time first (a 960x600 window shows these two without scrolling), the
+            # name column and the header kept in place while the rest scrolls sideways
+            imgui.table_setup_scroll_freeze(1, 1)
             imgui.table_setup_column("pass")
-            imgui.table_setup_column("status")
             imgui.table_setup_column("ms")
+            imgui.table_setup_column("status")
             imgui.table_setup_column("reason")
             imgui.table_headers_row()
             for p in rep.passes:
@@ -95,13 +98,13 @@ class PassesWindow:
                     elif outs:
                         st.set_inspect(outs[0])
                 imgui.table_next_column()
-                imgui.text_colored(COLORS.get(p.status, COLORS["pruned"]), p.status)
-                imgui.table_next_column()
                 if p.ms is not None:
-                    imgui.text(f"{p.ms:.2f}")
+                    imgui.text(f"{p.ms:.1f}")
                 elif p.name in fr.last_ms:
-                    imgui.text_disabled(f"({fr.last_ms[p.name]:.2f})")
+                    imgui.text_disabled(f"({fr.last_ms[p.name]:.1f})")
                     tooltip("cost when it last ran")
+                imgui.table_next_column()
+                imgui.text_colored(COLORS.get(p.status, COLORS["pruned"]), p.status)
                 imgui.table_next_column()
                 if getattr(p, "nonfinite", None):
                     imgui.text_colored(ERR, "NaN/Inf")
