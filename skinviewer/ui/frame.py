@@ -64,8 +64,9 @@ def calibration_note(why: str, have: bool, cached: bool, auto: bool, governor_on
         source = "this machine's measurements" if cached else "the table shipped for this GL renderer"
         stale = "; techniques made for other preview ladders are not measured again" if why else ""
         return f"calibration off: the governor's budget from {source}{stale}"
-    return (f"calibration off: no calibration for {machine} and none will be measured; edits render "
-            "at your settings (skinviewer calibrate measures one)")
+    # what it means first (a 960x600 status bar cuts the rest, shown in full in its tooltip)
+    return (f"calibration off: no preview budget, edits show your settings (no calibration for {machine}, "
+            "none will be measured; skinviewer calibrate measures one)")
 
 
 class FrameController:
