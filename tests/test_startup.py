@@ -151,3 +151,33 @@ def test_texel_tables_come_from_the_cache(tmp_path, monkeypatch):
     np.save(mine, np.zeros((2, 2), np.float32))  # a table of the wrong shape: made again
     d = stored_table(["seam", 24.0], (covered,), like, compute)
     assert len(calls) == 5 and np.array_equal(d, a)
+
+
+def test_the_panel_is_drawn_before_the_mesh_is_loaded(monkeypatch):
+    """Issue 34 ("never a black window"): with the start-up screen, the viewer's first UI frame (the
+    "ui" mark) comes before the scene is built and uploaded (Renderer.ensure_scene); the scene then
+    loads and the first render is complete. Order of events, not time."""
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.ground.settings import Settings, with_values
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui import startup
+    from skinviewer.ui.app import create_app, destroy_app
+    events: list[str] = []
+    ensure = Renderer.ensure_scene
+    monkeypatch.setattr(Renderer, "ensure_scene", lambda self, s: (events.append("scene"), ensure(self, s))[1])
+    mark = startup.mark
+    monkeypatch.setattr(startup, "mark", lambda event, **info: (events.append(event), mark(event, **info))[1])
+    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "phong",
+                                 "shadow.map_size": 256})
+    app = create_app(s, size=(480, 320), vsync=False, splash=True)
+    try:
+        assert "ui" in events and "scene" in events and events.index("ui") < events.index("scene"), events
+        assert app.state.scene is not None
+        app.frame.set_frame_budget(None)
+        app.step(1)
+        assert app.frame.report is not None and app.frame.report.complete
+    finally:
+        destroy_app(app)
