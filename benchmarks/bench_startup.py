@@ -145,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
                 run_load = os.getloadavg()[0]
                 r = one_run(viewer, run_env, a.timeout, a.shots if k == 0 else None, shot_at, root, tag)
             rows[name].append(r)
-            cpu = "  ".join(f"{e} {r['cpu_' + e]:.2f} s" for e in ("window", "ui") if "cpu_" + e in r)
+            cpu = "  ".join(f"{e} {r['cpu_' + e]:.2f} s" for e in ("window", "ui", "image") if "cpu_" + e in r)
             print(f"run {k + 1} {name}: " + "  ".join(f"{e} {r[e]:.2f} s" if e in r else f"{e} -" for e in FIGURES)
                   + (f"   CPU to {cpu}" if cpu else "") + f"   (load {run_load:.1f})", flush=True)
     load = os.getloadavg()[0]
