@@ -181,3 +181,32 @@ def test_the_panel_is_drawn_before_the_mesh_is_loaded(monkeypatch):
         assert app.frame.report is not None and app.frame.report.complete
     finally:
         destroy_app(app)
+
+
+def test_a_state_made_before_its_scene_loads_it_on_an_edit_or_when_asked_with_the_fallback():
+    """ViewerState(defer_scene=True), the panel-first start: no scene until load_initial_scene (or an
+    edit, which loads it itself; the later call is then a no-op); a scene that cannot be loaded gives
+    the fallback scene's settings, and the presets' baseline is theirs (no "unsaved" at start)."""
+    pytest.importorskip("imgui_bundle")
+    from types import SimpleNamespace
+
+    from skinviewer.ground.settings import Settings, with_values
+    from skinviewer.ui.state import FALLBACK_SCENE, ViewerState
+    loads: list[str] = []
+
+    def load(s):
+        loads.append(s.scene.name)
+        if s.scene.name == "head":
+            raise OSError("no head here")
+        return SimpleNamespace(notes=[], description=s.scene.name)
+
+    st = ViewerState(with_values(Settings(), {"scene.name": "shadow-edge"}), load, defer_scene=True)
+    assert st.scene is None and loads == []
+    assert st.apply({"render.exposure": 1.5})  # an edit before the scene: it loads it
+    assert st.scene is not None and loads == ["shadow-edge"]
+    st.load_initial_scene()
+    assert loads == ["shadow-edge"]  # already there: not loaded twice
+    bad = ViewerState(Settings(), load, defer_scene=True)  # the head cannot be loaded
+    bad.load_initial_scene()
+    assert loads[-2:] == ["head", FALLBACK_SCENE] and bad.settings.scene.name == FALLBACK_SCENE
+    assert any("not available" in n for n in bad.notices) and not bad.presets.dirty(bad.settings)
