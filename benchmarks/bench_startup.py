@@ -15,7 +15,10 @@ it; the cold start's first image without a calibration, issue 34); otherwise the
 (``SKINVIEWER_CACHE`` or ~/.cache/skinviewer), so the head is read from it. ``--shots DIR``: grab the X screen at each
 ``--shot-at`` second of the first run (``DIR/startup-<s>s.png``).
 
-Wall clock on a shared machine: compare figures of one run of this script, not across runs."""
+Wall clock on a shared machine: compare figures of one run of this script, not across runs. Each run
+also prints the load average as it started and the viewer process's CPU seconds at the window and
+panel marks (its own work, all threads: about the wall time on a quiet machine, where the start runs
+mostly one thread at a time)."""
 from __future__ import annotations
 
 import argparse
@@ -47,6 +50,8 @@ def read_trace(path: Path) -> dict[str, float]:
         except ValueError:
             continue  # a line being written
         out.setdefault(d["event"], float(d["t"]))
+        if "cpu" in d:  # the process's CPU seconds at the mark (older trees: none)
+            out.setdefault(f"cpu_{d['event']}", float(d["cpu"]))
         if d["event"] == "image" and "preview" not in d:
             out.setdefault("old", 1.0)  # a tree that does not say whether its first image is a preview
         if d["event"] == "image" and "longest_frame_ms" in d:  # the longest frame from the panel to the image
@@ -63,7 +68,7 @@ def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | 
         t0 = time.time()
         proc = subprocess.Popen([sys.executable, "-m", "skinviewer", *argv], cwd=root, env={**env, "PYTHONPATH": str(root)},
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        pending = sorted(shot_at)
+        pending = sorted(shot_at) if shots is not None else []  # (no grabs: a run ends at its last mark, not at the timeout)
         try:
             while time.time() - t0 < timeout:
                 marks = read_trace(trace)
@@ -91,8 +96,7 @@ def one_run(argv: list[str], env: dict[str, str], timeout: float, shots: Path | 
         if "image" not in marks:
             print(f"run did not reach the first image (exit {proc.returncode}): {err.strip()[-400:]}", file=sys.stderr)
         out = {e: marks[e] - t0 for e in EVENTS if e in marks}
-        if "frozen" in marks:
-            out["frozen"] = marks["frozen"]
+        out.update({k: v for k, v in marks.items() if k.startswith("cpu_") or k == "frozen"})
         return out
 
 
@@ -138,10 +142,12 @@ def main(argv: list[str] | None = None) -> int:
                     link_cache(Path(cache))
                 run_env = {**env, "SKINVIEWER_CACHE": cache} if a.first_start or a.no_calibration else env
                 tag = "" if root == ROOT else "-compared"
+                run_load = os.getloadavg()[0]
                 r = one_run(viewer, run_env, a.timeout, a.shots if k == 0 else None, shot_at, root, tag)
             rows[name].append(r)
-            print(f"run {k + 1} {name}: " + "  ".join(f"{e} {r[e]:.2f} s" if e in r else f"{e} -" for e in FIGURES),
-                  flush=True)
+            cpu = "  ".join(f"{e} {r['cpu_' + e]:.2f} s" for e in ("window", "ui", "image") if "cpu_" + e in r)
+            print(f"run {k + 1} {name}: " + "  ".join(f"{e} {r[e]:.2f} s" if e in r else f"{e} -" for e in FIGURES)
+                  + (f"   CPU to {cpu}" if cpu else "") + f"   (load {run_load:.1f})", flush=True)
     load = os.getloadavg()[0]
     for name, root in trees:
         print(f"\nviewer start, {name} ({root}; {a.technique}, {a.size}, "
@@ -152,6 +158,10 @@ def main(argv: list[str] | None = None) -> int:
             xs = [r[e] for r in rows[name] if e in r]
             print(f"  to {e:6s} {statistics.median(xs):6.2f} s  (runs: {', '.join(f'{x:.2f}' for x in xs)})" if xs
                   else f"  to {e:6s}   not reached")
+        cpu = [r["cpu_ui"] for r in rows[name] if "cpu_ui" in r]
+        if cpu:  # the quiet machine's estimate: the start is one process, mostly one thread at a time
+            print(f"  CPU to the panel {statistics.median(cpu):.2f} s (runs: {', '.join(f'{x:.2f}' for x in cpu)}): "
+                  "about the wall time to the panel on a quiet machine (the process's CPU seconds, all threads)")
     return 0
 
 

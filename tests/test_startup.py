@@ -151,3 +151,62 @@ def test_texel_tables_come_from_the_cache(tmp_path, monkeypatch):
     np.save(mine, np.zeros((2, 2), np.float32))  # a table of the wrong shape: made again
     d = stored_table(["seam", 24.0], (covered,), like, compute)
     assert len(calls) == 5 and np.array_equal(d, a)
+
+
+def test_the_panel_is_drawn_before_the_mesh_is_loaded(monkeypatch):
+    """Issue 34 ("never a black window"): with the start-up screen, the viewer's first UI frame (the
+    "ui" mark) comes before the scene is built and uploaded (Renderer.ensure_scene); the scene then
+    loads and the first render is complete. Order of events, not time."""
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.ground.settings import Settings, with_values
+    from skinviewer.scene.scenes import scene_overrides
+    from skinviewer.ui import startup
+    from skinviewer.ui.app import create_app, destroy_app
+    events: list[str] = []
+    ensure = Renderer.ensure_scene
+    monkeypatch.setattr(Renderer, "ensure_scene", lambda self, s: (events.append("scene"), ensure(self, s))[1])
+    mark = startup.mark
+    monkeypatch.setattr(startup, "mark", lambda event, **info: (events.append(event), mark(event, **info))[1])
+    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "phong",
+                                 "shadow.map_size": 256})
+    app = create_app(s, size=(480, 320), vsync=False, splash=True)
+    try:
+        assert "ui" in events and "scene" in events and events.index("ui") < events.index("scene"), events
+        assert app.state.scene is not None
+        app.frame.set_frame_budget(None)
+        app.step(1)
+        assert app.frame.report is not None and app.frame.report.complete
+    finally:
+        destroy_app(app)
+
+
+def test_a_state_made_before_its_scene_loads_it_on_an_edit_or_when_asked_with_the_fallback():
+    """ViewerState(defer_scene=True), the panel-first start: no scene until load_initial_scene (or an
+    edit, which loads it itself; the later call is then a no-op); a scene that cannot be loaded gives
+    the fallback scene's settings, and the presets' baseline is theirs (no "unsaved" at start)."""
+    pytest.importorskip("imgui_bundle")
+    from types import SimpleNamespace
+
+    from skinviewer.ground.settings import Settings, with_values
+    from skinviewer.ui.state import FALLBACK_SCENE, ViewerState
+    loads: list[str] = []
+
+    def load(s):
+        loads.append(s.scene.name)
+        if s.scene.name == "head":
+            raise OSError("no head here")
+        return SimpleNamespace(notes=[], description=s.scene.name)
+
+    st = ViewerState(with_values(Settings(), {"scene.name": "shadow-edge"}), load, defer_scene=True)
+    assert st.scene is None and loads == []
+    assert st.apply({"render.exposure": 1.5})  # an edit before the scene: it loads it
+    assert st.scene is not None and loads == ["shadow-edge"]
+    st.load_initial_scene()
+    assert loads == ["shadow-edge"]  # already there: not loaded twice
+    bad = ViewerState(Settings(), load, defer_scene=True)  # the head cannot be loaded
+    bad.load_initial_scene()
+    assert loads[-2:] == ["head", FALLBACK_SCENE] and bad.settings.scene.name == FALLBACK_SCENE
+    assert any("not available" in n for n in bad.notices) and not bad.presets.dirty(bad.settings)

@@ -23,9 +23,17 @@ from skinviewer.engine.bench import (
 )
 from skinviewer.ground.settings import Settings, value_key, with_values
 from skinviewer.physics.metrics import image_error, rel_error_map, with_u
-from skinviewer.ui.widgets import show_tooltip, wrapped
+from skinviewer.ui.layout import floating_rects, keep_inside
+from skinviewer.ui.widgets import flow_legend, show_tooltip, wrapped
 
 VIEW_MODES = ("image", "heat map", "split image | heat map")
+CHART_MIN_H = 160.0  # the Pareto chart's least height (px): below it the window scrolls
+FRONT_RGBA = (0.92, 0.92, 0.92, 0.9)
+CURRENT_RGBA = (1.0, 0.85, 0.2, 1.0)
+RUNG_RGBA = (0.4, 0.6, 1.0, 1.0)
+BUDGET_RGBA = (1.0, 0.45, 0.4, 0.9)
+
+
 def reference_key(s: Settings) -> str:
     """What a reference depends on, to tell whether the one on hand is for this view."""
     return "|".join(value_key(s, k) for k in ("scene", "camera", "render.width", "render.height", "lights",
@@ -89,6 +97,11 @@ class AccuracyWindow:
         self.partial = None  # the stage shown (engine.reference.Partial)
         self.rms_se = None  # (rms (3,), standard error (3,)) of the figures while the truth refines
         self.view_mode = 0
+        self.tab = "Truth"       # the page shown (Truth, Pareto, Governor)
+        self.tab_request = ""    # a page to show next frame (scripts, tests)
+        self.rect = None         # the window's last (x, y, w, h)
+        self.chart_rect = None   # the Pareto chart's last (x, y, w, h) on screen (tests)
+        self.legend_extent: list[float] = []  # (rightmost x of its legend, the right edge it may use)
         self.error = None        # ImageError of the image on screen
         self.error_for = None    # (settings object, report id) the figures are for
         self.status = ""
@@ -232,23 +245,33 @@ class AccuracyWindow:
         from imgui_bundle import imgui
         self._poll()
         self._update_error()
-        vx, vy, vw, vh = ui.layout.view
-        # the top-left corner of the view (the passes window takes the top-right): collapsed, a bar above
-        # the subject, never across the face or over the corners where the camera is dragged
-        imgui.set_next_window_pos(imgui.ImVec2(vx + 8, vy + 8), imgui.Cond_.first_use_ever.value)
-        # half the view at most (the passes window has the other half), so their title bars never overlap
-        # and a 960x600 window keeps most of the image visible
-        imgui.set_next_window_size(imgui.ImVec2(min(420.0, max(200.0, vw / 2 - 12)), min(360.0, max(160.0, vh * 0.6))),
-                                   imgui.Cond_.first_use_ever.value)
+        # issue 34: the top-left of the 3D view, half its width at most (the Passes window has the
+        # other half), as tall as the view allows so the Pareto chart fits without scrolling at
+        # 960x600; starts collapsed (a bar above the subject); a window moved or left outside the
+        # view (a resize, the panel moved) is brought back inside it, never over the panel
+        x, y, w, h = floating_rects(ui.layout.view)["accuracy"]
+        imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(w, h), imgui.Cond_.first_use_ever.value)
         imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
+        if self.rect is not None:
+            nx, ny = keep_inside(self.rect, ui.layout.view)
+            if (nx, ny) != self.rect[:2]:
+                imgui.set_next_window_pos(imgui.ImVec2(nx, ny), imgui.Cond_.always.value)
         expanded = imgui.begin("Accuracy###accuracy")[0]
-        if expanded:
-            self._truth_ui(imgui)
-            imgui.separator()
-            self._chart_ui(imgui)
-            self._governor_ui(imgui)
+        if expanded and imgui.begin_tab_bar("##accuracy_tabs"):
+            # one page at a time (issue 34): the truth's figures, the bench's Pareto chart (the
+            # window's height is the chart's), the governor's front on this machine
+            for name, body in (("Truth", self._truth_ui), ("Pareto", self._chart_ui), ("Governor", self._governor_ui)):
+                flags = imgui.TabItemFlags_.set_selected.value if self.tab_request == name else 0
+                if imgui.begin_tab_item(name, None, flags)[0]:
+                    self.tab = name
+                    body(imgui)
+                    imgui.end_tab_item()
+            self.tab_request = ""
+            imgui.end_tab_bar()
         pos, size = imgui.get_window_pos(), imgui.get_window_size()
-        ui.claim((pos.x, pos.y, size.x, size.y))
+        self.rect = (pos.x, pos.y, size.x, size.y)
+        ui.claim(self.rect)
         imgui.end()
 
     def _truth_ui(self, imgui) -> None:
@@ -299,29 +322,41 @@ class AccuracyWindow:
         ok = [r for r in self.results if r.error is None and r.full_ms and r.rms]
         if not ok:
             return
-        h = max(180.0, imgui.get_content_region_avail().y - 4)
-        if implot.begin_plot("##pareto", imgui.ImVec2(-1, h)):
+        techs = list(dict.fromkeys(r.technique for r in ok))
+        cols = [implot.get_colormap_color(k, implot.Colormap_.deep.value) for k in range(len(techs))]
+        front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)
+        cur = [r for r in ok if self.matches(r)]
+        # the legend above the chart, wrapped to the window's width (never over the points, never cut)
+        items = [(tech, (c.x, c.y, c.z, c.w)) for tech, c in zip(techs, cols)]
+        items += [("Pareto front", FRONT_RGBA)] if len(front) > 1 else []
+        items += [("current", CURRENT_RGBA)] if cur else []
+        self.legend_extent[:] = flow_legend(items, {"current": "the configuration of the live settings",
+                                                    "Pareto front": "no configuration is both faster and closer to the truth"})
+        h = max(CHART_MIN_H, imgui.get_content_region_avail().y - 4)
+        p = imgui.get_cursor_screen_pos()
+        self.chart_rect = (p.x, p.y, imgui.get_content_region_avail().x, h)
+        if implot.begin_plot("##pareto", imgui.ImVec2(-1, h), implot.Flags_.no_legend.value):
             implot.setup_axes("full frame ms", "RMS %")
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
-            # the legend above the plot (never over the points); the RMS axis clipped at the bulk of the
-            # points (an outlier of several hundred % would flatten the rest)
-            implot.setup_legend(implot.Location_.north.value,
-                                implot.LegendFlags_.outside.value | implot.LegendFlags_.horizontal.value)
+            # the RMS axis clipped at the bulk of the points (an outlier of several hundred % would
+            # flatten the rest)
             ys = np.array([100 * r.rms_mean for r in ok])
             top = float(min(ys.max(), 1.5 * np.percentile(ys, 90, method="lower"))) * 1.08
             implot.setup_axis_limits(implot.ImAxis_.y1.value, 0.0, max(top, 1e-3), implot.Cond_.once.value)
-            for k, tech in enumerate(dict.fromkeys(r.technique for r in ok)):
+            xs = np.array([r.full_ms for r in ok])  # a quarter of a decade beyond the points: none on the frame
+            implot.setup_axis_limits(implot.ImAxis_.x1.value, float(xs.min()) / 1.25, float(xs.max()) * 1.25,
+                                     implot.Cond_.once.value)
+            for tech, col in zip(techs, cols):
                 pts = [r for r in ok if r.technique == tech]
-                implot.set_next_marker_style(implot.Marker_.circle.value, 4.0,
-                                             implot.get_colormap_color(k, implot.Colormap_.deep.value))  # distinct per technique
+                implot.set_next_marker_style(implot.Marker_.circle.value, 4.0, col)  # distinct per technique
                 implot.plot_scatter(tech, np.array([r.full_ms for r in pts], np.float64),
                                     np.array([100 * r.rms_mean for r in pts], np.float64))
-            front = sorted((r for r in ok if r.pareto), key=lambda r: r.full_ms)
             if len(front) > 1:
+                implot.set_next_line_style(imgui.ImVec4(*FRONT_RGBA), 1.0)
                 implot.plot_line("Pareto front", np.array([r.full_ms for r in front], np.float64),
                                  np.array([100 * r.rms_mean for r in front], np.float64))
-            cur = [r for r in ok if self.matches(r)]
             if cur:
+                implot.set_next_marker_style(implot.Marker_.square.value, 6.0, imgui.ImVec4(*CURRENT_RGBA))
                 implot.plot_scatter("current", np.array([cur[0].full_ms], np.float64),
                                     np.array([100 * cur[0].rms_mean], np.float64))
             hovered = self._nearest(implot, ok)
@@ -351,15 +386,21 @@ class AccuracyWindow:
             return
         imgui.text(f"governor's front on this machine ({self.frame.governor.budget_ms:g} ms budget)")
         timed = [(label, ms, err, pick) for label, ms, err, pick in pts if err is not None]
-        if timed and implot.begin_plot("##governor", imgui.ImVec2(-1, 160)):
+        picked = [x for x in timed if x[3]]
+        if timed:  # its legend above it, wrapped (never over the points)
+            flow_legend([("rungs", RUNG_RGBA)] + ([("governor's pick", CURRENT_RGBA)] if picked else [])
+                        + [("budget", BUDGET_RGBA)])
+        if timed and implot.begin_plot("##governor", imgui.ImVec2(-1, 160), implot.Flags_.no_legend.value):
             implot.setup_axes("light-move frame ms", "RMS %")
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
+            implot.set_next_marker_style(implot.Marker_.circle.value, 4.0, imgui.ImVec4(*RUNG_RGBA))
             implot.plot_scatter("rungs", np.array([x[1] for x in timed], np.float64),
                                 np.array([100 * x[2] for x in timed], np.float64))
-            picked = [x for x in timed if x[3]]
             if picked:
+                implot.set_next_marker_style(implot.Marker_.square.value, 6.0, imgui.ImVec4(*CURRENT_RGBA))
                 implot.plot_scatter("governor's pick", np.array([picked[0][1]], np.float64),
                                     np.array([100 * picked[0][2]], np.float64))
+            implot.set_next_line_style(imgui.ImVec4(*BUDGET_RGBA), 1.0)
             implot.plot_inf_lines("budget", np.array([self.frame.governor.budget_ms], np.float64))
             implot.end_plot()
         for label, ms, err, is_pick in pts:

@@ -43,13 +43,14 @@ class ViewerApp(mglw.WindowConfig):
 
     def __init__(self, settings: Settings | None = None, preset_path: str | None = None,
                  shaders_root: str | Path | None = None, notices: list[str] | None = None,
-                 options: ViewerOptions | None = None, **kwargs):
+                 options: ViewerOptions | None = None, defer_scene: bool = False, **kwargs):
         super().__init__(**kwargs)
         self.shaders = ShaderLibrary(self.ctx, root=Path(shaders_root) if shaders_root else None)
         # env_bake_background: the window does not wait for the environment's visibility bake (issue 32)
         self.renderer = Renderer(self.ctx, self.shaders, env_bake_background=True)
         self._vsync = bool(getattr(self.wnd, "vsync", True))
-        self.state = ViewerState(settings, self.renderer.ensure_scene, preset_path, notices, options, vsync=self._vsync)
+        self.state = ViewerState(settings, self.renderer.ensure_scene, preset_path, notices, options, vsync=self._vsync,
+                                 defer_scene=defer_scene)
         self.frame = FrameController(self.ctx, self.state, self.renderer, self.shaders,
                                      self.wnd.size, self.wnd.buffer_size)
         self.ui = UiHost(self.wnd, self.state, self.frame)
@@ -215,6 +216,15 @@ class ViewerApp(mglw.WindowConfig):
         self.shaders.release()
 
 
+def startup_headline(s: Settings) -> str:
+    """The start-up screen's headline once the panel works (issue 34: what it says must hold): with the
+    governor on, a cheaper preview comes first (the cold start's cheapest rung, or the calibrated pick);
+    with it off, the first image is at the user's settings."""
+    if s.render.governor == "off":
+        return "the panel works; the image at your settings appears here (the governor is off: no preview first)"
+    return "the panel works; a first preview appears here where a cheaper one exists, then your settings"
+
+
 def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True,
                vsync: bool = True, preset_path: str | None = None, shaders_root=None,
                notices: list[str] | None = None, options: ViewerOptions | None = None,
@@ -229,29 +239,45 @@ def create_app(settings: Settings | None = None, size: tuple[int, int] = DEFAULT
         sp = Splash(wnd)
         sp.show("window open")
         startup.mark("window")
-    if sp is not None:
-        s0 = settings or Settings()
-        if not s0.scene.mesh and s0.scene.name == "head":
-            from skinviewer.kernel.gpu_scene import prepare_gpu_arrays
-            from skinviewer.scene.scenes import prefetch_scene
-            try:  # generated once, then read from the cache: here in a worker while the screen ticks
-                sp.run("the default head: generating it (first start only) or reading it from the cache",
-                       lambda: prepare_gpu_arrays(prefetch_scene("head", s0.scene.head_detail).mesh))
-            except Exception:
-                pass  # the viewer's own load below reports it
-        sp.show("loading the scene onto the GPU, the shader library")
+    if sp is None:
+        return _finish(ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root,
+                                 notices=notices, options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer()), None)
+    # issue 34: the panel before the mesh -- the viewer's objects without a scene, its first UI frame,
+    # then the scene read in a worker while the panel keeps drawing, uploaded on this (GL) thread
+    sp.show("the viewer's objects and the shader library (the scene comes after the panel)")
     app = ViewerApp(settings=settings, preset_path=preset_path, shaders_root=shaders_root, notices=notices,
-                    options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer())
-    if sp is not None:  # the first frame's CPU work in a worker from now (ui/warm.py; run_viewer joins it)
-        app.start_warm()
-    if sp is not None:  # from here on the screen is the view's until the first image (the panel beside it)
-        sp.hand_over(f"the viewer is built; the first image of {app.state.settings.technique} comes next",
-                     "the panel works; a first preview appears here, then your settings")
-        from skinviewer.ui.splash import StartupView
-        app.ui.add_window(lambda state, frame: StartupView(sp, frame))
-    else:
-        wnd.swap_buffers()
-    wnd.set_default_viewport()
+                    options=options, ctx=wnd.ctx, wnd=wnd, timer=Timer(), defer_scene=True)
+    sp.hand_over(f"the panel is up; the scene, then the first image of {app.state.settings.technique}",
+                 startup_headline(app.state.settings))
+    from skinviewer.ui.splash import StartupView
+    app.ui.add_window(lambda state, frame: StartupView(sp, frame))
+    app.ui_frame()  # the panel, before the mesh is read (the "ui" mark)
+    s0 = app.state.settings
+    if app.state.scene is None and not s0.scene.mesh and s0.scene.name == "head":
+        import threading
+
+        from skinviewer.kernel.gpu_scene import prepare_gpu_arrays
+        from skinviewer.scene.scenes import prefetch_scene
+
+        def read_head():
+            try:  # generated once, then read from the cache; the load below reports a failure
+                prepare_gpu_arrays(prefetch_scene("head", s0.scene.head_detail).mesh)
+            except Exception:
+                pass
+        th = threading.Thread(target=read_head, name="skinviewer-head", daemon=True)
+        th.start()
+        while th.is_alive() and not wnd_closing(app):
+            app.ui_frame()
+            th.join(0.1)  # ~8 panel frames a second: most of the GIL stays with the worker
+    app.state.load_initial_scene()  # the upload (GL: this thread), or the fallback scene
+    app.start_warm()  # the first frame's CPU work in a worker from now (ui/warm.py; run_viewer joins it)
+    return _finish(app, sp)
+
+
+def _finish(app: ViewerApp, sp) -> ViewerApp:
+    if sp is None:
+        app.wnd.swap_buffers()
+    app.wnd.set_default_viewport()
     return app
 
 

@@ -52,6 +52,23 @@ class UiLayer(Protocol):
     def view_hooks(self) -> list: ...
 
 
+def calibration_note(why: str, have: bool, cached: bool, auto: bool, governor_on: bool, machine: str) -> str:
+    """The status line about the governor's calibration (issue 34), true in every case: the engine's
+    reason (``why``: "... measuring ...", "... rebuilding it") holds only when a measurement will run,
+    i.e. with ``auto`` (not SKINVIEWER_CALIBRATE=0, not a scripted --frames run) and the governor on
+    (a technique is measured when the governor first shows it). ``have``: a calibration was loaded;
+    ``cached``: it is this machine's own (else the table shipped for this GL renderer)."""
+    if auto:  # the governor off: nothing is measured until it is turned on (then "calibrating k/n")
+        return why if governor_on else ""
+    if have:
+        source = "this machine's measurements" if cached else "the table shipped for this GL renderer"
+        stale = "; techniques made for other preview ladders are not measured again" if why else ""
+        return f"calibration off: the governor's budget from {source}{stale}"
+    # what it means first (a 960x600 status bar cuts the rest, shown in full in its tooltip)
+    return (f"calibration off: no preview budget, edits show your settings (no calibration for {machine}, "
+            "none will be measured; skinviewer calibrate measures one)")
+
+
 class FrameController:
     def __init__(self, ctx, state: ViewerState, renderer: Renderer, shaders: ShaderLibrary,
                  window_size: tuple[int, int], buffer_size: tuple[int, int]):
@@ -182,9 +199,13 @@ class FrameController:
         from skinviewer.engine import calibration
         scene = self.renderer.scene
         tris = int(len(scene.gpu.mesh.indices)) if scene is not None else 0
-        cal, why = calibration.load(calibration.renderer_name(self.ctx), calibration.mesh_class(tris))
+        renderer, mclass = calibration.renderer_name(self.ctx), calibration.mesh_class(tris)
+        cal, why = calibration.load(renderer, mclass)
         self.governor.set_calibration(cal)
         self._auto_calibrate = auto
+        cached = calibration.calibration_path(renderer, mclass).is_file()
+        why = calibration_note(why, cal is not None, cached, auto, self.state.settings.render.governor != "off",
+                               f"{renderer} ({mclass} meshes)")
         if why:
             self.state.say(why)
         return why

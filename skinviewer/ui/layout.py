@@ -62,3 +62,51 @@ def compute_layout(window: tuple[int, int], framebuffer: tuple[int, int], show_u
     y0, y1 = round(view[1] * sy), round((view[1] + view[3]) * sy)  # top-left origin
     view_fb = (int(x0), int(fh - y1), max(int(x1 - x0), 16), max(int(y1 - y0), 16))
     return Layout((ww, wh), (fw, fh), panel, status, view, view_fb)
+
+
+# -- the floating windows over the 3D view (issue 34: layouts that fit 960x600) -----------------------
+MARGIN = 8.0
+ACCURACY_MAX_W, PASSES_MAX_W = 460.0, 380.0
+FLOAT_MIN_W = 200.0
+FLOAT_MAX_H = 560.0
+
+
+def floating_rects(view: Rect) -> dict[str, Rect]:
+    """The Accuracy and Passes windows' first rectangles (expanded): side by side along the top of
+    the 3D view, Accuracy at the left, Passes at the right, each at most half the view less the
+    margins, so neither covers the panel, the status bar or the other; as tall as the view allows
+    (up to ``FLOAT_MAX_H``) so the Accuracy window's Pareto chart fits without scrolling."""
+    vx, vy, vw, vh = view
+    half = max((vw - 3 * MARGIN) / 2, 1.0)
+    h = max(min(FLOAT_MAX_H, vh - 2 * MARGIN), 1.0)
+    aw, pw = min(ACCURACY_MAX_W, half), min(PASSES_MAX_W, half)
+    return {"accuracy": (vx + MARGIN, vy + MARGIN, aw, h),
+            "passes": (vx + vw - MARGIN - pw, vy + MARGIN, pw, h)}
+
+
+def keep_inside(rect: Rect, area: Rect) -> tuple[float, float]:
+    """The position that keeps ``rect`` (a window the user moved) inside ``area`` (the view, after a
+    resize or the panel moved): moved, never resized; the top-left corner wins when it is larger."""
+    x, y, w, h = rect
+    ax, ay, aw, ah = area
+    return max(ax, min(x, ax + aw - w)), max(ay, min(y, ay + ah - h))
+
+
+def overlaps(a: Rect, b: Rect) -> bool:
+    return a[0] < b[0] + b[2] and b[0] < a[0] + a[2] and a[1] < b[1] + b[3] and b[1] < a[1] + a[3]
+
+
+def flow_rows(widths: list[float], avail: float, gap: float) -> list[list[int]]:
+    """Items of these widths laid out left to right, wrapped to a new row when the next one would
+    pass ``avail`` (a legend that never runs past its window's edge; an item wider than ``avail``
+    has a row of its own)."""
+    rows: list[list[int]] = []
+    x = 0.0
+    for i, w in enumerate(widths):
+        if rows and rows[-1] and x + gap + w <= avail:
+            rows[-1].append(i)
+            x += gap + w
+        else:
+            rows.append([i])
+            x = w
+    return rows

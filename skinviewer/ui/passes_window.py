@@ -8,11 +8,11 @@ from imgui_bundle import imgui
 
 from skinviewer.kernel.graph import TIMING_NOTES
 from skinviewer.ui.display import CHANNELS
+from skinviewer.ui.layout import floating_rects, keep_inside
 from skinviewer.ui.widgets import ERR, UiContext, tooltip
 
 COLORS = {"ran": imgui.ImVec4(1.0, 0.7, 0.3, 1.0), "cached": imgui.ImVec4(0.5, 0.85, 0.5, 1.0),
           "pruned": imgui.ImVec4(0.55, 0.55, 0.6, 1.0), "deferred": imgui.ImVec4(0.5, 0.7, 1.0, 1.0)}
-WIDTH = 380.0
 
 
 class PassesWindow:
@@ -24,19 +24,18 @@ class PassesWindow:
 
     def draw(self, ui: UiContext) -> None:
         vx, vy, vw, vh = ui.layout.view
-        # first shown at the top-right corner of the 3D view; then wherever the user moves it
-        # half the view at most: the accuracy window takes the top-left half, their title bars never overlap
-        w = min(WIDTH, max(200.0, vw / 2 - 12))
-        imgui.set_next_window_pos(imgui.ImVec2(max(vx, vx + vw - w - 8), vy + 8), imgui.Cond_.first_use_ever.value)
-        imgui.set_next_window_size(imgui.ImVec2(w, min(520.0, vh - 16)), imgui.Cond_.first_use_ever.value)
+        # first shown at the top-right corner of the 3D view, then wherever the user moves it; half the
+        # view at most: the Accuracy window takes the top-left half (ui/layout.floating_rects), so
+        # neither covers the other or the panel at 960x600
+        x, y, w, h = floating_rects(ui.layout.view)["passes"]
+        imgui.set_next_window_pos(imgui.ImVec2(x, y), imgui.Cond_.first_use_ever.value)
+        imgui.set_next_window_size(imgui.ImVec2(w, h), imgui.Cond_.first_use_ever.value)
         if vw < 900:  # small views: start collapsed so the image stays visible
             imgui.set_next_window_collapsed(True, imgui.Cond_.first_use_ever.value)
         if self._rect is not None:
-            # the window shrank (or the panel moved): keep the passes window on screen
-            x, y, w, h = self._rect
-            ww, wh = ui.layout.window
-            nx, ny = max(0.0, min(x, ww - w)), max(0.0, min(y, wh - h))
-            if (nx, ny) != (x, y):
+            # the window shrank (or the panel moved): keep the passes window inside the view
+            nx, ny = keep_inside(self._rect, ui.layout.view)
+            if (nx, ny) != self._rect[:2]:
                 imgui.set_next_window_pos(imgui.ImVec2(nx, ny), imgui.Cond_.always.value)
         expanded = imgui.begin("Passes###passes")[0]
         if expanded:
@@ -80,9 +79,12 @@ class PassesWindow:
         flags = (imgui.TableFlags_.borders_inner_h.value | imgui.TableFlags_.row_bg.value
                  | imgui.TableFlags_.sizing_fixed_fit.value | imgui.TableFlags_.scroll_x.value)
         if imgui.begin_table("passes", 4, flags):
+            # the name and the time first (a 960x600 window shows these two without scrolling), the
+            # name column and the header kept in place while the rest scrolls sideways
+            imgui.table_setup_scroll_freeze(1, 1)
             imgui.table_setup_column("pass")
-            imgui.table_setup_column("status")
             imgui.table_setup_column("ms")
+            imgui.table_setup_column("status")
             imgui.table_setup_column("reason")
             imgui.table_headers_row()
             for p in rep.passes:
@@ -96,13 +98,13 @@ class PassesWindow:
                     elif outs:
                         st.set_inspect(outs[0])
                 imgui.table_next_column()
-                imgui.text_colored(COLORS.get(p.status, COLORS["pruned"]), p.status)
-                imgui.table_next_column()
                 if p.ms is not None:
-                    imgui.text(f"{p.ms:.2f}")
+                    imgui.text(f"{p.ms:.1f}")
                 elif p.name in fr.last_ms:
-                    imgui.text_disabled(f"({fr.last_ms[p.name]:.2f})")
+                    imgui.text_disabled(f"({fr.last_ms[p.name]:.1f})")
                     tooltip("cost when it last ran")
+                imgui.table_next_column()
+                imgui.text_colored(COLORS.get(p.status, COLORS["pruned"]), p.status)
                 imgui.table_next_column()
                 if getattr(p, "nonfinite", None):
                     imgui.text_colored(ERR, "NaN/Inf")

@@ -57,21 +57,26 @@ def y_label(log_r: bool) -> str:
     return "r² R(r) (per ln r)" if log_r else "r R(r) (1/mm)"
 
 
-def draw(title: str, series, log_r: bool, height: float = PLOT_H) -> tuple[float, float, float, float] | None:
+def draw(title: str, series, log_r: bool, height: float = PLOT_H,
+         legend: list | None = None) -> tuple[float, float, float, float] | None:
     """One plot of ``series`` [(label, r, y, (r, g, b, a), thickness)]; returns its screen rect.
     No mouse input (``no_inputs``): the wheel scrolls the window it is in."""
     from imgui_bundle import imgui, implot
+
+    from skinviewer.ui.widgets import flow_legend
     p = imgui.get_cursor_screen_pos()
     w = imgui.get_content_region_avail().x
-    flags = implot.Flags_.no_inputs.value | implot.Flags_.no_menus.value
+    # the legend above the plot, wrapped into rows at the panel's width (issue 34: implot's one-row
+    # outside legend was cut at the panel's edge, "B look" at 960x600); it never hides the curves
+    right, edge = flow_legend([(label, col) for label, _, _, col, _ in series])
+    if legend is not None:  # (rightmost x drawn, the window's right edge): tests
+        legend[:] = [right, edge]
+    flags = implot.Flags_.no_inputs.value | implot.Flags_.no_menus.value | implot.Flags_.no_legend.value
     implot.push_style_var(implot.StyleVar_.fit_padding.value, imgui.ImVec2(0.0, 0.08))  # peaks not on the frame
     if implot.begin_plot(title, imgui.ImVec2(-1, height), flags):
         implot.setup_axes("r (mm)", y_label(log_r), implot.AxisFlags_.auto_fit.value, implot.AxisFlags_.auto_fit.value)
         if log_r:
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
-        # above the plot, in one row: it never hides the curves
-        implot.setup_legend(implot.Location_.north.value,
-                            implot.LegendFlags_.outside.value | implot.LegendFlags_.horizontal.value)
         for label, r, y, col, thick in series:
             implot.set_next_line_style(imgui.ImVec4(*col), thick)
             implot.plot_line(label, np.ascontiguousarray(r, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64))

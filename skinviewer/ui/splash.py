@@ -215,6 +215,8 @@ class StartupView:
         governor's preview where there is one -- with its passes done so far (a pass's first run
         compiles its shaders)."""
         f = self.frame
+        if getattr(getattr(f, "state", None), "scene", True) is None:  # the panel came before the mesh
+            return "the scene: the default head read from the cache (generated on a first start), then uploaded", ""
         if f.frames == 0:
             return "preparing the first frame: the mesh's tables (border edges, rays to the lights, rho_dt)", ""
         rung = getattr(f, "_rung", None)

@@ -62,7 +62,7 @@ class InspectState:
 class ViewerState:
     def __init__(self, settings: Settings | None, load_scene: Callable[[Settings], Any],
                  preset_path: str | None = None, notices: list[str] | None = None,
-                 options: ViewerOptions | None = None, vsync: bool = True):
+                 options: ViewerOptions | None = None, vsync: bool = True, defer_scene: bool = False):
         self._load_scene = load_scene
         self._listeners: list[Callable[[str], None]] = []
         self.options = options or ViewerOptions()
@@ -78,9 +78,23 @@ class ViewerState:
         s = settings or Settings()
         if s.technique not in techniques.names():
             s = with_values(s, {"technique": best_technique(s.technique)})
-        self.settings = self._initial_scene(s)
+        self._preset_path = preset_path
+        # defer_scene: the start shows the panel before the mesh is read and uploaded (issue 34);
+        # load_initial_scene() follows (an edit before it loads the scene itself, set_settings)
+        self.settings = s if defer_scene else self._initial_scene(s)
         self.home_camera = self.settings.camera.model_dump(mode="json")
         self.presets = PresetState(self.settings, preset_path)
+
+    def load_initial_scene(self) -> None:
+        """The scene of a start whose panel came first (``defer_scene``); the fallback scene, said
+        in the notices, if it cannot be loaded. Nothing if a scene is loaded already."""
+        if self.scene is not None:
+            return
+        s = self._initial_scene(self.settings)
+        if s is not self.settings:  # the fallback scene: its settings are the start's
+            self.settings = s
+            self.home_camera = s.camera.model_dump(mode="json")
+            self.presets = PresetState(s, self._preset_path)
 
     # -- listeners ---------------------------------------------------------------------------
     def subscribe(self, fn: Callable[[str], None]) -> None:

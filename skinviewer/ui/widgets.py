@@ -28,6 +28,37 @@ OK = imgui.ImVec4(0.55, 0.9, 0.55, 1.0)
 DIM = imgui.ImVec4(0.65, 0.65, 0.7, 1.0)
 
 
+def flow_legend(items, tooltips: dict[str, str] | None = None) -> tuple[float, float]:
+    """A plot's legend above it, as imgui items (issue 34): a colour square and the label per item
+    ``(label, (r, g, b, a))``, wrapped into as many rows as the window's width needs (implot's own
+    outside legend is one row, cut at the window's edge). Returns the rightmost x drawn and the
+    right edge available (tests: the first never passes the second)."""
+    from skinviewer.ui.layout import flow_rows
+    sq = imgui.get_text_line_height() * 0.75
+    gap = imgui.get_style().item_spacing.x
+    widths = [sq + 4 + imgui.calc_text_size(label).x for label, _ in items]
+    x0 = imgui.get_cursor_screen_pos().x
+    avail = imgui.get_content_region_avail().x
+    right = x0
+    dl = imgui.get_window_draw_list()
+    for row in flow_rows(widths, avail, gap * 2):
+        for k, i in enumerate(row):
+            label, col = items[i]
+            if k:
+                imgui.same_line(0, gap * 2)
+            p = imgui.get_cursor_screen_pos()
+            lh = imgui.get_text_line_height()
+            dl.add_rect_filled(imgui.ImVec2(p.x, p.y + (lh - sq) / 2), imgui.ImVec2(p.x + sq, p.y + (lh + sq) / 2),
+                               imgui.color_convert_float4_to_u32(imgui.ImVec4(*col)))
+            imgui.dummy(imgui.ImVec2(sq, lh))
+            imgui.same_line(0, 4)
+            imgui.text(label)
+            if tooltips and label in tooltips:
+                tooltip(tooltips[label])
+            right = max(right, imgui.get_item_rect_max().x)
+    return right, x0 + avail
+
+
 def wrapped(text: str, color: imgui.ImVec4 | None = None) -> None:
     """Text wrapped at the window edge: dimmed, or in ``color``."""
     imgui.push_text_wrap_pos(0)

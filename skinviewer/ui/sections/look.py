@@ -67,6 +67,7 @@ class LookSection:
         self.frame = frame
         self.log_r = True
         self.plot_rect: tuple[float, float, float, float] | None = None  # last drawn profile plot (tests)
+        self.legend_extent: list[float] = []  # (rightmost x of the profile legend, the right edge it may use): tests
 
     def draw(self, ui: UiContext) -> None:
         st = self.state
@@ -139,7 +140,7 @@ class LookSection:
             series += [(f"{n} table", r, yt[:, c], (*col, 1.0), 2.0) for c, (n, col) in enumerate(profile_plot.CHANNELS)]
         yb = profile_plot.weighted(r, burley, self.log_r)
         series += [(f"{n} look", r, yb[:, c], (*col, 0.45), 1.0) for c, (n, col) in enumerate(profile_plot.CHANNELS)]
-        self.plot_rect = profile_plot.draw("scatter profile##look", series, self.log_r, 170.0)
+        self.plot_rect = profile_plot.draw("scatter profile##look", series, self.log_r, 170.0, self.legend_extent)
 
 
 class QualitySection:

@@ -32,7 +32,7 @@ class StatusSection:
     def draw(self, ui: UiContext) -> None:
         st, fr = self.state, self.frame
         s = st.settings
-        wrapped(st.scene.description if st.scene else "-", DIM)
+        wrapped(st.scene.description if st.scene else "the scene is loading (the panel comes first)", DIM)
         p = st.presets
         marker = " (unsaved changes, Ctrl+S)" if p.dirty(s) else ""
         ro = " (shipped, read-only)" if p.read_only else ""

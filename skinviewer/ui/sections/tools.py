@@ -92,7 +92,9 @@ class PresetsSection:
         entered, text = imgui.input_text("path", p.edit_path, _ENTER)
         if text != p.edit_path:
             st.set_preset_path_text(text)
-        tooltip("a preset .json; Enter or 'load' loads it (asking first if there are unsaved changes), "
+        # the whole path first: a 960x600 panel shows only its start in the field (issue 34)
+        tooltip((f"{p.edit_path}\n" if p.edit_path else "")
+                + "a preset .json; Enter or 'load' loads it (asking first if there are unsaved changes), "
                 "'save as' writes the current state there")
         if (imgui.button("load") or entered) and p.edit_path.strip():
             st.request_preset(p.edit_path.strip())
