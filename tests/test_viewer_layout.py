@@ -161,3 +161,27 @@ def test_the_start_up_headline_promises_a_preview_only_when_the_governor_makes_o
     off = startup_headline(with_values(Settings(), {"render.governor": "off"}))
     assert "preview appears" not in off and "your settings" in off
     assert "preview" in startup_headline(Settings())
+
+
+def test_a_click_on_a_legend_item_hides_its_series_and_a_second_shows_it(app960):
+    """The wrapped legends (issue 34) keep implot's click-to-hide: a click on "R table" in the
+    scatter profile's legend hides that curve, a second click shows it again."""
+    from imgui_bundle import imgui
+
+    from skinviewer.ui.sections.look import LookSection
+    app = app960
+    look = next(s for w in app.ui.windows for s in getattr(w, "sections", ()) if isinstance(s, LookSection))
+    app.step(1)
+    assert "R table" in look.legend_rects, look.legend_rects
+    x, y, w, h = look.legend_rects["R table"]
+    io = imgui.get_io()
+    for expect in (True, False):
+        io.add_mouse_pos_event(x + w / 2, y + h / 2)
+        app.step(1)
+        io.add_mouse_button_event(0, True)
+        app.step(1)
+        io.add_mouse_button_event(0, False)
+        app.step(1)
+        assert ("R table" in look.profile_hidden) is expect, look.profile_hidden
+    io.add_mouse_pos_event(-1.0, -1.0)
+    app.step(1)

@@ -102,6 +102,7 @@ class AccuracyWindow:
         self.rect = None         # the window's last (x, y, w, h)
         self.chart_rect = None   # the Pareto chart's last (x, y, w, h) on screen (tests)
         self.legend_extent: list[float] = []  # (rightmost x of its legend, the right edge it may use)
+        self.pareto_hidden: set[str] = set()  # series a click on the Pareto chart's legend hid
         self.error = None        # ImageError of the image on screen
         self.error_for = None    # (settings object, report id) the figures are for
         self.status = ""
@@ -331,7 +332,9 @@ class AccuracyWindow:
         items += [("Pareto front", FRONT_RGBA)] if len(front) > 1 else []
         items += [("current", CURRENT_RGBA)] if cur else []
         self.legend_extent[:] = flow_legend(items, {"current": "the configuration of the live settings",
-                                                    "Pareto front": "no configuration is both faster and closer to the truth"})
+                                                    "Pareto front": "no configuration is both faster and closer to the truth"},
+                                            hidden=self.pareto_hidden)
+        shown = self.pareto_hidden.isdisjoint
         h = max(CHART_MIN_H, imgui.get_content_region_avail().y - 4)
         p = imgui.get_cursor_screen_pos()
         self.chart_rect = (p.x, p.y, imgui.get_content_region_avail().x, h)
@@ -347,19 +350,21 @@ class AccuracyWindow:
             implot.setup_axis_limits(implot.ImAxis_.x1.value, float(xs.min()) / 1.25, float(xs.max()) * 1.25,
                                      implot.Cond_.once.value)
             for tech, col in zip(techs, cols):
+                if not shown((tech,)):
+                    continue
                 pts = [r for r in ok if r.technique == tech]
                 implot.set_next_marker_style(implot.Marker_.circle.value, 4.0, col)  # distinct per technique
                 implot.plot_scatter(tech, np.array([r.full_ms for r in pts], np.float64),
                                     np.array([100 * r.rms_mean for r in pts], np.float64))
-            if len(front) > 1:
+            if len(front) > 1 and shown(("Pareto front",)):
                 implot.set_next_line_style(imgui.ImVec4(*FRONT_RGBA), 1.0)
                 implot.plot_line("Pareto front", np.array([r.full_ms for r in front], np.float64),
                                  np.array([100 * r.rms_mean for r in front], np.float64))
-            if cur:
+            if cur and shown(("current",)):
                 implot.set_next_marker_style(implot.Marker_.square.value, 6.0, imgui.ImVec4(*CURRENT_RGBA))
                 implot.plot_scatter("current", np.array([cur[0].full_ms], np.float64),
                                     np.array([100 * cur[0].rms_mean], np.float64))
-            hovered = self._nearest(implot, ok)
+            hovered = self._nearest(implot, [r for r in ok if shown((r.technique,))])
             if hovered is not None:
                 show_tooltip(f"{hovered.name}\n{hovered.full_ms:.0f} ms, RMS {100 * hovered.rms_mean:.2f} %, "
                              f"DSSIM {hovered.dssim:.4f}\nclick: apply")

@@ -36,6 +36,7 @@ class ProfileLab:
         self.shared = True
         self.normalize = True
         self.log_r = True  # the plot's radius axis (ui/profile_plot.py)
+        self.hidden: set[str] = set()  # series a click on the plot's legend hid
         # fit / fit_error belong to the UI thread; the background fit only hands its outcome over
         # through _result (one assignment), picked up by _collect() on the UI thread
         self.fit = None
@@ -199,4 +200,4 @@ class ProfileLab:
                 F = profile_plot.weighted(r, np.asarray(self.fit(r), dtype=np.float64), self.log_r)
                 for c, (name, col) in enumerate(profile_plot.CHANNELS):
                     series.append((f"fit {name}", r, F[:, c], (*col, 1.0), 2.5))
-            profile_plot.draw("model (thin) and fit##lab", series, self.log_r)
+            profile_plot.draw("model (thin) and fit##lab", series, self.log_r, hidden=self.hidden)

@@ -58,9 +58,10 @@ def y_label(log_r: bool) -> str:
 
 
 def draw(title: str, series, log_r: bool, height: float = PLOT_H,
-         legend: list | None = None) -> tuple[float, float, float, float] | None:
+         legend: list | None = None, hidden: set[str] | None = None, rects: dict | None = None) -> tuple[float, float, float, float] | None:
     """One plot of ``series`` [(label, r, y, (r, g, b, a), thickness)]; returns its screen rect.
-    No mouse input (``no_inputs``): the wheel scrolls the window it is in."""
+    No mouse input (``no_inputs``): the wheel scrolls the window it is in. ``hidden``: the caller's
+    set of series labels a click on the legend has hidden; ``rects``: the legend items' rects."""
     from imgui_bundle import imgui, implot
 
     from skinviewer.ui.widgets import flow_legend
@@ -68,7 +69,7 @@ def draw(title: str, series, log_r: bool, height: float = PLOT_H,
     w = imgui.get_content_region_avail().x
     # the legend above the plot, wrapped into rows at the panel's width (issue 34: implot's one-row
     # outside legend was cut at the panel's edge, "B look" at 960x600); it never hides the curves
-    right, edge = flow_legend([(label, col) for label, _, _, col, _ in series])
+    right, edge = flow_legend([(label, col) for label, _, _, col, _ in series], hidden=hidden, rects=rects)
     if legend is not None:  # (rightmost x drawn, the window's right edge): tests
         legend[:] = [right, edge]
     flags = implot.Flags_.no_inputs.value | implot.Flags_.no_menus.value | implot.Flags_.no_legend.value
@@ -78,6 +79,8 @@ def draw(title: str, series, log_r: bool, height: float = PLOT_H,
         if log_r:
             implot.setup_axis_scale(implot.ImAxis_.x1.value, implot.Scale_.log10.value)
         for label, r, y, col, thick in series:
+            if hidden and label in hidden:
+                continue
             implot.set_next_line_style(imgui.ImVec4(*col), thick)
             implot.plot_line(label, np.ascontiguousarray(r, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64))
         implot.end_plot()

@@ -28,11 +28,14 @@ OK = imgui.ImVec4(0.55, 0.9, 0.55, 1.0)
 DIM = imgui.ImVec4(0.65, 0.65, 0.7, 1.0)
 
 
-def flow_legend(items, tooltips: dict[str, str] | None = None) -> tuple[float, float]:
+def flow_legend(items, tooltips: dict[str, str] | None = None,
+                hidden: set[str] | None = None, rects: dict | None = None) -> tuple[float, float]:
     """A plot's legend above it, as imgui items (issue 34): a colour square and the label per item
     ``(label, (r, g, b, a))``, wrapped into as many rows as the window's width needs (implot's own
-    outside legend is one row, cut at the window's edge). Returns the rightmost x drawn and the
-    right edge available (tests: the first never passes the second)."""
+    outside legend is one row, cut at the window's edge). With ``hidden`` (the caller's set of
+    labels not to plot), a click on an item hides or shows its series, as implot's legend did; a
+    hidden item is drawn dimmed; ``rects`` receives each item's screen rect (tests). Returns the rightmost x drawn and the right edge available
+    (tests: the first never passes the second)."""
     from skinviewer.ui.layout import flow_rows
     sq = imgui.get_text_line_height() * 0.75
     gap = imgui.get_style().item_spacing.x
@@ -48,14 +51,29 @@ def flow_legend(items, tooltips: dict[str, str] | None = None) -> tuple[float, f
                 imgui.same_line(0, gap * 2)
             p = imgui.get_cursor_screen_pos()
             lh = imgui.get_text_line_height()
+            off = hidden is not None and label in hidden
+            a = col[3] * (0.3 if off else 1.0)
             dl.add_rect_filled(imgui.ImVec2(p.x, p.y + (lh - sq) / 2), imgui.ImVec2(p.x + sq, p.y + (lh + sq) / 2),
-                               imgui.color_convert_float4_to_u32(imgui.ImVec4(*col)))
-            imgui.dummy(imgui.ImVec2(sq, lh))
-            imgui.same_line(0, 4)
-            imgui.text(label)
-            if tooltips and label in tooltips:
-                tooltip(tooltips[label])
+                               imgui.color_convert_float4_to_u32(imgui.ImVec4(col[0], col[1], col[2], a)))
+            if hidden is None:
+                imgui.dummy(imgui.ImVec2(sq, lh))
+                imgui.same_line(0, 4)
+                imgui.text(label)
+            else:  # the square and the label as one button: a click toggles the series
+                imgui.invisible_button(f"##legend-{label}", imgui.ImVec2(widths[i], lh))
+                clicked = imgui.is_item_clicked(0)
+                dl.add_text(imgui.ImVec2(p.x + sq + 4, p.y), imgui.get_color_u32(
+                    imgui.Col_.text_disabled.value if off else imgui.Col_.text.value), label)
+                if clicked:
+                    hidden.symmetric_difference_update({label})
+            tip = (tooltips or {}).get(label, "")
+            if hidden is not None:
+                tip = (tip + "\n" if tip else "") + ("hidden: click to show" if off else "click to hide")
+            if tip:
+                tooltip(tip)
             right = max(right, imgui.get_item_rect_max().x)
+            if rects is not None:
+                rects[label] = (p.x, p.y, imgui.get_item_rect_max().x - p.x, lh)
     return right, x0 + avail
 
 

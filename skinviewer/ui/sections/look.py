@@ -66,6 +66,8 @@ class LookSection:
         self.state = state
         self.frame = frame
         self.log_r = True
+        self.profile_hidden: set[str] = set()  # series a click on the profile's legend hid
+        self.legend_rects: dict[str, tuple] = {}  # its items' screen rects (tests)
         self.plot_rect: tuple[float, float, float, float] | None = None  # last drawn profile plot (tests)
         self.legend_extent: list[float] = []  # (rightmost x of the profile legend, the right edge it may use): tests
 
@@ -140,7 +142,8 @@ class LookSection:
             series += [(f"{n} table", r, yt[:, c], (*col, 1.0), 2.0) for c, (n, col) in enumerate(profile_plot.CHANNELS)]
         yb = profile_plot.weighted(r, burley, self.log_r)
         series += [(f"{n} look", r, yb[:, c], (*col, 0.45), 1.0) for c, (n, col) in enumerate(profile_plot.CHANNELS)]
-        self.plot_rect = profile_plot.draw("scatter profile##look", series, self.log_r, 170.0, self.legend_extent)
+        self.plot_rect = profile_plot.draw("scatter profile##look", series, self.log_r, 170.0, self.legend_extent,
+                                           self.profile_hidden, self.legend_rects)
 
 
 class QualitySection:

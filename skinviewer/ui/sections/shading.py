@@ -105,6 +105,7 @@ class DeonSection:
         self.state = state
         self.frame = frame
         self.log_r = True  # the profile plot's radius axis (see ui/profile_plot.py)
+        self.profile_hidden: set[str] = set()  # series a click on the profile's legend hid
         self.plot_rect: tuple[float, float, float, float] | None = None  # last drawn profile plot (tests)
 
     def draw(self, ui: UiContext) -> None:
@@ -184,7 +185,7 @@ class DeonSection:
                 "log: r²·R(r) against log r -- the same area rule, so each Gaussian is a bump as high as its weight")
         r, y = profile_plot.gaussian_curve(gs, self.log_r)
         series = [(name, r, y[:, c], (*col, 1.0), 2.0) for c, (name, col) in enumerate(profile_plot.CHANNELS)]
-        self.plot_rect = profile_plot.draw("radial profile##deon", series, self.log_r)
+        self.plot_rect = profile_plot.draw("radial profile##deon", series, self.log_r, hidden=self.profile_hidden)
 
 
 class SpecularSection:
