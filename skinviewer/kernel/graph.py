@@ -29,7 +29,7 @@ import moderngl
 import numpy as np
 
 from skinviewer.ground.paths import shaders_dir
-from skinviewer.ground.settings import Settings, value_key
+from skinviewer.ground.settings import Settings, get_path, value_key
 from skinviewer.kernel.compiler import affected, order_passes, pixels, prune_reason, why
 from skinviewer.kernel.execute import ExecuteContext
 from skinviewer.kernel.gpu import GpuServices, write_uniform
@@ -65,6 +65,35 @@ class TileProgress:
     ms: float = 0.0
     held: dict[str, Any] = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
     band_ms: list[float] = field(default_factory=list)  # what each band done so far cost
+
+
+_SPEC_KEYS: dict[TexSpec, str] = {}  # repr of an output's spec, made once per spec (part of every key)
+
+
+def _spec_key(spec: TexSpec) -> str:
+    k = _SPEC_KEYS.get(spec)
+    if k is None:
+        if len(_SPEC_KEYS) > 4096:
+            _SPEC_KEYS.clear()
+        k = _SPEC_KEYS[spec] = repr(spec)
+    return k
+
+
+def fast_value_key(settings: Settings, path: str) -> str:
+    """``value_key`` of a setting, the same text, without JSON for a plain number, bool or None (most
+    declared settings; JSON encoding was most of the cost of a pass's cache key)."""
+    v = get_path(settings, path)
+    t = type(v)
+    if t is float:
+        if math.isfinite(v):
+            return repr(v)
+    elif t is int:
+        return repr(v)
+    elif t is bool:
+        return "true" if v else "false"
+    elif v is None:
+        return "null"
+    return value_key(settings, path)
 
 
 def band_shares(profile: np.ndarray | None, count: int) -> np.ndarray:
@@ -153,9 +182,11 @@ class RenderGraph:
     def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None,
                      interactive: bool = False) -> dict[str, Reflection]:
         refl = {}
+        memo: dict[Any, Any] = {}  # Reflection.memo: rules many passes ask, answered once this frame
         for p in self.passes:
             r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
                            view=view if p.uses_scene else None, interactive=interactive)
+            r._frame_memo = memo
             p.reflect(r)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
@@ -170,12 +201,13 @@ class RenderGraph:
         vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
         for path in r.declared:
             if path not in vk:
-                vk[path] = value_key(frame.settings, path)
+                vk[path] = fast_value_key(frame.settings, path)
+        versions = self.res.versions
         key = {
             "settings": {path: vk[path] for path in r.declared},
-            "inputs": {res: self.res.versions.get(res, 0) for res in r.inputs},
+            "inputs": {res: versions.get(res, 0) for res in r.inputs},
             "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
-            "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
+            "outputs": {res: _spec_key(spec) for res, spec in r.outputs.items()},
         }
         if r.depends_on:
             key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
