@@ -104,3 +104,81 @@ def test_an_edit_read_only_inside_a_memoised_rule_re_runs(gl_ctx):
         assert "deon_irradiance" in edit.ran
     finally:
         r.release()
+
+
+def test_finite_checks_are_read_back_after_the_last_pass(gl_ctx, tmp_path, monkeypatch):
+    """render.check_finite: each pass's scan is drawn after it, but read back (a wait for the GPU)
+    only once every pass of the frame is issued; the frame's own report still names the pass."""
+    import moderngl
+    from test_reliability import FS_VERT, Poison
+
+    from skinviewer.kernel.graph import RenderGraph
+    from skinviewer.kernel.pass_api import TexSpec
+    from skinviewer.kernel.report import FrameInputs
+    from skinviewer.kernel.shaders import ShaderLibrary
+
+    events: list[str] = []
+
+    class After(Poison):
+        name = "after"
+
+        def reflect(self, r):
+            super().reflect(r)
+            r.outputs.clear()
+            r.input("lit")
+            r.output("image", TexSpec((200, 70), 4, "f2"))
+
+        def execute(self, ec):
+            events.append("after ran")
+            prog = ec.program("fill")
+            ec.set(prog, "u_value", 0.5)
+            ec.draw_fullscreen(prog, "image")
+
+    (tmp_path / "fill.vert").write_text(FS_VERT)
+    (tmp_path / "fill.frag").write_text("#version 330 core\nuniform float u_value;\nout vec4 f;\nvoid main() {"
+                                        " f = (ivec2(gl_FragCoord.xy) == ivec2(137, 41)) ? vec4(u_value) : vec4(0.5); }\n")
+    g = RenderGraph(gl_ctx, ShaderLibrary(gl_ctx, tmp_path), [Poison(float("nan")), After(0.5)], ["image"])
+    read = moderngl.Texture.read
+
+    def spy(tex, *a, **k):
+        if tex.size == (64, 64) and tex.components == 1:  # a scan's flags
+            events.append("flags read")
+        return read(tex, *a, **k)
+    monkeypatch.setattr(moderngl.Texture, "read", spy)
+    rep = g.run(FrameInputs(Settings(), None, 0, None, "c"))
+    assert events[0] == "after ran" and events.count("flags read") == 2  # lit and image, after both passes
+    assert rep.nonfinite == {"poison": ["lit"]}
+    g.release()
+
+
+def test_timer_queries_are_read_after_the_last_pass(gl_ctx, shader_dir, monkeypatch):
+    """render.timing = gpu without a frame budget (render, bench): every pass's timer query is read
+    once all are issued (reading one waits for the GPU); each pass still gets its own figure. Under a
+    budget (the viewer) each is read at once: the look-ahead needs it."""
+    import moderngl
+    from test_graph import Add, Fill, frame, make_graph
+
+    events: list[str] = []
+
+    class Spy(Fill):
+        def execute(self, ec):
+            events.append("ran")
+            super().execute(ec)
+    passes = [Spy("fill_a", "a", "render.exposure"), Spy("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, _ = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    elapsed = moderngl.Query.elapsed
+
+    def spy(q):
+        events.append("read")
+        return elapsed.fget(q)
+    monkeypatch.setattr(moderngl.Query, "elapsed", property(spy))
+    for _ in range(2):  # llvmpipe's first query may answer nothing
+        events.clear()
+        rep = g.run(frame(Settings()), timing="gpu", force=True)
+    assert events == ["ran", "ran", "read", "read", "read"]
+    assert all(p.ms is None or 0 <= p.ms < 4000 for p in rep.passes)
+    assert sum(p.ms is not None for p in rep.passes) >= 1
+    events.clear()
+    g.run(frame(Settings()), timing="gpu", force=True, budget_ms=1e6)
+    assert events == ["ran", "read", "ran", "read", "read"]
+    g.release()

@@ -67,6 +67,15 @@ class TileProgress:
     band_ms: list[float] = field(default_factory=list)  # what each band done so far cost
 
 
+def _elapsed_ms(query: moderngl.Query) -> float | None:
+    """A timer query's GPU time in ms (waits for it), the query released; None when it has none."""
+    ns = query.elapsed
+    query.release() if hasattr(query, "release") else None
+    if ns is None or ns >= 0xFFFFFFFF or ns < 0:  # llvmpipe's first query answers 0xFFFFFFFF
+        return None
+    return ns / 1e6
+
+
 _SPEC_KEYS: dict[TexSpec, str] = {}  # repr of an output's spec, made once per spec (part of every key)
 
 
@@ -144,8 +153,12 @@ class RenderGraph:
         # by the first frame that is not a preview and finds them cached; what a pass's check last cost
         self._unchecked: set[str] = set()
         self._check_ms: dict[str, float] = {}
+        # this frame's NaN/Inf scans, drawn after their pass, read back after the last (_collect_checks)
+        self._pending_checks: list[tuple[str, list[tuple[str, moderngl.Texture]], float]] = []
+        self._pending_queries: list[tuple[Any, PassRecord, str, int, float | None]] = []  # _collect_queries
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
-        self._value_keys: dict[str, str] = {}  # settings path -> value_key, within one run()
+        self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
+        self._vk_settings: Settings | None = None  # the settings those keys were made from
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
@@ -196,6 +209,20 @@ class RenderGraph:
                 self._produced[p.name] = set(r.outputs)
             refl[p.name] = r
         return refl
+
+    def _kept_value_keys(self, settings: Settings) -> dict[str, str]:
+        """This frame's value keys to start from: the last frame's, for the paths under a top-level
+        section equal (==) to the last frame's; empty when the settings are another kind of object.
+        A camera move or a light drag then re-encodes only the camera's or the lights' paths (the
+        JSON of a whole section such as ``lights`` or ``deon.gaussians`` was most of a key's cost)."""
+        last, self._vk_settings = self._vk_settings, settings
+        old = self._value_keys
+        if last is None or not old or type(last) is not type(settings):
+            return {}
+        if last is settings:
+            return old
+        same = {name for name in type(settings).model_fields if getattr(settings, name) == getattr(last, name)}
+        return {path: k for path, k in old.items() if path.split(".", 1)[0] in same}
 
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
         vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
@@ -248,10 +275,15 @@ class RenderGraph:
                            note=p.note, figures=p.figures, nonfinite=p.nonfinite)
                 for p in last.passes])
             return self.last_report
+        if self._pending_checks:  # the last frame raised before reading its scans back
+            self._collect_checks(None)
+        for query, *_ in self._pending_queries:
+            query.release() if hasattr(query, "release") else None
+        self._pending_queries = []
         t_start = time.perf_counter()
         any_ran = False
         self._exec_s = 0.0
-        self._value_keys = {}  # per frame: the settings may be another object (or edited) next frame
+        self._value_keys = self._kept_value_keys(frame.settings)
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
@@ -323,8 +355,12 @@ class RenderGraph:
                         rec.reason += f"; in {progress.count} bands"
                 else:
                     predicted = self._expected_ms(p, r)
-                    rec.ms = self._execute(p, r, frame, timing)
-                    self._keep_pace(predicted, rec.ms)
+                    if timing == "gpu" and budget_ms is None:  # read after the frame (_collect_queries)
+                        query = self._execute(p, r, frame, timing, defer=True)
+                        self._pending_queries.append((query, rec, p.name, pixels(r), predicted))
+                    else:
+                        rec.ms = self._execute(p, r, frame, timing)
+                        self._keep_pace(predicted, rec.ms)
                 rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
@@ -352,6 +388,8 @@ class RenderGraph:
             if self._lod_notes.get(p.name):  # it drew the mesh at a coarser level (rules.mesh_lod)
                 rec.reason = "; ".join(x for x in (rec.reason, self._lod_notes[p.name]) if x)
             records[p.name] = rec
+        self._collect_queries()  # the passes' timer queries, read once every pass is issued
+        self._collect_checks(records)  # the frame's NaN/Inf scans, read back once every pass is issued
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         # (not a resource another pass writes now: ss_diffuse is ss_transmittance's or ss_lighting's)
         written = {res for p in order for res in refl[p.name].outputs}
@@ -498,8 +536,24 @@ class RenderGraph:
         """Tileable passes part-way: name -> (bands done, bands)."""
         return {n: (pr.done, pr.count) for n, pr in self._progress.items()}
 
+    def _collect_queries(self) -> None:
+        """The GPU time of the passes whose timer query _execute left to read (timing "gpu" without a
+        budget): reading one waits for the GPU to finish that pass, so reading each right after its
+        pass kept the CPU idle while the GPU ran it and the GPU idle while the CPU set up the next."""
+        pending, self._pending_queries = self._pending_queries, []
+        t0 = time.perf_counter()
+        for query, rec, name, px, predicted in pending:
+            rec.ms = _elapsed_ms(query)
+            self._keep_pace(predicted, rec.ms)
+            if rec.ms is not None:
+                self._last_ms[name] = rec.ms
+                self._last_px[name] = px
+        self._exec_s += time.perf_counter() - t0  # waiting for the GPU: the passes' time, not the graph's
+
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
-                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None) -> float | None:
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False) -> Any:
+        """Run ``p`` (or one band of it) and return its ms; ``defer`` (timing "gpu"): its timer query,
+        to be read after the frame's last pass (_collect_queries)."""
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         t_enter = time.perf_counter()
@@ -513,11 +567,7 @@ class RenderGraph:
             query = self.ctx.query(time=True)
             with query:
                 p.execute(ec)
-            ns = query.elapsed
-            query.release() if hasattr(query, "release") else None
-            if ns is None or ns >= 0xFFFFFFFF or ns < 0:  # llvmpipe's first query answers 0xFFFFFFFF
-                return None
-            return ns / 1e6
+            return query if defer else _elapsed_ms(query)
         finally:
             ec._finish()
             self._last_draws = ec.draws
@@ -528,16 +578,40 @@ class RenderGraph:
         return self.res.plan_bytes(refl, order)
 
     def _check(self, name: str, outputs: dict[str, TexSpec]) -> None:
-        """The NaN/Inf check of a pass's outputs, and what it cost (the budget's look-ahead counts it)."""
+        """The NaN/Inf check of a pass's outputs: its GPU scans are drawn now, after the pass, and
+        read back once the frame's passes are all issued (_collect_checks): a read-back waits for the
+        GPU, and one per pass kept the CPU and the GPU taking turns. What it cost is kept for the
+        budget's look-ahead (the draws now plus the read-back then)."""
         t0 = time.perf_counter()
-        self._nonfinite[name] = self._find_nonfinite(outputs)
-        self._check_ms[name] = (time.perf_counter() - t0) * 1000.0
+        flags = self._scan_nonfinite(outputs)
+        self._pending_checks.append((name, flags, (time.perf_counter() - t0) * 1000.0))
 
-    def _find_nonfinite(self, outputs: dict[str, TexSpec]) -> list[str]:
-        """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back
-        (<= 4 KB per output). 8-bit outputs cannot hold one and are skipped."""
+    def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
+        """Read back the scans _check drew this frame: each pass's non-finite outputs (and its record's)."""
+        pending, self._pending_checks = self._pending_checks, []
+        for name, flags, ms in pending:
+            t0 = time.perf_counter()
+            bad: list[str] = []
+            for res, tex in flags:
+                try:
+                    if records is not None and np.frombuffer(tex.read(alignment=1), dtype=np.uint8).any():
+                        bad.append(res)
+                finally:
+                    self.res.give(tex)
+            if records is None:  # abandoned (a frame that raised): checked again when next run
+                self._unchecked.add(name)
+                continue
+            self._nonfinite[name] = bad
+            self._check_ms[name] = ms + (time.perf_counter() - t0) * 1000.0
+            if name in records:
+                records[name].nonfinite = list(bad)
+
+    def _scan_nonfinite(self, outputs: dict[str, TexSpec]) -> list[tuple[str, moderngl.Texture]]:
+        """A GPU scan of each output into a grid of at most 64x64 flags (<= 4 KB to read back; a
+        flag is set where a texel is NaN or Inf): (output, its flags texture, taken from the pool:
+        the caller reads and gives it back). 8-bit outputs cannot hold one and are skipped."""
         vao_of = self.gpu.fullscreen_vao
-        bad: list[str] = []
+        out: list[tuple[str, moderngl.Texture]] = []
         for res, spec in outputs.items():
             if spec.dtype == "f1" or res not in self.res.textures:
                 continue
@@ -546,21 +620,17 @@ class RenderGraph:
             tile = (-(-w // gw), -(-h // gh))
             prog = self._check_program()
             if prog is None:
-                return bad
+                return out
             flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
-            try:
-                fbo = self.res.framebuffer_for((flags,))
-                fbo.use()
-                self.res.textures[res].use(0)
-                write_uniform(prog["src"], 0)
-                write_uniform(prog["u_tile"], tile)
-                write_uniform(prog["u_size"], (w, h))
-                vao_of(prog).render(vertices=3)
-                if np.frombuffer(flags.read(alignment=1), dtype=np.uint8).any():
-                    bad.append(res)
-            finally:
-                self.res.give(flags)
-        return bad
+            out.append((res, flags))
+            fbo = self.res.framebuffer_for((flags,))
+            fbo.use()
+            self.res.textures[res].use(0)
+            write_uniform(prog["src"], 0)
+            write_uniform(prog["u_tile"], tile)
+            write_uniform(prog["u_size"], (w, h))
+            vao_of(prog).render(vertices=3)
+        return out
 
     def _check_program(self) -> moderngl.Program | None:
         """shaders/finite_check.*, from the graph's library, or the project's when the graph was
@@ -612,6 +682,7 @@ class RenderGraph:
                 self._cancel(pass_name)
 
     def release(self) -> None:
+        self._collect_checks(None)
         for name in list(self._progress):
             self._finish_bands(name)
         for p in self.passes:
