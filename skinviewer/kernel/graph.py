@@ -589,6 +589,7 @@ class RenderGraph:
     def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
         """Read back the scans _check drew this frame: each pass's non-finite outputs (and its record's)."""
         pending, self._pending_checks = self._pending_checks, []
+        t_all = time.perf_counter()
         for name, flags, ms in pending:
             t0 = time.perf_counter()
             bad: list[str] = []
@@ -605,6 +606,9 @@ class RenderGraph:
             self._check_ms[name] = ms + (time.perf_counter() - t0) * 1000.0
             if name in records:
                 records[name].nonfinite = list(bad)
+        # the first read-back waits for whatever the GPU has left of the frame: the passes' time, not the
+        # graph's own (own_ms, which the governor counts as the frame's overhead)
+        self._exec_s += time.perf_counter() - t_all
 
     def _scan_nonfinite(self, outputs: dict[str, TexSpec]) -> list[tuple[str, moderngl.Texture]]:
         """A GPU scan of each output into a grid of at most 64x64 flags (<= 4 KB to read back; a
