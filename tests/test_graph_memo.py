@@ -24,8 +24,8 @@ def test_a_hit_declares_notes_and_drops_as_the_first_ask():
     first, second = Reflection(Settings()), Reflection(Settings())
     first._frame_memo = second._frame_memo = memo
     first.settings.deon.mix  # noqa: B018  (read before the rule: the rule's record must still hold it)
-    a = first.memo("rule", lambda: _rule(first, calls))
-    b = second.memo("rule", lambda: _rule(second, calls))
+    a = first.memo("rule", lambda rr: _rule(rr, calls))
+    b = second.memo("rule", lambda rr: _rule(rr, calls))
     assert a == b and len(calls) == 1
     assert "deon.mix" in second.declared and "deon.irradiance_size" in second.declared
     assert second.notes == ["map 256² from screen coverage"]
@@ -38,9 +38,9 @@ def test_a_nested_hit_is_recorded_by_the_outer_rule():
     rs = [Reflection(Settings()) for _ in range(3)]
     for r in rs:
         r._frame_memo = memo
-    rs[0].memo("inner", lambda: _rule(rs[0], calls))  # asked alone first
-    rs[1].memo("outer", lambda: rs[1].memo("inner", lambda: _rule(rs[1], calls)) + 1.0)  # inner: a hit
-    rs[2].memo("outer", lambda: pytest.fail("answered by the memo"))
+    rs[0].memo("inner", lambda rr: _rule(rr, calls))  # asked alone first
+    rs[1].memo("outer", lambda rr: rr.memo("inner", lambda r2: _rule(r2, calls)) + 1.0)  # inner: a hit
+    rs[2].memo("outer", lambda rr: pytest.fail("answered by the memo"))
     assert len(calls) == 1
     assert {"deon.mix", "deon.irradiance_size"} <= set(rs[2].declared)
     assert rs[2].dropped == {"deon_tsm": "kernel under a pixel"}
@@ -49,8 +49,8 @@ def test_a_nested_hit_is_recorded_by_the_outer_rule():
 def test_without_a_frame_memo_every_ask_is_fresh():
     calls: list[int] = []
     r = Reflection(Settings())
-    r.memo("rule", lambda: _rule(r, calls))
-    r.memo("rule", lambda: _rule(r, calls))
+    r.memo("rule", lambda rr: _rule(rr, calls))
+    r.memo("rule", lambda rr: _rule(rr, calls))
     assert len(calls) == 2
 
 
@@ -81,7 +81,7 @@ def test_deon_reflects_as_without_the_memo(gl_ctx, monkeypatch, extra):
         memoised = _reflections(r, s)
     finally:
         r.release()
-    monkeypatch.setattr(Reflection, "memo", lambda self, key, make: make())
+    monkeypatch.setattr(Reflection, "memo", lambda self, key, rule: rule(self))
     r = Renderer(gl_ctx)
     try:
         fresh = _reflections(r, s)
@@ -182,3 +182,64 @@ def test_timer_queries_are_read_after_the_last_pass(gl_ctx, shader_dir, monkeypa
     g.run(frame(Settings()), timing="gpu", force=True, budget_ms=1e6)
     assert events == ["ran", "read", "ran", "read", "read"]
     g.release()
+
+
+def _sequence(s: Settings) -> list[Settings]:
+    """A drag, a light move, an edit, a zoom under the coverage rules, back: what reflections see."""
+    d = s.lights[0].direction
+    auto = with_values(s, {"deon.irradiance_size_mode": "auto", "shadow.map_size_mode": "auto"})
+    return [s, with_values(s, {"camera.yaw": s.camera.yaw + 20.0}),
+            with_values(s, {"lights.0.direction": (d[0] + 0.3, d[1], d[2])}),
+            with_values(s, {"deon.mix": 0.7, "burley.scale": 1.5, "gosselin.scale_x": 2.5}),
+            auto, with_values(auto, {"camera.fov_y": 8.0}),
+            with_values(auto, {"camera.fov_y": 8.0, "camera.yaw": 30.0}),
+            with_values(s, {"lights.0.enabled": False}), s]
+
+
+@pytest.mark.parametrize("tech", ["deon", "burley2", "gosselin", "ssss"])
+def test_reused_reflections_equal_fresh_ones_frame_by_frame(gl_ctx, monkeypatch, tech):
+    """RenderGraph reuses a pass's last reflection while nothing it read changed: over a sequence of
+    camera, light, edit and coverage changes every frame re-runs the same passes and every pass's
+    reflection (settings, plan, inputs, outputs, programs, notes, drops, skip) equals the one a
+    fresh reflect makes (REUSE_REFLECTIONS off)."""
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel import graph as graph_mod
+
+    def run(reuse: bool) -> list:
+        monkeypatch.setattr(graph_mod, "REUSE_REFLECTIONS", reuse)
+        r = Renderer(gl_ctx)
+        out = []
+        try:
+            for s in _sequence(_small(**{"technique": tech, "deon.subpixel_kernel_px": 0.0})):
+                rep = r.render(s)
+                g = r.graph(tech)
+                out.append((rep.ran, {n: (list(x.declared), list(x.notes), dict(x.dropped), x.skip_reason,
+                                          dict(x._plan), list(x.inputs), dict(x.outputs), list(x.programs))
+                                      for n, x in g._last_refl.items()}))
+        finally:
+            r.release()
+        return out
+    fresh, reused = run(False), run(True)
+    for k, (a, b) in enumerate(zip(fresh, reused)):
+        assert a == b, f"frame {k}"
+
+
+def test_a_camera_move_reuses_deons_texture_space_reflections(gl_ctx):
+    """The point of it: on a camera-only frame the texture-space passes' reflections are reused (the
+    view-dependent passes still re-run: their keys hold the camera); after an edit of what they read
+    they are made afresh."""
+    from skinviewer.engine.renderer import Renderer
+    s = _small(**{"deon.subpixel_kernel_px": 0.0})
+    r = Renderer(gl_ctx)
+    try:
+        r.render(s)
+        g = r.graph("deon")
+        before = dict(g._last_refl)
+        r.render(with_values(s, {"camera.yaw": s.camera.yaw + 5.0}))
+        assert g._last_refl["deon_irradiance"] is before["deon_irradiance"]
+        assert "deon_final" in r.render(with_values(s, {"camera.yaw": s.camera.yaw + 9.0})).ran  # the camera re-keys it
+        r.render(with_values(s, {"camera.yaw": s.camera.yaw + 5.0, "deon.irradiance_size": 512}))
+        assert g._last_refl["deon_irradiance"] is not before["deon_irradiance"]
+        assert g._last_refl["deon_irradiance"].outputs != before["deon_irradiance"].outputs
+    finally:
+        r.release()

@@ -50,6 +50,9 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
+# a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
+# every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
+REUSE_REFLECTIONS = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -159,6 +162,9 @@ class RenderGraph:
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
         self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
         self._vk_settings: Settings | None = None  # the settings those keys were made from
+        # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
+        self._reflected: dict[str, tuple[Reflection, Any, Any]] = {}
+        self._reflect_settings: Settings | None = None  # the settings of the last reflected frame
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
@@ -196,11 +202,19 @@ class RenderGraph:
                      interactive: bool = False) -> dict[str, Reflection]:
         refl = {}
         memo: dict[Any, Any] = {}  # Reflection.memo: rules many passes ask, answered once this frame
+        same = self._same_sections(settings)
+        token = (getattr(scene, "env_generation", 0), interactive)
         for p in self.passes:
-            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
-                           view=view if p.uses_scene else None, interactive=interactive)
-            r._frame_memo = memo
-            p.reflect(r)
+            prev = self._reflected.get(p.name)
+            if prev is not None and self._still_holds(prev, same, token, scene if p.uses_scene else None, memo,
+                                                      settings, scene, view, interactive):
+                r = prev[0]  # what its reflect read is unchanged: it would declare the same again
+            else:
+                r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
+                               view=view if p.uses_scene else None, interactive=interactive)
+                r._frame_memo = memo
+                p.reflect(r)
+            self._reflected[p.name] = (r, token, scene if p.uses_scene else None)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
             elif r.outputs:
@@ -223,6 +237,46 @@ class RenderGraph:
             return old
         same = {name for name in type(settings).model_fields if getattr(settings, name) == getattr(last, name)}
         return {path: k for path, k in old.items() if path.split(".", 1)[0] in same}
+
+    def _same_sections(self, settings: Settings) -> set[str] | None:
+        """The top-level settings sections equal (==) to the last reflected frame's; None: none known.
+        (A section equal by == but not in every bit, 0.0 against -0.0, counts as unchanged.)"""
+        last, self._reflect_settings = self._reflect_settings, settings
+        if last is None or type(last) is not type(settings):
+            return None
+        names = type(settings).model_fields
+        if last is settings:
+            return set(names)
+        return {name for name in names if getattr(settings, name) == getattr(last, name)}
+
+    def _still_holds(self, prev: tuple[Reflection, Any, Any], same: set[str] | None, token: Any, pass_scene: Any,
+                     memo: dict[Any, Any], settings: Settings, scene: Any, view: Any, interactive: bool) -> bool:
+        """Whether a pass's last reflection holds this frame, so that its reflect need not run (issue 27:
+        a camera move re-reflected every pass of the technique): REUSE_REFLECTIONS, the same scene object
+        (its environment bake and the preview flag alike), every setting it declared or peeked in an
+        unchanged top-level section, no read of the view, the shape state or the raw settings but through
+        a memoised rule, and every such rule answering as last frame (asked again, once a frame, in a
+        reflection of the graph's own: same value, same settings read, same notes and drops)."""
+        r, last_token, last_scene = prev
+        if not REUSE_REFLECTIONS or same is None or r._untracked or r._frame_memo is None \
+                or last_token != token or last_scene is not pass_scene:
+            return False
+        for path in r.declared:
+            if path.split(".", 1)[0] not in same:
+                return False
+        for path in r._peek_paths:
+            if path.split(".", 1)[0] not in same:
+                return False
+        last_memo = r._frame_memo
+        for key, rule, scene_less in r._memos:
+            if key not in memo:
+                asker = Reflection(settings, None if scene_less else scene, self.shape_state,
+                                   view=None if scene_less else view, interactive=interactive)
+                asker._frame_memo = memo
+                asker.memo(key, rule)
+            if memo[key] != last_memo.get(key):
+                return False
+        return True
 
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
         vk = self._value_keys  # this frame's value keys: passes declare many of the same paths

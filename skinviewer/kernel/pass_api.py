@@ -250,7 +250,7 @@ class Reflection:
 
     def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None,
                  view: FrameView | None = None, interactive: bool = False):
-        self._settings = settings
+        self._settings_value = settings
         # a governed preview frame (FrameInputs.interactive): a scene rule may answer from a coarser,
         # cached estimate (rules.tsm_needed); the final image's frames are never interactive
         self.interactive = interactive
@@ -266,20 +266,28 @@ class Reflection:
         self.skip_reason: str | None = None
         self.dropped: dict[str, str] = {}
         self.notes: list[str] = []
-        self.state = state if state is not None else {}  # the graph's memory for shape decisions
+        self._state = state if state is not None else {}  # the graph's memory for shape decisions (state)
+        # what this reflect read besides its declared settings, so that the graph may reuse it next frame
+        # (RenderGraph._reusable): settings peeked (paths), rules asked through memo (key, rule, scene-less),
+        # and whether it read the view, the shape state or the raw settings outside a memoised rule
+        self._peek_paths: list[str] = []
+        self._memos: list[tuple[Any, Callable[[Reflection], Any], bool]] = []  # (key, rule, scene is None)
+        self._untracked = False
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
         # the graph's per-frame memo of rules many passes ask (Reflection.memo); None: no memo
         self._frame_memo: dict[Any, tuple[Any, list[str], list[str], list[tuple[str, str]]]] | None = None
         self._recorders: list[tuple[list[str], list[str], list[tuple[str, str]]]] = []
         self._reads = SettingsNode(settings, "", self._declare)  # r.settings
-        self._peeks = SettingsNode(settings, "", None)  # r.peeked
+        self._peeks = SettingsNode(settings, "", self._peek_read)  # r.peeked (recorded, not declared)
 
     @property
     def view(self) -> FrameView:
         """The frame's view of the scene and camera (kernel/frame_view.FrameView, built once a frame by
         the renderer; ``ec.view`` is its camera): what the scene rules (passes/rules.py) measure --
         the screen coverage, the camera a thin part must be in view of. Passes that use the scene get it."""
+        if not self._recorders:
+            self._untracked = True
         if self._view is None:
             raise GraphError("this reflection has no frame view (FrameInputs.frame_view: the renderer builds "
                              "one a frame; a scene rule needs it)")
@@ -321,23 +329,44 @@ class Reflection:
         """The plan recorded so far (what ``ec.plan`` will be)."""
         return Plan(self._plan)
 
-    def memo(self, key: Any, make: Callable[[], _T]) -> _T:
-        """``make()``, or what it returned for ``key`` in an earlier pass's reflect of this frame: a
+    @property
+    def state(self) -> ShapeState:
+        """The graph's memory for shape decisions (hysteresis of the scene rules)."""
+        if not self._recorders:
+            self._untracked = True
+        return self._state
+
+    @property
+    def _settings(self) -> Settings:
+        """The settings object itself, read by a scene rule (undeclared: the rule declares what it needs)."""
+        if not self._recorders:
+            self._untracked = True
+        return self._settings_value
+
+    def _peek_read(self, path: str) -> None:
+        self._peek_paths.append(path)
+
+    def memo(self, key: Any, rule: Callable[[Reflection], _T]) -> _T:
+        """``rule(self)``, or what it returned for ``key`` in an earlier pass's reflect of this frame: a
         scene rule that many passes ask the same question (d'Eon's map size, blur plan, TSM light, the
-        kernel-under-a-pixel rule) is answered once a frame. On a hit, what ``make`` did to its
+        kernel-under-a-pixel rule) is answered once a frame. On a hit, what the rule did to its
         reflection is done again to this one: the settings it read are declared (so cache keys are
         as without the memo), its notes noted and its drops dropped. ``key`` must name everything the
         answer depends on besides the frame's settings, scene, view and state (e.g. whether this pass
-        uses the scene). Outside a graph's frame (no memo): ``make()``."""
+        uses the scene); ``rule`` reads only through the reflection it is given (the graph asks it
+        again, in a reflection of its own, to tell whether a pass's last reflection still holds).
+        Outside a graph's frame (no memo): ``rule(self)``."""
         memo = self._frame_memo
         if memo is None:
-            return make()
+            return rule(self)
+        if not self._recorders:  # a rule this pass asked itself: re-asked when the graph reuses the reflection
+            self._memos.append((key, rule, self.scene is None))
         hit = memo.get(key)
         if hit is None:
             rec: tuple[list[str], list[str], list[tuple[str, str]]] = ([], [], [])
             self._recorders.append(rec)
             try:
-                value = make()
+                value = rule(self)
             finally:
                 self._recorders.remove(rec)
             memo[key] = hit = (value, *rec)
@@ -377,16 +406,21 @@ class Reflection:
         """Declare a setting (dotted path) and return its current value (tests and tools; passes
         read ``r.settings``)."""
         self._declare(path)
-        return get_path(self._settings, path)
+        return get_path(self._settings_value, path)
 
     def peek(self, path: str) -> Any:
         """Read a setting without declaring it: only for the graph's shape (e.g. whether light i
         exists), never for a value the pass's output depends on."""
-        return get_path(self._settings, path)
+        self._peek_read(path)
+        return get_path(self._settings_value, path)
 
-    def depends(self, name: str, value: Any) -> None:
+    def depends(self, name: str, value: Any, scene_generation: bool = False) -> None:
         """The output also depends on ``value`` (e.g. a progressive pass's frame index, kept in
-        ``state``): part of the cache key, so the pass re-runs when it changes."""
+        ``state``): part of the cache key, so the pass re-runs when it changes. Its reflect then runs
+        every frame (the graph cannot tell whether the value changed without asking), but for
+        ``scene_generation``: the value is the scene's ``env_generation``, which the graph watches."""
+        if not scene_generation:
+            self._untracked = True
         self.depends_on[name] = value
 
     def input(self, resource: str) -> None:

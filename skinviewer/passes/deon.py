@@ -93,16 +93,19 @@ GATHER_BLOCKS_ZONE = "deon_gather_blocks_zone"  # per 2 x 2 block: zone, spread
 def map_size(r) -> int:
     """The irradiance-map size: deon.irradiance_size, or from the screen coverage (rules.py); asked
     by most passes, answered once a frame (rules.frame_memo)."""
+    return frame_memo(r, "deon.map_size", _map_size)
+
+
+def _map_size(r) -> int:
     d = r.settings.deon
-    return frame_memo(r, "deon.map_size",
-                      lambda: coverage_size(r, d.irradiance_size, d.irradiance_size_mode, "deon_irradiance"))
+    return coverage_size(r, d.irradiance_size, d.irradiance_size_mode, "deon_irradiance")
 
 
 # -- which light casts the TSM --------------------------------------------------------------------
 
 def tsm_light_index(r: Reflection) -> int | None:
     """_tsm_light_index, answered once a frame (rules.frame_memo: several passes ask)."""
-    return frame_memo(r, "deon.tsm_light_index", lambda: _tsm_light_index(r))
+    return frame_memo(r, "deon.tsm_light_index", _tsm_light_index)
 
 
 def _tsm_light_index(r: Reflection) -> int | None:
@@ -377,7 +380,7 @@ def plan_of(variances, r) -> list:
 
 
 def _plan(r):
-    return frame_memo(r, "deon._plan", lambda: plan_of([g.variance for g in whole(r.settings.deon.gaussians)], r))
+    return frame_memo(r, "deon._plan", lambda rr: plan_of([g.variance for g in whole(rr.settings.deon.gaussians)], rr))
 
 
 
@@ -599,10 +602,11 @@ class GaussianBlurPass(Pass):
         return {"OPEN_BORDER": 1} if self.chain == "irradiance" and open_border(r) else {}
 
     def _step(self, r):
-        def step():  # blur i declares the variances up to its own: its key is the chain's prefix
-            vs = [r.settings.deon.gaussians[k].variance for k in range(self.i + 1)]
-            return plan_of(vs, r)[self.i]
-        return frame_memo(r, ("deon._step", self.i), step)
+        i = self.i
+
+        def step(rr):  # blur i declares the variances up to its own: its key is the chain's prefix
+            return plan_of([rr.settings.deon.gaussians[k].variance for k in range(i + 1)], rr)[i]
+        return frame_memo(r, ("deon._step", i), step)
 
     @staticmethod
     def _narrow(r, step, stretch: str | None, n: int) -> dict:

@@ -138,16 +138,17 @@ def kernel_px(settings, view: FrameView) -> float:
     return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
 
 
-def frame_memo(r: Any, key: Any, make: Callable[[], Any]) -> Any:
-    """``make()`` answered once a frame for ``key`` when ``r`` is a graph's Reflection
-    (Reflection.memo: the reads, notes and drops replayed); an ExecuteContext asks afresh."""
+def frame_memo(r: Any, key: Any, rule: Callable[[Any], Any]) -> Any:
+    """``rule(r)`` answered once a frame for ``key`` when ``r`` is a graph's Reflection
+    (Reflection.memo: the reads, notes and drops replayed); an ExecuteContext asks afresh. ``rule``
+    reads only through the reflection it is given."""
     memo = getattr(r, "memo", None)
-    return make() if memo is None else memo((key, r.scene is None), make)
+    return rule(r) if memo is None else memo((key, r.scene is None), rule)
 
 
 def kernel_under_pixel(r: Reflection) -> str | None:
     """Asked by most of d'Eon's passes a frame: answered once (frame_memo); see _kernel_under_pixel."""
-    return frame_memo(r, "kernel_under_pixel", lambda: _kernel_under_pixel(r))
+    return frame_memo(r, "kernel_under_pixel", _kernel_under_pixel)
 
 
 def _kernel_under_pixel(r: Reflection) -> str | None:
