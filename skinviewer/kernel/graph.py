@@ -158,6 +158,7 @@ class RenderGraph:
         self._check_ms: dict[str, float] = {}
         # this frame's NaN/Inf scans, drawn after their pass, read back after the last (_collect_checks)
         self._pending_checks: list[tuple[str, list[tuple[str, moderngl.Texture]], float]] = []
+        self._timing = "sync"  # this run()'s timing mode
         self._pending_queries: list[tuple[Any, PassRecord, str, int, float | None]] = []  # _collect_queries
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
         self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
@@ -341,6 +342,7 @@ class RenderGraph:
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
+        self._timing = timing
         self.gpu.keep_scene(frame.scene)
         refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive)
         order, live = order_passes(self.passes, refl, list(targets or self.targets))
@@ -638,7 +640,10 @@ class RenderGraph:
         budget's look-ahead (the draws now plus the read-back then)."""
         t0 = time.perf_counter()
         flags = self._scan_nonfinite(outputs)
-        self._pending_checks.append((name, flags, (time.perf_counter() - t0) * 1000.0))
+        dt = time.perf_counter() - t0
+        if self._timing != "sync":  # no glFinish after the pass: llvmpipe waits for it in the scan's draw,
+            self._exec_s += dt  # the pass's time, not the graph's own (own_ms)
+        self._pending_checks.append((name, flags, dt * 1000.0))
 
     def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
         """Read back the scans _check drew this frame: each pass's non-finite outputs (and its record's)."""
