@@ -243,3 +243,24 @@ def test_a_camera_move_reuses_deons_texture_space_reflections(gl_ctx):
         assert g._last_refl["deon_irradiance"].outputs != before["deon_irradiance"].outputs
     finally:
         r.release()
+
+
+def test_a_reused_reflection_still_re_runs_after_a_shader_edit(gl_ctx, shader_dir):
+    """The cache key made from a reused reflection is kept while no shader was replaced; a hot-reloaded
+    program re-keys (and re-runs) its pass, and an edit of a setting it declared does too."""
+    import os
+    from test_graph import Add, Fill, frame, make_graph
+
+    passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
+    g, lib = make_graph(gl_ctx, shader_dir, passes, ["out"])
+    g.run(frame(Settings()))
+    assert g.run(frame(Settings(), "cam1")).ran == []  # new settings object, equal: reused, cached
+    frag = shader_dir / "fill.frag"
+    frag.write_text(frag.read_text() + "\n// edited\n")
+    os.utime(frag, (frag.stat().st_mtime + 5, frag.stat().st_mtime + 5))
+    lib.reload()
+    assert set(g.run(frame(Settings(), "cam2")).ran) == {"fill_a", "fill_b", "sum"}
+    assert g.run(frame(Settings(), "cam3")).ran == []
+    edited = with_values(Settings(), {"phong.ambient": 0.2})
+    assert set(g.run(frame(edited, "cam4")).ran) == {"fill_b", "sum"}
+    g.release()

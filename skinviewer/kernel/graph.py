@@ -166,6 +166,7 @@ class RenderGraph:
         # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
         self._reflected: dict[str, tuple[Reflection, Any, Any]] = {}
         self._reflect_settings: Settings | None = None  # the settings of the last reflected frame
+        self._key_parts: dict[str, tuple[Reflection, int, dict[str, Any]]] = {}  # pass -> (reflection, shaders' revision, key parts)
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
@@ -280,21 +281,28 @@ class RenderGraph:
         return True
 
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
-        vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
-        for path in r.declared:
-            if path not in vk:
-                vk[path] = fast_value_key(frame.settings, path)
+        # a reflection reused from an earlier frame (_still_holds: every section it read unchanged since)
+        # with no shader replaced since: the key's parts made from it then are made again the same
+        cached = self._key_parts.get(p.name)
+        if cached is not None and cached[0] is r and cached[1] == self.shaders.revision:
+            key = dict(cached[2])
+        else:
+            vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
+            for path in r.declared:
+                if path not in vk:
+                    vk[path] = fast_value_key(frame.settings, path)
+            key = {
+                "settings": {path: vk[path] for path in r.declared},
+                "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
+                "outputs": {res: _spec_key(spec) for res, spec in r.outputs.items()},
+            }
+            if r.depends_on:
+                key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
+            if r._plan:  # what reflect decided for execute (Reflection.plan)
+                key["plan"] = {k: repr(v) for k, v in r._plan.items()}
+            self._key_parts[p.name] = (r, self.shaders.revision, dict(key))
         versions = self.res.versions
-        key = {
-            "settings": {path: vk[path] for path in r.declared},
-            "inputs": {res: versions.get(res, 0) for res in r.inputs},
-            "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
-            "outputs": {res: _spec_key(spec) for res, spec in r.outputs.items()},
-        }
-        if r.depends_on:
-            key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
-        if r._plan:  # what reflect decided for execute (Reflection.plan)
-            key["plan"] = {k: repr(v) for k, v in r._plan.items()}
+        key["inputs"] = {res: versions.get(res, 0) for res in r.inputs}
         if p.uses_scene:
             key["scene"] = (frame.scene_version, frame.mesh_lod)
         if p.view_dependent:
