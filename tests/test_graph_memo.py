@@ -249,6 +249,7 @@ def test_a_reused_reflection_still_re_runs_after_a_shader_edit(gl_ctx, shader_di
     """The cache key made from a reused reflection is kept while no shader was replaced; a hot-reloaded
     program re-keys (and re-runs) its pass, and an edit of a setting it declared does too."""
     import os
+
     from test_graph import Add, Fill, frame, make_graph
 
     passes = [Fill("fill_a", "a", "render.exposure"), Fill("fill_b", "b", "phong.ambient"), Add("sum", "a", "b", "out")]
