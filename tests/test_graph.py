@@ -263,7 +263,9 @@ def test_trim_releases_depth_buffers_of_old_sizes(renderer):
     assert renderer.render(with_values(s, {"render.width": 80})).ran == []  # nothing cached was lost
 
 
-def test_idle_frames_take_the_fast_path_and_stay_correct(renderer):
+def test_idle_frames_take_the_fast_path_and_stay_correct(renderer, monkeypatch):
+    from skinviewer.kernel import graph as graph_mod
+    monkeypatch.setattr(graph_mod, "REUSE_REFLECTIONS", False)  # the full check reflects (tests/test_graph_memo.py)
     s = small_settings("shadow-edge", "gosselin")
     renderer.render(s)
     g = renderer.graph("gosselin")

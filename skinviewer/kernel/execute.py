@@ -85,6 +85,8 @@ class ExecuteContext:
         return view
 
     def _check_declared(self, path: str) -> None:
+        if path in self._refl._declared_set:  # the common case, without scanning the list
+            return
         declared = self._refl.declared
         if path not in declared and not any(path.startswith(d + ".") for d in declared):
             raise GraphError(f"pass {self.pass_.name} reads setting '{path}' it did not declare in reflect()")

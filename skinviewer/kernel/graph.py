@@ -29,7 +29,7 @@ import moderngl
 import numpy as np
 
 from skinviewer.ground.paths import shaders_dir
-from skinviewer.ground.settings import Settings, value_key
+from skinviewer.ground.settings import Settings, get_path, value_key
 from skinviewer.kernel.compiler import affected, order_passes, pixels, prune_reason, why
 from skinviewer.kernel.execute import ExecuteContext
 from skinviewer.kernel.gpu import GpuServices, write_uniform
@@ -50,6 +50,9 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
+# a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
+# every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
+REUSE_REFLECTIONS = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -65,6 +68,44 @@ class TileProgress:
     ms: float = 0.0
     held: dict[str, Any] = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
     band_ms: list[float] = field(default_factory=list)  # what each band done so far cost
+
+
+def _elapsed_ms(query: moderngl.Query) -> float | None:
+    """A timer query's GPU time in ms (waits for it), the query released; None when it has none."""
+    ns = query.elapsed
+    query.release() if hasattr(query, "release") else None
+    if ns is None or ns >= 0xFFFFFFFF or ns < 0:  # llvmpipe's first query answers 0xFFFFFFFF
+        return None
+    return ns / 1e6
+
+
+_SPEC_KEYS: dict[TexSpec, str] = {}  # repr of an output's spec, made once per spec (part of every key)
+
+
+def _spec_key(spec: TexSpec) -> str:
+    k = _SPEC_KEYS.get(spec)
+    if k is None:
+        if len(_SPEC_KEYS) > 4096:
+            _SPEC_KEYS.clear()
+        k = _SPEC_KEYS[spec] = repr(spec)
+    return k
+
+
+def fast_value_key(settings: Settings, path: str) -> str:
+    """``value_key`` of a setting, the same text, without JSON for a plain number, bool or None (most
+    declared settings; JSON encoding was most of the cost of a pass's cache key)."""
+    v = get_path(settings, path)
+    t = type(v)
+    if t is float:
+        if math.isfinite(v):
+            return repr(v)
+    elif t is int:
+        return repr(v)
+    elif t is bool:
+        return "true" if v else "false"
+    elif v is None:
+        return "null"
+    return value_key(settings, path)
 
 
 def band_shares(profile: np.ndarray | None, count: int) -> np.ndarray:
@@ -115,8 +156,17 @@ class RenderGraph:
         # by the first frame that is not a preview and finds them cached; what a pass's check last cost
         self._unchecked: set[str] = set()
         self._check_ms: dict[str, float] = {}
+        # this frame's NaN/Inf scans, drawn after their pass, read back after the last (_collect_checks)
+        self._pending_checks: list[tuple[str, list[tuple[str, moderngl.Texture]], float]] = []
+        self._timing = "sync"  # this run()'s timing mode
+        self._pending_queries: list[tuple[Any, PassRecord, str, int, float | None]] = []  # _collect_queries
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
-        self._value_keys: dict[str, str] = {}  # settings path -> value_key, within one run()
+        self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
+        self._vk_settings: Settings | None = None  # the settings those keys were made from
+        # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
+        self._reflected: dict[str, tuple[Reflection, Any, Any]] = {}
+        self._reflect_settings: Settings | None = None  # the settings of the last reflected frame
+        self._key_parts: dict[str, tuple[Reflection, int, dict[str, Any]]] = {}  # pass -> (reflection, shaders' revision, key parts)
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
@@ -153,10 +203,20 @@ class RenderGraph:
     def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None,
                      interactive: bool = False) -> dict[str, Reflection]:
         refl = {}
+        memo: dict[Any, Any] = {}  # Reflection.memo: rules many passes ask, answered once this frame
+        same = self._same_sections(settings)
+        token = (getattr(scene, "env_generation", 0), interactive)
         for p in self.passes:
-            r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
-                           view=view if p.uses_scene else None, interactive=interactive)
-            p.reflect(r)
+            prev = self._reflected.get(p.name)
+            if prev is not None and self._still_holds(prev, same, token, scene if p.uses_scene else None, memo,
+                                                      settings, scene, view, interactive):
+                r = prev[0]  # what its reflect read is unchanged: it would declare the same again
+            else:
+                r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
+                               view=view if p.uses_scene else None, interactive=interactive)
+                r._frame_memo = memo
+                p.reflect(r)
+            self._reflected[p.name] = (r, token, scene if p.uses_scene else None)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
             elif r.outputs:
@@ -166,21 +226,83 @@ class RenderGraph:
             refl[p.name] = r
         return refl
 
-    def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
-        vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
+    def _kept_value_keys(self, settings: Settings) -> dict[str, str]:
+        """This frame's value keys to start from: the last frame's, for the paths under a top-level
+        section equal (==) to the last frame's; empty when the settings are another kind of object.
+        A camera move or a light drag then re-encodes only the camera's or the lights' paths (the
+        JSON of a whole section such as ``lights`` or ``deon.gaussians`` was most of a key's cost)."""
+        last, self._vk_settings = self._vk_settings, settings
+        old = self._value_keys
+        if last is None or not old or type(last) is not type(settings):
+            return {}
+        if last is settings:
+            return old
+        same = {name for name in type(settings).model_fields if getattr(settings, name) == getattr(last, name)}
+        return {path: k for path, k in old.items() if path.split(".", 1)[0] in same}
+
+    def _same_sections(self, settings: Settings) -> set[str] | None:
+        """The top-level settings sections equal (==) to the last reflected frame's; None: none known.
+        (A section equal by == but not in every bit, 0.0 against -0.0, counts as unchanged.)"""
+        last, self._reflect_settings = self._reflect_settings, settings
+        if last is None or type(last) is not type(settings):
+            return None
+        names = type(settings).model_fields
+        if last is settings:
+            return set(names)
+        return {name for name in names if getattr(settings, name) == getattr(last, name)}
+
+    def _still_holds(self, prev: tuple[Reflection, Any, Any], same: set[str] | None, token: Any, pass_scene: Any,
+                     memo: dict[Any, Any], settings: Settings, scene: Any, view: Any, interactive: bool) -> bool:
+        """Whether a pass's last reflection holds this frame, so that its reflect need not run (issue 27:
+        a camera move re-reflected every pass of the technique): REUSE_REFLECTIONS, the same scene object
+        (its environment bake and the preview flag alike), every setting it declared or peeked in an
+        unchanged top-level section, no read of the view, the shape state or the raw settings but through
+        a memoised rule, and every such rule answering as last frame (asked again, once a frame, in a
+        reflection of the graph's own: same value, same settings read, same notes and drops)."""
+        r, last_token, last_scene = prev
+        if not REUSE_REFLECTIONS or same is None or r._untracked or r._frame_memo is None \
+                or last_token != token or last_scene is not pass_scene:
+            return False
         for path in r.declared:
-            if path not in vk:
-                vk[path] = value_key(frame.settings, path)
-        key = {
-            "settings": {path: vk[path] for path in r.declared},
-            "inputs": {res: self.res.versions.get(res, 0) for res in r.inputs},
-            "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
-            "outputs": {res: repr(spec) for res, spec in r.outputs.items()},
-        }
-        if r.depends_on:
-            key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
-        if r._plan:  # what reflect decided for execute (Reflection.plan)
-            key["plan"] = {k: repr(v) for k, v in r._plan.items()}
+            if path.split(".", 1)[0] not in same:
+                return False
+        for path in r._peek_paths:
+            if path.split(".", 1)[0] not in same:
+                return False
+        last_memo = r._frame_memo
+        for key, rule, scene_less in r._memos:
+            if key not in memo:
+                asker = Reflection(settings, None if scene_less else scene, self.shape_state,
+                                   view=None if scene_less else view, interactive=interactive)
+                asker._frame_memo = memo
+                asker.memo(key, rule)
+            if memo[key] != last_memo.get(key):
+                return False
+        return True
+
+    def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
+        # a reflection reused from an earlier frame (_still_holds: every section it read unchanged since)
+        # with no shader replaced since: the key's parts made from it then are made again the same
+        cached = self._key_parts.get(p.name)
+        if cached is not None and cached[0] is r and cached[1] == self.shaders.revision:
+            key = dict(cached[2])
+        else:
+            vk = self._value_keys  # this frame's value keys: passes declare many of the same paths
+            for path in r.declared:
+                if path not in vk:
+                    vk[path] = fast_value_key(frame.settings, path)
+            key = {
+                "settings": {path: vk[path] for path in r.declared},
+                "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
+                "outputs": {res: _spec_key(spec) for res, spec in r.outputs.items()},
+            }
+            if r.depends_on:
+                key["depends"] = {k: repr(v) for k, v in r.depends_on.items()}
+            if r._plan:  # what reflect decided for execute (Reflection.plan)
+                key["plan"] = {k: repr(v) for k, v in r._plan.items()}
+            self._key_parts[p.name] = (r, self.shaders.revision, dict(key))
+        versions = self.res.versions
+        key["inputs"] = {res: versions.get(res, 0) for res in r.inputs}
         if p.uses_scene:
             key["scene"] = (frame.scene_version, frame.mesh_lod)
         if p.view_dependent:
@@ -216,13 +338,19 @@ class RenderGraph:
                            note=p.note, figures=p.figures, nonfinite=p.nonfinite)
                 for p in last.passes])
             return self.last_report
+        if self._pending_checks:  # the last frame raised before reading its scans back
+            self._collect_checks(None)
+        for query, *_ in self._pending_queries:
+            query.release() if hasattr(query, "release") else None
+        self._pending_queries = []
         t_start = time.perf_counter()
         any_ran = False
         self._exec_s = 0.0
-        self._value_keys = {}  # per frame: the settings may be another object (or edited) next frame
+        self._value_keys = self._kept_value_keys(frame.settings)
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
+        self._timing = timing
         self.gpu.keep_scene(frame.scene)
         refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive)
         order, live = order_passes(self.passes, refl, list(targets or self.targets))
@@ -291,8 +419,12 @@ class RenderGraph:
                         rec.reason += f"; in {progress.count} bands"
                 else:
                     predicted = self._expected_ms(p, r)
-                    rec.ms = self._execute(p, r, frame, timing)
-                    self._keep_pace(predicted, rec.ms)
+                    if timing == "gpu" and budget_ms is None:  # read after the frame (_collect_queries)
+                        query = self._execute(p, r, frame, timing, defer=True)
+                        self._pending_queries.append((query, rec, p.name, pixels(r), predicted))
+                    else:
+                        rec.ms = self._execute(p, r, frame, timing)
+                        self._keep_pace(predicted, rec.ms)
                 rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
@@ -320,6 +452,8 @@ class RenderGraph:
             if self._lod_notes.get(p.name):  # it drew the mesh at a coarser level (rules.mesh_lod)
                 rec.reason = "; ".join(x for x in (rec.reason, self._lod_notes[p.name]) if x)
             records[p.name] = rec
+        self._collect_queries()  # the passes' timer queries, read once every pass is issued
+        self._collect_checks(records)  # the frame's NaN/Inf scans, read back once every pass is issued
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         # (not a resource another pass writes now: ss_diffuse is ss_transmittance's or ss_lighting's)
         written = {res for p in order for res in refl[p.name].outputs}
@@ -466,8 +600,24 @@ class RenderGraph:
         """Tileable passes part-way: name -> (bands done, bands)."""
         return {n: (pr.done, pr.count) for n, pr in self._progress.items()}
 
+    def _collect_queries(self) -> None:
+        """The GPU time of the passes whose timer query _execute left to read (timing "gpu" without a
+        budget): reading one waits for the GPU to finish that pass, so reading each right after its
+        pass kept the CPU idle while the GPU ran it and the GPU idle while the CPU set up the next."""
+        pending, self._pending_queries = self._pending_queries, []
+        t0 = time.perf_counter()
+        for query, rec, name, px, predicted in pending:
+            rec.ms = _elapsed_ms(query)
+            self._keep_pace(predicted, rec.ms)
+            if rec.ms is not None:
+                self._last_ms[name] = rec.ms
+                self._last_px[name] = px
+        self._exec_s += time.perf_counter() - t0  # waiting for the GPU: the passes' time, not the graph's
+
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
-                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None) -> float | None:
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False) -> Any:
+        """Run ``p`` (or one band of it) and return its ms; ``defer`` (timing "gpu"): its timer query,
+        to be read after the frame's last pass (_collect_queries)."""
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         t_enter = time.perf_counter()
@@ -481,11 +631,7 @@ class RenderGraph:
             query = self.ctx.query(time=True)
             with query:
                 p.execute(ec)
-            ns = query.elapsed
-            query.release() if hasattr(query, "release") else None
-            if ns is None or ns >= 0xFFFFFFFF or ns < 0:  # llvmpipe's first query answers 0xFFFFFFFF
-                return None
-            return ns / 1e6
+            return query if defer else _elapsed_ms(query)
         finally:
             ec._finish()
             self._last_draws = ec.draws
@@ -496,16 +642,47 @@ class RenderGraph:
         return self.res.plan_bytes(refl, order)
 
     def _check(self, name: str, outputs: dict[str, TexSpec]) -> None:
-        """The NaN/Inf check of a pass's outputs, and what it cost (the budget's look-ahead counts it)."""
+        """The NaN/Inf check of a pass's outputs: its GPU scans are drawn now, after the pass, and
+        read back once the frame's passes are all issued (_collect_checks): a read-back waits for the
+        GPU, and one per pass kept the CPU and the GPU taking turns. What it cost is kept for the
+        budget's look-ahead (the draws now plus the read-back then)."""
         t0 = time.perf_counter()
-        self._nonfinite[name] = self._find_nonfinite(outputs)
-        self._check_ms[name] = (time.perf_counter() - t0) * 1000.0
+        flags = self._scan_nonfinite(outputs)
+        dt = time.perf_counter() - t0
+        if self._timing != "sync":  # no glFinish after the pass: llvmpipe waits for it in the scan's draw,
+            self._exec_s += dt  # the pass's time, not the graph's own (own_ms)
+        self._pending_checks.append((name, flags, dt * 1000.0))
 
-    def _find_nonfinite(self, outputs: dict[str, TexSpec]) -> list[str]:
-        """Outputs holding a NaN or Inf: a GPU scan into a grid of at most 64x64 flags, read back
-        (<= 4 KB per output). 8-bit outputs cannot hold one and are skipped."""
+    def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
+        """Read back the scans _check drew this frame: each pass's non-finite outputs (and its record's)."""
+        pending, self._pending_checks = self._pending_checks, []
+        t_all = time.perf_counter()
+        for name, flags, ms in pending:
+            t0 = time.perf_counter()
+            bad: list[str] = []
+            for res, tex in flags:
+                try:
+                    if records is not None and np.frombuffer(tex.read(alignment=1), dtype=np.uint8).any():
+                        bad.append(res)
+                finally:
+                    self.res.give(tex)
+            if records is None:  # abandoned (a frame that raised): checked again when next run
+                self._unchecked.add(name)
+                continue
+            self._nonfinite[name] = bad
+            self._check_ms[name] = ms + (time.perf_counter() - t0) * 1000.0
+            if name in records:
+                records[name].nonfinite = list(bad)
+        # the first read-back waits for whatever the GPU has left of the frame: the passes' time, not the
+        # graph's own (own_ms, which the governor counts as the frame's overhead)
+        self._exec_s += time.perf_counter() - t_all
+
+    def _scan_nonfinite(self, outputs: dict[str, TexSpec]) -> list[tuple[str, moderngl.Texture]]:
+        """A GPU scan of each output into a grid of at most 64x64 flags (<= 4 KB to read back; a
+        flag is set where a texel is NaN or Inf): (output, its flags texture, taken from the pool:
+        the caller reads and gives it back). 8-bit outputs cannot hold one and are skipped."""
         vao_of = self.gpu.fullscreen_vao
-        bad: list[str] = []
+        out: list[tuple[str, moderngl.Texture]] = []
         for res, spec in outputs.items():
             if spec.dtype == "f1" or res not in self.res.textures:
                 continue
@@ -514,21 +691,17 @@ class RenderGraph:
             tile = (-(-w // gw), -(-h // gh))
             prog = self._check_program()
             if prog is None:
-                return bad
+                return out
             flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
-            try:
-                fbo = self.res.framebuffer_for((flags,))
-                fbo.use()
-                self.res.textures[res].use(0)
-                write_uniform(prog["src"], 0)
-                write_uniform(prog["u_tile"], tile)
-                write_uniform(prog["u_size"], (w, h))
-                vao_of(prog).render(vertices=3)
-                if np.frombuffer(flags.read(alignment=1), dtype=np.uint8).any():
-                    bad.append(res)
-            finally:
-                self.res.give(flags)
-        return bad
+            out.append((res, flags))
+            fbo = self.res.framebuffer_for((flags,))
+            fbo.use()
+            self.res.textures[res].use(0)
+            write_uniform(prog["src"], 0)
+            write_uniform(prog["u_tile"], tile)
+            write_uniform(prog["u_size"], (w, h))
+            vao_of(prog).render(vertices=3)
+        return out
 
     def _check_program(self) -> moderngl.Program | None:
         """shaders/finite_check.*, from the graph's library, or the project's when the graph was
@@ -580,6 +753,7 @@ class RenderGraph:
                 self._cancel(pass_name)
 
     def release(self) -> None:
+        self._collect_checks(None)
         for name in list(self._progress):
             self._finish_bands(name)
         for p in self.passes:

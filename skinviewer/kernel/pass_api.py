@@ -3,7 +3,7 @@ reflect (settings, inputs, outputs with their ``TexSpec``, programs, and the ``P
 execute), read-only ``SettingsView``s and the errors of the graph."""
 from __future__ import annotations
 
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, TypeVar, cast
@@ -124,6 +124,14 @@ def _composite(value: Any) -> bool:
     return _is_model(t) or (t is list and bool(value) and _is_model(type(value[0])))
 
 
+class _Leaf:
+    """A field's value read through a SettingsNode, with its dotted path (SettingsNode._kids)."""
+    __slots__ = ("value", "path")
+
+    def __init__(self, value: Any, path: str):
+        self.value, self.path = value, path
+
+
 class SettingsNode:
     """Typed attribute access to the settings that declares each read by its dotted path, exactly as
     ``Reflection.setting(path)`` does (issue 28): ``r.settings.deon.mix`` declares ``deon.mix`` and
@@ -137,7 +145,7 @@ class SettingsNode:
     _value: Any
     _path: str
     _on_read: Any
-    _kids: dict[str, SettingsNode]
+    _kids: dict[str | int, SettingsNode | _Leaf]
 
     def __init__(self, value: Any, path: str, on_read: Any):
         object.__setattr__(self, "_value", value)
@@ -146,13 +154,11 @@ class SettingsNode:
         object.__setattr__(self, "_kids", {})  # the sections under it, made once (the settings are immutable here)
 
     def _child(self, value: Any, part: str) -> Any:
-        kid = self._kids.get(part)
-        if kid is not None:
-            return kid
         path = f"{self._path}.{part}" if self._path else part
         if _composite(value):
             kid = self._kids[part] = SettingsNode(value, path, self._on_read)
             return kid
+        self._kids[part] = _Leaf(value, path)  # the next read of it: one dict look-up (__getattr__)
         if self._on_read is not None:
             self._on_read(path)
         return value
@@ -163,6 +169,15 @@ class SettingsNode:
         return self._value
 
     def __getattr__(self, name: str) -> Any:
+        # a field read before through this node (reflect reads the same fields many times): its node,
+        # or its value with the read declared again -- the settings do not change under a node
+        kid = self._kids.get(name)
+        if kid is not None:
+            if type(kid) is _Leaf:
+                if self._on_read is not None:
+                    self._on_read(kid.path)
+                return kid.value
+            return kid
         v = self._value
         if name[0] == "_" or not _is_model(type(v)) or name not in _fields(type(v)):
             raise AttributeError(f"settings '{self._path or '<root>'}' have no field '{name}'")
@@ -173,7 +188,16 @@ class SettingsNode:
         if type(v) is not list:
             raise TypeError(f"settings '{self._path}' are not a list")
         if type(key) is int and 0 <= key < len(v):
-            return self._child(v[key], str(key))
+            kid = self._kids.get(key)
+            if kid is not None:
+                if type(kid) is _Leaf:
+                    if self._on_read is not None:
+                        self._on_read(kid.path)
+                    return kid.value
+                return kid
+            kid = self._child(v[key], str(key))
+            self._kids[key] = self._kids[str(key)]
+            return kid
         if isinstance(key, slice):
             return self._whole()[key]
         raise IndexError(f"settings '{self._path}' have no item {key!r}")
@@ -226,13 +250,14 @@ class Reflection:
 
     def __init__(self, settings: Settings, scene: Any = None, state: ShapeState | None = None,
                  view: FrameView | None = None, interactive: bool = False):
-        self._settings = settings
+        self._settings_value = settings
         # a governed preview frame (FrameInputs.interactive): a scene rule may answer from a coarser,
         # cached estimate (rules.tsm_needed); the final image's frames are never interactive
         self.interactive = interactive
         self.scene = scene  # the GpuScene: its shape may decide the graph's (uses_scene passes)
         self._view = view  # the frame's view of the scene and camera (Reflection.view)
         self.declared: list[str] = []  # the settings read, by dotted path: the cache keys on them
+        self._declared_set: set[str] = set()
         self.inputs: list[str] = []
         self.outputs: dict[str, TexSpec] = {}
         self.programs: list[tuple[str, Defines]] = []
@@ -241,17 +266,28 @@ class Reflection:
         self.skip_reason: str | None = None
         self.dropped: dict[str, str] = {}
         self.notes: list[str] = []
-        self.state = state if state is not None else {}  # the graph's memory for shape decisions
+        self._state = state if state is not None else {}  # the graph's memory for shape decisions (state)
+        # what this reflect read besides its declared settings, so that the graph may reuse it next frame
+        # (RenderGraph._reusable): settings peeked (paths), rules asked through memo (key, rule, scene-less),
+        # and whether it read the view, the shape state or the raw settings outside a memoised rule
+        self._peek_paths: list[str] = []
+        self._memos: list[tuple[Any, Callable[[Reflection], Any], bool]] = []  # (key, rule, scene is None)
+        self._untracked = False
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
+        # the graph's per-frame memo of rules many passes ask (Reflection.memo); None: no memo
+        self._frame_memo: dict[Any, tuple[Any, list[str], list[str], list[tuple[str, str]]]] | None = None
+        self._recorders: list[tuple[list[str], list[str], list[tuple[str, str]]]] = []
         self._reads = SettingsNode(settings, "", self._declare)  # r.settings
-        self._peeks = SettingsNode(settings, "", None)  # r.peeked
+        self._peeks = SettingsNode(settings, "", self._peek_read)  # r.peeked (recorded, not declared)
 
     @property
     def view(self) -> FrameView:
         """The frame's view of the scene and camera (kernel/frame_view.FrameView, built once a frame by
         the renderer; ``ec.view`` is its camera): what the scene rules (passes/rules.py) measure --
         the screen coverage, the camera a thin part must be in view of. Passes that use the scene get it."""
+        if not self._recorders:
+            self._untracked = True
         if self._view is None:
             raise GraphError("this reflection has no frame view (FrameInputs.frame_view: the renderer builds "
                              "one a frame; a scene rule needs it)")
@@ -261,13 +297,19 @@ class Reflection:
         """This pass is not needed this frame (declare nothing else); reported "pruned: reason"."""
         self.skip_reason = reason
 
-    def drop(self, resource: str, reason: str) -> None:
+    def drop(self, resource: str, reason: str, record: bool = True) -> None:
         """This pass does not read ``resource`` this frame because of ``reason``: when nothing else
         reads it its producer is reported "pruned: reason"."""
+        if record:
+            for rec in self._recorders:
+                rec[2].append((resource, reason))
         self.dropped.setdefault(resource, reason)
 
-    def note(self, text: str) -> None:
+    def note(self, text: str, record: bool = True) -> None:
         """A scene-driven choice shown with the pass in the frame report (e.g. a map size)."""
+        if record:
+            for rec in self._recorders:
+                rec[1].append(text)
         if text not in self.notes:
             self.notes.append(text)
 
@@ -287,8 +329,66 @@ class Reflection:
         """The plan recorded so far (what ``ec.plan`` will be)."""
         return Plan(self._plan)
 
-    def _declare(self, path: str) -> None:
-        if path not in self.declared:
+    @property
+    def state(self) -> ShapeState:
+        """The graph's memory for shape decisions (hysteresis of the scene rules)."""
+        if not self._recorders:
+            self._untracked = True
+        return self._state
+
+    @property
+    def _settings(self) -> Settings:
+        """The settings object itself, read by a scene rule (undeclared: the rule declares what it needs)."""
+        if not self._recorders:
+            self._untracked = True
+        return self._settings_value
+
+    def _peek_read(self, path: str) -> None:
+        self._peek_paths.append(path)
+
+    def memo(self, key: Any, rule: Callable[[Reflection], _T]) -> _T:
+        """``rule(self)``, or what it returned for ``key`` in an earlier pass's reflect of this frame: a
+        scene rule that many passes ask the same question (d'Eon's map size, blur plan, TSM light, the
+        kernel-under-a-pixel rule) is answered once a frame. On a hit, what the rule did to its
+        reflection is done again to this one: the settings it read are declared (so cache keys are
+        as without the memo), its notes noted and its drops dropped. ``key`` must name everything the
+        answer depends on besides the frame's settings, scene, view and state (e.g. whether this pass
+        uses the scene); ``rule`` reads only through the reflection it is given (the graph asks it
+        again, in a reflection of its own, to tell whether a pass's last reflection still holds).
+        Outside a graph's frame (no memo): ``rule(self)``."""
+        memo = self._frame_memo
+        if memo is None:
+            return rule(self)
+        if not self._recorders:  # a rule this pass asked itself: re-asked when the graph reuses the reflection
+            self._memos.append((key, rule, self.scene is None))
+        hit = memo.get(key)
+        if hit is None:
+            rec: tuple[list[str], list[str], list[tuple[str, str]]] = ([], [], [])
+            self._recorders.append(rec)
+            try:
+                value = rule(self)
+            finally:
+                self._recorders.remove(rec)
+            memo[key] = hit = (value, *rec)
+        else:
+            for outer in self._recorders:  # a memo asked inside another's make: the outer records it too
+                outer[0].extend(hit[1])
+                outer[1].extend(hit[2])
+                outer[2].extend(hit[3])
+            for path in hit[1]:
+                self._declare(path, record=False)
+            for text in hit[2]:
+                self.note(text, record=False)
+            for resource, reason in hit[3]:
+                self.drop(resource, reason, record=False)
+        return cast(_T, hit[0])
+
+    def _declare(self, path: str, record: bool = True) -> None:
+        if record and self._recorders:
+            for rec in self._recorders:
+                rec[0].append(path)
+        if path not in self._declared_set:  # a set beside the list: reflect reads a path many times
+            self._declared_set.add(path)
             self.declared.append(path)
 
     @property
@@ -306,16 +406,21 @@ class Reflection:
         """Declare a setting (dotted path) and return its current value (tests and tools; passes
         read ``r.settings``)."""
         self._declare(path)
-        return get_path(self._settings, path)
+        return get_path(self._settings_value, path)
 
     def peek(self, path: str) -> Any:
         """Read a setting without declaring it: only for the graph's shape (e.g. whether light i
         exists), never for a value the pass's output depends on."""
-        return get_path(self._settings, path)
+        self._peek_read(path)
+        return get_path(self._settings_value, path)
 
-    def depends(self, name: str, value: Any) -> None:
+    def depends(self, name: str, value: Any, scene_generation: bool = False) -> None:
         """The output also depends on ``value`` (e.g. a progressive pass's frame index, kept in
-        ``state``): part of the cache key, so the pass re-runs when it changes."""
+        ``state``): part of the cache key, so the pass re-runs when it changes. Its reflect then runs
+        every frame (the graph cannot tell whether the value changed without asking), but for
+        ``scene_generation``: the value is the scene's ``env_generation``, which the graph watches."""
+        if not scene_generation:
+            self._untracked = True
         self.depends_on[name] = value
 
     def input(self, resource: str) -> None:

@@ -47,6 +47,7 @@ from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import (
     analytic_on,
     coverage_size,
+    frame_memo,
     kernel_under_pixel,
     light_map_size,
     light_on,
@@ -90,7 +91,12 @@ GATHER_BLOCKS_ZONE = "deon_gather_blocks_zone"  # per 2 x 2 block: zone, spread
 
 
 def map_size(r) -> int:
-    """The irradiance-map size: deon.irradiance_size, or from the screen coverage (rules.py)."""
+    """The irradiance-map size: deon.irradiance_size, or from the screen coverage (rules.py); asked
+    by most passes, answered once a frame (rules.frame_memo)."""
+    return frame_memo(r, "deon.map_size", _map_size)
+
+
+def _map_size(r) -> int:
     d = r.settings.deon
     return coverage_size(r, d.irradiance_size, d.irradiance_size_mode, "deon_irradiance")
 
@@ -98,6 +104,11 @@ def map_size(r) -> int:
 # -- which light casts the TSM --------------------------------------------------------------------
 
 def tsm_light_index(r: Reflection) -> int | None:
+    """_tsm_light_index, answered once a frame (rules.frame_memo: several passes ask)."""
+    return frame_memo(r, "deon.tsm_light_index", _tsm_light_index)
+
+
+def _tsm_light_index(r: Reflection) -> int | None:
     """Declare (and return) the light the TSM is rendered from: deon.tsm_light when it names an
     enabled shadow-casting light, else the first such light; None when deon.tsm is off or no light
     casts shadows. Reflect only: the passes plan it (``tsm_light``) for execute."""
@@ -369,7 +380,7 @@ def plan_of(variances, r) -> list:
 
 
 def _plan(r):
-    return plan_of([g.variance for g in whole(r.settings.deon.gaussians)], r)
+    return frame_memo(r, "deon._plan", lambda rr: plan_of([g.variance for g in whole(rr.settings.deon.gaussians)], rr))
 
 
 
@@ -591,8 +602,11 @@ class GaussianBlurPass(Pass):
         return {"OPEN_BORDER": 1} if self.chain == "irradiance" and open_border(r) else {}
 
     def _step(self, r):
-        vs = [r.settings.deon.gaussians[k].variance for k in range(self.i + 1)]
-        return plan_of(vs, r)[self.i]
+        i = self.i
+
+        def step(rr):  # blur i declares the variances up to its own: its key is the chain's prefix
+            return plan_of([rr.settings.deon.gaussians[k].variance for k in range(i + 1)], rr)[i]
+        return frame_memo(r, ("deon._step", i), step)
 
     @staticmethod
     def _narrow(r, step, stretch: str | None, n: int) -> dict:

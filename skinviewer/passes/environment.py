@@ -145,7 +145,7 @@ def depend_on_bake(r, light) -> None:
     """The lit output depends on which transfer vectors the vertex arrays hold: the unoccluded
     stand-in while the viewer's background bake runs, then the bake (GpuScene.env_generation)."""
     if light.occlusion and hasattr(r, "depends") and r.scene is not None:
-        r.depends("env_visibility", getattr(r.scene, "env_generation", 0))
+        r.depends("env_visibility", getattr(r.scene, "env_generation", 0), scene_generation=True)
 
 
 def _defines(light) -> dict[str, int]:

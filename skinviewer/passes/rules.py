@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 import threading
 import time
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -137,7 +138,20 @@ def kernel_px(settings, view: FrameView) -> float:
     return math.sqrt(max(v, 0.0)) * d_px / (2.0 * scene.frame[1] * scene.mm_per_unit)
 
 
+def frame_memo(r: Any, key: Any, rule: Callable[[Any], Any]) -> Any:
+    """``rule(r)`` answered once a frame for ``key`` when ``r`` is a graph's Reflection
+    (Reflection.memo: the reads, notes and drops replayed); an ExecuteContext asks afresh. ``rule``
+    reads only through the reflection it is given."""
+    memo = getattr(r, "memo", None)
+    return rule(r) if memo is None else memo((key, r.scene is None), rule)
+
+
 def kernel_under_pixel(r: Reflection) -> str | None:
+    """Asked by most of d'Eon's passes a frame: answered once (frame_memo); see _kernel_under_pixel."""
+    return frame_memo(r, "kernel_under_pixel", _kernel_under_pixel)
+
+
+def _kernel_under_pixel(r: Reflection) -> str | None:
     """The screen-space rule of the Burley techniques (kernel under a pixel: no blur) for d'Eon:
     when the widest Gaussian spans under deon.subpixel_kernel_px pixels on screen, diffusion cannot
     show, so the blurs, stretch and TSM are skipped and the final pass reads the irradiance. With
