@@ -24,6 +24,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from bench_blur_floor import light_frame  # noqa: E402
 from bench_frames import copy_draw_ms, settings_for  # noqa: E402
 
+import skinviewer.passes.deon as deon_passes  # noqa: E402
 from skinviewer.engine.renderer import Renderer  # noqa: E402
 from skinviewer.kernel import execute  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
@@ -94,6 +95,8 @@ def main() -> None:
     ap.add_argument("--set", action="append", default=[])
     ap.add_argument("--ab", action="append", default=[],
                     help="program:DEFINE=value: time the program with that extra define too (B), interleaved")
+    ap.add_argument("--ab-no-zone-split", action="store_true",
+                    help="B also draws every blur tile with the zone checks (passes.deon.zone_split off)")
     args = ap.parse_args()
     ctx = headless_context()
     print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
@@ -105,31 +108,36 @@ def main() -> None:
     r.render(phong, force=True)
     per: dict[tuple, list[float]] = collections.defaultdict(list)
     counts: dict[tuple, int] = {}
-    frames, phongs, copies, halves = [], [], [], []
+    frames, frames_b, phongs, copies, halves = [], [], [], [], []
     variant: dict[str, dict] = {}
     for a in args.ab:
         name, kv = a.split(":", 1)
         variant.setdefault(name, {}).update(parse_sets([kv]))
+    zone_split = deon_passes.zone_split
     for k in range(args.repeats):
-        for side in (("A", "B") if variant else ("A",)):
+        for side in (("A", "B") if variant or args.ab_no_zone_split else ("A",)):
             VARIANT.clear()
+            deon_passes.zone_split = zone_split
             if side == "B":
                 VARIANT.update(variant)
+                if args.ab_no_zone_split:
+                    deon_passes.zone_split = lambda *a, **k: None
             LOG.clear()
             ms_frame = light_frame(r, s, k)[0]
-            if side == "A":
-                frames.append(ms_frame)
+            (frames if side == "A" else frames_b).append(ms_frame)
             # the base frame of light_frame is untimed but its draws are logged too: keep the second half
             frame = collections.defaultdict(float)
             n = collections.Counter()
             base = len(LOG) // 2
-            for p, prog, tiled, ms in LOG[base:]:
-                frame[(p, prog)] += ms
-                n[(p, prog)] += 1
+            for p, prog, _tiled, ms in LOG[base:]:
+                label = prog if side == "A" else "(B) " + prog  # B: the --ab side
+                frame[(p, label)] += ms
+                n[(p, label)] += 1
             for key, ms in frame.items():
                 per[key].append(ms)
                 counts[key] = n[key]
         VARIANT.clear()
+        deon_passes.zone_split = zone_split
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])
         copies.append(copy_draw_ms(r, args.maps, 3))
@@ -137,7 +145,11 @@ def main() -> None:
     copy, half = statistics.median(copies), statistics.median(halves)
     print(f"# scene={args.scene} image={args.size}^2 maps={args.maps}^2 repeats={args.repeats} {args.set or 'defaults'}; "
           f"load {os.getloadavg()[0]:.1f} at the end")
-    print(f"# light move (timed per draw) {statistics.median(frames):.0f} ms, Phong {statistics.median(phongs):.0f} ms; "
+    ph = statistics.median(phongs)
+    b = (f"; with --ab (B) {statistics.median(frames_b):.0f} ms = {statistics.median(frames_b) / ph:.2f} x Phong"
+         if frames_b else "")
+    print(f"# light move (timed per draw) {statistics.median(frames):.0f} ms = {statistics.median(frames) / ph:.2f} x Phong{b}; "
+          f"Phong {ph:.0f} ms; "
           f"copy {copy:.2f} ms ({args.maps}^2), {half:.2f} ms ({args.maps // 2}^2)")
     hdr = f"{'pass':<18} {'program':<58} {'draws':>5} {'ms':>8} {'/ copy':>7}"
     print(hdr)
