@@ -5,6 +5,12 @@ in plain copies (shaders/copy.frag, RGBA32F) of the map size, with Phong's light
 in the same run.
 
     python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
+        [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split]
+
+--ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
+define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
+--ab-no-* flags make B draw every blur tile with the zone checks / seam-fill every fill tile (the code
+before passes.deon.zone_split / seam_split). B's rows are marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
 are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
@@ -99,6 +105,8 @@ def main() -> None:
                     help="program:DEFINE=value: time the program with that extra define too (B), interleaved")
     ap.add_argument("--ab-no-zone-split", action="store_true",
                     help="B also draws every blur tile with the zone checks (passes.deon.zone_split off)")
+    ap.add_argument("--ab-no-seam-split", action="store_true",
+                    help="B also seam-fills every fill tile (passes.deon.seam_split off)")
     args = ap.parse_args()
     ctx = headless_context()
     print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
@@ -115,15 +123,17 @@ def main() -> None:
     for a in args.ab:
         name, kv = a.split(":", 1)
         variant.setdefault(name, {}).update(parse_sets([kv]))
-    zone_split = deon_passes.zone_split
+    zone_split, seam_split = deon_passes.zone_split, deon_passes.seam_split
     for k in range(args.repeats):
-        for side in (("A", "B") if variant or args.ab_no_zone_split else ("A",)):
+        for side in (("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split else ("A",)):
             VARIANT.clear()
-            deon_passes.zone_split = zone_split
+            deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
             if side == "B":
                 VARIANT.update(variant)
                 if args.ab_no_zone_split:
                     deon_passes.zone_split = lambda *a, **k: None
+                if args.ab_no_seam_split:
+                    deon_passes.seam_split = lambda *a, **k: None
             LOG.clear()
             ms_frame = light_frame(r, s, k)[0]
             (frames if side == "A" else frames_b).append(ms_frame)
@@ -139,7 +149,7 @@ def main() -> None:
                 per[key].append(ms)
                 counts[key] = n[key]
         VARIANT.clear()
-        deon_passes.zone_split = zone_split
+        deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])
         copies.append(copy_draw_ms(r, args.maps, 3))

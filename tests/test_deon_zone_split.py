@@ -1,8 +1,9 @@
 """Issue 27: a separable d'Eon blur draws the island tiles where no tap can reach another UV island
 zone with a variant compiled without the zone checks (passes/deon.zone_split, deon_blur.frag
-NO_ZONE_CHECKS): llvmpipe pays a check's zone fetches under a mask on every texel otherwise. The check
-is false on every texel of those tiles, so the blurs, the diffuse sum and the image are the same as
-with every tile checked."""
+NO_ZONE_CHECKS), and its seam fill's tiles with no texel across a seam or past a border as a plain
+copy (passes/deon.seam_split, seam_fill.frag NO_SEAM): llvmpipe pays a branch's work under a mask on
+every texel otherwise. Those tiles hold no texel the removed code would change, so the blurs, the
+diffuse sum and the image are the same as with every tile checked and filled."""
 import numpy as np
 import pytest
 from helpers import small_settings
@@ -23,7 +24,11 @@ def test_zone_free_tiles_give_the_same_blurs(renderer, monkeypatch, half):
     assert sep and sum(p.figures.get("zone_free_rects", 0) for p in sep) > 0, "some tiles are drawn unchecked"
     names = ["lit", "image", "deon_diffuse"] + [blur_resource(int(p.name.rsplit("_", 1)[1])) for p in sep]
     a = {k: renderer.read(s, k) for k in names}
+    objs = renderer.graph("deon").shape_state["gl_objects"]
+    assert any(k[0] == "seam_split" and k[-1] == "plain" and objs[k] is not None for k in objs), \
+        "some fill tiles are plain copies"
     monkeypatch.setattr(deon_passes, "zone_split", lambda *args, **kw: None)  # every tile checked
+    monkeypatch.setattr(deon_passes, "seam_split", lambda *args, **kw: None)  # every tile seam-filled
     renderer.render(s, force=True)
     b = {k: renderer.read(s, k) for k in names}
     assert np.array_equal(a["lit"], b["lit"]) and np.array_equal(a["image"], b["image"])
@@ -66,3 +71,28 @@ def test_free_tiles_hold_no_texel_near_another_zone(renderer):
             cb = np.frombuffer(checked[0].read(), np.float32).reshape(checked[1], 4).astype(int)
             assert not any((border[y0:y0 + h, x0:x0 + w] >= reach).all() for x0, y0, w, h in cb
                            if w == TILE and h == TILE)  # a single checked tile has a texel near a border
+
+
+def test_plain_fill_tiles_hold_no_seam_texel(renderer):
+    """seam_split's plain tiles: no texel in them lies across a seam or past a border (the seam map's
+    B is 0), so seam_fill's plain copy is what the full fill gives there; the seam tiles each have one."""
+    s = small_settings("head", "deon", 64, **{"deon.irradiance_size": 256, "deon.skip_gutters": True,
+                                              "deon.surface_gather_below_texels": 0.0,
+                                              "deon.half_res_above_texels": 0.0})
+    renderer.render(s, force=True)
+    g = renderer.graph("deon")
+    objs = g.shape_state["gl_objects"]
+    keys = [k for k in objs if k[0] == "seam_split" and k[-1] == "plain" and objs[k] is not None]
+    assert keys, "a fill split its tiles"
+    for key in keys:
+        n = key[2]
+        b = g.texture(f"seam_{n}")
+        seam_b = np.frombuffer(b.read(), np.float32).reshape(n, n, b.components)[..., 2]
+        tex, count, _ = objs[key]
+        for x0, y0, w, h in np.frombuffer(tex.read(), np.float32).reshape(count, 4).astype(int):
+            assert (seam_b[y0:y0 + h, x0:x0 + w] < 0.5).all()
+        seam = objs[key[:-1] + ("seam",)]
+        if seam is not None:
+            for x0, y0, w, h in np.frombuffer(seam[0].read(), np.float32).reshape(seam[1], 4).astype(int):
+                if w == TILE and h == TILE:
+                    assert (seam_b[y0:y0 + h, x0:x0 + w] > 0.5).any()

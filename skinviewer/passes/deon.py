@@ -522,10 +522,13 @@ class GaussianBlurPass(Pass):
             r.program("deon_blur", **blur_defines, NO_ZONE_CHECKS=1)
         if seam:
             fill_defines = {**(dilate_fill or tiled), **border}
-            r.plan(fill_defines=fill_defines)
-            r.program("seam_fill", **fill_defines)
-            if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
-                r.program("seam_fill", DOWN=1, **fill_defines)
+            # the fill's tiles with no texel across a seam or past a border take a plain copy (seam_split)
+            plain = bool(fill_defines.get("TILED") == 2) and not border
+            r.plan(fill_defines=fill_defines, seam_split=plain)
+            for extra in ({}, {"NO_SEAM": 1}) if plain else ({},):
+                r.program("seam_fill", **fill_defines, **extra)
+                if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
+                    r.program("seam_fill", DOWN=1, **fill_defines, **extra)
         r.output(self._output(), self._spec(m))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -658,10 +661,15 @@ class GaussianBlurPass(Pass):
             for p_ in (prog, fill):  # never half size: no DOWN fill
                 ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
+        # the plain-copy variants for the fill's tiles without seam or border texels (seam_split)
+        plain_fill = ec.program("seam_fill", **plan.fill_defines, NO_SEAM=1) if seam and plan.seam_split else None
+        plain_down = (ec.program("seam_fill", DOWN=1, **plan.fill_defines, NO_SEAM=1)
+                      if down is not None and plan.seam_split else None)
         if seam:
             light = self.chain == "irradiance"
-            for p_ in (fill, down) if down else (fill,):
-                ec.set(p_, "u_past_border_dark", light)
+            for p_ in (fill, down, plain_fill, plain_down):
+                if p_ is not None:
+                    ec.set(p_, "u_past_border_dark", light)
             for p_ in progs:
                 ec.bind(p_, "seam_map", seam)
                 ec.set(p_, "u_absorb", light)
@@ -695,9 +703,17 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    prog_fill = down if down and source is plan.source else fill
+                    first = down is not None and source is plan.source
+                    prog_fill = down if first else fill
                     maps = {"seam_map": seam, **({"gutter": plan.gutter} if dilate_fill or prog_fill is down else {})}
-                    draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
+                    plain = plain_down if first else plain_fill
+                    split = seam_split(ec, n, fill_tiles) if plain is not None and fill_tiles is not None else None
+                    if split is None:
+                        draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
+                    else:
+                        for p_, where in ((prog_fill, split[0]), (plain, split[1])):
+                            if where is not None:
+                                draws.append((p_, refl, maps, source, filled, where))
                     source = filled
                 for p_, where in parts:  # spacing = sigma (eq. 25)
                     draws.append((p_, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, where))
@@ -715,6 +731,52 @@ class GaussianBlurPass(Pass):
             ec.bind(program, "source", source)
             with ec.band(sub, subs):
                 ec.draw_fullscreen(program, target, tiles=where)
+
+
+def seam_split(ec, n: int, tiles: tuple) -> tuple | None:
+    """A seam fill's tiles (``tiles``, TILED = 2 rectangles, or one whole-target tile) split by whether
+    a texel of the tile lies across a UV seam or past a mesh border (the seam map's B > 0.5): (tiles
+    with one: None if none, tiles without), or None when every tile has one. seam_fill.frag gives
+    the plain copy at the island texel on every texel of the second set, so its NO_SEAM variant (no seam
+    lookup, which llvmpipe would run masked on every texel) gives the same values there (issue 27).
+    Once per mesh, size and tile set."""
+    objs = ec.state.setdefault("gl_objects", {})  # each entry a work_tiles-like tuple or None (Graph.release)
+    key = ("seam_split", id(ec.scene), n, id(tiles[0]), int(tiles[1]))
+    if key + ("plain",) in objs:
+        plain = objs[key + ("plain",)]
+        return None if plain is None else (objs[key + ("seam",)], plain)
+    for k in [k for k in objs if k[0] == "seam_split" and k[1] != id(ec.scene)]:
+        old = objs.pop(k)
+        if old is not None:
+            old[0].release()
+    nt = -(-n // TILE)
+    if tiles[2] == n:  # one tile: the whole target
+        drawn_t = np.ones((nt, nt), bool)
+    else:
+        boxes = np.frombuffer(tiles[0].read(), np.float32).reshape(int(tiles[1]), 4).astype(np.int64) // TILE
+        drawn_t = np.zeros((nt, nt), bool)
+        for x0, y0, w, h in boxes:
+            drawn_t[y0:y0 + h, x0:x0 + w] = True
+    sm = ec.input(seam_resource(n))
+    b = np.frombuffer(sm.read(), np.float32).reshape(n, n, sm.components)[..., 2]
+    pad = np.zeros((nt * TILE, nt * TILE), bool)
+    pad[:n, :n] = ~(b < 0.5)  # NaN-safe: a tile is plain only when every texel's B is below 0.5
+    seam_t = np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))) & drawn_t
+    plain_t = drawn_t & ~seam_t
+    if not plain_t.any():
+        objs[key + ("plain",)] = None
+        return None
+
+    def rects(mask: np.ndarray) -> tuple | None:
+        if not mask.any():
+            return None
+        r = tile_rects(mask) * TILE
+        tex = ec.gl.texture((len(r), 1), 4, r.astype(np.float32).tobytes(), dtype="f4")
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return (tex, len(r), TILE)
+
+    objs[key + ("seam",)], objs[key + ("plain",)] = rects(seam_t), rects(plain_t)
+    return objs[key + ("seam",)], objs[key + ("plain",)]
 
 
 def zone_split(ec, n: int, ring: int, tiles: tuple, reach: float) -> tuple | None:
