@@ -6,8 +6,10 @@ size and format, d'Eon's light-move frame in Phong's, and both at 512^2 / 1024^2
                                           [--set deon.skip_gutters=false ...]
 
 Each row runs "before" (every blur step at the map's size, deon.half_res_above_texels = 0, and the
-island tiles drawn one 16^2 quad each: passes.deon.TILE_RECTS off, the code before this change) and
-"after" (the defaults: wide steps on a half-size map, the tiles merged into rectangles),
+island tiles drawn one 16^2 quad each: passes.deon.TILE_RECTS off, session 4's code), "unsplit" (the
+defaults with every blur tile zone-checked and every fill tile seam-filled: session 5's code) and
+"after" (the defaults: wide steps on a half-size map, the tiles merged into rectangles and split by
+passes.deon.zone_split / seam_split),
 interleaved with Phong and with plain full-screen copies (shaders/copy.frag, RGBA32F, the map size
 and half of it), so that load on the machine hits all alike. Sync timing (glFinish + wall clock: llvmpipe's timer
 queries are not trustworthy), medians over --repeats. A light move re-runs the light's shadow map
@@ -29,8 +31,20 @@ from skinviewer.engine.renderer import Renderer  # noqa: E402
 from skinviewer.ground.settings import with_values  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 
-CONFIGS = {"before": {"deon.half_res_above_texels": 0.0}, "after": {}}
-RECTS = {"before": False, "after": True}  # passes.deon.TILE_RECTS per configuration
+CONFIGS = {"before": {"deon.half_res_above_texels": 0.0}, "unsplit": {}, "after": {}}
+RECTS = {"before": False, "unsplit": True, "after": True}  # passes.deon.TILE_RECTS per configuration
+# "unsplit": the defaults with every blur tile zone-checked and every fill tile seam-filled (passes.deon
+# zone_split / seam_split off: session 5's code); "after": the defaults
+SPLITS = {"before": False, "unsplit": False, "after": True}
+ZONE_SPLIT, SEAM_SPLIT = deon_passes.zone_split, deon_passes.seam_split
+
+
+def use(config: str) -> None:
+    """passes.deon's switches for a configuration (TILE_RECTS, the tile splits)."""
+    deon_passes.TILE_RECTS = RECTS.get(config, True)
+    on = SPLITS.get(config, True)
+    deon_passes.zone_split = ZONE_SPLIT if on else (lambda *a, **k: None)
+    deon_passes.seam_split = SEAM_SPLIT if on else (lambda *a, **k: None)
 
 
 def light_frame(r: Renderer, s, k: int):
@@ -88,20 +102,20 @@ def main() -> None:
         s = {c: settings_for("deon", args.scene, args.size, maps, **extra, **v) for c, v in CONFIGS.items()}
         phong = settings_for("phong", args.scene, args.size, maps)
         for c, x in (*s.items(), ("phong", phong)):
-            deon_passes.TILE_RECTS = RECTS.get(c, True)
+            use(c)
             r.render(x, force=True)
         m = {c: {"light": [], "dir": [], "summed": [], "sep": []} for c in (*CONFIGS, "phong")}
         copies, halves, dirs = [], [], {}
         for k in range(args.repeats):
             for c in CONFIGS:
-                deon_passes.TILE_RECTS = RECTS[c]
+                use(c)
                 ms, rep = light_frame(r, s[c], k)
                 d, summed, dirs[c], sep = blur_figures(rep)
                 m[c]["light"].append(ms)
                 m[c]["dir"].append(d)
                 m[c]["summed"].append(summed)
                 m[c]["sep"].append(sep)
-            deon_passes.TILE_RECTS = True
+            use("after")
             m["phong"]["light"].append(light_frame(r, phong, k)[0])
             copies.append(copy_draw_ms(r, maps, 3))
             halves.append(copy_draw_ms(r, maps // 2, 3))
@@ -109,12 +123,12 @@ def main() -> None:
         copy = statistics.median(copies)
         if maps == 1024 or maps == args.maps[-1]:
             for c in CONFIGS:
-                deon_passes.TILE_RECTS = RECTS[c]
+                use(c)
                 rep = light_frame(r, s[c], args.repeats)[1]
                 print(f"# {maps}^2 maps, {c}, one light-move frame per pass (plain copies of {copy:.2f} ms): "
                       + ", ".join(f"{p.name} {p.ms / copy:.1f}" for p in rep.passes if p.status == "ran" and p.ms),
                       flush=True)
-            deon_passes.TILE_RECTS = True
+            use("after")
         rows[maps] = (med, copy, dirs, statistics.median(halves))
         r.release()
         r.shaders.release()

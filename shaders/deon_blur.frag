@@ -41,7 +41,14 @@ vec2 shear_step(vec2 s, float c, vec2 dir) {
 #ifdef ISLAND_ZONES
 uniform sampler2D seam_map;  // A: 1 where the nearest island edge is a mesh border (seam_map in Python)
 uniform int u_absorb;        // 1: light (past a border there is none); 0: the stretch chain (a metric)
+#ifdef NO_ZONE_CHECKS
+// drawn on the tiles where no texel's farthest tap reaches another zone (passes/deon.zone_split, issue
+// 27): the check below would be false on every texel there, and llvmpipe would still pay its taps'
+// zone fetches under a mask; the same values, bit for bit
+#define ISLAND_CHECK(reach) false
+#else
 #define ISLAND_CHECK(reach) ((reach) > own.a)
+#endif
 #define PAST_BORDER ((u_absorb != 0) ? texelFetch(seam_map, src, 0).a : 0.0)
 #else
 #define ISLAND_CHECK(reach) false

@@ -37,12 +37,19 @@ uniform int u_reflect;
 out vec4 f_color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
-    vec4 s = texelFetch(seam_map, p, 0);
 #if defined(DILATE) || defined(DOWN)
     vec4 here = AT_TEXEL(ivec2(texelFetch(gutter, p, 0).rg + 0.5));
 #else
     vec4 here = AT_TEXEL(p);
 #endif
+#if defined(NO_SEAM) && !defined(OPEN_BORDER)
+    // drawn on the tiles with no texel across a seam or past a border (passes/deon.seam_split, issue 27):
+    // the copy at the island texel that the lines below give there, without their seam lookup, which a
+    // SIMD rasteriser would run masked on every texel
+    f_color = here;
+    return;
+#endif
+    vec4 s = texelFetch(seam_map, p, 0);
 #ifdef OPEN_BORDER
     vec4 bf = texelFetch(border_map, p, 0);
     if (u_reflect != 0 && u_past_border_dark != 0 && s.b > 1.5 && bf.a > 0.5 && bf.r < 0.0) {

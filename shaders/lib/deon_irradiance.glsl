@@ -50,7 +50,13 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
     vec4 vis = vec4(0.0);
+#if defined(DEON_TEXEL_SAMPLES) && DEON_TEXEL_SAMPLES > 0 && !defined(GENERIC_SHADERS)
+    // the pass compiles deon.texel_samples in (issue 27): llvmpipe runs both sides of a branch on a
+    // uniform under a mask, so the 4-sample path cost the 1-sample default 10-20 % of this pass
+    const int ns = (DEON_TEXEL_SAMPLES >= 4) ? 4 : 1;
+#else
     int ns = (u_texel_samples >= 4) ? 4 : 1;
+#endif
     vec2 duv = u_texel_uv;  // one texel of the irradiance map in uv
     for (int i = 0; i < N_LIGHTS; ++i) {
         vec3 L;

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import moderngl
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
@@ -54,13 +55,16 @@ from skinviewer.passes.rules import (
     tsm_needed,
 )
 from skinviewer.passes.texture_space import (
+    TILE,
     declare_shaded,
     declare_unwrapped,
     dilate,
     gutter_resource,
     rasterize_unwrapped,
+    read_gutter,
     seam_resource,
     shade_dilated,
+    tile_rects,
     unwrap_dilated,
     work_tiles,
 )
@@ -339,8 +343,9 @@ class IrradiancePass(Pass):
             r.input(TSM)
         vis = texture_shadows(r)
         r.plan(tsm_light=j, visibility=vis)  # the TSM's light; each light's fac_shadow kept per texel
+        # deon.texel_samples compiled in: a branch on a uniform costs both sides on llvmpipe (issue 27)
         declare_shaded(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
-                       steps=over_texel, DEON_VISIBILITY=int(vis))
+                       steps=over_texel, DEON_VISIBILITY=int(vis), DEON_TEXEL_SAMPLES=int(r.settings.deon.texel_samples))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 
@@ -517,15 +522,24 @@ class GaussianBlurPass(Pass):
             r.input(border_resource(n))
             r.input(IRRADIANCE)  # E at the border (lib/open_border.glsl)
         narrow = {} if half else self._narrow(r, step, stretch, n)
+        # with island tiles, the tiles where no tap can reach another zone take a variant without the
+        # zone checks (zone_split; issue 27): the same values, without the masked zone fetches
+        split = bool(zones) and bool(skip_gutters) and not border
+        blur_defines = {**tiled, **zones, **border, **narrow}
         r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
-               ring_sigma=ring_sigma(r, self.i))
-        r.program("deon_blur", **tiled, **zones, **border, **narrow)
+               ring_sigma=ring_sigma(r, self.i), blur_defines=blur_defines, zone_split=split)
+        r.program("deon_blur", **blur_defines)
+        if split:
+            r.program("deon_blur", **blur_defines, NO_ZONE_CHECKS=1)
         if seam:
             fill_defines = {**(dilate_fill or tiled), **border}
-            r.plan(fill_defines=fill_defines)
-            r.program("seam_fill", **fill_defines)
-            if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
-                r.program("seam_fill", DOWN=1, **fill_defines)
+            # the fill's tiles with no texel across a seam or past a border take a plain copy (seam_split)
+            plain = bool(fill_defines.get("TILED") == 2) and not border
+            r.plan(fill_defines=fill_defines, seam_split=plain)
+            for extra in ({}, {"NO_SEAM": 1}) if plain else ({},):
+                r.program("seam_fill", **fill_defines, **extra)
+                if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
+                    r.program("seam_fill", DOWN=1, **fill_defines, **extra)
         r.output(self._output(), self._spec(m))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -626,20 +640,24 @@ class GaussianBlurPass(Pass):
             self._execute_gather(ec)
             return
         step, n, stretch, narrow, border = plan.step, plan.size, plan.stretch, plan.narrow, plan.border
-        prog = ec.program("deon_blur")  # the variant reflect declared (TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS)
+        prog = ec.program("deon_blur", **plan.blur_defines)  # TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS
+        free = ec.program("deon_blur", **plan.blur_defines, NO_ZONE_CHECKS=1) if plan.zone_split else None
+        progs = (prog, free) if free else (prog,)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
-        ec.uniforms(prog, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
-                    u_weights=np.asarray(KERNEL7, np.float32),
-                    u_shear=bool(stretch) and bool(ec.settings.deon.stretch_shear))
+        for p_ in progs:
+            ec.uniforms(p_, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
+                        u_weights=np.asarray(KERNEL7, np.float32),
+                        u_shear=bool(stretch) and bool(ec.settings.deon.stretch_shear))
         texel_mm = mean_texel_mm(ec.scene, n)
         increment = step.increment
         if plan.half:  # the coarser grid's interpolation is part of the variance (half_size_increment)
             increment = half_size_increment(increment, mean_texel_mm(ec.scene, plan.full), plan.size_in != n)
         sigmas = ([np.sqrt(step.increment)] if narrow else
                   sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), increment, texel_mm))
-        ec.bind(prog, "gutter", plan.gutter)
-        if stretch:
-            ec.bind(prog, "stretch_map", stretch)
+        for p_ in progs:
+            ec.bind(p_, "gutter", plan.gutter)
+            if stretch:
+                ec.bind(p_, "stretch_map", stretch)
         spec = plan.spec
         # scratch kept across the pass's bands (ExecuteContext.held): a blur runs in row bands
         # under the viewer's frame budget, each draw complete before the next one's first band
@@ -657,12 +675,18 @@ class GaussianBlurPass(Pass):
             for p_ in (prog, fill):  # never half size: no DOWN fill
                 ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
+        # the plain-copy variants for the fill's tiles without seam or border texels (seam_split)
+        plain_fill = ec.program("seam_fill", **plan.fill_defines, NO_SEAM=1) if seam and plan.seam_split else None
+        plain_down = (ec.program("seam_fill", DOWN=1, **plan.fill_defines, NO_SEAM=1)
+                      if down is not None and plan.seam_split else None)
         if seam:
             light = self.chain == "irradiance"
-            for p_ in (fill, down) if down else (fill,):
-                ec.set(p_, "u_past_border_dark", light)
-            ec.bind(prog, "seam_map", seam)
-            ec.set(prog, "u_absorb", light)
+            for p_ in (fill, down, plain_fill, plain_down):
+                if p_ is not None:
+                    ec.set(p_, "u_past_border_dark", light)
+            for p_ in progs:
+                ec.bind(p_, "seam_map", seam)
+                ec.set(p_, "u_absorb", light)
         src = plan.source
         # the blur draws the texels a reader can reach: with a dilating seam fill the islands and
         # DILATE_RING (its taps read the fill), else the ring its own and the next blur's taps reach
@@ -671,6 +695,19 @@ class GaussianBlurPass(Pass):
         # a dilating fill: over the tiles this blur's taps reach (measured: splitting it into a plain
         # fill on the island tiles and a dilating one beyond them costs one draw more and saved nothing)
         fill_tiles = work_tiles(ec, n, reach, rects=TILE_RECTS) if dilate_fill else tiles
+        # the blur's tiles as (program, tiles) draws: those where a tap may reach another zone with the
+        # checks, the rest without (zone_split); one draw when no tile is free of them
+        parts = [(prog, tiles)]
+        if free is not None and tiles is not None and TILE_RECTS:  # zone_split draws rectangles (TILED = 2)
+            ring = DILATE_RING if dilate_fill else reach
+            widest = float(max(sigmas))
+            if narrow:  # whole-texel taps: ISLAND_CHECK(NARROW_TAPS + 0.5)
+                reach_texels = float(plan.blur_defines["NARROW_TAPS"]) + 0.5
+            else:  # bilinear taps: ISLAND_CHECK(3 |step| + 1.5), the step at most the largest stretch
+                reach_texels = 3.0 * max_stretch(ec, stretch) * widest * n + 1.5
+            split = zone_split(ec, n, ring, tiles, reach_texels + 1.0)  # + 1: float32 rounding
+            if split is not None:
+                parts = [(prog, split[0]), (free, split[1])] if split[0] is not None else [(free, split[1])]
         # (program, uniforms, textures, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
         draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any]] = []
         for k, sigma in enumerate(sigmas):
@@ -680,13 +717,23 @@ class GaussianBlurPass(Pass):
             for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
                                               ((0.0, 1.0), tmp, plan.output if last else tmp2)):
                 if seam:  # the source with its seam gutters continued across the seam
-                    prog_fill = down if down and source is plan.source else fill
+                    first = down is not None and source is plan.source
+                    prog_fill = down if first else fill
                     maps = {"seam_map": seam, **({"gutter": plan.gutter} if dilate_fill or prog_fill is down else {})}
-                    draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
+                    plain = plain_down if first else plain_fill
+                    split = seam_split(ec, n, fill_tiles) if plain is not None and fill_tiles is not None else None
+                    if split is None:
+                        draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
+                    else:
+                        for p_, where in ((prog_fill, split[0]), (plain, split[1])):
+                            if where is not None:
+                                draws.append((p_, refl, maps, source, filled, where))
                     source = filled
-                draws.append((prog, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, tiles))  # spacing = sigma (eq. 25)
+                for p_, where in parts:  # spacing = sigma (eq. 25)
+                    draws.append((p_, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, where))
             src = tmp2
-        ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas))
+        ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas),
+                zone_free_rects=int(sum(w[1] for p_, w in parts if p_ is free and w is not None)))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
         for d, sub, subs in ec.units(len(draws)):
@@ -698,6 +745,102 @@ class GaussianBlurPass(Pass):
             ec.bind(program, "source", source)
             with ec.band(sub, subs):
                 ec.draw_fullscreen(program, target, tiles=where)
+
+
+def seam_split(ec, n: int, tiles: tuple) -> tuple | None:
+    """A seam fill's tiles (``tiles``, TILED = 2 rectangles, or one whole-target tile) split by whether
+    a texel of the tile lies across a UV seam or past a mesh border (the seam map's B > 0.5): (tiles
+    with one: None if none, tiles without), or None when every tile has one. seam_fill.frag gives
+    the plain copy at the island texel on every texel of the second set, so its NO_SEAM variant (no seam
+    lookup, which llvmpipe would run masked on every texel) gives the same values there (issue 27).
+    Once per mesh, size and tile set."""
+    objs = ec.state.setdefault("gl_objects", {})  # each entry a work_tiles-like tuple or None (Graph.release)
+    key = ("seam_split", id(ec.scene), n, id(tiles[0]), int(tiles[1]))
+    if key + ("plain",) in objs:
+        plain = objs[key + ("plain",)]
+        return None if plain is None else (objs[key + ("seam",)], plain)
+    for k in [k for k in objs if k[0] == "seam_split" and k[1] != id(ec.scene)]:
+        old = objs.pop(k)
+        if old is not None:
+            old[0].release()
+    nt = -(-n // TILE)
+    if tiles[2] == n:  # one tile: the whole target
+        drawn_t = np.ones((nt, nt), bool)
+    else:
+        boxes = np.frombuffer(tiles[0].read(), np.float32).reshape(int(tiles[1]), 4).astype(np.int64) // TILE
+        drawn_t = np.zeros((nt, nt), bool)
+        for x0, y0, w, h in boxes:
+            drawn_t[y0:y0 + h, x0:x0 + w] = True
+    sm = ec.input(seam_resource(n))
+    b = np.frombuffer(sm.read(), np.float32).reshape(n, n, sm.components)[..., 2]
+    pad = np.zeros((nt * TILE, nt * TILE), bool)
+    pad[:n, :n] = ~(b < 0.5)  # NaN-safe: a tile is plain only when every texel's B is below 0.5
+    seam_t = np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))) & drawn_t
+    plain_t = drawn_t & ~seam_t
+    if not plain_t.any():
+        objs[key + ("plain",)] = None
+        return None
+
+    def rects(mask: np.ndarray) -> tuple | None:
+        if not mask.any():
+            return None
+        r = tile_rects(mask) * TILE
+        tex = ec.gl.texture((len(r), 1), 4, r.astype(np.float32).tobytes(), dtype="f4")
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return (tex, len(r), TILE)
+
+    objs[key + ("seam",)], objs[key + ("plain",)] = rects(seam_t), rects(plain_t)
+    return objs[key + ("seam",)], objs[key + ("plain",)]
+
+
+def zone_split(ec, n: int, ring: int, tiles: tuple, reach: float) -> tuple | None:
+    """The blur's island tiles (work_tiles(ec, n, ring), drawn as ``tiles``) split by whether a tap can
+    reach another UV island zone (issue 27): (tiles with a texel whose zone border, the gutter map's A at
+    the island texel it is computed at, lies within ``reach`` texels: None if none; tiles with none), as
+    ``tiles`` tuples (TILED = 2 rectangles), or None when every tile has such a texel. deon_blur.frag's
+    check (ISLAND_CHECK) is false on every texel of the second set, so the variant without it
+    (NO_ZONE_CHECKS) gives the same values there. Once per mesh, size, ring and reach."""
+    objs = ec.state.setdefault("gl_objects", {})  # each entry a work_tiles-like tuple or None (Graph.release)
+    key = ("zone_split", id(ec.scene), n, int(ring), round(float(reach), 3))
+    if key + ("free",) in objs:
+        free = objs[key + ("free",)]
+        return None if free is None else (objs[key + ("checked",)], free)
+    for k in [k for k in objs if k[0] == "zone_split" and k[1] != id(ec.scene)]:
+        old = objs.pop(k)
+        if old is not None:
+            old[0].release()
+    g = read_gutter(ec.input(gutter_resource(n)))
+    y, x = np.mgrid[0:n, 0:n]
+    nt = -(-n // TILE)
+    if tiles[2] == n:  # work_tiles drew the whole target as one tile
+        drawn = np.ones((n, n), bool)
+    else:
+        drawn = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
+    sx = np.clip((g[..., 0] + 0.5).astype(np.int64), 0, n - 1)  # the island texel computed (deon_blur: src)
+    sy = np.clip((g[..., 1] + 0.5).astype(np.int64), 0, n - 1)
+    checked = drawn & ~(g[sy, sx, 3] >= reach)  # NaN-safe: a texel is free only when its border is beyond reach
+
+    def per_tile(mask: np.ndarray) -> np.ndarray:
+        pad = np.zeros((nt * TILE, nt * TILE), bool)
+        pad[:n, :n] = mask
+        return np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3)))
+
+    any_t, checked_t = per_tile(drawn), per_tile(checked)
+    free_t = any_t & ~checked_t
+    if not free_t.any():
+        objs[key + ("free",)] = None
+        return None
+
+    def rects(mask: np.ndarray) -> tuple | None:
+        if not mask.any():
+            return None
+        boxes = tile_rects(mask) * TILE
+        tex = ec.gl.texture((len(boxes), 1), 4, boxes.astype(np.float32).tobytes(), dtype="f4")
+        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        return (tex, len(boxes), TILE)
+
+    objs[key + ("checked",)], objs[key + ("free",)] = rects(any_t & checked_t), rects(free_t)
+    return objs[key + ("checked",)], objs[key + ("free",)]
 
 
 def texture_shadows(r) -> bool:

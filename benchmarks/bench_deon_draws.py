@@ -1,0 +1,178 @@
+"""Where a d'Eon light move's time goes, draw by draw (issue 27, "Also asked"): every full-screen draw
+and mesh draw of a light-move frame timed with glFinish before and after (sync timing: llvmpipe's
+timer queries are not trustworthy), grouped by pass and program variant, medians over --repeats,
+in plain copies (shaders/copy.frag, RGBA32F) of the map size, with Phong's light move beside them
+in the same run.
+
+    python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
+        [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split]
+
+--ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
+define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
+--ab-no-* flags make B draw every blur tile with the zone checks / seam-fill every fill tile (the code
+before passes.deon.zone_split / seam_split). B's rows are marked (B).
+
+The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
+are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
+lines can differ by far more than their draws do (seen once: 1.9 vs 3.0 s with draws 5 % apart):
+trust the per-draw lines, each fenced on both sides.
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import os
+import statistics
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(__file__))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from bench_blur_floor import light_frame  # noqa: E402
+from bench_frames import copy_draw_ms, settings_for  # noqa: E402
+
+import skinviewer.passes.deon as deon_passes  # noqa: E402
+from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.kernel import execute  # noqa: E402
+from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
+
+LOG: list[tuple[str, str, tuple, float]] = []
+NAMES: dict[int, str] = {}
+VARIANT: dict[str, dict] = {}  # program name -> extra defines (--ab), while the B side runs
+
+
+def _label(name: str, defines: dict) -> str:
+    keep = {k: v for k, v in defines.items() if k not in ("MAX_GAUSSIANS", "N_LIGHTS")}
+    return name + ("[" + ",".join(f"{k}={v}" for k, v in sorted(keep.items())) + "]" if keep else "")
+
+
+def instrument() -> None:
+    """Wrap ExecuteContext.program (to name programs) and its draws (to time them)."""
+    ec_cls = execute.ExecuteContext
+    program = ec_cls.program
+
+    def named_program(self, name, **defines):
+        if not defines:
+            declared = [d for n, d in self._refl.programs if n == name]
+            defines = dict(declared[0]) if len(declared) == 1 else {}
+        if name in VARIANT:  # the B side of --ab: the same program with extra defines
+            defines = {**defines, **VARIANT[name]}
+            prog = self.graph.shaders.get(name, defines)
+        else:
+            prog = program(self, name, **defines)
+        NAMES[id(prog)] = _label(name, defines)
+        return prog
+
+    ec_cls.program = named_program
+    for meth in ("draw_fullscreen", "draw_mesh"):
+        orig = getattr(ec_cls, meth, None)
+        if orig is None:
+            continue
+
+        def timed(self, prog, *a, _orig=orig, **k):
+            self.gl.finish()
+            t0 = time.perf_counter()
+            _orig(self, prog, *a, **k)
+            self.gl.finish()
+            LOG.append((self.pass_.name, NAMES.get(id(prog), "?"), bool(k.get("tiles")), (time.perf_counter() - t0) * 1000.0))
+
+        setattr(ec_cls, meth, timed)
+
+
+def parse_sets(items: list[str]) -> dict:
+    out = {}
+    for kv in items:
+        k, v = kv.split("=", 1)
+        val: object = {"true": True, "false": False}.get(v.lower(), v)
+        if isinstance(val, str):
+            try:
+                val = float(v) if "." in v else int(v)
+            except ValueError:
+                pass
+        out[k] = val
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--maps", type=int, default=1024)
+    ap.add_argument("--size", type=int, default=640)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--scene", default="head")
+    ap.add_argument("--set", action="append", default=[])
+    ap.add_argument("--ab", action="append", default=[],
+                    help="program:DEFINE=value: time the program with that extra define too (B), interleaved")
+    ap.add_argument("--ab-no-zone-split", action="store_true",
+                    help="B also draws every blur tile with the zone checks (passes.deon.zone_split off)")
+    ap.add_argument("--ab-no-seam-split", action="store_true",
+                    help="B also seam-fills every fill tile (passes.deon.seam_split off)")
+    args = ap.parse_args()
+    ctx = headless_context()
+    print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
+    instrument()
+    r = Renderer(ctx)
+    s = settings_for("deon", args.scene, args.size, args.maps, **parse_sets(args.set))
+    phong = settings_for("phong", args.scene, args.size, args.maps)
+    r.render(s, force=True)
+    r.render(phong, force=True)
+    per: dict[tuple, list[float]] = collections.defaultdict(list)
+    counts: dict[tuple, int] = {}
+    frames, frames_b, phongs, copies, halves = [], [], [], [], []
+    variant: dict[str, dict] = {}
+    for a in args.ab:
+        name, kv = a.split(":", 1)
+        variant.setdefault(name, {}).update(parse_sets([kv]))
+    zone_split, seam_split = deon_passes.zone_split, deon_passes.seam_split
+    for k in range(args.repeats):
+        for side in (("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split else ("A",)):
+            VARIANT.clear()
+            deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
+            if side == "B":
+                VARIANT.update(variant)
+                if args.ab_no_zone_split:
+                    deon_passes.zone_split = lambda *a, **k: None
+                if args.ab_no_seam_split:
+                    deon_passes.seam_split = lambda *a, **k: None
+            LOG.clear()
+            ms_frame = light_frame(r, s, k)[0]
+            (frames if side == "A" else frames_b).append(ms_frame)
+            # the base frame of light_frame is untimed but its draws are logged too: keep the second half
+            frame = collections.defaultdict(float)
+            n = collections.Counter()
+            base = len(LOG) // 2
+            for p, prog, _tiled, ms in LOG[base:]:
+                label = prog if side == "A" else "(B) " + prog  # B: the --ab side
+                frame[(p, label)] += ms
+                n[(p, label)] += 1
+            for key, ms in frame.items():
+                per[key].append(ms)
+                counts[key] = n[key]
+        VARIANT.clear()
+        deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
+        LOG.clear()
+        phongs.append(light_frame(r, phong, k)[0])
+        copies.append(copy_draw_ms(r, args.maps, 3))
+        halves.append(copy_draw_ms(r, args.maps // 2, 3))
+    copy, half = statistics.median(copies), statistics.median(halves)
+    print(f"# scene={args.scene} image={args.size}^2 maps={args.maps}^2 repeats={args.repeats} {args.set or 'defaults'}; "
+          f"load {os.getloadavg()[0]:.1f} at the end")
+    ph = statistics.median(phongs)
+    b = (f"; with --ab (B) {statistics.median(frames_b):.0f} ms = {statistics.median(frames_b) / ph:.2f} x Phong"
+         if frames_b else "")
+    print(f"# light move (timed per draw) {statistics.median(frames):.0f} ms = {statistics.median(frames) / ph:.2f} x Phong{b}; "
+          f"Phong {ph:.0f} ms; "
+          f"copy {copy:.2f} ms ({args.maps}^2), {half:.2f} ms ({args.maps // 2}^2)")
+    hdr = f"{'pass':<18} {'program':<58} {'draws':>5} {'ms':>8} {'/ copy':>7}"
+    print(hdr)
+    print("-" * len(hdr))
+    total = 0.0
+    for key in sorted(per, key=lambda k: -statistics.median(per[k])):
+        ms = statistics.median(per[key])
+        total += ms
+        print(f"{key[0]:<18} {key[1]:<58} {counts[key]:>5} {ms:8.1f} {ms / copy:7.1f}")
+    print(f"{'sum of draws':<18} {'':<58} {'':>5} {total:8.1f} {total / copy:7.1f}")
+
+
+if __name__ == "__main__":
+    main()
