@@ -86,8 +86,8 @@ def test_project_shaders_all_compile(gl_ctx):
     names = sorted({p.stem for p in paths.shaders_dir().glob("*.frag")})
     assert names
     failures = {}
-    variants = [None, {"LIGHT_COUNT": 0, "SHADOW_PCF": 0, "SHADOW_MASK": 0},
-                {"LIGHT_COUNT": 4, "SHADOW_PCF": 3, "SHADOW_MASK": 0b1011}]
+    variants = [None, {"LIGHT_COUNT": 0, "SHADOW_PCF": 0, "SHADOW_MASK": 0, "POINT_MASK": 0, "BEAM_MASK": 0},
+                {"LIGHT_COUNT": 4, "SHADOW_PCF": 3, "SHADOW_MASK": 0b1011, "POINT_MASK": 0b0100, "BEAM_MASK": 0b0010}]
     for n in names:
         lit = "lib/lights.glsl" in (paths.shaders_dir() / f"{n}.frag").read_text()
         for defines in variants if lit else variants[:1]:

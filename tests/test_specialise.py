@@ -1,4 +1,5 @@
-"""Specialised lit shaders (LIGHT_COUNT, SHADOW_PCF, SHADOW_MASK defines; shaders/lib/lights.glsl)
+"""Specialised lit shaders (LIGHT_COUNT, SHADOW_PCF, SHADOW_MASK, POINT_MASK, BEAM_MASK defines;
+shaders/lib/lights.glsl)
 give bit-identical images to the generic, uniform-driven version (GENERIC_SHADERS)."""
 from __future__ import annotations
 
@@ -19,6 +20,9 @@ CASES = {
                           "cast_shadow": False},
                          {"kind": "directional", "direction": (-0.7, 0.2, -0.9), "intensity": 1.1}]},
     "hard": {"shadow.pcf": 0},
+    "beam": {"lights": [{"kind": "point", "position": (120.0, 60.0, 300.0), "intensity": 0.6},
+                        {"kind": "beam", "position": (0.0, 20.0, 150.0), "direction": (0.0, 0.0, 1.0),
+                         "beam_radius": 30.0, "intensity": 2.0}]},
     "box": {"shadow.pcf_filter": "box"},
 }
 
@@ -37,6 +41,9 @@ def test_specialised_equals_generic(renderer, generic, technique, case):
     assert defines["SHADOW_BILINEAR"] == (s.shadow.pcf_filter == "bilinear")
     want_mask = sum(1 << k for k, l in enumerate([l for l in s.lights if l.enabled]) if l.cast_shadow)
     assert defines["SHADOW_MASK"] == want_mask
+    on = [l for l in s.lights if l.enabled]
+    assert defines["POINT_MASK"] == sum(1 << k for k, l in enumerate(on) if l.kind == "point")
+    assert defines["BEAM_MASK"] == sum(1 << k for k, l in enumerate(on) if l.kind == "beam")
     for res in ("lit", "image") + (("deon_irradiance",) if technique == "deon" else ()) \
             + (("gosselin_light_map",) if technique == "gosselin" else ()):
         a, b = renderer.read(s, res), generic.read(s, res)
@@ -51,10 +58,11 @@ def _lit_pass(technique):
 def test_generic_define_reaches_the_source(gl_ctx):
     lib, lib_spec = ShaderLibrary(gl_ctx, defines={"GENERIC_SHADERS": 1}), ShaderLibrary(gl_ctx)
     try:
-        defines = {"LIGHT_COUNT": 1, "SHADOW_PCF": 1, "SHADOW_MASK": 1}
+        defines = {"LIGHT_COUNT": 1, "SHADOW_PCF": 1, "SHADOW_MASK": 1, "POINT_MASK": 0, "BEAM_MASK": 0}
         assert "u_light_count" in lib.get("phong", defines)  # the uniform-driven loop
         spec = lib_spec.get("phong", defines)
         assert "u_light_count" not in spec and "u_shadow_pcf" not in spec and "shadow_map1" not in spec
+        assert "u_light_kind" not in spec and "u_beam_radius" not in spec  # no kind test, no beam coverage left
     finally:
         lib.release()
         lib_spec.release()

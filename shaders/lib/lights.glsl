@@ -1,16 +1,24 @@
 // Lights and shadow lookups shared by every technique (seed 000 §4.1.1-4.1.2).
 // Specialisation (skinviewer.passes.common.declare_lighting): a lit program is compiled with
-// LIGHT_COUNT, SHADOW_PCF, SHADOW_BILINEAR and SHADOW_MASK (bit k: light slot k has a shadow map) for the frame's
-// lights, so its loops have constant bounds and absent shadow lookups vanish: a SIMD rasteriser
-// pays every tap of a loop that merely `continue`s. GENERIC_SHADERS (or no LIGHT_COUNT) compiles
+// LIGHT_COUNT, SHADOW_PCF, SHADOW_BILINEAR, SHADOW_MASK (bit k: light slot k has a shadow map) and
+// POINT_MASK / BEAM_MASK (bit k: slot k is a point light / a beam) for the frame's lights, so its
+// loops have constant bounds and absent shadow lookups and light kinds vanish: a SIMD rasteriser
+// pays every tap of a loop that merely `continue`s, and a beam's coverage where no light is a beam. GENERIC_SHADERS (or no LIGHT_COUNT) compiles
 // the uniform-driven version; both give bit-identical images (tests/test_specialise.py).
 #ifndef SKINVIEWER_LIGHTS_GLSL
 #define SKINVIEWER_LIGHTS_GLSL
 #if defined(LIGHT_COUNT) && !defined(GENERIC_SHADERS)
 #define LIGHTS_SPECIALISED 1
 #define N_LIGHTS LIGHT_COUNT        // loop bound of the lit passes: for (i = 0; i < N_LIGHTS; ...)
+#if !defined(POINT_MASK) || !defined(BEAM_MASK)
+#error "a specialised lit program needs POINT_MASK and BEAM_MASK (passes.common.declare_lighting)"
+#endif
+#define LIGHT_IS_POINT(i) (((POINT_MASK >> (i)) & 1) != 0)
+#define LIGHT_IS_BEAM(i) (((BEAM_MASK >> (i)) & 1) != 0)
 #else
 #define N_LIGHTS u_light_count
+#define LIGHT_IS_POINT(i) (u_light_kind[i] == LIGHT_POINT)
+#define LIGHT_IS_BEAM(i) (u_light_kind[i] == LIGHT_BEAM)
 #endif
 #include "lib/beam.glsl"
 uniform int u_light_count;
@@ -34,14 +42,14 @@ const float MAX_RECEIVER_SLOPE = 11.43;     // tan 85 deg: the steepest receiver
 // Direction to the light L and incident radiance Lc at world point P (eq. 9).
 vec3 light_incident(int i, vec3 P, out vec3 L) {
     vec3 Lc = u_light_radiance[i];
-    if (u_light_kind[i] == LIGHT_POINT) {
+    if (LIGHT_IS_POINT(i)) {
         vec3 d = u_light_pos[i] - P;
         float len2 = max(dot(d, d), 1e-12);
         L = d * inversesqrt(len2);
         return Lc;  // no inverse-square falloff: artists set intensity at the subject
     }
     L = u_light_dir[i];
-    if (u_light_kind[i] == LIGHT_BEAM) {
+    if (LIGHT_IS_BEAM(i)) {
         // beam: collimated, radius u_beam_radius around the axis through u_light_pos
         // averaged over the texel/pixel footprint set by set_light_footprint (lib/beam.glsl)
         return Lc * beam_coverage(P, u_light_pos[i], L, u_beam_radius[i]);
@@ -136,7 +144,7 @@ float shadow_factor_test(int i, vec3 P, vec3 Ng, bool hard) {
 #else
     if (u_light_shadowed[i] == 0) return 1.0;
 #endif
-    vec3 L = (u_light_kind[i] == LIGHT_POINT) ? normalize(u_light_pos[i] - P) : u_light_dir[i];
+    vec3 L = LIGHT_IS_POINT(i) ? normalize(u_light_pos[i] - P) : u_light_dir[i];
     float nl = dot(Ng, L);
     vec3 n = nl >= 0.0 ? Ng : -Ng;
     float sin_l = sqrt(clamp(1.0 - nl * nl, 0.0, 1.0));

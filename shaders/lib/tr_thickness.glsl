@@ -27,7 +27,7 @@ vec2 transmitted(int i, vec3 P, vec3 Ng) {
     vec3 c = p.xyz / p.w * 0.5 + 0.5;
     if (any(lessThan(c.xy, vec2(0.0))) || any(greaterThan(c.xy, vec2(1.0)))) return vec2(0.0);
     vec2 texel = 1.0 / vec2(u_shadow_map_size);
-    vec3 Lv = (u_light_kind[i] == LIGHT_POINT) ? normalize(u_light_pos[i] - Ps) : u_light_dir[i];
+    vec3 Lv = LIGHT_IS_POINT(i) ? normalize(u_light_pos[i] - Ps) : u_light_dir[i];
     // a lit point's own depth differs from the texel-centre depth by up to tan(N, L) / 2 texels:
     // that much thickness is quantisation, not tissue (the slope-scaled tolerance of the shadow test)
     float nl = abs(dot(Ng, Lv));

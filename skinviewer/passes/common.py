@@ -48,7 +48,9 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
             if shadow_maps:
                 r.input(shadow_resource(i))
             mask |= 1 << slot
-    return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_BILINEAR": int(bilinear), "SHADOW_MASK": mask}
+    kinds = {k: sum(1 << slot for slot, (_, l) in enumerate(active) if l.kind == k) for k in ("point", "beam")}
+    return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_BILINEAR": int(bilinear), "SHADOW_MASK": mask,
+            "POINT_MASK": kinds["point"], "BEAM_MASK": kinds["beam"]}
 
 
 def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
