@@ -63,6 +63,18 @@ want renders && stamp "renders and parity" && timeout "$(cap 120)" python3 bench
 
 want frames && stamp "frames, ratios, memory" && timeout "$(cap 240)" python3 benchmarks/gpu/gpu_check.py frames --out "$OUT" --width $W --height $H --repeats $REPS "${FRAMES_EXTRA[@]}"
 
+if want perf; then
+    # issue 27's open questions on this GL: is a compute sliding window faster than the fragment blur
+    # here, and what the graph's own CPU work costs per frame (tiny view and maps)
+    stamp "perf: compute vs fragment blur, CPU overhead"
+    for m in 1024 2048; do
+        timeout "$(cap 60)" python3 benchmarks/bench_compute_blur.py --maps $m --repeats 9 >> "$OUT/perf.md" 2>&1
+    done
+    if [ -f benchmarks/bench_cpu_overhead.py ]; then
+        timeout "$(cap 120)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
+    fi
+fi
+
 if want calibrate; then
     # the quality governor's calibration of this GPU (issue 27): shipped for exactly this renderer
     stamp "governor calibration"
@@ -117,18 +129,6 @@ s0=$(date +%s.%N)
 
 fi
 
-
-if want perf; then
-    # issue 27's open questions on this GL: is a compute sliding window faster than the fragment blur
-    # here, and what the graph's own CPU work costs per frame (tiny view and maps)
-    stamp "perf: compute vs fragment blur, CPU overhead"
-    for m in 1024 2048; do
-        timeout "$(cap 60)" python3 benchmarks/bench_compute_blur.py --maps $m --repeats 9 >> "$OUT/perf.md" 2>&1
-    done
-    if [ -f benchmarks/bench_cpu_overhead.py ]; then
-        timeout "$(cap 120)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
-    fi
-fi
 
 if want diag; then
     stamp "diagnostics"
