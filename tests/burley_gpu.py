@@ -27,6 +27,7 @@ class UploadPass(Pass):
         self.version = getattr(self, "version", 0) + 1
 
     def reflect(self, r):
+        r.depends("upload", self.version)  # the arrays are the pass's own state, set from outside
         h, w = self.z.shape[:2]
         r.output(PB.IRRADIANCE, TexSpec((w, h), 4, PB.IRRADIANCE_DTYPE, filter="nearest"))
         r.output(PB.DEPTH, TexSpec((w, h), 4, "f4", filter="nearest"))

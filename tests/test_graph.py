@@ -852,3 +852,24 @@ def test_a_banded_mesh_pass_clears_only_its_own_rows(gl_ctx, shader_dir):
     assert rep.passes[0].draws == 2 and np.all(g.read("h")[..., 0] == 1.5)
     g.release()
     scene.buf.release()
+
+
+class OwnState(Fill):
+    """A pass whose reflect reads state of its own, set from outside, without declaring it (the
+    contract says r.depends): only a forced run is bound to see it."""
+
+    def reflect(self, r: Reflection):
+        r.setting(self.setting_path)
+        r.program("fill")
+        r.output(self.out, TexSpec((self.n, self.n), 4, "f4"))
+
+
+def test_a_forced_run_reflects_every_pass_afresh(gl_ctx, shader_dir):
+    p = OwnState("sized", "out", "render.exposure")
+    p.n = 8
+    g, _ = make_graph(gl_ctx, shader_dir, [p], ["out"])
+    s = Settings()
+    g.run(frame(s))
+    p.n = 12  # nothing the reflection read changed: a plain run may reuse it; force must not
+    g.run(frame(s, "cam1"), force=True)
+    assert g.read("out").shape[:2] == (12, 12)

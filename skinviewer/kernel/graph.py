@@ -201,14 +201,14 @@ class RenderGraph:
 
     # -- the frame ---------------------------------------------------------------------------
     def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None,
-                     interactive: bool = False) -> dict[str, Reflection]:
+                     interactive: bool = False, reuse: bool = True) -> dict[str, Reflection]:
         refl = {}
         memo: dict[Any, Any] = {}  # Reflection.memo: rules many passes ask, answered once this frame
         same = self._same_sections(settings)
         token = (getattr(scene, "env_generation", 0), interactive)
         for p in self.passes:
             prev = self._reflected.get(p.name)
-            if prev is not None and self._still_holds(prev, same, token, scene if p.uses_scene else None, memo,
+            if reuse and prev is not None and self._still_holds(prev, same, token, scene if p.uses_scene else None, memo,
                                                       settings, scene, view, interactive):
                 r = prev[0]  # what its reflect read is unchanged: it would declare the same again
             else:
@@ -352,7 +352,8 @@ class RenderGraph:
         self.frame += 1
         self._timing = timing
         self.gpu.keep_scene(frame.scene)
-        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive)
+        # force: every pass reflected afresh too (tests and benchmarks that change a pass's own state)
+        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive, reuse=not force)
         order, live = order_passes(self.passes, refl, list(targets or self.targets))
         self.res.check_memory(refl, order)
         self.order = order

@@ -467,7 +467,10 @@ class SettingsView:
 class Pass:
     """Base class of render passes. Subclasses set ``name`` (unique in a graph), override
     ``reflect`` and ``execute``. ``view_dependent`` passes re-run when the camera moves;
-    ``uses_scene`` passes re-run when the mesh, its maps or its units change."""
+    ``uses_scene`` passes re-run when the mesh, its maps or its units change. ``reflect`` reads
+    only through its Reflection (settings, scene, view, memoised rules): the graph reuses a
+    reflection while what it read is unchanged. A pass whose reflect reads state of its own that
+    changes from outside declares it with ``r.depends`` (then it is reflected every frame)."""
     name: str = "pass"
     view_dependent: bool = False
     uses_scene: bool = True
