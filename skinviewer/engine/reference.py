@@ -1154,8 +1154,7 @@ STRIDES = (4, 2, 1)
 ENV_POINT_K = 3.0      # the pixels' environment estimates: K standard errors (env_point_uncertainty)
 ENV_UNCERTAINTY_NOTE = ("; with an environment: the Monte Carlo error of its irradiance estimated at the pixels' "
                         "own points (3 standard errors, each at least the view's median relative one, times the "
-                        "weight of the Gaussians that read the pixel's own E A); the environment interpolated "
-                        "between estimation points at the source elements (the wide Gaussians' part) is not in it")
+                        "weight of the Gaussians that read the pixel's own E A)")
 
 
 def env_point_uncertainty(diff: gt.Diffusion, se: np.ndarray, e_env: np.ndarray, sel: np.ndarray) -> np.ndarray:
@@ -1178,6 +1177,57 @@ def env_point_uncertainty(diff: gt.Diffusion, se: np.ndarray, e_env: np.ndarray,
         if diff.method(float(v))[0] in ("delta", "exact"):
             here += np.asarray(w, np.float64)
     out[sel] = ENV_POINT_K * np.sqrt(se[sel] ** 2 + (rel[None] * ref) ** 2) * here[None]
+    return out
+
+
+ENV_EL_STRIDE = 8   # the source elements' interpolated environment is checked at every 8th triangle
+ENV_EL_NEAR = 8     # ... and a pixel takes the ratio of its ENV_EL_NEAR nearest checks
+ENV_EL_NOTE = ("; from the whole surface's stage on, the environment interpolated at the source elements (which "
+               "the Gaussians other than the delta read): a point of every {stride}th triangle estimated on its own, "
+               "sum |interpolated - own| / sum E A over the pixel's {near} nearest such points, times the pixel's M "
+               "less the delta's part")
+
+
+def env_interpolation_checks(surf: Surface, mix: float, energy: bool, stride: int = ENV_EL_STRIDE,
+                             tri: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The environment's interpolation at the source elements, checked (issue 34): at a random point of
+    every ``stride``-th triangle (seeded: the same points whichever view asks), the environment's
+    irradiance as the elements read it (Surface.env_irradiance: linear between three estimates inside
+    the triangle) against an estimate at the point itself (Surface.env_direct, independent rays), both
+    x C^mix; ``tri``: only those of them. Returns (points mm (S, 3), |interpolated - own| (S, 3), E A
+    there (S, 3), the elements' value). The difference holds both estimates' Monte Carlo error too (it is stated, not subtracted)."""
+    if surf.env is None:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
+    every = np.arange(0, len(surf.F), max(int(stride), 1))
+    bary = np.random.default_rng(2718).dirichlet(np.ones(3), len(every))  # per checked triangle
+    if tri is not None:  # only these of the checked triangles (tests: a part of the surface)
+        keep = np.isin(every, tri)
+        every, bary = every[keep], bary[keep]
+    tri = every
+    a = surf.attributes(tri, bary)
+    cm = _safe_pow(a["C"], mix)
+    interp = surf.env_irradiance(tri, bary, energy) * cm
+    own, _ = surf.env_direct(a, energy, seed=2718)
+    ea = surf.irradiance(a, mix, energy)
+    return a["P"] * surf.mm, np.abs(interp - own * cm), ea
+
+
+def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray, np.ndarray], x_mm: np.ndarray,
+                            m_read: np.ndarray, near: int = ENV_EL_NEAR) -> np.ndarray:
+    """The uncertainty (N, 3) of M at points ``x_mm`` from the environment interpolated at the source
+    elements: ``m_read`` (N, 3), the part of M that reads the elements (all but the delta's E A here),
+    times the relative interpolation error near the point -- sum |dE| / sum E A over the ``near``
+    nearest checks (env_interpolation_checks). A Gaussian's sum over elements cannot be further off than
+    the elements' absolute errors summed (the ratio is that, locally); measured in notes/truth.md."""
+    pos, d, ea = checks
+    if len(pos) == 0 or len(x_mm) == 0:
+        return np.zeros((len(x_mm), 3))
+    from scipy.spatial import cKDTree
+    k = min(int(near), len(pos))
+    _, nn = cKDTree(pos).query(x_mm, k=k)
+    nn = nn.reshape(len(x_mm), k)
+    rho = d[nn].sum(1) / np.maximum(ea[nn].sum(1), 1e-300)
+    out: np.ndarray = rho * np.maximum(m_read, 0.0)
     return out
 
 
@@ -1423,7 +1473,8 @@ class TruthSession:
                     "fraction": float(done.sum() / n), "seconds": {"total": sec}, "cached": False,
                     "mm_per_unit": surf.mm, "session": True, "visible_mask": mask, "field_ratio": self.field_ratio}
             if u_M is not None:
-                meta["uncertainty"] = LATTICE_UNCERTAINTY_NOTE + (ENV_UNCERTAINTY_NOTE if env_px else "")
+                meta["uncertainty"] = LATTICE_UNCERTAINTY_NOTE + (ENV_UNCERTAINTY_NOTE if env_px else "") \
+                    + (ENV_EL_NOTE.format(stride=ENV_EL_STRIDE, near=ENV_EL_NEAR) if surf.env is not None else "")
             return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3],
                                      imgs[4] if u_M is not None else None), stage, float(done.sum() / n), final, sec)
 
@@ -1452,6 +1503,25 @@ class TruthSession:
                         u_first + TRUNCATE_LOSS * np.abs(M))
         el, pts = self._whole_sources(surf, s, report, check)
         shared = self._structures[sources_key(s, self.h_mm)]
+        if surf.env is not None and "env_checks" not in shared:  # view-independent: kept with the sources
+            report("environment checks", 0.0)
+            shared["env_checks"] = env_interpolation_checks(surf, mix, energy)
+            report("environment checks", 1.0)
+
+        def u_env_el(d: gt.Diffusion, sel: np.ndarray, M: np.ndarray) -> np.ndarray:
+            """The stated uncertainty of M from the environment interpolated at the source elements
+            (env_element_uncertainty): the part of M that reads them, all of it but the delta's E A
+            here (with the environment interpolated at the pixels too, all of it)."""
+            out = np.zeros((len(x_mm), 3))
+            if surf.env is None or not sel.any():
+                return out
+            read = M[sel].copy()
+            if env_px:
+                w_delta = sum((np.asarray(w, np.float64) for v, w in zip(d.v, d.w)
+                               if d.method(float(v))[0] == "delta"), np.zeros(3))
+                read -= w_delta[None] * ea_here[sel]
+            out[sel] = env_element_uncertainty(shared["env_checks"], x_mm[sel], read)
+            return out
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
         footprint = pixel_footprint_mm(pix, W, x_mm)
         M = np.zeros((len(pix), 3))
@@ -1501,7 +1571,7 @@ class TruthSession:
                     report("lattice refinement", 1.0)
                 self.refined = int(redo.sum())
             part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final,
-                         U + u_env(diff, done) + TRUNCATE_LOSS * np.abs(M))
+                         U + u_env(diff, done) + u_env_el(diff, done, M) + TRUNCATE_LOSS * np.abs(M))
             if final:
                 self._remember(key, part.reference)
             yield part
