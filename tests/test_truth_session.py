@@ -440,3 +440,39 @@ def test_the_environment_interpolated_at_the_source_elements_is_in_the_stated_un
     assert np.all((d <= u).mean(0) >= 0.9), (d <= u).mean(0)
     assert np.all(np.sqrt((d ** 2).mean(0)) <= np.sqrt((u ** 2).mean(0)))
     assert np.all(np.sqrt((u ** 2).mean(0) / (M ** 2).mean(0)) < 0.15)
+
+
+def test_lattice_refine_takes_the_largest_parts_until_the_target_or_the_cap():
+    """lattice_refine picks the pixels with the largest share of the lattices' stated uncertainty in the
+    view's relative RMS, fewest first, until what is left is <= LATTICE_TARGET in every channel, and
+    never more than LATTICE_REFINE_MAX of the pixels; nothing when the target is met already."""
+    n = 1000
+    u = np.full((n, 3), 1e-4)
+    u[:30] = 0.2  # 3 % of the pixels hold nearly all of it
+    ref = np.ones(3)
+    redo = R.TruthSession.lattice_refine(u, ref)
+    assert redo[:30].all() and redo.sum() == 30
+    left = u.copy()
+    left[redo] = 0.0
+    assert np.all(np.sqrt((left ** 2).mean(0)) <= R.LATTICE_TARGET * ref)
+    assert not R.TruthSession.lattice_refine(np.full((n, 3), 1e-4), ref).any()
+    assert R.TruthSession.lattice_refine(np.full((n, 3), 1.0), ref).sum() == int(R.LATTICE_REFINE_MAX * n)
+
+
+def test_the_back_lit_flaps_lattice_uncertainty_is_refined_below_the_target_and_still_covers():
+    """On the back-lit flap at 128x128 the lattices' stated +- was 4-6 % of the lit level (RMS), as large as
+    a technique's figure, while their real error is ~0.6 %: the session now gathers the wide Gaussians
+    exactly at the pixels with the largest part, so the final +- is within LATTICE_TARGET (+ truncation)
+    of the view's RMS, and it still covers the difference to the same truth gathered per pixel at
+    >= 99 % of the pixels."""
+    s = with_values(Settings(), {"scene.name": "backlit-ear", **scene_overrides("backlit-ear"), "render.width": 128,
+                                 "render.height": 128})
+    ses = R.TruthSession()
+    ref = list(ses.progressive(s))[-1].reference
+    assert ses.fields_evaluated(s) > 0 and ses.refined > 0
+    per_pixel = list(R.TruthSession(field_ratio=None).progressive(s))[-1].reference
+    m = ref.mask & per_pixel.mask
+    u, lit = ref.uncertainty[m], ref.lit[m]
+    err = np.abs(ref.diffuse - per_pixel.diffuse)[m]
+    assert np.all(np.sqrt((u ** 2).mean(0) / (lit ** 2).mean(0)) <= R.LATTICE_TARGET + 2 * R.TRUNCATE_LOSS)
+    assert np.all((err <= u).mean(0) >= 0.99), (err <= u).mean(0)
