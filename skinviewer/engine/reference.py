@@ -1184,9 +1184,8 @@ ENV_EL_STRIDE = 8   # the source elements' interpolated environment is checked a
 ENV_EL_NEAR = 8     # ... and a pixel takes the ratio of its ENV_EL_NEAR nearest checks
 ENV_EL_NOTE = ("; from the whole surface's stage on, the environment interpolated at the source elements (which "
                "the Gaussians other than the delta read): a point of every {stride}th triangle estimated on its own, "
-               "sum |interpolated - own| / sum E A over the pixel's {near} nearest such points, times the pixel's M "
-               "less the delta's part, or, if larger, the same check at the pixel itself times the weight of the "
-               "Gaussians other than the delta")
+               "the mean |interpolated - own| over the pixel's {near} nearest such points or, if larger, the same "
+               "check at the pixel itself, times the weight of the Gaussians other than the delta")
 
 
 def env_interpolation_checks(surf: Surface, mix: float, energy: bool, stride: int = ENV_EL_STRIDE,
@@ -1214,29 +1213,28 @@ def env_interpolation_checks(surf: Surface, mix: float, energy: bool, stride: in
 
 
 def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray, np.ndarray], x_mm: np.ndarray,
-                            m_read: np.ndarray, near: int = ENV_EL_NEAR, here: np.ndarray | None = None,
-                            w_read: np.ndarray | None = None) -> np.ndarray:
+                            w_read: np.ndarray, here: np.ndarray | None = None, near: int = ENV_EL_NEAR
+                            ) -> np.ndarray:
     """The uncertainty (N, 3) of M at points ``x_mm`` from the environment interpolated at the source
-    elements: ``m_read`` (N, 3), the part of M that reads the elements (all but the delta's E A here),
-    times the relative interpolation error near the point -- sum |dE| / sum E A over the ``near``
-    nearest checks (env_interpolation_checks). A Gaussian's sum over elements cannot be further off than
-    the elements' absolute errors summed (the ratio is that, locally). ``here`` (N, 3): the same check at
-    each point itself, |interpolated - own| (the truth has both there), times ``w_read`` (3,), the weight
-    of the Gaussians that read the elements: the larger of the two (the narrow Gaussians read the
-    elements next to the pixel, where a fold's error is; measured in notes/truth.md)."""
-    pos, d, ea = checks
-    if len(pos) == 0 or len(x_mm) == 0:
-        base = np.zeros((len(x_mm), 3))
-        return base if here is None or w_read is None else here * w_read[None]
-    from scipy.spatial import cKDTree
-    k = min(int(near), len(pos))
-    _, nn = cKDTree(pos).query(x_mm, k=k)
-    nn = nn.reshape(len(x_mm), k)
-    rho = d[nn].sum(1) / np.maximum(ea[nn].sum(1), 1e-300)
-    out: np.ndarray = rho * np.maximum(m_read, 0.0)
-    if here is not None and w_read is not None:
-        out = np.maximum(out, here * w_read[None])
-    return out
+    elements: the mean |dE| of the ``near`` nearest checks (env_interpolation_checks) -- a Gaussian's
+    sum over elements (unit weight) is off by at most the mean of its elements' |dE| -- or, if larger,
+    ``here`` (N, 3): the same check at each point itself, |interpolated - own| (the session has both
+    there: the narrow Gaussians read the elements next to the pixel, where a fold's error is), times
+    ``w_read`` (3,), the weight of the Gaussians that read the elements (all but the delta's, which
+    reads the pixel's own estimate). Absolute, not relative to E A: in a crease the interpolation can
+    exceed the value itself many times (a ratio times M blew up there: +- 35 % on the head's blue);
+    measured in notes/truth.md."""
+    pos, d, _ = checks
+    out = np.zeros((len(x_mm), 3))
+    if len(pos) and len(x_mm):
+        from scipy.spatial import cKDTree
+        k = min(int(near), len(pos))
+        _, nn = cKDTree(pos).query(x_mm, k=k)
+        out = d[nn.reshape(len(x_mm), k)].mean(1)
+    if here is not None:
+        out = np.maximum(out, here)
+    res: np.ndarray = out * np.asarray(w_read, np.float64)[None]
+    return res
 
 
 def sources_key(s: Settings, h_mm: float) -> str:
@@ -1516,25 +1514,21 @@ class TruthSession:
             shared["env_checks"] = env_interpolation_checks(surf, mix, energy)
             report("environment checks", 1.0)
 
-        def u_env_el(d: gt.Diffusion, sel: np.ndarray, M: np.ndarray) -> np.ndarray:
+        def u_env_el(d: gt.Diffusion, sel: np.ndarray) -> np.ndarray:
             """The stated uncertainty of M from the environment interpolated at the source elements
-            (env_element_uncertainty): the part of M that reads them, all of it but the delta's E A
-            here (with the environment interpolated at the pixels too, all of it)."""
+            (env_element_uncertainty), read by every Gaussian but the delta (with the environment
+            interpolated at the pixels too, by all)."""
             out = np.zeros((len(x_mm), 3))
             if surf.env is None or not sel.any():
                 return out
-            read = M[sel].copy()
             w_delta = sum((np.asarray(w, np.float64) for v, w in zip(d.v, d.w)
                            if d.method(float(v))[0] == "delta"), np.zeros(3))
-            here = w_read = None
-            if env_px:
-                read -= w_delta[None] * ea_here[sel]
-                # the check at the pixel itself: the environment interpolated there as the elements
-                # read it against the pixel's own estimate (both kept)
+            w_read, here = np.sum(d.w, axis=0), None
+            if env_px:  # the delta reads the pixel's own estimate; the check at the pixel itself, both kept
+                w_read = w_read - w_delta
                 here = np.abs(surf.env_irradiance(tri[sel], bary[sel], energy) * _safe_pow(a["C"][sel], mix)
                               - ea_env[sel])
-                w_read = np.sum(d.w, axis=0) - w_delta
-            out[sel] = env_element_uncertainty(shared["env_checks"], x_mm[sel], read, here=here, w_read=w_read)
+            out[sel] = env_element_uncertainty(shared["env_checks"], x_mm[sel], w_read, here=here)
             return out
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
         footprint = pixel_footprint_mm(pix, W, x_mm)
@@ -1585,7 +1579,7 @@ class TruthSession:
                     report("lattice refinement", 1.0)
                 self.refined = int(redo.sum())
             part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final,
-                         U + u_env(diff, done) + u_env_el(diff, done, M) + TRUNCATE_LOSS * np.abs(M))
+                         U + u_env(diff, done) + u_env_el(diff, done) + TRUNCATE_LOSS * np.abs(M))
             if final:
                 self._remember(key, part.reference)
             yield part
