@@ -1539,6 +1539,7 @@ class TruthSession:
         lat_final = self.lattice_gaussians(diff, footprint)
         exact_lat = {k: np.zeros((len(pix), 3)) for k in lat_final}
         M_wide = np.zeros((len(pix), 3))  # the lat_final Gaussians' part of M, gathered or interpolated
+        self.refined = 0
         done = np.zeros(len(pix), bool)
         U = np.zeros((len(pix), 3))
         for stride in STRIDES:
