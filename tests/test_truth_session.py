@@ -389,3 +389,90 @@ def test_the_sessions_uncertainty_covers_the_pixels_environment():
     u = (ref.uncertainty + judge.uncertainty)[m]
     assert d.max() > 0  # the estimates differ
     assert (d <= u).mean() >= 0.99, (d <= u).mean(0)
+
+
+def test_the_environment_interpolated_at_the_source_elements_is_in_the_stated_uncertainty():
+    """The source elements read the environment linearly between three estimates inside each mesh
+    triangle; at a fold that is off by much of the value. On the default head's ear (detail 0, where
+    that error is largest), the diffusion from those elements differs from the same diffusion with the
+    environment estimated at every element corner itself (2x the rays, other seeds) by more than the
+    estimates' noise, and by no more than the stated uncertainty (env_element_uncertainty, as the
+    session computes it: the checks near the view and the check at each pixel) at >= 90 % of the pixels
+    per channel and in RMS (measured: 100 / 100 / 98 %, the ± 11 / 6.5 / 6.8 x the error in the median:
+    a fold's narrow blue Gaussians read the few elements next to the pixel, where a check a few mm away
+    sees less); the uncertainty is not vacuous (RMS under 15 % of M; measured 9 %)."""
+    s = _head_with_environment(16)
+    surf = R.Surface(*R.load_scene(s), s)
+    mix, energy = s.deon.mix, s.deon.energy_conservation
+    P = surf.P * surf.mm
+    tc = P[surf.F].mean(1)
+    p0 = P[np.argmax(P[:, 0])]  # the ear's rim
+    rng = np.random.default_rng(1)
+    tri = rng.choice(np.nonzero(np.linalg.norm(tc - p0, axis=1) < 5.0)[0], 48)
+    bary = rng.dirichlet(np.ones(3), 48)
+    a = surf.attributes(tri, bary)
+    x = a["P"] * surf.mm
+    variances, weights = R.profile_of(s)
+    h = 2.0
+    reach = np.nonzero(np.linalg.norm(tc - p0, axis=1) < 8.0 + 4.5 * np.sqrt(variances.max()) + 3 * h)[0]
+    checks = R.env_interpolation_checks(surf, mix, energy, tri=reach)
+    assert len(checks[0]) > 8
+    no_env = surf.irradiance(a, mix, energy, env_level="none")
+    ea, _ = surf.irradiance_at_points(a, mix, energy, seed=3)
+    cm = R._safe_pow(a["C"], mix)
+    interp = R.build_diffusion(surf, x, h, variances, weights, mix, energy)
+    real = R.Surface.env_irradiance
+    try:
+        R.Surface.env_irradiance = lambda self, t, b, energy, level="full": self.env_direct(
+            self.attributes(t, b), energy, rays=2 * R.ENV_DIFFUSE_RAYS, seed=len(t) + 7)[0]
+        judge = R.build_diffusion(surf, x, h, variances, weights, mix, energy)
+    finally:
+        R.Surface.env_irradiance = real
+    M, M_judge = interp.exitance(x, ea), judge.exitance(x, ea)
+    w_delta = sum((np.asarray(w) for v, w in zip(interp.v, interp.w) if interp.method(float(v))[0] == "delta"),
+                  np.zeros(3))
+    here = np.abs(surf.env_irradiance(tri, bary, energy) * cm - (ea - no_env))
+    u = R.env_element_uncertainty(checks, x, interp.w.sum(0) - w_delta, here=here)
+    d = np.abs(M - M_judge)
+    print("coverage", (d <= u).mean(0), "median u / error", np.median(u / np.maximum(d, 1e-300), axis=0),
+          "RMS error / M", np.sqrt((d ** 2).mean(0) / (M ** 2).mean(0)), "RMS u / M", np.sqrt((u ** 2).mean(0) / (M ** 2).mean(0)))
+    assert np.all(np.sqrt((d ** 2).mean(0) / (M ** 2).mean(0)) > 0.005)  # an error worth stating
+    assert np.all((d <= u).mean(0) >= 0.9), (d <= u).mean(0)
+    assert np.all(np.sqrt((d ** 2).mean(0)) <= np.sqrt((u ** 2).mean(0)))
+    assert np.all(np.sqrt((u ** 2).mean(0) / (M ** 2).mean(0)) < 0.15)
+
+
+def test_lattice_refine_takes_the_largest_parts_until_the_target_or_the_cap():
+    """lattice_refine picks the pixels with the largest share of the lattices' stated uncertainty in the
+    view's relative RMS, fewest first, until what is left is <= LATTICE_TARGET in every channel, and
+    never more than LATTICE_REFINE_MAX of the pixels; nothing when the target is met already."""
+    n = 1000
+    u = np.full((n, 3), 1e-4)
+    u[:30] = 0.2  # 3 % of the pixels hold nearly all of it
+    ref = np.ones(3)
+    redo = R.TruthSession.lattice_refine(u, ref)
+    assert redo[:30].all() and redo.sum() == 30
+    left = u.copy()
+    left[redo] = 0.0
+    assert np.all(np.sqrt((left ** 2).mean(0)) <= R.LATTICE_TARGET * ref)
+    assert not R.TruthSession.lattice_refine(np.full((n, 3), 1e-4), ref).any()
+    assert R.TruthSession.lattice_refine(np.full((n, 3), 1.0), ref).sum() == int(R.LATTICE_REFINE_MAX * n)
+
+
+def test_the_back_lit_flaps_lattice_uncertainty_is_refined_below_the_target_and_still_covers():
+    """On the back-lit flap at 128x128 the lattices' stated +- was 4-6 % of the lit level (RMS), as large as
+    a technique's figure, while their real error is ~0.6 %: the session now gathers the wide Gaussians
+    exactly at the pixels with the largest part, so the final +- is within LATTICE_TARGET (+ truncation)
+    of the view's RMS, and it still covers the difference to the same truth gathered per pixel at
+    >= 99 % of the pixels."""
+    s = with_values(Settings(), {"scene.name": "backlit-ear", **scene_overrides("backlit-ear"), "render.width": 128,
+                                 "render.height": 128})
+    ses = R.TruthSession()
+    ref = list(ses.progressive(s))[-1].reference
+    assert ses.fields_evaluated(s) > 0 and ses.refined > 0
+    per_pixel = list(R.TruthSession(field_ratio=None).progressive(s))[-1].reference
+    m = ref.mask & per_pixel.mask
+    u, lit = ref.uncertainty[m], ref.lit[m]
+    err = np.abs(ref.diffuse - per_pixel.diffuse)[m]
+    assert np.all(np.sqrt((u ** 2).mean(0) / (lit ** 2).mean(0)) <= R.LATTICE_TARGET + 2 * R.TRUNCATE_LOSS)
+    assert np.all((err <= u).mean(0) >= 0.99), (err <= u).mean(0)

@@ -79,7 +79,7 @@ def uncertainty_words(meta: dict) -> str:
     """What the session truth's +- covers (engine.reference: LATTICE_ and ENV_UNCERTAINTY_NOTE)."""
     if "environment" in str(meta.get("uncertainty", "")):
         return ("(+- the surface lattices' interpolation error and the environment's Monte Carlo error at the "
-                "pixels; not the environment interpolated at the source elements, nor the element size's "
+                "pixels and interpolated at the source elements; not the element size's "
                 "part: skinviewer reference)")
     return "(+- the surface lattices' interpolation error; the element size's part: skinviewer reference)"
 
