@@ -43,17 +43,24 @@ def test_zone_free_tiles_give_the_same_blurs(renderer, monkeypatch, half):
         assert np.abs(a[k][reach] - b[k][reach]).max() <= 1e-30, k
 
 
-def test_free_tiles_hold_no_texel_near_another_zone(renderer):
-    """zone_split's free tiles: every texel's island texel lies at least `reach` texels from another
-    zone (the gutter map's A), so deon_blur's ISLAND_CHECK is false there; the checked ones have one."""
+def _split_tiles(renderer, split: str, part: str):
+    """d'Eon at 256² maps, every blur full size: its graph, gl_objects and the keys of ``split``'s
+    ``part`` tile lists (zone_split free / seam_split plain)."""
     s = small_settings("head", "deon", 64, **{"deon.irradiance_size": 256, "deon.skip_gutters": True,
                                               "deon.surface_gather_below_texels": 0.0,
                                               "deon.half_res_above_texels": 0.0})
     renderer.render(s, force=True)
     g = renderer.graph("deon")
     objs = g.shape_state["gl_objects"]
-    keys = [k for k in objs if k[0] == "zone_split" and k[-1] == "free" and objs[k] is not None]
-    assert keys, "a blur split its tiles"
+    keys = [k for k in objs if k[0] == split and k[-1] == part and objs[k] is not None]
+    assert keys, f"no {split} {part} tiles"
+    return g, objs, keys
+
+
+def test_free_tiles_hold_no_texel_near_another_zone(renderer):
+    """zone_split's free tiles: every texel's island texel lies at least `reach` texels from another
+    zone (the gutter map's A), so deon_blur's ISLAND_CHECK is false there; the checked ones have one."""
+    g, objs, keys = _split_tiles(renderer, "zone_split", "free")
     gt = read_gutter(g.texture(f"gutter_{keys[0][2]}"))
     n = gt.shape[0]
     sx = np.clip((gt[..., 0] + 0.5).astype(int), 0, n - 1)
@@ -76,14 +83,7 @@ def test_free_tiles_hold_no_texel_near_another_zone(renderer):
 def test_plain_fill_tiles_hold_no_seam_texel(renderer):
     """seam_split's plain tiles: no texel in them lies across a seam or past a border (the seam map's
     B is 0), so seam_fill's plain copy is what the full fill gives there; the seam tiles each have one."""
-    s = small_settings("head", "deon", 64, **{"deon.irradiance_size": 256, "deon.skip_gutters": True,
-                                              "deon.surface_gather_below_texels": 0.0,
-                                              "deon.half_res_above_texels": 0.0})
-    renderer.render(s, force=True)
-    g = renderer.graph("deon")
-    objs = g.shape_state["gl_objects"]
-    keys = [k for k in objs if k[0] == "seam_split" and k[-1] == "plain" and objs[k] is not None]
-    assert keys, "a fill split its tiles"
+    g, objs, keys = _split_tiles(renderer, "seam_split", "plain")
     for key in keys:
         n = key[2]
         b = g.texture(f"seam_{n}")

@@ -168,16 +168,20 @@ class SettingsNode:
             self._on_read(self._path)
         return self._value
 
+    def _again(self, kid: Any) -> Any:
+        """A field read before through this node: its node, or its value with the read declared again."""
+        if type(kid) is _Leaf:
+            if self._on_read is not None:
+                self._on_read(kid.path)
+            return kid.value
+        return kid
+
     def __getattr__(self, name: str) -> Any:
         # a field read before through this node (reflect reads the same fields many times): its node,
         # or its value with the read declared again -- the settings do not change under a node
         kid = self._kids.get(name)
         if kid is not None:
-            if type(kid) is _Leaf:
-                if self._on_read is not None:
-                    self._on_read(kid.path)
-                return kid.value
-            return kid
+            return self._again(kid)
         v = self._value
         if name[0] == "_" or not _is_model(type(v)) or name not in _fields(type(v)):
             raise AttributeError(f"settings '{self._path or '<root>'}' have no field '{name}'")
@@ -190,11 +194,7 @@ class SettingsNode:
         if type(key) is int and 0 <= key < len(v):
             kid = self._kids.get(key)
             if kid is not None:
-                if type(kid) is _Leaf:
-                    if self._on_read is not None:
-                        self._on_read(kid.path)
-                    return kid.value
-                return kid
+                return self._again(kid)
             kid = self._child(v[key], str(key))
             self._kids[key] = self._kids[str(key)]
             return kid
