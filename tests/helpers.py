@@ -193,3 +193,35 @@ def graph_test_shaders(folder):
     (folder / "add.frag").write_text("#version 330 core\nin vec2 v_uv;\nuniform sampler2D a;\nuniform sampler2D b;\n"
                                      "out vec4 f;\nvoid main() { f = texture(a, v_uv) + texture(b, v_uv); }\n")
     return folder
+
+
+def viewer_app(tmp_path_factory, scene: str, size: tuple[int, int], **assign):
+    """A viewer (ui.app) for a module's tests, as a generator for a module fixture: the scene's own
+    lights and camera with 256² maps, its own empty cache folder (no calibration), no frame budget,
+    two frames drawn. Skips without a display, imgui or a window."""
+    import os
+
+    import pytest
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY and no Xvfb")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.ui.app import WindowUnavailableError, create_app, destroy_app
+    old = os.environ.get("SKINVIEWER_CACHE")
+    os.environ["SKINVIEWER_CACHE"] = str(tmp_path_factory.mktemp("cache"))  # no calibration here
+    s = with_values(Settings(), {"scene.name": scene, **scene_overrides(scene), "technique": "deon",
+                                 "shadow.map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256,
+                                 **assign})
+    try:
+        try:
+            a = create_app(s, size=size, vsync=False)
+        except WindowUnavailableError as exc:  # no window at all (display or GL driver); a start-up bug fails
+            pytest.skip(f"cannot open a window: {exc}")
+        a.frame.set_frame_budget(None)
+        a.step(2)
+        yield a
+        destroy_app(a)
+    finally:
+        if old is None:
+            os.environ.pop("SKINVIEWER_CACHE", None)
+        else:
+            os.environ["SKINVIEWER_CACHE"] = old

@@ -3,40 +3,18 @@ figures, the heat-map view modes, cancelling, and the Pareto chart's configurati
 from __future__ import annotations
 
 import json
-import os
 import time
 
 import numpy as np
 import pytest
+from helpers import viewer_app
 
 pytestmark = pytest.mark.viewer
 
 
 @pytest.fixture(scope="module")
 def app(tmp_path_factory):
-    if not os.environ.get("DISPLAY"):
-        pytest.skip("no DISPLAY and no Xvfb")
-    pytest.importorskip("imgui_bundle")
-    old = os.environ.get("SKINVIEWER_CACHE")
-    os.environ["SKINVIEWER_CACHE"] = str(tmp_path_factory.mktemp("cache"))
-    from skinviewer.ground.settings import Settings, with_values
-    from skinviewer.scene.scenes import scene_overrides
-    from skinviewer.ui.app import create_app, destroy_app
-    s = with_values(Settings(), {"scene.name": "laser", **scene_overrides("laser"), "technique": "deon",
-                                 "shadow.map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
-    from skinviewer.ui.app import WindowUnavailableError
-    try:
-        a = create_app(s, size=(300, 200), vsync=False)
-    except WindowUnavailableError as exc:  # no window at all (display or GL driver); a start-up bug fails
-        pytest.skip(f"cannot open a window: {exc}")
-    a.frame.set_frame_budget(None)
-    a.step(2)
-    yield a
-    destroy_app(a)
-    if old is None:
-        os.environ.pop("SKINVIEWER_CACHE", None)
-    else:
-        os.environ["SKINVIEWER_CACHE"] = old
+    yield from viewer_app(tmp_path_factory, "laser", (300, 200))
 
 
 def _acc(app):

@@ -5,9 +5,9 @@ true when no calibration will come (SKINVIEWER_CALIBRATE=0)."""
 from __future__ import annotations
 
 import json
-import os
 
 import pytest
+from helpers import viewer_app
 
 from skinviewer.ui.layout import compute_layout, floating_rects, flow_rows, keep_inside, overlaps
 
@@ -75,28 +75,7 @@ def test_the_calibration_line_never_promises_a_measurement_that_will_not_run():
 
 @pytest.fixture(scope="module")
 def app960(tmp_path_factory):
-    if not os.environ.get("DISPLAY"):
-        pytest.skip("no DISPLAY and no Xvfb")
-    pytest.importorskip("imgui_bundle")
-    old = os.environ.get("SKINVIEWER_CACHE")
-    os.environ["SKINVIEWER_CACHE"] = str(tmp_path_factory.mktemp("cache"))  # no calibration here
-    from skinviewer.ground.settings import Settings, with_values
-    from skinviewer.scene.scenes import scene_overrides
-    from skinviewer.ui.app import WindowUnavailableError, create_app, destroy_app
-    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "deon",
-                                 "shadow.map_size": 256, "deon.irradiance_size": 256, "deon.tsm_size": 256})
-    try:
-        a = create_app(s, size=(960, 600), vsync=False)
-    except WindowUnavailableError as exc:
-        pytest.skip(f"cannot open a window: {exc}")
-    a.frame.set_frame_budget(None)
-    a.step(2)
-    yield a
-    destroy_app(a)
-    if old is None:
-        os.environ.pop("SKINVIEWER_CACHE", None)
-    else:
-        os.environ["SKINVIEWER_CACHE"] = old
+    yield from viewer_app(tmp_path_factory, "shadow-edge", (960, 600))
 
 
 def test_at_960x600_both_windows_open_the_pareto_chart_is_whole_and_no_legend_is_cut(app960, tmp_path):

@@ -59,6 +59,7 @@ from skinviewer.passes.texture_space import (
     declare_shaded,
     declare_unwrapped,
     dilate,
+    drop_other_scenes,
     gutter_resource,
     rasterize_unwrapped,
     read_gutter,
@@ -759,10 +760,7 @@ def seam_split(ec, n: int, tiles: tuple) -> tuple | None:
     if key + ("plain",) in objs:
         plain = objs[key + ("plain",)]
         return None if plain is None else (objs[key + ("seam",)], plain)
-    for k in [k for k in objs if k[0] == "seam_split" and k[1] != id(ec.scene)]:
-        old = objs.pop(k)
-        if old is not None:
-            old[0].release()
+    drop_other_scenes(objs, "seam_split", id(ec.scene))
     nt = -(-n // TILE)
     if tiles[2] == n:  # one tile: the whole target
         drawn_t = np.ones((nt, nt), bool)
@@ -805,10 +803,7 @@ def zone_split(ec, n: int, ring: int, tiles: tuple, reach: float) -> tuple | Non
     if key + ("free",) in objs:
         free = objs[key + ("free",)]
         return None if free is None else (objs[key + ("checked",)], free)
-    for k in [k for k in objs if k[0] == "zone_split" and k[1] != id(ec.scene)]:
-        old = objs.pop(k)
-        if old is not None:
-            old[0].release()
+    drop_other_scenes(objs, "zone_split", id(ec.scene))
     g = read_gutter(ec.input(gutter_resource(n)))
     y, x = np.mgrid[0:n, 0:n]
     nt = -(-n // TILE)

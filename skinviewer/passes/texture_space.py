@@ -149,6 +149,15 @@ def read_gutter(tex: moderngl.Texture) -> np.ndarray:
 TILE = 16  # texels per tile edge of work_tiles
 
 
+def drop_other_scenes(objs: dict, kind: str, scene_id: int) -> None:
+    """Release the tile lists cached in ``gl_objects`` under ``kind`` for another mesh (each entry a
+    work_tiles-like tuple whose first element is a texture, or None)."""
+    for k in [k for k in objs if k[0] == kind and k[1] != scene_id]:
+        old = objs.pop(k)
+        if old is not None:
+            old[0].release()
+
+
 def work_tiles(ec, size: int, ring: int, rects: bool = False) -> tuple | None:
     """The tiles (TILE x TILE texels) holding a texel covered by a UV island or within ``ring``
     texels of one: (RG32F 1-row texture of tile origins, count, TILE) for ``ec.draw_fullscreen(...,
@@ -160,10 +169,7 @@ def work_tiles(ec, size: int, ring: int, rects: bool = False) -> tuple | None:
     key = ("work_tiles", id(ec.scene), size, int(ring), bool(rects))
     if key in objs:
         return objs[key]
-    for k in [k for k in objs if k[0] == "work_tiles" and k[1] != id(ec.scene)]:
-        old = objs.pop(k)
-        if old is not None:
-            old[0].release()
+    drop_other_scenes(objs, "work_tiles", id(ec.scene))
     g = read_gutter(ec.input(gutter_resource(size)))
     y, x = np.mgrid[0:size, 0:size]
     near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
