@@ -162,10 +162,9 @@ class RenderGraph:
         self._pending_queries: list[tuple[Any, PassRecord, str, int, float | None]] = []  # _collect_queries
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
         self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
-        self._vk_settings: Settings | None = None  # the settings those keys were made from
         # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
         self._reflected: dict[str, tuple[Reflection, Any, Any]] = {}
-        self._reflect_settings: Settings | None = None  # the settings of the last reflected frame
+        self._reflect_settings: Settings | None = None  # the settings of the last reflected and keyed frame
         self._key_parts: dict[str, tuple[Reflection, int, dict[str, Any]]] = {}  # pass -> (reflection, shaders' revision, key parts)
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
@@ -201,10 +200,12 @@ class RenderGraph:
 
     # -- the frame ---------------------------------------------------------------------------
     def _reflect_all(self, settings: Settings, scene: Any = None, view: Any = None,
-                     interactive: bool = False, reuse: bool = True) -> dict[str, Reflection]:
+                     interactive: bool = False, same: set[str] | None = None,
+                     reuse: bool = True) -> dict[str, Reflection]:
+        """Every pass's reflection; ``same``: the top-level sections unchanged since the last frame
+        (_same_sections), under which a reflection may be reused."""
         refl = {}
         memo: dict[Any, Any] = {}  # Reflection.memo: rules many passes ask, answered once this frame
-        same = self._same_sections(settings)
         token = (getattr(scene, "env_generation", 0), interactive)
         for p in self.passes:
             prev = self._reflected.get(p.name)
@@ -226,22 +227,19 @@ class RenderGraph:
             refl[p.name] = r
         return refl
 
-    def _kept_value_keys(self, settings: Settings) -> dict[str, str]:
+    def _kept_value_keys(self, same: set[str] | None) -> dict[str, str]:
         """This frame's value keys to start from: the last frame's, for the paths under a top-level
-        section equal (==) to the last frame's; empty when the settings are another kind of object.
+        section equal (==) to the last frame's (``same``, from _same_sections; None: none kept).
         A camera move or a light drag then re-encodes only the camera's or the lights' paths (the
         JSON of a whole section such as ``lights`` or ``deon.gaussians`` was most of a key's cost)."""
-        last, self._vk_settings = self._vk_settings, settings
         old = self._value_keys
-        if last is None or not old or type(last) is not type(settings):
+        if same is None or not old:
             return {}
-        if last is settings:
-            return old
-        same = {name for name in type(settings).model_fields if getattr(settings, name) == getattr(last, name)}
         return {path: k for path, k in old.items() if path.split(".", 1)[0] in same}
 
     def _same_sections(self, settings: Settings) -> set[str] | None:
-        """The top-level settings sections equal (==) to the last reflected frame's; None: none known.
+        """The top-level settings sections equal (==) to the last run's (once a run: the reflections'
+        reuse and the value keys both follow it); None: none known.
         (A section equal by == but not in every bit, 0.0 against -0.0, counts as unchanged.)"""
         last, self._reflect_settings = self._reflect_settings, settings
         if last is None or type(last) is not type(settings):
@@ -346,14 +344,16 @@ class RenderGraph:
         t_start = time.perf_counter()
         any_ran = False
         self._exec_s = 0.0
-        self._value_keys = self._kept_value_keys(frame.settings)
+        same = self._same_sections(frame.settings)
+        self._value_keys = self._kept_value_keys(same)
         if timing not in TIMING_NOTES:
             raise GraphError(f"timing mode must be one of {list(TIMING_NOTES)}")
         self.frame += 1
         self._timing = timing
         self.gpu.keep_scene(frame.scene)
         # force: every pass reflected afresh too (tests and benchmarks that change a pass's own state)
-        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive, reuse=not force)
+        refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive, same,
+                                 reuse=not force)
         order, live = order_passes(self.passes, refl, list(targets or self.targets))
         self.res.check_memory(refl, order)
         self.order = order
