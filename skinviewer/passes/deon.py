@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import moderngl
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
@@ -61,11 +60,12 @@ from skinviewer.passes.texture_space import (
     dilate,
     drop_other_scenes,
     gutter_resource,
+    per_tile,
     rasterize_unwrapped,
     read_gutter,
+    rect_tiles,
     seam_resource,
     shade_dilated,
-    tile_rects,
     unwrap_dilated,
     work_tiles,
 )
@@ -771,23 +771,12 @@ def seam_split(ec, n: int, tiles: tuple) -> tuple | None:
             drawn_t[y0:y0 + h, x0:x0 + w] = True
     sm = ec.input(seam_resource(n))
     b = np.frombuffer(sm.read(), np.float32).reshape(n, n, sm.components)[..., 2]
-    pad = np.zeros((nt * TILE, nt * TILE), bool)
-    pad[:n, :n] = ~(b < 0.5)  # NaN-safe: a tile is plain only when every texel's B is below 0.5
-    seam_t = np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3))) & drawn_t
+    seam_t = per_tile(~(b < 0.5)) & drawn_t  # NaN-safe: a tile is plain only when every texel's B is below 0.5
     plain_t = drawn_t & ~seam_t
     if not plain_t.any():
         objs[key + ("plain",)] = None
         return None
-
-    def rects(mask: np.ndarray) -> tuple | None:
-        if not mask.any():
-            return None
-        r = tile_rects(mask) * TILE
-        tex = ec.gl.texture((len(r), 1), 4, r.astype(np.float32).tobytes(), dtype="f4")
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        return (tex, len(r), TILE)
-
-    objs[key + ("seam",)], objs[key + ("plain",)] = rects(seam_t), rects(plain_t)
+    objs[key + ("seam",)], objs[key + ("plain",)] = rect_tiles(ec.gl, seam_t), rect_tiles(ec.gl, plain_t)
     return objs[key + ("seam",)], objs[key + ("plain",)]
 
 
@@ -806,7 +795,6 @@ def zone_split(ec, n: int, ring: int, tiles: tuple, reach: float) -> tuple | Non
     drop_other_scenes(objs, "zone_split", id(ec.scene))
     g = read_gutter(ec.input(gutter_resource(n)))
     y, x = np.mgrid[0:n, 0:n]
-    nt = -(-n // TILE)
     if tiles[2] == n:  # work_tiles drew the whole target as one tile
         drawn = np.ones((n, n), bool)
     else:
@@ -814,27 +802,12 @@ def zone_split(ec, n: int, ring: int, tiles: tuple, reach: float) -> tuple | Non
     sx = np.clip((g[..., 0] + 0.5).astype(np.int64), 0, n - 1)  # the island texel computed (deon_blur: src)
     sy = np.clip((g[..., 1] + 0.5).astype(np.int64), 0, n - 1)
     checked = drawn & ~(g[sy, sx, 3] >= reach)  # NaN-safe: a texel is free only when its border is beyond reach
-
-    def per_tile(mask: np.ndarray) -> np.ndarray:
-        pad = np.zeros((nt * TILE, nt * TILE), bool)
-        pad[:n, :n] = mask
-        return np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3)))
-
     any_t, checked_t = per_tile(drawn), per_tile(checked)
     free_t = any_t & ~checked_t
     if not free_t.any():
         objs[key + ("free",)] = None
         return None
-
-    def rects(mask: np.ndarray) -> tuple | None:
-        if not mask.any():
-            return None
-        boxes = tile_rects(mask) * TILE
-        tex = ec.gl.texture((len(boxes), 1), 4, boxes.astype(np.float32).tobytes(), dtype="f4")
-        tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-        return (tex, len(boxes), TILE)
-
-    objs[key + ("checked",)], objs[key + ("free",)] = rects(any_t & checked_t), rects(free_t)
+    objs[key + ("checked",)], objs[key + ("free",)] = rect_tiles(ec.gl, any_t & checked_t), rect_tiles(ec.gl, free_t)
     return objs[key + ("checked",)], objs[key + ("free",)]
 
 

@@ -158,6 +158,26 @@ def drop_other_scenes(objs: dict, kind: str, scene_id: int) -> None:
             old[0].release()
 
 
+def per_tile(mask: np.ndarray) -> np.ndarray:
+    """(tiles, tiles) bool: the TILE x TILE tiles of an (n, n) texel ``mask`` that hold a True texel."""
+    n = mask.shape[0]
+    nt = -(-n // TILE)
+    pad = np.zeros((nt * TILE, nt * TILE), bool)
+    pad[:n, :n] = mask
+    return np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3)))
+
+
+def rect_tiles(gl, tiles: np.ndarray, edge: int = TILE) -> tuple | None:
+    """The True cells of ``tiles`` as a work_tiles-like tuple for a TILED = 2 program (RGBA32F 1-row
+    texture of tile_rects' rectangles in texels, count, edge); None when no cell is True."""
+    if not tiles.any():
+        return None
+    boxes = tile_rects(tiles) * edge
+    tex = gl.texture((len(boxes), 1), 4, boxes.astype(np.float32).tobytes(), dtype="f4")
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    return (tex, len(boxes), edge)
+
+
 def work_tiles(ec, size: int, ring: int, rects: bool = False) -> tuple | None:
     """The tiles (TILE x TILE texels) holding a texel covered by a UV island or within ``ring``
     texels of one: (RG32F 1-row texture of tile origins, count, TILE) for ``ec.draw_fullscreen(...,
@@ -172,26 +192,20 @@ def work_tiles(ec, size: int, ring: int, rects: bool = False) -> tuple | None:
     drop_other_scenes(objs, "work_tiles", id(ec.scene))
     g = read_gutter(ec.input(gutter_resource(size)))
     y, x = np.mgrid[0:size, 0:size]
-    near = np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring
     nt = -(-size // TILE)
-    pad = np.zeros((nt * TILE, nt * TILE), bool)
-    pad[:size, :size] = near
-    any_t: np.ndarray = np.asarray(pad.reshape(nt, TILE, nt, TILE).any(axis=(1, 3)))
+    any_t = per_tile(np.hypot(g[..., 0] - x, g[..., 1] - y) <= ring)
     ty, tx = np.nonzero(any_t)
     edge = TILE
     if len(tx) == 0 or len(tx) > 0.9 * nt * nt or len(tx) > 16384:
         tx, ty, edge = np.zeros(1, int), np.zeros(1, int), size  # one tile: the whole target
         any_t = np.ones((1, 1), bool)
     if rects:
-        boxes = tile_rects(any_t) * edge
-        tex = ec.gl.texture((len(boxes), 1), 4, boxes.astype(np.float32).tobytes(), dtype="f4")
-        count = len(boxes)
-    else:
-        origins = np.stack([tx * TILE, ty * TILE], axis=1).astype(np.float32)
-        tex = ec.gl.texture((len(tx), 1), 2, origins.tobytes(), dtype="f4")
-        count = len(tx)
+        objs[key] = rect_tiles(ec.gl, any_t, edge)
+        return objs[key]
+    origins = np.stack([tx * TILE, ty * TILE], axis=1).astype(np.float32)
+    tex = ec.gl.texture((len(tx), 1), 2, origins.tobytes(), dtype="f4")
     tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    objs[key] = (tex, count, edge)
+    objs[key] = (tex, len(tx), edge)
     return objs[key]
 
 
