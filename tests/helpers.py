@@ -225,3 +225,20 @@ def viewer_app(tmp_path_factory, scene: str, size: tuple[int, int], **assign):
             os.environ.pop("SKINVIEWER_CACHE", None)
         else:
             os.environ["SKINVIEWER_CACHE"] = old
+
+
+def splash_app(size: tuple[int, int]):
+    """The viewer as it starts (its start-up screen in the view): d'Eon on the shadow-edge scene at a
+    64² render. Skips without a display, imgui or a window; the caller destroys it (destroy_app)."""
+    import os
+
+    import pytest
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.ui.app import WindowUnavailableError, create_app
+    s = with_values(small_settings("shadow-edge", "deon", size=64), {**scene_overrides("shadow-edge")})
+    try:
+        return create_app(s, size=size, vsync=False, splash=True)
+    except WindowUnavailableError as exc:
+        pytest.skip(f"cannot open a window: {exc}")

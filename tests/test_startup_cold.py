@@ -4,11 +4,9 @@ the start-up screen says which it is making. Structure, not timing: the times ar
 benchmarks/bench_startup.py's."""
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import pytest
-from helpers import small_settings
+from helpers import splash_app
 
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.techniques.preview import FINAL, LADDERS, cheapest, ladder
@@ -42,18 +40,10 @@ def test_a_cold_start_without_calibration_shows_the_cheapest_preview_first(tmp_p
     """create_app as the viewer starts (its start-up screen in the view), no calibration: the first
     complete image is the cheapest rung's (a ¼ view), the start-up screen named it while it was made,
     the next complete image is the user's settings -- the image an ungoverned start shows."""
-    if not os.environ.get("DISPLAY"):
-        pytest.skip("no DISPLAY")
-    pytest.importorskip("imgui_bundle")
     monkeypatch.setenv("SKINVIEWER_CACHE", str(tmp_path))  # no calibration in this cache
-    from skinviewer.scene.scenes import scene_overrides
-    from skinviewer.ui.app import WindowUnavailableError, create_app, destroy_app
+    app = splash_app((480, 320))
+    from skinviewer.ui.app import destroy_app
     from skinviewer.ui.splash import StartupView
-    s = with_values(small_settings("shadow-edge", "deon", size=64), {**scene_overrides("shadow-edge")})
-    try:
-        app = create_app(s, size=(480, 320), vsync=False, splash=True)
-    except WindowUnavailableError as exc:
-        pytest.skip(f"cannot open a window: {exc}")
     try:
         f = app.frame
         assert f.load_calibration(auto=False) is not None and f.governor.calibration is None

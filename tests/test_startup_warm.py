@@ -5,7 +5,7 @@ benchmarks/bench_startup.py's."""
 from __future__ import annotations
 
 import numpy as np
-from helpers import small_settings
+from helpers import small_settings, splash_app
 
 from skinviewer.ground.settings import with_values
 
@@ -81,19 +81,8 @@ def test_a_first_frame_is_spread_over_several_under_a_budget(renderer):
 def test_the_viewer_start_warms_in_a_worker_and_the_first_render_waits_for_it():
     """create_app with its start-up screen starts the worker (app.warm); the panel frames run while it
     works; the first render joins it (never both on the scene's caches at once)."""
-    import os
-
-    import pytest
-    if not os.environ.get("DISPLAY"):
-        pytest.skip("no DISPLAY")
-    pytest.importorskip("imgui_bundle")
-    from skinviewer.scene.scenes import scene_overrides
-    from skinviewer.ui.app import WindowUnavailableError, create_app, destroy_app
-    s = with_values(small_settings("shadow-edge", "deon", size=64), {**scene_overrides("shadow-edge")})
-    try:
-        app = create_app(s, size=(320, 240), vsync=False, splash=True)
-    except WindowUnavailableError as exc:
-        pytest.skip(f"cannot open a window: {exc}")
+    app = splash_app((320, 240))
+    from skinviewer.ui.app import destroy_app
     try:
         assert app.warm is not None
         app.ui_frame()  # the panel, while the worker may still run
