@@ -1189,15 +1189,15 @@ ENV_EL_NOTE = ("; from the whole surface's stage on, the environment interpolate
 
 
 def env_interpolation_checks(surf: Surface, mix: float, energy: bool, stride: int = ENV_EL_STRIDE,
-                             tri: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                             tri: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The environment's interpolation at the source elements, checked (issue 34): at a random point of
     every ``stride``-th triangle (seeded: the same points whichever view asks), the environment's
     irradiance as the elements read it (Surface.env_irradiance: linear between three estimates inside
     the triangle) against an estimate at the point itself (Surface.env_direct, independent rays), both
-    x C^mix; ``tri``: only those of them. Returns (points mm (S, 3), |interpolated - own| (S, 3), E A
-    there (S, 3), the elements' value). The difference holds both estimates' Monte Carlo error too (it is stated, not subtracted)."""
+    x C^mix; ``tri``: only those of them. Returns (points mm (S, 3), |interpolated - own| (S, 3)). The
+    difference holds both estimates' Monte Carlo error too (it is stated, not subtracted)."""
     if surf.env is None:
-        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))
+        return np.zeros((0, 3)), np.zeros((0, 3))
     every = np.arange(0, len(surf.F), max(int(stride), 1))
     bary = np.random.default_rng(2718).dirichlet(np.ones(3), len(every))  # per checked triangle
     if tri is not None:  # only these of the checked triangles (tests: a part of the surface)
@@ -1208,11 +1208,10 @@ def env_interpolation_checks(surf: Surface, mix: float, energy: bool, stride: in
     cm = _safe_pow(a["C"], mix)
     interp = surf.env_irradiance(tri, bary, energy) * cm
     own, _ = surf.env_direct(a, energy, seed=2718)
-    ea = surf.irradiance(a, mix, energy)
-    return a["P"] * surf.mm, np.abs(interp - own * cm), ea
+    return a["P"] * surf.mm, np.abs(interp - own * cm)
 
 
-def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray, np.ndarray], x_mm: np.ndarray,
+def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray], x_mm: np.ndarray,
                             w_read: np.ndarray, here: np.ndarray | None = None, near: int = ENV_EL_NEAR
                             ) -> np.ndarray:
     """The uncertainty (N, 3) of M at points ``x_mm`` from the environment interpolated at the source
@@ -1224,7 +1223,7 @@ def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray, np.ndarray], x
     reads the pixel's own estimate). Absolute, not relative to E A: in a crease the interpolation can
     exceed the value itself many times (a ratio times M blew up there: +- 35 % on the head's blue);
     measured in notes/truth.md."""
-    pos, d, _ = checks
+    pos, d = checks
     out = np.zeros((len(x_mm), 3))
     if len(pos) and len(x_mm):
         from scipy.spatial import cKDTree
