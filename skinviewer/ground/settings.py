@@ -187,6 +187,11 @@ class RenderSettings(_Model):
         "auto", description="auto: GL timer queries on a hardware GPU (no glFinish between passes), sync on a "
         "software rasterizer (llvmpipe: its timer queries are far too low); sync: glFinish + wall clock per "
         "pass; gpu: GL timer queries")
+    compute_blur: Literal["auto", "on", "off"] = Field(
+        "auto", description="d'Eon's separable blur directions and their seam fills as compute passes (issue 27; "
+        "the same values as the fragment draws): auto: on an OpenGL 4.3 GPU, off on a software rasterizer "
+        "(llvmpipe: compute was slower there); on: wherever the context has compute shaders (said, and the "
+        "fragment draws, where it has not); off: fragment draws")
     texel_surface: bool = Field(
         True, description="texture-space techniques (d'Eon's irradiance and transmitted light, Gosselin's light "
                           "map) shade once per texel from the texel surface map (the mesh's attributes per "
@@ -211,6 +216,12 @@ class RenderSettings(_Model):
     def _bg_env(cls, v: Any) -> Any:
         # --set reads off / on as false / true
         return {False: "off", True: "sharp"}.get(v, v) if isinstance(v, bool) else v
+
+    @field_validator("compute_blur", mode="before")
+    @classmethod
+    def _compute_on_off(cls, v: Any) -> Any:
+        # --set reads on / off as true / false
+        return {False: "off", True: "on"}.get(v, v) if isinstance(v, bool) else v
 
     @field_validator("governor", mode="before")
     @classmethod

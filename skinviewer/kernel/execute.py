@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, cast
 import moderngl
 
 from skinviewer.ground.settings import get_path
+from skinviewer.kernel.gl import image_format
 from skinviewer.kernel.gpu import write_uniform
 from skinviewer.kernel.pass_api import (
     GraphError,
@@ -298,6 +299,51 @@ class ExecuteContext:
         self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
+    def dispatch(self, prog: moderngl.ComputeShader, target: str | moderngl.Texture,
+                 tiles: tuple[moderngl.Texture, int, int] | None = None) -> None:
+        """Run compute shader ``prog`` (a library program from ``name.comp`` including
+        lib/compute_target.glsl; GL 4.3) over ``target`` (a declared output or a scratch/held texture),
+        bound to image unit 0 and written with imageStore: the compute twin of ``draw_fullscreen``
+        (issue 27). ``tiles``: (texture of RG tile origins, count, edge) for a program compiled with
+        ``CS_TILES``, one workgroup per tile of ``edge`` = its CS_TILE texels; None: the whole target
+        (or this band's rows, as the draws' scissor). Textures and uniforms are bound as for draws;
+        a memory barrier follows, so later draws, dispatches and reads see the writes."""
+        tex = self._image_target(target)
+        defines = self.graph.shaders.program_defines(prog)
+        fmt = image_format(tex.components, tex.dtype)
+        if fmt is None or defines.get("IMAGE_FORMAT") != fmt:
+            raise GraphError(f"pass {self.pass_.name}: a dispatch into a {tex.components} x {tex.dtype} texture needs "
+                             f"IMAGE_FORMAT {fmt or '(none: not image load/store compatible)'}, the program has "
+                             f"{defines.get('IMAGE_FORMAT')}")
+        edge = int(defines.get("CS_TILE", 0))
+        if edge <= 0 or (tiles is not None) != ("CS_TILES" in defines) or (tiles is not None and tiles[2] != edge):
+            raise GraphError(f"pass {self.pass_.name}: dispatch needs a program with CS_TILE (and CS_TILES with "
+                             f"tiles of its edge); it has {defines}")
+        w, h = tex.size
+        rect = self._band_of((w, h)) or (0, 0, w, h)
+        x0, y0 = rect[0], rect[1]
+        x1, y1 = min(x0 + rect[2], w), min(y0 + rect[3], h)
+        self.set(prog, "u_clip", (x0, y0, x1, y1))
+        if tiles is not None:
+            self.bind(prog, "u_tiles", tiles[0])
+        self._apply(prog)
+        tex.bind_to_image(0, read=False, write=True)
+        if tiles is not None:
+            groups = (int(tiles[1]), 1)
+        else:
+            groups = (-(-(x1 - x0) // edge), -(-(y1 - y0) // edge))
+        if groups[0] > 0 and groups[1] > 0 and x1 > x0 and y1 > y0:
+            prog.run(*groups)
+        self.gl.memory_barrier()  # every bit: the next pass may sample it, draw into it or read it back
+        self.draws += 1
+
+    def _image_target(self, target: str | moderngl.Texture) -> moderngl.Texture:
+        if isinstance(target, str):
+            return self.output(target)
+        if target not in self._scratch and target not in list(self._held.values()):
+            raise GraphError(f"pass {self.pass_.name}: dispatch targets are declared outputs or scratch textures")
+        return target
+
     def refine(self, more: bool) -> None:
         """A progressive pass (e.g. temporal accumulation) asks for another frame even when nothing
         changed (``more``), or says it has converged: the graph does not idle while any pass asks."""
@@ -370,16 +416,19 @@ class ExecuteContext:
         total = draws * per
         return [(u // per, u % per, per) for u in range((k * total) // n, ((k + 1) * total) // n)]
 
-    def _scissor(self, fbo: moderngl.Framebuffer) -> tuple[int, int, int, int] | None:
-        """Set the band's scissor on ``fbo`` before it is used (reset after the draw); None: none."""
+    def _band_of(self, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
+        """The rows (x, y, w, h) a draw or dispatch in the current band() writes in a target of ``size``."""
         if self._banded is True:
-            rect = self.band_rect(fbo.size)
-        elif self._banded:
+            return self.band_rect(size)
+        if self._banded:
             sub, subs = self._banded
             assert subs is not None  # band() is given sub and subs together
-            rect = None if subs <= 1 else _rows(fbo.size, sub, subs)
-        else:
-            rect = None
+            return None if subs <= 1 else _rows(size, sub, subs)
+        return None
+
+    def _scissor(self, fbo: moderngl.Framebuffer) -> tuple[int, int, int, int] | None:
+        """Set the band's scissor on ``fbo`` before it is used (reset after the draw); None: none."""
+        rect = self._band_of(fbo.size)
         if rect is not None:
             fbo.scissor = rect
         return rect

@@ -3,7 +3,9 @@ remembers source files and modification times, and recompiles on demand. Compile
 as (file, line, message) records; the last good program keeps running.
 
 A program ``name`` is ``name.frag`` plus a vertex stage: ``name.vert``, or the shared stage its
-fragment file names with ``#pragma vertex_stage "vs/fullscreen.vert"`` (paths relative to the root).
+fragment file names with ``#pragma vertex_stage "vs/fullscreen.vert"`` (paths relative to the root);
+or, with no ``name.frag``, the compute shader ``name.comp`` (GL 4.3; a ``moderngl.ComputeShader``,
+dispatched with ``ExecuteContext.dispatch``).
 Every program gets the shared constants (``skinviewer.ground.constants.GLSL_DEFINES``), then the
 library's own defines, then the program's defines, as ``#define`` lines after ``#version``."""
 from __future__ import annotations
@@ -34,7 +36,7 @@ _ERR_PATTERNS = (
     re.compile(r"^\s*(\d+)\((\d+)\)\s*:\s*(?:error|warning)?\s*(.*)$"),
     re.compile(r"^\s*(?:ERROR|WARNING):\s*(\d+):(\d+):\s*(.*)$"),
 )
-STAGES = {"vertex_shader": ".vert", "fragment_shader": ".frag", "geometry_shader": ".geom"}
+STAGES = {"vertex_shader": ".vert", "fragment_shader": ".frag", "geometry_shader": ".geom", "compute_shader": ".comp"}
 
 
 @dataclass(frozen=True)
@@ -169,6 +171,10 @@ class ShaderLibrary:
     def _stage_files(self, name: str) -> dict[str, Path]:
         found = {stage: self.root / f"{name}{ext}" for stage, ext in STAGES.items()}
         found = {s: p for s, p in found.items() if p.is_file()}
+        if "fragment_shader" in found:  # a compute shader only where there is no fragment stage
+            found.pop("compute_shader", None)
+        elif "compute_shader" in found:
+            return {"compute_shader": found["compute_shader"]}
         frag = found.get("fragment_shader")
         if frag is not None:
             try:
@@ -187,7 +193,8 @@ class ShaderLibrary:
         stage_files = self._stage_files(name)
         if "fragment_shader" in stage_files and "vertex_shader" not in stage_files:
             self._expand(stage_files["fragment_shader"].resolve(), [])  # its own error (encoding) first
-        if "vertex_shader" not in stage_files or "fragment_shader" not in stage_files:
+        if "compute_shader" not in stage_files and ("vertex_shader" not in stage_files
+                                                    or "fragment_shader" not in stage_files):
             raise _SourceError(ShaderError(f"{name}.vert/.frag", 0, "shader files not found in " + str(self.root)))
         for stage, path in stage_files.items():
             outside = self._outside(path)
@@ -195,7 +202,7 @@ class ShaderLibrary:
                 raise _SourceError(ShaderError(f"{name}.frag" if stage == "vertex_shader" else self._rel(path), 0,
                                                ("#pragma vertex_stage: " if stage == "vertex_shader" else "")
                                                + outside))
-        if not stage_files["vertex_shader"].is_file():
+        if "vertex_shader" in stage_files and not stage_files["vertex_shader"].is_file():
             raise _SourceError(ShaderError(f"{name}.frag", 0, "vertex stage "
                                            f"{self._rel(stage_files['vertex_shader'])} not found"))
         defines = tuple({**self.defines, **dict(defines)}.items())  # a program's own define wins
@@ -227,8 +234,11 @@ class ShaderLibrary:
             entry.errors = []
             return True
         try:
-            prog = self.ctx.program(vertex_shader=sources["vertex_shader"], fragment_shader=sources.get("fragment_shader"),
-                                    geometry_shader=sources.get("geometry_shader"))
+            if "compute_shader" in sources:
+                prog = self.ctx.compute_shader(sources["compute_shader"])
+            else:
+                prog = self.ctx.program(vertex_shader=sources["vertex_shader"], fragment_shader=sources.get("fragment_shader"),
+                                        geometry_shader=sources.get("geometry_shader"))
         except Exception as exc:  # moderngl.Error
             entry.errors = self._parse_errors(str(exc), files_per_stage)
             return False

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
+from skinviewer.kernel.gl import compute_choice, image_format
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.passes.common import (
     LIT,
@@ -55,6 +56,7 @@ from skinviewer.passes.rules import (
 )
 from skinviewer.passes.texture_space import (
     TILE,
+    compute_tiles,
     declare_shaded,
     declare_unwrapped,
     dilate,
@@ -527,20 +529,23 @@ class GaussianBlurPass(Pass):
         # zone checks (zone_split; issue 27): the same values, without the masked zone fetches
         split = bool(zones) and bool(skip_gutters) and not border
         blur_defines = {**tiled, **zones, **border, **narrow}
+        # render.compute_blur (issue 27): every draw below as its compute twin (deon_blur_cs, seam_fill_cs)
+        compute = compute_blur(r)
         r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
-               ring_sigma=ring_sigma(r, self.i), blur_defines=blur_defines, zone_split=split)
-        r.program("deon_blur", **blur_defines)
+               ring_sigma=ring_sigma(r, self.i), blur_defines=blur_defines, zone_split=split, compute=compute)
+        spec = self._spec(m)
+        blur_program(r, compute, spec, "deon_blur", **blur_defines)
         if split:
-            r.program("deon_blur", **blur_defines, NO_ZONE_CHECKS=1)
+            blur_program(r, compute, spec, "deon_blur", **blur_defines, NO_ZONE_CHECKS=1)
         if seam:
             fill_defines = {**(dilate_fill or tiled), **border}
             # the fill's tiles with no texel across a seam or past a border take a plain copy (seam_split)
             plain = bool(fill_defines.get("TILED") == 2) and not border
             r.plan(fill_defines=fill_defines, seam_split=plain)
             for extra in ({}, {"NO_SEAM": 1}) if plain else ({},):
-                r.program("seam_fill", **fill_defines, **extra)
+                blur_program(r, compute, spec, "seam_fill", **fill_defines, **extra)
                 if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
-                    r.program("seam_fill", DOWN=1, **fill_defines, **extra)
+                    blur_program(r, compute, spec, "seam_fill", DOWN=1, **fill_defines, **extra)
         r.output(self._output(), self._spec(m))
 
     def _reflect_gather(self, r, step, n: int) -> None:
@@ -641,8 +646,13 @@ class GaussianBlurPass(Pass):
             self._execute_gather(ec)
             return
         step, n, stretch, narrow, border = plan.step, plan.size, plan.stretch, plan.narrow, plan.border
-        prog = ec.program("deon_blur", **plan.blur_defines)  # TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS
-        free = ec.program("deon_blur", **plan.blur_defines, NO_ZONE_CHECKS=1) if plan.zone_split else None
+        compute = plan.compute  # render.compute_blur: the compute twins of the same programs (blur_program)
+
+        def program(name: str, **defines: Any) -> Any:
+            name, d = blur_variant(compute, plan.spec, name, defines)
+            return ec.program(name, **d)
+        prog = program("deon_blur", **plan.blur_defines)  # TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS
+        free = program("deon_blur", **plan.blur_defines, NO_ZONE_CHECKS=1) if plan.zone_split else None
         progs = (prog, free) if free else (prog,)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         for p_ in progs:
@@ -669,16 +679,16 @@ class GaussianBlurPass(Pass):
         n_in = plan.size_in
         filled = ec.held("filled", spec)[0] if seam else None
         dilate_fill = bool(seam) and plan.island_tiles
-        fill = ec.program("seam_fill", **plan.fill_defines) if seam else None  # the variant reflect declared
+        fill = program("seam_fill", **plan.fill_defines) if seam else None  # the variant reflect declared
         # a half-size blur's full-size input: filled at half size, each texel the 2 x 2 it covers (DOWN)
-        down = ec.program("seam_fill", DOWN=1, **plan.fill_defines) if seam and n_in != n else None
+        down = program("seam_fill", DOWN=1, **plan.fill_defines) if seam and n_in != n else None
         if border:
             for p_ in (prog, fill):  # never half size: no DOWN fill
                 ec.bind(p_, "border_map", border)
                 ec.bind(p_, "irradiance_map", IRRADIANCE)
         # the plain-copy variants for the fill's tiles without seam or border texels (seam_split)
-        plain_fill = ec.program("seam_fill", **plan.fill_defines, NO_SEAM=1) if seam and plan.seam_split else None
-        plain_down = (ec.program("seam_fill", DOWN=1, **plan.fill_defines, NO_SEAM=1)
+        plain_fill = program("seam_fill", **plan.fill_defines, NO_SEAM=1) if seam and plan.seam_split else None
+        plain_down = (program("seam_fill", DOWN=1, **plan.fill_defines, NO_SEAM=1)
                       if down is not None and plan.seam_split else None)
         if seam:
             light = self.chain == "irradiance"
@@ -733,7 +743,8 @@ class GaussianBlurPass(Pass):
                 for p_, where in parts:  # spacing = sigma (eq. 25)
                     draws.append((p_, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, where))
             src = tmp2
-        ec.note(f"{2 * len(sigmas)} directions, {len(draws)} draws", directions=2 * len(sigmas),
+        ec.note(f"{2 * len(sigmas)} directions, {len(draws)} {'compute dispatches' if compute else 'draws'}",
+                directions=2 * len(sigmas), compute=bool(compute),
                 zone_free_rects=int(sum(w[1] for p_, w in parts if p_ is free and w is not None)))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
@@ -745,7 +756,38 @@ class GaussianBlurPass(Pass):
                 ec.bind(program, name, tex)
             ec.bind(program, "source", source)
             with ec.band(sub, subs):
-                ec.draw_fullscreen(program, target, tiles=where)
+                if compute:  # the same texels: the draw's tiles as CS_TILE x CS_TILE workgroups
+                    ec.dispatch(program, target, tiles=compute_tiles(ec, where) if where is not None else None)
+                else:
+                    ec.draw_fullscreen(program, target, tiles=where)
+
+
+def compute_blur(r) -> bool:
+    """render.compute_blur (issue 27) on this context (kernel/gl.compute_policy): whether the separable blur
+    directions and their seam fills run as compute passes; `on` where the context has no compute shaders
+    says so in the pass's note and keeps the fragment draws."""
+    use, why = compute_choice(r.settings.render.compute_blur, r.scene.ctx)
+    if why:
+        r.note(why)
+    return use
+
+
+def blur_variant(compute: bool, spec: TexSpec, name: str, defines: dict) -> tuple[str, dict]:
+    """(program name, defines) of a separable blur draw's program, or of its compute twin (``name``_cs:
+    lib/compute_target.glsl around the same body): the vertex stage's TILED becomes a workgroup per
+    TILE x TILE tile (CS_TILES), IMAGE_FORMAT is the output's (TexSpec ``spec``)."""
+    if not compute:
+        return name, dict(defines)
+    d = {k: v for k, v in defines.items() if k != "TILED"}
+    if "TILED" in defines:
+        d["CS_TILES"] = 1
+    return f"{name}_cs", {**d, "CS_TILE": TILE, "IMAGE_FORMAT": image_format(spec.components, spec.dtype)}
+
+
+def blur_program(r, compute: bool, spec: TexSpec, name: str, **defines: Any) -> None:
+    """Declare a separable blur program (``blur_variant``)."""
+    name, d = blur_variant(compute, spec, name, defines)
+    r.program(name, **d)
 
 
 def seam_split(ec, n: int, tiles: tuple) -> tuple | None:

@@ -178,6 +178,30 @@ def rect_tiles(gl, tiles: np.ndarray, edge: int = TILE) -> tuple | None:
     return (tex, len(boxes), edge)
 
 
+def compute_tiles(ec, tiles: tuple) -> tuple:
+    """A work_tiles-like list (``tiles``: TILED = 2 rectangles, TILED = 1 origins, or one whole-target tile)
+    as the TILE x TILE tile origins a compute twin dispatches one workgroup each (ExecuteContext.dispatch,
+    lib/compute_target.glsl CS_TILES): (RG32F 1-row texture of origins, count, TILE); the same texels.
+    Once per list (kept in gl_objects with it)."""
+    objs = ec.state.setdefault("gl_objects", {})
+    key = ("compute_tiles", id(ec.scene), id(tiles[0]), int(tiles[1]), int(tiles[2]))
+    hit = objs.get(key)
+    if hit is not None:
+        return hit
+    drop_other_scenes(objs, "compute_tiles", id(ec.scene))
+    tex, count, edge = tiles
+    boxes = np.frombuffer(tex.read(), np.float32).reshape(int(count), tex.components).astype(np.int64)
+    if tex.components == 2:  # origins of edge x edge tiles
+        boxes = np.concatenate([boxes, np.full((len(boxes), 2), int(edge), np.int64)], axis=1)
+    origins = [(x, y) for bx, by, bw, bh in boxes
+               for y in range(by, by + bh, TILE) for x in range(bx, bx + bw, TILE)]
+    arr = np.asarray(sorted(set(origins), key=lambda o: (o[1], o[0])), np.float32).reshape(-1, 2)
+    out = ec.gl.texture((len(arr), 1), 2, arr.tobytes(), dtype="f4")
+    out.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    objs[key] = (out, len(arr), TILE)
+    return objs[key]
+
+
 def work_tiles(ec, size: int, ring: int, rects: bool = False) -> tuple | None:
     """The tiles (TILE x TILE texels) holding a texel covered by a UV island or within ``ring``
     texels of one: (RG32F 1-row texture of tile origins, count, TILE) for ``ec.draw_fullscreen(...,
