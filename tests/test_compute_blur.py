@@ -1,0 +1,151 @@
+"""Issue 27: d'Eon's separable blur directions and their seam fills as compute passes (render.compute_blur,
+shaders/deon_blur_cs.comp and seam_fill_cs.comp around the fragment programs' own bodies, ExecuteContext.dispatch).
+llvmpipe's GL 4.5 has compute shaders, so `on` runs them here: every blur texture, the diffuse sum and the image
+must equal the fragment path's bit for bit above llvmpipe's run-to-run subnormal noise (values under 1e-30
+flushed, as tests/test_tiles.py; measured: max |difference| 0, or 1.5e-38 in a texel of the diffuse sum). `auto` keeps the
+fragment draws on a software rasterizer and dispatches on a GL >= 4.3 GPU; `on` without compute says so and draws."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import skinviewer.passes.deon as deon_passes
+from skinviewer.ground.settings import Settings, with_values
+from skinviewer.kernel.gl import compute_policy
+from skinviewer.physics.diffusion import blur_resource, stretch_blur_resource
+from skinviewer.scene.scenes import scene_overrides
+from tests.helpers import small_settings
+from tests.test_tiles import same
+
+CASES = {
+    # island tiles, zone_split and seam_split (both program variants per draw), every step full size
+    "tiles-full-size": ("head", {"deon.irradiance_size": 256, "deon.half_res_above_texels": 0.0}),
+    # wide steps on a half-size map: the DOWN fill of the full-size input
+    "half-size": ("head", {"deon.irradiance_size": 512, "deon.half_res_above_texels": 2.0}),
+    # no tiles: whole-target dispatches
+    "no-tiles": ("head", {"deon.irradiance_size": 256, "deon.skip_gutters": False}),
+    # the stretch chain (RG32F: rg32f images) beside the light's
+    "stretch-chain": ("head", {"deon.irradiance_size": 256, "deon.stretch_per_gaussian": True,
+                               "deon.fold_below_texels": 0.0}),
+}
+
+
+def _settings(scene: str, mode: str, extra: dict) -> Settings:
+    return small_settings(scene, "deon", 48, **{"deon.surface_gather_below_texels": 0.0, **extra,
+                                                "render.compute_blur": mode})
+
+
+def _slab(mode: str) -> Settings:
+    """The laser slab: an open mesh border (the OPEN_BORDER variants of both programs)."""
+    return with_values(Settings(), {"scene.name": "laser", **scene_overrides("laser"), "technique": "deon",
+                                    "render.width": 48, "render.height": 48, "deon.irradiance_size": 256,
+                                    "deon.tsm": False, "deon.surface_gather_below_texels": 0.0,
+                                    "deon.open_border": "reflect", "render.compute_blur": mode,
+                                    "lights": [{"kind": "directional", "direction": [0, 0, 1], "intensity": 1.0,
+                                                "cast_shadow": False}]})
+
+
+def _render(renderer, s: Settings) -> tuple[dict[str, np.ndarray], list]:
+    """Every separable blur's output (and stretch blur's), the diffuse sum and the image; the blur passes."""
+    rep = renderer.render(s, force=True)
+    sep = [p for p in rep.passes if p.name.startswith(("deon_blur_", "deon_stretch_blur_")) and p.status == "ran"
+           and "directions" in p.figures]
+    names = ["lit", "image", "deon_diffuse"]
+    for p in sep:
+        i = int(p.name.rsplit("_", 1)[1])
+        names.append(stretch_blur_resource(i) if "stretch" in p.name else blur_resource(i))
+    return {k: renderer.read(s, k) for k in names}, sep
+
+
+def _same(renderer, on: Settings, off: Settings) -> list:
+    a, sep_on = _render(renderer, on)
+    b, sep_off = _render(renderer, off)
+    assert sep_on and all(p.figures["compute"] for p in sep_on), [(p.name, p.note) for p in sep_on]
+    assert not any(p.figures["compute"] for p in sep_off)
+    assert all("compute dispatches" in p.note for p in sep_on)
+    assert a.keys() == b.keys()
+    for k in a:
+        diff = float(np.abs(a[k].astype(np.float64) - b[k]).max())
+        assert same(a[k], b[k]), (k, diff)
+    return sep_on
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_compute_blurs_equal_the_fragment_draws_bit_for_bit(renderer, case):
+    scene, extra = CASES[case]
+    sep = _same(renderer, _settings(scene, "on", extra), _settings(scene, "off", extra))
+    if case == "stretch-chain":
+        assert any("stretch" in p.name for p in sep)
+
+
+def test_compute_blurs_over_an_open_border_equal_the_fragment_draws(renderer):
+    _same(renderer, _slab("on"), _slab("off"))
+
+
+def test_compute_blurs_in_bands_equal_the_whole_fragment_pass(renderer):
+    """Under the viewer's frame budget each dispatch runs in row bands (its clip rectangle, as the draws'
+    scissor), complete before the next starts: the result is the whole fragment pass's."""
+    off = _settings("head", "off", CASES["tiles-full-size"][1])
+    renderer.render(off, force=True)
+    want = renderer.read(off, "blur_5").copy()
+    on = with_values(off, {"render.compute_blur": "on"})
+    banded = False
+    for _ in range(4000):
+        rep = renderer.render(on, budget_ms=1e-6)
+        banded |= any(p.name == "deon_blur_5" and "band" in p.reason for p in rep.passes)
+        if rep.complete:
+            break
+    assert rep.complete and banded
+    assert same(renderer.read(on, "blur_5"), want)
+
+
+def test_auto_picks_fragment_on_llvmpipe_and_compute_on_a_gpu():
+    """The policy by context (no GPU needed): auto dispatches on a GL >= 4.3 hardware renderer only."""
+    assert compute_policy("auto", 450, "llvmpipe (LLVM 15.0.6, 256 bits)") == (False, "")
+    assert compute_policy("auto", 450, "softpipe") == (False, "")
+    assert compute_policy("auto", 460, "NVIDIA H200/PCIe/SSE2") == (True, "")
+    assert compute_policy("auto", 330, "NVIDIA H200/PCIe/SSE2") == (False, "")  # a 3.3 context: no compute
+    assert compute_policy("on", 450, "llvmpipe (LLVM 15.0.6, 256 bits)") == (True, "")
+    assert compute_policy("off", 460, "NVIDIA H200/PCIe/SSE2") == (False, "")
+    use, why = compute_policy("on", 330, "NVIDIA H200/PCIe/SSE2")
+    assert not use and "4.3" in why and "fragment" in why
+
+
+def test_auto_keeps_the_fragment_draws_here(renderer, gl_ctx):
+    if "llvmpipe" not in gl_ctx.info.get("GL_RENDERER", ""):
+        pytest.skip("a hardware renderer: auto dispatches there")
+    _, sep = _render(renderer, _settings("head", "auto", CASES["tiles-full-size"][1]))
+    assert sep and not any(p.figures["compute"] for p in sep)
+
+
+def test_on_without_compute_says_so_and_draws(renderer, monkeypatch):
+    """A context without compute shaders (a 3.3 one, as NVIDIA's EGL gives when asked 3.3): `on` puts one
+    line in the blur passes' frame-report entries and renders the fragment path's image."""
+    extra = CASES["tiles-full-size"][1]
+    want, _ = _render(renderer, _settings("head", "off", extra))
+    monkeypatch.setattr(deon_passes, "compute_choice",
+                        lambda mode, ctx: compute_policy(mode, 330, str(ctx.info.get("GL_RENDERER", ""))))
+    got, sep = _render(renderer, _settings("head", "on", extra))
+    assert sep and not any(p.figures["compute"] for p in sep)
+    assert all("no compute shaders" in p.reason and "fragment draws" in p.reason for p in sep), [p.reason for p in sep]
+    assert same(got["image"], want["image"])
+
+
+def test_a_dispatch_refuses_a_target_of_another_image_format(renderer, gl_ctx):
+    """ExecuteContext.dispatch checks the program's IMAGE_FORMAT against the texture it stores into."""
+    from skinviewer.kernel.execute import ExecuteContext
+    from skinviewer.kernel.pass_api import GraphError, Pass, Reflection, TexSpec
+    from skinviewer.kernel.report import FrameInputs
+
+    s = small_settings("head", "phong", 48)
+    renderer.render(s)
+    g = renderer.graph("phong")
+    p = Pass()
+    p.name = "probe"
+    r = Reflection(s)
+    r.program("seam_fill_cs", CS_TILE=16, IMAGE_FORMAT="rgba32f")
+    ec = ExecuteContext(g, p, r, FrameInputs(s, None, 0, None, ""))
+    tex = ec.scratch(TexSpec((32, 32), 2, "f4"))
+    with pytest.raises(GraphError, match="IMAGE_FORMAT rg32f"):
+        ec.dispatch(ec.program("seam_fill_cs"), tex)
+    ec._finish()
