@@ -4,6 +4,12 @@ size and format, d'Eon's light-move frame in Phong's, and both at 512^2 / 1024^2
 
     python benchmarks/bench_blur_floor.py [--maps 512 1024 2048] [--size 640] [--repeats 3]
                                           [--set deon.skip_gutters=false ...]
+    python benchmarks/bench_blur_floor.py --compute [--maps 1024] [--repeats 5]
+
+--compute (issue 27, render.compute_blur): one blur direction as fragment draws (off) and as compute passes
+(on), interleaved light-move frames of the defaults in one run, in plain copies; every separable blur's
+output and the image compared between the two (max |difference|). On llvmpipe compute is slower (auto
+keeps the fragment draws there); on a GL 4.3 GPU auto picks compute.
 
 Each row runs "before" (every blur step at the map's size, deon.half_res_above_texels = 0, and the
 island tiles drawn one 16^2 quad each: passes.deon.TILE_RECTS off, session 4's code), "unsplit" (the
@@ -75,6 +81,66 @@ def blur_figures(rep) -> tuple[float, float, int, float]:
     return (sep / dirs if dirs else float("nan")), summed, dirs, sep
 
 
+def compute_rows(args, extra: dict) -> None:
+    """--compute: fragment (render.compute_blur = off) vs compute (on), side by side in one run."""
+    import numpy as np
+
+    from skinviewer.kernel.gl import compute_choice
+    from skinviewer.physics.diffusion import blur_resource
+    ctx = headless_context()
+    auto = compute_choice("auto", ctx)[0]
+    print(f"# d'Eon blur direction, fragment vs compute — {describe(ctx)}; render.compute_blur = auto picks "
+          f"{'compute' if auto else 'fragment'} here; load {os.getloadavg()[0]:.1f} at start")
+    print(f"# scene={args.scene} image={args.size}^2 repeats={args.repeats}; light-move frames, sync timing, medians;"
+          f" {extra or 'defaults otherwise'}")
+    if ctx.version_code < 430:
+        print("# no compute shaders on this context (GL < 4.3): nothing to compare")
+        return
+    use("after")
+    hdr = (f"{'maps':>5} {'path':<9} {'light ms':>9} {'blur dir ms':>12} {'/ copy':>7} {'/ half':>7} {'sep ms':>8} "
+           f"{'copy ms':>8}")
+    lines = []
+    for maps in args.maps:
+        r = Renderer(ctx)
+        s = {m: settings_for("deon", args.scene, args.size, maps, **extra, **{"render.compute_blur": m})
+             for m in ("off", "on")}
+        for x in s.values():
+            r.render(x, force=True)
+        m = {k: {"light": [], "dir": [], "sep": []} for k in s}
+        copies, halves = [], []
+        for k in range(args.repeats):
+            for mode, x in s.items():
+                ms, rep = light_frame(r, x, k)
+                d, _summed, _dirs, sep = blur_figures(rep)
+                m[mode]["light"].append(ms)
+                m[mode]["dir"].append(d)
+                m[mode]["sep"].append(sep)
+            copies.append(copy_draw_ms(r, maps, 3))
+            halves.append(copy_draw_ms(r, maps // 2, 3))
+        copy, half = statistics.median(copies), statistics.median(halves)
+        # the same values? every separable blur's output and the image, each path rendered afresh
+        got = {}
+        for mode, x in s.items():
+            rep = r.render(x, force=True)
+            names = ["image"] + [blur_resource(int(p.name.rsplit("_", 1)[1])) for p in rep.passes
+                                 if p.name.startswith("deon_blur_") and p.status == "ran" and "directions" in p.figures]
+            got[mode] = {n: r.read(x, n).astype(np.float64) for n in names}
+        diffs = {n: float(np.abs(got["on"][n] - got["off"][n]).max()) for n in got["off"]}
+        for mode in s:
+            x = {k: statistics.median(v) for k, v in m[mode].items()}
+            lines.append(f"{maps:>5} {'fragment' if mode == 'off' else 'compute':<9} {x['light']:9.1f} {x['dir']:12.2f} "
+                         f"{x['dir'] / copy:7.2f} {x['dir'] / half:7.2f} {x['sep']:8.1f} {copy:8.2f}")
+        lines.append(f"# {maps}^2: max |compute - fragment|: " + ", ".join(f"{n} {v:.2e}" for n, v in diffs.items()))
+        r.release()
+        r.shaders.release()
+    print(f"# load {os.getloadavg()[0]:.1f} at the end")
+    print("# blur dir: one separable direction with its seam fill, in plain copies of the full map's size (the "
+          "goal's unit, <= 2) and of the half size its wide steps run at")
+    print(hdr)
+    print("-" * len(hdr))
+    print("\n".join(lines))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--maps", type=int, nargs="+", default=[512, 1024, 2048])
@@ -82,6 +148,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--scene", default="head")
     ap.add_argument("--set", action="append", default=[], help="extra key=value for both configurations")
+    ap.add_argument("--compute", action="store_true", help="fragment vs compute blur directions (render.compute_blur)")
     args = ap.parse_args()
     extra = {}
     for kv in args.set:
@@ -92,6 +159,9 @@ def main() -> None:
                 extra[k] = float(v) if "." in v else int(v)
             except ValueError:
                 pass
+    if args.compute:
+        compute_rows(args, extra)
+        return
     ctx = headless_context()
     print(f"# d'Eon blur floor — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
     print(f"# scene={args.scene} image={args.size}^2 repeats={args.repeats}; sync timing, medians; "

@@ -11,6 +11,9 @@ the map size) in plain full-screen copies of the same size and format, side by s
     python benchmarks/bench_compute_blur.py [--maps 1024] [--repeats 5]
 
 Sync timing (glFinish + wall clock), medians. Needs GL 4.3 for the compute rows (skipped otherwise).
+Each row's output is checked against the fragment whole-map blur on the texels it writes (max |difference|
+printed; texture() taps must agree within 1e-6, the hand-interpolated windows within 4e-3: a GPU's
+bilinear filter keeps ~8 bits of the fraction).
 On llvmpipe (2 cores, load 1-3) the fragment path won: whole 3.6-4.6 copies, runs 3.4-3.5, shared-memory
 windows 7.4-27, compute texture() 12-14 (notes/perf.md).
 """
@@ -99,7 +102,9 @@ def main() -> None:
     rng = np.random.default_rng(0)
     src = ctx.texture((n, n), 4, rng.random((n, n, 4), dtype=np.float32).tobytes(), dtype="f4")
     dst = ctx.texture((n, n), 4, dtype="f4")
-    st = ctx.texture((n, n), 4, np.tile(np.float32([1.0, 1.2, 0.1, 1.0]), (n, n, 1)).tobytes(), dtype="f4")
+    stretch = np.tile(np.float32([1.0, 1.2, 0.1, 1.0]), (n, n, 1))
+    stretch[..., 0] = 0.8 + 0.4 * rng.random((n, n), dtype=np.float32)  # taps between texels: filtering is checked
+    st = ctx.texture((n, n), 4, stretch.tobytes(), dtype="f4")
     st.filter = (moderngl.NEAREST, moderngl.NEAREST)
     nt = n // tile
     sel = (rng.random((nt, nt)) < 0.7)
@@ -144,11 +149,14 @@ def main() -> None:
     copy = timed(frag(VS, COPY, 3))
     print(f"# {describe(ctx)}; {n}^2 RGBA32F; plain copy {copy:.2f} ms; {len(tx)} tiles = {len(boxes)} rectangles")
     src.filter = (moderngl.LINEAR, moderngl.LINEAR)
+    src.repeat_x = src.repeat_y = False  # clamped at the map's edge, as the windows' loads
     rows = [("fragment, whole map", frag(VS, FRAG, 3)),
             ("fragment, one quad per tile", frag(VS_RECTS, FRAG, 6 * len(quads), quad_tex)),
             ("fragment, tiles merged into rectangles", frag(VS_RECTS, FRAG, 6 * len(boxes), rects))]
     if ctx.version_code >= 430:
         for w, apron, lx in ((256, 16, 64), (256, 16, 256), (512, 16, 512)):
+            if n % w:  # a window per row segment: the map must be whole segments
+                continue
             cs = ctx.compute_shader(window_cs(w, apron, lx))
 
             def run(cs=cs, w=w):
@@ -168,8 +176,29 @@ def main() -> None:
             cs["s"], cs["st"], cs["u_tiles"], cs["sig"] = 0, 1, 2, 4.0
             cs.run(len(tx), 1)
         rows.append(("compute texture() taps over the tiles", run_t))
+    # each row's output against the fragment whole-map blur's, on the texels it writes (the tiles for the
+    # tiled rows, the whole map else), after clearing the target to -1 so a texel left unwritten shows
+    tile_mask = np.kron(sel, np.ones((tile, tile), bool))
+    ref = None
+    worst = 0.0
     for label, fn in rows:
-        print(f"{label:<48} {timed(fn) / copy:6.2f} copies")
+        fbo.clear(-1.0, -1.0, -1.0, -1.0)
+        fn()
+        ctx.memory_barrier()
+        ctx.finish()
+        out = np.frombuffer(dst.read(), np.float32).reshape(n, n, 4)
+        if ref is None:
+            ref = out.copy()
+        where = tile_mask if ("tile" in label or "rectangles" in label) else np.ones((n, n), bool)
+        diff = float(np.abs(out[where] - ref[where]).max())
+        # hand-interpolated windows: a GPU's bilinear filter keeps ~8 bits of the fraction, so they differ
+        # from texture() by up to ~1/512 of the texel step; texture() taps: the same filter as the fragment
+        tol = 4e-3 if "window" in label else 1e-6
+        worst = max(worst, diff / tol)
+        print(f"{label:<48} {timed(fn) / copy:6.2f} copies   max |out - fragment| {diff:.2e}"
+              f"{'' if diff <= tol else f'  OVER {tol:.0e}'}")
+    print(f"# outputs checked against the fragment whole-map blur: {'all within' if worst <= 1.0 else 'NOT all within'}"
+          " tolerance (texture() taps 1e-6, hand-interpolated windows 4e-3)")
 
 
 if __name__ == "__main__":

@@ -149,3 +149,32 @@ def test_a_dispatch_refuses_a_target_of_another_image_format(renderer, gl_ctx):
     with pytest.raises(GraphError, match="IMAGE_FORMAT rg32f"):
         ec.dispatch(ec.program("seam_fill_cs"), tex)
     ec._finish()
+
+
+def test_a_headless_context_asks_4_3_first_and_says_its_fallback(monkeypatch):
+    """NVIDIA's EGL gives exactly the version asked: 4.3 is asked first (compute shaders); a driver that
+    refuses it gets a 3.3 context, and describe() says so (no real context made here)."""
+    import moderngl
+
+    from skinviewer.kernel import gl
+
+    asked = []
+
+    class Ctx:
+        version_code = 330
+        info = {"GL_RENDERER": "some GPU", "GL_VERSION": "3.3.0"}
+
+        def release(self):
+            pass
+
+    def create(require=330, **kw):
+        asked.append(require)
+        if require >= 430:
+            raise Exception("no 4.3 context")
+        return Ctx()
+
+    monkeypatch.setattr(moderngl, "create_standalone_context", create)
+    ctx = gl.headless_context()
+    assert asked == [430, 330]
+    assert "OpenGL 4.3 unavailable, running 3.3: no compute shaders" in gl.describe(ctx)
+    assert gl.compute_choice("on", ctx)[0] is False and gl.compute_choice("auto", ctx)[0] is False

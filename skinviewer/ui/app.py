@@ -35,7 +35,7 @@ from skinviewer.ui.windows import UiHost
 
 class ViewerApp(mglw.WindowConfig):
     title = "skinviewer"
-    gl_version = (3, 3)
+    gl_version = (4, 3)  # create_window asks 4.3 (compute shaders), then 3.3
     aspect_ratio = None  # type: ignore[assignment]  # moderngl-window accepts None (free aspect); its annotation does not
     resizable = True
     clear_color = None  # type: ignore[assignment]  # None: no clear by the window (the frame draws everything)

@@ -39,7 +39,7 @@ class WindowUnavailableError(RuntimeError):
 
 def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, vsync: bool = True,
                   backend: str = "glfw"):
-    """A moderngl-window window (glfw by default; pyglet as a fallback) with a GL 3.3 core context.
+    """A moderngl-window window (glfw by default; pyglet as a fallback) with a GL 4.3 core context, or 3.3.
     Imports moderngl-window and the window library only (a few tenths of a second), nothing of the
     viewer: the launcher (skinviewer/launch.py) opens it before the viewer's own modules load."""
     import sys
@@ -50,20 +50,28 @@ def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, 
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) and sys.platform.startswith("linux"):
         errors.append("no DISPLAY or WAYLAND_DISPLAY")
     else:
-        for name in ([backend] + [b for b in ("glfw", "pyglet") if b != backend]):
+        # OpenGL 4.3 first (compute shaders: render.compute_blur), else 3.3: a driver may give exactly the
+        # version asked; the fallback is said once on stderr and in kernel.gl.describe
+        for name, version in [(b, v) for b in ([backend] + [b for b in ("glfw", "pyglet") if b != backend])
+                              for v in ((4, 3), (3, 3))]:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")  # glfw reports its init failure as a warning too
                     cls = mglw.get_local_window_cls(name)
                     wnd = cls(title="skinviewer", size=(int(size[0]), int(size[1])), resizable=True, visible=visible,
-                              gl_version=(3, 3), aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
+                              gl_version=version, aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
                 mglw.activate_context(window=wnd)
                 # moderngl-window closes the window on Escape by default: that quit the session (unsaved
                 # edits and all) when Escape was meant for a text field or for leaving the pass inspector
                 wnd.exit_key = None
+                if version < (4, 3):
+                    from skinviewer.kernel.gl import set_fallback
+                    note = f"OpenGL 4.3 unavailable ({errors[-1] if errors else '?'}), running 3.3: no compute shaders"
+                    set_fallback(wnd.ctx, note)
+                    print(f"skinviewer: {note}", file=sys.stderr)
                 return wnd
             except Exception as exc:
-                errors.append(f"{name}: {exc}")
+                errors.append(f"{name} {version[0]}.{version[1]}: {exc}")
     raise WindowUnavailableError(
         "cannot open a window (" + "; ".join(errors) + "). Without a display run it under Xvfb: "
         "xvfb-run -a -s '-screen 0 1280x800x24' skinviewer ...; headless renders: skinviewer render --out FILE.png")
