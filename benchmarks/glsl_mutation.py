@@ -49,9 +49,9 @@ MUTATIONS: list[tuple[str, str, str, str, list[str]]] = [
     ("ks-beckmann", "lib/kelemen.glsl", "return exp(-s2 / (c2 * m2)) / (m2 * c2 * c2);",
      "return exp(-s2 / (c2 * m2)) / (m2 * c2);", [T + "test_specular.py"]),
     # d'Eon & Luebke texture-space diffusion (seed 000 eq. 21, 28, 33, 34)
-    ("deon-blur-7tap-step", "deon_blur.frag", "vec2 t = uv + step_uv * float(k - 3);",
+    ("deon-blur-7tap-step", "lib/deon_blur.glsl", "vec2 t = uv + step_uv * float(k - 3);",
      "vec2 t = uv + 1.5 * step_uv * float(k - 3);", [T + "test_deon.py", "-k", "laser_profile or stretch_plane"]),
-    ("deon-blur-narrow-gauss", "deon_blur.frag", ": exp(-fk * fk / (2.0 * s_t * s_t));", ": exp(-fk * fk / (s_t * s_t));",
+    ("deon-blur-narrow-gauss", "lib/deon_blur.glsl", ": exp(-fk * fk / (2.0 * s_t * s_t));", ": exp(-fk * fk / (s_t * s_t));",
      [T + "test_deon.py", T + "test_fidelity.py", "-k", "laser_profile or laser_error_falls"]),
     ("deon-final-albedo", "deon_final.frag", "diffuse *= safe_pow(C, 1.0 - u_mix) * rho_v;", "diffuse *= C * rho_v;",
      [T + "test_bench.py", T + "test_fidelity.py", "-k", "lit_plane or backlit_ear_transmits"]),

@@ -57,6 +57,14 @@ def _render(renderer, s: Settings) -> tuple[dict[str, np.ndarray], list]:
     return {k: renderer.read(s, k) for k in names}, sep
 
 
+def _agree(renderer, a: np.ndarray, b: np.ndarray) -> bool:
+    """Bit for bit (subnormal noise aside) on llvmpipe, where both paths run the same JIT; elsewhere within
+    float rounding (a GPU's compiler may contract a stage's arithmetic differently): 1e-5 relative."""
+    if "llvmpipe" in str(renderer.ctx.info.get("GL_RENDERER", "")):
+        return same(a, b)
+    return bool(np.allclose(a, b, rtol=1e-5, atol=1e-6 * max(float(np.abs(b).max()), 1e-30)))
+
+
 def _same(renderer, on: Settings, off: Settings) -> list:
     a, sep_on = _render(renderer, on)
     b, sep_off = _render(renderer, off)
@@ -66,7 +74,7 @@ def _same(renderer, on: Settings, off: Settings) -> list:
     assert a.keys() == b.keys()
     for k in a:
         diff = float(np.abs(a[k].astype(np.float64) - b[k]).max())
-        assert same(a[k], b[k]), (k, diff)
+        assert _agree(renderer, a[k], b[k]), (k, diff)
     return sep_on
 
 
@@ -96,7 +104,7 @@ def test_compute_blurs_in_bands_equal_the_whole_fragment_pass(renderer):
         if rep.complete:
             break
     assert rep.complete and banded
-    assert same(renderer.read(on, "blur_5"), want)
+    assert _agree(renderer, renderer.read(on, "blur_5"), want)
 
 
 def test_auto_picks_fragment_on_llvmpipe_and_compute_on_a_gpu():
