@@ -299,9 +299,9 @@ class ExecuteContext:
         self.draws += 1
         self.gl.disable(moderngl.DEPTH_TEST)
 
-    def dispatch(self, prog: moderngl.ComputeShader, target: str | moderngl.Texture,
+    def dispatch(self, prog: moderngl.Program, target: str | moderngl.Texture,
                  tiles: tuple[moderngl.Texture, int, int] | None = None) -> None:
-        """Run compute shader ``prog`` (a library program from ``name.comp`` including
+        """Run compute shader ``prog`` (``ec.program`` of a library program from ``name.comp`` including
         lib/compute_target.glsl; GL 4.3) over ``target`` (a declared output or a scratch/held texture),
         bound to image unit 0 and written with imageStore: the compute twin of ``draw_fullscreen``
         (issue 27). ``tiles``: (texture of RG tile origins, count, edge) for a program compiled with
@@ -333,7 +333,7 @@ class ExecuteContext:
         else:
             groups = (-(-(x1 - x0) // edge), -(-(y1 - y0) // edge))
         if groups[0] > 0 and groups[1] > 0 and x1 > x0 and y1 > y0:
-            prog.run(*groups)
+            cast(moderngl.ComputeShader, prog).run(*groups)
         self.gl.memory_barrier()  # every bit: the next pass may sample it, draw into it or read it back
         self.draws += 1
 

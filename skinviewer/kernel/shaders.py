@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import moderngl
 
@@ -234,8 +234,9 @@ class ShaderLibrary:
             entry.errors = []
             return True
         try:
-            if "compute_shader" in sources:
-                prog = self.ctx.compute_shader(sources["compute_shader"])
+            if "compute_shader" in sources:  # a ComputeShader, held as the programs are (the same uniform
+                # access by name, release); ExecuteContext.dispatch runs it
+                prog = cast(moderngl.Program, self.ctx.compute_shader(sources["compute_shader"]))
             else:
                 prog = self.ctx.program(vertex_shader=sources["vertex_shader"], fragment_shader=sources.get("fragment_shader"),
                                         geometry_shader=sources.get("geometry_shader"))

@@ -55,6 +55,9 @@ FIELD_DOCS: dict[str, tuple[str, str]] = {
     "render.mesh_lod": ("", "auto: when the head is so small on screen that its triangles are far under a pixel "
                         "(over 4 per pixel), draw a coarser copy (1/4 of the triangles per level, UV seams kept) "
                         "and say so in the passes window; full: always the whole mesh"),
+    "render.compute_blur": ("", "d'Eon's separable blurs and seam fills as compute passes (the same values as the "
+                            "fragment draws): auto on an OpenGL 4.3 GPU, not on llvmpipe (slower there); on: wherever "
+                            "the context has compute shaders (the passes window says when it has not); off: draws"),
     "render.check_finite": ("", "after a pass runs, scan its outputs for NaN/Inf on the GPU; the passes window "
                             "names a pass whose output is not finite (the screen shows the background there)"),
     # specular (Kelemen / Szirmay-Kalos)
@@ -86,6 +89,7 @@ LABELS: dict[str, str] = {
     "render.background_environment": "environment behind",
     "render.timing": "timing method",
     "render.mesh_lod": "mesh level of detail",
+    "render.compute_blur": "compute blurs",
     "shadow.map_size": "shadow map size",
     "shadow.tol": "shadow bias",
     "shadow.pcf": "shadow softness",
