@@ -86,6 +86,19 @@ def test_compute_blurs_equal_the_fragment_draws_bit_for_bit(renderer, case):
         assert any("stretch" in p.name for p in sep)
 
 
+def test_compute_tiles_in_several_rows_cover_the_same_texels(renderer, monkeypatch):
+    """compute_tiles lays the origins out row by row (a 4096^2 map has more tiles than a texture is wide):
+    with 7 a row (the last row padded) the dispatch writes the same texels."""
+    import skinviewer.passes.texture_space as ts
+    monkeypatch.setattr(ts, "COMPUTE_TILE_COLS", 7)
+    scene, extra = CASES["tiles-full-size"]
+    _same(renderer, _settings(scene, "on", extra), _settings(scene, "off", extra))
+    objs = renderer.graph("deon").shape_state["gl_objects"]
+    lists = [v for k, v in objs.items() if k[0] == "compute_tiles" and k[-1] == 7]
+    assert lists and all(v[0].width == 7 and v[0].height == -(-v[1] // 7) for v in lists)
+    assert any(v[1] % 7 for v in lists)  # a padded last row
+
+
 def test_compute_blurs_over_an_open_border_equal_the_fragment_draws(renderer):
     _same(renderer, _slab("on"), _slab("off"))
 

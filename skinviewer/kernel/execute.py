@@ -304,8 +304,8 @@ class ExecuteContext:
         """Run compute shader ``prog`` (``ec.program`` of a library program from ``name.comp`` including
         lib/compute_target.glsl; GL 4.3) over ``target`` (a declared output or a scratch/held texture),
         bound to image unit 0 and written with imageStore: the compute twin of ``draw_fullscreen``
-        (issue 27). ``tiles``: (texture of RG tile origins, count, edge) for a program compiled with
-        ``CS_TILES``, one workgroup per tile of ``edge`` = its CS_TILE texels; None: the whole target
+        (issue 27). ``tiles``: (texture of RG tile origins row by row, count, edge) for a program compiled
+        with ``CS_TILES``, one workgroup per tile of ``edge`` = its CS_TILE texels; None: the whole target
         (or this band's rows, as the draws' scissor). Textures and uniforms are bound as for draws;
         a memory barrier follows, so later draws, dispatches and reads see the writes."""
         tex = self._image_target(target)
@@ -326,10 +326,12 @@ class ExecuteContext:
         self.set(prog, "u_clip", (x0, y0, x1, y1))
         if tiles is not None:
             self.bind(prog, "u_tiles", tiles[0])
+            self.set(prog, "u_tile_count", int(tiles[1]))
         self._apply(prog)
         tex.bind_to_image(0, read=False, write=True)
-        if tiles is not None:
-            groups = (int(tiles[1]), 1)
+        if tiles is not None:  # the origins row by row in a texture of tiles[0].width columns
+            cols = int(tiles[0].width)
+            groups = (min(int(tiles[1]), cols), -(-int(tiles[1]) // cols))
         else:
             groups = (-(-(x1 - x0) // edge), -(-(y1 - y0) // edge))
         if groups[0] > 0 and groups[1] > 0 and x1 > x0 and y1 > y0:

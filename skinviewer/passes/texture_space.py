@@ -147,6 +147,7 @@ def read_gutter(tex: moderngl.Texture) -> np.ndarray:
 
 
 TILE = 16  # texels per tile edge of work_tiles
+COMPUTE_TILE_COLS = 4096  # compute_tiles' origins a texture row
 
 
 def drop_other_scenes(objs: dict, kind: str, scene_id: int) -> None:
@@ -181,10 +182,11 @@ def rect_tiles(gl, tiles: np.ndarray, edge: int = TILE) -> tuple | None:
 def compute_tiles(ec, tiles: tuple) -> tuple:
     """A work_tiles-like list (``tiles``: TILED = 2 rectangles, TILED = 1 origins, or one whole-target tile)
     as the TILE x TILE tile origins a compute twin dispatches one workgroup each (ExecuteContext.dispatch,
-    lib/compute_target.glsl CS_TILES): (RG32F 1-row texture of origins, count, TILE); the same texels.
+    lib/compute_target.glsl CS_TILES): (RG32F texture of the origins row by row, COMPUTE_TILE_COLS a row,
+    count, TILE); the same texels.
     Once per list (kept in gl_objects with it)."""
     objs = ec.state.setdefault("gl_objects", {})
-    key = ("compute_tiles", id(ec.scene), id(tiles[0]), int(tiles[1]), int(tiles[2]))
+    key = ("compute_tiles", id(ec.scene), id(tiles[0]), int(tiles[1]), int(tiles[2]), COMPUTE_TILE_COLS)
     hit = objs.get(key)
     if hit is not None:
         return hit
@@ -196,9 +198,14 @@ def compute_tiles(ec, tiles: tuple) -> tuple:
     origins = [(x, y) for bx, by, bw, bh in boxes
                for y in range(by, by + bh, TILE) for x in range(bx, bx + bw, TILE)]
     arr = np.asarray(sorted(set(origins), key=lambda o: (o[1], o[0])), np.float32).reshape(-1, 2)
-    out = ec.gl.texture((len(arr), 1), 2, arr.tobytes(), dtype="f4")
+    count = len(arr)
+    cols = min(count, COMPUTE_TILE_COLS)  # row by row: a 4096^2 map has 65,536 tiles, more than a texture's width
+    rows = -(-count // cols)
+    padded = np.zeros((rows * cols, 2), np.float32)
+    padded[:count] = arr
+    out = ec.gl.texture((cols, rows), 2, padded.tobytes(), dtype="f4")
     out.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    objs[key] = (out, len(arr), TILE)
+    objs[key] = (out, count, TILE)
     return objs[key]
 
 
