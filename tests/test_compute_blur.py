@@ -152,6 +152,23 @@ def test_on_without_compute_says_so_and_draws(renderer, monkeypatch):
     assert same(got["image"], want["image"])
 
 
+def test_compute_twins_that_do_not_compile_fall_back_to_the_draws(renderer, monkeypatch):
+    """A driver whose compiler refuses the compute twins (here: an image format that does not exist): the
+    blur passes draw with the fragment programs reflect also declared, say so, and the image is theirs."""
+    extra = CASES["tiles-full-size"][1]
+    want, _ = _render(renderer, _settings("head", "off", extra))
+    real = deon_passes.blur_variant
+
+    def broken(compute, spec, name, defines):
+        n, d = real(compute, spec, name, defines)
+        return (n, {**d, "IMAGE_FORMAT": "no_such_format"}) if compute else (n, d)
+    monkeypatch.setattr(deon_passes, "blur_variant", broken)
+    got, sep = _render(renderer, _settings("head", "on", extra))
+    assert sep and not any(p.figures["compute"] for p in sep)
+    assert all("compute blur did not compile" in p.note and "fragment draws" in p.note for p in sep), [p.note for p in sep]
+    assert same(got["image"], want["image"])
+
+
 def test_a_dispatch_refuses_a_target_of_another_image_format(renderer, gl_ctx):
     """ExecuteContext.dispatch checks the program's IMAGE_FORMAT against the texture it stores into."""
     from skinviewer.kernel.execute import ExecuteContext

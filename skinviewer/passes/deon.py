@@ -30,6 +30,7 @@ import numpy as np
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
 from skinviewer.kernel.gl import compute_choice, image_format
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
+from skinviewer.kernel.shaders import ShaderCompileError
 from skinviewer.passes.common import (
     LIT,
     bind_specular,
@@ -651,8 +652,21 @@ class GaussianBlurPass(Pass):
         def program(name: str, **defines: Any) -> Any:
             name, d = blur_variant(compute, plan.spec, name, defines)
             return ec.program(name, **d)
-        prog = program("deon_blur", **plan.blur_defines)  # TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS
-        free = program("deon_blur", **plan.blur_defines, NO_ZONE_CHECKS=1) if plan.zone_split else None
+        try:
+            prog = program("deon_blur", **plan.blur_defines)  # TILED, ISLAND_ZONES, OPEN_BORDER, NARROW_TAPS
+            free = program("deon_blur", **plan.blur_defines, NO_ZONE_CHECKS=1) if plan.zone_split else None
+            if compute and plan.seam:
+                program("seam_fill", **plan.fill_defines)
+        except ShaderCompileError as exc:
+            if not compute:
+                raise
+            # a driver whose compiler refuses the compute twins: the fragment draws reflect also declared
+            compute = False
+            compute_failed = f"compute blur did not compile ({exc.errors[0] if exc.errors else exc.name}): fragment draws; "
+            prog = program("deon_blur", **plan.blur_defines)
+            free = program("deon_blur", **plan.blur_defines, NO_ZONE_CHECKS=1) if plan.zone_split else None
+        else:
+            compute_failed = ""
         progs = (prog, free) if free else (prog,)
         s = 1.0 if stretch else ec.scene.mean_uv_per_mm
         for p_ in progs:
@@ -743,7 +757,7 @@ class GaussianBlurPass(Pass):
                 for p_, where in parts:  # spacing = sigma (eq. 25)
                     draws.append((p_, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, where))
             src = tmp2
-        ec.note(f"{2 * len(sigmas)} directions, {len(draws)} {'compute dispatches' if compute else 'draws'}",
+        ec.note(f"{compute_failed}{2 * len(sigmas)} directions, {len(draws)} {'compute dispatches' if compute else 'draws'}",
                 directions=2 * len(sigmas), compute=bool(compute),
                 zone_free_rects=int(sum(w[1] for p_, w in parts if p_ is free and w is not None)))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
@@ -785,9 +799,12 @@ def blur_variant(compute: bool, spec: TexSpec, name: str, defines: dict) -> tupl
 
 
 def blur_program(r, compute: bool, spec: TexSpec, name: str, **defines: Any) -> None:
-    """Declare a separable blur program (``blur_variant``)."""
-    name, d = blur_variant(compute, spec, name, defines)
-    r.program(name, **d)
+    """Declare a separable blur program: the fragment one, and with ``compute`` its twin (``blur_variant``),
+    which execute runs unless a driver's compiler refuses it (then the draws, said in the pass's note)."""
+    r.program(name, **defines)
+    if compute:
+        cs_name, cs_defines = blur_variant(True, spec, name, defines)
+        r.program(cs_name, **cs_defines)
 
 
 def seam_split(ec, n: int, tiles: tuple) -> tuple | None:
