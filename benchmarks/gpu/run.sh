@@ -57,7 +57,7 @@ if [ -f "$OUT/nvidia-smi.txt" ]; then
     rm -f "$OUT/nvidia-smi.txt"
 fi
 
-if [ "$LIGHT" = "--light" ]; then SIZE=128; W=320; H=180; REPS=2; TSIZE=96x96; FRAMES_EXTRA=(--small-maps 256); SUITE=(tests/test_settings.py tests/test_graph.py); else SIZE=256; W=1920; H=1080; REPS=5; TSIZE=128x128; FRAMES_EXTRA=(); SUITE=(); fi
+if [ "$LIGHT" = "--light" ]; then SIZE=128; W=320; H=180; REPS=2; TSIZE=96x96; FRAMES_EXTRA=(--small-maps 256); SUITE=(tests/test_settings.py tests/test_graph.py); PERF=(--maps 512 --size 128 --repeats 2); else SIZE=256; W=1920; H=1080; REPS=5; TSIZE=128x128; FRAMES_EXTRA=(); SUITE=(); PERF=(--maps 1024 --repeats 5); fi
 
 want renders && stamp "renders and parity" && timeout "$(cap 120)" python3 benchmarks/gpu/gpu_check.py renders --out "$OUT" --size $SIZE $( [ "$SIZE" = 256 ] && echo --ref .gpuref/renders.npz )
 
@@ -70,10 +70,10 @@ if want perf; then
     stamp "perf: d'Eon blur direction fragment vs compute, synthetic compute blur, CPU overhead"
     PERF_END=$(( $(date +%s) + 60 ))
     left() { local l=$(( PERF_END - $(date +%s) )); [ "$l" -lt "$1" ] && l=$(( l > 5 ? l : 5 )) || l=$1; cap "$l"; }
-    timeout "$(left 35)" python3 benchmarks/bench_blur_floor.py --compute --maps 1024 --repeats 5 >> "$OUT/perf.md" 2>&1
-    timeout "$(left 15)" python3 benchmarks/bench_compute_blur.py --maps 1024 --repeats 9 >> "$OUT/perf.md" 2>&1
+    timeout "$(left 30)" python3 benchmarks/bench_blur_floor.py --compute "${PERF[@]}" >> "$OUT/perf.md" 2>&1
+    timeout "$(left 10)" python3 benchmarks/bench_compute_blur.py --maps "${PERF[1]}" --repeats 9 >> "$OUT/perf.md" 2>&1
     if [ -f benchmarks/bench_cpu_overhead.py ]; then
-        timeout "$(left 15)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
+        timeout "$(left 20)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
     fi
 fi
 
