@@ -216,3 +216,44 @@ def test_a_headless_context_asks_4_3_first_and_says_its_fallback(monkeypatch):
     assert asked == [430, 330]
     assert "OpenGL 4.3 unavailable, running 3.3: no compute shaders" in gl.describe(ctx)
     assert gl.compute_choice("on", ctx)[0] is False and gl.compute_choice("auto", ctx)[0] is False
+
+
+def test_the_viewer_window_asks_4_3_first_and_says_its_fallback(monkeypatch, capsys):
+    """ui/startup.create_window asks each window library for OpenGL 4.3, then 3.3; a 3.3 window is said on
+    stderr and in kernel.gl.describe (fake window classes: no display needed)."""
+    import moderngl_window as mglw
+
+    from skinviewer.kernel import gl
+    from skinviewer.ui import startup
+
+    asked = []
+
+    class Ctx:
+        info = {"GL_RENDERER": "some GPU", "GL_VERSION": "3.3.0"}
+
+    class Window:
+        def __init__(self, gl_version=(3, 3), **kw):
+            asked.append(gl_version)
+            if gl_version >= (4, 3):
+                raise RuntimeError("GLFW: requested OpenGL version 4.3, got 3.3")
+            self.ctx = Ctx()
+
+    monkeypatch.setenv("DISPLAY", ":0")
+    monkeypatch.setattr(mglw, "get_local_window_cls", lambda name: Window)
+    monkeypatch.setattr(mglw, "activate_context", lambda window=None, ctx=None: None)
+    wnd = startup.create_window((64, 64), visible=False)
+    assert asked == [(4, 3), (3, 3)]
+    assert "running 3.3: no compute shaders" in gl.describe(wnd.ctx)
+    assert "OpenGL 4.3 unavailable" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("timing", ["sync", "gpu"])
+def test_a_dispatching_pass_is_timed_and_checked_like_a_drawing_one(renderer, timing):
+    """The graph times a pass that dispatches (glFinish or a timer query around it) and scans its outputs
+    for NaN/Inf after it (render.check_finite) as it does a pass that draws."""
+    s = with_values(_settings("head", "on", CASES["tiles-full-size"][1]),
+                    {"render.timing": timing, "render.check_finite": True})
+    rep = renderer.render(s, force=True)
+    sep = [p for p in rep.passes if p.name.startswith("deon_blur_") and p.status == "ran" and "directions" in p.figures]
+    assert sep and all(p.figures["compute"] for p in sep)
+    assert all(p.ms is not None and p.ms > 0.0 and p.nonfinite == [] for p in sep), [(p.ms, p.nonfinite) for p in sep]
