@@ -7,6 +7,7 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any, cast
 
 import moderngl
+import numpy as np
 
 from skinviewer.ground.settings import get_path
 from skinviewer.kernel.gl import image_format
@@ -300,14 +301,15 @@ class ExecuteContext:
         self.gl.disable(moderngl.DEPTH_TEST)
 
     def dispatch(self, prog: moderngl.Program, target: str | moderngl.Texture,
-                 tiles: tuple[moderngl.Texture, int, int] | None = None) -> None:
+                 tiles: tuple[Any, ...] | None = None) -> None:
         """Run compute shader ``prog`` (``ec.program`` of a library program from ``name.comp`` including
         lib/compute_target.glsl; GL 4.3) over ``target`` (a declared output or a scratch/held texture),
         bound to image unit 0 and written with imageStore: the compute twin of ``draw_fullscreen``
-        (issue 27). ``tiles``: (texture of RG tile origins row by row, count, edge) for a program compiled
-        with ``CS_TILES``, one workgroup per tile of ``edge`` = its CS_TILE texels; None: the whole target
-        (or this band's rows, as the draws' scissor). Textures and uniforms are bound as for draws;
-        a memory barrier follows, so later draws, dispatches and reads see the writes."""
+        (issue 27). ``tiles``: (texture of RG tile origins row by row, count, edge[, the origins' y in
+        ascending order]) for a program compiled with ``CS_TILES``, one workgroup per tile of ``edge`` =
+        its CS_TILE texels (with the y's, a band dispatches only the tiles reaching its rows); None: the
+        whole target (or this band's rows, as the draws' scissor). Textures and uniforms are bound as
+        for draws; a memory barrier follows, so later draws, dispatches and reads see the writes."""
         tex = self._image_target(target)
         defines = self.graph.shaders.program_defines(prog)
         fmt = image_format(tex.components, tex.dtype)
@@ -320,20 +322,25 @@ class ExecuteContext:
             raise GraphError(f"pass {self.pass_.name}: dispatch needs a program with CS_TILE (and CS_TILES with "
                              f"tiles of its edge); it has {defines}")
         w, h = tex.size
-        rect = self._band_of((w, h)) or (0, 0, w, h)
+        band = self._band_of((w, h))
+        rect = band or (0, 0, w, h)
         x0, y0 = rect[0], rect[1]
         x1, y1 = min(x0 + rect[2], w), min(y0 + rect[3], h)
         self.set(prog, "u_clip", (x0, y0, x1, y1))
         if tiles is not None:
+            first, count = 0, int(tiles[1])
+            if band is not None and len(tiles) > 3:  # the tiles whose rows [y, y + edge) reach the band's
+                ys = tiles[3]
+                first = int(np.searchsorted(ys, y0 - edge + 1, "left"))
+                count = int(np.searchsorted(ys, y1, "left")) - first
             self.bind(prog, "u_tiles", tiles[0])
-            self.set(prog, "u_tile_count", int(tiles[1]))
-        self._apply(prog)
-        tex.bind_to_image(0, read=False, write=True)
-        if tiles is not None:  # the origins row by row in a texture of tiles[0].width columns
-            cols = int(tiles[0].width)
-            groups = (min(int(tiles[1]), cols), -(-int(tiles[1]) // cols))
+            self.uniforms(prog, u_tile_first=first, u_tile_count=count)
+            cols = min(max(count, 1), int(tiles[0].width))
+            groups = (min(count, cols), -(-count // cols))
         else:
             groups = (-(-(x1 - x0) // edge), -(-(y1 - y0) // edge))
+        self._apply(prog)
+        tex.bind_to_image(0, read=False, write=True)
         if groups[0] > 0 and groups[1] > 0 and x1 > x0 and y1 > y0:
             cast(moderngl.ComputeShader, prog).run(*groups)
         self.gl.memory_barrier()  # every bit: the next pass may sample it, draw into it or read it back

@@ -182,8 +182,8 @@ def rect_tiles(gl, tiles: np.ndarray, edge: int = TILE) -> tuple | None:
 def compute_tiles(ec, tiles: tuple) -> tuple:
     """A work_tiles-like list (``tiles``: TILED = 2 rectangles, TILED = 1 origins, or one whole-target tile)
     as the TILE x TILE tile origins a compute twin dispatches one workgroup each (ExecuteContext.dispatch,
-    lib/compute_target.glsl CS_TILES): (RG32F texture of the origins row by row, COMPUTE_TILE_COLS a row,
-    count, TILE); the same texels.
+    lib/compute_target.glsl CS_TILES): (RG32F texture of the origins sorted by y, read row by row,
+    COMPUTE_TILE_COLS a row; count; TILE; their y's), so a band dispatches only its rows' tiles; the same texels.
     Once per list (kept in gl_objects with it)."""
     objs = ec.state.setdefault("gl_objects", {})
     key = ("compute_tiles", id(ec.scene), id(tiles[0]), int(tiles[1]), int(tiles[2]), COMPUTE_TILE_COLS)
@@ -205,7 +205,7 @@ def compute_tiles(ec, tiles: tuple) -> tuple:
     padded[:count] = arr
     out = ec.gl.texture((cols, rows), 2, padded.tobytes(), dtype="f4")
     out.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    objs[key] = (out, count, TILE)
+    objs[key] = (out, count, TILE, arr[:, 1].astype(np.int64))  # + the origins' y, ascending (a band's range)
     return objs[key]
 
 
