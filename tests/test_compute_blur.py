@@ -257,3 +257,24 @@ def test_a_dispatching_pass_is_timed_and_checked_like_a_drawing_one(renderer, ti
     sep = [p for p in rep.passes if p.name.startswith("deon_blur_") and p.status == "ran" and "directions" in p.figures]
     assert sep and all(p.figures["compute"] for p in sep)
     assert all(p.ms is not None and p.ms > 0.0 and p.nonfinite == [] for p in sep), [(p.ms, p.nonfinite) for p in sep]
+
+
+@pytest.mark.skipif(__import__("shutil").which("glslangValidator") is None, reason="glslangValidator not installed")
+def test_compute_twins_pass_the_reference_compiler(gl_ctx, tmp_path):
+    """Every compute variant the blur passes declare compiles with Khronos' reference compiler (stricter than
+    Mesa about GLSL 4.30: what a GPU driver's compiler may refuse that llvmpipe accepts)."""
+    import subprocess
+
+    from skinviewer.kernel.shaders import ShaderLibrary
+    lib = ShaderLibrary(gl_ctx)
+    variants = [{}, {"ISLAND_ZONES": 1}, {"ISLAND_ZONES": 1, "NO_ZONE_CHECKS": 1}, {"ISLAND_ZONES": 1, "OPEN_BORDER": 1},
+                {"ISLAND_ZONES": 1, "NARROW_TAPS": 6}, {"DILATE": 1}, {"DOWN": 1, "NO_SEAM": 1}, {"OPEN_BORDER": 1}]
+    for name in ("deon_blur_cs", "seam_fill_cs"):
+        for v in variants:
+            for fmt in ("rgba32f", "rg32f"):
+                d = tuple((str(k), str(x)) for k, x in sorted({**v, "CS_TILES": 1, "CS_TILE": 16, "IMAGE_FORMAT": fmt}.items()))
+                src = lib._assemble(name, d)[0]["compute_shader"]
+                f = tmp_path / f"{name}.comp"
+                f.write_text(src)
+                r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
+                assert r.returncode == 0, (name, v, fmt, r.stdout[-600:])
