@@ -58,6 +58,8 @@ if [ -f "$OUT/nvidia-smi.txt" ]; then
 fi
 
 if [ "$LIGHT" = "--light" ]; then SIZE=128; W=320; H=180; REPS=2; TSIZE=96x96; FRAMES_EXTRA=(--small-maps 256); SUITE=(tests/test_settings.py tests/test_graph.py); PERF=(--maps 512 --size 128 --repeats 2); else SIZE=256; W=1920; H=1080; REPS=5; TSIZE=128x128; FRAMES_EXTRA=(); SUITE=(); PERF=(--maps 1024 --repeats 5); fi
+# SUITE_FILES: a part of the suite (test files or globs) instead of the whole, for a short call
+if [ -n "${SUITE_FILES:-}" ]; then SUITE=($SUITE_FILES); fi
 
 want renders && stamp "renders and parity" && timeout "$(cap 120)" python3 benchmarks/gpu/gpu_check.py renders --out "$OUT" --size $SIZE $( [ "$SIZE" = 256 ] && echo --ref .gpuref/renders.npz )
 
