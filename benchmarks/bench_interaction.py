@@ -5,7 +5,7 @@ technique: an orbit drag, a key-light drag, slider edits (the key light's intens
 frame), then a still view until the image is final.
 
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
-        [--seconds 3] [--frame-log frames.jsonl]
+        [--seconds 3] [--frame-log frames.jsonl] [--rest 1] [--prime on|off|both] [--cold-shaders]
 
 ``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
 both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
@@ -16,6 +16,13 @@ wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it p
 swap's ms -- presenting under Xvfb, timed apart --, Python's collections in it (ms, generations), the
 rung, the passes that ran): where a long frame's time went.
 
+``--rest``: before each drag and the edits the user looks at the still, final image for this long (1 s;
+and on, at most 30 s, until the viewer's idle priming of the next drag's preview variants is done --
+ui/warm.Primer); those idle frames are timed apart (the "rests" table), not in the script's figures.
+``--prime both``: the A/B of that priming, each arm in a fresh viewer (a new GL context: nothing
+JIT-compiled yet); ``--cold-shaders`` turns Mesa's on-disk shader cache off, so every variant is
+JIT-compiled at its first draw, as on a first run or for a variant never drawn on this machine.
+
 Per technique and governor mode it prints:
 - p95 of the interval between visible image updates while dragging (a frame that completed and ran
   passes puts a new image on screen); goal <= 150 ms;
@@ -25,6 +32,8 @@ Per technique and governor mode it prints:
   it that frame less its buffer swap (our work), the longest swap, the longest collection, how many
   frames took longer than 100 ms (of all the frames of the script) and the load average
   of the machine while the row was measured (one minute, os.getloadavg);
+- the light drag's first 3 frames (the longest), the programs drawn for the first time during the
+  drags (ShaderLibrary.first_draws: each a JIT compile on llvmpipe) and the longest frame of the rests;
 - the preview's error against the ground truth (the calibration's figure for the rung shown at
   the end of the light drag: techniques/preview_errors.json, measured at 160² on the default view),
   and whether the final image equals the ungoverned render of the same settings bit for bit.
@@ -131,7 +140,7 @@ class Driver:
         fr = self.app.frame
         self.tag["phase"] = "rest"
         start = time.perf_counter()
-        n = len(self.frame_ms)
+        n, gcs = len(self.frame_ms), self.full_gcs
         while time.perf_counter() - start < cap_s:
             self.step()
             el = time.perf_counter() - start
@@ -140,6 +149,7 @@ class Driver:
                 break
         self.idle_ms += self.frame_ms[n:]
         del self.frame_ms[n:], self.swap_ms[n:], self.gc_ms[n:]
+        self.full_gcs = gcs  # the idle full collection (ui/collector.py) is the rest's, not the script's
         return time.perf_counter() - start
 
     def drag(self, button, seconds: float, dx: float = 6.0, dy: float = 1.5) -> list[float]:
