@@ -150,6 +150,28 @@ def test_idle_frames_draw_the_variants_the_next_light_drag_renders(fresh_viewer)
     assert all(r == targets[0][0] for r in shown)
     assert lib.first_draws == n, "the drag drew a program for the first time (a JIT in a drag frame)"
     _final(app)
+    # an edit that changes a variant of your settings' graph (the output's tone map) changes the
+    # preview's too: primed again before the next drag, which again draws nothing for the first time
+    fr.governor._seen.clear()  # the fake calibration's costs decide again
+    fr.governor.observe = lambda *a, **k: None
+    main_before = app.renderer.graph("deon").programs()
+    primings = fr.primer.frames
+    assert app.state.apply({"render.tone_map": "linear"}, "render.tone_map")
+    _final(app)
+    assert app.renderer.graph("deon").programs() != main_before
+    assert fr.primer.pending(fr.governor, app.state.settings) or fr.primer.frames > primings
+    for _ in range(200):
+        app.step(1)
+        if not fr.primer.pending(fr.governor, app.state.settings):
+            break
+    assert not fr.primer.pending(fr.governor, app.state.settings)
+    n = lib.first_draws
+    try:
+        shown = _light_drag(app, 2)
+    finally:
+        del fr.governor.observe
+    assert not shown[0].final and lib.first_draws == n
+    _final(app)
     got = app.renderer.image(app.state.settings)
     app.renderer.render(app.state.settings, force=True)
     assert np.array_equal(got, app.renderer.image(app.state.settings))

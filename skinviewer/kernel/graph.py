@@ -727,6 +727,11 @@ class RenderGraph:
         last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
         return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
 
+    def programs(self) -> frozenset[tuple[str, tuple[tuple[str, str], ...]]]:
+        """The program variants (name, sorted defines) the last frame's passes declared."""
+        return frozenset((n, tuple(sorted((str(k), str(v)) for k, v in dict(d).items())))
+                         for r in self._last_refl.values() for n, d in r.programs)
+
     def likely_programs(self) -> list[tuple[str, dict[str, Any]]]:
         """Program variants one toggle away from the last frame's (passes that define
         ``likely_programs(reflection)``): what ShaderLibrary.warm compiles while the viewer idles."""

@@ -96,7 +96,7 @@ class Primer:
         import os
         self.renderer = renderer
         self.enabled = os.environ.get(PRIME_ENV, "1").strip() != "0"
-        self.primed: set[tuple] = set()  # (scene key, technique, variant): its programs have been drawn
+        self.primed: set[tuple] = set()  # Primer._key of each priming done: its programs have been drawn
         self.frames = 0  # idle frames that rendered a priming slice
         self.slice_ms: list[float] = []  # each slice's wall ms (sync timing where the renderer's timing is)
         self.error = ""
@@ -117,8 +117,13 @@ class Primer:
         return [(r, t) for r in rungs if r.changes for t in toggles]
 
     def _key(self, s, rung, extra: dict) -> tuple:
+        """What a priming holds for: the scene, the rung's graph, and the variants your settings' own
+        graph last drew (an edit that changes a shader variant there -- a Gaussian's weight to 0,
+        another tone map -- changes the preview's too: primed again)."""
         scene = self.renderer.scene
-        return (scene.key if scene is not None else None, s.technique, preview_variant(rung), tuple(sorted(extra)))
+        g = self.renderer.graphs.get(s.technique)
+        return (scene.key if scene is not None else None, s.technique, preview_variant(rung), tuple(sorted(extra)),
+                hash(g.programs()) if g is not None else 0)
 
     def pending(self, governor, s) -> list[tuple]:
         return [(r, t) for r, t in self.targets(governor, s) if self._key(s, r, t) not in self.primed]
@@ -147,5 +152,7 @@ class Primer:
         self.slice_ms.append((time.perf_counter() - t0) * 1000.0)
         self.frames += 1
         if report.complete:
+            if len(self.primed) > 64:
+                self.primed.clear()
             self.primed.add(self._key(s, rung, extra))
         return True
