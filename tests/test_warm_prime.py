@@ -185,3 +185,14 @@ def test_the_primer_says_nothing_to_do_without_a_calibration_or_for_the_user_s_o
     g = Governor(budget_ms=1e9)  # everything fits: the pick is your settings, nothing to prime
     g.set_calibration(fake_calibration("deon", s, seed=1))
     assert p.targets(g, s) == [] and p.step(g, s, (64, 64), 50.0) is False
+
+
+def test_the_live_names_of_a_program_are_those_moderngl_lists_made_once(renderer):
+    """ExecuteContext._check asks ShaderLibrary.members (a set made once per program) instead of
+    ``name in prog`` (moderngl walks every member each time); the same names, and a new set after a
+    program is replaced."""
+    lib = renderer.shaders
+    prog = lib.get("output", {"TONE_MAP": 1, "BG_ENV": 0, "BG_LEVEL": 1})
+    names = lib.members(prog)
+    assert names == frozenset(prog) and lib.members(prog) is names
+    assert all(n in names for n in prog) and "no_such_uniform" not in names

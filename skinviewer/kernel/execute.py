@@ -160,7 +160,7 @@ class ExecuteContext:
     # -- uniforms and textures -------------------------------------------------------------------
     def _check(self, prog: moderngl.Program, name: str, optional: bool) -> bool:
         """Whether ``name`` is live in ``prog``; GraphError when its source does not declare it."""
-        if name in prog:
+        if name in self.graph.shaders.members(prog):
             return True
         try:
             pname, declared = self.graph.shaders.describe(prog)
