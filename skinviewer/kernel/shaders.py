@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import hashlib
 import os
-import sys
 import re
+import sys
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
