@@ -440,7 +440,8 @@ class FrameController:
         if not (self._governing and self.input_stopped and not self.governor.refining and not self._partial_ran):
             return False
         budget = self.graph_budget_ms()
-        return self.primer.step(self.governor, self.state.settings, tuple(self.layout.view_fb[2:]),
+        vw, vh = self.layout.view_fb[2:]
+        return self.primer.step(self.governor, self.state.settings, (int(vw), int(vh)),
                                 self.governor.room() if budget is None else budget)
 
     def _sync_size(self) -> None:
