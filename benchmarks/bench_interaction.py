@@ -5,7 +5,7 @@ technique: an orbit drag, a key-light drag, slider edits (the key light's intens
 frame), then a still view until the image is final.
 
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
-        [--seconds 3] [--frame-log frames.jsonl]
+        [--seconds 3] [--frame-log frames.jsonl] [--rest 1] [--prime on|off|both] [--cold-shaders]
 
 ``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
 both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
@@ -16,6 +16,13 @@ wall ms and its own ms outside every pass -- RenderGraph.own_ms --, whether it p
 swap's ms -- presenting under Xvfb, timed apart --, Python's collections in it (ms, generations), the
 rung, the passes that ran): where a long frame's time went.
 
+``--rest``: before each drag and the edits the user looks at the still, final image for this long (1 s;
+and on, at most 30 s, until the viewer's idle priming of the next drag's preview variants is done --
+ui/warm.Primer); those idle frames are timed apart (the "rests" table), not in the script's figures.
+``--prime both``: the A/B of that priming, each arm in a fresh viewer (a new GL context: nothing
+JIT-compiled yet); ``--cold-shaders`` turns Mesa's on-disk shader cache off, so every variant is
+JIT-compiled at its first draw, as on a first run or for a variant never drawn on this machine.
+
 Per technique and governor mode it prints:
 - p95 of the interval between visible image updates while dragging (a frame that completed and ran
   passes puts a new image on screen); goal <= 150 ms;
@@ -25,6 +32,8 @@ Per technique and governor mode it prints:
   it that frame less its buffer swap (our work), the longest swap, the longest collection, how many
   frames took longer than 100 ms (of all the frames of the script) and the load average
   of the machine while the row was measured (one minute, os.getloadavg);
+- the light drag's first 3 frames (the longest), the programs drawn for the first time during the
+  drags (ShaderLibrary.first_draws: each a JIT compile on llvmpipe) and the longest frame of the rests;
 - the preview's error against the ground truth (the calibration's figure for the rung shown at
   the end of the light drag: techniques/preview_errors.json, measured at 160² on the default view),
   and whether the final image equals the ungoverned render of the same settings bit for bit.
@@ -93,6 +102,9 @@ class Driver:
         self.gc_ms: list[float] = []
         self.full_gcs = 0  # generation-2 collections during the script
         self.updates: list[float] = []  # perf_counter of frames that put a new, complete image on screen
+        self._first_draws = app.frame.renderer.shaders.first_draws
+        self.first_draws: dict[str, int] = {}  # per phase: programs drawn for the first time (a JIT each)
+        self.idle_ms: list[float] = []  # the frames of the rests before each drag (the priming's)
 
     def step(self) -> None:
         GC.take()
@@ -109,13 +121,36 @@ class Driver:
         rep = fr.report
         if rep is not None and rep.complete and rep.ran:
             self.updates.append(t1)
+        first = fr.renderer.shaders.first_draws - self._first_draws  # programs drawn for the first time
+        self._first_draws += first
+        self.first_draws[self.tag["phase"]] = self.first_draws.get(self.tag["phase"], 0) + first
         if self.log is not None:
             self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
                                        "render_ms": round(fr._render_ms or 0.0, 2),
                                        "graph_own_ms": round(getattr(fr, "last_own_ms", 0.0), 2),
                                        "presented": fr.presented, "swap_ms": round(swap, 2),
                                        "gc_ms": round(gc_ms, 2), "gc_generations": gens, "rung": fr._rung.label,
+                                       "first_draws": first, "primed": fr.primer.frames,
                                        "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else []}) + "\n")
+
+    def rest(self, seconds: float, cap_s: float = 30.0) -> float:
+        """The user looks at the final image before the next drag: idle frames for ``seconds``, and
+        on until the viewer's priming of the next drag's preview variants is done (at most
+        ``cap_s``); their frame times go to ``idle_ms``, not the script's. Returns the seconds."""
+        fr = self.app.frame
+        self.tag["phase"] = "rest"
+        start = time.perf_counter()
+        n, gcs = len(self.frame_ms), self.full_gcs
+        while time.perf_counter() - start < cap_s:
+            self.step()
+            el = time.perf_counter() - start
+            if el >= seconds and (not (fr.primer.enabled and fr._governing) or fr.primer.error
+                                  or not fr.primer.pending(fr.governor, fr.state.settings)):
+                break
+        self.idle_ms += self.frame_ms[n:]
+        del self.frame_ms[n:], self.swap_ms[n:], self.gc_ms[n:]
+        self.full_gcs = gcs  # the idle full collection (ui/collector.py) is the rest's, not the script's
+        return time.perf_counter() - start
 
     def drag(self, button, seconds: float, dx: float = 6.0, dy: float = 1.5) -> list[float]:
         """Drag in the view for ``seconds``; the intervals between visible updates meanwhile (ms)."""
@@ -180,7 +215,7 @@ def full_frame_alone(app) -> float:
     return statistics.median(ms)
 
 
-def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=None) -> dict:
+def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=None, rest_s: float = 1.0) -> dict:
     from skinviewer.ground.settings import validate
     st = app.state
     st.set_settings(validate({**st.settings.model_dump(mode="json"), "technique": technique}), "technique")
@@ -191,16 +226,22 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
     d.swap_ms.clear()
     d.gc_ms.clear()
     d.full_gcs = 0
+    d.first_draws.clear()
     load0 = os.getloadavg()[0]
+    rested = d.rest(rest_s)
     drag = d.drag(app.wnd.mouse.left, seconds)
     orbit_final = d.until_final()
+    rested += d.rest(rest_s)
+    n_light = len(d.frame_ms)
     light = d.drag(app.wnd.mouse.right, seconds)
+    light_start = max(d.frame_ms[n_light:n_light + 3], default=float("nan"))  # the light drag's first frames
     fr = app.frame
     shown = fr.governor.shown
     entry = fr.governor.entry(technique, shown) if mode != "off" else None
     preview_err = entry.error if entry is not None else None
     preview = shown.label if mode != "off" else "(your settings)"
     release = d.until_final()
+    rested += d.rest(rest_s)
     edits = d.edits(n_edits)
     edit_final = d.until_final()
     live = st.settings
@@ -216,7 +257,10 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
             "gc_max_ms": max(d.gc_ms), "full_gcs": d.full_gcs,
             "over_100": sum(ms > 100.0 for ms in d.frame_ms), "frames": len(d.frame_ms),
             "load": 0.5 * (load0 + os.getloadavg()[0]),
-            "preview": preview, "preview_err": preview_err, "identical": identical}
+            "preview": preview, "preview_err": preview_err, "identical": identical,
+            "light_start_ms": light_start, "idle_max_ms": max(d.idle_ms, default=0.0), "rest_s": rested,
+            "drag_first_draws": d.first_draws.get("orbit drag", 0) + d.first_draws.get("light drag", 0),
+            "first_draws": dict(d.first_draws), "prime": app.frame.primer.enabled}
 
 
 def markdown(rows: list[dict], head: str) -> str:
@@ -226,11 +270,14 @@ def markdown(rows: list[dict], head: str) -> str:
            "| scene | technique | p95 drags: off → on | p95 edits: off → on | release → final, on (× alone) "
            "| longest frame: off → on | on: its work / swap | on: frames > 100 ms | on: full GCs | load |",
            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    by = {(r["scene"], r["technique"], r["mode"]): r for r in rows}
-    for (scene, t, mode), on in by.items():
+    by = {(r["scene"], r["technique"], r["mode"], r["prime"]): r for r in rows}
+    both = len({r["prime"] for r in rows}) > 1
+    for (scene, t, mode, prime), on in by.items():
         if mode == "off":
             continue
-        off = by.get((scene, t, "off"))
+        off = by.get((scene, t, "off", prime))
+        if both:
+            t = f"{t} (priming {'on' if prime else 'off'})"
         b = (lambda x: f"**{x:,.0f}**")
         p_off = f"{off['p95_drag']:,.0f}" if off else "-"
         e_off = f"{off['p95_edits']:,.0f}" if off else "-"
@@ -241,6 +288,15 @@ def markdown(rows: list[dict], head: str) -> str:
                    f"| {on['release_ms']:,.0f} ms ({ratio:.2f}×) | {s_off} → {b(on['stall_ms'])} ms "
                    f"| {on['work_stall_ms']:,.0f} / {on['swap_max_ms']:,.0f} ms | {on['over_100']} / {on['frames']} "
                    f"| {on['full_gcs']} | {load} |")
+    out += ["", "The first draws (issue 27): the governor on, the light drag's first 3 frames (the longest), programs "
+            "drawn for the first time during the drags (each a JIT compile on llvmpipe), the longest frame of the "
+            "rests before each drag (the idle priming's slices), the rests' seconds in all:", "",
+            "| scene | technique | priming | light drag's first frames | first draws in the drags | longest rest frame | rests |",
+            "| --- | --- | --- | --- | --- | --- | --- |"]
+    for (scene, t, mode, prime), on in by.items():
+        if mode != "off":
+            out.append(f"| {scene} | {t} | {'on' if prime else 'off'} | {on['light_start_ms']:,.0f} ms "
+                       f"| {on['drag_first_draws']} | {on['idle_max_ms']:,.0f} ms | {on['rest_s']:.1f} s |")
     same = all(r["identical"] for r in rows)
     out += ["", f"Every final image equals the ungoverned render bit for bit: {'yes' if same else 'NO'} "
             f"({sum(r['identical'] for r in rows)} / {len(rows)} rows)."]
@@ -256,7 +312,17 @@ def main() -> int:
     ap.add_argument("--seconds", type=float)
     ap.add_argument("--edits", type=int)
     ap.add_argument("--frame-log", help="write one JSON line per frame here")
+    ap.add_argument("--rest", type=float, default=1.0,
+                    help="seconds of still view before each drag and the edits (and until the priming is done)")
+    ap.add_argument("--prime", choices=("on", "off", "both"), default="on",
+                    help="the idle priming of the next drag's preview variants (ui/warm.Primer); both: A/B, "
+                         "each in a fresh viewer (a new GL context: nothing JIT-compiled yet)")
+    ap.add_argument("--cold-shaders", action="store_true",
+                    help="Mesa's on-disk shader cache off (MESA_SHADER_CACHE_DISABLE): every variant is "
+                         "JIT-compiled at its first draw, as on a first run or a variant never drawn here")
     args = ap.parse_args()
+    if args.cold_shaders:
+        os.environ["MESA_SHADER_CACHE_DISABLE"] = "true"  # before any GL context
     log = open(args.frame_log, "w") if args.frame_log else None  # noqa: SIM115 (closed at the end of main)
     from skinviewer import techniques
     names = args.techniques.split(",") if args.techniques else (["deon", "phong"] if args.quick else techniques.names())
@@ -274,8 +340,10 @@ def main() -> int:
     os.environ.setdefault("SKINVIEWER_CALIBRATE", "0")
     from skinviewer.ui.app import create_app, destroy_app
     rows = []
-    for scene_name, scene in scenes.items():
+    arms = {"on": [True], "off": [False], "both": [False, True]}[args.prime]
+    for scene_name, scene, prime in [(n, sc, p) for n, sc in scenes.items() for p in arms]:
         app = create_app(with_values(Settings(), scene), size=WINDOW, vsync=False)
+        app.frame.primer.enabled = prime
         try:
             app.step(2)
             fr = app.frame
@@ -292,21 +360,24 @@ def main() -> int:
                 print(f"# bench_interaction — {describe(app.ctx)}; window {WINDOW[0]}x{WINDOW[1]} (view {w}x{h}), "
                       f"default settings (1024² maps), governor budget {app.state.settings.render.governor_budget_ms:g} ms; "
                       f"{seconds:g} s drags, {n_edits} edits; sync timing for 'alone'")
-                print(f"{'scene':<6} {'technique':<9} {'governor':<11} {'p95 drag':>9} {'p95 edits':>9} "
+                print(f"{'scene':<6} {'technique':<9} {'governor':<11} {'prime':<5} {'p95 drag':>9} {'p95 edits':>9} "
                       f"{'release→final':>13} {'alone':>8} {'ratio':>6} {'stall':>8} {'work':>6} {'swap':>6} {'gc':>5} {'>100ms':>9} {'load':>5} "
                       f"{'preview (end of light drag)':<48} "
-                      f"{'error':>7} {'final = ungoverned':>18}", flush=True)
+                      f"{'error':>7} {'final = ungoverned':>18} {'light start':>11} {'1st draws':>9} {'idle max':>8}",
+                      flush=True)
             for name in names:
                 for mode in ("off", "interactive"):
-                    row = run_one(app, name, mode, seconds, n_edits, log)
+                    row = run_one(app, name, mode, seconds, n_edits, log, args.rest)
                     row["scene"] = scene_name
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
-                    print(f"{scene_name:<6} {name:<9} {mode:<11} {row['p95_drag']:9.0f} {row['p95_edits']:9.0f} "
+                    print(f"{scene_name:<6} {name:<9} {mode:<11} {'on' if prime else 'off':<5} "
+                          f"{row['p95_drag']:9.0f} {row['p95_edits']:9.0f} "
                           f"{row['release_ms']:13.0f} {row['alone_ms']:8.0f} {row['release_ms'] / row['alone_ms']:6.2f} "
                           f"{row['stall_ms']:8.0f} {row['work_stall_ms']:6.0f} {row['swap_max_ms']:6.0f} {row['gc_max_ms']:5.0f} "
                           f"{row['over_100']:>4}/{row['frames']:<4} {row['load']:5.1f} "
-                          f"{row['preview']:<48} {err:>7} {row['identical']!s:>18}", flush=True)
+                          f"{row['preview']:<48} {err:>7} {row['identical']!s:>18} {row['light_start_ms']:11.0f} "
+                          f"{row['drag_first_draws']:9d} {row['idle_max_ms']:8.0f}", flush=True)
         finally:
             destroy_app(app)
     if log is not None:

@@ -162,7 +162,7 @@ class ExecuteContext:
     # -- uniforms and textures -------------------------------------------------------------------
     def _check(self, prog: moderngl.Program, name: str, optional: bool) -> bool:
         """Whether ``name`` is live in ``prog``; GraphError when its source does not declare it."""
-        if name in prog:
+        if name in self.graph.shaders.members(prog):
             return True
         try:
             pname, declared = self.graph.shaders.describe(prog)
@@ -266,9 +266,13 @@ class ExecuteContext:
             vao, count = self.graph.gpu.band_vao(prog, scene, lod, space, matrix, fbo.size[1],
                                                  (rect[1], rect[1] + rect[3]), env_rays=env_rays)
             if count:
+                t0 = self.graph.shaders.first_draw(prog)
                 vao.render(vertices=count)
+                self.graph.shaders.first_draw_done(prog, t0)
         else:
+            t0 = self.graph.shaders.first_draw(prog)
             self.graph.gpu.mesh_vao(prog, scene, lod, env_rays).render()
+            self.graph.shaders.first_draw_done(prog, t0)
         self.gl.disable(moderngl.CULL_FACE)
         if rect is not None:
             fbo.scissor = None  # type: ignore[assignment]  # moderngl's stub omits None (documented: scissor off)
@@ -294,7 +298,9 @@ class ExecuteContext:
             w, h = fbo.size
             self.uniforms(prog, u_tile=float(edge), u_target_size=(float(w), float(h)))
         self._apply(prog)
+        t0 = self.graph.shaders.first_draw(prog)
         self.graph.gpu.fullscreen_vao(prog).render(vertices=3 if tiles is None else 6 * tiles[1])
+        self.graph.shaders.first_draw_done(prog, t0)
         if rect is not None:
             fbo.scissor = None  # type: ignore[assignment]  # moderngl's stub omits None (documented: scissor off)
         self.draws += 1

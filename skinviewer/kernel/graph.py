@@ -163,7 +163,8 @@ class RenderGraph:
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
         self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
         # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
-        self._reflected: dict[str, tuple[Reflection, Any, Any]] = {}
+        # per pass: (its last reflection, env token, scene, the top-level settings sections it read)
+        self._reflected: dict[str, tuple[Reflection, Any, Any, frozenset[str]]] = {}
         self._reflect_settings: Settings | None = None  # the settings of the last reflected and keyed frame
         self._key_parts: dict[str, tuple[Reflection, int, dict[str, Any]]] = {}  # pass -> (reflection, shaders' revision, key parts)
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
@@ -211,13 +212,14 @@ class RenderGraph:
             prev = self._reflected.get(p.name)
             if reuse and prev is not None and self._still_holds(prev, same, token, scene if p.uses_scene else None, memo,
                                                       settings, scene, view, interactive):
-                r = prev[0]  # what its reflect read is unchanged: it would declare the same again
+                r, sections = prev[0], prev[3]  # what its reflect read is unchanged: it would declare the same again
             else:
                 r = Reflection(settings, scene if p.uses_scene else None, self.shape_state,
                                view=view if p.uses_scene else None, interactive=interactive)
                 r._frame_memo = memo
                 p.reflect(r)
-            self._reflected[p.name] = (r, token, scene if p.uses_scene else None)
+                sections = frozenset(path.split(".", 1)[0] for path in (*r.declared, *r._peek_paths))
+            self._reflected[p.name] = (r, token, scene if p.uses_scene else None, sections)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
             elif r.outputs:
@@ -249,7 +251,8 @@ class RenderGraph:
             return set(names)
         return {name for name in names if getattr(settings, name) == getattr(last, name)}
 
-    def _still_holds(self, prev: tuple[Reflection, Any, Any], same: set[str] | None, token: Any, pass_scene: Any,
+    def _still_holds(self, prev: tuple[Reflection, Any, Any, frozenset[str]], same: set[str] | None, token: Any,
+                     pass_scene: Any,
                      memo: dict[Any, Any], settings: Settings, scene: Any, view: Any, interactive: bool) -> bool:
         """Whether a pass's last reflection holds this frame, so that its reflect need not run (issue 27:
         a camera move re-reflected every pass of the technique): REUSE_REFLECTIONS, the same scene object
@@ -257,16 +260,12 @@ class RenderGraph:
         unchanged top-level section, no read of the view, the shape state or the raw settings but through
         a memoised rule, and every such rule answering as last frame (asked again, once a frame, in a
         reflection of the graph's own: same value, same settings read, same notes and drops)."""
-        r, last_token, last_scene = prev
+        r, last_token, last_scene, sections = prev
         if not REUSE_REFLECTIONS or same is None or r._untracked or r._frame_memo is None \
                 or last_token != token or last_scene is not pass_scene:
             return False
-        for path in r.declared:
-            if path.split(".", 1)[0] not in same:
-                return False
-        for path in r._peek_paths:
-            if path.split(".", 1)[0] not in same:
-                return False
+        if not sections <= same:  # the sections of every setting it declared or peeked (made once)
+            return False
         last_memo = r._frame_memo
         for key, rule, scene_less in r._memos:
             if key not in memo:
@@ -727,6 +726,11 @@ class RenderGraph:
         """The last measured cost of re-running these passes (0 for those never timed)."""
         last = {p.name: p.ms for p in (self.last_report.passes if self.last_report else [])}
         return float(sum(self._last_ms.get(n, last.get(n) or 0.0) for n in passes))
+
+    def programs(self) -> frozenset[tuple[str, tuple[tuple[str, str], ...]]]:
+        """The program variants (name, sorted defines) the last frame's passes declared."""
+        return frozenset((n, tuple(sorted((str(k), str(v)) for k, v in dict(d).items())))
+                         for r in self._last_refl.values() for n, d in r.programs)
 
     def likely_programs(self) -> list[tuple[str, dict[str, Any]]]:
         """Program variants one toggle away from the last frame's (passes that define

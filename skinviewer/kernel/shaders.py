@@ -11,7 +11,9 @@ library's own defines, then the program's defines, as ``#define`` lines after ``
 from __future__ import annotations
 
 import hashlib
+import os
 import re
+import sys
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -66,6 +68,8 @@ class _Entry:
     errors: list[ShaderError] = field(default_factory=list)
     generation: int = 0  # bumps each time a new program replaces the old one
     declared: frozenset[str] = frozenset()  # uniform names declared in the running program's source
+    drawn: bool = False  # the running program has been drawn (a driver JIT-compiles it at its first draw)
+    members: frozenset[str] | None = None  # the running program's live names (``name in prog`` scans them)
 
 
 def declared_uniforms(source: str) -> set[str]:
@@ -80,6 +84,9 @@ def declared_uniforms(source: str) -> set[str]:
             if name.isidentifier():
                 out.add(name)
     return out
+
+
+FIRST_DRAWS_ENV = "SKINVIEWER_FIRST_DRAWS"  # 1: time and print every program's first draw
 
 
 class ShaderLibrary:
@@ -98,6 +105,12 @@ class ShaderLibrary:
         self._by_program: dict[int, _Entry] = {}
         self._release_hooks: list[Callable[[moderngl.Program], None]] = []
         self.revision = 0  # bumps whenever any program is replaced (a cheap "did any shader change?")
+        # first draws (issue 27): llvmpipe -- and GPU drivers too -- finish a program at its first
+        # draw, not at link (ctx.program took <= 16 ms, d'Eon's final pass's first draw ~0.5 s);
+        # counted always, timed (glFinish before and after) with SKINVIEWER_FIRST_DRAWS=1
+        self.first_draws = 0
+        self.time_first_draws = os.environ.get(FIRST_DRAWS_ENV, "").strip() not in ("", "0")
+        self.first_draw_log: list[tuple[str, dict[str, str], float]] = []  # (name, defines, ms) when timed
 
     # -- source assembly ---------------------------------------------------------------------
     def _expand(self, path: Path, files: list[Path], stack: tuple[Path, ...] = (),
@@ -249,6 +262,8 @@ class ShaderLibrary:
                 hook(entry.program)
             entry.program.release()
         entry.program = prog
+        entry.drawn = False
+        entry.members = None
         self._by_program[id(prog)] = entry
         entry.declared = frozenset(n for src in sources.values() for n in declared_uniforms(src))
         entry.digest = digest
@@ -319,6 +334,49 @@ class ShaderLibrary:
             self._entry(name, defines)
             done += 1
         return len(todo) - done
+
+    def first_draw(self, prog: moderngl.Program) -> float | None:
+        """Before a draw of ``prog``: the first one of a program this library made is counted
+        (``first_draws``); when first draws are timed, returns the clock after a glFinish (hand it
+        to ``first_draw_done`` after the draw), else None."""
+        entry = self._by_program.get(id(prog))
+        if entry is None or entry.program is not prog or entry.drawn:
+            return None
+        entry.drawn = True
+        self.first_draws += 1
+        if not self.time_first_draws:
+            return None
+        self.ctx.finish()
+        return time.perf_counter()
+
+    def first_draw_done(self, prog: moderngl.Program, t0: float | None) -> None:
+        """After a first draw timed by ``first_draw``: its ms (sync: glFinish) logged and printed."""
+        if t0 is None:
+            return
+        self.ctx.finish()
+        ms = (time.perf_counter() - t0) * 1000.0
+        entry = self._by_program.get(id(prog))
+        name, defines = (entry.name, dict(entry.defines)) if entry is not None else ("?", {})
+        self.first_draw_log.append((name, defines, ms))
+        own = {k: v for k, v in defines.items() if self.defines.get(k) != v}
+        print(f"first draw: {name} {own} {ms:.1f} ms", file=sys.stderr, flush=True)
+
+    def members(self, prog: moderngl.Program) -> frozenset[str]:
+        """The live uniform/attribute names of ``prog``, as ``name in prog`` tests them, made once per
+        program this library made (moderngl's ``in`` walks every member: ~1,300 steps a d'Eon camera
+        frame, issue 27's CPU overhead)."""
+        entry = self._by_program.get(id(prog))
+        if entry is None or entry.program is not prog:
+            return frozenset(prog)
+        if entry.members is None:
+            entry.members = frozenset(prog)
+        return entry.members
+
+    def drawn(self, name: str, defines: dict[str, Any] | None = None) -> bool:
+        """The variant is compiled and its running program has been drawn at least once."""
+        key = (name, tuple(sorted((str(k), str(v)) for k, v in (defines or {}).items())))
+        entry = self._entries.get(key)
+        return entry is not None and entry.drawn
 
     def version(self, name: str, defines: dict[str, Any] | None = None) -> str:
         """Digest of the assembled source of the running program (part of pass cache keys)."""

@@ -11,7 +11,6 @@ It owns the renderer's frame products (report, per-pass costs, the last change's
 time-budget options; the state owns what the user chose."""
 from __future__ import annotations
 
-import json
 import time
 import traceback
 from collections import deque
@@ -34,6 +33,7 @@ from skinviewer.ui.scheduler import ChangeCost, RenderScheduler, split_ms, view_
 from skinviewer.ui.screenshot import read_screen, timestamped_path
 from skinviewer.ui.state import ViewerState
 from skinviewer.ui.view import ViewPresenter
+from skinviewer.ui.warm import Primer, preview_variant
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
 PRESENT_EVERY_S = 0.5  # a refinement rendering without presenting still refreshes the screen this often
@@ -138,6 +138,8 @@ class FrameController:
         # Python's garbage collector: young generations only while busy, frozen start-up objects
         # (ui/collector.py; a full collection took 33 ms of a drag's frame)
         self.collector = Collector()
+        # the idle frames' priming of the next drag's preview variants (ui/warm.py)
+        self.primer = Primer(renderer)
         self._gov_note = ""
         # issue 34, the cold start: the technique whose first image is the ladder's declared cheapest
         # rung even without a calibration (start_with_preview), and that rung once picked
@@ -421,7 +423,7 @@ class FrameController:
                 ui_built = ui.build(frametime, self.layout)
         self._last_presented = True
         self._presented_at = time.perf_counter()
-        if self.report is not None and self.report.complete and not self.report.ran:
+        if self.report is not None and self.report.complete and not self.report.ran and not self._prime():
             self.renderer.warm(self.state.settings.technique, budget_ms=30.0)  # idle: likely shader variants
         self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
         self.watcher.refresh_errors()
@@ -431,6 +433,16 @@ class FrameController:
             ui.present()
         self._take_shots(include_ui=True)
         return True
+
+    def _prime(self) -> bool:
+        """An idle frame (still, final, nothing ran): draw a slice of the preview variants the next
+        drag will render (ui/warm.Primer: their first draw JIT-compiles them). True if it rendered."""
+        if not (self._governing and self.input_stopped and not self.governor.refining and not self._partial_ran):
+            return False
+        budget = self.graph_budget_ms()
+        vw, vh = self.layout.view_fb[2:]
+        return self.primer.step(self.governor, self.state.settings, (int(vw), int(vh)),
+                                self.governor.room() if budget is None else budget)
 
     def _sync_size(self) -> None:
         """The render size follows the 3D view region (framebuffer pixels), not the whole window."""
@@ -457,7 +469,7 @@ class FrameController:
         target = self._shown if defer and self._shown is not None else self.governor.settings_for(
             live, self._rung if self._governing else FINAL)
         rung = self._rung if self._governing and not defer else FINAL
-        variant = "" if not rung.changes else "preview " + json.dumps(sorted((k, repr(v)) for k, v in rung.changes.items()))
+        variant = preview_variant(rung)
         inflight = self._inflight
         if inflight is not None and self._governing and self._interacting and not defer \
                 and inflight[0].technique == live.technique and not self._scene_changed(inflight[0]):
