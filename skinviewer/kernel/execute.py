@@ -348,7 +348,9 @@ class ExecuteContext:
         self._apply(prog)
         tex.bind_to_image(0, read=False, write=True)
         if groups[0] > 0 and groups[1] > 0 and x1 > x0 and y1 > y0:
+            t0 = self.graph.shaders.first_draw(prog)  # a driver may finish compiling at the first run too
             cast(moderngl.ComputeShader, prog).run(*groups)
+            self.graph.shaders.first_draw_done(prog, t0)
         self.gl.memory_barrier()  # every bit: the next pass may sample it, draw into it or read it back
         self.draws += 1
 
