@@ -242,3 +242,26 @@ def splash_app(size: tuple[int, int]):
         return create_app(s, size=size, vsync=False, splash=True)
     except WindowUnavailableError as exc:
         pytest.skip(f"cannot open a window: {exc}")
+
+
+def edge_viewer():
+    """A viewer of its own for a module fixture (``yield from edge_viewer()``): d'Eon on the shadow-edge
+    scene at 420 x 300 with 256² shadow/TSM and 512² irradiance maps, the panel hidden, two frames drawn.
+    Its own GL context and shader library. Skips without a display, imgui or a window."""
+    import os
+
+    import pytest
+    if not os.environ.get("DISPLAY"):
+        pytest.skip("no DISPLAY and no Xvfb")
+    pytest.importorskip("imgui_bundle")
+    from skinviewer.ui.app import create_app, destroy_app
+    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "deon",
+                                 "shadow.map_size": 256, "deon.irradiance_size": 512, "deon.tsm_size": 256})
+    try:
+        a = create_app(s, size=(420, 300), vsync=False)
+    except RuntimeError as exc:
+        pytest.skip(f"cannot open a window: {exc}")
+    a.state.set_show_ui(False)
+    a.step(2)
+    yield a
+    destroy_app(a)

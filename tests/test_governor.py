@@ -14,7 +14,7 @@ from skinviewer.engine.calibration import Calibration, Entry, rung_key, signatur
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.techniques.preview import FINAL, ladder
 from skinviewer.ui.governor import Governor
-from tests.helpers import small_settings
+from tests.helpers import edge_viewer, small_settings
 
 
 def fake_calibration(technique: str, s: Settings, seed: int = 0, errors: bool = True) -> Calibration:
@@ -271,22 +271,7 @@ def test_governed_refinement_converges_to_exactly_the_ungoverned_image(renderer)
 # -- in the viewer's frame loop (Xvfb) ----------------------------------------------------------
 @pytest.fixture(scope="module")
 def viewer():
-    import os
-    if not os.environ.get("DISPLAY"):
-        pytest.skip("no DISPLAY and no Xvfb")
-    pytest.importorskip("imgui_bundle")
-    from skinviewer.scene.scenes import scene_overrides
-    from skinviewer.ui.app import create_app, destroy_app
-    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "deon",
-                                 "shadow.map_size": 256, "deon.irradiance_size": 512, "deon.tsm_size": 256})
-    try:
-        a = create_app(s, size=(420, 300), vsync=False)
-    except RuntimeError as exc:
-        pytest.skip(f"cannot open a window: {exc}")
-    a.state.set_show_ui(False)
-    a.step(2)
-    yield a
-    destroy_app(a)
+    yield from edge_viewer()
 
 
 def _still(app, max_frames=200):

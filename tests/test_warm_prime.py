@@ -9,6 +9,7 @@ import pytest
 
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.ui.warm import Primer, preview_variant, rung_frame_settings
+from tests.helpers import edge_viewer
 from tests.test_governor import fake_calibration
 
 
@@ -49,22 +50,7 @@ def test_a_primed_rung_is_rendered_in_the_graph_and_at_the_size_the_drag_uses():
 @pytest.fixture(scope="module")
 def fresh_viewer():
     """A viewer of its own (its own GL context and shader library: no preview variant drawn yet)."""
-    import os
-    if not os.environ.get("DISPLAY"):
-        pytest.skip("no DISPLAY and no Xvfb")
-    pytest.importorskip("imgui_bundle")
-    from skinviewer.scene.scenes import scene_overrides
-    from skinviewer.ui.app import create_app, destroy_app
-    s = with_values(Settings(), {"scene.name": "shadow-edge", **scene_overrides("shadow-edge"), "technique": "deon",
-                                 "shadow.map_size": 256, "deon.irradiance_size": 512, "deon.tsm_size": 256})
-    try:
-        a = create_app(s, size=(420, 300), vsync=False)
-    except RuntimeError as exc:
-        pytest.skip(f"cannot open a window: {exc}")
-    a.state.set_show_ui(False)
-    a.step(2)
-    yield a
-    destroy_app(a)
+    yield from edge_viewer()
 
 
 def _cheapest_fits(s: Settings):
