@@ -10,6 +10,8 @@ Graph (resources in quotes):
     deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
     deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
     deon_gather_surface "deon_gather_surface" mesh, size, seams            (points and areas per texel)
+    deon_gather_weights_i "deon_gather_w{i}_{t}" surface, v_1..v_i, stretch  (a summed step's weights, kept
+                                           across light moves: issue 27)
     deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26; narrow
                                            steps: a direct sum over the surface, eq. 21)
     deon_transmitted    "deon_transmitted" TSM, blurs, weights                (eq. 33)
