@@ -206,3 +206,31 @@ def test_the_shaders_list_the_taps_in_the_twins_order():
                 assert max(abs(i), abs(j)) == ring, (name, line)
                 got.append((i, j, k))
         assert got == blocks, name
+
+
+def test_the_unit_count_is_never_queried_off_the_gl_thread():
+    """The viewer's start-up warm-up reflects in a worker thread: moderngl caches ctx.info at its first
+    read, so a read there cached zeros for the whole context ("too many textures" in every pass after).
+    fragment_units reads ctx.info on the main thread only, else the cached value or 32."""
+    import threading
+
+    from skinviewer.passes.deon import fragment_units
+
+    class Ctx:
+        _info = None
+
+        @property
+        def info(self):
+            raise AssertionError("ctx.info read off the GL thread")
+
+    got = []
+    t = threading.Thread(target=lambda: got.append(fragment_units(Ctx())))
+    t.start()
+    t.join()
+    assert got == [32]
+    ctx = Ctx()
+    ctx._info = {"GL_MAX_TEXTURE_IMAGE_UNITS": 16}
+    t = threading.Thread(target=lambda: got.append(fragment_units(ctx)))
+    t.start()
+    t.join()
+    assert got == [32, 16]

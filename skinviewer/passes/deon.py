@@ -26,6 +26,7 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 from __future__ import annotations
 
 import os
+import threading
 from typing import Any
 
 import numpy as np
@@ -254,8 +255,18 @@ def split_sum(r, step: BlurStep, n: int) -> bool:
     """Whether gathered blur step ``step`` is summed with kept weights (SPLIT_SUM): when its weight
     textures, the sum's five other textures and the tile list fit the context's texture units (29 of
     32 after the graph's dummies: up to reach 3, 19 textures; a wider reach sums in one pass)."""
-    units = int(r.scene.ctx.info.get("GL_MAX_TEXTURE_IMAGE_UNITS", 16)) - 3
+    units = fragment_units(r.scene.ctx) - 3
     return SPLIT_SUM and weight_textures(gather_reach(r, step, n)) + 6 <= units
+
+
+def fragment_units(ctx) -> int:
+    """GL_MAX_TEXTURE_IMAGE_UNITS without querying GL off the GL thread: moderngl caches ctx.info at its
+    first read, and a read from a worker (the viewer's start-up warm-up reflects there) caches zeros for
+    the whole context. Not read yet, off the main thread: 32, what every GL 3.3+ desktop driver has."""
+    info = getattr(ctx, "_info", None)
+    if info is None and threading.current_thread() is threading.main_thread():
+        info = ctx.info
+    return int((info or {}).get("GL_MAX_TEXTURE_IMAGE_UNITS", 32) or 32)
 
 
 class GatherWeightsPass(Pass):
