@@ -22,6 +22,9 @@
 #ifndef LIT_RING
 #define LIT_RING GATHER_BLOCKS  // the rings whose light is taken at its own mean point (the rest: FLAT)
 #endif
+#ifndef KEPT_RINGS
+#define KEPT_RINGS 3  // the rings whose weights are kept (physics/surface_gather.KEPT_RINGS); the rest: LIVE
+#endif
 uniform sampler2D source;     // the blur's input, seam-filled
 uniform sampler2D surface;    // deon_gather_surface.frag: xyz mm, w area mm^2
 uniform sampler2D gutter;     // RG nearest island texel
@@ -29,6 +32,18 @@ uniform sampler2D blocks_e;   // deon_gather_blocks.frag MEAN_THICKNESS: RGB sum
 uniform sampler2D blocks_l;   // xyz the light's mean point, w its spread
 uniform sampler2D blocks_m;   // (LIT_RING < GATHER_BLOCKS) RGB the mean light sum E A / sum A, A the mean thickness
 uniform float u_var;          // variance added, mm^2
+#if GATHER_BLOCKS > KEPT_RINGS  // the rings past KEPT_RINGS: their weights computed here, as deon_gather_weights.frag does
+uniform sampler2D blocks_p;   // (BLOCK_SURFACE) xyz mean point (mm), w area
+uniform sampler2D blocks_z;   // R zone, G spread (mm^2 per axis)
+uniform sampler2D stretch_map;  // RG UV per mm, B shear cosine
+uniform int u_use_stretch;
+uniform vec2 u_uniform_stretch;
+uniform float u_shortcut;     // SHORTCUT_RATIO (passes/deon.py)
+
+float sheet(vec3 d, vec2 o, float c) {  // deon_surface_gather.frag's sheet test
+    return (dot(d, d) < u_shortcut * u_shortcut * (dot(o, o) + 2.0 * c * o.x * o.y)) ? 0.0 : 1.0;
+}
+#endif
 #if WEIGHT_TEXTURES > 0
 uniform sampler2D w0;
 #endif
@@ -121,6 +136,9 @@ out vec4 f_color;
 #define BLOCK(I, J, K) { float w = W[(K) >> 2][(K) & 3]; ivec2 c = clamp(b + ivec2(I, J), ivec2(0), bhi); vec4 e = texelFetch(blocks_e, c, 0); float a = max(w, 0.0); acc.a += a * e.a; wsum += a; vec4 l = texelFetch(blocks_l, c, 0); vec3 dl = l.xyz - x; float vl = var + l.w; lit += ((w >= 0.0) ? (var / vl) * exp(-0.5 * dot(dl, dl) / vl) : 0.0) * e.rgb; }
 // a block past LIT_RING: its light at its area's mean point (the weight of its thickness), one fetch, no exp
 #define FLAT(I, J, K) { float a = max(W[(K) >> 2][(K) & 3], 0.0); acc += a * texelFetch(blocks_m, clamp(b + ivec2(I, J), ivec2(0), bhi), 0); wsum += a; }
+// a block past KEPT_RINGS: its weight w A_b / s computed here (deon_gather_weights.frag's BLOCK), then as
+// BLOCK (LITP 1: its light at its own mean point) or FLAT (LITP 0)
+#define LIVE(I, J, LITP) { ivec2 c = b + ivec2(I, J); float inside = (all(greaterThanEqual(c, ivec2(0))) && all(lessThanEqual(c, bhi))) ? 1.0 : 0.0; c = clamp(c, ivec2(0), bhi); vec4 q = texelFetch(blocks_p, c, 0); vec2 z = texelFetch(blocks_z, c, 0).rg; vec3 d = q.xyz - x; float same = inside * ((abs(z.r - zone) < 0.5 && q.w > 0.0) ? 1.0 : 0.0) * sheet(d, (vec2(2 * c - src) + 0.5) * mm_per_texel, cs); float vb = var + z.g; float a = same * min((var / vb) * exp(-0.5 * dot(d, d) / vb) * q.w / s, 65504.0); if (LITP > 0.5) { vec4 e = texelFetch(blocks_e, c, 0); acc.a += a * e.a; vec4 l = texelFetch(blocks_l, c, 0); vec3 dl = l.xyz - x; float vl = var + l.w; lit += same * (var / vl) * exp(-0.5 * dot(dl, dl) / vl) * e.rgb; } else { acc += a * texelFetch(blocks_m, c, 0); } wsum += a; }
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
@@ -221,6 +239,12 @@ void main() {
     vec4 acc = vec4(0.0);
     float wsum = 0.0;
     vec3 lit = vec3(0.0);
+#if GATHER_BLOCKS > KEPT_RINGS
+    float zone = abs(texelFetch(gutter, src, 0).b);
+    vec3 st = (u_use_stretch != 0) ? texelFetch(stretch_map, src, 0).rgb : vec3(u_uniform_stretch, 0.0);
+    vec2 mm_per_texel = 1.0 / max(st.rg * vec2(textureSize(source, 0)), vec2(1e-30));
+    float cs = clamp(st.b, -0.95, 0.95);
+#endif
     INNER(-2, -2, 0)
     INNER(-1, -2, 1)
     INNER(0, -2, 2)
@@ -258,6 +282,7 @@ void main() {
     INNER(2, 3, 34)
     INNER(3, 3, 35)
 #if GATHER_BLOCKS >= 2
+#if KEPT_RINGS >= 2
 #if LIT_RING >= 2
     BLOCK(-2, -2, 36)
     BLOCK(-1, -2, 37)
@@ -293,8 +318,44 @@ void main() {
     FLAT(1, 2, 50)
     FLAT(2, 2, 51)
 #endif
+#elif LIT_RING >= 2
+    LIVE(-2, -2, 1.0)
+    LIVE(-1, -2, 1.0)
+    LIVE(0, -2, 1.0)
+    LIVE(1, -2, 1.0)
+    LIVE(2, -2, 1.0)
+    LIVE(-2, -1, 1.0)
+    LIVE(2, -1, 1.0)
+    LIVE(-2, 0, 1.0)
+    LIVE(2, 0, 1.0)
+    LIVE(-2, 1, 1.0)
+    LIVE(2, 1, 1.0)
+    LIVE(-2, 2, 1.0)
+    LIVE(-1, 2, 1.0)
+    LIVE(0, 2, 1.0)
+    LIVE(1, 2, 1.0)
+    LIVE(2, 2, 1.0)
+#else
+    LIVE(-2, -2, 0.0)
+    LIVE(-1, -2, 0.0)
+    LIVE(0, -2, 0.0)
+    LIVE(1, -2, 0.0)
+    LIVE(2, -2, 0.0)
+    LIVE(-2, -1, 0.0)
+    LIVE(2, -1, 0.0)
+    LIVE(-2, 0, 0.0)
+    LIVE(2, 0, 0.0)
+    LIVE(-2, 1, 0.0)
+    LIVE(2, 1, 0.0)
+    LIVE(-2, 2, 0.0)
+    LIVE(-1, 2, 0.0)
+    LIVE(0, 2, 0.0)
+    LIVE(1, 2, 0.0)
+    LIVE(2, 2, 0.0)
+#endif
 #endif
 #if GATHER_BLOCKS >= 3
+#if KEPT_RINGS >= 3
 #if LIT_RING >= 3
     BLOCK(-3, -3, 52)
     BLOCK(-2, -3, 53)
@@ -346,8 +407,60 @@ void main() {
     FLAT(2, 3, 74)
     FLAT(3, 3, 75)
 #endif
+#elif LIT_RING >= 3
+    LIVE(-3, -3, 1.0)
+    LIVE(-2, -3, 1.0)
+    LIVE(-1, -3, 1.0)
+    LIVE(0, -3, 1.0)
+    LIVE(1, -3, 1.0)
+    LIVE(2, -3, 1.0)
+    LIVE(3, -3, 1.0)
+    LIVE(-3, -2, 1.0)
+    LIVE(3, -2, 1.0)
+    LIVE(-3, -1, 1.0)
+    LIVE(3, -1, 1.0)
+    LIVE(-3, 0, 1.0)
+    LIVE(3, 0, 1.0)
+    LIVE(-3, 1, 1.0)
+    LIVE(3, 1, 1.0)
+    LIVE(-3, 2, 1.0)
+    LIVE(3, 2, 1.0)
+    LIVE(-3, 3, 1.0)
+    LIVE(-2, 3, 1.0)
+    LIVE(-1, 3, 1.0)
+    LIVE(0, 3, 1.0)
+    LIVE(1, 3, 1.0)
+    LIVE(2, 3, 1.0)
+    LIVE(3, 3, 1.0)
+#else
+    LIVE(-3, -3, 0.0)
+    LIVE(-2, -3, 0.0)
+    LIVE(-1, -3, 0.0)
+    LIVE(0, -3, 0.0)
+    LIVE(1, -3, 0.0)
+    LIVE(2, -3, 0.0)
+    LIVE(3, -3, 0.0)
+    LIVE(-3, -2, 0.0)
+    LIVE(3, -2, 0.0)
+    LIVE(-3, -1, 0.0)
+    LIVE(3, -1, 0.0)
+    LIVE(-3, 0, 0.0)
+    LIVE(3, 0, 0.0)
+    LIVE(-3, 1, 0.0)
+    LIVE(3, 1, 0.0)
+    LIVE(-3, 2, 0.0)
+    LIVE(3, 2, 0.0)
+    LIVE(-3, 3, 0.0)
+    LIVE(-2, 3, 0.0)
+    LIVE(-1, 3, 0.0)
+    LIVE(0, 3, 0.0)
+    LIVE(1, 3, 0.0)
+    LIVE(2, 3, 0.0)
+    LIVE(3, 3, 0.0)
+#endif
 #endif
 #if GATHER_BLOCKS >= 4
+#if KEPT_RINGS >= 4
 #if LIT_RING >= 4
     BLOCK(-4, -4, 76)
     BLOCK(-3, -4, 77)
@@ -415,8 +528,76 @@ void main() {
     FLAT(3, 4, 106)
     FLAT(4, 4, 107)
 #endif
+#elif LIT_RING >= 4
+    LIVE(-4, -4, 1.0)
+    LIVE(-3, -4, 1.0)
+    LIVE(-2, -4, 1.0)
+    LIVE(-1, -4, 1.0)
+    LIVE(0, -4, 1.0)
+    LIVE(1, -4, 1.0)
+    LIVE(2, -4, 1.0)
+    LIVE(3, -4, 1.0)
+    LIVE(4, -4, 1.0)
+    LIVE(-4, -3, 1.0)
+    LIVE(4, -3, 1.0)
+    LIVE(-4, -2, 1.0)
+    LIVE(4, -2, 1.0)
+    LIVE(-4, -1, 1.0)
+    LIVE(4, -1, 1.0)
+    LIVE(-4, 0, 1.0)
+    LIVE(4, 0, 1.0)
+    LIVE(-4, 1, 1.0)
+    LIVE(4, 1, 1.0)
+    LIVE(-4, 2, 1.0)
+    LIVE(4, 2, 1.0)
+    LIVE(-4, 3, 1.0)
+    LIVE(4, 3, 1.0)
+    LIVE(-4, 4, 1.0)
+    LIVE(-3, 4, 1.0)
+    LIVE(-2, 4, 1.0)
+    LIVE(-1, 4, 1.0)
+    LIVE(0, 4, 1.0)
+    LIVE(1, 4, 1.0)
+    LIVE(2, 4, 1.0)
+    LIVE(3, 4, 1.0)
+    LIVE(4, 4, 1.0)
+#else
+    LIVE(-4, -4, 0.0)
+    LIVE(-3, -4, 0.0)
+    LIVE(-2, -4, 0.0)
+    LIVE(-1, -4, 0.0)
+    LIVE(0, -4, 0.0)
+    LIVE(1, -4, 0.0)
+    LIVE(2, -4, 0.0)
+    LIVE(3, -4, 0.0)
+    LIVE(4, -4, 0.0)
+    LIVE(-4, -3, 0.0)
+    LIVE(4, -3, 0.0)
+    LIVE(-4, -2, 0.0)
+    LIVE(4, -2, 0.0)
+    LIVE(-4, -1, 0.0)
+    LIVE(4, -1, 0.0)
+    LIVE(-4, 0, 0.0)
+    LIVE(4, 0, 0.0)
+    LIVE(-4, 1, 0.0)
+    LIVE(4, 1, 0.0)
+    LIVE(-4, 2, 0.0)
+    LIVE(4, 2, 0.0)
+    LIVE(-4, 3, 0.0)
+    LIVE(4, 3, 0.0)
+    LIVE(-4, 4, 0.0)
+    LIVE(-3, 4, 0.0)
+    LIVE(-2, 4, 0.0)
+    LIVE(-1, 4, 0.0)
+    LIVE(0, 4, 0.0)
+    LIVE(1, 4, 0.0)
+    LIVE(2, 4, 0.0)
+    LIVE(3, 4, 0.0)
+    LIVE(4, 4, 0.0)
+#endif
 #endif
 #if GATHER_BLOCKS >= 5
+#if KEPT_RINGS >= 5
 #if LIT_RING >= 5
     BLOCK(-5, -5, 108)
     BLOCK(-4, -5, 109)
@@ -499,6 +680,89 @@ void main() {
     FLAT(3, 5, 145)
     FLAT(4, 5, 146)
     FLAT(5, 5, 147)
+#endif
+#elif LIT_RING >= 5
+    LIVE(-5, -5, 1.0)
+    LIVE(-4, -5, 1.0)
+    LIVE(-3, -5, 1.0)
+    LIVE(-2, -5, 1.0)
+    LIVE(-1, -5, 1.0)
+    LIVE(0, -5, 1.0)
+    LIVE(1, -5, 1.0)
+    LIVE(2, -5, 1.0)
+    LIVE(3, -5, 1.0)
+    LIVE(4, -5, 1.0)
+    LIVE(5, -5, 1.0)
+    LIVE(-5, -4, 1.0)
+    LIVE(5, -4, 1.0)
+    LIVE(-5, -3, 1.0)
+    LIVE(5, -3, 1.0)
+    LIVE(-5, -2, 1.0)
+    LIVE(5, -2, 1.0)
+    LIVE(-5, -1, 1.0)
+    LIVE(5, -1, 1.0)
+    LIVE(-5, 0, 1.0)
+    LIVE(5, 0, 1.0)
+    LIVE(-5, 1, 1.0)
+    LIVE(5, 1, 1.0)
+    LIVE(-5, 2, 1.0)
+    LIVE(5, 2, 1.0)
+    LIVE(-5, 3, 1.0)
+    LIVE(5, 3, 1.0)
+    LIVE(-5, 4, 1.0)
+    LIVE(5, 4, 1.0)
+    LIVE(-5, 5, 1.0)
+    LIVE(-4, 5, 1.0)
+    LIVE(-3, 5, 1.0)
+    LIVE(-2, 5, 1.0)
+    LIVE(-1, 5, 1.0)
+    LIVE(0, 5, 1.0)
+    LIVE(1, 5, 1.0)
+    LIVE(2, 5, 1.0)
+    LIVE(3, 5, 1.0)
+    LIVE(4, 5, 1.0)
+    LIVE(5, 5, 1.0)
+#else
+    LIVE(-5, -5, 0.0)
+    LIVE(-4, -5, 0.0)
+    LIVE(-3, -5, 0.0)
+    LIVE(-2, -5, 0.0)
+    LIVE(-1, -5, 0.0)
+    LIVE(0, -5, 0.0)
+    LIVE(1, -5, 0.0)
+    LIVE(2, -5, 0.0)
+    LIVE(3, -5, 0.0)
+    LIVE(4, -5, 0.0)
+    LIVE(5, -5, 0.0)
+    LIVE(-5, -4, 0.0)
+    LIVE(5, -4, 0.0)
+    LIVE(-5, -3, 0.0)
+    LIVE(5, -3, 0.0)
+    LIVE(-5, -2, 0.0)
+    LIVE(5, -2, 0.0)
+    LIVE(-5, -1, 0.0)
+    LIVE(5, -1, 0.0)
+    LIVE(-5, 0, 0.0)
+    LIVE(5, 0, 0.0)
+    LIVE(-5, 1, 0.0)
+    LIVE(5, 1, 0.0)
+    LIVE(-5, 2, 0.0)
+    LIVE(5, 2, 0.0)
+    LIVE(-5, 3, 0.0)
+    LIVE(5, 3, 0.0)
+    LIVE(-5, 4, 0.0)
+    LIVE(5, 4, 0.0)
+    LIVE(-5, 5, 0.0)
+    LIVE(-4, 5, 0.0)
+    LIVE(-3, 5, 0.0)
+    LIVE(-2, 5, 0.0)
+    LIVE(-1, 5, 0.0)
+    LIVE(0, 5, 0.0)
+    LIVE(1, 5, 0.0)
+    LIVE(2, 5, 0.0)
+    LIVE(3, 5, 0.0)
+    LIVE(4, 5, 0.0)
+    LIVE(5, 5, 0.0)
 #endif
 #endif
     acc.rgb += lit / s;

@@ -16,6 +16,9 @@
 #ifndef GROUP
 #define GROUP 0
 #endif
+#ifndef KEPT_RINGS
+#define KEPT_RINGS 3  // the rings whose weights are kept (the sum computes the rest itself)
+#endif
 #ifndef OUTPUTS
 #define OUTPUTS 8
 #endif
@@ -96,6 +99,7 @@ void main() {
     INNER(2, 3, 34)
     INNER(3, 3, 35)
 #if GATHER_BLOCKS >= 2
+#if KEPT_RINGS >= 2
     BLOCK(-2, -2, 36)
     BLOCK(-1, -2, 37)
     BLOCK(0, -2, 38)
@@ -113,7 +117,9 @@ void main() {
     BLOCK(1, 2, 50)
     BLOCK(2, 2, 51)
 #endif
+#endif
 #if GATHER_BLOCKS >= 3
+#if KEPT_RINGS >= 3
     BLOCK(-3, -3, 52)
     BLOCK(-2, -3, 53)
     BLOCK(-1, -3, 54)
@@ -139,7 +145,9 @@ void main() {
     BLOCK(2, 3, 74)
     BLOCK(3, 3, 75)
 #endif
+#endif
 #if GATHER_BLOCKS >= 4
+#if KEPT_RINGS >= 4
     BLOCK(-4, -4, 76)
     BLOCK(-3, -4, 77)
     BLOCK(-2, -4, 78)
@@ -173,7 +181,9 @@ void main() {
     BLOCK(3, 4, 106)
     BLOCK(4, 4, 107)
 #endif
+#endif
 #if GATHER_BLOCKS >= 5
+#if KEPT_RINGS >= 5
     BLOCK(-5, -5, 108)
     BLOCK(-4, -5, 109)
     BLOCK(-3, -5, 110)
@@ -214,6 +224,7 @@ void main() {
     BLOCK(3, 5, 145)
     BLOCK(4, 5, 146)
     BLOCK(5, 5, 147)
+#endif
 #endif
 #if OUTPUTS > 0
     f_w[0] = vec4(w[0], w[1], w[2], w[3]);

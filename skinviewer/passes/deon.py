@@ -84,7 +84,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
-from skinviewer.physics.surface_gather import SHORTCUT_RATIO, gather_blocks_for, weight_textures
+from skinviewer.physics.surface_gather import KEPT_RINGS, SHORTCUT_RATIO, gather_blocks_for, weight_textures
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.texels import border_frame
 
@@ -251,12 +251,21 @@ def weights_resource(i: int, t: int) -> str:
     return f"deon_gather_w{i}_{t}"
 
 
+def kept_textures(reach: int) -> int:
+    """The weight textures a summed step of ``reach`` keeps: its rings up to KEPT_RINGS (19 at 3); the
+    sum computes the weights of the rings past it itself (deon_gather_sum.frag LIVE)."""
+    return weight_textures(min(reach, KEPT_RINGS))
+
+
 def split_sum(r, step: BlurStep, n: int) -> bool:
     """Whether gathered blur step ``step`` is summed with kept weights (SPLIT_SUM): when its weight
-    textures, the sum's five other textures and the tile list fit the context's texture units (29 of
-    32 after the graph's dummies: up to reach 3, 19 textures; a wider reach sums in one pass)."""
+    textures, the sum's five other textures, the tile list, the live rings' three (blocks' points and
+    zones, stretch) and the flat rings' mean light fit the context's texture units (at most 29: the 29
+    of 32 after the graph's dummies; else the one-pass sum)."""
     units = fragment_units(r.scene.ctx) - 3
-    return SPLIT_SUM and weight_textures(gather_reach(r, step, n)) + 6 <= units
+    reach = gather_reach(r, step, n)
+    need = kept_textures(reach) + 6 + (3 if reach > KEPT_RINGS else 0) + (1 if LIT_RING is not None else 0)
+    return SPLIT_SUM and need <= units
 
 
 def fragment_units(ctx) -> int:
@@ -290,7 +299,7 @@ class GatherWeightsPass(Pass):
         n = map_size(r)
         if not split_sum(r, step, n):
             return
-        reach = gather_reach(r, step, n)
+        reach = min(gather_reach(r, step, n), KEPT_RINGS)  # the rings whose weights are kept
         count = weight_textures(reach)
         tiles = island_tiles(r, "irradiance", {"OPEN_BORDER": 1} if open_border(r) else {})  # the sum's tiles
         r.plan(size=n, step=step, reach=reach, count=count, gutter=gutter_resource(n), tiles=tiles)
@@ -644,7 +653,8 @@ class GaussianBlurPass(Pass):
         r.input(step.source)
         r.input(gutter_resource(n))
         r.input(GATHER_SURFACE)
-        if not split_sum(r, step, n):  # the one-pass sum computes the weights itself
+        # the one-pass sum computes the weights itself; the split one those of the rings past KEPT_RINGS
+        if not split_sum(r, step, n) or gather_reach(r, step, n) > KEPT_RINGS:
             r.input(GATHER_BLOCKS_POINT)
             r.input(GATHER_BLOCKS_ZONE)
             if r.settings.deon.stretch:
@@ -663,14 +673,14 @@ class GaussianBlurPass(Pass):
         reach = gather_reach(r, step, n)
         tiled = {"TILED": tiled_define()} if tiles else {}
         if split_sum(r, step, n):  # the weights kept by GatherWeightsPass; the light summed with them here
-            count = weight_textures(reach)
-            r.plan(weights=[weights_resource(self.i, t) for t in range(count)])
+            count = kept_textures(reach)
+            r.plan(weights=[weights_resource(self.i, t) for t in range(count)], live=reach > KEPT_RINGS)
             for res in r.planned.weights:
                 r.input(res)
             flat = {"LIT_RING": LIT_RING} if LIT_RING is not None and LIT_RING < reach else {}
             r.plan(flat=bool(flat))
             r.program("deon_gather_blocks", MEAN_THICKNESS=1, **({"MEAN_LIGHT": 1} if flat else {}))
-            r.program("deon_gather_sum", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, **tiled, **flat)
+            r.program("deon_gather_sum", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS, **tiled, **flat)
         else:
             r.plan(weights=None)
             r.program("deon_gather_blocks")
@@ -713,6 +723,13 @@ class GaussianBlurPass(Pass):
             ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light, blocks_l=lit)
             if flat:
                 ec.bind(prog, "blocks_m", held[2][0])
+            if plan.live:  # the rings past KEPT_RINGS: their weights computed in the sum
+                ec.textures(prog, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
+                stretch = ec.has_input(STRETCH)
+                sc = ec.scene.mean_uv_per_mm
+                ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
+                if stretch:
+                    ec.bind(prog, "stretch_map", STRETCH)
             for t, res in enumerate(plan.weights):
                 ec.bind(prog, f"w{t}", res)
             ec.set(prog, "u_var", float(step.increment))

@@ -155,6 +155,7 @@ def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: A
 # border, its light taken at PAST_BORDER_SHARE), then each outer block's w A_b / s (A_b its area; -1: not
 # summed: another zone, no area, or across air), with s = |area at x| (1 when 0) so the weights stay near 1.
 # A light move then fetches E, the blocks' light and these weights and sums (deon_gather_sum.frag).
+KEPT_RINGS = 3  # block rings whose weights are kept; a wider reach computes the rest in the sum (deon_gather_sum LIVE)
 WEIGHT_DTYPE = np.float16  # RGBA16F: 2^-11 relative per weight (measured against the ruler: notes/deon_light_move.md)
 HALF_MAX = 65504.0
 NOT_SUMMED = -1.0
@@ -179,8 +180,9 @@ def weight_textures(blocks: int) -> int:
 
 def gather_weights(surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: float, blocks: int = GATHER_BLOCKS,
                    dtype: Any = WEIGHT_DTYPE) -> FloatArray:
-    """deon_gather_weights.frag at every texel: (n, n, 4 * weight_textures(blocks)) in float64, rounded
-    through ``dtype`` (None: not rounded). The same Gaussians, zone and sheet tests as surface_gather."""
+    """deon_gather_weights.frag at every texel: (n, n, 4 * weight_textures(blocks)) in float64, the kept
+    ones (rings <= KEPT_RINGS) rounded through ``dtype`` (None: not rounded); past KEPT_RINGS the weights
+    deon_gather_sum.frag computes itself (LIVE). The same Gaussians, zone and sheet tests as surface_gather."""
     S = np.asarray(surface, np.float64)
     st = np.asarray(stretch, np.float64)
     zone = np.asarray(zone, np.float64)
@@ -223,7 +225,11 @@ def gather_weights(surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: f
         w = (v / vb) * np.exp(-0.5 * (d * d).sum(-1) / vb)
         out[..., k] = np.where(same > 0, np.minimum(w * area / s, HALF_MAX), NOT_SUMMED)
         k += 1
-    return out if dtype is None else out.astype(dtype).astype(np.float64)
+    if dtype is None:
+        return out
+    k = weight_count(min(blocks, KEPT_RINGS))  # the kept ones are stored so; the rest is computed in the sum
+    out[..., :k] = out[..., :k].astype(dtype).astype(np.float64)
+    return out
 
 
 def gather_sum(E: ArrayLike, surface: ArrayLike, weights: ArrayLike, v: float, blocks: int = GATHER_BLOCKS,
