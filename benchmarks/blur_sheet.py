@@ -3,7 +3,10 @@ front / three-quarter / back-lit (camera 60,5 as notes/fidelity.md), each row fu
 deon.half_res_above_texels = 0) | the defaults (after) | |after - before| x 10, with the largest 8-bit
 difference printed per view. For looking at seams, lines and halos, not a measurement.
 
-    python benchmarks/blur_sheet.py --out /tmp/blur_sheet.png [--maps 1024] [--size 640]
+    python benchmarks/blur_sheet.py --out /tmp/blur_sheet.png [--maps 1024] [--size 640] [--before one-pass-sum]
+
+--before one-pass-sum: before = the summed step in one pass (passes.deon.SPLIT_SUM off, deon_surface_gather.frag),
+after = the defaults (its weights kept, deon_gather_sum.frag; issue 27).
 """
 from __future__ import annotations
 
@@ -32,7 +35,9 @@ def main() -> None:
     ap.add_argument("--out", required=True)
     ap.add_argument("--maps", type=int, default=1024)
     ap.add_argument("--size", type=int, default=640)
+    ap.add_argument("--before", choices=("full-size-blurs", "one-pass-sum"), default="full-size-blurs")
     args = ap.parse_args()
+    import skinviewer.passes.deon as deon_passes
     r = Renderer(headless_context())
     rows = []
     for scene, extra in (("head", {}), ("scan", {"scene.mesh": str(SCAN)})):
@@ -43,8 +48,12 @@ def main() -> None:
         for view, (yaw, pitch) in VIEWS.items():
             s = with_values(base, {"camera.yaw": yaw, "camera.pitch": pitch})
             imgs = []
-            for half in (0.0, base.deon.half_res_above_texels):
-                x = with_values(s, {"deon.half_res_above_texels": half})
+            for side in (0, 1):
+                if args.before == "one-pass-sum":
+                    x = s
+                    deon_passes.SPLIT_SUM = bool(side)  # a forced run reflects every pass afresh
+                else:
+                    x = with_values(s, {"deon.half_res_above_texels": (0.0, base.deon.half_res_above_texels)[side]})
                 r.render(x, force=True)
                 imgs.append(np.flipud(np.clip(r.read(x, "image")[..., :3], 0.0, 1.0)))
             a, b = (np.round(i * 255.0) for i in imgs)

@@ -9,6 +9,9 @@
 // mean point and spread (weight E.r + E.g + E.b), so a lit texel beside dark ones (a beam, a shadow
 // edge) stays where it is instead of moving to the block's centre. Past a border (w < 0) a texel adds
 // its area and thickness, and only the light of its part still on the surface (PAST_BORDER_SHARE).
+// MEAN_THICKNESS (deon_gather_sum.frag, whose weights hold the block's area): A is the block's mean
+// thickness (sum a A / sum a) instead of the sum; MEAN_LIGHT adds the mean light (sum a E / sum a, RGB)
+// with it, for the rings the sum takes at the area's mean point (its LIT_RING).
 #include "lib/gather_surface.glsl"
 uniform sampler2D surface;  // deon_gather_surface.frag: xyz mm, w area mm^2
 #ifdef BLOCK_SURFACE
@@ -19,6 +22,9 @@ layout(location = 1) out vec4 f_zone;      // R zone, G spread (mm^2 per axis)
 uniform sampler2D source;   // the blur's input, seam-filled
 layout(location = 0) out vec4 f_light;     // sum E A
 layout(location = 1) out vec4 f_lit;       // xyz the light's mean point, w its spread
+#ifdef MEAN_LIGHT
+layout(location = 2) out vec4 f_mean;      // RGB the mean light, A the mean thickness
+#endif
 #endif
 
 // mean point and per-axis spread of weights w at offsets d (sums: w d, w, w |d|^2) about origin
@@ -38,6 +44,7 @@ void main() {
     bool mixed = false;
 #else
     vec4 light = vec4(0.0);
+    float sum_a = 0.0;
 #endif
     for (int k = 0; k < 4; ++k) {
         ivec2 t = min(2 * b + ivec2(k & 1, k >> 1), hi);
@@ -53,6 +60,7 @@ void main() {
         vec4 e = texelFetch(source, t, 0);
         vec3 rgb = a * ((s.w > 0.0) ? e.rgb : PAST_BORDER_SHARE * e.rgb);
         light += vec4(rgb, a * e.a);
+        sum_a += a;
         float w = rgb.r + rgb.g + rgb.b;
 #endif
         sum += vec4(w * d, w);
@@ -63,7 +71,13 @@ void main() {
     f_position = vec4(m.xyz, sum.w);
     f_zone = vec4(mixed ? 0.0 : zone, m.w, 0.0, 1.0);
 #else
+#ifdef MEAN_THICKNESS
+    light.a /= max(sum_a, 1e-30);
+#endif
     f_light = light;
+#ifdef MEAN_LIGHT
+    f_mean = vec4(light.rgb / max(sum_a, 1e-30), light.a);
+#endif
     f_lit = moments(sum, second, origin);  // no light: any point (its weight multiplies no light)
 #endif
 }

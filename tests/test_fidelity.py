@@ -668,7 +668,8 @@ def _seam_filled(E, seam):
 def test_surface_gather_shader_agrees_with_its_numpy_twin(renderer):
     """deon_gather_blocks.frag + deon_surface_gather.frag against physics/surface_gather.py on the
     default head at 256^2 (seams, folds, lips and ears; the first blur, straight from the
-    irradiance): the island texels agree within 1e-4 of the largest (measured: 2e-6)."""
+    irradiance): the island texels agree within 1e-3 of the largest, the weights being kept as half floats
+    (issue 27; measured 3.8e-4; 2e-6 when the sum computed them itself)."""
     from skinviewer.passes.deon import GATHER_SURFACE, STRETCH
     from skinviewer.passes.texture_space import gutter_resource, seam_resource
     from skinviewer.physics.diffusion import IRRADIANCE, blur_resource
@@ -681,11 +682,13 @@ def test_surface_gather_shader_agrees_with_its_numpy_twin(renderer):
     got = g.read(blur_resource(step.index)).astype(np.float64)
     blocks = gather_blocks_for(np.sqrt(step.increment) / texel)  # the reach follows sigma (issue 27)
     assert blocks < 5
-    want = surface_gather(E, g.read(GATHER_SURFACE), np.abs(gut[..., 2]), g.read(STRETCH), step.increment, blocks)
+    args = (g.read(GATHER_SURFACE), np.abs(gut[..., 2]), g.read(STRETCH), step.increment, blocks)
+    want = surface_gather(E, *args)
     island = (gut[..., 0] == np.arange(n)[None, :]) & (gut[..., 1] == np.arange(n)[:, None])
     assert island.sum() > 0.3 * n * n
     err = np.abs(got - want)[island].max(0) / np.maximum(np.abs(want[island]).max(0), 1e-12)
-    assert np.all(err < 1e-4), err
+    # the weights kept in half floats (issue 27, deon_gather_weights.frag): measured 3.8e-4 of the largest
+    assert np.all(err < 1e-3), err  # the split's own twins: tests/test_surface_gather_split.py
 
 
 def _density_jump_obj(path, ratio: float = 4.0):

@@ -10,6 +10,8 @@ Graph (resources in quotes):
     deon_tsm            "deon_tsm"         key light pose, mesh, tsm size     (§4.2.7)
     deon_irradiance     "deon_irradiance"  lights, mix, albedo, TSM           (eq. 28, 32)
     deon_gather_surface "deon_gather_surface" mesh, size, seams            (points and areas per texel)
+    deon_gather_weights_i "deon_gather_w{i}_{t}" surface, v_1..v_i, stretch  (a summed step's weights, kept
+                                           across light moves: issue 27)
     deon_blur_i         "blur_i"           v_1..v_i, stretch toggle, input    (eq. 24-26; narrow
                                            steps: a direct sum over the surface, eq. 21)
     deon_transmitted    "deon_transmitted" TSM, blurs, weights                (eq. 33)
@@ -23,6 +25,8 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 """
 from __future__ import annotations
 
+import os
+import threading
 from typing import Any
 
 import numpy as np
@@ -83,7 +87,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
-from skinviewer.physics.surface_gather import SHORTCUT_RATIO, gather_blocks_for
+from skinviewer.physics.surface_gather import KEPT_RINGS, SHORTCUT_RATIO, gather_blocks_for, weight_textures
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.texels import border_frame
 
@@ -96,6 +100,15 @@ MAX_THICKNESS_MM = 100.0  # exp(-100^2 / 2 v) = 0 for every skin Gaussian
 GATHER_SURFACE = "deon_gather_surface"  # per texel: point on the surface (mm), area (mm^2)
 GATHER_BLOCKS_POINT = "deon_gather_blocks_point"  # per 2 x 2 block: mean point, area
 GATHER_BLOCKS_ZONE = "deon_gather_blocks_zone"  # per 2 x 2 block: zone, spread
+# issue 27: the summed step split in a weight pass (mesh, size, variance, stretch: kept across light moves)
+# and a light pass that sums with them (deon_gather_weights.frag, deon_gather_sum.frag); False: the
+# one-pass deon_surface_gather.frag, what benchmarks/bench_deon_draws.py --ab-unsplit-sum compares against
+# (SKINVIEWER_SPLIT_SUM=0 in the environment: a whole run, e.g. the bench's ruler, without the split)
+SPLIT_SUM = os.environ.get("SKINVIEWER_SPLIT_SUM", "1") != "0"
+MRT = 8  # targets per draw of the weight pass (GL_MAX_DRAW_BUFFERS >= 8)
+# the block rings whose light the sum takes at the light's own mean point (deon_gather_sum.frag LIT_RING);
+# None: every ring; past it at the area's mean point (one fetch, no exp a block; notes/deon_light_move.md)
+LIT_RING: int | None = int(os.environ["SKINVIEWER_LIT_RING"]) if os.environ.get("SKINVIEWER_LIT_RING") else None
 
 
 def map_size(r) -> int:
@@ -234,6 +247,96 @@ class GatherSurfacePass(Pass):
         blocks = ec.program("deon_gather_blocks", BLOCK_SURFACE=1)
         ec.textures(blocks, surface=ec.output(GATHER_SURFACE), gutter=gutter)
         ec.draw_fullscreen(blocks, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE)
+
+
+def weights_resource(i: int, t: int) -> str:
+    """RGBA texture t of blur step i's summed-step weights (GatherWeightsPass)."""
+    return f"deon_gather_w{i}_{t}"
+
+
+def kept_textures(reach: int) -> int:
+    """The weight textures a summed step of ``reach`` keeps: its rings up to KEPT_RINGS (19 at 3); the
+    sum computes the weights of the rings past it itself (deon_gather_sum.frag LIVE)."""
+    return weight_textures(min(reach, KEPT_RINGS))
+
+
+def split_sum(r, step: BlurStep, n: int) -> bool:
+    """Whether gathered blur step ``step`` is summed with kept weights (SPLIT_SUM): when its weight
+    textures, the sum's five other textures, the tile list, the live rings' three (blocks' points and
+    zones, stretch) and the flat rings' mean light fit the context's texture units (at most 29: the 29
+    of 32 after the graph's dummies; else the one-pass sum)."""
+    units = fragment_units(r.scene.ctx) - 3
+    reach = gather_reach(r, step, n)
+    need = kept_textures(reach) + 6 + (3 if reach > KEPT_RINGS else 0) + (1 if LIT_RING is not None else 0)
+    return SPLIT_SUM and need <= units
+
+
+def fragment_units(ctx) -> int:
+    """GL_MAX_TEXTURE_IMAGE_UNITS without querying GL off the GL thread: moderngl caches ctx.info at its
+    first read, and a read from a worker (the viewer's start-up warm-up reflects there) caches zeros for
+    the whole context. Not read yet, off the main thread: 32, what every GL 3.3+ desktop driver has."""
+    info = getattr(ctx, "_info", None)
+    if info is None and threading.current_thread() is threading.main_thread():
+        info = ctx.info
+    return int((info or {}).get("GL_MAX_TEXTURE_IMAGE_UNITS", 32) or 32)
+
+
+class GatherWeightsPass(Pass):
+    """The light-independent half of summed blur step i (issue 27; shaders/deon_gather_weights.frag,
+    physics/surface_gather.gather_weights): per texel the normalised-to-the-centre weights of the
+    36 inner texels and the outer blocks, packed 4 to an RGBA16F texel. Reads the gather surface, its
+    blocks, the gutter map, the stretch map and the variances up to v_i: a light move keeps it."""
+
+    def __init__(self, i: int):
+        self.i = i
+        self.name = f"deon_gather_weights_{i}"
+
+    tileable = True  # in row bands: each band draws its rows of every group
+
+    def reflect(self, r: Reflection) -> None:
+        if len(r.peeked.deon.gaussians) <= self.i or not gather_used(r):
+            return
+        step = GaussianBlurPass(self.i)._step(r)
+        if not gathered(r, step):
+            return
+        n = map_size(r)
+        if not split_sum(r, step, n):
+            return
+        reach = min(gather_reach(r, step, n), KEPT_RINGS)  # the rings whose weights are kept
+        count = weight_textures(reach)
+        tiles = island_tiles(r, "irradiance", {"OPEN_BORDER": 1} if open_border(r) else {})  # the sum's tiles
+        r.plan(size=n, step=step, reach=reach, count=count, gutter=gutter_resource(n), tiles=tiles)
+        for res in (gutter_resource(n), GATHER_SURFACE, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE):
+            r.input(res)
+        if r.settings.deon.stretch:
+            r.input(STRETCH)
+        tiled = {"TILED": tiled_define()} if tiles else {}
+        for g in range(-(-count // MRT)):
+            r.program("deon_gather_weights", GATHER_BLOCKS=reach, GROUP=g, OUTPUTS=min(MRT, count - MRT * g), **tiled)
+        for t in range(count):
+            r.output(weights_resource(self.i, t), TexSpec((n, n), 4, "f2", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        plan = ec.plan
+        n, count, step = plan.size, plan.count, plan.step
+        stretch = ec.has_input(STRETCH)
+        sc = ec.scene.mean_uv_per_mm
+        tiles = work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if plan.tiles else None
+        for g in range(-(-count // MRT)):
+            outs = [weights_resource(self.i, t) for t in range(MRT * g, min(count, MRT * (g + 1)))]
+            prog = ec.program("deon_gather_weights", GATHER_BLOCKS=plan.reach, GROUP=g, OUTPUTS=len(outs),
+                              **({"TILED": tiled_define()} if plan.tiles else {}))
+            ec.textures(prog, surface=GATHER_SURFACE, gutter=plan.gutter, blocks_p=GATHER_BLOCKS_POINT,
+                        blocks_z=GATHER_BLOCKS_ZONE)
+            ec.uniforms(prog, u_var=float(step.increment), u_use_stretch=stretch, u_uniform_stretch=(sc, sc),
+                        u_shortcut=SHORTCUT_RATIO)
+            if stretch:
+                ec.bind(prog, "stretch_map", STRETCH)
+            if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
+                for res in outs:
+                    ec.clear_unwritten(res, (id(ec.scene), n, DILATE_RING))
+            with ec.band():
+                ec.draw_fullscreen(prog, *outs, tiles=tiles)
 
 
 def border_resource(size: int) -> str:
@@ -555,10 +658,13 @@ class GaussianBlurPass(Pass):
         seam = r.settings.scene.seam_aware
         r.input(step.source)
         r.input(gutter_resource(n))
-        for res in (GATHER_SURFACE, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE):
-            r.input(res)
-        if r.settings.deon.stretch:
-            r.input(STRETCH)
+        r.input(GATHER_SURFACE)
+        # the one-pass sum computes the weights itself; the split one those of the rings past KEPT_RINGS
+        if not split_sum(r, step, n) or gather_reach(r, step, n) > KEPT_RINGS:
+            r.input(GATHER_BLOCKS_POINT)
+            r.input(GATHER_BLOCKS_ZONE)
+            if r.settings.deon.stretch:
+                r.input(STRETCH)
         tiles = r.planned.island_tiles
         h = (n + 1) // 2
         r.plan(blocks=TexSpec((h, h), 4, "f4", filter="nearest"))  # the 2 x 2 block sums, kept across bands
@@ -570,8 +676,21 @@ class GaussianBlurPass(Pass):
                 r.input(IRRADIANCE)
             dilate = {"DILATE": 1} if tiles and step.source != IRRADIANCE else {}  # never with a border
             r.program("seam_fill", **dilate, **border, **({"RIM_SHARE": 1} if border else {}))
-        r.program("deon_gather_blocks")
-        r.program("deon_surface_gather", GATHER_BLOCKS=gather_reach(r, step, n), **({"TILED": tiled_define()} if tiles else {}))
+        reach = gather_reach(r, step, n)
+        tiled = {"TILED": tiled_define()} if tiles else {}
+        if split_sum(r, step, n):  # the weights kept by GatherWeightsPass; the light summed with them here
+            count = kept_textures(reach)
+            r.plan(weights=[weights_resource(self.i, t) for t in range(count)], live=reach > KEPT_RINGS)
+            for res in r.planned.weights:
+                r.input(res)
+            flat = {"LIT_RING": LIT_RING} if LIT_RING is not None and LIT_RING < reach else {}
+            r.plan(flat=bool(flat))
+            r.program("deon_gather_blocks", MEAN_THICKNESS=1, **({"MEAN_LIGHT": 1} if flat else {}))
+            r.program("deon_gather_sum", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS, **tiled, **flat)
+        else:
+            r.plan(weights=None)
+            r.program("deon_gather_blocks")
+            r.program("deon_surface_gather", GATHER_BLOCKS=reach, **tiled)
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec) -> None:
@@ -594,22 +713,42 @@ class GaussianBlurPass(Pass):
                     ec.set(fill, "u_reflect", 0)
                 ec.draw_fullscreen(fill, filled)
             source = filled
-        (light, fresh), (lit, _) = (ec.held(k, plan.blocks) for k in ("light", "lit"))
-        if fresh:
-            prog = ec.program("deon_gather_blocks")
+        split = plan.weights is not None
+        flat = split and plan.flat  # the rings past LIT_RING read the blocks' mean light
+        held = [ec.held(k, plan.blocks) for k in ("light", "lit", "mean")[:3 if flat else 2]]
+        light, lit = held[0][0], held[1][0]
+        if held[0][1]:
+            prog = ec.program("deon_gather_blocks", **({"MEAN_THICKNESS": 1} if split else {}),
+                              **({"MEAN_LIGHT": 1} if flat else {}))
             ec.textures(prog, source=source, surface=GATHER_SURFACE)
-            ec.draw_fullscreen(prog, light, lit)
-        prog = ec.program("deon_surface_gather")  # GATHER_BLOCKS (gather_reach) and TILED as reflect declared
-        ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light,
-                    blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
-        ec.set(prog, "u_var", float(step.increment))
+            ec.draw_fullscreen(prog, *(t for t, _ in held))
         texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
         ec.note(f"summed over the surface: sigma {texels:.2f} mean texels", sigma_texels=float(texels))
-        stretch = ec.has_input(STRETCH)
-        sc = ec.scene.mean_uv_per_mm
-        ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
-        if stretch:
-            ec.bind(prog, "stretch_map", STRETCH)
+        if split:  # the light-dependent half: E, the blocks' light and the kept weights
+            prog = ec.program("deon_gather_sum")  # GATHER_BLOCKS, WEIGHT_TEXTURES and TILED as reflect declared
+            ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light, blocks_l=lit)
+            if flat:
+                ec.bind(prog, "blocks_m", held[2][0])
+            if plan.live:  # the rings past KEPT_RINGS: their weights computed in the sum
+                ec.textures(prog, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
+                stretch = ec.has_input(STRETCH)
+                sc = ec.scene.mean_uv_per_mm
+                ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
+                if stretch:
+                    ec.bind(prog, "stretch_map", STRETCH)
+            for t, res in enumerate(plan.weights):
+                ec.bind(prog, f"w{t}", res)
+            ec.set(prog, "u_var", float(step.increment))
+        else:
+            prog = ec.program("deon_surface_gather")  # GATHER_BLOCKS (gather_reach) and TILED as reflect declared
+            ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light,
+                        blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
+            ec.set(prog, "u_var", float(step.increment))
+            stretch = ec.has_input(STRETCH)
+            sc = ec.scene.mean_uv_per_mm
+            ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
+            if stretch:
+                ec.bind(prog, "stretch_map", STRETCH)
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():

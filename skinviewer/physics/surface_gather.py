@@ -147,3 +147,137 @@ def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: A
             wsum += w * area
     out = np.where(wsum[..., None] > 0, acc / np.maximum(wsum, 1e-300)[..., None], E)
     return out
+
+
+# -- the split sum (issue 27): light-independent weights once, the light's sum on every light move --------
+# The gather's weights depend on the surface, the zones, the stretch, v and the reach only. They are made
+# once (deon_gather_weights.frag) and packed 4 to a texel: the 36 inner texels' w / s (< 0: past a mesh
+# border, its light taken at PAST_BORDER_SHARE), then each outer block's w A_b / s (A_b its area; -1: not
+# summed: another zone, no area, or across air), with s = |area at x| (1 when 0) so the weights stay near 1.
+# A light move then fetches E, the blocks' light and these weights and sums (deon_gather_sum.frag).
+KEPT_RINGS = 3  # block rings whose weights are kept; a wider reach computes the rest in the sum (deon_gather_sum LIVE)
+WEIGHT_DTYPE = np.float16  # RGBA16F: 2^-11 relative per weight (measured against the ruler: notes/deon_light_move.md)
+HALF_MAX = 65504.0
+NOT_SUMMED = -1.0
+
+
+def block_offsets(blocks: int) -> list[tuple[int, int]]:
+    """The outer blocks (i, j) in the order of the split sum's weights: ring by ring from ring 2 (a ring's
+    index does not depend on the reach), each ring's rows j then i; the inner 3 x 3 left out."""
+    return [(i, j) for ring in range(2, blocks + 1) for j in range(-ring, ring + 1) for i in range(-ring, ring + 1)
+            if max(abs(i), abs(j)) == ring]
+
+
+def weight_count(blocks: int) -> int:
+    """Weights per texel: 36 inner texels and the outer blocks."""
+    return 36 + len(block_offsets(blocks))
+
+
+def weight_textures(blocks: int) -> int:
+    """RGBA textures holding weight_count(blocks) weights."""
+    return -(-weight_count(blocks) // 4)
+
+
+def gather_weights(surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: float, blocks: int = GATHER_BLOCKS,
+                   dtype: Any = WEIGHT_DTYPE) -> FloatArray:
+    """deon_gather_weights.frag at every texel: (n, n, 4 * weight_textures(blocks)) in float64, the kept
+    ones (rings <= KEPT_RINGS) rounded through ``dtype`` (None: not rounded); past KEPT_RINGS the weights
+    deon_gather_sum.frag computes itself (LIVE). The same Gaussians, zone and sheet tests as surface_gather."""
+    S = np.asarray(surface, np.float64)
+    st = np.asarray(stretch, np.float64)
+    zone = np.asarray(zone, np.float64)
+    n = S.shape[0]
+    v = max(float(v), 1e-30)
+    x, z0 = S[..., :3], zone
+    s = np.where(np.abs(S[..., 3]) > 0, np.abs(S[..., 3]), 1.0)
+    yy, xx = np.mgrid[0:n, 0:n]
+    by, bx = yy >> 1, xx >> 1
+    mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
+    cs = np.clip(st[..., 2], -0.95, 0.95)
+
+    def sheet(d: FloatArray, ou: NDArray[np.number[Any]], ov: NDArray[np.number[Any]]) -> FloatArray:
+        a, b = ou * mm_u, ov * mm_v
+        return np.where((d * d).sum(-1) < SHORTCUT_RATIO ** 2 * (a * a + b * b + 2 * cs * a * b), 0.0, 1.0)
+
+    out = np.zeros((n, n, 4 * weight_textures(blocks)))
+    k = 0
+    for j in range(-2, 4):
+        for i in range(-2, 4):
+            ty, tx = 2 * by + j, 2 * bx + i
+            inside = (ty >= 0) & (ty < n) & (tx >= 0) & (tx < n)
+            ty, tx = np.clip(ty, 0, n - 1), np.clip(tx, 0, n - 1)
+            t = S[ty, tx]
+            same = np.abs(zone[ty, tx] - z0) < 0.5
+            d = t[..., :3] - x
+            w = inside * same * sheet(d, tx - xx, ty - yy) * np.abs(t[..., 3]) * np.exp(-0.5 * (d * d).sum(-1) / v)
+            out[..., k] = np.where(t[..., 3] < 0, -1.0, 1.0) * np.minimum(w / s, HALF_MAX)
+            k += 1
+    B = gather_blocks(np.zeros(S.shape), S, zone)
+    h = B["area"].shape[0]
+    for i, j in block_offsets(blocks):
+        cy, cx = by + j, bx + i
+        inside = (cy >= 0) & (cy < h) & (cx >= 0) & (cx < h)
+        cy, cx = np.clip(cy, 0, h - 1), np.clip(cx, 0, h - 1)
+        area = B["area"][cy, cx]
+        d = B["point"][cy, cx] - x
+        same = (inside & (np.abs(B["zone"][cy, cx] - z0) < 0.5) & (area > 0)) * sheet(d, 2 * cx - xx + 0.5, 2 * cy - yy + 0.5)
+        vb = v + B["spread"][cy, cx]
+        w = (v / vb) * np.exp(-0.5 * (d * d).sum(-1) / vb)
+        out[..., k] = np.where(same > 0, np.minimum(w * area / s, HALF_MAX), NOT_SUMMED)
+        k += 1
+    if dtype is None:
+        return out
+    k = weight_count(min(blocks, KEPT_RINGS))  # the kept ones are stored so; the rest is computed in the sum
+    out[..., :k] = out[..., :k].astype(dtype).astype(np.float64)
+    return out
+
+
+def gather_sum(E: ArrayLike, surface: ArrayLike, weights: ArrayLike, v: float, blocks: int = GATHER_BLOCKS,
+               lit_ring: int | None = None) -> FloatArray:
+    """deon_gather_sum.frag at every texel (n, n, 4): surface_gather's sum from gather_weights' weights, E
+    and its blocks' light (gather_blocks: the summed light, its mean point and spread; the mean thickness).
+    ``lit_ring`` (LIT_RING; None: every ring): the rings past it take their light at the area's mean point
+    (the weight of their thickness) instead of the light's own, which only surface_gather's rings <= it do."""
+    E = np.asarray(E, np.float64)
+    S = np.asarray(surface, np.float64)
+    W = np.asarray(weights, np.float64)
+    n = E.shape[0]
+    v = max(float(v), 1e-30)
+    L = np.array(E)
+    x = S[..., :3]
+    s = np.where(np.abs(S[..., 3]) > 0, np.abs(S[..., 3]), 1.0)
+    yy, xx = np.mgrid[0:n, 0:n]
+    by, bx = yy >> 1, xx >> 1
+    acc = np.zeros((n, n, 4))
+    wsum = np.zeros((n, n))
+    k = 0
+    for j in range(-2, 4):
+        for i in range(-2, 4):
+            ty, tx = np.clip(2 * by + j, 0, n - 1), np.clip(2 * bx + i, 0, n - 1)
+            w = W[..., k]
+            e = L[ty, tx]
+            acc[..., :3] += np.abs(w)[..., None] * np.where((w > 0)[..., None], e[..., :3], PAST_BORDER_SHARE * e[..., :3])
+            acc[..., 3] += np.abs(w) * e[..., 3]
+            wsum += np.abs(w)
+            k += 1
+    B = gather_blocks(E, S, np.ones(S.shape[:2]))
+    h = B["area"].shape[0]
+    thick = B["light"][..., 3] / np.maximum(B["area"], 1e-30)  # the mean thickness (MEAN_THICKNESS)
+    lit = np.zeros((n, n, 3))
+    for i, j in block_offsets(blocks):
+        cy, cx = np.clip(by + j, 0, h - 1), np.clip(bx + i, 0, h - 1)
+        w = W[..., k]
+        wa = np.maximum(w, 0.0)
+        acc[..., 3] += wa * thick[cy, cx]
+        wsum += wa
+        if lit_ring is not None and max(abs(i), abs(j)) > lit_ring:  # FLAT: the mean light at W
+            acc[..., :3] += wa[..., None] * B["light"][cy, cx, :3] / np.maximum(B["area"][cy, cx], 1e-30)[..., None]
+            k += 1
+            continue
+        dl = B["lit_point"][cy, cx] - x
+        vl = v + B["lit_spread"][cy, cx]
+        wl = (w >= 0) * (v / vl) * np.exp(-0.5 * (dl * dl).sum(-1) / vl)
+        lit += wl[..., None] * B["light"][cy, cx, :3]
+        k += 1
+    acc[..., :3] += lit / s[..., None]
+    return np.where(wsum[..., None] > 0, acc / np.maximum(wsum, 1e-300)[..., None], E)

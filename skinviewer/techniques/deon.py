@@ -8,6 +8,7 @@ from skinviewer.passes.deon import (
     DeonFinalPass,
     DiffuseSumPass,
     GatherSurfacePass,
+    GatherWeightsPass,
     GaussianBlurPass,
     IrradiancePass,
     StretchPass,
@@ -30,6 +31,7 @@ def build():
                TexelSurfacePass("deon_texel_surface", map_size),
                TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass(), GatherSurfacePass(),
                BorderFramePass()]
+            + [GatherWeightsPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
             + [TransmittedPass(), DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])
