@@ -278,3 +278,31 @@ def test_compute_twins_pass_the_reference_compiler(gl_ctx, tmp_path):
                 f.write_text(src)
                 r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
                 assert r.returncode == 0, (name, v, fmt, r.stdout[-600:])
+
+
+def test_gl_info_is_never_read_off_the_gl_thread():
+    """moderngl caches ctx.info at its first read; read from the viewer's warm-up worker it held zeros
+    for the whole context (every pass then failed). kernel/gl.gl_info reads it on the main thread only;
+    off it, before a read, {} and nothing cached: compute_choice keeps the fragment draws there."""
+    import threading
+
+    from skinviewer.kernel import gl
+
+    reads = []
+
+    class Ctx:
+        version_code = 450
+
+        @property
+        def info(self):
+            reads.append(threading.current_thread().name)
+            self._info = {"GL_RENDERER": "some GPU", "GL_MAX_TEXTURE_IMAGE_UNITS": 32}
+            return self._info
+
+    ctx, seen = Ctx(), {}
+    t = threading.Thread(target=lambda: seen.update(info=gl.gl_info(ctx), choice=gl.compute_choice("auto", ctx)))
+    t.start()
+    t.join()
+    assert seen["info"] == {} and seen["choice"][0] is False and reads == [] and not hasattr(ctx, "_info")
+    assert gl.gl_info(ctx)["GL_RENDERER"] == "some GPU" and reads == [threading.current_thread().name]
+    assert gl.compute_choice("auto", ctx)[0] is True

@@ -3,6 +3,7 @@ the headless one made here)."""
 from __future__ import annotations
 
 import os
+import threading
 from typing import Any
 
 import moderngl
@@ -68,9 +69,19 @@ def set_fallback(ctx: moderngl.Context, text: str) -> None:
 SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "swrast", "software rasterizer")
 
 
+def gl_info(ctx: moderngl.Context) -> dict[str, Any]:
+    """ctx.info, never queried off the GL thread: moderngl caches it at its first read, and a read from
+    a worker (the viewer's start-up warm-up reflects passes there) caches zeros and empty names for the
+    whole context. Not read yet, off the main thread: {} (callers take their defaults)."""
+    info = getattr(ctx, "_info", None)
+    if info is None and threading.current_thread() is threading.main_thread():
+        info = ctx.info
+    return dict(info or {})
+
+
 def software_renderer(ctx: moderngl.Context) -> bool:
     """A rasterizer on the CPU (Mesa llvmpipe and the like): lazy, its timer queries untrustworthy."""
-    name = str(ctx.info.get("GL_RENDERER", "")).lower()
+    name = str(gl_info(ctx).get("GL_RENDERER", "")).lower()
     return any(s in name for s in SOFTWARE_RENDERERS)
 
 
@@ -98,8 +109,9 @@ def compute_policy(mode: str, version_code: int, renderer: str) -> tuple[bool, s
 
 
 def compute_choice(mode: str, ctx: moderngl.Context) -> tuple[bool, str]:
-    """compute_policy for a context."""
-    return compute_policy(mode, int(ctx.version_code), str(ctx.info.get("GL_RENDERER", "")))
+    """compute_policy for a context (off the GL thread before the renderer's name is known: as a
+    software rasterizer, the fragment draws; gl_info)."""
+    return compute_policy(mode, int(ctx.version_code), str(gl_info(ctx).get("GL_RENDERER", "software rasterizer")))
 
 
 # image formats of the textures a dispatch may store into: (components, dtype) -> GLSL layout qualifier

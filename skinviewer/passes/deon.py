@@ -26,13 +26,12 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 from __future__ import annotations
 
 import os
-import threading
 from typing import Any
 
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
-from skinviewer.kernel.gl import compute_choice, image_format
+from skinviewer.kernel.gl import compute_choice, gl_info, image_format
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.kernel.shaders import ShaderCompileError
 from skinviewer.passes.common import (
@@ -272,13 +271,9 @@ def split_sum(r, step: BlurStep, n: int) -> bool:
 
 
 def fragment_units(ctx) -> int:
-    """GL_MAX_TEXTURE_IMAGE_UNITS without querying GL off the GL thread: moderngl caches ctx.info at its
-    first read, and a read from a worker (the viewer's start-up warm-up reflects there) caches zeros for
-    the whole context. Not read yet, off the main thread: 32, what every GL 3.3+ desktop driver has."""
-    info = getattr(ctx, "_info", None)
-    if info is None and threading.current_thread() is threading.main_thread():
-        info = ctx.info
-    return int((info or {}).get("GL_MAX_TEXTURE_IMAGE_UNITS", 32) or 32)
+    """GL_MAX_TEXTURE_IMAGE_UNITS, never queried off the GL thread (kernel/gl.gl_info; not read yet there:
+    32, what every GL 3.3+ desktop driver has)."""
+    return int(gl_info(ctx).get("GL_MAX_TEXTURE_IMAGE_UNITS", 32) or 32)
 
 
 class GatherWeightsPass(Pass):
