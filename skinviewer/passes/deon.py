@@ -306,21 +306,24 @@ class GatherWeightsPass(Pass):
         if r.settings.deon.stretch:
             r.input(STRETCH)
         tiled = {"TILED": tiled_define()} if tiles else {}
+        groups = []  # per draw: its outputs and its program's defines (up to MRT targets a draw)
         for g in range(-(-count // MRT)):
-            r.program("deon_gather_weights", GATHER_BLOCKS=reach, GROUP=g, OUTPUTS=min(MRT, count - MRT * g), **tiled)
+            outs = tuple(weights_resource(self.i, t) for t in range(MRT * g, min(count, MRT * (g + 1))))
+            defines = {"GATHER_BLOCKS": reach, "GROUP": g, "OUTPUTS": len(outs), **tiled}
+            r.program("deon_gather_weights", **defines)
+            groups.append((outs, defines))
+        r.plan(groups=tuple(groups))
         for t in range(count):
             r.output(weights_resource(self.i, t), TexSpec((n, n), 4, "f2", filter="nearest"))
 
     def execute(self, ec) -> None:
         plan = ec.plan
-        n, count, step = plan.size, plan.count, plan.step
+        n, step = plan.size, plan.step
         stretch = ec.has_input(STRETCH)
         sc = ec.scene.mean_uv_per_mm
         tiles = work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if plan.tiles else None
-        for g in range(-(-count // MRT)):
-            outs = [weights_resource(self.i, t) for t in range(MRT * g, min(count, MRT * (g + 1)))]
-            prog = ec.program("deon_gather_weights", GATHER_BLOCKS=plan.reach, GROUP=g, OUTPUTS=len(outs),
-                              **({"TILED": tiled_define()} if plan.tiles else {}))
+        for outs, defines in plan.groups:  # as reflect planned them
+            prog = ec.program("deon_gather_weights", **defines)
             ec.textures(prog, surface=GATHER_SURFACE, gutter=plan.gutter, blocks_p=GATHER_BLOCKS_POINT,
                         blocks_z=GATHER_BLOCKS_ZONE)
             ec.uniforms(prog, u_var=float(step.increment), u_use_stretch=stretch, u_uniform_stretch=(sc, sc),
