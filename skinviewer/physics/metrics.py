@@ -246,7 +246,8 @@ def p99_change_bounds(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArr
     makes every pair a tie; here a pixel where a and b agree to ``same`` of its denominator counts once
     for both (b taken equal to a there, which moves b's p99 by at most that much: added to the bounds),
     and only the order statistics around the 99th percentile of those shared pixels can move the
-    difference (``_kth_largest_gap``). Pixels where they differ take a at its worst and b at its best
+    difference (``_kth_largest_gap``); ``same`` x 1, 10, 100, 1000 are tried, each bound is valid, the
+    tightest is kept. Pixels where they differ take a at its worst and b at its best
     truth independently (sound, looser there). With u = 0 and same = 0 both bounds are the plain
     difference. The 99th percentile interpolates two order statistics (numpy's linear rule): the bound
     is the same combination of theirs."""
@@ -267,12 +268,15 @@ def p99_change_bounds(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArr
     ks = (n - i0, n - min(i0 + 1, n - 1))  # the ascending i-th value is the (n - i)-th largest
 
     def gap(ex: FloatArray, ey: FloatArray, apart_c: FloatArray, uc: FloatArray) -> float:
-        d = apart_c > same
-        slack = float(apart_c[~d].max()) if (~d).any() else 0.0
-        c_lo, c_hi = np.maximum(ex[~d] - uc[~d], 0.0), ex[~d] + uc[~d]
-        x_hi, y_lo = ex[d] + uc[d], np.maximum(ey[d] - uc[d], 0.0)
-        g = [_kth_largest_gap(c_lo, c_hi, x_hi, y_lo, k) for k in ks]
-        return (1.0 - f) * g[0] + f * g[1] + slack
+        best = np.inf
+        for t in sorted({same, *(same * 10.0 ** np.arange(1, 4))}):  # each threshold gives a bound: the least
+            d = apart_c > t
+            slack = float(apart_c[~d].max()) if (~d).any() else 0.0
+            c_lo, c_hi = np.maximum(ex[~d] - uc[~d], 0.0), ex[~d] + uc[~d]
+            x_hi, y_lo = ex[d] + uc[d], np.maximum(ey[d] - uc[d], 0.0)
+            g = [_kth_largest_gap(c_lo, c_hi, x_hi, y_lo, k) for k in ks]
+            best = min(best, (1.0 - f) * g[0] + f * g[1] + slack)
+        return best
     hi = np.array([gap(da[:, c], db[:, c], apart[:, c], um[:, c]) for c in range(3)])
     lo = -np.array([gap(db[:, c], da[:, c], apart[:, c], um[:, c]) for c in range(3)])
     return lo, hi
