@@ -13,12 +13,15 @@
 
   truth   d'Eon, open border absorb and reflect, against the ground truth on the scenes with open borders.
   cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
-  samples deon.texel_samples 1 / 4 (issue 30 item 4) x shadow.pcf default / 0 x irr512 / irr1024 against the
-          ground truth on the default head and the scan (--size, default 512; the notes' table: 192).
+  samples deon.texel_samples 1 / 4 (issue 30 item 4) x irr512 / irr1024 against the ground truth on the default
+          head and the scan (--size, default 512; the notes' table: 192), with the default lights and the key light
+          only (--samples-rigs): the truth as computed and converged further where the p99 is decided
+          (reference.refine_at, --samples-rounds), and the paired p99 change (metrics.p99_change_bounds).
   samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4 x PCF default vs 0, at the defaults (1024^2 maps,
           640^2 view), head and scan, sync timing, 3 interleaved repeats.
 
 Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
+     [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2]
 """
 from __future__ import annotations
 
@@ -251,7 +254,12 @@ def tail_pixels(images: dict[str, np.ndarray], lit: np.ndarray, u: np.ndarray, m
     return out
 
 
-def part_samples(size: int, rounds: int = 2) -> None:
+def key_light_only() -> list[dict]:
+    """The default rig less its environment light: what deon.texel_samples acts on, alone."""
+    return [light.model_dump(mode="json") for light in Settings().lights if light.kind != "environment"]
+
+
+def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: str = "default") -> None:
     """deon.texel_samples 1 vs 4 against the ground truth (the judge that shares neither the shadow map nor
     the texel grid), head and scan, irr512 / irr1024: RMS and p99 with the truth's uncertainty, the
     truth as computed and converged further at the pixels that decide a p99 (tail_pixels, then
@@ -261,10 +269,15 @@ def part_samples(size: int, rounds: int = 2) -> None:
     from skinviewer.engine.reference import Surface, load_scene, refine_at
     from skinviewer.engine.renderer import Renderer
     from skinviewer.kernel.gl import headless_context
-    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds
+    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, with_u
     ctx = headless_context()
     r = Renderer(ctx)
-    for name, extra in (("head", {}), ("scan", SCAN_VALUES)):
+    todo = [(n, e, rig) for n, e in (("head", {}), ("scan", SCAN_VALUES)) if n in scenes.split(",")
+            for rig in rigs.split(",")]
+    for name, extra, rig in todo:
+        if rig == "key":  # the key light alone (environment off)
+            extra = {**extra, "lights": key_light_only()}
+            name = f"{name}, key light only"
         s0 = with_values(Settings(), {"render.width": size, "render.height": size, **extra})
         t = time.perf_counter()
         ref = compute_reference(s0)
@@ -290,6 +303,13 @@ def part_samples(size: int, rounds: int = 2) -> None:
                 break
             sel |= grow
             fine = refine_at(s0, ref, sel, surface=surf)
+            for irr in (512, 1024):  # each round's figures: how far the refinement moved them
+                p = [image_error(images[(irr, row)], fine.lit, mask, uncertainty=fine.uncertainty) for row in SAMPLE_ROWS]
+                lo, hi = p99_change_bounds(images[(irr, "4 samples")], images[(irr, "1 sample (default)")], fine.lit,
+                                           fine.uncertainty, mask)
+                print(f"  [{name}: {int(sel.sum())} pixels refined, {time.perf_counter() - t:.0f} s] irr{irr} p99 "
+                      + "; ".join(f"{row} {with_u(e.p99, e.p99_u, 2)}" for row, e in zip(SAMPLE_ROWS, p))
+                      + f"; paired {' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(lo, hi))}", flush=True)
         t_fine = time.perf_counter() - t
         truths["converged at the tail"] = fine
         print(f"## {name} {size}^2: d'Eon against the ground truth ({'cached' if ref.meta.get('cached') else f'{t_truth:.0f} s'}; "
@@ -361,6 +381,9 @@ def main() -> int:
     ap.add_argument("--edge-size", type=int, default=32)
     ap.add_argument("--rim-size", default="512,1024", help="d'Eon's map sizes on the slab (512: its first step is summed)")
     ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
+    ap.add_argument("--samples-scenes", default="head,scan")
+    ap.add_argument("--samples-rigs", default="default,key", help="default: the default lights; key: the key light only")
+    ap.add_argument("--samples-rounds", type=int, default=2, help="refinements of the truth at the p99's pixels")
     a = ap.parse_args()
     parts = set(a.parts.split(","))
     if "edge" in parts:
@@ -380,7 +403,7 @@ def main() -> int:
     if "samples-cost" in parts:
         part_samples_cost()
     if "samples" in parts:
-        part_samples(a.size)
+        part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs)
     return 0
 
 

@@ -217,7 +217,7 @@ def test_the_paired_p99_bounds_hold_for_every_truth_within_the_uncertainty_and_a
     a shared tail whose truth is uncertain leaves the per-figure bounds tied while the paired bounds
     decide; and a difference the uncertainty can reverse is reported as a tie."""
     rng = np.random.default_rng(7)
-    for trial in range(60):
+    for _ in range(60):
         n = int(rng.integers(40, 300))
         ref = rng.uniform(0.05, 1.0, (n, 1, 3))
         a = ref * (1 + rng.normal(0, 0.3, ref.shape))

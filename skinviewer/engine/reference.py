@@ -1294,14 +1294,14 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
     M_all[sel] = M_new
     u_edge = edge_position_uncertainty(surf, mask, x_mm, M_all, h_mm)[sel]
     u_new = u_gci + u_edge + u_env + TRUNCATE_LOSS * np.abs(M_new)
-    out = Reference(ref.lit.copy(), ref.diffuse.copy(), ref.specular.copy(), ref.mask.copy(), dict(ref.meta),
-                    ref.position.copy(), ref.uncertainty.copy())
     rows, cols = np.nonzero(mask)
     r, c = rows[sel], cols[sel]
     diffuse = np.nan_to_num(M_new * post[sel], nan=0.0, posinf=0.0, neginf=0.0)
-    out.lit[r, c] = diffuse + ref.specular[r, c]
-    out.diffuse[r, c] = diffuse
-    out.uncertainty[r, c] = u_new * post[sel]
+    lit, dif, unc = ref.lit.copy(), ref.diffuse.copy(), ref.uncertainty.copy()
+    lit[r, c] = diffuse + ref.specular[r, c]
+    dif[r, c] = diffuse
+    unc[r, c] = u_new * post[sel]
+    out = Reference(lit, dif, ref.specular.copy(), ref.mask.copy(), dict(ref.meta), ref.position.copy(), unc)
     finest = h_mm * 2.0 ** -int(depth.max())
     out.meta["refined"] = {"pixels": int(sel.sum()), "halvings": {str(float(v)): int(d) for v, d in zip(variances, depth)},
                            "seconds": time.perf_counter() - t0,
