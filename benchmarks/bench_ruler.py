@@ -21,7 +21,7 @@
           640^2 view), head and scan, sync timing, 3 interleaved repeats.
 
 Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
-     [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2]
+     [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2] [--samples-max-pixels 1500]
 """
 from __future__ import annotations
 
@@ -259,7 +259,8 @@ def key_light_only() -> list[dict]:
     return [light.model_dump(mode="json") for light in Settings().lights if light.kind != "environment"]
 
 
-def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: str = "default") -> None:
+def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: str = "default",
+                 max_pixels: int = 1500) -> None:
     """deon.texel_samples 1 vs 4 against the ground truth (the judge that shares neither the shadow map nor
     the texel grid), head and scan, irr512 / irr1024: RMS and p99 with the truth's uncertainty, the
     truth as computed and converged further at the pixels that decide a p99 (tail_pixels, then
@@ -299,6 +300,14 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
         surf = Surface(mesh, mm, s0)  # kept between the rounds: the environment's estimates
         for _ in range(rounds):
             grow = tail_pixels({str(k): x for k, x in images.items()}, fine.lit, fine.uncertainty, mask) & ~sel
+            room = max_pixels - int(sel.sum())
+            if int(grow.sum()) > room:  # the largest relative uncertainties first
+                rel = (fine.uncertainty / np.maximum(fine.lit, 0.01 * fine.lit[mask].mean(0))).max(2)
+                keep = np.argsort(-np.where(grow, rel, -1.0).ravel())[:max(room, 0)]
+                print(f"  [{name}: {int(grow.sum())} more pixels decide a p99; the {max(room, 0)} most uncertain refined]")
+                grow = np.zeros_like(grow).ravel()
+                grow[keep] = True
+                grow = grow.reshape(sel.shape)
             if not grow.any():
                 break
             sel |= grow
@@ -384,6 +393,7 @@ def main() -> int:
     ap.add_argument("--samples-scenes", default="head,scan")
     ap.add_argument("--samples-rigs", default="default,key", help="default: the default lights; key: the key light only")
     ap.add_argument("--samples-rounds", type=int, default=2, help="refinements of the truth at the p99's pixels")
+    ap.add_argument("--samples-max-pixels", type=int, default=1500, help="at most this many refined pixels a view")
     a = ap.parse_args()
     parts = set(a.parts.split(","))
     if "edge" in parts:
@@ -403,7 +413,7 @@ def main() -> int:
     if "samples-cost" in parts:
         part_samples_cost()
     if "samples" in parts:
-        part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs)
+        part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs, a.samples_max_pixels)
     return 0
 
 

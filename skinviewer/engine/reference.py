@@ -1179,6 +1179,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
 REFINE_HALVINGS = 3        # the narrowest Gaussians' elements down to h / 8 at the refined pixels
 REFINE_ENV_FACTOR = 8      # the environment's estimates near them with 8 x the rays more (its error / 3)
 REFINE_ENV_OWN_SIGMA = 0.25  # mm: Gaussians narrower than this read the environment at the pixel's own point
+REFINE_BATCH = 128         # pixels refined together (the finest level: ~2-3 M elements a batch on the head)
 REFINE_NOTE = ("at the {n} refined pixels: every Gaussian with elements of {h1:g} mm, the narrow ones down to their "
                "own sigma (at most {hn:g} mm), the value the finest level's; per Gaussian 3 |M(finest) - M(the level "
                "above)| (the GCI as elsewhere, at the pixel itself) + the edge-position and truncation terms; with an "
@@ -1263,31 +1264,39 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
         report("environment", 1.0)
     ea_full = surf.irradiance(a_sel, mix, energy)
     ea_key = surf.irradiance(a_sel, mix, energy, env_level="none") if has_env else ea_full
-    per: list[list[np.ndarray]] = [[] for _ in variances]
-    env_add: dict[int, np.ndarray] = {}  # the own-environment Gaussians' environment part, every level
-    for j in range(int(depth.max()) + 1):
-        report("refine", j / (depth.max() + 1))
-        for group, env_level, ea in ((~own_env, "full", ea_full), (own_env, "none", ea_key)):
-            idx = [i for i in range(len(variances)) if group[i] and depth[i] >= j and np.any(weights[i] > 0)]
-            if not idx:
-                continue
-            diff = build_diffusion(surf, xs, h_mm * 2.0 ** -j, variances[idx], weights[idx], mix, energy,
-                                   check=cancelled, env_level=env_level)
-            for n_i, i in enumerate(idx):
-                per[i].append(diff.exitance(xs, ea, only=[n_i], cancelled=cancelled))
-            if j == 0 and env_level == "none":  # each own-environment Gaussian's mass over the surface at x
-                ones = gt.Diffusion(gt.Elements(diff.el.corners, np.ones_like(diff.el.ea), split=diff.el.split),
-                                    variances[idx], weights[idx], h_mm)
-                t = tri_mm[a_sel["tri"]]
-                L = np.sqrt(np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1))  # ~ its size
+    n_lv = depth + 1
+    per = {i: np.zeros((int(n_lv[i]), n_sel, 3)) for i in range(len(variances)) if np.any(weights[i] > 0)}
+    env_add = {i: np.zeros((n_sel, 3)) for i in per}  # the own-environment Gaussians' environment part
+    if has_env:
+        t = tri_mm[a_sel["tri"]]
+        L = np.sqrt(np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1))  # ~ the triangle's size
+    # the pixels in batches of REFINE_BATCH, nearest together: the finest levels' elements (whole mesh
+    # triangles subdivided to 0.0625 mm) grow with the area the batch spans
+    order = np.lexsort((xs[:, 2], xs[:, 1], xs[:, 0]))
+    batches = np.array_split(order, max(1, math.ceil(n_sel / REFINE_BATCH)))
+    for b_i, pix in enumerate(batches):
+        for j in range(int(depth.max()) + 1):
+            report("refine", (b_i + j / (depth.max() + 1)) / len(batches))
+            for group, env_level, ea in ((~own_env, "full", ea_full), (own_env, "none", ea_key)):
+                idx = [i for i in per if group[i] and depth[i] >= j]
+                if not idx:
+                    continue
+                diff = build_diffusion(surf, xs[pix], h_mm * 2.0 ** -j, variances[idx], weights[idx], mix, energy,
+                                       check=cancelled, env_level=env_level)
                 for n_i, i in enumerate(idx):
-                    mass_w = ones.exitance(xs, np.ones_like(xs), only=[n_i], cancelled=cancelled)  # w_i x mass
-                    env_add[i] = mass_w * own
-                    # K standard errors of the estimate at x, and the environment's change over the
-                    # Gaussian: the interpolation's error at x scaled from the triangle to sigma, quadratically
-                    u_env += mass_w * (ENV_POINT_K * se_own + (sig[i] / np.maximum(L, sig[i]))[:, None] ** 2 * check)
-            del diff
-    levels = {i: np.stack(lv) + env_add.get(i, 0.0) for i, lv in enumerate(per) if lv}
+                    per[i][j, pix] = diff.exitance(xs[pix], ea[pix], only=[n_i], cancelled=cancelled)
+                if j == 0 and env_level == "none":  # each own-environment Gaussian's mass over the surface at x
+                    ones = gt.Diffusion(gt.Elements(diff.el.corners, np.ones_like(diff.el.ea), split=diff.el.split),
+                                        variances[idx], weights[idx], h_mm)
+                    for n_i, i in enumerate(idx):
+                        mass_w = ones.exitance(xs[pix], np.ones((len(pix), 3)), only=[n_i], cancelled=cancelled)
+                        env_add[i][pix] = mass_w * own[pix]  # mass_w: w_i x the Gaussian's mass at x
+                        # K standard errors of the estimate at x, and the environment's change over the
+                        # Gaussian: the interpolation's error at x scaled from the triangle to sigma, quadratically
+                        u_env[pix] += mass_w * (ENV_POINT_K * se_own[pix]
+                                                + (sig[i] / np.maximum(L[pix], sig[i]))[:, None] ** 2 * check[pix])
+                del diff
+    levels = {i: lv + env_add[i] for i, lv in per.items()}
     M_new = sum(lv[-1] for lv in levels.values())
     u_gci = sum(GCI_SAFETY * np.abs(lv[-1] - lv[-2]) for lv in levels.values() if len(lv) > 1)
     M_all = ref.diffuse[mask] / np.maximum(post, 1e-300)
