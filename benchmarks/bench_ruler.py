@@ -17,11 +17,12 @@
           head and the scan (--size, default 512; the notes' table: 192), with the default lights and the key light
           only (--samples-rigs): the truth as computed and converged further where the p99 is decided
           (reference.refine_at, --samples-rounds), and the paired p99 change (metrics.p99_change_bounds).
+  samples-tail  where the p99 tail of d'Eon against the truth is (head and scan, --size; --tail-map DIR: PNG maps).
   samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4 x PCF default vs 0, at the defaults (1024^2 maps,
           640^2 view), head and scan, sync timing, 3 interleaved repeats.
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
-     [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2] [--samples-max-pixels 1500]
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-tail,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
+     [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2] [--samples-max-pixels 1500] [--tail-map DIR]
 """
 from __future__ import annotations
 
@@ -346,6 +347,80 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
     ctx.release()
 
 
+def part_samples_tail(size: int, map_dir: str | None = None) -> None:
+    """Where the p99 tail is (issue 30 item 4): the worst 1 % of each channel of d'Eon (irr512 / irr1024,
+    1 sample) against the truth on the head and the scan, the default rig: the share in the key light's
+    cast shadow, facing away from it, darker than 10 % of the mean, near a shadow boundary or the
+    silhouette, d'Eon brighter there, changed by deon.texel_samples 4, and the truth's relative
+    uncertainty there; ``map_dir``: a PNG per scene (the truth, then per channel the worst 1 % in red
+    where d'Eon is brighter, yellow where darker, the key light's shadow boundary in blue)."""
+    from PIL import Image
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+
+    from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.reference import Surface, camera_hits, load_scene
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
+    from skinviewer.physics.metrics import display_encode, rel_error_map
+    ctx = headless_context()
+    r = Renderer(ctx)
+    for name, extra in (("head", {}), ("scan", SCAN_VALUES)):
+        s0 = with_values(Settings(), {"render.width": size, "render.height": size, **extra})
+        ref = compute_reference(s0)
+        mesh, mm = load_scene(s0)
+        surf = Surface(mesh, mm, s0)
+        mask, tri, bary, _ = camera_hits(surf, s0)
+        a = surf.attributes(tri, bary)
+        U, vis = surf.irradiance_parts(a, s0.deon.mix, s0.deon.energy_conservation)
+        faces = np.zeros(mask.shape, bool)
+        lit = np.zeros(mask.shape, bool)
+        faces[mask], lit[mask] = U[0].sum(1) > 0, vis[0]
+        shadow = faces & ~lit
+        edge = (binary_dilation(shadow) & lit & faces) | (binary_dilation(lit & faces) & shadow)
+        near_edge, near_sil = distance_transform_edt(~edge) <= 3, distance_transform_edt(mask) <= 3
+        print(f"## {name} {size}^2, the default rig: the worst 1 % of d'Eon's pixels against the truth (R / G / B)")
+        panels = [(display_encode(ref.lit, s0.render.exposure) * 255).astype(np.uint8)]
+        for irr in (512, 1024):
+            imgs, m = {}, ref.mask.copy()
+            for k in (1, 4):
+                s = with_values(s0, {"technique": "deon", "deon.irradiance_size": irr, "deon.texel_samples": k})
+                r.render_settled(s)
+                imgs[k], cov = linear_image(r, s)
+                m &= compare_mask(ref.mask, cov)
+            e = rel_error_map(imgs[1], ref.lit, m)
+            den = np.maximum(ref.lit, np.maximum(0.01 * ref.lit[m].mean(0), 1e-12))
+            moved = np.abs(imgs[4] - imgs[1]) / den > 0.01
+            rows: dict[str, list[float]] = {}
+            for c in range(3):
+                w = m & (e[..., c] >= np.percentile(e[..., c][m], 99))
+                for label, where in (("in the key light's cast shadow", shadow), ("facing away from it", ~faces),
+                                     ("darker than 10 % of the mean", ref.lit[..., c] < 0.1 * ref.lit[m][:, c].mean()),
+                                     ("within 3 px of its shadow boundary", near_edge),
+                                     ("within 3 px of the silhouette", near_sil),
+                                     ("d'Eon brighter than the truth", imgs[1][..., c] > ref.lit[..., c]),
+                                     ("changed > 1 point by 4 samples", moved[..., c])):
+                    rows.setdefault(label, []).append(100 * float(where[w].mean()))
+                    rows.setdefault(label + " (all pixels)", []).append(100 * float(where[m].mean()))
+                rows.setdefault("the truth's u, median % of the pixel", []).append(
+                    100 * float(np.median((ref.uncertainty / den)[..., c][w])))
+                if map_dir and irr == 1024:
+                    pan = (0.5 * display_encode(ref.lit, s0.render.exposure) * 255).astype(np.uint8)
+                    pan[edge & m] = (0, 80, 255)
+                    pan[w & (imgs[1][..., c] > ref.lit[..., c])] = (255, 0, 0)
+                    pan[w & (imgs[1][..., c] <= ref.lit[..., c])] = (255, 255, 0)
+                    panels.append(pan)
+            print(f"  irr{irr}, 1 sample: " + "; ".join(f"{k} {' / '.join(f'{v:.0f}' for v in vals)} %"
+                                                         for k, vals in rows.items()), flush=True)
+        if map_dir:
+            Path(map_dir).mkdir(parents=True, exist_ok=True)
+            out = Path(map_dir) / f"tail_{name}_{size}.png"
+            Image.fromarray(np.concatenate(panels, 1)).save(out)
+            print(f"  map: {out} (the truth; the worst 1 % of R, G, B at irr1024: red d'Eon brighter, yellow "
+                  f"darker; blue the key light's shadow boundary)")
+    r.release()
+    ctx.release()
+
+
 SAMPLE_CONFIGS = {"1 sample, PCF default": {}, "4 samples": {"deon.texel_samples": 4},
                   "1 sample, PCF 0": {"shadow.pcf": 0}, "4 samples, PCF 0": {"deon.texel_samples": 4, "shadow.pcf": 0}}
 
@@ -393,6 +468,7 @@ def main() -> int:
     ap.add_argument("--samples-scenes", default="head,scan")
     ap.add_argument("--samples-rigs", default="default,key", help="default: the default lights; key: the key light only")
     ap.add_argument("--samples-rounds", type=int, default=2, help="refinements of the truth at the p99's pixels")
+    ap.add_argument("--tail-map", default=None, help="samples-tail: a folder for the PNG maps")
     ap.add_argument("--samples-max-pixels", type=int, default=1500, help="at most this many refined pixels a view")
     a = ap.parse_args()
     parts = set(a.parts.split(","))
@@ -412,6 +488,8 @@ def main() -> int:
         part_head(a.size)
     if "samples-cost" in parts:
         part_samples_cost()
+    if "samples-tail" in parts:
+        part_samples_tail(a.size, a.tail_map)
     if "samples" in parts:
         part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs, a.samples_max_pixels)
     return 0
