@@ -13,12 +13,16 @@
 
   truth   d'Eon, open border absorb and reflect, against the ground truth on the scenes with open borders.
   cost    what deon.open_border = reflect costs against absorb (shadow-edge, sync timing, interleaved).
-  samples deon.texel_samples 1 / 4 (issue 30 item 4) x shadow.pcf default / 0 x irr512 / irr1024 against the
-          ground truth on the default head and the scan (--size, default 512; the notes' table: 192).
+  samples deon.texel_samples 1 / 4 (issue 30 item 4) x irr512 / irr1024 against the ground truth on the default
+          head and the scan (--size, default 512; the notes' table: 192), with the default lights and the key light
+          only (--samples-rigs): the truth as computed and converged further where the p99 is decided
+          (reference.refine_at, --samples-rounds), and the paired p99 change (metrics.p99_change_bounds).
+  samples-tail  where the p99 tail of d'Eon against the truth is (head and scan, --size; --tail-map DIR: PNG maps).
   samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4 x PCF default vs 0, at the defaults (1024^2 maps,
           640^2 view), head and scan, sync timing, 3 interleaved repeats.
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-tail,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
+     [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2] [--samples-max-pixels 1500] [--tail-map DIR]
 """
 from __future__ import annotations
 
@@ -232,32 +236,187 @@ SCAN = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
 SCAN_VALUES = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}
 
 
-def part_samples(size: int) -> None:
-    """deon.texel_samples against the ground truth (the judge that shares neither the shadow map nor the
-    texel grid): head and scan, irr512 / irr1024, the default PCF and PCF off."""
+SAMPLE_ROWS = {"1 sample (default)": {}, "4 samples": {"deon.texel_samples": 4}}
+
+
+def tail_pixels(images: dict[str, np.ndarray], lit: np.ndarray, u: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The pixels that can decide a p99 (issue 30 item 4): those whose error interval |x - r| -/+ u
+    (relative, as p99_rel) reaches into [p99 - its uncertainty, p99 + its uncertainty] of some image
+    and channel; a pixel wholly above or below every such band cannot move any p99 or its bound."""
+    from skinviewer.physics.metrics import figure_uncertainty, rel_error_map
+    den = np.maximum(lit, np.maximum(0.01 * lit[mask].mean(0), 1e-12))
+    ur = u / den
+    out = np.zeros(mask.shape, bool)
+    for img in images.values():
+        e = rel_error_map(img, lit, mask)
+        _, pu, _ = figure_uncertainty(img, lit, u, mask)
+        p = np.percentile(e[mask], 99, axis=0)
+        out |= (mask[..., None] & (e + ur >= p - pu) & (np.maximum(e - ur, 0.0) <= p + pu)).any(2)
+    return out
+
+
+def key_light_only() -> list[dict]:
+    """The default rig less its environment light: what deon.texel_samples acts on, alone."""
+    return [light.model_dump(mode="json") for light in Settings().lights if light.kind != "environment"]
+
+
+def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: str = "default",
+                 max_pixels: int = 1500) -> None:
+    """deon.texel_samples 1 vs 4 against the ground truth (the judge that shares neither the shadow map nor
+    the texel grid), head and scan, irr512 / irr1024: RMS and p99 with the truth's uncertainty, the
+    truth as computed and converged further at the pixels that decide a p99 (tail_pixels, then
+    reference.refine_at, ``rounds`` times: the band moves as the uncertainty shrinks), and the paired
+    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth)."""
     from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.reference import Surface, load_scene, refine_at
     from skinviewer.engine.renderer import Renderer
     from skinviewer.kernel.gl import headless_context
-    from skinviewer.physics.metrics import image_error
+    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, with_u
+    ctx = headless_context()
+    r = Renderer(ctx)
+    todo = [(n, e, rig) for n, e in (("head", {}), ("scan", SCAN_VALUES)) if n in scenes.split(",")
+            for rig in rigs.split(",")]
+    for name, extra, rig in todo:
+        if rig == "key":  # the key light alone (environment off)
+            extra = {**extra, "lights": key_light_only()}
+            name = f"{name}, key light only"
+        s0 = with_values(Settings(), {"render.width": size, "render.height": size, **extra})
+        t = time.perf_counter()
+        ref = compute_reference(s0)
+        t_truth = time.perf_counter() - t
+        images: dict[tuple[int, str], np.ndarray] = {}
+        mask = ref.mask.copy()
+        for irr in (512, 1024):
+            for row, v in SAMPLE_ROWS.items():
+                s = with_values(s0, {"technique": "deon", "deon.irradiance_size": irr, **v})
+                r.render_settled(s)
+                img, cov = linear_image(r, s)
+                images[(irr, row)] = img
+                mask &= compare_mask(ref.mask, cov)
+        truths = {"as computed": ref}
+        sel = np.zeros_like(mask)
+        t = time.perf_counter()
+        fine = ref
+        mesh, mm = load_scene(s0)
+        surf = Surface(mesh, mm, s0)  # kept between the rounds: the environment's estimates
+        for _ in range(rounds):
+            grow = tail_pixels({str(k): x for k, x in images.items()}, fine.lit, fine.uncertainty, mask) & ~sel
+            room = max_pixels - int(sel.sum())
+            if int(grow.sum()) > room:  # the largest relative uncertainties first
+                rel = (fine.uncertainty / np.maximum(fine.lit, 0.01 * fine.lit[mask].mean(0))).max(2)
+                keep = np.argsort(-np.where(grow, rel, -1.0).ravel())[:max(room, 0)]
+                print(f"  [{name}: {int(grow.sum())} more pixels decide a p99; the {max(room, 0)} most uncertain refined]")
+                grow = np.zeros_like(grow).ravel()
+                grow[keep] = True
+                grow = grow.reshape(sel.shape)
+            if not grow.any():
+                break
+            sel |= grow
+            fine = refine_at(s0, ref, sel, surface=surf)
+            for irr in (512, 1024):  # each round's figures: how far the refinement moved them
+                p = [image_error(images[(irr, row)], fine.lit, mask, uncertainty=fine.uncertainty) for row in SAMPLE_ROWS]
+                lo, hi = p99_change_bounds(images[(irr, "4 samples")], images[(irr, "1 sample (default)")], fine.lit,
+                                           fine.uncertainty, mask)
+                print(f"  [{name}: {int(sel.sum())} pixels refined, {time.perf_counter() - t:.0f} s] irr{irr} p99 "
+                      + "; ".join(f"{row} {with_u(e.p99, e.p99_u, 2)}" for row, e in zip(SAMPLE_ROWS, p))
+                      + f"; paired {' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(lo, hi))}", flush=True)
+        t_fine = time.perf_counter() - t
+        truths["converged at the tail"] = fine
+        print(f"## {name} {size}^2: d'Eon against the ground truth ({'cached' if ref.meta.get('cached') else f'{t_truth:.0f} s'}; "
+              f"{int(mask.sum())} pixels compared, {int(sel.sum())} refined in {t_fine:.0f} s)", flush=True)
+        for label, tr in truths.items():
+            print(f"  truth {label}:")
+            for irr in (512, 1024):
+                errs = {}
+                for row in SAMPLE_ROWS:
+                    e = image_error(images[(irr, row)], tr.lit, mask, exposure=s0.render.exposure,
+                                    uncertainty=tr.uncertainty)
+                    errs[row] = e
+                    print(f"    irr{irr} {row:<20} {e.summary()}", flush=True)
+                a, b = images[(irr, "4 samples")], images[(irr, "1 sample (default)")]
+                lo, hi = p99_change_bounds(a, b, tr.lit, tr.uncertainty, mask)
+                plain = np.array(errs["4 samples"].p99) - np.array(errs["1 sample (default)"].p99)
+                verdict = ["falls" if h_ < 0 else "rises" if l_ > 0 else "tie" for l_, h_ in zip(lo, hi)]
+                better = certainly_better(a, b, tr.lit, tr.uncertainty, mask)
+                worse = certainly_better(b, a, tr.lit, tr.uncertainty, mask)
+                rms = ["lower" if x else "higher" if y else "tie" for x, y in zip(better, worse)]
+                print(f"    irr{irr} 4 vs 1 sample: p99 change {' / '.join(f'{100 * x:+.2f}' for x in plain)} points, "
+                      f"paired bounds {' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(lo, hi))}: "
+                      f"{' / '.join(verdict)}; RMS (pairwise) {' / '.join(rms)}", flush=True)
+    r.release()
+    ctx.release()
+
+
+def part_samples_tail(size: int, map_dir: str | None = None) -> None:
+    """Where the p99 tail is (issue 30 item 4): the worst 1 % of each channel of d'Eon (irr512 / irr1024,
+    1 sample) against the truth on the head and the scan, the default rig: the share in the key light's
+    cast shadow, facing away from it, darker than 10 % of the mean, near a shadow boundary or the
+    silhouette, d'Eon brighter there, changed by deon.texel_samples 4, and the truth's relative
+    uncertainty there; ``map_dir``: a PNG per scene (the truth, then per channel the worst 1 % in red
+    where d'Eon is brighter, yellow where darker, the key light's shadow boundary in blue)."""
+    from PIL import Image
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+
+    from skinviewer.engine.bench import compare_mask, linear_image
+    from skinviewer.engine.reference import Surface, camera_hits, load_scene
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.kernel.gl import headless_context
+    from skinviewer.physics.metrics import display_encode, rel_error_map
     ctx = headless_context()
     r = Renderer(ctx)
     for name, extra in (("head", {}), ("scan", SCAN_VALUES)):
         s0 = with_values(Settings(), {"render.width": size, "render.height": size, **extra})
         ref = compute_reference(s0)
-        print(f"## {name} {size}^2: d'Eon against the ground truth", flush=True)
+        mesh, mm = load_scene(s0)
+        surf = Surface(mesh, mm, s0)
+        mask, tri, bary, _ = camera_hits(surf, s0)
+        a = surf.attributes(tri, bary)
+        U, vis = surf.irradiance_parts(a, s0.deon.mix, s0.deon.energy_conservation)
+        faces = np.zeros(mask.shape, bool)
+        lit = np.zeros(mask.shape, bool)
+        faces[mask], lit[mask] = U[0].sum(1) > 0, vis[0]
+        shadow = faces & ~lit
+        edge = (binary_dilation(shadow) & lit & faces) | (binary_dilation(lit & faces) & shadow)
+        near_edge, near_sil = distance_transform_edt(~edge) <= 3, distance_transform_edt(mask) <= 3
+        print(f"## {name} {size}^2, the default rig: the worst 1 % of d'Eon's pixels against the truth (R / G / B)")
+        panels = [(display_encode(ref.lit, s0.render.exposure) * 255).astype(np.uint8)]
         for irr in (512, 1024):
-            for pcf in (None, 0):
-                for k in (1, 4):
-                    v = {"technique": "deon", "deon.irradiance_size": irr, "deon.texel_samples": k}
-                    if pcf is not None:
-                        v["shadow.pcf"] = pcf
-                    s = with_values(s0, v)
-                    r.render_settled(s)
-                    img, cov = linear_image(r, s)
-                    e = image_error(img, ref.lit, compare_mask(ref.mask, cov), exposure=s.render.exposure,
-                                    uncertainty=ref.uncertainty)
-                    print(f"  irr{irr} pcf {'default' if pcf is None else pcf} texel_samples {k}: {e.summary()}",
-                          flush=True)
+            imgs, m = {}, ref.mask.copy()
+            for k in (1, 4):
+                s = with_values(s0, {"technique": "deon", "deon.irradiance_size": irr, "deon.texel_samples": k})
+                r.render_settled(s)
+                imgs[k], cov = linear_image(r, s)
+                m &= compare_mask(ref.mask, cov)
+            e = rel_error_map(imgs[1], ref.lit, m)
+            den = np.maximum(ref.lit, np.maximum(0.01 * ref.lit[m].mean(0), 1e-12))
+            moved = np.abs(imgs[4] - imgs[1]) / den > 0.01
+            rows: dict[str, list[float]] = {}
+            for c in range(3):
+                w = m & (e[..., c] >= np.percentile(e[..., c][m], 99))
+                for label, where in (("in the key light's cast shadow", shadow), ("facing away from it", ~faces),
+                                     ("darker than 10 % of the mean", ref.lit[..., c] < 0.1 * ref.lit[m][:, c].mean()),
+                                     ("within 3 px of its shadow boundary", near_edge),
+                                     ("within 3 px of the silhouette", near_sil),
+                                     ("d'Eon brighter than the truth", imgs[1][..., c] > ref.lit[..., c]),
+                                     ("changed > 1 point by 4 samples", moved[..., c])):
+                    rows.setdefault(label, []).append(100 * float(where[w].mean()))
+                    rows.setdefault(label + " (all pixels)", []).append(100 * float(where[m].mean()))
+                rows.setdefault("the truth's u, median % of the pixel", []).append(
+                    100 * float(np.median((ref.uncertainty / den)[..., c][w])))
+                if map_dir and irr == 1024:
+                    pan = (0.5 * display_encode(ref.lit, s0.render.exposure) * 255).astype(np.uint8)
+                    pan[edge & m] = (0, 80, 255)
+                    pan[w & (imgs[1][..., c] > ref.lit[..., c])] = (255, 0, 0)
+                    pan[w & (imgs[1][..., c] <= ref.lit[..., c])] = (255, 255, 0)
+                    panels.append(pan)
+            print(f"  irr{irr}, 1 sample: " + "; ".join(f"{k} {' / '.join(f'{v:.0f}' for v in vals)} %"
+                                                         for k, vals in rows.items()), flush=True)
+        if map_dir:
+            Path(map_dir).mkdir(parents=True, exist_ok=True)
+            out = Path(map_dir) / f"tail_{name}_{size}.png"
+            Image.fromarray(np.concatenate(panels, 1)).save(out)
+            print(f"  map: {out} (the truth; the worst 1 % of R, G, B at irr1024: red d'Eon brighter, yellow "
+                  f"darker; blue the key light's shadow boundary)")
     r.release()
     ctx.release()
 
@@ -306,6 +465,11 @@ def main() -> int:
     ap.add_argument("--edge-size", type=int, default=32)
     ap.add_argument("--rim-size", default="512,1024", help="d'Eon's map sizes on the slab (512: its first step is summed)")
     ap.add_argument("--rim-modes", default="absorb,reflect", help="deon.open_border values to compare")
+    ap.add_argument("--samples-scenes", default="head,scan")
+    ap.add_argument("--samples-rigs", default="default,key", help="default: the default lights; key: the key light only")
+    ap.add_argument("--samples-rounds", type=int, default=2, help="refinements of the truth at the p99's pixels")
+    ap.add_argument("--tail-map", default=None, help="samples-tail: a folder for the PNG maps")
+    ap.add_argument("--samples-max-pixels", type=int, default=1500, help="at most this many refined pixels a view")
     a = ap.parse_args()
     parts = set(a.parts.split(","))
     if "edge" in parts:
@@ -324,8 +488,10 @@ def main() -> int:
         part_head(a.size)
     if "samples-cost" in parts:
         part_samples_cost()
+    if "samples-tail" in parts:
+        part_samples_tail(a.size, a.tail_map)
     if "samples" in parts:
-        part_samples(a.size)
+        part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs, a.samples_max_pixels)
     return 0
 
 

@@ -209,3 +209,51 @@ def test_the_pairwise_order_holds_for_every_truth_within_the_uncertainty_and_onl
         got = M.certainly_better(a, b, ref, u)
         worst = ref - u * np.sign(a - b)  # the truth that favours b most
         assert np.array_equal(got, M.rel_rms(a, worst) < M.rel_rms(b, worst))
+
+
+def test_the_paired_p99_bounds_hold_for_every_truth_within_the_uncertainty_and_are_exact_without_one():
+    """p99_change_bounds (issue 30 item 4): p99(a) - p99(b) against one truth r + d, |d| <= u, lies
+    within the bounds for sampled and extreme truths; with u = 0 both bounds are the plain difference;
+    a shared tail whose truth is uncertain leaves the per-figure bounds tied while the paired bounds
+    decide; and a difference the uncertainty can reverse is reported as a tie."""
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        n = int(rng.integers(40, 300))
+        ref = rng.uniform(0.05, 1.0, (n, 1, 3))
+        a = ref * (1 + rng.normal(0, 0.3, ref.shape))
+        b = a.copy()
+        ch = rng.random(n) < rng.uniform(0.0, 0.5)
+        b[ch] = ref[ch] * (1 + rng.normal(0, 0.3, (int(ch.sum()), 1, 3)))
+        u = ref * rng.uniform(0, 0.1, ref.shape) * (rng.random(ref.shape) < 0.5)
+        lo, hi = M.p99_change_bounds(a, b, ref, u, same=0.0)
+        den = np.maximum(ref, 0.01 * ref.mean((0, 1)))
+        for _ in range(30):
+            r2 = ref + u * rng.choice([-1.0, 0.0, 1.0, float(rng.uniform(-1, 1))], size=ref.shape)
+            diff = (np.percentile((np.abs(a - r2) / den).reshape(-1, 3), 99, 0)
+                    - np.percentile((np.abs(b - r2) / den).reshape(-1, 3), 99, 0))
+            assert np.all(diff <= hi + 1e-12) and np.all(diff >= lo - 1e-12)
+        lo0, hi0 = M.p99_change_bounds(a, b, ref, 0 * u, same=0.0)
+        exact = M.p99_rel(a, ref) - M.p99_rel(b, ref)
+        np.testing.assert_allclose(lo0, exact, atol=1e-12)
+        np.testing.assert_allclose(hi0, exact, atol=1e-12)
+    # a shared tail (the top 3 % identical in a and b, its truth uncertain by 20 %) and b 1 % worse
+    # everywhere below it: the figures' own bounds leave a +-20-point tie, the paired bounds hold the
+    # difference to within ``same`` (what the images share cancels)
+    ref = np.ones((50, 40, 3))
+    err = np.linspace(0.0, 0.1, ref.size // 3).reshape(50, 40)[..., None] * np.ones(3)
+    tail = err >= np.quantile(err, 0.97)
+    err = np.where(tail, 0.6, err)
+    a = ref * (1 + err)
+    b = ref * (1 + np.where(tail, err, err + 0.01))
+    b[tail] = a[tail]
+    u = np.where(tail, 0.2, 0.0) * ref
+    ea, eb = M.image_error(a, ref, uncertainty=u), M.image_error(b, ref, uncertainty=u)
+    assert all(M.tied(x, ux, y, uy) for x, ux, y, uy in zip(ea.p99, ea.p99_u, eb.p99, eb.p99_u))
+    lo, hi = M.p99_change_bounds(a, b, ref, u)
+    assert np.all(hi <= 1e-3 + 1e-12) and np.all(lo >= -1e-3 - 1e-12)
+    assert all(pu > 0.15 for pu in ea.p99_u)
+    # the same pair where the tail differs by less than its truth's uncertainty: a tie, never ranked
+    b2 = b.copy()
+    b2[tail] = ref[tail] * 1.59
+    assert M.p99_change(a, b2, ref, u) == ("tie", "tie", "tie")
+    assert M.p99_change(a, b2, ref, 0 * u) == ("higher", "higher", "higher")

@@ -302,3 +302,68 @@ def test_the_shipped_preview_errors_carry_the_rulers_uncertainty():
     assert errors and set(unc) == set(errors)
     assert all(np.isfinite(v) and 0.0 < v < 0.1 for v in unc.values()), unc
     assert all(unc[k] < errors[k] for k in errors)  # every rung is farther from the truth than the ruler's doubt
+
+
+def test_refining_the_truth_at_chosen_pixels_tightens_its_uncertainty_there_and_still_bounds_the_error():
+    """reference.refine_at (issue 30 item 4): the lit slab's rim pixels (where the truth's stated
+    uncertainty is largest), recomputed with finer elements: the other pixels are untouched, the stated
+    uncertainty still covers the true error (the analytic open square) at every refined pixel and is
+    smaller there than before, the error is no larger (to the truncation level both share); a truth of another view is refused."""
+    from skinviewer.engine.reference import refine_at
+    s = _settings("laser", 32, **{"lights": [{"kind": "directional", "direction": [0, 0, 1], "intensity": 2.0,
+                                               "cast_shadow": True}],
+                                  "deon.energy_conservation": False, "specular.rho_s": 0.0})
+    ref = compute_reference(s, use_cache=False)
+    m = ref.mask
+    u = ref.uncertainty[..., 1]
+    sel = m & (u >= np.quantile(u[m], 0.9))
+    out = refine_at(s, ref, sel)
+    assert out.meta["refined"]["pixels"] == int(sel.sum())
+    np.testing.assert_array_equal(out.lit[~sel], ref.lit[~sel])
+    np.testing.assert_array_equal(out.uncertainty[~sel], ref.uncertainty[~sel])
+    p = ref.position[sel]
+    sd = np.sqrt(V)[None, :]
+
+    def box(x, a=12.0):
+        return ndtr((a - x) / sd) - ndtr((-a - x) / sd)
+    expect = 2.0 * (W[None] * (box(p[:, :1]) * box(p[:, 1:2]))[..., None]).sum(1)
+    err_before, err_after = np.abs(ref.diffuse[sel] - expect), np.abs(out.diffuse[sel] - expect)
+    assert np.all(err_after <= out.uncertainty[sel])
+    u_after, u_before = (np.sqrt((r.uncertainty[sel] ** 2).mean(0)) for r in (out, ref))
+    assert np.all(u_after < 0.8 * u_before) and u_after.max() < 0.5 * u_before.max()  # the rest: truncation
+    slack = 5e-5 * expect.max()  # TRUNCATE_LOSS: the level both share
+    assert np.all(np.sqrt((err_after ** 2).mean(0)) <= np.sqrt((err_before ** 2).mean(0)) + slack)
+    with pytest.raises(ValueError, match="view"):
+        refine_at(with_values(s, {"camera.yaw": 30.0}), ref, sel)
+
+
+def test_refining_under_an_environment_reads_it_at_the_pixel_and_stays_within_its_uncertainty():
+    """refine_at with an environment light (the Gaussians narrower than 0.25 mm read its irradiance
+    estimated at the pixel's own point, the wider ones the interpolated estimates with more rays): the
+    slab under the studio environment alone, whose upper hemisphere nothing blocks, so the irradiance is
+    the same everywhere and M = E sum_i w_i (square * G_i); at the refined rim pixels the refined truth
+    matches that within its stated uncertainty, which is small (< 1 % of E)."""
+    from skinviewer.engine.reference import refine_at
+    s = _settings("laser", 24, **{"lights": [{"kind": "environment", "environment": "studio", "intensity": 1.0,
+                                               "cast_shadow": False}],
+                                  "deon.energy_conservation": False, "specular.rho_s": 0.0})
+    ref = compute_reference(s, use_cache=False)
+    m = ref.mask
+    p = ref.position[m]
+    sd = np.sqrt(V)[None, :]
+
+    def box(x, a=12.0):
+        return ndtr((a - x) / sd) - ndtr((-a - x) / sd)
+    shape = (W[None] * (box(p[:, :1]) * box(p[:, 1:2]))[..., None]).sum(1)
+    centre = np.argmin(np.hypot(p[:, 0], p[:, 1]))
+    E = ref.diffuse[m][centre] / shape[centre]
+    r = np.hypot(p[:, 0], p[:, 1])
+    sel = m.copy()
+    sel[m] = np.abs(np.abs(p[:, :2]).max(1) - 12.0) < 1.0  # within 1 mm of the square's rim
+    assert sel.sum() >= 8
+    out = refine_at(s, ref, sel)
+    expect = (E[None] * shape)[sel[m]]
+    err = np.abs(out.diffuse[sel] - expect)
+    assert np.all(err <= out.uncertainty[sel] + 1e-3 * E)  # E itself from the centre pixel: to 0.1 %
+    assert np.all(out.uncertainty[sel] < 0.01 * E)
+    assert r.max() > 12.0

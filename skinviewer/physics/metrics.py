@@ -22,7 +22,7 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from skinviewer.physics.arrays import BoolArray, FloatArray
+from skinviewer.physics.arrays import BoolArray, FloatArray, IntArray
 
 DSSIM_SETUP = ("SSIM (Wang et al. 2004, scikit-image): Gaussian window sigma 1.5 (11x11), population covariance, "
                "C1=(0.01L)^2, C2=(0.03L)^2, L=1, on sRGB-encoded [0,1] RGB per channel, mean over mask; "
@@ -202,3 +202,90 @@ def image_error(x: FloatArray, ref: FloatArray, mask: ArrayLike | None = None, e
         return ImageError(rms, p99, d)
     ru, pu, du = figure_uncertainty(x, ref, uncertainty, mask, exposure)
     return ImageError(rms, p99, d, _rgb(ru), _rgb(pu), du)
+
+
+def _kth_largest_gap(c_lo: FloatArray, c_hi: FloatArray, x: FloatArray, y: FloatArray, k: int) -> float:
+    """max over c with c_lo <= c <= c_hi (elementwise) of L_k(c u x) - L_k(c u y), L_k the k-th largest
+    (1-based). Every sorted c lies between the sorted bounds, and L_k(c u x) = max_m min(c_(k-m), x_(m))
+    (m taken from x, k - m from c; c_(0) = x_(0) = +inf, beyond the end -inf), so only c's order
+    statistics k - n .. k matter (n = min(k, len x)). For the split j* attaining the first term at level
+    v, the second is smallest with c's statistics as low as the bounds and the order allow (lo_j below
+    j*, max(lo_j, v) from it on); the difference then rises with v up to x_(j*) and falls after it, so
+    v = clip(x_(j*), lo_j*, hi_j*). A relaxation (c's statistics are bounded one by one), so an upper
+    bound; exact when c_lo = c_hi."""
+    inf = np.inf
+    c_lo_d, c_hi_d = np.sort(c_lo)[::-1], np.sort(c_hi)[::-1]
+    xd, yd = np.sort(x)[::-1], np.sort(y)[::-1]
+    n = min(k, len(xd))
+    j = np.arange(n + 1)
+
+    def stat(d: FloatArray, i: IntArray) -> FloatArray:  # i-th largest, 1-based; 0 -> +inf, past the end -inf
+        out = np.full(len(i), -inf)
+        out[i == 0] = inf
+        ok = (i >= 1) & (i <= len(d))
+        out[ok] = d[i[ok] - 1]
+        return out
+    lo, hi = stat(c_lo_d, k - j), stat(c_hi_d, k - j)
+    xm, ym = stat(xd, j), stat(yd, j)
+    v = np.minimum(np.maximum(xm, lo), hi)                         # (n+1,) one per j*
+    first = np.minimum(v, xm)
+    z = np.where(j[None, :] < j[:, None], lo[None, :], np.maximum(lo[None, :], v[:, None]))  # [j*, j]
+    second = np.minimum(z, ym[None, :]).max(axis=1)
+    with np.errstate(invalid="ignore"):
+        gap = first - second
+    gap = np.where(np.isnan(gap), -inf, gap)
+    return float(gap.max())
+
+
+def p99_change_bounds(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArray,
+                      mask: ArrayLike | None = None, same: float = 1e-3) -> tuple[FloatArray, FloatArray]:
+    """Per channel (lo (3,), hi (3,)): bounds of p99(a) - p99(b) (``p99_rel``, relative errors over the
+    reference's denominators max(ref, floor) as ``figure_uncertainty``) over every truth r + d with
+    |d| <= u, both images judged against the *same* truth. The per-figure bounds (``figure_uncertainty``,
+    ``tied``) let the two images take opposite truths, so a shared tail pixel whose truth is uncertain
+    makes every pair a tie; here a pixel where a and b agree to ``same`` of its denominator counts once
+    for both (b taken equal to a there, which moves b's p99 by at most that much: added to the bounds),
+    and only the order statistics around the 99th percentile of those shared pixels can move the
+    difference (``_kth_largest_gap``); ``same`` x 1, 10, 100, 1000 are tried, each bound is valid, the
+    tightest is kept. Pixels where they differ take a at its worst and b at its best
+    truth independently (sound, looser there). With u = 0 and same = 0 both bounds are the plain
+    difference. The 99th percentile interpolates two order statistics (numpy's linear rule): the bound
+    is the same combination of theirs."""
+    a, ref = _check(a, ref)
+    b, _ = _check(b, ref)
+    u = np.abs(np.asarray(u, np.float64)[..., :3])
+    m = _mask(a, mask)
+    if not m.any():
+        return np.zeros(3), np.zeros(3)
+    floor = np.maximum(0.01 * ref[m].mean(axis=0), 1e-12)
+    den = np.maximum(ref[m], floor)
+    da, db, um = np.abs(a - ref)[m] / den, np.abs(b - ref)[m] / den, u[m] / den
+    apart = np.abs(a - b)[m] / den
+    n = len(da)
+    pos = 0.99 * (n - 1)
+    i0 = int(np.floor(pos))
+    f = pos - i0
+    ks = (n - i0, n - min(i0 + 1, n - 1))  # the ascending i-th value is the (n - i)-th largest
+
+    def gap(ex: FloatArray, ey: FloatArray, apart_c: FloatArray, uc: FloatArray) -> float:
+        best = np.inf
+        for t in sorted({same, *(same * 10.0 ** np.arange(1, 4))}):  # each threshold gives a bound: the least
+            d = apart_c > t
+            slack = float(apart_c[~d].max()) if (~d).any() else 0.0
+            c_lo, c_hi = np.maximum(ex[~d] - uc[~d], 0.0), ex[~d] + uc[~d]
+            x_hi, y_lo = ex[d] + uc[d], np.maximum(ey[d] - uc[d], 0.0)
+            g = [_kth_largest_gap(c_lo, c_hi, x_hi, y_lo, k) for k in ks]
+            best = min(best, (1.0 - f) * g[0] + f * g[1] + slack)
+        return best
+    hi = np.array([gap(da[:, c], db[:, c], apart[:, c], um[:, c]) for c in range(3)])
+    lo = -np.array([gap(db[:, c], da[:, c], apart[:, c], um[:, c]) for c in range(3)])
+    return lo, hi
+
+
+def p99_change(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArray, mask: ArrayLike | None = None,
+               same: float = 1e-3) -> tuple[str, str, str]:
+    """Per channel, how a's p99 stands to b's under every truth within u (``p99_change_bounds``):
+    "lower", "higher" or "tie" (the bounds straddle 0: never ranked)."""
+    lo, hi = p99_change_bounds(a, b, ref, u, mask, same)
+    return cast("tuple[str, str, str]", tuple("lower" if h < 0 else "higher" if l > 0 else "tie"
+                                              for l, h in zip(lo, hi)))
