@@ -91,6 +91,36 @@ def gather_blocks(E: FloatArray, surface: ArrayLike, zone: ArrayLike) -> dict[st
             "lit_point": origin + lmean, "lit_spread": lspread, "zone": bz}
 
 
+def _sheet_test(st: FloatArray, n: int):
+    """The sheet test at every x (eq. 27 with shear, from the stretch at x): 0 for an offset d (3D) nearer
+    than SHORTCUT_RATIO x its offset (ou, ov) texels along the surface, else 1."""
+    mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
+    cs = np.clip(st[..., 2], -0.95, 0.95)
+
+    def sheet(d: FloatArray, ou: NDArray[np.number[Any]], ov: NDArray[np.number[Any]]) -> FloatArray:
+        a, b = ou * mm_u, ov * mm_v
+        return np.where((d * d).sum(-1) < SHORTCUT_RATIO ** 2 * (a * a + b * b + 2 * cs * a * b), 0.0, 1.0)
+    return sheet
+
+
+def _inner_taps(S: FloatArray, zone: FloatArray, sheet, v: float):
+    """The 36 texels of the 3 x 3 blocks around x's block, in the shaders' order: per tap (ty, tx, the
+    texel's surface, w = G(v, |P(x) - P(y)|) |A(y)| on x's sheet and zone, 0 outside the map)."""
+    n = S.shape[0]
+    x = S[..., :3]
+    yy, xx = np.mgrid[0:n, 0:n]
+    by, bx = yy >> 1, xx >> 1
+    for j in range(-2, 4):
+        for i in range(-2, 4):
+            ty, tx = 2 * by + j, 2 * bx + i
+            inside = (ty >= 0) & (ty < n) & (tx >= 0) & (tx < n)
+            ty, tx = np.clip(ty, 0, n - 1), np.clip(tx, 0, n - 1)
+            t = S[ty, tx]
+            same = np.abs(zone[ty, tx] - zone) < 0.5
+            d = t[..., :3] - x
+            yield ty, tx, t, inside * same * sheet(d, tx - xx, ty - yy) * np.abs(t[..., 3]) * np.exp(-0.5 * (d * d).sum(-1) / v)
+
+
 def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: float, blocks: int = GATHER_BLOCKS) -> FloatArray:
     """deon_surface_gather.frag at every texel (n, n, 4); v the step's variance (mm^2)."""
     E = np.asarray(E, np.float64)
@@ -105,25 +135,10 @@ def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: A
     acc = np.zeros((n, n, 4))
     wsum = np.zeros((n, n))
     by, bx = yy >> 1, xx >> 1
-    mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
-    cs = np.clip(st[..., 2], -0.95, 0.95)
-
-    def sheet(d: FloatArray, ou: NDArray[np.number[Any]], ov: NDArray[np.number[Any]]) -> FloatArray:
-  # 0 when nearer in 3D than SHORTCUT_RATIO x the offset along the surface
-        a, b = ou * mm_u, ov * mm_v
-        return np.where((d * d).sum(-1) < SHORTCUT_RATIO ** 2 * (a * a + b * b + 2 * cs * a * b), 0.0, 1.0)
-
-    for j in range(-2, 4):
-        for i in range(-2, 4):
-            ty, tx = 2 * by + j, 2 * bx + i
-            inside = (ty >= 0) & (ty < n) & (tx >= 0) & (tx < n)
-            ty, tx = np.clip(ty, 0, n - 1), np.clip(tx, 0, n - 1)
-            s = S[ty, tx]
-            same = np.abs(zone[ty, tx] - z0) < 0.5
-            d = s[..., :3] - x
-            w = inside * same * sheet(d, tx - xx, ty - yy) * np.abs(s[..., 3]) * np.exp(-0.5 * (d * d).sum(-1) / v)
-            acc += w[..., None] * L[ty, tx]
-            wsum += w
+    sheet = _sheet_test(st, n)
+    for ty, tx, _, w in _inner_taps(S, zone, sheet, v):
+        acc += w[..., None] * L[ty, tx]
+        wsum += w
     B = gather_blocks(E, S, zone)
     h = B["area"].shape[0]
     for j in range(-blocks, blocks + 1):
@@ -192,26 +207,12 @@ def gather_weights(surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: f
     s = np.where(np.abs(S[..., 3]) > 0, np.abs(S[..., 3]), 1.0)
     yy, xx = np.mgrid[0:n, 0:n]
     by, bx = yy >> 1, xx >> 1
-    mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
-    cs = np.clip(st[..., 2], -0.95, 0.95)
-
-    def sheet(d: FloatArray, ou: NDArray[np.number[Any]], ov: NDArray[np.number[Any]]) -> FloatArray:
-        a, b = ou * mm_u, ov * mm_v
-        return np.where((d * d).sum(-1) < SHORTCUT_RATIO ** 2 * (a * a + b * b + 2 * cs * a * b), 0.0, 1.0)
-
+    sheet = _sheet_test(st, n)
     out = np.zeros((n, n, 4 * weight_textures(blocks)))
     k = 0
-    for j in range(-2, 4):
-        for i in range(-2, 4):
-            ty, tx = 2 * by + j, 2 * bx + i
-            inside = (ty >= 0) & (ty < n) & (tx >= 0) & (tx < n)
-            ty, tx = np.clip(ty, 0, n - 1), np.clip(tx, 0, n - 1)
-            t = S[ty, tx]
-            same = np.abs(zone[ty, tx] - z0) < 0.5
-            d = t[..., :3] - x
-            w = inside * same * sheet(d, tx - xx, ty - yy) * np.abs(t[..., 3]) * np.exp(-0.5 * (d * d).sum(-1) / v)
-            out[..., k] = np.where(t[..., 3] < 0, -1.0, 1.0) * np.minimum(w / s, HALF_MAX)
-            k += 1
+    for _, _, t, w in _inner_taps(S, zone, sheet, v):
+        out[..., k] = np.where(t[..., 3] < 0, -1.0, 1.0) * np.minimum(w / s, HALF_MAX)
+        k += 1
     B = gather_blocks(np.zeros(S.shape), S, zone)
     h = B["area"].shape[0]
     for i, j in block_offsets(blocks):
