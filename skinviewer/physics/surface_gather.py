@@ -25,6 +25,7 @@ along u and v and the shear cosine (deon_stretch).
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -91,7 +92,7 @@ def gather_blocks(E: FloatArray, surface: ArrayLike, zone: ArrayLike) -> dict[st
             "lit_point": origin + lmean, "lit_spread": lspread, "zone": bz}
 
 
-def _sheet_test(st: FloatArray, n: int):
+def _sheet_test(st: FloatArray, n: int) -> Callable[[FloatArray, Any, Any], FloatArray]:
     """The sheet test at every x (eq. 27 with shear, from the stretch at x): 0 for an offset d (3D) nearer
     than SHORTCUT_RATIO x its offset (ou, ov) texels along the surface, else 1."""
     mm_u, mm_v = 1.0 / np.maximum(st[..., 0] * n, 1e-30), 1.0 / np.maximum(st[..., 1] * n, 1e-30)
@@ -103,7 +104,8 @@ def _sheet_test(st: FloatArray, n: int):
     return sheet
 
 
-def _inner_taps(S: FloatArray, zone: FloatArray, sheet, v: float):
+def _inner_taps(S: FloatArray, zone: FloatArray, sheet: Callable[[FloatArray, Any, Any], FloatArray],
+                v: float) -> Iterator[tuple[Any, Any, FloatArray, FloatArray]]:
     """The 36 texels of the 3 x 3 blocks around x's block, in the shaders' order: per tap (ty, tx, the
     texel's surface, w = G(v, |P(x) - P(y)|) |A(y)| on x's sheet and zone, 0 outside the map)."""
     n = S.shape[0]
