@@ -123,6 +123,20 @@ def _inner_taps(S: FloatArray, zone: FloatArray, sheet: Callable[[FloatArray, An
             yield ty, tx, t, inside * same * sheet(d, tx - xx, ty - yy) * np.abs(t[..., 3]) * np.exp(-0.5 * (d * d).sum(-1) / v)
 
 
+def _block_tap(B: dict[str, FloatArray], S: FloatArray, zone: FloatArray,
+               sheet: Callable[[FloatArray, Any, Any], FloatArray], i: int, j: int) -> tuple[Any, Any, FloatArray, FloatArray]:
+    """Outer block (i, j) from x's block: its index (cy, cx), whether it is summed (inside the map, x's
+    zone, some area, on x's sheet: 1 or 0) and its area's mean point's offset d from x."""
+    n, h = S.shape[0], B["area"].shape[0]
+    yy, xx = np.mgrid[0:n, 0:n]
+    cy, cx = (yy >> 1) + j, (xx >> 1) + i
+    inside = (cy >= 0) & (cy < h) & (cx >= 0) & (cx < h)
+    cy, cx = np.clip(cy, 0, h - 1), np.clip(cx, 0, h - 1)
+    d = B["point"][cy, cx] - S[..., :3]
+    same = (inside & (np.abs(B["zone"][cy, cx] - zone) < 0.5) & (B["area"][cy, cx] > 0)) * sheet(d, 2 * cx - xx + 0.5, 2 * cy - yy + 0.5)
+    return cy, cx, same, d
+
+
 def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: float, blocks: int = GATHER_BLOCKS) -> FloatArray:
     """deon_surface_gather.frag at every texel (n, n, 4); v the step's variance (mm^2)."""
     E = np.asarray(E, np.float64)
@@ -132,27 +146,20 @@ def surface_gather(E: ArrayLike, surface: ArrayLike, zone: ArrayLike, stretch: A
     n = E.shape[0]
     v = max(float(v), 1e-30)
     L = _light(E, S[..., 3])
-    x, z0 = S[..., :3], zone
-    yy, xx = np.mgrid[0:n, 0:n]
+    x = S[..., :3]
     acc = np.zeros((n, n, 4))
     wsum = np.zeros((n, n))
-    by, bx = yy >> 1, xx >> 1
     sheet = _sheet_test(st, n)
     for ty, tx, _, w in _inner_taps(S, zone, sheet, v):
         acc += w[..., None] * L[ty, tx]
         wsum += w
     B = gather_blocks(E, S, zone)
-    h = B["area"].shape[0]
     for j in range(-blocks, blocks + 1):
         for i in range(-blocks, blocks + 1):
             if max(abs(i), abs(j)) <= 1:
                 continue
-            cy, cx = by + j, bx + i
-            inside = (cy >= 0) & (cy < h) & (cx >= 0) & (cx < h)
-            cy, cx = np.clip(cy, 0, h - 1), np.clip(cx, 0, h - 1)
+            cy, cx, same, d = _block_tap(B, S, zone, sheet, i, j)
             area = B["area"][cy, cx]
-            d = B["point"][cy, cx] - x
-            same = (inside & (np.abs(B["zone"][cy, cx] - z0) < 0.5) & (area > 0)) * sheet(d, 2 * cx - xx + 0.5, 2 * cy - yy + 0.5)
             vb = v + B["spread"][cy, cx]
             w = same * (v / vb) * np.exp(-0.5 * (d * d).sum(-1) / vb)
             dl = B["lit_point"][cy, cx] - x
@@ -205,10 +212,7 @@ def gather_weights(surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: f
     zone = np.asarray(zone, np.float64)
     n = S.shape[0]
     v = max(float(v), 1e-30)
-    x, z0 = S[..., :3], zone
     s = np.where(np.abs(S[..., 3]) > 0, np.abs(S[..., 3]), 1.0)
-    yy, xx = np.mgrid[0:n, 0:n]
-    by, bx = yy >> 1, xx >> 1
     sheet = _sheet_test(st, n)
     out = np.zeros((n, n, 4 * weight_textures(blocks)))
     k = 0
@@ -216,14 +220,9 @@ def gather_weights(surface: ArrayLike, zone: ArrayLike, stretch: ArrayLike, v: f
         out[..., k] = np.where(t[..., 3] < 0, -1.0, 1.0) * np.minimum(w / s, HALF_MAX)
         k += 1
     B = gather_blocks(np.zeros(S.shape), S, zone)
-    h = B["area"].shape[0]
     for i, j in block_offsets(blocks):
-        cy, cx = by + j, bx + i
-        inside = (cy >= 0) & (cy < h) & (cx >= 0) & (cx < h)
-        cy, cx = np.clip(cy, 0, h - 1), np.clip(cx, 0, h - 1)
+        cy, cx, same, d = _block_tap(B, S, zone, sheet, i, j)
         area = B["area"][cy, cx]
-        d = B["point"][cy, cx] - x
-        same = (inside & (np.abs(B["zone"][cy, cx] - z0) < 0.5) & (area > 0)) * sheet(d, 2 * cx - xx + 0.5, 2 * cy - yy + 0.5)
         vb = v + B["spread"][cy, cx]
         w = (v / vb) * np.exp(-0.5 * (d * d).sum(-1) / vb)
         out[..., k] = np.where(same > 0, np.minimum(w * area / s, HALF_MAX), NOT_SUMMED)
