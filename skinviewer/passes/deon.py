@@ -276,6 +276,16 @@ def fragment_units(ctx) -> int:
     return int(gl_info(ctx).get("GL_MAX_TEXTURE_IMAGE_UNITS", 32) or 32)
 
 
+def bind_sheet_stretch(ec, prog) -> None:
+    """The sheet test's stretch at x (eq. 27 with shear) for the gather's programs: the stretch map when
+    the pass reads it, else the atlas' mean UV per mm; and the shortcut ratio (SHORTCUT_RATIO)."""
+    stretch = ec.has_input(STRETCH)
+    sc = ec.scene.mean_uv_per_mm
+    ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
+    if stretch:
+        ec.bind(prog, "stretch_map", STRETCH)
+
+
 class GatherWeightsPass(Pass):
     """The light-independent half of summed blur step i (issue 27; shaders/deon_gather_weights.frag,
     physics/surface_gather.gather_weights): per texel the normalised-to-the-centre weights of the
@@ -300,7 +310,7 @@ class GatherWeightsPass(Pass):
         reach = min(gather_reach(r, step, n), KEPT_RINGS)  # the rings whose weights are kept
         count = weight_textures(reach)
         tiles = island_tiles(r, "irradiance", {"OPEN_BORDER": 1} if open_border(r) else {})  # the sum's tiles
-        r.plan(size=n, step=step, reach=reach, count=count, gutter=gutter_resource(n), tiles=tiles)
+        r.plan(size=n, step=step, gutter=gutter_resource(n), tiles=tiles)
         for res in (gutter_resource(n), GATHER_SURFACE, GATHER_BLOCKS_POINT, GATHER_BLOCKS_ZONE):
             r.input(res)
         if r.settings.deon.stretch:
@@ -319,17 +329,13 @@ class GatherWeightsPass(Pass):
     def execute(self, ec) -> None:
         plan = ec.plan
         n, step = plan.size, plan.step
-        stretch = ec.has_input(STRETCH)
-        sc = ec.scene.mean_uv_per_mm
         tiles = work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if plan.tiles else None
         for outs, defines in plan.groups:  # as reflect planned them
             prog = ec.program("deon_gather_weights", **defines)
             ec.textures(prog, surface=GATHER_SURFACE, gutter=plan.gutter, blocks_p=GATHER_BLOCKS_POINT,
                         blocks_z=GATHER_BLOCKS_ZONE)
-            ec.uniforms(prog, u_var=float(step.increment), u_use_stretch=stretch, u_uniform_stretch=(sc, sc),
-                        u_shortcut=SHORTCUT_RATIO)
-            if stretch:
-                ec.bind(prog, "stretch_map", STRETCH)
+            ec.set(prog, "u_var", float(step.increment))
+            bind_sheet_stretch(ec, prog)
             if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
                 for res in outs:
                     ec.clear_unwritten(res, (id(ec.scene), n, DILATE_RING))
@@ -648,7 +654,7 @@ class GaussianBlurPass(Pass):
                 blur_program(r, compute, spec, "seam_fill", **fill_defines, **extra)
                 if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
                     blur_program(r, compute, spec, "seam_fill", DOWN=1, **fill_defines, **extra)
-        r.output(self._output(), self._spec(m))
+        r.output(self._output(), spec)
 
     def _reflect_gather(self, r, step, n: int) -> None:
         """A narrow step as a direct sum over the surface: the gather surface, the step's input
@@ -729,11 +735,7 @@ class GaussianBlurPass(Pass):
                 ec.bind(prog, "blocks_m", held[2][0])
             if plan.live:  # the rings past KEPT_RINGS: their weights computed in the sum
                 ec.textures(prog, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
-                stretch = ec.has_input(STRETCH)
-                sc = ec.scene.mean_uv_per_mm
-                ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
-                if stretch:
-                    ec.bind(prog, "stretch_map", STRETCH)
+                bind_sheet_stretch(ec, prog)
             for t, res in enumerate(plan.weights):
                 ec.bind(prog, f"w{t}", res)
             ec.set(prog, "u_var", float(step.increment))
@@ -742,11 +744,7 @@ class GaussianBlurPass(Pass):
             ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light,
                         blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE, blocks_l=lit)
             ec.set(prog, "u_var", float(step.increment))
-            stretch = ec.has_input(STRETCH)
-            sc = ec.scene.mean_uv_per_mm
-            ec.uniforms(prog, u_use_stretch=stretch, u_uniform_stretch=(sc, sc), u_shortcut=SHORTCUT_RATIO)
-            if stretch:
-                ec.bind(prog, "stretch_map", STRETCH)
+            bind_sheet_stretch(ec, prog)
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():
