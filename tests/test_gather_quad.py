@@ -1,7 +1,8 @@
 """d'Eon's split summed step four texels a fragment (issue 27, passes.deon.quad_sum: deon_gather_quad.frag
 sums the island texels of each 2 x 2 block at half size, sharing their taps' fetches; deon_gather_pick.frag
 gives each texel its island texel's sum): bit for bit the one-texel sum (deon_gather_sum.frag), whole, in
-tiles, with the flat outer rings, without seams and on the scan; where it applies."""
+tiles, with the flat outer rings, with rings past the kept ones, without seams and on the scan; where it
+applies."""
 from __future__ import annotations
 
 import numpy as np
@@ -19,6 +20,8 @@ CASES = {
     "head-flat-rings": ("head", {}, 2),  # rings past LIT_RING at the area's mean light (FLAT)
     "head-no-seams": ("head", {"scene.seam_aware": False}, None),  # the sum reads the irradiance itself
     "scan": ("head", "scan", None),
+    "shadow-edge": ("shadow-edge", {}, None),  # an open border; a fourth ring, its weights computed in the sum (LIVE)
+    "shadow-edge-flat": ("shadow-edge", {}, 2),
 }
 
 
@@ -54,7 +57,7 @@ def _flushed(a: np.ndarray) -> np.ndarray:
     return np.where(np.abs(a) < 1e-30, 0.0, a)
 
 
-def test_the_quad_sum_applies_on_a_software_rasterizer_to_even_maps_with_kept_rings(renderer, monkeypatch):
+def test_the_quad_sum_applies_on_a_software_rasterizer_to_even_maps(renderer, monkeypatch):
     s = small_settings("head", "deon", size=64, **{"deon.irradiance_size": 256})
     g, texel, step = first_gathered_step(renderer, s, 256)
     r = type("R", (), {"settings": s, "scene": renderer.scene.gpu})()
@@ -63,5 +66,3 @@ def test_the_quad_sum_applies_on_a_software_rasterizer_to_even_maps_with_kept_ri
         assert deon_passes.quad_sum(r, step, 256) is want, mode
     monkeypatch.setattr(deon_passes, "QUAD_SUM", "1")
     assert not deon_passes.quad_sum(r, step, 255)  # an odd map: the half-size sums would miss a column
-    monkeypatch.setattr(deon_passes, "gather_reach", lambda *a: deon_passes.KEPT_RINGS + 1)
-    assert not deon_passes.quad_sum(r, step, 256)  # a live ring: its weights are computed per texel

@@ -275,10 +275,10 @@ def split_sum(r, step: BlurStep, n: int) -> bool:
 
 
 def quad_sum(r, step: BlurStep, n: int) -> bool:
-    """Whether split-summed step ``step`` sums four texels a fragment (QUAD_SUM): an even map whose rings
-    are all kept (a live ring's weights are computed per texel). auto: on a software rasterizer (kernel/gl;
+    """Whether split-summed step ``step`` sums four texels a fragment (QUAD_SUM): an even map. auto: on a
+    software rasterizer (kernel/gl;
     off the GL thread before the renderer is known: as one, like compute_choice)."""
-    if QUAD_SUM == "0" or n % 2 or gather_reach(r, step, n) > KEPT_RINGS:
+    if QUAD_SUM == "0" or n % 2:
         return False
     info = gl_info(r.scene.ctx)
     return QUAD_SUM == "1" or not info or software_renderer(r.scene.ctx)
@@ -789,6 +789,9 @@ class GaussianBlurPass(Pass):
         for t, res in enumerate(plan.weights):
             ec.bind(prog, f"w{t}", res)
         ec.set(prog, "u_var", float(plan.step.increment))
+        if plan.live:  # the rings past KEPT_RINGS: their weights computed in the sum
+            ec.textures(prog, gutter=plan.gutter, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
+            bind_sheet_stretch(ec, prog)
         pick = ec.program("deon_gather_pick")
         ec.bind(pick, "gutter", plan.gutter)
         for t, q in enumerate(quads):
