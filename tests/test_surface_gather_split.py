@@ -187,8 +187,8 @@ def test_a_light_move_keeps_the_weights_and_what_they_read_remakes_them(renderer
 
 
 def test_the_shaders_list_the_taps_in_the_twins_order():
-    """deon_gather_weights.frag and deon_gather_sum.frag write one line per tap (its weight's index a
-    literal): the 36 inner texels row by row, then the blocks ring by ring as block_offsets orders them,
+    """deon_gather_weights.frag and lib/gather_sum_taps.glsl (the taps of deon_gather_sum.frag and
+    deon_gather_quad.frag) write one line per tap (its weight's index a literal): the 36 inner texels row by row, then the blocks ring by ring as block_offsets orders them,
     each ring under its GATHER_BLOCKS guard, up to GATHER_BLOCKS."""
     import re
     from pathlib import Path
@@ -197,7 +197,7 @@ def test_the_shaders_list_the_taps_in_the_twins_order():
     root = Path(__file__).resolve().parents[1] / "shaders"
     inner = [(i, j, k) for k, (i, j) in enumerate((i, j) for j in range(-2, 4) for i in range(-2, 4))]
     blocks = [(i, j, 36 + k) for k, (i, j) in enumerate(block_offsets(GATHER_BLOCKS))]
-    for name in ("deon_gather_weights.frag", "deon_gather_sum.frag"):
+    for name in ("deon_gather_weights.frag", "lib/gather_sum_taps.glsl"):
         text = (root / name).read_text()
         taps = [tuple(int(v) for v in m) for m in re.findall(r"^\s+INNER\((-?\d+), (-?\d+), (\d+)\)$", text, re.M)]
         assert taps == inner, name

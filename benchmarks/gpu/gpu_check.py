@@ -389,16 +389,19 @@ def cmd_report(args) -> int:
     fr = d.get("frames")
     if fr:
         lines += ["", f"## Frame times at {fr['width']}×{fr['height']} (default head; medians of {fr['repeats']})", "",
-                  "Sync = glFinish + wall clock around the frame; GPU = the sum of the passes' GL timer queries "
-                  "(`render.timing = gpu`). Maps: the defaults (1024² irradiance, shadow, TSM) or 2048².", "",
-                  "| technique | maps | full ms (sync) | full ms (GPU) | light move (sync) | light move (GPU) | "
-                  "camera only (sync) | camera only (GPU) | MiB held |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+                  "Sync = `render.timing = sync` (a glFinish after every pass), wall clock around the frame; GPU = the "
+                  "sum of the passes' GL timer queries (`render.timing = gpu`, what the viewer uses on a GPU); wall = "
+                  "that frame's wall clock (no glFinish between passes, one after the frame: what a user waits). "
+                  "Maps: the defaults (1024² irradiance, shadow, TSM) or 2048².", "",
+                  "| technique | maps | full ms (sync) | full ms (GPU) | full (wall) | light move (sync) | light move (GPU) | "
+                  "light (wall) | camera only (sync) | camera only (GPU) | camera (wall) | MiB held |",
+                  "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
         for k, row in fr["rows"].items():
             tech, maps = k.split("@")
             sy, gp = row["sync"], row["gpu"]
-            lines.append(f"| {tech} | {maps} | {_f(sy['full'])} | {_f(gp['full_passes'])} | {_f(sy['light'])} | "
-                         f"{_f(gp['light_passes'])} | {_f(sy['camera'])} | {_f(gp['camera_passes'])} | "
-                         f"{_f(fr['memory'][k]['total'], 1)} |")
+            lines.append(f"| {tech} | {maps} | {_f(sy['full'])} | {_f(gp['full_passes'])} | {_f(gp['full'])} | "
+                         f"{_f(sy['light'])} | {_f(gp['light_passes'])} | {_f(gp['light'])} | {_f(sy['camera'])} | "
+                         f"{_f(gp['camera_passes'])} | {_f(gp['camera'])} | {_f(fr['memory'][k]['total'], 1)} |")
         sums = [(k, r["surface_sum_ms"]) for k, r in fr["rows"].items() if r.get("surface_sum_ms")]
         if sums:
             lines += ["", "d'Eon's surface-sum steps (sync, one full frame): " +

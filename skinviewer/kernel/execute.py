@@ -281,7 +281,8 @@ class ExecuteContext:
         self.draws += 1
 
     def draw_fullscreen(self, prog: moderngl.Program, *targets: str | moderngl.Texture,
-                        tiles: tuple[moderngl.Texture, int, float] | None = None) -> None:
+                        tiles: tuple[moderngl.Texture, int, float] | None = None,
+                        tile_space: tuple[int, int] | None = None) -> None:
         """One full-screen triangle with ``prog`` (its vertex stage: shaders/vs/fullscreen.vert) into
         ``targets`` (declared outputs or scratch textures), no depth test, no clear.
 
@@ -295,7 +296,7 @@ class ExecuteContext:
         if tiles is not None:
             tex, count, edge = tiles
             self.bind(prog, "u_tiles", tex)
-            w, h = fbo.size
+            w, h = tile_space or fbo.size
             self.uniforms(prog, u_tile=float(edge), u_target_size=(float(w), float(h)))
         self._apply(prog)
         t0 = self.graph.shaders.first_draw(prog)

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
-from skinviewer.kernel.gl import compute_choice, gl_info, image_format
+from skinviewer.kernel.gl import compute_choice, gl_info, image_format, software_renderer
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.kernel.shaders import ShaderCompileError
 from skinviewer.passes.common import (
@@ -108,6 +108,10 @@ MRT = 8  # targets per draw of the weight pass (GL_MAX_DRAW_BUFFERS >= 8)
 # the block rings whose light the sum takes at the light's own mean point (deon_gather_sum.frag LIT_RING);
 # None: every ring; past it at the area's mean point (one fetch, no exp a block; notes/deon_light_move.md)
 LIT_RING: int | None = int(os.environ["SKINVIEWER_LIT_RING"]) if os.environ.get("SKINVIEWER_LIT_RING") else None
+# issue 27: the split sum four texels a fragment (deon_gather_quad.frag + deon_gather_pick.frag, the same
+# values bit for bit): "auto" on a software rasterizer, which pays per fetch and lane (135 fetches a texel
+# -> 49); a GPU's texture cache shares those fetches already. "1" / "0" (SKINVIEWER_QUAD_SUM): always / never.
+QUAD_SUM = os.environ.get("SKINVIEWER_QUAD_SUM", "auto")
 
 
 def map_size(r) -> int:
@@ -268,6 +272,16 @@ def split_sum(r, step: BlurStep, n: int) -> bool:
     reach = gather_reach(r, step, n)
     need = kept_textures(reach) + 6 + (3 if reach > KEPT_RINGS else 0) + (1 if LIT_RING is not None else 0)
     return SPLIT_SUM and need <= units
+
+
+def quad_sum(r, step: BlurStep, n: int) -> bool:
+    """Whether split-summed step ``step`` sums four texels a fragment (QUAD_SUM): an even map. auto: on a
+    software rasterizer (kernel/gl;
+    off the GL thread before the renderer is known: as one, like compute_choice)."""
+    if QUAD_SUM == "0" or n % 2:
+        return False
+    info = gl_info(r.scene.ctx)
+    return QUAD_SUM == "1" or not info or software_renderer(r.scene.ctx)
 
 
 def fragment_units(ctx) -> int:
@@ -690,9 +704,17 @@ class GaussianBlurPass(Pass):
             flat = {"LIT_RING": LIT_RING} if LIT_RING is not None and LIT_RING < reach else {}
             r.plan(flat=bool(flat))
             r.program("deon_gather_blocks", MEAN_THICKNESS=1, **({"MEAN_LIGHT": 1} if flat else {}))
-            r.program("deon_gather_sum", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS, **tiled, **flat)
+            quad = quad_sum(r, step, n)
+            r.plan(quad=quad)
+            if quad:  # four texels a fragment at half size, then each texel picked (issue 27)
+                r.program("deon_gather_quad", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS,
+                          **tiled, **flat)
+                r.program("deon_gather_pick", **tiled)
+            else:
+                r.program("deon_gather_sum", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS,
+                          **tiled, **flat)
         else:
-            r.plan(weights=None)
+            r.plan(weights=None, quad=False)
             r.program("deon_gather_blocks")
             r.program("deon_surface_gather", GATHER_BLOCKS=reach, **tiled)
         r.output(self._output(), self._spec(n))
@@ -728,6 +750,9 @@ class GaussianBlurPass(Pass):
             ec.draw_fullscreen(prog, *(t for t, _ in held))
         texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
         ec.note(f"summed over the surface: sigma {texels:.2f} mean texels", sigma_texels=float(texels))
+        if split and plan.quad:  # four texels a fragment (deon_gather_quad.frag), then picked per texel
+            self._execute_quad(ec, source, light, lit, held[2][0] if flat else None)
+            return
         if split:  # the light-dependent half: E, the blocks' light and the kept weights
             prog = ec.program("deon_gather_sum")  # GATHER_BLOCKS, WEIGHT_TEXTURES and TILED as reflect declared
             ec.textures(prog, source=source, surface=GATHER_SURFACE, gutter=gutter, blocks_e=light, blocks_l=lit)
@@ -749,6 +774,37 @@ class GaussianBlurPass(Pass):
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
         with ec.band():
             ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if tiled else None)
+
+    def _execute_quad(self, ec, source, light, lit, mean) -> None:
+        """The split sum as deon_gather_quad.frag (the island texels, four a fragment, into four half-size
+        float32 sums kept across the bands) and deon_gather_pick.frag (each texel its island texel's sum):
+        two draws in sequence over the bands (ExecuteContext.units), the same tiles."""
+        plan = ec.plan
+        n, h = plan.size, plan.size // 2
+        quads = [ec.held(f"quad{t}", TexSpec((h, h), 4, "f4", filter="nearest"))[0] for t in range(4)]
+        prog = ec.program("deon_gather_quad")  # GATHER_BLOCKS, WEIGHT_TEXTURES, TILED as reflect declared
+        ec.textures(prog, source=source, surface=GATHER_SURFACE, blocks_e=light, blocks_l=lit)
+        if mean is not None:
+            ec.bind(prog, "blocks_m", mean)
+        for t, res in enumerate(plan.weights):
+            ec.bind(prog, f"w{t}", res)
+        ec.set(prog, "u_var", float(plan.step.increment))
+        if plan.live:  # the rings past KEPT_RINGS: their weights computed in the sum
+            ec.textures(prog, gutter=plan.gutter, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
+            bind_sheet_stretch(ec, prog)
+        pick = ec.program("deon_gather_pick")
+        ec.bind(pick, "gutter", plan.gutter)
+        for t, q in enumerate(quads):
+            ec.bind(pick, f"q{t}", q)
+        tiles = work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if plan.island_tiles else None
+        if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
+            ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
+        for d, sub, subs in ec.units(2):
+            with ec.band(sub, subs):
+                if d == 0:  # the tiles' rectangles are in the map's texels: the half-size target's twice
+                    ec.draw_fullscreen(prog, *quads, tiles=tiles, tile_space=(n, n))
+                else:
+                    ec.draw_fullscreen(pick, plan.output, tiles=tiles)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
