@@ -66,7 +66,7 @@ want renders && stamp "renders and parity" && timeout "$(cap 120)" python3 bench
 want frames && stamp "frames, ratios, memory" && timeout "$(cap 240)" python3 benchmarks/gpu/gpu_check.py frames --out "$OUT" --width $W --height $H --repeats $REPS "${FRAMES_EXTRA[@]}"
 
 if want perf; then
-    # issue 27 on this GL, <= 60 s in all: one d'Eon blur direction as fragment draws vs compute passes
+    # issue 27 on this GL, <= 90 s in all: one d'Eon blur direction as fragment draws vs compute passes
     # (render.compute_blur off / on, the defaults' light move, outputs compared), the synthetic compute
     # blur (outputs checked against the fragment one), and the graph's own CPU work per frame
     stamp "perf: d'Eon blur direction fragment vs compute, synthetic compute blur, CPU overhead"
@@ -77,6 +77,11 @@ if want perf; then
     if [ -f benchmarks/bench_cpu_overhead.py ]; then
         timeout "$(left 20)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
     fi
+    # d'Eon's light move draw by draw, the summed step four texels a fragment (forced: auto keeps it to
+    # software rasterizers) against one texel a fragment (B): whether the quad sum pays on a GPU too
+    PERF_END=$(( PERF_END + 30 ))
+    SKINVIEWER_QUAD_SUM=1 timeout "$(left 30)" python3 benchmarks/bench_deon_draws.py "${PERF[@]}" --ab-no-quad-sum \
+        | head -n 16 >> "$OUT/perf.md" 2>&1
 fi
 
 if want calibrate; then
