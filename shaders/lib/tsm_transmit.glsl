@@ -39,7 +39,9 @@
 #ifndef TSM_SKIP
 #define TSM_SKIP 0
 #endif
+#ifndef TSM_ZERO
 #define TSM_ZERO 110.0
+#endif
 #ifndef TSM_SKIP_MARK
 #define TSM_SKIP_MARK 0.0  // what a skipped texel returns: -1 marks it (the share skipped, benchmarks)
 #endif
