@@ -103,8 +103,10 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
         if (v_max > 4.0 * tmm * tmm)
             reach = max(reach, sqrt(0.5 * k2 * v_max) * sqrt(2.0 * log(2.0 * float(TSM_GATHER_N))) / tmm);
 #endif
-        if (reach + 2.0 <= u_tsm_max_reach) {  // the max map covers it (+2 texels for rounding)
-            ivec2 nT = textureSize(tsm_map, 0);
+        ivec2 nT = textureSize(tsm_map, 0);
+        // the max map covers the reach (+2 texels for rounding) and was made from a TSM of this size
+        if (reach + 2.0 <= u_tsm_max_reach
+                && textureSize(tsm_max_map, 0) == (nT + u_tsm_max_block - 1) / u_tsm_max_block) {
             ivec2 q = clamp(ivec2(floor(c * vec2(nT))), ivec2(0), nT - ivec2(1));
             m_near = dC - texelFetch(tsm_max_map, q / u_tsm_max_block, 0).r;
         }
