@@ -134,3 +134,25 @@ def test_a_light_move_reruns_the_max_and_a_camera_move_keeps_it(renderer):
     # the reach follows the widest Gaussian: a wider one re-plans the window
     wide = with_values(moved, {"deon.gaussians.5.variance": 4.0 * s.deon.gaussians[5].variance})
     assert "deon_tsm_max" in _ran(renderer.render(wide))
+
+
+@pytest.mark.skipif(__import__("shutil").which("glslangValidator") is None, reason="glslangValidator not installed")
+def test_the_skip_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
+    """deon_tsm_max's two programs and the transmitted programs with the skip compile with Khronos'
+    reference compiler (stricter than Mesa). deon_blurs.glsl's FETCH_BLURS macro continues its lines
+    with backslashes, which glslang refuses before GLSL 4.20: joined here, as Mesa and NVIDIA read them."""
+    import subprocess
+
+    from skinviewer.kernel.shaders import ShaderLibrary
+    lib = ShaderLibrary(gl_ctx)
+    skip = {"GAUSSIAN_MASK": 63, "TSM_SKIP": 1}
+    for name, defines in [("deon_tsm_max", {"TSM_MAX_BLOCK": 1}), ("deon_tsm_max", {"TSM_MAX_BLOCK": 0}),
+                          ("deon_transmitted_texels", {**skip, "TSM_GATHER_N": 16, "TILED": 1, "TEXEL_STEPS": 0}),
+                          ("deon_transmitted_texels", {**skip, "TSM_GATHER_N": 0, "TILED": 1, "TEXEL_STEPS": 0,
+                                                       "TSM_SKIP_MARK": -1.0}),
+                          ("deon_transmitted", {**skip, "TSM_GATHER_N": 16})]:
+        srcs = lib._assemble(name, tuple((str(k), str(v)) for k, v in sorted(defines.items())))[0]
+        f = tmp_path / f"{name}.frag"
+        f.write_text(srcs["fragment_shader"].replace("\\\n", " "))
+        r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, (name, defines, r.stdout[-600:])
