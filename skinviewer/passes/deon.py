@@ -498,13 +498,13 @@ class TsmMaxPass(Pass):
         r.program("deon_tsm_max", TSM_MAX_BLOCK=1)
         r.program("deon_tsm_max", TSM_MAX_BLOCK=0)
         nb = -(-n // block)
-        r.output(TSM_MAX, TexSpec((nb, nb), 1, "f4", filter="nearest"))
+        spec = TexSpec((nb, nb), 1, "f4", filter="nearest")
+        r.plan(spec=spec)  # the output's and its two scratch textures' (the blocks, one axis dilated)
+        r.output(TSM_MAX, spec)
 
     def execute(self, ec) -> None:
         n, block, radius = ec.plan.tsm_max
-        spec = ec.output(TSM_MAX)
-        spec = TexSpec(spec.size, 1, "f4", filter="nearest")
-        blocks, wide = ec.scratch(spec), ec.scratch(spec)
+        blocks, wide = ec.scratch(ec.plan.spec), ec.scratch(ec.plan.spec)
         prog = ec.program("deon_tsm_max", TSM_MAX_BLOCK=1)
         ec.bind(prog, "src", TSM)
         ec.set(prog, "u_block", int(block))
