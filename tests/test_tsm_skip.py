@@ -15,7 +15,7 @@ from helpers import small_settings
 import skinviewer.passes.deon as deon_passes
 from skinviewer.engine.renderer import Renderer
 from skinviewer.ground.settings import with_values
-from skinviewer.passes.deon import TSM, TSM_MAX, TRANSMITTED, tsm_max_covered, tsm_reach_texels
+from skinviewer.passes.deon import TRANSMITTED, TSM, TSM_MAX, tsm_max_covered, tsm_reach_texels
 
 # llvmpipe does not reproduce its own denormals: two renders of the unchanged shader in one process
 # differ by up to ~1.2e-38 in a few texels (seen in blur_4, blur_5 and the transmitted light alike).
