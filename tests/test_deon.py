@@ -312,7 +312,7 @@ def test_caching_rules(renderer):
 
     assert ran(**{"camera.yaw": 40.0}) == ["deon_final", "output"]  # orbit
     got = ran(**{"lights.0.direction": [0.1, 0.3, -1.0]})  # light move
-    assert set(got) == {"shadow_map_0", "deon_tsm", "deon_irradiance", *blurs, *summed}, got
+    assert set(got) == {"shadow_map_0", "deon_tsm", "deon_tsm_max", "deon_irradiance", *blurs, *summed}, got
     got = ran(**{"lights.0.intensity": 5.0})  # light colour/intensity: no shadow map, no TSM
     assert set(got) == {"deon_irradiance", *blurs, *summed}, got
     assert ran(**{"deon.gaussians.2.weights": [0.2, 0.1, 0.0]}) == summed  # weight edit: no blur

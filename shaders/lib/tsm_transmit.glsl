@@ -31,6 +31,25 @@
 #ifndef TSM_GATHER_N
 #define TSM_GATHER_N 0
 #endif
+// TSM_SKIP (deon_transmitted, issue 27): a texel C that no TSM read within reach can bring near
+// enough returns 0 before its loops. Every term is exp(-m^2 / (k2 v)) (less a share >= 0, clamped at
+// 0) with m = d(C) - t.r >= d(C) - R, R the largest t.r within reach (deon_tsm_max.frag): once
+// (d(C) - R)^2 / (k2 v) > TSM_ZERO, exp underflows to exactly 0 in float32 (below the smallest
+// denormal past 103.97; flushed past 87.3), so the skip returns what the loops would: bit for bit.
+#ifndef TSM_SKIP
+#define TSM_SKIP 0
+#endif
+#ifndef TSM_ZERO
+#define TSM_ZERO 110.0
+#endif
+#ifndef TSM_SKIP_MARK
+#define TSM_SKIP_MARK 0.0  // what a skipped texel returns: -1 marks it (the share skipped, benchmarks)
+#endif
+#if TSM_SKIP
+uniform sampler2D tsm_max_map;  // deon_tsm_max: the largest t.r around each block of TSM texels
+uniform int u_tsm_max_block;    // TSM texels per block side
+uniform float u_tsm_max_reach;  // TSM texels the max reaches past C's texel on each side
+#endif
 #if TSM_GATHER_N > 0
 uniform float u_tsm_map_mm;       // the TSM's width in mm (light space; a point light's at the subject)
 uniform sampler2D irradiance_map; // E of the lit points the gather reaches (eq. 28)
@@ -38,7 +57,9 @@ uniform sampler2D irradiance_map; // E of the lit points the gather reaches (eq.
 // Gaussian i's light-space gather at C (c: C's TSM coordinates, dC its distance, sC its UV per mm); the
 // spiral turned by `turn` (pi/4 per Gaussian: each one's samples take other directions, so their
 // errors on an edge in the TSM do not add up).
-vec3 tsm_gathered(float v, float turn, vec2 c, float dC, vec2 uvC, vec2 sC, float zoneC, float k2) {
+// m_near > 0: no sample's m is below it (TSM_SKIP), so when its term underflows every term is 0.
+vec3 tsm_gathered(float v, float turn, vec2 c, float dC, vec2 uvC, vec2 sC, float zoneC, float k2, float m_near) {
+    if (m_near > 0.0 && m_near * m_near > TSM_ZERO * k2 * v) return vec3(0.0);  // exactly the loop's 0
     float sig = sqrt(0.5 * k2 * v);  // samples ~ exp(-lat^2 / (k2 v))
     vec3 e = vec3(0.0);
     for (int k = 0; k < TSM_GATHER_N; ++k) {
@@ -66,8 +87,33 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
     if (t0.a < 0.0) return vec3(0.0);  // no surface towards the light
     vec2 texel = 1.0 / vec2(textureSize(tsm_map, 0));
     float dC = tsm_distance_mm(P);
-    vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
     float k2 = (u_tsm_printed != 0) ? 1.0 : 2.0;  // eq. 33 as printed: exp(-x^2 / v)
+    float m_near = -1.0;  // <= 0: no bound on m (no skip)
+#if TSM_SKIP
+    {   // the widest used Gaussian, the reach of its gather (the spiral's last sample, 3x3 taps else)
+        float v_max = 0.0;
+        for (int i = 0; i < MAX_GAUSSIANS; ++i) {
+            if (i >= u_count) break;
+            float v = u_var[i];
+            if (((G_MASK >> i) & 1) != 0 && u_used[i] != 0 && v > 0.0) v_max = max(v_max, v);
+        }
+        float reach = 1.0;
+#if TSM_GATHER_N > 0
+        float tmm = u_tsm_map_mm * texel.x;
+        if (v_max > 4.0 * tmm * tmm)
+            reach = max(reach, sqrt(0.5 * k2 * v_max) * sqrt(2.0 * log(2.0 * float(TSM_GATHER_N))) / tmm);
+#endif
+        ivec2 nT = textureSize(tsm_map, 0);
+        // the max map covers the reach (+2 texels for rounding) and was made from a TSM of this size
+        if (reach + 2.0 <= u_tsm_max_reach
+                && textureSize(tsm_max_map, 0) == (nT + u_tsm_max_block - 1) / u_tsm_max_block) {
+            ivec2 q = clamp(ivec2(floor(c * vec2(nT))), ivec2(0), nT - ivec2(1));
+            m_near = dC - texelFetch(tsm_max_map, q / u_tsm_max_block, 0).r;
+        }
+        if (m_near > 0.0 && m_near * m_near > TSM_ZERO * k2 * v_max) return vec3(TSM_SKIP_MARK);
+    }
+#endif
+    vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
     float zoneC = uv_zone(zone_map, uvC);
     vec3 Lc = (u_tsm_kind == LIGHT_POINT) ? normalize(u_tsm_pos - P) : u_tsm_dir;
     float away = smoothstep(0.0, 0.2, -dot(N, Lc) * inversesqrt(max(dot(N, N), 1e-30)));
@@ -106,7 +152,7 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
         if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0) continue;
 #if TSM_GATHER_N > 0
         if (u_var[i] > 4.0 * texel_mm * texel_mm)  // a uniform branch
-            acc += u_w[i] * g0 * tsm_gathered(u_var[i], float(i) * 0.78539816, c, dC, uvC, sC, zoneC, k2);
+            acc += u_w[i] * g0 * tsm_gathered(u_var[i], float(i) * 0.78539816, c, dC, uvC, sC, zoneC, k2, m_near);
         else
 #endif
             acc += u_w[i] * (f[i] / 9.0) * there[i].rgb;

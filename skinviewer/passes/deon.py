@@ -25,6 +25,7 @@ stretch * sigma_mm; TSM distances and thicknesses are in mm (mesh units * scene.
 """
 from __future__ import annotations
 
+import math
 import os
 from typing import Any
 
@@ -447,6 +448,87 @@ class TsmPass(Pass):
         prog = ec.program("deon_tsm")
         set_tsm_uniforms(ec, prog, ec.plan.tsm_light, matrix="u_light_matrix")
         ec.draw_mesh(prog, TSM, clear=(0.0, 0.0, 0.0, -1.0))  # A < 0: no surface
+
+
+TSM_MAX = "deon_tsm_max"  # the TSM's farthest first surface within reach, per block (TsmMaxPass)
+TSM_MAX_BLOCK = 8  # TSM texels per block side (a 1024^2 TSM: a 128^2 map)
+# deon_transmitted skips the texels the max proves get exactly 0 (lib/tsm_transmit.glsl TSM_SKIP);
+# SKINVIEWER_TSM_SKIP=0 in the environment: a whole run without it (an A/B)
+TSM_SKIP = os.environ.get("SKINVIEWER_TSM_SKIP", "1") != "0"
+TSM_SKIP_MARK = False  # benchmarks and tests: a skipped texel comes out -1 (the share skipped), not 0
+
+
+def tsm_reach_texels(v_max: float, texel_mm: float, gather: int, k2: float) -> float:
+    """How far (TSM texels) lib/tsm_transmit.glsl reads from C's texel: its gather's last spiral sample for
+    the widest used Gaussian (variance ``v_max`` mm^2) when it is gathered (v > 4 texels^2), at
+    sqrt(k2 v / 2) sqrt(-2 ln(0.5 / N)) mm; the 3x3 taps (1 texel) else."""
+    if gather <= 0 or not texel_mm > 0.0 or not v_max > 3.9 * texel_mm * texel_mm:  # 3.9: the shader's 4, rounded
+        return 1.0
+    return max(1.0, math.sqrt(0.5 * k2 * v_max) * math.sqrt(2.0 * math.log(2.0 * gather)) / texel_mm)
+
+
+def tsm_max_plan(r) -> tuple[int, int, int]:
+    """(TSM size, block, dilation in blocks) of deon_tsm_max, answered once a frame: the blocks reach past
+    every read of the widest Gaussian's gather, +3 texels of rounding (the shader checks it needs
+    reach + 2 <= dilation * block). Peeked: the plan keys what the reach depends on."""
+    return frame_memo(r, "deon.tsm_max_plan", _tsm_max_plan)
+
+
+def _tsm_max_plan(r) -> tuple[int, int, int]:
+    n = light_map_size(r, r.settings.deon.tsm_size, r.settings.deon.irradiance_size_mode, "deon_tsm")
+    j = tsm_light_index(r)
+    reach = 1.0
+    if j is not None and r.scene is not None:
+        g = whole(r.peeked.deon.gaussians)
+        v_max = max((float(x.variance) for x in g if any(w > 0 for w in x.weights)), default=0.0)
+        ls = r.scene.light_space(whole(r.peeked.lights[j]))
+        k2 = 1.0 if r.peeked.deon.tsm_form == "printed" else 2.0
+        reach = tsm_reach_texels(v_max, ls.texel_world(n) * r.scene.mm_per_unit, int(r.peeked.deon.tsm_gather), k2)
+    blocks = -(-n // TSM_MAX_BLOCK)
+    return n, TSM_MAX_BLOCK, min(math.ceil((reach + 3.0) / TSM_MAX_BLOCK), blocks) if math.isfinite(reach) else blocks
+
+
+def tsm_max_covered(plan: tuple[int, int, int]) -> float:
+    """TSM texels the max map covers past C's texel on each side (u_tsm_max_reach): the whole map
+    when the dilation spans it."""
+    n, block, radius = plan
+    return 1e30 if radius >= -(-n // block) else float(radius * block)
+
+
+class TsmMaxPass(Pass):
+    """The TSM's farthest first surface (largest t.r) around each block of TSM texels, dilated by the
+    transmitted light's reach (shaders/deon_tsm_max.frag): deon_transmitted returns 0 before its loops
+    for a texel that it proves every read leaves at exactly 0 (issue 27). Re-runs with the TSM (a
+    light move) and when the reach changes; a camera move keeps it."""
+    name = "deon_tsm_max"
+
+    def reflect(self, r: Reflection) -> None:
+        if not TSM_SKIP or tsm_light_index(r) is None:
+            return
+        plan = tsm_max_plan(r)
+        n, block, _ = plan
+        r.plan(tsm_max=plan)
+        r.input(TSM)
+        r.program("deon_tsm_max", TSM_MAX_BLOCK=1)
+        r.program("deon_tsm_max", TSM_MAX_BLOCK=0)
+        nb = -(-n // block)
+        spec = TexSpec((nb, nb), 1, "f4", filter="nearest")
+        r.plan(spec=spec)  # the output's and its two scratch textures' (the blocks, one axis dilated)
+        r.output(TSM_MAX, spec)
+
+    def execute(self, ec) -> None:
+        n, block, radius = ec.plan.tsm_max
+        blocks, wide = ec.scratch(ec.plan.spec), ec.scratch(ec.plan.spec)
+        prog = ec.program("deon_tsm_max", TSM_MAX_BLOCK=1)
+        ec.bind(prog, "src", TSM)
+        ec.set(prog, "u_block", int(block))
+        ec.draw_fullscreen(prog, blocks)
+        prog = ec.program("deon_tsm_max", TSM_MAX_BLOCK=0)
+        ec.set(prog, "u_radius", int(radius))
+        for src, axis, dst in ((blocks, (1, 0), wide), (wide, (0, 1), TSM_MAX)):  # a box window, one axis each
+            ec.bind(prog, "src", src)
+            ec.set(prog, "u_axis", axis)
+            ec.draw_fullscreen(prog, dst)
 
 
 class IrradiancePass(Pass):
@@ -1170,6 +1252,12 @@ class TransmittedPass(Pass):
         mask = used_mask(r)
         declare_blurs(r, mask)
         tsm_defines = declare_tsm_read(r)
+        if TSM_SKIP:  # the texels no TSM read can reach are skipped (deon_tsm_max)
+            r.input(TSM_MAX)
+            r.plan(tsm_max=tsm_max_plan(r))
+            tsm_defines["TSM_SKIP"] = 1
+            if TSM_SKIP_MARK:
+                tsm_defines["TSM_SKIP_MARK"] = -1.0
         n = transmitted_size(r)
         declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask,
                        **tsm_defines)
@@ -1178,6 +1266,10 @@ class TransmittedPass(Pass):
         prog = ec.program(ec.plan.shading.program)
         bind_blurs(ec, prog)
         bind_tsm_read(ec, prog)
+        if ec.has_input(TSM_MAX):  # optional: a variant compiled with TSM_SKIP=0 (an A/B) has none
+            ec.bind(prog, "tsm_max_map", TSM_MAX, optional=True)
+            ec.set(prog, "u_tsm_max_block", int(ec.plan.tsm_max[1]), optional=True)
+            ec.set(prog, "u_tsm_max_reach", tsm_max_covered(ec.plan.tsm_max), optional=True)
         shade_dilated(ec, prog, TRANSMITTED)
 
 

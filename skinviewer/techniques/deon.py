@@ -13,6 +13,7 @@ from skinviewer.passes.deon import (
     IrradiancePass,
     StretchPass,
     TransmittedPass,
+    TsmMaxPass,
     TsmPass,
     map_size,
     transmitted_size,
@@ -29,7 +30,7 @@ def build():
             + [GutterMapPass("deon_gutter", map_size),
                GutterMapPass("deon_gutter_half", transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TexelSurfacePass("deon_texel_surface", map_size),
-               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), IrradiancePass(), GatherSurfacePass(),
+               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), TsmMaxPass(), IrradiancePass(), GatherSurfacePass(),
                BorderFramePass()]
             + [GatherWeightsPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
