@@ -30,8 +30,7 @@ out vec4 f_color;
 #define HALF_MASK 0
 #endif
 // unused slots are bound to a 1x1 dummy (generic shaders): clamp the fetch into it
-#define ADD(k, s) if (((G_MASK >> k) & 1) != 0) acc += u_w[k] * ((((HALF_MASK >> k) & 1) != 0)                  \
-    ? texture(s, (vec2(p) + 0.5) / u_size).rgb : texelFetch(s, min(p, textureSize(s, 0) - 1), 0).rgb);
+#define ADD(k, s) if (((G_MASK >> k) & 1) != 0) acc += u_w[k] * ((((HALF_MASK >> k) & 1) != 0) ? texture(s, (vec2(p) + 0.5) / u_size).rgb : texelFetch(s, min(p, textureSize(s, 0) - 1), 0).rgb);
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);

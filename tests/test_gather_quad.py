@@ -66,3 +66,24 @@ def test_the_quad_sum_applies_on_a_software_rasterizer_to_even_maps(renderer, mo
         assert deon_passes.quad_sum(r, step, 256) is want, mode
     monkeypatch.setattr(deon_passes, "QUAD_SUM", "1")
     assert not deon_passes.quad_sum(r, step, 255)  # an odd map: the half-size sums would miss a column
+
+
+@pytest.mark.skipif(__import__("shutil").which("glslangValidator") is None, reason="glslangValidator not installed")
+def test_the_quad_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
+    """deon_gather_quad (kept rings, a live fourth ring, flat rings; tiled) and deon_gather_pick compile with
+    Khronos' reference compiler (stricter than Mesa: four MRT outputs, constant indices only)."""
+    import subprocess
+
+    from skinviewer.kernel.shaders import ShaderLibrary
+    lib = ShaderLibrary(gl_ctx)
+    base = {"KEPT_RINGS": 3, "WEIGHT_TEXTURES": 19, "TILED": 2}
+    for name, defines in [("deon_gather_quad", {**base, "GATHER_BLOCKS": 3}),
+                          ("deon_gather_quad", {**base, "GATHER_BLOCKS": 5}),
+                          ("deon_gather_quad", {**base, "GATHER_BLOCKS": 4, "LIT_RING": 2}),
+                          ("deon_gather_pick", {"TILED": 2})]:
+        srcs = lib._assemble(name, tuple((str(k), str(v)) for k, v in sorted(defines.items())))[0]
+        for stage, ext in (("vertex_shader", "vert"), ("fragment_shader", "frag")):
+            f = tmp_path / f"{name}.{ext}"
+            f.write_text(srcs[stage])
+            r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
+            assert r.returncode == 0, (name, defines, stage, r.stdout[-600:])

@@ -140,7 +140,7 @@ def test_shared_constants_are_injected_and_declared_uniforms_known(gl_ctx, lib_d
 
 def test_project_shaders_are_consolidated():
     """Shared vertex stages (no two .vert files with one body), include guards in every lib
-    snippet, and no copy of a constant that skinviewer.ground.constants injects."""
+    snippet, no copy of a constant that skinviewer.ground.constants injects, no line continuation."""
     import re
 
     from skinviewer.ground import paths
@@ -160,6 +160,8 @@ def test_project_shaders_are_consolidated():
         for name in GLSL_DEFINES:
             assert not re.search(rf"#define\s+{name}\b", text), f"{f.name} redefines {name}"
         assert not re.search(r"\b65000\.0|\b1e30\b", text), f"{f.name} writes a clamp constant by value"
+        # GLSL 3.30 has no line continuation (4.20 added it): Mesa and NVIDIA read one, a strict compiler not
+        assert not re.search(r"\\\n", text), f"{f.name} continues a line with a backslash"
 
 
 def test_file_in_another_encoding_is_a_shader_error(gl_ctx, lib_dir):

@@ -139,8 +139,7 @@ def test_a_light_move_reruns_the_max_and_a_camera_move_keeps_it(renderer):
 @pytest.mark.skipif(__import__("shutil").which("glslangValidator") is None, reason="glslangValidator not installed")
 def test_the_skip_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
     """deon_tsm_max's two programs and the transmitted programs with the skip compile with Khronos'
-    reference compiler (stricter than Mesa). deon_blurs.glsl's FETCH_BLURS macro continues its lines
-    with backslashes, which glslang refuses before GLSL 4.20: joined here, as Mesa and NVIDIA read them."""
+    reference compiler (stricter than Mesa)."""
     import subprocess
 
     from skinviewer.kernel.shaders import ShaderLibrary
@@ -153,6 +152,6 @@ def test_the_skip_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
                           ("deon_transmitted", {**skip, "TSM_GATHER_N": 16})]:
         srcs = lib._assemble(name, tuple((str(k), str(v)) for k, v in sorted(defines.items())))[0]
         f = tmp_path / f"{name}.frag"
-        f.write_text(srcs["fragment_shader"].replace("\\\n", " "))
+        f.write_text(srcs["fragment_shader"])
         r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
         assert r.returncode == 0, (name, defines, r.stdout[-600:])

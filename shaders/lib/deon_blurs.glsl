@@ -32,10 +32,7 @@ uniform int u_use_stretch;
 // every blurred texture sampled once per point, by name: an index into a chain of samplers would
 // make many compilers fetch all eight on each call; slots outside `mask` are not sampled at all
 #define FETCH_ONE(out_, k, s, uv, mask) out_[k] = (((mask) >> k) & 1) != 0 ? texture(s, uv) : vec4(0.0);
-#define FETCH_BLURS(out_, uv, mask)                                                                    \
-    FETCH_ONE(out_, 0, blur0, uv, mask) FETCH_ONE(out_, 1, blur1, uv, mask) FETCH_ONE(out_, 2, blur2, uv, mask) \
-    FETCH_ONE(out_, 3, blur3, uv, mask) FETCH_ONE(out_, 4, blur4, uv, mask) FETCH_ONE(out_, 5, blur5, uv, mask) \
-    FETCH_ONE(out_, 6, blur6, uv, mask) FETCH_ONE(out_, 7, blur7, uv, mask)
+#define FETCH_BLURS(out_, uv, mask) FETCH_ONE(out_, 0, blur0, uv, mask) FETCH_ONE(out_, 1, blur1, uv, mask) FETCH_ONE(out_, 2, blur2, uv, mask) FETCH_ONE(out_, 3, blur3, uv, mask) FETCH_ONE(out_, 4, blur4, uv, mask) FETCH_ONE(out_, 5, blur5, uv, mask) FETCH_ONE(out_, 6, blur6, uv, mask) FETCH_ONE(out_, 7, blur7, uv, mask)
 
 vec2 uv_per_mm(vec2 uv) {
     vec2 s = (u_use_stretch != 0) ? texture(stretch_map, uv).rg : u_uniform_stretch;

@@ -1,7 +1,9 @@
 // The summed step's taps in the sum's order (physics/surface_gather.block_offsets): the 36 inner texels
 // row by row, then the blocks ring by ring, each as the including shader defines INNER, BLOCK, FLAT and
 // LIVE (deon_gather_sum.frag: one texel; deon_gather_quad.frag: the four texels of a 2 x 2 block).
-// One line per tap, its weight's index a literal. No include guard: spliced where the taps run.
+// One line per tap, its weight's index a literal. Spliced where the taps run (once a shader).
+#ifndef SKINVIEWER_GATHER_SUM_TAPS_GLSL
+#define SKINVIEWER_GATHER_SUM_TAPS_GLSL
     INNER(-2, -2, 0)
     INNER(-1, -2, 1)
     INNER(0, -2, 2)
@@ -520,5 +522,6 @@
     LIVE(3, 5, 0.0)
     LIVE(4, 5, 0.0)
     LIVE(5, 5, 0.0)
+#endif
 #endif
 #endif

@@ -1,5 +1,7 @@
 // The summed step's kept weights (deon_gather_weights.frag, WEIGHT_TEXTURES of them: 4 weights a texel)
-// and WEIGHTS_AT(W, OFF, P): W[OFF + t] = weight texture t at texel P. No include guard: once a shader.
+// and WEIGHTS_AT(W, OFF, P): W[OFF + t] = weight texture t at texel P. Once a shader.
+#ifndef SKINVIEWER_GATHER_WEIGHT_MAPS_GLSL
+#define SKINVIEWER_GATHER_WEIGHT_MAPS_GLSL
 #ifndef WEIGHT_TEXTURES
 #define WEIGHT_TEXTURES 19
 #endif
@@ -172,3 +174,4 @@ uniform sampler2D w27;
 #define WEIGHT_AT_27(W, OFF, P)
 #endif
 #define WEIGHTS_AT(W, OFF, P) WEIGHT_AT_0(W, OFF, P) WEIGHT_AT_1(W, OFF, P) WEIGHT_AT_2(W, OFF, P) WEIGHT_AT_3(W, OFF, P) WEIGHT_AT_4(W, OFF, P) WEIGHT_AT_5(W, OFF, P) WEIGHT_AT_6(W, OFF, P) WEIGHT_AT_7(W, OFF, P) WEIGHT_AT_8(W, OFF, P) WEIGHT_AT_9(W, OFF, P) WEIGHT_AT_10(W, OFF, P) WEIGHT_AT_11(W, OFF, P) WEIGHT_AT_12(W, OFF, P) WEIGHT_AT_13(W, OFF, P) WEIGHT_AT_14(W, OFF, P) WEIGHT_AT_15(W, OFF, P) WEIGHT_AT_16(W, OFF, P) WEIGHT_AT_17(W, OFF, P) WEIGHT_AT_18(W, OFF, P) WEIGHT_AT_19(W, OFF, P) WEIGHT_AT_20(W, OFF, P) WEIGHT_AT_21(W, OFF, P) WEIGHT_AT_22(W, OFF, P) WEIGHT_AT_23(W, OFF, P) WEIGHT_AT_24(W, OFF, P) WEIGHT_AT_25(W, OFF, P) WEIGHT_AT_26(W, OFF, P) WEIGHT_AT_27(W, OFF, P)
+#endif
