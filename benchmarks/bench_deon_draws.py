@@ -6,13 +6,16 @@ in the same run.
 
     python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
         [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split] [--ab-unsplit-sum]
+        [--ab-unsplit-irradiance]
 
 --ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
 define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
 --ab-no-* flags make B draw every blur tile with the zone checks / seam-fill every fill tile (the code
 before passes.deon.zone_split / seam_split); --ab-unsplit-sum makes B sum the narrow step in one pass
 (deon_surface_gather.frag, passes.deon.SPLIT_SUM off: the code before the weights were kept), in a second
-renderer (a light move does not re-reflect the pass). B's rows are marked (B).
+renderer (a light move does not re-reflect the pass); --ab-unsplit-irradiance makes B shade the irradiance
+in one pass (passes.deon.SPLIT_IRRADIANCE off: the code before its light-independent pass), in a second
+renderer too. B's rows are marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
 are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
@@ -111,6 +114,8 @@ def main() -> None:
                     help="B also seam-fills every fill tile (passes.deon.seam_split off)")
     ap.add_argument("--ab-unsplit-sum", action="store_true",
                     help="B sums the narrow step in one pass (passes.deon.SPLIT_SUM off), in its own renderer")
+    ap.add_argument("--ab-unsplit-irradiance", action="store_true",
+                    help="B shades the irradiance in one pass (passes.deon.SPLIT_IRRADIANCE off), in its own renderer")
     args = ap.parse_args()
     ctx = headless_context()
     print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
@@ -121,11 +126,13 @@ def main() -> None:
     r.render(s, force=True)
     r.render(phong, force=True)
     rb = r
-    if args.ab_unsplit_sum:
-        deon_passes.SPLIT_SUM = False
+    own = args.ab_unsplit_sum or args.ab_unsplit_irradiance  # B in a renderer of its own
+    if own:
+        deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
+        deon_passes.SPLIT_IRRADIANCE = not args.ab_unsplit_irradiance
         rb = Renderer(ctx)
         rb.render(s, force=True)
-        deon_passes.SPLIT_SUM = True
+        deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
     per: dict[tuple, list[float]] = collections.defaultdict(list)
     counts: dict[tuple, int] = {}
     frames, frames_b, phongs, copies, halves = [], [], [], [], []
@@ -135,11 +142,12 @@ def main() -> None:
         variant.setdefault(name, {}).update(parse_sets([kv]))
     zone_split, seam_split = deon_passes.zone_split, deon_passes.seam_split
     for k in range(args.repeats):
-        for side in (("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split or args.ab_unsplit_sum
+        for side in (("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split or own
                      else ("A",)):
             VARIANT.clear()
             deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
             deon_passes.SPLIT_SUM = side == "A" or not args.ab_unsplit_sum
+            deon_passes.SPLIT_IRRADIANCE = side == "A" or not args.ab_unsplit_irradiance
             if side == "B":
                 VARIANT.update(variant)
                 if args.ab_no_zone_split:
@@ -162,7 +170,7 @@ def main() -> None:
                 counts[key] = n[key]
         VARIANT.clear()
         deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
-        deon_passes.SPLIT_SUM = True
+        deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])
         copies.append(copy_draw_ms(r, args.maps, 3))
