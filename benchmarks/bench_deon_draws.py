@@ -125,7 +125,7 @@ def main() -> None:
     phong = settings_for("phong", args.scene, args.size, args.maps)
     r.render(s, force=True)
     r.render(phong, force=True)
-    rb = r
+    ra = rb = r
     own = args.ab_unsplit_sum or args.ab_unsplit_irradiance  # B in a renderer of its own
     if own:
         deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
@@ -133,6 +133,8 @@ def main() -> None:
         rb = Renderer(ctx)
         rb.render(s, force=True)
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
+        ra = Renderer(ctx)  # A in a renderer of its own too: neither side shares Phong's pool
+        ra.render(s, force=True)
     per: dict[tuple, list[float]] = collections.defaultdict(list)
     counts: dict[tuple, int] = {}
     frames, frames_b, phongs, copies, halves = [], [], [], [], []
@@ -142,8 +144,8 @@ def main() -> None:
         variant.setdefault(name, {}).update(parse_sets([kv]))
     zone_split, seam_split = deon_passes.zone_split, deon_passes.seam_split
     for k in range(args.repeats):
-        for side in (("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split or own
-                     else ("A",)):
+        sides = ("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split or own else ("A",)
+        for side in (sides if k % 2 == 0 else sides[::-1]):  # each side first in every other repeat
             VARIANT.clear()
             deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
             deon_passes.SPLIT_SUM = side == "A" or not args.ab_unsplit_sum
@@ -155,7 +157,7 @@ def main() -> None:
                 if args.ab_no_seam_split:
                     deon_passes.seam_split = lambda *a, **k: None
             LOG.clear()
-            ms_frame = light_frame(r if side == "A" else rb, s, k)[0]
+            ms_frame = light_frame(ra if side == "A" else rb, s, k)[0]
             (frames if side == "A" else frames_b).append(ms_frame)
             # the base frame of light_frame is untimed but its draws are logged too: keep the second half
             frame = collections.defaultdict(float)
