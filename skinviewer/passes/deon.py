@@ -90,6 +90,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
+from skinviewer.physics.specular import per_region_specular
 from skinviewer.physics.surface_gather import KEPT_RINGS, SHORTCUT_RATIO, gather_blocks_for, weight_textures
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.texels import border_frame
@@ -481,8 +482,10 @@ class IrradianceSurfacePass(Pass):
         env = declare_environment(r, specular=False)
         declare(r.settings.deon.mix)
         if r.settings.deon.energy_conservation:
-            declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
-            r.input(RHO_DT_RESOURCE)
+            sp = r.settings.specular  # per-texel m and rho_s (specular_params; f0 is the rho_dt table's)
+            declare(sp.m, sp.rho_s, sp.per_region)
+            if env:  # rho_dt's hemispherical mean for the environment (eq. 32)
+                r.input(RHO_DT_RESOURCE)
         maps = TEXEL_SURFACE_MAPS
         if env and int(env.get("ENV_RAYS", 0)) > 0:  # the environment's AO and shadowed irradiance per texel
             maps += "v"
@@ -503,9 +506,13 @@ class IrradianceSurfacePass(Pass):
         set_environment(ec, prog, specular=False)
         energy = bool(ec.settings.deon.energy_conservation)
         ec.uniforms(prog, u_energy=energy, u_mix=float(ec.settings.deon.mix), u_texel_uv=(1.0 / n, 1.0 / n))
-        if energy:
-            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-            bind_specular(ec, prog)
+        if energy:  # lib/specular_params.glsl's m and rho_s (bind_specular less the f0 this pass does not read)
+            sp = ec.settings.specular
+            m, rho = per_region_specular(sp)
+            ec.uniforms(prog, u_spec_m=m, u_spec_rho_s=rho, u_spec_rho_s_table=float(sp.rho_s))
+            ec.textures(prog, region_map=ec.scene.region_map, specular_map=ec.scene.specular_map)
+            if ec.has_input(RHO_DT_RESOURCE):
+                ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
         for k, res in zip(plan.maps, texel_surface_resources(n, plan.maps)):
             ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
         if ec.first_tile:  # texels beyond the island tiles: 0, not a pooled texture's
