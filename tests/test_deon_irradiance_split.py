@@ -79,6 +79,7 @@ def test_a_light_move_reruns_only_the_light_pass_and_what_it_reads_reruns_the_su
     Image.fromarray(np.full((8, 8, 3), (200, 120, 90), np.uint8)).save(albedo)
     for change in ({"lights.1.intensity": 0.4}, {"lights.1.yaw": 40.0},  # the environment
                    {"deon.mix": 0.3}, {"specular.rho_s": 0.25}, {"specular.m": 0.4},  # the material
+                   {"specular.f0": 0.04},  # the rho_dt table the environment's term is weighted with
                    {"scene.albedo_map": str(albedo)},  # a map
                    {"deon.irradiance_size": 512}):  # the map size
         ran = _ran(renderer.render(with_values(s, change)))
@@ -86,11 +87,13 @@ def test_a_light_move_reruns_only_the_light_pass_and_what_it_reads_reruns_the_su
         renderer.render(s)
 
 
-def test_without_an_environment_the_surface_pass_writes_two_maps(renderer):
+def test_without_an_environment_the_surface_pass_writes_two_maps_and_f0_leaves_it(renderer):
     s = small_settings("head", "deon", size=32, **{"deon.irradiance_size": 256})
     renderer.render(s)
     res = renderer.graph("deon").resources()
     assert irradiance_surface_resource(1) in res and irradiance_surface_resource(2) not in res
+    ran = _ran(renderer.render(with_values(s, {"specular.f0": 0.04})))  # f0: the rho_dt table, read by the light only
+    assert "deon_irradiance" in ran and SURFACE not in ran, ran
 
 
 def test_the_switch_turns_the_split_off(monkeypatch):
