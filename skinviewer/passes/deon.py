@@ -494,7 +494,8 @@ class IrradianceSurfacePass(Pass):
             r.input(res)
         r.program("deon_irradiance_surface", TILED=1, DEON_SURFACE=1, **env)
         outs = tuple(irradiance_surface_resource(k) for k in range(irradiance_surface_maps(r)))
-        r.plan(size=n, maps=maps, outs=outs)
+        samplers = tuple((TEXEL_SURFACE_SAMPLERS[k], res) for k, res in zip(maps, texel_surface_resources(n, maps)))
+        r.plan(size=n, samplers=samplers, outs=outs)
         for res in outs:
             r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
 
@@ -513,8 +514,8 @@ class IrradianceSurfacePass(Pass):
             ec.textures(prog, region_map=ec.scene.region_map, specular_map=ec.scene.specular_map)
             if ec.has_input(RHO_DT_RESOURCE):
                 ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-        for k, res in zip(plan.maps, texel_surface_resources(n, plan.maps)):
-            ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
+        for sampler, res in plan.samplers:  # the texel surface maps it reads
+            ec.bind(prog, sampler, res)
         if ec.first_tile:  # texels beyond the island tiles: 0, not a pooled texture's
             for res in plan.outs:
                 ec.clear_unwritten(res, (id(ec.scene), n, 0))
@@ -536,9 +537,10 @@ class IrradiancePass(Pass):
         if split:  # N, C^mix, m, rho_s and the environment's term from the light-independent pass
             lighting = {**declare_lighting(r), "DEON_CACHED": 1,
                         "DEON_CACHED_ENV": int(irradiance_surface_maps(r) > 2)}
-            r.plan(surface_maps=irradiance_surface_maps(r))
-            for k in range(irradiance_surface_maps(r)):
-                r.input(irradiance_surface_resource(k))
+            cached = tuple(irradiance_surface_resource(k) for k in range(irradiance_surface_maps(r)))
+            r.plan(cached=cached)
+            for res in cached:
+                r.input(res)
             if energy:
                 declare(r.settings.specular.rho_s)  # the rho_s of the rho_dt table (surface_rho_dt)
                 r.input(RHO_DT_RESOURCE)
@@ -569,8 +571,8 @@ class IrradiancePass(Pass):
         ec.uniforms(prog, u_energy=energy, u_texel_samples=int(ec.settings.deon.texel_samples),
                     u_texel_uv=(1.0 / n, 1.0 / n))
         if ec.plan.split:
-            for k in range(ec.plan.surface_maps):
-                ec.bind(prog, f"irr_surface{k}", irradiance_surface_resource(k))
+            for k, res in enumerate(ec.plan.cached):
+                ec.bind(prog, f"irr_surface{k}", res)
             if energy:
                 ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
                 ec.uniforms(prog, u_spec_rho_s_table=float(ec.settings.specular.rho_s))
