@@ -5,16 +5,18 @@ in plain copies (shaders/copy.frag, RGBA32F) of the map size, with Phong's light
 in the same run.
 
     python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
-        [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split] [--ab-unsplit-sum] [--ab-no-quad-sum]
+        [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split] [--ab-unsplit-sum]
+        [--ab-unsplit-irradiance] [--ab-no-quad-sum]
 
 --ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
 define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
 --ab-no-* flags make B draw every blur tile with the zone checks / seam-fill every fill tile (the code
 before passes.deon.zone_split / seam_split); --ab-unsplit-sum makes B sum the narrow step in one pass
 (deon_surface_gather.frag, passes.deon.SPLIT_SUM off: the code before the weights were kept), in a second
-renderer (a light move does not re-reflect the pass); --ab-no-quad-sum makes B sum it one texel a fragment
-(deon_gather_sum.frag, passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too.
-B's rows are marked (B).
+renderer (a light move does not re-reflect the pass); --ab-unsplit-irradiance makes B shade the irradiance
+in one pass (passes.deon.SPLIT_IRRADIANCE off: the code before its light-independent pass), in a second
+renderer too; --ab-no-quad-sum makes B sum the split step one texel a fragment (deon_gather_sum.frag,
+passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too. B's rows are marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
 are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
@@ -113,6 +115,8 @@ def main() -> None:
                     help="B also seam-fills every fill tile (passes.deon.seam_split off)")
     ap.add_argument("--ab-unsplit-sum", action="store_true",
                     help="B sums the narrow step in one pass (passes.deon.SPLIT_SUM off), in its own renderer")
+    ap.add_argument("--ab-unsplit-irradiance", action="store_true",
+                    help="B shades the irradiance in one pass (passes.deon.SPLIT_IRRADIANCE off), in its own renderer")
     ap.add_argument("--ab-no-quad-sum", action="store_true",
                     help="B sums the split step one texel a fragment (passes.deon.QUAD_SUM 0), in its own renderer")
     args = ap.parse_args()
@@ -125,17 +129,18 @@ def main() -> None:
     phong = settings_for("phong", args.scene, args.size, args.maps)
     r.render(s, force=True)
     r.render(phong, force=True)
-    rb = r
-    if args.ab_unsplit_sum:
-        deon_passes.SPLIT_SUM = False
+    ra = rb = r
+    own = args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum  # B in a renderer of its own
+    if own:
+        deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
+        deon_passes.SPLIT_IRRADIANCE = not args.ab_unsplit_irradiance
+        deon_passes.QUAD_SUM = "0" if args.ab_no_quad_sum else quad
         rb = Renderer(ctx)
         rb.render(s, force=True)
-        deon_passes.SPLIT_SUM = True
-    if args.ab_no_quad_sum:
-        deon_passes.QUAD_SUM = "0"
-        rb = Renderer(ctx)
-        rb.render(s, force=True)
+        deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
+        ra = Renderer(ctx)  # A in a renderer of its own too: neither side shares Phong's pool
+        ra.render(s, force=True)
     per: dict[tuple, list[float]] = collections.defaultdict(list)
     counts: dict[tuple, int] = {}
     frames, frames_b, phongs, copies, halves = [], [], [], [], []
@@ -145,11 +150,12 @@ def main() -> None:
         variant.setdefault(name, {}).update(parse_sets([kv]))
     zone_split, seam_split = deon_passes.zone_split, deon_passes.seam_split
     for k in range(args.repeats):
-        for side in (("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split or args.ab_unsplit_sum
-                     or args.ab_no_quad_sum else ("A",)):
+        sides = ("A", "B") if variant or args.ab_no_zone_split or args.ab_no_seam_split or own else ("A",)
+        for side in (sides if k % 2 == 0 else sides[::-1]):  # each side first in every other repeat
             VARIANT.clear()
             deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
             deon_passes.SPLIT_SUM = side == "A" or not args.ab_unsplit_sum
+            deon_passes.SPLIT_IRRADIANCE = side == "A" or not args.ab_unsplit_irradiance
             deon_passes.QUAD_SUM = "0" if side == "B" and args.ab_no_quad_sum else quad
             if side == "B":
                 VARIANT.update(variant)
@@ -158,7 +164,7 @@ def main() -> None:
                 if args.ab_no_seam_split:
                     deon_passes.seam_split = lambda *a, **k: None
             LOG.clear()
-            ms_frame = light_frame(r if side == "A" else rb, s, k)[0]
+            ms_frame = light_frame(ra if side == "A" else rb, s, k)[0]
             (frames if side == "A" else frames_b).append(ms_frame)
             # the base frame of light_frame is untimed but its draws are logged too: keep the second half
             frame = collections.defaultdict(float)
@@ -173,7 +179,7 @@ def main() -> None:
                 counts[key] = n[key]
         VARIANT.clear()
         deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
-        deon_passes.SPLIT_SUM = True
+        deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])

@@ -20,7 +20,37 @@ uniform int u_tsm;
 uniform sampler2D tsm_map;
 uniform mat4 u_tsm_matrix;
 uniform float u_max_thickness;   // mm
+// The split irradiance (issue 27; notes/deon_light_move.md section 9). DEON_SURFACE = 1: the
+// light-independent pass (deon_irradiance_surface.frag) writes what eq. (28)/(32) need of the texel and
+// not of the light, as exact float32: the shading normal N and m, C^mix and rho_s, and with the
+// environment its occluded irradiance and rho_dt's hemispherical mean. DEON_CACHED = 1: the light pass
+// reads them at its own texel instead of fetching the maps; the arithmetic, and its order
+// E = (sum over lights + env) C, is the one-pass shader's, so the result is the same to the bit.
+#ifndef DEON_SURFACE
+#define DEON_SURFACE 0
+#endif
+#ifndef DEON_CACHED
+#define DEON_CACHED 0
+#endif
+#ifndef DEON_CACHED_ENV
+#define DEON_CACHED_ENV 0
+#endif
+#if DEON_CACHED
+uniform sampler2D irr_surface0;  // N, m
+uniform sampler2D irr_surface1;  // C^mix, rho_s
+#if DEON_CACHED_ENV
+uniform sampler2D irr_surface2;  // the environment's occluded irradiance at N, rho_dt's hemispherical mean
+#endif
+#endif
+#if DEON_SURFACE
+layout(location = 0) out vec4 f_surface0;
+layout(location = 1) out vec4 f_surface1;
+#if ENV_LIGHT
+layout(location = 2) out vec4 f_surface2;
+#endif
+#else
 layout(location = 0) out vec4 f_irradiance;
+#endif
 #ifndef DEON_VISIBILITY
 #define DEON_VISIBILITY 0
 #endif
@@ -42,15 +72,28 @@ uniform vec2 u_texel_uv;          // 1 / the irradiance map's size
 const vec2 TEXEL_SAMPLE[4] = vec2[4](vec2(-0.375, -0.125), vec2(0.125, -0.375), vec2(0.375, 0.125),
                                      vec2(-0.125, 0.375));
 
+#if !DEON_SURFACE
 void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, vec3 dPdx, vec3 dPdy) {
     set_light_footprint(dPdx, dPdy);  // beam lights: area coverage
+#if DEON_CACHED
+    // the light-independent pass's values at this texel (DEON_SURFACE above)
+    ivec2 q = ivec2(gl_FragCoord.xy);
+    vec4 s0 = texelFetch(irr_surface0, q, 0), s1 = texelFetch(irr_surface1, q, 0);
+    vec3 N = s0.xyz;
+    vec3 C = s1.rgb;
+    vec3 E = vec3(0.0);
+    SpecParams sp = SpecParams(s0.w, s1.w);
+#else
     g_surface_footprint = u_texel_uv;  // one texel of this map: the same mip level on either path
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
     vec3 C = safe_pow(surface_map(albedo_map, v_uv).rgb, u_mix);
     vec3 E = vec3(0.0);
     SpecParams sp = specular_params(v_uv);
+#endif
     vec4 vis = vec4(0.0);
-#if defined(DEON_TEXEL_SAMPLES) && DEON_TEXEL_SAMPLES > 0 && !defined(GENERIC_SHADERS)
+#if DEON_CACHED
+    const int ns = 1;  // the light pass runs only with one sample (4 read the normal map at other uv)
+#elif defined(DEON_TEXEL_SAMPLES) && DEON_TEXEL_SAMPLES > 0 && !defined(GENERIC_SHADERS)
     // the pass compiles deon.texel_samples in (issue 27): llvmpipe runs both sides of a branch on a
     // uniform under a mask, so the 4-sample path cost the 1-sample default 10-20 % of this pass
     const int ns = (DEON_TEXEL_SAMPLES >= 4) ? 4 : 1;
@@ -86,7 +129,10 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
         vis[i] = 0.25 * sv;
         E += Lc * (0.25 * e);
     }
-#if ENV_LIGHT
+#if DEON_CACHED && DEON_CACHED_ENV
+    vec4 s2 = texelFetch(irr_surface2, q, 0);
+    E += s2.rgb * s2.a;  // the same product as below, its factors made by the light-independent pass
+#elif ENV_LIGHT
     // the environment, occluded, with eq. (32)'s rho_dt averaged over the hemisphere
     E += env_irradiance(N, v_normal) * ((u_energy != 0) ? env_rho_dt_mean(rho_dt_tex, sp) : 1.0);
 #endif
@@ -108,4 +154,22 @@ void deon_irradiance(vec3 v_position, vec3 v_normal, vec2 v_uv, vec4 v_tangent, 
     f_visibility = vis;
 #endif
 }
+#endif
+
+#if DEON_SURFACE
+// the light-independent half of deon_irradiance (issue 27): its first lines and its environment term,
+// stored as they are computed (float32 targets: exact); rho_s and m only where eq. (32) reads them
+void deon_irradiance_surface(vec3 v_normal, vec2 v_uv, vec4 v_tangent) {
+    g_surface_footprint = u_texel_uv;  // one texel of this map: the same mip level on either path
+    vec3 N = surface_normal(v_normal, v_tangent, v_uv);
+    vec3 C = safe_pow(surface_map(albedo_map, v_uv).rgb, u_mix);
+    SpecParams sp = specular_params(v_uv);
+    bool energy = u_energy != 0;
+    f_surface0 = vec4(N, energy ? sp.m : 0.0);
+    f_surface1 = vec4(C, energy ? sp.rho_s : 0.0);
+#if ENV_LIGHT
+    f_surface2 = vec4(env_irradiance(N, v_normal), energy ? env_rho_dt_mean(rho_dt_tex, sp) : 1.0);
+#endif
+}
+#endif
 #endif

@@ -60,6 +60,8 @@ from skinviewer.passes.rules import (
     tsm_needed,
 )
 from skinviewer.passes.texture_space import (
+    TEXEL_SURFACE_MAPS,
+    TEXEL_SURFACE_SAMPLERS,
     TILE,
     compute_tiles,
     declare_shaded,
@@ -73,6 +75,8 @@ from skinviewer.passes.texture_space import (
     rect_tiles,
     seam_resource,
     shade_dilated,
+    texel_shading,
+    texel_surface_resources,
     unwrap_dilated,
     work_tiles,
 )
@@ -87,6 +91,7 @@ from skinviewer.physics.diffusion import (
     sub_steps,
     texture_of,
 )
+from skinviewer.physics.specular import per_region_specular
 from skinviewer.physics.surface_gather import KEPT_RINGS, SHORTCUT_RATIO, gather_blocks_for, weight_textures
 from skinviewer.scene.camera import gl_bytes
 from skinviewer.scene.texels import border_frame
@@ -531,20 +536,118 @@ class TsmMaxPass(Pass):
             ec.draw_fullscreen(prog, dst)
 
 
+# issue 27: the irradiance split in a light-independent pass (IrradianceSurfacePass: the shading normal,
+# C^mix, the specular parameters, the environment's term; kept across light moves) and the light pass
+# (IrradiancePass, DEON_CACHED); bit-identical to the one-pass shader. SKINVIEWER_SPLIT_IRRADIANCE=0 in the
+# environment: the one-pass shader, for before | after runs (notes/deon_light_move.md section 9)
+SPLIT_IRRADIANCE = os.environ.get("SKINVIEWER_SPLIT_IRRADIANCE", "1") != "0"
+
+
+def irradiance_surface_resource(k: int) -> str:
+    """RGBA32F map k of the irradiance's light-independent values (IrradianceSurfacePass)."""
+    return f"deon_irradiance_surface_{k}"
+
+
+def split_irradiance(r) -> bool:
+    """Whether the irradiance is shaded from the light-independent pass's maps: SPLIT_IRRADIANCE, over the
+    texel surface map (render.texel_surface; the mesh unwrapped shades in one pass) and with one sample a
+    texel (deon.texel_samples = 4 reads the normal map at four other uv per light: one pass)."""
+    return bool(SPLIT_IRRADIANCE and texel_shading(r) and r.peeked.deon.texel_samples < 4)
+
+
+def irradiance_surface_maps(r) -> int:
+    """How many RGBA32F maps the light-independent pass writes: N and m, C^mix and rho_s, and with an
+    environment light its term."""
+    return 3 if env_index(r) is not None else 2
+
+
+class IrradianceSurfacePass(Pass):
+    """The light-independent half of the irradiance (issue 27; shaders/deon_irradiance_surface.frag, the
+    first lines and the environment term of lib/deon_irradiance.glsl): per covered texel the shading
+    normal N and m, C^mix and rho_s, and the environment's occluded irradiance at N with rho_dt's
+    hemispherical mean (eq. 32), stored as exact float32. It reads the mesh, the map size, the albedo,
+    normal, region and specular maps, deon.mix, the specular settings and the environment light: a
+    light move keeps it. Tileable like the light pass (row bands)."""
+    name = "deon_irradiance_surface"
+    tileable = True
+
+    def reflect(self, r: Reflection) -> None:
+        if not split_irradiance(r):
+            return
+        n = map_size(r)
+        env = declare_environment(r, specular=False)
+        declare(r.settings.deon.mix)
+        if r.settings.deon.energy_conservation:
+            sp = r.settings.specular  # per-texel m and rho_s (specular_params; f0 is the rho_dt table's)
+            declare(sp.m, sp.rho_s, sp.per_region)
+            if env:  # rho_dt's hemispherical mean for the environment (eq. 32)
+                r.input(RHO_DT_RESOURCE)
+        maps = TEXEL_SURFACE_MAPS
+        if env and int(env.get("ENV_RAYS", 0)) > 0:  # the environment's AO and shadowed irradiance per texel
+            maps += "v"
+            env = {**env, "ENV_TEXELS": 1}
+        for res in (gutter_resource(n),) + texel_surface_resources(n, maps):
+            r.input(res)
+        r.program("deon_irradiance_surface", TILED=1, DEON_SURFACE=1, **env)
+        outs = tuple(irradiance_surface_resource(k) for k in range(irradiance_surface_maps(r)))
+        samplers = tuple((TEXEL_SURFACE_SAMPLERS[k], res) for k, res in zip(maps, texel_surface_resources(n, maps)))
+        r.plan(size=n, samplers=samplers, outs=outs)
+        for res in outs:
+            r.output(res, TexSpec((n, n), 4, "f4", filter="nearest"))
+
+    def execute(self, ec) -> None:
+        plan = ec.plan
+        n = plan.size
+        prog = ec.program("deon_irradiance_surface")
+        bind_surface(ec, prog)
+        set_environment(ec, prog, specular=False)
+        energy = bool(ec.settings.deon.energy_conservation)
+        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.settings.deon.mix), u_texel_uv=(1.0 / n, 1.0 / n))
+        if energy:  # lib/specular_params.glsl's m and rho_s (bind_specular less the f0 this pass does not read)
+            sp = ec.settings.specular
+            m, rho = per_region_specular(sp)
+            ec.uniforms(prog, u_spec_m=m, u_spec_rho_s=rho, u_spec_rho_s_table=float(sp.rho_s))
+            ec.textures(prog, region_map=ec.scene.region_map, specular_map=ec.scene.specular_map)
+            if ec.has_input(RHO_DT_RESOURCE):
+                ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        for sampler, res in plan.samplers:  # the texel surface maps it reads
+            ec.bind(prog, sampler, res)
+        if ec.first_tile:  # texels beyond the island tiles: 0, not a pooled texture's
+            for res in plan.outs:
+                ec.clear_unwritten(res, (id(ec.scene), n, 0))
+        with ec.band():
+            ec.draw_fullscreen(prog, *plan.outs, tiles=work_tiles(ec, n, 0))
+
+
 class IrradiancePass(Pass):
     """eq. (28)/(32) in texture space, thickness in alpha; float32; gutters dilated. Tileable: under
-    the viewer's frame budget it is shaded in row bands, across frames (issue 27)."""
+    the viewer's frame budget it is shaded in row bands, across frames (issue 27). Split (split_irradiance):
+    the light pass, reading the light-independent values of IrradianceSurfacePass."""
     name = "deon_irradiance"
     tileable = True
 
     def reflect(self, r: Reflection) -> None:
         n = map_size(r)
-        lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
-        declare(r.settings.deon.mix)
+        split = split_irradiance(r)
+        energy = r.settings.deon.energy_conservation
+        if split:  # N, C^mix, m, rho_s and the environment's term from the light-independent pass
+            lighting = {**declare_lighting(r), "DEON_CACHED": 1,
+                        "DEON_CACHED_ENV": int(irradiance_surface_maps(r) > 2)}
+            cached = tuple(irradiance_surface_resource(k) for k in range(irradiance_surface_maps(r)))
+            r.plan(cached=cached)
+            for res in cached:
+                r.input(res)
+            if energy:
+                declare(r.settings.specular.rho_s)  # the rho_s of the rho_dt table (surface_rho_dt)
+                r.input(RHO_DT_RESOURCE)
+        else:
+            lighting = {**declare_lighting(r), **declare_environment(r, specular=False)}
+            declare(r.settings.deon.mix)
+            if energy:
+                declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
+                r.input(RHO_DT_RESOURCE)
+        r.plan(split=split)
         over_texel = r.settings.deon.texel_samples > 1  # the texel's extent (TEXEL_STEPS) for its samples
-        if r.settings.deon.energy_conservation:
-            declare_specular(r, lut=False)  # per-texel m and rho_s for rho_dt(x, L)
-            r.input(RHO_DT_RESOURCE)
         j = tsm_light_index(r)
         if j is not None:
             r.input(TSM)
@@ -559,15 +662,23 @@ class IrradiancePass(Pass):
     def execute(self, ec) -> None:
         n = ec.plan.shading.size
         prog = ec.program(ec.plan.shading.program)
-        bind_surface(ec, prog)
         set_lighting(ec, prog)
-        set_environment(ec, prog, specular=False)
         energy = bool(ec.settings.deon.energy_conservation)
-        ec.uniforms(prog, u_energy=energy, u_mix=float(ec.settings.deon.mix),
-                    u_texel_samples=int(ec.settings.deon.texel_samples), u_texel_uv=(1.0 / n, 1.0 / n))
-        if energy:
-            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-            bind_specular(ec, prog)
+        ec.uniforms(prog, u_energy=energy, u_texel_samples=int(ec.settings.deon.texel_samples),
+                    u_texel_uv=(1.0 / n, 1.0 / n))
+        if ec.plan.split:
+            for k, res in enumerate(ec.plan.cached):
+                ec.bind(prog, f"irr_surface{k}", res)
+            if energy:
+                ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+                ec.uniforms(prog, u_spec_rho_s_table=float(ec.settings.specular.rho_s))
+        else:
+            bind_surface(ec, prog)
+            set_environment(ec, prog, specular=False)
+            ec.uniforms(prog, u_mix=float(ec.settings.deon.mix))
+            if energy:
+                ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+                bind_specular(ec, prog)
         use_tsm = ec.plan.tsm_light is not None
         ec.uniforms(prog, u_tsm=use_tsm, u_max_thickness=MAX_THICKNESS_MM)
         if use_tsm:

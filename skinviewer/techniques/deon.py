@@ -11,6 +11,7 @@ from skinviewer.passes.deon import (
     GatherWeightsPass,
     GaussianBlurPass,
     IrradiancePass,
+    IrradianceSurfacePass,
     StretchPass,
     TransmittedPass,
     TsmMaxPass,
@@ -30,7 +31,8 @@ def build():
             + [GutterMapPass("deon_gutter", map_size),
                GutterMapPass("deon_gutter_half", transmitted_size), StretchPass(), RhoDtLutPass(), BeckmannLutPass(),
                TexelSurfacePass("deon_texel_surface", map_size),
-               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), TsmMaxPass(), IrradiancePass(), GatherSurfacePass(),
+               TexelSurfacePass("deon_texel_surface_half", transmitted_size), TsmPass(), TsmMaxPass(), IrradianceSurfacePass(),
+               IrradiancePass(), GatherSurfacePass(),
                BorderFramePass()]
             + [GatherWeightsPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]

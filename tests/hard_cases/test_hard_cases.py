@@ -30,6 +30,8 @@ SIGNED_PREFIXES = ("gutter", "seam", "deon_tsm", "deon_stretch", "stretch", "bur
                    "deon_gather_surface", "deon_gather_blocks", "deon_border",  # deon_border: signed distances
                    # the summed step's kept weights: < 0 past a mesh border, -1 a block not summed (sign-coded)
                    "deon_gather_w",
+                   # the irradiance's light-independent map 0: the shading normal N (xyz) and m
+                   "deon_irradiance_surface_0",
                    # Penner's environment: the scattered lobe's SH band factors (lambda_l / lambda_0), signed
                    # where a wide profile flattens the lobe (band 2 past zero); the irradiance made from
                    # them is clamped at 0 (lib/environment.glsl env_irradiance_scattered)
