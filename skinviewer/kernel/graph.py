@@ -186,6 +186,8 @@ class RenderGraph:
         self.peers: list[RenderGraph] = []
         self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
         self.frame_ms: dict[str, float] = {}  # what each pass (its bands) cost in the last run, this frame only
+        # a pass of dependent whole-target draws (ExecuteContext.units): how many it made last run
+        self._units: dict[str, int] = {}
 
     # -- the resource cache's (kernel/resources.py) ---------------------------------------------
     @property
@@ -579,7 +581,18 @@ class RenderGraph:
         prof = self._band_profile.get(p.name)
         while prof is not None and n < most and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
             n = min(most, n + max(1, n // 4))
-        return n
+        return self._align_units(p.name, n)
+
+    def _align_units(self, name: str, n: int) -> int:
+        """``n`` bands for a pass of d dependent whole-target draws (ExecuteContext.units), as a multiple of
+        d: each band is then one sub-band of one draw, so its cost over the bands (the profile) is each
+        draw's, and a band is never a whole costly draw. With fewer bands than draws a band was one or
+        two whole draws: Gosselin's Poisson blur at 1024² drew 95-126 ms bands in frames of a 90 ms
+        budget (issue 27, the longest frames)."""
+        d = self._units.get(name, 1)
+        if n <= 1 or d <= 1:
+            return n
+        return max(1, min(-(-n // d), MAX_TILES // d)) * d if d <= MAX_TILES else n
 
     def _band_next_ms(self, p: Pass, r: Reflection | None, progress: TileProgress) -> float:
         """What the next band of ``p`` costs: its share of the pass by the cost profile over the
