@@ -106,3 +106,21 @@ def test_only_graphs_of_one_technique_share_and_release_unlinks(renderer, rig):
     p.release()
     assert p not in g.peers
     del renderer.graphs[f"separable|{PREVIEW}"]
+
+
+def test_an_rgb_float_table_is_run_not_blitted(renderer, gl_ctx):
+    """Penner's tables are RGB32F, a format GL 3.3 core need not render to: never copied (the pass runs in
+    each graph), while the shadow map beside it is, and the preview's image is still its own render's."""
+    user = small_settings("head", "penner", size=48)
+    renderer.render(user)
+    preview = with_values(user, {"render.width": 24, "render.height": 24})
+    rep = renderer.render(preview, variant=PREVIEW, interactive=True)
+    luts = status(rep, "penner_luts")
+    assert luts.status == "ran" and "copied" not in luts.reason and not luts.inputs
+    assert "copied" in status(rep, SHADOW).reason
+    r = Renderer(gl_ctx)
+    try:
+        r.render(preview)
+        assert np.array_equal(renderer.graph("penner", PREVIEW).read("image"), r.graph("penner").read("image"))
+    finally:
+        r.release()

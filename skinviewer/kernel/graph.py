@@ -56,6 +56,8 @@ REUSE_REFLECTIONS = True
 # a pass with no texture input whose key another graph of the technique holds is copied from it
 # (RenderGraph.share_passes); False: every graph runs its own (bench_interaction.py --share both)
 SHARE_PASSES = True
+# a pass of dependent draws is split into a multiple of them (_align_units); False: as counted (A/B)
+ALIGN_UNITS = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -515,6 +517,8 @@ class RenderGraph:
         version is the graph's own: an equal number says nothing across graphs) or keeps state."""
         if not SHARE_PASSES or r.inputs or not r.outputs or p.name in self.refining:
             return False
+        if any(spec.components == 3 for spec in r.outputs.values()):
+            return False  # RGB float formats need not be colour-renderable (GL 3.3 core): no framebuffer to blit
         for peer in self.peers:
             if peer._keys.get(p.name) != key or p.name in peer._progress or p.name in peer.refining:
                 continue
@@ -524,9 +528,13 @@ class RenderGraph:
             if timing == "sync":
                 self.ctx.finish()
                 t0 = time.perf_counter()
-            for res in r.outputs:  # one framebuffer per texture: a blit copies one colour buffer to one
-                self.ctx.copy_framebuffer(self.res.framebuffer_for((self.res.textures[res],)),
-                                          peer.res.framebuffer_for((peer.res.textures[res],)))
+            try:  # one framebuffer per texture: a blit copies one colour buffer to one
+                for res in r.outputs:
+                    self.ctx.copy_framebuffer(self.res.framebuffer_for((self.res.textures[res],)),
+                                              peer.res.framebuffer_for((peer.res.textures[res],)))
+            except Exception:  # a format no framebuffer takes (an uploaded table): the pass runs instead
+                return False
+            for res in r.outputs:
                 self.res.versions[res] = self.res.versions.get(res, 0) + 1
             if timing == "sync":
                 self.ctx.finish()
@@ -590,7 +598,7 @@ class RenderGraph:
         two whole draws: Gosselin's Poisson blur at 1024² drew 95-126 ms bands in frames of a 90 ms
         budget (issue 27, the longest frames)."""
         d = self._units.get(name, 1)
-        if n <= 1 or d <= 1:
+        if n <= 1 or d <= 1 or not ALIGN_UNITS:
             return n
         return max(1, min(-(-n // d), MAX_TILES // d)) * d if d <= MAX_TILES else n
 
