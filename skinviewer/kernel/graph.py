@@ -340,6 +340,7 @@ class RenderGraph:
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.own_ms = 0.0
+            self.frame_ms = {}
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
                            "" if p.status == "ran" else p.reason, p.inputs, p.outputs,
