@@ -4,7 +4,6 @@ sub-band of one draw. With fewer bands than draws a band was one or two whole dr
 ran 95-126 ms bands in frames of a 90 ms budget. The split pass equals the unsplit one bit for bit."""
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from skinviewer.ground.settings import with_values

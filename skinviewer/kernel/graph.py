@@ -421,7 +421,8 @@ class RenderGraph:
                     progress = progress or TileProgress(key, self._tile_count(p, r, budget_ms))
                     self._progress[p.name] = progress
                     self._keys.pop(p.name, None)  # its outputs are being overwritten band by band
-                    rec.ms = self.frame_ms[p.name] = self._run_bands(p, r, frame, timing, progress, t_start, budget_ms)
+                    rec.ms = self._run_bands(p, r, frame, timing, progress, t_start, budget_ms)
+                    self.frame_ms[p.name] = rec.ms or 0.0
                     rec.draws = self._last_draws
                     if progress.done < progress.count:
                         rec.status = "deferred"
@@ -439,7 +440,8 @@ class RenderGraph:
                         query = self._execute(p, r, frame, timing, defer=True)
                         self._pending_queries.append((query, rec, p.name, pixels(r), predicted))
                     else:
-                        rec.ms = self.frame_ms[p.name] = self._execute(p, r, frame, timing)
+                        rec.ms = self._execute(p, r, frame, timing)
+                        self.frame_ms[p.name] = rec.ms or 0.0
                         self._keep_pace(predicted, rec.ms)
                 rec.draws = self._last_draws
                 if r.notes:
