@@ -131,7 +131,11 @@ class Driver:
                                        "presented": fr.presented, "swap_ms": round(swap, 2),
                                        "gc_ms": round(gc_ms, 2), "gc_generations": gens, "rung": fr._rung.label,
                                        "first_draws": first, "primed": fr.primer.frames,
-                                       "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else []}) + "\n")
+                                       "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else [],
+                                       # each pass that ran or ran a band here: its ms (sync timing on llvmpipe)
+                                       "pass_ms": {k: round(v, 1) for k, v in getattr(fr.last_graph, "frame_ms", {}).items()},
+                                       "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
+                                       "overhead_ms": round(fr.overhead_ms or 0.0, 1)}) + "\n")
 
     def rest(self, seconds: float, cap_s: float = 30.0) -> float:
         """The user looks at the final image before the next drag: idle frames for ``seconds``, and
@@ -320,6 +324,9 @@ def main() -> int:
     ap.add_argument("--cold-shaders", action="store_true",
                     help="Mesa's on-disk shader cache off (MESA_SHADER_CACHE_DISABLE): every variant is "
                          "JIT-compiled at its first draw, as on a first run or a variant never drawn here")
+    ap.add_argument("--share", choices=("on", "off", "both"), default="on",
+                    help="passes copied between the user's graph and a preview's when their keys are equal "
+                         "(RenderGraph.share_passes); both: the governed row twice, sharing off then on, in one viewer")
     args = ap.parse_args()
     if args.cold_shaders:
         os.environ["MESA_SHADER_CACHE_DISABLE"] = "true"  # before any GL context
@@ -365,13 +372,20 @@ def main() -> int:
                       f"{'preview (end of light drag)':<48} "
                       f"{'error':>7} {'final = ungoverned':>18} {'light start':>11} {'1st draws':>9} {'idle max':>8}",
                       flush=True)
+            from skinviewer.kernel import graph as graph_mod
+            shares = {"on": [True], "off": [False], "both": [False, True]}[args.share]
             for name in names:
-                for mode in ("off", "interactive"):
+                for mode, share in [("off", shares[-1])] + [("interactive", sh) for sh in shares]:
+                    graph_mod.SHARE_PASSES = share
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest)
                     row["scene"] = scene_name
+                    if len(shares) > 1 and mode != "off":
+                        row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
+                        if not share:
+                            row["mode"] = "interactive, sharing off"
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
-                    print(f"{scene_name:<6} {name:<9} {mode:<11} {'on' if prime else 'off':<5} "
+                    print(f"{scene_name:<6} {row['technique']:<9} {mode:<11} {'on' if prime else 'off':<5} "
                           f"{row['p95_drag']:9.0f} {row['p95_edits']:9.0f} "
                           f"{row['release_ms']:13.0f} {row['alone_ms']:8.0f} {row['release_ms'] / row['alone_ms']:6.2f} "
                           f"{row['stall_ms']:8.0f} {row['work_stall_ms']:6.0f} {row['swap_max_ms']:6.0f} {row['gc_max_ms']:5.0f} "

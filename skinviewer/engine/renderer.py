@@ -118,6 +118,9 @@ class Renderer:
             g.memory_available = self.available_memory
             if variant:  # a preview's first frame is budgeted by what its passes cost in the user's graph
                 g.share_costs(self.graph(technique))
+                # and a pass whose key is equal in the other graph is copied, not run (share_passes); not
+                # between two previews: only the user's graph and each preview's
+                g.share_passes(self.graph(technique))
             self.graphs[key] = g
         return g
 

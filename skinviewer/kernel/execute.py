@@ -430,6 +430,7 @@ class ExecuteContext:
         ceil(bands / draws) row bands and a band runs a contiguous share of them, so every draw is
         complete before the next one starts; one band (no budget): every draw whole, in order."""
         k, n = self.tile
+        self.graph._units[self.pass_.name] = max(int(draws), 1)  # the next split aligns its bands to them
         per = max(1, -(-n // max(draws, 1)))
         total = draws * per
         return [(u // per, u % per, per) for u in range((k * total) // n, ((k + 1) * total) // n)]

@@ -53,6 +53,11 @@ PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 a
 # a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
 # every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
 REUSE_REFLECTIONS = True
+# a pass with no texture input whose key another graph of the technique holds is copied from it
+# (RenderGraph.share_passes); False: every graph runs its own (bench_interaction.py --share both)
+SHARE_PASSES = True
+# a pass of dependent draws is split into a multiple of them (_align_units); False: as counted (A/B)
+ALIGN_UNITS = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -178,7 +183,13 @@ class RenderGraph:
         self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
+        # graphs of the same technique (the viewer's governor previews, Renderer.graph): a pass that
+        # reads no texture and whose cache key one of them holds is copied from it, not run (share_passes)
+        self.peers: list[RenderGraph] = []
         self.cancelled: list[str] = []  # passes whose unfinished bands the last frame abandoned
+        self.frame_ms: dict[str, float] = {}  # what each pass (its bands) cost in the last run, this frame only
+        # a pass of dependent whole-target draws (ExecuteContext.units): how many it made last run
+        self._units: dict[str, int] = {}
 
     # -- the resource cache's (kernel/resources.py) ---------------------------------------------
     @property
@@ -329,6 +340,7 @@ class RenderGraph:
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.own_ms = 0.0
+            self.frame_ms = {}
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
                            "" if p.status == "ran" else p.reason, p.inputs, p.outputs,
@@ -363,6 +375,7 @@ class RenderGraph:
         check_finite = bool(getattr(frame.settings.render, "check_finite", False))
         self._checking = check_finite and not frame.interactive
         records: dict[str, PassRecord] = {}
+        self.frame_ms = {}
         partial: set[str] = set()  # outputs of passes part-way through their bands this frame
         self.cancelled = []
         for p in order:
@@ -381,6 +394,9 @@ class RenderGraph:
             if progress is not None and (force or progress.key != key):
                 self._cancel(p.name)  # what its bands were computing is no longer wanted
                 progress = None
+            if not force and old != key and progress is None and self._copy_from_peer(p, r, key, rec, timing):
+                records[p.name] = rec  # an equal key in a peer graph: its outputs copied (the same result)
+                continue
             if force or realloc or old != key:
                 # a freshly (re)allocated output holds garbage under no key (popped above): deferred,
                 # it runs next frame like any other pass (its consumers wait) -- a first frame is spread
@@ -406,6 +422,7 @@ class RenderGraph:
                     self._progress[p.name] = progress
                     self._keys.pop(p.name, None)  # its outputs are being overwritten band by band
                     rec.ms = self._run_bands(p, r, frame, timing, progress, t_start, budget_ms)
+                    self.frame_ms[p.name] = rec.ms or 0.0
                     rec.draws = self._last_draws
                     if progress.done < progress.count:
                         rec.status = "deferred"
@@ -424,6 +441,7 @@ class RenderGraph:
                         self._pending_queries.append((query, rec, p.name, pixels(r), predicted))
                     else:
                         rec.ms = self._execute(p, r, frame, timing)
+                        self.frame_ms[p.name] = rec.ms or 0.0
                         self._keep_pace(predicted, rec.ms)
                 rec.draws = self._last_draws
                 if r.notes:
@@ -486,6 +504,65 @@ class RenderGraph:
         pass ran here its own cost is used."""
         self._cost_fallback = other
 
+    def share_passes(self, other: RenderGraph) -> None:
+        """Let this graph and ``other`` (graphs of one technique: the user's and a governor preview's)
+        copy each other's passes: a pass that reads no texture computes from its key alone (settings,
+        programs, output specs, scene, camera, plan), so an equal key in the other graph holds the same
+        outputs, bit for bit. Issue 27: the user's graph re-rendered the key light's shadow map that the
+        preview's graph had just made at the same light after a light drag."""
+        if other is not self and other not in self.peers:
+            self.peers.append(other)
+            other.peers.append(self)
+
+    def _copy_from_peer(self, p: Pass, r: Reflection, key: dict[str, Any], rec: PassRecord, timing: str) -> bool:
+        """``p``'s outputs copied from a peer graph whose cache holds ``p`` under ``key`` (complete, not
+        part-way through its bands); False where no peer does or ``p`` reads a texture (a texture's
+        version is the graph's own: an equal number says nothing across graphs) or keeps state."""
+        if not SHARE_PASSES or r.inputs or not r.outputs or p.name in self.refining:
+            return False
+        if any(spec.components == 3 for spec in r.outputs.values()):
+            return False  # RGB float formats need not be colour-renderable (GL 3.3 core): no framebuffer to blit
+        for peer in self.peers:
+            if peer._keys.get(p.name) != key or p.name in peer._progress or p.name in peer.refining:
+                continue
+            if any(peer.res.specs.get(res) != spec or res not in peer.res.textures for res, spec in r.outputs.items()):
+                continue
+            t0 = time.perf_counter()
+            if timing == "sync":
+                self.ctx.finish()
+                t0 = time.perf_counter()
+            try:  # one framebuffer per texture: a blit copies one colour buffer to one
+                for res in r.outputs:
+                    self.ctx.copy_framebuffer(self.res.framebuffer_for((self.res.textures[res],)),
+                                              peer.res.framebuffer_for((peer.res.textures[res],)))
+            except Exception:  # a format no framebuffer takes (an uploaded table): the pass runs instead
+                return False
+            for res in r.outputs:
+                self.res.versions[res] = self.res.versions.get(res, 0) + 1
+            if timing == "sync":
+                self.ctx.finish()
+            self._exec_s += time.perf_counter() - t0
+            rec.status, rec.ms = "ran", (time.perf_counter() - t0) * 1000.0
+            self.frame_ms[p.name] = rec.ms
+            rec.reason = "copied from a graph of the same technique holding the same key"
+            self._keys[p.name] = key
+            self._nonfinite[p.name] = list(peer._nonfinite.get(p.name, []))
+            if p.name in peer._unchecked:
+                self._unchecked.add(p.name)
+            else:
+                self._unchecked.discard(p.name)
+            if p.name in peer._notes:
+                self._notes[p.name] = peer._notes[p.name]
+                rec.note, rec.figures = peer._notes[p.name]
+            if peer._lod_notes.get(p.name):
+                self._lod_notes[p.name] = peer._lod_notes[p.name]
+            else:
+                self._lod_notes.pop(p.name, None)
+            rec.nonfinite = list(self._nonfinite[p.name])
+            self._last_draws = 0
+            return True
+        return False
+
     # -- tiles: a long pass in row bands, across frames --------------------------------------
     def _expected_ms(self, p: Pass, r: Reflection) -> float | None:
         """``p``'s last measured cost scaled to the pixels of its outputs now (a governed preview
@@ -515,7 +592,18 @@ class RenderGraph:
         prof = self._band_profile.get(p.name)
         while prof is not None and n < most and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
             n = min(most, n + max(1, n // 4))
-        return n
+        return self._align_units(p.name, n)
+
+    def _align_units(self, name: str, n: int) -> int:
+        """``n`` bands for a pass of d dependent whole-target draws (ExecuteContext.units), as a multiple of
+        d: each band is then one sub-band of one draw, so its cost over the bands (the profile) is each
+        draw's, and a band is never a whole costly draw. With fewer bands than draws a band was one or
+        two whole draws: Gosselin's Poisson blur at 1024² drew 95-126 ms bands in frames of a 90 ms
+        budget (issue 27, the longest frames)."""
+        d = self._units.get(name, 1)
+        if n <= 1 or d <= 1 or not ALIGN_UNITS:
+            return n
+        return max(1, min(-(-n // d), MAX_TILES // d)) * d if d <= MAX_TILES else n
 
     def _band_next_ms(self, p: Pass, r: Reflection | None, progress: TileProgress) -> float:
         """What the next band of ``p`` costs: its share of the pass by the cost profile over the
@@ -759,6 +847,10 @@ class RenderGraph:
 
     def release(self) -> None:
         self._collect_checks(None)
+        for peer in self.peers:
+            if self in peer.peers:
+                peer.peers.remove(self)
+        self.peers = []
         for name in list(self._progress):
             self._finish_bands(name)
         for p in self.passes:

@@ -15,7 +15,7 @@ import time
 import traceback
 from collections import deque
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 from skinviewer import techniques
 from skinviewer.engine.renderer import Renderer
@@ -112,6 +112,7 @@ class FrameController:
         # passes' cost it observes (issue 27: 25-60 ms of a d'Eon preview frame was this)
         self.graph_own_ms: float | None = None
         self.last_own_ms = 0.0  # the graph's own time in the last frame's render (any frame)
+        self.last_graph: Any = None  # the graph the last frame rendered in
         self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
         self._presented_at = 0.0
         self._last_presented = True
@@ -488,7 +489,8 @@ class FrameController:
             preview = self._governing and not rung.final
             report = self.renderer.render(target, budget_ms=budget, variant=variant, interactive=preview)
             self._render_ms = (time.perf_counter() - t0) * 1000.0
-            own = self.last_own_ms = self.renderer.graph(target.technique, variant).own_ms
+            self.last_graph = self.renderer.graph(target.technique, variant)  # the frame log's (bench_interaction)
+            own = self.last_own_ms = self.last_graph.own_ms
             if preview and report.ran:
                 self.graph_own_ms = own if self.graph_own_ms is None else 0.8 * self.graph_own_ms + 0.2 * own
             if not report.complete and self._governing and self._interacting:

@@ -28,6 +28,7 @@ from skinviewer.techniques.preview import FINAL, Rung, ladder
 
 MODES = ("off", "interactive", "fixed-budget")
 REFINE_STEP_SHARE = 0.1  # an intermediate refinement step costs at most this share of the final frame
+SKIP_STEP_FRAMES = 2.0  # no intermediate step when the final frame costs at most this many frames' room
 FIT_MARGIN = 0.85  # a rung fits when its cost is within this share of the frame's render budget
 OBSERVED_WEIGHT = 0.5  # the running mean of the costs seen: the newest frame's share
 
@@ -225,6 +226,11 @@ class Governor:
         order = self._accuracy_order(t, ladder(s))
         above = order[order.index(start) + 1:-1] if start in order else []
         final_ms = self.cost(t, FINAL, False)
+        if final_ms is not None and final_ms <= SKIP_STEP_FRAMES * self.room():
+            # the final image is at most this many frames away: an intermediate image would be on screen
+            # for about one frame and cost its own frame of rendering and presenting (issue 27: release ->
+            # final); it is shown straight away instead
+            return [FINAL]
         cheap = [r for r in above if final_ms is not None and (self.cost(t, r, False) or 0.0) <= REFINE_STEP_SHARE * final_ms]
         return ([cheap[-1]] if cheap else []) + [FINAL]
 

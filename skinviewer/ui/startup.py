@@ -31,6 +31,7 @@ def mark(event: str, **info) -> None:
 
 
 DEFAULT_WINDOW = (1280, 800)
+RETRY_PAUSE_S = 0.25  # before asking a window library for OpenGL 4.3 a second time
 
 
 class WindowUnavailableError(RuntimeError):
@@ -50,28 +51,40 @@ def create_window(size: tuple[int, int] = DEFAULT_WINDOW, visible: bool = True, 
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) and sys.platform.startswith("linux"):
         errors.append("no DISPLAY or WAYLAND_DISPLAY")
     else:
-        # OpenGL 4.3 first (compute shaders: render.compute_blur), else 3.3: a driver may give exactly the
-        # version asked; the fallback is said once on stderr and in kernel.gl.describe
-        for name, version in [(b, v) for b in ([backend] + [b for b in ("glfw", "pyglet") if b != backend])
-                              for v in ((4, 3), (3, 3))]:
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")  # glfw reports its init failure as a warning too
-                    cls = mglw.get_local_window_cls(name)
-                    wnd = cls(title="skinviewer", size=(int(size[0]), int(size[1])), resizable=True, visible=visible,
-                              gl_version=version, aspect_ratio=None, vsync=vsync, samples=0, cursor=True)
-                mglw.activate_context(window=wnd)
+        # OpenGL 4.3 first (compute shaders: render.compute_blur), asked twice: glfw's init failed once
+        # under Xvfb ("Failed to initialize glfw") where the next window opened at 4.3 (a 3.3 window on a
+        # GPU loses the compute blurs); then 3.3: a driver may give exactly the version asked. What it
+        # got after a failure is said once on stderr and in kernel.gl.describe
+        import time
+        for name in [backend] + [b for b in ("glfw", "pyglet") if b != backend]:
+            failed: list[str] = []  # this library's failures
+            for version in ((4, 3), (4, 3), (3, 3)):
+                if failed and version == (4, 3):
+                    time.sleep(RETRY_PAUSE_S)  # the second 4.3 try, after a pause
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")  # glfw reports its init failure as a warning too
+                        cls = mglw.get_local_window_cls(name)
+                        wnd = cls(title="skinviewer", size=(int(size[0]), int(size[1])), resizable=True,
+                                  visible=visible, gl_version=version, aspect_ratio=None, vsync=vsync, samples=0,
+                                  cursor=True)
+                    mglw.activate_context(window=wnd)
+                except Exception as exc:
+                    failed.append(f"{name} {version[0]}.{version[1]}: {exc}")
+                    continue
                 # moderngl-window closes the window on Escape by default: that quit the session (unsaved
                 # edits and all) when Escape was meant for a text field or for leaving the pass inspector
                 wnd.exit_key = None
-                if version < (4, 3):
+                if failed:
                     from skinviewer.kernel.gl import set_fallback
-                    note = f"OpenGL 4.3 unavailable ({errors[-1] if errors else '?'}), running 3.3: no compute shaders"
+                    if version < (4, 3):
+                        note = f"OpenGL 4.3 unavailable twice ({failed[-1]}), running 3.3: no compute shaders"
+                    else:
+                        note = f"OpenGL 4.3 on the second try (the first: {failed[0]})"
                     set_fallback(wnd.ctx, note)
                     print(f"skinviewer: {note}", file=sys.stderr)
                 return wnd
-            except Exception as exc:
-                errors.append(f"{name} {version[0]}.{version[1]}: {exc}")
+            errors.extend(failed)
     raise WindowUnavailableError(
         "cannot open a window (" + "; ".join(errors) + "). Without a display run it under Xvfb: "
         "xvfb-run -a -s '-screen 0 1280x800x24' skinviewer ...; headless renders: skinviewer render --out FILE.png")
