@@ -35,7 +35,7 @@ def main() -> None:
     v = {"scene.name": "head", **scene_overrides("head"), "technique": "deon",
          "render.width": args.size, "render.height": args.size}
     if args.scene == "scan":
-        v["scene.mesh"] = str(SCAN)
+        v["scene.mesh"], v["scene.mm_per_unit"] = str(SCAN), 48.0  # its units: 48 mm
     if args.camera:
         yaw, pitch = (float(x) for x in args.camera.split(","))
         v.update({"camera.yaw": yaw, "camera.pitch": pitch})

@@ -49,7 +49,7 @@ def main() -> None:
     extra = {}
     if args.scene == "scan":
         from bench_fidelity import SCAN
-        extra = {"scene.mesh": str(SCAN)}
+        extra = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}  # its units: 48 mm
     maps = args.maps
     s = settings_for("deon", "head", args.size, maps, **extra)
     phong = settings_for("phong", "head", args.size, maps, **extra)

@@ -66,7 +66,7 @@ def main() -> None:
     extra = {}
     if args.scene == "scan":
         from bench_fidelity import SCAN
-        extra = {"scene.mesh": str(SCAN)}
+        extra = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}  # its units: 48 mm
     maps_list = [int(x) for x in args.maps.split(",")]
     # side -> (SPLIT_SUM, LIT_RING); True / False: split / one pass as the defaults have them
     kinds: dict = {True: (True, deon_passes.LIT_RING), False: (False, None)}

@@ -40,7 +40,7 @@ def main() -> None:
     import skinviewer.passes.deon as deon_passes
     r = Renderer(headless_context())
     rows = []
-    for scene, extra in (("head", {}), ("scan", {"scene.mesh": str(SCAN)})):
+    for scene, extra in (("head", {}), ("scan", {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0})):
         if scene == "scan" and not SCAN.is_file():
             print(f"# no scan at {SCAN}: head only")
             continue

@@ -488,3 +488,33 @@ def test_the_rule_s_worker_pauses_between_chunks_and_finds_the_same_vertices(ren
     _fresh_rule(sc)
     assert np.array_equal(rules.tsm_candidates(s, sc, pose, gauss), whole)  # the main thread: chunked, no pause
     assert pauses and set(pauses) == {"MainThread"}  # asked there too; rules._pause sleeps only off it
+
+
+def test_a_mesh_a_few_mm_across_keeps_every_back_vertex_without_pairing_them(renderer, monkeypatch):
+    """A head loaded without its units (the scan at 1 mm a unit is 5 mm across): the TSM gather's reach
+    spans the whole mesh, so every sheet pair is within it (10 s and 3 GB of pairs a light move). The rule
+    pairs nothing there and keeps every vertex facing away (the TSM is kept: never dropped unproven)."""
+    s = small_settings("head", "deon", 96, **{"camera.yaw": 0.0, "scene.mm_per_unit": 0.02})
+    renderer.render(s)
+    sc = renderer.scene.gpu
+    assert rules.BESIDE_MAX_RADIUS * sc.radius * sc.mm_per_unit < 1.0  # mm: under any skin Gaussian's reach
+    pose = s.lights[0].model_copy(update={"kind": "directional", "direction": (0.1, 0.25, -1.0)})
+    _fresh_rule(sc)
+    monkeypatch.setattr(rules, "lit_beside", lambda *a, **k: pytest.fail("paired a mesh the reach spans"))
+    cand = rules.tsm_candidates(s, sc, pose, s.deon.gaussians)
+    back = rules._facing(sc, pose)[4]
+    assert len(back) and np.isin(back, cand).all()
+
+
+@NEEDS_SCAN
+def test_a_mesh_loaded_without_its_units_says_what_scale_a_head_would_need(gl_ctx):
+    """The scan is in units of 48 mm: without scene.mm_per_unit it loads 5 mm across, and the note says so."""
+    r = Renderer(gl_ctx)
+    try:
+        loaded = r.ensure_scene(with_values(small_settings("head", "phong", 32), {"scene.mesh": str(LPS_GLB)}))
+        note = next(n for n in loaded.notes if "mm_per_unit not set" in n)
+        assert "mm across" in note and "--set scene.mm_per_unit=" in note, note
+        scale = float(note.rsplit("=", 1)[1])
+        assert 30.0 < scale < 80.0, note  # 48 is right
+    finally:
+        r.release()

@@ -88,7 +88,10 @@ class Renderer:
             mm = sc.mm_per_unit
             if mm is None:
                 mm = 1.0
-                notes.append("scene.mm_per_unit not set: assuming the mesh is in millimetres")
+                across = 2.0 * float(mesh.frame[1])  # the head's framing sphere (without the neck and shoulders)
+                hint = (f" — its head is {across:.3g} mm across that way, a head ~260 mm: e.g. --set "
+                        f"scene.mm_per_unit={260.0 / across:.3g}" if across > 0 and not 100.0 <= across <= 600.0 else "")
+                notes.append("scene.mm_per_unit not set: assuming the mesh is in millimetres" + hint)
             desc = f"{Path(sc.mesh).name}"
         else:
             sdef = build_scene(sc.name, sc.head_detail)

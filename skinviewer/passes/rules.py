@@ -191,6 +191,7 @@ TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread 
 # llvmpipe for the cores (2 here); chunked and paused it takes about a tenth of a core
 RAY_CHUNK = 512     # rays per Embree call (0.14 ms CPU; embreex releases the GIL while casting)
 PAIR_CHUNK = 16384  # sheet pairs selected per step (lit_beside; 0.15 ms CPU)
+BESIDE_MAX_RADIUS = 0.25  # a gather reach past this share of the mesh's radius: no pairs, every back vertex kept
 WORKER_PAUSE_S = 0.001  # the pause: the GIL and the CPU go to the main thread meanwhile
 
 
@@ -524,7 +525,11 @@ def tsm_candidates(settings, scene, pose, gaussians) -> np.ndarray:
             wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
                     if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
             reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
-            if reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
+            if reach > BESIDE_MAX_RADIUS * scene.radius * scene.mm_per_unit:  # a mesh a few mm across (its
+                # units not mm): every pair is within reach (10 s and 3 GB a light move on the scan at 1 mm a
+                # unit); every vertex facing away is kept, as the gather could reach it (never drop, unproven)
+                cand = np.union1d(cand, _facing(scene, pose)[4])
+            elif reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
                 back, k, d, acos = lit_beside(scene, pose, reach)
                 a2 = np.zeros(len(back))
                 for v, w in wide:
