@@ -497,9 +497,9 @@ def test_a_mesh_a_few_mm_across_keeps_every_back_vertex_without_pairing_them(ren
     s = small_settings("head", "deon", 96, **{"camera.yaw": 0.0, "scene.mm_per_unit": 0.02})
     renderer.render(s)
     sc = renderer.scene.gpu
-    assert rules.BESIDE_MAX_RADIUS * sc.radius * sc.mm_per_unit < 1.0  # mm: under any skin Gaussian's reach
     pose = s.lights[0].model_copy(update={"kind": "directional", "direction": (0.1, 0.25, -1.0)})
     _fresh_rule(sc)
+    monkeypatch.setattr(rules, "BESIDE_MAX_PAIRS", 0.5 * rules.beside_pairs(sc, pose, 8.0))  # this small head's
     monkeypatch.setattr(rules, "lit_beside", lambda *a, **k: pytest.fail("paired a mesh the reach spans"))
     cand = rules.tsm_candidates(s, sc, pose, s.deon.gaussians)
     back = rules._facing(sc, pose)[4]

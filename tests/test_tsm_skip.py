@@ -15,6 +15,7 @@ from helpers import small_settings
 import skinviewer.passes.deon as deon_passes
 from skinviewer.engine.renderer import Renderer
 from skinviewer.ground.settings import with_values
+from skinviewer.kernel.gl import software_renderer
 from skinviewer.passes.deon import TRANSMITTED, TSM, TSM_MAX, tsm_max_covered, tsm_reach_texels
 
 # llvmpipe does not reproduce its own denormals: two renders of the unchanged shader in one process
@@ -48,9 +49,15 @@ def test_the_skip_is_the_full_path(gl_ctx, scene, extra):
     rep, skip = _render(gl_ctx, s, skip=True)
     assert "deon_tsm_max" in {p.name for p in rep.passes if p.status == "ran"}
     assert TSM_MAX not in full  # without the skip nobody reads it
+    # a GPU compiler may schedule the two variants' arithmetic differently (fused multiply-adds): the H200
+    # read 6e-8 apart in texels neither skips; llvmpipe compiles them alike
+    tol = FLT_MIN if software_renderer(gl_ctx) else 1e-6
     for name in (TRANSMITTED, "deon_diffuse", "image"):
         a, b = skip[name].astype(np.float64), full[name].astype(np.float64)
-        assert np.abs(a - b).max() < FLT_MIN, name
+        if skip[name].dtype.kind in "ui":  # 8-bit: a difference that rounds across a level
+            assert np.abs(a - b).max() <= (0 if tol == FLT_MIN else 1), name
+        else:
+            assert np.abs(a - b).max() <= tol * max(1.0, np.abs(b).max()), name
     lit = full[TRANSMITTED][..., :3]
     assert (lit > FLT_MIN).any(axis=-1).sum() > 100  # light goes through
     _, marked = _render(gl_ctx, s, skip=True, mark=True)

@@ -191,7 +191,7 @@ TSM_WORKER = True  # governed previews: a bin's rule is made in a worker thread 
 # llvmpipe for the cores (2 here); chunked and paused it takes about a tenth of a core
 RAY_CHUNK = 512     # rays per Embree call (0.14 ms CPU; embreex releases the GIL while casting)
 PAIR_CHUNK = 16384  # sheet pairs selected per step (lit_beside; 0.15 ms CPU)
-BESIDE_MAX_RADIUS = 0.25  # a gather reach past this share of the mesh's radius: no pairs, every back vertex kept
+BESIDE_MAX_PAIRS = 1_000_000  # lit_beside's pairs (estimated; the head 4e4, the scan 4e3) past which it pairs nothing
 WORKER_PAUSE_S = 0.001  # the pause: the GIL and the CPU go to the main thread meanwhile
 
 
@@ -503,6 +503,16 @@ def tsm_needed(settings, scene, pose, gaussians, frame: FrameView, interactive: 
     return memo[key]
 
 
+def beside_pairs(scene, pose, reach_mm: float) -> float:
+    """About how many (vertex facing away, lit vertex) pairs lie within ``reach_mm``: their product times the
+    share of the mesh's surface a disc of that reach covers (its bounding sphere's, at most 1)."""
+    _, _, _, nl, back = _facing(scene, pose)
+    lit = min(int(np.count_nonzero(nl > 0.05)), MAX_LIT)
+    r_mm = float(scene.radius) * float(scene.mm_per_unit)
+    share = min(1.0, reach_mm * reach_mm / (4.0 * r_mm * r_mm)) if r_mm > 0 else 1.0
+    return float(len(back)) * lit * share
+
+
 def tsm_candidates(settings, scene, pose, gaussians) -> np.ndarray:
     """The exact rule's vertices through which the TSM term transmits more than TSM_EPS (in view
     or not), cached per light pose, profile and gather (the last POSE_MEMORY). ImportError: no Embree.
@@ -525,9 +535,9 @@ def tsm_candidates(settings, scene, pose, gaussians) -> np.ndarray:
             wide = [(g.variance, max(g.weights)) for i, g in enumerate(gaussians)
                     if i > 0 and g.variance > 0 and max(g.weights) > TSM_EPS]
             reach = max((math.sqrt(2.0 * v * math.log(w / TSM_EPS)) for v, w in wide), default=0.0)
-            if reach > BESIDE_MAX_RADIUS * scene.radius * scene.mm_per_unit:  # a mesh a few mm across (its
-                # units not mm): every pair is within reach (10 s and 3 GB a light move on the scan at 1 mm a
-                # unit); every vertex facing away is kept, as the gather could reach it (never drop, unproven)
+            if beside_pairs(scene, pose, reach) > BESIDE_MAX_PAIRS:  # e.g. a dense head a few mm across (its
+                # units not mm): nearly every pair is within reach (10 s and 3 GB a light move on the scan at 1
+                # mm a unit); every vertex facing away is kept, as the gather could reach it (never drop, unproven)
                 cand = np.union1d(cand, _facing(scene, pose)[4])
             elif reach > 0:  # sum_i w_i sum_q G(v_i, d_q) A_q cos_q: the gather's integral over those vertices
                 back, k, d, acos = lit_beside(scene, pose, reach)
