@@ -430,3 +430,40 @@ def test_a_cached_truth_of_an_older_version_is_recomputed_with_a_note(tmp_path, 
     assert not files[0].exists()
     again = compute_reference(s)
     assert again.meta["cached"] and not again.meta.get("notes")
+
+
+def test_the_refined_decision_is_reproducible():
+    """refine_at under an environment (issue 30 item 4: more rays where the p99 is decided) is seeded:
+    two runs from fresh surfaces give the same truth and uncertainty to the bit, so the paired p99
+    verdict (metrics.p99_change_bounds) is the same; a second refinement with more environment rays
+    on the same surface adds rays only up to the new factor (Surface.env_boosted) and leaves the
+    refined truth's environment part no more uncertain than before."""
+    from skinviewer.engine.reference import Surface, refine_at
+    from skinviewer.physics.metrics import p99_change_bounds
+    s, scene = _blade_under_an_environment()
+    s = with_values(s, {"render.width": 20, "render.height": 20})
+    ref = compute_reference(s, h_mm=1.0, scene=scene)
+    m = ref.mask & (ref.lit.sum(-1) > 0)
+    rel = (ref.uncertainty / np.maximum(ref.lit, 1e-3)).max(2)
+    sel = m & (rel >= np.quantile(rel[m], 0.9))  # the most uncertain tenth, as the bench's tail
+    assert 10 <= sel.sum() <= 60
+    rng = np.random.default_rng(5)
+    a = ref.lit * (1.0 + 0.05 * rng.standard_normal(ref.lit.shape))
+    b = ref.lit * 1.03
+    runs = []
+    for _ in range(2):
+        surf = Surface(*scene, s)
+        runs.append((refine_at(s, ref, sel, h_mm=1.0, halvings=1, surface=surf, env_factor=2), surf))
+    (r1, surf), (r2, _) = runs
+    np.testing.assert_array_equal(r1.lit, r2.lit)
+    np.testing.assert_array_equal(r1.uncertainty, r2.uncertainty)
+    assert r1.meta["refined"]["env_factor"] == 2
+    for lo_hi in zip(p99_change_bounds(a, b, r1.lit, r1.uncertainty, m), p99_change_bounds(a, b, r2.lit, r2.uncertainty, m)):
+        np.testing.assert_array_equal(*lo_hi)
+    boosted = surf.env_boosted.copy()
+    assert set(np.unique(boosted)) <= {0, 2} and (boosted == 2).any()
+    r3 = refine_at(s, ref, sel, h_mm=1.0, halvings=1, surface=surf, env_factor=8)
+    assert set(np.unique(surf.env_boosted[boosted == 2])) == {8}
+    assert np.all(np.isfinite(r3.lit)) and not np.array_equal(r3.lit, r1.lit)
+    u1, u3 = (np.sqrt((r.uncertainty[sel] ** 2).mean(0)) for r in (r1, r3))
+    assert np.all(u3 <= 1.05 * u1), (u1, u3)

@@ -418,17 +418,25 @@ class Surface:
     def env_more_rays(self, tri: np.ndarray, energy: bool, factor: int) -> None:
         """The full level's estimates of the triangles ``tri`` with ``factor`` x ENV_DIFFUSE_RAYS more rays,
         combined with what they have by ray count (refine_at: where a comparison's tail reads them);
-        seeded by the triangles asked for."""
-        from skinviewer.physics.environment import mc_irradiance_cv
+        seeded by the triangles asked for. A triangle asked again with a larger factor gets the rays
+        that bring it to that factor; with the same or a smaller one, nothing (the same rays again)."""
         if self.env is None:
             return
-        boosted = self.__dict__.setdefault("env_boosted", np.zeros(len(self.F), bool))
+        boosted = self.__dict__.setdefault("env_boosted", np.zeros(len(self.F), np.int64))
         tri = np.unique(np.asarray(tri, np.int64))
-        tri = tri[~boosted[tri]]  # once per triangle: a second call would redraw the same rays
+        tri = tri[boosted[tri] < int(factor)]  # a triangle boosted to this factor already keeps its rays
         if len(tri) == 0:
             return
-        boosted[tri] = True
         self.env_irradiance(tri, np.full((len(tri), 3), 1.0 / 3.0), energy)  # the first estimates
+        # what each triangle has (ENV_DIFFUSE_RAYS x (1 + its earlier factor)), in groups of one earlier factor
+        for before in np.unique(boosted[tri]):
+            self._env_boost(tri[boosted[tri] == before], energy, int(before), int(factor))
+        boosted[tri] = int(factor)
+
+    def _env_boost(self, tri: np.ndarray, energy: bool, before: int, factor: int) -> None:
+        """env_more_rays for triangles boosted to ``before`` so far: (factor - before) x ENV_DIFFUSE_RAYS
+        more rays, seeded by the triangles and the factors."""
+        from skinviewer.physics.environment import mc_irradiance_cv
         ids = (3 * tri[:, None] + np.arange(3)[None]).ravel()
         a = self._env_points("full", ids)
         weight = None
@@ -437,11 +445,13 @@ class Surface:
 
             def weight(mu: np.ndarray, sl: slice | np.ndarray) -> np.ndarray:
                 return self.rho_dt_along(rows[sl], rho[sl], mu)
-        n2 = float(ENV_DIFFUSE_RAYS * int(factor))
-        rng = np.random.default_rng((12345, 99, len(ids), int(ids.sum() % (2 ** 31))))
+        n2 = float(ENV_DIFFUSE_RAYS * (int(factor) - int(before)))
+        seed = (12345, 99, len(ids), int(ids.sum() % (2 ** 31))) + ((int(before), int(factor)) if before else ())
+        rng = np.random.default_rng(seed)
         est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, int(n2), rng, self.eps,
                                     weight=weight, batches=ENV_BATCHES)
-        n1 = float(ENV_DIFFUSE_RAYS)  # at least: the adaptive points had more (counted as this: conservative)
+        # at least: the adaptive points had more (counted as this: conservative)
+        n1 = float(ENV_DIFFUSE_RAYS * (1 + int(before)))
         v, e = self.env_val["full"], self.env_err["full"]
         v[ids] = (n1 * v[ids] + n2 * est) / (n1 + n2)
         e[ids] = np.sqrt(n1 ** 2 * e[ids] ** 2 + n2 ** 2 * err ** 2) / (n1 + n2)
@@ -1119,7 +1129,7 @@ def env_mc_uncertainty(surf: Surface, a: dict[str, Any], variances: np.ndarray, 
     done = np.nonzero(surf.env_done["full"])[0]
     if len(done) == 0:
         return out
-    e, se = surf.env_val["full"][done], surf.env_err["full"][done]
+    se = surf.env_err["full"][done]
     sig2 = se ** 2
     if floor:  # pooled over the triangle's three estimates (12 degrees of freedom), never below its own
         tri_of = done // 3
@@ -1316,7 +1326,8 @@ REFINE_NOTE = ("at the {n} refined pixels: every Gaussian with elements of {h1:g
 def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEFAULT_H_MM,
               halvings: int = REFINE_HALVINGS, profile: ProfileArrays | None = None,
               report: Callable[[str, float], None] | None = None,
-              cancelled: Callable[[], bool] | None = None, surface: Surface | None = None) -> Reference:
+              cancelled: Callable[[], bool] | None = None, surface: Surface | None = None,
+              env_factor: int = REFINE_ENV_FACTOR) -> Reference:
     """``ref`` (compute_reference(s, h_mm, profile)) converged further at the pixels ``select`` (H, W):
     Gaussian i is summed at h 2^-j for j = 0 .. J_i, J_i the halvings that bring the elements to its own
     sigma (at least 1, at most ``halvings``), over the elements that reach the selected pixels for that Gaussian (build_diffusion);
@@ -1326,7 +1337,8 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
     C^(1-mix) rho_dt(N.V) as compute_reference. Other pixels are ``ref``'s. meta["refined"] says how
     many pixels, the levels and the seconds. ValueError if ``ref`` is not this view's truth.
     ``surface``: a Surface of these settings to reuse (its environment's estimates are kept: a second
-    call on more pixels pays only for the new ones)."""
+    call on more pixels pays only for the new ones). ``env_factor``: the environment's rays at the
+    pixels and near them, x ENV_DIFFUSE_RAYS (its Monte Carlo error falls as 1 / sqrt of it)."""
     report = report or (lambda stage, f: None)
     if ref.uncertainty is None or ref.position is None:
         raise ValueError("refine_at needs a truth with its uncertainty and positions")
@@ -1376,10 +1388,11 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
         tc = tri_mm.mean(1)
         tr = np.linalg.norm(tri_mm - tc[:, None], axis=2).max(1)
         dist, _ = cKDTree(xs).query(tc, distance_upper_bound=h_mm + tr.max())
-        surf.env_more_rays(np.nonzero(dist <= h_mm + tr)[0], energy, REFINE_ENV_FACTOR)
+        surf.env_more_rays(np.nonzero(dist <= h_mm + tr)[0], energy, env_factor)
         cm = _safe_pow(a_sel["C"], mix)
         interp = surf.env_irradiance(a_sel["tri"], a_sel["bary"], energy) * cm
-        own, se_own = surf.env_direct(a_sel, energy, rays=ENV_DIFFUSE_RAYS * REFINE_ENV_FACTOR, seed=n_sel)
+        own, se_own = surf.env_direct(a_sel, energy, rays=ENV_DIFFUSE_RAYS * int(env_factor),
+                                      seed=n_sel if env_factor == REFINE_ENV_FACTOR else 1000 * n_sel + int(env_factor))
         own, se_own = own * cm, se_own * cm
         check = np.abs(interp - own)  # the interpolation at the pixel (both estimates' noise in it)
         se_int = surf.env_stderr(a_sel["tri"], a_sel["bary"]) * cm
@@ -1438,8 +1451,9 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
     finest = h_mm * 2.0 ** -int(depth.max())
     out.meta["refined"] = {"pixels": int(sel.sum()), "halvings": {str(float(v)): int(d) for v, d in zip(variances, depth)},
                            "seconds": time.perf_counter() - t0,
-                           "note": REFINE_NOTE.format(n=int(sel.sum()), h1=h_mm / 2, h=h_mm, hn=finest, f=REFINE_ENV_FACTOR,
-                                                       own=REFINE_ENV_OWN_SIGMA, rays=ENV_DIFFUSE_RAYS * REFINE_ENV_FACTOR)}
+                           "env_factor": int(env_factor),
+                           "note": REFINE_NOTE.format(n=int(sel.sum()), h1=h_mm / 2, h=h_mm, hn=finest, f=int(env_factor),
+                                                       own=REFINE_ENV_OWN_SIGMA, rays=ENV_DIFFUSE_RAYS * int(env_factor))}
     report("refine", 1.0)
     return out
 
