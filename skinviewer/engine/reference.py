@@ -99,6 +99,7 @@ class Reference:
     meta: dict[str, Any] = field(default_factory=dict)
     position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
     uncertainty: np.ndarray | None = None  # (H, W, 3) of ``lit``: |M_h - M_2h| (see coarse_uncertainty)
+    uncertainty_env: np.ndarray | None = None  # (H, W, 3): the environment's Monte Carlo part of ``uncertainty``
 
 
 # -- scene -------------------------------------------------------------------------------------
@@ -848,6 +849,7 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
         arrays = {k: np.array(z[k]) for k in ("lit", "diffuse", "specular", "mask", "position", "meta")}
         names = set(z.files)
         z_unc = np.array(z["uncertainty"]) if "uncertainty" in names else None
+        z_env = np.array(z["uncertainty_env"]) if "uncertainty_env" in names else None
     meta = json.loads(str(arrays["meta"]))
     if not isinstance(meta, dict) or meta.get("key") != key:
         raise ValueError("its key is not the file name's")
@@ -862,14 +864,19 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
         unc = np.array(z_unc)
         if unc.shape != (*hw, 3) or not np.all(np.isfinite(unc)):
             raise ValueError(f"'uncertainty' is {unc.shape}, expected finite {(*hw, 3)}")
+    if z_env is not None and (z_env.shape != (*hw, 3) or not np.all(np.isfinite(z_env))):
+        raise ValueError(f"'uncertainty_env' is {z_env.shape}, expected finite {(*hw, 3)}")
     meta["cached"] = True
-    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"], unc)
+    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"], unc,
+                     z_env)
 
 
 def _store(key: str, ref: Reference) -> None:
     buf = io.BytesIO()
     assert ref.position is not None, "a computed reference has its surface positions"
     extra: dict[str, Any] = {} if ref.uncertainty is None else {"uncertainty": ref.uncertainty.astype(np.float32)}
+    if ref.uncertainty_env is not None:
+        extra["uncertainty_env"] = ref.uncertainty_env.astype(np.float32)
     np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
                         specular=ref.specular.astype(np.float32), mask=ref.mask,
                         position=ref.position.astype(np.float32), meta=json.dumps(ref.meta), **extra)
@@ -1241,7 +1248,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     M = diff.exitance(x_mm, ea_here, progress=lambda f: report("diffusion", f), cancelled=check)
     times["diffusion"] = time.perf_counter() - t0 - times["camera"] - times["irradiance"]
     H, W = mask.shape
-    u_M = None
+    u_M = u_env_M = None
     if uncertainty:
         t1 = time.perf_counter()
         report("uncertainty", 0.0)
@@ -1251,7 +1258,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
         times["uncertainty"] = time.perf_counter() - t1
         if surf.env is not None:  # the environment's Monte Carlo error (issue 30: in the creases it dominates)
             t1 = time.perf_counter()
-            u_M = u_M + env_mc_uncertainty(surf, a, variances, weights, mix)
+            u_env_M = env_mc_uncertainty(surf, a, variances, weights, mix)
             times["uncertainty_env"] = time.perf_counter() - t1
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
@@ -1276,12 +1283,15 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     H, W = mask.shape
     imgs = []
     scale = _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
-    u_lit = None
+    u_lit = u_env_lit = None
     if u_M is not None:
         u_lit = u_M * scale
-        if surf.env is not None and surf.env_spec_err is not None:  # K standard errors of its specular, every channel
-            u_lit = u_lit + ENV_MC_K * surf.env_spec_err[:, None]
-    for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_lit is None else (u_lit,)):
+        if u_env_M is not None:
+            u_env_lit = u_env_M * scale
+            if surf.env_spec_err is not None:  # K standard errors of its specular, every channel
+                u_env_lit = u_env_lit + ENV_MC_K * surf.env_spec_err[:, None]
+            u_lit = u_lit + u_env_lit
+    for arr in (diffuse + spec, diffuse, spec, a["P"]) + tuple(x for x in (u_lit, u_env_lit) if x is not None):
         img = np.zeros((H * W, 3))
         img[mask.ravel()] = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
         imgs.append(img.reshape(H, W, 3))
@@ -1292,7 +1302,8 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     if u_M is not None:
         meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm) + \
             (ENV_MC_NOTE.format(k=ENV_MC_K) if surf.env is not None else "")
-    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None)
+    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None,
+                    imgs[5] if u_env_lit is not None else None)
     if use_cache:
         _store(key, ref)
     if cache_notes:
