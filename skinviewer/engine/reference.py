@@ -1107,7 +1107,7 @@ def edge_position_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray,
 ENV_MC_K = 3.0              # the environment's Monte Carlo error: K standard errors (as ENV_POINT_K)
 ENV_MC_LOCAL = 0.5          # a Gaussian with sigma < 0.5 x the median triangle edge reads the pixel's own triangle's estimates
 ENV_MC_NOTE = ("; with an environment: its Monte Carlo error, {k:g} standard errors of M propagated from the "
-               "independent estimates' (each at least the view's median relative one) through the diffusion "
+               "independent estimates' (each at least its triangle's mean) through the diffusion "
                "sum (the Gaussians narrower than half a triangle read the pixel's triangle's three estimates "
                "through the interpolation weights, the wider ones each estimate's share of its triangle as a "
                "Gaussian blob), + {k:g} standard errors of the environment's specular")
