@@ -20,7 +20,8 @@ except to look up the surface's own maps.
   (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at three points inside each source triangle, linear
   between them (each block of points seeded by its ids, version 7); its
   specular int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (ENV_SPEC_RAYS per
-  pixel). meta["env"] holds the standard errors (from independent batches).
+  pixel). meta["env"] holds the standard errors (from independent batches); the uncertainty states
+  their effect on the image (env_mc_uncertainty, version 8; Reference.uncertainty_env).
 
 Results are cached on disk (``cache_dir()/reference``) by a hash of everything they depend on.
 """
@@ -1204,7 +1205,8 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     expensive part) when the estimate exceeds it. ``progress(stage, fraction)``; ``cancelled()``
     -> True stops with InterruptedError. ``scene``: (mesh, mm per unit) instead of s.scene (not
     cached). ``uncertainty``: also the per-pixel uncertainty of ``lit`` (coarse_uncertainty, about
-    +25 % CPU time). ``split_edges``: False = elements crossed by a shadow edge carry their corners'
+    +25 % CPU time; with an environment light + env_mc_uncertainty, < 1 % more, kept apart in
+    ``uncertainty_env`` too). ``split_edges``: False = elements crossed by a shadow edge carry their corners'
     mean (the version-4 truth; for comparisons)."""
     key = cache_key(s, h_mm, profile, split_edges, uncertainty)
     if scene is not None:
