@@ -23,6 +23,7 @@
 
 Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-tail,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
      [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2] [--samples-max-pixels 1500] [--tail-map DIR]
+     [--samples-env-factors 8,64]
 """
 from __future__ import annotations
 
@@ -261,14 +262,16 @@ def key_light_only() -> list[dict]:
 
 
 def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: str = "default",
-                 max_pixels: int = 1500) -> None:
+                 max_pixels: int = 1500, env_factors: str = "8") -> None:
     """deon.texel_samples 1 vs 4 against the ground truth (the judge that shares neither the shadow map nor
     the texel grid), head and scan, irr512 / irr1024: RMS and p99 with the truth's uncertainty, the
     truth as computed and converged further at the pixels that decide a p99 (tail_pixels, then
     reference.refine_at, ``rounds`` times: the band moves as the uncertainty shrinks), and the paired
-    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth)."""
+    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth).
+    ``env_factors``: the environment's rays at the refined pixels per round (x ENV_DIFFUSE_RAYS; the last
+    one for the rounds after): a round stops early when every comparison is decided."""
     from skinviewer.engine.bench import compare_mask, linear_image
-    from skinviewer.engine.reference import Surface, load_scene, refine_at
+    from skinviewer.engine.reference import ENV_DIFFUSE_RAYS, Surface, load_scene, refine_at
     from skinviewer.engine.renderer import Renderer
     from skinviewer.kernel.gl import headless_context
     from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, with_u
@@ -299,7 +302,13 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
         fine = ref
         mesh, mm = load_scene(s0)
         surf = Surface(mesh, mm, s0)  # kept between the rounds: the environment's estimates
-        for _ in range(rounds):
+        factors = [int(f) for f in env_factors.split(",")]
+        for k_round in range(rounds):
+            factor = factors[min(k_round, len(factors) - 1)]
+            decided = all(h_ < 0 or l_ > 0 for irr in (512, 1024) for l_, h_ in zip(*p99_change_bounds(
+                images[(irr, "4 samples")], images[(irr, "1 sample (default)")], fine.lit, fine.uncertainty, mask)))
+            if decided:
+                break
             grow = tail_pixels({str(k): x for k, x in images.items()}, fine.lit, fine.uncertainty, mask) & ~sel
             room = max_pixels - int(sel.sum())
             if int(grow.sum()) > room:  # the largest relative uncertainties first
@@ -309,10 +318,14 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
                 grow = np.zeros_like(grow).ravel()
                 grow[keep] = True
                 grow = grow.reshape(sel.shape)
-            if not grow.any():
+            more_rays = k_round > 0 and factor > factors[min(k_round - 1, len(factors) - 1)]
+            if not grow.any() and not more_rays:
                 break
             sel |= grow
-            fine = refine_at(s0, ref, sel, surface=surf)
+            t_r = time.perf_counter()
+            fine = refine_at(s0, ref, sel, surface=surf, env_factor=factor)
+            print(f"  [{name}: round {k_round + 1}, environment x{factor} ({factor * ENV_DIFFUSE_RAYS} rays a point), "
+                  f"{int(sel.sum())} pixels, {time.perf_counter() - t_r:.0f} s]", flush=True)
             for irr in (512, 1024):  # each round's figures: how far the refinement moved them
                 p = [image_error(images[(irr, row)], fine.lit, mask, uncertainty=fine.uncertainty) for row in SAMPLE_ROWS]
                 lo, hi = p99_change_bounds(images[(irr, "4 samples")], images[(irr, "1 sample (default)")], fine.lit,
@@ -469,6 +482,8 @@ def main() -> int:
     ap.add_argument("--samples-rigs", default="default,key", help="default: the default lights; key: the key light only")
     ap.add_argument("--samples-rounds", type=int, default=2, help="refinements of the truth at the p99's pixels")
     ap.add_argument("--tail-map", default=None, help="samples-tail: a folder for the PNG maps")
+    ap.add_argument("--samples-env-factors", default="8", help="samples: the environment's rays at the refined pixels "
+                    "per round, x 256 (e.g. 8,64: the second round 64x; the last for later rounds)")
     ap.add_argument("--samples-max-pixels", type=int, default=1500, help="at most this many refined pixels a view")
     a = ap.parse_args()
     parts = set(a.parts.split(","))
@@ -491,7 +506,8 @@ def main() -> int:
     if "samples-tail" in parts:
         part_samples_tail(a.size, a.tail_map)
     if "samples" in parts:
-        part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs, a.samples_max_pixels)
+        part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs, a.samples_max_pixels,
+                     a.samples_env_factors)
     return 0
 
 

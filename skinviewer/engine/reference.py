@@ -20,7 +20,8 @@ except to look up the surface's own maps.
   (ENV_DIFFUSE_RAYS per point; no SH, no baked AO) at three points inside each source triangle, linear
   between them (each block of points seeded by its ids, version 7); its
   specular int L(w) KS(N, w, V) V(w) dw by stratified Beckmann importance sampling (ENV_SPEC_RAYS per
-  pixel). meta["env"] holds the standard errors (from independent batches).
+  pixel). meta["env"] holds the standard errors (from independent batches); the uncertainty states
+  their effect on the image (env_mc_uncertainty, version 8; Reference.uncertainty_env).
 
 Results are cached on disk (``cache_dir()/reference``) by a hash of everything they depend on.
 """
@@ -61,7 +62,8 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 7                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points
+VERSION = 8                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points; 8, the uncertainty states the environment's Monte Carlo error
+VERSION_CHANGE = "its uncertainty now states the environment's Monte Carlo error"  # what VERSION changed, for the stale cache's note
 ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
 ENV_SPEC_RAYS = 64          # per pixel
 ENV_BATCHES = 4
@@ -98,6 +100,7 @@ class Reference:
     meta: dict[str, Any] = field(default_factory=dict)
     position: np.ndarray | None = None  # (H, W, 3) surface point of each pixel, mesh units
     uncertainty: np.ndarray | None = None  # (H, W, 3) of ``lit``: |M_h - M_2h| (see coarse_uncertainty)
+    uncertainty_env: np.ndarray | None = None  # (H, W, 3): the environment's Monte Carlo part of ``uncertainty``
 
 
 # -- scene -------------------------------------------------------------------------------------
@@ -417,17 +420,25 @@ class Surface:
     def env_more_rays(self, tri: np.ndarray, energy: bool, factor: int) -> None:
         """The full level's estimates of the triangles ``tri`` with ``factor`` x ENV_DIFFUSE_RAYS more rays,
         combined with what they have by ray count (refine_at: where a comparison's tail reads them);
-        seeded by the triangles asked for."""
-        from skinviewer.physics.environment import mc_irradiance_cv
+        seeded by the triangles asked for. A triangle asked again with a larger factor gets the rays
+        that bring it to that factor; with the same or a smaller one, nothing (the same rays again)."""
         if self.env is None:
             return
-        boosted = self.__dict__.setdefault("env_boosted", np.zeros(len(self.F), bool))
+        boosted = self.__dict__.setdefault("env_boosted", np.zeros(len(self.F), np.int64))
         tri = np.unique(np.asarray(tri, np.int64))
-        tri = tri[~boosted[tri]]  # once per triangle: a second call would redraw the same rays
+        tri = tri[boosted[tri] < int(factor)]  # a triangle boosted to this factor already keeps its rays
         if len(tri) == 0:
             return
-        boosted[tri] = True
         self.env_irradiance(tri, np.full((len(tri), 3), 1.0 / 3.0), energy)  # the first estimates
+        # what each triangle has (ENV_DIFFUSE_RAYS x (1 + its earlier factor)), in groups of one earlier factor
+        for before in np.unique(boosted[tri]):
+            self._env_boost(tri[boosted[tri] == before], energy, int(before), int(factor))
+        boosted[tri] = int(factor)
+
+    def _env_boost(self, tri: np.ndarray, energy: bool, before: int, factor: int) -> None:
+        """env_more_rays for triangles boosted to ``before`` so far: (factor - before) x ENV_DIFFUSE_RAYS
+        more rays, seeded by the triangles and the factors."""
+        from skinviewer.physics.environment import mc_irradiance_cv
         ids = (3 * tri[:, None] + np.arange(3)[None]).ravel()
         a = self._env_points("full", ids)
         weight = None
@@ -436,11 +447,13 @@ class Surface:
 
             def weight(mu: np.ndarray, sl: slice | np.ndarray) -> np.ndarray:
                 return self.rho_dt_along(rows[sl], rho[sl], mu)
-        n2 = float(ENV_DIFFUSE_RAYS * int(factor))
-        rng = np.random.default_rng((12345, 99, len(ids), int(ids.sum() % (2 ** 31))))
+        n2 = float(ENV_DIFFUSE_RAYS * (int(factor) - int(before)))
+        seed = (12345, 99, len(ids), int(ids.sum() % (2 ** 31))) + ((int(before), int(factor)) if before else ())
+        rng = np.random.default_rng(seed)
         est, err = mc_irradiance_cv(self.env_sampler, a["Ps"], a["N"], a["Ng"], self.rays, int(n2), rng, self.eps,
                                     weight=weight, batches=ENV_BATCHES)
-        n1 = float(ENV_DIFFUSE_RAYS)  # at least: the adaptive points had more (counted as this: conservative)
+        # at least: the adaptive points had more (counted as this: conservative)
+        n1 = float(ENV_DIFFUSE_RAYS * (1 + int(before)))
         v, e = self.env_val["full"], self.env_err["full"]
         v[ids] = (n1 * v[ids] + n2 * est) / (n1 + n2)
         e[ids] = np.sqrt(n1 ** 2 * e[ids] ** 2 + n2 ** 2 * err ** 2) / (n1 + n2)
@@ -746,12 +759,14 @@ def model_profile(model: str, material: str | None = None, normalize: bool = Tru
 TECHNIQUE_ONLY_LIGHT_FIELDS = ("sh_order", "occlusion", "ao_rays", "transfer_order")
 
 
-def cache_key(s: Settings, h_mm: float, profile: Any = None, split_edges: bool = True, uncertainty: bool = True) -> str:
+def cache_key(s: Settings, h_mm: float, profile: Any = None, split_edges: bool = True, uncertainty: bool = True,
+              version: int | None = None) -> str:
+    """The cache's key: a hash of everything the truth depends on, ``version`` (default VERSION) first."""
     from skinviewer.engine.renderer import Renderer
     d = s.model_dump(mode="json")
     # the environment's approximations (SH order, baked visibility) are the techniques', not the truth's
     lights = [{k: v for k, v in light.items() if k not in TECHNIQUE_ONLY_LIGHT_FIELDS} for light in d["lights"]]
-    parts = {"v": VERSION, "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
+    parts = {"v": VERSION if version is None else int(version), "scene": Renderer.scene_key(s), "back_faces": s.scene.back_faces, "camera": d["camera"],
              "size": [s.render.width, s.render.height], "lights": lights, "specular": d["specular"],
              "env_files": _env_stamps(s),
              "mix": s.deon.mix, "energy": s.deon.energy_conservation, "h": h_mm,
@@ -791,6 +806,7 @@ def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileArrays 
     key = cache_key(s, h_mm, profile, split_edges, uncertainty)
     p = _cache_path(key)
     if not os.path.lexists(p):
+        _discard_stale(s, h_mm, profile, split_edges, uncertainty, notes)
         return None
     try:
         return _validated(p, key, (s.render.height, s.render.width))
@@ -806,6 +822,27 @@ def load_cached(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileArrays 
         return None
 
 
+STALE_VERSIONS = 4  # load_cached looks this many truth versions back for an entry of the same inputs
+
+
+def _discard_stale(s: Settings, h_mm: float, profile: ProfileArrays | None, split_edges: bool, uncertainty: bool,
+                   notes: list[str] | None) -> None:
+    """An entry of the same inputs computed by an older truth (VERSION - 1 .. - STALE_VERSIONS) is
+    deleted, and ``notes`` gets one line saying so: the caller recomputes it (nothing stale is left)."""
+    for old in range(VERSION - 1, max(VERSION - 1 - STALE_VERSIONS, 0), -1):
+        q = _cache_path(cache_key(s, h_mm, profile, split_edges, uncertainty, version=old))
+        if not os.path.lexists(q):
+            continue
+        try:
+            os.unlink(q)
+            what = "discarded"
+        except OSError:
+            what = "ignored (it cannot be deleted)"
+        if notes is not None:
+            notes.append(f"the cached reference {q.name} is of truth version {old}, this is version {VERSION} "
+                         f"({VERSION_CHANGE}): {what}, recomputing")
+
+
 def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
     from skinviewer.ground.files import read_regular_file
     data = read_regular_file(p, MAX_CACHE_BYTES, what=f"cache entry {p}")
@@ -813,6 +850,7 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
         arrays = {k: np.array(z[k]) for k in ("lit", "diffuse", "specular", "mask", "position", "meta")}
         names = set(z.files)
         z_unc = np.array(z["uncertainty"]) if "uncertainty" in names else None
+        z_env = np.array(z["uncertainty_env"]) if "uncertainty_env" in names else None
     meta = json.loads(str(arrays["meta"]))
     if not isinstance(meta, dict) or meta.get("key") != key:
         raise ValueError("its key is not the file name's")
@@ -827,14 +865,19 @@ def _validated(p: Path, key: str, hw: tuple[int, int]) -> Reference:
         unc = np.array(z_unc)
         if unc.shape != (*hw, 3) or not np.all(np.isfinite(unc)):
             raise ValueError(f"'uncertainty' is {unc.shape}, expected finite {(*hw, 3)}")
+    if z_env is not None and (z_env.shape != (*hw, 3) or not np.all(np.isfinite(z_env))):
+        raise ValueError(f"'uncertainty_env' is {z_env.shape}, expected finite {(*hw, 3)}")
     meta["cached"] = True
-    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"], unc)
+    return Reference(arrays["lit"], arrays["diffuse"], arrays["specular"], arrays["mask"], meta, arrays["position"], unc,
+                     z_env)
 
 
 def _store(key: str, ref: Reference) -> None:
     buf = io.BytesIO()
     assert ref.position is not None, "a computed reference has its surface positions"
     extra: dict[str, Any] = {} if ref.uncertainty is None else {"uncertainty": ref.uncertainty.astype(np.float32)}
+    if ref.uncertainty_env is not None:
+        extra["uncertainty_env"] = ref.uncertainty_env.astype(np.float32)
     np.savez_compressed(buf, lit=ref.lit.astype(np.float32), diffuse=ref.diffuse.astype(np.float32),
                         specular=ref.specular.astype(np.float32), mask=ref.mask,
                         position=ref.position.astype(np.float32), meta=json.dumps(ref.meta), **extra)
@@ -992,7 +1035,7 @@ TRUNCATE_LOSS = 5e-5        # relative: the weight beyond TRUNCATE sigma, exp(-4
 UNCERTAINTY_NOTE = ("per pixel: 3 |M(h={h:g} mm) - M(h={h2:g} mm, half the beam rays)| (Roache's grid convergence "
                     "index, first order, safety factor 3; the coarse level on every 2nd pixel, the largest of the "
                     "pixel's 3x3 neighbourhood) + |grad M| x the shadow edge's position tolerance (ray offset and "
-                    "bisection bracket) + 5e-5 M (truncation), times C^(1-mix) rho_dt(N.V); specular is exact")
+                    "bisection bracket) + 5e-5 M (truncation), times C^(1-mix) rho_dt(N.V); the lights' specular is exact")
 
 
 def coarse_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray, ea_here: np.ndarray, M: np.ndarray,
@@ -1062,6 +1105,95 @@ def edge_position_uncertainty(surf: Surface, mask: np.ndarray, x_mm: np.ndarray,
     return out
 
 
+ENV_MC_K = 3.0              # the environment's Monte Carlo error: K standard errors (as ENV_POINT_K)
+ENV_MC_LOCAL = 0.5          # a Gaussian with sigma < 0.5 x the median triangle edge reads the pixel's own triangle's estimates
+ENV_MC_NOTE = ("; with an environment: its Monte Carlo error, {k:g} standard errors of M propagated from the "
+               "independent estimates' (each at least its triangle's mean) through the diffusion "
+               "sum (the Gaussians narrower than half a triangle read the pixel's triangle's three estimates "
+               "through the interpolation weights, the wider ones each estimate's share of its triangle as a "
+               "Gaussian blob), + {k:g} standard errors of the environment's specular")
+
+
+def env_mc_uncertainty(surf: Surface, a: dict[str, Any], variances: np.ndarray, weights: np.ndarray, mix: float,
+                       k: float = ENV_MC_K, floor: bool = True, chunk: int = 1024) -> np.ndarray:
+    """The environment's Monte Carlo error in M at receivers ``a`` (Surface.attributes) (N, 3): K standard
+    deviations of sum_p eps_p c_p(x), eps_p the independent errors of the full level's estimates (their
+    standard errors from ENV_BATCHES batches; with ``floor`` each at least the mean variance of its
+    triangle's three estimates: a 3-degree-of-freedom estimate is 3x too small at ~5 % of the points,
+    a pooled 12-degree one almost never) and c_p(x) = sum_i w_i x (Gaussian i's sum over the elements of estimate p's
+    interpolation weight phi_p x C^mix): the diffusion sum is linear in the elements' E A. A Gaussian
+    narrower than ENV_MC_LOCAL x the median triangle edge stays inside x's triangle, where phi_p is
+    linear, so its mean there is phi_p(x): c_p = w_i phi_p(x) C^mix(x) for the three estimates of x's
+    own triangle (unit mass). A wider one: estimate p as a blob of its share of the triangle's area
+    a_p = A / 3 with the spread s_p^2 = a_p / (2 pi) (a disc's), c_p = w_i a_p C^mix(y_p) G(v_i + s_p^2,
+    |x - y_p|), over the estimates within 3 sqrt(v_i + s_p^2) (the variance beyond: exp(-9) of it).
+    Without an environment: zeros."""
+    mm = surf.mm
+    x_mm, tri, bary = a["P"] * mm, a["tri"], a["bary"]
+    out = np.zeros((len(x_mm), 3))
+    if surf.env is None or len(x_mm) == 0:
+        return out
+    from scipy.spatial import cKDTree
+    done = np.nonzero(surf.env_done["full"])[0]
+    if len(done) == 0:
+        return out
+    se = surf.env_err["full"][done]
+    sig2 = se ** 2
+    if floor:  # pooled over the triangle's three estimates (12 degrees of freedom), never below its own
+        tri_of = done // 3
+        tot = np.zeros((len(surf.F), 3))
+        cnt = np.bincount(tri_of, minlength=len(surf.F)).astype(np.float64)
+        for ch in range(3):
+            tot[:, ch] = np.bincount(tri_of, sig2[:, ch], minlength=len(surf.F))
+        sig2 = np.maximum(sig2, tot[tri_of] / np.maximum(cnt[tri_of], 1.0)[:, None])
+    tri_mm = surf.P[surf.F] * mm
+    area = 0.5 * np.linalg.norm(np.cross(tri_mm[:, 1] - tri_mm[:, 0], tri_mm[:, 2] - tri_mm[:, 0]), axis=1)
+    edge = float(np.median(np.sqrt(2.0 * area[np.unique(done // 3)])))
+    v = np.asarray(variances, np.float64).ravel()
+    w = np.asarray(weights, np.float64).reshape(len(v), 3)
+    on = np.any(w > 0, axis=1)
+    local = on & (np.sqrt(np.maximum(v, 0.0)) < ENV_MC_LOCAL * edge)
+    wide = np.nonzero(on & ~local)[0]
+    pos = np.full(len(surf.env_done["full"]), -1, np.int64)
+    pos[done] = np.arange(len(done))
+    # the narrow Gaussians: x's own triangle's estimates through the interpolation weights
+    ids, phi = surf._env_support("full", tri, bary)               # (N, 3), (N, 3)
+    own = pos[ids]
+    c_own = phi[..., None] * (w[local].sum(0)[None] * _safe_pow(a["C"], mix))[:, None]  # (N, 3 estimates, 3 ch)
+    c_own = np.where((own >= 0)[..., None], c_own, 0.0)
+    own = np.maximum(own, 0)
+    if len(wide):
+        a_pt = surf.attributes(done // 3, _ENV_B[done % 3])
+        y = a_pt["P"] * mm
+        a_p = area[done // 3] / 3.0
+        q = a_p[:, None] * _safe_pow(a_pt["C"], mix)  # a_p C^mix (P, 3)
+        s2 = a_p / (2.0 * math.pi)
+        tree = cKDTree(y)
+
+        def blob(d2: np.ndarray, j: np.ndarray) -> np.ndarray:
+            """sum over the wide Gaussians of w_i a_p C^mix G(v_i + s_p^2, d) (pairs, 3)."""
+            ve = v[wide][None] + s2[j][:, None]
+            g = np.exp(-d2[:, None] / (2.0 * ve)) / (2.0 * math.pi * ve)
+            res: np.ndarray = (g @ w[wide]) * q[j]
+            return res
+        reach = 3.0 * math.sqrt(float(v[wide].max()) + float(s2.max()))
+        for s0 in range(0, len(x_mm), chunk):
+            sl = slice(s0, min(len(x_mm), s0 + chunk))
+            sm = cKDTree(x_mm[sl]).sparse_distance_matrix(tree, reach, output_type="ndarray")
+            i, j, d = sm["i"].astype(np.int64), sm["j"].astype(np.int64), sm["v"]
+            var = blob(d * d, j) ** 2 * sig2[j]
+            for ch in range(3):
+                out[sl, ch] = np.bincount(i, var[:, ch], minlength=sl.stop - s0)
+        # x's own estimates: the wide part's coefficient there, to combine with the narrow one's
+        d2 = ((x_mm[:, None] - y[own]) ** 2).sum(2)
+        c_wide = blob(d2.ravel(), own.ravel()).reshape(c_own.shape)
+        out += (((c_own + c_wide) ** 2 - c_wide ** 2) * sig2[own]).sum(1)
+    else:
+        out += (c_own ** 2 * sig2[own]).sum(1)
+    res: np.ndarray = k * np.sqrt(np.maximum(out, 0.0))
+    return res
+
+
 def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileArrays | None = None,
                       use_cache: bool = True,
                       max_seconds: float | None = None, scene: tuple[MeshData, float] | None = None,
@@ -1073,7 +1205,8 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     expensive part) when the estimate exceeds it. ``progress(stage, fraction)``; ``cancelled()``
     -> True stops with InterruptedError. ``scene``: (mesh, mm per unit) instead of s.scene (not
     cached). ``uncertainty``: also the per-pixel uncertainty of ``lit`` (coarse_uncertainty, about
-    +25 % CPU time). ``split_edges``: False = elements crossed by a shadow edge carry their corners'
+    +25 % CPU time; with an environment light + env_mc_uncertainty, < 1 % more, kept apart in
+    ``uncertainty_env`` too). ``split_edges``: False = elements crossed by a shadow edge carry their corners'
     mean (the version-4 truth; for comparisons)."""
     key = cache_key(s, h_mm, profile, split_edges, uncertainty)
     if scene is not None:
@@ -1117,7 +1250,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     M = diff.exitance(x_mm, ea_here, progress=lambda f: report("diffusion", f), cancelled=check)
     times["diffusion"] = time.perf_counter() - t0 - times["camera"] - times["irradiance"]
     H, W = mask.shape
-    u_M = None
+    u_M = u_env_M = None
     if uncertainty:
         t1 = time.perf_counter()
         report("uncertainty", 0.0)
@@ -1125,6 +1258,10 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
                                  split_edges, check)
         report("uncertainty", 1.0)
         times["uncertainty"] = time.perf_counter() - t1
+        if surf.env is not None:  # the environment's Monte Carlo error (issue 30: in the creases it dominates)
+            t1 = time.perf_counter()
+            u_env_M = env_mc_uncertainty(surf, a, variances, weights, mix)
+            times["uncertainty_env"] = time.perf_counter() - t1
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
     V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
@@ -1148,7 +1285,15 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
     H, W = mask.shape
     imgs = []
     scale = _safe_pow(a["C"], 1.0 - mix) * rho_v[:, None]
-    for arr in (diffuse + spec, diffuse, spec, a["P"]) + (() if u_M is None else (u_M * scale,)):
+    u_lit = u_env_lit = None
+    if u_M is not None:
+        u_lit = u_M * scale
+        if u_env_M is not None:
+            u_env_lit = u_env_M * scale
+            if surf.env_spec_err is not None:  # K standard errors of its specular, every channel
+                u_env_lit = u_env_lit + ENV_MC_K * surf.env_spec_err[:, None]
+            u_lit = u_lit + u_env_lit
+    for arr in (diffuse + spec, diffuse, spec, a["P"]) + tuple(x for x in (u_lit, u_env_lit) if x is not None):
         img = np.zeros((H * W, 3))
         img[mask.ravel()] = np.nan_to_num(arr, nan=0.0, posinf=0.0, neginf=0.0)
         imgs.append(img.reshape(H, W, 3))
@@ -1157,8 +1302,10 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
             "beam_rays": 0 if points is None else len(points.position), "seconds": times, "estimate_s": est,
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False, "env": env_meta}
     if u_M is not None:
-        meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm)
-    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None)
+        meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm) + \
+            (ENV_MC_NOTE.format(k=ENV_MC_K) if surf.env is not None else "")
+    ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None,
+                    imgs[5] if u_env_lit is not None else None)
     if use_cache:
         _store(key, ref)
     if cache_notes:
@@ -1192,7 +1339,8 @@ REFINE_NOTE = ("at the {n} refined pixels: every Gaussian with elements of {h1:g
 def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEFAULT_H_MM,
               halvings: int = REFINE_HALVINGS, profile: ProfileArrays | None = None,
               report: Callable[[str, float], None] | None = None,
-              cancelled: Callable[[], bool] | None = None, surface: Surface | None = None) -> Reference:
+              cancelled: Callable[[], bool] | None = None, surface: Surface | None = None,
+              env_factor: int = REFINE_ENV_FACTOR) -> Reference:
     """``ref`` (compute_reference(s, h_mm, profile)) converged further at the pixels ``select`` (H, W):
     Gaussian i is summed at h 2^-j for j = 0 .. J_i, J_i the halvings that bring the elements to its own
     sigma (at least 1, at most ``halvings``), over the elements that reach the selected pixels for that Gaussian (build_diffusion);
@@ -1202,7 +1350,8 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
     C^(1-mix) rho_dt(N.V) as compute_reference. Other pixels are ``ref``'s. meta["refined"] says how
     many pixels, the levels and the seconds. ValueError if ``ref`` is not this view's truth.
     ``surface``: a Surface of these settings to reuse (its environment's estimates are kept: a second
-    call on more pixels pays only for the new ones)."""
+    call on more pixels pays only for the new ones). ``env_factor``: the environment's rays at the
+    pixels and near them, x ENV_DIFFUSE_RAYS (its Monte Carlo error falls as 1 / sqrt of it)."""
     report = report or (lambda stage, f: None)
     if ref.uncertainty is None or ref.position is None:
         raise ValueError("refine_at needs a truth with its uncertainty and positions")
@@ -1252,10 +1401,11 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
         tc = tri_mm.mean(1)
         tr = np.linalg.norm(tri_mm - tc[:, None], axis=2).max(1)
         dist, _ = cKDTree(xs).query(tc, distance_upper_bound=h_mm + tr.max())
-        surf.env_more_rays(np.nonzero(dist <= h_mm + tr)[0], energy, REFINE_ENV_FACTOR)
+        surf.env_more_rays(np.nonzero(dist <= h_mm + tr)[0], energy, env_factor)
         cm = _safe_pow(a_sel["C"], mix)
         interp = surf.env_irradiance(a_sel["tri"], a_sel["bary"], energy) * cm
-        own, se_own = surf.env_direct(a_sel, energy, rays=ENV_DIFFUSE_RAYS * REFINE_ENV_FACTOR, seed=n_sel)
+        own, se_own = surf.env_direct(a_sel, energy, rays=ENV_DIFFUSE_RAYS * int(env_factor),
+                                      seed=n_sel if env_factor == REFINE_ENV_FACTOR else 1000 * n_sel + int(env_factor))
         own, se_own = own * cm, se_own * cm
         check = np.abs(interp - own)  # the interpolation at the pixel (both estimates' noise in it)
         se_int = surf.env_stderr(a_sel["tri"], a_sel["bary"]) * cm
@@ -1314,8 +1464,9 @@ def refine_at(s: Settings, ref: Reference, select: np.ndarray, h_mm: float = DEF
     finest = h_mm * 2.0 ** -int(depth.max())
     out.meta["refined"] = {"pixels": int(sel.sum()), "halvings": {str(float(v)): int(d) for v, d in zip(variances, depth)},
                            "seconds": time.perf_counter() - t0,
-                           "note": REFINE_NOTE.format(n=int(sel.sum()), h1=h_mm / 2, h=h_mm, hn=finest, f=REFINE_ENV_FACTOR,
-                                                       own=REFINE_ENV_OWN_SIGMA, rays=ENV_DIFFUSE_RAYS * REFINE_ENV_FACTOR)}
+                           "env_factor": int(env_factor),
+                           "note": REFINE_NOTE.format(n=int(sel.sum()), h1=h_mm / 2, h=h_mm, hn=finest, f=int(env_factor),
+                                                       own=REFINE_ENV_OWN_SIGMA, rays=ENV_DIFFUSE_RAYS * int(env_factor))}
     report("refine", 1.0)
     return out
 
