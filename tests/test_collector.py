@@ -16,6 +16,9 @@ class _Cycle:
 
 def test_busy_frames_collect_only_young_generations_and_idle_ones_hand_back(monkeypatch):
     asked: list[int] = []
+
+    def full() -> list[int]:  # the full collections asked (a held frame may also take the young ones, by count)
+        return [g for g in asked if g == 2]
     real = gc.collect
     monkeypatch.setattr(gc, "collect", lambda generation=2: (asked.append(generation), real(generation))[1])
     clock = [1000.0]  # the collector's clock, stepped by hand (no waiting, no timing in the test)
@@ -41,22 +44,22 @@ def test_busy_frames_collect_only_young_generations_and_idle_ones_hand_back(monk
         clock[0] += 0.6  # idle for IDLE_S: one full collection in this frame, start-up frozen, handed back
         c.frame(busy=False, scene_key="head")
         assert gc.isenabled() and not c.held
-        assert asked == [2] and c.frozen_for == "head" and gc.get_freeze_count() > 0
+        assert full() == [2] and set(asked) <= {0, 1, 2} and c.frozen_for == "head" and gc.get_freeze_count() > 0
         clock[0] += 5.0
         c.frame(busy=False, scene_key="head")
-        assert asked == [2]  # idle frames after it: the automatic collector's business
+        assert full() == [2]  # idle frames after it: the automatic collector's business
         c.frame(busy=True, scene_key="head")  # a drag again: held at once
         assert not gc.isenabled()
         clock[0] += 0.1
         c.frame(busy=False, scene_key="head")
         clock[0] += 1.0
         c.frame(busy=False, scene_key="head")  # idle: what the drag put off, collected; not re-frozen
-        assert asked == [2, 2] and gc.isenabled()
+        assert full() == [2, 2] and gc.isenabled()
         c.frame(busy=True, scene_key="scan")
         c.frame(busy=False, scene_key="scan")
         clock[0] += 1.0
         c.frame(busy=False, scene_key="scan")  # another scene: unfrozen, collected once, frozen again
-        assert asked == [2, 2, 2] and c.frozen_for == "scan"
+        assert full() == [2, 2, 2] and c.frozen_for == "scan"
         c.frame(busy=True, scene_key="scan")
         c.release()  # the viewer closing hands the collector back, nothing frozen
         assert gc.isenabled() and gc.get_freeze_count() == 0
