@@ -81,6 +81,7 @@ def laser(r: Renderer, sizes, offsets=((0.0, 0.0), (0.013, -0.007))) -> None:
 # ../shared beside the checkout, or SKINVIEWER_SHARED (as tests/conftest.py)
 SHARED = Path(os.environ.get("SKINVIEWER_SHARED") or Path(__file__).resolve().parents[2] / "shared")
 SCAN = SHARED / "assets" / "lee-perry-smith" / "LeePerrySmith.glb"
+SCAN_VALUES = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}  # the scan with its units (48 mm): at 1 mm a unit it is 5.6 mm across
 
 
 _REFERENCES: dict = {}  # (judge, E's bytes) -> reference: the irradiance is the same for every blur setting

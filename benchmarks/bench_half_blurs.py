@@ -13,7 +13,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-from bench_fidelity import SCAN  # noqa: E402
+from bench_fidelity import SCAN_VALUES  # noqa: E402
 
 from skinviewer.engine.bench import compare_mask, linear_image  # noqa: E402
 from skinviewer.engine.reference import compute_reference  # noqa: E402
@@ -35,7 +35,7 @@ def main() -> None:
     v = {"scene.name": "head", **scene_overrides("head"), "technique": "deon",
          "render.width": args.size, "render.height": args.size}
     if args.scene == "scan":
-        v["scene.mesh"], v["scene.mm_per_unit"] = str(SCAN), 48.0  # its units: 48 mm
+        v.update(SCAN_VALUES)
     if args.camera:
         yaw, pitch = (float(x) for x in args.camera.split(","))
         v.update({"camera.yaw": yaw, "camera.pitch": pitch})

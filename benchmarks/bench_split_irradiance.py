@@ -48,8 +48,8 @@ def main() -> None:
     print(f"# irradiance split | one pass — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
     extra = {}
     if args.scene == "scan":
-        from bench_fidelity import SCAN
-        extra = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}  # its units: 48 mm
+        from bench_fidelity import SCAN_VALUES
+        extra = dict(SCAN_VALUES)
     maps = args.maps
     s = settings_for("deon", "head", args.size, maps, **extra)
     phong = settings_for("phong", "head", args.size, maps, **extra)

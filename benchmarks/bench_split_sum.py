@@ -65,8 +65,8 @@ def main() -> None:
     print(f"# summed step split | one pass — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
     extra = {}
     if args.scene == "scan":
-        from bench_fidelity import SCAN
-        extra = {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0}  # its units: 48 mm
+        from bench_fidelity import SCAN_VALUES
+        extra = dict(SCAN_VALUES)
     maps_list = [int(x) for x in args.maps.split(",")]
     # side -> (SPLIT_SUM, LIT_RING); True / False: split / one pass as the defaults have them
     kinds: dict = {True: (True, deon_passes.LIT_RING), False: (False, None)}

@@ -19,7 +19,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 
-from bench_fidelity import SCAN  # noqa: E402
+from bench_fidelity import SCAN, SCAN_VALUES  # noqa: E402
 from bench_frames import settings_for  # noqa: E402
 from PIL import Image  # noqa: E402
 
@@ -40,7 +40,7 @@ def main() -> None:
     import skinviewer.passes.deon as deon_passes
     r = Renderer(headless_context())
     rows = []
-    for scene, extra in (("head", {}), ("scan", {"scene.mesh": str(SCAN), "scene.mm_per_unit": 48.0})):
+    for scene, extra in (("head", {}), ("scan", SCAN_VALUES)):
         if scene == "scan" and not SCAN.is_file():
             print(f"# no scan at {SCAN}: head only")
             continue
