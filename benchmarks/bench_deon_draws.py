@@ -105,7 +105,9 @@ def parse_sets(items: list[str]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--maps", type=int, default=1024)
+    ap.add_argument("--maps", default="1024",
+                    help="map size; a list (1024,2048): the growth mode, each size's light move (whole frames, "
+                         "no per-draw fences) and plain copy interleaved in each repeat, in one process")
     ap.add_argument("--size", type=int, default=640)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--scene", default="head")
@@ -126,6 +128,11 @@ def main() -> None:
                     help="B without the summed step's split seam fill and the combine's shared fetches "
                          "(passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE off), in its own renderer")
     args = ap.parse_args()
+    sizes = [int(v) for v in str(args.maps).split(",")]
+    if len(sizes) > 1:
+        growth(args, sizes)
+        return
+    args.maps = sizes[0]
     quad = deon_passes.QUAD_SUM
     ctx = headless_context()
     print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
@@ -215,6 +222,43 @@ def main() -> None:
         total += ms
         print(f"{key[0]:<18} {key[1]:<58} {counts[key]:>5} {ms:8.1f} {ms / copy:7.1f}")
     print(f"{'sum of draws':<18} {'':<58} {'':>5} {total:8.1f} {total / copy:7.1f}")
+
+
+def growth(args, sizes: list[int]) -> None:
+    """Issue 27's growth goal (a light move's cost at most linear in texels): per map size, one renderer,
+    its light move (light_frame: whole frames, sync timing at the frame's ends only) and a plain copy of that
+    size, interleaved in each repeat (sizes in turn, the order reversed every other repeat), Phong beside."""
+    ctx = headless_context()
+    print(f"# d'Eon light move by map size — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
+    sets = parse_sets(args.set)
+    renderers, settings = {}, {}
+    for n in sizes:
+        settings[n] = settings_for("deon", args.scene, args.size, n, **sets)
+        renderers[n] = Renderer(ctx)
+        renderers[n].render(settings[n], force=True)
+    phong_r = Renderer(ctx)
+    phong = settings_for("phong", args.scene, args.size, sizes[0])
+    phong_r.render(phong, force=True)
+    frames: dict[int, list[float]] = collections.defaultdict(list)
+    copies: dict[int, list[float]] = collections.defaultdict(list)
+    phongs = []
+    for k in range(args.repeats):
+        for n in (sizes if k % 2 == 0 else sizes[::-1]):
+            frames[n].append(light_frame(renderers[n], settings[n], k)[0])
+            copies[n].append(copy_draw_ms(renderers[n], n, 3))
+        phongs.append(light_frame(phong_r, phong, k)[0])
+    ph = statistics.median(phongs)
+    print(f"# scene={args.scene} image={args.size}^2 repeats={args.repeats} {args.set or 'defaults'}; "
+          f"load {os.getloadavg()[0]:.1f} at the end; Phong's light move {ph:.0f} ms")
+    print(f"{'maps':>6} {'light move ms':>14} {'x Phong':>8} {'copy ms':>8} {'/ copy':>7}")
+    med = {n: (statistics.median(frames[n]), statistics.median(copies[n])) for n in sizes}
+    for n in sizes:
+        ms, cp = med[n]
+        print(f"{n:>6} {ms:14.0f} {ms / ph:8.2f} {cp:8.2f} {ms / cp:7.1f}")
+    for a, b in zip(sizes, sizes[1:]):
+        texels = (b / a) ** 2
+        print(f"# growth {a}^2 -> {b}^2 ({texels:.0f}x texels): light move {med[b][0] / med[a][0]:.2f}x "
+              f"(goal <= {texels:.0f}x); a plain copy {med[b][1] / med[a][1]:.2f}x")
 
 
 if __name__ == "__main__":
