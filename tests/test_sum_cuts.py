@@ -132,3 +132,25 @@ def test_the_combine_with_shared_fetches_is_the_combine_for_every_mask(renderer,
     textures = tuple(renderer.graph("deon")._last_refl["deon_combine"].planned.textures)
     for v in likely:
         assert v.get("BLUR_SOURCES", 0o76543210) == deon_passes.blur_sources(textures, v["GAUSSIAN_MASK"]), v
+
+
+@pytest.mark.skipif(__import__("shutil").which("glslangValidator") is None, reason="glslangValidator not installed")
+def test_the_combine_with_shared_fetches_passes_the_reference_compiler(gl_ctx, tmp_path):
+    """deon_combine with BLUR_SOURCES (slots 1 and 2 from slot 0; slot 2 from slot 1; slot 3 from slot 0) and
+    the split fill's variants compile with Khronos' reference compiler (stricter than Mesa)."""
+    import subprocess
+
+    from skinviewer.kernel.shaders import ShaderLibrary
+    lib = ShaderLibrary(gl_ctx)
+    same = deon_passes.blur_sources(("e", "e", "e", "b3", "b4", "b5"), 63)
+    cases = [("deon_combine", {"GAUSSIAN_MASK": 63, "HALF_MASK": 48, "BLUR_SOURCES": same}),
+             ("deon_combine", {"GAUSSIAN_MASK": 62, "BLUR_SOURCES": deon_passes.blur_sources(("e", "e", "e", "e"), 62)}),
+             ("deon_combine", {"GAUSSIAN_MASK": 15, "BLUR_SOURCES": deon_passes.blur_sources(("e", "a", "b", "e"), 15)}),
+             ("seam_fill", {"TILED": 2}), ("seam_fill", {"TILED": 2, "NO_SEAM": 1})]
+    for name, defines in cases:
+        srcs = lib._assemble(name, tuple((str(k), str(v)) for k, v in sorted(defines.items())))[0]
+        for stage, ext in (("vertex_shader", "vert"), ("fragment_shader", "frag")):
+            f = tmp_path / f"{name}.{ext}"
+            f.write_text(srcs[stage])
+            r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
+            assert r.returncode == 0, (name, defines, stage, r.stdout[-600:])
