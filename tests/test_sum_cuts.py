@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from conftest import LPS_GLB
-from helpers import first_gathered_step, small_settings
+from helpers import small_settings
 
 import skinviewer.passes.deon as deon_passes
 from skinviewer.physics.diffusion import blur_resource
