@@ -26,7 +26,10 @@ uniform sampler2D blocks_e;   // deon_gather_blocks.frag MEAN_THICKNESS: RGB sum
 uniform sampler2D blocks_l;   // xyz the light's mean point, w its spread
 uniform sampler2D blocks_m;   // (LIT_RING < GATHER_BLOCKS) RGB the mean light sum E A / sum A
 uniform float u_var;          // variance added, mm^2
-#if GATHER_BLOCKS > KEPT_RINGS || defined(ISLAND_ONLY)
+#ifndef ISLAND_ONLY
+#define ISLAND_ONLY 0
+#endif
+#if GATHER_BLOCKS > KEPT_RINGS || ISLAND_ONLY
 uniform sampler2D gutter;     // RG nearest island texel, B zone
 #endif
 #if GATHER_BLOCKS > KEPT_RINGS  // the rings past KEPT_RINGS: their weights computed here (deon_gather_sum.frag)
@@ -87,7 +90,7 @@ void main() {
         cs[t] = clamp(st.b, -0.95, 0.95);
 #endif
     }
-#ifdef ISLAND_ONLY
+#if ISLAND_ONLY
     // ISLAND_ONLY (issue 27, session 9): a gutter texel's sum is never read (deon_gather_pick.frag reads the
     // island texel's), so its weights are not fetched: the island texels' sums are unchanged
     for (int t = 0; t < 4; ++t) {
