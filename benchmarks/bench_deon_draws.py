@@ -17,9 +17,8 @@ renderer (a light move does not re-reflect the pass); --ab-unsplit-irradiance ma
 in one pass (passes.deon.SPLIT_IRRADIANCE off: the code before its light-independent pass), in a second
 renderer too; --ab-no-quad-sum makes B sum the split step one texel a fragment (deon_gather_sum.frag,
 passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too; --ab-no-sum-cuts makes B
-seam-fill the summed step's input without the plain tiles, fetch every combine slot and every texel's weights
-in the quad sum (passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE and QUAD_ISLANDS off: the code before session 9),
-in a second renderer too. B's rows are
+seam-fill the summed step's input without the plain tiles and fetch every combine slot (passes.deon.
+GATHER_FILL_SPLIT and COMBINE_ONCE off: the code before session 9), in a second renderer too. B's rows are
 marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
@@ -126,9 +125,8 @@ def main() -> None:
     ap.add_argument("--ab-no-quad-sum", action="store_true",
                     help="B sums the split step one texel a fragment (passes.deon.QUAD_SUM 0), in its own renderer")
     ap.add_argument("--ab-no-sum-cuts", action="store_true",
-                    help="B without the summed step's split seam fill, the quad sum's island-only weights and the "
-                         "combine's shared fetches (passes.deon.GATHER_FILL_SPLIT, QUAD_ISLANDS, COMBINE_ONCE off), "
-                         "in its own renderer")
+                    help="B without the summed step's split seam fill and the combine's shared fetches "
+                         "(passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE off), in its own renderer")
     args = ap.parse_args()
     sizes = [int(v) for v in str(args.maps).split(",")]
     if len(sizes) > 1:
@@ -146,18 +144,18 @@ def main() -> None:
     r.render(phong, force=True)
     ra = rb = r
     own = args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum or args.ab_no_sum_cuts  # B in a renderer of its own
-    cuts = deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE, deon_passes.QUAD_ISLANDS
+    cuts = deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE
     if own:
         deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
         deon_passes.SPLIT_IRRADIANCE = not args.ab_unsplit_irradiance
         deon_passes.QUAD_SUM = "0" if args.ab_no_quad_sum else quad
         if args.ab_no_sum_cuts:
-            deon_passes.GATHER_FILL_SPLIT = deon_passes.COMBINE_ONCE = deon_passes.QUAD_ISLANDS = False
+            deon_passes.GATHER_FILL_SPLIT = deon_passes.COMBINE_ONCE = False
         rb = Renderer(ctx)
         rb.render(s, force=True)
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
-        deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE, deon_passes.QUAD_ISLANDS = cuts
+        deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
         ra = Renderer(ctx)  # A in a renderer of its own too: neither side shares Phong's pool
         ra.render(s, force=True)
     per: dict[tuple, list[float]] = collections.defaultdict(list)
@@ -176,8 +174,7 @@ def main() -> None:
             deon_passes.SPLIT_SUM = side == "A" or not args.ab_unsplit_sum
             deon_passes.SPLIT_IRRADIANCE = side == "A" or not args.ab_unsplit_irradiance
             deon_passes.QUAD_SUM = "0" if side == "B" and args.ab_no_quad_sum else quad
-            deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE, deon_passes.QUAD_ISLANDS = (
-                (False, False, False) if side == "B" and args.ab_no_sum_cuts else cuts)
+            deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = (False, False) if side == "B" and args.ab_no_sum_cuts else cuts
             if side == "B":
                 VARIANT.update(variant)
                 if args.ab_no_zone_split:
@@ -202,7 +199,7 @@ def main() -> None:
         deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
-        deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE, deon_passes.QUAD_ISLANDS = cuts
+        deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])
         copies.append(copy_draw_ms(r, args.maps, 3))

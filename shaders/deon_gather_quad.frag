@@ -26,13 +26,8 @@ uniform sampler2D blocks_e;   // deon_gather_blocks.frag MEAN_THICKNESS: RGB sum
 uniform sampler2D blocks_l;   // xyz the light's mean point, w its spread
 uniform sampler2D blocks_m;   // (LIT_RING < GATHER_BLOCKS) RGB the mean light sum E A / sum A
 uniform float u_var;          // variance added, mm^2
-#ifndef ISLAND_ONLY
-#define ISLAND_ONLY 0
-#endif
-#if GATHER_BLOCKS > KEPT_RINGS || ISLAND_ONLY
-uniform sampler2D gutter;     // RG nearest island texel, B zone
-#endif
 #if GATHER_BLOCKS > KEPT_RINGS  // the rings past KEPT_RINGS: their weights computed here (deon_gather_sum.frag)
+uniform sampler2D gutter;     // B zone
 uniform sampler2D blocks_p;   // (BLOCK_SURFACE) xyz mean point (mm), w area
 uniform sampler2D blocks_z;   // R zone, G spread (mm^2 per axis)
 uniform sampler2D stretch_map;  // RG UV per mm, B shear cosine
@@ -90,23 +85,10 @@ void main() {
         cs[t] = clamp(st.b, -0.95, 0.95);
 #endif
     }
-#if ISLAND_ONLY
-    // ISLAND_ONLY (issue 27, session 9): a gutter texel's sum is never read (deon_gather_pick.frag reads the
-    // island texel's), so its weights are not fetched: the island texels' sums are unchanged
-    for (int t = 0; t < 4; ++t) {
-        for (int k = 0; k < WT; ++k) W[t * WT + k] = vec4(0.0);
-    }
-    ivec2 q1 = min(b2 + ivec2(1, 0), hi), q2 = min(b2 + ivec2(0, 1), hi), q3 = min(b2 + ivec2(1, 1), hi);
-    if (ivec2(texelFetch(gutter, b2, 0).rg + 0.5) == b2) { WEIGHTS_AT(W, 0, b2) }
-    if (ivec2(texelFetch(gutter, q1, 0).rg + 0.5) == q1) { WEIGHTS_AT(W, WT, q1) }
-    if (ivec2(texelFetch(gutter, q2, 0).rg + 0.5) == q2) { WEIGHTS_AT(W, 2 * WT, q2) }
-    if (ivec2(texelFetch(gutter, q3, 0).rg + 0.5) == q3) { WEIGHTS_AT(W, 3 * WT, q3) }
-#else
     WEIGHTS_AT(W, 0, b2)
     WEIGHTS_AT(W, WT, min(b2 + ivec2(1, 0), hi))
     WEIGHTS_AT(W, 2 * WT, min(b2 + ivec2(0, 1), hi))
     WEIGHTS_AT(W, 3 * WT, min(b2 + ivec2(1, 1), hi))
-#endif
 #include "lib/gather_sum_taps.glsl"
     for (int t = 0; t < 4; ++t) {
         acc[t].rgb += lit[t] / s[t];

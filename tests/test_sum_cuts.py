@@ -1,8 +1,7 @@
-"""The summed step's seam fill split into seam and plain tiles, the quad sum fetching island texels' weights
-only, and deon_combine fetching a texture two blur slots share once (issue 27, session 9: passes.deon.
-GATHER_FILL_SPLIT, QUAD_ISLANDS, COMBINE_ONCE, blur_sources): the same textures bit for bit as without them,
-whole and in bands, on the head (quad sum on and off), without seams, on the scan and past an open border
-(where the fill is not split; a fourth ring there, its weights computed in the sum)."""
+"""The summed step's seam fill split into seam and plain tiles, and deon_combine fetching a texture two blur
+slots share once (issue 27, session 9: passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE, blur_sources): the
+same textures bit for bit as without them, whole and in bands, on the head (quad sum on and off), without
+seams, on the scan and past an open border (where the fill is not split)."""
 from __future__ import annotations
 
 import numpy as np
@@ -30,7 +29,6 @@ def _flushed(a: np.ndarray) -> np.ndarray:
 def _cuts(monkeypatch, on: bool) -> None:
     monkeypatch.setattr(deon_passes, "GATHER_FILL_SPLIT", on)
     monkeypatch.setattr(deon_passes, "COMBINE_ONCE", on)
-    monkeypatch.setattr(deon_passes, "QUAD_ISLANDS", on)
 
 
 def _settings(scene, extra):
@@ -64,9 +62,6 @@ def test_the_cuts_give_the_same_textures_bit_for_bit(renderer, monkeypatch, case
     for k, want in before.items():
         assert np.array_equal(_flushed(after[k]), _flushed(want), equal_nan=True), (case, k, float(np.nanmax(np.abs(after[k] - want))))
     g = gathered[0]
-    quads = [dict(d) for d in programs[g] if any(k == "WEIGHT_TEXTURES" for k, _ in d)]
-    if quad == "auto" and deon_passes.software_renderer(renderer.ctx):  # the quad sum: island weights only
-        assert any(d.get("ISLAND_ONLY") == 1 for d in quads), programs[g]
     fills = [d for d in programs[g] if ("RIM_SHARE", 1) not in d and any(k == "NO_SEAM" for k, _ in d)]
     if case in ("head", "head-one-texel-sum", "scan"):  # seams, no border: the plain tiles take one more draw
         assert fills, programs[g]
@@ -141,9 +136,8 @@ def test_the_combine_with_shared_fetches_is_the_combine_for_every_mask(renderer,
 
 @pytest.mark.skipif(__import__("shutil").which("glslangValidator") is None, reason="glslangValidator not installed")
 def test_the_combine_with_shared_fetches_passes_the_reference_compiler(gl_ctx, tmp_path):
-    """deon_combine with BLUR_SOURCES (slots 1 and 2 from slot 0; slot 2 from slot 1; slot 3 from slot 0), the
-    split fill's variants and the quad sum with ISLAND_ONLY (with and without a live ring, which reads the gutter
-    map too) compile with Khronos' reference compiler (stricter than Mesa)."""
+    """deon_combine with BLUR_SOURCES (slots 1 and 2 from slot 0; slot 2 from slot 1; slot 3 from slot 0) and
+    the split fill's variants compile with Khronos' reference compiler (stricter than Mesa)."""
     import subprocess
 
     from skinviewer.kernel.shaders import ShaderLibrary
@@ -152,9 +146,7 @@ def test_the_combine_with_shared_fetches_passes_the_reference_compiler(gl_ctx, t
     cases = [("deon_combine", {"GAUSSIAN_MASK": 63, "HALF_MASK": 48, "BLUR_SOURCES": same}),
              ("deon_combine", {"GAUSSIAN_MASK": 62, "BLUR_SOURCES": deon_passes.blur_sources(("e", "e", "e", "e"), 62)}),
              ("deon_combine", {"GAUSSIAN_MASK": 15, "BLUR_SOURCES": deon_passes.blur_sources(("e", "a", "b", "e"), 15)}),
-             ("seam_fill", {"TILED": 2}), ("seam_fill", {"TILED": 2, "NO_SEAM": 1}),
-             ("deon_gather_quad", {"GATHER_BLOCKS": 3, "KEPT_RINGS": 3, "WEIGHT_TEXTURES": 19, "TILED": 2, "ISLAND_ONLY": 1}),
-             ("deon_gather_quad", {"GATHER_BLOCKS": 4, "KEPT_RINGS": 3, "WEIGHT_TEXTURES": 19, "TILED": 2, "ISLAND_ONLY": 1})]
+             ("seam_fill", {"TILED": 2}), ("seam_fill", {"TILED": 2, "NO_SEAM": 1})]
     for name, defines in cases:
         srcs = lib._assemble(name, tuple((str(k), str(v)) for k, v in sorted(defines.items())))[0]
         for stage, ext in (("vertex_shader", "vert"), ("fragment_shader", "frag")):

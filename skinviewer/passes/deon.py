@@ -120,13 +120,10 @@ LIT_RING: int | None = int(os.environ["SKINVIEWER_LIT_RING"]) if os.environ.get(
 QUAD_SUM = os.environ.get("SKINVIEWER_QUAD_SUM", "auto")
 # issue 27 (session 9, notes/deon_light_move.md section 12): the summed step's seam fill as a plain copy on
 # the tiles with no seam texel (seam_split), and deon_combine's fetch of a texture that two blur slots share
-# once (blur_sources); each the same values bit for bit. SKINVIEWER_SUM_CUTS=0: these and QUAD_ISLANDS off,
-# for an A/B (benchmarks/bench_deon_draws.py --ab-no-sum-cuts).
+# once (blur_sources); each the same values bit for bit. SKINVIEWER_SUM_CUTS=0: both off, for an A/B
+# (benchmarks/bench_deon_draws.py --ab-no-sum-cuts).
 GATHER_FILL_SPLIT = os.environ.get("SKINVIEWER_SUM_CUTS", "1") != "0"
 COMBINE_ONCE = os.environ.get("SKINVIEWER_SUM_CUTS", "1") != "0"
-# ... and the quad sum fetches the weights of island texels only (deon_gather_quad.frag ISLAND_ONLY: a gutter
-# texel's sum is never read, deon_gather_pick.frag reads its island texel's)
-QUAD_ISLANDS = os.environ.get("SKINVIEWER_SUM_CUTS", "1") != "0"
 
 
 def map_size(r) -> int:
@@ -919,7 +916,7 @@ class GaussianBlurPass(Pass):
             r.plan(quad=quad)
             if quad:  # four texels a fragment at half size, then each texel picked (issue 27)
                 r.program("deon_gather_quad", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS,
-                          **tiled, **flat, **({"ISLAND_ONLY": 1} if QUAD_ISLANDS else {}))
+                          **tiled, **flat)
                 r.program("deon_gather_pick", **tiled)
             else:
                 r.program("deon_gather_sum", GATHER_BLOCKS=reach, WEIGHT_TEXTURES=count, KEPT_RINGS=KEPT_RINGS,
@@ -1008,9 +1005,8 @@ class GaussianBlurPass(Pass):
         for t, res in enumerate(plan.weights):
             ec.bind(prog, f"w{t}", res)
         ec.set(prog, "u_var", float(plan.step.increment))
-        ec.bind(prog, "gutter", plan.gutter, optional=True)  # LIVE's zones, ISLAND_ONLY's island test
         if plan.live:  # the rings past KEPT_RINGS: their weights computed in the sum
-            ec.textures(prog, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
+            ec.textures(prog, gutter=plan.gutter, blocks_p=GATHER_BLOCKS_POINT, blocks_z=GATHER_BLOCKS_ZONE)
             bind_sheet_stretch(ec, prog)
         pick = ec.program("deon_gather_pick")
         ec.bind(pick, "gutter", plan.gutter)
