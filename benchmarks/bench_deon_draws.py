@@ -6,7 +6,7 @@ in the same run.
 
     python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
         [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split] [--ab-unsplit-sum]
-        [--ab-unsplit-irradiance] [--ab-no-quad-sum]
+        [--ab-unsplit-irradiance] [--ab-no-quad-sum] [--ab-no-sum-cuts]
 
 --ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
 define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
@@ -16,7 +16,10 @@ before passes.deon.zone_split / seam_split); --ab-unsplit-sum makes B sum the na
 renderer (a light move does not re-reflect the pass); --ab-unsplit-irradiance makes B shade the irradiance
 in one pass (passes.deon.SPLIT_IRRADIANCE off: the code before its light-independent pass), in a second
 renderer too; --ab-no-quad-sum makes B sum the split step one texel a fragment (deon_gather_sum.frag,
-passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too. B's rows are marked (B).
+passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too; --ab-no-sum-cuts makes B
+seam-fill the summed step's input without the plain tiles and fetch every combine slot (passes.deon.
+GATHER_FILL_SPLIT and COMBINE_ONCE off: the code before session 9), in a second renderer too. B's rows are
+marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
 are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
@@ -102,7 +105,9 @@ def parse_sets(items: list[str]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--maps", type=int, default=1024)
+    ap.add_argument("--maps", default="1024",
+                    help="map size; a list (1024,2048): the growth mode, each size's light move (whole frames, "
+                         "no per-draw fences) and plain copy interleaved in each repeat, in one process")
     ap.add_argument("--size", type=int, default=640)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--scene", default="head")
@@ -119,7 +124,15 @@ def main() -> None:
                     help="B shades the irradiance in one pass (passes.deon.SPLIT_IRRADIANCE off), in its own renderer")
     ap.add_argument("--ab-no-quad-sum", action="store_true",
                     help="B sums the split step one texel a fragment (passes.deon.QUAD_SUM 0), in its own renderer")
+    ap.add_argument("--ab-no-sum-cuts", action="store_true",
+                    help="B without the summed step's split seam fill and the combine's shared fetches "
+                         "(passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE off), in its own renderer")
     args = ap.parse_args()
+    sizes = [int(v) for v in str(args.maps).split(",")]
+    if len(sizes) > 1:
+        growth(args, sizes)
+        return
+    args.maps = sizes[0]
     quad = deon_passes.QUAD_SUM
     ctx = headless_context()
     print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
@@ -130,15 +143,19 @@ def main() -> None:
     r.render(s, force=True)
     r.render(phong, force=True)
     ra = rb = r
-    own = args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum  # B in a renderer of its own
+    own = args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum or args.ab_no_sum_cuts  # B in a renderer of its own
+    cuts = deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE
     if own:
         deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
         deon_passes.SPLIT_IRRADIANCE = not args.ab_unsplit_irradiance
         deon_passes.QUAD_SUM = "0" if args.ab_no_quad_sum else quad
+        if args.ab_no_sum_cuts:
+            deon_passes.GATHER_FILL_SPLIT = deon_passes.COMBINE_ONCE = False
         rb = Renderer(ctx)
         rb.render(s, force=True)
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
+        deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
         ra = Renderer(ctx)  # A in a renderer of its own too: neither side shares Phong's pool
         ra.render(s, force=True)
     per: dict[tuple, list[float]] = collections.defaultdict(list)
@@ -157,6 +174,7 @@ def main() -> None:
             deon_passes.SPLIT_SUM = side == "A" or not args.ab_unsplit_sum
             deon_passes.SPLIT_IRRADIANCE = side == "A" or not args.ab_unsplit_irradiance
             deon_passes.QUAD_SUM = "0" if side == "B" and args.ab_no_quad_sum else quad
+            deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = (False, False) if side == "B" and args.ab_no_sum_cuts else cuts
             if side == "B":
                 VARIANT.update(variant)
                 if args.ab_no_zone_split:
@@ -181,6 +199,7 @@ def main() -> None:
         deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
+        deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])
         copies.append(copy_draw_ms(r, args.maps, 3))
@@ -203,6 +222,43 @@ def main() -> None:
         total += ms
         print(f"{key[0]:<18} {key[1]:<58} {counts[key]:>5} {ms:8.1f} {ms / copy:7.1f}")
     print(f"{'sum of draws':<18} {'':<58} {'':>5} {total:8.1f} {total / copy:7.1f}")
+
+
+def growth(args, sizes: list[int]) -> None:
+    """Issue 27's growth goal (a light move's cost at most linear in texels): per map size, one renderer,
+    its light move (light_frame: whole frames, sync timing at the frame's ends only) and a plain copy of that
+    size, interleaved in each repeat (sizes in turn, the order reversed every other repeat), Phong beside."""
+    ctx = headless_context()
+    print(f"# d'Eon light move by map size — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
+    sets = parse_sets(args.set)
+    renderers, settings = {}, {}
+    for n in sizes:
+        settings[n] = settings_for("deon", args.scene, args.size, n, **sets)
+        renderers[n] = Renderer(ctx)
+        renderers[n].render(settings[n], force=True)
+    phong_r = Renderer(ctx)
+    phong = settings_for("phong", args.scene, args.size, sizes[0])
+    phong_r.render(phong, force=True)
+    frames: dict[int, list[float]] = collections.defaultdict(list)
+    copies: dict[int, list[float]] = collections.defaultdict(list)
+    phongs = []
+    for k in range(args.repeats):
+        for n in (sizes if k % 2 == 0 else sizes[::-1]):
+            frames[n].append(light_frame(renderers[n], settings[n], k)[0])
+            copies[n].append(copy_draw_ms(renderers[n], n, 3))
+        phongs.append(light_frame(phong_r, phong, k)[0])
+    ph = statistics.median(phongs)
+    print(f"# scene={args.scene} image={args.size}^2 repeats={args.repeats} {args.set or 'defaults'}; "
+          f"load {os.getloadavg()[0]:.1f} at the end; Phong's light move {ph:.0f} ms")
+    print(f"{'maps':>6} {'light move ms':>14} {'x Phong':>8} {'copy ms':>8} {'/ copy':>7}")
+    med = {n: (statistics.median(frames[n]), statistics.median(copies[n])) for n in sizes}
+    for n in sizes:
+        ms, cp = med[n]
+        print(f"{n:>6} {ms:14.0f} {ms / ph:8.2f} {cp:8.2f} {ms / cp:7.1f}")
+    for a, b in zip(sizes, sizes[1:]):
+        texels = (b / a) ** 2
+        print(f"# growth {a}^2 -> {b}^2 ({texels:.0f}x texels): light move {med[b][0] / med[a][0]:.2f}x "
+              f"(goal <= {texels:.0f}x); a plain copy {med[b][1] / med[a][1]:.2f}x")
 
 
 if __name__ == "__main__":

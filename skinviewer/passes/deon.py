@@ -118,6 +118,12 @@ LIT_RING: int | None = int(os.environ["SKINVIEWER_LIT_RING"]) if os.environ.get(
 # values bit for bit): "auto" on a software rasterizer, which pays per fetch and lane (135 fetches a texel
 # -> 49); a GPU's texture cache shares those fetches already. "1" / "0" (SKINVIEWER_QUAD_SUM): always / never.
 QUAD_SUM = os.environ.get("SKINVIEWER_QUAD_SUM", "auto")
+# issue 27 (session 9, notes/deon_light_move.md section 12): the summed step's seam fill as a plain copy on
+# the tiles with no seam texel (seam_split), and deon_combine's fetch of a texture that two blur slots share
+# once (blur_sources); each the same values bit for bit. SKINVIEWER_SUM_CUTS=0: both off, for an A/B
+# (benchmarks/bench_deon_draws.py --ab-no-sum-cuts).
+GATHER_FILL_SPLIT = os.environ.get("SKINVIEWER_SUM_CUTS", "1") != "0"
+COMBINE_ONCE = os.environ.get("SKINVIEWER_SUM_CUTS", "1") != "0"
 
 
 def map_size(r) -> int:
@@ -886,7 +892,16 @@ class GaussianBlurPass(Pass):
                 r.input(border_resource(n))
                 r.input(IRRADIANCE)
             dilate = {"DILATE": 1} if tiles and step.source != IRRADIANCE else {}  # never with a border
-            r.program("seam_fill", **dilate, **border, **({"RIM_SHARE": 1} if border else {}))
+            fill = {**dilate, **border, **({"RIM_SHARE": 1} if border else {})}
+            # issue 27: the fill over the whole map as rectangles, those with no texel across a seam as a
+            # plain copy (seam_split, as the separable blurs' fills; NO_SEAM is void with a border)
+            fill_split = GATHER_FILL_SPLIT and TILE_RECTS and not border
+            r.plan(fill=fill, fill_split=fill_split)
+            if fill_split:
+                for extra in ({}, {"NO_SEAM": 1}):
+                    r.program("seam_fill", **fill, TILED=2, **extra)
+            else:
+                r.program("seam_fill", **fill)
         reach = gather_reach(r, step, n)
         tiled = {"TILED": tiled_define()} if tiles else {}
         if split_sum(r, step, n):  # the weights kept by GatherWeightsPass; the light summed with them here
@@ -922,15 +937,23 @@ class GaussianBlurPass(Pass):
             filled, fresh = ec.held("filled", plan.spec)
             if fresh:
                 dilating = tiled and source != IRRADIANCE  # the irradiance is whole: dilated already
-                fill = ec.program("seam_fill")  # the variant reflect declared (DILATE, OPEN_BORDER, RIM_SHARE)
-                ec.textures(fill, source=source, seam_map=plan.seam)
-                if dilating:
-                    ec.bind(fill, "gutter", gutter)
-                ec.set(fill, "u_past_border_dark", True)
-                if plan.border:  # a texel the border crosses counts its share on the surface; no reflection
-                    ec.textures(fill, border_map=plan.border, irradiance_map=IRRADIANCE)
-                    ec.set(fill, "u_reflect", 0)
-                ec.draw_fullscreen(fill, filled)
+                # the variant(s) reflect declared (DILATE, OPEN_BORDER, RIM_SHARE; TILED = 2 with its NO_SEAM twin)
+                split = seam_split(ec, n, whole_target(ec, n)) if plan.fill_split else None
+                if split is None:
+                    parts = [(ec.program("seam_fill", **plan.fill, **({"TILED": 2} if plan.fill_split else {})),
+                              whole_target(ec, n) if plan.fill_split else None)]
+                else:
+                    parts = [(ec.program("seam_fill", **plan.fill, TILED=2, **extra), where)
+                             for extra, where in (({}, split[0]), ({"NO_SEAM": 1}, split[1])) if where is not None]
+                for fill, where in parts:
+                    ec.textures(fill, source=source, seam_map=plan.seam)
+                    if dilating:
+                        ec.bind(fill, "gutter", gutter)
+                    ec.set(fill, "u_past_border_dark", True)
+                    if plan.border:  # a texel the border crosses counts its share on the surface; no reflection
+                        ec.textures(fill, border_map=plan.border, irradiance_map=IRRADIANCE)
+                        ec.set(fill, "u_reflect", 0)
+                    ec.draw_fullscreen(fill, filled, tiles=where)
             source = filled
         split = plan.weights is not None
         flat = split and plan.flat  # the rings past LIT_RING read the blocks' mean light
@@ -1191,6 +1214,17 @@ def blur_program(r, compute: bool, spec: TexSpec, name: str, **defines: Any) -> 
         r.program(cs_name, **cs_defines)
 
 
+def whole_target(ec, n: int) -> tuple:
+    """The whole n x n target as one TILED = 2 rectangle (a work_tiles-like tuple, kept in gl_objects), for
+    seam_split over a draw that covers every texel (the summed step's seam fill)."""
+    objs = ec.state.setdefault("gl_objects", {})
+    key = ("whole_target", id(ec.scene), n)
+    if objs.get(key) is None:
+        drop_other_scenes(objs, "whole_target", id(ec.scene))
+        objs[key] = rect_tiles(ec.gl, np.ones((1, 1), bool), n)
+    return objs[key]
+
+
 def seam_split(ec, n: int, tiles: tuple) -> tuple | None:
     """A seam fill's tiles (``tiles``, TILED = 2 rectangles, or one whole-target tile) split by whether
     a texel of the tile lies across a UV seam or past a mesh border (the seam map's B > 0.5): (tiles
@@ -1400,22 +1434,56 @@ class DiffuseSumPass(Pass):
         r.plan(size=n)
         # the blurs made at half size (deon.half_res_above_texels): filtered up, not fetched per texel
         half = sum(1 << i for i, step in enumerate(_plan(r)) if (mask >> i) & 1 and texture_size(r, texture_of(step)) != n)
-        r.program("deon_combine", GAUSSIAN_MASK=mask, **({"HALF_MASK": half} if half else {}))
+        textures = tuple(texture_of(step) for step in _plan(r))
+        r.plan(textures=textures)
+        r.program("deon_combine", **combine_defines(textures, mask, half))
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_combine one weight toggle away: warmed while idle, with deon_final's."""
-        return [("deon_combine", v) for n, d in r.programs if n == "deon_combine"
-                for v in likely_final_variants(dict(d))[:MAX_GAUSSIANS]]
+        textures = r.planned.textures if "textures" in r.planned else ()
+        out = []
+        for n, d in r.programs:
+            if n != "deon_combine":
+                continue
+            for v in likely_final_variants(dict(d))[:MAX_GAUSSIANS]:
+                v.pop("BLUR_SOURCES", None)  # the sources of the toggled mask (blur_sources)
+                out.append(("deon_combine", combine_defines(textures, v["GAUSSIAN_MASK"], v.get("HALF_MASK", 0), v)))
+        return out
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_combine")
         ws, _, _ = bind_blur_slots(ec, prog)
         n = ec.plan.size
         ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED), u_size=(float(n), float(n)))
+        ec.set(prog, "u_one", 1.0, optional=True)  # BLUR_SOURCES' shared values times 1 (deon_combine.frag)
         if ec.has_input(TRANSMITTED):
             ec.bind(prog, "transmitted", TRANSMITTED)
         ec.draw_fullscreen(prog, DIFFUSE)
+
+
+def blur_sources(textures: tuple, mask: int) -> int:
+    """deon_combine.frag's BLUR_SOURCES: 3 bits a slot k < 4, the earliest used slot (bit of ``mask``) that
+    reads the same texture as k (k itself if none), slots 4..7 their own; 0o76543210 when no slot shares."""
+    out = 0
+    for k in range(8):
+        src = k
+        if k < 4 and k < len(textures) and (mask >> k) & 1:
+            src = next(j for j in range(k + 1) if (mask >> j) & 1 and textures[j] == textures[k])
+        out |= src << (3 * k)
+    return out
+
+
+def combine_defines(textures: tuple, mask: int, half: int, base: dict | None = None) -> dict:
+    """deon_combine's defines: GAUSSIAN_MASK, HALF_MASK (when some), BLUR_SOURCES (COMBINE_ONCE, when a
+    texture is shared by two used slots)."""
+    out = {**(base or {}), "GAUSSIAN_MASK": int(mask)}
+    if half:
+        out["HALF_MASK"] = int(half)
+    sources = blur_sources(textures, mask)
+    if COMBINE_ONCE and sources != 0o76543210:
+        out["BLUR_SOURCES"] = sources
+    return out
 
 
 def likely_final_variants(defines: dict, gather: int | None = None) -> list[dict]:
