@@ -31,7 +31,42 @@ uniform int u_combined;          // generic shaders: read diffuse_sum instead of
 #if DEON_TEXTURE_SHADOWS
 uniform sampler2D visibility;    // fac_shadow per light slot, from the irradiance pass (deon_irradiance.frag)
 #endif
+// Split in two (issue 27; passes.deon.split_final), DEON_FINAL_PART: 0 the whole pass; 1 its
+// light-independent part (DeonFinalViewPass: the shading normal N and m, the factor
+// C^(1-mix) rho_dt(N.V) and rho_s, the environment's specular and translucency, as exact float32 per
+// pixel); 2 the light part (this pass), which reads them at its own pixel (the same mesh, raster and
+// depth test, so the same fragment lands there) and adds the lights in the one-pass order: bit-identical.
+#ifndef DEON_FINAL_PART
+#define DEON_FINAL_PART 0
+#endif
+#ifndef FINAL_ENV
+#define FINAL_ENV 0      // part 2: the environment's specular is in final_view2
+#endif
+#ifndef FINAL_ENV_TR
+#define FINAL_ENV_TR 0   // parts 1-2: the environment's translucency is in final_view3 (ENV_RAYS > 0, deon.tsm)
+#endif
+#if DEON_FINAL_PART == 1
+layout(location = 0) out vec4 f_view0;  // N, m
+layout(location = 1) out vec4 f_view1;  // C^(1-mix) rho_dt(N.V), rho_s
+#if ENV_LIGHT
+layout(location = 2) out vec4 f_view2;  // the environment's specular (env_specular)
+#endif
+#if FINAL_ENV_TR
+layout(location = 3) out vec4 f_view3;  // the environment's translucency, C^mix applied
+#endif
+#else
 out vec4 f_color;
+#endif
+#if DEON_FINAL_PART == 2
+uniform sampler2D final_view0;
+uniform sampler2D final_view1;
+#if FINAL_ENV
+uniform sampler2D final_view2;
+#endif
+#if FINAL_ENV_TR
+uniform sampler2D final_view3;
+#endif
+#endif
 
 // Specialised (issue 14) by GAUSSIAN_MASK (bit i: Gaussian i has weight and its blur is bound),
 // DEON_TSM (0: no transmission code) and DEON_COMBINED (1: the sum, transmission included, comes
@@ -49,6 +84,7 @@ out vec4 f_color;
 #include "lib/tsm_transmit.glsl"
 
 void main() {
+#if DEON_FINAL_PART != 1
 #if G_MASK == 0 && G_TSM == 0 && defined(LIGHT_COUNT) && !defined(GENERIC_SHADERS)
 #if LIGHT_COUNT == 0
     f_color = vec4(0.0, 0.0, 0.0, 1.0);  // every light off: black, as the full sum would give
@@ -56,10 +92,21 @@ void main() {
 #endif
 #endif
     set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
+#endif
+#if DEON_FINAL_PART == 2
+    ivec2 px = ivec2(gl_FragCoord.xy);  // the view part's values of this fragment
+    vec4 view0 = texelFetch(final_view0, px, 0);
+    vec4 view1 = texelFetch(final_view1, px, 0);
+    vec3 N = view0.xyz;  // gl_FrontFacing applied
+#else
     vec3 N = surface_normal(v_normal, v_tangent, v_uv);
+#endif
     vec3 V = normalize(u_eye - v_position);
+#if DEON_FINAL_PART != 2
     if (!gl_FrontFacing) N = -N;  // the back of an open sheet (scene.back_faces: show)
+#endif
     vec3 diffuse = vec3(0.0);
+#if DEON_FINAL_PART != 1
 #if G_COMBINED == 1
     diffuse = texture(diffuse_sum, v_uv).rgb;  // eq. (34), sum_i w_i blur_i, summed in texture space
 #else
@@ -79,23 +126,54 @@ void main() {
 #if G_TSM != 0
     if (u_tsm != 0) diffuse += tsm_transmitted(v_position, v_normal, v_uv);  // eq. 33 (lib/tsm_transmit.glsl)
 #endif
+#endif
+#if DEON_FINAL_PART != 2
     vec3 C = max(texture(albedo_map, v_uv).rgb, vec3(0.0));
-#if ENV_LIGHT && ENV_RAYS > 0
+#endif
+#if ENV_LIGHT && ENV_RAYS > 0 && DEON_FINAL_PART != 2
     // translucency from the environment (issue 32; physics/environment.env_transmitted): the back side's
     // irradiance E_SH(-Ng) through eq. 33's profile sum_i w_i exp(-d^2 / 2 v_i) at the thickness d baked
     // along -N, times the pre-scatter albedo as the irradiance map's light is (deon.tsm gates it)
+#if DEON_FINAL_PART == 1
+    if (FINAL_ENV_TR != 0) {
+#else
     if (u_env_tr != 0) {
+#endif
         float d = ENV_THICK().x * u_mm_per_unit;
         vec3 t = vec3(0.0);
         for (int i = 0; i < MAX_GAUSSIANS; ++i) {
             if (u_env_tr_v[i] > 0.0) t += u_env_tr_w[i] * exp(-d * d / (2.0 * u_env_tr_v[i]));
         }
-        diffuse += env_back_irradiance(normalize(v_normal)) * t * safe_pow(C, u_mix);
+        vec3 env_tr = env_back_irradiance(normalize(v_normal)) * t * safe_pow(C, u_mix);
+#if DEON_FINAL_PART == 1
+#if FINAL_ENV_TR
+        f_view3 = vec4(env_tr, 0.0);
+#endif
+#else
+        diffuse += env_tr;
+#endif
     }
 #endif
+#if DEON_FINAL_PART == 2
+#if FINAL_ENV_TR
+    diffuse += texelFetch(final_view3, px, 0).rgb;
+#endif
+    SpecParams sp = SpecParams(view0.w, view1.w);
+    diffuse *= view1.rgb;
+#else
     SpecParams sp = specular_params(v_uv);
     float rho_v = (u_energy != 0) ? surface_rho_dt(rho_dt_tex, dot(N, V), sp) : 1.0;  // eq. (34)
-    diffuse *= safe_pow(C, 1.0 - u_mix) * rho_v;
+    vec3 factor = safe_pow(C, 1.0 - u_mix) * rho_v;
+    diffuse *= factor;
+#endif
+#if DEON_FINAL_PART == 1
+    f_view0 = vec4(N, sp.m);
+    f_view1 = vec4(factor, sp.rho_s);
+#if ENV_LIGHT
+    ENV_VIS_IN();
+    f_view2 = vec4(env_specular(N, V, v_normal, sp), 0.0);  // split sum, specular occlusion (lib/environment.glsl)
+#endif
+#else
     vec3 spec = vec3(0.0);
 #if DEON_TEXTURE_SHADOWS
     vec4 vis = texture(visibility, v_uv);  // eq. 10 per texel: no shadow-map lookups on a camera move
@@ -114,6 +192,9 @@ void main() {
 #if ENV_LIGHT
     ENV_VIS_IN();
     spec += env_specular(N, V, v_normal, sp);  // split sum, specular occlusion (lib/environment.glsl)
+#elif FINAL_ENV
+    spec += texelFetch(final_view2, px, 0).rgb;  // the view part's env_specular
 #endif
     f_color = vec4(finite3(diffuse + spec), 1.0);
+#endif
 }

@@ -48,7 +48,8 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
-from skinviewer.passes.environment import declare_environment, env_index, set_environment
+from skinviewer.passes.environment import declare_environment, env_defines, env_index, set_environment
+from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import (
     analytic_on,
@@ -1475,8 +1476,106 @@ def blur_ring(ec, n: int, stretch: str | None, sigma: float) -> int:
     return int(np.ceil(3.0 * s_max * sigma * n)) + 2
 
 
+# issue 27: the final pass split in a light-independent view pass (DeonFinalViewPass: the shading normal,
+# the specular parameters, C^(1-mix) rho_dt(N.V), the environment's specular and translucency; kept across
+# light moves) and the light pass (DeonFinalPass, DEON_FINAL_PART = 2); bit-identical to the one-pass shader.
+# SKINVIEWER_SPLIT_FINAL: auto (a software rasterizer: there a pixel's light-independent work costs per
+# lane; on a GPU the final pass is ~1 ms and the maps would hold 127 MiB at 1920x1080), 1, 0 (the one-pass
+# shader, for before | after runs: notes/deon_light_move.md section 15)
+SPLIT_FINAL = os.environ.get("SKINVIEWER_SPLIT_FINAL", "auto")
+
+
+def final_view_resource(k: int) -> str:
+    """RGBA32F render-size map k of the final pass's light-independent values (DeonFinalViewPass)."""
+    return f"deon_final_view_{k}"
+
+
+def split_final(r) -> bool:
+    """Whether deon_final adds the lights to the view pass's maps (SPLIT_FINAL): not when every light is
+    off (the black one-pass shader); auto: on a software rasterizer (kernel/gl; off the GL thread before
+    the renderer is known: as one, like quad_sum). Shape only (peeked)."""
+    if SPLIT_FINAL == "0":
+        return False
+    if not any(analytic_on(whole(l)) for l in whole(r.peeked.lights)[:MAX_LIGHTS]) and env_index(r) is None:
+        return False
+    if SPLIT_FINAL == "1" or r.scene is None:
+        return True
+    info = gl_info(r.scene.ctx)
+    return not info or software_renderer(r.scene.ctx)
+
+
+def final_view_maps(r) -> tuple[int, bool, bool]:
+    """(maps, env, env_tr): the view pass writes N and m, the factor and rho_s, with an environment light
+    its specular (env) and, with its occlusion bake and deon.tsm, its translucency (env_tr). Declares
+    deon.tsm only where the translucency exists (ENV_RAYS > 0)."""
+    env = env_defines(r)
+    env_tr = bool(env) and int(env.get("ENV_RAYS", 0)) > 0 and bool(r.settings.deon.tsm)
+    return 2 + int(bool(env)) + int(env_tr), bool(env), env_tr
+
+
+class DeonFinalViewPass(Pass):
+    """The light-independent part of eq. (34)-(35) per pixel (issue 27; deon_final.frag with DEON_FINAL_PART
+    = 1): the shading normal N (the normal map, back faces reversed) and m, C^(1-mix) rho_dt(N.V) and rho_s,
+    the environment's split-sum specular and its translucency, as exact float32. It reads the camera, the
+    mesh, the albedo, normal, region and specular maps, deon.mix, the specular settings, the rho_dt table and
+    the environment light; no analytic light: a light move keeps it, a camera move re-runs it."""
+    name = "deon_final_view"
+    tileable = True
+    view_dependent = True
+
+    def reflect(self, r: Reflection) -> None:
+        if not split_final(r):
+            return
+        count, env, env_tr = final_view_maps(r)
+        declare(r.settings.deon.mix)
+        declare_specular(r, lut=False)  # m, rho_s per texel and rho_dt's; the Beckmann LUT is the light pass's
+        if r.settings.deon.energy_conservation:
+            r.input(RHO_DT_RESOURCE)
+        defines = declare_environment(r)
+        if env_tr:
+            whole(r.settings.deon.gaussians)  # the translucency's profile (u_env_tr_w, u_env_tr_v)
+        declare_view_mesh(r)
+        w, h = r.settings.render.width, r.settings.render.height
+        r.program("deon_final", DEON_FINAL_PART=1, FINAL_ENV_TR=int(env_tr), LIGHT_COUNT=0, POINT_MASK=0,
+                  BEAM_MASK=0, SHADOW_MASK=0, **final_defines(0, False, True), **defines)
+        outs = tuple(final_view_resource(k) for k in range(count))
+        r.plan(outs=outs)
+        for res in outs:
+            r.output(res, TexSpec((w, h), 4, "f4", depth=True, filter="nearest"))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("deon_final")
+        set_camera(ec, prog)
+        bind_surface(ec, prog)
+        energy = ec.has_input(RHO_DT_RESOURCE)
+        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=energy)
+        if energy:
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        sp = ec.settings.specular  # lib/specular_params.glsl less the Beckmann LUT (the light pass's ks)
+        m, rho = per_region_specular(sp)
+        ec.uniforms(prog, u_spec_m=m, u_spec_rho_s=rho, u_spec_rho_s_table=float(sp.rho_s))
+        ec.textures(prog, region_map=ec.scene.region_map, specular_map=ec.scene.specular_map)
+        set_environment(ec, prog)
+        if "u_env_tr_w" in prog:
+            set_env_translucency(ec, prog)
+        draw_view_mesh(ec, prog, *ec.plan.outs)
+
+
+def set_env_translucency(ec, prog) -> None:
+    """deon_final's environment translucency profile: every Gaussian's weights and variance, the mm a unit."""
+    gs = whole(ec.settings.deon.gaussians)[:MAX_GAUSSIANS]
+    w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+    v = np.zeros(MAX_GAUSSIANS, np.float32)
+    for i, g in enumerate(gs):
+        w[i], v[i] = g.weights, g.variance
+    ec.set(prog, "u_env_tr_w", w, optional=True)
+    ec.set(prog, "u_env_tr_v", v, optional=True)
+    ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit), optional=True)  # the thickness in mm
+
+
 class DeonFinalPass(Pass):
-    """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output)."""
+    """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output). Split (split_final):
+    the light part, adding the lights to DeonFinalViewPass's maps."""
     name = "deon_final"
     tileable = True  # one draw (view mesh / texel shading): in row bands under a frame budget (issue 27)
     view_dependent = True
@@ -1494,10 +1593,23 @@ class DeonFinalPass(Pass):
             declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
             declare_view_mesh(r)
             return
-        declare(r.settings.deon.mix)
-        declare_specular(r)
-        if r.settings.deon.energy_conservation:
-            r.input(RHO_DT_RESOURCE)
+        split = split_final(r)
+        part: dict[str, int] = {}
+        if split:  # N, m, rho_s, the factor and the environment's terms from the view pass
+            count, env, env_tr = final_view_maps(r)
+            part = {"DEON_FINAL_PART": 2, "FINAL_ENV": int(env), "FINAL_ENV_TR": int(env_tr)}
+            r.plan(view_maps=tuple(final_view_resource(k) for k in range(count)))
+            for res in r.planned.view_maps:
+                r.input(res)
+            sp = r.settings.specular  # surface_ks: f0 and the mode (m, rho_s per pixel from the view pass)
+            declare(sp.f0)
+            if sp.mode == "beckmann_lut":
+                r.input(BECKMANN_LUT)
+        else:
+            declare(r.settings.deon.mix)
+            declare_specular(r)
+            if r.settings.deon.energy_conservation:
+                r.input(RHO_DT_RESOURCE)
         summed = combined(r)
         tsm = tsm_light_index(r) is not None and not summed  # summed: deon_transmitted has it
         if summed:
@@ -1516,7 +1628,7 @@ class DeonFinalPass(Pass):
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
         declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
-                    DEON_TEXTURE_SHADOWS=int(vis), **declare_environment(r))
+                    DEON_TEXTURE_SHADOWS=int(vis), **(part or declare_environment(r)))
         declare_view_mesh(r)
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
@@ -1530,30 +1642,33 @@ class DeonFinalPass(Pass):
         if ec.plan.dark:
             draw_view_mesh(ec, prog, LIT)
             return
-        bind_surface(ec, prog)
         has = ec.has_input
         set_lighting(ec, prog, shadow_maps=not has(VISIBILITY))
         bind_blurs(ec, prog)  # unbound blur slots read the graph's dummy texture
-        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM),
-                    u_combined=has(DIFFUSE))
+        ec.uniforms(prog, u_tsm=has(TSM), u_combined=has(DIFFUSE))
         if has(DIFFUSE):
             ec.bind(prog, "diffuse_sum", DIFFUSE)
-        if has(RHO_DT_RESOURCE):
-            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-        bind_specular(ec, prog)
         if has(TSM):
             bind_tsm_read(ec, prog)
         if has(VISIBILITY):
             ec.bind(prog, "visibility", VISIBILITY)
+        view_maps = ec.plan.get("view_maps")
+        if view_maps:  # the light part: the view pass's values (split_final)
+            for k, res in enumerate(view_maps):
+                ec.bind(prog, f"final_view{k}", res)
+            sp = ec.settings.specular  # surface_ks's f0 and Beckmann LUT
+            ec.uniforms(prog, u_f0=float(sp.f0), u_spec_lut=has(BECKMANN_LUT))
+            if has(BECKMANN_LUT):
+                ec.bind(prog, "beckmann_tex", BECKMANN_LUT)
+            draw_view_mesh(ec, prog, LIT)
+            return
+        bind_surface(ec, prog)
+        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=has(RHO_DT_RESOURCE))
+        if has(RHO_DT_RESOURCE):
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        bind_specular(ec, prog)
         set_environment(ec, prog)
         ec.set(prog, "u_env_tr", bool(ec.settings.deon.tsm), optional=True)
-        if "u_env_tr" in prog:
-            gs = whole(ec.settings.deon.gaussians)[:MAX_GAUSSIANS]  # the environment's translucency profile
-            w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
-            v = np.zeros(MAX_GAUSSIANS, np.float32)
-            for i, g in enumerate(gs):
-                w[i], v[i] = g.weights, g.variance
-            ec.set(prog, "u_env_tr_w", w, optional=True)
-            ec.set(prog, "u_env_tr_v", v, optional=True)
-            ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit), optional=True)  # the thickness in mm
+        if "u_env_tr" in prog:  # the environment's translucency profile
+            set_env_translucency(ec, prog)
         draw_view_mesh(ec, prog, LIT)
