@@ -14,6 +14,7 @@ from skinviewer.ground.settings import default_rig, with_values
 from skinviewer.passes.deon import final_view_resource
 
 VIEW = "deon_final_view"
+ROLES = ("n", "f", "p", "uv", "e", "x", "nrm")
 RIG = [light.model_dump() for light in default_rig()]  # the studio environment (occluded) + a key light
 
 CASES = {
@@ -28,6 +29,8 @@ CASES = {
         "lights": RIG, "deon.specular_shadows": "texture", "lights.1.occlusion": False,
         "specular.mode": "beckmann_lut"},
     "the blurs read per pixel (combine off)": {"deon.combine_blurs": False},
+    "shadow maps in the specular, a point light": {"lights": RIG, "deon.specular_shadows": "pixel",
+                                                    "lights.0.kind": "point", "lights.0.position": [0, 50, 300]},
 }
 
 
@@ -38,8 +41,8 @@ def _render(ctx, s, split: str, monkeypatch) -> tuple[np.ndarray, set[str]]:
     try:
         rep = r.render(s)
         g = r.graph("deon")
-        maps = {k for k in range(4) if final_view_resource(k) in g.resources()}
-        return g.read("lit"), {p.name for p in rep.passes if p.status == "ran"} | {f"map{k}" for k in maps}
+        maps = {k for k in ROLES if final_view_resource(k) in g.resources()}
+        return g.read("lit"), {p.name for p in rep.passes if p.status == "ran"} | {f"map_{k}" for k in maps}
     finally:
         r.release()
 
@@ -50,8 +53,12 @@ def test_the_split_final_pass_is_the_one_pass_image_bit_for_bit(gl_ctx, monkeypa
     split, ran_split = _render(gl_ctx, s, "1", monkeypatch)
     one, ran_one = _render(gl_ctx, s, "0", monkeypatch)
     assert VIEW in ran_split and VIEW not in ran_one, (ran_split, ran_one)
-    if case == "default rig (environment)":  # the environment's specular and translucency maps
-        assert {"map2", "map3"} <= ran_split, ran_split
+    if case == "default rig (environment)":  # the environment's specular and translucency maps, full-screen
+        assert {"map_e", "map_x", "map_p", "map_uv"} <= ran_split and "map_nrm" not in ran_split, ran_split
+    if "beam" in case:  # the light part over the mesh (a beam's footprint is the mesh's dFdx)
+        assert "map_p" not in ran_split, ran_split
+    if "shadow maps" in case or "combine off" in case:  # the light part reads the vertex normal
+        assert "map_nrm" in ran_split, ran_split
     assert split.tobytes() == one.tobytes(), (case, np.abs(split.astype(float) - one).max())
     assert np.abs(split[..., :3]).max() > 0  # lit: not two black images
 
@@ -74,7 +81,7 @@ def test_a_light_move_reruns_only_the_light_part_and_a_camera_move_both(split_on
     first = _ran(renderer.render(s))
     assert VIEW in first and "deon_final" in first
     g = renderer.graph("deon")
-    assert all(final_view_resource(k) in g.resources() for k in range(3)), sorted(g.resources())  # + the environment
+    assert all(final_view_resource(k) in g.resources() for k in "nfe"), sorted(g.resources())  # + the environment
     for change in ({"lights.0.direction": [0.3, 0.2, 1.0]}, {"lights.0.intensity": 2.0},
                    {"lights.0.color": [1.0, 0.8, 0.7]}):
         ran = _ran(renderer.render(with_values(s, change)))
@@ -98,7 +105,7 @@ def test_without_an_environment_the_view_pass_writes_two_maps(split_on, renderer
     s = small_settings("head", "deon", size=32, **{"deon.irradiance_size": 256})
     assert VIEW in _ran(renderer.render(s))
     res = renderer.graph("deon").resources()
-    assert final_view_resource(1) in res and final_view_resource(2) not in res
+    assert final_view_resource("f") in res and final_view_resource("e") not in res
 
 
 def test_every_light_off_and_the_switch_fall_back_to_the_one_pass_shader(gl_ctx, monkeypatch):

@@ -1485,9 +1485,9 @@ def blur_ring(ec, n: int, stretch: str | None, sigma: float) -> int:
 SPLIT_FINAL = os.environ.get("SKINVIEWER_SPLIT_FINAL", "auto")
 
 
-def final_view_resource(k: int) -> str:
-    """RGBA32F render-size map k of the final pass's light-independent values (DeonFinalViewPass)."""
-    return f"deon_final_view_{k}"
+def final_view_resource(role: str) -> str:
+    """Render-size map ``role`` of the final pass's light-independent values (DeonFinalViewPass)."""
+    return f"deon_final_view_{role}"
 
 
 def split_final(r) -> bool:
@@ -1504,13 +1504,32 @@ def split_final(r) -> bool:
     return not info or software_renderer(r.scene.ctx)
 
 
-def final_view_maps(r) -> tuple[int, bool, bool]:
-    """(maps, env, env_tr): the view pass writes N and m, the factor and rho_s, with an environment light
-    its specular (env) and, with its occlusion bake and deon.tsm, its translucency (env_tr). Declares
-    deon.tsm only where the translucency exists (ENV_RAYS > 0)."""
+def final_screen(r) -> bool:
+    """Whether the light part is drawn full-screen (deon_final_light.frag) from the kept fragment's stored
+    position and uv, or over the mesh again (deon_final.frag): a beam light's footprint is dFdx of the
+    mesh's position (lib/beam.glsl), which a full-screen draw does not have. Shape only (peeked)."""
+    return not any(analytic_on(whole(l)) and l.kind == "beam" for l in whole(r.peeked.lights)[:MAX_LIGHTS])
+
+
+FINAL_VIEW_FORMATS = {"n": 4, "f": 4, "p": 4, "uv": 2, "e": 4, "x": 4, "nrm": 4}  # components (float32)
+
+
+def final_view_roles(r) -> tuple[tuple[str, ...], dict[str, int]]:
+    """The view pass's maps in location order and the FINAL_LOC_* defines (lib/deon_final.glsl): N and m,
+    the factor and rho_s; full-screen (final_screen) the position and uv, and the vertex normal where the
+    light part reads it (shadow-map lookups, the TSM read per pixel); with an environment light its
+    specular, and with its occlusion bake and deon.tsm its translucency (declares deon.tsm there)."""
     env = env_defines(r)
-    env_tr = bool(env) and int(env.get("ENV_RAYS", 0)) > 0 and bool(r.settings.deon.tsm)
-    return 2 + int(bool(env)) + int(env_tr), bool(env), env_tr
+    screen = final_screen(r)
+    roles = ["n", "f"] + (["p", "uv"] if screen else [])
+    if env:
+        roles.append("e")
+        if int(env.get("ENV_RAYS", 0)) > 0 and r.settings.deon.tsm:
+            roles.append("x")
+    if screen and (not texture_shadows(r) or not combined(r)):
+        roles.append("nrm")
+    loc = {k: roles.index(k) if k in roles else -1 for k in ("p", "uv", "e", "x", "nrm")}
+    return tuple(roles), {f"FINAL_LOC_{k.upper()}": v for k, v in loc.items()}
 
 
 class DeonFinalViewPass(Pass):
@@ -1526,22 +1545,22 @@ class DeonFinalViewPass(Pass):
     def reflect(self, r: Reflection) -> None:
         if not split_final(r):
             return
-        count, env, env_tr = final_view_maps(r)
+        roles, locs = final_view_roles(r)
         declare(r.settings.deon.mix)
         declare_specular(r, lut=False)  # m, rho_s per texel and rho_dt's; the Beckmann LUT is the light pass's
         if r.settings.deon.energy_conservation:
             r.input(RHO_DT_RESOURCE)
         defines = declare_environment(r)
-        if env_tr:
+        if "x" in roles:
             whole(r.settings.deon.gaussians)  # the translucency's profile (u_env_tr_w, u_env_tr_v)
         declare_view_mesh(r)
         w, h = r.settings.render.width, r.settings.render.height
-        r.program("deon_final", DEON_FINAL_PART=1, FINAL_ENV_TR=int(env_tr), LIGHT_COUNT=0, POINT_MASK=0,
-                  BEAM_MASK=0, SHADOW_MASK=0, **final_defines(0, False, True), **defines)
-        outs = tuple(final_view_resource(k) for k in range(count))
+        r.program("deon_final", DEON_FINAL_PART=1, **locs, LIGHT_COUNT=0, POINT_MASK=0, BEAM_MASK=0,
+                  SHADOW_MASK=0, **final_defines(0, False, True), **defines)
+        outs = tuple(final_view_resource(k) for k in roles)
         r.plan(outs=outs)
-        for res in outs:
-            r.output(res, TexSpec((w, h), 4, "f4", depth=True, filter="nearest"))
+        for role, res in zip(roles, outs):
+            r.output(res, TexSpec((w, h), FINAL_VIEW_FORMATS[role], "f4", depth=True, filter="nearest"))
 
     def execute(self, ec) -> None:
         prog = ec.program("deon_final")
@@ -1595,11 +1614,14 @@ class DeonFinalPass(Pass):
             return
         split = split_final(r)
         part: dict[str, int] = {}
-        if split:  # N, m, rho_s, the factor and the environment's terms from the view pass
-            count, env, env_tr = final_view_maps(r)
-            part = {"DEON_FINAL_PART": 2, "FINAL_ENV": int(env), "FINAL_ENV_TR": int(env_tr)}
-            r.plan(view_maps=tuple(final_view_resource(k) for k in range(count)))
-            for res in r.planned.view_maps:
+        program = "deon_final"
+        if split:  # N, m, rho_s, the factor, the environment's terms (and the fragment) from the view pass
+            roles, locs = final_view_roles(r)
+            part = {"DEON_FINAL_PART": 2, **locs}
+            screen = final_screen(r)
+            program = "deon_final_light" if screen else "deon_final"
+            r.plan(view_maps=tuple((role, final_view_resource(role)) for role in roles), screen=screen)
+            for _, res in r.planned.view_maps:
                 r.input(res)
             sp = r.settings.specular  # surface_ks: f0 and the mode (m, rho_s per pixel from the view pass)
             declare(sp.f0)
@@ -1627,18 +1649,22 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
-        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
+        declare_lit(r, program, **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
                     DEON_TEXTURE_SHADOWS=int(vis), **(part or declare_environment(r)))
         declare_view_mesh(r)
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
-        return [("deon_final", v) for n, d in r.programs if n == "deon_final"
+        return [(n, v) for n, d in r.programs if n in ("deon_final", "deon_final_light")
                 for v in likely_final_variants(dict(d), r.peeked.deon.tsm_gather)]
 
     def execute(self, ec) -> None:
-        prog = ec.program("deon_final")
-        set_camera(ec, prog)
+        screen = bool(ec.plan.get("screen"))
+        prog = ec.program("deon_final_light" if screen else "deon_final")
+        if screen:  # full-screen: the eye only (the position comes from the view pass)
+            ec.set(prog, "u_eye", tuple(float(x) for x in ec.view.eye))
+        else:
+            set_camera(ec, prog)
         if ec.plan.dark:
             draw_view_mesh(ec, prog, LIT)
             return
@@ -1654,13 +1680,17 @@ class DeonFinalPass(Pass):
             ec.bind(prog, "visibility", VISIBILITY)
         view_maps = ec.plan.get("view_maps")
         if view_maps:  # the light part: the view pass's values (split_final)
-            for k, res in enumerate(view_maps):
-                ec.bind(prog, f"final_view{k}", res)
+            for role, res in view_maps:
+                ec.bind(prog, f"final_view_{role}", res)
             sp = ec.settings.specular  # surface_ks's f0 and Beckmann LUT
             ec.uniforms(prog, u_f0=float(sp.f0), u_spec_lut=has(BECKMANN_LUT))
             if has(BECKMANN_LUT):
                 ec.bind(prog, "beckmann_tex", BECKMANN_LUT)
-            draw_view_mesh(ec, prog, LIT)
+            if screen:
+                with ec.band():  # every pixel written (the clear colour where no fragment was kept)
+                    ec.draw_fullscreen(prog, LIT)
+            else:
+                draw_view_mesh(ec, prog, LIT)
             return
         bind_surface(ec, prog)
         ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=has(RHO_DT_RESOURCE))
