@@ -3,6 +3,8 @@
 //   transmitted = sum_i w_i (exp(-m^2 / 2 v_i) - exp(-r^2 / 2 v_i)) blur_i(uv_A)   (eq. 33 at the
 //   true distance m, less what the surface blur carries: lib/tsm_transmit.glsl)
 //   specular = sum_lights KS(N, L, V) Lc fac_shadow   (ks_* already carries N.L, eq. 35)
+#ifndef SKINVIEWER_DEON_FINAL_GLSL
+#define SKINVIEWER_DEON_FINAL_GLSL
 #include "lib/color.glsl"
 #include "lib/lights.glsl"
 #include "lib/surface.glsl"
@@ -259,3 +261,4 @@ void main() {
     f_color = vec4(finite3(diffuse + spec), 1.0);
 #endif
 }
+#endif
