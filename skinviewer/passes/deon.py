@@ -1526,7 +1526,9 @@ def final_view_roles(r) -> tuple[tuple[str, ...], dict[str, int]]:
         roles.append("e")
         if int(env.get("ENV_RAYS", 0)) > 0 and r.settings.deon.tsm:
             roles.append("x")
-    if screen and (not texture_shadows(r) or not combined(r)):
+    pk = r.peeked.deon  # shape only: the view pass does not read these
+    summed = pk.combine_blurs and any(any(w > 0 for w in g.weights) for g in whole(pk.gaussians))
+    if screen and (pk.specular_shadows != "texture" or not summed):  # shadow-map lookups, the TSM per pixel
         roles.append("nrm")
     loc = {k: roles.index(k) if k in roles else -1 for k in ("p", "uv", "e", "x", "nrm")}
     return tuple(roles), {f"FINAL_LOC_{k.upper()}": v for k, v in loc.items()}
