@@ -43,7 +43,13 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=640)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--scene", default="head", choices=("head", "scan"))
+    ap.add_argument("--draws", action="store_true",
+                    help="also time the final passes' draws alone (glFinish before and after each draw, as "
+                         "bench_deon_draws.py; adds a few ms to every frame, on both sides)")
     args = ap.parse_args()
+    if args.draws:
+        import bench_deon_draws
+        bench_deon_draws.instrument()
     ctx = headless_context()
     print(f"# final pass split | one pass — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
     extra = {}
@@ -66,21 +72,44 @@ def main() -> None:
     def add(key, v):
         ms.setdefault(key, []).append(v)
 
+    def draws(split, kind):
+        """The final passes' draw ms of the frame just timed (--draws), then a fresh log."""
+        if not args.draws:
+            return
+        import bench_deon_draws
+        log = bench_deon_draws.LOG
+        base = len(log) // 2 if kind == "light" else 0  # light_frame renders its base frame first
+        for name in ("deon_final", "deon_final_view"):
+            add((split, f"{kind} draw {name}"), sum(x[3] for x in log[base:] if x[0] == name))
+        log.clear()
+
     for k in range(args.repeats):
         for split in ((True, False) if k % 2 == 0 else (False, True)):
             deon_passes.SPLIT_FINAL = "1" if split else "0"
             r = sides[split]
+            if args.draws:
+                import bench_deon_draws
+                bench_deon_draws.LOG.clear()
             t, rep = light_frame(r, s, k)
+            draws(split, "light")
             add((split, "light"), t)
             add((split, "light final"), pass_ms(rep, "deon_final"))
             add((split, "light view"), pass_ms(rep, "deon_final_view"))
+            if args.draws:
+                import bench_deon_draws
+                bench_deon_draws.LOG.clear()
             t, rep = timed(r, s, force=True)
+            draws(split, "full")
             add((split, "full"), t)
             add((split, "full final"), pass_ms(rep, "deon_final"))
             add((split, "full view"), pass_ms(rep, "deon_final_view"))
             cam = with_values(s, {"camera.yaw": s.camera.yaw + 3.0 * (k + 1)})
             r.render(s)
+            if args.draws:
+                import bench_deon_draws
+                bench_deon_draws.LOG.clear()
             t, rep = timed(r, cam)
+            draws(split, "camera")
             add((split, "camera"), t)
             add((split, "camera final"), pass_ms(rep, "deon_final"))
             add((split, "camera view"), pass_ms(rep, "deon_final_view"))
@@ -111,6 +140,12 @@ def main() -> None:
                        ("full view", "view pass, full frame")):
         b, a = med[(False, key)], med[(True, key)]
         print(f"{label:<34} {b:>9.0f} ms {b / copy:>5.1f}cp {a:>9.0f} ms {a / copy:>5.1f}cp")
+    if args.draws:
+        for kind in ("light", "camera", "full"):
+            b = med[(False, f"{kind} draw deon_final")]
+            a, v = med[(True, f"{kind} draw deon_final")], med[(True, f"{kind} draw deon_final_view")]
+            print(f"{'draws alone, ' + kind:<34} {b:>9.1f} ms {b / copy:>5.1f}cp {a + v:>9.1f} ms {(a + v) / copy:>5.1f}cp "
+                  f"(light part {a:.1f} + view part {v:.1f} ms)")
     for split in (False, True):
         mem = renderer_memory(sides[split])
         kept = sum(t.size[0] * t.size[1] * t.components * 4 for name, t in
