@@ -14,7 +14,7 @@ from skinviewer.ground.settings import default_rig, with_values
 from skinviewer.passes.deon import final_view_resource
 
 VIEW = "deon_final_view"
-ROLES = ("n", "f", "p", "uv", "e", "x", "nrm")
+ROLES = ("n", "f", "p", "s", "e", "x", "nrm")
 RIG = [light.model_dump() for light in default_rig()]  # the studio environment (occluded) + a key light
 
 CASES = {
@@ -54,7 +54,9 @@ def test_the_split_final_pass_is_the_one_pass_image_bit_for_bit(gl_ctx, monkeypa
     one, ran_one = _render(gl_ctx, s, "0", monkeypatch)
     assert VIEW in ran_split and VIEW not in ran_one, (ran_split, ran_one)
     if case == "default rig (environment)":  # the environment's specular and translucency maps, full-screen
-        assert {"map_e", "map_x", "map_p", "map_uv"} <= ran_split and "map_nrm" not in ran_split, ran_split
+        assert {"map_e", "map_x", "map_p"} <= ran_split and not {"map_nrm", "map_s"} & ran_split, ran_split
+    if case == "three lights, a point light":  # no environment: rho_s in a map of its own
+        assert "map_s" in ran_split and "map_e" not in ran_split, ran_split
     if "beam" in case:  # the light part over the mesh (a beam's footprint is the mesh's dFdx)
         assert "map_p" not in ran_split, ran_split
     if "shadow maps" in case or "combine off" in case:  # the light part reads the vertex normal

@@ -51,16 +51,18 @@ uniform sampler2D visibility;    // fac_shadow per light slot, from the irradian
 // Over the mesh (deon_final.frag) the same raster and depth test land the same fragment there; full-screen
 // (deon_final_light.frag, FINAL_SCREEN) the pixel's kept fragment is the stored one.
 // Maps (passes.deon.final_view_roles; FINAL_LOC_*: the location of each optional one, -1 none):
-//   N (N, m), F (C^(1-mix) rho_dt(N.V), rho_s), P (position, 1: covered), UV (uv), E (the environment's
-//   specular), X (its translucency, C^mix applied), NRM (the interpolated vertex normal)
+//   over the mesh: N (N, m), F (C^(1-mix) rho_dt(N.V), rho_s), E (the environment's specular), X (its
+//   translucency, C^mix applied); full-screen (FINAL_LOC_P >= 0): N (N, uv.x), F (the factor, uv.y),
+//   P (position, m), E (the environment's specular, rho_s) or else S (rho_s), X, and NRM (the interpolated
+//   vertex normal) where the light part reads it; a pixel no fragment reached keeps N = 0
 #ifndef DEON_FINAL_PART
 #define DEON_FINAL_PART 0
 #endif
 #ifndef FINAL_LOC_P
 #define FINAL_LOC_P -1
 #endif
-#ifndef FINAL_LOC_UV
-#define FINAL_LOC_UV -1
+#ifndef FINAL_LOC_S
+#define FINAL_LOC_S -1
 #endif
 #ifndef FINAL_LOC_E
 #define FINAL_LOC_E -1
@@ -76,7 +78,9 @@ layout(location = 0) out vec4 f_view_n;
 layout(location = 1) out vec4 f_view_f;
 #if FINAL_LOC_P >= 0
 layout(location = FINAL_LOC_P) out vec4 f_view_p;
-layout(location = FINAL_LOC_UV) out vec4 f_view_uv;
+#endif
+#if FINAL_LOC_S >= 0
+layout(location = FINAL_LOC_S) out vec4 f_view_s;
 #endif
 #if FINAL_LOC_E >= 0
 layout(location = FINAL_LOC_E) out vec4 f_view_e;
@@ -95,7 +99,9 @@ uniform sampler2D final_view_n;
 uniform sampler2D final_view_f;
 #if FINAL_SCREEN
 uniform sampler2D final_view_p;
-uniform sampler2D final_view_uv;
+#if FINAL_LOC_S >= 0
+uniform sampler2D final_view_s;
+#endif
 #if FINAL_LOC_NRM >= 0
 uniform sampler2D final_view_nrm;
 #endif
@@ -135,19 +141,32 @@ void main() {
 #if DEON_FINAL_PART == 2
     ivec2 px = ivec2(gl_FragCoord.xy);  // the view part's values of this fragment
 #if FINAL_SCREEN
-    vec4 view_p = texelFetch(final_view_p, px, 0);
-    if (view_p.w == 0.0) {  // no fragment was kept here: the clear colour of a mesh draw
+    vec4 view0 = texelFetch(final_view_n, px, 0);
+    if (view0.xyz == vec3(0.0)) {  // no fragment was kept here (a kept N is unit or NaN): a mesh draw's clear
         f_color = vec4(0.0);
         return;
     }
+    vec4 view1 = texelFetch(final_view_f, px, 0);
+    vec4 view_p = texelFetch(final_view_p, px, 0);
     g_position = view_p.xyz;
-    g_uv = texelFetch(final_view_uv, px, 0).xy;
+    g_uv = vec2(view0.w, view1.w);
 #if FINAL_LOC_NRM >= 0
     g_normal = texelFetch(final_view_nrm, px, 0).xyz;
 #endif
+#if FINAL_LOC_E >= 0
+    vec4 view_e = texelFetch(final_view_e, px, 0);
+    SpecParams sp = SpecParams(view_p.w, view_e.w);
+#else
+    SpecParams sp = SpecParams(view_p.w, texelFetch(final_view_s, px, 0).r);
 #endif
+#else
     vec4 view0 = texelFetch(final_view_n, px, 0);
     vec4 view1 = texelFetch(final_view_f, px, 0);
+#if FINAL_LOC_E >= 0
+    vec4 view_e = texelFetch(final_view_e, px, 0);
+#endif
+    SpecParams sp = SpecParams(view0.w, view1.w);
+#endif
 #endif
 #if DEON_FINAL_PART != 1 && !FINAL_SCREEN
     set_light_footprint(dFdx(v_position), dFdy(v_position));  // beam lights: area coverage
@@ -214,7 +233,6 @@ void main() {
 #if FINAL_LOC_X >= 0
     diffuse += texelFetch(final_view_x, px, 0).rgb;
 #endif
-    SpecParams sp = SpecParams(view0.w, view1.w);
     diffuse *= view1.rgb;
 #else
     SpecParams sp = specular_params(v_uv);
@@ -223,18 +241,25 @@ void main() {
     diffuse *= factor;
 #endif
 #if DEON_FINAL_PART == 1
+#if FINAL_LOC_P >= 0  // packed for the full-screen light part: uv in N's and the factor's w
+    f_view_n = vec4(N, v_uv.x);
+    f_view_f = vec4(factor, v_uv.y);
+    f_view_p = vec4(v_position, sp.m);
+    float spare = sp.rho_s;  // in the environment specular's w, or a map of its own
+#else
     f_view_n = vec4(N, sp.m);
     f_view_f = vec4(factor, sp.rho_s);
-#if FINAL_LOC_P >= 0
-    f_view_p = vec4(v_position, 1.0);
-    f_view_uv = vec4(v_uv, 0.0, 0.0);
+    float spare = 0.0;
+#endif
+#if FINAL_LOC_S >= 0
+    f_view_s = vec4(spare);
 #endif
 #if FINAL_LOC_NRM >= 0
     f_view_nrm = vec4(v_normal, 0.0);
 #endif
 #if ENV_LIGHT && FINAL_LOC_E >= 0
     ENV_VIS_IN();
-    f_view_e = vec4(env_specular(N, V, v_normal, sp), 0.0);  // split sum, specular occlusion (lib/environment.glsl)
+    f_view_e = vec4(env_specular(N, V, v_normal, sp), spare);  // split sum, specular occlusion (lib/environment.glsl)
 #endif
 #else
     vec3 spec = vec3(0.0);
@@ -256,7 +281,7 @@ void main() {
     ENV_VIS_IN();
     spec += env_specular(N, V, v_normal, sp);  // split sum, specular occlusion (lib/environment.glsl)
 #elif FINAL_LOC_E >= 0
-    spec += texelFetch(final_view_e, px, 0).rgb;  // the view part's env_specular
+    spec += view_e.rgb;  // the view part's env_specular
 #endif
     f_color = vec4(finite3(diffuse + spec), 1.0);
 #endif

@@ -1480,7 +1480,7 @@ def blur_ring(ec, n: int, stretch: str | None, sigma: float) -> int:
 # the specular parameters, C^(1-mix) rho_dt(N.V), the environment's specular and translucency; kept across
 # light moves) and the light pass (DeonFinalPass, DEON_FINAL_PART = 2); bit-identical to the one-pass shader.
 # SKINVIEWER_SPLIT_FINAL: auto (a software rasterizer: there a pixel's light-independent work costs per
-# lane; on a GPU the final pass is ~1 ms and the maps would hold 127 MiB at 1920x1080), 1, 0 (the one-pass
+# lane; on a GPU the whole camera-only frame is 1.6 ms (H200) and the maps would hold 174 MiB at 1920x1080), 1, 0 (the one-pass
 # shader, for before | after runs: notes/deon_light_move.md section 15)
 SPLIT_FINAL = os.environ.get("SKINVIEWER_SPLIT_FINAL", "auto")
 
@@ -1511,26 +1511,30 @@ def final_screen(r) -> bool:
     return not any(analytic_on(whole(l)) and l.kind == "beam" for l in whole(r.peeked.lights)[:MAX_LIGHTS])
 
 
-FINAL_VIEW_FORMATS = {"n": 4, "f": 4, "p": 4, "uv": 2, "e": 4, "x": 4, "nrm": 4}  # components (float32)
+FINAL_VIEW_FORMATS = {"n": 4, "f": 4, "p": 4, "s": 1, "e": 4, "x": 4, "nrm": 4}  # components (float32)
 
 
 def final_view_roles(r) -> tuple[tuple[str, ...], dict[str, int]]:
-    """The view pass's maps in location order and the FINAL_LOC_* defines (lib/deon_final.glsl): N and m,
-    the factor and rho_s; full-screen (final_screen) the position and uv, and the vertex normal where the
-    light part reads it (shadow-map lookups, the TSM read per pixel); with an environment light its
-    specular, and with its occlusion bake and deon.tsm its translucency (declares deon.tsm there)."""
+    """The view pass's maps in location order and the FINAL_LOC_* defines (lib/deon_final.glsl): N, the
+    factor C^(1-mix) rho_dt(N.V), and with an environment light its specular, and with its occlusion bake
+    and deon.tsm its translucency (declares deon.tsm there). Full-screen (final_screen) the position too,
+    uv, m and rho_s in the w channels (rho_s in a map of its own without an environment), and the vertex
+    normal where the light part reads it (shadow-map lookups, the TSM read per pixel); over the mesh m and
+    rho_s in N's and the factor's w."""
     env = env_defines(r)
     screen = final_screen(r)
-    roles = ["n", "f"] + (["p", "uv"] if screen else [])
+    roles = ["n", "f"] + (["p"] if screen else [])
     if env:
         roles.append("e")
         if int(env.get("ENV_RAYS", 0)) > 0 and r.settings.deon.tsm:
             roles.append("x")
+    elif screen:
+        roles.append("s")
     pk = r.peeked.deon  # shape only: the view pass does not read these
     summed = pk.combine_blurs and any(any(w > 0 for w in g.weights) for g in whole(pk.gaussians))
     if screen and (pk.specular_shadows != "texture" or not summed):  # shadow-map lookups, the TSM per pixel
         roles.append("nrm")
-    loc = {k: roles.index(k) if k in roles else -1 for k in ("p", "uv", "e", "x", "nrm")}
+    loc = {k: roles.index(k) if k in roles else -1 for k in ("p", "s", "e", "x", "nrm")}
     return tuple(roles), {f"FINAL_LOC_{k.upper()}": v for k, v in loc.items()}
 
 
