@@ -99,8 +99,8 @@ uniform sampler2D final_view_n;
 uniform sampler2D final_view_f;
 #if FINAL_SCREEN
 uniform sampler2D final_view_p;
-#if FINAL_LOC_S >= 0
-uniform sampler2D final_view_s;
+#if FINAL_LOC_E < 0
+uniform sampler2D final_view_s;  // rho_s without an environment
 #endif
 #if FINAL_LOC_NRM >= 0
 uniform sampler2D final_view_nrm;
