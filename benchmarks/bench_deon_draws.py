@@ -6,7 +6,7 @@ in the same run.
 
     python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
         [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split] [--ab-unsplit-sum]
-        [--ab-unsplit-irradiance] [--ab-no-quad-sum] [--ab-no-sum-cuts]
+        [--ab-unsplit-irradiance] [--ab-no-quad-sum] [--ab-no-sum-cuts] [--ab-unsplit-final]
 
 --ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
 define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
@@ -18,8 +18,9 @@ in one pass (passes.deon.SPLIT_IRRADIANCE off: the code before its light-indepen
 renderer too; --ab-no-quad-sum makes B sum the split step one texel a fragment (deon_gather_sum.frag,
 passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too; --ab-no-sum-cuts makes B
 seam-fill the summed step's input without the plain tiles and fetch every combine slot (passes.deon.
-GATHER_FILL_SPLIT and COMBINE_ONCE off: the code before session 9), in a second renderer too. B's rows are
-marked (B).
+GATHER_FILL_SPLIT and COMBINE_ONCE off: the code before session 9), in a second renderer too;
+--ab-unsplit-final makes B shade the final pass in one pass (passes.deon.SPLIT_FINAL 0), in a second
+renderer too. B's rows are marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
 are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
@@ -127,6 +128,8 @@ def main() -> None:
     ap.add_argument("--ab-no-sum-cuts", action="store_true",
                     help="B without the summed step's split seam fill and the combine's shared fetches "
                          "(passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE off), in its own renderer")
+    ap.add_argument("--ab-unsplit-final", action="store_true",
+                    help="B shades the final pass in one pass (passes.deon.SPLIT_FINAL 0), in its own renderer")
     args = ap.parse_args()
     sizes = [int(v) for v in str(args.maps).split(",")]
     if len(sizes) > 1:
@@ -134,6 +137,7 @@ def main() -> None:
         return
     args.maps = sizes[0]
     quad = deon_passes.QUAD_SUM
+    split_final = deon_passes.SPLIT_FINAL
     ctx = headless_context()
     print(f"# d'Eon light move, draw by draw — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
     instrument()
@@ -143,7 +147,8 @@ def main() -> None:
     r.render(s, force=True)
     r.render(phong, force=True)
     ra = rb = r
-    own = args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum or args.ab_no_sum_cuts  # B in a renderer of its own
+    own = (args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum or args.ab_no_sum_cuts
+           or args.ab_unsplit_final)  # B in a renderer of its own
     cuts = deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE
     if own:
         deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
@@ -151,11 +156,13 @@ def main() -> None:
         deon_passes.QUAD_SUM = "0" if args.ab_no_quad_sum else quad
         if args.ab_no_sum_cuts:
             deon_passes.GATHER_FILL_SPLIT = deon_passes.COMBINE_ONCE = False
+        deon_passes.SPLIT_FINAL = "0" if args.ab_unsplit_final else split_final
         rb = Renderer(ctx)
         rb.render(s, force=True)
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
         deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
+        deon_passes.SPLIT_FINAL = split_final
         ra = Renderer(ctx)  # A in a renderer of its own too: neither side shares Phong's pool
         ra.render(s, force=True)
     per: dict[tuple, list[float]] = collections.defaultdict(list)
@@ -175,6 +182,7 @@ def main() -> None:
             deon_passes.SPLIT_IRRADIANCE = side == "A" or not args.ab_unsplit_irradiance
             deon_passes.QUAD_SUM = "0" if side == "B" and args.ab_no_quad_sum else quad
             deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = (False, False) if side == "B" and args.ab_no_sum_cuts else cuts
+            deon_passes.SPLIT_FINAL = "0" if side == "B" and args.ab_unsplit_final else split_final
             if side == "B":
                 VARIANT.update(variant)
                 if args.ab_no_zone_split:
@@ -200,6 +208,7 @@ def main() -> None:
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
         deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
+        deon_passes.SPLIT_FINAL = split_final
         LOG.clear()
         phongs.append(light_frame(r, phong, k)[0])
         copies.append(copy_draw_ms(r, args.maps, 3))

@@ -48,7 +48,8 @@ from skinviewer.passes.common import (
     set_camera,
     set_lighting,
 )
-from skinviewer.passes.environment import declare_environment, env_index, set_environment
+from skinviewer.passes.environment import declare_environment, env_defines, env_index, set_environment
+from skinviewer.passes.luts import BECKMANN_LUT
 from skinviewer.passes.rho_dt import RHO_DT_RESOURCE
 from skinviewer.passes.rules import (
     analytic_on,
@@ -1543,8 +1544,131 @@ def blur_ring(ec, n: int, stretch: str | None, sigma: float) -> int:
     return int(np.ceil(3.0 * s_max * sigma * n)) + 2
 
 
+# issue 27: the final pass split in a light-independent view pass (DeonFinalViewPass: the shading normal,
+# the specular parameters, C^(1-mix) rho_dt(N.V), the environment's specular and translucency; kept across
+# light moves) and the light pass (DeonFinalPass, DEON_FINAL_PART = 2); bit-identical to the one-pass shader.
+# SKINVIEWER_SPLIT_FINAL: auto (a software rasterizer: there a pixel's light-independent work costs per
+# lane; on a GPU the whole camera-only frame is 1.6 ms (H200) and the maps would hold 174 MiB at 1920x1080), 1, 0 (the one-pass
+# shader, for before | after runs: notes/deon_light_move.md section 15)
+SPLIT_FINAL = os.environ.get("SKINVIEWER_SPLIT_FINAL", "auto")
+
+
+def final_view_resource(role: str) -> str:
+    """Render-size map ``role`` of the final pass's light-independent values (DeonFinalViewPass)."""
+    return f"deon_final_view_{role}"
+
+
+def split_final(r) -> bool:
+    """Whether deon_final adds the lights to the view pass's maps (SPLIT_FINAL): not when every light is
+    off (the black one-pass shader); auto: on a software rasterizer (kernel/gl; off the GL thread before
+    the renderer is known: as one, like quad_sum). Shape only (peeked)."""
+    if SPLIT_FINAL == "0":
+        return False
+    if not any(analytic_on(whole(l)) for l in whole(r.peeked.lights)[:MAX_LIGHTS]) and env_index(r) is None:
+        return False
+    if SPLIT_FINAL == "1" or r.scene is None:
+        return True
+    info = gl_info(r.scene.ctx)
+    return not info or software_renderer(r.scene.ctx)
+
+
+def final_screen(r) -> bool:
+    """Whether the light part is drawn full-screen (deon_final_light.frag) from the kept fragment's stored
+    position and uv, or over the mesh again (deon_final.frag): a beam light's footprint is dFdx of the
+    mesh's position (lib/beam.glsl), which a full-screen draw does not have. Shape only (peeked)."""
+    return not any(analytic_on(whole(l)) and l.kind == "beam" for l in whole(r.peeked.lights)[:MAX_LIGHTS])
+
+
+FINAL_VIEW_FORMATS = {"n": 4, "f": 4, "p": 4, "s": 1, "e": 4, "x": 4, "nrm": 4}  # components (float32)
+
+
+def final_view_roles(r) -> tuple[tuple[str, ...], dict[str, int]]:
+    """The view pass's maps in location order and the FINAL_LOC_* defines (lib/deon_final.glsl): N, the
+    factor C^(1-mix) rho_dt(N.V), and with an environment light its specular, and with its occlusion bake
+    and deon.tsm its translucency (declares deon.tsm there). Full-screen (final_screen) the position too,
+    uv, m and rho_s in the w channels (rho_s in a map of its own without an environment), and the vertex
+    normal where the light part reads it (shadow-map lookups, the TSM read per pixel); over the mesh m and
+    rho_s in N's and the factor's w."""
+    env = env_defines(r)
+    screen = final_screen(r)
+    roles = ["n", "f"] + (["p"] if screen else [])
+    if env:
+        roles.append("e")
+        if int(env.get("ENV_RAYS", 0)) > 0 and r.settings.deon.tsm:
+            roles.append("x")
+    elif screen:
+        roles.append("s")
+    pk = r.peeked.deon  # shape only: the view pass does not read these
+    summed = pk.combine_blurs and any(any(w > 0 for w in g.weights) for g in whole(pk.gaussians))
+    if screen and (pk.specular_shadows != "texture" or not summed):  # shadow-map lookups, the TSM per pixel
+        roles.append("nrm")
+    loc = {k: roles.index(k) if k in roles else -1 for k in ("p", "s", "e", "x", "nrm")}
+    return tuple(roles), {f"FINAL_LOC_{k.upper()}": v for k, v in loc.items()}
+
+
+class DeonFinalViewPass(Pass):
+    """The light-independent part of eq. (34)-(35) per pixel (issue 27; deon_final.frag with DEON_FINAL_PART
+    = 1): the shading normal N (the normal map, back faces reversed) and m, C^(1-mix) rho_dt(N.V) and rho_s,
+    the environment's split-sum specular and its translucency, as exact float32. It reads the camera, the
+    mesh, the albedo, normal, region and specular maps, deon.mix, the specular settings, the rho_dt table and
+    the environment light; no analytic light: a light move keeps it, a camera move re-runs it."""
+    name = "deon_final_view"
+    tileable = True
+    view_dependent = True
+
+    def reflect(self, r: Reflection) -> None:
+        if not split_final(r):
+            return
+        roles, locs = final_view_roles(r)
+        declare(r.settings.deon.mix)
+        declare_specular(r, lut=False)  # m, rho_s per texel and rho_dt's; the Beckmann LUT is the light pass's
+        if r.settings.deon.energy_conservation:
+            r.input(RHO_DT_RESOURCE)
+        defines = declare_environment(r)
+        if "x" in roles:
+            whole(r.settings.deon.gaussians)  # the translucency's profile (u_env_tr_w, u_env_tr_v)
+        declare_view_mesh(r)
+        w, h = r.settings.render.width, r.settings.render.height
+        r.program("deon_final", DEON_FINAL_PART=1, **locs, LIGHT_COUNT=0, POINT_MASK=0, BEAM_MASK=0,
+                  SHADOW_MASK=0, **final_defines(0, False, True), **defines)
+        outs = tuple(final_view_resource(k) for k in roles)
+        r.plan(outs=outs)
+        for role, res in zip(roles, outs):
+            r.output(res, TexSpec((w, h), FINAL_VIEW_FORMATS[role], "f4", depth=True, filter="nearest"))
+
+    def execute(self, ec) -> None:
+        prog = ec.program("deon_final")
+        set_camera(ec, prog)
+        bind_surface(ec, prog)
+        energy = ec.has_input(RHO_DT_RESOURCE)
+        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=energy)
+        if energy:
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        sp = ec.settings.specular  # lib/specular_params.glsl less the Beckmann LUT (the light pass's ks)
+        m, rho = per_region_specular(sp)
+        ec.uniforms(prog, u_spec_m=m, u_spec_rho_s=rho, u_spec_rho_s_table=float(sp.rho_s))
+        ec.textures(prog, region_map=ec.scene.region_map, specular_map=ec.scene.specular_map)
+        set_environment(ec, prog)
+        if "u_env_tr_w" in prog:
+            set_env_translucency(ec, prog)
+        draw_view_mesh(ec, prog, *ec.plan.outs)
+
+
+def set_env_translucency(ec, prog) -> None:
+    """deon_final's environment translucency profile: every Gaussian's weights and variance, the mm a unit."""
+    gs = whole(ec.settings.deon.gaussians)[:MAX_GAUSSIANS]
+    w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
+    v = np.zeros(MAX_GAUSSIANS, np.float32)
+    for i, g in enumerate(gs):
+        w[i], v[i] = g.weights, g.variance
+    ec.set(prog, "u_env_tr_w", w, optional=True)
+    ec.set(prog, "u_env_tr_v", v, optional=True)
+    ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit), optional=True)  # the thickness in mm
+
+
 class DeonFinalPass(Pass):
-    """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output)."""
+    """eq. (34)-(35), view-dependent: the only pass an orbit re-runs (with the output). Split (split_final):
+    the light part, adding the lights to DeonFinalViewPass's maps."""
     name = "deon_final"
     tileable = True  # one draw (view mesh / texel shading): in row bands under a frame budget (issue 27)
     view_dependent = True
@@ -1562,10 +1686,26 @@ class DeonFinalPass(Pass):
             declare_lit(r, "deon_final", **lighting, **final_defines(0, False))
             declare_view_mesh(r)
             return
-        declare(r.settings.deon.mix)
-        declare_specular(r)
-        if r.settings.deon.energy_conservation:
-            r.input(RHO_DT_RESOURCE)
+        split = split_final(r)
+        part: dict[str, int] = {}
+        program = "deon_final"
+        if split:  # N, m, rho_s, the factor, the environment's terms (and the fragment) from the view pass
+            roles, locs = final_view_roles(r)
+            part = {"DEON_FINAL_PART": 2, **locs}
+            screen = final_screen(r)
+            program = "deon_final_light" if screen else "deon_final"
+            r.plan(view_maps=tuple((role, final_view_resource(role)) for role in roles), screen=screen)
+            for _, res in r.planned.view_maps:
+                r.input(res)
+            sp = r.settings.specular  # surface_ks: f0 and the mode (m, rho_s per pixel from the view pass)
+            declare(sp.f0)
+            if sp.mode == "beckmann_lut":
+                r.input(BECKMANN_LUT)
+        else:
+            declare(r.settings.deon.mix)
+            declare_specular(r)
+            if r.settings.deon.energy_conservation:
+                r.input(RHO_DT_RESOURCE)
         summed = combined(r)
         tsm = tsm_light_index(r) is not None and not summed  # summed: deon_transmitted has it
         if summed:
@@ -1583,45 +1723,56 @@ class DeonFinalPass(Pass):
                     r.input(texture_of(plan[i - 1]))  # its blurred thickness
             else:
                 r.drop(texture_of(step), f"Gaussian {i} has zero weight")
-        declare_lit(r, "deon_final", **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
-                    DEON_TEXTURE_SHADOWS=int(vis), **declare_environment(r))
+        declare_lit(r, program, **lighting, **final_defines(mask, tsm, summed), **tsm_defines,
+                    DEON_TEXTURE_SHADOWS=int(vis), **(part or declare_environment(r)))
         declare_view_mesh(r)
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
         """deon_final one toggle away (a weight to/from zero, the TSM on/off): warmed while idle."""
-        return [("deon_final", v) for n, d in r.programs if n == "deon_final"
+        return [(n, v) for n, d in r.programs if n in ("deon_final", "deon_final_light")
                 for v in likely_final_variants(dict(d), r.peeked.deon.tsm_gather)]
 
     def execute(self, ec) -> None:
-        prog = ec.program("deon_final")
-        set_camera(ec, prog)
+        screen = bool(ec.plan.get("screen"))
+        prog = ec.program("deon_final_light" if screen else "deon_final")
+        if screen:  # full-screen: the eye only (the position comes from the view pass)
+            ec.set(prog, "u_eye", tuple(float(x) for x in ec.view.eye))
+        else:
+            set_camera(ec, prog)
         if ec.plan.dark:
             draw_view_mesh(ec, prog, LIT)
             return
-        bind_surface(ec, prog)
         has = ec.has_input
         set_lighting(ec, prog, shadow_maps=not has(VISIBILITY))
         bind_blurs(ec, prog)  # unbound blur slots read the graph's dummy texture
-        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=has(RHO_DT_RESOURCE), u_tsm=has(TSM),
-                    u_combined=has(DIFFUSE))
+        ec.uniforms(prog, u_tsm=has(TSM), u_combined=has(DIFFUSE))
         if has(DIFFUSE):
             ec.bind(prog, "diffuse_sum", DIFFUSE)
-        if has(RHO_DT_RESOURCE):
-            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
-        bind_specular(ec, prog)
         if has(TSM):
             bind_tsm_read(ec, prog)
         if has(VISIBILITY):
             ec.bind(prog, "visibility", VISIBILITY)
+        view_maps = ec.plan.get("view_maps")
+        if view_maps:  # the light part: the view pass's values (split_final)
+            for role, res in view_maps:
+                ec.bind(prog, f"final_view_{role}", res)
+            sp = ec.settings.specular  # surface_ks's f0 and Beckmann LUT
+            ec.uniforms(prog, u_f0=float(sp.f0), u_spec_lut=has(BECKMANN_LUT))
+            if has(BECKMANN_LUT):
+                ec.bind(prog, "beckmann_tex", BECKMANN_LUT)
+            if screen:
+                with ec.band():  # every pixel written (the clear colour where no fragment was kept)
+                    ec.draw_fullscreen(prog, LIT)
+            else:
+                draw_view_mesh(ec, prog, LIT)
+            return
+        bind_surface(ec, prog)
+        ec.uniforms(prog, u_mix=float(ec.settings.deon.mix), u_energy=has(RHO_DT_RESOURCE))
+        if has(RHO_DT_RESOURCE):
+            ec.bind(prog, "rho_dt_tex", RHO_DT_RESOURCE)
+        bind_specular(ec, prog)
         set_environment(ec, prog)
         ec.set(prog, "u_env_tr", bool(ec.settings.deon.tsm), optional=True)
-        if "u_env_tr" in prog:
-            gs = whole(ec.settings.deon.gaussians)[:MAX_GAUSSIANS]  # the environment's translucency profile
-            w = np.zeros((MAX_GAUSSIANS, 3), np.float32)
-            v = np.zeros(MAX_GAUSSIANS, np.float32)
-            for i, g in enumerate(gs):
-                w[i], v[i] = g.weights, g.variance
-            ec.set(prog, "u_env_tr_w", w, optional=True)
-            ec.set(prog, "u_env_tr_v", v, optional=True)
-            ec.set(prog, "u_mm_per_unit", float(ec.scene.mm_per_unit), optional=True)  # the thickness in mm
+        if "u_env_tr" in prog:  # the environment's translucency profile
+            set_env_translucency(ec, prog)
         draw_view_mesh(ec, prog, LIT)

@@ -6,6 +6,7 @@ from skinviewer.ground.constants import MAX_GAUSSIANS
 from skinviewer.passes.deon import (
     BorderFramePass,
     DeonFinalPass,
+    DeonFinalViewPass,
     DiffuseSumPass,
     GatherSurfacePass,
     GatherWeightsPass,
@@ -37,7 +38,7 @@ def build():
             + [GatherWeightsPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i) for i in range(MAX_GAUSSIANS)]
             + [GaussianBlurPass(i, chain="stretch") for i in range(MAX_GAUSSIANS)]
-            + [TransmittedPass(), DiffuseSumPass(), DeonFinalPass(), OutputPass("lit")])
+            + [TransmittedPass(), DiffuseSumPass(), DeonFinalViewPass(), DeonFinalPass(), OutputPass("lit")])
 
 
 def fewer_gaussians(k: int) -> list[dict]:
