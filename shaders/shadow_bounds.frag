@@ -11,6 +11,9 @@
 // stores s = -1: never decided.
 //   RGBA = (a', G.x, G.y, s)
 #include "lib/color.glsl"
+#ifndef SHADOW_BOUNDS_BLOCK
+#define SHADOW_BOUNDS_BLOCK 8  // passes.common.SHADOW_BOUNDS_BLOCK
+#endif
 uniform sampler2D depth;  // the shadow map (z/w in [0,1], eq. 6)
 uniform int u_margin;
 out vec4 f_bounds;
