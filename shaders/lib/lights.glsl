@@ -148,7 +148,8 @@ float shadow_compare_bounded(sampler2D sm, vec3 c, vec2 g, float decided) {
         int y = k / side - SHADOW_PCF, x = k - (k / side) * side - SHADOW_PCF;
         lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
     }
-    return lit / float((2 * r + 1) * (2 * r + 1));
+    // decided shadowed: +0.0 as the taps' sum is (the weighted sum of zeros can come out -0.0 as compiled)
+    return (!read && one == 0.0) ? 0.0 : lit / float((2 * r + 1) * (2 * r + 1));
 #else
     vec2 texel = 1.0 / vec2(textureSize(sm, 0));
     float lit = read ? 0.0 : one, n = read ? 0.0 : 1.0;  // decided: every test `one`, lit / n = one exactly
@@ -160,7 +161,7 @@ float shadow_compare_bounded(sampler2D sm, vec3 c, vec2 g, float decided) {
         lit += (c.z + dot(g, vec2(x, y) * texel) - ds > u_shadow_tol) ? 0.0 : 1.0;
         n += 1.0;
     }
-    return lit / n;
+    return (!read && one == 0.0) ? 0.0 : lit / n;
 #endif
 #else
     int r = u_shadow_pcf;
