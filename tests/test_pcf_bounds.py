@@ -158,3 +158,26 @@ def test_the_bounds_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
         f.write_text(srcs["fragment_shader"])
         r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
         assert r.returncode == 0, (name, defines, r.stdout[-600:])
+
+
+@pytest.mark.parametrize("extra", [{}, {"deon.texel_samples": 4}, {"render.texel_surface": False}],
+                         ids=["texels", "four-samples", "unwrapped"])
+def test_the_irradiance_and_its_visibility_dilated_in_one_draw(gl_ctx, extra):
+    """d'Eon's irradiance and visibility dilated in one draw (dilate.frag DILATE_MORE, issue 27) are the
+    same bytes as dilated one draw each (texture_space.DILATE_PAIRS off), one draw fewer."""
+    import skinviewer.passes.texture_space as ts
+    s = small_settings("head", "deon", 64, **{"deon.specular_shadows": "texture", **extra})
+    got = {}
+    for pair in (False, True):
+        ts.DILATE_PAIRS = pair
+        r = Renderer(gl_ctx)
+        try:
+            rep = r.render(s)
+            drew = [p.draws for p in rep.passes if p.name == "deon_irradiance"][0]
+            g = r.graph("deon")
+            got[pair] = ({k: g.read(k).tobytes() for k in ("deon_irradiance", "deon_visibility", "image")}, drew)
+        finally:
+            r.release()
+            ts.DILATE_PAIRS = True
+    assert got[True][0] == got[False][0]
+    assert got[True][1] == got[False][1] - 1  # one dilate draw fewer
