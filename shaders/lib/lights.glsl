@@ -74,13 +74,63 @@ float pcf_weight(int k, int r, float t) {
     return (k == -r) ? 1.0 - t : ((k == r + 1) ? t : 1.0);
 }
 
-float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
-    // eq. (7): shadowed if d(P) - ds > tol; PCF averages the test over a (2 pcf + 1)^2-texel box.
-    // shadow.pcf_filter = bilinear: the box slides with the lookup's sub-texel position (the
-    // (2 pcf + 2)^2 texels it touches, edge ones weighted by their overlap), so visibility varies
-    // continuously instead of in one-texel terraces; box: the box snapped to texels.
-    // pcf = 0: the printed hard test at one texel.
+// SHADOW_BOUNDS (issue 27; passes.shadow_map.ShadowBoundsPass, shaders/shadow_bounds.frag): the exact
+// early-out of the specialised PCF (shadow.pcf >= 1). The bounds map holds, per block of the shadow map,
+// a plane P'(u) = a' + G . (u - u_b) under every depth of the texels a lookup from that block reads, and
+// the span s above it. Every tap compares z = c.z + g . d (the receiver plane, d its centre's offset from
+// c) with ds in [P', P' + s], so with K = c.z - P'(c):
+//   z - ds <= K + (g - G) . d                 (every test 1 when this is <= tol for every tap: lit)
+//   z - ds >= K + (g - G) . d - |G| . e - s   (every test 0 when this is > tol for every tap: shadowed)
+// (g - G) . d bounded over the taps' box (bilinear: x - t texels, x = -r .. r + 1; box: x = -r .. r, and
+// e = 1 texel: the texel a nearest lookup reads is within it of its point). A margin covers float32's
+// rounding on both sides (~1e-7 relative; 1e-5 taken). A decided lookup returns what the taps return: 0
+// (every term 0), or for the bilinear filter the same weights summed in the same order times a runtime
+// 1.0 (the same products, fused or not). The taps are a loop of (2r + 2)^2 iterations, or none: llvmpipe
+// runs both sides of an if under a mask, and leaves a loop after one masked iteration when no lane is left.
+#if defined(LIGHTS_SPECIALISED) && defined(SHADOW_BOUNDS) && SHADOW_BOUNDS != 0 && SHADOW_PCF > 0
+#ifndef SHADOW_BOUNDS_BLOCK
+#define SHADOW_BOUNDS_BLOCK 8
+#endif
+#define PCF_BOUNDED 1
+uniform sampler2D shadow_bounds0;
+uniform sampler2D shadow_bounds1;
+uniform sampler2D shadow_bounds2;
+uniform sampler2D shadow_bounds3;
+// 1: every tap lit, 0: every tap shadowed, -1: not decided (the taps are read)
+float shadow_decided(sampler2D sm, sampler2D sb, vec3 c, vec2 g) {
+    ivec2 size = textureSize(sm, 0);
+    vec2 fs = vec2(size);
+    ivec2 nb = textureSize(sb, 0);
+    ivec2 b = clamp(ivec2(floor(c.xy * fs)) / SHADOW_BOUNDS_BLOCK, ivec2(0), nb - 1);
+    vec4 pb = texelFetch(sb, b, 0);  // a', G, s
+    vec2 ub = (vec2(b * SHADOW_BOUNDS_BLOCK) + 0.5 * float(SHADOW_BOUNDS_BLOCK)) / fs;
+    vec2 G = pb.yz, aG = abs(G), e = g - G;
+    float K = c.z - pb.x - dot(G, c.xy - ub);
+    float margin = 1e-5 * (1.0 + abs(c.z) + abs(pb.x) + (aG.x + aG.y + abs(g.x) + abs(g.y))
+                           * float(3 * SHADOW_BOUNDS_BLOCK + 8) / fs.x);
+#if defined(SHADOW_BILINEAR) && SHADOW_BILINEAR != 0
+    vec2 f = c.xy * fs - 0.5;
+    vec2 t = f - floor(f);  // as shadow_compare computes it; 1/64 texel of its rounding below
+    vec2 dlo = (-float(SHADOW_PCF) - t - 1.0 / 64.0) / fs, dhi = (float(SHADOW_PCF) + 1.0 - t + 1.0 / 64.0) / fs;
+    float slack = 0.0;
+#else
+    vec2 dlo = vec2(-float(SHADOW_PCF)) / fs, dhi = vec2(float(SHADOW_PCF)) / fs;
+    float slack = (aG.x + aG.y) / fs.x;
+#endif
+    vec2 emax = max(e * dlo, e * dhi), emin = min(e * dlo, e * dhi);
+    if (!(pb.w >= 0.0) || size.x != size.y) return -1.0;  // a block at the map's edge: clamped reads
+    if (K + emax.x + emax.y + slack + margin <= u_shadow_tol) return 1.0;
+    if (K + emin.x + emin.y - slack - pb.w - margin > u_shadow_tol) return 0.0;
+    return -1.0;
+}
+#endif
+
+// The specialised test with `decided` (shadow_decided: 1 lit, 0 shadowed, -1 read the taps; -1 without
+// the bounds); the generic shaders read the taps.
+float shadow_compare_bounded(sampler2D sm, vec3 c, vec2 g, float decided) {
 #ifdef LIGHTS_SPECIALISED
+    bool read = decided < 0.0;
+    float one = decided;  // a decided lookup's every test (1.0 or 0.0)
 #if SHADOW_PCF <= 0
     return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
 #elif defined(SHADOW_BILINEAR) && SHADOW_BILINEAR != 0
@@ -88,18 +138,38 @@ float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
     vec2 f = c.xy * vec2(textureSize(sm, 0)) - 0.5;
     vec2 i0 = floor(f), t = f - i0;
     float lit = 0.0;
+    if (!read) {  // the taps' sum with every test `one`
+        for (int y = -SHADOW_PCF; y <= SHADOW_PCF + 1; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF + 1; ++x)
+            lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * one;
+    }
+#ifdef SHADOW_PCF_NESTED  // the loops before (an A/B: bench_deon_draws.py --ab program:SHADOW_PCF_NESTED=1)
     for (int y = -SHADOW_PCF; y <= SHADOW_PCF + 1; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF + 1; ++x)
         lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
     return lit / float((2 * r + 1) * (2 * r + 1));
+#endif
+    // one flat loop over the taps, y-major as the nested loops were: the same terms in the same order,
+    // and ~13 % less CPU for d'Eon's irradiance light pass on llvmpipe than the two nested loops
+    // (notes/deon_light_move.md section 13), the early-out off
+    const int side = 2 * SHADOW_PCF + 2;
+    int taps = read ? side * side : 0;
+    for (int k = 0; k < taps; ++k) {
+        int y = k / side - SHADOW_PCF, x = k - (k / side) * side - SHADOW_PCF;
+        lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
+    }
+    // decided shadowed: +0.0 as the taps' sum is (the weighted sum of zeros can come out -0.0 as compiled)
+    return (!read && one == 0.0) ? 0.0 : lit / float((2 * r + 1) * (2 * r + 1));
 #else
     vec2 texel = 1.0 / vec2(textureSize(sm, 0));
-    float lit = 0.0, n = 0.0;
-    for (int y = -SHADOW_PCF; y <= SHADOW_PCF; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF; ++x) {
+    float lit = read ? 0.0 : one, n = read ? 0.0 : 1.0;  // decided: every test `one`, lit / n = one exactly
+    const int side = 2 * SHADOW_PCF + 1;
+    int taps = read ? side * side : 0;
+    for (int k = 0; k < taps; ++k) {
+        int y = k / side - SHADOW_PCF, x = k - (k / side) * side - SHADOW_PCF;
         float ds = texture(sm, c.xy + vec2(x, y) * texel).r;
         lit += (c.z + dot(g, vec2(x, y) * texel) - ds > u_shadow_tol) ? 0.0 : 1.0;
         n += 1.0;
     }
-    return lit / n;
+    return (!read && one == 0.0) ? 0.0 : lit / n;
 #endif
 #else
     int r = u_shadow_pcf;
@@ -126,6 +196,15 @@ float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
 #endif
 }
 
+float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
+    // eq. (7): shadowed if d(P) - ds > tol; PCF averages the test over a (2 pcf + 1)^2-texel box.
+    // shadow.pcf_filter = bilinear: the box slides with the lookup's sub-texel position (the
+    // (2 pcf + 2)^2 texels it touches, edge ones weighted by their overlap), so visibility varies
+    // continuously instead of in one-texel terraces; box: the box snapped to texels.
+    // pcf = 0: the printed hard test at one texel.
+    return shadow_compare_bounded(sm, c, g, -1.0);
+}
+
 // fac_shadow of eq. (10): 1 lit, 0 shadowed (fractional with PCF). Ng is the geometric normal:
 // the lookup point moves off the surface by half a shadow texel to one (normal offset), and each PCF
 // tap compares the map with the receiver's tangent plane at that tap (receiver-plane depth bias):
@@ -136,6 +215,15 @@ float shadow_hard(sampler2D sm, vec3 c) {
     return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
 }
 
+#if defined(PCF_BOUNDED) && defined(SHADOW_BOUNDS_MARK) && SHADOW_BOUNDS_MARK != 0
+// benchmarks and tests (passes.common.PCF_BOUNDS_MARK): a decided lookup returns -1 (lit) or -2 (shadowed)
+float shadow_marked(float d, float s) { return d >= 0.0 ? -2.0 + d : s; }
+#define SHADOW_COMPARE(sm, sb, c, g) shadow_marked(shadow_decided(sm, sb, c, g), shadow_compare(sm, c, g))
+#elif defined(PCF_BOUNDED)
+#define SHADOW_COMPARE(sm, sb, c, g) shadow_compare_bounded(sm, c, g, shadow_decided(sm, sb, c, g))
+#else
+#define SHADOW_COMPARE(sm, sb, c, g) shadow_compare(sm, c, g)
+#endif
 // hard: the eq. (7) hard test instead of the PCF (deon.texel_samples 4 averages four of them over the
 // texel's patch: a PCF on top would filter the shadow twice, issue 30 item 4)
 float shadow_factor_test(int i, vec3 P, vec3 Ng, bool hard) {
@@ -168,16 +256,16 @@ float shadow_factor_test(int i, vec3 P, vec3 Ng, bool hard) {
     if (gl > MAX_RECEIVER_SLOPE * z_per_uv) g *= MAX_RECEIVER_SLOPE * z_per_uv / gl;
 #ifdef LIGHTS_SPECIALISED
 #if (SHADOW_MASK & 1) != 0
-    if (i == 0) return hard ? shadow_hard(shadow_map0, c) : shadow_compare(shadow_map0, c, g);
+    if (i == 0) return hard ? shadow_hard(shadow_map0, c) : SHADOW_COMPARE(shadow_map0, shadow_bounds0, c, g);
 #endif
 #if (SHADOW_MASK & 2) != 0
-    if (i == 1) return hard ? shadow_hard(shadow_map1, c) : shadow_compare(shadow_map1, c, g);
+    if (i == 1) return hard ? shadow_hard(shadow_map1, c) : SHADOW_COMPARE(shadow_map1, shadow_bounds1, c, g);
 #endif
 #if (SHADOW_MASK & 4) != 0
-    if (i == 2) return hard ? shadow_hard(shadow_map2, c) : shadow_compare(shadow_map2, c, g);
+    if (i == 2) return hard ? shadow_hard(shadow_map2, c) : SHADOW_COMPARE(shadow_map2, shadow_bounds2, c, g);
 #endif
 #if (SHADOW_MASK & 8) != 0
-    if (i == 3) return hard ? shadow_hard(shadow_map3, c) : shadow_compare(shadow_map3, c, g);
+    if (i == 3) return hard ? shadow_hard(shadow_map3, c) : SHADOW_COMPARE(shadow_map3, shadow_bounds3, c, g);
 #endif
     return 1.0;
 #else

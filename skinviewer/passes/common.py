@@ -3,6 +3,7 @@
 the final passes and the lit image they write. GL work goes through the ExecuteContext services."""
 from __future__ import annotations
 
+import os
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,21 @@ def shadow_resource(i: int) -> str:
     return f"shadow_map_{i}"
 
 
+def shadow_bounds_resource(i: int) -> str:
+    """Light i's shadow-map bounds (passes.shadow_map.ShadowBoundsPass, lib/lights.glsl SHADOW_BOUNDS)."""
+    return f"shadow_bounds_{i}"
+
+
+# issue 27: the specialised PCF can decide a lookup whose every tap is lit (or shadowed) from the shadow
+# map's per-block bounds, without its taps (lib/lights.glsl SHADOW_BOUNDS; bit-identical). Off: on
+# llvmpipe it decides ~70 % of the lookups but saves ~7 % of d'Eon's irradiance light pass, about what
+# the bounds pass costs (notes/deon_light_move.md section 13). SKINVIEWER_PCF_BOUNDS=1 in the
+# environment turns it on (for a GPU, whose branches skip what its lanes all skip; an A/B)
+PCF_BOUNDS = os.environ.get("SKINVIEWER_PCF_BOUNDS", "0") == "1"
+SHADOW_BOUNDS_BLOCK = 8  # shadow-map texels per block side (a 1024^2 map: a 128^2 bounds map)
+PCF_BOUNDS_MARK = False  # benchmarks and tests: a decided lookup returns -1 (lit) or -2 (shadowed), not 1 or 0
+
+
 def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
     """Declare what a lit pass reads: every light, the shadow test settings, and the shadow maps
     of shadow-casting lights (not with ``shadow_maps=False``: a pass that reads the shadow test's
@@ -43,14 +59,23 @@ def declare_lighting(r: Reflection, shadow_maps: bool = True) -> dict[str, Any]:
         if not analytic_on(l) and l.cast_shadow:
             r.drop(shadow_resource(i), light_off_reason(i, l))
     mask = 0
+    bounds = shadow_maps and PCF_BOUNDS and pcf >= 1  # one tap at pcf 0: nothing to skip
     for slot, (i, l) in enumerate(active):
         if l.cast_shadow:
             if shadow_maps:
                 r.input(shadow_resource(i))
+                if bounds:
+                    r.input(shadow_bounds_resource(i))
             mask |= 1 << slot
+    r.plan(shadow_bounds=bool(bounds and mask))
     kinds = {k: sum(1 << slot for slot, (_, l) in enumerate(active) if l.kind == k) for k in ("point", "beam")}
-    return {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_BILINEAR": int(bilinear), "SHADOW_MASK": mask,
-            "POINT_MASK": kinds["point"], "BEAM_MASK": kinds["beam"]}
+    out = {"LIGHT_COUNT": len(active), "SHADOW_PCF": int(pcf), "SHADOW_BILINEAR": int(bilinear), "SHADOW_MASK": mask,
+           "POINT_MASK": kinds["point"], "BEAM_MASK": kinds["beam"]}
+    if bounds and mask:
+        out.update(SHADOW_BOUNDS=1, SHADOW_BOUNDS_BLOCK=SHADOW_BOUNDS_BLOCK)
+        if PCF_BOUNDS_MARK:
+            out.update(SHADOW_BOUNDS_MARK=1)
+    return out
 
 
 def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
@@ -81,6 +106,8 @@ def set_lighting(ec, prog, shadow_maps: bool = True) -> None:
         texels[slot] = ls.texel_world(map_size)
         if l.cast_shadow and shadow_maps:
             ec.bind(prog, f"shadow_map{slot}", shadow_resource(i))
+            if ec.plan.shadow_bounds:  # SHADOW_BOUNDS: generic shaders compile it out
+                ec.bind(prog, f"shadow_bounds{slot}", shadow_bounds_resource(i), optional=True)
     ec.uniforms(prog, u_light_count=len(active), u_light_kind=kind, u_light_radiance=radiance,
                 u_light_dir=dirs, u_light_pos=poss, u_beam_radius=radii, u_light_shadowed=shadowed,
                 u_light_matrix=mats, u_shadow_texel=texels,

@@ -662,7 +662,8 @@ class IrradiancePass(Pass):
         r.plan(tsm_light=j, visibility=vis)  # the TSM's light; each light's fac_shadow kept per texel
         # deon.texel_samples compiled in: a branch on a uniform costs both sides on llvmpipe (issue 27)
         declare_shaded(r, "deon_irradiance", n, IRRADIANCE, TexSpec((n, n), 4, "f4"), **lighting,
-                       steps=over_texel, DEON_VISIBILITY=int(vis), DEON_TEXEL_SAMPLES=int(r.settings.deon.texel_samples))
+                       steps=over_texel, more=int(vis), DEON_VISIBILITY=int(vis),  # E and visibility dilated in one draw
+                       DEON_TEXEL_SAMPLES=int(r.settings.deon.texel_samples))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
 

@@ -268,12 +268,17 @@ def rasterize_unwrapped(ec, prog, size: int, components: int = 4, dtype: str = "
     return tex
 
 
-def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec, **defines) -> None:
+def declare_unwrapped(r: Reflection, program: str, size: int, resource: str, spec: TexSpec, more: int = 0,
+                      **defines) -> None:
     """Declare a pass that rasterises ``program`` (with ``defines``) in texture space and writes
-    ``resource`` with its gutters filled (see unwrap_dilated)."""
+    ``resource`` with its gutters filled (see unwrap_dilated). ``more`` = 1: it writes one more output
+    (declared by the caller), dilated in the same draw as ``resource`` (dilate.frag DILATE_MORE)."""
     r.input(gutter_resource(size))
     r.program(program, **defines)
     r.program("dilate")
+    if more == 1:
+        r.program("dilate", DILATE_MORE=1)
+    r.plan(dilate_pair=more == 1)
     r.output(resource, spec)
 
 
@@ -352,7 +357,7 @@ class Shading:
 
 
 def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: TexSpec,
-                   maps: str = TEXEL_SURFACE_MAPS, steps: bool = False, **defines: object) -> None:
+                   maps: str = TEXEL_SURFACE_MAPS, steps: bool = False, more: int = 0, **defines: object) -> None:
     """Declare a texture-space shading pass writing ``resource`` with its gutters filled, whichever
     way it shades (shading_program): declare_unwrapped, plus for the texel path the maps ``maps``
     it reads, TILED and TEXEL_STEPS (the position's change per texel, which only beam footprints
@@ -360,7 +365,7 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
     Plans ``shading`` (a Shading) for execute and shade_dilated."""
     if not texel_shading(r):
         r.plan(shading=Shading(base, size, False))
-        declare_unwrapped(r, base, size, resource, spec, **defines)
+        declare_unwrapped(r, base, size, resource, spec, more=more, **defines)
         return
     if defines.get("ENV_LIGHT") and int(defines.get("ENV_RAYS", 0)) > 0:  # type: ignore[call-overload]  # the environment's AO per texel
         maps += "v"
@@ -369,7 +374,8 @@ def declare_shaded(r: Reflection, base: str, size: int, resource: str, spec: Tex
         r.input(res)
     steps = steps or any(light_on(light) and light.kind == "beam" for light in whole(r.settings.lights))
     r.plan(shading=Shading(shading_program(r, base), size, True, maps))
-    declare_unwrapped(r, shading_program(r, base), size, resource, spec, TILED=1, TEXEL_STEPS=int(steps), **defines)
+    declare_unwrapped(r, shading_program(r, base), size, resource, spec, more=more, TILED=1, TEXEL_STEPS=int(steps),
+                      **defines)
 
 
 def shade_dilated(ec, prog, resource: str, *more: str) -> None:
@@ -387,8 +393,7 @@ def shade_dilated(ec, prog, resource: str, *more: str) -> None:
     with ec.band():  # a tileable pass (issue 27): this band's rows; the dilation once all are shaded
         ec.draw_fullscreen(prog, *raws, tiles=work_tiles(ec, size, 0))
     if ec.last_tile:
-        for raw, res in zip(raws, (resource,) + more):
-            dilate(ec, raw, gutter_resource(size), res)
+        dilate_all(ec, raws, gutter_resource(size), (resource,) + more)
 
 
 def _raws(ec, size: int, more: tuple[str, ...]) -> list:
@@ -406,8 +411,7 @@ def unwrap_dilated(ec, prog, size: int, resource: str, *more: str) -> None:
     with ec.band():  # a tileable pass (issue 27): this band's rows; the dilation once all are drawn
         ec.draw_mesh(prog, *raws, depth_test=False, space="uv")
     if ec.last_tile:
-        for raw, res in zip(raws, (resource,) + more):
-            dilate(ec, raw, gutter_resource(size), res)
+        dilate_all(ec, raws, gutter_resource(size), (resource,) + more)
 
 
 SEAM_REACH_TEXELS = 24.0  # gutter texels this close to a seam continue across it (blur taps reach ~3 sigma)
@@ -484,6 +488,26 @@ def gutter_table(covered: np.ndarray) -> np.ndarray:
     out[..., 0] = ix
     out[..., 1] = iy
     return out
+
+
+# issue 27: two shaded outputs (d'Eon's irradiance and visibility) dilated in one draw when the pass declared
+# dilate DILATE_MORE (declare_shaded more=1); False: one draw each (the code before, for an A/B)
+DILATE_PAIRS = os.environ.get("SKINVIEWER_DILATE_PAIRS", "1") != "0"
+
+
+def dilate_all(ec, sources: list, gutter: str, targets: tuple) -> None:
+    """Dilate each source into its target (``dilate``); a pair in one draw (dilate.frag DILATE_MORE) when
+    the pass declared that variant: the same copies, one gutter fetch and one draw fewer."""
+    if len(targets) == 2 and DILATE_PAIRS and ec.plan.dilate_pair:
+        prog = ec.program("dilate", DILATE_MORE=1)
+        ec.textures(prog, source=sources[0], source1=sources[1], gutter=gutter)
+        outs = [ec.output(t) if isinstance(t, str) else t for t in targets]
+        ec.set(prog, "u_limit", HALF_MAX if outs[0].dtype == "f2" else FLOAT_MAX)
+        ec.set(prog, "u_limit1", HALF_MAX if outs[1].dtype == "f2" else FLOAT_MAX)
+        ec.draw_fullscreen(prog, *targets)
+        return
+    for src, target in zip(sources, targets):
+        dilate(ec, src, gutter, target)
 
 
 def dilate(ec, source: moderngl.Texture | str, gutter: str, target: moderngl.Texture | str) -> None:

@@ -11,7 +11,7 @@ from typing import Any
 from skinviewer.ground.constants import MAX_LIGHTS
 from skinviewer.kernel.pass_api import Pass
 from skinviewer.passes.environment import EnvironmentPass
-from skinviewer.passes.shadow_map import ShadowMapPass
+from skinviewer.passes.shadow_map import ShadowBoundsPass, ShadowMapPass
 
 TARGETS = ["image"]
 
@@ -30,5 +30,7 @@ class Technique:
 
 
 def shadow_passes() -> list[Pass]:
-    """The shadow map of each light, and the environment light's pre-filtered maps (issue 32)."""
-    return [ShadowMapPass(i) for i in range(MAX_LIGHTS)] + [EnvironmentPass()]
+    """The shadow map of each light and its bounds (the PCF's exact early-out, issue 27), and the
+    environment light's pre-filtered maps (issue 32)."""
+    return ([ShadowMapPass(i) for i in range(MAX_LIGHTS)] + [ShadowBoundsPass(i) for i in range(MAX_LIGHTS)]
+            + [EnvironmentPass()])
