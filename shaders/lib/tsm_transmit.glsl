@@ -39,8 +39,14 @@
 #ifndef TSM_SKIP
 #define TSM_SKIP 0
 #endif
+#ifndef TSM_TAPS_NARROW
+#define TSM_TAPS_NARROW 1  // the 3x3 taps' terms only for the Gaussians not gathered (the others' f[i] is unread)
+#endif
 #ifndef TSM_ZERO
 #define TSM_ZERO 110.0
+#endif
+#ifndef TSM_PROBE
+#define TSM_PROBE 0  // measurement only (benchmarks/bench_transmitted_parts.py): 1 no gather, 2 no tap terms, 4 setup only
 #endif
 #ifndef TSM_SKIP_MARK
 #define TSM_SKIP_MARK 0.0  // what a skipped texel returns: -1 marks it (the share skipped, benchmarks)
@@ -60,6 +66,9 @@ uniform sampler2D irradiance_map; // E of the lit points the gather reaches (eq.
 // m_near > 0: no sample's m is below it (TSM_SKIP), so when its term underflows every term is 0.
 vec3 tsm_gathered(float v, float turn, vec2 c, float dC, vec2 uvC, vec2 sC, float zoneC, float k2, float m_near) {
     if (m_near > 0.0 && m_near * m_near > TSM_ZERO * k2 * v) return vec3(0.0);  // exactly the loop's 0
+#if (TSM_PROBE & 1) != 0
+    return vec3(0.0);
+#endif
     float sig = sqrt(0.5 * k2 * v);  // samples ~ exp(-lat^2 / (k2 v))
     vec3 e = vec3(0.0);
     for (int k = 0; k < TSM_GATHER_N; ++k) {
@@ -113,10 +122,16 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
         if (m_near > 0.0 && m_near * m_near > TSM_ZERO * k2 * v_max) return vec3(TSM_SKIP_MARK);
     }
 #endif
+#if (TSM_PROBE & 4) != 0
+    return vec3(m_near);
+#endif
     vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
     float zoneC = uv_zone(zone_map, uvC);
     vec3 Lc = (u_tsm_kind == LIGHT_POINT) ? normalize(u_tsm_pos - P) : u_tsm_dir;
     float away = smoothstep(0.0, 0.2, -dot(N, Lc) * inversesqrt(max(dot(N, N), 1e-30)));
+#if TSM_GATHER_N > 0
+    float texel_mm = u_tsm_map_mm * texel.x;  // a Gaussian wider than two TSM texels is gathered
+#endif
     float f[MAX_GAUSSIANS];
     for (int i = 0; i < MAX_GAUSSIANS; ++i) f[i] = 0.0;
     bool any_k = false;
@@ -136,6 +151,12 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
             if (i >= u_count) break;
             float v = u_var[i];
             if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0 || (isnan(v) || v <= 0.0)) continue;
+#if (TSM_PROBE & 2) != 0
+            continue;
+#endif
+#if TSM_GATHER_N > 0 && TSM_TAPS_NARROW
+            if (v > 4.0 * texel_mm * texel_mm) continue;  // gathered below: f[i] is not read (a uniform branch)
+#endif
             f[i] += g * max(exp(-m * m / (k2 * v)) - exp(-r * r / (k2 * v)), 0.0);
         }
     }
@@ -144,19 +165,29 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
     FETCH_BLURS(there, t0.gb, THERE_MASK)
     vec3 acc = vec3(0.0);
 #if TSM_GATHER_N > 0
-    float texel_mm = u_tsm_map_mm * texel.x;
     vec2 sC = uv_per_mm(uvC);
+#endif
+#if (TSM_PROBE & 8) != 0
+    vec3 cnt = vec3(0.0, 0.0, 1.0);  // Gaussians gathered (past their own skip), of them non-zero; 1: reached here
 #endif
     for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_count) break;
         if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0) continue;
 #if TSM_GATHER_N > 0
-        if (u_var[i] > 4.0 * texel_mm * texel_mm)  // a uniform branch
+        if (u_var[i] > 4.0 * texel_mm * texel_mm) {  // a uniform branch
+#if (TSM_PROBE & 8) != 0
+            vec3 e = tsm_gathered(u_var[i], float(i) * 0.78539816, c, dC, uvC, sC, zoneC, k2, m_near);
+            cnt.x += (m_near > 0.0 && m_near * m_near > TSM_ZERO * k2 * u_var[i]) ? 0.0 : 1.0;
+            cnt.y += any(notEqual(u_w[i] * g0 * e, vec3(0.0))) ? 1.0 : 0.0;
+#endif
             acc += u_w[i] * g0 * tsm_gathered(u_var[i], float(i) * 0.78539816, c, dC, uvC, sC, zoneC, k2, m_near);
-        else
+        } else
 #endif
             acc += u_w[i] * (f[i] / 9.0) * there[i].rgb;
     }
+#if (TSM_PROBE & 8) != 0
+    return cnt;
+#endif
     return acc;
 }
 #endif
