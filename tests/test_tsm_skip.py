@@ -162,3 +162,33 @@ def test_the_skip_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
         f.write_text(srcs["fragment_shader"])
         r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
         assert r.returncode == 0, (name, defines, r.stdout[-600:])
+
+
+def _render_cut(ctx, s, cut: bool):
+    deon_passes.TSM_TAPS_CUT = cut
+    r = Renderer(ctx)
+    try:
+        r.render(s)
+        g = r.graph("deon")
+        return {k: g.read(k) for k in (TRANSMITTED, "deon_diffuse", "image")}
+    finally:
+        r.release()
+        deon_passes.TSM_TAPS_CUT = True
+
+
+@pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
+                         ids=["backlit-ear", "head-front-lit", "head-back-lit"])
+def test_the_tap_cuts_are_the_full_taps(gl_ctx, scene, extra):
+    """The 3x3 taps' terms computed only for the Gaussians that read them (not gathered) and that the max
+    map does not prove 0 (TSM_TAPS_NARROW, TSM_TAPS_SKIP) give the transmitted light, the diffuse sum and
+    the image of every tap term computed (up to llvmpipe's own denormal noise), with light going through."""
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": 256, **extra})
+    full, cut = _render_cut(gl_ctx, s, cut=False), _render_cut(gl_ctx, s, cut=True)
+    tol = FLT_MIN if software_renderer(gl_ctx) else 1e-6
+    for name in (TRANSMITTED, "deon_diffuse", "image"):
+        a, b = cut[name].astype(np.float64), full[name].astype(np.float64)
+        if cut[name].dtype.kind in "ui":
+            assert np.abs(a - b).max() <= (0 if tol == FLT_MIN else 1), name
+        else:
+            assert np.abs(a - b).max() <= tol * max(1.0, np.abs(b).max()), name
+    assert (full[TRANSMITTED][..., :3] > FLT_MIN).any(axis=-1).sum() > 100  # light goes through

@@ -42,6 +42,9 @@
 #ifndef TSM_TAPS_NARROW
 #define TSM_TAPS_NARROW 1  // the 3x3 taps' terms only for the Gaussians not gathered (the others' f[i] is unread)
 #endif
+#ifndef TSM_TAPS_SKIP
+#define TSM_TAPS_SKIP 1  // a Gaussian's taps skipped where m_near proves them 0 (TSM_SKIP's bound, per Gaussian)
+#endif
 #ifndef TSM_ZERO
 #define TSM_ZERO 110.0
 #endif
@@ -125,13 +128,29 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
 #if (TSM_PROBE & 4) != 0
     return vec3(m_near);
 #endif
-    vec2 s = 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb));
-    float zoneC = uv_zone(zone_map, uvC);
-    vec3 Lc = (u_tsm_kind == LIGHT_POINT) ? normalize(u_tsm_pos - P) : u_tsm_dir;
-    float away = smoothstep(0.0, 0.2, -dot(N, Lc) * inversesqrt(max(dot(N, N), 1e-30)));
 #if TSM_GATHER_N > 0
     float texel_mm = u_tsm_map_mm * texel.x;  // a Gaussian wider than two TSM texels is gathered
 #endif
+    // live[i]: Gaussian i's tap terms can be non-zero. Every tap reads a t.r <= the max map's R, so
+    // m >= m_near; past TSM_ZERO its exp(-m^2 / (k2 v)) underflows to 0 at every tap and the term,
+    // max(0 - exp(-r^2 / (k2 v)), 0), is exactly +0: skipping it adds what the loop adds (TSM_TAPS_SKIP).
+    bool live[MAX_GAUSSIANS];
+    bool taps_live = false;  // some Gaussian's tap terms are live: r (zone, stretch) and the blurs are read
+    for (int i = 0; i < MAX_GAUSSIANS; ++i) {
+        float v = u_var[i];
+        live[i] = i < u_count && ((G_MASK >> i) & 1) != 0 && u_used[i] != 0 && !(isnan(v) || v <= 0.0);
+#if TSM_GATHER_N > 0 && TSM_TAPS_NARROW
+        if (v > 4.0 * texel_mm * texel_mm) live[i] = false;  // gathered below: f[i] is not read (a uniform branch)
+#endif
+#if TSM_TAPS_SKIP
+        if (m_near > 0.0 && m_near * m_near > TSM_ZERO * k2 * v) live[i] = false;
+#endif
+        taps_live = taps_live || live[i];
+    }
+    vec2 s = taps_live ? 0.5 * (uv_per_mm(uvC) + uv_per_mm(t0.gb)) : vec2(1.0);
+    float zoneC = uv_zone(zone_map, uvC);
+    vec3 Lc = (u_tsm_kind == LIGHT_POINT) ? normalize(u_tsm_pos - P) : u_tsm_dir;
+    float away = smoothstep(0.0, 0.2, -dot(N, Lc) * inversesqrt(max(dot(N, N), 1e-30)));
     float f[MAX_GAUSSIANS];
     for (int i = 0; i < MAX_GAUSSIANS; ++i) f[i] = 0.0;
     bool any_k = false;
@@ -146,23 +165,24 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
         float g = smoothstep(tol, 2.0 * tol, m);
         if ((isnan(g) || g <= 0.0)) continue;
         any_k = true;
+#if (TSM_PROBE & 2) != 0
+        continue;
+#endif
+        if (!taps_live) continue;
         float r = (abs(uv_zone(zone_map, t.gb) - zoneC) < 0.5) ? length((uvC - t.gb) / s) : 1e18;
         for (int i = 0; i < MAX_GAUSSIANS; ++i) {
             if (i >= u_count) break;
             float v = u_var[i];
-            if (((G_MASK >> i) & 1) == 0 || u_used[i] == 0 || (isnan(v) || v <= 0.0)) continue;
-#if (TSM_PROBE & 2) != 0
-            continue;
-#endif
-#if TSM_GATHER_N > 0 && TSM_TAPS_NARROW
-            if (v > 4.0 * texel_mm * texel_mm) continue;  // gathered below: f[i] is not read (a uniform branch)
-#endif
+            if (!live[i]) continue;
             f[i] += g * max(exp(-m * m / (k2 * v)) - exp(-r * r / (k2 * v)), 0.0);
         }
     }
     if (!any_k && (isnan(g0) || g0 <= 0.0)) return vec3(0.0);
     vec4 there[MAX_GAUSSIANS];
-    FETCH_BLURS(there, t0.gb, THERE_MASK)
+    for (int i = 0; i < MAX_GAUSSIANS; ++i) there[i] = vec4(0.0);
+    if (taps_live) {  // else every f[i] read below is 0 and the blurs (finite) are not needed
+        FETCH_BLURS(there, t0.gb, THERE_MASK)
+    }
     vec3 acc = vec3(0.0);
 #if TSM_GATHER_N > 0
     vec2 sC = uv_per_mm(uvC);

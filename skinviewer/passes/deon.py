@@ -461,6 +461,9 @@ TSM_MAX_BLOCK = 8  # TSM texels per block side (a 1024^2 TSM: a 128^2 map)
 # SKINVIEWER_TSM_SKIP=0 in the environment: a whole run without it (an A/B)
 TSM_SKIP = os.environ.get("SKINVIEWER_TSM_SKIP", "1") != "0"
 TSM_SKIP_MARK = False  # benchmarks and tests: a skipped texel comes out -1 (the share skipped), not 0
+# the 3x3 taps' terms only for the Gaussians not gathered, and not for those the max map proves 0
+# (lib/tsm_transmit.glsl TSM_TAPS_NARROW, TSM_TAPS_SKIP; exact); SKINVIEWER_TSM_TAPS=0: without (an A/B)
+TSM_TAPS_CUT = os.environ.get("SKINVIEWER_TSM_TAPS", "1") != "0"
 
 
 def tsm_reach_texels(v_max: float, texel_mm: float, gather: int, k2: float) -> float:
@@ -1369,6 +1372,8 @@ class TransmittedPass(Pass):
             tsm_defines["TSM_SKIP"] = 1
             if TSM_SKIP_MARK:
                 tsm_defines["TSM_SKIP_MARK"] = -1.0
+        if not TSM_TAPS_CUT:
+            tsm_defines.update(TSM_TAPS_NARROW=0, TSM_TAPS_SKIP=0)
         n = transmitted_size(r)
         declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask,
                        **tsm_defines)
