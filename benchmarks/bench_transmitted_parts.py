@@ -9,7 +9,7 @@ TSM_PROBE = 8, per island texel: how many gathered Gaussians pass their own skip
 a non-zero term.
 
     python benchmarks/bench_transmitted_parts.py [--maps 1024] [--size 640] [--repeats 3] [--scenes head,scan]
-        [--lights front,back] [--probes 1,2,4,3] [--variant TSM_TAPS_NARROW=0 ...] [--no-counts]
+        [--lights front,back] [--probes 1,2,4,3] [--variant TSM_TAPS_NARROW=0,TSM_MAX_CHANNELS=1 ...] [--no-counts]
 """
 from __future__ import annotations
 
@@ -89,8 +89,8 @@ def main() -> None:
     sides = {"A": {}}
     for p in [int(x) for x in args.probes.split(",") if x]:
         sides[f"PROBE={p}"] = {"TSM_PROBE": p}
-    for v in args.variant:
-        sides[v] = draws.parse_sets([v])
+    for v in args.variant:  # DEFINE=value[,DEFINE=value...]
+        sides[v] = draws.parse_sets(v.split(","))
     scenes = {k: v for k, v in shared_scenes().items() if k in args.scenes.split(",")}
     print("| scene | light | " + " | ".join(sides) + " | copy ms | load |")
     print("| --- | --- | " + " | ".join("---" for _ in sides) + " | --- | --- |")

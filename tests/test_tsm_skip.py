@@ -16,7 +16,7 @@ import skinviewer.passes.deon as deon_passes
 from skinviewer.engine.renderer import Renderer
 from skinviewer.ground.settings import with_values
 from skinviewer.kernel.gl import software_renderer
-from skinviewer.passes.deon import TRANSMITTED, TSM, TSM_MAX, tsm_max_covered, tsm_reach_texels
+from skinviewer.passes.deon import TRANSMITTED, TSM, TSM_MAX, tsm_max_covered, tsm_max_radii, tsm_reach_texels
 
 # llvmpipe does not reproduce its own denormals: two renders of the unchanged shader in one process
 # differ by up to ~1.2e-38 in a few texels (seen in blur_4, blur_5 and the transmitted light alike).
@@ -44,7 +44,9 @@ def test_the_skip_is_the_full_path(gl_ctx, scene, extra):
     """The transmitted light and the image with the skip equal those without it (up to llvmpipe's own
     denormal noise), while the skip does skip texels on the head (a -1 marker counts them; on the thin
     ear none is out of reach) and the term is not all zero (the comparison means something)."""
-    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": 256, **extra})
+    # a TSM of the defaults' size on the head: the max map's channels have distinct windows (taps, gathers)
+    tsm_size = 1024 if scene == "head" else 256
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
     _, full = _render(gl_ctx, s, skip=False)
     rep, skip = _render(gl_ctx, s, skip=True)
     assert "deon_tsm_max" in {p.name for p in rep.passes if p.status == "ran"}
@@ -94,18 +96,25 @@ def _window_max(r: np.ndarray, lit: np.ndarray, block: int, radius: int) -> np.n
 @pytest.mark.parametrize("scene,extra", [("head", {}), ("backlit-ear", {})])
 def test_the_max_map_holds_the_farthest_first_surface_in_reach(renderer, scene, extra):
     """deon_tsm_max = numpy's max over the TSM read back (texels with a surface), block by block over
-    the planned window; so no TSM texel within the covered reach of a texel's block is farther."""
-    s = small_settings(scene, "deon", 48, **{"deon.irradiance_size": 256, "deon.tsm_size": 256, **extra})
+    each channel's planned window; so no TSM texel within a channel's covered reach of a texel's block is
+    farther."""
+    tsm_size = 1024 if scene == "head" else 256  # the head's at the defaults: the reaches fill several windows
+    s = small_settings(scene, "deon", 48, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
     renderer.render(s)
     g = renderer.graph("deon")
     tsm, got = g.read(TSM), g.read(TSM_MAX)[..., 0]
-    n, block, radius = g._last_refl["deon_tsm_max"].planned["tsm_max"]
+    n, block, radii = g._last_refl["deon_tsm_max"].planned["tsm_max"]
     assert tsm.shape[:2] == (n, n) and got.shape == (-(-n // block),) * 2
-    want = _window_max(tsm[..., 0].astype(np.float64), tsm[..., 3] >= 0.0, block, radius)
-    empty = ~np.isfinite(want)
-    assert np.array_equal(got[~empty], want[~empty].astype(np.float32))
-    assert (got[empty] <= -1e29).all()  # no surface in reach: below any distance
-    assert (~empty).sum() > 10 and radius * block >= 3
+    got4 = g.read(TSM_MAX)
+    for ch, radius in enumerate(radii):  # each channel its own window
+        want = _window_max(tsm[..., 0].astype(np.float64), tsm[..., 3] >= 0.0, block, radius)
+        empty = ~np.isfinite(want)
+        assert np.array_equal(got4[..., ch][~empty], want[~empty].astype(np.float32)), ch
+        assert (got4[..., ch][empty] <= -1e29).all()  # no surface in reach: below any distance
+        assert (~empty).sum() > 10 and radius * block >= 3
+    assert radii[0] == max(radii)  # R: the widest reach (the texel's bound before the per-Gaussian channels)
+    if scene == "head":  # the taps' 1 texel and the gathered Gaussians' spirals: several windows
+        assert len(set(radii)) >= 2 and min(radii) == 1
 
 
 @pytest.mark.parametrize("n_gather", [1, 4, 16, 64])
@@ -121,7 +130,9 @@ def test_the_reach_covers_the_gather_spiral(n_gather):
             rad = sig * np.sqrt(-2.0 * np.log(1.0 - (k + 0.5) / n_gather))
             assert rad.max() / texel_mm <= reach * (1 + 1e-9)
             radius = math.ceil((reach + 3.0) / 8)
-            assert tsm_max_covered((1024, 8, radius)) >= reach + 2.0
+            assert min(tsm_max_covered((1024, 8, (radius,) * 4))) >= reach + 2.0
+            radii = tsm_max_radii([1.0, reach, 2.0 * reach], 1024, 8)
+            assert radius in radii and max(radii) == radii[0] and min(radii) == 1
     assert tsm_reach_texels(7.41, 0.31, 0, 2.0) == 1.0  # no gather: the 3x3 taps
     assert tsm_reach_texels(0.1, 0.31, 16, 2.0) == 1.0  # narrower than 2 texels: not gathered
 
@@ -182,7 +193,8 @@ def test_the_tap_cuts_are_the_full_taps(gl_ctx, scene, extra):
     """The 3x3 taps' terms computed only for the Gaussians that read them (not gathered) and that the max
     map does not prove 0 (TSM_TAPS_NARROW, TSM_TAPS_SKIP) give the transmitted light, the diffuse sum and
     the image of every tap term computed (up to llvmpipe's own denormal noise), with light going through."""
-    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": 256, **extra})
+    tsm_size = 1024 if scene == "head" else 256
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
     full, cut = _render_cut(gl_ctx, s, cut=False), _render_cut(gl_ctx, s, cut=True)
     tol = FLT_MIN if software_renderer(gl_ctx) else 1e-6
     for name in (TRANSMITTED, "deon_diffuse", "image"):
