@@ -26,8 +26,10 @@ FLT_MIN = float(np.finfo(np.float32).tiny)
 BACK_LIT = {"lights.0.direction": [0.0, 0.2, -1.0], "lights.1.direction": [0.1, 0.0, -1.0]}
 
 
-def _render(ctx, s, skip: bool, mark: bool = False):
-    deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK = skip, mark
+def _render(ctx, s, skip: bool, mark: bool = False, cut: bool = False):
+    """(report, every texture) of a render with the skip on or off; ``cut``: its threshold at 2^-24
+    (passes.deon.TSM_CUT, the default) instead of float32's underflow (exact)."""
+    deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK, deon_passes.TSM_CUT = skip, mark, cut
     r = Renderer(ctx)
     try:
         rep = r.render(s)
@@ -35,7 +37,7 @@ def _render(ctx, s, skip: bool, mark: bool = False):
         return rep, {k: g.read(k) for k in g.resources()}
     finally:
         r.release()
-        deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK = True, False
+        deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK, deon_passes.TSM_CUT = True, False, True
 
 
 @pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
@@ -176,7 +178,7 @@ def test_the_skip_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
 
 
 def _render_cut(ctx, s, cut: bool):
-    deon_passes.TSM_TAPS_CUT = cut
+    deon_passes.TSM_TAPS_CUT, deon_passes.TSM_CUT = cut, False  # exact: the taps' cuts alone
     r = Renderer(ctx)
     try:
         r.render(s)
@@ -184,7 +186,7 @@ def _render_cut(ctx, s, cut: bool):
         return {k: g.read(k) for k in (TRANSMITTED, "deon_diffuse", "image")}
     finally:
         r.release()
-        deon_passes.TSM_TAPS_CUT = True
+        deon_passes.TSM_TAPS_CUT, deon_passes.TSM_CUT = True, True
 
 
 @pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
@@ -204,3 +206,28 @@ def test_the_tap_cuts_are_the_full_taps(gl_ctx, scene, extra):
         else:
             assert np.abs(a - b).max() <= tol * max(1.0, np.abs(b).max()), name
     assert (full[TRANSMITTED][..., :3] > FLT_MIN).any(axis=-1).sum() > 100  # light goes through
+
+
+@pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
+                         ids=["backlit-ear", "head-front-lit", "head-back-lit"])
+def test_the_cut_stays_under_its_bound(gl_ctx, scene, extra):
+    """The default threshold (passes.deon.TSM_CUT: a term below 2^-24 of its lit point's light counts as 0)
+    against the full path: every texel of the transmitted light within e^-TSM_CUT_ZERO x sum_i w_i x
+    max(20 max E, max blur) per channel (numpy, from the maps read back: eq. 33's terms are each below
+    e^-Z times E / cos A <= 20 E or a blur), it does cut something on the head, and the lit and displayed
+    images are the same bit for bit (what the cut is allowed to do)."""
+    tsm_size = 1024 if scene == "head" else 256
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
+    _, full = _render(gl_ctx, s, skip=False)
+    _, cut = _render(gl_ctx, s, skip=True, cut=True)
+    e_max = max(float(np.abs(full[deon_passes.IRRADIANCE][..., :3]).max()) * 20.0,
+                max(float(np.abs(v[..., :3]).max()) for k, v in full.items() if k.startswith("blur_")))
+    w = np.array([g.weights for g in s.deon.gaussians], np.float64)  # (Gaussians, rgb)
+    bound = math.exp(-deon_passes.TSM_CUT_ZERO) * np.abs(w).sum(axis=0) * e_max  # per channel
+    d = np.abs(cut[TRANSMITTED][..., :3].astype(np.float64) - full[TRANSMITTED][..., :3].astype(np.float64))
+    assert (d <= bound + FLT_MIN).all(), (d.max(axis=(0, 1)), bound)
+    if scene == "head":
+        assert (d > 0).any()  # it cuts (a threshold that never acts tests nothing)
+    assert (full[TRANSMITTED][..., :3] > FLT_MIN).any(axis=-1).sum() > 100  # light goes through
+    for name in ("lit", "image"):
+        assert np.array_equal(cut[name], full[name]), name

@@ -49,7 +49,7 @@
 #define TSM_MAX_CHANNELS 4  // the max map's channels read (1: R alone, the widest reach's bound: session 8's skip)
 #endif
 #ifndef TSM_ZERO
-#define TSM_ZERO 110.0
+#define TSM_ZERO 110.0  // exact: every exp past it is 0 in float32; passes.deon.TSM_CUT sets 16.64 (< 2^-24)
 #endif
 #ifndef TSM_PROBE
 #define TSM_PROBE 0  // measurement only (benchmarks/bench_transmitted_parts.py): 1 no gather, 2 no tap terms, 4 setup only

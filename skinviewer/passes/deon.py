@@ -464,6 +464,14 @@ TSM_SKIP_MARK = False  # benchmarks and tests: a skipped texel comes out -1 (the
 # the 3x3 taps' terms only for the Gaussians not gathered, and not for those the max map proves 0
 # (lib/tsm_transmit.glsl TSM_TAPS_NARROW, TSM_TAPS_SKIP; exact); SKINVIEWER_TSM_TAPS=0: without (an A/B)
 TSM_TAPS_CUT = os.environ.get("SKINVIEWER_TSM_TAPS", "1") != "0"
+# the skip's threshold (lib/tsm_transmit.glsl TSM_ZERO): by default a term exp(-m^2 / (k2 v)) below 2^-24
+# (e^-16.64) of its lit point's light counts as 0, so a texel (a Gaussian, its taps) whose every term is
+# below it is skipped: |change| < 2^-24 x sum |w_i| x max E / 0.05 (E / cos A, clamped), the lit and
+# displayed images bit-identical on the head and the scan, front- and back-lit, at the defaults
+# (notes/deon_light_move.md section 14). SKINVIEWER_TSM_CUT=0 (or TSM_CUT = False): only what underflows
+# to 0 in float32 is skipped (TSM_ZERO 110, bit for bit the loops' result)
+TSM_CUT = os.environ.get("SKINVIEWER_TSM_CUT", "1") != "0"
+TSM_CUT_ZERO = 16.64  # ln 2^24 = 16.636: e^-16.64 < 2^-24
 
 
 def tsm_reach_texels(v_max: float, texel_mm: float, gather: int, k2: float) -> float:
@@ -1382,6 +1390,8 @@ class TransmittedPass(Pass):
             r.input(TSM_MAX)
             r.plan(tsm_max=tsm_max_plan(r))
             tsm_defines["TSM_SKIP"] = 1
+            if TSM_CUT:
+                tsm_defines["TSM_ZERO"] = TSM_CUT_ZERO
             if TSM_SKIP_MARK:
                 tsm_defines["TSM_SKIP_MARK"] = -1.0
         if not TSM_TAPS_CUT:
