@@ -6,10 +6,11 @@ any --variant DEFINE=value, interleaved in every repeat, for each scene (the hea
 (the defaults' key in front; the key behind the head). Sync timing (a glFinish either side of the draw),
 medians, in plain copies (shaders/copy.frag, RGBA32F) of the 1024^2 map; and, from a render with
 TSM_PROBE = 8, per island texel: how many gathered Gaussians pass their own skip and how many of those add
-a non-zero term.
+a non-zero term; with --work, each side's work (texels past the skips, gathered Gaussians and live taps a
+texel and a 4x4 block), which the load does not move.
 
     python benchmarks/bench_transmitted_parts.py [--maps 1024] [--size 640] [--repeats 3] [--scenes head,scan]
-        [--lights front,back] [--probes 1,2,4,3] [--variant TSM_TAPS_NARROW=0,TSM_MAX_CHANNELS=1 ...] [--no-counts]
+        [--lights front,back] [--probes 1,2,4,3] [--variant TSM_TAPS_NARROW=0,TSM_MAX_CHANNELS=1 ...] [--no-counts] [--work]
 """
 from __future__ import annotations
 
@@ -52,6 +53,32 @@ def transmitted_ms(r: Renderer, s, s2, defines: dict) -> float:
     return sum(ms for p, prog, _t, ms in draws.LOG if p == "deon_transmitted" and prog.startswith(PROGRAM))
 
 
+def work(r: Renderer, s, s2, defines: dict) -> tuple[float, float, float, float, float]:
+    """The work ``defines``' variant does, from a TSM_PROBE = 8 render (deterministic, unlike the ms):
+    (share of island texels past the whole skip and the lit early return, gathered Gaussians past their own
+    skip per island texel, share with live tap terms; the last two per 4x4 block of texels as a SIMD
+    rasterizer runs them: the block pays for its busiest texel)."""
+    draws.VARIANT.clear()
+    r.render(s)
+    draws.VARIANT[PROGRAM] = {**defines, "TSM_PROBE": 8}
+    r.render(s2)
+    draws.VARIANT.clear()
+    g = r.graph("deon")
+    t = g.read(deon_passes.TRANSMITTED)[..., :3].astype(np.float64)
+    n = t.shape[0]
+    cov = g.read(f"texel_surface_{n}_p")[..., 3] != 0
+    r.render(s, force=True)  # the probe's texture is not the frame's
+    reached = cov & (t[..., 2] >= 1.0)
+    gath = np.where(reached, t[..., 0], 0.0)
+    taps = np.where(reached & (t[..., 2] == 2.0), 1.0, 0.0)
+    tot = max(int(cov.sum()), 1)
+    b = n // 4
+    blk = lambda a: a[:b * 4, :b * 4].reshape(b, 4, b, 4).max(axis=(1, 3))  # noqa: E731
+    cb = blk(cov.astype(np.float64)) > 0
+    nb = max(int(cb.sum()), 1)
+    return (reached.sum() / tot, gath.sum() / tot, taps.sum() / tot, blk(gath)[cb].sum() / nb, blk(taps)[cb].sum() / nb)
+
+
 def counts(r: Renderer, s, s2) -> str:
     draws.VARIANT.clear()
     r.render(s)
@@ -62,7 +89,7 @@ def counts(r: Renderer, s, s2) -> str:
     t = g.read(deon_passes.TRANSMITTED)[..., :3]
     n = t.shape[0]
     cov = g.read(f"texel_surface_{n}_p")[..., 3] != 0
-    reached = cov & (t[..., 2] == 1.0)
+    reached = cov & (t[..., 2] >= 1.0)
     entered, nonzero = t[..., 0][reached], t[..., 1][reached]
     tot = max(int(cov.sum()), 1)
     hist = " ".join(f"{k}:{100 * np.mean(entered == k) * reached.sum() / tot:.0f}%" for k in range(4))
@@ -82,6 +109,7 @@ def main() -> None:
     ap.add_argument("--probes", default="1,2,4,3")
     ap.add_argument("--variant", action="append", default=[])
     ap.add_argument("--no-counts", action="store_true")
+    ap.add_argument("--work", action="store_true", help="each side's work from a TSM_PROBE = 8 render (deterministic)")
     args = ap.parse_args()
     ctx = headless_context()
     print(f"# deon_transmitted by parts — {describe(ctx)}; load {os.getloadavg()[0]:.1f} at start")
@@ -102,6 +130,14 @@ def main() -> None:
             try:
                 r.render(s, force=True)
                 note = "" if args.no_counts else counts(r, s, moved(s, 0))
+                if args.work:
+                    for name, d in sides.items():
+                        if "TSM_PROBE" in d:
+                            continue
+                        w = work(r, s, moved(s, 0), d)
+                        print(f"#   work {scene_name} {light} {name}: past the skips {100 * w[0]:.1f} % of island "
+                              f"texels; gathered Gaussians a texel {w[1]:.3f} (a 4x4 block {w[3]:.3f}); live taps "
+                              f"{100 * w[2]:.1f} % (blocks {100 * w[4]:.1f} %)", flush=True)
                 per = {k: [] for k in sides}
                 cp = []
                 names = list(sides)

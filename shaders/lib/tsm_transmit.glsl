@@ -200,7 +200,8 @@ vec3 tsm_transmitted(vec3 P, vec3 N, vec2 uvC) {
     vec2 sC = uv_per_mm(uvC);
 #endif
 #if (TSM_PROBE & 8) != 0
-    vec3 cnt = vec3(0.0, 0.0, 1.0);  // Gaussians gathered (past their own skip), of them non-zero; 1: reached here
+    // Gaussians gathered (past their own skip), of them non-zero; 1 reached here, 2 with tap terms live
+    vec3 cnt = vec3(0.0, 0.0, taps_live ? 2.0 : 1.0);
 #endif
     for (int i = 0; i < MAX_GAUSSIANS; ++i) {
         if (i >= u_count) break;
