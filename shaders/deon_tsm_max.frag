@@ -7,13 +7,14 @@
 // (tsm_transmitted's TSM_SKIP). Two programs:
 //  * TSM_MAX_BLOCK = 1: the largest t.r over u_block x u_block TSM texels (texels with no surface,
 //    A < 0, are not read by the transmission: skipped; -FLOAT_MAX when the block has none);
-//  * TSM_MAX_BLOCK = 0: that max dilated along u_axis by u_radius blocks (run once per axis: a box
-//    window), clamped to the map like the TSM's clamp-to-edge reads.
+//  * TSM_MAX_BLOCK = 0: that max dilated along u_axis by u_radii[c] blocks in channel c (run once per
+//    axis: a box window; four windows, one per channel: the reaches of the Gaussians' reads, widest in
+//    R), clamped to the map like the TSM's clamp-to-edge reads.
 #include "lib/color.glsl"
 uniform sampler2D src;
 uniform int u_block;
 uniform ivec2 u_axis;
-uniform int u_radius;
+uniform ivec4 u_radii;
 out vec4 f_max;
 void main() {
     ivec2 q = ivec2(gl_FragCoord.xy);
@@ -26,12 +27,18 @@ void main() {
         vec4 s = texelFetch(src, t, 0);
         if (s.a >= 0.0) hi = max(hi, s.r);
     }
+    f_max = vec4(hi);
 #else
-    for (int k = -u_radius; k <= u_radius; ++k) {
+    vec4 h = vec4(-FLOAT_MAX);
+    int w = max(max(u_radii.x, u_radii.y), max(u_radii.z, u_radii.w));
+    for (int k = -w; k <= w; ++k) {
         ivec2 t = q + k * u_axis;
         if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, n))) continue;
-        hi = max(hi, texelFetch(src, t, 0).r);
+        vec4 s = texelFetch(src, t, 0);
+        bvec4 in_c = lessThanEqual(ivec4(abs(k)), u_radii);
+        h = max(h, vec4(in_c.x ? s.x : -FLOAT_MAX, in_c.y ? s.y : -FLOAT_MAX, in_c.z ? s.z : -FLOAT_MAX,
+                        in_c.w ? s.w : -FLOAT_MAX));
     }
+    f_max = h;
 #endif
-    f_max = vec4(hi, 0.0, 0.0, 1.0);
 }

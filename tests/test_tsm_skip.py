@@ -16,7 +16,7 @@ import skinviewer.passes.deon as deon_passes
 from skinviewer.engine.renderer import Renderer
 from skinviewer.ground.settings import with_values
 from skinviewer.kernel.gl import software_renderer
-from skinviewer.passes.deon import TRANSMITTED, TSM, TSM_MAX, tsm_max_covered, tsm_reach_texels
+from skinviewer.passes.deon import TRANSMITTED, TSM, TSM_MAX, tsm_max_covered, tsm_max_radii, tsm_reach_texels
 
 # llvmpipe does not reproduce its own denormals: two renders of the unchanged shader in one process
 # differ by up to ~1.2e-38 in a few texels (seen in blur_4, blur_5 and the transmitted light alike).
@@ -26,8 +26,10 @@ FLT_MIN = float(np.finfo(np.float32).tiny)
 BACK_LIT = {"lights.0.direction": [0.0, 0.2, -1.0], "lights.1.direction": [0.1, 0.0, -1.0]}
 
 
-def _render(ctx, s, skip: bool, mark: bool = False):
-    deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK = skip, mark
+def _render(ctx, s, skip: bool, mark: bool = False, cut: bool = False):
+    """(report, every texture) of a render with the skip on or off; ``cut``: its threshold at 2^-24
+    (passes.deon.TSM_CUT, the default) instead of float32's underflow (exact)."""
+    deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK, deon_passes.TSM_CUT = skip, mark, cut
     r = Renderer(ctx)
     try:
         rep = r.render(s)
@@ -35,7 +37,7 @@ def _render(ctx, s, skip: bool, mark: bool = False):
         return rep, {k: g.read(k) for k in g.resources()}
     finally:
         r.release()
-        deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK = True, False
+        deon_passes.TSM_SKIP, deon_passes.TSM_SKIP_MARK, deon_passes.TSM_CUT = True, False, True
 
 
 @pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
@@ -44,7 +46,9 @@ def test_the_skip_is_the_full_path(gl_ctx, scene, extra):
     """The transmitted light and the image with the skip equal those without it (up to llvmpipe's own
     denormal noise), while the skip does skip texels on the head (a -1 marker counts them; on the thin
     ear none is out of reach) and the term is not all zero (the comparison means something)."""
-    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": 256, **extra})
+    # a TSM of the defaults' size on the head: the max map's channels have distinct windows (taps, gathers)
+    tsm_size = 1024 if scene == "head" else 256
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
     _, full = _render(gl_ctx, s, skip=False)
     rep, skip = _render(gl_ctx, s, skip=True)
     assert "deon_tsm_max" in {p.name for p in rep.passes if p.status == "ran"}
@@ -94,18 +98,25 @@ def _window_max(r: np.ndarray, lit: np.ndarray, block: int, radius: int) -> np.n
 @pytest.mark.parametrize("scene,extra", [("head", {}), ("backlit-ear", {})])
 def test_the_max_map_holds_the_farthest_first_surface_in_reach(renderer, scene, extra):
     """deon_tsm_max = numpy's max over the TSM read back (texels with a surface), block by block over
-    the planned window; so no TSM texel within the covered reach of a texel's block is farther."""
-    s = small_settings(scene, "deon", 48, **{"deon.irradiance_size": 256, "deon.tsm_size": 256, **extra})
+    each channel's planned window; so no TSM texel within a channel's covered reach of a texel's block is
+    farther."""
+    tsm_size = 1024 if scene == "head" else 256  # the head's at the defaults: the reaches fill several windows
+    s = small_settings(scene, "deon", 48, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
     renderer.render(s)
     g = renderer.graph("deon")
     tsm, got = g.read(TSM), g.read(TSM_MAX)[..., 0]
-    n, block, radius = g._last_refl["deon_tsm_max"].planned["tsm_max"]
+    n, block, radii = g._last_refl["deon_tsm_max"].planned["tsm_max"]
     assert tsm.shape[:2] == (n, n) and got.shape == (-(-n // block),) * 2
-    want = _window_max(tsm[..., 0].astype(np.float64), tsm[..., 3] >= 0.0, block, radius)
-    empty = ~np.isfinite(want)
-    assert np.array_equal(got[~empty], want[~empty].astype(np.float32))
-    assert (got[empty] <= -1e29).all()  # no surface in reach: below any distance
-    assert (~empty).sum() > 10 and radius * block >= 3
+    got4 = g.read(TSM_MAX)
+    for ch, radius in enumerate(radii):  # each channel its own window
+        want = _window_max(tsm[..., 0].astype(np.float64), tsm[..., 3] >= 0.0, block, radius)
+        empty = ~np.isfinite(want)
+        assert np.array_equal(got4[..., ch][~empty], want[~empty].astype(np.float32)), ch
+        assert (got4[..., ch][empty] <= -1e29).all()  # no surface in reach: below any distance
+        assert (~empty).sum() > 10 and radius * block >= 3
+    assert radii[0] == max(radii)  # R: the widest reach (the texel's bound before the per-Gaussian channels)
+    if scene == "head":  # the taps' 1 texel and the gathered Gaussians' spirals: several windows
+        assert len(set(radii)) >= 2 and min(radii) == 1
 
 
 @pytest.mark.parametrize("n_gather", [1, 4, 16, 64])
@@ -121,7 +132,9 @@ def test_the_reach_covers_the_gather_spiral(n_gather):
             rad = sig * np.sqrt(-2.0 * np.log(1.0 - (k + 0.5) / n_gather))
             assert rad.max() / texel_mm <= reach * (1 + 1e-9)
             radius = math.ceil((reach + 3.0) / 8)
-            assert tsm_max_covered((1024, 8, radius)) >= reach + 2.0
+            assert min(tsm_max_covered((1024, 8, (radius,) * 4))) >= reach + 2.0
+            radii = tsm_max_radii([1.0, reach, 2.0 * reach], 1024, 8)
+            assert radius in radii and max(radii) == radii[0] and min(radii) == 1
     assert tsm_reach_texels(7.41, 0.31, 0, 2.0) == 1.0  # no gather: the 3x3 taps
     assert tsm_reach_texels(0.1, 0.31, 16, 2.0) == 1.0  # narrower than 2 texels: not gathered
 
@@ -162,3 +175,59 @@ def test_the_skip_shaders_pass_the_reference_compiler(gl_ctx, tmp_path):
         f.write_text(srcs["fragment_shader"])
         r = subprocess.run(["glslangValidator", str(f)], capture_output=True, text=True, timeout=60)
         assert r.returncode == 0, (name, defines, r.stdout[-600:])
+
+
+def _render_cut(ctx, s, cut: bool):
+    deon_passes.TSM_TAPS_CUT, deon_passes.TSM_CUT = cut, False  # exact: the taps' cuts alone
+    r = Renderer(ctx)
+    try:
+        r.render(s)
+        g = r.graph("deon")
+        return {k: g.read(k) for k in (TRANSMITTED, "deon_diffuse", "image")}
+    finally:
+        r.release()
+        deon_passes.TSM_TAPS_CUT, deon_passes.TSM_CUT = True, True
+
+
+@pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
+                         ids=["backlit-ear", "head-front-lit", "head-back-lit"])
+def test_the_tap_cuts_are_the_full_taps(gl_ctx, scene, extra):
+    """The 3x3 taps' terms computed only for the Gaussians that read them (not gathered) and that the max
+    map does not prove 0 (TSM_TAPS_NARROW, TSM_TAPS_SKIP) give the transmitted light, the diffuse sum and
+    the image of every tap term computed (up to llvmpipe's own denormal noise), with light going through."""
+    tsm_size = 1024 if scene == "head" else 256
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
+    full, cut = _render_cut(gl_ctx, s, cut=False), _render_cut(gl_ctx, s, cut=True)
+    tol = FLT_MIN if software_renderer(gl_ctx) else 1e-6
+    for name in (TRANSMITTED, "deon_diffuse", "image"):
+        a, b = cut[name].astype(np.float64), full[name].astype(np.float64)
+        if cut[name].dtype.kind in "ui":
+            assert np.abs(a - b).max() <= (0 if tol == FLT_MIN else 1), name
+        else:
+            assert np.abs(a - b).max() <= tol * max(1.0, np.abs(b).max()), name
+    assert (full[TRANSMITTED][..., :3] > FLT_MIN).any(axis=-1).sum() > 100  # light goes through
+
+
+@pytest.mark.parametrize("scene,extra", [("backlit-ear", {}), ("head", {}), ("head", BACK_LIT)],
+                         ids=["backlit-ear", "head-front-lit", "head-back-lit"])
+def test_the_cut_stays_under_its_bound(gl_ctx, scene, extra):
+    """The default threshold (passes.deon.TSM_CUT: a term below 2^-24 of its lit point's light counts as 0)
+    against the full path: every texel of the transmitted light within e^-TSM_CUT_ZERO x sum_i w_i x
+    max(20 max E, max blur) per channel (numpy, from the maps read back: eq. 33's terms are each below
+    e^-Z times E / cos A <= 20 E or a blur), it does cut something on the head, and the lit and displayed
+    images are the same bit for bit (what the cut is allowed to do)."""
+    tsm_size = 1024 if scene == "head" else 256
+    s = small_settings(scene, "deon", 64, **{"deon.irradiance_size": 256, "deon.tsm_size": tsm_size, **extra})
+    _, full = _render(gl_ctx, s, skip=False)
+    _, cut = _render(gl_ctx, s, skip=True, cut=True)
+    e_max = max(float(np.abs(full[deon_passes.IRRADIANCE][..., :3]).max()) * 20.0,
+                max(float(np.abs(v[..., :3]).max()) for k, v in full.items() if k.startswith("blur_")))
+    w = np.array([g.weights for g in s.deon.gaussians], np.float64)  # (Gaussians, rgb)
+    bound = math.exp(-deon_passes.TSM_CUT_ZERO) * np.abs(w).sum(axis=0) * e_max  # per channel
+    d = np.abs(cut[TRANSMITTED][..., :3].astype(np.float64) - full[TRANSMITTED][..., :3].astype(np.float64))
+    assert (d <= bound + FLT_MIN).all(), (d.max(axis=(0, 1)), bound)
+    if scene == "head":
+        assert (d > 0).any()  # it cuts (a threshold that never acts tests nothing)
+    assert (full[TRANSMITTED][..., :3] > FLT_MIN).any(axis=-1).sum() > 100  # light goes through
+    for name in ("lit", "image"):
+        assert np.array_equal(cut[name], full[name]), name

@@ -462,12 +462,23 @@ class TsmPass(Pass):
         ec.draw_mesh(prog, TSM, clear=(0.0, 0.0, 0.0, -1.0))  # A < 0: no surface
 
 
-TSM_MAX = "deon_tsm_max"  # the TSM's farthest first surface within reach, per block (TsmMaxPass)
+TSM_MAX = "deon_tsm_max"  # the TSM's farthest first surface within four reaches, per block (TsmMaxPass)
 TSM_MAX_BLOCK = 8  # TSM texels per block side (a 1024^2 TSM: a 128^2 map)
 # deon_transmitted skips the texels the max proves get exactly 0 (lib/tsm_transmit.glsl TSM_SKIP);
 # SKINVIEWER_TSM_SKIP=0 in the environment: a whole run without it (an A/B)
 TSM_SKIP = os.environ.get("SKINVIEWER_TSM_SKIP", "1") != "0"
 TSM_SKIP_MARK = False  # benchmarks and tests: a skipped texel comes out -1 (the share skipped), not 0
+# the 3x3 taps' terms only for the Gaussians not gathered, and not for those the max map proves 0
+# (lib/tsm_transmit.glsl TSM_TAPS_NARROW, TSM_TAPS_SKIP; exact); SKINVIEWER_TSM_TAPS=0: without (an A/B)
+TSM_TAPS_CUT = os.environ.get("SKINVIEWER_TSM_TAPS", "1") != "0"
+# the skip's threshold (lib/tsm_transmit.glsl TSM_ZERO): by default a term exp(-m^2 / (k2 v)) below 2^-24
+# (e^-16.64) of its lit point's light counts as 0, so a texel (a Gaussian, its taps) whose every term is
+# below it is skipped: |change| < 2^-24 x sum |w_i| x max E / 0.05 (E / cos A, clamped), the lit and
+# displayed images bit-identical on the head and the scan, front- and back-lit, at the defaults
+# (notes/deon_light_move.md section 14). SKINVIEWER_TSM_CUT=0 (or TSM_CUT = False): only what underflows
+# to 0 in float32 is skipped (TSM_ZERO 110, bit for bit the loops' result)
+TSM_CUT = os.environ.get("SKINVIEWER_TSM_CUT", "1") != "0"
+TSM_CUT_ZERO = 16.64  # ln 2^24 = 16.636: e^-16.64 < 2^-24
 
 
 def tsm_reach_texels(v_max: float, texel_mm: float, gather: int, k2: float) -> float:
@@ -479,32 +490,44 @@ def tsm_reach_texels(v_max: float, texel_mm: float, gather: int, k2: float) -> f
     return max(1.0, math.sqrt(0.5 * k2 * v_max) * math.sqrt(2.0 * math.log(2.0 * gather)) / texel_mm)
 
 
-def tsm_max_plan(r) -> tuple[int, int, int]:
-    """(TSM size, block, dilation in blocks) of deon_tsm_max, answered once a frame: the blocks reach past
-    every read of the widest Gaussian's gather, +3 texels of rounding (the shader checks it needs
-    reach + 2 <= dilation * block). Peeked: the plan keys what the reach depends on."""
+def tsm_max_plan(r) -> tuple[int, int, tuple[int, int, int, int]]:
+    """(TSM size, block, dilation in blocks of each of the max map's four channels) of deon_tsm_max,
+    answered once a frame. Channel 0 reaches past every read of the widest Gaussian's gather; the others
+    past the reads of narrower ones (the 3x3 taps' 1 texel for a Gaussian not gathered), so each Gaussian
+    gets the tightest bound that covers its own reads: +3 texels of rounding (the shader checks it needs
+    reach + 2 <= dilation * block). Peeked: the plan keys what the reaches depend on."""
     return frame_memo(r, "deon.tsm_max_plan", _tsm_max_plan)
 
 
-def _tsm_max_plan(r) -> tuple[int, int, int]:
+def tsm_max_radii(reaches, n: int, block: int) -> tuple[int, int, int, int]:
+    """The four channels' dilations (blocks) for Gaussians reading ``reaches`` TSM texels around C:
+    the widest first (the texel's whole-skip bound before session 9), then the narrowest, then the
+    others, widest first; repeated to fill four channels. Blocks cover reach + 3 texels."""
+    blocks = -(-n // block)
+    rad = sorted({min(math.ceil((x + 3.0) / block), blocks) if math.isfinite(x) else blocks for x in reaches} or {1})
+    out = [rad[-1]] + ([rad[0]] if len(rad) > 1 else []) + rad[-2:0:-1]
+    return tuple((out + [rad[-1]] * 4)[:4])
+
+
+def _tsm_max_plan(r) -> tuple[int, int, tuple[int, int, int, int]]:
     n = light_map_size(r, r.settings.deon.tsm_size, r.settings.deon.irradiance_size_mode, "deon_tsm")
     j = tsm_light_index(r)
-    reach = 1.0
+    reaches = [1.0]
     if j is not None and r.scene is not None:
         g = whole(r.peeked.deon.gaussians)
-        v_max = max((float(x.variance) for x in g if any(w > 0 for w in x.weights)), default=0.0)
         ls = r.scene.light_space(whole(r.peeked.lights[j]))
         k2 = 1.0 if r.peeked.deon.tsm_form == "printed" else 2.0
-        reach = tsm_reach_texels(v_max, ls.texel_world(n) * r.scene.mm_per_unit, int(r.peeked.deon.tsm_gather), k2)
-    blocks = -(-n // TSM_MAX_BLOCK)
-    return n, TSM_MAX_BLOCK, min(math.ceil((reach + 3.0) / TSM_MAX_BLOCK), blocks) if math.isfinite(reach) else blocks
+        texel_mm = ls.texel_world(n) * r.scene.mm_per_unit
+        reaches += [tsm_reach_texels(float(x.variance), texel_mm, int(r.peeked.deon.tsm_gather), k2)
+                    for x in g if any(w > 0 for w in x.weights)]
+    return n, TSM_MAX_BLOCK, tsm_max_radii(reaches, n, TSM_MAX_BLOCK)
 
 
-def tsm_max_covered(plan: tuple[int, int, int]) -> float:
-    """TSM texels the max map covers past C's texel on each side (u_tsm_max_reach): the whole map
-    when the dilation spans it."""
-    n, block, radius = plan
-    return 1e30 if radius >= -(-n // block) else float(radius * block)
+def tsm_max_covered(plan) -> tuple[float, float, float, float]:
+    """TSM texels each channel of the max map covers past C's texel on each side (u_tsm_max_reach): the
+    whole map when the dilation spans it."""
+    n, block, radii = plan
+    return tuple(1e30 if radius >= -(-n // block) else float(radius * block) for radius in radii)
 
 
 class TsmMaxPass(Pass):
@@ -518,25 +541,25 @@ class TsmMaxPass(Pass):
         if not TSM_SKIP or tsm_light_index(r) is None:
             return
         plan = tsm_max_plan(r)
-        n, block, _ = plan
+        n, block, _radii = plan
         r.plan(tsm_max=plan)
         r.input(TSM)
         r.program("deon_tsm_max", TSM_MAX_BLOCK=1)
         r.program("deon_tsm_max", TSM_MAX_BLOCK=0)
         nb = -(-n // block)
-        spec = TexSpec((nb, nb), 1, "f4", filter="nearest")
+        spec = TexSpec((nb, nb), 4, "f4", filter="nearest")  # a channel per reach
         r.plan(spec=spec)  # the output's and its two scratch textures' (the blocks, one axis dilated)
         r.output(TSM_MAX, spec)
 
     def execute(self, ec) -> None:
-        n, block, radius = ec.plan.tsm_max
+        n, block, radii = ec.plan.tsm_max
         blocks, wide = ec.scratch(ec.plan.spec), ec.scratch(ec.plan.spec)
         prog = ec.program("deon_tsm_max", TSM_MAX_BLOCK=1)
         ec.bind(prog, "src", TSM)
         ec.set(prog, "u_block", int(block))
         ec.draw_fullscreen(prog, blocks)
         prog = ec.program("deon_tsm_max", TSM_MAX_BLOCK=0)
-        ec.set(prog, "u_radius", int(radius))
+        ec.set(prog, "u_radii", tuple(int(x) for x in radii))
         for src, axis, dst in ((blocks, (1, 0), wide), (wide, (0, 1), TSM_MAX)):  # a box window, one axis each
             ec.bind(prog, "src", src)
             ec.set(prog, "u_axis", axis)
@@ -1403,8 +1426,12 @@ class TransmittedPass(Pass):
             r.input(TSM_MAX)
             r.plan(tsm_max=tsm_max_plan(r))
             tsm_defines["TSM_SKIP"] = 1
+            if TSM_CUT:
+                tsm_defines["TSM_ZERO"] = TSM_CUT_ZERO
             if TSM_SKIP_MARK:
                 tsm_defines["TSM_SKIP_MARK"] = -1.0
+        if not TSM_TAPS_CUT:
+            tsm_defines.update(TSM_TAPS_NARROW=0, TSM_TAPS_SKIP=0)
         n = transmitted_size(r)
         declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask,
                        **tsm_defines)
@@ -1416,7 +1443,7 @@ class TransmittedPass(Pass):
         if ec.has_input(TSM_MAX):  # optional: a variant compiled with TSM_SKIP=0 (an A/B) has none
             ec.bind(prog, "tsm_max_map", TSM_MAX, optional=True)
             ec.set(prog, "u_tsm_max_block", int(ec.plan.tsm_max[1]), optional=True)
-            ec.set(prog, "u_tsm_max_reach", tsm_max_covered(ec.plan.tsm_max), optional=True)
+            ec.set(prog, "u_tsm_max_reach", tsm_max_covered(ec.plan.tsm_max), optional=True)  # per channel
         shade_dilated(ec, prog, TRANSMITTED)
 
 
