@@ -62,14 +62,15 @@ class ShadowBoundsPass(Pass):
             return
         size = shadow_map_size(r)
         nb = -(-size // SHADOW_BOUNDS_BLOCK)
-        r.input(shadow_resource(i))
+        depth, bounds = shadow_resource(i), shadow_bounds_resource(i)
+        r.input(depth)
         r.program("shadow_bounds", SHADOW_BOUNDS_BLOCK=SHADOW_BOUNDS_BLOCK)
-        r.plan(margin=int(r.settings.shadow.pcf) + 2)  # every texel a lookup from the block reads, +1
-        r.output(shadow_bounds_resource(i), TexSpec((nb, nb), 4, "f4", filter="nearest"))
+        # margin: every texel a lookup from the block reads, +1
+        r.plan(margin=int(r.settings.shadow.pcf) + 2, depth=depth, bounds=bounds)
+        r.output(bounds, TexSpec((nb, nb), 4, "f4", filter="nearest"))
 
     def execute(self, ec) -> None:
-        i = self.light_index
         prog = ec.program("shadow_bounds")
-        ec.bind(prog, "depth", shadow_resource(i))
+        ec.bind(prog, "depth", ec.plan.depth)
         ec.set(prog, "u_margin", int(ec.plan.margin))
-        ec.draw_fullscreen(prog, shadow_bounds_resource(i))
+        ec.draw_fullscreen(prog, ec.plan.bounds)
