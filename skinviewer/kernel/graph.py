@@ -50,6 +50,7 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
+PACE_ERR_K = 2.0  # and adds this many of the predictions' mean error (pace_err) as a margin
 # a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
 # every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
 REUSE_REFLECTIONS = True
@@ -175,11 +176,16 @@ class RenderGraph:
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
+        self.run_ms = 0.0  # its last run's wall time (ms): the viewer budgets the renderer's work around it
         self._exec_s = 0.0
         # how the passes' costs compare with what the look-ahead predicted from their last runs (a
         # running mean of actual / predicted): a machine that got busier since then is >1, and the
         # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
         self.pace = 1.0
+        # how far single costs stray from that pace (a running mean of |actual / predicted - pace|):
+        # the look-ahead leaves a margin of PACE_ERR_K of it, so a band as often off as llvmpipe's on a
+        # shared machine still ends the frame within its budget (issue 27: the whole frame)
+        self.pace_err = 0.0
         self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
@@ -340,6 +346,7 @@ class RenderGraph:
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.own_ms = 0.0
+            self.run_ms = 0.0
             self.frame_ms = {}
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
@@ -491,7 +498,8 @@ class RenderGraph:
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
-        self.own_ms = max((time.perf_counter() - t_start - self._exec_s) * 1000.0, 0.0)
+        self.run_ms = (time.perf_counter() - t_start) * 1000.0  # this run's wall time
+        self.own_ms = max(self.run_ms - self._exec_s * 1000.0, 0.0)
         # programs first compiled during this frame bumped the revision: record it as it is now
         self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
@@ -634,14 +642,18 @@ class RenderGraph:
         return self._band_next_ms(p, r, progress) + self._check_after(p.name, progress)
 
     def _paced(self, ms: float) -> float:
-        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX)."""
-        return ms * min(max(self.pace, 1.0), PACE_MAX)
+        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX), with a
+        margin of PACE_ERR_K times their mean error (``pace_err``): an upper bound, not a mean."""
+        return ms * (min(max(self.pace, 1.0), PACE_MAX) + PACE_ERR_K * min(self.pace_err, 1.0))
 
     def _keep_pace(self, predicted: float | None, ms: float | None) -> None:
-        """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace."""
+        """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace
+        and its error."""
         if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms):
             return
         ratio = min(max(ms / predicted, 0.25), 4.0)
+        # the error of the pace it would have been predicted with: a running mean absolute deviation
+        self.pace_err = (1.0 - PACE_WEIGHT) * self.pace_err + PACE_WEIGHT * abs(ratio - self.pace)
         self.pace = (1.0 - PACE_WEIGHT) * self.pace + PACE_WEIGHT * ratio
 
     def _check_after(self, name: str, progress: TileProgress | None) -> float:
