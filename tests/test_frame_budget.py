@@ -70,7 +70,7 @@ def test_the_whole_frame_keeps_to_the_budget_when_the_render_fills_its_share(mon
     after = itertools.cycle(swaps)
     frames, old_rule = [], []
     mean_rest = None
-    for k in range(60):
+    for _ in range(60):
         t0 = clock.t
         fc._frame_t0, fc._after_extra = t0, 0.0
         clock.ms(next(before))  # the UI built, the governor
@@ -111,7 +111,7 @@ def test_idle_work_after_the_render_is_not_taken_for_a_frame_s_cost(monkeypatch)
     clock = Clock()
     monkeypatch.setattr(frame_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter, time=clock.perf_counter))
     fc = _controller(clock)
-    for k in range(20):
+    for _ in range(20):
         fc._frame_t0 = clock.t
         fc._render_end = clock.t
         clock.ms(60.0)  # a priming slice (ui/warm.Primer) ...
