@@ -139,7 +139,22 @@ def test_bad_budgets_still_say_so_with_the_frame_s_rest_measured():
 
 # -- the graph's look-ahead: a margin scaled by its predictions' error -------------------------------
 
-def _run_frames(gl_ctx, monkeypatch, k_err: float, ratios, budget: float = 60.0, moves: int = 10):
+class Finishes:
+    """The graph's GL context, its glFinish calls counted."""
+
+    def __init__(self, ctx):
+        self._ctx, self.n = ctx, 0
+
+    def finish(self):
+        self.n += 1
+        self._ctx.finish()
+
+    def __getattr__(self, name):
+        return getattr(self._ctx, name)
+
+
+def _run_frames(gl_ctx, monkeypatch, k_err: float, ratios, budget: float = 60.0, moves: int = 10,
+                sampled: bool = False, stats: dict | None = None):
     """Light moves rendered under ``budget`` in a fresh renderer with a fake clock: every band or pass
     costs its scripted cost times the next of ``ratios`` (how a shared machine strays from the last
     measurement). Returns each frame's work (fake ms) after the first move, and whether each move's
@@ -148,6 +163,7 @@ def _run_frames(gl_ctx, monkeypatch, k_err: float, ratios, budget: float = 60.0,
     clock = Clock()
     monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
     monkeypatch.setattr(graph_mod, "PACE_ERR_K", k_err)
+    monkeypatch.setattr(graph_mod, "SAMPLED_SYNC", sampled)
     # bands cost alike (the scripted cost is even over the rows): predicted as such, so what strays is the ratio
     monkeypatch.setattr(graph_mod, "band_shares", lambda profile, count: np.full(count, 1.0 / count))
     renderer = Renderer(gl_ctx)
@@ -155,14 +171,20 @@ def _run_frames(gl_ctx, monkeypatch, k_err: float, ratios, budget: float = 60.0,
         s = small_settings("head", "phong", size=64)
         renderer.render(s)
         g = renderer.graph("phong")
+        finishes = Finishes(g.ctx)
+        monkeypatch.setattr(g, "ctx", finishes)
         cost = {p.name: (200.0 if p.tileable else 4.0) for p in g.passes}
         ratio = iter(ratios)
         real = g._execute
 
-        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False):
-            real(p, r, frame, timing, tile=tile, held=held, defer=defer)  # the real draws: the real image
+        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
+            # the real draws (the real image), their glFinish as asked
+            real(p, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy, sync_after=sync_after)
             ms = cost[p.name] / tile[1] * next(ratio)
             clock.ms(ms)
+            if stats is not None:
+                stats["fake_ms"] = stats.get("fake_ms", 0.0) + ms
+                stats["lazy"] = stats.get("lazy", 0) + (not sync_after)
             return ms
 
         work, same = [], []
@@ -179,9 +201,13 @@ def _run_frames(gl_ctx, monkeypatch, k_err: float, ratios, budget: float = 60.0,
             img = renderer.image(sm)
             kept = dict(g._last_ms), g.pace, g.pace_err  # the forced render's real (unclocked) costs are not the script's
             monkeypatch.setattr(g, "_execute", real)
+            n = finishes.n
             renderer.render(sm, force=True)
+            finishes.n = n
             same.append(bool(np.array_equal(img, renderer.image(sm))))
             g._last_ms, g.pace, g.pace_err = kept
+        if stats is not None:
+            stats["finishes"] = finishes.n
         return work, same
     finally:
         renderer.release()
@@ -256,3 +282,21 @@ def test_a_still_refinement_never_re_presents_an_unchanged_image(viewer, monkeyp
         monkeypatch.undo()
         app.frame.set_frame_budget(100.0)
         app.state.apply({"render.governor": "interactive"})
+
+
+def test_sampled_sync_skips_glfinish_inside_a_frame_and_keeps_the_image_and_the_budget(gl_ctx, monkeypatch):
+    """Bands whose costs the look-ahead predicts (here exactly): with sampled sync the bands within a
+    frame skip their glFinish (a chain timed by the band that closes it, its time shared out by their
+    predictions), so fewer glFinish calls, the same frames within the budget, the passes' times adding up
+    to what they cost, and the image of the bands the ungoverned render bit for bit."""
+    ratios = [1.0] * 5000
+    full: dict = {}
+    work_full, same = _run_frames(gl_ctx, monkeypatch, graph_mod.PACE_ERR_K, ratios, 100.0, 6, False, full)
+    assert all(same) and full["lazy"] == 0
+    monkeypatch.undo()
+    sampled: dict = {}
+    work, same = _run_frames(gl_ctx, monkeypatch, graph_mod.PACE_ERR_K, ratios, 100.0, 6, True, sampled)
+    assert all(same)
+    assert sampled["lazy"] > 0 and sampled["finishes"] < full["finishes"]
+    assert max(work) <= 100.0 + 1e-6
+    assert len(work) <= len(work_full)  # no more frames than with a glFinish around every band

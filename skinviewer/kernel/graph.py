@@ -51,6 +51,14 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
 PACE_ERR_K = 2.0  # and adds this many of the predictions' mean error (pace_err) as a margin
+# sampled sync (issue 27, release -> final): under a budget with sync timing, a band whose cost the
+# look-ahead predicts well (pace_err at most SAMPLE_ERR) and after which another band of the pass is
+# predicted to fit skips its glFinish; the chain of such bands is timed as a whole by the next band that
+# syncs (at most SYNC_EVERY bands a chain), its time shared out by their predictions. The draws are the
+# same, in the same order: the image is bit-identical. False: a glFinish around every band (A/B)
+SAMPLED_SYNC = True
+SAMPLE_ERR = 0.15
+SYNC_EVERY = 4
 # a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
 # every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
 REUSE_REFLECTIONS = True
@@ -630,6 +638,16 @@ class RenderGraph:
             total = progress.ms / k * progress.count if k > 0 else 0.0
         return total * float(shares[k])
 
+    def _band_ms_at(self, p: Pass, r: Reflection | None, progress: TileProgress, k: int) -> float:
+        """What band ``k`` of ``p`` (at or after the next) is predicted to cost, as _band_next_ms."""
+        if k >= progress.count:
+            return 0.0
+        if k == progress.done:
+            return self._band_next_ms(p, r, progress)
+        shares = band_shares(self._band_profile.get(p.name), progress.count)
+        nxt = self._band_next_ms(p, r, progress)
+        return nxt * float(shares[k]) / float(shares[progress.done]) if shares[progress.done] > 0 else nxt
+
     def _next_ms(self, p: Pass, r: Reflection, progress: TileProgress | None, budget_ms: float) -> float:
         """What running ``p`` next costs, as last measured (scaled to its outputs' pixels now): its
         next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured. With
@@ -669,17 +687,66 @@ class RenderGraph:
         (its share of the pass by the cost profile) would take the frame past the budget; at least
         one band per call. Returns the ms of the bands run now; the profile is kept when all are done."""
         ms_now = 0.0
+        chain: list[tuple[int, float]] = []  # bands run since the last glFinish: (band, predicted ms)
+        chain_t0 = 0.0
+
+        def close(total_ms: float) -> None:
+            """The chain's bands and the band closing it took ``total_ms`` together: shared out by
+            their predictions (what each one's own glFinish would have measured, in sum)."""
+            nonlocal ms_now
+            pred = sum(x for _, x in chain)
+            if pred > 0.0:
+                self._keep_pace(pred, total_ms)
+            for k, x in chain:
+                ms = total_ms * x / pred if pred > 0.0 else total_ms / len(chain)
+                ms_now += ms - progress.band_ms[k]
+                progress.ms += ms - progress.band_ms[k]
+                progress.band_ms[k] = ms
+            chain.clear()
+
         while progress.done < progress.count:
-            predicted = self._band_next_ms(p, r, progress) if p.name in self._last_ms else None
-            ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
-            self._keep_pace(predicted, ms)
+            measured = p.name in self._last_ms
+            predicted = self._band_next_ms(p, r, progress) if measured else None
+            # what the frame has spent, the chain's queued work at its prediction (not yet waited for)
+            spent = max((time.perf_counter() - t_start) * 1000.0,
+                        (chain_t0 - t_start) * 1000.0 + sum(x for _, x in chain)) if chain else None
+            lazy = (timing == "sync" and SAMPLED_SYNC and predicted is not None and predicted > 1.0
+                    and self.pace_err <= SAMPLE_ERR and len(chain) < SYNC_EVERY - 1
+                    and progress.done + 1 < progress.count
+                    and (spent if spent is not None else (time.perf_counter() - t_start) * 1000.0)
+                    + self._paced(predicted + self._band_ms_at(p, r, progress, progress.done + 1))
+                    + self._check_after(p.name, progress) <= budget_ms)
+            if lazy and not chain:
+                self.ctx.finish()  # what ran before is not the chain's
+                chain_t0 = time.perf_counter()
+            t_band = time.perf_counter()
+            ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held,
+                               lazy=lazy or bool(chain), sync_after=not lazy)
+            if lazy:
+                ms = float(predicted or 0.0)  # provisional: the chain's closing glFinish shares out its time
+                chain.append((progress.done, ms))
+            elif chain:
+                chain.append((progress.done, float(predicted if predicted is not None else ms or 0.0)))
+                ms = (time.perf_counter() - t_band) * 1000.0  # provisional, replaced by close()
+            else:
+                self._keep_pace(predicted, ms)
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
             progress.band_ms.append(ms or 0.0)
-            if (time.perf_counter() - t_start) * 1000.0 + self._paced(self._band_next_ms(p, r, progress)) \
+            if chain and not lazy:
+                close((time.perf_counter() - chain_t0) * 1000.0)
+            now_ms = (time.perf_counter() - t_start) * 1000.0
+            if chain:  # a lazy band's work may still be running: the frame's time at its prediction
+                now_ms = max(now_ms, (chain_t0 - t_start) * 1000.0 + sum(x for _, x in chain))
+            if now_ms + self._paced(self._band_next_ms(p, r, progress)) \
                     + self._check_after(p.name, progress) > budget_ms:
                 break
+        if chain:  # the last band run was lazy (the look-ahead changed its mind): wait for it now
+            t0 = time.perf_counter()
+            self.ctx.finish()
+            self._exec_s += time.perf_counter() - t0
+            close((time.perf_counter() - chain_t0) * 1000.0)
         if progress.done == progress.count and progress.count > 1 and progress.ms > 0:
             self._band_profile[p.name] = np.concatenate([[0.0], np.cumsum(progress.band_ms) / progress.ms])
         return ms_now
@@ -715,18 +782,23 @@ class RenderGraph:
         self._exec_s += time.perf_counter() - t0  # waiting for the GPU: the passes' time, not the graph's
 
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
-                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False) -> Any:
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False,
+                 lazy: bool = False, sync_after: bool = True) -> Any:
         """Run ``p`` (or one band of it) and return its ms; ``defer`` (timing "gpu"): its timer query,
-        to be read after the frame's last pass (_collect_queries)."""
+        to be read after the frame's last pass (_collect_queries). Sync timing: a glFinish before it
+        (none when ``lazy``: a band of a sampled-sync chain, _run_bands) and after it (none unless
+        ``sync_after``: its time is then only the CPU's)."""
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         t_enter = time.perf_counter()
         try:
             if timing == "sync":
-                self.ctx.finish()
+                if not lazy:
+                    self.ctx.finish()
                 t0 = time.perf_counter()
                 p.execute(ec)
-                self.ctx.finish()
+                if sync_after:
+                    self.ctx.finish()
                 return (time.perf_counter() - t0) * 1000.0
             query = self.ctx.query(time=True)
             with query:

@@ -40,6 +40,11 @@ DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
 # (frames driven without ViewerApp.step, which reports each frame's end): the rest of the frame (UI,
 # presenting) is then a running mean of the interval less the render, off by several ms a frame here
 GRAPH_SHARE = 0.9
+# False: the budgeting before the whole frame was (bench_interaction.py --whole-frame both, an A/B): the
+# graph's share GRAPH_SHARE of the budget less the rest of a frame's running mean, a render-only frame
+# GRAPH_SHARE of the budget, and a still view's refinement re-presenting the screen every REFRESH_S
+WHOLE_FRAME = True
+REFRESH_S = 0.5
 
 
 class UiLayer(Protocol):
@@ -178,7 +183,7 @@ class FrameController:
         fb = self.frame_budget_ms
         if fb is None:
             return None
-        after = (self.after_present if present else self.after_quiet).upper()
+        after = (self.after_present if present else self.after_quiet).upper() if WHOLE_FRAME else None
         if after is None:
             rest = (self.overhead_ms or 0.0) if present else 0.0
             return max(0.3 * fb, GRAPH_SHARE * (fb - rest))
@@ -192,7 +197,7 @@ class FrameController:
         """What a presenting frame costs here besides its render graph's passes' own budget: before
         its render (mean), after it (upper bound) and the renderer's work around the graph (upper
         bound); the running mean of the interval less the render until a frame was measured whole."""
-        after = self.after_present.upper()
+        after = self.after_present.upper() if WHOLE_FRAME else None
         if after is None:
             return self.overhead_ms or 0.0
         return (self.before.mean or 0.0) + after + (self.render_extra.upper() or 0.0)
@@ -207,7 +212,8 @@ class FrameController:
             return
         after = (time.perf_counter() - end) * 1000.0 - self._after_extra
         (self.after_present if self._last_presented else self.after_quiet).add(after)
-        self.overhead_ms = self.frame_rest_ms()
+        if WHOLE_FRAME:
+            self.overhead_ms = self.frame_rest_ms()
 
     def set_drag_resolution(self, mode: str) -> None:
         if mode in DRAG_RESOLUTIONS:
@@ -418,7 +424,8 @@ class FrameController:
         UI and swap in a d'Eon release -> final, issue 27)."""
         r = self.report
         return (self.quiet_frames and input_events == 0 and r is not None and not r.complete
-                and not self._widget_active and not self._dragging and not self._pending_shots)
+                and not self._widget_active and not self._dragging and not self._pending_shots
+                and (WHOLE_FRAME or time.perf_counter() - self._presented_at < REFRESH_S))
 
     def run(self, frametime: float, window_size, buffer_size, ui: UiLayer | None = None,
             present: bool = True) -> bool:
@@ -438,7 +445,8 @@ class FrameController:
         if self._last_frame_t is not None:
             interval = (now - self._last_frame_t) * 1000.0
             self.frame_ms.append(interval)
-            if self._render_ms is not None and self._last_presented and self.after_present.mean is None:
+            if self._render_ms is not None and self._last_presented and (self.after_present.mean is None
+                                                                         or not WHOLE_FRAME):
                 rest = max(interval - self._render_ms, 0.0)  # until frame_end measures the frame whole
                 self.overhead_ms = rest if self.overhead_ms is None else 0.8 * self.overhead_ms + 0.2 * rest
         self._last_frame_t = now
@@ -464,7 +472,7 @@ class FrameController:
                 return False
             spent = (time.perf_counter() - now) * 1000.0
             # presenting it now adds the UI built and what a presenting frame costs after its render
-            after = self.after_present.upper()
+            after = self.after_present.upper() if WHOLE_FRAME else None
             rest = (self.overhead_ms or 0.0) if after is None else (self.before.upper() or 0.0) + after
             if self.frame_budget_ms is not None and spent + rest > self.frame_budget_ms:
                 # complete, but the UI and presenting on top would take this frame past the budget:
