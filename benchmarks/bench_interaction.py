@@ -336,8 +336,8 @@ def main() -> int:
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
                          "budgeted at their running upper bound, the look-ahead's error margin, no refresh of an "
-                         "unchanged image); off: the budgeting before; both: the governed row twice, off then "
-                         "on, in one viewer (an A/B)")
+                         "unchanged image, sampled sync of the bands); off: the budgeting before, a glFinish "
+                         "around every band; both: the governed row twice, off then on, in one viewer (an A/B)")
     args = ap.parse_args()
     if args.cold_shaders:
         os.environ["MESA_SHADER_CACHE_DISABLE"] = "true"  # before any GL context
@@ -394,6 +394,7 @@ def main() -> int:
                     graph_mod.SHARE_PASSES = share
                     frame_mod.WHOLE_FRAME = whole
                     graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
+                    graph_mod.SAMPLED_SYNC = whole
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest)
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":

@@ -50,7 +50,8 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
-PACE_ERR_K = 2.0  # and adds this many of the predictions' mean error (pace_err) as a margin
+PACE_ERR_K = 2.0  # and adds this many of the predictions' mean error (pace_err) as a margin,
+PACE_ERR_MAX = 0.5  # at most this share of the prediction (a loaded machine's error would halve every frame)
 # sampled sync (issue 27, release -> final): under a budget with sync timing, a band whose cost the
 # look-ahead predicts well (pace_err at most SAMPLE_ERR) and after which another band of the pass is
 # predicted to fit skips its glFinish; the chain of such bands is timed as a whole by the next band that
@@ -662,7 +663,7 @@ class RenderGraph:
     def _paced(self, ms: float) -> float:
         """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX), with a
         margin of PACE_ERR_K times their mean error (``pace_err``): an upper bound, not a mean."""
-        return ms * (min(max(self.pace, 1.0), PACE_MAX) + PACE_ERR_K * min(self.pace_err, 1.0))
+        return ms * (min(max(self.pace, 1.0), PACE_MAX) + min(PACE_ERR_K * self.pace_err, PACE_ERR_MAX))
 
     def _keep_pace(self, predicted: float | None, ms: float | None) -> None:
         """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace
