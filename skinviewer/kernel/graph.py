@@ -595,11 +595,14 @@ class RenderGraph:
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
         """Bands for a tileable pass: as many as make its costliest band (by its cost over the rows
-        last time) at most half the budget, so a band leaves room for the rest of the frame;
-        UNMEASURED_TILES before it was ever timed."""
+        last time, paced: an upper bound) at most half the budget, so a band leaves room for the rest
+        of the frame; UNMEASURED_TILES before it was ever timed."""
         ms = self._expected_ms(p, r)
         if ms is None:
             return UNMEASURED_TILES
+        # split by what it may cost, not by what it cost: its prediction scaled by the pace and the
+        # predictions' error margin (_paced), so a machine whose costs stray gets smaller bands (issue 27)
+        ms = self._paced(ms)
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
         # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
         # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
