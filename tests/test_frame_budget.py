@@ -300,3 +300,51 @@ def test_sampled_sync_skips_glfinish_inside_a_frame_and_keeps_the_image_and_the_
     assert sampled["lazy"] > 0 and sampled["finishes"] < full["finishes"]
     assert max(work) <= 100.0 + 1e-6
     assert len(work) <= len(work_full)  # no more frames than with a glFinish around every band
+
+
+def test_a_released_preview_of_your_own_graph_leaves_none_of_its_passes_in_the_final_frame(viewer, monkeypatch):
+    """A drag's preview that is a smaller view of your settings (the same graph as the final image) left
+    part-way when the user lets go: the refinement's first frame reports only its own passes (the
+    preview's were listed as the final frame's when only a change of graph reset them; a cheaper pick
+    -- the whole frame's rest budgeted at its upper bound -- made this case common under load)."""
+    from skinviewer.techniques.preview import ladder
+    from skinviewer.ui.governor import Pick
+    from tests.test_governor import fake_calibration
+    app = viewer
+    g = app.frame.governor
+    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
+    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
+    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
+    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    app.frame.set_frame_budget(40.0)
+    try:
+        app.frame.set_dragging(True)
+        part_way = False
+        for k in range(400):
+            assert app.state.apply({"lights.0.direction": [0.3 + 0.001 * k, 0.35, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+            rep = app.frame.report
+            if rep is not None and not rep.complete and app.frame._partial_ran:
+                part_way = True
+                break
+        assert part_way and g.shown == half
+        app.frame.set_dragging(False)
+        app.step(1)
+        assert g.shown.final
+        rep = app.frame.report
+        if not rep.complete:
+            assert [id(p) for p in app.frame._partial_ran] == [id(p) for p in rep.passes if p.status == "ran"]
+        for _ in range(3000):
+            app.step(1)
+            if app.frame.report.complete and not g.refining:
+                break
+        assert app.frame.report.complete
+    finally:
+        app.frame.set_dragging(False)
+        app.frame.set_frame_budget(100.0)
+        monkeypatch.undo()
+        g.set_calibration(None)
+    live = app.state.settings
+    got = app.renderer.image(live)
+    app.renderer.render(live, force=True)
+    assert np.array_equal(got, app.renderer.image(live))

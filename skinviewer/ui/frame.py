@@ -153,6 +153,7 @@ class FrameController:
         # gets complete images (a refinement frame, started while still, is abandoned instead)
         self._inflight: tuple[Settings, str, Rung] | None = None
         self._partial_variant = ""  # the graph of the unfinished frame whose passes _partial_ran lists
+        self._partial_rung: Rung = FINAL  # and its rung (two rungs may share a graph: a smaller view of yours)
         # Python's garbage collector: young generations only while busy, frozen start-up objects
         # (ui/collector.py; a full collection took 33 ms of a drag's frame)
         self.collector = Collector()
@@ -544,7 +545,7 @@ class FrameController:
             target, variant, rung = inflight
             self.governor.hold(rung)
         self._inflight = None
-        if self._partial_ran and variant != self._partial_variant:
+        if self._partial_ran and (variant != self._partial_variant or rung != self._partial_rung):
             self._partial_ran = []  # an unfinished frame of another graph was abandoned (a preview at release)
         try:
             t0 = time.perf_counter()
@@ -583,7 +584,7 @@ class FrameController:
             return report
         if not report.complete:
             self._partial_ran += [p for p in report.passes if p.status == "ran"]
-            self._partial_variant = variant
+            self._partial_variant, self._partial_rung = variant, rung
             return report
         if self._partial_ran:
             report = self._merge_partial(report)
