@@ -178,7 +178,8 @@ class FrameController:
         else its running mean), less what the rest of a frame costs here after it -- the view, the UI
         drawn and the buffer swap for a frame that presents (``present``), the event poll for one that
         only renders -- and the renderer's own work around the graph, each at its running estimate's
-        upper bound (mean + 2 deviations: a swap that spikes is budgeted, not averaged). At least 30 %
+        upper bound (RunningCost.upper: mean + 2 deviations or the largest of the last 20, so a swap
+        that spikes is budgeted, not averaged). At least 30 %
         of the budget. Before any frame was measured whole: GRAPH_SHARE of the budget less the rest of
         a frame's running mean. None: no budget (one frame, however long)."""
         fb = self.frame_budget_ms
@@ -190,6 +191,8 @@ class FrameController:
             return max(0.3 * fb, GRAPH_SHARE * (fb - rest))
         if self._frame_t0 is not None:
             before = (time.perf_counter() - self._frame_t0) * 1000.0
+        elif not present:
+            before = 0.0  # a frame that only renders builds no UI
         else:
             before = self.before.mean or 0.0
         return max(0.3 * fb, fb - before - after - (self.render_extra.upper() or 0.0))
@@ -549,7 +552,7 @@ class FrameController:
             self._partial_ran = []  # an unfinished frame of another graph was abandoned (a preview at release)
         try:
             t0 = time.perf_counter()
-            if self._frame_t0 is not None:
+            if self._frame_t0 is not None and present:  # a presenting frame's UI built before its render
                 self.before.add((t0 - self._frame_t0) * 1000.0)
             budget = self.graph_budget_ms(present) if budget_ms is None else budget_ms
             # a governed preview (not the user's settings): scene rules answer from coarser cached
