@@ -195,6 +195,7 @@ class RenderGraph:
         # the look-ahead leaves a margin of PACE_ERR_K of it, so a band as often off as llvmpipe's on a
         # shared machine still ends the frame within its budget (issue 27: the whole frame)
         self.pace_err = 0.0
+        self._starved = False  # the last run ran nothing: its own time had taken the budget (run)
         self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
@@ -421,7 +422,13 @@ class RenderGraph:
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
                 spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 \
                     + self._paced(self._next_ms(p, r, progress, budget_ms)) > budget_ms
-                if waits or (any_ran and spent):
+                # the frame's first pass runs whatever it costs (progress), unless the graph's own time
+                # (reflecting every pass afresh: 20-45 ms in a release's first frame) already took half the
+                # budget and the pass would overrun it: then the frame ends here, once (next frame's own
+                # time is small), instead of one band on top of it (issue 27: the longest frames)
+                starve = not any_ran and spent and not self._starved \
+                    and (time.perf_counter() - t_start) * 1000.0 > 0.5 * budget_ms
+                if waits or (any_ran and spent) or starve:
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
                     rec.nonfinite = list(self._nonfinite.get(p.name, []))
@@ -504,6 +511,8 @@ class RenderGraph:
                 self.refining.discard(p.name)
                 if p.name in self._progress:
                     self._cancel(p.name)
+        self._starved = bool(budget_ms is not None and not any_ran and any(
+            rec.status == "deferred" and rec.reason == "frame time budget spent" for rec in records.values()))
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
