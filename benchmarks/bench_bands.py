@@ -5,6 +5,9 @@ default), and with each band drawing the whole mesh (as before). Medians of ``--
 
     python benchmarks/bench_bands.py [--techniques phong,ssss] [--budget 50] [--runs 3]
 
+The bands are timed with a glFinish around each (``kernel.graph.SAMPLED_SYNC`` off) in the first two
+arms, and with sampled sync (a chain of predicted bands timed by the one closing it) in the last.
+
 The defaults a user gets: default settings (1024² maps), a 640×676 view (the viewer's at its default
 window)."""
 from __future__ import annotations
@@ -16,6 +19,7 @@ import time
 from skinviewer.engine.renderer import Renderer
 from skinviewer.ground.settings import Settings, with_values
 from skinviewer.kernel import gpu as G
+from skinviewer.kernel import graph as graph_mod
 from skinviewer.kernel.gl import describe, headless_context
 
 
@@ -33,15 +37,17 @@ def main() -> int:
         return self.mesh_vao(prog, scene, lod), len(scene.lod_mesh(lod).indices) * 3
 
     print(f"# bench_bands — {describe(ctx)}; 640x676, default settings, budget {a.budget:g} ms a call, sync timing")
-    print(f"{'technique':<10} {'whole':>8} {'bands (culled)':>15} {'×':>5} {'bands (whole mesh)':>19} {'×':>5}")
+    print(f"{'technique':<10} {'whole':>8} {'bands (culled)':>15} {'×':>5} {'bands (whole mesh)':>19} {'×':>5} "
+          f"{'culled, sampled':>16} {'×':>5}")
     for t in a.techniques.split(","):
         s = with_values(Settings(), {"technique": t, "render.width": 640, "render.height": 676})
         r.render(s)
-        ms: dict[str, list[float]] = {"whole": [], "culled": [], "mesh": []}
+        ms: dict[str, list[float]] = {"whole": [], "culled": [], "mesh": [], "sampled": []}
         for k in range(a.runs):
             for mode in ms:
                 G.GpuServices.band_vao = whole_mesh if mode == "mesh" else culled  # type: ignore[method-assign]
-                d = [0.3, 0.2 + 0.01 * k + {"whole": 0.0, "culled": 0.003, "mesh": 0.006}[mode], 1.0]
+                graph_mod.SAMPLED_SYNC = mode == "sampled"  # else a glFinish around every band
+                d = [0.3, 0.2 + 0.01 * k + {"whole": 0.0, "culled": 0.003, "mesh": 0.006, "sampled": 0.009}[mode], 1.0]
                 s2 = with_values(s, {"lights.0.direction": d})
                 t0 = time.perf_counter()
                 if mode == "whole":
@@ -51,8 +57,8 @@ def main() -> int:
                         pass
                 ms[mode].append((time.perf_counter() - t0) * 1000.0)
         G.GpuServices.band_vao = culled  # type: ignore[method-assign]
-        w, c, m = (statistics.median(ms[k]) for k in ("whole", "culled", "mesh"))
-        print(f"{t:<10} {w:8.0f} {c:15.0f} {c / w:5.2f} {m:19.0f} {m / w:5.2f}", flush=True)
+        w, c, m, sm = (statistics.median(ms[k]) for k in ("whole", "culled", "mesh", "sampled"))
+        print(f"{t:<10} {w:8.0f} {c:15.0f} {c / w:5.2f} {m:19.0f} {m / w:5.2f} {sm:16.0f} {sm / w:5.2f}", flush=True)
     r.release()
     return 0
 

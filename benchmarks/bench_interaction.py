@@ -90,6 +90,11 @@ class GcTimer:
 GC = GcTimer()
 
 
+def _frame_mod():
+    from skinviewer.ui import frame
+    return frame
+
+
 class Driver:
     """The scripted user: mouse drags and edits into a ViewerApp, one frame per step, timed."""
 
@@ -135,7 +140,8 @@ class Driver:
                                        # each pass that ran or ran a band here: its ms (sync timing on llvmpipe)
                                        "pass_ms": {k: round(v, 1) for k, v in getattr(fr.last_graph, "frame_ms", {}).items()},
                                        "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
-                                       "overhead_ms": round(fr.overhead_ms or 0.0, 1)}) + "\n")
+                                       "overhead_ms": round(fr.overhead_ms or 0.0, 1),
+                                       "whole_frame": _frame_mod().WHOLE_FRAME}) + "\n")
 
     def rest(self, seconds: float, cap_s: float = 30.0) -> float:
         """The user looks at the final image before the next drag: idle frames for ``seconds``, and
@@ -327,6 +333,11 @@ def main() -> int:
     ap.add_argument("--share", choices=("on", "off", "both"), default="on",
                     help="passes copied between the user's graph and a preview's when their keys are equal "
                          "(RenderGraph.share_passes); both: the governed row twice, sharing off then on, in one viewer")
+    ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
+                    help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
+                         "budgeted at their running upper bound, the look-ahead's error margin, no refresh of an "
+                         "unchanged image, sampled sync of the bands); off: the budgeting before, a glFinish "
+                         "around every band; both: the governed row twice, off then on, in one viewer (an A/B)")
     args = ap.parse_args()
     if args.cold_shaders:
         os.environ["MESA_SHADER_CACHE_DISABLE"] = "true"  # before any GL context
@@ -373,16 +384,27 @@ def main() -> int:
                       f"{'error':>7} {'final = ungoverned':>18} {'light start':>11} {'1st draws':>9} {'idle max':>8}",
                       flush=True)
             from skinviewer.kernel import graph as graph_mod
+            from skinviewer.ui import frame as frame_mod
             shares = {"on": [True], "off": [False], "both": [False, True]}[args.share]
+            wholes = {"on": [True], "off": [False], "both": [False, True]}[args.whole_frame]
+            pace_err_k = graph_mod.PACE_ERR_K
             for name in names:
-                for mode, share in [("off", shares[-1])] + [("interactive", sh) for sh in shares]:
+                arms = [("off", shares[-1], wholes[-1])] + [("interactive", sh, wh) for sh in shares for wh in wholes]
+                for mode, share, whole in arms:
                     graph_mod.SHARE_PASSES = share
+                    frame_mod.WHOLE_FRAME = whole
+                    graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
+                    graph_mod.SAMPLED_SYNC = whole
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest)
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
                         if not share:
                             row["mode"] = "interactive, sharing off"
+                    if len(wholes) > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} (whole frame {'on' if whole else 'off'})"
+                        if not whole:
+                            row["mode"] = row["mode"] + ", whole frame off"
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
                     print(f"{scene_name:<6} {row['technique']:<9} {mode:<11} {'on' if prime else 'off':<5} "

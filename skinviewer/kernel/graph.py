@@ -50,6 +50,16 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
+PACE_ERR_K = 2.0  # and adds this many of the predictions' mean error (pace_err) as a margin,
+PACE_ERR_MAX = 0.5  # at most this share of the prediction (a loaded machine's error would halve every frame)
+# sampled sync (issue 27, release -> final): under a budget with sync timing, a band whose cost the
+# look-ahead predicts well (pace_err at most SAMPLE_ERR) and after which another band of the pass is
+# predicted to fit skips its glFinish; the chain of such bands is timed as a whole by the next band that
+# syncs (at most SYNC_EVERY bands a chain), its time shared out by their predictions. The draws are the
+# same, in the same order: the image is bit-identical. False: a glFinish around every band (A/B)
+SAMPLED_SYNC = True
+SAMPLE_ERR = 0.15
+SYNC_EVERY = 4
 # a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
 # every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
 REUSE_REFLECTIONS = True
@@ -175,11 +185,17 @@ class RenderGraph:
         # the graph's own time in its last run (ms): the frame's wall time outside every pass's execute
         # (reflect and the scene rules, cache keys, NaN/Inf checks); the viewer's governor counts it
         self.own_ms = 0.0
+        self.run_ms = 0.0  # its last run's wall time (ms): the viewer budgets the renderer's work around it
         self._exec_s = 0.0
         # how the passes' costs compare with what the look-ahead predicted from their last runs (a
         # running mean of actual / predicted): a machine that got busier since then is >1, and the
         # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
         self.pace = 1.0
+        # how far single costs stray from that pace (a running mean of |actual / predicted - pace|):
+        # the look-ahead leaves a margin of PACE_ERR_K of it, so a band as often off as llvmpipe's on a
+        # shared machine still ends the frame within its budget (issue 27: the whole frame)
+        self.pace_err = 0.0
+        self._starved = False  # the last run ran nothing: its own time had taken the budget (run)
         self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
@@ -340,6 +356,7 @@ class RenderGraph:
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.own_ms = 0.0
+            self.run_ms = 0.0
             self.frame_ms = {}
             self.last_report = FrameReport(self.frame, timing, [
                 PassRecord(p.name, "cached" if p.status == "ran" else p.status, None,
@@ -405,7 +422,13 @@ class RenderGraph:
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
                 spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 \
                     + self._paced(self._next_ms(p, r, progress, budget_ms)) > budget_ms
-                if waits or (any_ran and spent):
+                # the frame's first pass runs whatever it costs (progress), unless the graph's own time
+                # (reflecting every pass afresh: 20-45 ms in a release's first frame) already took half the
+                # budget and the pass would overrun it: then the frame ends here, once (next frame's own
+                # time is small), instead of one band on top of it (issue 27: the longest frames)
+                starve = not any_ran and spent and not self._starved \
+                    and (time.perf_counter() - t_start) * 1000.0 > 0.5 * budget_ms
+                if waits or (any_ran and spent) or starve:
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
                     rec.nonfinite = list(self._nonfinite.get(p.name, []))
@@ -488,10 +511,13 @@ class RenderGraph:
                 self.refining.discard(p.name)
                 if p.name in self._progress:
                     self._cancel(p.name)
+        self._starved = bool(budget_ms is not None and not any_ran and any(
+            rec.status == "deferred" and rec.reason == "frame time budget spent" for rec in records.values()))
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
                              [records[p.name] for p in self.passes if p.name not in live])
         self.last_report = report
-        self.own_ms = max((time.perf_counter() - t_start - self._exec_s) * 1000.0, 0.0)
+        self.run_ms = (time.perf_counter() - t_start) * 1000.0  # this run's wall time
+        self.own_ms = max(self.run_ms - self._exec_s * 1000.0, 0.0)
         # programs first compiled during this frame bumped the revision: record it as it is now
         self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
@@ -578,11 +604,14 @@ class RenderGraph:
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
         """Bands for a tileable pass: as many as make its costliest band (by its cost over the rows
-        last time) at most half the budget, so a band leaves room for the rest of the frame;
-        UNMEASURED_TILES before it was ever timed."""
+        last time, paced: an upper bound) at most half the budget, so a band leaves room for the rest
+        of the frame; UNMEASURED_TILES before it was ever timed."""
         ms = self._expected_ms(p, r)
         if ms is None:
             return UNMEASURED_TILES
+        # split by what it may cost, not by what it cost: its prediction scaled by the pace and the
+        # predictions' error margin (_paced), so a machine whose costs stray gets smaller bands (issue 27)
+        ms = self._paced(ms)
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
         # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
         # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
@@ -622,6 +651,16 @@ class RenderGraph:
             total = progress.ms / k * progress.count if k > 0 else 0.0
         return total * float(shares[k])
 
+    def _band_ms_at(self, p: Pass, r: Reflection | None, progress: TileProgress, k: int) -> float:
+        """What band ``k`` of ``p`` (at or after the next) is predicted to cost, as _band_next_ms."""
+        if k >= progress.count:
+            return 0.0
+        if k == progress.done:
+            return self._band_next_ms(p, r, progress)
+        shares = band_shares(self._band_profile.get(p.name), progress.count)
+        nxt = self._band_next_ms(p, r, progress)
+        return nxt * float(shares[k]) / float(shares[progress.done]) if shares[progress.done] > 0 else nxt
+
     def _next_ms(self, p: Pass, r: Reflection, progress: TileProgress | None, budget_ms: float) -> float:
         """What running ``p`` next costs, as last measured (scaled to its outputs' pixels now): its
         next band for a tileable pass (band_next_ms), else its whole run; 0 when never measured. With
@@ -634,14 +673,18 @@ class RenderGraph:
         return self._band_next_ms(p, r, progress) + self._check_after(p.name, progress)
 
     def _paced(self, ms: float) -> float:
-        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX)."""
-        return ms * min(max(self.pace, 1.0), PACE_MAX)
+        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX), with a
+        margin of PACE_ERR_K times their mean error (``pace_err``): an upper bound, not a mean."""
+        return ms * (min(max(self.pace, 1.0), PACE_MAX) + min(PACE_ERR_K * self.pace_err, PACE_ERR_MAX))
 
     def _keep_pace(self, predicted: float | None, ms: float | None) -> None:
-        """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace."""
+        """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace
+        and its error."""
         if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms):
             return
         ratio = min(max(ms / predicted, 0.25), 4.0)
+        # the error of the pace it would have been predicted with: a running mean absolute deviation
+        self.pace_err = (1.0 - PACE_WEIGHT) * self.pace_err + PACE_WEIGHT * abs(ratio - self.pace)
         self.pace = (1.0 - PACE_WEIGHT) * self.pace + PACE_WEIGHT * ratio
 
     def _check_after(self, name: str, progress: TileProgress | None) -> float:
@@ -657,17 +700,66 @@ class RenderGraph:
         (its share of the pass by the cost profile) would take the frame past the budget; at least
         one band per call. Returns the ms of the bands run now; the profile is kept when all are done."""
         ms_now = 0.0
+        chain: list[tuple[int, float]] = []  # bands run since the last glFinish: (band, predicted ms)
+        chain_t0 = 0.0
+
+        def close(total_ms: float) -> None:
+            """The chain's bands and the band closing it took ``total_ms`` together: shared out by
+            their predictions (what each one's own glFinish would have measured, in sum)."""
+            nonlocal ms_now
+            pred = sum(x for _, x in chain)
+            if pred > 0.0:
+                self._keep_pace(pred, total_ms)
+            for k, x in chain:
+                ms = total_ms * x / pred if pred > 0.0 else total_ms / len(chain)
+                ms_now += ms - progress.band_ms[k]
+                progress.ms += ms - progress.band_ms[k]
+                progress.band_ms[k] = ms
+            chain.clear()
+
         while progress.done < progress.count:
-            predicted = self._band_next_ms(p, r, progress) if p.name in self._last_ms else None
-            ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held)
-            self._keep_pace(predicted, ms)
+            measured = p.name in self._last_ms
+            predicted = self._band_next_ms(p, r, progress) if measured else None
+            # what the frame has spent, the chain's queued work at its prediction (not yet waited for)
+            spent = max((time.perf_counter() - t_start) * 1000.0,
+                        (chain_t0 - t_start) * 1000.0 + sum(x for _, x in chain)) if chain else None
+            lazy = (timing == "sync" and SAMPLED_SYNC and predicted is not None and predicted > 1.0
+                    and self.pace_err <= SAMPLE_ERR and len(chain) < SYNC_EVERY - 1
+                    and progress.done + 1 < progress.count
+                    and (spent if spent is not None else (time.perf_counter() - t_start) * 1000.0)
+                    + self._paced(predicted + self._band_ms_at(p, r, progress, progress.done + 1))
+                    + self._check_after(p.name, progress) <= budget_ms)
+            if lazy and not chain:
+                self.ctx.finish()  # what ran before is not the chain's
+                chain_t0 = time.perf_counter()
+            t_band = time.perf_counter()
+            ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held,
+                               lazy=lazy or bool(chain), sync_after=not lazy)
+            if lazy:
+                ms = float(predicted or 0.0)  # provisional: the chain's closing glFinish shares out its time
+                chain.append((progress.done, ms))
+            elif chain:
+                chain.append((progress.done, float(predicted if predicted is not None else ms or 0.0)))
+                ms = (time.perf_counter() - t_band) * 1000.0  # provisional, replaced by close()
+            else:
+                self._keep_pace(predicted, ms)
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
             progress.band_ms.append(ms or 0.0)
-            if (time.perf_counter() - t_start) * 1000.0 + self._paced(self._band_next_ms(p, r, progress)) \
+            if chain and not lazy:
+                close((time.perf_counter() - chain_t0) * 1000.0)
+            now_ms = (time.perf_counter() - t_start) * 1000.0
+            if chain:  # a lazy band's work may still be running: the frame's time at its prediction
+                now_ms = max(now_ms, (chain_t0 - t_start) * 1000.0 + sum(x for _, x in chain))
+            if now_ms + self._paced(self._band_next_ms(p, r, progress)) \
                     + self._check_after(p.name, progress) > budget_ms:
                 break
+        if chain:  # the last band run was lazy (the look-ahead changed its mind): wait for it now
+            t0 = time.perf_counter()
+            self.ctx.finish()
+            self._exec_s += time.perf_counter() - t0
+            close((time.perf_counter() - chain_t0) * 1000.0)
         if progress.done == progress.count and progress.count > 1 and progress.ms > 0:
             self._band_profile[p.name] = np.concatenate([[0.0], np.cumsum(progress.band_ms) / progress.ms])
         return ms_now
@@ -703,18 +795,23 @@ class RenderGraph:
         self._exec_s += time.perf_counter() - t0  # waiting for the GPU: the passes' time, not the graph's
 
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
-                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False) -> Any:
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False,
+                 lazy: bool = False, sync_after: bool = True) -> Any:
         """Run ``p`` (or one band of it) and return its ms; ``defer`` (timing "gpu"): its timer query,
-        to be read after the frame's last pass (_collect_queries)."""
+        to be read after the frame's last pass (_collect_queries). Sync timing: a glFinish before it
+        (none when ``lazy``: a band of a sampled-sync chain, _run_bands) and after it (none unless
+        ``sync_after``: its time is then only the CPU's)."""
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         t_enter = time.perf_counter()
         try:
             if timing == "sync":
-                self.ctx.finish()
+                if not lazy:
+                    self.ctx.finish()
                 t0 = time.perf_counter()
                 p.execute(ec)
-                self.ctx.finish()
+                if sync_after:
+                    self.ctx.finish()
                 return (time.perf_counter() - t0) * 1000.0
             query = self.ctx.query(time=True)
             with query:

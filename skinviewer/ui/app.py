@@ -81,6 +81,7 @@ class ViewerApp(mglw.WindowConfig):
             else:
                 self.swap_ms = 0.0
                 self._poll_events()
+            self.frame.frame_end()  # what the frame cost after its render: the next frames budget it
             self._note_stall(t0)
 
     def start_warm(self) -> None:

@@ -29,17 +29,22 @@ from skinviewer.ui.governor import BackgroundCalibration, Governor
 from skinviewer.ui.hot_reload import ShaderWatcher
 from skinviewer.ui.layout import Layout, compute_layout
 from skinviewer.ui.scheduler import MODES as SCHEDULE_MODES
-from skinviewer.ui.scheduler import ChangeCost, RenderScheduler, split_ms, view_side
+from skinviewer.ui.scheduler import ChangeCost, RenderScheduler, RunningCost, split_ms, view_side
 from skinviewer.ui.screenshot import read_screen, timestamped_path
 from skinviewer.ui.state import ViewerState
 from skinviewer.ui.view import ViewPresenter
 from skinviewer.ui.warm import Primer, preview_variant
 
 DRAG_RESOLUTIONS = ("auto", "full", "0.5", "0.25")
-PRESENT_EVERY_S = 0.5  # a refinement rendering without presenting still refreshes the screen this often
-# the render graph's share of what is left of a frame's budget: its costs are predictions from the last
-# runs and the rest of the frame (UI, presenting) a running mean, both off by several ms a frame here
+# the render graph's share of what is left of a frame's budget before the whole frame was measured
+# (frames driven without ViewerApp.step, which reports each frame's end): the rest of the frame (UI,
+# presenting) is then a running mean of the interval less the render, off by several ms a frame here
 GRAPH_SHARE = 0.9
+# False: the budgeting before the whole frame was (bench_interaction.py --whole-frame both, an A/B): the
+# graph's share GRAPH_SHARE of the budget less the rest of a frame's running mean, a render-only frame
+# GRAPH_SHARE of the budget, and a still view's refinement re-presenting the screen every REFRESH_S
+WHOLE_FRAME = True
+REFRESH_S = 0.5
 
 
 class UiLayer(Protocol):
@@ -115,6 +120,18 @@ class FrameController:
         self.last_graph: Any = None  # the graph the last frame rendered in
         self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
         self._presented_at = 0.0
+        # the whole frame kept to the budget (issue 27): what a frame spends before its render (the UI
+        # built, the governor), measured in the frame itself; what it spends after (the view, the UI
+        # drawn, the buffer swap -- presenting under Xvfb is 7-40 ms here -- or, for a frame that only
+        # renders, the event poll), a running estimate of each from ViewerApp.step's frame_end; and the
+        # renderer's own work around the graph (the frame's view, the mesh level)
+        self._frame_t0: float | None = None  # when this frame began (None: outside a frame)
+        self._render_end: float | None = None  # when this frame's render returned
+        self._after_extra = 0.0  # ms this frame spent after its render on idle work (priming, warm-up)
+        self.before = RunningCost(cap=1000.0)
+        self.after_present = RunningCost(cap=1000.0)
+        self.after_quiet = RunningCost(cap=1000.0)
+        self.render_extra = RunningCost(cap=1000.0)
         self._last_presented = True
         self._window: tuple[tuple[int, int], tuple[int, int]] = (
             (window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
@@ -136,6 +153,7 @@ class FrameController:
         # gets complete images (a refinement frame, started while still, is abandoned instead)
         self._inflight: tuple[Settings, str, Rung] | None = None
         self._partial_variant = ""  # the graph of the unfinished frame whose passes _partial_ran lists
+        self._partial_rung: Rung = FINAL  # and its rung (two rungs may share a graph: a smaller view of yours)
         # Python's garbage collector: young generations only while busy, frozen start-up objects
         # (ui/collector.py; a full collection took 33 ms of a drag's frame)
         self.collector = Collector()
@@ -154,13 +172,52 @@ class FrameController:
     def set_frame_budget(self, ms: float | None) -> None:
         self.frame_budget_ms = None if ms is None else max(float(ms), 1e-6)
 
-    def graph_budget_ms(self) -> float | None:
-        """The render graph's share of the frame budget: GRAPH_SHARE of the budget less what the rest
-        of a frame costs here (at least 30 % of it); None: no budget (one frame, however long)."""
+    def graph_budget_ms(self, present: bool = True) -> float | None:
+        """The render graph's share of the frame budget, so that the *whole* frame keeps to it (issue
+        27): the budget less what this frame spent before its render (measured now, inside a frame;
+        else its running mean), less what the rest of a frame costs here after it -- the view, the UI
+        drawn and the buffer swap for a frame that presents (``present``), the event poll for one that
+        only renders -- and the renderer's own work around the graph, each at its running estimate's
+        upper bound (RunningCost.upper: mean + 2 deviations or the largest of the last 20, so a swap
+        that spikes is budgeted, not averaged). At least 30 %
+        of the budget. Before any frame was measured whole: GRAPH_SHARE of the budget less the rest of
+        a frame's running mean. None: no budget (one frame, however long)."""
         fb = self.frame_budget_ms
         if fb is None:
             return None
-        return max(0.3 * fb, GRAPH_SHARE * (fb - (self.overhead_ms or 0.0)))
+        after = (self.after_present if present else self.after_quiet).upper() if WHOLE_FRAME else None
+        if after is None:
+            rest = (self.overhead_ms or 0.0) if present else 0.0
+            return max(0.3 * fb, GRAPH_SHARE * (fb - rest))
+        if self._frame_t0 is not None:
+            before = (time.perf_counter() - self._frame_t0) * 1000.0
+        elif not present:
+            before = 0.0  # a frame that only renders builds no UI
+        else:
+            before = self.before.mean or 0.0
+        return max(0.3 * fb, fb - before - after - (self.render_extra.upper() or 0.0))
+
+    def frame_rest_ms(self) -> float:
+        """What a presenting frame costs here besides its render graph's passes' own budget: before
+        its render (mean), after it (upper bound) and the renderer's work around the graph (upper
+        bound); the running mean of the interval less the render until a frame was measured whole."""
+        after = self.after_present.upper() if WHOLE_FRAME else None
+        if after is None:
+            return self.overhead_ms or 0.0
+        return (self.before.mean or 0.0) + after + (self.render_extra.upper() or 0.0)
+
+    def frame_end(self) -> None:
+        """ViewerApp.step, once the frame is on screen (after the buffer swap) or, for a frame that
+        only rendered, after the event poll: what this frame cost after its render, a sample of the
+        running estimate its kind of frame budgets for (graph_budget_ms)."""
+        end, self._render_end = self._render_end, None
+        self._frame_t0 = None
+        if end is None:
+            return
+        after = (time.perf_counter() - end) * 1000.0 - self._after_extra
+        (self.after_present if self._last_presented else self.after_quiet).add(after)
+        if WHOLE_FRAME:
+            self.overhead_ms = self.frame_rest_ms()
 
     def set_drag_resolution(self, mode: str) -> None:
         if mode in DRAG_RESOLUTIONS:
@@ -256,7 +313,7 @@ class FrameController:
         interacting = not self.input_stopped
         self._interacting = interacting
         complete = self.report is None or self.report.complete
-        g.set_overhead((self.overhead_ms or 0.0) + (self.graph_own_ms or 0.0))
+        g.set_overhead(self.frame_rest_ms() + (self.graph_own_ms or 0.0))
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
@@ -363,13 +420,16 @@ class FrameController:
 
     def can_skip_present(self, input_events: int) -> bool:
         """This frame may only render (no UI, no view, no buffer swap): a frame spread over several
-        is in progress, no input arrived since the last presented frame, no widget is held, no
-        screenshot waits, and the screen was refreshed less than PRESENT_EVERY_S ago. Presenting
-        costs tens of ms a frame under Xvfb on llvmpipe: a still view's refinement gets that time."""
+        is in progress, no input arrived since the last presented frame, no widget is held and no
+        screenshot waits. Presenting costs tens of ms a frame under Xvfb on llvmpipe: a still view's
+        refinement gets that time. Nothing would change on screen meanwhile -- the view keeps the
+        last complete image until this one is complete, and the frame that completes it presents
+        -- so there is no periodic refresh (it re-presented the same image every 0.5 s: 2-3 frames of
+        UI and swap in a d'Eon release -> final, issue 27)."""
         r = self.report
         return (self.quiet_frames and input_events == 0 and r is not None and not r.complete
                 and not self._widget_active and not self._dragging and not self._pending_shots
-                and time.perf_counter() - self._presented_at < PRESENT_EVERY_S)
+                and (WHOLE_FRAME or time.perf_counter() - self._presented_at < REFRESH_S))
 
     def run(self, frametime: float, window_size, buffer_size, ui: UiLayer | None = None,
             present: bool = True) -> bool:
@@ -389,10 +449,12 @@ class FrameController:
         if self._last_frame_t is not None:
             interval = (now - self._last_frame_t) * 1000.0
             self.frame_ms.append(interval)
-            if self._render_ms is not None and self._last_presented:
-                rest = max(interval - self._render_ms, 0.0)
+            if self._render_ms is not None and self._last_presented and (self.after_present.mean is None
+                                                                         or not WHOLE_FRAME):
+                rest = max(interval - self._render_ms, 0.0)  # until frame_end measures the frame whole
                 self.overhead_ms = rest if self.overhead_ms is None else 0.8 * self.overhead_ms + 0.2 * rest
         self._last_frame_t = now
+        self._frame_t0, self._render_end, self._after_extra = now, None, 0.0
         self.frames += 1
         self._window = ((window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         self.watcher.poll()
@@ -404,8 +466,7 @@ class FrameController:
             ui_built = ui.build(frametime, self.layout)
         self._rung = self._govern()
         self._sync_size()
-        quiet = None if self.frame_budget_ms is None else GRAPH_SHARE * self.frame_budget_ms
-        self.report = self._render_main(None if present else quiet)
+        self.report = self._render_main(present=present)
         g = self.graph()
         if g is not None and self.report is not None and self.report.complete:
             self.view.keep(g, bool(self.report.ran))  # the view shows the last complete image
@@ -414,7 +475,10 @@ class FrameController:
                 self._last_presented = False
                 return False
             spent = (time.perf_counter() - now) * 1000.0
-            if self.frame_budget_ms is not None and spent + (self.overhead_ms or 0.0) > self.frame_budget_ms:
+            # presenting it now adds the UI built and what a presenting frame costs after its render
+            after = self.after_present.upper() if WHOLE_FRAME else None
+            rest = (self.overhead_ms or 0.0) if after is None else (self.before.upper() or 0.0) + after
+            if self.frame_budget_ms is not None and spent + rest > self.frame_budget_ms:
                 # complete, but the UI and presenting on top would take this frame past the budget:
                 # it is shown next frame (can_skip_present is False once the frame is complete)
                 self._last_presented = False
@@ -424,8 +488,13 @@ class FrameController:
                 ui_built = ui.build(frametime, self.layout)
         self._last_presented = True
         self._presented_at = time.perf_counter()
-        if self.report is not None and self.report.complete and not self.report.ran and not self._prime():
-            self.renderer.warm(self.state.settings.technique, budget_ms=30.0)  # idle: likely shader variants
+        if self.report is not None and self.report.complete and not self.report.ran:
+            # idle: a slice of the next drag's preview variants, else likely shader variants compiled;
+            # not what a frame costs after its render (frame_end leaves it out)
+            t_idle = time.perf_counter()
+            if not self._prime():
+                self.renderer.warm(self.state.settings.technique, budget_ms=30.0)
+            self._after_extra = (time.perf_counter() - t_idle) * 1000.0
         self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())
         self.watcher.refresh_errors()
         self._trim_texture_pools()
@@ -458,7 +527,7 @@ class FrameController:
                                    "render size")
         self._drag_scaled = scale < 1.0
 
-    def _render_main(self, budget_ms: float | None = None) -> FrameReport | None:
+    def _render_main(self, budget_ms: float | None = None, present: bool = True) -> FrameReport | None:
         live = self.state.settings
         pending = self._shown is None or (self._shown is not live and self._shown != live)
         last_cost = self.last_change.total_ms if self.last_change else None
@@ -479,17 +548,21 @@ class FrameController:
             target, variant, rung = inflight
             self.governor.hold(rung)
         self._inflight = None
-        if self._partial_ran and variant != self._partial_variant:
+        if self._partial_ran and (variant != self._partial_variant or rung != self._partial_rung):
             self._partial_ran = []  # an unfinished frame of another graph was abandoned (a preview at release)
         try:
             t0 = time.perf_counter()
-            budget = self.graph_budget_ms() if budget_ms is None else budget_ms
+            if self._frame_t0 is not None and present:  # a presenting frame's UI built before its render
+                self.before.add((t0 - self._frame_t0) * 1000.0)
+            budget = self.graph_budget_ms(present) if budget_ms is None else budget_ms
             # a governed preview (not the user's settings): scene rules answer from coarser cached
             # estimates and outputs are checked for NaN/Inf once a frame of the final image finds them
             preview = self._governing and not rung.final
             report = self.renderer.render(target, budget_ms=budget, variant=variant, interactive=preview)
-            self._render_ms = (time.perf_counter() - t0) * 1000.0
+            self._render_end = time.perf_counter()
+            self._render_ms = (self._render_end - t0) * 1000.0
             self.last_graph = self.renderer.graph(target.technique, variant)  # the frame log's (bench_interaction)
+            self.render_extra.add(self._render_ms - self.last_graph.run_ms)
             own = self.last_own_ms = self.last_graph.own_ms
             if preview and report.ran:
                 self.graph_own_ms = own if self.graph_own_ms is None else 0.8 * self.graph_own_ms + 0.2 * own
@@ -514,7 +587,7 @@ class FrameController:
             return report
         if not report.complete:
             self._partial_ran += [p for p in report.passes if p.status == "ran"]
-            self._partial_variant = variant
+            self._partial_variant, self._partial_rung = variant, rung
             return report
         if self._partial_ran:
             report = self._merge_partial(report)

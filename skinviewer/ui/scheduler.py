@@ -90,3 +90,43 @@ class RenderScheduler:
         if self.mode == "on release":
             return True
         return last_cost_ms is not None and last_cost_ms > self.budget_ms
+
+
+class RunningCost:
+    """A running estimate of a cost that varies frame to frame (the UI and presenting around the
+    render: a buffer swap under Xvfb is 7-40 ms here): an exponentially weighted mean and mean
+    absolute deviation, and the last ``window`` samples. ``upper`` -- what a frame budgets for it, so
+    that the *whole* frame, not the render alone, keeps to the budget (issue 27) -- is the larger of
+    the mean plus ``k`` deviations and the largest recent sample: a swap that spikes every few frames
+    is budgeted, not averaged away, and a load that eases gives the room back within ``window``."""
+
+    def __init__(self, weight: float = 0.2, k: float = 2.0, window: int = 20, cap: float | None = None):
+        from collections import deque
+        self.weight = weight
+        self.k = k
+        self.cap = cap  # a sample above this is taken as this (a pause between frames is not a frame's cost)
+        self.mean: float | None = None
+        self.dev = 0.0
+        self.n = 0
+        self.recent: deque[float] = deque(maxlen=window)
+
+    def add(self, ms: float) -> None:
+        if not (ms >= 0.0) or ms == float("inf"):  # NaN, negative, inf: not a measurement
+            return
+        if self.cap is not None:
+            ms = min(ms, self.cap)
+        self.n += 1
+        self.recent.append(ms)
+        if self.mean is None:
+            self.mean, self.dev = ms, 0.25 * ms  # one sample says little about its spread
+            return
+        w = self.weight
+        self.dev = (1.0 - w) * self.dev + w * abs(ms - self.mean)
+        self.mean = (1.0 - w) * self.mean + w * ms
+
+    def upper(self) -> float | None:
+        """What to budget for it: mean + k deviations, or the largest recent sample if larger (None:
+        never measured)."""
+        if self.mean is None:
+            return None
+        return max(self.mean + self.k * self.dev, max(self.recent))
