@@ -232,6 +232,73 @@ def test_the_look_ahead_leaves_a_margin_scaled_by_its_own_error(gl_ctx, monkeypa
 
 # -- in the viewer's frame loop (Xvfb) ----------------------------------------------------------------
 
+def test_sampled_sync_skips_glfinish_inside_a_frame_and_keeps_the_image_and_the_budget(gl_ctx, monkeypatch):
+    """Bands whose costs the look-ahead predicts (here exactly): with sampled sync the bands within a
+    frame skip their glFinish (a chain timed by the band that closes it, its time shared out by their
+    predictions), so fewer glFinish calls, the same frames within the budget, the passes' times adding up
+    to what they cost, and the image of the bands the ungoverned render bit for bit."""
+    ratios = [1.0] * 5000
+    full: dict = {}
+    work_full, same = _run_frames(gl_ctx, monkeypatch, graph_mod.PACE_ERR_K, ratios, 100.0, 6, False, full)
+    assert all(same) and full["lazy"] == 0
+    monkeypatch.undo()
+    sampled: dict = {}
+    work, same = _run_frames(gl_ctx, monkeypatch, graph_mod.PACE_ERR_K, ratios, 100.0, 6, True, sampled)
+    assert all(same)
+    assert sampled["lazy"] > 0 and sampled["finishes"] < full["finishes"]
+    assert max(work) <= 100.0 + 1e-6
+    assert len(work) <= len(work_full)  # no more frames than with a glFinish around every band
+
+
+def test_a_frame_whose_own_time_took_half_the_budget_runs_no_pass_over_it(gl_ctx, monkeypatch):
+    """The graph's own time (reflecting every pass afresh, as in a release's first frame) took 50 of a 60 ms
+    budget and the first pass is predicted at 20: that frame ends without it (not 70 ms), the next one (its
+    own time small) runs it; a frame never starves twice in a row, and the image is the whole render's."""
+    from skinviewer.engine.renderer import Renderer
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        renderer.render(s)
+        g = renderer.graph("phong")
+        real_execute, real_reflect = g._execute, g._reflect_all
+        own = [50.0]
+
+        def reflect(*a, **k):
+            clock.ms(own[0])  # the graph's own time, once
+            own[0] = 0.0
+            return real_reflect(*a, **k)
+
+        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
+            real_execute(p, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy, sync_after=sync_after)
+            clock.ms(20.0 / tile[1])
+            return 20.0 / tile[1]
+
+        monkeypatch.setattr(g, "_reflect_all", reflect)
+        monkeypatch.setattr(g, "_execute", execute)
+        g._last_ms = {name: 20.0 for name in g._last_ms}
+        g.pace, g.pace_err = 1.0, 0.0
+        sm = with_values(s, {"lights.0.direction": [0.4, 0.1, 1.0]})
+        work, ran = [], []
+        for _ in range(50):
+            t0 = clock.t
+            rep = renderer.render(sm, budget_ms=60.0)
+            work.append((clock.t - t0) * 1000.0)
+            ran.append(bool(rep.ran))
+            if rep.complete:
+                break
+        assert rep.complete
+        assert ran[0] is False and ran[1] is True  # the first frame ended after its own time
+        assert max(work) <= 60.0
+        img = renderer.image(sm)
+        monkeypatch.undo()
+        renderer.render(sm, force=True)
+        assert np.array_equal(img, renderer.image(sm))
+    finally:
+        renderer.release()
+
+
 @pytest.fixture(scope="module")
 def viewer():
     from tests.helpers import edge_viewer
@@ -284,24 +351,6 @@ def test_a_still_refinement_never_re_presents_an_unchanged_image(viewer, monkeyp
         app.state.apply({"render.governor": "interactive"})
 
 
-def test_sampled_sync_skips_glfinish_inside_a_frame_and_keeps_the_image_and_the_budget(gl_ctx, monkeypatch):
-    """Bands whose costs the look-ahead predicts (here exactly): with sampled sync the bands within a
-    frame skip their glFinish (a chain timed by the band that closes it, its time shared out by their
-    predictions), so fewer glFinish calls, the same frames within the budget, the passes' times adding up
-    to what they cost, and the image of the bands the ungoverned render bit for bit."""
-    ratios = [1.0] * 5000
-    full: dict = {}
-    work_full, same = _run_frames(gl_ctx, monkeypatch, graph_mod.PACE_ERR_K, ratios, 100.0, 6, False, full)
-    assert all(same) and full["lazy"] == 0
-    monkeypatch.undo()
-    sampled: dict = {}
-    work, same = _run_frames(gl_ctx, monkeypatch, graph_mod.PACE_ERR_K, ratios, 100.0, 6, True, sampled)
-    assert all(same)
-    assert sampled["lazy"] > 0 and sampled["finishes"] < full["finishes"]
-    assert max(work) <= 100.0 + 1e-6
-    assert len(work) <= len(work_full)  # no more frames than with a glFinish around every band
-
-
 def test_a_released_preview_of_your_own_graph_leaves_none_of_its_passes_in_the_final_frame(viewer, monkeypatch):
     """A drag's preview that is a smaller view of your settings (the same graph as the final image) left
     part-way when the user lets go: the refinement's first frame reports only its own passes (the
@@ -342,52 +391,3 @@ def test_a_released_preview_of_your_own_graph_leaves_none_of_its_passes_in_the_f
         app.frame.set_frame_budget(None)
         app.step(2)
         app.frame.set_frame_budget(100.0)
-
-
-def test_a_frame_whose_own_time_took_half_the_budget_runs_no_pass_over_it(gl_ctx, monkeypatch):
-    """The graph's own time (reflecting every pass afresh, as in a release's first frame) took 50 of a 60 ms
-    budget and the first pass is predicted at 20: that frame ends without it (not 70 ms), the next one (its
-    own time small) runs it; a frame never starves twice in a row, and the image is the whole render's."""
-    from skinviewer.engine.renderer import Renderer
-    clock = Clock()
-    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
-    renderer = Renderer(gl_ctx)
-    try:
-        s = small_settings("head", "phong", size=64)
-        renderer.render(s)
-        g = renderer.graph("phong")
-        real_execute, real_reflect = g._execute, g._reflect_all
-        own = [50.0]
-
-        def reflect(*a, **k):
-            clock.ms(own[0])  # the graph's own time, once
-            own[0] = 0.0
-            return real_reflect(*a, **k)
-
-        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
-            real_execute(p, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy, sync_after=sync_after)
-            clock.ms(20.0 / tile[1])
-            return 20.0 / tile[1]
-
-        monkeypatch.setattr(g, "_reflect_all", reflect)
-        monkeypatch.setattr(g, "_execute", execute)
-        g._last_ms = {name: 20.0 for name in g._last_ms}
-        g.pace, g.pace_err = 1.0, 0.0
-        sm = with_values(s, {"lights.0.direction": [0.4, 0.1, 1.0]})
-        work, ran = [], []
-        for _ in range(50):
-            t0 = clock.t
-            rep = renderer.render(sm, budget_ms=60.0)
-            work.append((clock.t - t0) * 1000.0)
-            ran.append(bool(rep.ran))
-            if rep.complete:
-                break
-        assert rep.complete
-        assert ran[0] is False and ran[1] is True  # the first frame ended after its own time
-        assert max(work) <= 60.0
-        img = renderer.image(sm)
-        monkeypatch.undo()
-        renderer.render(sm, force=True)
-        assert np.array_equal(img, renderer.image(sm))
-    finally:
-        renderer.release()

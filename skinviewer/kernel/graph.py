@@ -50,6 +50,7 @@ from skinviewer.kernel.texture_pool import TexturePool as TexturePool
 
 PACE_WEIGHT = 0.25  # the running mean of actual / predicted cost: the newest pass's (or band's) share
 PACE_MAX = 2.0  # the look-ahead scales its predictions by the pace, between 1 and this
+STARVE_MIN_MS = 10.0  # own time below this never ends a frame before its first pass (a tiny budget still progresses)
 PACE_ERR_K = 2.0  # and adds this many of the predictions' mean error (pace_err) as a margin,
 PACE_ERR_MAX = 0.5  # at most this share of the prediction (a loaded machine's error would halve every frame)
 # sampled sync (issue 27, release -> final): under a budget with sync timing, a band whose cost the
@@ -426,8 +427,9 @@ class RenderGraph:
                 # (reflecting every pass afresh: 20-45 ms in a release's first frame) already took half the
                 # budget and the pass would overrun it: then the frame ends here, once (next frame's own
                 # time is small), instead of one band on top of it (issue 27: the longest frames)
+                own_ms = (time.perf_counter() - t_start) * 1000.0
                 starve = not any_ran and spent and not self._starved \
-                    and (time.perf_counter() - t_start) * 1000.0 > 0.5 * budget_ms
+                    and own_ms > max(0.5 * budget_ms, STARVE_MIN_MS)
                 if waits or (any_ran and spent) or starve:
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
