@@ -172,3 +172,33 @@ def test_file_in_another_encoding_is_a_shader_error(gl_ctx, lib_dir):
     replaced, errors = lib.reload()
     assert replaced == [] and lib.get("prog") is good
     assert any(e.file == "lib/common.glsl" and e.line == 1 and "UTF-8" in e.message for e in errors["prog"])
+
+
+def test_no_assembled_source_ends_with_a_line_directive(gl_ctx, lib_dir):
+    """An include on a file's last line leaves no #line after it: NVIDIA's compiler refuses a #line that
+    ends the source (C0115 "#line source-string number invalid": every d'Eon program on the H200 once),
+    while the line numbers of what follows an include elsewhere still map to their files."""
+    from skinviewer.ground import paths
+    (lib_dir / "tail.vert").write_text(VERT)
+    (lib_dir / "tail.frag").write_text('#version 330 core\nout vec4 f;\nvoid main() { f = vec4(twice(0.5)); }\n'
+                                       '#include "lib/common.glsl"\n\n')
+    (lib_dir / "lib" / "common.glsl").write_text(LIB + '#include "lib/leaf.glsl"\n')
+    (lib_dir / "lib" / "leaf.glsl").write_text("// leaf\n")
+    lib = ShaderLibrary(gl_ctx, lib_dir)
+    for name in ("tail", "prog"):
+        sources, _ = lib._assemble(name, ())
+        for src in sources.values():
+            last = [ln for ln in src.splitlines() if ln.strip()][-1]
+            assert not last.startswith("#line"), (name, last)
+    assert "#line 3 0" in lib._assemble("prog", ())[0]["fragment_shader"]  # after a mid-file include
+    lib.release()
+    project = ShaderLibrary(gl_ctx)
+    for p in sorted(paths.shaders_dir().glob("*.frag")):
+        try:
+            sources, _ = project._assemble(p.stem, ())
+        except Exception:  # a stage file missing on its own: test_project_shaders_all_compile's business
+            continue
+        for src in sources.values():
+            last = [ln for ln in src.splitlines() if ln.strip()][-1]
+            assert not last.startswith("#line"), (p.name, last)
+    project.release()

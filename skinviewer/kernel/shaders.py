@@ -138,7 +138,8 @@ class ShaderLibrary:
             files.append(path)
         fid = files.index(path)
         out: list[str] = []
-        for lineno, line in enumerate(text.splitlines(), start=1):
+        src_lines = text.splitlines()
+        for lineno, line in enumerate(src_lines, start=1):
             m = _INCLUDE.match(line)
             if _VERTEX_STAGE.match(line):
                 out.append("// " + line.strip())  # read by _stage_files; keeps line numbers
@@ -155,7 +156,8 @@ class ShaderLibrary:
                     raise _SourceError(ShaderError(self._rel(path), lineno, f'#include "{m.group(1)}" not found'))
                 out.append(f"#line 1 {len(files) if inc not in files else files.index(inc)}")
                 out.extend(self._expand(inc, files, stack + (path,), watch))
-                out.append(f"#line {lineno + 1} {fid}")
+                if any(ln.strip() for ln in src_lines[lineno:]):  # NVIDIA refuses a #line that ends the source
+                    out.append(f"#line {lineno + 1} {fid}")  # (C0115, an include on a file's last line)
             else:
                 out.append(line)
                 if line.lstrip().startswith("#version") and not stack:
