@@ -81,7 +81,8 @@ if want perf; then
     # software rasterizers) against one texel a fragment (B): whether the quad sum pays on a GPU too
     PERF_END=$(( PERF_END + 30 ))
     SKINVIEWER_QUAD_SUM=1 timeout "$(left 30)" python3 benchmarks/bench_deon_draws.py "${PERF[@]}" --ab-no-quad-sum \
-        | head -n 16 >> "$OUT/perf.md" 2>&1
+        > "$OUT/deon_draws.txt" 2>&1  # whole (a pipe into head broke it off); its head in perf.md
+    head -n 16 "$OUT/deon_draws.txt" >> "$OUT/perf.md"
 fi
 
 if want calibrate; then
