@@ -428,7 +428,7 @@ class RenderGraph:
                 # budget and the pass would overrun it: then the frame ends here, once (next frame's own
                 # time is small), instead of one band on top of it (issue 27: the longest frames)
                 own_ms = (time.perf_counter() - t_start) * 1000.0
-                starve = not any_ran and spent and not self._starved \
+                starve = budget_ms is not None and not any_ran and spent and not self._starved \
                     and own_ms > max(0.5 * budget_ms, STARVE_MIN_MS)
                 if waits or (any_ran and spent) or starve:
                     rec.status = "deferred"

@@ -505,8 +505,8 @@ def tsm_max_radii(reaches, n: int, block: int) -> tuple[int, int, int, int]:
     others, widest first; repeated to fill four channels. Blocks cover reach + 3 texels."""
     blocks = -(-n // block)
     rad = sorted({min(math.ceil((x + 3.0) / block), blocks) if math.isfinite(x) else blocks for x in reaches} or {1})
-    out = [rad[-1]] + ([rad[0]] if len(rad) > 1 else []) + rad[-2:0:-1]
-    return tuple((out + [rad[-1]] * 4)[:4])
+    out = ([rad[-1]] + ([rad[0]] if len(rad) > 1 else []) + rad[-2:0:-1] + [rad[-1]] * 4)[:4]
+    return int(out[0]), int(out[1]), int(out[2]), int(out[3])
 
 
 def _tsm_max_plan(r) -> tuple[int, int, tuple[int, int, int, int]]:
@@ -527,7 +527,8 @@ def tsm_max_covered(plan) -> tuple[float, float, float, float]:
     """TSM texels each channel of the max map covers past C's texel on each side (u_tsm_max_reach): the
     whole map when the dilation spans it."""
     n, block, radii = plan
-    return tuple(1e30 if radius >= -(-n // block) else float(radius * block) for radius in radii)
+    c = [1e30 if radius >= -(-n // block) else float(radius * block) for radius in radii]
+    return c[0], c[1], c[2], c[3]
 
 
 class TsmMaxPass(Pass):
@@ -963,13 +964,13 @@ class GaussianBlurPass(Pass):
             if fresh:
                 dilating = tiled and source != IRRADIANCE  # the irradiance is whole: dilated already
                 # the variant(s) reflect declared (DILATE, OPEN_BORDER, RIM_SHARE; TILED = 2 with its NO_SEAM twin)
-                split = seam_split(ec, n, whole_target(ec, n)) if plan.fill_split else None
-                if split is None:
+                fill_sets = seam_split(ec, n, whole_target(ec, n)) if plan.fill_split else None
+                if fill_sets is None:
                     parts = [(ec.program("seam_fill", **plan.fill, **({"TILED": 2} if plan.fill_split else {})),
                               whole_target(ec, n) if plan.fill_split else None)]
                 else:
                     parts = [(ec.program("seam_fill", **plan.fill, TILED=2, **extra), where)
-                             for extra, where in (({}, split[0]), ({"NO_SEAM": 1}, split[1])) if where is not None]
+                             for extra, where in (({}, fill_sets[0]), ({"NO_SEAM": 1}, fill_sets[1])) if where is not None]
                 for fill, where in parts:
                     ec.textures(fill, source=source, seam_map=plan.seam)
                     if dilating:
