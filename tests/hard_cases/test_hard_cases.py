@@ -32,6 +32,9 @@ SIGNED_PREFIXES = ("gutter", "seam", "deon_tsm", "deon_stretch", "stretch", "bur
                    "deon_gather_w",
                    # the irradiance's light-independent map 0: the shading normal N (xyz) and m
                    "deon_irradiance_surface_0",
+                   # d'Eon's kept view maps (the final pass split): the shading normal N, the fragment's
+                   # position, the vertex normal; the light's terms (e, x) and the factor (f) stay checked
+                   "deon_final_view_n", "deon_final_view_p", "deon_final_view_nrm",
                    # Penner's environment: the scattered lobe's SH band factors (lambda_l / lambda_0), signed
                    # where a wide profile flattens the lobe (band 2 past zero); the irradiance made from
                    # them is clamped at 0 (lib/environment.glsl env_irradiance_scattered)
