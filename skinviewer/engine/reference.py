@@ -62,8 +62,8 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 8                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points; 8, the uncertainty states the environment's Monte Carlo error
-VERSION_CHANGE = "its uncertainty now states the environment's Monte Carlo error"  # what VERSION changed, for the stale cache's note
+VERSION = 9                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points; 8, the uncertainty states the environment's Monte Carlo error; 9, and its interpolation inside the triangles
+VERSION_CHANGE = "its uncertainty now states the environment's interpolation inside the triangles too"  # what VERSION changed, for the stale cache's note
 ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
 ENV_SPEC_RAYS = 64          # per pixel
 ENV_BATCHES = 4
@@ -1262,6 +1262,9 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
             t1 = time.perf_counter()
             u_env_M = env_mc_uncertainty(surf, a, variances, weights, mix)
             times["uncertainty_env"] = time.perf_counter() - t1
+            t1 = time.perf_counter()
+            u_env_M = u_env_M + env_interpolation_uncertainty(surf, a, weights, mix, energy)
+            times["uncertainty_env_interpolation"] = time.perf_counter() - t1
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
     V /= np.maximum(np.linalg.norm(V, axis=1), 1e-300)[:, None]
@@ -1303,7 +1306,8 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False, "env": env_meta}
     if u_M is not None:
         meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm) + \
-            (ENV_MC_NOTE.format(k=ENV_MC_K) if surf.env is not None else "")
+            (ENV_MC_NOTE.format(k=ENV_MC_K) + ENV_INTERP_NOTE.format(stride=ENV_EL_STRIDE, near=ENV_EL_NEAR)
+             if surf.env is not None else "")
     ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None,
                     imgs[5] if u_env_lit is not None else None)
     if use_cache:
@@ -1589,6 +1593,33 @@ def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray], x_mm: np.ndar
         out = np.maximum(out, here)
     res: np.ndarray = out * np.asarray(w_read, np.float64)[None]
     return res
+
+
+ENV_INTERP_NOTE = ("; with an environment: its interpolation between the three estimates of each triangle, which "
+                   "the pixel (the delta) and the source elements (every other Gaussian) read: a point of every "
+                   "{stride}th triangle the truth estimated, estimated on its own, the mean |interpolated - own| over "
+                   "the pixel's {near} nearest such points or, if larger, the same check at the pixel itself, times "
+                   "the weight of every Gaussian")
+
+
+def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], weights: np.ndarray, mix: float, energy: bool,
+                                  stride: int = ENV_EL_STRIDE, near: int = ENV_EL_NEAR
+                                  ) -> np.ndarray:
+    """compute_reference's stated error (N, 3) of M at receivers ``a`` from the environment read linearly
+    between three estimates inside each mesh triangle (issue 30; the session's env_element_uncertainty):
+    every Gaussian reads interpolated values there (the delta at the pixel itself, the others at the
+    source elements), so the checks (env_interpolation_checks, on the triangles whose estimates this
+    truth made: no estimate more) and the pixel's own check (Surface.env_direct at the pixel, independent
+    rays, seeded) are weighted by the sum of all the Gaussians' weights. Without an environment: zeros."""
+    out = np.zeros((len(a["P"]), 3))
+    if surf.env is None or len(out) == 0:
+        return out
+    made = np.unique(np.nonzero(surf.env_done["full"])[0] // 3)
+    checks = env_interpolation_checks(surf, mix, energy, stride=stride, tri=made)
+    own, _ = surf.env_direct(a, energy, seed=4242)
+    here = np.abs(surf.env_irradiance(a["tri"], a["bary"], energy) - own) * _safe_pow(a["C"], mix)
+    w_read = np.asarray(weights, np.float64).reshape(-1, 3).sum(0)
+    return env_element_uncertainty(checks, a["P"] * surf.mm, w_read, here=here, near=near)
 
 
 def sources_key(s: Settings, h_mm: float) -> str:
