@@ -6,6 +6,7 @@ frame), then a still view until the image is final.
 
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
         [--seconds 3] [--frame-log frames.jsonl] [--rest 1] [--prime on|off|both] [--cold-shaders]
+        [--frames on|off|both] [--whole-frame on|off|both] [--share on|off|both]
 
 ``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
 both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
@@ -28,7 +29,9 @@ Per technique and governor mode it prints:
   passes puts a new image on screen); goal <= 150 ms;
 - release -> final: from the last input to the complete image at the user's settings; its ratio to
   that settings' light-move frame measured alone (sync timing, no budget); goal <= 1.5;
-- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms; beside
+- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms (a frame
+  that drew a program for the first time holds its JIT compile, which no band can split: such frames over
+  100 ms are counted apart, "k compiles", with the longest frame without one); beside
   it that frame less its buffer swap (our work), the longest swap, the longest collection, how many
   frames took longer than 100 ms (of all the frames of the script) and the load average
   of the machine while the row was measured (one minute, os.getloadavg);
@@ -110,6 +113,8 @@ class Driver:
         self._first_draws = app.frame.renderer.shaders.first_draws
         self.first_draws: dict[str, int] = {}  # per phase: programs drawn for the first time (a JIT each)
         self.idle_ms: list[float] = []  # the frames of the rests before each drag (the priming's)
+        self.frame_fd: list[int] = []  # each frame's first draws (a program JIT-compiled there: a compile, not a band)
+        self.idle_fd: list[int] = []
 
     def step(self) -> None:
         GC.take()
@@ -129,6 +134,7 @@ class Driver:
         first = fr.renderer.shaders.first_draws - self._first_draws  # programs drawn for the first time
         self._first_draws += first
         self.first_draws[self.tag["phase"]] = self.first_draws.get(self.tag["phase"], 0) + first
+        self.frame_fd.append(first)
         if self.log is not None:
             self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
                                        "render_ms": round(fr._render_ms or 0.0, 2),
@@ -158,7 +164,8 @@ class Driver:
                                   or not fr.primer.pending(fr.governor, fr.state.settings)):
                 break
         self.idle_ms += self.frame_ms[n:]
-        del self.frame_ms[n:], self.swap_ms[n:], self.gc_ms[n:]
+        self.idle_fd += self.frame_fd[n:]
+        del self.frame_ms[n:], self.swap_ms[n:], self.gc_ms[n:], self.frame_fd[n:]
         self.full_gcs = gcs  # the idle full collection (ui/collector.py) is the rest's, not the script's
         return time.perf_counter() - start
 
@@ -235,6 +242,7 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
     d.frame_ms.clear()
     d.swap_ms.clear()
     d.gc_ms.clear()
+    d.frame_fd.clear()
     d.full_gcs = 0
     d.first_draws.clear()
     load0 = os.getloadavg()[0]
@@ -269,8 +277,22 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
             "load": 0.5 * (load0 + os.getloadavg()[0]),
             "preview": preview, "preview_err": preview_err, "identical": identical,
             "light_start_ms": light_start, "idle_max_ms": max(d.idle_ms, default=0.0), "rest_s": rested,
+            # a frame that drew a program for the first time holds its compile (llvmpipe's JIT at the first
+            # draw, which no band can split): the longest frames and rests without one, and with one
+            "stall_band_ms": max((f for f, c in zip(d.frame_ms, d.frame_fd) if not c), default=0.0),
+            "over_100_compile": sum(f > 100.0 and c > 0 for f, c in zip(d.frame_ms, d.frame_fd)),
+            "idle_band_ms": max((f for f, c in zip(d.idle_ms, d.idle_fd) if not c), default=0.0),
+            "idle_compile_ms": max((f for f, c in zip(d.idle_ms, d.idle_fd) if c), default=0.0),
+            "idle_compiles": sum(c > 0 for c in d.idle_fd),
             "drag_first_draws": d.first_draws.get("orbit drag", 0) + d.first_draws.get("light drag", 0),
             "first_draws": dict(d.first_draws), "prime": app.frame.primer.enabled}
+
+
+def _compiles(row: dict) -> str:
+    """ " (k compiles, longest frame without one: x ms)" when k of the frames over 100 ms drew a program for
+    the first time (its JIT, not a band: nothing the budget can split)."""
+    k = row.get("over_100_compile", 0)
+    return f" ({k} compiles; without: {row['stall_band_ms']:,.0f} ms)" if k else ""
 
 
 def markdown(rows: list[dict], head: str) -> str:
@@ -296,17 +318,20 @@ def markdown(rows: list[dict], head: str) -> str:
         load = f"{off['load']:.1f} / {on['load']:.1f}" if off else f"{on['load']:.1f}"
         out.append(f"| {scene} | {t} | {p_off} → {b(on['p95_drag'])} ms | {e_off} → {b(on['p95_edits'])} ms "
                    f"| {on['release_ms']:,.0f} ms ({ratio:.2f}×) | {s_off} → {b(on['stall_ms'])} ms "
-                   f"| {on['work_stall_ms']:,.0f} / {on['swap_max_ms']:,.0f} ms | {on['over_100']} / {on['frames']} "
+                   f"| {on['work_stall_ms']:,.0f} / {on['swap_max_ms']:,.0f} ms | {on['over_100']} / {on['frames']}"
+                   f"{_compiles(on)} "
                    f"| {on['full_gcs']} | {load} |")
     out += ["", "The first draws (issue 27): the governor on, the light drag's first 3 frames (the longest), programs "
             "drawn for the first time during the drags (each a JIT compile on llvmpipe), the longest frame of the "
             "rests before each drag (the idle priming's slices), the rests' seconds in all:", "",
-            "| scene | technique | priming | light drag's first frames | first draws in the drags | longest rest frame | rests |",
+            "| scene | technique | priming | light drag's first frames | first draws in the drags "
+            "| longest rest frame: no compile / a compile (rest frames compiling) | rests |",
             "| --- | --- | --- | --- | --- | --- | --- |"]
     for (scene, t, mode, prime), on in by.items():
         if mode != "off":
             out.append(f"| {scene} | {t} | {'on' if prime else 'off'} | {on['light_start_ms']:,.0f} ms "
-                       f"| {on['drag_first_draws']} | {on['idle_max_ms']:,.0f} ms | {on['rest_s']:.1f} s |")
+                       f"| {on['drag_first_draws']} | {on['idle_band_ms']:,.0f} / {on['idle_compile_ms']:,.0f} ms "
+                       f"({on['idle_compiles']}) | {on['rest_s']:.1f} s |")
     same = all(r["identical"] for r in rows)
     out += ["", f"Every final image equals the ungoverned render bit for bit: {'yes' if same else 'NO'} "
             f"({sum(r['identical'] for r in rows)} / {len(rows)} rows)."]
@@ -333,6 +358,11 @@ def main() -> int:
     ap.add_argument("--share", choices=("on", "off", "both"), default="on",
                     help="passes copied between the user's graph and a preview's when their keys are equal "
                          "(RenderGraph.share_passes); both: the governed row twice, sharing off then on, in one viewer")
+    ap.add_argument("--frames", choices=("on", "off", "both"), default="on",
+                    help="this session's budget keeping (issue 27, session 10): the look-ahead's margin at the p99 "
+                         "of each draw's recent errors (kernel.graph.QUANTILE_MARGIN), a first pass that does not fit "
+                         "after the frame's own time waits a frame (DEFER_UNFIT_FIRST); off: the pace and its mean "
+                         "error (the rule before); both: the governed row twice, off then on, in one viewer (an A/B)")
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
                          "budgeted at their running upper bound, the look-ahead's error margin, no refresh of an "
@@ -387,14 +417,19 @@ def main() -> int:
             from skinviewer.ui import frame as frame_mod
             shares = {"on": [True], "off": [False], "both": [False, True]}[args.share]
             wholes = {"on": [True], "off": [False], "both": [False, True]}[args.whole_frame]
+            frames = {"on": [True], "off": [False], "both": [False, True]}[args.frames]
             pace_err_k = graph_mod.PACE_ERR_K
             for name in names:
-                arms = [("off", shares[-1], wholes[-1])] + [("interactive", sh, wh) for sh in shares for wh in wholes]
-                for mode, share, whole in arms:
+                arms = [("off", shares[-1], wholes[-1], frames[-1])] + [
+                    ("interactive", sh, wh, fr) for sh in shares for wh in wholes for fr in frames]
+                for mode, share, whole, new in arms:
                     graph_mod.SHARE_PASSES = share
                     frame_mod.WHOLE_FRAME = whole
                     graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
                     graph_mod.SAMPLED_SYNC = whole
+                    graph_mod.QUANTILE_MARGIN = graph_mod.DEFER_UNFIT_FIRST = new
+                    for g in app.renderer.graphs.values():
+                        g.margins.clear()  # each arm learns its own margins
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest)
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
@@ -405,6 +440,10 @@ def main() -> int:
                         row["technique"] = f"{row['technique']} (whole frame {'on' if whole else 'off'})"
                         if not whole:
                             row["mode"] = row["mode"] + ", whole frame off"
+                    if len(frames) > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} (p99 margin {'on' if new else 'off'})"
+                        if not new:
+                            row["mode"] = row["mode"] + ", p99 margin off"
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
                     print(f"{scene_name:<6} {row['technique']:<9} {mode:<11} {'on' if prime else 'off':<5} "
