@@ -421,6 +421,60 @@ def test_a_first_pass_that_fits_only_a_frame_of_its_own_waits_for_it(gl_ctx, mon
         renderer.release()
 
 
+@pytest.mark.parametrize("fit", [True, False])
+def test_a_tileable_first_pass_starts_with_a_band_that_fits_what_the_own_time_left(gl_ctx, monkeypatch, fit):
+    """The graph's own time took 45 of a 60 ms budget (over half: the rule before ended the frame there,
+    running nothing) and the first pass, tileable, is predicted at 45 ms (2 bands of 22.5 as split for the
+    budget): with DEFER_UNFIT_FIRST its bands are made smaller so that its first fits the 15 ms left, and
+    the frame runs it (the final's first band in the release frame), within the budget; the image is the
+    whole render's."""
+    from skinviewer.engine.renderer import Renderer
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    monkeypatch.setattr(graph_mod, "DEFER_UNFIT_FIRST", fit)
+    monkeypatch.setattr(graph_mod, "QUANTILE_MARGIN", False)
+    monkeypatch.setattr(graph_mod, "band_shares", lambda profile, count: np.full(count, 1.0 / count))
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        renderer.render(s)
+        g = renderer.graph("phong")
+        real_execute, real_reflect = g._execute, g._reflect_all
+        own = [45.0]
+
+        def reflect(*a, **k):
+            clock.ms(own[0])  # the graph's own time, once
+            own[0] = 0.0
+            return real_reflect(*a, **k)
+
+        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
+            real_execute(p, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy, sync_after=sync_after)
+            clock.ms(45.0 / tile[1])
+            return 45.0 / tile[1]
+
+        monkeypatch.setattr(g, "_reflect_all", reflect)
+        monkeypatch.setattr(g, "_execute", execute)
+        g._last_ms = {name: 45.0 for name in g._last_ms}
+        g.pace, g.pace_err = 1.0, 0.0
+        sm = with_values(s, {"lights.0.direction": [0.4, 0.1, 1.0]})
+        work, started = [], []
+        for _ in range(50):
+            t0 = clock.t
+            rep = renderer.render(sm, budget_ms=60.0)
+            work.append((clock.t - t0) * 1000.0)
+            started.append(any(p.status == "ran" or "band" in p.reason for p in rep.passes))
+            if rep.complete:
+                break
+        assert rep.complete and max(work) <= 60.0
+        assert started[0] is fit  # the first frame ran a band of its first pass (or, the rule before, nothing)
+        img = renderer.image(sm)
+        monkeypatch.undo()
+        renderer.render(sm, force=True)
+        assert np.array_equal(img, renderer.image(sm))
+    finally:
+        renderer.release()
+
+
 @pytest.fixture(scope="module")
 def viewer():
     from tests.helpers import edge_viewer

@@ -447,6 +447,12 @@ class RenderGraph:
                 # budget and the pass would overrun it: then the frame ends here, once (next frame's own
                 # time is small), instead of one band on top of it (issue 27: the longest frames)
                 own_ms = (time.perf_counter() - t_start) * 1000.0
+                if budget_ms is not None and spent and not any_ran and progress is None and p.tileable:
+                    # a tileable pass starting in a frame whose own time took part of the budget (a
+                    # release's first frame): its bands made smaller, so its first fits what is left
+                    fitted = self._fitted_progress(p, r, key, budget_ms, own_ms)
+                    if fitted is not None:
+                        progress, spent = fitted, False
                 starve = budget_ms is not None and not any_ran and spent and not self._starved \
                     and (own_ms > max(0.5 * budget_ms, STARVE_MIN_MS)
                          or self._fits_a_frame_of_its_own(nxt, own_ms, budget_ms))
@@ -461,7 +467,7 @@ class RenderGraph:
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else why(old, key))
                 if p.tileable and budget_ms is not None:
-                    if progress is not None:
+                    if progress is not None and progress.done:
                         rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
                     progress = progress or TileProgress(key, self._tile_count(p, r, budget_ms))
                     self._progress[p.name] = progress
@@ -715,6 +721,26 @@ class RenderGraph:
             return 0
         k = progress.done if band is None else band
         return min(k * d // progress.count, d - 1)
+
+    def _fitted_progress(self, p: Pass, r: Reflection, key: dict[str, Any], budget_ms: float,
+                         own_ms: float) -> TileProgress | None:
+        """DEFER_UNFIT_FIRST, a tileable pass not started, the frame's first to run, whose first band (as
+        _tile_count splits it) does not fit what the graph's own time ``own_ms`` left of ``budget_ms``: the
+        bands (up to MAX_TILES, aligned to its draws) that make its first band fit that room, paced as
+        every band is; None when none do (or it was never measured). The same rows drawn in more bands:
+        the same image (issue 27, session 10: the final's first band in the release frame)."""
+        room = budget_ms - own_ms
+        if not DEFER_UNFIT_FIRST or room < STARVE_MIN_MS or self._expected_ms(p, r) is None:
+            return None
+        n = self._tile_count(p, r, budget_ms)
+        while n < MAX_TILES:
+            n = self._align_units(p.name, min(MAX_TILES, 2 * n))
+            progress = TileProgress(key, n)
+            if self._paced(self._next_ms(p, r, progress, budget_ms), p.name, self._draw_of(p.name, progress)) <= room:
+                return progress
+            if n >= MAX_TILES or self._align_units(p.name, min(MAX_TILES, 2 * n)) <= n:
+                break
+        return None
 
     @staticmethod
     def _fits_a_frame_of_its_own(paced_ms: float, own_ms: float, budget_ms: float) -> bool:

@@ -118,6 +118,7 @@ class FrameController:
         self.graph_own_ms: float | None = None
         self.last_own_ms = 0.0  # the graph's own time in the last frame's render (any frame)
         self.last_graph: Any = None  # the graph the last frame rendered in
+        self.last_budget_ms: float | None = None  # the budget the last frame's render was given
         self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
         self._presented_at = 0.0
         # the whole frame kept to the budget (issue 27): what a frame spends before its render (the UI
@@ -555,6 +556,7 @@ class FrameController:
             if self._frame_t0 is not None and present:  # a presenting frame's UI built before its render
                 self.before.add((t0 - self._frame_t0) * 1000.0)
             budget = self.graph_budget_ms(present) if budget_ms is None else budget_ms
+            self.last_budget_ms = budget  # what the graph was given (bench_interaction's frame log)
             # a governed preview (not the user's settings): scene rules answer from coarser cached
             # estimates and outputs are checked for NaN/Inf once a frame of the final image finds them
             preview = self._governing and not rung.final
