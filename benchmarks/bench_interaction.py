@@ -377,6 +377,10 @@ def main() -> int:
                          "of each draw's recent errors (kernel.graph.QUANTILE_MARGIN), a first pass that does not fit "
                          "after the frame's own time waits a frame (DEFER_UNFIT_FIRST); off: the pace and its mean "
                          "error (the rule before); both: the governed row twice, off then on, in one viewer (an A/B)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="the governed arms this many times, interleaved (A, B, A, B): on a shared machine whose load "
+                         "drifts, each arm's figures then come from the same stretch of time (rows 'run k')")
+    ap.add_argument("--no-off", action="store_true", help="no governor-off row (only the governed arms: an A/B)")
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
                          "budgeted at their running upper bound, the look-ahead's error margin, no refresh of an "
@@ -434,9 +438,10 @@ def main() -> int:
             frames = {"on": [True], "off": [False], "both": [False, True]}[args.frames]
             pace_err_k = graph_mod.PACE_ERR_K
             for name in names:
-                arms = [("off", shares[-1], wholes[-1], frames[-1])] + [
-                    ("interactive", sh, wh, fr) for sh in shares for wh in wholes for fr in frames]
-                for mode, share, whole, new in arms:
+                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], 0)]) + [
+                    ("interactive", sh, wh, fr, k) for k in range(max(args.repeat, 1))
+                    for sh in shares for wh in wholes for fr in frames]
+                for mode, share, whole, new, k in arms:
                     graph_mod.SHARE_PASSES = share
                     frame_mod.WHOLE_FRAME = whole
                     graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
@@ -445,7 +450,7 @@ def main() -> int:
                     for g in app.renderer.graphs.values():
                         g.margins.clear()  # each arm learns its own margins
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest,
-                                  {"share": share, "whole_frame": whole, "p99_margin": new})
+                                  {"share": share, "whole_frame": whole, "p99_margin": new, "run": k})
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
@@ -459,6 +464,8 @@ def main() -> int:
                         row["technique"] = f"{row['technique']} (p99 margin {'on' if new else 'off'})"
                         if not new:
                             row["mode"] = row["mode"] + ", p99 margin off"
+                    if args.repeat > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} run {k + 1}"
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
                     print(f"{scene_name:<6} {row['technique']:<9} {mode:<11} {'on' if prime else 'off':<5} "

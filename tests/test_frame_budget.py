@@ -138,6 +138,33 @@ def test_bad_budgets_still_say_so_with_the_frame_s_rest_measured():
     assert p.note.startswith("nothing fits") and not p.rung.final
 
 
+def test_the_governor_s_pick_fits_the_graph_s_margin_in_one_frame():
+    """The graph's look-ahead budgets each cost at its p99 margin (here 1.6x: a loaded machine), so a rung
+    fits one frame only when its cost times that is within the frame's render budget: the governor's room
+    follows the margin where it is wider than its own fit margin (0.85), and a drag then gets a cheaper
+    rung in one frame, not a dearer one spread over two. A margin of 1 (or unknown) leaves the room as it was."""
+    from skinviewer.ground.settings import Settings
+    from skinviewer.ui.governor import FIT_MARGIN, Governor
+    from tests.test_governor import fake_calibration
+    s = with_values(Settings(), {"technique": "deon"})
+    cheaper = 0
+    for seed in range(20):
+        g = Governor("interactive", 300.0, fake_calibration("deon", s, seed=seed))
+        g.set_overhead(40.0)
+        g.set_margin(None)
+        assert g.room() == pytest.approx(FIT_MARGIN * 260.0)
+        plain = g.pick(s)
+        g.set_margin(1.6)
+        assert g.room() == pytest.approx(260.0 / 1.6)
+        p = g.pick(s)
+        if not p.note:
+            assert p.ms * 1.6 <= 260.0 + 1e-9  # at the graph's upper bound it fits the frame
+        cheaper += (p.ms or 0.0) < (plain.ms or 0.0)
+        g.set_margin(1.05)  # narrower than the governor's own margin: the room as before
+        assert g.room() == pytest.approx(FIT_MARGIN * 260.0)
+    assert cheaper > 0
+
+
 # -- the graph's look-ahead: a margin scaled by its predictions' error -------------------------------
 
 class Finishes:

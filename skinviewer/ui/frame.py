@@ -315,11 +315,27 @@ class FrameController:
         self._interacting = interacting
         complete = self.report is None or self.report.complete
         g.set_overhead(self.frame_rest_ms() + (self.graph_own_ms or 0.0))
+        g.set_margin(self._graph_margin(s.technique))
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
         self._gov_note = g.message
         return rung
+
+    def _graph_margin(self, technique: str) -> float | None:
+        """The margin the render graph's look-ahead puts on its predicted costs (kernel/margin.py: the p99
+        of every pass's recent actual / predicted ratios) in the graph of the image on screen (a
+        preview's), else the user's graph of ``technique``; None: none known, or the margin off
+        (graph.QUANTILE_MARGIN)."""
+        from skinviewer.kernel import graph as graph_mod
+        if not graph_mod.QUANTILE_MARGIN:
+            return None
+        for key in (f"{technique}|{self._variant}" if self._variant else technique, technique):
+            g = self.renderer.graphs.get(key)
+            f = g.margins.factor("") if g is not None else None
+            if f is not None:
+                return float(f)
+        return None
 
     def start_with_preview(self) -> None:
         """Issue 34, the cold start: the first image is the technique's cheapest preview rung
