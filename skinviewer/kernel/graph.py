@@ -70,6 +70,7 @@ QUANTILE_MARGIN = True
 MARGIN_Q = 0.99
 MARGIN_WINDOW = 48
 MARGIN_MIN_N = 6
+MARGIN_MAX = PACE_MAX + PACE_ERR_MAX  # at most the pace rule's widest (a load spike would stall every frame's work)
 # the frame's first pass that does not fit what its own time left of the budget, but would fit a frame of
 # its own, waits for the next frame (once): a release's first frame (its own time 15-20 ms, reflecting every
 # pass for the new light) then a 70 ms pass took it to 110 ms (issue 27, session 10). False: only an own
@@ -710,7 +711,7 @@ class RenderGraph:
         if f is None and QUANTILE_MARGIN and self._cost_fallback is not None:  # a preview's: the user's graph's
             f = self._cost_fallback.margins.factor(name, draw)
         if f is not None:
-            return ms * f
+            return ms * min(f, MARGIN_MAX)
         return ms * (min(max(self.pace, 1.0), PACE_MAX) + min(PACE_ERR_K * self.pace_err, PACE_ERR_MAX))
 
     def _draw_of(self, name: str, progress: TileProgress | None, band: int | None = None) -> int:

@@ -334,7 +334,7 @@ class FrameController:
             g = self.renderer.graphs.get(key)
             f = g.margins.factor("") if g is not None else None
             if f is not None:
-                return float(f)
+                return min(float(f), graph_mod.MARGIN_MAX)
         return None
 
     def start_with_preview(self) -> None:
