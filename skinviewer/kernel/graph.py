@@ -71,6 +71,10 @@ MARGIN_Q = 0.99
 MARGIN_WINDOW = 48
 MARGIN_MIN_N = 6
 MARGIN_MAX = PACE_MAX + PACE_ERR_MAX  # at most the pace rule's widest (a load spike would stall every frame's work)
+# only costs predicted at this or more are kept for the margin: a band predicted at 1-4 ms is mostly fixed
+# latency (a glFinish's wake-up, its draw calls), its ratio 2-4x under load, and it cannot take a frame far
+# past its budget; kept, they set every pass's p99 at the cap (load 7-8: the margin of every pass was 4)
+MARGIN_MIN_MS = 5.0
 # the frame's first pass that does not fit what its own time left of the budget, but would fit a frame of
 # its own, waits for the next frame (once): a release's first frame (its own time 15-20 ms, reflecting every
 # pass for the new light) then a 70 ms pass took it to 110 ms (issue 27, session 10). False: only an own
@@ -757,7 +761,7 @@ class RenderGraph:
         if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms) or compiled:
             return  # (a compile at a first draw: not what the draw costs, and not what the next one will)
         ratio = min(max(ms / predicted, 0.25), 4.0)
-        if key is not None:
+        if key is not None and predicted >= MARGIN_MIN_MS:
             self.margins.add(key[0], key[1], ratio)
         # the error of the pace it would have been predicted with: a running mean absolute deviation
         self.pace_err = (1.0 - PACE_WEIGHT) * self.pace_err + PACE_WEIGHT * abs(ratio - self.pace)
