@@ -6,6 +6,7 @@ frame), then a still view until the image is final.
 
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
         [--seconds 3] [--frame-log frames.jsonl] [--rest 1] [--prime on|off|both] [--cold-shaders]
+        [--frames on|off|both] [--whole-frame on|off|both] [--share on|off|both]
 
 ``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
 both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
@@ -28,7 +29,9 @@ Per technique and governor mode it prints:
   passes puts a new image on screen); goal <= 150 ms;
 - release -> final: from the last input to the complete image at the user's settings; its ratio to
   that settings' light-move frame measured alone (sync timing, no budget); goal <= 1.5;
-- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms; beside
+- the longest main-thread stall (the longest frame of the loop, UI included); goal <= 100 ms (a frame
+  that drew a program for the first time holds its JIT compile, which no band can split: such frames over
+  100 ms are counted apart, "k compiles", with the longest frame without one); beside
   it that frame less its buffer swap (our work), the longest swap, the longest collection, how many
   frames took longer than 100 ms (of all the frames of the script) and the load average
   of the machine while the row was measured (one minute, os.getloadavg);
@@ -110,6 +113,11 @@ class Driver:
         self._first_draws = app.frame.renderer.shaders.first_draws
         self.first_draws: dict[str, int] = {}  # per phase: programs drawn for the first time (a JIT each)
         self.idle_ms: list[float] = []  # the frames of the rests before each drag (the priming's)
+        self.frame_fd: list[int] = []  # each frame's first draws (a program JIT-compiled there: a compile, not a band)
+        # frames that ran passes under a budget: (the graph's wall ms, the budget it was given), the graph's
+        # own keeping of its budget apart from the frame around it (the UI, the swap, the machine's stalls)
+        self.graph_fits: list[tuple[float, float]] = []
+        self.idle_fd: list[int] = []
 
     def step(self) -> None:
         GC.take()
@@ -129,6 +137,10 @@ class Driver:
         first = fr.renderer.shaders.first_draws - self._first_draws  # programs drawn for the first time
         self._first_draws += first
         self.first_draws[self.tag["phase"]] = self.first_draws.get(self.tag["phase"], 0) + first
+        self.frame_fd.append(first)
+        gb, g = getattr(fr, "last_budget_ms", None), fr.last_graph
+        if gb is not None and g is not None and rep is not None and rep.ran and not first and self.tag["phase"] != "rest":
+            self.graph_fits.append((g.run_ms, gb))
         if self.log is not None:
             self.log.write(json.dumps({**self.tag, "frame_ms": round((t1 - t0) * 1000.0, 2),
                                        "render_ms": round(fr._render_ms or 0.0, 2),
@@ -140,6 +152,11 @@ class Driver:
                                        # each pass that ran or ran a band here: its ms (sync timing on llvmpipe)
                                        "pass_ms": {k: round(v, 1) for k, v in getattr(fr.last_graph, "frame_ms", {}).items()},
                                        "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
+                                       "render_budget_ms": round(getattr(fr, "last_budget_ms", None) or 0.0, 1),
+                                       "graph_run_ms": round(getattr(fr.last_graph, "run_ms", 0.0), 2),
+                                       # the graph's margin on its predictions (every pass's p99: kernel/margin.py)
+                                       "margin": round(fr.last_graph.margins.factor("") or 0.0, 2)
+                                       if getattr(fr.last_graph, "margins", None) is not None else None,
                                        "overhead_ms": round(fr.overhead_ms or 0.0, 1),
                                        "whole_frame": _frame_mod().WHOLE_FRAME}) + "\n")
 
@@ -158,7 +175,8 @@ class Driver:
                                   or not fr.primer.pending(fr.governor, fr.state.settings)):
                 break
         self.idle_ms += self.frame_ms[n:]
-        del self.frame_ms[n:], self.swap_ms[n:], self.gc_ms[n:]
+        self.idle_fd += self.frame_fd[n:]
+        del self.frame_ms[n:], self.swap_ms[n:], self.gc_ms[n:], self.frame_fd[n:]
         self.full_gcs = gcs  # the idle full collection (ui/collector.py) is the rest's, not the script's
         return time.perf_counter() - start
 
@@ -225,16 +243,19 @@ def full_frame_alone(app) -> float:
     return statistics.median(ms)
 
 
-def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=None, rest_s: float = 1.0) -> dict:
+def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=None, rest_s: float = 1.0,
+            arm: dict | None = None) -> dict:
     from skinviewer.ground.settings import validate
     st = app.state
     st.set_settings(validate({**st.settings.model_dump(mode="json"), "technique": technique}), "technique")
     st.apply({"render.governor": mode})
-    d = Driver(app, log, {"technique": technique, "governor": mode})
+    d = Driver(app, log, {"technique": technique, "governor": mode, **(arm or {})})  # arm: the A/B switches
     d.until_final()
     d.frame_ms.clear()
     d.swap_ms.clear()
     d.gc_ms.clear()
+    d.frame_fd.clear()
+    d.graph_fits.clear()
     d.full_gcs = 0
     d.first_draws.clear()
     load0 = os.getloadavg()[0]
@@ -269,8 +290,25 @@ def run_one(app, technique: str, mode: str, seconds: float, n_edits: int, log=No
             "load": 0.5 * (load0 + os.getloadavg()[0]),
             "preview": preview, "preview_err": preview_err, "identical": identical,
             "light_start_ms": light_start, "idle_max_ms": max(d.idle_ms, default=0.0), "rest_s": rested,
+            # a frame that drew a program for the first time holds its compile (llvmpipe's JIT at the first
+            # draw, which no band can split): the longest frames and rests without one, and with one
+            "stall_band_ms": max((f for f, c in zip(d.frame_ms, d.frame_fd) if not c), default=0.0),
+            "over_100_compile": sum(f > 100.0 and c > 0 for f, c in zip(d.frame_ms, d.frame_fd)),
+            "idle_band_ms": max((f for f, c in zip(d.idle_ms, d.idle_fd) if not c), default=0.0),
+            "idle_compile_ms": max((f for f, c in zip(d.idle_ms, d.idle_fd) if c), default=0.0),
+            "idle_compiles": sum(c > 0 for c in d.idle_fd),
+            # the render graph against the budget it was given (frames that ran passes, no compile)
+            "graph_over": sum(ms > b + 1.0 for ms, b in d.graph_fits), "graph_frames": len(d.graph_fits),
+            "graph_over_p99": float(np.percentile([ms / b for ms, b in d.graph_fits], 99)) if d.graph_fits else float("nan"),
             "drag_first_draws": d.first_draws.get("orbit drag", 0) + d.first_draws.get("light drag", 0),
             "first_draws": dict(d.first_draws), "prime": app.frame.primer.enabled}
+
+
+def _compiles(row: dict) -> str:
+    """ " (k compiles, longest frame without one: x ms)" when k of the frames over 100 ms drew a program for
+    the first time (its JIT, not a band: nothing the budget can split)."""
+    k = row.get("over_100_compile", 0)
+    return f" ({k} compiles; without: {row['stall_band_ms']:,.0f} ms)" if k else ""
 
 
 def markdown(rows: list[dict], head: str) -> str:
@@ -278,8 +316,9 @@ def markdown(rows: list[dict], head: str) -> str:
     off and on side by side (one run), the load beside each row."""
     out = [head, "",
            "| scene | technique | p95 drags: off → on | p95 edits: off → on | release → final, on (× alone) "
-           "| longest frame: off → on | on: its work / swap | on: frames > 100 ms | on: full GCs | load |",
-           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+           "| longest frame: off → on | on: its work / swap | on: frames > 100 ms | on: renders over their budget "
+           "(p99 of render / budget) | on: full GCs | load |",
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     by = {(r["scene"], r["technique"], r["mode"], r["prime"]): r for r in rows}
     both = len({r["prime"] for r in rows}) > 1
     for (scene, t, mode, prime), on in by.items():
@@ -296,17 +335,20 @@ def markdown(rows: list[dict], head: str) -> str:
         load = f"{off['load']:.1f} / {on['load']:.1f}" if off else f"{on['load']:.1f}"
         out.append(f"| {scene} | {t} | {p_off} → {b(on['p95_drag'])} ms | {e_off} → {b(on['p95_edits'])} ms "
                    f"| {on['release_ms']:,.0f} ms ({ratio:.2f}×) | {s_off} → {b(on['stall_ms'])} ms "
-                   f"| {on['work_stall_ms']:,.0f} / {on['swap_max_ms']:,.0f} ms | {on['over_100']} / {on['frames']} "
+                   f"| {on['work_stall_ms']:,.0f} / {on['swap_max_ms']:,.0f} ms | {on['over_100']} / {on['frames']}"
+                   f"{_compiles(on)} | {on['graph_over']} / {on['graph_frames']} ({on['graph_over_p99']:.2f}) "
                    f"| {on['full_gcs']} | {load} |")
     out += ["", "The first draws (issue 27): the governor on, the light drag's first 3 frames (the longest), programs "
             "drawn for the first time during the drags (each a JIT compile on llvmpipe), the longest frame of the "
             "rests before each drag (the idle priming's slices), the rests' seconds in all:", "",
-            "| scene | technique | priming | light drag's first frames | first draws in the drags | longest rest frame | rests |",
+            "| scene | technique | priming | light drag's first frames | first draws in the drags "
+            "| longest rest frame: no compile / a compile (rest frames compiling) | rests |",
             "| --- | --- | --- | --- | --- | --- | --- |"]
     for (scene, t, mode, prime), on in by.items():
         if mode != "off":
             out.append(f"| {scene} | {t} | {'on' if prime else 'off'} | {on['light_start_ms']:,.0f} ms "
-                       f"| {on['drag_first_draws']} | {on['idle_max_ms']:,.0f} ms | {on['rest_s']:.1f} s |")
+                       f"| {on['drag_first_draws']} | {on['idle_band_ms']:,.0f} / {on['idle_compile_ms']:,.0f} ms "
+                       f"({on['idle_compiles']}) | {on['rest_s']:.1f} s |")
     same = all(r["identical"] for r in rows)
     out += ["", f"Every final image equals the ungoverned render bit for bit: {'yes' if same else 'NO'} "
             f"({sum(r['identical'] for r in rows)} / {len(rows)} rows)."]
@@ -333,6 +375,15 @@ def main() -> int:
     ap.add_argument("--share", choices=("on", "off", "both"), default="on",
                     help="passes copied between the user's graph and a preview's when their keys are equal "
                          "(RenderGraph.share_passes); both: the governed row twice, sharing off then on, in one viewer")
+    ap.add_argument("--frames", choices=("on", "off", "both"), default="on",
+                    help="this session's budget keeping (issue 27, session 10): the look-ahead's margin at the p99 "
+                         "of each draw's recent errors (kernel.graph.QUANTILE_MARGIN), a first pass that does not fit "
+                         "after the frame's own time waits a frame (DEFER_UNFIT_FIRST); off: the pace and its mean "
+                         "error (the rule before); both: the governed row twice, off then on, in one viewer (an A/B)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="the governed arms this many times, interleaved (A, B, A, B): on a shared machine whose load "
+                         "drifts, each arm's figures then come from the same stretch of time (rows 'run k')")
+    ap.add_argument("--no-off", action="store_true", help="no governor-off row (only the governed arms: an A/B)")
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
                          "budgeted at their running upper bound, the look-ahead's error margin, no refresh of an "
@@ -387,15 +438,22 @@ def main() -> int:
             from skinviewer.ui import frame as frame_mod
             shares = {"on": [True], "off": [False], "both": [False, True]}[args.share]
             wholes = {"on": [True], "off": [False], "both": [False, True]}[args.whole_frame]
+            frames = {"on": [True], "off": [False], "both": [False, True]}[args.frames]
             pace_err_k = graph_mod.PACE_ERR_K
             for name in names:
-                arms = [("off", shares[-1], wholes[-1])] + [("interactive", sh, wh) for sh in shares for wh in wholes]
-                for mode, share, whole in arms:
+                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], 0)]) + [
+                    ("interactive", sh, wh, fr, k) for k in range(max(args.repeat, 1))
+                    for sh in shares for wh in wholes for fr in frames]
+                for mode, share, whole, new, k in arms:
                     graph_mod.SHARE_PASSES = share
                     frame_mod.WHOLE_FRAME = whole
                     graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
                     graph_mod.SAMPLED_SYNC = whole
-                    row = run_one(app, name, mode, seconds, n_edits, log, args.rest)
+                    graph_mod.QUANTILE_MARGIN = graph_mod.DEFER_UNFIT_FIRST = new
+                    for g in app.renderer.graphs.values():
+                        g.margins.clear()  # each arm learns its own margins
+                    row = run_one(app, name, mode, seconds, n_edits, log, args.rest,
+                                  {"share": share, "whole_frame": whole, "p99_margin": new, "run": k})
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
@@ -405,6 +463,12 @@ def main() -> int:
                         row["technique"] = f"{row['technique']} (whole frame {'on' if whole else 'off'})"
                         if not whole:
                             row["mode"] = row["mode"] + ", whole frame off"
+                    if len(frames) > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} (p99 margin {'on' if new else 'off'})"
+                        if not new:
+                            row["mode"] = row["mode"] + ", p99 margin off"
+                    if args.repeat > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} run {k + 1}"
                     rows.append(row)
                     err = "" if row["preview_err"] is None else f"{row['preview_err']:.1%}"
                     print(f"{scene_name:<6} {row['technique']:<9} {mode:<11} {'on' if prime else 'off':<5} "
@@ -413,7 +477,9 @@ def main() -> int:
                           f"{row['stall_ms']:8.0f} {row['work_stall_ms']:6.0f} {row['swap_max_ms']:6.0f} {row['gc_max_ms']:5.0f} "
                           f"{row['over_100']:>4}/{row['frames']:<4} {row['load']:5.1f} "
                           f"{row['preview']:<48} {err:>7} {row['identical']!s:>18} {row['light_start_ms']:11.0f} "
-                          f"{row['drag_first_draws']:9d} {row['idle_max_ms']:8.0f}", flush=True)
+                          f"{row['drag_first_draws']:9d} {row['idle_max_ms']:8.0f} "
+                          f"graph over budget {row['graph_over']}/{row['graph_frames']} p99 {row['graph_over_p99']:.2f}",
+                          flush=True)
         finally:
             destroy_app(app)
     if log is not None:

@@ -33,6 +33,7 @@ from skinviewer.ground.settings import Settings, get_path, value_key
 from skinviewer.kernel.compiler import affected, order_passes, pixels, prune_reason, why
 from skinviewer.kernel.execute import ExecuteContext
 from skinviewer.kernel.gpu import GpuServices, write_uniform
+from skinviewer.kernel.margin import ANY, ErrorQuantiles
 from skinviewer.kernel.pass_api import GraphError as GraphError
 from skinviewer.kernel.pass_api import Pass as Pass
 from skinviewer.kernel.pass_api import Reflection as Reflection
@@ -61,6 +62,24 @@ PACE_ERR_MAX = 0.5  # at most this share of the prediction (a loaded machine's e
 SAMPLED_SYNC = True
 SAMPLE_ERR = 0.15
 SYNC_EVERY = 4
+# the look-ahead's margin from the distribution of its errors (issue 27, session 10: every frame within the
+# budget; kernel/margin.py): a predicted cost is budgeted at the MARGIN_Q quantile of its draw's recent
+# actual / predicted ratios (the budget's p99, not its mean), its pass's or every pass's while the draw has
+# fewer than MARGIN_MIN_N; before that the pace and PACE_ERR_K mean errors. False: the pace rule alone (A/B)
+QUANTILE_MARGIN = True
+MARGIN_Q = 0.99
+MARGIN_WINDOW = 48
+MARGIN_MIN_N = 6
+MARGIN_MAX = PACE_MAX + PACE_ERR_MAX  # at most the pace rule's widest (a load spike would stall every frame's work)
+# only costs predicted at this or more are kept for the margin: a band predicted at 1-4 ms is mostly fixed
+# latency (a glFinish's wake-up, its draw calls), its ratio 2-4x under load, and it cannot take a frame far
+# past its budget; kept, they set every pass's p99 at the cap (load 7-8: the margin of every pass was 4)
+MARGIN_MIN_MS = 5.0
+# the frame's first pass that does not fit what its own time left of the budget, but would fit a frame of
+# its own, waits for the next frame (once): a release's first frame (its own time 15-20 ms, reflecting every
+# pass for the new light) then a 70 ms pass took it to 110 ms (issue 27, session 10). False: only an own
+# time over half the budget ends a frame before its first pass (the rule before; A/B)
+DEFER_UNFIT_FIRST = True
 # a pass's last reflection is reused while nothing it read changed (RenderGraph._still_holds); False:
 # every pass reflects every frame (the cost before; benchmarks/bench_cpu_overhead.py compares both)
 REUSE_REFLECTIONS = True
@@ -197,6 +216,10 @@ class RenderGraph:
         # shared machine still ends the frame within its budget (issue 27: the whole frame)
         self.pace_err = 0.0
         self._starved = False  # the last run ran nothing: its own time had taken the budget (run)
+        self.margins = ErrorQuantiles(MARGIN_WINDOW, MARGIN_Q, MARGIN_MIN_N)  # _paced's per-draw error quantiles
+        # a run since the last _keep_pace drew a program for the first time: its cost is the driver's
+        # compile (llvmpipe: 0.1-2.5 s without Mesa's shader cache), no measure of the draw's (_keep_pace)
+        self._compiled = False
         self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
@@ -421,15 +444,23 @@ class RenderGraph:
                 # over several under the budget instead of freezing the viewer for all its passes
                 waits = partial & set(r.inputs)
                 # spent: what this pass (or its next band) last cost would take the frame past the budget
-                spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 \
-                    + self._paced(self._next_ms(p, r, progress, budget_ms)) > budget_ms
+                nxt = 0.0 if budget_ms is None else self._paced(
+                    self._next_ms(p, r, progress, budget_ms), p.name, self._draw_of(p.name, progress))
+                spent = budget_ms is not None and (time.perf_counter() - t_start) * 1000.0 + nxt > budget_ms
                 # the frame's first pass runs whatever it costs (progress), unless the graph's own time
                 # (reflecting every pass afresh: 20-45 ms in a release's first frame) already took half the
                 # budget and the pass would overrun it: then the frame ends here, once (next frame's own
                 # time is small), instead of one band on top of it (issue 27: the longest frames)
                 own_ms = (time.perf_counter() - t_start) * 1000.0
+                if budget_ms is not None and spent and not any_ran and progress is None and p.tileable:
+                    # a tileable pass starting in a frame whose own time took part of the budget (a
+                    # release's first frame): its bands made smaller, so its first fits what is left
+                    fitted = self._fitted_progress(p, r, key, budget_ms, own_ms)
+                    if fitted is not None:
+                        progress, spent = fitted, False
                 starve = budget_ms is not None and not any_ran and spent and not self._starved \
-                    and own_ms > max(0.5 * budget_ms, STARVE_MIN_MS)
+                    and (own_ms > max(0.5 * budget_ms, STARVE_MIN_MS)
+                         or self._fits_a_frame_of_its_own(nxt, own_ms, budget_ms))
                 if waits or (any_ran and spent) or starve:
                     rec.status = "deferred"
                     rec.reason = "waits for " + ", ".join(sorted(waits)) if waits else "frame time budget spent"
@@ -441,7 +472,7 @@ class RenderGraph:
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else why(old, key))
                 if p.tileable and budget_ms is not None:
-                    if progress is not None:
+                    if progress is not None and progress.done:
                         rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
                     progress = progress or TileProgress(key, self._tile_count(p, r, budget_ms))
                     self._progress[p.name] = progress
@@ -467,7 +498,7 @@ class RenderGraph:
                     else:
                         rec.ms = self._execute(p, r, frame, timing)
                         self.frame_ms[p.name] = rec.ms or 0.0
-                        self._keep_pace(predicted, rec.ms)
+                        self._keep_pace(predicted, rec.ms, (p.name, 0))
                 rec.draws = self._last_draws
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
@@ -613,7 +644,7 @@ class RenderGraph:
             return UNMEASURED_TILES
         # split by what it may cost, not by what it cost: its prediction scaled by the pace and the
         # predictions' error margin (_paced), so a machine whose costs stray gets smaller bands (issue 27)
-        ms = self._paced(ms)
+        ms = self._paced(ms, p.name)
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
         # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
         # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
@@ -674,17 +705,64 @@ class RenderGraph:
             progress = TileProgress({}, self._tile_count(p, r, budget_ms))
         return self._band_next_ms(p, r, progress) + self._check_after(p.name, progress)
 
-    def _paced(self, ms: float) -> float:
-        """A predicted cost scaled by how recent predictions fared (``pace``, 1 .. PACE_MAX), with a
-        margin of PACE_ERR_K times their mean error (``pace_err``): an upper bound, not a mean."""
+    def _paced(self, ms: float, name: str = "", draw: int = ANY) -> float:
+        """A predicted cost as an upper bound, not a mean: with QUANTILE_MARGIN, times the MARGIN_Q quantile
+        of the recent actual / predicted ratios of draw ``draw`` of pass ``name`` (its pass's, every pass's
+        while it has few: kernel/margin.py; a preview graph's, the user's graph's until it has its own);
+        before any were kept, scaled by how recent predictions fared
+        (``pace``, 1 .. PACE_MAX) with a margin of PACE_ERR_K times their mean error (``pace_err``)."""
+        f = self.margins.factor(name, draw) if QUANTILE_MARGIN else None
+        if f is None and QUANTILE_MARGIN and self._cost_fallback is not None:  # a preview's: the user's graph's
+            f = self._cost_fallback.margins.factor(name, draw)
+        if f is not None:
+            return ms * min(f, MARGIN_MAX)
         return ms * (min(max(self.pace, 1.0), PACE_MAX) + min(PACE_ERR_K * self.pace_err, PACE_ERR_MAX))
 
-    def _keep_pace(self, predicted: float | None, ms: float | None) -> None:
+    def _draw_of(self, name: str, progress: TileProgress | None, band: int | None = None) -> int:
+        """Which of the pass's dependent whole-target draws (ExecuteContext.units) band ``band`` (default:
+        the next) of ``progress`` draws: the key of its error statistics (0 for a pass of one draw)."""
+        d = self._units.get(name, 1)
+        if progress is None or d <= 1 or progress.count < d:
+            return 0
+        k = progress.done if band is None else band
+        return min(k * d // progress.count, d - 1)
+
+    def _fitted_progress(self, p: Pass, r: Reflection, key: dict[str, Any], budget_ms: float,
+                         own_ms: float) -> TileProgress | None:
+        """DEFER_UNFIT_FIRST, a tileable pass not started, the frame's first to run, whose first band (as
+        _tile_count splits it) does not fit what the graph's own time ``own_ms`` left of ``budget_ms``: the
+        bands (up to MAX_TILES, aligned to its draws) that make its first band fit that room, paced as
+        every band is; None when none do (or it was never measured). The same rows drawn in more bands:
+        the same image (issue 27, session 10: the final's first band in the release frame)."""
+        room = budget_ms - own_ms
+        if not DEFER_UNFIT_FIRST or room < STARVE_MIN_MS or self._expected_ms(p, r) is None:
+            return None
+        n = self._tile_count(p, r, budget_ms)
+        while n < MAX_TILES:
+            n = self._align_units(p.name, min(MAX_TILES, 2 * n))
+            progress = TileProgress(key, n)
+            if self._paced(self._next_ms(p, r, progress, budget_ms), p.name, self._draw_of(p.name, progress)) <= room:
+                return progress
+            if n >= MAX_TILES or self._align_units(p.name, min(MAX_TILES, 2 * n)) <= n:
+                break
+        return None
+
+    @staticmethod
+    def _fits_a_frame_of_its_own(paced_ms: float, own_ms: float, budget_ms: float) -> bool:
+        """DEFER_UNFIT_FIRST: the frame's first pass (its next band), at ``paced_ms``, does not fit what the
+        graph's own time ``own_ms`` left of ``budget_ms`` but fits a frame whose own time is small
+        (STARVE_MIN_MS): waiting a frame keeps both within the budget."""
+        return DEFER_UNFIT_FIRST and own_ms > STARVE_MIN_MS and paced_ms + STARVE_MIN_MS <= budget_ms
+
+    def _keep_pace(self, predicted: float | None, ms: float | None, key: tuple[str, int] | None = None) -> None:
         """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace
-        and its error."""
-        if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms):
-            return
+        and its error, and the error statistics of ``key`` (pass, draw) the margin is taken from."""
+        compiled, self._compiled = self._compiled, False
+        if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms) or compiled:
+            return  # (a compile at a first draw: not what the draw costs, and not what the next one will)
         ratio = min(max(ms / predicted, 0.25), 4.0)
+        if key is not None and predicted >= MARGIN_MIN_MS:
+            self.margins.add(key[0], key[1], ratio)
         # the error of the pace it would have been predicted with: a running mean absolute deviation
         self.pace_err = (1.0 - PACE_WEIGHT) * self.pace_err + PACE_WEIGHT * abs(ratio - self.pace)
         self.pace = (1.0 - PACE_WEIGHT) * self.pace + PACE_WEIGHT * ratio
@@ -711,7 +789,7 @@ class RenderGraph:
             nonlocal ms_now
             pred = sum(x for _, x in chain)
             if pred > 0.0:
-                self._keep_pace(pred, total_ms)
+                self._keep_pace(pred, total_ms, (p.name, self._draw_of(p.name, progress, chain[0][0])))
             for k, x in chain:
                 ms = total_ms * x / pred if pred > 0.0 else total_ms / len(chain)
                 ms_now += ms - progress.band_ms[k]
@@ -729,10 +807,12 @@ class RenderGraph:
                     and self.pace_err <= SAMPLE_ERR and len(chain) < SYNC_EVERY - 1
                     and progress.done + 1 < progress.count
                     and (spent if spent is not None else (time.perf_counter() - t_start) * 1000.0)
-                    + self._paced(predicted + self._band_ms_at(p, r, progress, progress.done + 1))
+                    + self._paced(predicted + self._band_ms_at(p, r, progress, progress.done + 1),
+                                  p.name, self._draw_of(p.name, progress))
                     + self._check_after(p.name, progress) <= budget_ms)
             if lazy and not chain:
                 self.ctx.finish()  # what ran before is not the chain's
+                self._compiled = False
                 chain_t0 = time.perf_counter()
             t_band = time.perf_counter()
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held,
@@ -744,7 +824,7 @@ class RenderGraph:
                 chain.append((progress.done, float(predicted if predicted is not None else ms or 0.0)))
                 ms = (time.perf_counter() - t_band) * 1000.0  # provisional, replaced by close()
             else:
-                self._keep_pace(predicted, ms)
+                self._keep_pace(predicted, ms, (p.name, self._draw_of(p.name, progress)))
             progress.done += 1
             ms_now += ms or 0.0
             progress.ms += ms or 0.0
@@ -754,7 +834,7 @@ class RenderGraph:
             now_ms = (time.perf_counter() - t_start) * 1000.0
             if chain:  # a lazy band's work may still be running: the frame's time at its prediction
                 now_ms = max(now_ms, (chain_t0 - t_start) * 1000.0 + sum(x for _, x in chain))
-            if now_ms + self._paced(self._band_next_ms(p, r, progress)) \
+            if now_ms + self._paced(self._band_next_ms(p, r, progress), p.name, self._draw_of(p.name, progress)) \
                     + self._check_after(p.name, progress) > budget_ms:
                 break
         if chain:  # the last band run was lazy (the look-ahead changed its mind): wait for it now
@@ -790,7 +870,7 @@ class RenderGraph:
         t0 = time.perf_counter()
         for query, rec, name, px, predicted in pending:
             rec.ms = _elapsed_ms(query)
-            self._keep_pace(predicted, rec.ms)
+            self._keep_pace(predicted, rec.ms, (name, 0))
             if rec.ms is not None:
                 self._last_ms[name] = rec.ms
                 self._last_px[name] = px
@@ -806,6 +886,7 @@ class RenderGraph:
         ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
         self._lod_notes.pop(p.name, None)
         t_enter = time.perf_counter()
+        first_draws = self.shaders.first_draws
         try:
             if timing == "sync":
                 if not lazy:
@@ -822,6 +903,8 @@ class RenderGraph:
         finally:
             ec._finish()
             self._last_draws = ec.draws
+            if self.shaders.first_draws > first_draws:  # a program finished (JIT-compiled) at its first draw
+                self._compiled = True
             self._exec_s += time.perf_counter() - t_enter
 
     # -- reliability: memory needed before allocating, non-finite outputs after running ----------

@@ -118,6 +118,7 @@ class FrameController:
         self.graph_own_ms: float | None = None
         self.last_own_ms = 0.0  # the graph's own time in the last frame's render (any frame)
         self.last_graph: Any = None  # the graph the last frame rendered in
+        self.last_budget_ms: float | None = None  # the budget the last frame's render was given
         self.quiet_frames = True  # a refinement in progress renders without presenting (can_skip_present)
         self._presented_at = 0.0
         # the whole frame kept to the budget (issue 27): what a frame spends before its render (the UI
@@ -314,11 +315,27 @@ class FrameController:
         self._interacting = interacting
         complete = self.report is None or self.report.complete
         g.set_overhead(self.frame_rest_ms() + (self.graph_own_ms or 0.0))
+        g.set_margin(self._graph_margin(s.technique))
         rung = g.rung_for(s, interacting, self._camera_input, complete)
         if g.message and g.message != self._gov_note:
             self.state.say(g.message)
         self._gov_note = g.message
         return rung
+
+    def _graph_margin(self, technique: str) -> float | None:
+        """The margin the render graph's look-ahead puts on its predicted costs (kernel/margin.py: the p99
+        of every pass's recent actual / predicted ratios) in the graph of the image on screen (a
+        preview's), else the user's graph of ``technique``; None: none known, or the margin off
+        (graph.QUANTILE_MARGIN)."""
+        from skinviewer.kernel import graph as graph_mod
+        if not graph_mod.QUANTILE_MARGIN:
+            return None
+        for key in (f"{technique}|{self._variant}" if self._variant else technique, technique):
+            g = self.renderer.graphs.get(key)
+            f = g.margins.factor("") if g is not None else None
+            if f is not None:
+                return min(float(f), graph_mod.MARGIN_MAX)
+        return None
 
     def start_with_preview(self) -> None:
         """Issue 34, the cold start: the first image is the technique's cheapest preview rung
@@ -555,6 +572,7 @@ class FrameController:
             if self._frame_t0 is not None and present:  # a presenting frame's UI built before its render
                 self.before.add((t0 - self._frame_t0) * 1000.0)
             budget = self.graph_budget_ms(present) if budget_ms is None else budget_ms
+            self.last_budget_ms = budget  # what the graph was given (bench_interaction's frame log)
             # a governed preview (not the user's settings): scene rules answer from coarser cached
             # estimates and outputs are checked for NaN/Inf once a frame of the final image finds them
             preview = self._governing and not rung.final

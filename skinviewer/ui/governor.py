@@ -56,6 +56,10 @@ class Governor:
         # what a displayed frame costs here besides rendering (UI, presenting): a rung fits when its
         # render cost plus this is within the budget (the frame controller keeps it up to date)
         self.overhead_ms = 0.0
+        # the render graph's margin (kernel/margin.py: the p99 of its recent actual / predicted costs): the
+        # graph stops a frame once its next work, at that upper bound, would pass the budget, so a rung
+        # fits one frame when its cost times this does (issue 27, session 10); 1: no margin known
+        self.margin = 1.0
         # costs seen here: (technique, rung, camera) -> running mean ms of its complete frames
         self._seen: dict[tuple[str, Rung, bool], float] = {}
 
@@ -73,6 +77,10 @@ class Governor:
     def set_overhead(self, ms: float | None) -> None:
         """What a displayed frame costs here besides rendering (None: not measured yet)."""
         self.overhead_ms = max(float(ms or 0.0), 0.0)
+
+    def set_margin(self, factor: float | None) -> None:
+        """The render graph's margin on its predicted costs (None: not known yet; at least 1)."""
+        self.margin = max(float(factor or 1.0), 1.0)
 
     def hold(self, rung: Rung) -> None:
         """The frame controller finishes a frame of ``rung`` begun earlier (a drag's frame part-way):
@@ -157,8 +165,9 @@ class Governor:
     def room(self) -> float:
         """What a rung's render may cost to fit: the budget less the rest of a frame (UI,
         presenting), with a margin (a pick that just fits is split over two frames by the graph's
-        own budget whenever the machine is a little slower than last time)."""
-        return FIT_MARGIN * (self.budget_ms - max(self.overhead_ms, 0.0))
+        own budget whenever the machine is a little slower than last time) -- or the graph's own margin
+        (``set_margin``) where that is wider: a rung that fits the graph's look-ahead in one frame."""
+        return min(FIT_MARGIN, 1.0 / self.margin) * (self.budget_ms - max(self.overhead_ms, 0.0))
 
     def pick(self, s: Settings, camera: bool = False) -> Pick:
         """The most accurate rung of ``s``'s ladder that fits the budget on the calibration held
