@@ -138,7 +138,9 @@ def test_a_camera_orbit_touches_only_what_the_camera_can_change(gl_ctx, monkeypa
     finally:
         r.release()
     on, off = got[True], got[False]
-    assert on[2] == off[2] == ["deon_final_view", "deon_final", "output"]
+    # the view pass and the light part on a software rasterizer, the one-pass final on a GPU (deon.SPLIT_FINAL)
+    assert on[2] == off[2] and on[2][-2:] == ["deon_final", "output"] and set(on[2]) <= {"deon_final_view",
+                                                                                          "deon_final", "output"}
     assert on[0]["order_passes"] == on[0]["prune_reason"] == on[0]["framebuffer"] == 0, on[0]
     assert on[0]["key"] == len(on[2])
     assert set(on[1]) == {"deon.tsm_light_index"}, on[1]

@@ -185,6 +185,7 @@ class RenderGraph:
         self._pending_queries: list[tuple[Any, PassRecord, str, int, float | None]] = []  # _collect_queries
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
         self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
+        self._value_paths: dict[str, list[str]] = {}  # top-level section -> the paths _value_keys got under it
         # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
         # per pass: (its last reflection, env token, scene, the top-level settings sections it read)
         self._reflected: dict[str, tuple[Reflection, Any, Any, frozenset[str]]] = {}
@@ -228,6 +229,7 @@ class RenderGraph:
         # their records: a frame of the same compile finds them so (run)
         self._settled: tuple[Any, dict[str, PassRecord]] | None = None
         self._prev_memo: tuple[dict[Any, Any], Any, Any] | None = None  # the last frame's memo (_recall)
+        self._rec_outputs: dict[str, tuple[Reflection, dict[str, dict[str, Any]]]] = {}  # _record_outputs
 
     # -- the resource cache's (kernel/resources.py) ---------------------------------------------
     @property
@@ -292,7 +294,14 @@ class RenderGraph:
         JSON of a whole section such as ``lights`` or ``deon.gaussians`` was most of a key's cost)."""
         old = self._value_keys
         if same is None or not old:
+            self._value_paths.clear()
             return {}
+        dropped = [self._value_paths.pop(section) for section in set(self._value_paths) - same]
+        if FAST_CACHED:  # the changed sections' paths dropped in place (a camera move: the camera's few)
+            for paths in dropped:
+                for path in paths:
+                    old.pop(path, None)
+            return old
         return {path: k for path, k in old.items() if path.split(".", 1)[0] in same}
 
     def _same_sections(self, settings: Settings) -> set[str] | None:
@@ -329,7 +338,8 @@ class RenderGraph:
                                    view=None if scene_less else view, interactive=interactive)
                 asker._frame_memo = memo
                 asker.memo(key, rule)
-            if memo[key][:4] != (last_memo.get(key) or ())[:4]:  # its answer, reads, notes and drops
+            now, then = memo[key], last_memo.get(key)
+            if now is not then and now[:4] != (then or ())[:4]:  # its answer, settings read, notes and drops
                 return False
         return True
 
@@ -388,6 +398,7 @@ class RenderGraph:
             for path in r.declared:
                 if path not in vk:
                     vk[path] = fast_value_key(frame.settings, path)
+                    self._value_paths.setdefault(path.split(".", 1)[0], []).append(path)
             key = {
                 "settings": {path: vk[path] for path in r.declared},
                 "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
@@ -478,9 +489,7 @@ class RenderGraph:
             old = self._keys.get(p.name)
             stamp = self._stamp(p, r, frame) if FAST_CACHED and not force else None
             key = old if old is not None and self._clean(p.name, old, stamp) else self._key(p, r, frame)
-            rec = PassRecord(p.name, "cached", inputs=list(r.inputs),
-                             outputs={k: {"size": list(v.size), "components": v.components, "dtype": v.dtype}
-                                      for k, v in r.outputs.items()})
+            rec = PassRecord(p.name, "cached", inputs=list(r.inputs), outputs=self._record_outputs(p.name, r))
             progress = self._progress.get(p.name)
             if progress is not None and (force or progress.key != key):
                 self._cancel(p.name)  # what its bands were computing is no longer wanted
@@ -608,6 +617,16 @@ class RenderGraph:
         # programs first compiled during this frame bumped the revision: record it as it is now
         self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
+
+    def _record_outputs(self, name: str, r: Reflection) -> dict[str, dict[str, Any]]:
+        """A pass's outputs as its record lists them; made once per reflection (FAST_CACHED: the frame
+        report's, read only)."""
+        kept = self._rec_outputs.get(name)
+        if FAST_CACHED and kept is not None and kept[0] is r:
+            return kept[1]
+        outputs = {k: {"size": list(v.size), "components": v.components, "dtype": v.dtype} for k, v in r.outputs.items()}
+        self._rec_outputs[name] = (r, outputs)
+        return outputs
 
     def _stamp(self, p: Pass, r: Reflection, frame: FrameInputs) -> tuple[Any, ...]:
         """What a pass's cache key can differ by between two frames in which it kept its reflection:
