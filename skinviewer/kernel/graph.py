@@ -333,7 +333,7 @@ class RenderGraph:
             return False
         last_memo = r._frame_memo
         for key, rule, scene_less in r._memos:
-            if key not in memo and not self._recall(key, memo, same, settings, token, scene, view):
+            if key not in memo and not self._recall(key, memo, same, token, scene, view):
                 asker = Reflection(settings, None if scene_less else scene, self.shape_state,
                                    view=None if scene_less else view, interactive=interactive)
                 asker._frame_memo = memo
@@ -343,11 +343,10 @@ class RenderGraph:
                 return False
         return True
 
-    def _recall(self, key: Any, memo: dict[Any, Any], same: set[str], settings: Settings, token: Any,
-                scene: Any, view: Any) -> bool:
+    def _recall(self, key: Any, memo: dict[Any, Any], same: set[str], token: Any, scene: Any, view: Any) -> bool:
         """A memoised rule's answer taken from the last frame's memo without asking it again (FAST_CACHED),
         when nothing it read differs now: the same scene, environment bake and preview flag, every setting
-        it declared or peeked in an unchanged section, not the raw settings unless none changed, the view's
+        it declared or peeked in an unchanged section, no read of the raw settings, the view's
         attributes and the shape state it read as they were, and the rules it asked answering as then
         (Reflection.memo's Reads); its state writes are made again. On a camera orbit d'Eon's blur plans
         and map sizes are recalled (the kernel rule, asked again for the head's new distance, answers the
@@ -376,11 +375,11 @@ class RenderGraph:
             elif kind == "write":
                 writes.append(read)
             elif kind == "memo":  # a rule it asked: answering as then (asked or recalled this frame)
-                if read[1] not in memo and not self._recall(read[1], memo, same, settings, token, scene, view):
+                if read[1] not in memo and not self._recall(read[1], memo, same, token, scene, view):
                     return False
                 if memo[read[1]][:4] != read[2]:
                     return False
-            elif len(same) != len(type(settings).model_fields):  # the raw settings: any section
+            else:  # the raw settings: a rule that reads them may read anything (the TSM rule's background worker)
                 return False
         for _, k, v in writes:
             state[k] = v
