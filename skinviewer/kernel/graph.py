@@ -661,7 +661,7 @@ class RenderGraph:
         d'Eon's 51 passes spent more on the 32 prune reasons than on its 3 passes' Python."""
         shape = tuple(refl[p.name] for p in self.passes)
         last = self._compiled
-        if FAST_CACHED and last is not None and last[1] == tuple(targets) \
+        if FAST_CACHED and last is not None and last[1] == tuple(targets) and len(last[0]) == len(shape) \
                 and all(a is b for a, b in zip(last[0], shape)):
             return last[2], last[3], last[4], last[5]
         order, live = order_passes(self.passes, refl, targets)
