@@ -21,6 +21,15 @@ the Python and the driver's work on the calling thread; llvmpipe's rasterizer th
 GL calls the passes made (counted by a shim around moderngl's objects, in this benchmark only):
 draws, framebuffer binds, texture binds, uniform writes. ``--profile TECH`` prints cProfile's top
 entries of TECH's camera-only and light-move frames.
+
+``--fast ab`` (the default): every frame twice, interleaved, with the graph's cached-frame fast path off
+("before": kernel/graph.FAST_CACHED False, as SKINVIEWER_GRAPH_FAST=0) and on ("after"), medians side by
+side; the passes run and the draws must be the same (checked: a line says so). ``--fast on|off``: one.
+The machine's load is printed at the start and the end (other work shares the cores).
+
+``--size 1920x1080`` (with ``--techniques phong,deon --kinds camera``): the default settings, maps and rules
+at that view, as the GPU check's frames (issue 27's goal: d'Eon's camera-only frame <= 1.2x Phong's);
+its "GPU ms" column sums the timer queries (meaningful on a real GPU only).
 """
 from __future__ import annotations
 
@@ -41,6 +50,7 @@ import moderngl  # noqa: E402
 
 from skinviewer.engine.renderer import Renderer  # noqa: E402
 from skinviewer.ground.settings import Settings, with_values  # noqa: E402
+from skinviewer.kernel import graph as graph_mod  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 
 SIZE, MAPS, MIN_MAPS = int(os.environ.get("CPU_BENCH_SIZE", 32)), 64, 256  # view, shadow/TSM maps, irradiance/light maps (their least value)
@@ -53,7 +63,13 @@ SLIDERS = {  # a setting of the technique's own section: its slider
 }
 
 
+VIEW: tuple[int, int] | None = None  # --size WxH: the defaults' maps and rules at this view (the GPU check's frames)
+
+
 def settings_for(tech: str) -> Settings:
+    if VIEW is not None:
+        return with_values(Settings(), {"technique": tech, "render.width": VIEW[0], "render.height": VIEW[1],
+                                        "render.timing": "gpu"})
     return with_values(Settings(), {"technique": tech, "render.width": SIZE, "render.height": SIZE,
                                     "render.timing": "gpu", "shadow.map_size": MAPS, "deon.tsm_size": MAPS,
                                     "deon.irradiance_size": MIN_MAPS, "gosselin.light_map_size": MIN_MAPS,
@@ -73,6 +89,7 @@ class GLCounter:
         "uniform writes": [(moderngl.Uniform, "write")],
         "state": [(moderngl.Context, "enable"), (moderngl.Context, "disable")],
         "finish": [(moderngl.Context, "finish")],
+        "fbo made": [(moderngl.Context, "framebuffer")],
     }
 
     def __init__(self) -> None:
@@ -151,7 +168,7 @@ def frames(s: Settings, k: int) -> dict[str, Settings]:
 
 
 def measure(r: Renderer, base: Settings, edited: Settings, counter: GLCounter | None = None
-            ) -> tuple[float, float, float, float, list[str]]:
+            ) -> tuple[float, float, float, float, list[str], float]:
     r.render(base)  # the base frame (not timed)
     r.ctx.finish()
     if counter is not None:
@@ -169,7 +186,8 @@ def measure(r: Renderer, base: Settings, edited: Settings, counter: GLCounter | 
     if CLOCK is not None:
         CLOCK.on = False
         graph_ms = CLOCK.s * 1000.0
-    return wall, cpu, r.graph(base.technique).own_ms, graph_ms, rep.ran
+    gpu = sum(p.ms or 0.0 for p in rep.passes if p.status == "ran")  # timer queries (llvmpipe's: far too low)
+    return wall, cpu, r.graph(base.technique).own_ms, graph_ms, rep.ran, gpu
 
 
 def profile(r: Renderer, base: Settings, edited: Settings, runs: int, top: int) -> str:
@@ -188,14 +206,31 @@ def profile(r: Renderer, base: Settings, edited: Settings, runs: int, top: int) 
     return "\n".join(lines[start:start + top + 1])
 
 
+def load() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"load {one:.2f} {five:.2f} {fifteen:.2f} (1, 5, 15 min)"
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--techniques", default=",".join(TECHNIQUES))
     ap.add_argument("--profile", default="deon", help="technique whose frames cProfile lists ('' : none)")
     ap.add_argument("--top", type=int, default=18)
+    ap.add_argument("--fast", choices=("ab", "on", "off"), default="ab",
+                    help="the graph's cached-frame fast path (kernel/graph.FAST_CACHED): both, interleaved, or one")
+    ap.add_argument("--kinds", default="camera,light,slider", help="frame kinds (camera, light, slider)")
+    ap.add_argument("--size", default="", help="WxH: the default settings (maps, rules) at this view instead of "
+                    "the tiny view and maps (e.g. 1920x1080, the GPU check's frames)")
     args = ap.parse_args(argv)
+    global VIEW
+    if args.size:
+        w, _, h = args.size.partition("x")
+        VIEW = (int(w), int(h or w))
     techs = [t for t in args.techniques.split(",") if t]
+    kinds = tuple(k for k in args.kinds.split(",") if k)
+    modes = {"ab": (False, True), "on": (True,), "off": (False,)}[args.fast]
+    start_load = load()
     ctx = headless_context()
     global CLOCK
     CLOCK = GraphClock()
@@ -203,56 +238,101 @@ def main(argv: list[str] | None = None) -> None:
     base = {t: settings_for(t) for t in techs}
     for t in techs:  # warm-up: compile shaders, build the scene, allocate; then every frame kind once
         r.render(base[t], force=True)
-        for s in frames(base[t], 0).values():
-            measure(r, base[t], s)
-    kinds = ("camera", "light", "slider")
-    res: dict[tuple[str, str], list[tuple[float, float, float, float]]] = {(t, k): [] for t in techs for k in kinds}
-    ran: dict[tuple[str, str], int] = {}
+        for mode in modes:
+            graph_mod.FAST_CACHED = mode
+            for kind, s in frames(base[t], 0).items():
+                if kind in kinds:
+                    measure(r, base[t], s)
+    Key = tuple[str, str, bool]
+    res: dict[Key, list[tuple[float, float, float, float, float]]] = {(t, k, m): [] for t in techs for k in kinds
+                                                                      for m in modes}
+    ran: dict[Key, list[str]] = {}
     for i in range(args.repeats):
         for t in techs:
             for kind, s in frames(base[t], i).items():
-                w, c, o, gm, names = measure(r, base[t], s)
-                res[(t, kind)].append((w, c, o, gm))
-                ran[(t, kind)] = len(names)
+                if kind not in kinds:
+                    continue
+                for mode in (modes if i % 2 == 0 else modes[::-1]):  # interleaved, each first half the time
+                    graph_mod.FAST_CACHED = mode
+                    w, c, o, gm, names, gpu = measure(r, base[t], s)
+                    res[(t, kind, mode)].append((w, c, o, gm, gpu))
+                    ran[(t, kind, mode)] = names
     counter = GLCounter()
-    calls: dict[tuple[str, str], Counter[str]] = {}
+    calls: dict[Key, Counter[str]] = {}
     try:
         for t in techs:
             for kind, s in frames(base[t], 1).items():
-                measure(r, base[t], s, counter)
-                calls[(t, kind)] = Counter(counter.counts)
+                for mode in modes:
+                    if kind in kinds:
+                        graph_mod.FAST_CACHED = mode
+                        measure(r, base[t], s, counter)
+                        calls[(t, kind, mode)] = Counter(counter.counts)
     finally:
         counter.restore()
+    graph_mod.FAST_CACHED = modes[-1]
 
-    def med(t: str, kind: str, j: int) -> float:
-        return statistics.median(x[j] for x in res[(t, kind)])
+    def med(t: str, kind: str, mode: bool, j: int) -> float:
+        return statistics.median(x[j] for x in res[(t, kind, mode)])
 
     ref = "phong" if "phong" in techs else techs[0]
-    print(f"# the graph's own CPU work per frame — {describe(ctx)}")
-    print(f"# default settings but a {SIZE}² view, {MAPS}² shadow/TSM maps, {MIN_MAPS}² irradiance/light maps "
-          f"(LIGHTER than the defaults' 640² view and 1024² maps, so that shading is small; d'Eon's "
-          f"kernel-under-a-pixel rule off, so its whole chain runs as at the default view); default head; "
-          f"timing 'gpu' (no glFinish between passes), one glFinish after the frame; medians of {args.repeats}")
+    new = modes[-1]
+    print(f"# the graph's own CPU work per frame — {describe(ctx)}; {start_load} at the start")
+    what = (f"default settings at a {VIEW[0]}x{VIEW[1]} view" if VIEW else
+            f"default settings but a {SIZE}² view, {MAPS}² shadow/TSM maps, {MIN_MAPS}² irradiance/light maps "
+            f"(LIGHTER than the defaults' 640² view and 1024² maps, so that shading is small; d'Eon's "
+            f"kernel-under-a-pixel rule off, so its whole chain runs as at the default view)")
+    print(f"# {what}; default head; timing 'gpu' (no glFinish between passes), one glFinish after the frame; "
+          f"medians of {args.repeats}; SKINVIEWER_SPLIT_FINAL={os.environ.get('SKINVIEWER_SPLIT_FINAL', 'auto')}")
     print(f"# wall: frame ms; cpu: this thread's CPU ms; own: the graph's work outside the passes' execute; "
           f"reflect+keys: this thread's CPU ms in the graph's reflect (every pass) and cache keys; "
-          f"x {ref}: ratio to {ref}'s in the same run")
+          f"x {ref}: ratio to {ref}'s in the same run and mode; "
+          + ("before / after: the graph's cached-frame fast path off / on (kernel/graph.FAST_CACHED), "
+             "interleaved; GL calls counted in one frame of each" if len(modes) == 2 else
+             f"fast path {'on' if new else 'off'}"))
     print()
-    print(f"| technique | frame | passes run | wall ms | × {ref} | cpu ms | × {ref} | own ms | reflect+keys ms | × {ref} "
-          "| draws | fbo binds | tex binds | uniform writes | state | finish |")
-    print("| --- " * 16 + "|")
-    for kind in kinds:
-        for t in techs:
-            c = calls.get((t, kind), Counter())
-            print(f"| {t} | {kind} | {ran[(t, kind)]} | {med(t, kind, 0):.2f} | "
-                  f"{med(t, kind, 0) / med(ref, kind, 0):.2f} | {med(t, kind, 1):.2f} | "
-                  f"{med(t, kind, 1) / med(ref, kind, 1):.2f} | {med(t, kind, 2):.2f} | {med(t, kind, 3):.2f} | "
-                  f"{med(t, kind, 3) / med(ref, kind, 3):.2f} | "
-                  f"{c['draws']} | {c['fbo binds']} | {c['tex binds']} | {c['uniform writes']} | {c['state']} | "
-                  f"{c['finish']} |")
+    if len(modes) == 2:
+        print(f"| technique | frame | passes run | wall ms before / after | wall × {ref} before / after "
+              f"| GPU ms (timer queries) | cpu ms before / after | cpu after/before "
+              f"| cpu × {ref} before / after | own ms before / after | reflect+keys ms before / after "
+              "| draws | fbo binds | fbo made before / after | tex binds | uniform writes | state |")
+        print("| --- " * 17 + "|")
+        same = True
+        for kind in kinds:
+            for t in techs:
+                b, a = calls.get((t, kind, False), Counter()), calls.get((t, kind, True), Counter())
+                same &= ran[(t, kind, False)] == ran[(t, kind, True)] and b["draws"] == a["draws"]
+                print(f"| {t} | {kind} | {len(ran[(t, kind, True)])} | "
+                      f"{med(t, kind, False, 0):.2f} / {med(t, kind, True, 0):.2f} | "
+                      f"{med(t, kind, False, 0) / med(ref, kind, False, 0):.2f} / "
+                      f"{med(t, kind, True, 0) / med(ref, kind, True, 0):.2f} | {med(t, kind, True, 4):.2f} | "
+                      f"{med(t, kind, False, 1):.2f} / {med(t, kind, True, 1):.2f} | "
+                      f"{med(t, kind, True, 1) / med(t, kind, False, 1):.2f} | "
+                      f"{med(t, kind, False, 1) / med(ref, kind, False, 1):.2f} / "
+                      f"{med(t, kind, True, 1) / med(ref, kind, True, 1):.2f} | "
+                      f"{med(t, kind, False, 2):.2f} / {med(t, kind, True, 2):.2f} | "
+                      f"{med(t, kind, False, 3):.2f} / {med(t, kind, True, 3):.2f} | "
+                      f"{a['draws']} | {a['fbo binds']} | {b['fbo made']} / {a['fbo made']} | {a['tex binds']} | "
+                      f"{a['uniform writes']} | {a['state']} |")
+        print(f"\n# the same passes ran and the same draws were made before and after: {'yes' if same else 'NO'}")
+    else:
+        print(f"| technique | frame | passes run | wall ms | × {ref} | cpu ms | × {ref} | own ms | reflect+keys ms "
+              f"| × {ref} | draws | fbo binds | fbo made | tex binds | uniform writes | state | finish |")
+        print("| --- " * 17 + "|")
+        for kind in kinds:
+            for t in techs:
+                c = calls.get((t, kind, new), Counter())
+                print(f"| {t} | {kind} | {len(ran[(t, kind, new)])} | {med(t, kind, new, 0):.2f} | "
+                      f"{med(t, kind, new, 0) / med(ref, kind, new, 0):.2f} | {med(t, kind, new, 1):.2f} | "
+                      f"{med(t, kind, new, 1) / med(ref, kind, new, 1):.2f} | {med(t, kind, new, 2):.2f} | "
+                      f"{med(t, kind, new, 3):.2f} | {med(t, kind, new, 3) / max(med(ref, kind, new, 3), 1e-9):.2f} | "
+                      f"{c['draws']} | {c['fbo binds']} | {c['fbo made']} | {c['tex binds']} | "
+                      f"{c['uniform writes']} | {c['state']} | {c['finish']} |")
+    print(f"# {load()} at the end")
     if args.profile and args.profile in techs:
         t = args.profile
         for kind in ("camera", "light"):
-            print(f"\n## cProfile: {t}, {kind} frame ({max(args.repeats // 3, 3)} frames, by own time)\n```")
+            print(f"\n## cProfile: {t}, {kind} frame, fast path {'on' if new else 'off'} "
+                  f"({max(args.repeats // 3, 3)} frames, by own time)\n```")
             print(profile(r, base[t], frames(base[t], 1)[kind], max(args.repeats // 3, 3), args.top))
             print("```")
     r.release()

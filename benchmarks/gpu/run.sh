@@ -75,7 +75,12 @@ if want perf; then
     timeout "$(left 30)" python3 benchmarks/bench_blur_floor.py --compute "${PERF[@]}" >> "$OUT/perf.md" 2>&1
     timeout "$(left 10)" python3 benchmarks/bench_compute_blur.py --maps "${PERF[1]}" --repeats 9 >> "$OUT/perf.md" 2>&1
     if [ -f benchmarks/bench_cpu_overhead.py ]; then
-        timeout "$(left 20)" python3 benchmarks/bench_cpu_overhead.py >> "$OUT/perf.md" 2>&1
+        # both paths of the graph's cached-frame fast path, interleaved (session 10: --fast ab), then issue 27's
+        # camera-only goal at the frames' size: d'Eon's wall / Phong's, the fast path off / on
+        PERF_END=$(( PERF_END + 40 ))
+        timeout "$(left 35)" python3 benchmarks/bench_cpu_overhead.py --repeats 9 >> "$OUT/perf.md" 2>&1
+        timeout "$(left 25)" python3 benchmarks/bench_cpu_overhead.py --size "${W}x${H}" --techniques phong,deon \
+            --kinds camera --repeats 15 --profile "" >> "$OUT/perf.md" 2>&1
     fi
     # d'Eon's light move draw by draw, the summed step four texels a fragment (forced: auto keeps it to
     # software rasterizers) against one texel a fragment (B): whether the quad sum pays on a GPU too

@@ -20,6 +20,7 @@ running, bands under a budget, timing).
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -34,12 +35,12 @@ from skinviewer.kernel.compiler import affected, order_passes, pixels, prune_rea
 from skinviewer.kernel.execute import ExecuteContext
 from skinviewer.kernel.gpu import GpuServices, write_uniform
 from skinviewer.kernel.margin import ANY, ErrorQuantiles
+from skinviewer.kernel.pass_api import MISSING, OPAQUE, ShapeState, read_value, state_value
 from skinviewer.kernel.pass_api import GraphError as GraphError
 from skinviewer.kernel.pass_api import Pass as Pass
 from skinviewer.kernel.pass_api import Reflection as Reflection
 from skinviewer.kernel.pass_api import ResourceLimitError as ResourceLimitError
 from skinviewer.kernel.pass_api import SettingsView as SettingsView
-from skinviewer.kernel.pass_api import ShapeState
 from skinviewer.kernel.pass_api import TexSpec as TexSpec
 from skinviewer.kernel.report import TIMING_NOTES as TIMING_NOTES
 from skinviewer.kernel.report import FrameInputs as FrameInputs
@@ -88,6 +89,12 @@ REUSE_REFLECTIONS = True
 SHARE_PASSES = True
 # a pass of dependent draws is split into a multiple of them (_align_units); False: as counted (A/B)
 ALIGN_UNITS = True
+# issue 27, a cached frame's CPU (session 10): a frame whose passes all kept their reflections reuses
+# the last frame's order, live set and prune reasons (RenderGraph._compile), checks each pass's key by
+# what can change between two such frames (_clean) and NaN/Inf-scans into kept targets
+# (_scan_target); the same passes run, in the same order, with the same draws. False
+# (SKINVIEWER_GRAPH_FAST=0): every frame compiles, keys and allocates as before (A/B: bench_cpu_overhead.py)
+FAST_CACHED = os.environ.get("SKINVIEWER_GRAPH_FAST", "1") != "0"
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -197,6 +204,7 @@ class RenderGraph:
         self._pending_queries: list[tuple[Any, PassRecord, str, int, float | None]] = []  # _collect_queries
         self._checking = False  # this frame checks outputs (render.check_finite, not a preview)
         self._value_keys: dict[str, str] = {}  # settings path -> value_key, this run()'s (_kept_value_keys)
+        self._value_paths: dict[str, list[str]] = {}  # top-level section -> the paths _value_keys got under it
         # pass -> (its last reflection, (env bake, preview flag), the scene it saw): reused while it holds
         # per pass: (its last reflection, env token, scene, the top-level settings sections it read)
         self._reflected: dict[str, tuple[Reflection, Any, Any, frozenset[str]]] = {}
@@ -230,6 +238,21 @@ class RenderGraph:
         self.frame_ms: dict[str, float] = {}  # what each pass (its bands) cost in the last run, this frame only
         # a pass of dependent whole-target draws (ExecuteContext.units): how many it made last run
         self._units: dict[str, int] = {}
+        # the last compile (_compile): (every pass's reflection, targets, order, live set, prune reasons,
+        # the resources the order writes)
+        self._compiled: tuple[tuple[Reflection, ...], tuple[str, ...], list[Pass], set[str], dict[str, str],
+                              set[str]] | None = None
+        # the NaN/Inf scans' flag targets, kept across frames (_scan_target): per grid size, the textures and
+        # their framebuffers, and how many of them this frame's scans took so far
+        self._scan_targets: dict[tuple[int, int], list[tuple[moderngl.Texture, moderngl.Framebuffer]]] = {}
+        self._scan_used: dict[tuple[int, int], int] = {}
+        self._check_src: ShaderLibrary | None = None  # the library finite_check comes from (_check_program)
+        self._stamps: dict[str, tuple[dict[str, Any], tuple[Any, ...]]] = {}  # pass -> (its kept key, _stamp)
+        # the compile whose pruned passes the last frame dropped (outputs freed, keys and flags popped) and
+        # their records: a frame of the same compile finds them so (run)
+        self._settled: tuple[Any, dict[str, PassRecord]] | None = None
+        self._prev_memo: tuple[dict[Any, Any], Any, Any] | None = None  # the last frame's memo (_recall)
+        self._rec_outputs: dict[str, tuple[Reflection, dict[str, dict[str, Any]]]] = {}  # _record_outputs
 
     # -- the resource cache's (kernel/resources.py) ---------------------------------------------
     @property
@@ -270,6 +293,12 @@ class RenderGraph:
                 r._frame_memo = memo
                 p.reflect(r)
                 sections = frozenset(path.split(".", 1)[0] for path in (*r.declared, *r._peek_paths))
+            if FAST_CACHED and prev is not None and r is prev[0]:
+                # kept: its skip already cleared, its outputs' names as kept (unless pruned since: run)
+                if r.outputs and p.name not in self._produced:
+                    self._produced[p.name] = set(r.outputs)
+                refl[p.name] = r
+                continue
             self._reflected[p.name] = (r, token, scene if p.uses_scene else None, sections)
             if r.skip_reason is not None:  # a skipped pass declares nothing
                 r.inputs, r.outputs, r.programs, r._plan = [], {}, [], {}
@@ -278,6 +307,7 @@ class RenderGraph:
                     self.res.free(res)  # e.g. a gutter map of a map size no longer used
                 self._produced[p.name] = set(r.outputs)
             refl[p.name] = r
+        self._prev_memo = (memo, token, scene)  # the rules asked this frame: what _recall answers from next
         return refl
 
     def _kept_value_keys(self, same: set[str] | None) -> dict[str, str]:
@@ -287,7 +317,14 @@ class RenderGraph:
         JSON of a whole section such as ``lights`` or ``deon.gaussians`` was most of a key's cost)."""
         old = self._value_keys
         if same is None or not old:
+            self._value_paths.clear()
             return {}
+        dropped = [self._value_paths.pop(section) for section in set(self._value_paths) - same]
+        if FAST_CACHED:  # the changed sections' paths dropped in place (a camera move: the camera's few)
+            for paths in dropped:
+                for path in paths:
+                    old.pop(path, None)
+            return old
         return {path: k for path, k in old.items() if path.split(".", 1)[0] in same}
 
     def _same_sections(self, settings: Settings) -> set[str] | None:
@@ -319,13 +356,57 @@ class RenderGraph:
             return False
         last_memo = r._frame_memo
         for key, rule, scene_less in r._memos:
-            if key not in memo:
+            if key not in memo and not self._recall(key, memo, same, token, scene, view):
                 asker = Reflection(settings, None if scene_less else scene, self.shape_state,
                                    view=None if scene_less else view, interactive=interactive)
                 asker._frame_memo = memo
                 asker.memo(key, rule)
-            if memo[key] != last_memo.get(key):
+            now, then = memo[key], last_memo.get(key)
+            if now is not then and now[:4] != (then or ())[:4]:  # its answer, settings read, notes and drops
                 return False
+        return True
+
+    def _recall(self, key: Any, memo: dict[Any, Any], same: set[str], token: Any, scene: Any, view: Any) -> bool:
+        """A memoised rule's answer taken from the last frame's memo without asking it again (FAST_CACHED),
+        when nothing it read differs now: the same scene, environment bake and preview flag, every setting
+        it declared or peeked in an unchanged section, no read of the raw settings, the view's
+        attributes and the shape state it read as they were, and the rules it asked answering as then
+        (Reflection.memo's Reads); its state writes are made again. On a camera orbit d'Eon's blur plans
+        and map sizes are recalled (the kernel rule, asked again for the head's new distance, answers the
+        same); the TSM's light, which reads the camera, is asked."""
+        last = self._prev_memo
+        if not FAST_CACHED or last is None or last[1] != token or last[2] is not scene:
+            return False
+        entry = last[0].get(key)
+        if entry is None or len(entry) < 5:
+            return False
+        if any(path.split(".", 1)[0] not in same for path in entry[1]):
+            return False
+        state = self.shape_state
+        writes = []
+        for read in entry[4]:
+            kind = read[0]
+            if kind == "peek":
+                if read[1].split(".", 1)[0] not in same:
+                    return False
+            elif kind == "view":
+                if view is None or read_value(read[1], getattr(view, read[1])) != read[2]:
+                    return False
+            elif kind == "state":
+                if read[2] is OPAQUE or state_value(state.get(read[1], MISSING)) != read[2]:
+                    return False
+            elif kind == "write":
+                writes.append(read)
+            elif kind == "memo":  # a rule it asked: answering as then (asked or recalled this frame)
+                if read[1] not in memo and not self._recall(read[1], memo, same, token, scene, view):
+                    return False
+                if memo[read[1]][:4] != read[2]:
+                    return False
+            else:  # the raw settings: a rule that reads them may read anything (the TSM rule's background worker)
+                return False
+        for _, k, v in writes:
+            state[k] = v
+        memo[key] = entry
         return True
 
     def _key(self, p: Pass, r: Reflection, frame: FrameInputs) -> dict[str, Any]:
@@ -339,6 +420,7 @@ class RenderGraph:
             for path in r.declared:
                 if path not in vk:
                     vk[path] = fast_value_key(frame.settings, path)
+                    self._value_paths.setdefault(path.split(".", 1)[0], []).append(path)
             key = {
                 "settings": {path: vk[path] for path in r.declared},
                 "programs": {f"{n}{d}": self.shaders.version(n, dict(d) or None) for n, d in r.programs},
@@ -406,7 +488,7 @@ class RenderGraph:
         # force: every pass reflected afresh too (tests and benchmarks that change a pass's own state)
         refl = self._reflect_all(frame.settings, frame.scene, frame.frame_view, frame.interactive, same,
                                  reuse=not force)
-        order, live = order_passes(self.passes, refl, list(targets or self.targets))
+        order, live, prune_reasons, written = self._compile(refl, list(targets or self.targets))
         self.res.check_memory(refl, order)
         self.order = order
         self._last_refl = refl
@@ -424,21 +506,22 @@ class RenderGraph:
             realloc = False
             for res, spec in r.outputs.items():
                 realloc |= self.res.ensure(res, spec)
-            key = self._key(p, r, frame)
             if realloc:  # garbage under any key: run before it may be found cached
                 self._keys.pop(p.name, None)
             old = self._keys.get(p.name)
-            rec = PassRecord(p.name, "cached", inputs=list(r.inputs),
-                             outputs={k: {"size": list(v.size), "components": v.components, "dtype": v.dtype}
-                                      for k, v in r.outputs.items()})
+            stamp = self._stamp(p, r, frame) if FAST_CACHED and not force else None
+            key = old if old is not None and self._clean(p.name, old, stamp) else self._key(p, r, frame)
+            rec = PassRecord(p.name, "cached", inputs=list(r.inputs), outputs=self._record_outputs(p.name, r))
             progress = self._progress.get(p.name)
             if progress is not None and (force or progress.key != key):
                 self._cancel(p.name)  # what its bands were computing is no longer wanted
                 progress = None
-            if not force and old != key and progress is None and self._copy_from_peer(p, r, key, rec, timing):
+            changed = key is not old and old != key
+            if not force and changed and progress is None and self._copy_from_peer(p, r, key, rec, timing):
+                self._keep_stamp(p.name, key, stamp)
                 records[p.name] = rec  # an equal key in a peer graph: its outputs copied (the same result)
                 continue
-            if force or realloc or old != key:
+            if force or realloc or changed:
                 # a freshly (re)allocated output holds garbage under no key (popped above): deferred,
                 # it runs next frame like any other pass (its consumers wait) -- a first frame is spread
                 # over several under the budget instead of freezing the viewer for all its passes
@@ -508,6 +591,7 @@ class RenderGraph:
                 for res in r.outputs:
                     self.res.versions[res] = self.res.versions.get(res, 0) + 1
                 self._keys[p.name] = key
+                self._keep_stamp(p.name, key, stamp)
                 self._unchecked.discard(p.name)
                 if self._checking:
                     self._check(p.name, r.outputs)
@@ -515,9 +599,11 @@ class RenderGraph:
                     self._nonfinite[p.name] = []
                     if check_finite:
                         self._unchecked.add(p.name)
-            elif self._checking and p.name in self._unchecked and p.name not in self._progress:
-                self._unchecked.discard(p.name)  # ran in a preview; its outputs are as it left them
-                self._check(p.name, r.outputs)
+            else:
+                self._keep_stamp(p.name, old, stamp)
+                if self._checking and p.name in self._unchecked and p.name not in self._progress:
+                    self._unchecked.discard(p.name)  # ran in a preview; its outputs are as it left them
+                    self._check(p.name, r.outputs)
             rec.nonfinite = list(self._nonfinite.get(p.name, []))  # a cached output keeps its flag
             if p.name in self._notes:
                 rec.note, rec.figures = self._notes[p.name]
@@ -530,10 +616,16 @@ class RenderGraph:
         self._collect_checks(records)  # the frame's NaN/Inf scans, read back once every pass is issued
         # pruned: passes of the technique nobody consumes this frame; their outputs go back to the pool
         # (not a resource another pass writes now: ss_diffuse is ss_transmittance's or ss_lighting's)
-        written = {res for p in order for res in refl[p.name].outputs}
+        settled = self._settled if FAST_CACHED and self._settled is not None \
+            and self._settled[0] is self._compiled else None
         for p in self.passes:
-            if p.name not in live:
-                records[p.name] = PassRecord(p.name, "pruned", reason=prune_reason(p.name, refl, live),
+            if p.name not in live and settled is not None:
+                # pruned last frame under this very compile, its outputs freed and its state dropped then:
+                # only the reflection's output names to forget again (_reflect_all keeps them) and its record
+                self._produced.pop(p.name, None)
+                records[p.name] = settled[1][p.name]
+            elif p.name not in live:
+                records[p.name] = PassRecord(p.name, "pruned", reason=prune_reasons[p.name],
                                              inputs=list(refl[p.name].inputs))
                 for res in (set(refl[p.name].outputs) | self._produced.pop(p.name, set())) - written:
                     if res in self.res.textures:
@@ -544,6 +636,7 @@ class RenderGraph:
                 self.refining.discard(p.name)
                 if p.name in self._progress:
                     self._cancel(p.name)
+        self._settled = (self._compiled, {name: records[name] for name in prune_reasons}) if self._compiled else None
         self._starved = bool(budget_ms is not None and not any_ran and any(
             rec.status == "deferred" and rec.reason == "frame time budget spent" for rec in records.values()))
         report = FrameReport(self.frame, timing, [records[p.name] for p in order] +
@@ -554,6 +647,59 @@ class RenderGraph:
         # programs first compiled during this frame bumped the revision: record it as it is now
         self._idle = idle[:4] + (self.shaders.revision, timing, frame.interactive) if report.complete else None
         return report
+
+    def _record_outputs(self, name: str, r: Reflection) -> dict[str, dict[str, Any]]:
+        """A pass's outputs as its record lists them; made once per reflection (FAST_CACHED: the frame
+        report's, read only)."""
+        kept = self._rec_outputs.get(name)
+        if FAST_CACHED and kept is not None and kept[0] is r:
+            return kept[1]
+        outputs = {k: {"size": list(v.size), "components": v.components, "dtype": v.dtype} for k, v in r.outputs.items()}
+        self._rec_outputs[name] = (r, outputs)
+        return outputs
+
+    def _stamp(self, p: Pass, r: Reflection, frame: FrameInputs) -> tuple[Any, ...]:
+        """What a pass's cache key can differ by between two frames in which it kept its reflection:
+        the reflection itself (its settings, programs, outputs and plan parts are made from it while no
+        shader was replaced: _key), the shaders' revision, its inputs' versions, the scene if it uses
+        it, the camera if it is view-dependent (_key's parts, cheaper than the key)."""
+        versions = self.res.versions
+        return (r, self.shaders.revision, tuple([versions.get(res, 0) for res in r.inputs]),
+                (frame.scene_version, frame.mesh_lod) if p.uses_scene else None,
+                frame.view_key if p.view_dependent else None)
+
+    def _clean(self, name: str, old: dict[str, Any] | None, stamp: tuple[Any, ...] | None) -> bool:
+        """Whether a pass's kept key ``old`` is this frame's without making it (FAST_CACHED): its stamp
+        is the one kept with that very key (_keep_stamp; any new, popped or invalidated key is another
+        object) and it is not part-way through its bands."""
+        if stamp is None or old is None or name in self._progress:
+            return False
+        kept = self._stamps.get(name)
+        return kept is not None and kept[0] is old and kept[1] == stamp
+
+    def _keep_stamp(self, name: str, key: dict[str, Any] | None, stamp: tuple[Any, ...] | None) -> None:
+        """The stamp of the frame in which ``key`` (the pass's kept key, made or found equal) held."""
+        if key is None or stamp is None:
+            self._stamps.pop(name, None)
+        else:
+            self._stamps[name] = (key, stamp)
+
+    def _compile(self, refl: dict[str, Reflection], targets: list[str]
+                 ) -> tuple[list[Pass], set[str], dict[str, str], set[str]]:
+        """The order passes run in, the live set, why each other pass is pruned and what the order
+        writes (compiler.py): the last frame's when every pass kept its reflection (the same objects:
+        _still_holds) for the same targets (FAST_CACHED), else compiled afresh. A camera move of
+        d'Eon's 51 passes spent more on the 32 prune reasons than on its 3 passes' Python."""
+        shape = tuple(refl[p.name] for p in self.passes)
+        last = self._compiled
+        if FAST_CACHED and last is not None and last[1] == tuple(targets) and len(last[0]) == len(shape) \
+                and all(a is b for a, b in zip(last[0], shape)):
+            return last[2], last[3], last[4], last[5]
+        order, live = order_passes(self.passes, refl, targets)
+        reasons = {p.name: prune_reason(p.name, refl, live) for p in self.passes if p.name not in live}
+        written = {res for p in order for res in refl[p.name].outputs}
+        self._compiled = (shape, tuple(targets), order, live, reasons, written)
+        return order, live, reasons, written
 
     def share_costs(self, other: RenderGraph) -> None:
         """Budget a pass never run in this graph by its cost in ``other``, a graph of the same technique
@@ -935,7 +1081,8 @@ class RenderGraph:
                     if records is not None and np.frombuffer(tex.read(alignment=1), dtype=np.uint8).any():
                         bad.append(res)
                 finally:
-                    self.res.give(tex)
+                    if not self._kept_scan(tex):
+                        self.res.give(tex)
             if records is None:  # abandoned (a frame that raised): checked again when next run
                 self._unchecked.add(name)
                 continue
@@ -943,6 +1090,7 @@ class RenderGraph:
             self._check_ms[name] = ms + (time.perf_counter() - t0) * 1000.0
             if name in records:
                 records[name].nonfinite = list(bad)
+        self._scan_used.clear()  # every kept flag target read: free for the next frame's scans
         # the first read-back waits for whatever the GPU has left of the frame: the passes' time, not the
         # graph's own (own_ms, which the governor counts as the frame's overhead)
         self._exec_s += time.perf_counter() - t_all
@@ -962,9 +1110,12 @@ class RenderGraph:
             prog = self._check_program()
             if prog is None:
                 return out
-            flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
+            if FAST_CACHED:
+                flags, fbo = self._scan_target((gw, gh))
+            else:
+                flags = self.pool.take(TexSpec((gw, gh), 1, "f1", filter="nearest"))
+                fbo = self.res.framebuffer_for((flags,))
             out.append((res, flags))
-            fbo = self.res.framebuffer_for((flags,))
             fbo.use()
             self.res.textures[res].use(0)
             write_uniform(prog["src"], 0)
@@ -973,14 +1124,34 @@ class RenderGraph:
             vao_of(prog).render(vertices=3)
         return out
 
+    def _scan_target(self, size: tuple[int, int]) -> tuple[moderngl.Texture, moderngl.Framebuffer]:
+        """A flags texture of ``size`` and its framebuffer for one scan of this frame, kept across frames
+        (FAST_CACHED): a scan draws every texel of it, so a kept one holds what a pooled one would, and
+        no framebuffer is made and released per scan a frame. Distinct within a frame (read back at its
+        end, _collect_checks, which frees them all for the next)."""
+        kept = self._scan_targets.setdefault(size, [])
+        k = self._scan_used.get(size, 0)
+        if k == len(kept):
+            tex = self.pool.take(TexSpec(size, 1, "f1", filter="nearest"))
+            kept.append((tex, self.ctx.framebuffer(color_attachments=[tex])))
+        self._scan_used[size] = k + 1
+        return kept[k]
+
+    def _kept_scan(self, tex: moderngl.Texture) -> bool:
+        return any(t is tex for t, _ in self._scan_targets.get(tex.size, ()))
+
     def _check_program(self) -> moderngl.Program | None:
         """shaders/finite_check.*, from the graph's library, or the project's when the graph was
-        given another shader folder (tests); None if it does not compile (no check then)."""
-        lib = self.shaders
-        if not (lib.root / "finite_check.frag").is_file():
-            if self._check_lib is None:
-                self._check_lib = ShaderLibrary(self.ctx, shaders_dir())
-            lib = self._check_lib
+        given another shader folder (tests); None if it does not compile (no check then). Which
+        library is looked up once (FAST_CACHED; a file test per scan before)."""
+        lib = self._check_src if FAST_CACHED else None
+        if lib is None:
+            lib = self.shaders
+            if not (lib.root / "finite_check.frag").is_file():
+                if self._check_lib is None:
+                    self._check_lib = ShaderLibrary(self.ctx, shaders_dir())
+                lib = self._check_lib
+            self._check_src = lib
         try:
             return lib.get("finite_check")
         except ShaderCompileError:
@@ -1038,6 +1209,11 @@ class RenderGraph:
         for p in self.passes:
             p.release()
         self.res.release()
+        for kept in self._scan_targets.values():
+            for tex, fbo in kept:
+                fbo.release()
+                self.pool.give(tex)
+        self._scan_targets.clear()
         for obj in self.shape_state.pop("gl_objects", {}).values():
             if obj is not None:
                 obj[0].release()  # texture_space.work_tiles
@@ -1046,6 +1222,7 @@ class RenderGraph:
         if self._check_lib is not None:
             self._check_lib.release()
             self._check_lib = None
+        self._check_src = None
 
     def describe(self) -> list[dict[str, Any]]:
         """The passes in execution order with their declared inputs/outputs and last status."""

@@ -245,6 +245,86 @@ def declare(*values: object) -> None:
         whole(v)
 
 
+# what a memoised rule read besides its declared settings (Reflection.memo): ("peek", path), ("raw",) (the
+# settings object itself), ("view", attribute, value: the camera by its key, floats by repr), ("state", key,
+# value or MISSING; OPAQUE: not comparable), ("write", key, value) (a shape-state write, in order), ("memo",
+# key, answer) (a rule it asked: its answer, settings read, notes and drops; what that one read is its own)
+Read = tuple[Any, ...]
+MISSING = object()
+OPAQUE = object()
+_PLAIN = (bool, int, str, type(None))
+
+
+def read_value(name: str, value: Any) -> Any:
+    """How a view attribute's value is kept in a Read: comparable by ==, bit-exact for floats."""
+    if name == "camera":
+        return value.key()
+    if type(value) is float:
+        return repr(value)
+    if type(value) in _PLAIN:
+        return value
+    return ("id", id(value))  # the scene: the same object (the graph checks it is)
+
+
+class _ViewReads:
+    """The frame's view as a memoised rule sees it: each attribute read recorded (Read "view")."""
+    __slots__ = ("_view", "_reads")
+
+    def __init__(self, view: Any, reads: list[Read]):
+        self._view, self._reads = view, reads
+
+    def __getattr__(self, name: str) -> Any:
+        value = getattr(self._view, name)
+        self._reads.append(("view", name, read_value(name, value)))
+        return value
+
+
+def state_value(value: Any) -> Any:
+    """How a shape-state value is kept in a Read: comparable by ==, bit-exact for floats; OPAQUE else."""
+    if value is MISSING or type(value) in _PLAIN:
+        return value
+    return ("float", repr(value)) if type(value) is float else OPAQUE
+
+
+class _StateReads:
+    """The graph's shape state as a memoised rule sees it: reads and writes recorded (Reads "state",
+    "write"); what a rule does with it beyond get / [] / in / setdefault is recorded as not comparable."""
+    __slots__ = ("_state", "_reads")
+
+    def __init__(self, state: ShapeState, reads: list[Read]):
+        self._state, self._reads = state, reads
+
+    def _note(self, *read: Any) -> None:
+        self._reads.append(read)
+
+    def get(self, key: Any, default: Any = None) -> Any:
+        value = self._state.get(key, MISSING)
+        self._note("state", key, state_value(value))
+        return default if value is MISSING else value
+
+    def __getitem__(self, key: Any) -> Any:
+        value = self._state.get(key, MISSING)
+        self._note("state", key, state_value(value))
+        return self._state[key]
+
+    def __contains__(self, key: Any) -> bool:
+        self._note("state", key, state_value(self._state.get(key, MISSING)))
+        return key in self._state
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        self._note("write", key, value)
+        self._state[key] = value
+
+    def setdefault(self, key: Any, default: Any = None) -> Any:
+        if key not in self:
+            self[key] = default
+        return self[key]
+
+    def __getattr__(self, name: str) -> Any:
+        self._note("state", name, OPAQUE)
+        return getattr(self._state, name)
+
+
 class Reflection:
     """What a pass declares for this frame (``Pass.reflect`` fills it)."""
 
@@ -276,8 +356,8 @@ class Reflection:
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
         # the graph's per-frame memo of rules many passes ask (Reflection.memo); None: no memo
-        self._frame_memo: dict[Any, tuple[Any, list[str], list[str], list[tuple[str, str]]]] | None = None
-        self._recorders: list[tuple[list[str], list[str], list[tuple[str, str]]]] = []
+        self._frame_memo: dict[Any, tuple[Any, list[str], list[str], list[tuple[str, str]], list[Read]]] | None = None
+        self._recorders: list[tuple[list[str], list[str], list[tuple[str, str]], list[Read]]] = []
         self._reads = SettingsNode(settings, "", self._declare)  # r.settings
         self._peeks = SettingsNode(settings, "", self._peek_read)  # r.peeked (recorded, not declared)
 
@@ -291,6 +371,8 @@ class Reflection:
         if self._view is None:
             raise GraphError("this reflection has no frame view (FrameInputs.frame_view: the renderer builds "
                              "one a frame; a scene rule needs it)")
+        if self._recorders:  # inside a memoised rule: what it reads of the view is recorded (_ViewReads)
+            return cast("FrameView", _ViewReads(self._view, self._recorders[-1][3]))
         return self._view
 
     def skip(self, reason: str) -> None:
@@ -334,17 +416,22 @@ class Reflection:
         """The graph's memory for shape decisions (hysteresis of the scene rules)."""
         if not self._recorders:
             self._untracked = True
-        return self._state
+            return self._state
+        return cast(ShapeState, _StateReads(self._state, self._recorders[-1][3]))  # recorded inside a memoised rule
 
     @property
     def _settings(self) -> Settings:
         """The settings object itself, read by a scene rule (undeclared: the rule declares what it needs)."""
         if not self._recorders:
             self._untracked = True
+        if self._recorders:
+            self._recorders[-1][3].append(("raw",))
         return self._settings_value
 
     def _peek_read(self, path: str) -> None:
         self._peek_paths.append(path)
+        if self._recorders:
+            self._recorders[-1][3].append(("peek", path))
 
     def memo(self, key: Any, rule: Callable[[Reflection], _T]) -> _T:
         """``rule(self)``, or what it returned for ``key`` in an earlier pass's reflect of this frame: a
@@ -355,7 +442,10 @@ class Reflection:
         answer depends on besides the frame's settings, scene, view and state (e.g. whether this pass
         uses the scene); ``rule`` reads only through the reflection it is given (the graph asks it
         again, in a reflection of its own, to tell whether a pass's last reflection still holds).
-        Outside a graph's frame (no memo): ``rule(self)``."""
+        Outside a graph's frame (no memo): ``rule(self)``. The answer is kept with what the rule read
+        besides its declared settings (``Read``s: settings peeked, the raw settings, the view's
+        attributes, the shape state read and written), so the graph can tell, without asking again,
+        that it would answer the same next frame (RenderGraph._recall)."""
         memo = self._frame_memo
         if memo is None:
             return rule(self)
@@ -363,18 +453,22 @@ class Reflection:
             self._memos.append((key, rule, self.scene is None))
         hit = memo.get(key)
         if hit is None:
-            rec: tuple[list[str], list[str], list[tuple[str, str]]] = ([], [], [])
+            rec: tuple[list[str], list[str], list[tuple[str, str]], list[Read]] = ([], [], [], [])
             self._recorders.append(rec)
             try:
                 value = rule(self)
             finally:
                 self._recorders.remove(rec)
             memo[key] = hit = (value, *rec)
+            if self._recorders:  # asked inside another rule: that one read this answer
+                self._recorders[-1][3].append(("memo", key, hit[:4]))
         else:
             for outer in self._recorders:  # a memo asked inside another's make: the outer records it too
                 outer[0].extend(hit[1])
                 outer[1].extend(hit[2])
                 outer[2].extend(hit[3])
+            if self._recorders:
+                self._recorders[-1][3].append(("memo", key, hit[:4]))
             for path in hit[1]:
                 self._declare(path, record=False)
             for text in hit[2]:

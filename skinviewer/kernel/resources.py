@@ -45,7 +45,8 @@ class ResourceCache:
 
     def ensure(self, resource: str, spec: TexSpec) -> bool:
         """Give ``resource`` a texture of ``spec``; True when it had to be (re)allocated."""
-        if self.specs.get(resource) == spec:
+        held = self.specs.get(resource)
+        if held is spec or held == spec:  # the same spec object while a reflection is kept
             return False
         self.free(resource)
         self.textures[resource] = self.pool.take(spec)

@@ -163,7 +163,7 @@ def _kernel_under_pixel(r: Reflection) -> str | None:
     if not limit > 0.0:
         r.state[key] = False
         return None
-    px = kernel_px(r._settings, r.view)
+    px = kernel_px(r.peeked, r.view)  # peeked: the graph sees the rule read the Gaussians (Reflection.memo)
     on = px < limit * (HYSTERESIS if r.state.get(key, False) else 1.0)
     r.state[key] = on
     return f"kernel under a pixel (widest Gaussian sigma {px:.2f} px on screen)" if on else None
