@@ -379,13 +379,13 @@ def test_a_compile_at_a_first_draw_is_not_taken_for_the_draw_s_error(gl_ctx, mon
     prediction: that is the driver's compile, not what the next band will cost, so neither the pace nor
     the error statistics the margin is taken from keep it."""
     g = graph_mod.RenderGraph.__new__(graph_mod.RenderGraph)
-    g.pace, g.pace_err, g._compiled = 1.0, 0.0, False
+    g.pace, g.pace_err, g._first_drawn = 1.0, 0.0, False
     g.margins = ErrorQuantiles(min_n=1)
     g._keep_pace(10.0, 10.5, ("blur", 0))
     assert g.margins.count("blur", 0) == 1
-    g._compiled = True  # RenderGraph._execute: the band drew a program for the first time
+    g._first_drawn = True  # RenderGraph._execute: the band drew a program for the first time
     g._keep_pace(10.0, 100.0, ("blur", 0))
-    assert g.margins.count("blur", 0) == 1 and g.pace == pytest.approx(1.0125) and not g._compiled
+    assert g.margins.count("blur", 0) == 1 and g.pace == pytest.approx(1.0125) and not g._first_drawn
     g._keep_pace(10.0, 11.0, ("blur", 0))  # the next band is measured again
     assert g.margins.count("blur", 0) == 2
 

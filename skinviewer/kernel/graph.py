@@ -227,7 +227,7 @@ class RenderGraph:
         self.margins = ErrorQuantiles(MARGIN_WINDOW, MARGIN_Q, MARGIN_MIN_N)  # _paced's per-draw error quantiles
         # a run since the last _keep_pace drew a program for the first time: its cost is the driver's
         # compile (llvmpipe: 0.1-2.5 s without Mesa's shader cache), no measure of the draw's (_keep_pace)
-        self._compiled = False
+        self._first_drawn = False
         self._cost_fallback: RenderGraph | None = None  # share_costs
         self._check_lib: ShaderLibrary | None = None
         self._progress: dict[str, TileProgress] = {}  # tileable passes part-way through their bands
@@ -903,7 +903,7 @@ class RenderGraph:
     def _keep_pace(self, predicted: float | None, ms: float | None, key: tuple[str, int] | None = None) -> None:
         """A pass (or band) predicted to cost ``predicted`` ms cost ``ms``: update the running pace
         and its error, and the error statistics of ``key`` (pass, draw) the margin is taken from."""
-        compiled, self._compiled = self._compiled, False
+        compiled, self._first_drawn = self._first_drawn, False
         if predicted is None or ms is None or not predicted > 1.0 or not math.isfinite(ms) or compiled:
             return  # (a compile at a first draw: not what the draw costs, and not what the next one will)
         ratio = min(max(ms / predicted, 0.25), 4.0)
@@ -958,7 +958,7 @@ class RenderGraph:
                     + self._check_after(p.name, progress) <= budget_ms)
             if lazy and not chain:
                 self.ctx.finish()  # what ran before is not the chain's
-                self._compiled = False
+                self._first_drawn = False
                 chain_t0 = time.perf_counter()
             t_band = time.perf_counter()
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held,
@@ -1050,7 +1050,7 @@ class RenderGraph:
             ec._finish()
             self._last_draws = ec.draws
             if self.shaders.first_draws > first_draws:  # a program finished (JIT-compiled) at its first draw
-                self._compiled = True
+                self._first_drawn = True
             self._exec_s += time.perf_counter() - t_enter
 
     # -- reliability: memory needed before allocating, non-finite outputs after running ----------
