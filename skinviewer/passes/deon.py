@@ -1319,12 +1319,20 @@ def cull_chain(r) -> tuple | None:
         stages.append(("blur", i, m, step.source, n_in, tuple(sigmas), int(narrow.get("NARROW_TAPS", 0)),
                        bool(r.settings.scene.seam_aware), cull))
     mask = used_mask(r)
-    stages.insert(0, ("names", DIFFUSE, TRANSMITTED, VISIBILITY, TSM, STRETCH))  # view_cull.names
+    m = transmitted_size(r)
+    stages.insert(0, ("names", DIFFUSE, TRANSMITTED, VISIBILITY, TSM, STRETCH, texel_surface_resources(m, "p")[0],
+                      gutter_resource(m)))  # view_cull.names
     reads = tuple(sorted({(texture_of(step), texture_size(r, texture_of(step)))
                           for i, step in enumerate(plan) if (mask >> i) & 1}))
     stages.append(("comb", reads))
-    if tsm_light_index(r) is not None:  # E of the lit points (the gather) and the blurs at the TSM's uv
-        stages.append(("trans", reads + (((IRRADIANCE, n),) if d.tsm_gather else ())))
+    j = tsm_light_index(r)
+    if j is not None:  # E of the lit points (the gather) and the blurs at the TSM's uv, around each exit
+        tsm_n, block, radii = tsm_max_plan(r)
+        reach = float(tsm_n) if radii[0] >= -(-tsm_n // block) else float(radii[0] * block)  # the widest window
+        declare_pose(r.settings.lights[j])  # the TSM's light space
+        matrix = tuple(float(x) for x in r.scene.light_space(whole(r.peeked.lights[j])).gl_matrix.ravel()) \
+            if texel_shading(r) else None  # the exits' positions: the half-size texel surface map
+        stages.append(("trans", reads + (((IRRADIANCE, n),) if d.tsm_gather else ()), matrix, int(tsm_n), reach))
     return tuple(stages)
 
 

@@ -174,38 +174,98 @@ def make_view_tiles(r, chain: tuple, n: int, m: int) -> ViewTiles | None:
 
 def names(chain: tuple) -> dict[str, str]:
     """The resource names a chain's first entry gives (make_view_tiles)."""
-    return dict(zip(("diffuse", "transmitted", "visibility", "tsm", "stretch"), chain[0][1:]))
+    return dict(zip(("diffuse", "transmitted", "visibility", "tsm", "stretch", "position", "gutter_half"),
+                    chain[0][1:]))
 
 
-def tsm_tiles(ec, size: int, tsm: str) -> np.ndarray:
-    """L: the tiles of a size x size map the transmitted light reads (lib/tsm_transmit.glsl: the blurs and
-    the irradiance at t.gb, the uv of some TSM texel's first surface, bilinearly), from the TSM itself: every
-    texel's uv (A >= 0: a surface), +UV_MARGIN texels. Once per TSM version and size (gl_objects)."""
+def tsm_texels(ec, tsm: str) -> tuple[np.ndarray, np.ndarray]:
+    """The TSM read back once per version (gl_objects): (its side, and per texel with a surface (A >= 0) its
+    flat index and uv)."""
     objs = ec.state.setdefault("gl_objects", {})
     version = ec.input_version(tsm)
-    key = ("view_cull_tsm", id(ec.scene), version, size)
+    key = ("view_cull_tsm", id(ec.scene), version)
     hit = objs.get(key)
-    if hit is not None:
-        return np.asarray(hit[1])
-    drop_other_scenes(objs, "view_cull_tsm", id(ec.scene))
-    for k in [k for k in objs if k[0] == "view_cull_tsm" and k[2] != version]:
-        objs.pop(k)
-    uv_key = ("view_cull_tsm", id(ec.scene), version, "uv")
-    if uv_key not in objs:  # the TSM's texels' uv, read back once per version
+    if hit is None:
+        drop_other_scenes(objs, "view_cull_tsm", id(ec.scene))
+        for k in [k for k in objs if k[0] == "view_cull_tsm"]:
+            objs.pop(k)
         tex = ec.input(tsm)
         t = np.frombuffer(tex.read(), np.float32).reshape(-1, tex.components)
-        keep = (t[:, 3] >= 0.0) & np.isfinite(t[:, 1]) & np.isfinite(t[:, 2])
-        objs[uv_key] = (_Token(), np.ascontiguousarray(np.clip(t[keep][:, 1:3], -1.0, 2.0)))
-    texel = np.floor(objs[uv_key][1] * np.float32(size)).astype(np.int32)  # the texel each uv falls in
-    nt = tiles_of(size)
-    hit_cells = np.zeros(nt * nt, bool)
-    m = int(math.ceil(UV_MARGIN))  # < VIEW_TILE: the cells of the texels m either side are those of +-m
-    for dx in (-m, m):
-        cx = np.clip((texel[:, 0] + dx) // VIEW_TILE, 0, nt - 1)
-        for dy in (-m, m):
-            hit_cells[np.clip((texel[:, 1] + dy) // VIEW_TILE, 0, nt - 1) * nt + cx] = True
-    out = hit_cells.reshape(nt, nt)
-    objs[key] = (_Token(), out)
+        keep = np.nonzero((t[:, 3] >= 0.0) & np.isfinite(t[:, 1]) & np.isfinite(t[:, 2]))[0]
+        hit = objs[key] = (_Token(), keep, np.ascontiguousarray(np.clip(t[keep][:, 1:3], -1.0, 2.0)))
+    return hit[1], hit[2]
+
+
+def exit_positions(ec, m: int, position: str, gutter: str) -> tuple[np.ndarray, np.ndarray]:
+    """(cell index, position) of every island texel of the m x m transmitted-light map (its texel surface map's
+    position; the gutter map's own texels), once per scene and size (gl_objects)."""
+    objs = ec.state.setdefault("gl_objects", {})
+    key = ("view_cull_exits", id(ec.scene), m)
+    hit = objs.get(key)
+    if hit is None:
+        drop_other_scenes(objs, "view_cull_exits", id(ec.scene))
+        g = read_gutter(ec.input(gutter))
+        y, x = np.mgrid[0:m, 0:m]
+        own = ((g[..., 0] + 0.5).astype(np.int64) == x) & ((g[..., 1] + 0.5).astype(np.int64) == y)
+        tex = ec.input(position)
+        p = np.frombuffer(tex.read(), np.float32).reshape(m, m, tex.components)[..., :3]
+        nt = tiles_of(m)
+        hit = objs[key] = (_Token(), ((y // VIEW_TILE) * nt + x // VIEW_TILE)[own], p[own].astype(np.float64))
+    return hit[1], hit[2]
+
+
+def tsm_reads(ec, stage: tuple, exits: np.ndarray, m: int, sizes: set[int], rn: dict[str, str]) -> dict[int, np.ndarray]:
+    """L: per map size in ``sizes``, the tiles the transmitted light reads for its exit texels in the tiles
+    ``exits`` (m x m map): lib/tsm_transmit.glsl projects an exit texel C into the TSM and reads the TSM texels
+    within its reach (the 3x3 taps, the gather's spiral: the max map's widest window, planned), and at each
+    one's stored uv t.gb the blurs and the irradiance (bilinear: +UV_MARGIN texels). A TSM texel is read when
+    it lies in the window around some exit texel's projection (per tile: the box of its texels' projections)."""
+    _, _, matrix, tsm_n, reach = stage
+    nts = {size: tiles_of(size) for size in sizes}
+    if matrix is None:  # no position map to project the exits from: every TSM texel
+        return _uv_tiles(ec, np.ones(tsm_n * tsm_n, bool), nts, rn["tsm"])
+    cells, pos = exit_positions(ec, m, rn["position"], rn["gutter_half"])
+    sel = exits.ravel()[cells]
+    out = {size: np.zeros((nt, nt), bool) for size, nt in nts.items()}
+    if not sel.any():
+        return out
+    clip = np.hstack([pos[sel], np.ones((int(sel.sum()), 1))]) @ np.asarray(matrix, np.float64).reshape(4, 4).T
+    w = clip[:, 3]
+    ok = w > 0.0  # behind the light: the shader returns 0 before reading
+    c = (clip[ok, :2] / w[ok, None] * 0.5 + 0.5) * tsm_n  # TSM texel coordinates (texel centres at +0.5)
+    cid = cells[sel][ok]
+    if not len(c):
+        return out
+    order = np.argsort(cid, kind="stable")
+    cid, c = cid[order], c[order]
+    starts = np.nonzero(np.r_[True, cid[1:] != cid[:-1]])[0]
+    lo = np.minimum.reduceat(c, starts, axis=0)
+    hi = np.maximum.reduceat(c, starts, axis=0)
+    ext = float(reach) + 2.0  # the window past the projection, a texel of rounding either side
+    x0 = np.clip(np.floor(lo[:, 0] - ext), 0, tsm_n).astype(np.int64)
+    y0 = np.clip(np.floor(lo[:, 1] - ext), 0, tsm_n).astype(np.int64)
+    x1 = np.clip(np.ceil(hi[:, 0] + ext) + 1, 0, tsm_n).astype(np.int64)
+    y1 = np.clip(np.ceil(hi[:, 1] + ext) + 1, 0, tsm_n).astype(np.int64)
+    keep = (x1 > x0) & (y1 > y0)
+    acc = np.zeros((tsm_n + 1, tsm_n + 1), np.int32)  # the windows' union: a summed difference array
+    for xs, ys, v in ((x0, y0, 1), (x1, y0, -1), (x0, y1, -1), (x1, y1, 1)):
+        np.add.at(acc, (ys[keep], xs[keep]), v)
+    return _uv_tiles(ec, (acc.cumsum(axis=0).cumsum(axis=1)[:tsm_n, :tsm_n] > 0).ravel(), nts, rn["tsm"])
+
+
+def _uv_tiles(ec, read: np.ndarray, nts: dict[int, int], tsm: str) -> dict[int, np.ndarray]:
+    """Per map size: the tiles of the uv stored in the TSM texels ``read`` (flat), +UV_MARGIN texels."""
+    index, uv = tsm_texels(ec, tsm)
+    uv = uv[read[index]]
+    out = {size: np.zeros((nt, nt), bool) for size, nt in nts.items()}
+    for size, nt in nts.items():
+        texel = np.floor(uv * np.float32(size)).astype(np.int32)  # the texel each uv falls in
+        hit_cells = out[size].ravel()
+        mg = int(math.ceil(UV_MARGIN))  # < VIEW_TILE: the tiles of the texels mg either side are those of +-mg
+        for dx in (-mg, mg):
+            cx = np.clip((texel[:, 0] + dx) // VIEW_TILE, 0, nt - 1)
+            for dy in (-mg, mg):
+                hit_cells[np.clip((texel[:, 1] + dy) // VIEW_TILE, 0, nt - 1) * nt + cx] = True
     return out
 
 
@@ -219,8 +279,9 @@ def declare_inputs(r, vt: ViewTiles) -> None:
         r.input(gutter_resource(size))
         if r.settings.scene.seam_aware:
             r.input(seam_resource(size))
-    if any(stage[0] == "trans" for stage in vt.chain):  # L: the TSM's uv (tsm_tiles)
+    if any(stage[0] == "trans" for stage in vt.chain):  # L: the TSM's uv around the exits (tsm_reads)
         r.input(res["tsm"])
+        r.input(res["position"])
     if r.settings.deon.stretch:
         r.input(res["stretch"])
         r.settings.deon.stretch_shear  # noqa: B018  (declared: max_stretch reads it)
@@ -386,9 +447,11 @@ def stage_needs(ec, vt_token: TileCover, n: int, m: int) -> dict[str, np.ndarray
         if stage[0] == "comb":
             for res, size in stage[1]:
                 add(res, size, f if size == n else half_of(f, size))
-        elif stage[0] == "trans":
+        elif stage[0] == "trans":  # the TSM texels around the exits' projections, at their uv
+            exits = through_links(need[TRANSMITTED], links(ec, m)[1])
+            lit = tsm_reads(ec, stage, exits, m, {size for _, size in stage[1]}, rn)
             for res, size in stage[1]:
-                add(res, size, tsm_tiles(ec, size, rn["tsm"]))
+                add(res, size, lit[size])
     for stage in reversed(chain[1:]):
         if stage[0] not in ("blur", "gather"):
             continue
