@@ -1096,7 +1096,7 @@ class GaussianBlurPass(Pass):
         work = work_of(ec, plan.output)  # deon.view_cull: the tiles to make, and their island texels' sums
         if work is not None:
             pick_tiles = restrict(ec, "pick", tiles, work, n)
-            quad_tiles = restrict(ec, "quad", tiles, through_links(work, links(ec, n)[1]), n)
+            quad_tiles = restrict(ec, "quad", tiles, through_links(work, links(ec, n)[1]), n, output=False)
         for d, sub, subs in ec.units(2):
             with ec.band(sub, subs):
                 if work is not None and (quad_tiles if d == 0 else pick_tiles) is None:
@@ -1257,7 +1257,8 @@ class GaussianBlurPass(Pass):
             ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
         if work is not None:  # deon.view_cull: each draw on the tiles the next ones read (separable_draws)
             masks = separable_draws(ec, plan.cull_stage, work, STRETCH)[0]
-            draws = [dw[:5] + (restrict(ec, j, dw[5], masks[dw[6]], n),) + dw[6:] for j, dw in enumerate(draws)]
+            draws = [dw[:5] + (restrict(ec, j, dw[5], masks[dw[6]], n, output=dw[4] == plan.output),) + dw[6:]
+                     for j, dw in enumerate(draws)]
             draws = [dw for dw in draws if dw[5] is not None]
         for d, sub, subs in ec.units(len(draws)):
             program, values, maps, source, target, where, _ = draws[d]

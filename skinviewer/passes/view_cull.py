@@ -26,7 +26,7 @@ import numpy as np
 
 from skinviewer.kernel.coverage import TileCover
 from skinviewer.passes.rules import LOD_HYSTERESIS, LOD_TRIANGLES_PER_PX, screen_diameter_px
-from skinviewer.passes.texture_space import drop_other_scenes, read_gutter, rect_tiles
+from skinviewer.passes.texture_space import TILE, drop_other_scenes, read_gutter, rect_tiles
 from skinviewer.scene.mesh import culls_back_faces
 
 # the tile of the needed sets and of the culled draws' rectangle lists: half of texture_space.TILE, so a one-texel
@@ -503,11 +503,33 @@ def note_tiles(ec, work: np.ndarray | None, text: str = "", **figures) -> None:
     ec.note(text, **figures)
 
 
-def mask_rects(ec, mask: np.ndarray, slot: object = 0) -> tuple | None:
-    """``mask``'s tiles as a TILED = 2 rectangle list (rect_tiles), kept for its last mask per pass and
-    ``slot`` (gl_objects); None when it is empty."""
+def coarse(mask: np.ndarray) -> np.ndarray:
+    """``mask`` widened to whole draw tiles (texture_space.TILE, two of these a side): fewer, larger rectangles
+    (llvmpipe pays per triangle: 8 x 8 quads made the irradiance's shading ~10 % dearer than 16 x 16 ones)."""
+    k = TILE // VIEW_TILE
+    nt = mask.shape[0]
+    big = -(-nt // k)
+    pad = np.zeros((big * k, big * k), bool)
+    pad[:nt, :nt] = mask
+    wide = pad.reshape(big, k, big, k).any(axis=(1, 3))
+    return np.asarray(np.repeat(np.repeat(wide, k, axis=0), k, axis=1)[:nt, :nt])
+
+
+def exact(ec) -> bool:
+    """Whether a draw into a pass's output must keep to its tiles: in a run for the tiles it does not hold
+    (ExecuteContext.cover), whose others hold valid texels; elsewhere (scratch targets, a whole run) a draw
+    may cover whole TILE tiles (coarse): the texels past its tiles are read by nothing."""
+    return ec.cover is not None and ec.cover[1] is not None
+
+
+def mask_rects(ec, mask: np.ndarray, slot: object = 0, output: bool = True) -> tuple | None:
+    """``mask``'s tiles as a TILED = 2 rectangle list (rect_tiles), whole TILE tiles where it may (``output``:
+    a draw into the pass's output, exact), kept for its last mask per pass and ``slot`` (gl_objects); None when
+    it is empty."""
     if not mask.any():
         return None
+    if not (output and exact(ec)):
+        mask = coarse(mask)
     objs = ec.state.setdefault("gl_objects", {})
     cover = TileCover(mask)
     key = ("view_cull_rects", id(ec.scene), ec.pass_.name, slot, mask.shape)
@@ -557,9 +579,11 @@ class _Keep:
         pass
 
 
-def restrict(ec, slot: object, where: tuple | None, mask: np.ndarray, size: int) -> tuple | None:
-    """A draw's tile list ``where`` cut to the tiles of ``mask`` (TILED = 2 rectangles; None: none left)."""
-    return mask_rects(ec, where_mask(ec, where, size) & mask, slot)
+def restrict(ec, slot: object, where: tuple | None, mask: np.ndarray, size: int, output: bool = True) -> tuple | None:
+    """A draw's tile list ``where`` cut to the tiles of ``mask`` (TILED = 2 rectangles; None: none left; whole
+    TILE tiles unless the draw writes the output in a run for new tiles: mask_rects)."""
+    wm = where_mask(ec, where, size)
+    return mask_rects(ec, wm & (mask if output and exact(ec) else coarse(mask)), slot, output)
 
 
 class _Token:
@@ -570,8 +594,10 @@ class _Token:
 
 
 def island_origins(ec, size: int, mask: np.ndarray, island: np.ndarray) -> tuple | None:
-    """The island tiles (``island``) of ``mask`` as a TILED = 1 origin list (work_tiles' form); None: none."""
-    sel = mask & island
+    """The island tiles (``island``) of ``mask`` as a TILED = 1 origin list (work_tiles' form) of whole TILE
+    tiles (its draw writes a scratch target); None: none."""
+    k = TILE // VIEW_TILE
+    sel = coarse(mask & island)[::k, ::k]
     ty, tx = np.nonzero(sel)
     if len(tx) == 0:
         return None
@@ -585,10 +611,10 @@ def island_origins(ec, size: int, mask: np.ndarray, island: np.ndarray) -> tuple
     old = objs.pop(key, None)
     if old is not None:
         old[0].release()
-    origins = np.stack([tx * VIEW_TILE, ty * VIEW_TILE], axis=1).astype(np.float32)
+    origins = np.stack([tx * TILE, ty * TILE], axis=1).astype(np.float32)
     tex = ec.gl.texture((len(tx), 1), 2, origins.tobytes(), dtype="f4")
     tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-    objs[key] = (tex, len(tx), VIEW_TILE)
+    objs[key] = (tex, len(tx), TILE)
     objs[key + ("mask",)] = (_Token(), cover)
     return objs[key]
 
