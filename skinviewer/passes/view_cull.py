@@ -196,9 +196,10 @@ def tsm_texels(ec, tsm: str) -> tuple[np.ndarray, np.ndarray]:
     return hit[1], hit[2]
 
 
-def exit_positions(ec, m: int, position: str, gutter: str) -> tuple[np.ndarray, np.ndarray]:
-    """(cell index, position) of every island texel of the m x m transmitted-light map (its texel surface map's
-    position; the gutter map's own texels), once per scene and size (gl_objects)."""
+def exit_boxes(ec, m: int, position: str, gutter: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(tile index, lowest corner, highest corner): per tile of the m x m transmitted-light map holding island
+    texels, the 3D box of those texels' positions (its texel surface map; the gutter map's own texels), once
+    per scene and size (gl_objects)."""
     objs = ec.state.setdefault("gl_objects", {})
     key = ("view_cull_exits", id(ec.scene), m)
     hit = objs.get(key)
@@ -208,10 +209,17 @@ def exit_positions(ec, m: int, position: str, gutter: str) -> tuple[np.ndarray, 
         y, x = np.mgrid[0:m, 0:m]
         own = ((g[..., 0] + 0.5).astype(np.int64) == x) & ((g[..., 1] + 0.5).astype(np.int64) == y)
         tex = ec.input(position)
-        p = np.frombuffer(tex.read(), np.float32).reshape(m, m, tex.components)[..., :3]
+        p = np.frombuffer(tex.read(), np.float32).reshape(m, m, tex.components)[..., :3][own].astype(np.float64)
         nt = tiles_of(m)
-        hit = objs[key] = (_Token(), ((y // VIEW_TILE) * nt + x // VIEW_TILE)[own], p[own].astype(np.float64))
-    return hit[1], hit[2]
+        cid = ((y // VIEW_TILE) * nt + x // VIEW_TILE)[own]
+        order = np.argsort(cid, kind="stable")
+        cid, p = cid[order], p[order]
+        starts = np.nonzero(np.r_[True, cid[1:] != cid[:-1]])[0] if len(cid) else np.zeros(0, np.int64)
+        with np.errstate(invalid="ignore"):  # a NaN position: its box is NaN, never projected (as the shader)
+            lo = np.minimum.reduceat(p, starts, axis=0) if len(cid) else np.zeros((0, 3))
+            hi = np.maximum.reduceat(p, starts, axis=0) if len(cid) else np.zeros((0, 3))
+        hit = objs[key] = (_Token(), cid[starts] if len(cid) else cid, lo, hi)
+    return hit[1], hit[2], hit[3]
 
 
 def tsm_reads(ec, stage: tuple, exits: np.ndarray, m: int, sizes: set[int], rn: dict[str, str]) -> dict[int, np.ndarray]:
@@ -219,28 +227,30 @@ def tsm_reads(ec, stage: tuple, exits: np.ndarray, m: int, sizes: set[int], rn: 
     ``exits`` (m x m map): lib/tsm_transmit.glsl projects an exit texel C into the TSM and reads the TSM texels
     within its reach (the 3x3 taps, the gather's spiral: the max map's widest window, planned), and at each
     one's stored uv t.gb the blurs and the irradiance (bilinear: +UV_MARGIN texels). A TSM texel is read when
-    it lies in the window around some exit texel's projection (per tile: the box of its texels' projections)."""
+    it lies in the window around some exit tile's projection: the box of its 3D box's projected corners (a
+    projective map keeps a box's image inside its corners' hull while all lie before the light; a tile
+    straddling the light's plane reads the whole TSM)."""
     _, _, matrix, tsm_n, reach = stage
     nts = {size: tiles_of(size) for size in sizes}
     if matrix is None:  # no position map to project the exits from: every TSM texel
         return _uv_tiles(ec, np.ones(tsm_n * tsm_n, bool), nts, rn["tsm"])
-    cells, pos = exit_positions(ec, m, rn["position"], rn["gutter_half"])
-    sel = exits.ravel()[cells]
+    cells, lo3, hi3 = exit_boxes(ec, m, rn["position"], rn["gutter_half"])
+    sel = exits.ravel()[cells] & np.all(np.isfinite(lo3) & np.isfinite(hi3), axis=1)
     out = {size: np.zeros((nt, nt), bool) for size, nt in nts.items()}
     if not sel.any():
         return out
-    clip = np.hstack([pos[sel], np.ones((int(sel.sum()), 1))]) @ np.asarray(matrix, np.float64).reshape(4, 4).T
-    w = clip[:, 3]
-    ok = w > 0.0  # behind the light: the shader returns 0 before reading
-    c = (clip[ok, :2] / w[ok, None] * 0.5 + 0.5) * tsm_n  # TSM texel coordinates (texel centres at +0.5)
-    cid = cells[sel][ok]
-    if not len(c):
+    lo3, hi3 = lo3[sel], hi3[sel]
+    corners = np.stack([np.where(np.array([(k >> a) & 1 for a in range(3)], bool), hi3, lo3) for k in range(8)], 1)
+    clip = np.concatenate([corners, np.ones(corners.shape[:2] + (1,))], axis=2) @ np.asarray(matrix, np.float64).reshape(4, 4).T
+    w = clip[..., 3]
+    front = np.all(w > 0.0, axis=1)  # every corner before the light: the tile's image within its corners' box
+    behind = np.all(w <= 0.0, axis=1)  # every texel behind it: the shader returns 0 before reading
+    if np.any(~front & ~behind):  # straddling the light's plane: anywhere in the TSM
+        return _uv_tiles(ec, np.ones(tsm_n * tsm_n, bool), nts, rn["tsm"])
+    cc = (clip[front][..., :2] / w[front][..., None] * 0.5 + 0.5) * tsm_n  # TSM texel coordinates
+    if not len(cc):
         return out
-    order = np.argsort(cid, kind="stable")
-    cid, c = cid[order], c[order]
-    starts = np.nonzero(np.r_[True, cid[1:] != cid[:-1]])[0]
-    lo = np.minimum.reduceat(c, starts, axis=0)
-    hi = np.maximum.reduceat(c, starts, axis=0)
+    lo, hi = cc.min(axis=1), cc.max(axis=1)
     ext = float(reach) + 2.0  # the window past the projection, a texel of rounding either side
     x0 = np.clip(np.floor(lo[:, 0] - ext), 0, tsm_n).astype(np.int64)
     y0 = np.clip(np.floor(lo[:, 1] - ext), 0, tsm_n).astype(np.int64)
@@ -254,18 +264,24 @@ def tsm_reads(ec, stage: tuple, exits: np.ndarray, m: int, sizes: set[int], rn: 
 
 
 def _uv_tiles(ec, read: np.ndarray, nts: dict[int, int], tsm: str) -> dict[int, np.ndarray]:
-    """Per map size: the tiles of the uv stored in the TSM texels ``read`` (flat), +UV_MARGIN texels."""
+    """Per map size: the tiles of the uv stored in the TSM texels ``read`` (flat), +UV_MARGIN texels (a texel
+    grid marked once, widened, then per tile: cheaper than marking each uv's tiles)."""
     index, uv = tsm_texels(ec, tsm)
     uv = uv[read[index]]
-    out = {size: np.zeros((nt, nt), bool) for size, nt in nts.items()}
+    out: dict[int, np.ndarray] = {}
+    mg = int(math.ceil(UV_MARGIN))
     for size, nt in nts.items():
-        texel = np.floor(uv * np.float32(size)).astype(np.int32)  # the texel each uv falls in
-        hit_cells = out[size].ravel()
-        mg = int(math.ceil(UV_MARGIN))  # < VIEW_TILE: the tiles of the texels mg either side are those of +-mg
-        for dx in (-mg, mg):
-            cx = np.clip((texel[:, 0] + dx) // VIEW_TILE, 0, nt - 1)
-            for dy in (-mg, mg):
-                hit_cells[np.clip((texel[:, 1] + dy) // VIEW_TILE, 0, nt - 1) * nt + cx] = True
+        texel = np.clip(np.floor(uv * np.float32(size)), 0, size - 1).astype(np.int32)  # off the map: its edge
+        grid = np.zeros((nt * VIEW_TILE, nt * VIEW_TILE), bool)
+        grid[texel[:, 1], texel[:, 0]] = True
+        for _ in range(mg):  # +-mg texels (a square)
+            g = grid.copy()
+            g[1:, :] |= grid[:-1, :]
+            g[:-1, :] |= grid[1:, :]
+            g[:, 1:] |= g[:, :-1].copy()
+            g[:, :-1] |= g[:, 1:].copy()
+            grid = g
+        out[size] = np.asarray(grid.reshape(nt, VIEW_TILE, nt, VIEW_TILE).any(axis=(1, 3)))
     return out
 
 
