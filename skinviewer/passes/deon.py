@@ -1563,7 +1563,9 @@ def shade_tiles(ec, prog, resource: str, mask: np.ndarray, *more: str) -> None:
     raws = [ec.held(f"raw{i}", TexSpec((size, size), 4 if i == 0 else ec.output(r).components,
                                        "f4" if i == 0 else ec.output(r).dtype, filter="nearest"))[0]
             for i, r in enumerate((resource,) + more)]
-    tiles = island_origins(ec, size, through_links(mask, pairs), island)
+    shaded = through_links(mask, pairs)
+    # every island tile needed: work_tiles' own list (one quad for the whole target when it is nearly all)
+    tiles = work_tiles(ec, size, 0) if not (island & ~shaded).any() else island_origins(ec, size, shaded, island)
     if ec.first_tile:  # the tiles no view needs: 0, not a pooled texture's (a run for new tiles keeps all)
         for res in (resource,) + more:
             ec.clear_unwritten(res, ("view_cull", id(ec.scene), size))
@@ -1689,11 +1691,12 @@ class DiffuseSumPass(Pass):
         work = work_of(ec, DIFFUSE)  # deon.view_cull: the tiles to make (None: every tile)
         if work is not None:
             note_tiles(ec, work)
-            ec.clear_unwritten(DIFFUSE, ("view_cull", id(ec.scene), ec.plan.size))  # the tiles no view needs: 0
-            rects = mask_rects(ec, work)
-            if rects is None:
-                return
-            defines["TILED"] = 2
+            if not work.all():  # else one full-screen draw, as without culling
+                ec.clear_unwritten(DIFFUSE, ("view_cull", id(ec.scene), ec.plan.size))  # the tiles no view needs: 0
+                rects = mask_rects(ec, work)
+                if rects is None:
+                    return
+                defines["TILED"] = 2
         prog = ec.program("deon_combine", **defines)
         ws, _, _ = bind_blur_slots(ec, prog)
         n = ec.plan.size

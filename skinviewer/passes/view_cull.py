@@ -599,7 +599,10 @@ def restrict(ec, slot: object, where: tuple | None, mask: np.ndarray, size: int,
     """A draw's tile list ``where`` cut to the tiles of ``mask`` (TILED = 2 rectangles; None: none left; whole
     TILE tiles unless the draw writes the output in a run for new tiles: mask_rects)."""
     wm = where_mask(ec, where, size)
-    return mask_rects(ec, wm & (mask if output and exact(ec) else coarse(mask)), slot, output)
+    cut = wm & (mask if output and exact(ec) else coarse(mask))
+    if np.array_equal(cut, wm):  # nothing culled: the draw's own list (work_tiles may draw it as one quad)
+        return where
+    return mask_rects(ec, cut, slot, output)
 
 
 class _Token:
