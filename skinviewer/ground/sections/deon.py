@@ -162,6 +162,13 @@ class DeonSettings(Section):
         tip=("view: texture-space maps are made only where the current view (and the translucency's lit side) "
              "reads them; orbiting adds the missing tiles, idle time the rest. The image is the same; off: every "
              "texel, every time"))
+
+    @field_validator("view_cull", mode="before")
+    @classmethod
+    def _view_cull_on_off(cls, v: object) -> object:
+        # --set reads on / off as true / false
+        return {False: "off", True: "view"}.get(v, v) if isinstance(v, bool) else v
+
     specular_shadows: Literal["texture", "pixel"] = field(
         "texture", description="where the specular's shadow test (eq. 10) is evaluated: texture: once per texel "
         "by the irradiance pass (the same PCF, kept per light), so a camera move does no shadow-map lookups; "
