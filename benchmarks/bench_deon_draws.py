@@ -6,7 +6,7 @@ in the same run.
 
     python benchmarks/bench_deon_draws.py [--maps 1024] [--size 640] [--repeats 3] [--set key=value ...]
         [--ab program:DEFINE=value ...] [--ab-no-zone-split] [--ab-no-seam-split] [--ab-unsplit-sum]
-        [--ab-unsplit-irradiance] [--ab-no-quad-sum] [--ab-no-sum-cuts] [--ab-unsplit-final]
+        [--ab-unsplit-irradiance] [--ab-no-quad-sum] [--ab-no-sum-cuts] [--ab-unsplit-final] [--ab-no-view-cull]
 
 --ab times a side B too, interleaved with A in each repeat: the named program compiled with the extra
 define (e.g. deon_irradiance_texels:DEON_TEXEL_SAMPLES=0, the uniform-driven irradiance); the
@@ -20,7 +20,10 @@ passes.deon.QUAD_SUM 0: the code before the quad sum), in a second renderer too;
 seam-fill the summed step's input without the plain tiles and fetch every combine slot (passes.deon.
 GATHER_FILL_SPLIT and COMBINE_ONCE off: the code before session 9), in a second renderer too;
 --ab-unsplit-final makes B shade the final pass in one pass (passes.deon.SPLIT_FINAL 0), in a second
-renderer too. B's rows are marked (B).
+renderer too; --ab-no-view-cull runs A with deon.view_cull = view and B with off (every texture-space tile, the code before
+section 17), in a second renderer too, and times per side the camera-only frames after each light move (yaw
++10: the tiles the turned view needs and no pass holds; then back: every tile held) and prints the share of
+tiles the culled passes made. B's rows are marked (B).
 
 The timing itself adds a glFinish per draw (a few ms a frame on llvmpipe): the per-draw figures
 are for comparing draws, the frame figure is bench_blur_floor.py's. Under load the A and B frame
@@ -44,6 +47,7 @@ from bench_frames import copy_draw_ms, settings_for  # noqa: E402
 
 import skinviewer.passes.deon as deon_passes  # noqa: E402
 from skinviewer.engine.renderer import Renderer  # noqa: E402
+from skinviewer.ground.settings import with_values  # noqa: E402
 from skinviewer.kernel import execute  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 
@@ -130,6 +134,8 @@ def main() -> None:
                          "(passes.deon.GATHER_FILL_SPLIT, COMBINE_ONCE off), in its own renderer")
     ap.add_argument("--ab-unsplit-final", action="store_true",
                     help="B shades the final pass in one pass (passes.deon.SPLIT_FINAL 0), in its own renderer")
+    ap.add_argument("--ab-no-view-cull", action="store_true",
+                    help="B makes every texture-space tile (deon.view_cull = off), in its own renderer; camera frames timed")
     args = ap.parse_args()
     sizes = [int(v) for v in str(args.maps).split(",")]
     if len(sizes) > 1:
@@ -148,7 +154,11 @@ def main() -> None:
     r.render(phong, force=True)
     ra = rb = r
     own = (args.ab_unsplit_sum or args.ab_unsplit_irradiance or args.ab_no_quad_sum or args.ab_no_sum_cuts
-           or args.ab_unsplit_final)  # B in a renderer of its own
+           or args.ab_unsplit_final or args.ab_no_view_cull)  # B in a renderer of its own
+    if args.ab_no_view_cull:  # A culls (deon.view_cull = view), B does not
+        s = with_values(s, {"deon.view_cull": "view"})
+        ra.render(s, force=True)
+    s_b = with_values(s, {"deon.view_cull": "off"}) if args.ab_no_view_cull else s
     cuts = deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE
     if own:
         deon_passes.SPLIT_SUM = not args.ab_unsplit_sum
@@ -158,7 +168,7 @@ def main() -> None:
             deon_passes.GATHER_FILL_SPLIT = deon_passes.COMBINE_ONCE = False
         deon_passes.SPLIT_FINAL = "0" if args.ab_unsplit_final else split_final
         rb = Renderer(ctx)
-        rb.render(s, force=True)
+        rb.render(s_b, force=True)
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
         deon_passes.QUAD_SUM = quad
         deon_passes.GATHER_FILL_SPLIT, deon_passes.COMBINE_ONCE = cuts
@@ -168,6 +178,8 @@ def main() -> None:
     per: dict[tuple, list[float]] = collections.defaultdict(list)
     counts: dict[tuple, int] = {}
     frames, frames_b, phongs, copies, halves = [], [], [], [], []
+    cams: dict[tuple[str, str], list[float]] = collections.defaultdict(list)  # (side, turned | back) -> ms
+    shares: dict[tuple[str, str], list[float]] = collections.defaultdict(list)  # (side, pass) -> tiles made
     variant: dict[str, dict] = {}
     for a in args.ab:
         name, kv = a.split(":", 1)
@@ -190,8 +202,12 @@ def main() -> None:
                 if args.ab_no_seam_split:
                     deon_passes.seam_split = lambda *a, **k: None
             LOG.clear()
-            ms_frame = light_frame(ra if side == "A" else rb, s, k)[0]
+            rs, ss = (ra, s) if side == "A" else (rb, s_b)
+            ms_frame, rep_light = light_frame(rs, ss, k)
             (frames if side == "A" else frames_b).append(ms_frame)
+            for p in rep_light.passes:
+                if p.status == "ran" and "view_tiles" in p.figures:
+                    shares[(side, p.name)].append(p.figures["view_tiles"])
             # the base frame of light_frame is untimed but its draws are logged too: keep the second half
             frame = collections.defaultdict(float)
             n = collections.Counter()
@@ -203,6 +219,15 @@ def main() -> None:
             for key, ms in frame.items():
                 per[key].append(ms)
                 counts[key] = n[key]
+            if args.ab_no_view_cull:  # the camera-only frames after the light move (not per draw)
+                moved = rep_light_settings(ss, k)
+                for label, view in (("turned", with_values(moved, {"camera.yaw": moved.camera.yaw + 10.0})),
+                                    ("back", moved)):
+                    rs.ctx.finish()
+                    t0 = time.perf_counter()
+                    rs.render(view)
+                    rs.ctx.finish()
+                    cams[(side, label)].append((time.perf_counter() - t0) * 1000.0)
         VARIANT.clear()
         deon_passes.zone_split, deon_passes.seam_split = zone_split, seam_split
         deon_passes.SPLIT_SUM = deon_passes.SPLIT_IRRADIANCE = True
@@ -222,6 +247,11 @@ def main() -> None:
     print(f"# light move (timed per draw) {statistics.median(frames):.0f} ms = {statistics.median(frames) / ph:.2f} x Phong{b}; "
           f"Phong {ph:.0f} ms; "
           f"copy {copy:.2f} ms ({args.maps}^2), {half:.2f} ms ({args.maps // 2}^2)")
+    for (side, label), ms_list in sorted(cams.items()):
+        print(f"# camera frame after the light move, {label} ({'view culling' if side == 'A' else 'B: off'}): "
+              f"{statistics.median(ms_list):.0f} ms")
+    for (side, name), fr in sorted(shares.items()):
+        print(f"# {name} made {100.0 * statistics.median(fr):.0f} % of its tiles in the light move ({side})")
     hdr = f"{'pass':<18} {'program':<58} {'draws':>5} {'ms':>8} {'/ copy':>7}"
     print(hdr)
     print("-" * len(hdr))
@@ -231,6 +261,12 @@ def main() -> None:
         total += ms
         print(f"{key[0]:<18} {key[1]:<58} {counts[key]:>5} {ms:8.1f} {ms / copy:7.1f}")
     print(f"{'sum of draws':<18} {'':<58} {'':>5} {total:8.1f} {total / copy:7.1f}")
+
+
+def rep_light_settings(s, k: int):
+    """The settings light_frame moved the key light to in repeat ``k`` (bench_blur_floor.light_frame)."""
+    d = s.lights[0].direction
+    return with_values(s, {"lights.0.direction": (d[0] + 0.02 * (k + 1), d[1], d[2])})
 
 
 def growth(args, sizes: list[int]) -> None:

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skinviewer import techniques
-from skinviewer.ground.settings import Settings
+from skinviewer.ground.settings import Settings, with_values
 from skinviewer.kernel.frame_view import FrameView
 from skinviewer.kernel.gpu_scene import GpuScene
 from skinviewer.kernel.graph import FrameInputs, FrameReport, RenderGraph, TexturePool
@@ -53,6 +53,7 @@ class Renderer:
         self.scene: LoadedScene | None = None
         self.scene_version = 0
         self._lod_state: dict[str, Any] = {}  # the mesh-LOD rule's hysteresis
+        self._completed: Settings | None = None  # complete_view: the settings every tile was made for
         self.last_view: View | None = None  # the last frame's camera (last_frame_view.camera)
         self.last_frame_view: FrameView | None = None
         # bytes textures may use (None: what the system has, see available_memory); tests set it
@@ -209,6 +210,24 @@ class Renderer:
 
     def read(self, s: Settings, resource: str) -> np.ndarray:
         return self.graph(s.technique).read(resource)
+
+    def complete_view(self, s: Settings, budget_ms: float | None = 30.0) -> bool:
+        """deon.view_cull: an idle frame's work -- the texture-space tiles the views so far did not need, made
+        under ``budget_ms`` (a pass in row bands resumes in the next call), so that a later camera move
+        finds them made (passes/view_cull.COMPLETE). The image is unchanged. True while work is left (a pass
+        ran or the budget deferred it); once every tile is made, False at once for the same settings object."""
+        from skinviewer.passes.view_cull import COMPLETE
+        g = self.graphs.get(s.technique)
+        if g is None or s.technique != "deon" or s.deon.view_cull != "view" or self._completed is s:
+            return False
+        g.shape_state[COMPLETE] = True
+        try:
+            rep = self.render(with_values(s, {}), budget_ms=budget_ms)
+        finally:
+            g.shape_state.pop(COMPLETE, None)
+        if rep.complete and not rep.ran:
+            self._completed = s
+        return bool(rep.ran) or not rep.complete
 
     def warm(self, technique: str, budget_ms: float | None = 50.0) -> int:
         """Compile the likely next shader variants of ``technique`` (idle time); returns how many

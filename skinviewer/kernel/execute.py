@@ -52,8 +52,12 @@ class ExecuteContext:
     """
 
     def __init__(self, graph: RenderGraph, p: Pass, refl: Reflection, frame: FrameInputs,
-                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None):
+                 tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None,
+                 cover: tuple[Any, Any] | None = None):
         self.graph = graph
+        # (need, have) of a pass that declared Reflection.cover: the cells its outputs must hold after this run
+        # and those they already hold under its key (None: none, every cell is to be made); None: no cover
+        self.cover = cover
         self.tile = tile  # (band, bands) of a tileable pass; (0, 1): the whole pass at once
         self._held = {} if held is None else held
         self._own_held = held is None  # not kept across bands: returned with the scratch
@@ -383,6 +387,8 @@ class ExecuteContext:
         a pass that draws only part of its output (texture-space tiles) leaves no pooled texture's, other
         scene's or other tile set's values in the rest (hard cases, the texture inspector, check_finite)."""
         g = self.graph
+        if self.cover is not None and self.cover[1] is not None:
+            return  # a run for the cells its outputs do not hold yet keeps those they hold (kernel/coverage)
         tag = (g.res.versions.get(resource), key)
         if g._cleared.get(resource) != tag:
             g.res.framebuffer((resource,)).clear(0.0, 0.0, 0.0, 0.0)

@@ -110,6 +110,12 @@ class TileProgress:
     ms: float = 0.0
     held: dict[str, Any] = field(default_factory=dict)  # name -> texture kept across its bands (ExecuteContext.held)
     band_ms: list[float] = field(default_factory=list)  # what each band done so far cost
+    cover: Any = None  # ExecuteContext.cover of its run (kernel/coverage): (need, have) or None
+
+
+def _covering(cover: Any) -> dict[str, Any]:
+    """_execute's ``cover`` keyword when a pass runs with one (kernel/coverage), else none."""
+    return {} if cover is None else {"cover": cover}
 
 
 def _elapsed_ms(query: moderngl.Query) -> float | None:
@@ -176,6 +182,8 @@ class RenderGraph:
         self.pool = pool or TexturePool(ctx)
         self.res = ResourceCache(ctx, self.pool)  # textures, framebuffers, memory (kernel/resources.py)
         self._keys: dict[str, dict[str, Any]] = {}  # pass name -> last cache key parts
+        # pass -> the tile cells (kernel/coverage.TileCover) its outputs hold under its key; absent: every cell
+        self._covered: dict[str, Any] = {}
         self.frame = 0
         self.last_report: FrameReport | None = None
         self.order: list[Pass] = []
@@ -511,17 +519,45 @@ class RenderGraph:
             old = self._keys.get(p.name)
             stamp = self._stamp(p, r, frame) if FAST_CACHED and not force else None
             key = old if old is not None and self._clean(p.name, old, stamp) else self._key(p, r, frame)
+            if old != key:
+                self._covered.pop(p.name, None)  # cells made under another key hold nothing now
+            # kernel/coverage: a pass valid on part of its outputs (Reflection.cover) runs again, on the cells
+            # still missing, when this frame needs more of them (need None: every cell)
+            need, have = r.cover_need, self._covered.get(p.name)
+            extend = old == key and have is not None and (need is None or not have.covers(need))
+            cover = (need, have if need is not None else None) if need is not None or extend else None
+            if extend and need is None:  # every cell wanted again: a whole run, as after a key change
+                self._keys.pop(p.name, None)
+                self._covered.pop(p.name, None)
+                old, extend, cover = None, False, None
             rec = PassRecord(p.name, "cached", inputs=list(r.inputs), outputs=self._record_outputs(p.name, r))
             progress = self._progress.get(p.name)
-            if progress is not None and (force or progress.key != key):
-                self._cancel(p.name)  # what its bands were computing is no longer wanted
+            if progress is not None and (force or progress.key != key or (need is not None and (
+                    progress.cover is None or progress.cover[0] != need))):
+                # what its bands were computing is no longer wanted; a run for cells it did not hold wrote only
+                # those: under an unchanged key it still holds the cells it held (kernel/coverage)
+                self._cancel(p.name, keep=not force and progress.key == key)
                 progress = None
+                old, have = self._keys.get(p.name), self._covered.get(p.name)
+                extend = old == key and have is not None and need is not None and not have.covers(need)
+                if old == key and have is not None and need is None:  # every cell wanted: a whole run
+                    self._keys.pop(p.name, None)
+                    self._covered.pop(p.name, None)
+                    old = None
+                cover = (need, have if extend else None) if need is not None else None
+            if progress is not None:
+                cover = progress.cover
+                extend = cover is not None and cover[1] is not None
             changed = key is not old and old != key
-            if not force and changed and progress is None and self._copy_from_peer(p, r, key, rec, timing):
+            if not force and changed and progress is None and cover is None \
+                    and self._copy_from_peer(p, r, key, rec, timing):
                 self._keep_stamp(p.name, key, stamp)
                 records[p.name] = rec  # an equal key in a peer graph: its outputs copied (the same result)
                 continue
-            if force or realloc or changed:
+            if force:
+                extend = False
+                cover = (need, None) if need is not None else None
+            if force or realloc or changed or extend:
                 # a freshly (re)allocated output holds garbage under no key (popped above): deferred,
                 # it runs next frame like any other pass (its consumers wait) -- a first frame is spread
                 # over several under the budget instead of freezing the viewer for all its passes
@@ -554,10 +590,12 @@ class RenderGraph:
                 any_ran = True
                 rec.status = "ran"
                 rec.reason = "forced" if force else ("allocated" if realloc and old == key else why(old, key))
+                if extend:
+                    rec.reason = "the view needs tiles it has not made"
                 if p.tileable and budget_ms is not None:
                     if progress is not None and progress.done:
                         rec.reason = f"resumed at band {progress.done + 1}/{progress.count}"
-                    progress = progress or TileProgress(key, self._tile_count(p, r, budget_ms))
+                    progress = progress or TileProgress(key, self._tile_count(p, r, budget_ms), cover=cover)
                     self._progress[p.name] = progress
                     self._keys.pop(p.name, None)  # its outputs are being overwritten band by band
                     rec.ms = self._run_bands(p, r, frame, timing, progress, t_start, budget_ms)
@@ -576,10 +614,10 @@ class RenderGraph:
                 else:
                     predicted = self._expected_ms(p, r)
                     if timing == "gpu" and budget_ms is None:  # read after the frame (_collect_queries)
-                        query = self._execute(p, r, frame, timing, defer=True)
+                        query = self._execute(p, r, frame, timing, defer=True, **_covering(cover))
                         self._pending_queries.append((query, rec, p.name, pixels(r), predicted))
                     else:
-                        rec.ms = self._execute(p, r, frame, timing)
+                        rec.ms = self._execute(p, r, frame, timing, **_covering(cover))
                         self.frame_ms[p.name] = rec.ms or 0.0
                         self._keep_pace(predicted, rec.ms, (p.name, 0))
                 rec.draws = self._last_draws
@@ -588,8 +626,15 @@ class RenderGraph:
                 if rec.ms is not None:
                     self._last_ms[p.name] = rec.ms
                     self._last_px[p.name] = pixels(r)
-                for res in r.outputs:
-                    self.res.versions[res] = self.res.versions.get(res, 0) + 1
+                if extend and cover is not None:  # the cells held are as they were: consumers extend theirs
+                    self._covered[p.name] = cover[1] | cover[0]
+                else:
+                    for res in r.outputs:
+                        self.res.versions[res] = self.res.versions.get(res, 0) + 1
+                    if need is not None:
+                        self._covered[p.name] = need
+                    else:
+                        self._covered.pop(p.name, None)
                 self._keys[p.name] = key
                 self._keep_stamp(p.name, key, stamp)
                 self._unchecked.discard(p.name)
@@ -631,6 +676,7 @@ class RenderGraph:
                     if res in self.res.textures:
                         self.res.free(res)
                 self._keys.pop(p.name, None)
+                self._covered.pop(p.name, None)
                 self._nonfinite.pop(p.name, None)
                 self._unchecked.discard(p.name)
                 self.refining.discard(p.name)
@@ -962,7 +1008,7 @@ class RenderGraph:
                 chain_t0 = time.perf_counter()
             t_band = time.perf_counter()
             ms = self._execute(p, r, frame, timing, tile=(progress.done, progress.count), held=progress.held,
-                               lazy=lazy or bool(chain), sync_after=not lazy)
+                               lazy=lazy or bool(chain), sync_after=not lazy, **_covering(progress.cover))
             if lazy:
                 ms = float(predicted or 0.0)  # provisional: the chain's closing glFinish shares out its time
                 chain.append((progress.done, ms))
@@ -997,10 +1043,18 @@ class RenderGraph:
         for tex in progress.held.values():
             self.res.give(tex)
 
-    def _cancel(self, name: str) -> None:
-        """Abandon a pass's unfinished bands: held textures back to the pool, no key for its outputs."""
+    def _cancel(self, name: str, keep: bool = False) -> None:
+        """Abandon a pass's unfinished bands: held textures back to the pool, no key for its outputs; but with
+        ``keep``, when the run was one for the cells its outputs did not hold (kernel/coverage), which writes
+        no other cell: its key and the cells it held before are kept."""
+        progress = self._progress.get(name)
+        extension = progress is not None and progress.cover is not None and progress.cover[1] is not None
         self._finish_bands(name)
         self._keys.pop(name, None)
+        self._covered.pop(name, None)  # a cancelled whole run may have overwritten any cell
+        if keep and extension and progress is not None:
+            self._keys[name] = progress.key
+            self._covered[name] = progress.cover[1]
         self.cancelled.append(name)
 
     @property
@@ -1024,12 +1078,12 @@ class RenderGraph:
 
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,
                  tile: tuple[int, int] = (0, 1), held: dict[str, Any] | None = None, defer: bool = False,
-                 lazy: bool = False, sync_after: bool = True) -> Any:
+                 lazy: bool = False, sync_after: bool = True, cover: tuple[Any, Any] | None = None) -> Any:
         """Run ``p`` (or one band of it) and return its ms; ``defer`` (timing "gpu"): its timer query,
         to be read after the frame's last pass (_collect_queries). Sync timing: a glFinish before it
         (none when ``lazy``: a band of a sampled-sync chain, _run_bands) and after it (none unless
         ``sync_after``: its time is then only the CPU's)."""
-        ec = ExecuteContext(self, p, r, frame, tile=tile, held=held)
+        ec = ExecuteContext(self, p, r, frame, tile=tile, held=held, cover=cover)
         self._lod_notes.pop(p.name, None)
         t_enter = time.perf_counter()
         first_draws = self.shaders.first_draws
@@ -1191,10 +1245,12 @@ class RenderGraph:
         """Forget cache keys (all, or one pass) so they re-run next frame."""
         if pass_name is None:
             self._keys.clear()
+            self._covered.clear()
             for name in list(self._progress):
                 self._cancel(name)
         else:
             self._keys.pop(pass_name, None)
+            self._covered.pop(pass_name, None)
             if pass_name in self._progress:
                 self._cancel(pass_name)
 

@@ -354,6 +354,8 @@ class Reflection:
         self._memos: list[tuple[Any, Callable[[Reflection], Any], bool]] = []  # (key, rule, scene is None)
         self._untracked = False
         self.depends_on: dict[str, Any] = {}  # values outside settings/inputs the output depends on
+        # kernel/coverage: the tile cells this pass's outputs must hold this frame (Reflection.cover); None: all
+        self.cover_need: Any = None
         self._plan: dict[str, Any] = {}  # what reflect decided, for execute (Reflection.plan)
         # the graph's per-frame memo of rules many passes ask (Reflection.memo); None: no memo
         self._frame_memo: dict[Any, tuple[Any, list[str], list[str], list[tuple[str, str]], list[Read]]] | None = None
@@ -516,6 +518,13 @@ class Reflection:
         if not scene_generation:
             self._untracked = True
         self.depends_on[name] = value
+
+    def cover(self, need: Any) -> None:
+        """This frame needs the outputs valid only on the cells of ``need`` (a kernel/coverage.TileCover, from
+        a memoised rule: not part of the cache key). The graph runs the pass when its key changed (the pass
+        computes ``need``) or when the cells it holds under its key do not cover ``need`` (it computes the
+        missing ones: ``ExecuteContext.cover``), and keeps it cached otherwise."""
+        self.cover_need = need
 
     def input(self, resource: str) -> None:
         if resource not in self.inputs:

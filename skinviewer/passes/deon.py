@@ -31,10 +31,11 @@ from typing import Any
 
 import numpy as np
 
-from skinviewer.ground.constants import LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
+from skinviewer.ground.constants import FLOAT_MAX, HALF_MAX, LIGHT_KINDS, MAX_GAUSSIANS, MAX_LIGHTS
 from skinviewer.kernel.gl import compute_choice, gl_info, image_format, software_renderer
 from skinviewer.kernel.pass_api import Pass, Reflection, TexSpec, declare, whole
 from skinviewer.kernel.shaders import ShaderCompileError
+from skinviewer.passes import texture_space
 from skinviewer.passes.common import (
     LIT,
     bind_specular,
@@ -81,6 +82,20 @@ from skinviewer.passes.texture_space import (
     unwrap_dilated,
     work_tiles,
 )
+from skinviewer.passes.view_cull import (
+    ViewTiles,
+    gutter_links,
+    island_origins,
+    links,
+    make_view_tiles,
+    mask_rects,
+    note_tiles,
+    restrict,
+    separable_draws,
+    through_links,
+    work_of,
+)
+from skinviewer.passes.view_cull import declare_inputs as declare_cull_inputs
 from skinviewer.physics.diffusion import (
     IRRADIANCE,
     KERNEL7,
@@ -690,6 +705,14 @@ class IrradiancePass(Pass):
                        DEON_TEXEL_SAMPLES=int(r.settings.deon.texel_samples))
         if vis:
             r.output(VISIBILITY, TexSpec((n, n), 4, "f2"))
+        # deon.view_cull: the tiles the blurs, the transmitted light and the final pass read (over the texel map)
+        vt = view_tiles(r) if r.planned.shading.texels else None
+        r.plan(cull=(vt.n, vt.m) if vt is not None else None)
+        if vt is not None:
+            r.program("dilate", TILED=2)
+            r.program("dilate", DILATE_MORE=1, TILED=2)
+            declare_cull_inputs(r, vt)
+            r.cover(vt.token)
 
     def execute(self, ec) -> None:
         n = ec.plan.shading.size
@@ -717,7 +740,15 @@ class IrradiancePass(Pass):
             ec.bind(prog, "tsm_map", TSM)
             set_tsm_uniforms(ec, prog, ec.plan.tsm_light)
         # with texture shadows the same draw also writes each light's fac_shadow (location 1)
-        shade_dilated(ec, prog, IRRADIANCE, *((VISIBILITY,) if ec.plan.visibility else ()))
+        more = (VISIBILITY,) if ec.plan.visibility else ()
+        work = work_of(ec, IRRADIANCE)  # deon.view_cull: the tiles to make (None: every tile)
+        if work is not None:
+            seen = work_of(ec, VISIBILITY) if more else None
+            work = work | seen if seen is not None else work
+            note_tiles(ec, work)
+            shade_tiles(ec, prog, IRRADIANCE, work, *more)
+        else:
+            shade_dilated(ec, prog, IRRADIANCE, *more)
 
 
 def mean_texel_mm(scene, n: int) -> float:
@@ -880,6 +911,7 @@ class GaussianBlurPass(Pass):
         compute = compute_blur(r)
         r.plan(stretch=stretch, source=source, skip_gutters=bool(skip_gutters), narrow=bool(narrow),
                ring_sigma=ring_sigma(r, self.i), blur_defines=blur_defines, zone_split=split, compute=compute)
+        self._declare_cull(r)
         spec = self._spec(m)
         blur_program(r, compute, spec, "deon_blur", **blur_defines)
         if split:
@@ -894,6 +926,15 @@ class GaussianBlurPass(Pass):
                 if n_in != m:  # a half-size blur's full-size input, seam-filled at half size (seam_fill DOWN)
                     blur_program(r, compute, spec, "seam_fill", DOWN=1, **fill_defines, **extra)
         r.output(self._output(), spec)
+
+    def _declare_cull(self, r) -> None:
+        """deon.view_cull: the tiles this blur's readers need (view_cull.stage_needs), when its stage is cullable."""
+        vt = view_tiles(r) if self.chain == "irradiance" else None
+        stage = cull_stage(vt, self.i) if vt is not None else None
+        r.plan(cull=(vt.n, vt.m) if stage is not None and vt is not None else None, cull_stage=stage)
+        if stage is not None and vt is not None:
+            declare_cull_inputs(r, vt)
+            r.cover(vt.token)
 
     def _reflect_gather(self, r, step, n: int) -> None:
         """A narrow step as a direct sum over the surface: the gather surface, the step's input
@@ -951,6 +992,7 @@ class GaussianBlurPass(Pass):
             r.plan(weights=None, quad=False)
             r.program("deon_gather_blocks")
             r.program("deon_surface_gather", GATHER_BLOCKS=reach, **tiled)
+        self._declare_cull(r)
         r.output(self._output(), self._spec(n))
 
     def _execute_gather(self, ec) -> None:
@@ -958,6 +1000,10 @@ class GaussianBlurPass(Pass):
         step, n, gutter = plan.step, plan.size, plan.gutter
         source = step.source
         tiled = plan.island_tiles
+        work = work_of(ec, plan.output)  # deon.view_cull: the tiles to make (None: every tile)
+        if work is not None and not work.any():
+            note_tiles(ec, work)
+            return
         # the seam fill and the block sums are made once (first band) and kept across the bands
         if plan.seam:  # gutters across seams hold the surface there
             filled, fresh = ec.held("filled", plan.spec)
@@ -991,7 +1037,7 @@ class GaussianBlurPass(Pass):
             ec.textures(prog, source=source, surface=GATHER_SURFACE)
             ec.draw_fullscreen(prog, *(t for t, _ in held))
         texels = np.sqrt(step.increment) / mean_texel_mm(ec.scene, n)
-        ec.note(f"summed over the surface: sigma {texels:.2f} mean texels", sigma_texels=float(texels))
+        note_tiles(ec, work, f"summed over the surface: sigma {texels:.2f} mean texels", sigma_texels=float(texels))
         if split and plan.quad:  # four texels a fragment (deon_gather_quad.frag), then picked per texel
             self._execute_quad(ec, source, light, lit, held[2][0] if flat else None)
             return
@@ -1014,8 +1060,13 @@ class GaussianBlurPass(Pass):
             bind_sheet_stretch(ec, prog)
         if tiled and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
+        tiles = work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if tiled else None
+        if work is not None:  # each texel is its island texel's sum: those of the tiles to make
+            tiles = restrict(ec, "sum", tiles, through_links(work, links(ec, n)[1]), n)
+            if tiles is None:
+                return
         with ec.band():
-            ec.draw_fullscreen(prog, plan.output, tiles=work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if tiled else None)
+            ec.draw_fullscreen(prog, plan.output, tiles=tiles)
 
     def _execute_quad(self, ec, source, light, lit, mean) -> None:
         """The split sum as deon_gather_quad.frag (the island texels, four a fragment, into four half-size
@@ -1041,12 +1092,19 @@ class GaussianBlurPass(Pass):
         tiles = work_tiles(ec, n, DILATE_RING, rects=TILE_RECTS) if plan.island_tiles else None
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, DILATE_RING))
+        quad_tiles = pick_tiles = tiles
+        work = work_of(ec, plan.output)  # deon.view_cull: the tiles to make, and their island texels' sums
+        if work is not None:
+            pick_tiles = restrict(ec, "pick", tiles, work, n)
+            quad_tiles = restrict(ec, "quad", tiles, through_links(work, links(ec, n)[1]), n, output=False)
         for d, sub, subs in ec.units(2):
             with ec.band(sub, subs):
+                if work is not None and (quad_tiles if d == 0 else pick_tiles) is None:
+                    continue  # deon.view_cull: no tile of this draw is to be made
                 if d == 0:  # the tiles' rectangles are in the map's texels: the half-size target's twice
-                    ec.draw_fullscreen(prog, *quads, tiles=tiles, tile_space=(n, n))
+                    ec.draw_fullscreen(prog, *quads, tiles=quad_tiles, tile_space=(n, n))
                 else:
-                    ec.draw_fullscreen(pick, plan.output, tiles=tiles)
+                    ec.draw_fullscreen(pick, plan.output, tiles=pick_tiles)
 
     def _spec(self, n: int) -> TexSpec:
         return TexSpec((n, n), 4 if self.chain == "irradiance" else 2, "f4")  # the stretch chain: RG
@@ -1080,6 +1138,10 @@ class GaussianBlurPass(Pass):
             self._execute_gather(ec)
             return
         step, n, stretch, narrow, border = plan.step, plan.size, plan.stretch, plan.narrow, plan.border
+        work = work_of(ec, plan.output)  # deon.view_cull: the tiles to make (None: every tile)
+        if work is not None and not work.any():
+            note_tiles(ec, work)
+            return
         compute = plan.compute  # render.compute_blur: the compute twins of the same programs (blur_program)
 
         def program(name: str, **defines: Any) -> Any:
@@ -1106,12 +1168,7 @@ class GaussianBlurPass(Pass):
             ec.uniforms(p_, u_use_stretch=bool(stretch), u_uniform_stretch=(s, s),
                         u_weights=np.asarray(KERNEL7, np.float32),
                         u_shear=bool(stretch) and bool(ec.settings.deon.stretch_shear))
-        texel_mm = mean_texel_mm(ec.scene, n)
-        increment = step.increment
-        if plan.half:  # the coarser grid's interpolation is part of the variance (half_size_increment)
-            increment = half_size_increment(increment, mean_texel_mm(ec.scene, plan.full), plan.size_in != n)
-        sigmas = ([np.sqrt(step.increment)] if narrow else
-                  sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), increment, texel_mm))
+        sigmas = blur_sigmas(ec.scene, step, n, plan.half, plan.size_in, plan.full, narrow)
         for p_ in progs:
             ec.bind(p_, "gutter", plan.gutter)
             if stretch:
@@ -1167,13 +1224,14 @@ class GaussianBlurPass(Pass):
             if split is not None:
                 parts = [(prog, split[0]), (free, split[1])] if split[0] is not None else [(free, split[1])]
         # (program, uniforms, textures, source, target, tiles), in order: H then V per sub-step (eq. 25-26)
-        draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any]] = []
+        draws: list[tuple[Any, dict[str, Any], dict[str, Any], Any, Any, Any, int]] = []
         for k, sigma in enumerate(sigmas):
             last = k == len(sigmas) - 1
             # past an open border: nothing in E itself (the first pass over it), the odd reflection in a blur of it
             refl = {"u_reflect": int(not (k == 0 and step.source == IRRADIANCE))} if border else {}
-            for direction, source, target in (((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
-                                              ((0.0, 1.0), tmp, plan.output if last else tmp2)):
+            for dd, (direction, source, target) in enumerate((((1.0, 0.0), src, tmp),  # horizontal: src -> tmp
+                                                             ((0.0, 1.0), tmp, plan.output if last else tmp2))):
+                fill_at, blur_at = 4 * k + 2 * dd, 4 * k + 2 * dd + 1  # view_cull.separable_draws' order
                 if seam:  # the source with its seam gutters continued across the seam
                     first = down is not None and source is plan.source
                     prog_fill = down if first else fill
@@ -1181,22 +1239,29 @@ class GaussianBlurPass(Pass):
                     plain = plain_down if first else plain_fill
                     split = seam_split(ec, n, fill_tiles) if plain is not None and fill_tiles is not None else None
                     if split is None:
-                        draws.append((prog_fill, refl, maps, source, filled, fill_tiles))
+                        draws.append((prog_fill, refl, maps, source, filled, fill_tiles, fill_at))
                     else:
                         for p_, where in ((prog_fill, split[0]), (plain, split[1])):
                             if where is not None:
-                                draws.append((p_, refl, maps, source, filled, where))
+                                draws.append((p_, refl, maps, source, filled, where, fill_at))
                     source = filled
                 for p_, where in parts:  # spacing = sigma (eq. 25)
-                    draws.append((p_, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, where))
+                    draws.append((p_, {"u_sigma_mm": float(sigma), "u_dir": direction, **refl}, {}, source, target, where,
+                                  blur_at))
             src = tmp2
-        ec.note(f"{compute_failed}{2 * len(sigmas)} directions, {len(draws)} {'compute dispatches' if compute else 'draws'}",
-                directions=2 * len(sigmas), compute=bool(compute),
-                zone_free_rects=int(sum(w[1] for p_, w in parts if p_ is free and w is not None)))
+        note_tiles(ec, work, f"{compute_failed}{2 * len(sigmas)} directions, {len(draws)} "
+                   f"{'compute dispatches' if compute else 'draws'}",
+                   directions=2 * len(sigmas), compute=bool(compute),
+                   zone_free_rects=int(sum(w[1] for p_, w in parts if p_ is free and w is not None)))
         if tiles is not None and ec.first_tile:  # texels beyond the tiles: 0, not a pooled texture's
             ec.clear_unwritten(plan.output, (id(ec.scene), n, tiles[1], tiles[2], reach, dilate_fill))
+        if work is not None:  # deon.view_cull: each draw on the tiles the next ones read (separable_draws)
+            masks = separable_draws(ec, plan.cull_stage, work, STRETCH)[0]
+            draws = [dw[:5] + (restrict(ec, j, dw[5], masks[dw[6]], n, output=dw[4] == plan.output),) + dw[6:]
+                     for j, dw in enumerate(draws)]
+            draws = [dw for dw in draws if dw[5] is not None]
         for d, sub, subs in ec.units(len(draws)):
-            program, values, maps, source, target, where = draws[d]
+            program, values, maps, source, target, where, _ = draws[d]
             for name, value in values.items():
                 ec.set(program, name, value)
             for name, tex in maps.items():
@@ -1207,6 +1272,87 @@ class GaussianBlurPass(Pass):
                     ec.dispatch(program, target, tiles=compute_tiles(ec, where) if where is not None else None)
                 else:
                     ec.draw_fullscreen(program, target, tiles=where)
+
+
+def blur_sigmas(scene, step: BlurStep, n: int, half: bool, n_in: int, full: int, narrow: bool) -> list[float]:
+    """A separable blur step's sub-step sigmas (mm) on its n x n map (eq. 24-26; sub_steps): one for whole-texel
+    taps (``narrow``); a half-size map's increment holds the coarser grid's interpolation (half_size_increment)."""
+    increment = step.increment
+    if half:
+        increment = half_size_increment(increment, mean_texel_mm(scene, full), n_in != n)
+    if narrow:
+        return [float(np.sqrt(step.increment))]
+    return [float(x) for x in sub_steps(np.sqrt(max(step.variance - step.increment, 0.0)), increment,
+                                        mean_texel_mm(scene, n))]
+
+
+def cull_chain(r) -> tuple | None:
+    """What each texture-space pass of the light chain reads, for deon.view_cull (passes/view_cull.stage_needs),
+    forwards: ("names", diffuse sum, transmitted light, visibility, TSM, stretch map), then per blur step that
+    runs ("gather", i, n, source, reach in blocks, cullable) or ("blur", i, its map's
+    side, source, the source's side, sub-step sigmas, NARROW_TAPS or 0, seam fill, cullable), then ("comb",
+    (texture, side)...) and with a TSM ("trans", (texture, side)...). A stage is cullable when it draws rectangle
+    tile lists (deon.skip_gutters; a separable one as fragment draws, not render.compute_blur) without an open
+    border's reflection or per-Gaussian stretch. None: the diffuse sum is not in texture space (deon_final reads
+    the blurs per pixel): nothing is culled."""
+    if not combined(r):
+        return None
+    d = r.settings.deon
+    n = map_size(r)
+    plan = _plan(r)
+    border = open_border(r)
+    compute = compute_blur(r)
+    stretch = STRETCH if d.stretch else None
+    stages: list[tuple] = []
+    for i, step in enumerate(plan):
+        if step.reused:
+            continue
+        if gathered(r, step):
+            stages.append(("gather", i, n, step.source, gather_reach(r, step, n),
+                           island_tiles(r, "irradiance", {"OPEN_BORDER": 1} if border else {})))
+            continue
+        half = half_size(r, i)
+        m = transmitted_size(r) if half else n
+        n_in = texture_size(r, step.source)
+        narrow = {} if half else GaussianBlurPass._narrow(r, step, stretch, n)
+        sigmas = blur_sigmas(r.scene, step, m, half, n_in, n, bool(narrow))
+        cull = bool(d.skip_gutters) and TILE_RECTS and not compute and not border and not d.stretch_per_gaussian
+        stages.append(("blur", i, m, step.source, n_in, tuple(sigmas), int(narrow.get("NARROW_TAPS", 0)),
+                       bool(r.settings.scene.seam_aware), cull))
+    mask = used_mask(r)
+    m = transmitted_size(r)
+    stages.insert(0, ("names", DIFFUSE, TRANSMITTED, VISIBILITY, TSM, STRETCH, texel_surface_resources(m, "p")[0],
+                      gutter_resource(m)))  # view_cull.names
+    reads = tuple(sorted({(texture_of(step), texture_size(r, texture_of(step)))
+                          for i, step in enumerate(plan) if (mask >> i) & 1}))
+    stages.append(("comb", reads))
+    j = tsm_light_index(r)
+    if j is not None:  # E of the lit points (the gather) and the blurs at the TSM's uv, around each exit
+        tsm_n, block, radii = tsm_max_plan(r)
+        reach = float(tsm_n) if radii[0] >= -(-tsm_n // block) else float(radii[0] * block)  # the widest window
+        declare_pose(r.settings.lights[j])  # the TSM's light space
+        matrix = tuple(float(x) for x in r.scene.light_space(whole(r.peeked.lights[j])).gl_matrix.ravel()) \
+            if texel_shading(r) else None  # the exits' positions: the half-size texel surface map
+        stages.append(("trans", reads + (((IRRADIANCE, n),) if d.tsm_gather else ()), matrix, int(tsm_n), reach))
+    return tuple(stages)
+
+
+def view_tiles(r) -> ViewTiles | None:
+    """deon.view_cull's needed tiles this frame (passes/view_cull), answered once a frame (frame_memo); None when
+    it is off, without a scene, or when nothing is culled (cull_chain, view_cull.make_view_tiles)."""
+    return frame_memo(r, "deon.view_tiles", _view_tiles)
+
+
+def _view_tiles(r) -> ViewTiles | None:
+    if r.settings.deon.view_cull != "view" or r.scene is None:
+        return None
+    chain = cull_chain(r)
+    return None if chain is None else make_view_tiles(r, chain, map_size(r), transmitted_size(r))
+
+
+def cull_stage(vt, i: int) -> tuple | None:
+    """Blur step i's stage of the chain (cull_chain), when it is cullable."""
+    return next((st for st in vt.chain[1:] if st[0] in ("blur", "gather") and st[1] == i and st[-1]), None)
 
 
 def compute_blur(r) -> bool:
@@ -1405,6 +1551,45 @@ def bind_tsm_read(ec, prog) -> None:
         ec.bind(prog, "irradiance_map", IRRADIANCE)
 
 
+def shade_tiles(ec, prog, resource: str, mask: np.ndarray, *more: str) -> None:
+    """shade_dilated on the tiles ``mask`` of ``resource`` (and ``more``) only (deon.view_cull): the program
+    shades the island texels the gutter dilation reads for those tiles (view_cull.gutter_links), the dilation
+    (TILED = 2; a pair in one draw as dilate_all) writes those tiles; the others keep what they held."""
+    shading = ec.plan.shading
+    size, maps = shading.size, shading.maps
+    for k, res in zip(maps, texel_surface_resources(size, maps)):
+        ec.bind(prog, TEXEL_SURFACE_SAMPLERS[k], res)
+    island, pairs = gutter_links(ec, size)
+    raws = [ec.held(f"raw{i}", TexSpec((size, size), 4 if i == 0 else ec.output(r).components,
+                                       "f4" if i == 0 else ec.output(r).dtype, filter="nearest"))[0]
+            for i, r in enumerate((resource,) + more)]
+    shaded = through_links(mask, pairs)
+    # every island tile needed: work_tiles' own list (one quad for the whole target when it is nearly all)
+    tiles = work_tiles(ec, size, 0) if not (island & ~shaded).any() else island_origins(ec, size, shaded, island)
+    if ec.first_tile:  # the tiles no view needs: 0, not a pooled texture's (a run for new tiles keeps all)
+        for res in (resource,) + more:
+            ec.clear_unwritten(res, ("view_cull", id(ec.scene), size))
+    with ec.band():
+        if tiles is not None:
+            ec.draw_fullscreen(prog, *raws, tiles=tiles)
+    rects = mask_rects(ec, mask, "dilate")
+    if not ec.last_tile or rects is None:
+        return
+    targets = (resource,) + more
+    limit = [HALF_MAX if ec.output(t).dtype == "f2" else FLOAT_MAX for t in targets]
+    if len(targets) == 2 and texture_space.DILATE_PAIRS and ec.plan.dilate_pair:  # as dilate_all
+        dil = ec.program("dilate", DILATE_MORE=1, TILED=2)
+        ec.textures(dil, source=raws[0], source1=raws[1], gutter=gutter_resource(size))
+        ec.uniforms(dil, u_limit=limit[0], u_limit1=limit[1])
+        ec.draw_fullscreen(dil, *targets, tiles=rects)
+        return
+    dil = ec.program("dilate", TILED=2)
+    for src, target, lim in zip(raws, targets, limit):
+        ec.textures(dil, source=src, gutter=gutter_resource(size))
+        ec.set(dil, "u_limit", lim)
+        ec.draw_fullscreen(dil, target, tiles=rects)
+
+
 def transmitted_size(r) -> int:
     """deon_transmitted's map: half the irradiance map's (the term is smooth: a 3x3-filtered TSM)."""
     return max(map_size(r) // 2, 32)
@@ -1436,6 +1621,13 @@ class TransmittedPass(Pass):
         n = transmitted_size(r)
         declare_shaded(r, "deon_transmitted", n, TRANSMITTED, TexSpec((n, n), 4, "f4"), GAUSSIAN_MASK=mask,
                        **tsm_defines)
+        # deon.view_cull: the combine's reads of it (F at half size); over the texel surface map only
+        vt = view_tiles(r) if r.planned.shading.texels else None
+        r.plan(cull=(vt.n, vt.m) if vt is not None else None)
+        if vt is not None:
+            r.program("dilate", TILED=2)
+            declare_cull_inputs(r, vt)
+            r.cover(vt.token)
 
     def execute(self, ec) -> None:
         prog = ec.program(ec.plan.shading.program)
@@ -1445,7 +1637,12 @@ class TransmittedPass(Pass):
             ec.bind(prog, "tsm_max_map", TSM_MAX, optional=True)
             ec.set(prog, "u_tsm_max_block", int(ec.plan.tsm_max[1]), optional=True)
             ec.set(prog, "u_tsm_max_reach", tsm_max_covered(ec.plan.tsm_max), optional=True)  # per channel
-        shade_dilated(ec, prog, TRANSMITTED)
+        work = work_of(ec, TRANSMITTED)  # deon.view_cull: the tiles to make (None: every tile)
+        if work is not None:
+            note_tiles(ec, work)
+            shade_tiles(ec, prog, TRANSMITTED, work)
+        else:
+            shade_dilated(ec, prog, TRANSMITTED)
 
 
 class DiffuseSumPass(Pass):
@@ -1466,7 +1663,14 @@ class DiffuseSumPass(Pass):
         half = sum(1 << i for i, step in enumerate(_plan(r)) if (mask >> i) & 1 and texture_size(r, texture_of(step)) != n)
         textures = tuple(texture_of(step) for step in _plan(r))
         r.plan(textures=textures)
-        r.program("deon_combine", **combine_defines(textures, mask, half))
+        defines = combine_defines(textures, mask, half)
+        r.program("deon_combine", **defines)
+        vt = view_tiles(r)  # deon.view_cull: the tiles the final pass reads (F), drawn as rectangles
+        r.plan(defines=tuple(sorted(defines.items())), cull=(vt.n, vt.m) if vt is not None else None)
+        if vt is not None:
+            r.program("deon_combine", **defines, TILED=2)
+            declare_cull_inputs(r, vt)
+            r.cover(vt.token)
         r.output(DIFFUSE, TexSpec((n, n), 4, "f4"))
 
     def likely_programs(self, r: Reflection) -> list[tuple[str, dict]]:
@@ -1474,7 +1678,7 @@ class DiffuseSumPass(Pass):
         textures = r.planned.textures if "textures" in r.planned else ()
         out = []
         for n, d in r.programs:
-            if n != "deon_combine":
+            if n != "deon_combine" or "TILED" in dict(d):
                 continue
             for v in likely_final_variants(dict(d))[:MAX_GAUSSIANS]:
                 v.pop("BLUR_SOURCES", None)  # the sources of the toggled mask (blur_sources)
@@ -1482,14 +1686,25 @@ class DiffuseSumPass(Pass):
         return out
 
     def execute(self, ec) -> None:
-        prog = ec.program("deon_combine")
+        defines = dict(ec.plan.defines)
+        rects = None
+        work = work_of(ec, DIFFUSE)  # deon.view_cull: the tiles to make (None: every tile)
+        if work is not None:
+            note_tiles(ec, work)
+            if not work.all():  # else one full-screen draw, as without culling
+                ec.clear_unwritten(DIFFUSE, ("view_cull", id(ec.scene), ec.plan.size))  # the tiles no view needs: 0
+                rects = mask_rects(ec, work)
+                if rects is None:
+                    return
+                defines["TILED"] = 2
+        prog = ec.program("deon_combine", **defines)
         ws, _, _ = bind_blur_slots(ec, prog)
         n = ec.plan.size
         ec.uniforms(prog, u_w=ws, u_transmitted=ec.has_input(TRANSMITTED), u_size=(float(n), float(n)))
         ec.set(prog, "u_one", 1.0, optional=True)  # BLUR_SOURCES' shared values times 1 (deon_combine.frag)
         if ec.has_input(TRANSMITTED):
             ec.bind(prog, "transmitted", TRANSMITTED)
-        ec.draw_fullscreen(prog, DIFFUSE)
+        ec.draw_fullscreen(prog, DIFFUSE, tiles=rects)
 
 
 def blur_sources(textures: tuple, mask: int) -> int:

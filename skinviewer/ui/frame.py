@@ -509,7 +509,8 @@ class FrameController:
             # idle: a slice of the next drag's preview variants, else likely shader variants compiled;
             # not what a frame costs after its render (frame_end leaves it out)
             t_idle = time.perf_counter()
-            if not self._prime():
+            # deon.view_cull: the texture-space tiles no view needed yet, so the next orbit finds them made
+            if not self._prime() and not self.renderer.complete_view(self.state.settings, self.graph_budget_ms() or 30.0):
                 self.renderer.warm(self.state.settings.technique, budget_ms=30.0)
             self._after_extra = (time.perf_counter() - t_idle) * 1000.0
         self.view.draw(self.graph(), self.layout, ui.view_hooks() if ui is not None else ())

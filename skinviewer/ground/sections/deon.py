@@ -152,6 +152,23 @@ class DeonSettings(Section):
         label="sum in texture space",
         tip=("sum the weighted blurs and the transmitted light once in texture space, so an orbit reads one "
              "texture (eq. 33-34; equal up to rounding)"))
+    view_cull: Literal["view", "off"] = field(
+        "off", description="view: d'Eon's texture-space light chain (irradiance, blurs, transmitted light, diffuse "
+        "sum) makes only the tiles the current view reads, transitively, and a camera move the tiles not made yet; "
+        "the viewer's idle frames make the rest (issue 27, notes/deon_light_move.md section 17; the image "
+        "bit-identical). Off by default: at 1024^2 on the head the face's texels are what the view and the blurs "
+        "read, so a light move makes ~all of the irradiance and the first blurs, and saves no time measurably",
+        label="texture-space view culling",
+        tip=("view: texture-space maps are made only where the current view (and the translucency's lit side) "
+             "reads them; orbiting adds the missing tiles, idle time the rest. The image is the same; off: every "
+             "texel, every time"))
+
+    @field_validator("view_cull", mode="before")
+    @classmethod
+    def _view_cull_on_off(cls, v: object) -> object:
+        # --set reads on / off as true / false
+        return {False: "off", True: "view"}.get(v, v) if isinstance(v, bool) else v
+
     specular_shadows: Literal["texture", "pixel"] = field(
         "texture", description="where the specular's shadow test (eq. 10) is evaluated: texture: once per texel "
         "by the irradiance pass (the same PCF, kept per light), so a camera move does no shadow-map lookups; "
