@@ -413,7 +413,10 @@ class RenderGraph:
             else:  # the raw settings: a rule that reads them may read anything (the TSM rule's background worker)
                 return False
         for _, k, v in writes:
-            state[k] = v
+            if v is MISSING:  # a delete (_StateReads.__delitem__)
+                state.pop(k, None)
+            else:
+                state[k] = v
         memo[key] = entry
         return True
 

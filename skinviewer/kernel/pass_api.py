@@ -320,6 +320,15 @@ class _StateReads:
             self[key] = default
         return self[key]
 
+    def __iter__(self) -> Any:
+        """Its keys (a rule dropping what another scene kept: passes/view_cull): not comparable."""
+        self._note("state", "__iter__", OPAQUE)
+        return iter(list(self._state))
+
+    def __delitem__(self, key: Any) -> None:
+        self._note("write", key, MISSING)
+        del self._state[key]
+
     def __getattr__(self, name: str) -> Any:
         self._note("state", name, OPAQUE)
         return getattr(self._state, name)
