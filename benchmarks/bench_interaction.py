@@ -375,6 +375,9 @@ def main() -> int:
     ap.add_argument("--share", choices=("on", "off", "both"), default="on",
                     help="passes copied between the user's graph and a preview's when their keys are equal "
                          "(RenderGraph.share_passes); both: the governed row twice, sharing off then on, in one viewer")
+    ap.add_argument("--governor-margin", choices=("on", "off", "both"), default="off",
+                    help="the governor fits a rung at the render graph's p99 margin (ui/frame.GOVERNOR_MARGIN); "
+                         "both: A/B")
     ap.add_argument("--frames", choices=("on", "off", "both"), default="on",
                     help="this session's budget keeping (issue 27, session 10): the look-ahead's margin at the p99 "
                          "of each draw's recent errors (kernel.graph.QUANTILE_MARGIN), a first pass that does not fit "
@@ -439,12 +442,14 @@ def main() -> int:
             shares = {"on": [True], "off": [False], "both": [False, True]}[args.share]
             wholes = {"on": [True], "off": [False], "both": [False, True]}[args.whole_frame]
             frames = {"on": [True], "off": [False], "both": [False, True]}[args.frames]
+            gms = {"on": [True], "off": [False], "both": [False, True]}[args.governor_margin]
             pace_err_k = graph_mod.PACE_ERR_K
             for name in names:
-                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], 0)]) + [
-                    ("interactive", sh, wh, fr, k) for k in range(max(args.repeat, 1))
-                    for sh in shares for wh in wholes for fr in frames]
-                for mode, share, whole, new, k in arms:
+                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], gms[-1], 0)]) + [
+                    ("interactive", sh, wh, fr, gm, k) for k in range(max(args.repeat, 1))
+                    for sh in shares for wh in wholes for fr in frames for gm in gms]
+                for mode, share, whole, new, gm, k in arms:
+                    frame_mod.GOVERNOR_MARGIN = gm
                     graph_mod.SHARE_PASSES = share
                     frame_mod.WHOLE_FRAME = whole
                     graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
@@ -453,7 +458,7 @@ def main() -> int:
                     for g in app.renderer.graphs.values():
                         g.margins.clear()  # each arm learns its own margins
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest,
-                                  {"share": share, "whole_frame": whole, "p99_margin": new, "run": k})
+                                  {"share": share, "whole_frame": whole, "p99_margin": new, "governor_margin": gm, "run": k})
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
@@ -467,6 +472,10 @@ def main() -> int:
                         row["technique"] = f"{row['technique']} (p99 margin {'on' if new else 'off'})"
                         if not new:
                             row["mode"] = row["mode"] + ", p99 margin off"
+                    if len(gms) > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} (governor margin {'on' if gm else 'off'})"
+                        if not gm:
+                            row["mode"] = row["mode"] + ", governor margin off"
                     if args.repeat > 1 and mode != "off":
                         row["technique"] = f"{row['technique']} run {k + 1}"
                     rows.append(row)

@@ -165,6 +165,25 @@ def test_the_governor_s_pick_fits_the_graph_s_margin_in_one_frame():
     assert cheaper > 0
 
 
+def test_the_viewer_hands_the_governor_the_graph_s_margin_only_when_asked(monkeypatch):
+    """ui/frame.GOVERNOR_MARGIN (off by default: the lead's quiet A/B, notes/governor.md session 10): the frame
+    controller hands the governor the render graph's p99 margin only when it is on (and the graph's margin is
+    on); off, the governor fits rungs at its own margin, as before session 10."""
+    margins = ErrorQuantiles(min_n=1)
+    for _ in range(8):
+        margins.add("deon_blur_3", 0, 2.0)
+    fc = FrameController.__new__(FrameController)
+    fc.renderer = SimpleNamespace(graphs={"deon": SimpleNamespace(margins=margins)})
+    fc._variant = None
+    assert frame_mod.GOVERNOR_MARGIN is False and fc._graph_margin("deon") is None
+    monkeypatch.setattr(frame_mod, "GOVERNOR_MARGIN", True)
+    monkeypatch.setattr(graph_mod, "QUANTILE_MARGIN", True)
+    assert fc._graph_margin("deon") == pytest.approx(margins.factor(""))
+    assert fc._graph_margin("deon") > 1.0
+    monkeypatch.setattr(graph_mod, "QUANTILE_MARGIN", False)
+    assert fc._graph_margin("deon") is None
+
+
 # -- the graph's look-ahead: a margin scaled by its predictions' error -------------------------------
 
 class Finishes:

@@ -45,6 +45,11 @@ GRAPH_SHARE = 0.9
 # GRAPH_SHARE of the budget, and a still view's refinement re-presenting the screen every REFRESH_S
 WHOLE_FRAME = True
 REFRESH_S = 0.5
+# the governor fits a rung to the budget at the render graph's p99 margin (Governor.set_margin) when True;
+# False (the default): at its own FIT_MARGIN only. In the lead's quiet A/B (notes/governor.md, session 10) the
+# margin made the cheap techniques drag a preview they did not need (Phong at view 1/2: release -> final 0.17 ->
+# 1.58x, Penner 1.24 -> 2.48x) for no longest-frame gain (3 / 6 rows within 100 ms either way)
+GOVERNOR_MARGIN = False
 
 
 class UiLayer(Protocol):
@@ -328,7 +333,7 @@ class FrameController:
         preview's), else the user's graph of ``technique``; None: none known, or the margin off
         (graph.QUANTILE_MARGIN)."""
         from skinviewer.kernel import graph as graph_mod
-        if not graph_mod.QUANTILE_MARGIN:
+        if not graph_mod.QUANTILE_MARGIN or not GOVERNOR_MARGIN:
             return None
         for key in (f"{technique}|{self._variant}" if self._variant else technique, technique):
             g = self.renderer.graphs.get(key)
