@@ -28,6 +28,9 @@ done
 # shellcheck disable=SC2086
 python3 -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 --implementation cp \
     --platform manylinux2014_x86_64 --platform manylinux1_x86_64 $plat -d .whl $pkgs
+# pytest-xdist (pure Python, not a dependency here): the suite runs in 8 workers on the GPU machine's cores
+python3 -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 --implementation cp -d .whl \
+    "pytest-xdist>=3.5" "execnet>=2.1"
 rm -rf .gpushared && cp -r "${SKINVIEWER_SHARED:-../shared}" .gpushared && chmod -R u+w .gpushared
 rm -rf .gpushared/seeds
 if [ "${1:-}" != "--no-ref" ]; then

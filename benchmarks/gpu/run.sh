@@ -116,7 +116,7 @@ xdist=(); if python3 -c "import xdist" 2>/dev/null && [ "$NPROC" -ge 8 ]; then x
 # in parallel workers where the machine has the cores; what fails there is re-run alone (--lf), so
 # a race between workers is told apart from a failure
 PYC=(-o cache_dir=/tmp/skinviewer-pytest-cache)
-timeout "$(cap 170)" python3 -m pytest -q "${PYC[@]}" -m "not viewer" "${kexpr[@]}" "${ignore[@]}" "${xdist[@]}" "${SUITE[@]}" > "$OUT/suite.log" 2>&1
+timeout "$(cap "${SUITE_SECONDS:-170}")" python3 -m pytest -q "${PYC[@]}" -m "not viewer" "${kexpr[@]}" "${ignore[@]}" "${xdist[@]}" "${SUITE[@]}" > "$OUT/suite.log" 2>&1
 rc=$?
 echo "pytest exit $rc"
 if [ $rc = 1 ] && [ ${#xdist[@]} -gt 0 ]; then
