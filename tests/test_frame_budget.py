@@ -727,3 +727,39 @@ def test_a_release_predicts_the_whole_view_by_its_own_cost_not_the_smaller_view_
         assert np.array_equal(img, renderer.image(release))
     finally:
         renderer.release()
+
+
+@pytest.mark.parametrize("by_cost", [True, False])
+def test_a_band_s_average_cost_floor_is_taken_on_the_prediction_not_its_upper_bound(gl_ctx, monkeypatch, by_cost):
+    """A pass predicted at 350 ms whose profile a stalled band made uneven (a share no count shrinks), on a
+    loaded machine (its cost paced 2.5x): it is split into as many bands as keep a band at MIN_BAND_SHARE
+    of the budget on average at its *predicted* cost (graph.MIN_BAND_BY_COST), 38 at a 90 ms budget -- not
+    at its upper bound, 2.5x as many (97: ss_lighting in 77-128 bands, each with its fixed cost, about
+    twice the pass's whole cost). by_cost=False: the rule before."""
+    from skinviewer.engine.renderer import Renderer
+    monkeypatch.setattr(graph_mod, "MIN_BAND_BY_COST", by_cost)
+    monkeypatch.setattr(graph_mod, "QUANTILE_MARGIN", False)  # the pace rule: 2 + 0.5 at the widest
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        renderer.render(s)
+        g = renderer.graph("phong")
+        p = next(p for p in g.passes if p.name == "phong")
+        r = g._reflect_all(s, renderer.scene.gpu)["phong"]
+        g._last_ms["phong"], g._last_px["phong"] = 350.0, 64 * 64
+        g.pace, g.pace_err = 2.0, 1.0
+        assert g._paced(350.0, "phong") == pytest.approx(875.0)
+        # a face over the middle rows and one band 10x the others (a stall): its share stays at any count
+        prof = np.concatenate([[0.0], np.cumsum(np.r_[np.full(20, 0.2), np.full(40, 1.0), [10.0], np.full(39, 1.0), np.full(28, 0.2)])])
+        g._band_profile["phong"] = prof / prof[-1]
+        n = g._tile_count(p, r, 90.0)
+        if by_cost:
+            assert n == int(350.0 / (graph_mod.MIN_BAND_SHARE * 90.0)), n
+            assert 350.0 / n >= graph_mod.MIN_BAND_SHARE * 90.0  # a band's average predicted cost
+        else:
+            assert n == int(875.0 / (graph_mod.MIN_BAND_SHARE * 90.0)), n
+        # an even profile: the bands that fit the paced cost in halves of the budget either way
+        g._band_profile.pop("phong")
+        assert g._tile_count(p, r, 90.0) == math.ceil(875.0 / 45.0)
+    finally:
+        renderer.release()

@@ -103,6 +103,13 @@ FAST_CACHED = os.environ.get("SKINVIEWER_GRAPH_FAST", "1") != "0"
 # 1.7-2.5x the pass's cost) and its margins learned from bands predicted 3x too dear. False: scaled (A/B)
 COST_PER_SIZE = True
 SIZES_KEPT = 4
+# issue 27, session 11: the floor on a band's average cost (MIN_BAND_SHARE of the budget) is taken on the pass's
+# predicted cost, not on its paced upper bound: at a 2.5x margin (a loaded machine) the floor allowed 2.5x the
+# bands, and a profile a stalled band had made uneven (a share no count shrinks) took the pass to that many --
+# ss_lighting in 77-128 bands of 1.3-3.5 ms fixed cost each, about twice its whole cost; each such run's sum
+# then predicted the next dearer still. The costliest band is still sized at its paced cost. False: the floor
+# on the paced cost (the rule before; A/B)
+MIN_BAND_BY_COST = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -861,13 +868,13 @@ class RenderGraph:
             return UNMEASURED_TILES
         # split by what it may cost, not by what it cost: its prediction scaled by the pace and the
         # predictions' error margin (_paced), so a machine whose costs stray gets smaller bands (issue 27)
-        ms = self._paced(ms, p.name)
+        cost, ms = ms, self._paced(ms, p.name)
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
         # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
         # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
         # costly band that does not shrink with the rows (ss_lighting's first) took the pass to 128 bands
         # and the pass to 3x its whole cost (burley2's refinement)
-        most = max(n, min(MAX_TILES, int(ms / max(MIN_BAND_SHARE * budget_ms, 1e-3))))
+        most = max(n, min(MAX_TILES, int((cost if MIN_BAND_BY_COST else ms) / max(MIN_BAND_SHARE * budget_ms, 1e-3))))
         prof = self._band_profile.get(p.name)
         while prof is not None and n < most and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
             n = min(most, n + max(1, n // 4))
