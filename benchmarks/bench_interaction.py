@@ -149,6 +149,8 @@ class Driver:
                                        "gc_ms": round(gc_ms, 2), "gc_generations": gens, "rung": fr._rung.label,
                                        "first_draws": first, "primed": fr.primer.frames,
                                        "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else [],
+                                       # passes part-way through their bands: (bands done, bands)
+                                       "bands": {k: list(v) for k, v in getattr(fr.last_graph, "in_progress", {}).items()},
                                        # each pass that ran or ran a band here: its ms (sync timing on llvmpipe)
                                        "pass_ms": {k: round(v, 1) for k, v in getattr(fr.last_graph, "frame_ms", {}).items()},
                                        "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
