@@ -6,7 +6,7 @@ frame), then a still view until the image is final.
 
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
         [--seconds 3] [--frame-log frames.jsonl] [--rest 1] [--prime on|off|both] [--cold-shaders]
-        [--frames on|off|both] [--whole-frame on|off|both] [--share on|off|both]
+        [--frames on|off|both] [--whole-frame on|off|both] [--share on|off|both] [--release-rules on|off|both]
 
 ``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
 both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
@@ -149,6 +149,8 @@ class Driver:
                                        "gc_ms": round(gc_ms, 2), "gc_generations": gens, "rung": fr._rung.label,
                                        "first_draws": first, "primed": fr.primer.frames,
                                        "ran": [p.name for p in rep.passes if p.status == "ran"] if rep else [],
+                                       # passes part-way through their bands: (bands done, bands)
+                                       "bands": {k: list(v) for k, v in getattr(fr.last_graph, "in_progress", {}).items()},
                                        # each pass that ran or ran a band here: its ms (sync timing on llvmpipe)
                                        "pass_ms": {k: round(v, 1) for k, v in getattr(fr.last_graph, "frame_ms", {}).items()},
                                        "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
@@ -386,6 +388,12 @@ def main() -> int:
     ap.add_argument("--repeat", type=int, default=1,
                     help="the governed arms this many times, interleaved (A, B, A, B): on a shared machine whose load "
                          "drifts, each arm's figures then come from the same stretch of time (rows 'run k')")
+    ap.add_argument("--release-rules", choices=("on", "off", "both"), default="on",
+                    help="issue 27, session 11: a drag's smaller view of your graph keeps the full size's pooled "
+                         "textures (ui/frame.KEEP_VIEW_POOLS), a pass is predicted at a size it ran at by that "
+                         "size's cost (kernel.graph.COST_PER_SIZE), a band's average-cost floor is taken on the "
+                         "predicted cost (kernel.graph.MIN_BAND_BY_COST); off: the rules before; both: the governed "
+                         "row twice, off then on, in one viewer (an A/B)")
     ap.add_argument("--no-off", action="store_true", help="no governor-off row (only the governed arms: an A/B)")
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
@@ -443,13 +451,15 @@ def main() -> int:
             wholes = {"on": [True], "off": [False], "both": [False, True]}[args.whole_frame]
             frames = {"on": [True], "off": [False], "both": [False, True]}[args.frames]
             gms = {"on": [True], "off": [False], "both": [False, True]}[args.governor_margin]
+            vss = {"on": [True], "off": [False], "both": [False, True]}[args.release_rules]
             pace_err_k = graph_mod.PACE_ERR_K
             for name in names:
-                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], gms[-1], 0)]) + [
-                    ("interactive", sh, wh, fr, gm, k) for k in range(max(args.repeat, 1))
-                    for sh in shares for wh in wholes for fr in frames for gm in gms]
-                for mode, share, whole, new, gm, k in arms:
+                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], gms[-1], vss[-1], 0)]) + [
+                    ("interactive", sh, wh, fr, gm, vs, k) for k in range(max(args.repeat, 1))
+                    for sh in shares for wh in wholes for fr in frames for gm in gms for vs in vss]
+                for mode, share, whole, new, gm, vs, k in arms:
                     frame_mod.GOVERNOR_MARGIN = gm
+                    frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = vs
                     graph_mod.SHARE_PASSES = share
                     frame_mod.WHOLE_FRAME = whole
                     graph_mod.PACE_ERR_K = pace_err_k if whole else 0.0
@@ -458,7 +468,8 @@ def main() -> int:
                     for g in app.renderer.graphs.values():
                         g.margins.clear()  # each arm learns its own margins
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest,
-                                  {"share": share, "whole_frame": whole, "p99_margin": new, "governor_margin": gm, "run": k})
+                                  {"share": share, "whole_frame": whole, "p99_margin": new, "governor_margin": gm,
+                                   "release_rules": vs, "run": k})
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
@@ -476,6 +487,10 @@ def main() -> int:
                         row["technique"] = f"{row['technique']} (governor margin {'on' if gm else 'off'})"
                         if not gm:
                             row["mode"] = row["mode"] + ", governor margin off"
+                    if len(vss) > 1 and mode != "off":
+                        row["technique"] = f"{row['technique']} (release rules {'on' if vs else 'off'})"
+                        if not vs:
+                            row["mode"] = row["mode"] + ", release rules off"
                     if args.repeat > 1 and mode != "off":
                         row["technique"] = f"{row['technique']} run {k + 1}"
                     rows.append(row)

@@ -1,146 +1,117 @@
-"""Release -> final and the longest frame of the refinement, A/B in one process (issue 27): what the viewer
-does when a light drag stops, without the window (no UI, no presenting), so that the graph's share can be
-measured apart from Xvfb and side by side:
+"""Release -> final after a light drag in the real viewer (issue 27, session 11), an A/B of this
+session's release rules -- ``ui/frame.KEEP_VIEW_POOLS``, ``kernel.graph.COST_PER_SIZE`` and
+``kernel.graph.MIN_BAND_BY_COST`` (all off: the rules before; all on: this session's) -- in one viewer, the arms interleaved (off, on, off, on, ...) so a load that drifts hits
+both; medians per technique. Run it under Xvfb:
 
-- a light drag: ``--drag`` preview frames at the governor's cheapest rung of the technique (ladder's first:
-  a ¼ or ½ view with lighter knobs, in the preview's own graph), the light moving a little each frame,
-  each frame under the drag's graph budget (72 ms) until complete;
-- the release: the user's settings at the drag's last light, frames under a still view's budget
-  (0.9 x 100 ms, as ui/frame.py's quiet frames) until complete. Its wall time (sync timing) against the
-  same light move rendered alone (no budget), and its longest frame.
+    PYTHONPATH=. xvfb-run -a -s "-screen 0 1280x800x24" python3 benchmarks/bench_release.py
+        [--techniques ssss,burley2,penner] [--scenes head,scan] [--reps 4] [--seconds 2]
 
-Arms (``--arms``), interleaved rep by rep with the light at new positions each time:
-``base`` (no pass shared between graphs, bands as counted, the old band_rows), ``share`` (passes whose key
-is equal copied between the preview's and the user's graph: RenderGraph.share_passes), ``all`` (and bands
-aligned to a pass's draws, ExecuteContext.units, and the per-corner band_rows).
-
-    python benchmarks/bench_release.py [--techniques burley,penner,separable,gosselin] [--reps 3]
-"""
+Per arm: release -> final (ms, from letting go of a key-light drag to the complete image at the user's
+settings on screen), its ratio to that image's frame measured alone right after (sync timing, no
+budget), the release frames' longest graph own time (texture allocation lands there) and longest
+frame, and the bands the largest tileable pass of the final ran in. The load average is printed
+beside each row. The defaults a user gets: 1040x700 window (640x676 view), 1024² maps, 100 ms budget,
+this machine's calibration."""
 from __future__ import annotations
 
 import argparse
 import os
+import re
 import statistics
 import sys
 import time
 
-import numpy as np
-
-from skinviewer.engine.renderer import Renderer
-from skinviewer.ground.settings import Settings, with_values
-from skinviewer.kernel import gpu as gpu_mod
-from skinviewer.kernel import graph as graph_mod
-from skinviewer.kernel.gl import describe, headless_context
-from skinviewer.techniques.preview import cheapest
-from skinviewer.ui.warm import preview_variant, rung_frame_settings
-
-VIEW = (640, 676)  # the viewer's default view beside the panel
-DRAG_BUDGET = 72.0
-QUIET_BUDGET = 90.0
-NEW_BAND_ROWS = gpu_mod.band_rows
-
-
-def old_band_rows(scene, lod, space, matrix, rows, cache):
-    """kernel/gpu.band_rows before this session: a (T, 3) gather reduced along its rows."""
-    key = (id(scene), lod, space, None if matrix is None else np.asarray(matrix, np.float32).tobytes(), rows)
-    hit = cache.get(key)
-    if hit is not None:
-        return hit
-    m = scene.lod_mesh(lod)
-    if space == "uv":
-        y = np.asarray(m.uvs, np.float64)[:, 1] * rows
-        ok = np.ones(len(y), bool)
-    else:
-        p = np.asarray(m.positions, np.float64)
-        clip = p @ np.asarray(matrix, np.float64)[:3, :3].T + np.asarray(matrix, np.float64)[:3, 3]
-        w = p @ np.asarray(matrix, np.float64)[3, :3] + float(np.asarray(matrix, np.float64)[3, 3])
-        ok = w > 1e-6
-        y = (clip[:, 1] / np.where(ok, w, 1.0) * 0.5 + 0.5) * rows
-    t = np.asarray(m.indices)
-    ty = y[t]
-    out = np.stack([ty.min(axis=1), ty.max(axis=1)], axis=1)
-    out[~ok[t].all(axis=1)] = (-np.inf, np.inf)
-    if len(cache) > 16:
-        cache.clear()
-    cache[key] = out
-    return out
-
-
-def arm(name: str) -> None:
-    graph_mod.SHARE_PASSES = name in ("share", "all")
-    graph_mod.ALIGN_UNITS = name == "all"
-    gpu_mod.band_rows = NEW_BAND_ROWS if name == "all" else old_band_rows
-
-
-def moved(s: Settings, k: float) -> Settings:
-    d = list(s.lights[0].direction)
-    return with_values(s, {"lights.0.direction": [d[0] + 0.15 * np.sin(k), d[1] + 0.1 * np.cos(1.3 * k), d[2]]})
-
-
-def release(r: Renderer, s: Settings, k0: float, drag: int) -> tuple[float, float, int, float]:
-    """One light drag and its release: (release -> final ms, longest frame ms, frames, identical)."""
-    rung = cheapest(s)
-    variant = preview_variant(rung)
-    for j in range(drag):
-        pv = rung_frame_settings(moved(s, k0 + 0.01 * j), rung, VIEW)
-        while not r.render(pv, budget_ms=DRAG_BUDGET, variant=variant, interactive=True).complete:
-            pass
-    final = moved(s, k0 + 0.01 * (drag - 1))
-    t0 = time.perf_counter()
-    longest, frames = 0.0, 0
-    while True:
-        t1 = time.perf_counter()
-        rep = r.render(final, budget_ms=QUIET_BUDGET)
-        longest = max(longest, (time.perf_counter() - t1) * 1000.0)
-        frames += 1
-        if rep.complete and not r.graph(s.technique).refining:
-            break
-    total = (time.perf_counter() - t0) * 1000.0
-    img = r.image(final)
-    r.render(final, force=True)
-    return total, longest, frames, float(np.array_equal(img, r.image(final)))
+sys.path.insert(0, os.path.dirname(__file__))
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--techniques", default="burley,penner,separable,gosselin")
-    ap.add_argument("--arms", default="base,share,all")
-    ap.add_argument("--reps", type=int, default=3)
-    ap.add_argument("--drag", type=int, default=4)
-    args = ap.parse_args()
-    ctx = headless_context()
-    r = Renderer(ctx)
-    arms = args.arms.split(",")
-    print(f"# bench_release — {describe(ctx)}; view {VIEW[0]}x{VIEW[1]}, default settings (1024² maps); "
-          f"drag frames under {DRAG_BUDGET:g} ms, the release's under {QUIET_BUDGET:g} ms (a still view's); "
-          f"sync timing; medians of {args.reps} reps, arms interleaved; load {os.getloadavg()[0]:.1f}", flush=True)
-    print("| technique | arm | release → final ms | alone ms | × alone | longest frame ms | frames | bit-identical | load |")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--techniques", default="ssss,burley2,penner")
+    ap.add_argument("--scenes", default="head")
+    ap.add_argument("--reps", type=int, default=4)
+    ap.add_argument("--seconds", type=float, default=2.0)
+    a = ap.parse_args()
+    os.environ.setdefault("SKINVIEWER_CALIBRATE", "0")
+    import bench_interaction as bi
+
+    from skinviewer.ground.settings import Settings, validate, with_values
+    from skinviewer.kernel import graph as graph_mod
+    from skinviewer.kernel.gl import describe
+    from skinviewer.ui import frame as frame_mod
+    from skinviewer.ui.app import create_app, destroy_app
+    scenes: dict[str, dict] = {}
+    for name in a.scenes.split(","):
+        if name == "head":
+            scenes["head"] = {}
+        else:
+            from bench_tsm_gather import scenes as shared
+            scenes[name] = shared()[name]
+    t0 = time.strftime("%Y-%m-%d %H:%M", time.gmtime())
+    lines = []
+    for scene_name, scene in scenes.items():
+        app = create_app(with_values(Settings(), scene), size=bi.WINDOW, vsync=False)
+        try:
+            app.step(2)
+            fr = app.frame
+            fr.load_calibration(auto=False)
+            if not lines:
+                print(f"# bench_release — {describe(app.ctx)}; view {app.state.settings.render.width}x"
+                      f"{app.state.settings.render.height}, {a.seconds:g} s light drags, {a.reps} reps an arm", flush=True)
+            for t in a.techniques.split(","):
+                st = app.state
+                st.set_settings(validate({**st.settings.model_dump(mode="json"), "technique": t}), "technique")
+                st.apply({"render.governor": "interactive"})
+                res: dict[bool, list[tuple[float, float, float, float, int]]] = {False: [], True: []}
+                loads = []
+                for k in range(2 * a.reps):
+                    on = k % 2 == 1
+                    frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = on
+                    d = bi.Driver(app, None, {"technique": t})
+                    d.until_final()
+                    d.rest(0.5)
+                    d.drag(app.wnd.mouse.right, a.seconds)
+                    n0 = len(d.frame_ms)
+                    own: list[float] = []
+                    bands: dict[str, int] = {}
+                    step = d.step
+
+                    def logged(step=step, own=own, bands=bands, fr=fr):
+                        step()
+                        g = fr.last_graph
+                        own.append(g.own_ms if g is not None else 0.0)
+                        for p in (fr.report.passes if fr.report is not None else []):
+                            m = re.search(r"in (\d+) bands", p.reason or "")
+                            if m and p.status == "ran":
+                                bands[p.name] = int(m.group(1))
+                    d.step = logged  # type: ignore[method-assign]
+                    ms = d.until_final()
+                    frames = d.frame_ms[n0:]
+                    alone = bi.full_frame_alone(app)
+                    ms_of = {p.name: p.ms or 0.0 for p in app.renderer.graph(t).last_report.passes}
+                    top = max(bands, key=lambda n: ms_of.get(n, 0.0), default="")
+                    if os.environ.get("BENCH_RELEASE_DEBUG"):
+                        print(t, on, round(ms), bands, flush=True)
+                    res[on].append((ms, ms / alone, max(own, default=0.0), max(frames, default=0.0), bands.get(top, 1)))
+                    loads.append(os.getloadavg()[0])
+                for on in (False, True):
+                    rows = res[on]
+                    med = [statistics.median(x[i] for x in rows) for i in range(5)]
+                    line = (f"| {scene_name} | {t} | {'on' if on else 'off'} | {med[0]:,.0f} ms | {med[1]:.2f}× "
+                            f"({', '.join(f'{x[1]:.2f}' for x in rows)}) | {med[2]:.0f} ms | {med[3]:.0f} ms | {med[4]:.0f} "
+                            f"| {min(loads):.1f}–{max(loads):.1f} |")
+                    lines.append(line)
+                    print(line, flush=True)
+        finally:
+            destroy_app(app)
+    up = ", ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"\n`{' '.join(sys.argv)}` ({t0}–{time.strftime('%H:%M', time.gmtime())} UTC, load average at the end {up}); "
+          "medians of the reps, each arm's reps interleaved with the other's:\n")
+    print("| scene | technique | release rules | release → final | × alone (each rep) | longest own time | longest frame "
+          "| bands of the costliest banded pass | load |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for t in args.techniques.split(","):
-        s = with_values(Settings(), {"technique": t, "render.width": VIEW[0], "render.height": VIEW[1]})
-        for a in arms:  # every arm's programs compiled and every graph made before timing
-            arm(a)
-            release(r, s, 0.0, 2)
-        res: dict[str, list[tuple[float, ...]]] = {a: [] for a in arms}
-        for rep in range(args.reps):
-            for a in arms:
-                arm(a)
-                k = 1.0 + rep * len(arms) + arms.index(a)
-                load0 = os.getloadavg()[0]
-                total, longest, frames, same = release(r, s, k, args.drag)
-                alone = r.render(moved(s, k + 0.5), timing="sync").total_ms  # the same kind of light move, whole
-                res[a].append((total, alone, longest, frames, same, 0.5 * (load0 + os.getloadavg()[0])))
-        for a in arms:
-            rows = res[a]
-            med = [statistics.median(x[i] for x in rows) for i in range(4)]
-            ratio = statistics.median(x[0] / x[1] for x in rows)
-            print(f"| {t} | {a} | {med[0]:,.0f} | {med[1]:,.0f} | {ratio:.2f} | {med[2]:,.0f} (max {max(x[2] for x in rows):,.0f}) "
-                  f"| {med[3]:.0f} | {'yes' if all(x[4] for x in rows) else 'NO'} | "
-                  f"{min(x[5] for x in rows):.1f}–{max(x[5] for x in rows):.1f} |", flush=True)
-    arm("all")
-    r.release()
+    print("\n".join(lines))
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    raise SystemExit(main())

@@ -6,6 +6,7 @@ wall-clock assertion."""
 from __future__ import annotations
 
 import itertools
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -613,3 +614,152 @@ def test_a_released_preview_of_your_own_graph_leaves_none_of_its_passes_in_the_f
         app.frame.set_frame_budget(None)
         app.step(2)
         app.frame.set_frame_budget(100.0)
+
+
+@pytest.mark.parametrize("keep", [True, False])
+def test_a_release_after_a_smaller_view_finds_the_full_size_textures_pooled(viewer, monkeypatch, keep):
+    """A drag's preview that is a smaller view of your settings (a governor rung's scale) gives the full-size
+    textures back to the pool; the release's frame takes them again instead of allocating a new set
+    (ui/frame.KEEP_VIEW_POOLS: the pools are trimmed when the view's size changes, not the rendered size's;
+    trimmed at every rendered size, the release frame allocated 16 textures for ssss, 96-236 ms of one
+    frame here). The final image is a fresh renderer's, bit for bit. keep=False: the rule before, which
+    allocates again at the release."""
+    from skinviewer.engine.renderer import Renderer
+    from skinviewer.techniques.preview import ladder
+    from skinviewer.ui.governor import Pick
+    from tests.test_governor import fake_calibration
+    app = viewer
+    monkeypatch.setattr(frame_mod, "KEEP_VIEW_POOLS", keep)
+    g = app.frame.governor
+    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
+    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
+    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
+    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    app.frame.set_frame_budget(None)  # one complete frame a step: each step's image is its pick's
+    full = (app.state.settings.render.width, app.state.settings.render.height)
+    try:
+        app.frame.set_dragging(True)
+        for k in range(3):  # a light drag: the preview, a smaller view of your graph
+            assert app.state.apply({"lights.0.direction": [0.3 + 0.01 * k, 0.35, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+        assert g.shown == half and app.state.settings.render.width < full[0]
+        pool = app.renderer.pool
+        before = pool.allocated
+        app.frame.set_dragging(False)
+        app.step(1)  # the release: your settings at the full view size
+        assert g.shown.final and app.frame.report.complete
+        assert (app.state.settings.render.width, app.state.settings.render.height) == full
+        allocated = pool.allocated - before
+        assert (allocated == 0) if keep else (allocated > 0), allocated
+        s = app.state.settings
+        fresh = Renderer(app.renderer.ctx)
+        try:
+            fresh.render(s)
+            assert np.array_equal(app.renderer.image(s), fresh.image(s))
+        finally:
+            fresh.release()
+    finally:
+        app.frame.set_dragging(False)
+        monkeypatch.undo()
+        g.set_calibration(None)
+        app.frame.set_frame_budget(None)
+        app.step(2)
+        app.frame.set_frame_budget(100.0)
+
+
+
+@pytest.mark.parametrize("per_size", [True, False])
+def test_a_release_predicts_the_whole_view_by_its_own_cost_not_the_smaller_view_s_scaled(gl_ctx, monkeypatch, per_size):
+    """A drag's smaller view of your graph (a governor rung's scale: the same pass at 1/16 of the pixels)
+    costs mostly what does not shrink with the view (the mesh): 40 of its 200 ms here. The release's whole
+    view is predicted at the cost it had at that size (graph.COST_PER_SIZE), not the quarter view's times 16
+    (650 ms), so its bands are those of a 200 ms pass (ssss's ss_lighting: 128 bands at 1.7-2.5x its cost,
+    predicted 990-1,160 ms against ~300). per_size=False: the rule before, which predicts 650 and splits
+    the pass into several times as many bands. The image is the whole render's."""
+    from skinviewer.engine.renderer import Renderer
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    monkeypatch.setattr(graph_mod, "COST_PER_SIZE", per_size)
+    monkeypatch.setattr(graph_mod, "SAMPLED_SYNC", False)
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        renderer.render(s)
+        g = renderer.graph("phong")
+        real = g._execute
+        p = next(p for p in g.passes if p.name == "phong")
+        full = 64 * 64
+
+        def execute(pp, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
+            real(pp, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy, sync_after=sync_after)
+            from skinviewer.kernel.compiler import pixels
+            # 30 ms of mesh work and 170 ms over the whole view's pixels, spread evenly over the bands
+            ms = (30.0 + 170.0 * pixels(r) / full) / tile[1] if pp.tileable else 1.0
+            clock.ms(ms)
+            return ms
+
+        monkeypatch.setattr(g, "_execute", execute)
+
+        def settle(settings, budget):
+            for _ in range(600):
+                rep = renderer.render(settings, budget_ms=budget)
+                if rep.complete:
+                    return next(x for x in rep.passes if x.name == "phong")
+            raise AssertionError("never complete")
+
+        settle(with_values(s, {"lights.0.direction": [0.3, 0.2, 1.0]}), 1e9)  # your settings, whole
+        quarter = with_values(s, {"render.width": 16, "render.height": 16, "lights.0.direction": [0.35, 0.2, 1.0]})
+        settle(quarter, 1e9)  # the drag's preview: 1/16 of the pixels, 40.6 ms
+        release = with_values(s, {"lights.0.direction": [0.35, 0.2, 1.0]})
+        r = g._reflect_all(release, renderer.scene.gpu)["phong"]
+        predicted = g._expected_ms(p, r)
+        assert predicted == pytest.approx(200.0 if per_size else 16 * (30.0 + 170.0 / 16))
+        rec = settle(release, 60.0)
+        bands = int(rec.reason.rsplit("in ", 1)[1].split()[0])
+        paced = g._paced(200.0, "phong")
+        if per_size:
+            assert bands <= math.ceil(paced / 30.0) * 2, (bands, rec.reason)
+        else:
+            assert bands >= 3 * math.ceil(200.0 / 30.0), (bands, rec.reason)
+        monkeypatch.setattr(g, "_execute", real)
+        img = renderer.image(release)
+        renderer.render(release, force=True)
+        assert np.array_equal(img, renderer.image(release))
+    finally:
+        renderer.release()
+
+
+@pytest.mark.parametrize("by_cost", [True, False])
+def test_a_band_s_average_cost_floor_is_taken_on_the_prediction_not_its_upper_bound(gl_ctx, monkeypatch, by_cost):
+    """A pass predicted at 350 ms whose profile a stalled band made uneven (a share no count shrinks), on a
+    loaded machine (its cost paced 2.5x): it is split into as many bands as keep a band at MIN_BAND_SHARE
+    of the budget on average at its *predicted* cost (graph.MIN_BAND_BY_COST), 38 at a 90 ms budget -- not
+    at its upper bound, 2.5x as many (97: ss_lighting in 77-128 bands, each with its fixed cost, about
+    twice the pass's whole cost). by_cost=False: the rule before."""
+    from skinviewer.engine.renderer import Renderer
+    monkeypatch.setattr(graph_mod, "MIN_BAND_BY_COST", by_cost)
+    monkeypatch.setattr(graph_mod, "QUANTILE_MARGIN", False)  # the pace rule: 2 + 0.5 at the widest
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        renderer.render(s)
+        g = renderer.graph("phong")
+        p = next(p for p in g.passes if p.name == "phong")
+        r = g._reflect_all(s, renderer.scene.gpu)["phong"]
+        g._last_ms["phong"], g._last_px["phong"] = 350.0, 64 * 64
+        g.pace, g.pace_err = 2.0, 1.0
+        assert g._paced(350.0, "phong") == pytest.approx(875.0)
+        # a face over the middle rows and one band 10x the others (a stall): its share stays at any count
+        prof = np.concatenate([[0.0], np.cumsum(np.r_[np.full(20, 0.2), np.full(40, 1.0), [10.0], np.full(39, 1.0), np.full(28, 0.2)])])
+        g._band_profile["phong"] = prof / prof[-1]
+        n = g._tile_count(p, r, 90.0)
+        if by_cost:
+            assert n == int(350.0 / (graph_mod.MIN_BAND_SHARE * 90.0)), n
+            assert 350.0 / n >= graph_mod.MIN_BAND_SHARE * 90.0  # a band's average predicted cost
+        else:
+            assert n == int(875.0 / (graph_mod.MIN_BAND_SHARE * 90.0)), n
+        # an even profile: the bands that fit the paced cost in halves of the budget either way
+        g._band_profile.pop("phong")
+        assert g._tile_count(p, r, 90.0) == math.ceil(875.0 / 45.0)
+    finally:
+        renderer.release()

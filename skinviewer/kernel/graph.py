@@ -95,6 +95,21 @@ ALIGN_UNITS = True
 # (_scan_target); the same passes run, in the same order, with the same draws. False
 # (SKINVIEWER_GRAPH_FAST=0): every frame compiles, keys and allocates as before (A/B: bench_cpu_overhead.py)
 FAST_CACHED = os.environ.get("SKINVIEWER_GRAPH_FAST", "1") != "0"
+# issue 27, session 11: a pass's last cost is also kept per output size (RenderGraph._ms_at, the last
+# SIZES_KEPT sizes), and a pass predicted at a size it ran at uses that size's cost, not the last run's scaled
+# by the pixels: a drag's smaller view of your graph (a governor rung's scale) ran ssss's ss_lighting at 1/16
+# of the pixels in ~70 ms -- mostly its mesh, which does not shrink with the view -- and the release predicted
+# the whole view at 16x that, 990-1,160 ms against ~300: 128 bands (at 1.3-3.5 ms of fixed cost a band here,
+# 1.7-2.5x the pass's cost) and its margins learned from bands predicted 3x too dear. False: scaled (A/B)
+COST_PER_SIZE = True
+SIZES_KEPT = 4
+# issue 27, session 11: the floor on a band's average cost (MIN_BAND_SHARE of the budget) is taken on the pass's
+# predicted cost, not on its paced upper bound: at a 2.5x margin (a loaded machine) the floor allowed 2.5x the
+# bands, and a profile a stalled band had made uneven (a share no count shrinks) took the pass to that many --
+# ss_lighting in 77-128 bands of 1.3-3.5 ms fixed cost each, about twice its whole cost; each such run's sum
+# then predicted the next dearer still. The costliest band is still sized at its paced cost. False: the floor
+# on the paced cost (the rule before; A/B)
+MIN_BAND_BY_COST = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
@@ -191,6 +206,7 @@ class RenderGraph:
         self._idle: tuple[object, ...] | None = None  # what the last complete frame was made of (fast idle frames)
         self._last_ms: dict[str, float] = {}  # last time each pass actually ran
         self._last_px: dict[str, int] = {}  # the pixels of its largest output then (costs scale with them)
+        self._ms_at: dict[str, dict[int, float]] = {}  # pass -> its output pixels -> its last cost there (COST_PER_SIZE)
         self._band_profile: dict[str, np.ndarray] = {}  # a banded pass's cost over its rows (band_shares)
         self._cleared: dict[str, tuple[int | None, object]] = {}  # resource -> (version, key) of its last clear
         self._notes: dict[str, tuple[str, dict[str, Any]]] = {}  # pass name -> (text, figures) of its last run
@@ -627,8 +643,7 @@ class RenderGraph:
                 if r.notes:
                     rec.reason = "; ".join([rec.reason] + r.notes)
                 if rec.ms is not None:
-                    self._last_ms[p.name] = rec.ms
-                    self._last_px[p.name] = pixels(r)
+                    self._keep_ms(p.name, rec.ms, pixels(r))
                 if extend and cover is not None:  # the cells held are as they were: consumers extend theirs
                     self._covered[p.name] = cover[1] | cover[0]
                 else:
@@ -818,16 +833,30 @@ class RenderGraph:
         return False
 
     # -- tiles: a long pass in row bands, across frames --------------------------------------
+    def _keep_ms(self, name: str, ms: float, px: int) -> None:
+        """A pass's cost at ``px`` output pixels: its last (``_last_ms``) and, with COST_PER_SIZE, that size's."""
+        self._last_ms[name] = ms
+        self._last_px[name] = px
+        at = self._ms_at.setdefault(name, {})
+        at.pop(px, None)  # the newest size last: the oldest goes first
+        at[px] = ms
+        while len(at) > SIZES_KEPT:
+            del at[next(iter(at))]
+
     def _expected_ms(self, p: Pass, r: Reflection) -> float | None:
-        """``p``'s last measured cost scaled to the pixels of its outputs now (a governed preview
-        runs the same pass at a quarter of the view, then the whole view); None: never timed."""
+        """``p``'s last measured cost at the pixels of its outputs now (COST_PER_SIZE), else its last cost
+        scaled to them (a governed preview runs the same pass at a quarter of the view, then the whole
+        view: a pass not yet run at this size); None: never timed."""
+        now = pixels(r)
         ms, then = self._last_ms.get(p.name), self._last_px.get(p.name, 0)
+        at = self._ms_at.get(p.name) if COST_PER_SIZE else None
+        if ms is not None and now != then and at is not None and now in at:
+            return at[now]  # (at the last run's size: its cost, as always)
         fb = self._cost_fallback
         if ms is None and fb is not None:  # never run here: its cost in the user's graph (share_costs)
             ms, then = fb._last_ms.get(p.name), fb._last_px.get(p.name, 0)
         if ms is None:
             return None
-        now = pixels(r)
         return ms * now / then if then > 0 and now > 0 else ms
 
     def _tile_count(self, p: Pass, r: Reflection, budget_ms: float) -> int:
@@ -839,13 +868,13 @@ class RenderGraph:
             return UNMEASURED_TILES
         # split by what it may cost, not by what it cost: its prediction scaled by the pace and the
         # predictions' error margin (_paced), so a machine whose costs stray gets smaller bands (issue 27)
-        ms = self._paced(ms, p.name)
+        cost, ms = ms, self._paced(ms, p.name)
         n = max(1, min(MAX_TILES, math.ceil(ms / max(0.5 * budget_ms, 1e-3))))
         # more bands for an uneven profile, but not below MIN_BAND_SHARE of the budget a band on average:
         # a band has a fixed cost of its own (its draw calls, the triangles straddling its edges), so a
         # costly band that does not shrink with the rows (ss_lighting's first) took the pass to 128 bands
         # and the pass to 3x its whole cost (burley2's refinement)
-        most = max(n, min(MAX_TILES, int(ms / max(MIN_BAND_SHARE * budget_ms, 1e-3))))
+        most = max(n, min(MAX_TILES, int((cost if MIN_BAND_BY_COST else ms) / max(MIN_BAND_SHARE * budget_ms, 1e-3))))
         prof = self._band_profile.get(p.name)
         while prof is not None and n < most and ms * float(band_shares(prof, n).max()) > 0.5 * budget_ms:
             n = min(most, n + max(1, n // 4))
@@ -1075,8 +1104,7 @@ class RenderGraph:
             rec.ms = _elapsed_ms(query)
             self._keep_pace(predicted, rec.ms, (name, 0))
             if rec.ms is not None:
-                self._last_ms[name] = rec.ms
-                self._last_px[name] = px
+                self._keep_ms(name, rec.ms, px)
         self._exec_s += time.perf_counter() - t0  # waiting for the GPU: the passes' time, not the graph's
 
     def _execute(self, p: Pass, r: Reflection, frame: FrameInputs, timing: str,

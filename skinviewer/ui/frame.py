@@ -50,6 +50,12 @@ REFRESH_S = 0.5
 # margin made the cheap techniques drag a preview they did not need (Phong at view 1/2: release -> final 0.17 ->
 # 1.58x, Penner 1.24 -> 2.48x) for no longest-frame gain (3 / 6 rows within 100 ms either way)
 GOVERNOR_MARGIN = False
+# issue 27, session 11: the render pools are trimmed when the *view's* size (or the technique) changes, not the
+# rendered size: a drag's smaller view (a governor rung's scale, the orbit resolution) keeps the full size's
+# free textures for the release. Trimmed at every rendered size, the release frame allocated the full-size set
+# again (16 textures for ssss: 96-236 ms of the graph's own time in one frame, the longest frames and 10-25 %
+# of release -> final here). False: trimmed at every rendered size (the rule before; A/B)
+KEEP_VIEW_POOLS = True
 
 
 class UiLayer(Protocol):
@@ -110,6 +116,7 @@ class FrameController:
         self._partial_ran: list = []  # passes that ran in the frames of an unfinished spread frame
         self._rendered: tuple[str, int, int] | None = None  # technique and size of the last main render
         self._pools_trimmed_for: tuple[str, int, int] | None = None
+        self._pool_key: tuple[str, int, int] | None = None  # what the pools are trimmed by (_trim_texture_pools)
         self._shown: Settings | None = None  # the settings of the image on screen
         self._change_source = "first frame"  # what caused the pending change (settings path, "orbit", ...)
         self._last_frame_t: float | None = None
@@ -599,6 +606,8 @@ class FrameController:
                 self._variant = variant
             self.render_error = ""
             self._rendered = (target.technique, target.render.width, target.render.height)
+            vw, vh = self.layout.view_fb[2:]
+            self._pool_key = (target.technique, int(vw), int(vh)) if KEEP_VIEW_POOLS else self._rendered
         except Exception as exc:
             self.render_error = f"{type(exc).__name__}: {exc}"
             self.state.say(f"render: {self.render_error.splitlines()[0]}", error=True)
@@ -657,16 +666,19 @@ class FrameController:
                                       report.timing_mode, time.time())
 
     def _trim_texture_pools(self) -> None:
-        """Give the free textures of the render pools back to GL when the render size (or the
+        """Give the free textures of the render pools back to GL when the view's size (or the
         technique) changed: a pool keeps every texture handed back to it, keyed by size, so each
-        window or panel resize and each orbit resolution used to leave a full set of view-sized
-        textures behind for the rest of the session. Textures in use (every graph's cache) stay."""
-        if self._rendered == self._pools_trimmed_for:
+        window or panel resize used to leave a full set of view-sized textures behind for the rest
+        of the session. Textures in use (every graph's cache) stay. A smaller view while dragging (a
+        governor rung's scale, the orbit resolution) is no change (KEEP_VIEW_POOLS): the full size's
+        textures wait in the pool for the release, and the drag's smaller ones are taken again by the
+        next drag (one set per scale, not one per drag)."""
+        if self._pool_key == self._pools_trimmed_for:
             return
         if self._pools_trimmed_for is not None:
             for r in (self.renderer, *self.view.renderers()):
                 r.trim()
-        self._pools_trimmed_for = self._rendered
+        self._pools_trimmed_for = self._pool_key
 
     # -- screenshots -------------------------------------------------------------------------
     def request_screenshot(self, path: str | Path | None = None, include_ui: bool | None = None) -> Path:
