@@ -763,3 +763,15 @@ def test_a_band_s_average_cost_floor_is_taken_on_the_prediction_not_its_upper_bo
         assert g._tile_count(p, r, 90.0) == math.ceil(875.0 / 45.0)
     finally:
         renderer.release()
+
+
+def test_the_automatic_drag_scale_takes_few_sizes_and_never_exceeds_its_budget():
+    """The orbit resolution (governor off, drag resolution "auto") is one of DRAG_STEPS, the largest not
+    above the scale the budget asks: a continuous scale gave each drag a new render size, whose free textures
+    KEEP_VIEW_POOLS then kept pooled until the view resized (one set per size: unbounded over a session)."""
+    asked = np.linspace(0.25, 1.0, 301)
+    got = [frame_mod.drag_step(float(a)) for a in asked]
+    assert set(got) <= set(frame_mod.DRAG_STEPS) and len(set(got)) == len(frame_mod.DRAG_STEPS)
+    assert all(g <= a + 1e-9 for g, a in zip(got, asked))
+    assert all(a - g < 0.3 * a for g, a in zip(got, asked))  # a half-octave of pixels at most below
+    assert frame_mod.drag_step(1.0) == 1.0 and frame_mod.drag_step(0.25) == 0.25 and frame_mod.drag_step(0.1) == 0.25

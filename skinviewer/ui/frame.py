@@ -58,6 +58,16 @@ GOVERNOR_MARGIN = False
 KEEP_VIEW_POOLS = True
 
 
+# the orbit resolutions the automatic drag scale takes (half-octaves of pixels): a continuous scale made each drag
+# a new render size, and with KEEP_VIEW_POOLS each size's free textures would stay pooled until the view resized
+DRAG_STEPS = (1.0, 0.5 ** 0.5, 0.5, 0.5 ** 1.5, 0.25)
+
+
+def drag_step(scale: float) -> float:
+    """The largest of DRAG_STEPS not above ``scale`` (a drag is never dearer than its budget asked)."""
+    return next((s for s in DRAG_STEPS if s <= scale + 1e-9), DRAG_STEPS[-1])
+
+
 class UiLayer(Protocol):
     """What the frame needs of the UI (``ui.windows.UiHost``)."""
 
@@ -435,7 +445,7 @@ class FrameController:
         ms = g.predicted_ms(g.affected([], camera=True)) * full / now
         if ms <= self.drag_budget_ms:
             return 1.0
-        return max(0.25, min(1.0, (self.drag_budget_ms / ms) ** 0.5))  # cost ~ pixels
+        return drag_step(max(0.25, min(1.0, (self.drag_budget_ms / ms) ** 0.5)))  # cost ~ pixels
 
     # -- the frame ---------------------------------------------------------------------------
     def _compute_layout(self) -> Layout:
