@@ -199,3 +199,22 @@ def test_no_assembled_source_ends_with_a_line_directive(gl_ctx, lib_dir):
             last = [ln for ln in src.splitlines() if ln.strip()][-1]
             assert not last.startswith("#line"), (p.name, last)
     project.release()
+
+
+def test_included_extension_moves_after_version(gl_ctx, lib_dir):
+    """An included file's #extension (lib/lights.glsl's GL_ARB_texture_gather) goes right after #version,
+    where GLSL wants it (Mesa refuses one after code: 'not allowed in the middle of a shader'); its own
+    line stays a comment, so an error in the file still reports its line."""
+    gather = ("// shared snippet\nfloat twice(float x) { return 2.0 * x; }\n"
+              "#extension GL_ARB_texture_gather : enable\n"
+              "#if defined(GL_ARB_texture_gather) || __VERSION__ >= 400\n"
+              "float first(sampler2D s) { return textureGather(s, vec2(0.5)).w; }\n#endif\n")
+    (lib_dir / "lib" / "common.glsl").write_text(gather)
+    lib = ShaderLibrary(gl_ctx, lib_dir)
+    assert "in_pos" in lib.get("prog")
+    src = lib._assemble("prog", ())[0]["fragment_shader"].splitlines()
+    assert src[0].startswith("#version") and src[1] == "#extension GL_ARB_texture_gather : enable"
+    assert sum(ln.lstrip().startswith("#extension") for ln in src) == 1
+    _touch_later(lib_dir / "lib" / "common.glsl", gather.replace("textureGather(s, vec2(0.5)).w", "undefined_thing"))
+    _, errors = lib.reload()
+    assert any(e.file == "lib/common.glsl" and e.line == 5 for e in errors["prog"]), errors

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from helpers import small_settings
 
-from skinviewer.kernel.shaders import ShaderLibrary
+from skinviewer.kernel.shaders import ShaderCompileError, ShaderLibrary
 
 # default lights (two, both shadowed, PCF 1); then three lights of every kind with an unshadowed
 # one in the middle slot, a disabled one before it, and a wider PCF
@@ -24,6 +24,7 @@ CASES = {
                         {"kind": "beam", "position": (0.0, 20.0, 150.0), "direction": (0.0, 0.0, 1.0),
                          "beam_radius": 30.0, "intensity": 2.0}]},
     "box": {"shadow.pcf_filter": "box"},
+    "npot": {"shadow.map_size": 200, "shadow.pcf": 2},  # the PCF's gathers at (X + 1) / size, size not 2^k
 }
 
 
@@ -83,3 +84,22 @@ def test_deon_texel_samples_compiled_in(renderer, generic, samples):
     a, b = renderer.read(s, "deon_irradiance"), generic.read(s, "deon_irradiance")
     assert np.array_equal(a, b), f"texel_samples {samples}: the irradiance differs by up to {np.abs(a - b).max()}"
     assert a[..., :3].max() > 0
+
+
+def test_pcf_taps_gathered(gl_ctx):
+    """The specialised bilinear PCF reads its taps as textureGather 2 x 2 footprints where the GL has it
+    (lib/lights.glsl PCF_GATHER, ~10 % of a lit pass's CPU on llvmpipe; notes/deon_light_move.md section
+    18): a define that breaks the name breaks the bilinear program, not the box filter's, nor PCF_GATHER=0's.
+    test_specialised_equals_generic checks its images against the generic shaders' texel fetches bit for bit."""
+    assert "GL_ARB_texture_gather" in gl_ctx.extensions or gl_ctx.version_code >= 400
+    lib = ShaderLibrary(gl_ctx)
+    try:
+        defines = {"LIGHT_COUNT": 1, "SHADOW_PCF": 1, "SHADOW_BILINEAR": 1, "SHADOW_MASK": 1, "POINT_MASK": 0,
+                   "BEAM_MASK": 0, "textureGather": "no_such_function"}
+        for name in ("phong", "deon_irradiance_texels"):
+            with pytest.raises(ShaderCompileError):
+                lib.get(name, defines)
+            assert "shadow_map0" in lib.get(name, {**defines, "PCF_GATHER": 0})
+            assert "shadow_map0" in lib.get(name, {**defines, "SHADOW_BILINEAR": 0})
+    finally:
+        lib.release()

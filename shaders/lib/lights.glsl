@@ -7,6 +7,15 @@
 // the uniform-driven version; both give bit-identical images (tests/test_specialise.py).
 #ifndef SKINVIEWER_LIGHTS_GLSL
 #define SKINVIEWER_LIGHTS_GLSL
+// The specialised bilinear PCF reads its (2r + 2)^2 taps as (r + 1)^2 textureGather 2 x 2 footprints
+// where the GL has it (GLSL 4.00, or ARB_texture_gather: Mesa's llvmpipe at 3.3): the same texels and
+// terms in the same order, the same bits, ~10 % less CPU for a lit pass on llvmpipe (issue 27,
+// notes/deon_light_move.md section 18). PCF_GATHER=0 reads the taps one texelFetch each (an A/B).
+// The shader library moves this #extension after #version (GLSL refuses one after code).
+#extension GL_ARB_texture_gather : enable
+#if !defined(PCF_GATHER) && (defined(GL_ARB_texture_gather) || __VERSION__ >= 400)
+#define PCF_GATHER 1
+#endif
 #if defined(LIGHT_COUNT) && !defined(GENERIC_SHADERS)
 #define LIGHTS_SPECIALISED 1
 #define N_LIGHTS LIGHT_COUNT        // loop bound of the lit passes: for (i = 0; i < N_LIGHTS; ...)
@@ -65,6 +74,12 @@ float shadow_test(sampler2D sm, ivec2 q, vec3 c, vec2 g) {
     float z = c.z + dot(g, (vec2(q) + 0.5) / vec2(size) - c.xy);
     q = clamp(q, ivec2(0), size - 1);
     return (z - texelFetch(sm, q, 0).r > u_shadow_tol) ? 0.0 : 1.0;
+}
+
+// shadow_test with the map's depth ds at q already read (PCF_GATHER)
+float shadow_tested(ivec2 q, ivec2 size, vec3 c, vec2 g, float ds) {
+    float z = c.z + dot(g, (vec2(q) + 0.5) / vec2(size) - c.xy);
+    return (z - ds > u_shadow_tol) ? 0.0 : 1.0;
 }
 
 // PCF weight of the tap at offset k (-r .. r + 1) along one axis: a (2r + 1)-texel box slid by the
@@ -146,6 +161,31 @@ float shadow_compare_bounded(sampler2D sm, vec3 c, vec2 g, float decided) {
     for (int y = -SHADOW_PCF; y <= SHADOW_PCF + 1; ++y) for (int x = -SHADOW_PCF; x <= SHADOW_PCF + 1; ++x)
         lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
     return lit / float((2 * r + 1) * (2 * r + 1));
+#endif
+#if defined(PCF_GATHER) && PCF_GATHER != 0
+    // the taps' texels as 2 x 2 gathers (textureGather: the bilinear footprint, clamped to the edge as
+    // shadow_test clamps), summed y-major in the flat loop's order: the same terms, the same bits
+    if (read) {
+        ivec2 size = textureSize(sm, 0);
+        vec2 inv = 1.0 / vec2(size);
+        for (int gy = 0; gy <= SHADOW_PCF; ++gy) {
+            int y = 2 * gy - SHADOW_PCF;
+            vec4 G[SHADOW_PCF + 1];
+            for (int gx = 0; gx <= SHADOW_PCF; ++gx)
+                G[gx] = textureGather(sm, (i0 + vec2(2 * gx - SHADOW_PCF, y) + 1.0) * inv);
+            for (int gx = 0; gx <= SHADOW_PCF; ++gx) {
+                int x = 2 * gx - SHADOW_PCF;
+                lit += pcf_weight(x, r, t.x) * pcf_weight(y, r, t.y) * shadow_tested(ivec2(i0) + ivec2(x, y), size, c, g, G[gx].w);
+                lit += pcf_weight(x + 1, r, t.x) * pcf_weight(y, r, t.y) * shadow_tested(ivec2(i0) + ivec2(x + 1, y), size, c, g, G[gx].z);
+            }
+            for (int gx = 0; gx <= SHADOW_PCF; ++gx) {
+                int x = 2 * gx - SHADOW_PCF;
+                lit += pcf_weight(x, r, t.x) * pcf_weight(y + 1, r, t.y) * shadow_tested(ivec2(i0) + ivec2(x, y + 1), size, c, g, G[gx].x);
+                lit += pcf_weight(x + 1, r, t.x) * pcf_weight(y + 1, r, t.y) * shadow_tested(ivec2(i0) + ivec2(x + 1, y + 1), size, c, g, G[gx].y);
+            }
+        }
+    }
+    return (!read && one == 0.0) ? 0.0 : lit / float((2 * r + 1) * (2 * r + 1));
 #endif
     // one flat loop over the taps, y-major as the nested loops were: the same terms in the same order,
     // and ~13 % less CPU for d'Eon's irradiance light pass on llvmpipe than the two nested loops

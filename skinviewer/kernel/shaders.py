@@ -30,6 +30,7 @@ MAX_SHADER_BYTES = 4 * 2**20  # one GLSL file; a FIFO or device among the shader
 
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 _VERTEX_STAGE = re.compile(r'^\s*#pragma\s+vertex_stage\s+"([^"]+)"\s*$', re.M)
+_EXTENSION = re.compile(r"^\s*#extension\b")  # moved after #version: GLSL allows it only before any code
 # "uniform <type> a, b[4];" with optional layout(...) and precision qualifiers
 _UNIFORM = re.compile(r"^\s*(?:layout\s*\([^)]*\)\s*)?uniform\s+([^;{]+);", re.M)
 # Mesa: "0:12(5): error: ..."; NVIDIA: "0(12) : error C0000: ..."; AMD/Intel: "ERROR: 0:12: ..."
@@ -226,9 +227,13 @@ class ShaderLibrary:
         for stage, path in stage_files.items():
             files: list[Path] = []
             lines = self._expand(path.resolve(), files, watch=watch)
-            if defines:
+            # an included file's #extension (e.g. lib/lights.glsl's) goes after #version, where GLSL
+            # wants it (Mesa refuses one after code); its line stays as a comment: the numbers hold
+            ext = list(dict.fromkeys(ln.strip() for ln in lines if _EXTENSION.match(ln)))
+            lines = [("// " + ln.strip()) if _EXTENSION.match(ln) else ln for ln in lines]
+            if defines or ext:
                 at = next((i + 1 for i, ln in enumerate(lines) if ln.lstrip().startswith("#version")), 0)
-                lines[at:at] = [f"#define {k} {v}" for k, v in defines]  # the #line after #version follows
+                lines[at:at] = ext + [f"#define {k} {v}" for k, v in defines]  # the #line after #version follows
             sources[stage] = "\n".join(lines) + "\n"
             files_per_stage[stage] = files
         return sources, files_per_stage
