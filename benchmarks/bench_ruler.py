@@ -267,14 +267,16 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
     the texel grid), head and scan, irr512 / irr1024: RMS and p99 with the truth's uncertainty, the
     truth as computed and converged further at the pixels that decide a p99 (tail_pixels, then
     reference.refine_at, ``rounds`` times: the band moves as the uncertainty shrinks), and the paired
-    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth).
-    ``env_factors``: the environment's rays at the refined pixels per round (x ENV_DIFFUSE_RAYS; the last
-    one for the rounds after): a round stops early when every comparison is decided."""
+    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth;
+    where they straddle 0, metrics.p99_change_witness: a truth within the +- that reverses the order makes
+    the tie real, none found leaves it undecided). ``env_factors``: the environment's rays at the refined
+    pixels per round (x ENV_DIFFUSE_RAYS; the last one for the rounds after): a round stops early when every
+    comparison is decided."""
     from skinviewer.engine.bench import compare_mask, linear_image
     from skinviewer.engine.reference import ENV_DIFFUSE_RAYS, Surface, load_scene, refine_at
     from skinviewer.engine.renderer import Renderer
     from skinviewer.kernel.gl import headless_context
-    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, with_u
+    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, p99_change_witness, with_u
     ctx = headless_context()
     r = Renderer(ctx)
     todo = [(n, e, rig) for n, e in (("head", {}), ("scan", SCAN_VALUES)) if n in scenes.split(",")
@@ -350,12 +352,19 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
                 lo, hi = p99_change_bounds(a, b, tr.lit, tr.uncertainty, mask)
                 plain = np.array(errs["4 samples"].p99) - np.array(errs["1 sample (default)"].p99)
                 verdict = ["falls" if h_ < 0 else "rises" if l_ > 0 else "tie" for l_, h_ in zip(lo, hi)]
+                # a tie of the bounds: is there a truth within the +- that reverses the plain order (a real tie)?
+                w_lo, w_hi, share = p99_change_witness(a, b, tr.lit, tr.uncertainty, mask)
+                verdict = [v if v != "tie" else "tie (reversed)" if wl < 0 < wh else "undecided (kept)"
+                           for v, wl, wh in zip(verdict, w_lo, w_hi)]
                 better = certainly_better(a, b, tr.lit, tr.uncertainty, mask)
                 worse = certainly_better(b, a, tr.lit, tr.uncertainty, mask)
                 rms = ["lower" if x else "higher" if y else "tie" for x, y in zip(better, worse)]
                 print(f"    irr{irr} 4 vs 1 sample: p99 change {' / '.join(f'{100 * x:+.2f}' for x in plain)} points, "
                       f"paired bounds {' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(lo, hi))}: "
                       f"{' / '.join(verdict)}; RMS (pairwise) {' / '.join(rms)}", flush=True)
+                print(f"      under truths within the +- (p99_change_witness, {len(share)} channels): change found "
+                      f"{' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(w_lo, w_hi))} points, "
+                      f"the plain sign kept by {' / '.join(f'{100 * x:.0f} %' for x in share)} of the truths", flush=True)
     r.release()
     ctx.release()
 
