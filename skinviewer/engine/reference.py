@@ -1602,6 +1602,9 @@ ENV_INTERP_NOTE = ("; with an environment: its interpolation between the three e
                    "|interpolated - own| for the element under it")
 
 
+ENV_INTERP_H_MM = 1.0  # the interpolation bound's elements: its field is constant over each mesh triangle (~2.8 mm)
+
+
 def env_corner_checks(surf: Surface, tri: np.ndarray, mix: float, energy: bool, seed: int = 2718) -> np.ndarray:
     """The environment's interpolation error over each of the triangles ``tri`` (issue 30): the mean over
     its three corners of |its linear field there (extrapolated from the three estimates inside it) -
@@ -1633,7 +1636,8 @@ def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], variances: n
     between three estimates inside each mesh triangle (issue 30). M is linear in the elements' E A with
     non-negative Gaussian weights, so its error is at most the same diffusion sum of |dE A|: each
     triangle whose estimates the truth made carries its corners' mean |interpolated - own|
-    (env_corner_checks) on elements of ``h_mm``, and the element under the pixel (the delta, the exact
+    (env_corner_checks) on elements of max(``h_mm``, ENV_INTERP_H_MM) (constant over a triangle: no finer
+    ones needed), and the element under the pixel (the delta, the exact
     Gaussians) the pixel's own |interpolated - own| (Surface.env_direct at the pixel, seeded). Weighting the
     checks by what each Gaussian reads matters where a Gaussian reaches another surface: across a 2 mm
     blade red's wide Gaussians read the far face, whose error a nearest-checks mean never saw (session 11).
@@ -1647,6 +1651,7 @@ def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], variances: n
     keep = np.zeros(len(surf.F), bool)
     keep[made] = True
     tri_mm = surf.P[surf.F] * surf.mm
+    h_mm = max(float(h_mm), ENV_INTERP_H_MM)
     vpar, vbary, elem = gt.subdivide(tri_mm, h_mm, keep)  # as build_diffusion's (no shadow-edge cut: E is smooth)
     corners = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])[elem]
     el = gt.Elements(corners, d_tri[vpar[elem[:, 0]]])
