@@ -508,3 +508,29 @@ def test_the_refined_decision_is_reproducible():
     assert np.all(np.isfinite(r3.lit)) and not np.array_equal(r3.lit, r1.lit)
     u1, u3 = (np.sqrt((r.uncertainty[sel] ** 2).mean(0)) for r in (r1, r3))
     assert np.all(u3 <= 1.05 * u1), (u1, u3)
+
+
+def test_a_triangles_corner_checks_bound_its_mean_interpolation_error_for_a_quadratic_irradiance():
+    """env_corner_checks measures a triangle's interpolation error at its corners: the three estimates sit at
+    (4, 1, 1) / 6, a degree-2 quadrature's points, so for a quadratic irradiance the linear field through
+    them is furthest off at the corners: their mean |error| is at least 1.6x the triangle's mean |error|
+    (random triangles and quadratics), while one random point (version 9's check) is below a third of it
+    about a tenth of the time."""
+    import skinviewer.engine.reference as R
+    rng = np.random.default_rng(3)
+    u = rng.dirichlet(np.ones(3), 4000)
+    ratio, one = [], []
+    for _ in range(300):
+        tri = rng.normal(size=(3, 2))
+        c = rng.normal(size=6)
+
+        def f(p, c=c):
+            x, y = p[:, 0], p[:, 1]
+            return c[0] * x * x + c[1] * y * y + c[2] * x * y + c[3] * x + c[4] * y + c[5]
+        at_corners = R._ENV_W @ f(R._ENV_B @ tri)  # the linear field through the three estimates, at the corners
+        mean_err = np.abs(u @ at_corners - f(u @ tri)).mean()
+        ratio.append(np.abs(at_corners - f(tri)).mean() / mean_err)
+        k = rng.integers(len(u))
+        one.append(abs(u[k] @ at_corners - f(u[k:k + 1] @ tri)[0]) / mean_err)
+    assert min(ratio) >= 1.6, min(ratio)
+    assert np.mean(np.array(one) < 1 / 3) > 0.05
