@@ -20,8 +20,13 @@
   samples-tail  where the p99 tail of d'Eon against the truth is (head and scan, --size; --tail-map DIR: PNG maps).
   samples-cost  the irradiance pass and the whole frame, texel_samples 1 vs 4 x PCF default vs 0, at the defaults (1024^2 maps,
           640^2 view), head and scan, sync timing, 3 interleaved repeats.
+  interp  the environment's interpolation term on tests/test_reference.py's blade under the studio environment: the
+          truth's error against the same truth with the environment estimated at every point it is read, within
+          the +- without the term, with version 9's (the mean of the 8 nearest checks) and with this one (each
+          triangle's corner checks through the diffusion sum), and where red's error comes from (the blade's
+          far face estimated at every point instead).
 
-Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-tail,samples-cost] [--size 512] [--edge-size 32] [--rim-size 512,1024]
+Run: python3 benchmarks/bench_ruler.py [--parts edge,unc,rim,truth,cost,head,samples,samples-tail,samples-cost,interp] [--size 512] [--edge-size 32] [--rim-size 512,1024]
      [--samples-scenes head,scan] [--samples-rigs default,key] [--samples-rounds 2] [--samples-max-pixels 1500] [--tail-map DIR]
      [--samples-env-factors 8,64]
 """
@@ -267,14 +272,16 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
     the texel grid), head and scan, irr512 / irr1024: RMS and p99 with the truth's uncertainty, the
     truth as computed and converged further at the pixels that decide a p99 (tail_pixels, then
     reference.refine_at, ``rounds`` times: the band moves as the uncertainty shrinks), and the paired
-    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth).
-    ``env_factors``: the environment's rays at the refined pixels per round (x ENV_DIFFUSE_RAYS; the last
-    one for the rounds after): a round stops early when every comparison is decided."""
+    p99 change of 4 samples against 1 (metrics.p99_change_bounds: both judged against the same truth;
+    where they straddle 0, metrics.p99_change_witness: a truth within the +- that reverses the order makes
+    the tie real, none found leaves it undecided). ``env_factors``: the environment's rays at the refined
+    pixels per round (x ENV_DIFFUSE_RAYS; the last one for the rounds after): a round stops early when every
+    comparison is decided."""
     from skinviewer.engine.bench import compare_mask, linear_image
     from skinviewer.engine.reference import ENV_DIFFUSE_RAYS, Surface, load_scene, refine_at
     from skinviewer.engine.renderer import Renderer
     from skinviewer.kernel.gl import headless_context
-    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, with_u
+    from skinviewer.physics.metrics import certainly_better, image_error, p99_change_bounds, p99_change_witness, with_u
     ctx = headless_context()
     r = Renderer(ctx)
     todo = [(n, e, rig) for n, e in (("head", {}), ("scan", SCAN_VALUES)) if n in scenes.split(",")
@@ -350,12 +357,19 @@ def part_samples(size: int, rounds: int = 2, scenes: str = "head,scan", rigs: st
                 lo, hi = p99_change_bounds(a, b, tr.lit, tr.uncertainty, mask)
                 plain = np.array(errs["4 samples"].p99) - np.array(errs["1 sample (default)"].p99)
                 verdict = ["falls" if h_ < 0 else "rises" if l_ > 0 else "tie" for l_, h_ in zip(lo, hi)]
+                # a tie of the bounds: is there a truth within the +- that reverses the plain order (a real tie)?
+                w_lo, w_hi, share = p99_change_witness(a, b, tr.lit, tr.uncertainty, mask)
+                verdict = [v if v != "tie" else "tie (reversed)" if wl < 0 < wh else "undecided (kept)"
+                           for v, wl, wh in zip(verdict, w_lo, w_hi)]
                 better = certainly_better(a, b, tr.lit, tr.uncertainty, mask)
                 worse = certainly_better(b, a, tr.lit, tr.uncertainty, mask)
                 rms = ["lower" if x else "higher" if y else "tie" for x, y in zip(better, worse)]
                 print(f"    irr{irr} 4 vs 1 sample: p99 change {' / '.join(f'{100 * x:+.2f}' for x in plain)} points, "
                       f"paired bounds {' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(lo, hi))}: "
                       f"{' / '.join(verdict)}; RMS (pairwise) {' / '.join(rms)}", flush=True)
+                print(f"      under truths within the +- (p99_change_witness, {len(share)} channels): change found "
+                      f"{' / '.join(f'[{100 * l_:+.2f}, {100 * h_:+.2f}]' for l_, h_ in zip(w_lo, w_hi))} points, "
+                      f"the plain sign kept by {' / '.join(f'{100 * x:.0f} %' for x in share)} of the truths", flush=True)
     r.release()
     ctx.release()
 
@@ -471,6 +485,84 @@ def part_samples_cost(repeats: int = 3) -> None:
     ctx.release()
 
 
+def part_interp() -> None:
+    """The environment's interpolation term against its true error on the blade (issue 30, session 11)."""
+    from test_reference import _blade_under_an_environment
+
+    import skinviewer.engine.reference as R
+    s, sc = _blade_under_an_environment()
+    t = time.process_time()
+    ref = compute_reference(s, h_mm=1.0, scene=sc)
+    t_ref = time.process_time() - t
+    term = R.env_interpolation_uncertainty
+    parts: dict[str, np.ndarray] = {}
+
+    def version9(surf, a, variances, weights, mix, energy, h_mm):  # the mean of the 8 nearest checks (version 9)
+        made = np.unique(np.nonzero(surf.env_done["full"])[0] // 3)
+        checks = R.env_interpolation_checks(surf, mix, energy, tri=made)
+        own, _ = surf.env_direct(a, energy, seed=4242)
+        here = np.abs(surf.env_irradiance(a["tri"], a["bary"], energy) - own) * R._safe_pow(a["C"], mix)
+        return R.env_element_uncertainty(checks, a["P"] * surf.mm, np.asarray(weights).reshape(-1, 3).sum(0), here=here)
+    for name, fn in (("without the term", lambda surf, a, *_a, **_k: np.zeros((len(a["P"]), 3))),
+                     ("version 9 (8 nearest checks)", version9)):
+        R.env_interpolation_uncertainty = fn
+        try:
+            parts[name] = compute_reference(s, h_mm=1.0, scene=sc).uncertainty
+        finally:
+            R.env_interpolation_uncertainty = term
+    parts["this (corner checks, diffusion sum)"] = ref.uncertainty
+    read = R.Surface.env_irradiance
+
+    def judged(direct_tri: np.ndarray | None) -> np.ndarray:
+        """The same truth with the environment estimated at every point it is read (2x the rays, other
+        seeds); ``direct_tri``: only on these triangles (interpolated, with 8x the rays, elsewhere)."""
+        def at_points(self, tri, bary, energy, level="full"):
+            if direct_tri is None:
+                return self.env_direct(self.attributes(tri, bary), energy, rays=2 * R.ENV_DIFFUSE_RAYS, seed=len(tri) + 11)[0]
+            v = read(self, tri, bary, energy, level)
+            on = np.isin(tri, direct_tri)
+            if on.any():
+                v[on] = self.env_direct(self.attributes(tri[on], bary[on]), energy, rays=8 * R.ENV_DIFFUSE_RAYS,
+                                        seed=int(on.sum()) + 5)[0]
+            return v
+        R.Surface.env_irradiance = at_points
+        rays = R.ENV_DIFFUSE_RAYS
+        R.ENV_DIFFUSE_RAYS = rays if direct_tri is None else 8 * rays
+        try:
+            return compute_reference(s, h_mm=1.0, scene=sc, uncertainty=False).lit
+        finally:
+            R.Surface.env_irradiance, R.ENV_DIFFUSE_RAYS = read, rays
+    judge = judged(None)
+    m = ref.mask & (ref.lit.sum(-1) > 0)
+    err = np.abs(ref.lit - judge)[m]
+    print(f"## the blade under the studio environment, 32^2, 1 mm elements ({int(m.sum())} pixels; truth "
+          f"{t_ref:.1f} CPU s, of it the term {ref.meta['seconds']['uncertainty_env_interpolation']:.2f} s); "
+          f"RMS error {' / '.join(f'{x:.2f}' for x in 100 * np.sqrt((err ** 2).mean(0) / (ref.lit[m] ** 2).mean(0)))} "
+          "% of the RMS value", flush=True)
+    for name, u in parts.items():
+        um = u[m]
+        print(f"  {name:<38} error > +- at {' / '.join(f'{x:.2f}' for x in 100 * (err > um).mean(0))} % of the pixels; "
+              f"worst error / +- {' / '.join(f'{x:.2f}' for x in (err / np.maximum(um, 1e-300)).max(0))}; "
+              f"RMS +- / RMS error {' / '.join(f'{x:.2f}' for x in np.sqrt((um ** 2).mean(0) / (err ** 2).mean(0)))}",
+              flush=True)
+    # where red's error comes from: the blade is a box of 12 triangles (the plane's 512 first); its top face
+    # (normal +z) is what the camera sees of it, its far face (normal -z) 2 mm below
+    surf = R.Surface(*sc, s)
+    top, far = (np.nonzero((np.arange(len(surf.F)) >= 512) & (surf.Ng[:, 2] * sg > 0.99))[0] for sg in (1.0, -1.0))
+    fine_far = judged(far)
+    fine_blade = judged(np.arange(512, len(surf.F)))
+    lit_r = np.maximum(ref.lit[..., 0], 1e-300)
+    z_top = float(surf.P[surf.F[top]][..., 2].mean() * sc[1])
+    assert ref.position is not None
+    face = m & (np.abs(ref.position[..., 2] * sc[1] - z_top) < 1e-3)
+    for name, other in (("interpolated everywhere (8x the rays)", judged(np.zeros(0, np.int64))),
+                        ("estimated at every point of the far face", fine_far),
+                        ("... of every blade face", fine_blade)):
+        rel = np.abs(other[..., 0] - judge[..., 0]) / lit_r
+        print(f"  the blade's top face ({int(face.sum())} pixels), red against the judge, {name}: mean "
+              f"{100 * rel[face].mean():.2f} %, worst {100 * rel[face].max():.2f} %", flush=True)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--parts", default="edge,unc,rim")
@@ -505,6 +597,8 @@ def main() -> int:
         part_samples_cost()
     if "samples-tail" in parts:
         part_samples_tail(a.size, a.tail_map)
+    if "interp" in parts:
+        part_interp()
     if "samples" in parts:
         part_samples(a.size, a.samples_rounds, a.samples_scenes, a.samples_rigs, a.samples_max_pixels,
                      a.samples_env_factors)

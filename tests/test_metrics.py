@@ -257,3 +257,26 @@ def test_the_paired_p99_bounds_hold_for_every_truth_within_the_uncertainty_and_a
     b2[tail] = ref[tail] * 1.59
     assert M.p99_change(a, b2, ref, u) == ("tie", "tie", "tie")
     assert M.p99_change(a, b2, ref, 0 * u) == ("higher", "higher", "higher")
+
+
+def test_a_p99_order_the_uncertainty_can_reverse_has_a_witness_and_a_decided_one_has_none():
+    """p99_change_witness (issue 30 item 4): the differences it finds under truths within u lie within
+    p99_change_bounds (both judge a and b against the same truth); a tail 1 % apart on either side of
+    the truth, uncertain by 20 %, is reversed by the truth d = +u: a witness, so that tie is real; the same
+    tail with both above the truth keeps its order under every truth tried while the bounds (a
+    relaxation) call it a tie: undecided, not reversed; where the bounds decide, no truth reverses it."""
+    rng = np.random.default_rng(11)
+    ref = rng.uniform(0.2, 1.0, (60, 50, 3))
+    err = rng.uniform(0.0, 0.1, ref.shape)
+    tail = err >= np.quantile(err, 0.98, axis=(0, 1))
+    u = np.where(tail, 0.2, 0.001) * ref
+    a = ref * (1 + np.where(tail, 0.5, err))
+    for b_tail, verdict, witness in ((-0.49, "tie", True), (0.51, "tie", False), (1.0, "lower", False)):
+        b = ref * (1 + np.where(tail, b_tail, err))
+        lo, hi = M.p99_change_bounds(a, b, ref, u)
+        found_lo, found_hi, share = M.p99_change_witness(a, b, ref, u)
+        assert np.all(found_lo >= lo - 1e-12) and np.all(found_hi <= hi + 1e-12)
+        assert M.p99_change(a, b, ref, u) == (verdict,) * 3
+        c0 = M.p99_rel(a, ref) - M.p99_rel(b, ref)
+        reversed_ = (found_lo < 0) & (found_hi > 0)
+        assert np.all(reversed_ == witness) and np.all((share < 1) == witness), (b_tail, c0, found_lo, found_hi)

@@ -418,11 +418,13 @@ def test_the_uncertainty_states_the_environments_interpolation_inside_the_triang
     """compute_reference reads the environment linearly between three estimates inside each (here 3.75 mm)
     triangle, at the pixel and at the source elements (issue 30). Against the same truth with the
     environment estimated at every point it is read (the pixel's and each element corner's own estimate,
-    2x the rays, other seeds), its error is within the stated uncertainty in RMS and, in green and blue, at
-    >= 99 % of the pixels; without the interpolation term (env_interpolation_uncertainty) the same
-    uncertainty misses it at 30 / 5.7 / 6.0 % of the pixels. **Weaker than asked:** red still misses
-    7.4 % (a smooth error under the blade's shadow of the sky, which red's wide Gaussians average and the
-    checks' mean |dE| understates by up to 1.7x); the truth is seeded, so these figures are exact here."""
+    2x the rays, other seeds), its error is within the stated uncertainty in RMS and at >= 99 % of the
+    pixels in every channel; without the interpolation term (env_interpolation_uncertainty) the same
+    uncertainty misses it at 30 / 5.7 / 6.0 % of the pixels. Red's wide Gaussians read the blade's far
+    face 2 mm away (35 x 80 mm triangles): the term weights each triangle's check by what the Gaussians
+    read there (a diffusion sum of the checks); a mean of the nearest checks (truth version 9) missed red
+    at 7.4 % of the pixels. The truth is seeded, so these figures are exact here (measured: 0 / 0.55 /
+    0.82 %, RMS +- / RMS error 4.2 / 4.4 / 4.2)."""
     import skinviewer.engine.reference as R
     s, scene = _blade_under_an_environment()
     a = compute_reference(s, h_mm=1.0, scene=scene)
@@ -441,12 +443,13 @@ def test_the_uncertainty_states_the_environments_interpolation_inside_the_triang
     err = np.abs(a.lit - judge.lit)[m]
     u, u0 = a.uncertainty[m], without.uncertainty[m]
     miss, miss0 = (err > u).mean(0), (err > u0).mean(0)
-    assert miss[0] <= 0.08 and np.all(miss[1:] <= 0.01), miss
+    assert np.all(miss <= 0.01), miss
     assert np.all(miss0 >= 0.05) and np.all(miss <= miss0 / 4), (miss0, miss)
     assert np.all(np.sqrt((err ** 2).mean(0)) <= np.sqrt((u ** 2).mean(0)))
     assert np.all((u >= u0).all(0))
-    # not vacuous: the stated RMS under 20 % of the image's RMS
+    # not vacuous: the stated RMS under 20 % of the image's RMS and under 5x the RMS error
     assert np.all(np.sqrt((u ** 2).mean(0)) < 0.2 * np.sqrt((a.lit[m] ** 2).mean(0)))
+    assert np.all(np.sqrt((u ** 2).mean(0)) < 5 * np.sqrt((err ** 2).mean(0)))
 
 
 def test_a_cached_truth_of_an_older_version_is_recomputed_with_a_note(tmp_path, monkeypatch):
@@ -505,3 +508,29 @@ def test_the_refined_decision_is_reproducible():
     assert np.all(np.isfinite(r3.lit)) and not np.array_equal(r3.lit, r1.lit)
     u1, u3 = (np.sqrt((r.uncertainty[sel] ** 2).mean(0)) for r in (r1, r3))
     assert np.all(u3 <= 1.05 * u1), (u1, u3)
+
+
+def test_a_triangles_corner_checks_bound_its_mean_interpolation_error_for_a_quadratic_irradiance():
+    """env_corner_checks measures a triangle's interpolation error at its corners: the three estimates sit at
+    (4, 1, 1) / 6, a degree-2 quadrature's points, so for a quadratic irradiance the linear field through
+    them is furthest off at the corners: their mean |error| is at least 1.6x the triangle's mean |error|
+    (random triangles and quadratics), while one random point (version 9's check) is below a third of it
+    about a tenth of the time."""
+    import skinviewer.engine.reference as R
+    rng = np.random.default_rng(3)
+    u = rng.dirichlet(np.ones(3), 4000)
+    ratio, one = [], []
+    for _ in range(300):
+        tri = rng.normal(size=(3, 2))
+        c = rng.normal(size=6)
+
+        def f(p, c=c):
+            x, y = p[:, 0], p[:, 1]
+            return c[0] * x * x + c[1] * y * y + c[2] * x * y + c[3] * x + c[4] * y + c[5]
+        at_corners = R._ENV_W @ f(R._ENV_B @ tri)  # the linear field through the three estimates, at the corners
+        mean_err = np.abs(u @ at_corners - f(u @ tri)).mean()
+        ratio.append(np.abs(at_corners - f(tri)).mean() / mean_err)
+        k = rng.integers(len(u))
+        one.append(abs(u[k] @ at_corners - f(u[k:k + 1] @ tri)[0]) / mean_err)
+    assert min(ratio) >= 1.6, min(ratio)
+    assert np.mean(np.array(one) < 1 / 3) > 0.05

@@ -62,8 +62,8 @@ from skinviewer.scene.environment import environment_image
 from skinviewer.scene.mesh import MeshData, culls_back_faces, is_closed, load_mesh, load_texture_maps
 from skinviewer.scene.scenes import build_scene
 
-VERSION = 9                 # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points; 8, the uncertainty states the environment's Monte Carlo error; 9, and its interpolation inside the triangles
-VERSION_CHANGE = "its uncertainty now states the environment's interpolation inside the triangles too"  # what VERSION changed, for the stale cache's note
+VERSION = 10                # bump when the reference's maths or its inputs change (invalidates the cache): 4, seam normals; 5, shadow edges cut; 6, environments; 7, environment's samples seeded per block of points; 8, the uncertainty states the environment's Monte Carlo error; 9, and its interpolation inside the triangles; 10, that interpolation's checks weighted by what each Gaussian reads
+VERSION_CHANGE = "its uncertainty now weights the environment's interpolation checks by what each Gaussian reads"  # what VERSION changed, for the stale cache's note
 ENV_DIFFUSE_RAYS = 256      # per point of each source triangle (4 independent stratified batches)
 ENV_SPEC_RAYS = 64          # per pixel
 ENV_BATCHES = 4
@@ -1263,7 +1263,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
             u_env_M = env_mc_uncertainty(surf, a, variances, weights, mix)
             times["uncertainty_env"] = time.perf_counter() - t1
             t1 = time.perf_counter()
-            u_env_M = u_env_M + env_interpolation_uncertainty(surf, a, weights, mix, energy)
+            u_env_M = u_env_M + env_interpolation_uncertainty(surf, a, variances, weights, mix, energy, h_mm)
             times["uncertainty_env_interpolation"] = time.perf_counter() - t1
     # view-dependent: eq. (34) rho_dt(N.V) and C^(1 - mix), and the specular (eq. 35)
     V = eye[None] - a["P"]
@@ -1306,7 +1306,7 @@ def compute_reference(s: Settings, h_mm: float = DEFAULT_H_MM, profile: ProfileA
             "plan": diff.plan(), "mm_per_unit": mm, "cached": False, "env": env_meta}
     if u_M is not None:
         meta["uncertainty"] = UNCERTAINTY_NOTE.format(h=h_mm, h2=UNCERTAINTY_COARSER * h_mm) + \
-            (ENV_MC_NOTE.format(k=ENV_MC_K) + ENV_INTERP_NOTE.format(stride=ENV_EL_STRIDE, near=ENV_EL_NEAR)
+            (ENV_MC_NOTE.format(k=ENV_MC_K) + ENV_INTERP_NOTE
              if surf.env is not None else "")
     ref = Reference(imgs[0], imgs[1], imgs[2], mask, meta, imgs[3], imgs[4] if u_M is not None else None,
                     imgs[5] if u_env_lit is not None else None)
@@ -1596,30 +1596,69 @@ def env_element_uncertainty(checks: tuple[np.ndarray, np.ndarray], x_mm: np.ndar
 
 
 ENV_INTERP_NOTE = ("; with an environment: its interpolation between the three estimates of each triangle, which "
-                   "the pixel (the delta) and the source elements (every other Gaussian) read: a point of every "
-                   "{stride}th triangle the truth estimated, estimated on its own, the mean |interpolated - own| over "
-                   "the pixel's {near} nearest such points or, if larger, the same check at the pixel itself, times "
-                   "the weight of every Gaussian")
+                   "the pixel and the source elements read: each triangle's linear field at its three corners "
+                   "against an estimate at the corner itself (its mean |difference|), through the same Gaussians "
+                   "as the light (the diffusion sum of that bound over the elements), and at the pixel itself "
+                   "|interpolated - own| for the element under it")
 
 
-def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], weights: np.ndarray, mix: float, energy: bool,
-                                  stride: int = ENV_EL_STRIDE, near: int = ENV_EL_NEAR
-                                  ) -> np.ndarray:
+ENV_INTERP_H_MM = 1.0  # the interpolation bound's elements: its field is constant over each mesh triangle (~2.8 mm)
+
+
+def env_corner_checks(surf: Surface, tri: np.ndarray, mix: float, energy: bool, seed: int = 2718) -> np.ndarray:
+    """The environment's interpolation error over each of the triangles ``tri`` (issue 30): the mean over
+    its three corners of |its linear field there (extrapolated from the three estimates inside it) -
+    an estimate at the corner itself| (Surface.env_direct, independent rays, seeded; one per mesh vertex,
+    shared by the triangles around it, its shadow rays along the vertex's area-weighted face normal), x
+    C^mix there. For a quadratic irradiance the corners' mean is 1.6-4.9x the triangle's mean |error|
+    (never less: the three estimates sit at a degree-2 quadrature's points, so the corners are where the
+    linear field is furthest off); a single random point of the triangle is below a third of it 10 % of
+    the time. Returns (T, 3); without an environment zeros."""
+    out = np.zeros((len(tri), 3))
+    if surf.env is None or len(tri) == 0:
+        return out
+    tri = np.asarray(tri, np.int64)
+    verts = np.unique(surf.F[tri])
+    own = np.zeros((len(surf.P), 3))
+    own[verts] = surf.env_direct(surf._env_points("coarse", verts), energy, seed=seed)[0]
+    corner = np.broadcast_to(np.eye(3), (len(tri), 3, 3)).reshape(-1, 3)
+    t3 = np.repeat(tri, 3)
+    lin = surf.env_irradiance(t3, corner, energy)  # the triangle's own linear field at its corners
+    cm = _safe_pow(surf.attributes(t3, corner)["C"], mix)
+    d = np.abs(lin - own[surf.F[tri].ravel()]) * cm
+    res: np.ndarray = d.reshape(len(tri), 3, 3).mean(1)
+    return res
+
+
+def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], variances: np.ndarray, weights: np.ndarray,
+                                  mix: float, energy: bool, h_mm: float = DEFAULT_H_MM) -> np.ndarray:
     """compute_reference's stated error (N, 3) of M at receivers ``a`` from the environment read linearly
-    between three estimates inside each mesh triangle (issue 30; the session's env_element_uncertainty):
-    every Gaussian reads interpolated values there (the delta at the pixel itself, the others at the
-    source elements), so the checks (env_interpolation_checks, on the triangles whose estimates this
-    truth made: no estimate more) and the pixel's own check (Surface.env_direct at the pixel, independent
-    rays, seeded) are weighted by the sum of all the Gaussians' weights. Without an environment: zeros."""
+    between three estimates inside each mesh triangle (issue 30). M is linear in the elements' E A with
+    non-negative Gaussian weights, so its error is at most the same diffusion sum of |dE A|: each
+    triangle whose estimates the truth made carries its corners' mean |interpolated - own|
+    (env_corner_checks) on elements of max(``h_mm``, ENV_INTERP_H_MM) (constant over a triangle: no finer
+    ones needed), and the element under the pixel (the delta, the exact
+    Gaussians) the pixel's own |interpolated - own| (Surface.env_direct at the pixel, seeded). Weighting the
+    checks by what each Gaussian reads matters where a Gaussian reaches another surface: across a 2 mm
+    blade red's wide Gaussians read the far face, whose error a nearest-checks mean never saw (session 11).
+    Without an environment: zeros."""
     out = np.zeros((len(a["P"]), 3))
     if surf.env is None or len(out) == 0:
         return out
     made = np.unique(np.nonzero(surf.env_done["full"])[0] // 3)
-    checks = env_interpolation_checks(surf, mix, energy, stride=stride, tri=made)
+    d_tri = np.zeros((len(surf.F), 3))
+    d_tri[made] = env_corner_checks(surf, made, mix, energy)
+    keep = np.zeros(len(surf.F), bool)
+    keep[made] = True
+    tri_mm = surf.P[surf.F] * surf.mm
+    h_mm = max(float(h_mm), ENV_INTERP_H_MM)
+    vpar, vbary, elem = gt.subdivide(tri_mm, h_mm, keep)  # as build_diffusion's (no shadow-edge cut: E is smooth)
+    corners = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])[elem]
+    el = gt.Elements(corners, d_tri[vpar[elem[:, 0]]])
     own, _ = surf.env_direct(a, energy, seed=4242)
     here = np.abs(surf.env_irradiance(a["tri"], a["bary"], energy) - own) * _safe_pow(a["C"], mix)
-    w_read = np.asarray(weights, np.float64).reshape(-1, 3).sum(0)
-    return env_element_uncertainty(checks, a["P"] * surf.mm, w_read, here=here, near=near)
+    res: np.ndarray = gt.Diffusion(el, variances, weights, h_mm).exitance(a["P"] * surf.mm, here)
+    return res
 
 
 def sources_key(s: Settings, h_mm: float) -> str:

@@ -289,3 +289,34 @@ def p99_change(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArray, mas
     lo, hi = p99_change_bounds(a, b, ref, u, mask, same)
     return cast("tuple[str, str, str]", tuple("lower" if h < 0 else "higher" if l > 0 else "tie"
                                               for l, h in zip(lo, hi)))
+
+
+def p99_change_witness(a: FloatArray, b: FloatArray, ref: FloatArray, u: FloatArray, mask: ArrayLike | None = None,
+                       draws: int = 64, seed: int = 0) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Per channel: p99(a) - p99(b) (relative errors over max(ref, floor), as ``p99_change_bounds``) under
+    chosen truths r + d, |d| <= u, both images judged against the *same* one: the extreme truths
+    d = +-u sign(a - b), +-u sign(a - r), +-u sign(b - r), +-u, and ``draws`` drawn uniformly in the box
+    (seeded). Returns (the smallest and the largest difference found, the share of truths with the sign
+    of the difference against r itself), (3,) each. A truth of the opposite sign is a witness: the order
+    is then a real tie under the ruler's uncertainty, not one of the bounds' relaxation (which is sound,
+    so a decided order has no witness); no witness found does not decide an order, only the bounds do."""
+    a, ref = _check(a, ref)
+    b, _ = _check(b, ref)
+    m = _mask(a, mask)
+    if not m.any():
+        return np.zeros(3), np.zeros(3), np.ones(3)
+    u = np.abs(np.asarray(u, np.float64)[..., :3])[m]
+    r, am, bm = ref[m], a[m], b[m]
+    den = np.maximum(r, np.maximum(0.01 * r.mean(axis=0), 1e-12))
+
+    def change(d: FloatArray) -> FloatArray:
+        t = r + d
+        out: FloatArray = (np.percentile(np.abs(am - t) / den, 99, axis=0)
+                           - np.percentile(np.abs(bm - t) / den, 99, axis=0))
+        return out
+    rng = np.random.default_rng(seed)
+    ds = [s * u * np.sign(x) for x in (am - bm, am - r, bm - r, np.ones_like(r)) for s in (1.0, -1.0)]
+    ds += [u * rng.uniform(-1.0, 1.0, u.shape) for _ in range(int(draws))]
+    c0 = change(np.zeros_like(r))
+    cs = np.array([change(d) for d in ds])
+    return cs.min(axis=0), cs.max(axis=0), (np.sign(cs) == np.sign(c0)[None]).mean(axis=0)
