@@ -414,7 +414,20 @@ def test_the_uncertainty_states_the_environments_monte_carlo_error(monkeypatch):
     assert np.all(np.sqrt((u ** 2).mean(0)) < 0.1 * np.sqrt((a.lit[m] ** 2).mean(0)))
 
 
-def test_the_uncertainty_states_the_environments_interpolation_inside_the_triangles(monkeypatch):
+@pytest.fixture(scope="module")
+def blade_judge():
+    """The blade's truth with the environment estimated at every point it is read (the pixel's and each
+    element corner's own estimate, 2x the rays, other seeds): the interpolation tests' judge."""
+    import skinviewer.engine.reference as R
+    s, scene = _blade_under_an_environment()
+    rays = 2 * R.ENV_DIFFUSE_RAYS
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(R.Surface, "env_irradiance", lambda self, t, b, energy, level="full": self.env_direct(
+            self.attributes(t, b), energy, rays=rays, seed=len(t) + 11)[0])
+        return compute_reference(s, h_mm=1.0, scene=scene, uncertainty=False)
+
+
+def test_the_uncertainty_states_the_environments_interpolation_inside_the_triangles(monkeypatch, blade_judge):
     """compute_reference reads the environment linearly between three estimates inside each (here 3.75 mm)
     triangle, at the pixel and at the source elements (issue 30). Against the same truth with the
     environment estimated at every point it is read (the pixel's and each element corner's own estimate,
@@ -434,10 +447,7 @@ def test_the_uncertainty_states_the_environments_interpolation_inside_the_triang
         mp.setattr(R, "env_interpolation_uncertainty", lambda surf, pts, *_a, **_k: np.zeros((len(pts["P"]), 3)))
         without = compute_reference(s, h_mm=1.0, scene=scene)
     np.testing.assert_array_equal(a.lit, without.lit)  # only the uncertainty differs
-    rays = 2 * R.ENV_DIFFUSE_RAYS
-    monkeypatch.setattr(R.Surface, "env_irradiance", lambda self, t, b, energy, level="full": self.env_direct(
-        self.attributes(t, b), energy, rays=rays, seed=len(t) + 11)[0])
-    judge = compute_reference(s, h_mm=1.0, scene=scene, uncertainty=False)
+    judge = blade_judge
     m = a.mask & (a.lit.sum(-1) > 0)
     assert m.sum() > 300
     err = np.abs(a.lit - judge.lit)[m]
@@ -450,6 +460,33 @@ def test_the_uncertainty_states_the_environments_interpolation_inside_the_triang
     # not vacuous: the stated RMS under 20 % of the image's RMS and under 5x the RMS error
     assert np.all(np.sqrt((u ** 2).mean(0)) < 0.2 * np.sqrt((a.lit[m] ** 2).mean(0)))
     assert np.all(np.sqrt((u ** 2).mean(0)) < 5 * np.sqrt((err ** 2).mean(0)))
+
+
+def test_the_session_truth_states_the_environments_interpolation_as_the_reference(monkeypatch, blade_judge):
+    """TruthSession (the viewer's Accuracy window) states the environment read linearly between three
+    estimates inside each triangle as compute_reference does (env_interpolation_sources: each triangle's
+    corner checks through the same Gaussians; the delta reads the pixel's own estimate). On the blade
+    under the studio sky, against the truth with the environment estimated at every point it is read
+    (blade_judge), its error is within the stated uncertainty at >= 99 % of the pixels per channel and in
+    RMS; the nearest checks' mean it stated before (env_element_uncertainty) missed red at 2.5 % of the
+    pixels (the blade's far face, as compute_reference's version 9); measured now 0 / 0 / 0 %, RMS ± 3.6 / 4.4 / 4.3x
+    the RMS error."""
+    import skinviewer.engine.reference as R
+    s, scene = _blade_under_an_environment()
+    monkeypatch.setattr(R, "load_scene", lambda _s: scene)
+    a = list(R.TruthSession(h_mm=1.0).progressive(s))[-1].reference
+    assert "corners" in a.meta["uncertainty"]
+    judge = blade_judge
+    m = a.mask & (a.lit.sum(-1) > 0)
+    assert m.sum() > 300
+    err, u = np.abs(a.lit - judge.lit)[m], a.uncertainty[m]
+    miss = (err > u).mean(0)
+    print("misses", miss, "RMS u / RMS error", np.sqrt((u ** 2).mean(0) / (err ** 2).mean(0)))
+    assert np.all(np.sqrt((err ** 2).mean(0)) > 0.005 * np.sqrt((a.lit[m] ** 2).mean(0)))  # an error worth stating
+    assert np.all(miss <= 0.01), miss
+    assert np.all(np.sqrt((err ** 2).mean(0)) <= np.sqrt((u ** 2).mean(0)))
+    # not vacuous: the stated RMS under 20 % of the image's RMS
+    assert np.all(np.sqrt((u ** 2).mean(0)) < 0.2 * np.sqrt((a.lit[m] ** 2).mean(0)))
 
 
 def test_a_cached_truth_of_an_older_version_is_recomputed_with_a_note(tmp_path, monkeypatch):

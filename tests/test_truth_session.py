@@ -396,11 +396,12 @@ def test_the_environment_interpolated_at_the_source_elements_is_in_the_stated_un
     triangle; at a fold that is off by much of the value. On the default head's ear (detail 0, where
     that error is largest), the diffusion from those elements differs from the same diffusion with the
     environment estimated at every element corner itself (2x the rays, other seeds) by more than the
-    estimates' noise, and by no more than the stated uncertainty (env_element_uncertainty, as the
-    session computes it: the checks near the view and the check at each pixel) at >= 90 % of the pixels
-    per channel and in RMS (measured: 100 / 100 / 98 %, the ± 11 / 6.5 / 6.8 x the error in the median:
-    a fold's narrow blue Gaussians read the few elements next to the pixel, where a check a few mm away
-    sees less); the uncertainty is not vacuous (RMS under 15 % of M; measured 9 %)."""
+    estimates' noise, and by no more than the stated uncertainty (as the session computes it: each
+    triangle's corner checks through the same Gaussians but the delta, env_interpolation_exitance) at
+    >= 90 % of the pixels per channel and in RMS (measured: 100 / 100 / 100 %, the ± 20 / 12 / 11 x the
+    error in the median; the nearest checks' mean the session used before session 11: 100 / 100 / 98 %,
+    11 / 6.5 / 6.8 x); the uncertainty is not vacuous (RMS under 30 % of M; measured 17 / 23 / 24 %, the
+    nearest checks' 9 %: the corners bound a triangle's mean error 1.6-4.9 x over)."""
     s = _head_with_environment(16)
     surf = R.Surface(*R.load_scene(s), s)
     mix, energy = s.deon.mix, s.deon.energy_conservation
@@ -414,13 +415,10 @@ def test_the_environment_interpolated_at_the_source_elements_is_in_the_stated_un
     x = a["P"] * surf.mm
     variances, weights = R.profile_of(s)
     h = 2.0
-    reach = np.nonzero(np.linalg.norm(tc - p0, axis=1) < 8.0 + 4.5 * np.sqrt(variances.max()) + 3 * h)[0]
-    checks = R.env_interpolation_checks(surf, mix, energy, tri=reach)
-    assert len(checks[0]) > 8
-    no_env = surf.irradiance(a, mix, energy, env_level="none")
     ea, _ = surf.irradiance_at_points(a, mix, energy, seed=3)
-    cm = R._safe_pow(a["C"], mix)
     interp = R.build_diffusion(surf, x, h, variances, weights, mix, energy)
+    el_i, h_i = R.env_interpolation_sources(surf, mix, energy, h)  # the triangles whose estimates it made
+    u = R.env_interpolation_exitance(R.gt.Diffusion(el_i, variances, weights, h_i), x, None)
     real = R.Surface.env_irradiance
     try:
         R.Surface.env_irradiance = lambda self, t, b, energy, level="full": self.env_direct(
@@ -429,17 +427,13 @@ def test_the_environment_interpolated_at_the_source_elements_is_in_the_stated_un
     finally:
         R.Surface.env_irradiance = real
     M, M_judge = interp.exitance(x, ea), judge.exitance(x, ea)
-    w_delta = sum((np.asarray(w) for v, w in zip(interp.v, interp.w) if interp.method(float(v))[0] == "delta"),
-                  np.zeros(3))
-    here = np.abs(surf.env_irradiance(tri, bary, energy) * cm - (ea - no_env))
-    u = R.env_element_uncertainty(checks, x, interp.w.sum(0) - w_delta, here=here)
     d = np.abs(M - M_judge)
     print("coverage", (d <= u).mean(0), "median u / error", np.median(u / np.maximum(d, 1e-300), axis=0),
           "RMS error / M", np.sqrt((d ** 2).mean(0) / (M ** 2).mean(0)), "RMS u / M", np.sqrt((u ** 2).mean(0) / (M ** 2).mean(0)))
     assert np.all(np.sqrt((d ** 2).mean(0) / (M ** 2).mean(0)) > 0.005)  # an error worth stating
     assert np.all((d <= u).mean(0) >= 0.9), (d <= u).mean(0)
     assert np.all(np.sqrt((d ** 2).mean(0)) <= np.sqrt((u ** 2).mean(0)))
-    assert np.all(np.sqrt((u ** 2).mean(0) / (M ** 2).mean(0)) < 0.15)
+    assert np.all(np.sqrt((u ** 2).mean(0) / (M ** 2).mean(0)) < 0.3)
 
 
 def test_lattice_refine_takes_the_largest_parts_until_the_target_or_the_cap():

@@ -1539,13 +1539,10 @@ def env_point_uncertainty(diff: gt.Diffusion, se: np.ndarray, e_env: np.ndarray,
     return out
 
 
+# truth version 9's (and the session's before session 11) check of the environment's interpolation, kept for
+# bench_ruler's comparison: the mean of the nearest checks, blind to a far face a wide Gaussian reads
 ENV_EL_STRIDE = 8   # the source elements' interpolated environment is checked at every 8th triangle
 ENV_EL_NEAR = 8     # ... and a pixel takes the ratio of its ENV_EL_NEAR nearest checks
-ENV_EL_NOTE = ("; from the whole surface's stage on, the environment interpolated at the source elements (which "
-               "the Gaussians other than the delta read): a point of every {stride}th triangle estimated on its own, "
-               "the mean |interpolated - own| over the pixel's {near} nearest such points or, if larger, the same "
-               "check at the pixel itself, times the weight of the Gaussians other than the delta")
-
 
 def env_interpolation_checks(surf: Surface, mix: float, energy: bool, stride: int = ENV_EL_STRIDE,
                              tri: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -1602,6 +1599,11 @@ ENV_INTERP_NOTE = ("; with an environment: its interpolation between the three e
                    "|interpolated - own| for the element under it")
 
 
+ENV_INTERP_SESSION_NOTE = ("; from the whole surface's stage on, the environment interpolated between the three "
+                           "estimates of each triangle, which the source elements read: each triangle's linear field "
+                           "at its three corners against an estimate at the corner itself (its mean |difference|), "
+                           "through the same Gaussians as the light but the delta (which reads the pixel's own "
+                           "estimate)")
 ENV_INTERP_H_MM = 1.0  # the interpolation bound's elements: its field is constant over each mesh triangle (~2.8 mm)
 
 
@@ -1630,22 +1632,13 @@ def env_corner_checks(surf: Surface, tri: np.ndarray, mix: float, energy: bool, 
     return res
 
 
-def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], variances: np.ndarray, weights: np.ndarray,
-                                  mix: float, energy: bool, h_mm: float = DEFAULT_H_MM) -> np.ndarray:
-    """compute_reference's stated error (N, 3) of M at receivers ``a`` from the environment read linearly
-    between three estimates inside each mesh triangle (issue 30). M is linear in the elements' E A with
-    non-negative Gaussian weights, so its error is at most the same diffusion sum of |dE A|: each
-    triangle whose estimates the truth made carries its corners' mean |interpolated - own|
-    (env_corner_checks) on elements of max(``h_mm``, ENV_INTERP_H_MM) (constant over a triangle: no finer
-    ones needed), and the element under the pixel (the delta, the exact
-    Gaussians) the pixel's own |interpolated - own| (Surface.env_direct at the pixel, seeded). Weighting the
-    checks by what each Gaussian reads matters where a Gaussian reaches another surface: across a 2 mm
-    blade red's wide Gaussians read the far face, whose error a nearest-checks mean never saw (session 11).
-    Without an environment: zeros."""
-    out = np.zeros((len(a["P"]), 3))
-    if surf.env is None or len(out) == 0:
-        return out
-    made = np.unique(np.nonzero(surf.env_done["full"])[0] // 3)
+def env_interpolation_sources(surf: Surface, mix: float, energy: bool, h_mm: float = DEFAULT_H_MM
+                              ) -> tuple[gt.Elements, float]:
+    """The environment's interpolation bound as source elements (view-independent): each triangle whose
+    estimates the truth made carries its corners' mean |interpolated - own| (env_corner_checks) on
+    elements of max(``h_mm``, ENV_INTERP_H_MM) (constant over a triangle: no finer ones needed; no
+    shadow-edge cut: E is smooth). Returns (elements, their edge mm); without an environment none."""
+    made = np.unique(np.nonzero(surf.env_done["full"])[0] // 3) if surf.env is not None else np.zeros(0, np.int64)
     d_tri = np.zeros((len(surf.F), 3))
     d_tri[made] = env_corner_checks(surf, made, mix, energy)
     keep = np.zeros(len(surf.F), bool)
@@ -1654,11 +1647,50 @@ def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], variances: n
     h_mm = max(float(h_mm), ENV_INTERP_H_MM)
     vpar, vbary, elem = gt.subdivide(tri_mm, h_mm, keep)  # as build_diffusion's (no shadow-edge cut: E is smooth)
     corners = np.einsum("vk,vkd->vd", vbary, tri_mm[vpar])[elem]
-    el = gt.Elements(corners, d_tri[vpar[elem[:, 0]]])
+    return gt.Elements(corners, d_tri[vpar[elem[:, 0]]]), h_mm
+
+
+def env_interpolation_here(surf: Surface, a: dict[str, Any], mix: float, energy: bool) -> np.ndarray:
+    """The environment's interpolation error at receivers ``a`` themselves (N, 3): |interpolated - an
+    estimate at the point| (Surface.env_direct, seeded) x C^mix, what the element under a pixel carries
+    when the pixel reads the interpolated environment."""
     own, _ = surf.env_direct(a, energy, seed=4242)
-    here = np.abs(surf.env_irradiance(a["tri"], a["bary"], energy) - own) * _safe_pow(a["C"], mix)
-    res: np.ndarray = gt.Diffusion(el, variances, weights, h_mm).exitance(a["P"] * surf.mm, here)
+    res: np.ndarray = np.abs(surf.env_irradiance(a["tri"], a["bary"], energy) - own) * _safe_pow(a["C"], mix)
     return res
+
+
+def env_interpolation_exitance(bound: gt.Diffusion, x_mm: np.ndarray, here: np.ndarray | None,
+                               cancelled: Callable[[], bool] | None = None) -> np.ndarray:
+    """The environment's interpolation bound (N, 3) of M at ``x_mm``: the diffusion sum ``bound`` (over
+    env_interpolation_sources' elements, the truth's Gaussians). ``here`` (N, 3): the points' own
+    |interpolated - own| (env_interpolation_here), for a truth whose pixels read the interpolated
+    environment (compute_reference): the element under the pixel carries it. None: the pixels read
+    their own estimate (the session's default; its error env_point_uncertainty's), so every Gaussian but
+    the delta, which reads nothing else."""
+    if len(bound.el.area) == 0:  # no estimates made: nothing interpolated
+        return np.zeros((len(x_mm), 3))
+    if here is not None:
+        return bound.exitance(x_mm, here, cancelled=cancelled)
+    return bound.exitance(x_mm, None, cancelled=cancelled,
+                          only={k for k, v in enumerate(bound.v) if bound.method(float(v))[0] != "delta"})
+
+
+def env_interpolation_uncertainty(surf: Surface, a: dict[str, Any], variances: np.ndarray, weights: np.ndarray,
+                                  mix: float, energy: bool, h_mm: float = DEFAULT_H_MM) -> np.ndarray:
+    """compute_reference's stated error (N, 3) of M at receivers ``a`` from the environment read linearly
+    between three estimates inside each mesh triangle (issue 30). M is linear in the elements' E A with
+    non-negative Gaussian weights, so its error is at most the same diffusion sum of |dE A|: the
+    elements of env_interpolation_sources (each triangle's corner checks) through the truth's own
+    Gaussians, and the element under the pixel (the delta, the exact Gaussians) the pixel's own
+    |interpolated - own| (env_interpolation_here). Weighting the checks by what each Gaussian reads
+    matters where a Gaussian reaches another surface: across a 2 mm blade red's wide Gaussians read the
+    far face, whose error a nearest-checks mean never saw (session 11). Without an environment: zeros."""
+    out = np.zeros((len(a["P"]), 3))
+    if surf.env is None or len(out) == 0:
+        return out
+    el, h = env_interpolation_sources(surf, mix, energy, h_mm)
+    here = env_interpolation_here(surf, a, mix, energy)
+    return env_interpolation_exitance(gt.Diffusion(el, variances, weights, h), a["P"] * surf.mm, here)
 
 
 def sources_key(s: Settings, h_mm: float) -> str:
@@ -1904,7 +1936,7 @@ class TruthSession:
                     "mm_per_unit": surf.mm, "session": True, "visible_mask": mask, "field_ratio": self.field_ratio}
             if u_M is not None:
                 meta["uncertainty"] = LATTICE_UNCERTAINTY_NOTE + (ENV_UNCERTAINTY_NOTE if env_px else "") \
-                    + (ENV_EL_NOTE.format(stride=ENV_EL_STRIDE, near=ENV_EL_NEAR) if surf.env is not None else "")
+                    + ((ENV_INTERP_SESSION_NOTE if env_px else ENV_INTERP_NOTE) if surf.env is not None else "")
             return Partial(Reference(imgs[0], imgs[1], imgs[2], m.reshape(H, W), meta, imgs[3],
                                      imgs[4] if u_M is not None else None), stage, float(done.sum() / n), final, sec)
 
@@ -1933,26 +1965,28 @@ class TruthSession:
                         u_first + TRUNCATE_LOSS * np.abs(M))
         el, pts = self._whole_sources(surf, s, report, check)
         shared = self._structures[sources_key(s, self.h_mm)]
-        if surf.env is not None and "env_checks" not in shared:  # view-independent: kept with the sources
+        if surf.env is not None and "env_interp" not in shared:  # view-independent: kept with the sources
             report("environment checks", 0.0)
-            shared["env_checks"] = env_interpolation_checks(surf, mix, energy)
+            # the bound's elements and its Diffusion's structures (an orbit builds none of them again)
+            shared["env_interp"] = (*env_interpolation_sources(surf, mix, energy, self.h_mm), {})
             report("environment checks", 1.0)
+        u_interp, has_interp = np.zeros((len(x_mm), 3)), np.zeros(len(x_mm), bool)
 
-        def u_env_el(d: gt.Diffusion, sel: np.ndarray) -> np.ndarray:
-            """The stated uncertainty of M from the environment interpolated at the source elements
-            (env_element_uncertainty), read by every Gaussian but the delta (with the environment
-            interpolated at the pixels too, by all)."""
+        def u_env_el(sel: np.ndarray) -> np.ndarray:
+            """The stated uncertainty of M from the environment interpolated at the source elements, as
+            compute_reference's (env_interpolation_uncertainty: each triangle's corner checks through the
+            same Gaussians), per pixel once. With the environment at the pixels' own points the delta reads
+            the pixel's estimate (its error: env_point_uncertainty), every other Gaussian the elements;
+            interpolated at the pixels too, the element under the pixel carries its own check."""
+            todo = sel & ~has_interp
+            if surf.env is not None and todo.any():
+                el_i, h_i, built = shared["env_interp"]
+                here = None if env_px else env_interpolation_here(surf, {k: v[todo] for k, v in a.items()}, mix, energy)
+                u_interp[todo] = env_interpolation_exitance(gt.Diffusion(el_i, variances, weights, h_i, shared=built),
+                                                            x_mm[todo], here, check)
+                has_interp[todo] = True
             out = np.zeros((len(x_mm), 3))
-            if surf.env is None or not sel.any():
-                return out
-            w_delta = sum((np.asarray(w, np.float64) for v, w in zip(d.v, d.w)
-                           if d.method(float(v))[0] == "delta"), np.zeros(3))
-            w_read, here = np.sum(d.w, axis=0), None
-            if env_px:  # the delta reads the pixel's own estimate; the check at the pixel itself, both kept
-                w_read = w_read - w_delta
-                here = np.abs(surf.env_irradiance(tri[sel], bary[sel], energy) * _safe_pow(a["C"][sel], mix)
-                              - ea_env[sel])
-            out[sel] = env_element_uncertainty(shared["env_checks"], x_mm[sel], w_read, here=here)
+            out[sel] = u_interp[sel]
             return out
         diff = gt.Diffusion(el, variances, weights, self.h_mm, pts, shared=shared)
         footprint = pixel_footprint_mm(pix, W, x_mm)
@@ -2004,7 +2038,7 @@ class TruthSession:
                     report("lattice refinement", 1.0)
                 self.refined = int(redo.sum())
             part = image(M, done, "final" if final else f"1/{stride * stride} of the pixels", self.h_mm, final,
-                         U + u_env(diff, done) + u_env_el(diff, done) + TRUNCATE_LOSS * np.abs(M))
+                         U + u_env(diff, done) + u_env_el(done) + TRUNCATE_LOSS * np.abs(M))
             if final:
                 self._remember(key, part.reference)
             yield part
