@@ -27,29 +27,14 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 import bench_deon_draws as bd  # noqa: E402
 from bench_fidelity import SCAN_VALUES  # noqa: E402
 from bench_frames import settings_for  # noqa: E402
+from bench_pcf_bounds import CPU as DRAWS  # noqa: E402  (program label, CPU s, wall s) of each draw
+from bench_pcf_bounds import instrument  # noqa: E402  each draw fenced and timed
 
 from skinviewer.engine.renderer import Renderer  # noqa: E402
 from skinviewer.ground.settings import with_values  # noqa: E402
-from skinviewer.kernel import execute  # noqa: E402
 from skinviewer.kernel.gl import describe, headless_context  # noqa: E402
 
 BACK_LIT = {"lights.0.direction": [0.0, 0.2, -1.0]}
-DRAWS: list[tuple[str, float, float]] = []  # (program label, CPU s, wall s) of each draw
-
-
-def instrument() -> None:
-    bd.instrument()  # names the programs and applies bd.VARIANT (the B side's defines)
-    ec_cls = execute.ExecuteContext
-    for meth in ("draw_fullscreen", "draw_mesh"):
-        orig = getattr(ec_cls, meth)
-
-        def timed(self, prog, *a, _orig=orig, **k):
-            self.gl.finish()
-            c0, t0 = time.process_time(), time.perf_counter()
-            _orig(self, prog, *a, **k)
-            self.gl.finish()
-            DRAWS.append((bd.NAMES.get(id(prog), "?"), time.process_time() - c0, time.perf_counter() - t0))
-        setattr(ec_cls, meth, timed)
 
 
 def main() -> None:

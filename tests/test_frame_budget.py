@@ -46,6 +46,16 @@ def test_a_running_cost_budgets_its_spread_not_its_mean():
     assert c.mean < 1000.0
 
 
+def _restore_viewer(app, monkeypatch) -> None:
+    """The shared viewer as the fixture gave it: no drag, no patch, no calibration, the 100 ms budget."""
+    app.frame.set_dragging(False)
+    monkeypatch.undo()
+    app.frame.governor.set_calibration(None)
+    app.frame.set_frame_budget(None)
+    app.step(2)
+    app.frame.set_frame_budget(100.0)
+
+
 def _controller(clock: Clock, budget: float = 100.0) -> FrameController:
     """A frame controller's budgeting alone (no window, no GL): the fields its budget reads."""
     fc = FrameController.__new__(FrameController)
@@ -608,12 +618,7 @@ def test_a_released_preview_of_your_own_graph_leaves_none_of_its_passes_in_the_f
         if not rep.complete:
             assert [id(p) for p in app.frame._partial_ran] == [id(p) for p in rep.passes if p.status == "ran"]
     finally:
-        app.frame.set_dragging(False)
-        monkeypatch.undo()
-        g.set_calibration(None)
-        app.frame.set_frame_budget(None)
-        app.step(2)
-        app.frame.set_frame_budget(100.0)
+        _restore_viewer(app, monkeypatch)
 
 
 @pytest.mark.parametrize("keep", [True, False])
@@ -659,12 +664,7 @@ def test_a_release_after_a_smaller_view_finds_the_full_size_textures_pooled(view
         finally:
             fresh.release()
     finally:
-        app.frame.set_dragging(False)
-        monkeypatch.undo()
-        g.set_calibration(None)
-        app.frame.set_frame_budget(None)
-        app.step(2)
-        app.frame.set_frame_budget(100.0)
+        _restore_viewer(app, monkeypatch)
 
 
 
