@@ -475,22 +475,13 @@ def main() -> int:
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
                         if not share:
                             row["mode"] = "interactive, sharing off"
-                    if len(wholes) > 1 and mode != "off":
-                        row["technique"] = f"{row['technique']} (whole frame {'on' if whole else 'off'})"
-                        if not whole:
-                            row["mode"] = row["mode"] + ", whole frame off"
-                    if len(frames) > 1 and mode != "off":
-                        row["technique"] = f"{row['technique']} (p99 margin {'on' if new else 'off'})"
-                        if not new:
-                            row["mode"] = row["mode"] + ", p99 margin off"
-                    if len(gms) > 1 and mode != "off":
-                        row["technique"] = f"{row['technique']} (governor margin {'on' if gm else 'off'})"
-                        if not gm:
-                            row["mode"] = row["mode"] + ", governor margin off"
-                    if len(vss) > 1 and mode != "off":
-                        row["technique"] = f"{row['technique']} (release rules {'on' if vs else 'off'})"
-                        if not vs:
-                            row["mode"] = row["mode"] + ", release rules off"
+                    # each A/B switch with both arms in this run names its arm in the row
+                    for arms, on, label in ((wholes, whole, "whole frame"), (frames, new, "p99 margin"),
+                                            (gms, gm, "governor margin"), (vss, vs, "release rules")):
+                        if len(arms) > 1 and mode != "off":
+                            row["technique"] = f"{row['technique']} ({label} {'on' if on else 'off'})"
+                            if not on:
+                                row["mode"] = row["mode"] + f", {label} off"
                     if args.repeat > 1 and mode != "off":
                         row["technique"] = f"{row['technique']} run {k + 1}"
                     rows.append(row)
