@@ -12,7 +12,8 @@ Error: the mean over channels of the relative RMS (physics/metrics.image_error).
 the key ``uncertainty`` (same rung keys), the ruler's uncertainty of that figure: the mean over
 channels of ``ImageError.rms_u``, how far the figure can move while the truth moves within its
 per-pixel uncertainty (engine/reference.coarse_uncertainty, issue 30), so a status line can read
-"6.1 % ± 0.4"."""
+"6.1 % ± 0.4". ``truth_version``: the truth's VERSION (engine/reference) the table was measured
+against; the governor marks figures of an older truth."""
 from __future__ import annotations
 
 import argparse
@@ -51,6 +52,8 @@ def main() -> None:
     args = ap.parse_args()
     base = with_values(Settings(), {"render.width": args.size, "render.height": args.size})
     ref = compute_reference(base)
+    truth_version = int(ref.meta["version"])
+    print(f"truth version {truth_version} ({'cached' if ref.meta.get('cached') else 'computed'})", flush=True)
     ctx = headless_context()
     r = Renderer(ctx)
     errors: dict[str, float] = {}
@@ -78,7 +81,8 @@ def main() -> None:
     measured = set(args.techniques.split(","))
     try:  # the techniques not measured now keep their figures (--techniques deon: d'Eon's rows only)
         old = json.loads(Path(args.out).read_text(encoding="utf-8"))
-        if old.get("size") == [args.size, args.size]:
+        # rows of another size or truth are not mixed with this run's (the table states one truth version)
+        if old.get("size") == [args.size, args.size] and old.get("truth_version") == truth_version:
             keep = {k for k in old.get("errors", {}) if json.loads(k)[0] not in measured}
             errors = {**{k: old["errors"][k] for k in keep}, **errors}
             uncertainty = {**{k: v for k, v in old.get("uncertainty", {}).items() if k in keep}, **uncertainty}
@@ -86,7 +90,8 @@ def main() -> None:
         pass  # no table yet (or unreadable): this run's rows alone
     data = {"what": "mean relative RMS against the ground truth of each preview rung (benchmarks/bench_governor_errors.py)",
             "scene": "head (default settings, 1024² maps)", "size": [args.size, args.size],
-            "renderer": describe(ctx), "date": time.strftime("%Y-%m-%d"), "errors": errors,
+            "renderer": describe(ctx), "date": time.strftime("%Y-%m-%d"),
+            "truth_version": truth_version, "errors": errors,
             "uncertainty_what": "the ground truth's own uncertainty of each error figure: mean over channels of "
                                 "ImageError.rms_u (issue 30); the error is known to +- this",
             "uncertainty": uncertainty}

@@ -467,6 +467,40 @@ def test_a_texel_a_shadow_edge_crosses_carries_its_lit_fraction(renderer, texel_
     assert 0.0 < got[4][edge].max() < 1.0
 
 
+@pytest.mark.parametrize("map_size", [512, 2048])
+def test_the_four_samples_lit_fraction_follows_a_shadow_edge_moved_by_less_than_a_shadow_texel(renderer, map_size):
+    """deon.texel_samples = 4 (issue 30 item 4): as the light tilts by 0.1 degree steps (the shadow-edge's
+    cast edge moves 0.16 of a 0.31 mm texel a step on the 256^2 map), the edge the texels' lit fractions
+    put (one row: where sum(lit fraction) says it is) moves at every step, as the surface's lit fraction
+    does. Each sample tested the nearest shadow-map texel alone, so all four snapped to the map's grid and
+    the edge stalled every other step (moved 0.00 then 0.25 texel; notes/truth.md session 12)."""
+    import math
+
+    from skinviewer.physics.diffusion import IRRADIANCE
+    from skinviewer.scene.scenes import build_scene
+    m = build_scene("shadow-edge").mesh
+    X, _, _ = plane_coords(m.positions, m.uvs, m.mm_per_unit, 256, np.abs(m.positions[:, 2]) < 1e-6)
+    x = X[128]
+    dx = x[1] - x[0]
+    near = np.abs(x - 21.0 * math.tan(math.radians(30.5))) < 3.0
+    edges, exact = [], []
+    for deg in np.linspace(30.0, 31.0, 11):
+        a = math.radians(deg)
+        s = small_settings("shadow-edge", "deon", 32, **{
+            "deon.irradiance_size": 256, "deon.tsm": False, "deon.energy_conservation": False,
+            "shadow.map_size": map_size, "deon.texel_samples": 4,
+            "lights": [{"kind": "directional", "direction": [-math.sin(a), 0.0, math.cos(a)], "intensity": 1.0,
+                        "cast_shadow": True}]})
+        renderer.render(s)
+        frac = renderer.graph("deon").read(IRRADIANCE)[128, :, 0].astype(np.float64) / math.cos(a)
+        edges.append(x[near].max() + dx / 2 - frac[near].sum() * dx)  # lit for x past the edge
+        exact.append(21.0 * math.tan(a))
+    steps, true_steps = np.diff(edges) / dx, np.diff(exact) / dx
+    assert np.all(true_steps > 0.15)
+    assert steps.min() > 0.05, f"the edge stalled: steps {np.round(steps, 2)} texels (exact {true_steps[0]:.2f})"
+    assert np.abs(np.array(edges) - exact).max() < 1.0 * dx  # and it stays within a texel of the exact edge
+
+
 def test_the_four_texel_samples_take_the_hard_shadow_test_not_the_pcf(renderer):
     """deon.texel_samples = 4 averages four hard eq. (7) tests over the texel's patch: with the PCF on,
     the irradiance map equals the one with shadow.pcf 0 (a PCF under the four samples filtered the shadow

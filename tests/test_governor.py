@@ -12,7 +12,7 @@ import pytest
 from skinviewer.engine import calibration
 from skinviewer.engine.calibration import Calibration, Entry, rung_key, signature
 from skinviewer.ground.settings import Settings, with_values
-from skinviewer.techniques.preview import FINAL, ladder
+from skinviewer.techniques.preview import FINAL, Rung, ladder
 from skinviewer.ui.governor import Governor
 from tests.helpers import edge_viewer, small_settings
 
@@ -430,6 +430,55 @@ def test_the_error_table_s_uncertainty_reaches_the_calibration(tmp_path, monkeyp
     for e in d["entries"]["deon"]:
         e.pop("uncertainty")
     assert Calibration.from_json(d).entries["deon"][0].uncertainty is None
+
+
+def test_figures_of_an_older_truth_are_said_in_the_calibration_and_the_status(tmp_path, monkeypatch):
+    """preview_errors.json records the truth's VERSION it was measured with (issue 30: every figure carries
+    its ruler): a table of an older truth, or one that does not say, is named in one line and in the
+    governor's status beside the figure; a table of today's truth, and a bench of it, are not."""
+    from skinviewer.engine.reference import VERSION
+    s = with_values(Settings(), {"technique": "deon"})
+    keys = [e.key for e in fake_calibration("deon", s, errors=False).entries["deon"]]
+    table = tmp_path / "errors.json"
+    monkeypatch.setattr(calibration, "ERRORS_TABLE", table)
+    monkeypatch.setattr(calibration, "_bench_errors", lambda path: {})
+
+    def governed(version):
+        doc = {"errors": {k: 0.05 for k in keys}, "uncertainty": {k: 0.02 for k in keys}}
+        if version is not None:
+            doc["truth_version"] = version
+        table.write_text(json.dumps(doc))
+        cal = fake_calibration("deon", s, errors=False)
+        calibration.attach_errors(cal)
+        g = Governor("interactive", 200.0, cal)
+        assert not g.rung_for(s, interacting=True, camera=False, last_complete=True).final
+        return cal, g.status(s)
+
+    cal, status = governed(VERSION - 2)
+    assert all(e.truth_version == VERSION - 2 for e in cal.entries["deon"])
+    line = calibration.stale_truth(cal)
+    assert f"{len(keys)} from the shipped table (truth version {VERSION - 2})" in line and f"version {VERSION})" in line
+    assert f"5.0 % ± 2.0 from the truth (truth version {VERSION - 2}, now {VERSION})" in status
+    cal, status = governed(None)  # a table made before it recorded its truth
+    assert "truth version not recorded" in calibration.stale_truth(cal) and "(truth version not recorded" in status
+    cal, status = governed(VERSION)
+    assert calibration.stale_truth(cal) == "" and "5.0 % ± 2.0 from the truth" in status and "(truth" not in status
+    # a bench's figures carry its results' truth version (results.json's "reference": the truth's meta)
+    monkeypatch.setattr(calibration, "_bench_errors", lambda path: {k: (0.04, 0.01, "bench b", VERSION - 1) for k in keys})
+    cal = fake_calibration("deon", s, errors=False)
+    calibration.attach_errors(cal)
+    assert "from the bench b (truth version" in calibration.stale_truth(cal)
+
+
+def test_a_bench_s_figures_carry_the_truth_version_of_its_results(tmp_path):
+    """_bench_errors reads the truth's version from the results' "reference" (engine/bench writes ref.meta)."""
+    rung = ladder(with_values(Settings(), {"technique": "deon"}))[0]
+    record = {"technique": "deon", "label": rung.label, "changes": dict(rung.changes), "rms": [0.25] * 3,
+              "rms_u": [0.5] * 3}
+    path = tmp_path / "results.json"
+    path.write_text(json.dumps({"reference": {"version": 7}, "results": [record]}))
+    got = calibration._bench_errors(path)
+    assert got[rung_key("deon", Rung(rung.label, dict(rung.changes), 1.0))] == (0.25, 0.5, f"bench {path}", 7)
 
 
 def test_a_cached_calibration_takes_the_error_table_s_newest_figures(cache, monkeypatch):

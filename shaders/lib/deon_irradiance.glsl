@@ -65,7 +65,7 @@ layout(location = 1) out vec4 f_visibility;
 // patch at a rotated 2 x 2 grid (offsets in texels; P moves along dPdx, dPdy, the normal map is read at
 // the sample's uv), so a texel a shadow edge crosses carries its lit fraction as the ground truth's
 // integral over the surface does, instead of all or nothing at its centre. Each sample is the hard eq. (7)
-// test: the PCF on top widened the penumbra past the texel (against the judge that shares no shadow, the
+// test at its own sub-texel position in the shadow map (lights.glsl shadow_hard): the PCF on top widened the penumbra past the texel (against the judge that shares no shadow, the
 // scan at 512^2: green / blue p99 5.2 / 3.6 % with the PCF, 3.7 / 1.7 % without; notes/truth.md item 4).
 uniform int u_texel_samples;
 uniform vec2 u_texel_uv;          // 1 / the irradiance map's size

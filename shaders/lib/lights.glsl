@@ -250,9 +250,20 @@ float shadow_compare(sampler2D sm, vec3 c, vec2 g) {
 // tap compares the map with the receiver's tangent plane at that tap (receiver-plane depth bias):
 // together they remove self-shadowing acne without the large offset that slid grazing lookups
 // sideways past an occluder's silhouette (light in creases).
-// eq. (7) printed: the hard test at one texel (shadow.pcf 0), whatever the PCF radius
-float shadow_hard(sampler2D sm, vec3 c) {
-    return (c.z - texture(sm, c.xy).r > u_shadow_tol) ? 0.0 : 1.0;
+// the hard eq. (7) test of one sample of deon.texel_samples 4, whatever the PCF radius: at the lookup's
+// sub-texel position (the 2 x 2 texels around it weighted bilinearly: a one-texel box slid, pcf_weight
+// with r = 0), each texel against the receiver's plane as a PCF tap is. The nearest texel's test alone
+// snapped all four samples of a texel to the shadow map's grid: the texel's lit fraction stalled, then
+// jumped, as a shadow edge moved across it (issue 30 item 4, notes/truth.md session 12).
+float shadow_hard(sampler2D sm, vec3 c, vec2 g) {
+    vec2 f = c.xy * vec2(textureSize(sm, 0)) - 0.5;
+    vec2 i0 = floor(f), t = f - i0;
+    float lit = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        int x = k & 1, y = k >> 1;
+        lit += pcf_weight(x, 0, t.x) * pcf_weight(y, 0, t.y) * shadow_test(sm, ivec2(i0) + ivec2(x, y), c, g);
+    }
+    return lit;
 }
 
 #if defined(PCF_BOUNDED) && defined(SHADOW_BOUNDS_MARK) && SHADOW_BOUNDS_MARK != 0
@@ -264,8 +275,8 @@ float shadow_marked(float d, float s) { return d >= 0.0 ? -2.0 + d : s; }
 #else
 #define SHADOW_COMPARE(sm, sb, c, g) shadow_compare(sm, c, g)
 #endif
-// hard: the eq. (7) hard test instead of the PCF (deon.texel_samples 4 averages four of them over the
-// texel's patch: a PCF on top would filter the shadow twice, issue 30 item 4)
+// hard: the eq. (7) hard test (shadow_hard) instead of the PCF (deon.texel_samples 4 averages four of them
+// over the texel's patch: a PCF on top would filter the shadow twice, issue 30 item 4)
 float shadow_factor_test(int i, vec3 P, vec3 Ng, bool hard) {
 #ifdef LIGHTS_SPECIALISED
     if (((SHADOW_MASK >> i) & 1) == 0) return 1.0;
@@ -296,23 +307,23 @@ float shadow_factor_test(int i, vec3 P, vec3 Ng, bool hard) {
     if (gl > MAX_RECEIVER_SLOPE * z_per_uv) g *= MAX_RECEIVER_SLOPE * z_per_uv / gl;
 #ifdef LIGHTS_SPECIALISED
 #if (SHADOW_MASK & 1) != 0
-    if (i == 0) return hard ? shadow_hard(shadow_map0, c) : SHADOW_COMPARE(shadow_map0, shadow_bounds0, c, g);
+    if (i == 0) return hard ? shadow_hard(shadow_map0, c, g) : SHADOW_COMPARE(shadow_map0, shadow_bounds0, c, g);
 #endif
 #if (SHADOW_MASK & 2) != 0
-    if (i == 1) return hard ? shadow_hard(shadow_map1, c) : SHADOW_COMPARE(shadow_map1, shadow_bounds1, c, g);
+    if (i == 1) return hard ? shadow_hard(shadow_map1, c, g) : SHADOW_COMPARE(shadow_map1, shadow_bounds1, c, g);
 #endif
 #if (SHADOW_MASK & 4) != 0
-    if (i == 2) return hard ? shadow_hard(shadow_map2, c) : SHADOW_COMPARE(shadow_map2, shadow_bounds2, c, g);
+    if (i == 2) return hard ? shadow_hard(shadow_map2, c, g) : SHADOW_COMPARE(shadow_map2, shadow_bounds2, c, g);
 #endif
 #if (SHADOW_MASK & 8) != 0
-    if (i == 3) return hard ? shadow_hard(shadow_map3, c) : SHADOW_COMPARE(shadow_map3, shadow_bounds3, c, g);
+    if (i == 3) return hard ? shadow_hard(shadow_map3, c, g) : SHADOW_COMPARE(shadow_map3, shadow_bounds3, c, g);
 #endif
     return 1.0;
 #else
-    if (i == 0) return hard ? shadow_hard(shadow_map0, c) : shadow_compare(shadow_map0, c, g);
-    if (i == 1) return hard ? shadow_hard(shadow_map1, c) : shadow_compare(shadow_map1, c, g);
-    if (i == 2) return hard ? shadow_hard(shadow_map2, c) : shadow_compare(shadow_map2, c, g);
-    return hard ? shadow_hard(shadow_map3, c) : shadow_compare(shadow_map3, c, g);
+    if (i == 0) return hard ? shadow_hard(shadow_map0, c, g) : shadow_compare(shadow_map0, c, g);
+    if (i == 1) return hard ? shadow_hard(shadow_map1, c, g) : shadow_compare(shadow_map1, c, g);
+    if (i == 2) return hard ? shadow_hard(shadow_map2, c, g) : shadow_compare(shadow_map2, c, g);
+    return hard ? shadow_hard(shadow_map3, c, g) : shadow_compare(shadow_map3, c, g);
 #endif
 }
 

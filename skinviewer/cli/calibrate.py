@@ -39,6 +39,9 @@ def cmd_calibrate(args) -> int:
         cal = calibration.calibrate(r, s, names, args.runs, into=old if names else None,
                                     progress=lambda what, i, n: print(f"[{i + 1}/{n}] {what}", file=sys.stderr))
         path = calibration.save(cal)
+        old_truth = calibration.stale_truth(cal)
+        if old_truth:
+            print(old_truth, file=sys.stderr)
     finally:
         r.release()
         ctx.release()

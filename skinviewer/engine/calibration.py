@@ -72,6 +72,7 @@ class Entry:
     error: float | None = None  # mean relative RMS against the ground truth (None: not measured)
     error_source: str = ""  # "bench <path>" | "shipped table" | ""
     uncertainty: float | None = None  # the ground truth's own uncertainty of ``error`` (None: not stated)
+    truth_version: int | None = None  # the ground truth's VERSION ``error`` was measured against (None: not recorded)
 
     @property
     def key(self) -> str:
@@ -261,14 +262,21 @@ def calibrate(renderer: Renderer, base: Settings,
     return cal
 
 
+def _version(v: object) -> int | None:
+    return v if isinstance(v, int) and not isinstance(v, bool) else None
+
+
 def attach_errors(cal: Calibration, bench_results: str | Path | None = None) -> None:
     """Error figures for the entries: the last bench's where it measured the same configuration
-    (the defaults with the rung's changes, at full view), else the shipped table's."""
+    (the defaults with the rung's changes, at full view), else the shipped table's; each with the
+    ground truth's version it was measured against (``truth_note``: an older one is said)."""
     shipped: dict[str, float] = {}
     shipped_u: dict[str, float] = {}
+    shipped_v: int | None = None
     try:
         table = json.loads(ERRORS_TABLE.read_text(encoding="utf-8"))
         shipped, shipped_u = table.get("errors", {}), table.get("uncertainty", {})
+        shipped_v = _version(table.get("truth_version"))
     except (OSError, ValueError, AttributeError):
         pass
     bench = _bench_errors(bench_results)
@@ -276,24 +284,63 @@ def attach_errors(cal: Calibration, bench_results: str | Path | None = None) -> 
         for e in es:
             key = e.key
             if key in bench:
-                e.error, e.uncertainty, e.error_source = bench[key]
+                e.error, e.uncertainty, e.error_source, e.truth_version = bench[key]
             elif key in shipped:
-                e.error, e.error_source = float(shipped[key]), "shipped table"
+                e.error, e.error_source, e.truth_version = float(shipped[key]), "shipped table", shipped_v
                 u = shipped_u.get(key)
                 e.uncertainty = float(u) if isinstance(u, (int, float)) else None
 
 
-def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, float | None, str]]:
+def truth_version() -> int:
+    """The ground truth's VERSION today (engine/reference): error figures of another were measured
+    against a truth whose value or uncertainty has changed since."""
+    from skinviewer.engine.reference import VERSION
+    return VERSION
+
+
+def truth_note(e: Entry) -> str:
+    """"" when ``e``'s error was measured against today's ground truth (or it has none), else which
+    truth it was: "truth version 8, now 10" (issue 30: a figure carries its ruler)."""
+    now = truth_version()
+    if e.error is None or e.truth_version == now:
+        return ""
+    return (f"truth version {e.truth_version}, now {now}" if e.truth_version is not None
+            else f"truth version not recorded, now {now}")
+
+
+def stale_truth(cal: Calibration | None) -> str:
+    """One line when some of ``cal``'s error figures were measured against another ground truth than
+    today's (their source and version), else ""."""
+    if cal is None:
+        return ""
+    old: dict[tuple[str, int | None], int] = {}
+    for es in cal.entries.values():
+        for e in es:
+            if truth_note(e):
+                k = (e.error_source, e.truth_version)
+                old[k] = old.get(k, 0) + 1
+    if not old:
+        return ""
+    parts = [f"{n} from the {src} (truth version {v if v is not None else 'not recorded'})"
+             for (src, v), n in sorted(old.items(), key=lambda kv: str(kv[0]))]
+    return (f"the governor's error figures were measured against an older ground truth than today's (version "
+            f"{truth_version()}): {'; '.join(parts)}; rerun benchmarks/bench_governor_errors.py or skinviewer bench")
+
+
+def _bench_errors(path: str | Path | None) -> dict[str, tuple[float, float | None, str, int | None]]:
     from skinviewer.engine.bench import last_bench, load_results
     path = path or last_bench()
     if not path:
         return {}
     try:
-        _, results = load_results(path)
+        data, results = load_results(path)
+        ref = data.get("reference")
+        version = _version(ref.get("version")) if isinstance(ref, dict) else None
     except Exception:  # an unreadable bench: no figures from it (the shipped table stays)
         return {}
     out = {}
     for r in results:
         if r.rms_mean is not None and not r.error:
-            out[rung_key(r.technique, Rung(r.label, dict(r.changes), 1.0))] = (r.rms_mean, r.rms_mean_u, f"bench {path}")
+            out[rung_key(r.technique, Rung(r.label, dict(r.changes), 1.0))] = (r.rms_mean, r.rms_mean_u, f"bench {path}",
+                                                                               version)
     return out

@@ -289,6 +289,8 @@ class FrameController:
         cached = calibration.calibration_path(renderer, mclass).is_file()
         why = calibration_note(why, cal is not None, cached, auto, self.state.settings.render.governor != "off",
                                f"{renderer} ({mclass} meshes)")
+        old = calibration.stale_truth(cal)  # figures of an older ground truth: said, and marked in the status
+        why = "; ".join(w for w in (why, old) if w)
         if why:
             self.state.say(why)
         return why

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from skinviewer.engine.calibration import Calibration, Entry, rung_settings
+from skinviewer.engine.calibration import Calibration, Entry, rung_settings, truth_note
 from skinviewer.ground.settings import Settings
 from skinviewer.techniques.preview import FINAL, Rung, ladder
 
@@ -270,6 +270,9 @@ class Governor:
             # the ruler's own uncertainty beside its figure (issue 30): "6.1 % ± 1.9"
             # (a comma, not a dash: the panel's font has no em dash)
             text += f", {100 * e:.1f} %{f' ± {100 * u:.1f}' if u is not None else ''} from the truth"
+            note = truth_note(entry) if entry is not None else ""
+            if note:  # measured against an older truth: "(truth version 8, now 10)"
+                text += f" ({note})"
         if self._plan:
             done = self._steps - len(self._plan)
             text += f" · refining {done + 1}/{self._steps}"

@@ -186,11 +186,12 @@ class DeonSettings(Section):
         tip=("skip the finest blur when its width is under this many texels (a blur narrower than a texel "
              "changes nothing): blur 1 reuses the irradiance itself"))
     texel_samples: Literal[1, 4] = Field(
-        1, description="irradiance samples per texel: 4 averages the hard shadow test (no PCF on top) and N.L over "
-                       "a rotated 2 x 2 grid of the texel's surface patch, so a texel a shadow edge crosses carries "
-                       "its lit fraction (issue 30 item 4; 1.1-1.7x the irradiance pass's time; against the judge "
-                       "that shares no shadow green/blue p99 fall, red RMS rises; against the ground truth ties: "
-                       "notes/truth.md)")
+        1, description="irradiance samples per texel: 4 averages the hard shadow test (at each sample's sub-texel "
+                       "position in the shadow map, no PCF on top) and N.L over a rotated 2 x 2 grid of the texel's "
+                       "surface patch, so a texel a shadow edge crosses carries its lit fraction (issue 30 item 4; "
+                       "against the judge that shares no shadow green/blue p99 fall, red RMS rises; against the "
+                       "ground truth (head, 192^2) ties with the default lights, red RMS rises with the key light "
+                       "alone: notes/truth.md session 12)")
     open_border: Literal["reflect", "absorb"] = field(
         "reflect", description="past an open mesh border (with scene.seam_aware): reflect: each blur after the first "
         "reads the odd reflection of the light about the border, so the light earlier steps carried past it comes "
