@@ -775,3 +775,90 @@ def test_the_automatic_drag_scale_takes_few_sizes_and_never_exceeds_its_budget()
     assert all(g <= a + 1e-9 for g, a in zip(got, asked))
     assert all(a - g < 0.3 * a for g, a in zip(got, asked))  # a half-octave of pixels at most below
     assert frame_mod.drag_step(1.0) == 1.0 and frame_mod.drag_step(0.25) == 0.25 and frame_mod.drag_step(0.1) == 0.25
+
+
+class _Gpu:
+    """The graph's GL context with a GPU queue on a fake clock: work queued (the NaN/Inf check's scans) is
+    paid at the next glFinish, as llvmpipe runs it, not when it is drawn."""
+
+    def __init__(self, ctx, clock: Clock):
+        self._ctx, self.clock, self.queued = ctx, clock, 0.0
+
+    def drain(self) -> None:
+        self.clock.ms(self.queued)
+        self.queued = 0.0
+
+    def finish(self):
+        self._ctx.finish()
+        self.drain()
+
+    def __getattr__(self, name):
+        return getattr(self._ctx, name)
+
+
+@pytest.mark.parametrize("sync_checks", [True, False])
+def test_the_check_s_scans_are_paid_where_they_are_predicted(gl_ctx, monkeypatch, sync_checks):
+    """render.check_finite scans a pass's outputs after it runs (a frame that is not a preview: the
+    refinement after a release). Here each pass costs 10 ms and each scan 12 ms of GPU time, paid at the next
+    glFinish. With SYNC_CHECKS the scans are waited for where they are drawn: the check's cost is kept as
+    the check's (_check_ms), the look-ahead leaves room for it, and no frame of a light move passes the 45 ms
+    budget. The rule before left them queued: the next pass's opening glFinish paid them, counted in no
+    pass and no prediction, and frames passed the budget. The image is the whole render's either way."""
+    from skinviewer.engine.renderer import Renderer
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    monkeypatch.setattr(graph_mod, "SYNC_CHECKS", sync_checks)
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        assert s.render.check_finite
+        renderer.render(s)
+        g = renderer.graph("phong")
+        gpu = _Gpu(g.ctx, clock)
+        real_execute, real_scan, real_collect = g._execute, g._scan_nonfinite, g._collect_checks
+
+        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
+            ms = real_execute(p, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy,
+                              sync_after=sync_after)  # its opening glFinish pays what is queued
+            clock.ms(10.0 / tile[1])
+            return 10.0 / tile[1] if timing == "sync" else ms
+
+        def scan(outputs):
+            flags = real_scan(outputs)
+            gpu.queued += 12.0 * len(flags)  # drawn now, run by the GPU later
+            return flags
+
+        def collect(records=None):
+            gpu.drain()  # reading the flags back waits for the GPU
+            return real_collect(records)
+
+        monkeypatch.setattr(g, "ctx", gpu)
+        monkeypatch.setattr(g, "_execute", execute)
+        monkeypatch.setattr(g, "_scan_nonfinite", scan)
+        monkeypatch.setattr(g, "_collect_checks", collect)
+        for p in g.passes:  # whole passes: what is predicted is the pass and its check
+            monkeypatch.setattr(p, "tileable", False)
+        budget, work = 45.0, []
+        for m in range(4):
+            sm = with_values(s, {"lights.0.direction": [0.3 + 0.05 * m, 0.2, 1.0]})
+            for _ in range(50):
+                t0 = clock.t
+                rep = renderer.render(sm, budget_ms=budget)
+                if m:  # the first move: the costs and the checks' costs are learned
+                    work.append((clock.t - t0) * 1000.0)
+                if rep.complete:
+                    break
+            assert rep.complete
+        checked = {n for n, ms in g._check_ms.items() if ms >= 12.0 - 1e-6}  # each check's cost is its scans'
+        if sync_checks:
+            assert {"shadow_map_0", "phong"} <= checked  # (8-bit outputs are not scanned: output's)
+            assert max(work) <= budget + 1e-6
+        else:
+            assert not checked  # the rule before: the scans' 12 ms in no check, no pass, no prediction
+            assert max(work) > budget + 5.0  # (54 ms here)
+        img = renderer.image(sm)
+        monkeypatch.undo()
+        renderer.render(sm, force=True)
+        assert np.array_equal(img, renderer.image(sm))
+    finally:
+        renderer.release()

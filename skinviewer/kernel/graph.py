@@ -112,6 +112,12 @@ SIZES_KEPT = 4
 MIN_BAND_BY_COST = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
+# issue 27, session 12: under sync timing the NaN/Inf check's GPU scans (render.check_finite, after each pass of a
+# frame that is not a preview) are waited for where they are drawn, so what they cost is kept as the check's
+# (_check_ms, the look-ahead's _check_after). Left queued, the next pass's opening glFinish waited for them: 10-28 ms
+# a pass in a refinement's frames counted in no pass and no prediction, the render's overrun past its budget
+# (the frames of 105-125 ms of release -> final). False: left queued (the rule before; A/B)
+SYNC_CHECKS = True
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
 
 
@@ -1149,9 +1155,12 @@ class RenderGraph:
         budget's look-ahead (the draws now plus the read-back then)."""
         t0 = time.perf_counter()
         flags = self._scan_nonfinite(outputs)
+        synced = self._timing == "sync" and SYNC_CHECKS and bool(flags)
+        if synced:  # the scans' GPU time, here where it is predicted, not in the next pass's opening glFinish
+            self.ctx.finish()
         dt = time.perf_counter() - t0
-        if self._timing != "sync":  # no glFinish after the pass: llvmpipe waits for it in the scan's draw,
-            self._exec_s += dt  # the pass's time, not the graph's own (own_ms)
+        if self._timing != "sync" or synced:  # no glFinish after the pass: llvmpipe waits for it in the scan's
+            self._exec_s += dt  # draw; or the scans waited for: GPU time, not the graph's own (own_ms)
         self._pending_checks.append((name, flags, dt * 1000.0))
 
     def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
