@@ -157,6 +157,8 @@ class Driver:
                                        "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
                                        "render_budget_ms": round(getattr(fr, "last_budget_ms", None) or 0.0, 1),
                                        "graph_run_ms": round(getattr(fr.last_graph, "run_ms", 0.0), 2),
+                                       # its NaN/Inf checks (render.check_finite: frames not a preview's), in its run
+                                       "check_ms": round(getattr(fr.last_graph, "check_ms", 0.0), 2),
                                        # the graph's margin on its predictions (every pass's p99: kernel/margin.py)
                                        "margin": round(fr.last_graph.margins.factor("") or 0.0, 2)
                                        if getattr(fr.last_graph, "margins", None) is not None else None,

@@ -245,6 +245,7 @@ class RenderGraph:
         self.own_ms = 0.0
         self.run_ms = 0.0  # its last run's wall time (ms): the viewer budgets the renderer's work around it
         self._exec_s = 0.0
+        self.check_ms = 0.0  # the last run's NaN/Inf checks: their scans drawn (and waited for) and read back
         # how the passes' costs compare with what the look-ahead predicted from their last runs (a
         # running mean of actual / predicted): a machine that got busier since then is >1, and the
         # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
@@ -495,6 +496,7 @@ class RenderGraph:
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.own_ms = 0.0
+            self.check_ms = 0.0
             self.run_ms = 0.0
             self.frame_ms = {}
             self.last_report = FrameReport(self.frame, timing, [
@@ -511,6 +513,7 @@ class RenderGraph:
         t_start = time.perf_counter()
         any_ran = False
         self._exec_s = 0.0
+        self.check_ms = 0.0
         same = self._same_sections(frame.settings)
         self._value_keys = self._kept_value_keys(same)
         if timing not in TIMING_NOTES:
@@ -1161,6 +1164,7 @@ class RenderGraph:
         dt = time.perf_counter() - t0
         if self._timing != "sync" or synced:  # no glFinish after the pass: llvmpipe waits for it in the scan's
             self._exec_s += dt  # draw; or the scans waited for: GPU time, not the graph's own (own_ms)
+        self.check_ms += dt * 1000.0
         self._pending_checks.append((name, flags, dt * 1000.0))
 
     def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
@@ -1188,6 +1192,7 @@ class RenderGraph:
         # the first read-back waits for whatever the GPU has left of the frame: the passes' time, not the
         # graph's own (own_ms, which the governor counts as the frame's overhead)
         self._exec_s += time.perf_counter() - t_all
+        self.check_ms += (time.perf_counter() - t_all) * 1000.0
 
     def _scan_nonfinite(self, outputs: dict[str, TexSpec]) -> list[tuple[str, moderngl.Texture]]:
         """A GPU scan of each output into a grid of at most 64x64 flags (<= 4 KB to read back; a
