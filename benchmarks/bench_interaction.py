@@ -399,9 +399,10 @@ def main() -> int:
                          "row twice, off then on, in one viewer (an A/B)")
     ap.add_argument("--frame-rules", choices=("on", "off", "both"), default="on",
                     help="issue 27, session 12: under sync timing the NaN/Inf check's scans are waited for where they "
-                         "are drawn, so their cost is the check's, predicted by the look-ahead (kernel.graph.SYNC_CHECKS); "
-                         "off: left queued for the next pass's opening glFinish (the rule before); both: the governed "
-                         "row twice, off then on, in one viewer (an A/B)")
+                         "are drawn, so their cost is the check's, predicted by the look-ahead (kernel.graph.SYNC_CHECKS), and a "
+                         "release's frame only renders until the refinement's image is complete (ui/frame."
+                         "RELEASE_RENDERS_FIRST); off: the rules before; both: the governed row twice, off then on, "
+                         "in one viewer (an A/B)")
     ap.add_argument("--no-off", action="store_true", help="no governor-off row (only the governed arms: an A/B)")
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
@@ -467,7 +468,7 @@ def main() -> int:
                     ("interactive", sh, wh, fr, gm, vs, fx, k) for k in range(max(args.repeat, 1))
                     for sh in shares for wh in wholes for fr in frames for gm in gms for vs in vss for fx in frs]
                 for mode, share, whole, new, gm, vs, fx, k in arms:
-                    graph_mod.SYNC_CHECKS = fx
+                    graph_mod.SYNC_CHECKS = frame_mod.RELEASE_RENDERS_FIRST = fx
                     frame_mod.GOVERNOR_MARGIN = gm
                     frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = vs
                     graph_mod.SHARE_PASSES = share
