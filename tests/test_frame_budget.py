@@ -538,6 +538,56 @@ def viewer():
     yield from edge_viewer()
 
 
+@pytest.mark.parametrize("first", [True, False])
+def test_the_release_frame_only_renders_until_the_refinement_is_complete(viewer, monkeypatch, first):
+    """A governed preview on screen, the drag let go: with RELEASE_RENDERS_FIRST the release's frame only
+    renders (nothing on screen changes until the refinement's image is complete), so its render gets the
+    render-only budget, not the budget less the UI and the swap; the release's own input events do not make the
+    frames after it present, new input does; the completed image is presented once, and it is the whole
+    render's bit for bit. The rule before (first=False) presented the release frame."""
+    from skinviewer.techniques.preview import ladder
+    from skinviewer.ui.governor import Pick
+    from tests.test_governor import fake_calibration
+    app = viewer
+    monkeypatch.setattr(frame_mod, "RELEASE_RENDERS_FIRST", first)
+    g = app.frame.governor
+    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
+    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
+    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
+    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    try:
+        app.frame.set_frame_budget(None)
+        app.frame.set_dragging(True)
+        for k in range(2):  # complete preview images of a light drag
+            assert app.state.apply({"lights.0.direction": [0.3 + 0.01 * k, 0.35, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+        assert g.shown == half and app.frame.report.complete and app.frame.presented
+        app.frame.set_frame_budget(1e-6)  # one pass or band a frame: the refinement takes many
+        app.frame.set_dragging(False)
+        app._events = 1  # the release's mouse event
+        app.step(1)
+        assert app.frame.report is not None and not app.frame.report.complete, app.frame.render_error
+        assert app.frame.presented is (not first)
+        log = []
+        for k in range(4000):
+            if k == 2:
+                app._events += 1  # a mouse move: that frame presents (the UI answers input at once)
+            app.step(1)
+            log.append((app.frame.presented, app.frame.report.complete))
+            if log[-1] == (True, True):
+                break
+        assert log[-1] == (True, True) and len(log) > 3
+        assert log[2][0] is True  # the new input
+        presented_part_way = sum(p and not c for p, c in log)
+        assert presented_part_way == 1  # only the frame of the new input, not the release's events again
+        s = app.state.settings
+        img = app.renderer.image(s)
+        app.renderer.render(s, force=True)
+        assert np.array_equal(img, app.renderer.image(s))
+    finally:
+        _restore_viewer(app, monkeypatch)
+
+
 def test_a_still_refinement_never_re_presents_an_unchanged_image(viewer, monkeypatch):
     """A still view's frame made in bands over many frames, no input: only the change's first frame and
     the frame showing the completed image present; the frames between only render, however long the
@@ -862,53 +912,3 @@ def test_the_check_s_scans_are_paid_where_they_are_predicted(gl_ctx, monkeypatch
         assert np.array_equal(img, renderer.image(sm))
     finally:
         renderer.release()
-
-
-@pytest.mark.parametrize("first", [True, False])
-def test_the_release_frame_only_renders_until_the_refinement_is_complete(viewer, monkeypatch, first):
-    """A governed preview on screen, the drag let go: with RELEASE_RENDERS_FIRST the release's frame only
-    renders (nothing on screen changes until the refinement's image is complete), so its render gets the
-    render-only budget, not the budget less the UI and the swap; the release's own input events do not make the
-    frames after it present, new input does; the completed image is presented once, and it is the whole
-    render's bit for bit. The rule before (first=False) presented the release frame."""
-    from skinviewer.techniques.preview import ladder
-    from skinviewer.ui.governor import Pick
-    from tests.test_governor import fake_calibration
-    app = viewer
-    monkeypatch.setattr(frame_mod, "RELEASE_RENDERS_FIRST", first)
-    g = app.frame.governor
-    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
-    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
-    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
-    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
-    try:
-        app.frame.set_frame_budget(None)
-        app.frame.set_dragging(True)
-        for k in range(2):  # complete preview images of a light drag
-            assert app.state.apply({"lights.0.direction": [0.3 + 0.01 * k, 0.35, 1.0]}, "lights.0 (key light drag)")
-            app.step(1)
-        assert g.shown == half and app.frame.report.complete and app.frame.presented
-        app.frame.set_frame_budget(1e-6)  # one pass or band a frame: the refinement takes many
-        app.frame.set_dragging(False)
-        app._events = 1  # the release's mouse event
-        app.step(1)
-        assert app.frame.report is not None and not app.frame.report.complete
-        assert app.frame.presented is (not first)
-        log = []
-        for k in range(4000):
-            if k == 2:
-                app._events += 1  # a mouse move: that frame presents (the UI answers input at once)
-            app.step(1)
-            log.append((app.frame.presented, app.frame.report.complete))
-            if log[-1] == (True, True):
-                break
-        assert log[-1] == (True, True) and len(log) > 3
-        assert log[2][0] is True  # the new input
-        presented_part_way = sum(p and not c for p, c in log)
-        assert presented_part_way == 1  # only the frame of the new input, not the release's events again
-        s = app.state.settings
-        img = app.renderer.image(s)
-        app.renderer.render(s, force=True)
-        assert np.array_equal(img, app.renderer.image(s))
-    finally:
-        _restore_viewer(app, monkeypatch)
