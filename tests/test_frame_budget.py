@@ -538,6 +538,32 @@ def viewer():
     yield from edge_viewer()
 
 
+@pytest.mark.parametrize("kept", [graph_mod.CHECKS_KEPT, 1])
+def test_a_check_that_stalled_once_is_not_predicted_at_its_stall(monkeypatch, kept):
+    """A pass's NaN/Inf check costs 12 ms four times, then once 200 (a descheduled process): its predicted cost
+    (_check_ms, what _check_after adds to the pass's last band) stays 12 -- the median of its last CHECKS_KEPT --
+    and follows a cost that stays changed. Kept as its last cost (kept=1, the rule before) it is predicted at 200,
+    and the pass's last band then waits a frame of its own."""
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    monkeypatch.setattr(graph_mod, "CHECKS_KEPT", kept)
+    g = graph_mod.RenderGraph.__new__(graph_mod.RenderGraph)
+    g._pending_checks, g._scan_used, g._scan_targets = [], {}, {}
+    g._check_ms, g._check_hist, g._nonfinite, g._unchecked = {}, {}, {}, set()
+    g._exec_s, g.check_ms = 0.0, 0.0
+    g._checking = True
+    predicted = []
+    for ms in (12.0, 12.0, 12.0, 12.0, 200.0, 12.0, 30.0, 30.0, 30.0):
+        g._pending_checks.append(("blur", [], ms))  # its scans drawn (and waited for) in ms; nothing to read back
+        g._collect_checks({})
+        predicted.append(g._check_after("blur", None))
+    if kept > 1:
+        assert predicted[4] == 12.0 and predicted[5] == 12.0  # the stall is not the prediction
+        assert predicted[-1] == 30.0  # a cost that stays changed is followed
+    else:
+        assert predicted[4] == 200.0  # the rule before: the stall predicted for the next run
+
+
 @pytest.mark.parametrize("first", [True, False])
 def test_the_release_frame_only_renders_until_the_refinement_is_complete(viewer, monkeypatch, first):
     """A governed preview on screen, the drag let go: with RELEASE_RENDERS_FIRST the release's frame only

@@ -118,6 +118,9 @@ UNMEASURED_TILES = 4
 # a pass in a refinement's frames counted in no pass and no prediction, the render's overrun past its budget
 # (the frames of 105-125 ms of release -> final). False: left queued (the rule before; A/B)
 SYNC_CHECKS = True
+# and a check's cost is predicted by the median of its last CHECKS_KEPT (a check stalled once -- 174-208 ms at load
+# 8-10 -- no longer makes its pass's next last band wait a frame); 1: the last check's cost (the rule before)
+CHECKS_KEPT = 5
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
 
 
@@ -228,6 +231,7 @@ class RenderGraph:
         # by the first frame that is not a preview and finds them cached; what a pass's check last cost
         self._unchecked: set[str] = set()
         self._check_ms: dict[str, float] = {}
+        self._check_hist: dict[str, list[float]] = {}  # each pass's last CHECKS_KEPT check costs (_check_ms: their median)
         # this frame's NaN/Inf scans, drawn after their pass, read back after the last (_collect_checks)
         self._pending_checks: list[tuple[str, list[tuple[str, moderngl.Texture]], float]] = []
         self._timing = "sync"  # this run()'s timing mode
@@ -1185,7 +1189,10 @@ class RenderGraph:
                 self._unchecked.add(name)
                 continue
             self._nonfinite[name] = bad
-            self._check_ms[name] = ms + (time.perf_counter() - t0) * 1000.0
+            hist = self._check_hist.setdefault(name, [])
+            hist.append(ms + (time.perf_counter() - t0) * 1000.0)
+            del hist[:-max(CHECKS_KEPT, 1)]
+            self._check_ms[name] = float(np.median(hist))
             if name in records:
                 records[name].nonfinite = list(bad)
         self._scan_used.clear()  # every kept flag target read: free for the next frame's scans
