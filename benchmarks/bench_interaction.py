@@ -399,7 +399,8 @@ def main() -> int:
                          "row twice, off then on, in one viewer (an A/B)")
     ap.add_argument("--frame-rules", choices=("on", "off", "both"), default="on",
                     help="issue 27, session 12: under sync timing the NaN/Inf check's scans are waited for where they "
-                         "are drawn, so their cost is the check's, predicted by the look-ahead (kernel.graph.SYNC_CHECKS), and a "
+                         "are drawn, so their cost is the check's, predicted by the look-ahead (kernel.graph.SYNC_CHECKS) at the median of "
+                         "its last CHECKS_KEPT, and a "
                          "release's frame only renders until the refinement's image is complete (ui/frame."
                          "RELEASE_RENDERS_FIRST); off: the rules before; both: the governed row twice, off then on, "
                          "in one viewer (an A/B)")
@@ -463,12 +464,14 @@ def main() -> int:
             vss = {"on": [True], "off": [False], "both": [False, True]}[args.release_rules]
             frs = {"on": [True], "off": [False], "both": [False, True]}[args.frame_rules]
             pace_err_k = graph_mod.PACE_ERR_K
+            checks_kept = graph_mod.CHECKS_KEPT
             for name in names:
                 arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], gms[-1], vss[-1], frs[-1], 0)]) + [
                     ("interactive", sh, wh, fr, gm, vs, fx, k) for k in range(max(args.repeat, 1))
                     for sh in shares for wh in wholes for fr in frames for gm in gms for vs in vss for fx in frs]
                 for mode, share, whole, new, gm, vs, fx, k in arms:
                     graph_mod.SYNC_CHECKS = frame_mod.RELEASE_RENDERS_FIRST = fx
+                    graph_mod.CHECKS_KEPT = checks_kept if fx else 1
                     frame_mod.GOVERNOR_MARGIN = gm
                     frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = vs
                     graph_mod.SHARE_PASSES = share

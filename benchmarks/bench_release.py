@@ -35,7 +35,8 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--rules", choices=("release", "frame"), default="release",
                     help="the switches the arms alternate: release (session 11's release rules) or frame (session 12: "
-                         "kernel.graph.SYNC_CHECKS and ui/frame.RELEASE_RENDERS_FIRST, the release rules on in both)")
+                         "kernel.graph.SYNC_CHECKS, CHECKS_KEPT and ui/frame.RELEASE_RENDERS_FIRST, the release rules on in "
+                         "both)")
     a = ap.parse_args()
     os.environ.setdefault("SKINVIEWER_CALIBRATE", "0")
     import bench_interaction as bi
@@ -45,6 +46,7 @@ def main() -> int:
     from skinviewer.kernel.gl import describe
     from skinviewer.ui import frame as frame_mod
     from skinviewer.ui.app import create_app, destroy_app
+    checks_kept = graph_mod.CHECKS_KEPT
     scenes: dict[str, dict] = {}
     for name in a.scenes.split(","):
         if name == "head":
@@ -73,6 +75,7 @@ def main() -> int:
                     on = k % 2 == 1
                     if a.rules == "frame":
                         graph_mod.SYNC_CHECKS = frame_mod.RELEASE_RENDERS_FIRST = on
+                        graph_mod.CHECKS_KEPT = checks_kept if on else 1
                     else:
                         frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = on
                     d = bi.Driver(app, None, {"technique": t})
