@@ -7,6 +7,7 @@ frame), then a still view until the image is final.
     python benchmarks/bench_interaction.py [--quick] [--techniques deon,phong] [--scenes head,scan | --scan]
         [--seconds 3] [--frame-log frames.jsonl] [--rest 1] [--prime on|off|both] [--cold-shaders]
         [--frames on|off|both] [--whole-frame on|off|both] [--share on|off|both] [--release-rules on|off|both]
+        [--frame-rules on|off|both]
 
 ``--scenes``: the default head (default), the shared scan (``scan``: ../shared/assets/lee-perry-smith) or
 both; ``--scan`` is ``--scenes head,scan``. At the end it prints the table ready to paste (markdown: per
@@ -156,6 +157,8 @@ class Driver:
                                        "budget_ms": round(fr.graph_budget_ms() or 0.0, 1),
                                        "render_budget_ms": round(getattr(fr, "last_budget_ms", None) or 0.0, 1),
                                        "graph_run_ms": round(getattr(fr.last_graph, "run_ms", 0.0), 2),
+                                       # its NaN/Inf checks (render.check_finite: frames not a preview's), in its run
+                                       "check_ms": round(getattr(fr.last_graph, "check_ms", 0.0), 2),
                                        # the graph's margin on its predictions (every pass's p99: kernel/margin.py)
                                        "margin": round(fr.last_graph.margins.factor("") or 0.0, 2)
                                        if getattr(fr.last_graph, "margins", None) is not None else None,
@@ -394,6 +397,13 @@ def main() -> int:
                          "size's cost (kernel.graph.COST_PER_SIZE), a band's average-cost floor is taken on the "
                          "predicted cost (kernel.graph.MIN_BAND_BY_COST); off: the rules before; both: the governed "
                          "row twice, off then on, in one viewer (an A/B)")
+    ap.add_argument("--frame-rules", choices=("on", "off", "both"), default="on",
+                    help="issue 27, session 12: under sync timing the NaN/Inf check's scans are waited for where they "
+                         "are drawn, so their cost is the check's, predicted by the look-ahead (kernel.graph.SYNC_CHECKS) at the median of "
+                         "its last CHECKS_KEPT, and a "
+                         "release's frame only renders until the refinement's image is complete (ui/frame."
+                         "RELEASE_RENDERS_FIRST); off: the rules before; both: the governed row twice, off then on, "
+                         "in one viewer (an A/B)")
     ap.add_argument("--no-off", action="store_true", help="no governor-off row (only the governed arms: an A/B)")
     ap.add_argument("--whole-frame", choices=("on", "off", "both"), default="on",
                     help="the frame budget kept on the whole frame (ui/frame.WHOLE_FRAME: the UI and swap "
@@ -452,12 +462,16 @@ def main() -> int:
             frames = {"on": [True], "off": [False], "both": [False, True]}[args.frames]
             gms = {"on": [True], "off": [False], "both": [False, True]}[args.governor_margin]
             vss = {"on": [True], "off": [False], "both": [False, True]}[args.release_rules]
+            frs = {"on": [True], "off": [False], "both": [False, True]}[args.frame_rules]
             pace_err_k = graph_mod.PACE_ERR_K
+            checks_kept = graph_mod.CHECKS_KEPT
             for name in names:
-                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], gms[-1], vss[-1], 0)]) + [
-                    ("interactive", sh, wh, fr, gm, vs, k) for k in range(max(args.repeat, 1))
-                    for sh in shares for wh in wholes for fr in frames for gm in gms for vs in vss]
-                for mode, share, whole, new, gm, vs, k in arms:
+                arms = ([] if args.no_off else [("off", shares[-1], wholes[-1], frames[-1], gms[-1], vss[-1], frs[-1], 0)]) + [
+                    ("interactive", sh, wh, fr, gm, vs, fx, k) for k in range(max(args.repeat, 1))
+                    for sh in shares for wh in wholes for fr in frames for gm in gms for vs in vss for fx in frs]
+                for mode, share, whole, new, gm, vs, fx, k in arms:
+                    graph_mod.SYNC_CHECKS = frame_mod.RELEASE_RENDERS_FIRST = fx
+                    graph_mod.CHECKS_KEPT = checks_kept if fx else 1
                     frame_mod.GOVERNOR_MARGIN = gm
                     frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = vs
                     graph_mod.SHARE_PASSES = share
@@ -469,7 +483,7 @@ def main() -> int:
                         g.margins.clear()  # each arm learns its own margins
                     row = run_one(app, name, mode, seconds, n_edits, log, args.rest,
                                   {"share": share, "whole_frame": whole, "p99_margin": new, "governor_margin": gm,
-                                   "release_rules": vs, "run": k})
+                                   "release_rules": vs, "frame_rules": fx, "run": k})
                     row["scene"] = scene_name
                     if len(shares) > 1 and mode != "off":
                         row["technique"] = f"{name} (sharing {'on' if share else 'off'})"
@@ -477,7 +491,8 @@ def main() -> int:
                             row["mode"] = "interactive, sharing off"
                     # each A/B switch with both arms in this run names its arm in the row
                     for arms, on, label in ((wholes, whole, "whole frame"), (frames, new, "p99 margin"),
-                                            (gms, gm, "governor margin"), (vss, vs, "release rules")):
+                                            (gms, gm, "governor margin"), (vss, vs, "release rules"),
+                                            (frs, fx, "frame rules")):
                         if len(arms) > 1 and mode != "off":
                             row["technique"] = f"{row['technique']} ({label} {'on' if on else 'off'})"
                             if not on:

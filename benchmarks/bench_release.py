@@ -4,7 +4,10 @@ session's release rules -- ``ui/frame.KEEP_VIEW_POOLS``, ``kernel.graph.COST_PER
 both; medians per technique. Run it under Xvfb:
 
     PYTHONPATH=. xvfb-run -a -s "-screen 0 1280x800x24" python3 benchmarks/bench_release.py
-        [--techniques ssss,burley2,penner] [--scenes head,scan] [--reps 4] [--seconds 2]
+        [--techniques ssss,burley2,penner] [--scenes head,scan] [--reps 4] [--seconds 2] [--rules release|frame]
+
+``--rules frame``: the arms alternate session 12's rules instead (``kernel.graph.SYNC_CHECKS``,
+``ui/frame.RELEASE_RENDERS_FIRST``), the release rules on in both.
 
 Per arm: release -> final (ms, from letting go of a key-light drag to the complete image at the user's
 settings on screen), its ratio to that image's frame measured alone right after (sync timing, no
@@ -30,6 +33,10 @@ def main() -> int:
     ap.add_argument("--scenes", default="head")
     ap.add_argument("--reps", type=int, default=4)
     ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--rules", choices=("release", "frame"), default="release",
+                    help="the switches the arms alternate: release (session 11's release rules) or frame (session 12: "
+                         "kernel.graph.SYNC_CHECKS, CHECKS_KEPT and ui/frame.RELEASE_RENDERS_FIRST, the release rules on in "
+                         "both)")
     a = ap.parse_args()
     os.environ.setdefault("SKINVIEWER_CALIBRATE", "0")
     import bench_interaction as bi
@@ -39,6 +46,7 @@ def main() -> int:
     from skinviewer.kernel.gl import describe
     from skinviewer.ui import frame as frame_mod
     from skinviewer.ui.app import create_app, destroy_app
+    checks_kept = graph_mod.CHECKS_KEPT
     scenes: dict[str, dict] = {}
     for name in a.scenes.split(","):
         if name == "head":
@@ -65,7 +73,11 @@ def main() -> int:
                 loads = []
                 for k in range(2 * a.reps):
                     on = k % 2 == 1
-                    frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = on
+                    if a.rules == "frame":
+                        graph_mod.SYNC_CHECKS = frame_mod.RELEASE_RENDERS_FIRST = on
+                        graph_mod.CHECKS_KEPT = checks_kept if on else 1
+                    else:
+                        frame_mod.KEEP_VIEW_POOLS = graph_mod.COST_PER_SIZE = graph_mod.MIN_BAND_BY_COST = on
                     d = bi.Driver(app, None, {"technique": t})
                     d.until_final()
                     d.rest(0.5)
@@ -106,7 +118,7 @@ def main() -> int:
     up = ", ".join(f"{x:.2f}" for x in os.getloadavg())
     print(f"\n`{' '.join(sys.argv)}` ({t0}–{time.strftime('%H:%M', time.gmtime())} UTC, load average at the end {up}); "
           "medians of the reps, each arm's reps interleaved with the other's:\n")
-    print("| scene | technique | release rules | release → final | × alone (each rep) | longest own time | longest frame "
+    print(f"| scene | technique | {a.rules} rules | release → final | × alone (each rep) | longest own time | longest frame "
           "| bands of the costliest banded pass | load |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     print("\n".join(lines))

@@ -538,6 +538,82 @@ def viewer():
     yield from edge_viewer()
 
 
+@pytest.mark.parametrize("kept", [graph_mod.CHECKS_KEPT, 1])
+def test_a_check_that_stalled_once_is_not_predicted_at_its_stall(monkeypatch, kept):
+    """A pass's NaN/Inf check costs 12 ms four times, then once 200 (a descheduled process): its predicted cost
+    (_check_ms, what _check_after adds to the pass's last band) stays 12 -- the median of its last CHECKS_KEPT --
+    and follows a cost that stays changed. Kept as its last cost (kept=1, the rule before) it is predicted at 200,
+    and the pass's last band then waits a frame of its own."""
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    monkeypatch.setattr(graph_mod, "CHECKS_KEPT", kept)
+    g = graph_mod.RenderGraph.__new__(graph_mod.RenderGraph)
+    g._pending_checks, g._scan_used, g._scan_targets = [], {}, {}
+    g._check_ms, g._check_hist, g._nonfinite, g._unchecked = {}, {}, {}, set()
+    g._exec_s, g.check_ms = 0.0, 0.0
+    g._checking = True
+    predicted = []
+    for ms in (12.0, 12.0, 12.0, 12.0, 200.0, 12.0, 30.0, 30.0, 30.0):
+        g._pending_checks.append(("blur", [], ms))  # its scans drawn (and waited for) in ms; nothing to read back
+        g._collect_checks({})
+        predicted.append(g._check_after("blur", None))
+    if kept > 1:
+        assert predicted[4] == 12.0 and predicted[5] == 12.0  # the stall is not the prediction
+        assert predicted[-1] == 30.0  # a cost that stays changed is followed
+    else:
+        assert predicted[4] == 200.0  # the rule before: the stall predicted for the next run
+
+
+@pytest.mark.parametrize("first", [True, False])
+def test_the_release_frame_only_renders_until_the_refinement_is_complete(viewer, monkeypatch, first):
+    """A governed preview on screen, the drag let go: with RELEASE_RENDERS_FIRST the release's frame only
+    renders (nothing on screen changes until the refinement's image is complete), so its render gets the
+    render-only budget, not the budget less the UI and the swap; the release's own input events do not make the
+    frames after it present, new input does; the completed image is presented once, and it is the whole
+    render's bit for bit. The rule before (first=False) presented the release frame."""
+    from skinviewer.techniques.preview import ladder
+    from skinviewer.ui.governor import Pick
+    from tests.test_governor import fake_calibration
+    app = viewer
+    monkeypatch.setattr(frame_mod, "RELEASE_RENDERS_FIRST", first)
+    g = app.frame.governor
+    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
+    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
+    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
+    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    try:
+        app.frame.set_frame_budget(None)
+        app.frame.set_dragging(True)
+        for k in range(2):  # complete preview images of a light drag
+            assert app.state.apply({"lights.0.direction": [0.3 + 0.01 * k, 0.35, 1.0]}, "lights.0 (key light drag)")
+            app.step(1)
+        assert g.shown == half and app.frame.report.complete and app.frame.presented
+        app.frame.set_frame_budget(1e-6)  # one pass or band a frame: the refinement takes many
+        app.frame.set_dragging(False)
+        app._events = 1  # the release's mouse event
+        app.step(1)
+        assert app.frame.report is not None and not app.frame.report.complete, app.frame.render_error
+        assert app.frame.presented is (not first)
+        log = []
+        for k in range(4000):
+            if k == 2:
+                app._events += 1  # a mouse move: that frame presents (the UI answers input at once)
+            app.step(1)
+            log.append((app.frame.presented, app.frame.report.complete))
+            if log[-1] == (True, True):
+                break
+        assert log[-1] == (True, True) and len(log) > 3
+        assert log[2][0] is True  # the new input
+        presented_part_way = sum(p and not c for p, c in log)
+        assert presented_part_way == 1  # only the frame of the new input, not the release's events again
+        s = app.state.settings
+        img = app.renderer.image(s)
+        app.renderer.render(s, force=True)
+        assert np.array_equal(img, app.renderer.image(s))
+    finally:
+        _restore_viewer(app, monkeypatch)
+
+
 def test_a_still_refinement_never_re_presents_an_unchanged_image(viewer, monkeypatch):
     """A still view's frame made in bands over many frames, no input: only the change's first frame and
     the frame showing the completed image present; the frames between only render, however long the
@@ -775,3 +851,90 @@ def test_the_automatic_drag_scale_takes_few_sizes_and_never_exceeds_its_budget()
     assert all(g <= a + 1e-9 for g, a in zip(got, asked))
     assert all(a - g < 0.3 * a for g, a in zip(got, asked))  # a half-octave of pixels at most below
     assert frame_mod.drag_step(1.0) == 1.0 and frame_mod.drag_step(0.25) == 0.25 and frame_mod.drag_step(0.1) == 0.25
+
+
+class _Gpu:
+    """The graph's GL context with a GPU queue on a fake clock: work queued (the NaN/Inf check's scans) is
+    paid at the next glFinish, as llvmpipe runs it, not when it is drawn."""
+
+    def __init__(self, ctx, clock: Clock):
+        self._ctx, self.clock, self.queued = ctx, clock, 0.0
+
+    def drain(self) -> None:
+        self.clock.ms(self.queued)
+        self.queued = 0.0
+
+    def finish(self):
+        self._ctx.finish()
+        self.drain()
+
+    def __getattr__(self, name):
+        return getattr(self._ctx, name)
+
+
+@pytest.mark.parametrize("sync_checks", [True, False])
+def test_the_check_s_scans_are_paid_where_they_are_predicted(gl_ctx, monkeypatch, sync_checks):
+    """render.check_finite scans a pass's outputs after it runs (a frame that is not a preview: the
+    refinement after a release). Here each pass costs 10 ms and each scan 12 ms of GPU time, paid at the next
+    glFinish. With SYNC_CHECKS the scans are waited for where they are drawn: the check's cost is kept as
+    the check's (_check_ms), the look-ahead leaves room for it, and no frame of a light move passes the 45 ms
+    budget. The rule before left them queued: the next pass's opening glFinish paid them, counted in no
+    pass and no prediction, and frames passed the budget. The image is the whole render's either way."""
+    from skinviewer.engine.renderer import Renderer
+    clock = Clock()
+    monkeypatch.setattr(graph_mod, "time", SimpleNamespace(perf_counter=clock.perf_counter))
+    monkeypatch.setattr(graph_mod, "SYNC_CHECKS", sync_checks)
+    renderer = Renderer(gl_ctx)
+    try:
+        s = small_settings("head", "phong", size=64)
+        assert s.render.check_finite
+        renderer.render(s)
+        g = renderer.graph("phong")
+        gpu = _Gpu(g.ctx, clock)
+        real_execute, real_scan, real_collect = g._execute, g._scan_nonfinite, g._collect_checks
+
+        def execute(p, r, frame, timing, tile=(0, 1), held=None, defer=False, lazy=False, sync_after=True):
+            ms = real_execute(p, r, frame, timing, tile=tile, held=held, defer=defer, lazy=lazy,
+                              sync_after=sync_after)  # its opening glFinish pays what is queued
+            clock.ms(10.0 / tile[1])
+            return 10.0 / tile[1] if timing == "sync" else ms
+
+        def scan(outputs):
+            flags = real_scan(outputs)
+            gpu.queued += 12.0 * len(flags)  # drawn now, run by the GPU later
+            return flags
+
+        def collect(records=None):
+            gpu.drain()  # reading the flags back waits for the GPU
+            return real_collect(records)
+
+        monkeypatch.setattr(g, "ctx", gpu)
+        monkeypatch.setattr(g, "_execute", execute)
+        monkeypatch.setattr(g, "_scan_nonfinite", scan)
+        monkeypatch.setattr(g, "_collect_checks", collect)
+        for p in g.passes:  # whole passes: what is predicted is the pass and its check
+            monkeypatch.setattr(p, "tileable", False)
+        budget, work = 45.0, []
+        for m in range(4):
+            sm = with_values(s, {"lights.0.direction": [0.3 + 0.05 * m, 0.2, 1.0]})
+            for _ in range(50):
+                t0 = clock.t
+                rep = renderer.render(sm, budget_ms=budget)
+                if m:  # the first move: the costs and the checks' costs are learned
+                    work.append((clock.t - t0) * 1000.0)
+                if rep.complete:
+                    break
+            assert rep.complete
+        checked = {n for n, ms in g._check_ms.items() if ms >= 12.0 - 1e-6}  # each check's cost is its scans'
+        if sync_checks:
+            assert {"shadow_map_0", "phong"} <= checked  # (8-bit outputs are not scanned: output's)
+            assert max(work) <= budget + 1e-6
+        else:
+            assert not checked  # the rule before: the scans' 12 ms in no check, no pass, no prediction
+            assert max(work) > budget + 5.0  # (54 ms here)
+        img = renderer.image(sm)
+        monkeypatch.undo()
+        renderer.render(sm, force=True)
+        assert np.array_equal(img, renderer.image(sm))
+    finally:
+        renderer.release()

@@ -112,6 +112,15 @@ SIZES_KEPT = 4
 MIN_BAND_BY_COST = True
 MAX_TILES = 128  # row bands a tileable pass is split into at most (8 rows of a 1024² map)
 UNMEASURED_TILES = 4
+# issue 27, session 12: under sync timing the NaN/Inf check's GPU scans (render.check_finite, after each pass of a
+# frame that is not a preview) are waited for where they are drawn, so what they cost is kept as the check's
+# (_check_ms, the look-ahead's _check_after). Left queued, the next pass's opening glFinish waited for them: 10-28 ms
+# a pass in a refinement's frames counted in no pass and no prediction, the render's overrun past its budget
+# (the frames of 105-125 ms of release -> final). False: left queued (the rule before; A/B)
+SYNC_CHECKS = True
+# and a check's cost is predicted by the median of its last CHECKS_KEPT (a check stalled once -- 174-208 ms at load
+# 8-10 -- no longer makes its pass's next last band wait a frame); 1: the last check's cost (the rule before)
+CHECKS_KEPT = 5
 MIN_BAND_SHARE = 0.1  # a pass is not split into bands that cost less than this share of the budget on average  # bands of a tileable pass never timed yet, under a budget
 
 
@@ -222,6 +231,7 @@ class RenderGraph:
         # by the first frame that is not a preview and finds them cached; what a pass's check last cost
         self._unchecked: set[str] = set()
         self._check_ms: dict[str, float] = {}
+        self._check_hist: dict[str, list[float]] = {}  # each pass's last CHECKS_KEPT check costs (_check_ms: their median)
         # this frame's NaN/Inf scans, drawn after their pass, read back after the last (_collect_checks)
         self._pending_checks: list[tuple[str, list[tuple[str, moderngl.Texture]], float]] = []
         self._timing = "sync"  # this run()'s timing mode
@@ -239,6 +249,7 @@ class RenderGraph:
         self.own_ms = 0.0
         self.run_ms = 0.0  # its last run's wall time (ms): the viewer budgets the renderer's work around it
         self._exec_s = 0.0
+        self.check_ms = 0.0  # the last run's NaN/Inf checks: their scans drawn (and waited for) and read back
         # how the passes' costs compare with what the look-ahead predicted from their last runs (a
         # running mean of actual / predicted): a machine that got busier since then is >1, and the
         # look-ahead scales its predictions by it (1..PACE_MAX) so the frame's last pass does not overrun
@@ -489,6 +500,7 @@ class RenderGraph:
                 and all(a is b or a == b for a, b in zip(idle, self._idle)) and idle[0] is self._idle[0]:
             self.frame += 1
             self.own_ms = 0.0
+            self.check_ms = 0.0
             self.run_ms = 0.0
             self.frame_ms = {}
             self.last_report = FrameReport(self.frame, timing, [
@@ -505,6 +517,7 @@ class RenderGraph:
         t_start = time.perf_counter()
         any_ran = False
         self._exec_s = 0.0
+        self.check_ms = 0.0
         same = self._same_sections(frame.settings)
         self._value_keys = self._kept_value_keys(same)
         if timing not in TIMING_NOTES:
@@ -1149,9 +1162,13 @@ class RenderGraph:
         budget's look-ahead (the draws now plus the read-back then)."""
         t0 = time.perf_counter()
         flags = self._scan_nonfinite(outputs)
+        synced = self._timing == "sync" and SYNC_CHECKS and bool(flags)
+        if synced:  # the scans' GPU time, here where it is predicted, not in the next pass's opening glFinish
+            self.ctx.finish()
         dt = time.perf_counter() - t0
-        if self._timing != "sync":  # no glFinish after the pass: llvmpipe waits for it in the scan's draw,
-            self._exec_s += dt  # the pass's time, not the graph's own (own_ms)
+        if self._timing != "sync" or synced:  # no glFinish after the pass: llvmpipe waits for it in the scan's
+            self._exec_s += dt  # draw; or the scans waited for: GPU time, not the graph's own (own_ms)
+        self.check_ms += dt * 1000.0
         self._pending_checks.append((name, flags, dt * 1000.0))
 
     def _collect_checks(self, records: dict[str, PassRecord] | None = None) -> None:
@@ -1172,13 +1189,17 @@ class RenderGraph:
                 self._unchecked.add(name)
                 continue
             self._nonfinite[name] = bad
-            self._check_ms[name] = ms + (time.perf_counter() - t0) * 1000.0
+            hist = self._check_hist.setdefault(name, [])
+            hist.append(ms + (time.perf_counter() - t0) * 1000.0)
+            del hist[:-max(CHECKS_KEPT, 1)]
+            self._check_ms[name] = float(np.median(hist))
             if name in records:
                 records[name].nonfinite = list(bad)
         self._scan_used.clear()  # every kept flag target read: free for the next frame's scans
         # the first read-back waits for whatever the GPU has left of the frame: the passes' time, not the
         # graph's own (own_ms, which the governor counts as the frame's overhead)
         self._exec_s += time.perf_counter() - t_all
+        self.check_ms += (time.perf_counter() - t_all) * 1000.0
 
     def _scan_nonfinite(self, outputs: dict[str, TexSpec]) -> list[tuple[str, moderngl.Texture]]:
         """A GPU scan of each output into a grid of at most 64x64 flags (<= 4 KB to read back; a

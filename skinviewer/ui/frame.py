@@ -56,6 +56,13 @@ GOVERNOR_MARGIN = False
 # again (16 textures for ssss: 96-236 ms of the graph's own time in one frame, the longest frames and 10-25 %
 # of release -> final here). False: trimmed at every rendered size (the rule before; A/B)
 KEEP_VIEW_POOLS = True
+# issue 27, session 12: the frame of a release (a drag or a held widget let go, a governed preview on screen) only
+# renders: nothing on screen changes until the refinement's image is complete, so it gets the render-only budget
+# (the budget less the event poll: ~97 ms, not ~75 less the UI and the swap) and presents with the UI only when it
+# completes it (a final that fits one frame -- Phong's ~65 ms -- is then on screen in that frame, not in the next);
+# the release's own input events do not make the frames after it present. False: the release frame presents
+# (the rule before; bench_interaction.py --frame-rules both)
+RELEASE_RENDERS_FIRST = True
 
 
 # the orbit resolutions the automatic drag scale takes (half-octaves of pixels): a continuous scale made each drag
@@ -170,6 +177,10 @@ class FrameController:
         self._variant = ""  # the renderer graph of the frame: "" the user's settings, else a preview's
         self._camera_input = False  # the last user change moved only the camera
         self._released = False  # a drag or held widget was let go since the last change: input has stopped
+        # RELEASE_RENDERS_FIRST: a drag or held widget was let go since the last frame (the next frame only renders),
+        # and the input events up to that release (None: none held back; a frame that presents clears it)
+        self._let_go = False
+        self._release_events: int | None = None
         self._interacting = False  # this frame renders the governor's interaction pick
         # a governed frame started during a drag or edit and part-way through (spread over frames):
         # (settings, variant, rung); it is finished before newer input is taken, so a drag always
@@ -256,12 +267,14 @@ class FrameController:
         """The input controller: the camera is being dragged in the view (a move, not a mere click)."""
         if self._dragging and not on:
             self._released = True  # the refinement starts now, not after the scheduler's rest
+            self._let_go = True
         self._dragging = bool(on)
 
     def set_widget_active(self, on: bool) -> None:
         """The UI: a widget is held this frame (an expensive edit may wait for its release)."""
         if self._widget_active and not on:
             self._released = True
+            self._let_go = True
         self._widget_active = bool(on)
 
     def ui_failed(self, text: str) -> None:
@@ -468,6 +481,15 @@ class FrameController:
         -- so there is no periodic refresh (it re-presented the same image every 0.5 s: 2-3 frames of
         UI and swap in a d'Eon release -> final, issue 27)."""
         r = self.report
+        if RELEASE_RENDERS_FIRST and self.quiet_frames and r is not None and not self._widget_active \
+                and not self._dragging and not self._pending_shots:
+            if self._let_go and self._governing and not self._rung.final and self._released:
+                # the release's frame, a preview on screen: it shows the same image until the refinement's is
+                # complete, and the frame that completes it presents (the UI built then sees the release)
+                self._release_events = input_events
+                return True
+            if self._release_events is not None and input_events <= self._release_events:
+                input_events = 0  # no input since the release's
         return (self.quiet_frames and input_events == 0 and r is not None and not r.complete
                 and not self._widget_active and not self._dragging and not self._pending_shots
                 and (WHOLE_FRAME or time.perf_counter() - self._presented_at < REFRESH_S))
@@ -496,6 +518,7 @@ class FrameController:
                 self.overhead_ms = rest if self.overhead_ms is None else 0.8 * self.overhead_ms + 0.2 * rest
         self._last_frame_t = now
         self._frame_t0, self._render_end, self._after_extra = now, None, 0.0
+        self._let_go = False  # (can_skip_present read it before this frame)
         self.frames += 1
         self._window = ((window_size[0], window_size[1]), (buffer_size[0], buffer_size[1]))
         self.watcher.poll()
@@ -528,6 +551,7 @@ class FrameController:
                 self.layout = self._compute_layout()
                 ui_built = ui.build(frametime, self.layout)
         self._last_presented = True
+        self._release_events = None
         self._presented_at = time.perf_counter()
         if self.report is not None and self.report.complete and not self.report.ran:
             # idle: a slice of the next drag's preview variants, else likely shader variants compiled;
