@@ -88,9 +88,17 @@ def gl_ctx():
 @pytest.fixture(autouse=True)
 def _current_gl(request):
     """A test that uses the session context gets it made current again (a viewer test's window
-    context may be current on this thread)."""
+    context may be current on this thread), and a test of a module's ``viewer`` its window's context (its
+    frame buffers are that context's objects: drawn with another current, they are incomplete)."""
     if "gl_ctx" in request.fixturenames:
         request.getfixturevalue("gl_ctx").__enter__()
+    elif "viewer" in request.fixturenames:  # a module's viewer, after a test made the session context current
+        native = request.getfixturevalue("viewer").wnd._window
+        if hasattr(native, "switch_to"):  # pyglet
+            native.switch_to()
+        else:
+            import glfw
+            glfw.make_context_current(native)
     yield
 
 

@@ -719,6 +719,8 @@ def test_a_release_after_a_smaller_view_finds_the_full_size_textures_pooled(view
     app.frame.set_frame_budget(None)  # one complete frame a step: each step's image is its pick's
     full = (app.state.settings.render.width, app.state.settings.render.height)
     try:
+        app.step(1)  # the still view first: your settings' full-size set is in the pools (run alone, too)
+        assert g.shown.final and app.frame.report.complete
         app.frame.set_dragging(True)
         for k in range(3):  # a light drag: the preview, a smaller view of your graph
             assert app.state.apply({"lights.0.direction": [0.3 + 0.01 * k, 0.35, 1.0]}, "lights.0 (key light drag)")
