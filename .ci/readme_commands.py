@@ -58,7 +58,7 @@ class Plan:
 PLANS: dict[str, Plan] = {
     # The two commands
     "pip install -e . && skinviewer": Plan("checkout", viewer=True),
-    'pip install -e ".[test]" && xvfb-run -a python -m pytest -q':
+    'pip install -e ".[test]" && xvfb-run -a python -m pytest -q -n auto --dist loadfile':
         Plan("ci", why=".ci/run's last step runs it exactly as written"),
     # Installing it as a tool
     "pip install .": Plan("wheel"),

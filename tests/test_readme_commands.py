@@ -61,13 +61,13 @@ def test_every_readme_command_has_a_plan_and_no_plan_is_stale():
 def test_the_two_commands_stay_and_ci_runs_everything():
     found = rc.commands(rc.README.read_text(encoding="utf-8"))
     assert found[:2] == ["pip install -e . && skinviewer",
-                         'pip install -e ".[test]" && xvfb-run -a python -m pytest -q']
+                         'pip install -e ".[test]" && xvfb-run -a python -m pytest -q -n auto --dist loadfile']
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
-    assert 'pip install -e ".[test]" && xvfb-run -a python -m pytest -q' in ci  # verbatim, its own line
+    assert 'pip install -e ".[test]" && xvfb-run -a python -m pytest -q -n auto --dist loadfile' in ci  # verbatim, its own line
     assert any("readme_commands.py wheel" in line for line in ci)
     assert any("readme_commands.py checkout" in line for line in ci)
     not_run = [c for c in found if rc.PLANS[c].where == "ci"]
-    assert not_run == ['pip install -e ".[test]" && xvfb-run -a python -m pytest -q', ".ci/run"]
+    assert not_run == ['pip install -e ".[test]" && xvfb-run -a python -m pytest -q -n auto --dist loadfile', ".ci/run"]
 
 
 def test_a_failing_command_fails_the_group(tmp_path, monkeypatch):
