@@ -532,6 +532,20 @@ def test_a_tileable_first_pass_starts_with_a_band_that_fits_what_the_own_time_le
         renderer.release()
 
 
+def _half_view_previews(app, monkeypatch):
+    """The governor of ``app`` picks the "view ½" rung (your graph at half the view) while dragging, and
+    refines straight to your settings: returns (governor, that rung)."""
+    from skinviewer.techniques.preview import ladder
+    from skinviewer.ui.governor import Pick
+    from tests.test_governor import fake_calibration
+    g = app.frame.governor
+    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
+    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
+    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
+    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    return g, half
+
+
 @pytest.fixture(scope="module")
 def viewer():
     from tests.helpers import edge_viewer
@@ -571,16 +585,9 @@ def test_the_release_frame_only_renders_until_the_refinement_is_complete(viewer,
     render-only budget, not the budget less the UI and the swap; the release's own input events do not make the
     frames after it present, new input does; the completed image is presented once, and it is the whole
     render's bit for bit. The rule before (first=False) presented the release frame."""
-    from skinviewer.techniques.preview import ladder
-    from skinviewer.ui.governor import Pick
-    from tests.test_governor import fake_calibration
     app = viewer
     monkeypatch.setattr(frame_mod, "RELEASE_RENDERS_FIRST", first)
-    g = app.frame.governor
-    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
-    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
-    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
-    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    g, half = _half_view_previews(app, monkeypatch)
     try:
         app.frame.set_frame_budget(None)
         app.frame.set_dragging(True)
@@ -665,15 +672,8 @@ def test_a_released_preview_of_your_own_graph_leaves_none_of_its_passes_in_the_f
     part-way when the user lets go: the refinement's first frame reports only its own passes (the
     preview's were listed as the final frame's when only a change of graph reset them; a cheaper pick
     -- the whole frame's rest budgeted at its upper bound -- made this case common under load)."""
-    from skinviewer.techniques.preview import ladder
-    from skinviewer.ui.governor import Pick
-    from tests.test_governor import fake_calibration
     app = viewer
-    g = app.frame.governor
-    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
-    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
-    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
-    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    g, half = _half_view_previews(app, monkeypatch)
     app.frame.set_frame_budget(1e-6)  # one pass or band a frame: the preview is part-way whatever the machine
     try:
         app.frame.set_dragging(True)
@@ -706,16 +706,9 @@ def test_a_release_after_a_smaller_view_finds_the_full_size_textures_pooled(view
     frame here). The final image is a fresh renderer's, bit for bit. keep=False: the rule before, which
     allocates again at the release."""
     from skinviewer.engine.renderer import Renderer
-    from skinviewer.techniques.preview import ladder
-    from skinviewer.ui.governor import Pick
-    from tests.test_governor import fake_calibration
     app = viewer
     monkeypatch.setattr(frame_mod, "KEEP_VIEW_POOLS", keep)
-    g = app.frame.governor
-    g.set_calibration(fake_calibration("deon", app.state.settings, seed=2))
-    half = next(r for r in ladder(app.state.settings) if r.label == "view ½")
-    monkeypatch.setattr(g, "pick", lambda s, camera=False: Pick(half, 10.0, None))
-    monkeypatch.setattr(g, "_refinement", lambda s, start: [] if start.final else [ladder(s)[-1]])
+    g, half = _half_view_previews(app, monkeypatch)
     app.frame.set_frame_budget(None)  # one complete frame a step: each step's image is its pick's
     full = (app.state.settings.render.width, app.state.settings.render.height)
     try:
