@@ -301,7 +301,12 @@ def test_the_shipped_preview_errors_carry_the_rulers_uncertainty():
     errors, unc = data["errors"], data["uncertainty"]
     assert errors and set(unc) == set(errors)
     assert all(np.isfinite(v) and 0.0 < v < 0.1 for v in unc.values()), unc
-    assert all(unc[k] < errors[k] for k in errors)  # every rung is farther from the truth than the ruler's doubt
+    from skinviewer.engine.reference import VERSION
+    assert data["truth_version"] == VERSION  # measured with today's ruler, not an older truth's ±
+    # the quarter view's cost in accuracy is measured, not inside the ruler's doubt (with truth version 10
+    # d'Eon's final rungs, 4.7 %, are within its ± 4.85 %: the status line shows "4.7 % ± 4.9")
+    quarter = [k for k in errors if json.loads(k)[2] == 0.25]
+    assert quarter and all(errors[k] > 2.0 * unc[k] for k in quarter), {k: (errors[k], unc[k]) for k in quarter}
 
 
 def test_refining_the_truth_at_chosen_pixels_tightens_its_uncertainty_there_and_still_bounds_the_error():
