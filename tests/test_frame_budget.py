@@ -211,6 +211,15 @@ class Finishes:
         return getattr(self._ctx, name)
 
 
+def _assert_the_ungoverned_image(renderer, sm, monkeypatch) -> None:
+    """The image the budgeted frames left is the one a whole render of ``sm`` makes with every patch of the
+    test undone (monkeypatch.undo), bit for bit."""
+    img = renderer.image(sm)
+    monkeypatch.undo()
+    renderer.render(sm, force=True)
+    assert np.array_equal(img, renderer.image(sm))
+
+
 def _run_frames(gl_ctx, monkeypatch, k_err: float, ratios, budget: float = 60.0, moves: int = 10,
                 sampled: bool = False, stats: dict | None = None, quantile: bool = False):
     """Light moves rendered under ``budget`` in a fresh renderer with a fake clock: every band or pass
@@ -352,10 +361,7 @@ def test_a_frame_whose_own_time_took_half_the_budget_runs_no_pass_over_it(gl_ctx
         assert rep.complete
         assert ran[0] is False and ran[1] is True  # the first frame ended after its own time
         assert max(work) <= 60.0
-        img = renderer.image(sm)
-        monkeypatch.undo()
-        renderer.render(sm, force=True)
-        assert np.array_equal(img, renderer.image(sm))
+        _assert_the_ungoverned_image(renderer, sm, monkeypatch)
     finally:
         renderer.release()
 
@@ -470,10 +476,7 @@ def test_a_first_pass_that_fits_only_a_frame_of_its_own_waits_for_it(gl_ctx, mon
             assert max(work) <= 60.0
         else:
             assert ran[0] is True and work[0] > 60.0  # the rule before: 20 ms of its own time plus the pass
-        img = renderer.image(sm)
-        monkeypatch.undo()
-        renderer.render(sm, force=True)
-        assert np.array_equal(img, renderer.image(sm))
+        _assert_the_ungoverned_image(renderer, sm, monkeypatch)
     finally:
         renderer.release()
 
@@ -524,10 +527,7 @@ def test_a_tileable_first_pass_starts_with_a_band_that_fits_what_the_own_time_le
                 break
         assert rep.complete and max(work) <= 60.0
         assert started[0] is fit  # the first frame ran a band of its first pass (or, the rule before, nothing)
-        img = renderer.image(sm)
-        monkeypatch.undo()
-        renderer.render(sm, force=True)
-        assert np.array_equal(img, renderer.image(sm))
+        _assert_the_ungoverned_image(renderer, sm, monkeypatch)
     finally:
         renderer.release()
 
@@ -927,9 +927,6 @@ def test_the_check_s_scans_are_paid_where_they_are_predicted(gl_ctx, monkeypatch
         else:
             assert not checked  # the rule before: the scans' 12 ms in no check, no pass, no prediction
             assert max(work) > budget + 5.0  # (54 ms here)
-        img = renderer.image(sm)
-        monkeypatch.undo()
-        renderer.render(sm, force=True)
-        assert np.array_equal(img, renderer.image(sm))
+        _assert_the_ungoverned_image(renderer, sm, monkeypatch)
     finally:
         renderer.release()
